@@ -1,0 +1,1 @@
+//! Criterion benches of softrod; see `benches/*.rs` and `docs/performance.md`.

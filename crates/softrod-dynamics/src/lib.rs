@@ -1,0 +1,1 @@
+//! softrod-dynamics (in progress).

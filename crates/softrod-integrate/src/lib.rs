@@ -1,0 +1,1 @@
+//! softrod-integrate (in progress).

@@ -1,0 +1,1 @@
+//! softrod-kinematics (in progress).

@@ -1,0 +1,1 @@
+//! softrod-mechanics (in progress).

@@ -1,0 +1,1 @@
+//! softrod-scene (in progress).

@@ -1,0 +1,1 @@
+//! Shared helpers of the validation suite; the cases live in `tests/*.rs`.
