@@ -1,0 +1,352 @@
+//! Kinematic state of a rod: one O(N) sweep, then cheap point queries.
+
+use crate::error::KinematicsError;
+use crate::rod::Rod;
+use nalgebra::{DVectorView, Matrix6xX};
+use softrod_lie::{
+    AdOp, Pose, Vec6, ad_vec, d_tangent_minus, d_tangent_minus_self, exp_and_tangent_minus,
+};
+
+/// In which frame a twist or Jacobian is expressed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Frame {
+    /// Body frame of the section at `s` (the model's native frame).
+    Body,
+    /// Spatial (world) twist `Ad_{g(s)} η`: angular velocity in world axes and
+    /// the velocity of the world point that coincides with the origin.
+    Spatial,
+    /// Mixed: `(R ω, R v)`, world axes at the section centre — the velocity a
+    /// position controller wants (`ṗ = R v`).
+    Mixed,
+}
+
+/// Kinematic quantities of a rod at given `q` (and optionally `q̇`, `q̈`).
+///
+/// [`RodKinematics::update`] runs the recursion of seed (8)–(11) / (D7)–(D12)
+/// once from base to tip (O(N)) and keeps the piece-tip values; queries at any
+/// `s` then cost one local exponential (O(1)) plus, for Jacobians, one
+/// backward sweep over the pieces before `s` (O(n_dof)). Buffers are allocated
+/// by [`RodKinematics::new`]; `update` and the queries do not allocate.
+///
+/// Body-frame velocities are `η = (ω, v)`, accelerations `η̇`, both at the
+/// section centre in the section frame.
+#[derive(Clone, Debug)]
+pub struct RodKinematics {
+    n_dof: usize,
+    /// `g(L_n)` (world) for `n = 0…N` (`g(L_0)` = base).
+    tip_pose: Vec<Pose>,
+    /// `η(L_n)`, `n = 0…N`.
+    tip_vel: Vec<Vec6>,
+    /// `η̇(L_n)`, `n = 0…N`.
+    tip_acc: Vec<Vec6>,
+    /// `A_{n,ℓ} = Ad⁻¹_{g_n(ℓ_n)}` per piece.
+    tip_ad_inv: Vec<AdOp>,
+    /// `S_n(ℓ_n)` in the columns of piece n (6 × n_dof).
+    tip_s: Matrix6xX<f64>,
+    /// `Ṡ_n(ℓ_n)` in the columns of piece n (6 × n_dof), when `q̇` was given.
+    tip_sdot: Matrix6xX<f64>,
+    /// Strain and strain rate per piece.
+    strain: Vec<Vec6>,
+    strain_rate: Vec<Vec6>,
+    /// `q̈_n` applied through `B_n`, per piece (`B_n q̈_n`).
+    strain_acc: Vec<Vec6>,
+    has_vel: bool,
+    has_acc: bool,
+}
+
+impl RodKinematics {
+    /// Allocates the buffers for `rod` (state: the rest configuration, at rest,
+    /// after the first [`update`](Self::update)).
+    pub fn new(rod: &Rod) -> Self {
+        let n = rod.n_pieces();
+        Self {
+            n_dof: rod.n_dof(),
+            tip_pose: vec![*rod.base(); n + 1],
+            tip_vel: vec![Vec6::zeros(); n + 1],
+            tip_acc: vec![Vec6::zeros(); n + 1],
+            tip_ad_inv: vec![AdOp::identity(); n],
+            tip_s: Matrix6xX::zeros(rod.n_dof()),
+            tip_sdot: Matrix6xX::zeros(rod.n_dof()),
+            strain: vec![Vec6::zeros(); n],
+            strain_rate: vec![Vec6::zeros(); n],
+            strain_acc: vec![Vec6::zeros(); n],
+            has_vel: false,
+            has_acc: false,
+        }
+    }
+
+    /// Sweeps base → tip at `q` (and `q̇`, `q̈` when given; missing ones are
+    /// taken as zero for velocity/acceleration queries). Each slice has
+    /// `n_dof` entries.
+    ///
+    /// Per piece (D7)–(D10) at `x = ℓ_n`: `g(L_n) = g(L_{n−1}) exp(ℓ_n ξ̂_n)`,
+    /// `η(L_n) = A_ℓ η(L_{n−1}) + S_ℓ q̇_n`,
+    /// `η̇(L_n) = A_ℓ η̇(L_{n−1}) + S_ℓ q̈_n + ad_{A_ℓ η(L_{n−1})} S_ℓ q̇_n + Ṡ_ℓ q̇_n`.
+    pub fn update(
+        &mut self,
+        rod: &Rod,
+        q: &[f64],
+        qd: Option<&[f64]>,
+        qdd: Option<&[f64]>,
+    ) -> Result<(), KinematicsError> {
+        rod.check_coordinates("q", q)?;
+        if let Some(v) = qd {
+            rod.check_coordinates("qdot", v)?;
+        }
+        if let Some(v) = qdd {
+            rod.check_coordinates("qddot", v)?;
+        }
+        debug_assert_eq!(self.n_dof, rod.n_dof());
+        self.has_vel = qd.is_some();
+        self.has_acc = qdd.is_some();
+        self.tip_pose[0] = *rod.base();
+        self.tip_vel[0] = Vec6::zeros();
+        self.tip_acc[0] = Vec6::zeros();
+        for (n, piece) in rod.pieces().iter().enumerate() {
+            let xi = piece.strain(q);
+            let dxi = qd.map_or(Vec6::zeros(), |v| piece.strain_rate(v));
+            let ddxi = qdd.map_or(Vec6::zeros(), |v| piece.strain_rate(v));
+            self.strain[n] = xi;
+            self.strain_rate[n] = dxi;
+            self.strain_acc[n] = ddxi;
+            let (g, tm) = exp_and_tangent_minus(piece.length, &xi);
+            let a = g.ad_inv();
+            self.tip_ad_inv[n] = a;
+            for c in 0..piece.basis.dof() {
+                let col = tm.mul_vec(&piece.basis.column(c));
+                self.tip_s
+                    .fixed_view_mut::<6, 1>(0, piece.dof_offset + c)
+                    .copy_from(&col);
+            }
+            if self.has_vel {
+                let dt = d_tangent_minus(piece.length, &xi, &dxi);
+                for c in 0..piece.basis.dof() {
+                    let col = dt.mul_vec(&piece.basis.column(c));
+                    self.tip_sdot
+                        .fixed_view_mut::<6, 1>(0, piece.dof_offset + c)
+                        .copy_from(&col);
+                }
+            }
+            self.tip_pose[n + 1] = self.tip_pose[n].compose(&g);
+            let carried = a.mul_vec(&self.tip_vel[n]);
+            let local_v = tm.mul_vec(&dxi);
+            self.tip_vel[n + 1] = carried + local_v;
+            self.tip_acc[n + 1] = a.mul_vec(&self.tip_acc[n])
+                + tm.mul_vec(&ddxi)
+                + ad_vec(&carried, &local_v)
+                + d_tangent_minus_self(piece.length, &xi, &dxi);
+        }
+        Ok(())
+    }
+
+    /// World pose `g(L_n)` of the piece boundaries, `n = 0…N` (base to tip).
+    pub fn boundary_poses(&self) -> &[Pose] {
+        &self.tip_pose
+    }
+
+    /// Strain `ξ_n` of each piece at the last update.
+    pub fn strains(&self) -> &[Vec6] {
+        &self.strain
+    }
+
+    /// World pose of the tip `g(L)`.
+    pub fn tip_pose(&self) -> &Pose {
+        self.tip_pose.last().expect("at least one piece")
+    }
+
+    /// World pose `g(s)` at any abscissa (D7).
+    pub fn pose_at(&self, rod: &Rod, s: f64) -> Result<Pose, KinematicsError> {
+        let (n, x) = rod.locate(s)?;
+        Ok(self.local(n, x).0)
+    }
+
+    /// World poses at several abscissae (any order); `out.len() == s.len()`.
+    pub fn poses_at(&self, rod: &Rod, s: &[f64], out: &mut [Pose]) -> Result<(), KinematicsError> {
+        if out.len() != s.len() {
+            return Err(KinematicsError::SizeMismatch {
+                what: "output poses",
+                got: out.len(),
+                expected: s.len(),
+            });
+        }
+        for (o, &si) in out.iter_mut().zip(s) {
+            *o = self.pose_at(rod, si)?;
+        }
+        Ok(())
+    }
+
+    /// Pose at local abscissa `x` of piece `n` (no bounds check beyond debug).
+    #[inline]
+    pub fn pose_in_piece(&self, n: usize, x: f64) -> Pose {
+        let g = softrod_lie::exp_twist(x, &self.strain[n]);
+        self.tip_pose[n].compose(&g)
+    }
+
+    /// `(g(s), A_n(x), T₋(x))` for piece `n`, local abscissa `x`.
+    #[inline]
+    fn local(&self, n: usize, x: f64) -> (Pose, AdOp, AdOp) {
+        let (g, tm) = exp_and_tangent_minus(x, &self.strain[n]);
+        (self.tip_pose[n].compose(&g), g.ad_inv(), tm)
+    }
+
+    /// Velocity `η(s)` (D8) in the requested frame.
+    pub fn velocity_at(&self, rod: &Rod, s: f64, frame: Frame) -> Result<Vec6, KinematicsError> {
+        let (n, x) = rod.locate(s)?;
+        let (g, a, tm) = self.local(n, x);
+        let eta = a.mul_vec(&self.tip_vel[n]) + tm.mul_vec(&self.strain_rate[n]);
+        Ok(to_frame(&g, &eta, frame))
+    }
+
+    /// Acceleration `η̇(s)` (D10), the time derivative of the body velocity,
+    /// in the requested frame. For `Spatial`/`Mixed` this is the rotated body
+    /// acceleration `Ad_g η̇` / `(Rω̇, Rv̇)` (not the derivative of the rotated
+    /// velocity, which also contains `ω × ·` terms; use [`Self::jacobian_dot_at`]
+    /// for those).
+    pub fn acceleration_at(
+        &self,
+        rod: &Rod,
+        s: f64,
+        frame: Frame,
+    ) -> Result<Vec6, KinematicsError> {
+        let (n, x) = rod.locate(s)?;
+        let (g, a, tm) = self.local(n, x);
+        let carried = a.mul_vec(&self.tip_vel[n]);
+        let dxi = self.strain_rate[n];
+        let local_v = tm.mul_vec(&dxi);
+        let acc = a.mul_vec(&self.tip_acc[n])
+            + tm.mul_vec(&self.strain_acc[n])
+            + ad_vec(&carried, &local_v)
+            + d_tangent_minus_self(x, &self.strain[n], &dxi);
+        Ok(to_frame(&g, &acc, frame))
+    }
+
+    /// Geometric Jacobian `J(s)` (6 × n_dof), `η(s) = J(s) q̇` (D11):
+    /// `J = [ A_n(x) A_{n−1,ℓ}⋯A_{i+1,ℓ} S_i(ℓ_i) (i < n) | S_n(x) | 0 ]`,
+    /// computed tip-side first so each earlier block costs one `AdOp` product.
+    pub fn jacobian_at(
+        &self,
+        rod: &Rod,
+        s: f64,
+        frame: Frame,
+        out: &mut Matrix6xX<f64>,
+    ) -> Result<(), KinematicsError> {
+        self.check_out(out)?;
+        let (n, x) = rod.locate(s)?;
+        let (g, a, tm) = self.local(n, x);
+        out.fill(0.0);
+        let pieces = rod.pieces();
+        let p = &pieces[n];
+        for c in 0..p.basis.dof() {
+            let col = tm.mul_vec(&p.basis.column(c));
+            out.fixed_view_mut::<6, 1>(0, p.dof_offset + c)
+                .copy_from(&col);
+        }
+        let mut carry = a;
+        for i in (0..n).rev() {
+            let pi = &pieces[i];
+            for c in pi.dofs() {
+                let col = carry.mul_vec(&self.tip_s.fixed_view::<6, 1>(0, c).into_owned());
+                out.fixed_view_mut::<6, 1>(0, c).copy_from(&col);
+            }
+            carry = carry * self.tip_ad_inv[i];
+        }
+        apply_frame(&g, frame, out);
+        Ok(())
+    }
+
+    /// Time derivative `J̇(s)` (6 × n_dof) of the Jacobian in the requested
+    /// frame, so that `η̇ = J q̈ + J̇ q̇` (body frame, D12). Needs `q̇` in the
+    /// last update. Blocks `i < n` use
+    /// `J̇_i(s) = C_i Ṡ_i(ℓ_i) − ad_{η(s) − C_i η(L_i)} C_i S_i(ℓ_i)` with
+    /// `C_i = Ad⁻¹` of the transform from `L_i` to `s`, which equals the
+    /// recursion (D12); block `n` is `Ṡ_n(x) = D_ξT₋(x)[B_n q̇_n] B_n` (D9).
+    pub fn jacobian_dot_at(
+        &self,
+        rod: &Rod,
+        s: f64,
+        frame: Frame,
+        out: &mut Matrix6xX<f64>,
+    ) -> Result<(), KinematicsError> {
+        self.check_out(out)?;
+        let (n, x) = rod.locate(s)?;
+        let (g, a, tm) = self.local(n, x);
+        let xi = self.strain[n];
+        let dxi = self.strain_rate[n];
+        let eta = a.mul_vec(&self.tip_vel[n]) + tm.mul_vec(&dxi);
+        // Frame change: d/dt (X J) = X (J̇ + Y J), X = Ad_g and Y = ad_η
+        // (spatial) or X = diag(R, R) and Y = diag(ω̃, ω̃) (mixed).
+        let w = softrod_lie::angular(&eta);
+        let extra = |jc: &Vec6| match frame {
+            Frame::Body => Vec6::zeros(),
+            Frame::Spatial => ad_vec(&eta, jc),
+            Frame::Mixed => softrod_lie::join(
+                &w.cross(&softrod_lie::angular(jc)),
+                &w.cross(&softrod_lie::linear(jc)),
+            ),
+        };
+        out.fill(0.0);
+        let pieces = rod.pieces();
+        let p = &pieces[n];
+        let dt = d_tangent_minus(x, &xi, &dxi);
+        for c in 0..p.basis.dof() {
+            let bc = p.basis.column(c);
+            let jc = tm.mul_vec(&bc);
+            let col = dt.mul_vec(&bc) + extra(&jc);
+            out.fixed_view_mut::<6, 1>(0, p.dof_offset + c)
+                .copy_from(&to_frame(&g, &col, frame));
+        }
+        let mut carry = a;
+        for i in (0..n).rev() {
+            let rel = eta - carry.mul_vec(&self.tip_vel[i + 1]);
+            for c in pieces[i].dofs() {
+                let sc = self.tip_s.fixed_view::<6, 1>(0, c).into_owned();
+                let sdc = self.tip_sdot.fixed_view::<6, 1>(0, c).into_owned();
+                let jc = carry.mul_vec(&sc);
+                let col = carry.mul_vec(&sdc) - ad_vec(&rel, &jc) + extra(&jc);
+                out.fixed_view_mut::<6, 1>(0, c)
+                    .copy_from(&to_frame(&g, &col, frame));
+            }
+            carry = carry * self.tip_ad_inv[i];
+        }
+        Ok(())
+    }
+
+    fn check_out(&self, out: &Matrix6xX<f64>) -> Result<(), KinematicsError> {
+        if out.ncols() != self.n_dof {
+            return Err(KinematicsError::SizeMismatch {
+                what: "Jacobian columns",
+                got: out.ncols(),
+                expected: self.n_dof,
+            });
+        }
+        Ok(())
+    }
+
+    /// `J(s) q̇` for a velocity vector, checked against [`Self::velocity_at`]
+    /// in tests; convenience for callers holding a Jacobian.
+    pub fn apply_jacobian(j: &Matrix6xX<f64>, qd: DVectorView<'_, f64>) -> Vec6 {
+        (j * qd).fixed_rows::<6>(0).into_owned()
+    }
+}
+
+fn to_frame(g: &Pose, v: &Vec6, frame: Frame) -> Vec6 {
+    match frame {
+        Frame::Body => *v,
+        Frame::Spatial => g.ad().mul_vec(v),
+        Frame::Mixed => softrod_lie::join(
+            &(g.rotation * softrod_lie::angular(v)),
+            &(g.rotation * softrod_lie::linear(v)),
+        ),
+    }
+}
+
+fn apply_frame(g: &Pose, frame: Frame, out: &mut Matrix6xX<f64>) {
+    if frame == Frame::Body {
+        return;
+    }
+    for c in 0..out.ncols() {
+        let col = out.fixed_view::<6, 1>(0, c).into_owned();
+        out.fixed_view_mut::<6, 1>(0, c)
+            .copy_from(&to_frame(g, &col, frame));
+    }
+}
