@@ -1,0 +1,315 @@
+//! Dormand–Prince 5(4) (J. R. Dormand, P. J. Prince, J. Comput. Appl. Math. 6
+//! (1980) 19–26), as in Hairer's DOPRI5 (Hairer–Nørsett–Wanner, *Solving
+//! ODEs I*, 2nd ed., §II.5 Table 5.2, §II.4 step control, §II.6 dense
+//! output):
+//!
+//! * 7 stages, FSAL (`k7 = f(t₁, y₁)` is the next step's `k1`): 6 right-hand
+//!   sides per accepted step; the 5th-order solution is propagated.
+//! * Error `err = ‖h Σ eᵢ kᵢ‖` (weighted RMS, weights `atol + rtol·max(|y₀|,
+//!   |y₁|)`), `e = b − b̂`.
+//! * PI controller (Gustafsson; Hairer's `β = 0.04`):
+//!   `h_new = h · clamp(0.9 · err^(−(0.2 − 0.75β)) · err_prev^β, 1/10, 5)`;
+//!   after a rejection the step may not grow.
+//! * Dense output of order 4 with Shampine's coefficients `d₁…d₇`.
+
+use nalgebra::DVector;
+
+use crate::driver::{Stepper, check_underflow, clip_step, initial_step, wrms};
+use crate::error::{IntegrateError, first_non_finite};
+use crate::options::{Options, Stats};
+use crate::system::{Problem, sys_err};
+
+const C2: f64 = 1.0 / 5.0;
+const C3: f64 = 3.0 / 10.0;
+const C4: f64 = 4.0 / 5.0;
+const C5: f64 = 8.0 / 9.0;
+const A21: f64 = 1.0 / 5.0;
+const A31: f64 = 3.0 / 40.0;
+const A32: f64 = 9.0 / 40.0;
+const A41: f64 = 44.0 / 45.0;
+const A42: f64 = -56.0 / 15.0;
+const A43: f64 = 32.0 / 9.0;
+const A51: f64 = 19372.0 / 6561.0;
+const A52: f64 = -25360.0 / 2187.0;
+const A53: f64 = 64448.0 / 6561.0;
+const A54: f64 = -212.0 / 729.0;
+const A61: f64 = 9017.0 / 3168.0;
+const A62: f64 = -355.0 / 33.0;
+const A63: f64 = 46732.0 / 5247.0;
+const A64: f64 = 49.0 / 176.0;
+const A65: f64 = -5103.0 / 18656.0;
+const A71: f64 = 35.0 / 384.0;
+const A73: f64 = 500.0 / 1113.0;
+const A74: f64 = 125.0 / 192.0;
+const A75: f64 = -2187.0 / 6784.0;
+const A76: f64 = 11.0 / 84.0;
+const E1: f64 = 71.0 / 57600.0;
+const E3: f64 = -71.0 / 16695.0;
+const E4: f64 = 71.0 / 1920.0;
+const E5: f64 = -17253.0 / 339200.0;
+const E6: f64 = 22.0 / 525.0;
+const E7: f64 = -1.0 / 40.0;
+const D1: f64 = -12715105075.0 / 11282082432.0;
+const D3: f64 = 87487479700.0 / 32700410799.0;
+const D4: f64 = -10690763975.0 / 1880347072.0;
+const D5: f64 = 701980252875.0 / 199316789632.0;
+const D6: f64 = -1453857185.0 / 822651844.0;
+const D7: f64 = 69997945.0 / 29380423.0;
+
+const SAFETY: f64 = 0.9;
+const BETA: f64 = 0.04;
+const FAC_MIN: f64 = 0.1; // smallest h_new / h
+const FAC_MAX: f64 = 5.0; // largest h_new / h
+
+/// DOPRI5 state and buffers (allocated once).
+pub(crate) struct Dopri5 {
+    t: f64,
+    t_prev: f64,
+    h: f64,
+    h_next: f64,
+    err_prev: f64,
+    y: DVector<f64>,
+    k: [DVector<f64>; 7],
+    ynew: DVector<f64>,
+    ytmp: DVector<f64>,
+    /// Dense-output coefficients of the last step (`rcont1..5` of DOPRI5).
+    cont: [DVector<f64>; 5],
+}
+
+impl Dopri5 {
+    pub(crate) fn new(n: usize) -> Self {
+        let z = DVector::zeros(n);
+        Self {
+            t: 0.0,
+            t_prev: 0.0,
+            h: 0.0,
+            h_next: 0.0,
+            err_prev: 1e-4,
+            y: z.clone(),
+            k: std::array::from_fn(|_| z.clone()),
+            ynew: z.clone(),
+            ytmp: z.clone(),
+            cont: std::array::from_fn(|_| z.clone()),
+        }
+    }
+
+    /// `ytmp = y + h Σ a_j k_j`.
+    fn stage_arg(&mut self, h: f64, coef: &[(usize, f64)]) {
+        self.ytmp.copy_from(&self.y);
+        for &(j, a) in coef {
+            self.ytmp.axpy(h * a, &self.k[j], 1.0);
+        }
+    }
+
+    /// Tries a step of size `h`; leaves `y₁` in `ynew`, `f(t+h, y₁)` in `k[6]`;
+    /// returns the error norm (∞ if the trial is not finite).
+    fn attempt<P: Problem>(
+        &mut self,
+        p: &mut P,
+        h: f64,
+        t_new: f64,
+        opts: &Options,
+        stats: &mut Stats,
+    ) -> Result<f64, IntegrateError> {
+        let t = self.t;
+        let err = |w| sys_err(t, h, w);
+        let stages: [(f64, &[(usize, f64)]); 5] = [
+            (C2, &[(0, A21)]),
+            (C3, &[(0, A31), (1, A32)]),
+            (C4, &[(0, A41), (1, A42), (2, A43)]),
+            (C5, &[(0, A51), (1, A52), (2, A53), (3, A54)]),
+            (1.0, &[(0, A61), (1, A62), (2, A63), (3, A64), (4, A65)]),
+        ];
+        for (s, (c, coef)) in stages.iter().enumerate() {
+            self.stage_arg(h, coef);
+            let (t_s, dst) = (if s == 4 { t_new } else { t + c * h }, s + 1);
+            let (ytmp, k) = (&self.ytmp, &mut self.k[dst]);
+            p.rhs(t_s, ytmp, k).map_err(err("rhs"))?;
+        }
+        self.stage_arg(h, &[(0, A71), (2, A73), (3, A74), (4, A75), (5, A76)]);
+        std::mem::swap(&mut self.ynew, &mut self.ytmp);
+        p.rhs(t_new, &self.ynew, &mut self.k[6])
+            .map_err(err("rhs"))?;
+        stats.rhs_evaluations += 6;
+        // Error estimate into ytmp.
+        let n = self.y.len();
+        for i in 0..n {
+            self.ytmp[i] = h
+                * (E1 * self.k[0][i]
+                    + E3 * self.k[2][i]
+                    + E4 * self.k[3][i]
+                    + E5 * self.k[4][i]
+                    + E6 * self.k[5][i]
+                    + E7 * self.k[6][i]);
+        }
+        if first_non_finite(self.ynew.as_slice()).is_some()
+            || first_non_finite(self.k[6].as_slice()).is_some()
+        {
+            return Ok(f64::INFINITY);
+        }
+        let e = wrms(&self.ytmp, &self.y, &self.ynew, opts);
+        Ok(if e.is_finite() { e } else { f64::INFINITY })
+    }
+}
+
+impl<P: Problem> Stepper<P> for Dopri5 {
+    fn init(
+        &mut self,
+        p: &mut P,
+        t0: f64,
+        y0: &DVector<f64>,
+        _t1: f64,
+        opts: &Options,
+        stats: &mut Stats,
+    ) -> Result<(), IntegrateError> {
+        if !opts.adaptive && opts.dt.is_none() {
+            return Err(IntegrateError::InvalidInput {
+                what: "a non-adaptive run needs Options::dt".into(),
+            });
+        }
+        self.t = t0;
+        self.t_prev = t0;
+        self.y.copy_from(y0);
+        self.err_prev = 1e-4;
+        self.system_changed(p, stats)?;
+        self.h_next = match opts.dt {
+            Some(dt) => dt.min(opts.h_max),
+            None => initial_step(
+                p,
+                t0,
+                y0,
+                &self.k[0],
+                5,
+                opts,
+                stats,
+                (&mut self.ynew, &mut self.ytmp),
+            )?,
+        };
+        Ok(())
+    }
+
+    fn step(
+        &mut self,
+        p: &mut P,
+        t_end: f64,
+        opts: &Options,
+        stats: &mut Stats,
+    ) -> Result<(), IntegrateError> {
+        let mut h = self.h_next.min(opts.h_max);
+        let mut rejected_before = false;
+        loop {
+            let (hh, last) = clip_step(self.t, h, t_end);
+            h = hh;
+            check_underflow(self.t, h, opts, "error test")?;
+            let t_new = if last { t_end } else { self.t + h };
+            let err = self.attempt(p, h, t_new, opts, stats)?;
+            if !opts.adaptive {
+                if !err.is_finite() {
+                    let index = first_non_finite(self.ynew.as_slice()).unwrap_or(0);
+                    return Err(IntegrateError::NonFinite {
+                        t: t_new,
+                        h,
+                        what: "state",
+                        index,
+                    });
+                }
+                self.accept(h, t_new, stats);
+                self.h_next = opts.dt.unwrap_or(h);
+                return Ok(());
+            }
+            if err <= 1.0 {
+                // PI controller.
+                let fac11 = err.max(1e-300).powf(0.2 - 0.75 * BETA);
+                let mut fac = fac11 / self.err_prev.powf(BETA) / SAFETY;
+                fac = fac.clamp(1.0 / FAC_MAX, 1.0 / FAC_MIN);
+                let mut h_new = h / fac;
+                if rejected_before {
+                    h_new = h_new.min(h);
+                }
+                self.err_prev = err.max(1e-4);
+                self.accept(h, t_new, stats);
+                self.h_next = h_new.min(opts.h_max);
+                return Ok(());
+            }
+            stats.rejected_steps += 1;
+            rejected_before = true;
+            let fac = if err.is_finite() {
+                (err.powf(0.2 - 0.75 * BETA) / SAFETY).min(1.0 / FAC_MIN)
+            } else {
+                1.0 / FAC_MIN
+            };
+            let reason = if err.is_finite() {
+                "error test"
+            } else {
+                "non-finite trial state"
+            };
+            h /= fac;
+            check_underflow(self.t, h, opts, reason)?;
+        }
+    }
+
+    fn t(&self) -> f64 {
+        self.t
+    }
+    fn t_prev(&self) -> f64 {
+        self.t_prev
+    }
+    fn y(&self) -> &DVector<f64> {
+        &self.y
+    }
+    fn h_last(&self) -> f64 {
+        self.h
+    }
+    fn dense(&self, t: f64, out: &mut DVector<f64>) {
+        let th = (t - self.t_prev) / self.h;
+        let th1 = 1.0 - th;
+        let [r1, r2, r3, r4, r5] = &self.cont;
+        for i in 0..out.len() {
+            out[i] = r1[i] + th * (r2[i] + th1 * (r3[i] + th * (r4[i] + th1 * r5[i])));
+        }
+    }
+    fn system_changed(&mut self, p: &mut P, stats: &mut Stats) -> Result<(), IntegrateError> {
+        p.rhs(self.t, &self.y, &mut self.k[0])
+            .map_err(sys_err(self.t, self.h, "rhs"))?;
+        stats.rhs_evaluations += 1;
+        if let Some(index) = first_non_finite(self.k[0].as_slice()) {
+            return Err(IntegrateError::NonFinite {
+                t: self.t,
+                h: self.h,
+                what: "derivative",
+                index,
+            });
+        }
+        Ok(())
+    }
+}
+
+impl Dopri5 {
+    /// Accepts the trial in `ynew`/`k[6]`: dense coefficients, FSAL shift.
+    fn accept(&mut self, h: f64, t_new: f64, stats: &mut Stats) {
+        let n = self.y.len();
+        for i in 0..n {
+            let y0 = self.y[i];
+            let y1 = self.ynew[i];
+            let ydiff = y1 - y0;
+            let bspl = h * self.k[0][i] - ydiff;
+            self.cont[0][i] = y0;
+            self.cont[1][i] = ydiff;
+            self.cont[2][i] = bspl;
+            self.cont[3][i] = ydiff - h * self.k[6][i] - bspl;
+            self.cont[4][i] = h
+                * (D1 * self.k[0][i]
+                    + D3 * self.k[2][i]
+                    + D4 * self.k[3][i]
+                    + D5 * self.k[4][i]
+                    + D6 * self.k[5][i]
+                    + D7 * self.k[6][i]);
+        }
+        std::mem::swap(&mut self.y, &mut self.ynew);
+        self.k.swap(0, 6);
+        self.t_prev = self.t;
+        self.t = t_new;
+        self.h = h;
+        stats.steps += 1;
+    }
+}

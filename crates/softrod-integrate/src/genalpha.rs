@@ -1,0 +1,364 @@
+//! Generalized-α for `q̈ = a(t, q, q̇)` (J. Chung, G. M. Hulbert, J. Appl.
+//! Mech. 60 (1993) 371–375), in the form of M. Arnold, O. Brüls (Multibody
+//! Syst. Dyn. 18 (2007) 185–202), where the equation of motion holds exactly
+//! at every time step and `a` below is an acceleration-like auxiliary
+//! variable:
+//!
+//! * `q̈ₙ₊₁ = a(tₙ₊₁, qₙ₊₁, q̇ₙ₊₁)`
+//! * `(1 − α_m) aₙ₊₁ + α_m aₙ = (1 − α_f) q̈ₙ₊₁ + α_f q̈ₙ`
+//! * `qₙ₊₁ = qₙ + h q̇ₙ + h² (½ − β) aₙ + h² β aₙ₊₁`
+//! * `q̇ₙ₊₁ = q̇ₙ + h (1 − γ) aₙ + h γ aₙ₊₁`
+//!
+//! with, from the spectral radius at infinity `ρ∞ ∈ [0, 1]` (Chung–Hulbert's
+//! optimal choice): `α_m = (2ρ∞ − 1)/(ρ∞ + 1)`, `α_f = ρ∞/(ρ∞ + 1)`,
+//! `γ = ½ − α_m + α_f`, `β = ¼ (γ + ½)²`. Second-order accurate (including
+//! with damping), unconditionally stable on linear problems; high frequencies
+//! are damped to `ρ∞` per step, low ones barely at all.
+//!
+//! The unknown `q̈ₙ₊₁` is found by simplified Newton on
+//! `r = q̈ₙ₊₁ − a(tₙ₊₁, qₙ₊₁, q̇ₙ₊₁)` with iteration matrix
+//! `I − β' ∂a/∂q − γ' ∂a/∂q̇`, `β' = h²β(1−α_f)/(1−α_m)`,
+//! `γ' = hγ(1−α_f)/(1−α_m)`. The Jacobians are reused across steps (refreshed
+//! when Newton fails or after [`Options::jacobian_max_age`] steps) and the LU
+//! while `h` is unchanged — for a fixed step and a linear problem: one
+//! factorization in total. When Newton fails with a fresh Jacobian, the step
+//! is halved (a rejected step) and regrown by doubling up to `dt` afterwards.
+//! Dense output: cubic Hermite in `(q, q̇)` with derivatives `(q̇, q̈)`.
+
+use nalgebra::DVector;
+
+use crate::driver::{Stepper, check_underflow, clip_step, hermite};
+use crate::error::{IntegrateError, first_non_finite};
+use crate::options::{Options, Stats};
+use crate::system::{SecondOrderProblem, SecondOrderSystem, sys_err};
+
+/// The four generalized-α parameters from `ρ∞` (Chung–Hulbert 1993, eqs. 25,
+/// 17, 20): returns `(α_m, α_f, β, γ)`.
+pub fn generalized_alpha_parameters(rho_inf: f64) -> (f64, f64, f64, f64) {
+    let am = (2.0 * rho_inf - 1.0) / (rho_inf + 1.0);
+    let af = rho_inf / (rho_inf + 1.0);
+    let gamma = 0.5 - am + af;
+    let beta = 0.25 * (gamma + 0.5) * (gamma + 0.5);
+    (am, af, beta, gamma)
+}
+
+/// Generalized-α state and buffers (allocated once).
+pub(crate) struct GeneralizedAlpha {
+    am: f64,
+    af: f64,
+    beta: f64,
+    gamma: f64,
+    t: f64,
+    t_prev: f64,
+    h: f64,
+    h_try: f64,
+    q: DVector<f64>,
+    v: DVector<f64>,
+    acc: DVector<f64>,
+    qdd: DVector<f64>,
+    // trial
+    x: DVector<f64>,
+    a_new: DVector<f64>,
+    q_new: DVector<f64>,
+    v_new: DVector<f64>,
+    g: DVector<f64>,
+    // first-order views for the driver and dense output
+    y: DVector<f64>,
+    f: DVector<f64>,
+    y_prev: DVector<f64>,
+    f_prev: DVector<f64>,
+    jac_age: usize,
+    lu_key: (f64, f64),
+}
+
+impl GeneralizedAlpha {
+    pub(crate) fn new(n: usize, rho_inf: f64) -> Self {
+        let (am, af, beta, gamma) = generalized_alpha_parameters(rho_inf);
+        let z = DVector::zeros(n);
+        let z2 = DVector::zeros(2 * n);
+        Self {
+            am,
+            af,
+            beta,
+            gamma,
+            t: 0.0,
+            t_prev: 0.0,
+            h: 0.0,
+            h_try: 0.0,
+            q: z.clone(),
+            v: z.clone(),
+            acc: z.clone(),
+            qdd: z.clone(),
+            x: z.clone(),
+            a_new: z.clone(),
+            q_new: z.clone(),
+            v_new: z.clone(),
+            g: z,
+            y: z2.clone(),
+            f: z2.clone(),
+            y_prev: z2.clone(),
+            f_prev: z2,
+            jac_age: usize::MAX,
+            lu_key: (f64::NAN, f64::NAN),
+        }
+    }
+
+    /// `a_new, q_new, v_new` from the current guess `x = q̈ₙ₊₁`.
+    fn newmark(&mut self, h: f64) {
+        let (am, af, beta, gamma) = (self.am, self.af, self.beta, self.gamma);
+        for i in 0..self.q.len() {
+            let a_new = (af * self.qdd[i] + (1.0 - af) * self.x[i] - am * self.acc[i]) / (1.0 - am);
+            self.a_new[i] = a_new;
+            self.q_new[i] =
+                self.q[i] + h * self.v[i] + h * h * ((0.5 - beta) * self.acc[i] + beta * a_new);
+            self.v_new[i] = self.v[i] + h * ((1.0 - gamma) * self.acc[i] + gamma * a_new);
+        }
+    }
+
+    fn set_first_order(&mut self) {
+        let n = self.q.len();
+        self.y.rows_mut(0, n).copy_from(&self.q);
+        self.y.rows_mut(n, n).copy_from(&self.v);
+        self.f.rows_mut(0, n).copy_from(&self.v);
+        self.f.rows_mut(n, n).copy_from(&self.qdd);
+    }
+
+    /// Simplified Newton for one step of size `h`. `Ok(Ok(()))`: converged
+    /// (trial in `x, a_new, q_new, v_new`); `Ok(Err((what, iterations)))`:
+    /// failed.
+    #[allow(clippy::type_complexity)]
+    fn solve_step<S: SecondOrderSystem>(
+        &mut self,
+        p: &mut SecondOrderProblem<'_, S>,
+        h: f64,
+        t_new: f64,
+        opts: &Options,
+        stats: &mut Stats,
+    ) -> Result<Result<(), (&'static str, usize)>, IntegrateError> {
+        let c = (1.0 - self.af) / (1.0 - self.am);
+        let bp = h * h * self.beta * c;
+        let gp = h * self.gamma * c;
+        self.x.copy_from(&self.qdd);
+        let mut norm_prev = f64::NAN;
+        let n = self.q.len();
+        for k in 1..=opts.newton_max_iter.max(1) {
+            self.newmark(h);
+            p.accel(t_new, &self.q_new, &self.v_new, &mut self.g)
+                .map_err(sys_err(self.t, h, "accel"))?;
+            stats.rhs_evaluations += 1;
+            stats.newton_iterations += 1;
+            // Δ = −(I − β'Jq − γ'Jv)⁻¹ (x − g), into g.
+            for i in 0..n {
+                self.g[i] -= self.x[i];
+            }
+            p.solve_n(&mut self.g);
+            stats.lu_solves += 1;
+            self.x += &self.g;
+            let mut s = 0.0;
+            for i in 0..n {
+                let wq = opts.atol + opts.rtol * self.q_new[i].abs();
+                let wv = opts.atol + opts.rtol * self.v_new[i].abs();
+                let dq = bp * self.g[i] / wq;
+                let dv = gp * self.g[i] / wv;
+                s += dq * dq + dv * dv;
+            }
+            let norm = if n == 0 {
+                0.0
+            } else {
+                (s / (2 * n) as f64).sqrt()
+            };
+            if !norm.is_finite() || first_non_finite(self.x.as_slice()).is_some() {
+                return Ok(Err(("non-finite iterate", k)));
+            }
+            let tol = opts.newton_tol;
+            if k == 1 {
+                if norm <= 1e-2 * tol {
+                    self.newmark(h);
+                    return Ok(Ok(()));
+                }
+            } else {
+                let theta = norm / norm_prev;
+                if theta >= 1.0 {
+                    return Ok(Err(("diverged", k)));
+                }
+                if theta / (1.0 - theta) * norm <= tol || norm == 0.0 {
+                    self.newmark(h);
+                    return Ok(Ok(()));
+                }
+            }
+            norm_prev = norm;
+        }
+        Ok(Err(("max iterations", opts.newton_max_iter)))
+    }
+}
+
+impl<S: SecondOrderSystem> Stepper<SecondOrderProblem<'_, S>> for GeneralizedAlpha {
+    fn init(
+        &mut self,
+        p: &mut SecondOrderProblem<'_, S>,
+        t0: f64,
+        y0: &DVector<f64>,
+        _t1: f64,
+        opts: &Options,
+        stats: &mut Stats,
+    ) -> Result<(), IntegrateError> {
+        let Some(dt) = opts.dt else {
+            return Err(IntegrateError::InvalidInput {
+                what: "generalized-α needs a fixed step: set Options::dt".into(),
+            });
+        };
+        let n = p.n();
+        self.t = t0;
+        self.t_prev = t0;
+        self.h_try = dt.min(opts.h_max);
+        self.q.copy_from(&y0.rows(0, n));
+        self.v.copy_from(&y0.rows(n, n));
+        self.system_changed(p, stats)?;
+        self.acc.copy_from(&self.qdd);
+        Ok(())
+    }
+
+    fn step(
+        &mut self,
+        p: &mut SecondOrderProblem<'_, S>,
+        t_end: f64,
+        opts: &Options,
+        stats: &mut Stats,
+    ) -> Result<(), IntegrateError> {
+        let dt = opts.dt.unwrap_or(self.h_try).min(opts.h_max);
+        let mut h = self.h_try.min(dt);
+        loop {
+            let (hh, last) = clip_step(self.t, h, t_end);
+            h = hh;
+            if let Err(e) = check_underflow(self.t, h, opts, "Newton failure") {
+                return Err(if stats.newton_iterations > 0 {
+                    IntegrateError::NewtonNonConvergence {
+                        t: self.t,
+                        h,
+                        iterations: opts.newton_max_iter,
+                        what: "step size underflow after repeated Newton failures",
+                    }
+                } else {
+                    e
+                });
+            }
+            if self.jac_age >= opts.jacobian_max_age.max(1) {
+                let bad = p
+                    .update_jacobians_qv(self.t, &self.q, &self.v)
+                    .map_err(sys_err(self.t, h, "jacobian"))?;
+                stats.jacobian_evaluations += 1;
+                if let Some(index) = bad {
+                    return Err(IntegrateError::NonFinite {
+                        t: self.t,
+                        h,
+                        what: "Jacobian",
+                        index,
+                    });
+                }
+                self.jac_age = 0;
+                self.lu_key = (f64::NAN, f64::NAN);
+            }
+            let c = (1.0 - self.af) / (1.0 - self.am);
+            let key = (h * h * self.beta * c, h * self.gamma * c);
+            if key != self.lu_key {
+                stats.factorizations += 1;
+                if !p.factor_newmark(key.0, key.1) {
+                    self.lu_key = (f64::NAN, f64::NAN);
+                    if self.jac_age == 0 {
+                        return Err(IntegrateError::SingularMatrix {
+                            t: self.t,
+                            h,
+                            what: "I − β'·∂a/∂q − γ'·∂a/∂q̇",
+                        });
+                    }
+                    self.jac_age = usize::MAX;
+                    continue;
+                }
+                self.lu_key = key;
+            }
+            let t_new = if last { t_end } else { self.t + h };
+            match self.solve_step(p, h, t_new, opts, stats)? {
+                Ok(()) => {
+                    std::mem::swap(&mut self.y_prev, &mut self.y);
+                    std::mem::swap(&mut self.f_prev, &mut self.f);
+                    std::mem::swap(&mut self.q, &mut self.q_new);
+                    std::mem::swap(&mut self.v, &mut self.v_new);
+                    std::mem::swap(&mut self.acc, &mut self.a_new);
+                    std::mem::swap(&mut self.qdd, &mut self.x);
+                    self.set_first_order();
+                    self.t_prev = self.t;
+                    self.t = t_new;
+                    self.h = h;
+                    stats.steps += 1;
+                    self.jac_age = self.jac_age.saturating_add(1);
+                    if !last {
+                        self.h_try = (2.0 * h).min(dt);
+                    }
+                    return Ok(());
+                }
+                Err((what, iterations)) => {
+                    stats.rejected_steps += 1;
+                    if self.jac_age != 0 {
+                        self.jac_age = usize::MAX;
+                    } else {
+                        h *= 0.5;
+                        if check_underflow(self.t, h, opts, "Newton failure").is_err() {
+                            return Err(IntegrateError::NewtonNonConvergence {
+                                t: self.t,
+                                h,
+                                iterations,
+                                what,
+                            });
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    fn t(&self) -> f64 {
+        self.t
+    }
+    fn t_prev(&self) -> f64 {
+        self.t_prev
+    }
+    fn y(&self) -> &DVector<f64> {
+        &self.y
+    }
+    fn h_last(&self) -> f64 {
+        self.h
+    }
+    fn dense(&self, t: f64, out: &mut DVector<f64>) {
+        hermite(
+            self.t_prev,
+            &self.y_prev,
+            &self.f_prev,
+            self.t,
+            &self.y,
+            &self.f,
+            t,
+            out,
+        );
+    }
+    fn system_changed(
+        &mut self,
+        p: &mut SecondOrderProblem<'_, S>,
+        stats: &mut Stats,
+    ) -> Result<(), IntegrateError> {
+        p.accel(self.t, &self.q, &self.v, &mut self.qdd)
+            .map_err(sys_err(self.t, self.h, "accel"))?;
+        stats.rhs_evaluations += 1;
+        if let Some(index) = first_non_finite(self.qdd.as_slice()) {
+            return Err(IntegrateError::NonFinite {
+                t: self.t,
+                h: self.h,
+                what: "acceleration",
+                index,
+            });
+        }
+        self.set_first_order();
+        self.jac_age = usize::MAX;
+        self.lu_key = (f64::NAN, f64::NAN);
+        Ok(())
+    }
+}
