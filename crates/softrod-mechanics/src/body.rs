@@ -1,0 +1,121 @@
+//! The mechanical description of one rod: section, material, length.
+
+use crate::error::{MechanicsError, positive};
+use crate::material::Material;
+use crate::section::{Section, SectionProperties};
+use softrod_kinematics::Rod;
+use softrod_lie::Vec6;
+
+/// Section + material + length of one rod: everything that turns strains and
+/// velocities into internal wrenches and inertia (seed (5)–(6)).
+///
+/// All per-`s` queries take the material abscissa `s ∈ [0, L]` [m] (clamped);
+/// only a tapered section depends on it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RodBody {
+    /// Cross-section (possibly varying along `s`).
+    pub section: Section,
+    /// Material.
+    pub material: Material,
+    /// Undeformed length `L` [m]; must equal the kinematic rod's length.
+    pub length: f64,
+}
+
+impl RodBody {
+    /// A validated body.
+    pub fn new(section: Section, material: Material, length: f64) -> Result<Self, MechanicsError> {
+        let b = Self {
+            section,
+            material,
+            length,
+        };
+        b.validate()?;
+        Ok(b)
+    }
+
+    /// Validates section, material and length.
+    pub fn validate(&self) -> Result<(), MechanicsError> {
+        positive("rod length [m]", self.length)?;
+        self.section.validate()?;
+        self.material.validate()
+    }
+
+    /// Checks that `rod` has this body's length (to 1e-12 relative).
+    pub fn check_rod(&self, rod: &Rod) -> Result<(), MechanicsError> {
+        if (rod.length() - self.length).abs() > 1e-12 * self.length.max(rod.length()) {
+            return Err(MechanicsError::LengthMismatch {
+                body: self.length,
+                rod: rod.length(),
+            });
+        }
+        Ok(())
+    }
+
+    /// Section properties at abscissa `s` [m].
+    #[inline]
+    pub fn properties(&self, s: f64) -> SectionProperties {
+        self.section.properties(s / self.length)
+    }
+
+    /// Diagonal of the screw inertia per unit length (seed (5), §0)
+    /// `𝓜(s) = diag(ρJx, ρJy, ρJz, ρA, ρA, ρA)` [kg·m, kg·m, kg·m, kg/m ×3],
+    /// body frame at the section centre.
+    #[inline]
+    pub fn screw_inertia(&self, s: f64) -> Vec6 {
+        let p = self.properties(s);
+        let r = self.material.density;
+        Vec6::new(
+            r * p.jx,
+            r * p.jy,
+            r * p.jz,
+            r * p.area,
+            r * p.area,
+            r * p.area,
+        )
+    }
+
+    /// Diagonal of the stiffness `Γ(s) = diag(GJx, EJy, EJz, EA, GA, GA)`
+    /// [N·m², N·m², N·m², N, N, N] (seed (6) with bending `EJ`, design.md erratum).
+    /// No shear correction factor is applied.
+    #[inline]
+    pub fn stiffness(&self, s: f64) -> Vec6 {
+        let p = self.properties(s);
+        let (e, g) = (self.material.young, self.material.shear);
+        Vec6::new(
+            g * p.jx,
+            e * p.jy,
+            e * p.jz,
+            e * p.area,
+            g * p.area,
+            g * p.area,
+        )
+    }
+
+    /// Diagonal of the Kelvin–Voigt viscosity
+    /// `γ(s) = diag(μJx, 3μJy, 3μJz, 3μA, μA, μA)` [N·m²·s, …, N·s] (seed (6)).
+    #[inline]
+    pub fn viscosity(&self, s: f64) -> Vec6 {
+        let p = self.properties(s);
+        let m = self.material.viscosity;
+        Vec6::new(
+            m * p.jx,
+            3.0 * m * p.jy,
+            3.0 * m * p.jz,
+            3.0 * m * p.area,
+            m * p.area,
+            m * p.area,
+        )
+    }
+
+    /// Mass per unit length `ρA(s)` [kg/m].
+    #[inline]
+    pub fn mass_per_length(&self, s: f64) -> f64 {
+        self.material.density * self.properties(s).area
+    }
+
+    /// True when every property is constant along the rod.
+    #[inline]
+    pub fn is_uniform(&self) -> bool {
+        self.section.is_uniform()
+    }
+}

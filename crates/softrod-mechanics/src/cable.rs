@@ -1,0 +1,286 @@
+//! Cables (tendons) routed through the cross-section (D15).
+//!
+//! A cable runs inside the rod over `s ∈ [from, to]` at the section offset
+//! `d(s) = (0, y(s), z(s))` (body frame) and is anchored at `to`. Its length is
+//! `ℓ_c(q) = ∫_from^to |q + k × d + d′| ds` (the body-frame tangent of the
+//! cable's path is `v = q + k × d + d′`, `t̂ = v/|v|`), and with tension `T ≥ 0`
+//! its generalized force is `τ_c = −T ∂ℓ_c/∂q`,
+//! `τ_c,n = −T ∫_{piece n ∩ [from, to]} B_nᵀ (d × t̂; t̂) ds` (D15).
+
+use crate::error::{MechanicsError, finite, non_negative};
+use softrod_kinematics::{GaussLegendre, Piece, Rod};
+use softrod_lie::{Vec3, Vec6, Wrench, angular, join, linear};
+
+/// Path of a cable in the cross-section, as a function of the abscissa `s`.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Routing {
+    /// Constant offset `d = (0, y, z)` [m] over the span (`d′ = 0`).
+    Offset {
+        /// Offset along local y [m].
+        y: f64,
+        /// Offset along local z [m].
+        z: f64,
+    },
+    /// Piecewise-linear offset through the points `(s, y, z)` [m], `s` strictly
+    /// increasing; constant beyond the first and last points.
+    Path(Vec<[f64; 3]>),
+}
+
+/// Cable tension `T(t)` [N] as a function of time.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Tension {
+    /// Constant tension `T ≥ 0` [N].
+    Constant(f64),
+    /// Piecewise-linear in time through `(times[i], values[i])` [s, N],
+    /// times strictly increasing, values `≥ 0`; held constant beyond the ends.
+    Table {
+        /// Times [s], strictly increasing.
+        times: Vec<f64>,
+        /// Tensions [N], `≥ 0`.
+        values: Vec<f64>,
+    },
+}
+
+/// A cable: routing, span `[from, to]` (anchored at `to`) and tension.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Cable {
+    /// Offset of the cable in the section along `s`.
+    pub routing: Routing,
+    /// Start of the span [m] (where the cable enters the rod).
+    pub from: f64,
+    /// End of the span, the anchor [m].
+    pub to: f64,
+    /// Tension schedule.
+    pub tension: Tension,
+}
+
+impl Cable {
+    /// Checks `0 ≤ from < to ≤ L` (to 1e-12·L), finite routing, strictly
+    /// increasing routing abscissae and tension times, non-negative tensions.
+    pub fn validate(&self, rod_length: f64) -> Result<(), MechanicsError> {
+        let tol = 1e-12 * rod_length;
+        if !(self.from.is_finite()
+            && self.to.is_finite()
+            && self.from >= -tol
+            && self.from < self.to
+            && self.to <= rod_length + tol)
+        {
+            return Err(MechanicsError::CableSpan {
+                from: self.from,
+                to: self.to,
+                length: rod_length,
+            });
+        }
+        match &self.routing {
+            Routing::Offset { y, z } => {
+                finite("cable offset y [m]", *y)?;
+                finite("cable offset z [m]", *z)?;
+            }
+            Routing::Path(pts) => {
+                if pts.is_empty() {
+                    return Err(MechanicsError::Empty {
+                        what: "cable routing path".into(),
+                    });
+                }
+                for (i, p) in pts.iter().enumerate() {
+                    for (c, v) in ["s", "y", "z"].iter().zip(p) {
+                        finite(&format!("cable routing point {i} {c} [m]"), *v)?;
+                    }
+                    if i > 0 && p[0] <= pts[i - 1][0] {
+                        return Err(MechanicsError::NotIncreasing {
+                            what: "cable routing abscissae s".into(),
+                            index: i,
+                            value: p[0],
+                            previous: pts[i - 1][0],
+                        });
+                    }
+                }
+            }
+        }
+        match &self.tension {
+            Tension::Constant(t) => non_negative("cable tension [N]", *t)?,
+            Tension::Table { times, values } => {
+                if times.is_empty() {
+                    return Err(MechanicsError::Empty {
+                        what: "cable tension table".into(),
+                    });
+                }
+                if values.len() != times.len() {
+                    return Err(MechanicsError::SizeMismatch {
+                        what: "cable tension values".into(),
+                        got: values.len(),
+                        expected: times.len(),
+                    });
+                }
+                for (i, (&t, &v)) in times.iter().zip(values).enumerate() {
+                    finite(&format!("cable tension time {i} [s]"), t)?;
+                    non_negative(&format!("cable tension value {i} [N]"), v)?;
+                    if i > 0 && t <= times[i - 1] {
+                        return Err(MechanicsError::NotIncreasing {
+                            what: "cable tension times".into(),
+                            index: i,
+                            value: t,
+                            previous: times[i - 1],
+                        });
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Tension `T(t) ≥ 0` [N]: the constant, or linear interpolation in the
+    /// table, clamped to the first/last value outside it. Negative inputs
+    /// (only possible without [`Self::validate`]) are clamped to 0.
+    #[inline]
+    pub fn tension_at(&self, t: f64) -> f64 {
+        let v = match &self.tension {
+            Tension::Constant(v) => *v,
+            Tension::Table { times, values } => interpolate(times, values, t),
+        };
+        v.max(0.0)
+    }
+
+    /// Offset `d(s) = (0, y(s), z(s))` [m] and its derivative `d′(s)` (body
+    /// frame). For a path, at a knot the derivative of the segment to the right
+    /// is returned; beyond the ends `d` is constant and `d′ = 0`.
+    #[inline]
+    pub fn offset(&self, s: f64) -> (Vec3, Vec3) {
+        match &self.routing {
+            Routing::Offset { y, z } => (Vec3::new(0.0, *y, *z), Vec3::zeros()),
+            Routing::Path(pts) => path_offset(pts, s),
+        }
+    }
+
+    /// Largest `|d(s)|` over the routing [m] (for checks against the section's
+    /// outer radius).
+    pub fn max_offset(&self) -> f64 {
+        match &self.routing {
+            Routing::Offset { y, z } => y.hypot(*z),
+            Routing::Path(pts) => pts.iter().map(|p| p[1].hypot(p[2])).fold(0.0, f64::max),
+        }
+    }
+
+    /// The cable's body wrench per unit tension at `s` for the strain
+    /// `ξ = (k, q)` of the piece containing `s` (the `𝓦/T` of D15):
+    /// `(d × t̂; t̂)`, `t̂ = v/|v|`, `v = q + k × d + d′` [m; 1].
+    /// Returns zero in the degenerate case `v = 0` (cable of zero length).
+    #[inline]
+    pub fn wrench_per_tension(&self, xi: &Vec6, s: f64) -> Wrench {
+        let (d, dp) = self.offset(s);
+        let v = linear(xi) + angular(xi).cross(&d) + dp;
+        let n = v.norm();
+        if n == 0.0 {
+            return Wrench::zeros();
+        }
+        let t = v / n;
+        join(&d.cross(&t), &t)
+    }
+
+    /// Cable length `ℓ_c = ∫_from^to |q + k × d + d′| ds` [m] at coordinates `q`,
+    /// with the Gauss rule on each sub-interval of `piece ∩ [from, to]` split
+    /// at the routing knots.
+    pub fn length(&self, rod: &Rod, q: &[f64], quadrature: &GaussLegendre) -> f64 {
+        let mut total = 0.0;
+        for p in rod.pieces() {
+            let xi = p.strain(q);
+            let (k, qv) = (angular(&xi), linear(&xi));
+            self.for_each_node(p, quadrature, |s, w| {
+                let (d, dp) = self.offset(s);
+                total += w * (qv + k.cross(&d) + dp).norm();
+            });
+        }
+        total
+    }
+
+    /// Adds `−∂ℓ_c/∂q` (the generalized force per unit tension, D15) into `out`
+    /// (length n_dof): `out_n −= ∫_{piece n ∩ [from,to]} B_nᵀ (d × t̂; t̂) ds`.
+    /// Integrates `piece ∩ [from,to]` split at the routing's knots with the
+    /// given Gauss rule on each sub-interval. Allocation-free. Multiply by
+    /// [`Self::tension_at`] for the force [N·m or N per coordinate unit].
+    pub fn add_force_per_tension(
+        &self,
+        rod: &Rod,
+        q: &[f64],
+        quadrature: &GaussLegendre,
+        out: &mut [f64],
+    ) {
+        for p in rod.pieces() {
+            let xi = p.strain(q);
+            let mut acc = Wrench::zeros();
+            self.for_each_node(p, quadrature, |s, w| {
+                acc += self.wrench_per_tension(&xi, s) * w;
+            });
+            if acc == Wrench::zeros() {
+                continue;
+            }
+            let r = p.dofs();
+            for (c, o) in out[r].iter_mut().enumerate() {
+                *o -= p.basis.column(c).dot(&acc);
+            }
+        }
+    }
+
+    /// Calls `f(s, w)` for every quadrature node of `piece ∩ [from, to]`, the
+    /// overlap split at the routing knots, the Gauss rule on each part.
+    fn for_each_node(
+        &self,
+        piece: &Piece,
+        quadrature: &GaussLegendre,
+        mut f: impl FnMut(f64, f64),
+    ) {
+        let a = piece.start.max(self.from);
+        let b = piece.end().min(self.to);
+        if b <= a {
+            return;
+        }
+        let mut rule = |lo: f64, hi: f64| {
+            for (x, w) in quadrature.on_interval(hi - lo) {
+                f(lo + x, w);
+            }
+        };
+        let mut lo = a;
+        if let Routing::Path(pts) = &self.routing {
+            for knot in pts.iter().map(|p| p[0]).filter(|&k| k > a && k < b) {
+                rule(lo, knot);
+                lo = knot;
+            }
+        }
+        rule(lo, b);
+    }
+}
+
+fn interpolate(times: &[f64], values: &[f64], t: f64) -> f64 {
+    let n = times.len();
+    if n == 0 {
+        return 0.0;
+    }
+    if t <= times[0] {
+        return values[0];
+    }
+    if t >= times[n - 1] {
+        return values[n - 1];
+    }
+    let i = times.partition_point(|&ti| ti <= t) - 1;
+    let u = (t - times[i]) / (times[i + 1] - times[i]);
+    values[i] + u * (values[i + 1] - values[i])
+}
+
+fn path_offset(pts: &[[f64; 3]], s: f64) -> (Vec3, Vec3) {
+    let n = pts.len();
+    let point = |p: &[f64; 3]| Vec3::new(0.0, p[1], p[2]);
+    if n == 0 {
+        return (Vec3::zeros(), Vec3::zeros());
+    }
+    if n == 1 || s < pts[0][0] {
+        return (point(&pts[0]), Vec3::zeros());
+    }
+    if s >= pts[n - 1][0] {
+        return (point(&pts[n - 1]), Vec3::zeros());
+    }
+    let i = pts.partition_point(|p| p[0] <= s) - 1;
+    let (p0, p1) = (&pts[i], &pts[i + 1]);
+    let h = p1[0] - p0[0];
+    let slope = Vec3::new(0.0, (p1[1] - p0[1]) / h, (p1[2] - p0[2]) / h);
+    (point(p0) + slope * (s - p0[0]), slope)
+}
