@@ -470,7 +470,14 @@ pub(crate) fn hermite(
 /// 1 % of `h` (Hairer's rule), and `last` means land exactly on `t_end`.
 pub(crate) fn clip_step(t: f64, h: f64, t_end: f64) -> (f64, bool) {
     if t + 1.01 * h >= t_end {
-        (t_end - t, true)
+        let rem = t_end - t;
+        // Within rounding of h: keep h itself so a fixed-step method keeps its
+        // LU (the time still lands exactly on t_end).
+        if (rem - h).abs() <= 1e-12 * h {
+            (h, true)
+        } else {
+            (rem, true)
+        }
     } else {
         (h, false)
     }
