@@ -603,3 +603,24 @@ fn empty_document_needs_a_rod() {
     assert!(e.to_string().contains("missing required key"), "{e}");
     assert!(e.to_string().contains("[[rod]]"), "{e}");
 }
+
+/// "No panic": every prefix of the example and every single-line deletion
+/// yields a scene or an error, and every error names the file.
+#[test]
+fn truncated_and_mutilated_scenes_never_panic() {
+    let mut texts: Vec<String> = BASE
+        .char_indices()
+        .map(|(i, _)| BASE[..i].to_owned())
+        .collect();
+    let lines: Vec<&str> = BASE.lines().collect();
+    for k in 0..lines.len() {
+        let mut l = lines.clone();
+        l.remove(k);
+        texts.push(l.join("\n"));
+    }
+    for text in texts {
+        if let Err(e) = Scene::from_str(&text, FILE) {
+            assert!(e.to_string().starts_with(FILE), "{e}");
+        }
+    }
+}
