@@ -1,1 +1,48 @@
-//! softrod-dynamics (in progress).
+//! PCS dynamics: inverse and O(N) forward dynamics, the matrices of the
+//! Lagrangian form, energies, statics and linearized modes — the fourth
+//! layer of softrod.
+//!
+//! A [`Model`] (rods, their bodies and force terms, gravity, quadrature) is
+//! immutable; a [`Data`] holds every buffer an evaluation needs. Algorithms
+//! are free functions that write into `data` and return a reference to the
+//! result:
+//!
+//! | function | computes | reference |
+//! |---|---|---|
+//! | [`inverse_dynamics`] | `τ_act(q, q̇, q̈)` | derivations §4 (D17–D18) |
+//! | [`forward_dynamics`] | `q̈`, O(N) articulated recursion | §6 (D23–D27), seed (14)–(22) corrected |
+//! | [`forward_dynamics_cholesky`] | `q̈ = M⁻¹(τ − b)` | cross-check |
+//! | [`mass_matrix`] | `M(q)`, composite recursion | (D19–D20) |
+//! | [`bias_force`] | `b = C q̇ + G + τ_e + D q̇ − τ_c − Q_ext` | (D21–D22) |
+//! | [`energies`] | kinetic, elastic, gravitational | §7 |
+//! | [`statics`] | equilibrium, Newton + line search + continuation | |
+//! | [`modes`] | natural frequencies about an equilibrium | |
+//! | [`dynamics_jacobians`] | `∂q̈/∂q`, `∂q̈/∂q̇` | |
+//!
+//! Units SI; twists and wrenches angular first; body frame (see `softrod-lie`).
+#![warn(missing_docs)]
+
+mod algorithms;
+mod data;
+mod derivatives;
+mod energy;
+mod error;
+mod matrices;
+mod model;
+mod modes;
+mod passes;
+mod statics;
+
+pub use algorithms::{
+    bias_force, forward_dynamics, forward_dynamics_cholesky, inverse_dynamics, mass_matrix,
+};
+pub use data::Data;
+pub use derivatives::{DynamicsJacobians, dynamics_jacobians};
+pub use energy::{Energies, energies};
+pub use error::DynamicsError;
+pub use matrices::{
+    actuation_matrix, coriolis_matrix, damping_matrix, generalized_gravity, stiffness_matrix,
+};
+pub use model::{Model, RodModel, RodSpec};
+pub use modes::{Modes, modes};
+pub use statics::{StaticsOptions, StaticsResult, statics};

@@ -1,0 +1,325 @@
+//! Inverse dynamics, O(N) forward dynamics, the mass matrix and the
+//! Cholesky forward dynamics.
+
+use crate::data::Data;
+use crate::error::DynamicsError;
+use crate::model::Model;
+use crate::passes::{
+    Pass, chol_solve, cholesky_k, forward_sub, gravity_base_acceleration, outward,
+};
+use nalgebra::DVector;
+use softrod_lie::{Mat6, Vec6};
+
+/// Checks a generalized vector argument: length `n_dof`, all finite.
+pub(crate) fn check_vec(model: &Model, what: &'static str, v: &[f64]) -> Result<(), DynamicsError> {
+    if v.len() != model.n_dof() {
+        return Err(DynamicsError::SizeMismatch {
+            what,
+            got: v.len(),
+            expected: model.n_dof(),
+        });
+    }
+    if let Some((i, x)) = v.iter().enumerate().find(|(_, x)| !x.is_finite()) {
+        return Err(DynamicsError::NotFinite {
+            what: format!("{what}[{i}]"),
+            value: *x,
+        });
+    }
+    Ok(())
+}
+
+/// Strain-space generalized forces into `data.strain_force`:
+/// `τ_act + λ τ_c(q, t) − τ_e(q) − D q̇` ((D13), (D15); `λ` = `data.load_scale`).
+pub(crate) fn strain_forces(
+    model: &Model,
+    data: &mut Data,
+    t: f64,
+    q: &[f64],
+    qd: Option<&[f64]>,
+    tau_act: Option<&[f64]>,
+) {
+    let sf = &mut data.strain_force;
+    match tau_act {
+        Some(ta) => sf.as_mut_slice().copy_from_slice(ta),
+        None => sf.fill(0.0),
+    }
+    if data.only_gravity {
+        return;
+    }
+    for rm in model.rods() {
+        let rod = &rm.spec.rod;
+        let off = rm.dof_offset;
+        for (piece, pd) in rod.pieces().iter().zip(&rm.pieces) {
+            let k = piece.basis.dof();
+            let o = off + piece.dof_offset;
+            let qn = &q[o..o + k];
+            for i in 0..k {
+                let mut e: f64 = qn
+                    .iter()
+                    .enumerate()
+                    .map(|(j, x)| pd.stiffness[(i, j)] * x)
+                    .sum();
+                if pd.has_offset {
+                    e += pd.elastic_offset[i];
+                }
+                if let (true, Some(v)) = (pd.has_damping, qd) {
+                    e += v[o..o + k]
+                        .iter()
+                        .enumerate()
+                        .map(|(j, x)| pd.damping[(i, j)] * x)
+                        .sum::<f64>();
+                }
+                sf[o + i] -= e;
+            }
+        }
+        if !rm.spec.cables.is_empty() {
+            let range = rm.dofs();
+            for cable in &rm.spec.cables {
+                let tension = cable.tension_at(t) * data.load_scale;
+                if tension == 0.0 {
+                    continue;
+                }
+                let scratch = &mut data.cable_scratch.as_mut_slice()[range.clone()];
+                scratch.fill(0.0);
+                cable.add_force_per_tension(rod, &q[range.clone()], &model.quadrature, scratch);
+                for (s, c) in sf.as_mut_slice()[range.clone()]
+                    .iter_mut()
+                    .zip(scratch.iter())
+                {
+                    *s += tension * c;
+                }
+            }
+        }
+    }
+}
+
+/// Inverse dynamics by recursive Newton–Euler for PCS (derivations §4):
+/// the actuator force `τ_act` (n_dof) that produces `q̈` at `(q, q̇, t)`,
+///
+/// `τ_act = M q̈ + C q̇ + G + τ_e + D q̇ − τ_c − Σ Jᵀ𝓕_p − ∫Jᵀ𝓕_d`.
+///
+/// Outward pass (D7–D10) at the Gauss points, point-load abscissae and piece
+/// tips; inward pass (D17) for the transmitted wrenches `W_n`; projection
+/// (D18) on each piece's `S_n`. Gravity enters as a base acceleration. O(N).
+/// `q`, `q̇`, `q̈`: dim `n_dof`. Result in `data.tau`.
+pub fn inverse_dynamics<'a>(
+    model: &Model,
+    data: &'a mut Data,
+    t: f64,
+    q: &[f64],
+    qd: &[f64],
+    qdd: &[f64],
+) -> Result<&'a DVector<f64>, DynamicsError> {
+    check_vec(model, "q", q)?;
+    check_vec(model, "qdot", qd)?;
+    check_vec(model, "qddot", qdd)?;
+    outward(model, data, q, Some(qd), Some(qdd), Pass::Inverse);
+    strain_forces(model, data, t, q, Some(qd), None);
+    inward_inverse(model, data);
+    Ok(&data.tau)
+}
+
+/// (D17–D18): `W_n = 𝓟_n + A_ℓᵀ W_{n+1}`, `τ_n = B_nᵀ(𝓹_n + T₋(ℓ)ᵀ W_{n+1}) − τ̃_n`.
+pub(crate) fn inward_inverse(model: &Model, data: &mut Data) {
+    for (r, rm) in model.rods().iter().enumerate() {
+        let mut wv = Vec6::zeros();
+        for (n, piece) in rm.spec.rod.pieces().iter().enumerate().rev() {
+            let w = &data.pieces[r][n];
+            let v = w.p_small + w.tm_tip.tr_mul_vec(&wv);
+            let o = rm.dof_offset + piece.dof_offset;
+            let k = piece.basis.dof();
+            piece
+                .basis
+                .tr_apply(&v, &mut data.tau.as_mut_slice()[o..o + k]);
+            wv = w.p_big + w.a_tip.tr_mul_vec(&wv);
+        }
+    }
+    data.tau -= &data.strain_force;
+}
+
+/// Forward dynamics by the O(N) articulated recursion (derivations §6, the
+/// corrected seed (14)–(22)): `q̈` (n_dof) at `(q, q̇, t)` under actuator
+/// force `τ_act` (n_dof, `None` = 0) and every term of the model.
+///
+/// Pass 1 (outward): `g, η`, the per-piece integrals (D20) and bias sums (D23).
+/// Pass 2 (inward): articulated inertia and bias (D24–D26), one `k_n×k_n`
+/// Cholesky per piece. Pass 3 (outward): `q̈_n` and `η̇(L_n)` (D27). Cost
+/// O(N·n_g). Result in `data.qdd`.
+///
+/// Fails if `D̂_n` is not positive definite (a degenerate basis or inertia).
+pub fn forward_dynamics<'a>(
+    model: &Model,
+    data: &'a mut Data,
+    t: f64,
+    q: &[f64],
+    qd: &[f64],
+    tau_act: Option<&[f64]>,
+) -> Result<&'a DVector<f64>, DynamicsError> {
+    check_vec(model, "q", q)?;
+    check_vec(model, "qdot", qd)?;
+    if let Some(ta) = tau_act {
+        check_vec(model, "tau", ta)?;
+    }
+    outward(model, data, q, Some(qd), None, Pass::Articulated);
+    strain_forces(model, data, t, q, Some(qd), tau_act);
+    let scale = data.load_scale;
+    for (r, rm) in model.rods().iter().enumerate() {
+        let pieces = rm.spec.rod.pieces();
+        let mut ma_next = Mat6::zeros();
+        let mut pa_next = Vec6::zeros();
+        for (n, piece) in pieces.iter().enumerate().rev() {
+            let k = piece.basis.dof();
+            let o = rm.dof_offset + piece.dof_offset;
+            let w = &mut data.pieces[r][n];
+            let a6 = w.a_tip.to_mat6();
+            let x = ma_next * w.s_tip;
+            let uhat = w.ut + a6.tr_mul(&x);
+            let mut dhat = w.dt + w.s_tip.tr_mul(&x);
+            let y = ma_next * w.acc_tip + pa_next;
+            let sty = w.s_tip.tr_mul(&y);
+            let mut u = Vec6::zeros();
+            for i in 0..k {
+                u[i] = data.strain_force[o + i] - w.p_small[i] - sty[i];
+            }
+            if !cholesky_k(&mut dhat, k) {
+                return Err(DynamicsError::Singular {
+                    rod: r,
+                    piece: n,
+                    what: "articulated piece inertia D̂_n",
+                });
+            }
+            // Z = L⁻¹ Ûᵀ (k×6), so Û D̂⁻¹ Ûᵀ = Zᵀ Z.
+            let mut z = Mat6::zeros();
+            for c in 0..6 {
+                let mut col = Vec6::zeros();
+                for i in 0..k {
+                    col[i] = uhat[(c, i)];
+                }
+                forward_sub(&dhat, k, &mut col);
+                z.set_column(c, &col);
+            }
+            let dinv_u = chol_solve(&dhat, k, &u);
+            ma_next = w.mt + a6.tr_mul(&(ma_next * a6)) - z.tr_mul(&z);
+            pa_next = w.p_big + a6.tr_mul(&y) + uhat * dinv_u;
+            w.ma = ma_next;
+            w.pa = pa_next;
+            w.uhat = uhat;
+            w.dhat_chol = dhat;
+            w.u = u;
+        }
+        let mut etadot = gravity_base_acceleration(model, rm, scale);
+        for (n, piece) in pieces.iter().enumerate() {
+            let k = piece.basis.dof();
+            let o = rm.dof_offset + piece.dof_offset;
+            let w = &data.pieces[r][n];
+            let rhs = w.u - w.uhat.tr_mul(&etadot);
+            let qn = chol_solve(&w.dhat_chol, k, &rhs);
+            data.qdd.as_mut_slice()[o..o + k].copy_from_slice(&qn.as_slice()[..k]);
+            etadot = w.a_tip.mul_vec(&etadot) + w.s_tip * qn + w.acc_tip;
+        }
+    }
+    if let Some((i, v)) = data.qdd.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        return Err(DynamicsError::NotFinite {
+            what: format!("qddot[{i}] at t = {t}"),
+            value: *v,
+        });
+    }
+    Ok(&data.qdd)
+}
+
+/// Mass matrix `M(q) = ∫ Jᵀ𝓜J ds` (D19) by the composite recursion (D20):
+/// `𝓜ᶜ_n = 𝓜ᵗ_n + A_ℓᵀ𝓜ᶜ_{n+1}A_ℓ`, `M_mm = 𝓓_m + S_ℓᵀ𝓜ᶜ_{m+1}S_ℓ`, and the
+/// off-diagonal blocks by carrying `F = 𝓤_m + A_ℓᵀ𝓜ᶜ_{m+1}S_ℓ` down the
+/// chain. Block diagonal across rods. Result in `data.mass` (n_dof × n_dof,
+/// symmetric positive definite). Cost O(N·n_dof).
+pub fn mass_matrix<'a>(
+    model: &Model,
+    data: &'a mut Data,
+    q: &[f64],
+) -> Result<&'a nalgebra::DMatrix<f64>, DynamicsError> {
+    check_vec(model, "q", q)?;
+    outward(model, data, q, None, None, Pass::Composite);
+    data.mass.fill(0.0);
+    for (r, rm) in model.rods().iter().enumerate() {
+        let pieces = rm.spec.rod.pieces();
+        let mut mc_next = Mat6::zeros();
+        for m in (0..pieces.len()).rev() {
+            let w = &data.pieces[r][m];
+            let km = pieces[m].basis.dof();
+            let om = rm.dof_offset + pieces[m].dof_offset;
+            let a6 = w.a_tip.to_mat6();
+            let x = mc_next * w.s_tip;
+            let mmm = w.dt + w.s_tip.tr_mul(&x);
+            let mut f = w.ut + a6.tr_mul(&x);
+            for i in 0..km {
+                for j in 0..km {
+                    data.mass[(om + i, om + j)] = mmm[(i, j)];
+                }
+            }
+            for n in (0..m).rev() {
+                let wn = &data.pieces[r][n];
+                let kn = pieces[n].basis.dof();
+                let on = rm.dof_offset + pieces[n].dof_offset;
+                let blk = wn.s_tip.tr_mul(&f);
+                for i in 0..kn {
+                    for j in 0..km {
+                        data.mass[(on + i, om + j)] = blk[(i, j)];
+                        data.mass[(om + j, on + i)] = blk[(i, j)];
+                    }
+                }
+                f = wn.a_tip.to_mat6().tr_mul(&f);
+            }
+            mc_next = w.mt + a6.tr_mul(&(mc_next * a6));
+        }
+    }
+    Ok(&data.mass)
+}
+
+/// Forward dynamics through the mass matrix, the cross-check of the O(N)
+/// recursion: `q̈ = M⁻¹(τ_act − ID(q, q̇, 0))` with a dense Cholesky
+/// (O(n_dof³), allocates the factor). Result in `data.qdd`.
+pub fn forward_dynamics_cholesky<'a>(
+    model: &Model,
+    data: &'a mut Data,
+    t: f64,
+    q: &[f64],
+    qd: &[f64],
+    tau_act: Option<&[f64]>,
+) -> Result<&'a DVector<f64>, DynamicsError> {
+    let zero = vec![0.0; model.n_dof()];
+    inverse_dynamics(model, data, t, q, qd, &zero)?;
+    let mut rhs = -data.tau.clone();
+    if let Some(ta) = tau_act {
+        check_vec(model, "tau", ta)?;
+        rhs += DVector::from_column_slice(ta);
+    }
+    mass_matrix(model, data, q)?;
+    let chol = data
+        .mass
+        .clone()
+        .cholesky()
+        .ok_or(DynamicsError::Singular {
+            rod: 0,
+            piece: 0,
+            what: "mass matrix",
+        })?;
+    data.qdd = chol.solve(&rhs);
+    Ok(&data.qdd)
+}
+
+/// The bias `b(q, q̇, t) = ID(q, q̇, 0)`: `C q̇ + G + τ_e + D q̇ − τ_c − Q_ext`
+/// (the equations of motion read `M q̈ + b = τ_act`). Result in `data.tau`.
+pub fn bias_force<'a>(
+    model: &Model,
+    data: &'a mut Data,
+    t: f64,
+    q: &[f64],
+    qd: &[f64],
+) -> Result<&'a DVector<f64>, DynamicsError> {
+    check_vec(model, "q", q)?;
+    check_vec(model, "qdot", qd)?;
+    outward(model, data, q, Some(qd), None, Pass::Inverse);
+    strain_forces(model, data, t, q, Some(qd), None);
+    inward_inverse(model, data);
+    Ok(&data.tau)
+}

@@ -1,0 +1,111 @@
+//! Reusable buffers: everything one evaluation needs, allocated once.
+
+use crate::model::Model;
+use nalgebra::{DMatrix, DVector};
+use softrod_lie::{AdOp, Mat6, Pose, Vec6};
+
+/// Per-piece work space of the recursions (all fixed-size; `k_n`-sized
+/// quantities live in the top-left of 6×6 / the head of 6-vectors).
+#[derive(Clone, Debug)]
+pub(crate) struct PieceWork {
+    pub xi: Vec6,
+    pub dxi: Vec6,
+    /// World pose, velocity and (fictitious, gravity included) acceleration
+    /// at the piece base `L_{n−1}`.
+    pub base_pose: Pose,
+    pub eta0: Vec6,
+    pub etadot0: Vec6,
+    /// `A_ℓ = Ad⁻¹_{g_n(ℓ)}`, `T₋(ℓ)`, `S_ℓ = T₋(ℓ)B` (6×k), bias `a_ℓ`.
+    pub a_tip: AdOp,
+    pub tm_tip: AdOp,
+    pub s_tip: Mat6,
+    pub acc_tip: Vec6,
+    /// (D20): `𝓜ᵗ`, `𝓤` (6×k), `𝓓` (k×k).
+    pub mt: Mat6,
+    pub ut: Mat6,
+    pub dt: Mat6,
+    /// (D23): `𝓟ᵗ` (6) and `𝓹` (k), or the inverse-dynamics sums of (D17–D18).
+    pub p_big: Vec6,
+    pub p_small: Vec6,
+    /// (D24–D26): articulated inertia and bias of the subtree from this piece.
+    pub ma: Mat6,
+    pub pa: Vec6,
+    pub uhat: Mat6,
+    pub dhat_chol: Mat6,
+    pub u: Vec6,
+}
+
+impl PieceWork {
+    fn new() -> Self {
+        Self {
+            xi: Vec6::zeros(),
+            dxi: Vec6::zeros(),
+            base_pose: Pose::identity(),
+            eta0: Vec6::zeros(),
+            etadot0: Vec6::zeros(),
+            a_tip: AdOp::identity(),
+            tm_tip: AdOp::zeros(),
+            s_tip: Mat6::zeros(),
+            acc_tip: Vec6::zeros(),
+            mt: Mat6::zeros(),
+            ut: Mat6::zeros(),
+            dt: Mat6::zeros(),
+            p_big: Vec6::zeros(),
+            p_small: Vec6::zeros(),
+            ma: Mat6::zeros(),
+            pa: Vec6::zeros(),
+            uhat: Mat6::zeros(),
+            dhat_chol: Mat6::zeros(),
+            u: Vec6::zeros(),
+        }
+    }
+}
+
+/// All buffers of the algorithms for one [`Model`] (Pinocchio-style
+/// `Model`/`Data` split). Create once with [`Data::new`]; evaluations
+/// write into it and allocate nothing.
+#[derive(Clone, Debug)]
+pub struct Data {
+    pub(crate) pieces: Vec<Vec<PieceWork>>,
+    /// Generalized force from the last [`crate::inverse_dynamics`] (n_dof).
+    pub tau: DVector<f64>,
+    /// Generalized acceleration from the last forward dynamics (n_dof).
+    pub qdd: DVector<f64>,
+    /// Mass matrix from the last [`crate::mass_matrix`] (n_dof × n_dof).
+    pub mass: DMatrix<f64>,
+    /// Strain-space forces scratch: `τ_act + τ_c − τ_e − D q̇` (n_dof).
+    pub(crate) strain_force: DVector<f64>,
+    /// Cable force per unit tension scratch (n_dof).
+    pub(crate) cable_scratch: DVector<f64>,
+    /// Factor multiplying every external load and cable tension (gravity,
+    /// point and distributed loads, cables); 1 by default. Statics ramps it
+    /// for load continuation.
+    pub load_scale: f64,
+    /// When set, the sweeps include gravity only (for [`crate::generalized_gravity`]).
+    pub(crate) only_gravity: bool,
+}
+
+impl Data {
+    /// Allocates the buffers for `model`.
+    pub fn new(model: &Model) -> Self {
+        let n = model.n_dof();
+        Self {
+            pieces: model
+                .rods()
+                .iter()
+                .map(|r| {
+                    (0..r.spec.rod.n_pieces())
+                        .map(|_| PieceWork::new())
+                        .collect()
+                })
+                .collect(),
+            tau: DVector::zeros(n),
+            qdd: DVector::zeros(n),
+            mass: DMatrix::zeros(n, n),
+            strain_force: DVector::zeros(n),
+            cable_scratch: DVector::zeros(n),
+            load_scale: 1.0,
+            only_gravity: false,
+        }
+    }
+}

@@ -1,0 +1,72 @@
+//! Energies (derivations §7).
+
+use crate::algorithms::check_vec;
+use crate::data::Data;
+use crate::error::DynamicsError;
+use crate::model::Model;
+use softrod_lie::{Vec6, exp_and_tangent_minus, exp_twist};
+use softrod_mechanics::elastic_energy;
+
+/// Mechanical energies of the model at `(q, q̇)` [J].
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Energies {
+    /// `½ q̇ᵀ M q̇ = ½ ∫ ηᵀ𝓜η ds` (same quadrature as `M`).
+    pub kinetic: f64,
+    /// `½ Σ_n ∫ (ξ_n − ξ*_n)ᵀ Γ (ξ_n − ξ*_n) ds`.
+    pub elastic: f64,
+    /// `−∫ ρA g_w·p(s) ds` (zero without gravity).
+    pub gravitational: f64,
+}
+
+impl Energies {
+    /// `kinetic + elastic + gravitational`: conserved without damping,
+    /// drag, actuation and non-conservative loads.
+    pub fn total(&self) -> f64 {
+        self.kinetic + self.elastic + self.gravitational
+    }
+}
+
+/// Kinetic, elastic and gravitational energy at `(q, q̇)` (dim n_dof each).
+/// Uses the model's quadrature; O(N). `data` is not modified except as scratch.
+pub fn energies(
+    model: &Model,
+    _data: &mut Data,
+    q: &[f64],
+    qd: &[f64],
+) -> Result<Energies, DynamicsError> {
+    check_vec(model, "q", q)?;
+    check_vec(model, "qdot", qd)?;
+    let mut e = Energies::default();
+    for rm in model.rods() {
+        let rod = &rm.spec.rod;
+        let range = rm.dofs();
+        let qr = &q[range.clone()];
+        let qdr = &qd[range];
+        e.elastic += elastic_energy(
+            rod,
+            &rm.spec.body,
+            rm.spec.stress_free.as_deref(),
+            qr,
+            &model.quadrature,
+        );
+        let mut pose = *rod.base();
+        let mut eta0 = Vec6::zeros();
+        for (piece, pd) in rod.pieces().iter().zip(&rm.pieces) {
+            let xi = piece.strain(qr);
+            let dxi = piece.strain_rate(qdr);
+            for qp in &pd.points {
+                let (gl, tm) = exp_and_tangent_minus(qp.x, &xi);
+                let eta = gl.ad_inv().mul_vec(&eta0) + tm.mul_vec(&dxi);
+                e.kinetic += 0.5 * qp.w * eta.dot(&qp.inertia.component_mul(&eta));
+                if let Some(g) = model.gravity {
+                    let p = pose.transform_point(&gl.translation);
+                    e.gravitational -= qp.w * qp.mass_per_length * g.dot(&p);
+                }
+            }
+            let (gl, tm) = exp_and_tangent_minus(piece.length, &xi);
+            eta0 = gl.ad_inv().mul_vec(&eta0) + tm.mul_vec(&dxi);
+            pose = pose.compose(&exp_twist(piece.length, &xi));
+        }
+    }
+    Ok(e)
+}

@@ -1,0 +1,126 @@
+//! The matrices of the Lagrangian form, seed (12)–(13), on request.
+
+use crate::algorithms::{check_vec, inward_inverse, strain_forces};
+use crate::data::Data;
+use crate::error::DynamicsError;
+use crate::model::Model;
+use crate::passes::{Pass, outward};
+use nalgebra::{DMatrix, DVector, Matrix6xX};
+use softrod_kinematics::{Frame, RodKinematics};
+use softrod_lie::coad_vec;
+
+/// Generalized gravity `G(q) = −∫ Jᵀ 𝓜 Ad⁻¹_{g(s)} 𝒢 ds = ∂V_g/∂q` (D22), on
+/// the left-hand side of the equations of motion; zero without gravity.
+/// Equals `ID(q, 0, 0)` with only gravity on.
+pub fn generalized_gravity(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+) -> Result<DVector<f64>, DynamicsError> {
+    check_vec(model, "q", q)?;
+    let zero = vec![0.0; model.n_dof()];
+    data.only_gravity = true;
+    let scale = std::mem::replace(&mut data.load_scale, 1.0);
+    outward(model, data, q, None, Some(&zero), Pass::Inverse);
+    strain_forces(model, data, 0.0, q, None, None);
+    inward_inverse(model, data);
+    data.only_gravity = false;
+    data.load_scale = scale;
+    Ok(data.tau.clone())
+}
+
+/// Block-diagonal generalized stiffness `K = diag(K_n)`, `K_n = ∫B_nᵀΓB_n ds` (D13).
+pub fn stiffness_matrix(model: &Model) -> DMatrix<f64> {
+    block_diag(model, |pd| &pd.stiffness)
+}
+
+/// Block-diagonal generalized damping `D = diag(D_n)`, `D_n = ∫B_nᵀγB_n ds` (D13).
+pub fn damping_matrix(model: &Model) -> DMatrix<f64> {
+    block_diag(model, |pd| &pd.damping)
+}
+
+fn block_diag(
+    model: &Model,
+    f: impl Fn(&crate::model::PieceData) -> &DMatrix<f64>,
+) -> DMatrix<f64> {
+    let n = model.n_dof();
+    let mut m = DMatrix::zeros(n, n);
+    for rm in model.rods() {
+        for (piece, pd) in rm.spec.rod.pieces().iter().zip(&rm.pieces) {
+            let o = rm.dof_offset + piece.dof_offset;
+            let k = piece.basis.dof();
+            m.view_mut((o, o), (k, k)).copy_from(f(pd));
+        }
+    }
+    m
+}
+
+/// Actuation matrix (n_dof × n_cables): column `c` is the generalized force
+/// of cable `c` per unit tension, `−∂ℓ_c/∂q` (D15). Cables are numbered rod
+/// by rod in the order given.
+pub fn actuation_matrix(model: &Model, q: &[f64]) -> Result<DMatrix<f64>, DynamicsError> {
+    check_vec(model, "q", q)?;
+    let mut a = DMatrix::zeros(model.n_dof(), model.n_cables());
+    let mut col = 0;
+    for rm in model.rods() {
+        let range = rm.dofs();
+        for cable in &rm.spec.cables {
+            let mut v = vec![0.0; rm.n_dof()];
+            cable.add_force_per_tension(&rm.spec.rod, &q[range.clone()], &model.quadrature, &mut v);
+            for (i, x) in v.iter().enumerate() {
+                a[(range.start + i, col)] = *x;
+            }
+            col += 1;
+        }
+    }
+    Ok(a)
+}
+
+/// Coriolis/centrifugal matrix `C = ∫ Jᵀ(ad*_{Jq̇}𝓜J + 𝓜J̇) ds` (D21, seed
+/// (12) with the true `J̇` of (D12)), for which `Ṁ − 2C` is skew-symmetric.
+/// Built from explicit Jacobians at the Gauss points: O(N·n_dof²), for
+/// analysis and control, not for simulation (use [`crate::bias_force`]).
+pub fn coriolis_matrix(
+    model: &Model,
+    q: &[f64],
+    qd: &[f64],
+) -> Result<DMatrix<f64>, DynamicsError> {
+    check_vec(model, "q", q)?;
+    check_vec(model, "qdot", qd)?;
+    let n = model.n_dof();
+    let mut c = DMatrix::zeros(n, n);
+    for rm in model.rods() {
+        let rod = &rm.spec.rod;
+        let range = rm.dofs();
+        let k = rod.n_dof();
+        let mut kin = RodKinematics::new(rod);
+        kin.update(rod, &q[range.clone()], Some(&qd[range.clone()]), None)
+            .map_err(|e| DynamicsError::InvalidModel(e.to_string()))?;
+        let mut j = Matrix6xX::zeros(k);
+        let mut jd = Matrix6xX::zeros(k);
+        let qdr = DVector::from_column_slice(&qd[range.clone()]);
+        for (piece, pd) in rod.pieces().iter().zip(&rm.pieces) {
+            for qp in &pd.points {
+                let s = piece.start + qp.x;
+                kin.jacobian_at(rod, s, Frame::Body, &mut j)
+                    .map_err(|e| DynamicsError::InvalidModel(e.to_string()))?;
+                kin.jacobian_dot_at(rod, s, Frame::Body, &mut jd)
+                    .map_err(|e| DynamicsError::InvalidModel(e.to_string()))?;
+                let eta: softrod_lie::Vec6 = (&j * &qdr).fixed_rows::<6>(0).into_owned();
+                // inner = ad*_η 𝓜 J + 𝓜 J̇ (6×k)
+                let mut inner = Matrix6xX::zeros(k);
+                for col in 0..k {
+                    let jc: softrod_lie::Vec6 = j.fixed_view::<6, 1>(0, col).into_owned();
+                    let jdc: softrod_lie::Vec6 = jd.fixed_view::<6, 1>(0, col).into_owned();
+                    let v = coad_vec(&eta, &qp.inertia.component_mul(&jc))
+                        + qp.inertia.component_mul(&jdc);
+                    inner.set_column(col, &v);
+                }
+                let blk = j.transpose() * inner * qp.w;
+                let mut view = c.view_mut((range.start, range.start), (k, k));
+                view += blk;
+            }
+        }
+    }
+    Ok(c)
+}

@@ -1,0 +1,282 @@
+//! The immutable description of what is simulated.
+
+use crate::error::DynamicsError;
+use nalgebra::{DMatrix, DVector};
+use softrod_kinematics::{GaussLegendre, Rod};
+use softrod_lie::{Vec3, Vec6};
+use softrod_mechanics::{
+    Cable, DistributedLoad, Drag, LoadFrame, PointLoad, RodBody, piece_matrices,
+};
+
+/// Everything about one rod: its geometry and strain bases, its body
+/// (section + material), and the force terms acting on it. Only the terms
+/// present are evaluated (an empty `cables` list costs nothing).
+#[derive(Clone, Debug)]
+pub struct RodSpec {
+    /// A name for messages and outputs.
+    pub name: String,
+    /// Pieces, bases, rest strain, base pose.
+    pub rod: Rod,
+    /// Section and material.
+    pub body: RodBody,
+    /// Stress-free strain `ξ*_n` per piece when it differs from the rest
+    /// strain `ξ̄_n` (the strain at `q = 0`); `None`: `ξ* = ξ̄`.
+    pub stress_free: Option<Vec<Vec6>>,
+    /// Point loads (dead or follower), any `s`, including the tip.
+    pub point_loads: Vec<PointLoad>,
+    /// Uniformly distributed loads.
+    pub distributed_loads: Vec<DistributedLoad>,
+    /// Linear viscous drag of a surrounding fluid.
+    pub drag: Option<Drag>,
+    /// Cables (tendons) routed along this rod.
+    pub cables: Vec<Cable>,
+}
+
+impl RodSpec {
+    /// A rod with no loads, cables or drag.
+    pub fn new(name: impl Into<String>, rod: Rod, body: RodBody) -> Self {
+        Self {
+            name: name.into(),
+            rod,
+            body,
+            stress_free: None,
+            point_loads: Vec::new(),
+            distributed_loads: Vec::new(),
+            drag: None,
+            cables: Vec::new(),
+        }
+    }
+}
+
+/// One evaluation point of a piece: local abscissa, weight and the diagonal
+/// of the screw inertia `𝓜` there.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct QuadPoint {
+    pub x: f64,
+    pub w: f64,
+    pub inertia: Vec6,
+    pub mass_per_length: f64,
+}
+
+/// A point load placed on its piece.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PlacedLoad {
+    pub x: f64,
+    pub index: usize,
+}
+
+/// Precomputed per-piece data of a rod.
+#[derive(Clone, Debug)]
+pub(crate) struct PieceData {
+    pub points: Vec<QuadPoint>,
+    pub loads: Vec<PlacedLoad>,
+    /// `K_n` (k×k), `D_n` (k×k), elastic offset `∫Bᵀ Γ (ξ̄ − ξ*)` (k).
+    pub stiffness: DMatrix<f64>,
+    pub damping: DMatrix<f64>,
+    pub elastic_offset: DVector<f64>,
+    /// `B_n` padded to 6×6 (columns ≥ k are zero).
+    pub basis6: softrod_lie::Mat6,
+    pub has_damping: bool,
+    pub has_offset: bool,
+}
+
+/// A rod inside a [`Model`], with precomputed piece data.
+#[derive(Clone, Debug)]
+pub struct RodModel {
+    /// The description it was built from.
+    pub spec: RodSpec,
+    /// Index of the rod's first coordinate in the model's `q`.
+    pub dof_offset: usize,
+    pub(crate) pieces: Vec<PieceData>,
+    /// Whether world poses at evaluation points are needed (world-frame
+    /// distributed loads, gravity potential).
+    pub(crate) needs_world_pose_at_points: bool,
+}
+
+impl RodModel {
+    /// Number of coordinates of this rod.
+    pub fn n_dof(&self) -> usize {
+        self.spec.rod.n_dof()
+    }
+
+    /// Range of this rod's coordinates in the model's `q`.
+    pub fn dofs(&self) -> std::ops::Range<usize> {
+        self.dof_offset..self.dof_offset + self.n_dof()
+    }
+}
+
+/// The immutable model: rods (each an independent chain clamped at its own
+/// base), world gravity, quadrature order, and the force terms of each rod.
+///
+/// Generalized coordinates are the concatenation of the rods' `q`
+/// (`n_dof = Σ_rods Σ_n k_n`).
+#[derive(Clone, Debug)]
+pub struct Model {
+    pub(crate) rods: Vec<RodModel>,
+    /// World gravity `g_w` [m/s²], `None` if absent.
+    pub gravity: Option<Vec3>,
+    /// Gauss points per piece.
+    pub quadrature: GaussLegendre,
+    n_dof: usize,
+}
+
+impl Model {
+    /// Builds a model; precomputes `K_n`, `D_n` (D13), the quadrature points
+    /// with their inertia, and the placement of point loads on pieces.
+    ///
+    /// `quadrature` is the number of Gauss–Legendre points per piece (≥ 1;
+    /// 4 integrates the inertia of a uniform piece to ~1e-10 for curvatures
+    /// up to a few rad per piece length).
+    pub fn new(
+        rods: Vec<RodSpec>,
+        gravity: Option<Vec3>,
+        quadrature: usize,
+    ) -> Result<Self, DynamicsError> {
+        if rods.is_empty() {
+            return Err(DynamicsError::InvalidModel(
+                "a model needs at least one rod".into(),
+            ));
+        }
+        if quadrature == 0 {
+            return Err(DynamicsError::InvalidModel(
+                "quadrature needs at least one Gauss point per piece".into(),
+            ));
+        }
+        if let Some(g) = gravity {
+            if g.iter().any(|v| !v.is_finite()) {
+                return Err(DynamicsError::InvalidModel(format!(
+                    "gravity {g:?} is not finite"
+                )));
+            }
+        }
+        let gravity = gravity.filter(|g| g.norm() > 0.0);
+        let gl = GaussLegendre::new(quadrature);
+        let mut out = Vec::with_capacity(rods.len());
+        let mut off = 0;
+        for spec in rods {
+            let rod = &spec.rod;
+            let name = spec.name.clone();
+            let invalid =
+                |what: String| DynamicsError::InvalidModel(format!("rod '{name}': {what}"));
+            spec.body.validate().map_err(|e| invalid(e.to_string()))?;
+            if (spec.body.length - rod.length()).abs() > 1e-9 * rod.length() {
+                return Err(invalid(format!(
+                    "body length {} differs from the rod length {}",
+                    spec.body.length,
+                    rod.length()
+                )));
+            }
+            if let Some(sf) = &spec.stress_free {
+                if sf.len() != rod.n_pieces() {
+                    return Err(invalid(format!(
+                        "{} stress-free strains given for {} pieces",
+                        sf.len(),
+                        rod.n_pieces()
+                    )));
+                }
+            }
+            for c in &spec.cables {
+                c.validate(rod.length())
+                    .map_err(|e| invalid(e.to_string()))?;
+            }
+            for (i, l) in spec.point_loads.iter().enumerate() {
+                rod.locate(l.s)
+                    .map_err(|e| invalid(format!("point load {i}: {e}")))?;
+            }
+            let mats = piece_matrices(rod, &spec.body, spec.stress_free.as_deref(), &gl);
+            let mut pieces = Vec::with_capacity(rod.n_pieces());
+            for (n, (piece, m)) in rod.pieces().iter().zip(mats).enumerate() {
+                let points = gl
+                    .on_interval(piece.length)
+                    .map(|(x, w)| {
+                        let s = piece.start + x;
+                        QuadPoint {
+                            x,
+                            w,
+                            inertia: spec.body.screw_inertia(s),
+                            mass_per_length: spec.body.mass_per_length(s),
+                        }
+                    })
+                    .collect();
+                let mut loads = Vec::new();
+                for (i, l) in spec.point_loads.iter().enumerate() {
+                    let (pn, x) = rod.locate(l.s).expect("checked above");
+                    if pn == n {
+                        loads.push(PlacedLoad { x, index: i });
+                    }
+                }
+                let mut basis6 = softrod_lie::Mat6::zeros();
+                let b = piece.basis.matrix();
+                basis6.view_mut((0, 0), (6, b.ncols())).copy_from(b);
+                pieces.push(PieceData {
+                    points,
+                    loads,
+                    has_damping: m.damping.iter().any(|v| *v != 0.0),
+                    has_offset: m.elastic_offset.iter().any(|v| *v != 0.0),
+                    stiffness: m.stiffness,
+                    damping: m.damping,
+                    elastic_offset: m.elastic_offset,
+                    basis6,
+                });
+            }
+            let needs_world = spec
+                .distributed_loads
+                .iter()
+                .any(|d| d.frame == LoadFrame::World);
+            let n = rod.n_dof();
+            out.push(RodModel {
+                spec,
+                dof_offset: off,
+                pieces,
+                needs_world_pose_at_points: needs_world,
+            });
+            off += n;
+        }
+        Ok(Self {
+            rods: out,
+            gravity,
+            quadrature: gl,
+            n_dof: off,
+        })
+    }
+
+    /// Total number of generalized coordinates.
+    pub fn n_dof(&self) -> usize {
+        self.n_dof
+    }
+
+    /// The rods.
+    pub fn rods(&self) -> &[RodModel] {
+        &self.rods
+    }
+
+    /// Names of the force terms present, for summaries (`softrod check`).
+    pub fn terms(&self) -> Vec<String> {
+        let mut t = vec!["inertia".to_string(), "elasticity".to_string()];
+        let any = |f: &dyn Fn(&RodModel) -> bool| self.rods.iter().any(f);
+        if any(&|r| r.pieces.iter().any(|p| p.has_damping)) {
+            t.push("damping".into());
+        }
+        if self.gravity.is_some() {
+            t.push("gravity".into());
+        }
+        if any(&|r| !r.spec.cables.is_empty()) {
+            t.push("cables".into());
+        }
+        if any(&|r| !r.spec.point_loads.is_empty()) {
+            t.push("point loads".into());
+        }
+        if any(&|r| !r.spec.distributed_loads.is_empty()) {
+            t.push("distributed loads".into());
+        }
+        if any(&|r| r.spec.drag.is_some()) {
+            t.push("drag".into());
+        }
+        t
+    }
+
+    /// Number of cables over all rods (columns of the actuation matrix).
+    pub fn n_cables(&self) -> usize {
+        self.rods.iter().map(|r| r.spec.cables.len()).sum()
+    }
+}

@@ -1,0 +1,259 @@
+//! The outward sweep shared by every algorithm, and small fixed-size helpers.
+
+use crate::data::Data;
+use crate::model::{Model, RodModel};
+use softrod_lie::{
+    AdOp, Mat6, Pose, Vec6, ad_vec, coad_vec, d_tangent_minus_self, exp_and_tangent_minus,
+};
+
+/// What the outward sweep accumulates per piece.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Pass {
+    /// (D17–D18) sums with `f = 𝓜η̇ + ad*_η𝓜η − 𝓕_ext`; needs `q̈`.
+    Inverse,
+    /// (D20) integrals and (D23) bias sums with `h = 𝓜a + ad*_η𝓜η − 𝓕_ext`.
+    Articulated,
+    /// (D20) integrals only (mass matrix).
+    Composite,
+}
+
+/// Base acceleration that stands for gravity (derivations §4): the rod is
+/// accelerated upward by `−g` in every section, `η̇(L₀) = −Ad⁻¹_{g_r}𝒢 =
+/// (0; −R_rᵀ g_w)`, so no gravity wrench is computed per point.
+#[inline]
+pub(crate) fn gravity_base_acceleration(model: &Model, rm: &RodModel, scale: f64) -> Vec6 {
+    match model.gravity {
+        Some(g) => {
+            let r = rm.spec.rod.base().rotation;
+            let a = -(r.tr_mul(&g)) * scale;
+            Vec6::new(0.0, 0.0, 0.0, a[0], a[1], a[2])
+        }
+        None => Vec6::zeros(),
+    }
+}
+
+/// `acc += w · Xᵀ diag(d) Y` for block operators `X = [[xa,0],[xb,xa]]`,
+/// `Y` likewise: five 3×3 products instead of two dense 6×6 ones.
+#[inline(always)]
+fn add_sandwich(acc: &mut Mat6, x: &AdOp, d: &Vec6, y: &AdOp, w: f64) {
+    let dw = softrod_lie::Mat3::from_diagonal(&softrod_lie::angular(d)) * w;
+    let dv = softrod_lie::Mat3::from_diagonal(&softrod_lie::linear(d)) * w;
+    let dv_ya = dv * y.a;
+    let dv_yb = dv * y.b;
+    let tl = x.a.tr_mul(&(dw * y.a)) + x.b.tr_mul(&dv_yb);
+    let tr = x.b.tr_mul(&dv_ya);
+    let bl = x.a.tr_mul(&dv_yb);
+    let br = x.a.tr_mul(&dv_ya);
+    let mut v = acc.fixed_view_mut::<3, 3>(0, 0);
+    v += tl;
+    let mut v = acc.fixed_view_mut::<3, 3>(0, 3);
+    v += tr;
+    let mut v = acc.fixed_view_mut::<3, 3>(3, 0);
+    v += bl;
+    let mut v = acc.fixed_view_mut::<3, 3>(3, 3);
+    v += br;
+}
+
+/// External distributed wrench density at a point (body frame, applied):
+/// drag on the body velocity plus distributed loads.
+#[inline]
+fn external_density(rm: &RodModel, scale: f64, world: &Pose, eta: &Vec6) -> Vec6 {
+    let mut f = Vec6::zeros();
+    if let Some(d) = &rm.spec.drag {
+        f += d.wrench_density(eta);
+    }
+    for dl in &rm.spec.distributed_loads {
+        f += dl.wrench_density(world) * scale;
+    }
+    f
+}
+
+/// Elementwise product with a diagonal given as a vector.
+#[inline(always)]
+fn diag_mul(d: &Vec6, v: &Vec6) -> Vec6 {
+    d.component_mul(v)
+}
+
+/// One outward sweep over every rod (D7–D10 at the evaluation points),
+/// accumulating per piece what `pass` needs. `q`, `qd`, `qdd` are the
+/// model's full vectors; `qd = None` means at rest, `qdd` only for
+/// [`Pass::Inverse`].
+pub(crate) fn outward(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    qd: Option<&[f64]>,
+    qdd: Option<&[f64]>,
+    pass: Pass,
+) {
+    let scale = data.load_scale;
+    let only_gravity = data.only_gravity;
+    for (r, rm) in model.rods.iter().enumerate() {
+        let rod = &rm.spec.rod;
+        let range = rm.dofs();
+        let qr = &q[range.clone()];
+        let qdr = qd.map(|v| &v[range.clone()]);
+        let qddr = qdd.map(|v| &v[range.clone()]);
+        let mut pose = *rod.base();
+        let mut eta0 = Vec6::zeros();
+        let mut etadot0 = if pass == Pass::Inverse {
+            gravity_base_acceleration(model, rm, scale)
+        } else {
+            Vec6::zeros()
+        };
+        let has_vel = qdr.is_some();
+        let need_world = rm.needs_world_pose_at_points;
+        for (n, (piece, pd)) in rod.pieces().iter().zip(&rm.pieces).enumerate() {
+            let w = &mut data.pieces[r][n];
+            let xi = piece.strain(qr);
+            let dxi = qdr.map_or(Vec6::zeros(), |v| piece.strain_rate(v));
+            let ddxi = qddr.map_or(Vec6::zeros(), |v| piece.strain_rate(v));
+            w.xi = xi;
+            w.dxi = dxi;
+            w.base_pose = pose;
+            w.eta0 = eta0;
+            w.etadot0 = etadot0;
+            let mut p_big = Vec6::zeros();
+            let mut p_small = Vec6::zeros();
+            let mut mt = Mat6::zeros();
+            let mut ut = Mat6::zeros();
+            let mut dt = Mat6::zeros();
+            for qp in &pd.points {
+                let (gl, tm) = exp_and_tangent_minus(qp.x, &xi);
+                let a = gl.ad_inv();
+                let m = &qp.inertia;
+                if pass != Pass::Composite {
+                    let carried = a.mul_vec(&eta0);
+                    let sv = tm.mul_vec(&dxi);
+                    let eta = carried + sv;
+                    let bias = if has_vel {
+                        ad_vec(&carried, &sv) + d_tangent_minus_self(qp.x, &xi, &dxi)
+                    } else {
+                        Vec6::zeros()
+                    };
+                    let world = if need_world {
+                        pose.compose(&gl)
+                    } else {
+                        Pose::identity()
+                    };
+                    let ext = if only_gravity {
+                        Vec6::zeros()
+                    } else {
+                        external_density(rm, scale, &world, &eta)
+                    };
+                    let gyro = coad_vec(&eta, &diag_mul(m, &eta));
+                    let f = if pass == Pass::Inverse {
+                        let etadot = a.mul_vec(&etadot0) + tm.mul_vec(&ddxi) + bias;
+                        diag_mul(m, &etadot) + gyro - ext
+                    } else {
+                        diag_mul(m, &bias) + gyro - ext
+                    };
+                    p_big += a.tr_mul_vec(&f) * qp.w;
+                    p_small += tm.tr_mul_vec(&f) * qp.w;
+                }
+                if pass != Pass::Inverse {
+                    add_sandwich(&mut mt, &a, m, &a, qp.w);
+                    add_sandwich(&mut ut, &a, m, &tm, qp.w);
+                    add_sandwich(&mut dt, &tm, m, &tm, qp.w);
+                }
+            }
+            if pass != Pass::Composite && !only_gravity {
+                for pl in &pd.loads {
+                    let load = &rm.spec.point_loads[pl.index];
+                    let (gl, tm) = exp_and_tangent_minus(pl.x, &xi);
+                    let f = load.wrench(&pose.compose(&gl)) * scale;
+                    let a = gl.ad_inv();
+                    p_big -= a.tr_mul_vec(&f);
+                    p_small -= tm.tr_mul_vec(&f);
+                }
+            }
+            let (gl, tm) = exp_and_tangent_minus(piece.length, &xi);
+            let a = gl.ad_inv();
+            let carried = a.mul_vec(&eta0);
+            let sv = tm.mul_vec(&dxi);
+            let acc = if has_vel {
+                ad_vec(&carried, &sv) + d_tangent_minus_self(piece.length, &xi, &dxi)
+            } else {
+                Vec6::zeros()
+            };
+            w.a_tip = a;
+            w.tm_tip = tm;
+            w.acc_tip = acc;
+            w.p_big = p_big;
+            if pass == Pass::Inverse {
+                w.p_small = p_small;
+                etadot0 = a.mul_vec(&etadot0) + tm.mul_vec(&ddxi) + acc;
+            } else {
+                let b6 = &pd.basis6;
+                w.s_tip = tm.to_mat6() * b6;
+                w.mt = mt;
+                w.ut = ut * b6;
+                w.dt = b6.tr_mul(&(dt * b6));
+                w.p_small = b6.tr_mul(&p_small);
+            }
+            eta0 = carried + sv;
+            pose = pose.compose(&gl);
+        }
+    }
+}
+
+/// In-place Cholesky of the leading `k×k` block of `m` (lower factor written
+/// to the lower triangle). Returns `false` if a pivot is not positive.
+#[inline]
+pub(crate) fn cholesky_k(m: &mut Mat6, k: usize) -> bool {
+    for j in 0..k {
+        let mut d = m[(j, j)];
+        for p in 0..j {
+            d -= m[(j, p)] * m[(j, p)];
+        }
+        if d.is_nan() || d <= 0.0 {
+            return false;
+        }
+        let d = d.sqrt();
+        m[(j, j)] = d;
+        for i in (j + 1)..k {
+            let mut s = m[(i, j)];
+            for p in 0..j {
+                s -= m[(i, p)] * m[(j, p)];
+            }
+            m[(i, j)] = s / d;
+        }
+    }
+    true
+}
+
+/// Solves `L y = b` (forward) in the leading `k` entries.
+#[inline]
+pub(crate) fn forward_sub(l: &Mat6, k: usize, b: &mut Vec6) {
+    for i in 0..k {
+        let mut s = b[i];
+        for p in 0..i {
+            s -= l[(i, p)] * b[p];
+        }
+        b[i] = s / l[(i, i)];
+    }
+}
+
+/// Solves `Lᵀ x = y` (backward) in the leading `k` entries.
+#[inline]
+pub(crate) fn backward_sub(l: &Mat6, k: usize, b: &mut Vec6) {
+    for i in (0..k).rev() {
+        let mut s = b[i];
+        for p in (i + 1)..k {
+            s -= l[(p, i)] * b[p];
+        }
+        b[i] = s / l[(i, i)];
+    }
+}
+
+/// `x = (L Lᵀ)⁻¹ b` in the leading `k` entries.
+#[inline]
+pub(crate) fn chol_solve(l: &Mat6, k: usize, b: &Vec6) -> Vec6 {
+    let mut x = *b;
+    for v in x.iter_mut().skip(k) {
+        *v = 0.0;
+    }
+    forward_sub(l, k, &mut x);
+    backward_sub(l, k, &mut x);
+    x
+}

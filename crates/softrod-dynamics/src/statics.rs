@@ -1,0 +1,249 @@
+//! Static equilibrium by Newton's method with line search and load continuation.
+
+use crate::algorithms::{check_vec, inverse_dynamics};
+use crate::data::Data;
+use crate::error::DynamicsError;
+use crate::matrices::stiffness_matrix;
+use crate::model::Model;
+use nalgebra::{DMatrix, DVector};
+
+/// Settings of [`statics`].
+#[derive(Clone, Debug)]
+pub struct StaticsOptions {
+    /// Converged when `‖r‖∞ ≤ tolerance · max(‖r(q₀)‖∞, ‖K q‖∞)`: the
+    /// residual generalized force relative to the load it balances.
+    pub tolerance: f64,
+    /// Newton iterations per continuation step.
+    pub max_iterations: usize,
+    /// Maximum number of continuation steps (load increments).
+    pub max_load_steps: usize,
+    /// Time at which time-dependent loads (cable tensions) are evaluated [s].
+    pub time: f64,
+}
+
+impl Default for StaticsOptions {
+    /// `tolerance = 1e-10` (far below the PCS discretization error, well
+    /// above round-off for cond(K) up to ~1e5), 30 iterations, 64 steps.
+    fn default() -> Self {
+        Self {
+            tolerance: 1e-10,
+            max_iterations: 30,
+            max_load_steps: 64,
+            time: 0.0,
+        }
+    }
+}
+
+/// A converged equilibrium.
+#[derive(Clone, Debug)]
+pub struct StaticsResult {
+    /// Equilibrium coordinates (n_dof).
+    pub q: DVector<f64>,
+    /// Always true in a returned result (failures are errors); kept for
+    /// machine-readable outputs.
+    pub converged: bool,
+    /// Newton iterations over all continuation steps.
+    pub iterations: usize,
+    /// Final residual `‖r‖∞` [N or N·m per coordinate].
+    pub residual: f64,
+    /// Load increments used (1 when the full load converged directly).
+    pub load_steps: usize,
+}
+
+/// Static equilibrium `r(q) = ID(q, 0, 0) = G + τ_e − τ_c − Q_ext = 0` under
+/// every static term of the model (gravity, elasticity, cables at
+/// `options.time`, point and distributed loads), starting from `q0`.
+///
+/// Newton's method with the Jacobian `K + ∂(r − Kq)/∂q` (central
+/// differences for the geometric part only) and a backtracking line search
+/// on `‖r‖`. If the full load does not converge from `q0`, the loads are
+/// ramped (`λ` from 0 to 1, step halved on failure, grown on success) —
+/// large curls and follower loads need it. Never returns an unconverged
+/// state: failure is [`DynamicsError::StaticsFailed`] with the load fraction
+/// reached and the residual.
+pub fn statics(
+    model: &Model,
+    data: &mut Data,
+    q0: &[f64],
+    options: &StaticsOptions,
+) -> Result<StaticsResult, DynamicsError> {
+    check_vec(model, "q0", q0)?;
+    let saved = data.load_scale;
+    let out = statics_inner(model, data, q0, options);
+    data.load_scale = saved;
+    out
+}
+
+struct Newton<'a> {
+    model: &'a Model,
+    k: DMatrix<f64>,
+    zero: Vec<f64>,
+    time: f64,
+    iterations: usize,
+}
+
+impl Newton<'_> {
+    fn residual(&self, data: &mut Data, q: &DVector<f64>) -> Result<DVector<f64>, DynamicsError> {
+        Ok(inverse_dynamics(
+            self.model,
+            data,
+            self.time,
+            q.as_slice(),
+            &self.zero,
+            &self.zero,
+        )?
+        .clone())
+    }
+
+    fn jacobian(&self, data: &mut Data, q: &DVector<f64>) -> Result<DMatrix<f64>, DynamicsError> {
+        let n = q.len();
+        let mut jac = self.k.clone();
+        let mut qp = q.clone();
+        for j in 0..n {
+            let h = 6e-6 * q[j].abs().max(1.0);
+            qp[j] = q[j] + h;
+            let plus = self.residual(data, &qp)?;
+            qp[j] = q[j] - h;
+            let minus = self.residual(data, &qp)?;
+            qp[j] = q[j];
+            for i in 0..n {
+                jac[(i, j)] += (plus[i] - minus[i]) / (2.0 * h) - self.k[(i, j)];
+            }
+        }
+        Ok(jac)
+    }
+
+    /// Newton from `q` at the current load scale; `Ok(Some(residual))` when
+    /// converged (q updated), `Ok(None)` when it failed (q unspecified).
+    fn solve(
+        &mut self,
+        data: &mut Data,
+        q: &mut DVector<f64>,
+        tol_ref: f64,
+        options: &StaticsOptions,
+    ) -> Result<Option<f64>, DynamicsError> {
+        let mut r = self.residual(data, q)?;
+        for _ in 0..options.max_iterations {
+            let rn = r.amax();
+            let kq = (&self.k * &*q).amax();
+            let tol = options.tolerance * tol_ref.max(kq);
+            if rn <= tol {
+                return Ok(Some(rn));
+            }
+            self.iterations += 1;
+            let jac = self.jacobian(data, q)?;
+            let Some(dq) = jac.lu().solve(&(-&r)) else {
+                return Ok(None);
+            };
+            if dq.iter().any(|v| !v.is_finite()) {
+                return Ok(None);
+            }
+            let mut alpha = 1.0;
+            loop {
+                let trial = &*q + &dq * alpha;
+                let rt = match self.residual(data, &trial) {
+                    Ok(v) => v,
+                    Err(DynamicsError::NotFinite { .. }) => {
+                        DVector::from_element(r.len(), f64::INFINITY)
+                    }
+                    Err(e) => return Err(e),
+                };
+                if rt.amax() < (1.0 - 1e-4 * alpha) * rn || rt.amax() <= tol {
+                    *q = trial;
+                    r = rt;
+                    break;
+                }
+                alpha *= 0.5;
+                if alpha < 1e-6 {
+                    // Stagnation at round-off counts as converged if the
+                    // residual is already tiny.
+                    return Ok((rn <= 1e3 * tol).then_some(rn));
+                }
+            }
+        }
+        let rn = r.amax();
+        let tol = options.tolerance * tol_ref.max((&self.k * &*q).amax());
+        Ok((rn <= tol).then_some(rn))
+    }
+}
+
+fn statics_inner(
+    model: &Model,
+    data: &mut Data,
+    q0: &[f64],
+    options: &StaticsOptions,
+) -> Result<StaticsResult, DynamicsError> {
+    let n = model.n_dof();
+    let mut newton = Newton {
+        model,
+        k: stiffness_matrix(model),
+        zero: vec![0.0; n],
+        time: options.time,
+        iterations: 0,
+    };
+    let start = DVector::from_column_slice(q0);
+    data.load_scale = 1.0;
+    let r_full = newton.residual(data, &start)?.amax();
+    // Reference force: the full-load imbalance at the start.
+    let tol_ref = r_full.max(f64::MIN_POSITIVE);
+    let mut q = start.clone();
+    if let Some(res) = newton.solve(data, &mut q, tol_ref, options)? {
+        return Ok(StaticsResult {
+            q,
+            converged: true,
+            iterations: newton.iterations,
+            residual: res,
+            load_steps: 1,
+        });
+    }
+    // Continuation from the unloaded state.
+    let mut lam = 0.0;
+    let mut q_prev = start.clone();
+    data.load_scale = 0.0;
+    if newton.solve(data, &mut q_prev, tol_ref, options)?.is_none() {
+        return Err(DynamicsError::StaticsFailed {
+            reason: "no equilibrium even without loads (check the stress-free strain)".into(),
+            load_fraction: 0.0,
+            iterations: newton.iterations,
+            residual: newton.residual(data, &q_prev)?.amax(),
+        });
+    }
+    let mut step = 0.25;
+    let mut steps = 0;
+    let mut last_res = 0.0;
+    while lam < 1.0 {
+        if steps >= options.max_load_steps || step < 1e-5 {
+            data.load_scale = lam;
+            return Err(DynamicsError::StaticsFailed {
+                reason: if step < 1e-5 {
+                    "load step fell below 1e-5 (a limit point or instability?)".into()
+                } else {
+                    format!("more than {} load steps", options.max_load_steps)
+                },
+                load_fraction: lam,
+                iterations: newton.iterations,
+                residual: last_res,
+            });
+        }
+        steps += 1;
+        let target = (lam + step).min(1.0);
+        data.load_scale = target;
+        let mut trial = q_prev.clone();
+        match newton.solve(data, &mut trial, tol_ref, options)? {
+            Some(res) => {
+                lam = target;
+                q_prev = trial;
+                last_res = res;
+                step *= 1.5;
+            }
+            None => step *= 0.5,
+        }
+    }
+    Ok(StaticsResult {
+        q: q_prev,
+        converged: true,
+        iterations: newton.iterations,
+        residual: last_res,
+        load_steps: steps,
+    })
+}
