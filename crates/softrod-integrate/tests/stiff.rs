@@ -113,8 +113,8 @@ fn robertson_to_t_40_matches_the_reference() {
     )
     .unwrap();
     println!("Robertson: {:?}, y = {}", sol.stats, sol.y_final);
-    for i in 0..3 {
-        let rel = (sol.y_final[i] - reference[i]).abs() / reference[i];
+    for (i, r) in reference.iter().enumerate() {
+        let rel = (sol.y_final[i] - r).abs() / r;
         assert!(rel < 1e-5, "component {i}: rel error {rel}");
     }
     let mass: f64 = sol.y_final.sum();

@@ -1,0 +1,507 @@
+//! The common interface: dense output at requested times, events, the
+//! per-step callback, failures as structured errors, determinism, statistics.
+
+mod common;
+
+use std::convert::Infallible;
+
+use common::{Linear, VanDerPol, dist, dv};
+use nalgebra::{DMatrix, DVector};
+use proptest::prelude::*;
+use softrod_integrate::{
+    Control, Direction, Event, Hooks, IntegrateError, Method, Options, SecondOrderSystem, Status,
+    StepInfo, integrate, integrate_second_order,
+};
+
+const ALL: [Method; 4] = [
+    Method::Rk4,
+    Method::Dopri5,
+    Method::Rosw34,
+    Method::GeneralizedAlpha { rho_inf: 0.8 },
+];
+
+/// Options per method: fixed methods get a step, adaptive ones tolerances.
+fn opts_for(method: Method, dt: f64, tol: f64) -> Options {
+    match method {
+        Method::Rk4 | Method::GeneralizedAlpha { .. } => Options::fixed(dt),
+        _ => Options::tol(tol, tol),
+    }
+}
+
+fn run(method: Method, sys: &mut Linear, t1: f64, opts: &Options) -> softrod_integrate::Solution {
+    integrate_second_order(
+        sys,
+        method,
+        0.0,
+        t1,
+        &Linear::q0(),
+        &Linear::qd0(),
+        opts,
+        Hooks::new(),
+    )
+    .unwrap()
+}
+
+#[test]
+fn dense_output_at_requested_times_does_not_force_steps() {
+    let sys = Linear::damped();
+    let t_eval: Vec<f64> = (0..=400).map(|i| i as f64 * 0.01).collect();
+    for (method, dt, tol) in [
+        (Method::Rk4, 0.05, 0.0),
+        (Method::Dopri5, 0.0, 1e-10),
+        (Method::Rosw34, 0.0, 1e-6),
+        (Method::GeneralizedAlpha { rho_inf: 1.0 }, 0.02, 0.0),
+    ] {
+        let opts = opts_for(method, dt, tol).with_t_eval(t_eval.clone());
+        let sol = run(method, &mut sys.clone(), 4.0, &opts);
+        assert_eq!(sol.t, t_eval);
+        let err = sol
+            .t
+            .iter()
+            .zip(&sol.y)
+            .map(|(&t, y)| dist(y, &sys.exact(t, &Linear::y0())))
+            .fold(0.0, f64::max);
+        println!(
+            "{method:?}: {} steps for 401 outputs, max error {err:.2e}",
+            sol.stats.steps
+        );
+        // Fewer steps than outputs: the outputs are interpolated.
+        assert!(
+            sol.stats.steps < 300,
+            "{method:?} took {} steps",
+            sol.stats.steps
+        );
+        // Dense output is as accurate as the steps (bounds from the methods'
+        // global errors at these settings).
+        let bound = match method {
+            Method::Rk4 => 1e-5,
+            Method::Dopri5 => 1e-8,
+            Method::Rosw34 => 1e-4,
+            _ => 1e-3, // second order, h = 0.02
+        };
+        assert!(err < bound, "{method:?}: dense error {err}");
+    }
+}
+
+/// `q̈ = −diag(4, 9) q`, `q(0) = (1, 0)`: `q₁ = cos 2t` is zero at π/4, 3π/4.
+fn decoupled() -> Linear {
+    Linear {
+        k: DMatrix::from_diagonal(&dv(&[4.0, 9.0])),
+        d: DMatrix::zeros(2, 2),
+        calls: 0,
+    }
+}
+
+#[test]
+fn terminal_and_recorded_events_are_located_on_the_dense_output() {
+    let pi = std::f64::consts::PI;
+    for method in ALL {
+        let opts = match method {
+            Method::Rk4 => Options::fixed(1e-3),
+            Method::GeneralizedAlpha { .. } => Options::fixed(1e-4),
+            _ => Options::tol(1e-10, 1e-10),
+        };
+        let hooks = Hooks::new()
+            // Recorded: q₁ crosses zero downwards at π/4.
+            .event(Event::record(|_t, y: &DVector<f64>| y[0]).direction(Direction::Falling))
+            // Terminal: q₁ crosses zero upwards at 3π/4.
+            .event(Event::terminal(|_t, y: &DVector<f64>| y[0]).direction(Direction::Rising));
+        let sol = integrate_second_order(
+            &mut decoupled(),
+            method,
+            0.0,
+            10.0,
+            &dv(&[1.0, 0.0]),
+            &dv(&[0.0, 0.0]),
+            &opts,
+            hooks,
+        )
+        .unwrap();
+        assert_eq!(sol.status, Status::Event { index: 1 });
+        assert_eq!(sol.events.len(), 2, "{:?}", sol.events);
+        let tol = match method {
+            Method::GeneralizedAlpha { .. } => 1e-6,
+            _ => 1e-8,
+        };
+        assert_eq!(sol.events[0].index, 0);
+        assert!(
+            (sol.events[0].t - pi / 4.0).abs() < tol,
+            "{method:?}: {}",
+            sol.events[0].t
+        );
+        assert!(
+            (sol.t_final - 3.0 * pi / 4.0).abs() < tol,
+            "{method:?}: {}",
+            sol.t_final
+        );
+        assert_eq!(*sol.t.last().unwrap(), sol.t_final);
+        assert!(sol.y_final[0].abs() < tol);
+    }
+}
+
+#[test]
+fn callback_can_stop_and_sees_every_step() {
+    for method in ALL {
+        let mut seen = Vec::new();
+        let hooks = Hooks::new().on_step(|info: &StepInfo, _s: &mut Linear| {
+            seen.push((info.t, info.stats.steps));
+            if info.stats.steps == 5 {
+                Control::Stop
+            } else {
+                Control::Continue
+            }
+        });
+        let sol = integrate_second_order(
+            &mut Linear::undamped(),
+            method,
+            0.0,
+            100.0,
+            &Linear::q0(),
+            &Linear::qd0(),
+            &opts_for(method, 0.01, 1e-6),
+            hooks,
+        )
+        .unwrap();
+        assert_eq!(sol.status, Status::Stopped);
+        assert_eq!(sol.stats.steps, 5);
+        assert_eq!(seen.len(), 5);
+        assert_eq!(sol.t_final, seen[4].0);
+        assert_eq!(*sol.t.last().unwrap(), sol.t_final);
+    }
+}
+
+#[test]
+fn a_control_law_changing_the_system_equals_a_restart() {
+    // At the first step with t ≥ 1 the callback stiffens K (a parameter
+    // change); the result must equal stopping there and restarting with the
+    // new system — bit for bit with fixed-step RK4.
+    let opts = Options::fixed(0.01);
+    let mut t_switch = f64::NAN;
+    let hooks = Hooks::new().on_step(|info: &StepInfo, s: &mut Linear| {
+        if info.t >= 1.0 && t_switch.is_nan() {
+            t_switch = info.t;
+            s.k *= 2.0;
+            Control::SystemChanged
+        } else {
+            Control::Continue
+        }
+    });
+    let mut sys = Linear::undamped();
+    let full = integrate_second_order(
+        &mut sys,
+        Method::Rk4,
+        0.0,
+        2.0,
+        &Linear::q0(),
+        &Linear::qd0(),
+        &opts,
+        hooks,
+    )
+    .unwrap();
+    assert!((1.0..1.02).contains(&t_switch));
+    let first = run(Method::Rk4, &mut Linear::undamped(), t_switch, &opts);
+    let mut stiffer = Linear::undamped();
+    stiffer.k *= 2.0;
+    let y = &first.y_final;
+    let second = integrate_second_order(
+        &mut stiffer,
+        Method::Rk4,
+        t_switch,
+        2.0,
+        &y.rows(0, 2).into_owned(),
+        &y.rows(2, 2).into_owned(),
+        &opts,
+        Hooks::new(),
+    )
+    .unwrap();
+    assert_eq!(full.y_final, second.y_final);
+    assert_eq!(full.t_final, 2.0);
+}
+
+/// `q̈ = −q` until `t_bad`, then NaN (or an error, if `fail`).
+struct Breaks {
+    t_bad: f64,
+    fail: bool,
+}
+
+#[derive(Debug, thiserror::Error)]
+#[error("model broke")]
+struct Broke;
+
+impl SecondOrderSystem for Breaks {
+    type Error = Broke;
+    fn dim(&self) -> usize {
+        1
+    }
+    fn accel(
+        &mut self,
+        t: f64,
+        q: &DVector<f64>,
+        _qd: &DVector<f64>,
+        qdd: &mut DVector<f64>,
+    ) -> Result<(), Broke> {
+        if t > self.t_bad {
+            if self.fail {
+                return Err(Broke);
+            }
+            qdd[0] = f64::NAN;
+        } else {
+            qdd[0] = -q[0];
+        }
+        Ok(())
+    }
+}
+
+fn run_breaks(method: Method, fail: bool) -> Result<softrod_integrate::Solution, IntegrateError> {
+    integrate_second_order(
+        &mut Breaks { t_bad: 1.0, fail },
+        method,
+        0.0,
+        2.0,
+        &dv(&[1.0]),
+        &dv(&[0.0]),
+        &opts_for(method, 0.1, 1e-6),
+        Hooks::new(),
+    )
+}
+
+#[test]
+fn nan_in_the_model_is_an_error_with_context_never_a_nan_trajectory() {
+    for method in ALL {
+        let err = run_breaks(method, false).unwrap_err();
+        println!("{method:?}: {err}");
+        match (method, &err) {
+            (Method::Rk4, IntegrateError::NonFinite { t, .. }) => assert!(*t > 1.0),
+            (
+                Method::Dopri5 | Method::Rosw34,
+                IntegrateError::StepSizeUnderflow { t, reason, .. },
+            ) => {
+                assert!((*t - 1.0).abs() < 1e-6, "stopped at {t}");
+                assert!(reason.contains("non-finite"), "{reason}");
+            }
+            (
+                Method::GeneralizedAlpha { .. },
+                IntegrateError::NewtonNonConvergence { t, what, .. },
+            ) => {
+                assert!((*t - 1.0).abs() < 1e-6, "stopped at {t}");
+                assert_eq!(*what, "non-finite iterate");
+            }
+            _ => panic!("{method:?}: unexpected {err:?}"),
+        }
+    }
+}
+
+#[test]
+fn system_errors_are_wrapped_with_time() {
+    for method in ALL {
+        match run_breaks(method, true).unwrap_err() {
+            IntegrateError::System { t, source, .. } => {
+                assert!(t <= 1.0 + 1e-12 && t > 0.5, "{method:?}: t = {t}");
+                assert_eq!(source.to_string(), "model broke");
+            }
+            e => panic!("{method:?}: unexpected {e:?}"),
+        }
+    }
+}
+
+#[test]
+fn blow_up_beyond_a_user_bound_is_an_error() {
+    // q̈ = +q grows like eᵗ.
+    let unstable = || Linear {
+        k: -DMatrix::identity(2, 2),
+        d: DMatrix::zeros(2, 2),
+        calls: 0,
+    };
+    for method in ALL {
+        let opts = Options {
+            max_norm: 1e3,
+            ..opts_for(method, 0.01, 1e-6)
+        };
+        let err = run_m(method, &mut unstable(), 20.0, &opts, Hooks::new()).unwrap_err();
+        match err {
+            IntegrateError::BoundExceeded {
+                t, value, bound, ..
+            } => {
+                assert_eq!(bound, 1e3);
+                assert!(value > 1e3 && t > 6.0 && t < 8.0, "{method:?}: t = {t}");
+            }
+            e => panic!("{method:?}: {e:?}"),
+        }
+        // An energy monitor.
+        let energy = |_t: f64, y: &DVector<f64>| 0.5 * y.rows(2, 2).norm_squared();
+        let hooks = Hooks::new().monitor("kinetic energy", 50.0, energy);
+        match run_m(
+            method,
+            &mut unstable(),
+            20.0,
+            &opts_for(method, 0.01, 1e-6),
+            hooks,
+        )
+        .unwrap_err()
+        {
+            IntegrateError::BoundExceeded { what, .. } => assert_eq!(what, "kinetic energy"),
+            e => panic!("{method:?}: {e:?}"),
+        }
+    }
+}
+
+fn run_m(
+    method: Method,
+    sys: &mut Linear,
+    t1: f64,
+    opts: &Options,
+    hooks: Hooks<'_, Linear>,
+) -> Result<softrod_integrate::Solution, IntegrateError> {
+    integrate_second_order(
+        sys,
+        method,
+        0.0,
+        t1,
+        &Linear::q0(),
+        &Linear::qd0(),
+        opts,
+        hooks,
+    )
+}
+
+#[test]
+fn invalid_input_is_rejected() {
+    let mut s = Linear::undamped();
+    let cases: Vec<(Method, Options, f64)> = vec![
+        (Method::Rk4, Options::default(), 1.0), // no dt
+        (
+            Method::GeneralizedAlpha { rho_inf: 1.5 },
+            Options::fixed(0.1),
+            1.0,
+        ),
+        (Method::Dopri5, Options::default(), -1.0), // t1 < t0
+        (Method::Dopri5, Options::tol(0.0, 0.0), 1.0),
+        (
+            Method::Dopri5,
+            Options::default().with_t_eval(vec![0.5, 0.2]),
+            1.0,
+        ),
+        (
+            Method::Dopri5,
+            Options::default().with_t_eval(vec![2.0]),
+            1.0,
+        ),
+    ];
+    for (m, o, t1) in cases {
+        match run_m(m, &mut s, t1, &o, Hooks::new()) {
+            Err(IntegrateError::InvalidInput { what }) => println!("{m:?}: {what}"),
+            r => panic!("{m:?}: expected InvalidInput, got {r:?}"),
+        }
+    }
+    // Generalized-α on a first-order system.
+    let r = integrate(
+        &mut VanDerPol { mu: 1.0 },
+        Method::GeneralizedAlpha { rho_inf: 0.5 },
+        0.0,
+        1.0,
+        &dv(&[2.0, 0.0]),
+        &Options::fixed(0.1),
+        Hooks::new(),
+    );
+    assert!(matches!(r, Err(IntegrateError::InvalidInput { .. })));
+}
+
+#[test]
+fn same_input_same_bits() {
+    for method in ALL {
+        let opts = opts_for(method, 0.01, 1e-7).with_t_eval(vec![0.3, 1.7, 2.9]);
+        let a = run(method, &mut Linear::damped(), 3.0, &opts);
+        let b = run(method, &mut Linear::damped(), 3.0, &opts);
+        assert_eq!(a, b);
+    }
+    let vdp = |_: ()| {
+        integrate(
+            &mut VanDerPol { mu: 10.0 },
+            Method::Rosw34,
+            0.0,
+            30.0,
+            &dv(&[2.0, 0.0]),
+            &Options::tol(1e-6, 1e-6),
+            Hooks::new(),
+        )
+        .unwrap()
+    };
+    assert_eq!(vdp(()), vdp(()));
+}
+
+#[test]
+fn statistics_count_the_work() {
+    for method in ALL {
+        let mut s = Linear::damped();
+        let sol = run(method, &mut s, 4.0, &opts_for(method, 0.05, 1e-6));
+        println!("{method:?}: {:?}", sol.stats);
+        // Every accel call is counted (the Jacobians are analytic here).
+        assert_eq!(sol.stats.rhs_evaluations, s.calls, "{method:?}");
+        let st = sol.stats;
+        match method {
+            Method::Rk4 => assert_eq!(st.rhs_evaluations, 4 * st.steps + 1),
+            Method::Dopri5 => {
+                // FSAL: 6 per attempted step, + initial f + starting-step guess.
+                assert_eq!(st.rhs_evaluations, 6 * (st.steps + st.rejected_steps) + 2)
+            }
+            Method::Rosw34 => {
+                assert!(st.factorizations >= 1 && st.jacobian_evaluations >= 1);
+                assert_eq!(st.lu_solves, 4 * (st.steps + st.rejected_steps));
+            }
+            Method::GeneralizedAlpha { .. } => {
+                assert_eq!(st.lu_solves, st.newton_iterations);
+                assert_eq!(st.rhs_evaluations, st.newton_iterations + 1);
+            }
+        }
+    }
+}
+
+#[test]
+fn first_and_second_order_interfaces_agree() {
+    // The same damped oscillator through both traits with DOPRI5 (no
+    // Jacobian involved): identical arithmetic, identical bits.
+    let sys = Linear::damped();
+    let opts = Options::tol(1e-8, 1e-8);
+    let a = run(Method::Dopri5, &mut sys.clone(), 3.0, &opts);
+    let b = integrate(
+        &mut common::LinearFirstOrder(sys.a()),
+        Method::Dopri5,
+        0.0,
+        3.0,
+        &Linear::y0(),
+        &opts,
+        Hooks::new(),
+    )
+    .unwrap();
+    assert_eq!(a.stats.steps, b.stats.steps);
+    assert!(dist(&a.y_final, &b.y_final) < 1e-14);
+}
+
+/// An infallible scalar decay `y' = −λ y`.
+struct Decay(f64);
+impl softrod_integrate::OdeSystem for Decay {
+    type Error = Infallible;
+    fn dim(&self) -> usize {
+        1
+    }
+    fn rhs(&mut self, _t: f64, y: &DVector<f64>, dy: &mut DVector<f64>) -> Result<(), Infallible> {
+        dy[0] = -self.0 * y[0];
+        Ok(())
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 24, failure_persistence: None, ..ProptestConfig::default() })]
+    /// For any rate and interval, the adaptive methods meet the tolerance on
+    /// `y' = −λ y` and never leave [0, y0] (L-stability for ROS34PW2).
+    #[test]
+    fn decay_is_accurate_and_monotone(lambda in 0.1f64..1e4, t1 in 0.1f64..10.0) {
+        for method in [Method::Dopri5, Method::Rosw34] {
+            let sol = integrate(&mut Decay(lambda), method, 0.0, t1, &dv(&[1.0]),
+                &Options { max_steps: 1_000_000, ..Options::tol(1e-8, 1e-10) }, Hooks::new()).unwrap();
+            let exact = (-lambda * t1).exp();
+            prop_assert!((sol.y_final[0] - exact).abs() < 1e-6, "{:?}: {} vs {}", method, sol.y_final[0], exact);
+            prop_assert!(sol.y.iter().all(|y| y[0] <= 1.0 + 1e-12 && y[0] >= -1e-6));
+        }
+    }
+}
