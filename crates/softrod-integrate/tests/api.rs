@@ -459,7 +459,8 @@ fn statistics_count_the_work() {
 #[test]
 fn first_and_second_order_interfaces_agree() {
     // The same damped oscillator through both traits with DOPRI5 (no
-    // Jacobian involved): identical arithmetic, identical bits.
+    // Jacobian involved): same steps, same result to rounding (the matrix
+    // product A·y and the split accel sum in a different order).
     let sys = Linear::damped();
     let opts = Options::tol(1e-8, 1e-8);
     let a = run(Method::Dopri5, &mut sys.clone(), 3.0, &opts);
