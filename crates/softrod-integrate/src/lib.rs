@@ -54,6 +54,7 @@ mod genalpha;
 mod linalg;
 mod options;
 mod rk4;
+mod rod;
 mod rosw;
 mod system;
 
@@ -64,4 +65,5 @@ pub use options::{
     Control, Direction, Event, EventRecord, Hooks, Method, Monitor, Options, ScalarFn, Solution,
     Stats, Status, StepCallback, StepInfo,
 };
+pub use rod::RodSystem;
 pub use system::{OdeSystem, SecondOrderSystem, fd_jacobian};
