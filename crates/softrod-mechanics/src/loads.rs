@@ -6,6 +6,7 @@
 //! All hot functions are `#[inline]`, allocation-free and cost a few 3×3
 //! products at most.
 
+use crate::error::{MechanicsError, finite, non_negative};
 use softrod_lie::{Pose, Twist, Vec3, Wrench, angular, join, linear};
 
 /// The frame a load's components are given in.
@@ -38,7 +39,19 @@ pub struct Gravity {
     pub acceleration: Vec3,
 }
 
+fn finite3(what: &str, v: &Vec3) -> Result<(), MechanicsError> {
+    for (c, x) in ["x", "y", "z"].iter().zip(v.iter()) {
+        finite(&format!("{what} {c}"), *x)?;
+    }
+    Ok(())
+}
+
 impl Gravity {
+    /// Checks that the acceleration is finite.
+    pub fn validate(&self) -> Result<(), MechanicsError> {
+        finite3("gravity [m/s^2]", &self.acceleration)
+    }
+
     /// Body wrench density (D14) `𝓕_g = 𝓜 Ad⁻¹_g 𝒢 = (0; ρA Rᵀ g_w)` [N/m],
     /// for mass per length `ρA` [kg/m] and the section's world pose `g = (R, p)`.
     /// Conservative, potential density `−ρA g_w·p`.
@@ -67,6 +80,20 @@ pub struct PointLoad {
 }
 
 impl PointLoad {
+    /// Checks `0 ≤ s ≤ L` (to 1e-12·L) and finite force and moment.
+    pub fn validate(&self, rod_length: f64) -> Result<(), MechanicsError> {
+        let tol = 1e-12 * rod_length;
+        if !(self.s >= -tol && self.s <= rod_length + tol) {
+            return Err(MechanicsError::OutOfRod {
+                what: "point load".into(),
+                s: self.s,
+                length: rod_length,
+            });
+        }
+        finite3("point load force [N]", &self.force)?;
+        finite3("point load moment [N m]", &self.moment)
+    }
+
     /// Applied body wrench at `s` (D14): `(Rᵀ m_w; Rᵀ f_w)` for a dead load,
     /// `(m; f)` for a follower load [N·m; N]. `pose` is the world pose `g(s)`.
     #[inline]
@@ -91,6 +118,12 @@ pub struct DistributedLoad {
 }
 
 impl DistributedLoad {
+    /// Checks finite force and moment densities.
+    pub fn validate(&self) -> Result<(), MechanicsError> {
+        finite3("distributed force [N/m]", &self.force)?;
+        finite3("distributed moment [N m/m]", &self.moment)
+    }
+
     /// Body wrench density (D14): `(Rᵀ m; Rᵀ f)` (World) or `(m; f)` (Body).
     #[inline]
     pub fn wrench_density(&self, pose: &Pose) -> Wrench {
@@ -113,6 +146,15 @@ pub struct Drag {
 }
 
 impl Drag {
+    /// Checks `c_t, c_r ≥ 0`, finite.
+    pub fn validate(&self) -> Result<(), MechanicsError> {
+        non_negative(
+            "translational drag coefficient [N s/m^2]",
+            self.translational,
+        )?;
+        non_negative("rotational drag coefficient [N m s/m]", self.rotational)
+    }
+
     /// Body wrench density `(−c_r ω; −c_t v)` for the body velocity `η = (ω, v)`.
     #[inline]
     pub fn wrench_density(&self, eta: &Twist) -> Wrench {

@@ -252,6 +252,40 @@ fn invalid_descriptions_are_reported_with_their_values() {
         .validate(1.0)
         .is_err()
     );
+    assert!(matches!(
+        PointLoad {
+            s: 1.5,
+            force: Vec3::zeros(),
+            moment: Vec3::zeros(),
+            frame: LoadFrame::Body
+        }
+        .validate(1.0),
+        Err(MechanicsError::OutOfRod { s, .. }) if s == 1.5
+    ));
+    assert!(
+        Drag {
+            translational: -1.0,
+            rotational: 0.0
+        }
+        .validate()
+        .is_err()
+    );
+    assert!(
+        Gravity {
+            acceleration: Vec3::new(0.0, f64::NAN, 0.0)
+        }
+        .validate()
+        .is_err()
+    );
+    assert!(
+        DistributedLoad {
+            force: Vec3::zeros(),
+            moment: Vec3::zeros(),
+            frame: LoadFrame::World
+        }
+        .validate()
+        .is_ok()
+    );
     // Messages name the quantity and the value.
     let msg = Section::Circle { radius: -2.5 }
         .validate()
