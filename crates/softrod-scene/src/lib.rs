@@ -9,8 +9,9 @@
 //! line and column where known, and what is wrong; suspicious but legal input
 //! comes back as [`Warning`]s next to the scene.
 //!
-//! Building a physics model from a [`Scene`] belongs to a higher layer; this
-//! crate depends on no physics crate.
+//! [`Scene::build`] (module [`build`]) turns a scene into a
+//! `softrod_dynamics::Model` holding only the terms the scene has, plus the
+//! initial state.
 //!
 //! ```
 //! use softrod_scene::Scene;
@@ -36,6 +37,7 @@
 #![warn(missing_docs)]
 
 mod actuation;
+pub mod build;
 mod error;
 mod locate;
 mod raw;
@@ -44,6 +46,7 @@ mod scene;
 mod validate;
 
 pub use actuation::{Cable, Load, LoadFrame, Routing, Tension};
+pub use build::Built;
 pub use error::{Location, SceneError, Warning};
 pub use rod::{Drag, Material, Pose, Rod, STRAIN_NAMES, Section, StrainSelection};
 pub use scene::{Initial, Integrator, Mode, Reference, Run, Scene, UnknownIntegrator, World};
