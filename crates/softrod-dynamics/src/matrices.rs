@@ -76,10 +76,17 @@ pub fn actuation_matrix(model: &Model, q: &[f64]) -> Result<DMatrix<f64>, Dynami
     Ok(a)
 }
 
-/// Coriolis/centrifugal matrix `C = ∫ Jᵀ(ad*_{Jq̇}𝓜J + 𝓜J̇) ds` (D21, seed
-/// (12) with the true `J̇` of (D12)), for which `Ṁ − 2C` is skew-symmetric.
-/// Built from explicit Jacobians at the Gauss points: O(N·n_dof²), for
-/// analysis and control, not for simulation (use [`crate::bias_force`]).
+/// Coriolis/centrifugal matrix `C(q, q̇)` with `C q̇ = ∫Jᵀ(ad*_η𝓜η + 𝓜J̇q̇) ds`
+/// (D21) and `Ṁ − 2C` skew-symmetric.
+///
+/// Only `C q̇` is unique. The seed's (12), `∫Jᵀ(ad*_{Jq̇}𝓜J + 𝓜J̇)`, gives the
+/// right product but `ad*_η𝓜` is not skew, so `Ṁ − 2C` is not skew with it.
+/// We use `C = ∫Jᵀ(Λ(𝓜η) J + 𝓜J̇) ds` with `Λ(F)ζ := ad*_ζ F`: `Λ(F) =
+/// [[−m̃, −f̃], [−f̃, 0]]` for `F = (m, f)` is skew, `Λ(𝓜η)η = ad*_η𝓜η`, and
+/// `C + Cᵀ = ∫(Jᵀ𝓜J̇ + J̇ᵀ𝓜J) = Ṁ` because `𝓜` is constant in the body frame.
+/// Built from explicit Jacobians (true `J̇` of (D12)) at the Gauss points:
+/// O(N·n_dof²), for analysis and control, not for simulation (use
+/// [`crate::bias_force`]).
 pub fn coriolis_matrix(
     model: &Model,
     q: &[f64],
@@ -107,13 +114,13 @@ pub fn coriolis_matrix(
                 kin.jacobian_dot_at(rod, s, Frame::Body, &mut jd)
                     .map_err(|e| DynamicsError::InvalidModel(e.to_string()))?;
                 let eta: softrod_lie::Vec6 = (&j * &qdr).fixed_rows::<6>(0).into_owned();
-                // inner = ad*_η 𝓜 J + 𝓜 J̇ (6×k)
+                // inner = Λ(𝓜η) J + 𝓜 J̇ (6×k), Λ(F) jc = ad*_{jc} F.
+                let m_eta = qp.inertia.component_mul(&eta);
                 let mut inner = Matrix6xX::zeros(k);
                 for col in 0..k {
                     let jc: softrod_lie::Vec6 = j.fixed_view::<6, 1>(0, col).into_owned();
                     let jdc: softrod_lie::Vec6 = jd.fixed_view::<6, 1>(0, col).into_owned();
-                    let v = coad_vec(&eta, &qp.inertia.component_mul(&jc))
-                        + qp.inertia.component_mul(&jdc);
+                    let v = coad_vec(&jc, &m_eta) + qp.inertia.component_mul(&jdc);
                     inner.set_column(col, &v);
                 }
                 let blk = j.transpose() * inner * qp.w;
