@@ -1,0 +1,172 @@
+//! `check`, `statics` and `modes`.
+
+use std::path::Path;
+
+use nalgebra::DVector;
+use softrod_dynamics::{
+    Data, StaticsOptions, StaticsResult, modes as dyn_modes, statics as dyn_statics,
+};
+
+use crate::common::{CliError, Loaded, Poser, failed, has_static_loads, load, pose_json};
+
+pub fn check(path: &Path) -> Result<(), CliError> {
+    let Loaded {
+        scene,
+        warnings,
+        built,
+    } = load(path)?;
+    let m = &built.model;
+    println!("scene: {}", scene.source);
+    println!("degrees of freedom: {}", m.n_dof());
+    for (r, rm) in scene.rods.iter().zip(m.rods()) {
+        println!(
+            "rod '{}': length {} m, {} pieces, strains [{}], {} DoF (q[{}..{}])",
+            r.name,
+            r.length,
+            r.n_pieces(),
+            r.strains.names().join(", "),
+            rm.n_dof(),
+            rm.dofs().start,
+            rm.dofs().end
+        );
+    }
+    if !scene.cables.is_empty() {
+        println!("cables: {}", scene.cables.len());
+    }
+    if !scene.loads.is_empty() {
+        println!("point loads: {}", scene.loads.len());
+    }
+    println!("terms: {}", m.terms().join(", "));
+    let run = &scene.run;
+    println!(
+        "run: mode {}, duration {} s, integrator {}, rtol {:e}, atol {:e}, dt {:e}, output every {:e} s, {} Gauss points per piece",
+        run.mode.name(),
+        run.duration,
+        run.integrator,
+        run.rtol,
+        run.atol,
+        run.dt,
+        run.output_every,
+        run.quadrature
+    );
+    if warnings.is_empty() {
+        println!("warnings: none");
+    } else {
+        println!("warnings: {}", warnings.len());
+        for w in &warnings {
+            println!("  warning: {}: {w}", scene.source);
+        }
+    }
+    Ok(())
+}
+
+/// Statics from the initial q (or rest) at t = 0.
+pub fn solve_statics(l: &mut Loaded, data: &mut Data) -> Result<StaticsResult, CliError> {
+    dyn_statics(
+        &l.built.model,
+        data,
+        l.built.q0.as_slice(),
+        &StaticsOptions::default(),
+    )
+    .map_err(failed)
+}
+
+pub fn statics(path: &Path, json: bool) -> Result<(), CliError> {
+    let mut l = load(path)?;
+    let mut data = Data::new(&l.built.model);
+    let res = solve_statics(&mut l, &mut data)?;
+    if res.q.iter().any(|v| !v.is_finite()) || !res.residual.is_finite() {
+        return Err(failed("statics returned a non-finite state"));
+    }
+    let model = &l.built.model;
+    let mut poser = Poser::new(model);
+    poser.update(model, res.q.as_slice())?;
+    if json {
+        let rods: Vec<_> = model
+            .rods()
+            .iter()
+            .enumerate()
+            .map(
+                |(i, r)| serde_json::json!({ "name": r.spec.name, "tip": pose_json(poser.tip(i)) }),
+            )
+            .collect();
+        let v = serde_json::json!({
+            "converged": res.converged,
+            "iterations": res.iterations,
+            "residual": res.residual,
+            "load_steps": res.load_steps,
+            "q": res.q.as_slice(),
+            "tip": pose_json(poser.tip(0)),
+            "rods": rods,
+        });
+        println!("{v}");
+    } else {
+        println!(
+            "statics converged: {} Newton iterations, {} load step(s), residual {:.3e}",
+            res.iterations, res.load_steps, res.residual
+        );
+        for (i, r) in model.rods().iter().enumerate() {
+            let p = poser.tip(i).translation;
+            println!(
+                "rod '{}' tip: [{:.9}, {:.9}, {:.9}] m",
+                r.spec.name, p[0], p[1], p[2]
+            );
+        }
+        if let Some(reference) = &l.scene.reference {
+            if let Some(tip) = reference.tip {
+                let p = poser.tip(reference.rod_index).translation;
+                let err = (p - nalgebra::Vector3::from(tip)).norm();
+                let tol = reference.tolerance.map_or(String::new(), |t| {
+                    format!(
+                        " (tolerance {t:e} m: {})",
+                        if err <= t { "agrees" } else { "DISAGREES" }
+                    )
+                });
+                println!("reference tip {:?}: distance {err:.3e} m{tol}", tip);
+            }
+        }
+    }
+    Ok(())
+}
+
+pub fn modes(path: &Path, json: bool, count: usize) -> Result<(), CliError> {
+    let mut l = load(path)?;
+    let mut data = Data::new(&l.built.model);
+    let (q_eq, equilibrium) = if has_static_loads(&l.scene) {
+        (solve_statics(&mut l, &mut data)?.q, "statics")
+    } else {
+        (DVector::zeros(l.built.model.n_dof()), "rest")
+    };
+    let m = dyn_modes(&l.built.model, &mut data, q_eq.as_slice(), 0.0).map_err(failed)?;
+    let f: Vec<f64> = m.frequencies_hz().into_iter().take(count).collect();
+    if f.iter().any(|v| !v.is_finite()) {
+        return Err(failed("modal analysis gave a non-finite frequency"));
+    }
+    if json {
+        println!(
+            "{}",
+            serde_json::json!({ "frequencies_hz": f, "equilibrium": equilibrium })
+        );
+    } else {
+        println!(
+            "natural frequencies about the {} ({} of {}):",
+            if equilibrium == "rest" {
+                "rest shape"
+            } else {
+                "static equilibrium"
+            },
+            f.len(),
+            l.built.model.n_dof()
+        );
+        for (i, v) in f.iter().enumerate() {
+            println!("  mode {:>2}: {v:.6} Hz", i + 1);
+        }
+        if m.asymmetry > 1e-8 {
+            println!(
+                "note: tangent stiffness asymmetry {:.2e} (follower loads or cables); its symmetric part was used",
+                m.asymmetry
+            );
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,504 @@
+//! `softrod run`: integrate, stream the trajectory, write shape, summary, plots.
+
+use std::fs::File;
+use std::io::{BufWriter, IsTerminal, Write};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use indicatif::{ProgressBar, ProgressStyle};
+use nalgebra::DVector;
+use softrod_dynamics::{Model, energies};
+use softrod_integrate::{
+    Control, Hooks, Method, Options, RodSystem, SecondOrderSystem, Stats, integrate_second_order,
+};
+use softrod_scene::{Integrator, Scene};
+
+use crate::common::{CliError, Poser, failed, load, out_dir, position, quaternion};
+use crate::plots;
+
+/// High-frequency spectral radius used for `integrator = "generalized-alpha"`:
+/// 0.9 damps the unresolved shear/extension modes a little while keeping the
+/// resolved bending modes almost undamped (period error and damping of a mode
+/// with ω·dt ≪ 1 are second order either way).
+pub const GENERALIZED_ALPHA_RHO_INF: f64 = 0.9;
+
+/// The integrator and its options for a scene's `[run]`.
+pub fn method_and_options(scene: &Scene) -> Result<(Method, Options), CliError> {
+    let run = &scene.run;
+    let fixed_steps = (run.duration / run.dt).ceil() as usize;
+    let (method, mut opts) = match run.integrator {
+        Integrator::Rk4 => (Method::Rk4, Options::fixed(run.dt)),
+        Integrator::GeneralizedAlpha => (
+            Method::GeneralizedAlpha {
+                rho_inf: GENERALIZED_ALPHA_RHO_INF,
+            },
+            Options {
+                rtol: run.rtol,
+                atol: run.atol,
+                ..Options::fixed(run.dt)
+            },
+        ),
+        Integrator::Dopri5 => (Method::Dopri5, Options::tol(run.rtol, run.atol)),
+        Integrator::Rosenbrock => (Method::Rosw34, Options::tol(run.rtol, run.atol)),
+        Integrator::Radau5 => {
+            return Err(CliError::Input(format!(
+                "{}: run.integrator: \"radau5\" is not implemented yet, use \"rosenbrock\" (stiff, adaptive)",
+                scene.source
+            )));
+        }
+    };
+    if run.integrator.is_adaptive() {
+        // The scene's dt is the initial step of adaptive methods.
+        opts.dt = Some(run.dt.min(run.duration));
+        opts.max_steps = 50_000_000;
+    } else {
+        opts.max_steps = 2 * fixed_steps + 100;
+    }
+    Ok((method, opts))
+}
+
+/// Output times `0, Δ, 2Δ, …` up to the duration, which is always included.
+pub fn output_times(duration: f64, every: f64) -> Vec<f64> {
+    let n = (duration / every + 1e-9).floor() as usize;
+    let mut t: Vec<f64> = (0..=n).map(|k| (k as f64 * every).min(duration)).collect();
+    if duration - t[t.len() - 1] > 1e-9 * duration {
+        t.push(duration);
+    } else {
+        let last = t.len() - 1;
+        t[last] = duration;
+    }
+    t.dedup();
+    t
+}
+
+/// What is kept in memory for the plots.
+#[derive(Default)]
+pub struct Series {
+    pub t: Vec<f64>,
+    pub tip: Vec<[f64; 3]>,
+    pub energy: Vec<[f64; 4]>,
+    /// Snapshots: time and, per rod, the boundary positions.
+    pub shapes: Vec<(f64, Vec<Vec<[f64; 3]>>)>,
+}
+
+/// Writes output rows as the integration produces them.
+pub struct Streamer {
+    traj: BufWriter<File>,
+    shape: BufWriter<File>,
+    times: Vec<f64>,
+    next: usize,
+    snapshot_at: Vec<usize>,
+    poser: Poser,
+    n: usize,
+    /// Last accepted point: t, y = (q, q̇), f = (q̇, q̈).
+    ta: f64,
+    ya: DVector<f64>,
+    fa: DVector<f64>,
+    fb: DVector<f64>,
+    y: DVector<f64>,
+    pub series: Series,
+    pub error: Option<String>,
+    pub last_stats: Stats,
+    pub last_t: f64,
+}
+
+fn create(path: &Path) -> Result<BufWriter<File>, CliError> {
+    File::create(path)
+        .map(BufWriter::new)
+        .map_err(|e| failed(format!("cannot create {}: {e}", path.display())))
+}
+
+impl Streamer {
+    pub fn new(dir: &Path, model: &Model, times: Vec<f64>) -> Result<Self, CliError> {
+        let n = model.n_dof();
+        let mut traj = create(&dir.join("trajectory.csv"))?;
+        let mut header = String::from("t,tip_x,tip_y,tip_z,tip_qw,tip_qx,tip_qy,tip_qz,energy");
+        for i in 0..n {
+            header.push_str(&format!(",q{i}"));
+        }
+        let mut shape = create(&dir.join("shape.csv"))?;
+        let io = |e: std::io::Error| failed(format!("writing outputs: {e}"));
+        writeln!(traj, "{header}").map_err(io)?;
+        traj.flush().map_err(io)?;
+        writeln!(shape, "t,rod,s,x,y,z,qw,qx,qy,qz").map_err(io)?;
+        let m = times.len();
+        let snaps = 6.min(m);
+        let mut snapshot_at: Vec<usize> = (0..snaps)
+            .map(|k| {
+                if snaps == 1 {
+                    0
+                } else {
+                    k * (m - 1) / (snaps - 1)
+                }
+            })
+            .collect();
+        snapshot_at.dedup();
+        Ok(Self {
+            traj,
+            shape,
+            times,
+            next: 0,
+            snapshot_at,
+            poser: Poser::new(model),
+            n,
+            ta: 0.0,
+            ya: DVector::zeros(2 * n),
+            fa: DVector::zeros(2 * n),
+            fb: DVector::zeros(2 * n),
+            y: DVector::zeros(2 * n),
+            series: Series::default(),
+            error: None,
+            last_stats: Stats::default(),
+            last_t: 0.0,
+        })
+    }
+
+    pub fn rows_written(&self) -> usize {
+        self.next
+    }
+
+    pub fn rows_expected(&self) -> usize {
+        self.times.len()
+    }
+
+    /// `f = (q̇, q̈(t, q, q̇))`.
+    fn deriv(
+        sys: &mut RodSystem,
+        t: f64,
+        y: &DVector<f64>,
+        f: &mut DVector<f64>,
+        n: usize,
+    ) -> Result<(), String> {
+        let q = y.rows(0, n).into_owned();
+        let qd = y.rows(n, n).into_owned();
+        let mut qdd = DVector::zeros(n);
+        sys.accel(t, &q, &qd, &mut qdd)
+            .map_err(|e| format!("accelerations for output at t = {t:e}: {e}"))?;
+        f.rows_mut(0, n).copy_from(&qd);
+        f.rows_mut(n, n).copy_from(&qdd);
+        Ok(())
+    }
+
+    /// The initial point (and the output rows at t0).
+    pub fn start(
+        &mut self,
+        sys: &mut RodSystem,
+        t0: f64,
+        y0: &DVector<f64>,
+    ) -> Result<(), CliError> {
+        self.ta = t0;
+        self.ya.copy_from(y0);
+        let mut fa = DVector::zeros(2 * self.n);
+        Self::deriv(sys, t0, y0, &mut fa, self.n).map_err(failed)?;
+        self.fa = fa;
+        while self.next < self.times.len() && self.times[self.next] <= t0 {
+            let y = y0.clone();
+            self.write_row(sys, self.times[self.next], &y)
+                .map_err(failed)?;
+            self.next += 1;
+        }
+        Ok(())
+    }
+
+    /// After an accepted step to `(t, y)`: the output rows in `(t_prev, t]`
+    /// by cubic Hermite interpolation on the step (the driver's own dense
+    /// output is not visible to callbacks).
+    pub fn step(&mut self, sys: &mut RodSystem, t: f64, y: &DVector<f64>) -> Result<(), String> {
+        let n = self.n;
+        let mut fb = std::mem::take(&mut self.fb);
+        Self::deriv(sys, t, y, &mut fb, n)?;
+        self.fb = fb;
+        let h = t - self.ta;
+        while self.next < self.times.len() && self.times[self.next] <= t {
+            let to = self.times[self.next];
+            let th = if h > 0.0 {
+                ((to - self.ta) / h).clamp(0.0, 1.0)
+            } else {
+                1.0
+            };
+            let (t2, t3) = (th * th, th * th * th);
+            let h00 = 2.0 * t3 - 3.0 * t2 + 1.0;
+            let h10 = t3 - 2.0 * t2 + th;
+            let h01 = -2.0 * t3 + 3.0 * t2;
+            let h11 = t3 - t2;
+            let mut yo = std::mem::take(&mut self.y);
+            for i in 0..2 * n {
+                yo[i] = h00 * self.ya[i] + h10 * h * self.fa[i] + h01 * y[i] + h11 * h * self.fb[i];
+            }
+            let r = self.write_row(sys, to, &yo);
+            self.y = yo;
+            r?;
+            self.next += 1;
+        }
+        self.ta = t;
+        self.ya.copy_from(y);
+        std::mem::swap(&mut self.fa, &mut self.fb);
+        self.last_t = t;
+        Ok(())
+    }
+
+    fn write_row(&mut self, sys: &mut RodSystem, t: f64, y: &DVector<f64>) -> Result<(), String> {
+        let n = self.n;
+        if let Some(i) = y.iter().position(|v| !v.is_finite()) {
+            let what = if i < n {
+                format!("q{i}")
+            } else {
+                format!("qdot{}", i - n)
+            };
+            return Err(format!("non-finite {what} at t = {t:e}; output stopped"));
+        }
+        let (q, qd) = (&y.as_slice()[..n], &y.as_slice()[n..]);
+        let e = energies(&sys.model, &mut sys.data, q, qd)
+            .map_err(|e| format!("energy at t = {t:e}: {e}"))?;
+        if !e.total().is_finite() {
+            return Err(format!("non-finite energy at t = {t:e}; output stopped"));
+        }
+        self.poser
+            .update(&sys.model, q)
+            .map_err(|e| format!("at t = {t:e}: {e}"))?;
+        let tip = *self.poser.tip(0);
+        let p = position(&tip);
+        let qt = quaternion(&tip);
+        if p.iter().chain(qt.iter()).any(|v| !v.is_finite()) {
+            return Err(format!("non-finite tip pose at t = {t:e}; output stopped"));
+        }
+        let mut line = format!(
+            "{t},{},{},{},{},{},{},{},{}",
+            p[0],
+            p[1],
+            p[2],
+            qt[0],
+            qt[1],
+            qt[2],
+            qt[3],
+            e.total()
+        );
+        for v in q {
+            line.push(',');
+            line.push_str(&v.to_string());
+        }
+        let io = |e: std::io::Error| format!("writing trajectory.csv: {e}");
+        writeln!(self.traj, "{line}").map_err(io)?;
+        self.traj.flush().map_err(io)?;
+        let mut shape_rows = String::new();
+        let mut snap = Vec::new();
+        for (r, rm) in sys.model.rods().iter().enumerate() {
+            let rod = &rm.spec.rod;
+            let mut pts = Vec::new();
+            for (k, g) in self.poser.boundaries(r).iter().enumerate() {
+                let s = if k == 0 {
+                    0.0
+                } else {
+                    rod.pieces()[k - 1].end()
+                };
+                let p = position(g);
+                let qq = quaternion(g);
+                if p.iter().chain(qq.iter()).any(|v| !v.is_finite()) {
+                    return Err(format!(
+                        "non-finite pose of rod '{}' at s = {s} m, t = {t:e}; output stopped",
+                        rm.spec.name
+                    ));
+                }
+                shape_rows.push_str(&format!(
+                    "{t},{},{s},{},{},{},{},{},{},{}\n",
+                    rm.spec.name, p[0], p[1], p[2], qq[0], qq[1], qq[2], qq[3]
+                ));
+                pts.push(p);
+            }
+            snap.push(pts);
+        }
+        let io = |e: std::io::Error| format!("writing shape.csv: {e}");
+        self.shape.write_all(shape_rows.as_bytes()).map_err(io)?;
+        self.shape.flush().map_err(io)?;
+        self.series.t.push(t);
+        self.series.tip.push(p);
+        self.series
+            .energy
+            .push([e.total(), e.kinetic, e.elastic, e.gravitational]);
+        if self.snapshot_at.contains(&self.next) {
+            self.series.shapes.push((t, snap));
+        }
+        Ok(())
+    }
+}
+
+/// The summary object.
+#[allow(clippy::too_many_arguments)]
+pub fn write_summary(
+    dir: &Path,
+    stats: &Stats,
+    wall: f64,
+    final_time: f64,
+    status: &str,
+    scene: &Scene,
+    rows: usize,
+    rows_expected: usize,
+) -> Result<(), CliError> {
+    let v = serde_json::json!({
+        "steps": stats.steps,
+        "rejected_steps": stats.rejected_steps,
+        "rhs_evaluations": stats.rhs_evaluations,
+        "wall_seconds": wall,
+        "final_time": final_time,
+        "status": status,
+        "integrator": scene.run.integrator.name(),
+        "jacobian_evaluations": stats.jacobian_evaluations,
+        "factorizations": stats.factorizations,
+        "duration": scene.run.duration,
+        "output_rows": rows,
+        "output_rows_expected": rows_expected,
+        "n_dof": scene.n_dof(),
+    });
+    let path = dir.join("summary.json");
+    let text = serde_json::to_string_pretty(&v).map_err(failed)?;
+    std::fs::write(&path, text + "\n")
+        .map_err(|e| failed(format!("cannot write {}: {e}", path.display())))
+}
+
+pub fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), CliError> {
+    let l = load(path)?;
+    let (method, mut opts) = method_and_options(&l.scene)?;
+    let dir = out_dir(path, out);
+    std::fs::create_dir_all(&dir)
+        .map_err(|e| failed(format!("cannot create {}: {e}", dir.display())))?;
+    let scene = &l.scene;
+    let duration = scene.run.duration;
+    let times = output_times(duration, scene.run.output_every);
+    // Written first so that an interrupted run leaves a summary that says so.
+    write_summary(
+        &dir,
+        &Stats::default(),
+        0.0,
+        0.0,
+        "error: did not finish (running, or interrupted)",
+        scene,
+        0,
+        times.len(),
+    )?;
+    let n = l.built.model.n_dof();
+    let mut y0 = DVector::zeros(2 * n);
+    y0.rows_mut(0, n).copy_from(&l.built.q0);
+    y0.rows_mut(n, n).copy_from(&l.built.qd0);
+    let mut sys = RodSystem::new(l.built.model.clone());
+    let mut streamer = Streamer::new(&dir, &sys.model, times)?;
+    let start = Instant::now();
+    streamer.start(&mut sys, 0.0, &y0)?;
+    let bar = (!quiet && std::io::stderr().is_terminal()).then(|| {
+        let b = ProgressBar::new(1000);
+        if let Ok(style) = ProgressStyle::with_template(
+            "{bar:40} {percent:>3}% t = {msg} s  [{elapsed_precise} < {eta}]",
+        ) {
+            b.set_style(style);
+        }
+        b
+    });
+    // Only the final state is kept by the driver; rows are streamed.
+    opts.t_eval = Some(vec![duration]);
+    let result = {
+        let st = &mut streamer;
+        let bar_ref = bar.as_ref();
+        let hooks = Hooks::new().on_step(move |info, sys: &mut RodSystem| {
+            st.last_stats = *info.stats;
+            if let Err(e) = st.step(sys, info.t, info.y) {
+                st.error = Some(e);
+                return Control::Stop;
+            }
+            if let Some(b) = bar_ref {
+                b.set_position((info.t / duration * 1000.0) as u64);
+                b.set_message(format!("{:.4}", info.t));
+            }
+            Control::Continue
+        });
+        integrate_second_order(
+            &mut sys,
+            method,
+            0.0,
+            duration,
+            &l.built.q0,
+            &l.built.qd0,
+            &opts,
+            hooks,
+        )
+    };
+    if let Some(b) = &bar {
+        b.finish_and_clear();
+    }
+    let wall = start.elapsed().as_secs_f64();
+    let (status, stats, t_final) = match (&result, &streamer.error) {
+        (_, Some(e)) => (format!("error: {e}"), streamer.last_stats, streamer.last_t),
+        (Err(e), None) => (format!("error: {e}"), streamer.last_stats, streamer.last_t),
+        (Ok(sol), None) => {
+            if streamer.rows_written() < streamer.rows_expected() {
+                // Round-off at the end: the remaining output time is the final state.
+                let yf = sol.y_final.clone();
+                while streamer.rows_written() < streamer.rows_expected() {
+                    if let Err(e) = streamer.step(&mut sys, sol.t_final, &yf) {
+                        streamer.error = Some(e);
+                        break;
+                    }
+                    if streamer.rows_written() < streamer.rows_expected() {
+                        streamer.error = Some(format!(
+                            "integration ended at t = {} before the last output time",
+                            sol.t_final
+                        ));
+                        break;
+                    }
+                }
+            }
+            match &streamer.error {
+                Some(e) => (format!("error: {e}"), sol.stats, sol.t_final),
+                None => ("ok".to_string(), sol.stats, sol.t_final),
+            }
+        }
+    };
+    write_summary(
+        &dir,
+        &stats,
+        wall,
+        t_final,
+        &status,
+        scene,
+        streamer.rows_written(),
+        streamer.rows_expected(),
+    )?;
+    // Plots of whatever was computed (also after a failure: they show where it went wrong).
+    let plot_result = plots::all(&dir, &streamer.series, scene);
+    if status != "ok" {
+        return Err(failed(format!(
+            "simulation failed: {} (outputs up to t = {} in {})",
+            status.trim_start_matches("error: "),
+            streamer.series.t.last().copied().unwrap_or(0.0),
+            dir.display()
+        )));
+    }
+    plot_result?;
+    if !quiet {
+        eprintln!(
+            "softrod: {} s simulated in {:.3} s wall: {} steps ({} rejected), {} rhs evaluations; wrote {}",
+            t_final,
+            wall,
+            stats.steps,
+            stats.rejected_steps,
+            stats.rhs_evaluations,
+            dir.display()
+        );
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::output_times;
+
+    #[test]
+    fn output_times_include_both_ends() {
+        let t = output_times(1.0, 0.25);
+        assert_eq!(t, vec![0.0, 0.25, 0.5, 0.75, 1.0]);
+        let t = output_times(1.0, 0.3);
+        assert_eq!(t.len(), 5);
+        assert_eq!(*t.last().unwrap(), 1.0);
+        let t = output_times(1.0, 1e-3);
+        assert_eq!(t.len(), 1001);
+        assert_eq!(*t.last().unwrap(), 1.0);
+    }
+}
