@@ -94,13 +94,18 @@ const TAU_SERIES: [[f64; N]; 4] = tau_series();
 const RHO_SERIES: [[f64; N]; 4] = rho_series();
 const ABC_SERIES: [[f64; N]; 3] = abc_series();
 
+/// Horner in `u`. Plain `acc * u + c` on purpose, not `f64::mul_add`: on the
+/// default `x86_64` target (no `fma` feature) `mul_add` is an out-of-line
+/// libm call per step, which made the series branch ~3× slower than the closed
+/// forms; the separate rounding costs nothing measurable in accuracy
+/// (tests/accuracy.rs) and gives the same bits on every target.
 #[inline(always)]
 fn horner(c: &[f64; N], u: f64) -> f64 {
     let mut acc = c[N - 1];
     let mut m = N - 1;
     while m > 0 {
         m -= 1;
-        acc = acc.mul_add(u, c[m]);
+        acc = acc * u + c[m];
     }
     acc
 }
@@ -269,10 +274,15 @@ mod tests {
         for psi in [PSI_SWITCH * (1.0 - 1e-9), PSI_SWITCH, 2.0, 3.0] {
             let (a1, t1, r1) = closed_forms(psi);
             let u = psi * psi;
+            // ψ = 3 lies beyond the switch, where the series is never used:
+            // there a = sin3/3 ≈ 0.047 is what is left of O(1) alternating
+            // terms (Σ|terms| = sinh3/3 ≈ 3.3), so the series itself is only
+            // good to ~ε·3.3/0.047 ≈ 8e-15 (measured 3.3e-15 vs 60 digits).
+            let tol_abc = if psi > PSI_SWITCH { 1e-14 } else { 2e-15 };
             for j in 0..3 {
                 let s = horner(&ABC_SERIES[j], u);
                 assert!(
-                    (s - a1[j]).abs() <= 2e-15 * a1[j].abs(),
+                    (s - a1[j]).abs() <= tol_abc * a1[j].abs(),
                     "abc[{j}] at {psi}"
                 );
             }
