@@ -392,7 +392,13 @@ impl Rod {
             .partition_point(|p| p.end() < s)
             .min(self.pieces.len() - 1);
         let p = &self.pieces[n];
-        Ok((n, (s - p.start).clamp(0.0, p.length)))
+        // `s − start` can miss `ℓ_n` by an ulp at s = L_n; return the tip exactly.
+        let x = if s >= p.end() {
+            p.length
+        } else {
+            (s - p.start).clamp(0.0, p.length)
+        };
+        Ok((n, x))
     }
 
     /// The strain of piece `n` for coordinates `q`.

@@ -1,7 +1,7 @@
 //! Kinematic state of a rod: one O(N) sweep, then cheap point queries.
 
 use crate::error::KinematicsError;
-use crate::rod::Rod;
+use crate::rod::{Basis, Rod};
 use nalgebra::{DVectorView, Matrix6xX};
 use softrod_lie::{
     AdOp, Pose, Vec6, ad_vec, d_tangent_minus, d_tangent_minus_self, exp_and_tangent_minus,
@@ -97,8 +97,14 @@ impl RodKinematics {
             rod.check_coordinates("qddot", v)?;
         }
         debug_assert_eq!(self.n_dof, rod.n_dof());
+        let had_vel = self.has_vel;
         self.has_vel = qd.is_some();
         self.has_acc = qdd.is_some();
+        if had_vel && !self.has_vel {
+            // Ṡ_ℓ is only refreshed when q̇ is given; without it q̇ = 0 and so
+            // Ṡ = 0 — do not leave a previous update's values behind.
+            self.tip_sdot.as_mut_slice().fill(0.0);
+        }
         self.tip_pose[0] = *rod.base();
         self.tip_vel[0] = Vec6::zeros();
         self.tip_acc[0] = Vec6::zeros();
@@ -112,29 +118,27 @@ impl RodKinematics {
             let (g, tm) = exp_and_tangent_minus(piece.length, &xi);
             let a = g.ad_inv();
             self.tip_ad_inv[n] = a;
-            for c in 0..piece.basis.dof() {
-                let col = tm.mul_vec(&piece.basis.column(c));
-                self.tip_s
-                    .fixed_view_mut::<6, 1>(0, piece.dof_offset + c)
-                    .copy_from(&col);
-            }
+            op_times_basis(&tm, &piece.basis, &mut self.tip_s, piece.dof_offset);
+            self.tip_pose[n + 1] = self.tip_pose[n].compose(&g);
             if self.has_vel {
                 let dt = d_tangent_minus(piece.length, &xi, &dxi);
-                for c in 0..piece.basis.dof() {
-                    let col = dt.mul_vec(&piece.basis.column(c));
-                    self.tip_sdot
-                        .fixed_view_mut::<6, 1>(0, piece.dof_offset + c)
-                        .copy_from(&col);
-                }
+                op_times_basis(&dt, &piece.basis, &mut self.tip_sdot, piece.dof_offset);
+                let carried = a.mul_vec(&self.tip_vel[n]);
+                let local_v = tm.mul_vec(&dxi);
+                self.tip_vel[n + 1] = carried + local_v;
+                self.tip_acc[n + 1] = a.mul_vec(&self.tip_acc[n])
+                    + tm.mul_vec(&ddxi)
+                    + ad_vec(&carried, &local_v)
+                    + d_tangent_minus_self(piece.length, &xi, &dxi);
+            } else {
+                // q̇ = 0: η ≡ 0 and the velocity terms of (D10) vanish.
+                self.tip_vel[n + 1] = Vec6::zeros();
+                self.tip_acc[n + 1] = if self.has_acc {
+                    a.mul_vec(&self.tip_acc[n]) + tm.mul_vec(&ddxi)
+                } else {
+                    Vec6::zeros()
+                };
             }
-            self.tip_pose[n + 1] = self.tip_pose[n].compose(&g);
-            let carried = a.mul_vec(&self.tip_vel[n]);
-            let local_v = tm.mul_vec(&dxi);
-            self.tip_vel[n + 1] = carried + local_v;
-            self.tip_acc[n + 1] = a.mul_vec(&self.tip_acc[n])
-                + tm.mul_vec(&ddxi)
-                + ad_vec(&carried, &local_v)
-                + d_tangent_minus_self(piece.length, &xi, &dxi);
         }
         Ok(())
     }
@@ -232,21 +236,29 @@ impl RodKinematics {
     ) -> Result<(), KinematicsError> {
         self.check_out(out)?;
         let (n, x) = rod.locate(s)?;
-        let (g, a, tm) = self.local(n, x);
-        out.fill(0.0);
         let pieces = rod.pieces();
         let p = &pieces[n];
-        for c in 0..p.basis.dof() {
-            let col = tm.mul_vec(&p.basis.column(c));
-            out.fixed_view_mut::<6, 1>(0, p.dof_offset + c)
-                .copy_from(&col);
-        }
+        out.as_mut_slice().fill(0.0);
+        let (g, a) = if x == p.length {
+            // At a piece tip everything is in the sweep's cache (same values
+            // `local` would recompute): g(L_n), A_ℓ and the columns S_ℓ.
+            let cols = 6 * p.dof_offset..6 * (p.dof_offset + p.basis.dof());
+            out.as_mut_slice()[cols.clone()].copy_from_slice(&self.tip_s.as_slice()[cols]);
+            (self.tip_pose[n + 1], self.tip_ad_inv[n])
+        } else {
+            let (g, a, tm) = self.local(n, x);
+            op_times_basis(&tm, &p.basis, out, p.dof_offset);
+            (g, a)
+        };
+        // Earlier pieces, tip-side first, on the raw column-major storage
+        // (column c is entries 6c…6c+5).
+        let ts = self.tip_s.as_slice();
+        let os = out.as_mut_slice();
         let mut carry = a;
         for i in (0..n).rev() {
-            let pi = &pieces[i];
-            for c in pi.dofs() {
-                let col = carry.mul_vec(&self.tip_s.fixed_view::<6, 1>(0, c).into_owned());
-                out.fixed_view_mut::<6, 1>(0, c).copy_from(&col);
+            for c in pieces[i].dofs() {
+                let col = carry.mul_vec(&Vec6::from_column_slice(&ts[6 * c..6 * c + 6]));
+                os[6 * c..6 * c + 6].copy_from_slice(col.as_slice());
             }
             carry = carry * self.tip_ad_inv[i];
         }
@@ -284,7 +296,7 @@ impl RodKinematics {
                 &w.cross(&softrod_lie::linear(jc)),
             ),
         };
-        out.fill(0.0);
+        out.as_mut_slice().fill(0.0);
         let pieces = rod.pieces();
         let p = &pieces[n];
         let dt = d_tangent_minus(x, &xi, &dxi);
@@ -326,6 +338,33 @@ impl RodKinematics {
     /// in tests; convenience for callers holding a Jacobian.
     pub fn apply_jacobian(j: &Matrix6xX<f64>, qd: DVectorView<'_, f64>) -> Vec6 {
         (j * qd).fixed_rows::<6>(0).into_owned()
+    }
+}
+
+/// Writes `op · B` (6 × k) into the columns `offset…offset + k` of `out`.
+/// For a selection basis the columns of `op = [[A, 0], [B, A]]` are copied
+/// (`op · e_i` exactly); otherwise one product per basis column.
+#[inline]
+fn op_times_basis(op: &AdOp, basis: &Basis, out: &mut Matrix6xX<f64>, offset: usize) {
+    match basis.selection() {
+        Some(sel) => {
+            for (c, &i) in sel.iter().enumerate() {
+                let mut col = out.fixed_view_mut::<6, 1>(0, offset + c);
+                if i < 3 {
+                    col.fixed_rows_mut::<3>(0).copy_from(&op.a.column(i));
+                    col.fixed_rows_mut::<3>(3).copy_from(&op.b.column(i));
+                } else {
+                    col.fixed_rows_mut::<3>(0).fill(0.0);
+                    col.fixed_rows_mut::<3>(3).copy_from(&op.a.column(i - 3));
+                }
+            }
+        }
+        None => {
+            for c in 0..basis.dof() {
+                let col = op.mul_vec(&basis.column(c));
+                out.fixed_view_mut::<6, 1>(0, offset + c).copy_from(&col);
+            }
+        }
     }
 }
 

@@ -1,0 +1,242 @@
+//! Invalid rod descriptions and queries give the right `KinematicsError`,
+//! never a panic.
+
+use nalgebra::Matrix6xX;
+use softrod_kinematics::{
+    Basis, Frame, KinematicsError, PieceSpec, Rod, RodKinematics, Strain, straight,
+};
+use softrod_lie::{Pose, Vec6};
+
+fn id() -> Pose {
+    Pose::identity()
+}
+
+#[test]
+fn bad_lengths() {
+    for l in [0.0, -1.0, -0.0, f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+        let e = Rod::uniform(l, 3, Basis::all(), straight(), id()).unwrap_err();
+        assert!(
+            matches!(e, KinematicsError::BadLength { .. }),
+            "uniform({l}): {e:?}"
+        );
+        let e = Rod::with_lengths(&[0.2, l, 0.3], Basis::all(), straight(), id()).unwrap_err();
+        match e {
+            KinematicsError::BadLength { what, value } => {
+                assert!(what.contains('1'), "names piece 1: {what}");
+                assert!(value.to_bits() == l.to_bits() || (value.is_nan() && l.is_nan()));
+            }
+            other => panic!("with_lengths({l}): {other:?}"),
+        }
+    }
+}
+
+#[test]
+fn no_pieces() {
+    assert_eq!(
+        Rod::uniform(1.0, 0, Basis::all(), straight(), id()).unwrap_err(),
+        KinematicsError::NoPieces
+    );
+    assert_eq!(
+        Rod::with_lengths(&[], Basis::all(), straight(), id()).unwrap_err(),
+        KinematicsError::NoPieces
+    );
+    assert_eq!(
+        Rod::from_pieces(vec![], id()).unwrap_err(),
+        KinematicsError::NoPieces
+    );
+}
+
+#[test]
+fn bad_bases() {
+    let is_bad =
+        |r: Result<Basis, KinematicsError>| matches!(r, Err(KinematicsError::BadBasis { .. }));
+    // Duplicate strain.
+    assert!(is_bad(Basis::select(&[Strain::Ky, Strain::Qx, Strain::Ky])));
+    assert!(is_bad(Basis::from_indices(&[3, 3])));
+    // Index out of range, empty, too many.
+    assert!(is_bad(Basis::from_indices(&[6])));
+    assert!(is_bad(Basis::from_indices(&[])));
+    assert!(is_bad(Basis::from_indices(&[0, 1, 2, 3, 4, 5, 0])));
+    // Rank-deficient matrices: parallel columns, a zero column, all zero.
+    let c = [0.3, 1.0, -0.2, 0.1, 0.0, 0.05];
+    let par: Vec<f64> = c
+        .iter()
+        .chain(c.iter().map(|v| v * -2.0).collect::<Vec<_>>().iter())
+        .copied()
+        .collect();
+    assert!(is_bad(Basis::from_matrix(Matrix6xX::from_column_slice(
+        &par
+    ))));
+    let mut z = c.to_vec();
+    z.extend([0.0; 6]);
+    assert!(is_bad(Basis::from_matrix(Matrix6xX::from_column_slice(&z))));
+    assert!(is_bad(Basis::from_matrix(Matrix6xX::zeros(2))));
+    // Nearly dependent (below the 1e-10 relative threshold).
+    let mut near = c.to_vec();
+    near.extend(
+        c.iter()
+            .enumerate()
+            .map(|(i, v)| v + if i == 0 { 1e-13 } else { 0.0 }),
+    );
+    assert!(is_bad(Basis::from_matrix(Matrix6xX::from_column_slice(
+        &near
+    ))));
+    // Wrong shapes and non-finite entries.
+    assert!(is_bad(Basis::from_matrix(Matrix6xX::zeros(0))));
+    assert!(is_bad(Basis::from_matrix(Matrix6xX::from_fn(
+        7,
+        |r, c| (r == c) as u8 as f64
+    ))));
+    let mut nan = c.to_vec();
+    nan[2] = f64::NAN;
+    assert!(is_bad(Basis::from_matrix(Matrix6xX::from_column_slice(
+        &nan
+    ))));
+    // A valid general basis and a selection matrix (recognised as such).
+    let ok = Basis::from_matrix(Matrix6xX::from_column_slice(&c)).unwrap();
+    assert_eq!(ok.selection(), None);
+    let mut sel = Matrix6xX::zeros(2);
+    sel[(4, 0)] = 1.0;
+    sel[(1, 1)] = 1.0;
+    let s = Basis::from_matrix(sel).unwrap();
+    assert_eq!(s.selection(), Some(&[4usize, 1][..]));
+}
+
+#[test]
+fn non_finite_rod_data() {
+    let mut rest = straight();
+    rest[1] = f64::NAN;
+    let e = Rod::uniform(1.0, 2, Basis::all(), rest, id()).unwrap_err();
+    assert!(matches!(e, KinematicsError::NotFinite { .. }), "{e:?}");
+    let mut base = id();
+    base.translation[2] = f64::INFINITY;
+    let e = Rod::uniform(1.0, 2, Basis::all(), straight(), base).unwrap_err();
+    assert!(matches!(e, KinematicsError::NotFinite { .. }), "{e:?}");
+    let e = Rod::from_pieces(
+        vec![PieceSpec {
+            length: 1.0,
+            basis: Basis::kirchhoff(),
+            rest_strain: Vec6::repeat(f64::NEG_INFINITY),
+        }],
+        id(),
+    )
+    .unwrap_err();
+    assert!(matches!(e, KinematicsError::NotFinite { .. }), "{e:?}");
+}
+
+fn rod() -> Rod {
+    Rod::uniform(
+        0.8,
+        3,
+        Basis::select(&[Strain::Ky, Strain::Qx]).unwrap(),
+        straight(),
+        id(),
+    )
+    .unwrap()
+}
+
+#[test]
+fn wrong_coordinate_vectors() {
+    let rod = rod();
+    let mut kin = RodKinematics::new(&rod);
+    let q = vec![0.1; 6];
+    for bad in [vec![0.0; 5], vec![0.0; 7], vec![]] {
+        let e = kin.update(&rod, &bad, None, None).unwrap_err();
+        assert!(
+            matches!(e, KinematicsError::SizeMismatch { got, expected: 6, .. } if got == bad.len()),
+            "{e:?}"
+        );
+        let e = kin.update(&rod, &q, Some(&bad), None).unwrap_err();
+        assert!(matches!(e, KinematicsError::SizeMismatch { .. }), "{e:?}");
+        let e = kin.update(&rod, &q, Some(&q), Some(&bad)).unwrap_err();
+        assert!(matches!(e, KinematicsError::SizeMismatch { .. }), "{e:?}");
+    }
+    for v in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+        let mut b = q.clone();
+        b[4] = v;
+        let e = kin.update(&rod, &b, None, None).unwrap_err();
+        assert!(matches!(e, KinematicsError::NotFinite { .. }), "{e:?}");
+        let e = kin.update(&rod, &q, Some(&b), None).unwrap_err();
+        assert!(matches!(e, KinematicsError::NotFinite { .. }), "{e:?}");
+        let e = kin.update(&rod, &q, None, Some(&b)).unwrap_err();
+        assert!(matches!(e, KinematicsError::NotFinite { .. }), "{e:?}");
+    }
+    kin.update(&rod, &q, Some(&q), Some(&q)).unwrap();
+    // Output buffers of the wrong size.
+    let mut j = Matrix6xX::zeros(5);
+    let e = kin.jacobian_at(&rod, 0.3, Frame::Body, &mut j).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            KinematicsError::SizeMismatch {
+                got: 5,
+                expected: 6,
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+    let e = kin
+        .jacobian_dot_at(&rod, 0.3, Frame::Body, &mut j)
+        .unwrap_err();
+    assert!(matches!(e, KinematicsError::SizeMismatch { .. }), "{e:?}");
+    let mut out = vec![Pose::identity(); 2];
+    let e = kin.poses_at(&rod, &[0.1, 0.2, 0.3], &mut out).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            KinematicsError::SizeMismatch {
+                got: 2,
+                expected: 3,
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+}
+
+#[test]
+fn abscissa_outside_the_rod() {
+    let rod = rod();
+    let mut kin = RodKinematics::new(&rod);
+    kin.update(&rod, &[0.5; 6], Some(&[0.1; 6]), None).unwrap();
+    let mut j = Matrix6xX::zeros(6);
+    for s in [
+        -1e-3,
+        -1e-9,
+        0.8 + 1e-9,
+        0.8001,
+        5.0,
+        f64::NAN,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    ] {
+        let oor = |e: KinematicsError| matches!(e, KinematicsError::OutOfRod { length, .. } if length == 0.8);
+        assert!(oor(rod.locate(s).unwrap_err()), "s = {s}");
+        assert!(oor(kin.pose_at(&rod, s).unwrap_err()));
+        assert!(oor(kin
+            .poses_at(&rod, &[0.1, s], &mut [Pose::identity(); 2])
+            .unwrap_err()));
+        for frame in [Frame::Body, Frame::Spatial, Frame::Mixed] {
+            assert!(oor(kin.velocity_at(&rod, s, frame).unwrap_err()));
+            assert!(oor(kin.acceleration_at(&rod, s, frame).unwrap_err()));
+            assert!(oor(kin.jacobian_at(&rod, s, frame, &mut j).unwrap_err()));
+            assert!(oor(kin
+                .jacobian_dot_at(&rod, s, frame, &mut j)
+                .unwrap_err()));
+        }
+    }
+    // The ends themselves (and round-off beyond them) are fine.
+    for s in [0.0, 0.8, 0.8 * (1.0 + 1e-14), -1e-14] {
+        kin.pose_at(&rod, s).unwrap();
+        kin.jacobian_at(&rod, s, Frame::Mixed, &mut j).unwrap();
+    }
+}
+
+#[test]
+fn errors_display() {
+    let e = Rod::uniform(-2.0, 1, Basis::all(), straight(), id()).unwrap_err();
+    assert!(e.to_string().contains("-2"), "{e}");
+    let e = Basis::select(&[Strain::Kz, Strain::Kz]).unwrap_err();
+    assert!(e.to_string().contains("kz"), "{e}");
+}
