@@ -32,18 +32,41 @@ pub(crate) fn gravity_base_acceleration(model: &Model, rm: &RodModel, scale: f64
     }
 }
 
-/// `acc += w · Xᵀ diag(d) Y` for block operators `X = [[xa,0],[xb,xa]]`,
-/// `Y` likewise: five 3×3 products instead of two dense 6×6 ones.
+/// `diag(d) M` by row scaling (bit-identical to the product with the
+/// diagonal matrix: the off-diagonal terms only add exact zeros).
 #[inline(always)]
-fn add_sandwich(acc: &mut Mat6, x: &AdOp, d: &Vec6, y: &AdOp, w: f64) {
-    let dw = softrod_lie::Mat3::from_diagonal(&softrod_lie::angular(d)) * w;
-    let dv = softrod_lie::Mat3::from_diagonal(&softrod_lie::linear(d)) * w;
-    let dv_ya = dv * y.a;
-    let dv_yb = dv * y.b;
-    let tl = x.a.tr_mul(&(dw * y.a)) + x.b.tr_mul(&dv_yb);
-    let tr = x.b.tr_mul(&dv_ya);
-    let bl = x.a.tr_mul(&dv_yb);
-    let br = x.a.tr_mul(&dv_ya);
+fn scale_rows(d: &softrod_lie::Vec3, m: &softrod_lie::Mat3) -> softrod_lie::Mat3 {
+    softrod_lie::Mat3::from_fn(|i, j| d[i] * m[(i, j)])
+}
+
+/// `diag(dw, dv)·Y` for a block operator `Y = [[ya,0],[yb,ya]]`, kept as the
+/// three distinct 3×3 blocks `(dw ya, dv ya, dv yb)`.
+#[inline(always)]
+fn scaled_blocks(
+    dw: &softrod_lie::Vec3,
+    dv: &softrod_lie::Vec3,
+    y: &AdOp,
+) -> (softrod_lie::Mat3, softrod_lie::Mat3, softrod_lie::Mat3) {
+    (
+        scale_rows(dw, &y.a),
+        scale_rows(dv, &y.a),
+        scale_rows(dv, &y.b),
+    )
+}
+
+/// `acc += Xᵀ diag(d) Y` with `diag(d) Y` given by [`scaled_blocks`]
+/// (the weight already in `d`): five 3×3 products instead of two dense
+/// 6×6 ones.
+#[inline(always)]
+fn add_sandwich(
+    acc: &mut Mat6,
+    x: &AdOp,
+    (dw_ya, dv_ya, dv_yb): &(softrod_lie::Mat3, softrod_lie::Mat3, softrod_lie::Mat3),
+) {
+    let tl = x.a.tr_mul(dw_ya) + x.b.tr_mul(dv_yb);
+    let tr = x.b.tr_mul(dv_ya);
+    let bl = x.a.tr_mul(dv_yb);
+    let br = x.a.tr_mul(dv_ya);
     let mut v = acc.fixed_view_mut::<3, 3>(0, 0);
     v += tl;
     let mut v = acc.fixed_view_mut::<3, 3>(0, 3);
@@ -152,9 +175,15 @@ pub(crate) fn outward(
                     p_small += tm.tr_mul_vec(&f) * qp.w;
                 }
                 if pass != Pass::Inverse {
-                    add_sandwich(&mut mt, &a, m, &a, qp.w);
-                    add_sandwich(&mut ut, &a, m, &tm, qp.w);
-                    add_sandwich(&mut dt, &tm, m, &tm, qp.w);
+                    // 𝓜ᵗ += w Aᵀ𝓜A, 𝓤 += w Aᵀ𝓜T₋, 𝓓 += w T₋ᵀ𝓜T₋; 𝓜T₋ is
+                    // shared by the last two.
+                    let dw = softrod_lie::angular(m) * qp.w;
+                    let dv = softrod_lie::linear(m) * qp.w;
+                    let m_a = scaled_blocks(&dw, &dv, &a);
+                    let m_tm = scaled_blocks(&dw, &dv, &tm);
+                    add_sandwich(&mut mt, &a, &m_a);
+                    add_sandwich(&mut ut, &a, &m_tm);
+                    add_sandwich(&mut dt, &tm, &m_tm);
                 }
             }
             if pass != Pass::Composite && !only_gravity {
@@ -184,12 +213,30 @@ pub(crate) fn outward(
                 w.p_small = p_small;
                 etadot0 = a.mul_vec(&etadot0) + tm.mul_vec(&ddxi) + acc;
             } else {
-                let b6 = &pd.basis6;
-                w.s_tip = tm.to_mat6() * b6;
                 w.mt = mt;
-                w.ut = ut * b6;
-                w.dt = b6.tr_mul(&(dt * b6));
-                w.p_small = b6.tr_mul(&p_small);
+                if let Some(sel) = piece.basis.selection() {
+                    // B is a column selection of I₆: gathers, bit-identical
+                    // to the products with `basis6` (they add exact zeros).
+                    let tm6 = tm.to_mat6();
+                    w.s_tip = Mat6::zeros();
+                    w.ut = Mat6::zeros();
+                    w.dt = Mat6::zeros();
+                    w.p_small = Vec6::zeros();
+                    for (c, &i) in sel.iter().enumerate() {
+                        w.s_tip.set_column(c, &tm6.column(i));
+                        w.ut.set_column(c, &ut.column(i));
+                        w.p_small[c] = p_small[i];
+                        for (r, &j) in sel.iter().enumerate() {
+                            w.dt[(r, c)] = dt[(j, i)];
+                        }
+                    }
+                } else {
+                    let b6 = &pd.basis6;
+                    w.s_tip = tm.to_mat6() * b6;
+                    w.ut = ut * b6;
+                    w.dt = b6.tr_mul(&(dt * b6));
+                    w.p_small = b6.tr_mul(&p_small);
+                }
             }
             eta0 = carried + sv;
             pose = pose.compose(&gl);

@@ -1,0 +1,109 @@
+//! Criterion benches of the `softrod-dynamics` algorithms on a full Cosserat
+//! rod: all six strains per piece, 4 Gauss points per piece, gravity,
+//! elasticity and Kelvin–Voigt damping, at a seeded, curved, moving state.
+//!
+//! Regenerate (numbers in docs/performance.md, section "softrod-dynamics"):
+//! `cargo bench -p softrod-benches --bench dynamics -- --warm-up-time 1 --measurement-time 2`
+
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use softrod_dynamics::{Data, Model, RodSpec, forward_dynamics, inverse_dynamics, mass_matrix};
+use softrod_kinematics::{Basis, Rod, straight};
+use softrod_lie::{Pose, Vec3};
+use softrod_mechanics::{Material, RodBody, Section};
+use std::hint::black_box;
+
+/// SplitMix64 in [−1, 1), seeded: reproducible states across runs.
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        (z >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+    }
+}
+
+/// The rod of derivations §8(h) (L = 0.5, r = 0.01, ρ = 1000, E = 1e7,
+/// G = E/3) with viscosity μ = 1 Pa·s, all six strains on each of `n` equal
+/// pieces, gravity (0, 0, −9.81), 4 Gauss points per piece.
+fn model(n: usize) -> Model {
+    let length = 0.5;
+    let rod = Rod::uniform(length, n, Basis::all(), straight(), Pose::identity()).unwrap();
+    let material = Material {
+        density: 1000.0,
+        young: 1e7,
+        shear: 1e7 / 3.0,
+        viscosity: 1.0,
+    };
+    let body = RodBody::new(Section::Circle { radius: 0.01 }, material, length).unwrap();
+    let spec = RodSpec::new("bench", rod, body);
+    let m = Model::new(vec![spec], Some(Vec3::new(0.0, 0.0, -9.81)), 4).unwrap();
+    assert!(m.terms().iter().any(|t| t == "damping"));
+    m
+}
+
+/// Seeded state: curvatures and torsion in ±2 rad/m, stretch and shears in
+/// ±0.02, rates in ±1 /s, accelerations in ±10 /s² (per strain component).
+fn state(n_dof: usize, seed: u64) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+    let mut rng = Rng(seed);
+    let q = (0..n_dof)
+        .map(|i| if i % 6 < 3 { 2.0 } else { 0.02 } * rng.next())
+        .collect();
+    let qd = (0..n_dof).map(|_| rng.next()).collect();
+    let qdd = (0..n_dof).map(|_| 10.0 * rng.next()).collect();
+    (q, qd, qdd)
+}
+
+fn bench_dynamics(c: &mut Criterion) {
+    let mut g = c.benchmark_group("forward_dynamics");
+    for n in [1usize, 4, 10, 40, 100, 1000] {
+        let m = model(n);
+        let mut data = Data::new(&m);
+        let (q, qd, _) = state(m.n_dof(), 42);
+        g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+            b.iter(|| {
+                forward_dynamics(&m, &mut data, 0.0, black_box(&q), black_box(&qd), None).unwrap()
+                    [0]
+            })
+        });
+    }
+    g.finish();
+
+    let mut g = c.benchmark_group("inverse_dynamics");
+    for n in [1usize, 4, 10, 40, 100, 1000] {
+        let m = model(n);
+        let mut data = Data::new(&m);
+        let (q, qd, qdd) = state(m.n_dof(), 42);
+        g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+            b.iter(|| {
+                inverse_dynamics(
+                    &m,
+                    &mut data,
+                    0.0,
+                    black_box(&q),
+                    black_box(&qd),
+                    black_box(&qdd),
+                )
+                .unwrap()[0]
+            })
+        });
+    }
+    g.finish();
+
+    let mut g = c.benchmark_group("mass_matrix");
+    for n in [10usize, 40, 100] {
+        let m = model(n);
+        let mut data = Data::new(&m);
+        let (q, _, _) = state(m.n_dof(), 42);
+        g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+            b.iter(|| mass_matrix(&m, &mut data, black_box(&q)).unwrap()[(0, 0)])
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench_dynamics);
+criterion_main!(benches);
