@@ -36,19 +36,6 @@ impl AdPowers {
             p: [p1, p2, p3, p4],
         }
     }
-
-    /// `Σ_{i=0}^{4} c_i ad^i` with `c₀ = c0`.
-    #[inline(always)]
-    fn combine(&self, c0: f64, c: [f64; 4]) -> AdOp {
-        AdOp {
-            a: Mat3::from_diagonal_element(c0)
-                + self.k[0] * c[0]
-                + self.k[1] * c[1]
-                + self.k[2] * c[2]
-                + self.k[3] * c[3],
-            b: self.p[0] * c[0] + self.p[1] * c[1] + self.p[2] * c[2] + self.p[3] * c[3],
-        }
-    }
 }
 
 /// Group exponential `exp(x·ξ̂)` (D4), the pose of the section at `x`
@@ -66,15 +53,49 @@ pub fn exp_twist(x: f64, xi: &Vec6) -> Pose {
 
 #[inline(always)]
 fn exp_twist_with(x: f64, xi: &Vec6, a: f64, b: f64, c: f64) -> Pose {
-    let k = skew(&angular(xi));
-    let k2 = k * k;
+    let kv = angular(xi);
     let q = linear(xi);
-    let rotation = Mat3::identity() + k * (x * a) + k2 * (x * x * b);
-    let kq = k * q;
-    let translation = q * x + kq * (x * x * b) + k * kq * (x * x * x * c);
+    // k̃² = kkᵀ − θ²I: no 3×3 product needed.
+    let rotation = Mat3::from_diagonal_element(1.0 - x * x * b * kv.norm_squared())
+        + skew(&kv) * (x * a)
+        + (kv * kv.transpose()) * (x * x * b);
+    let kq = kv.cross(&q);
+    let translation = q * x + kq * (x * x * b) + kv.cross(&kq) * (x * x * x * c);
     Pose {
         rotation,
         translation,
+    }
+}
+
+/// `T(x)` (`sign = +1`) or `T₋(x)` (`sign = −1`) in block form from the
+/// coefficients, without any 3×3 product.
+///
+/// With `K = k̃`, `Q = q̃`, `σ = k·q`, the powers of `ad_ξ` have the blocks
+/// `K² = kkᵀ − θ²I`, `K³ = −θ²K`, `K⁴ = −θ²K²` and `P₁ = Q`,
+/// `P₂ = QK + KQ = kqᵀ + qkᵀ − 2σI`, `P₃ = −θ²Q − 2σK`, `P₄ = −θ²P₂ − 2σK²`
+/// (the skew-product identity `ãb̃ = baᵀ − (a·b)I`). Collecting (D3) and using
+/// the exact identities `τ₁ − ψ²τ₃ = b(ψ)`, `τ₂ − ψ²τ₄ = c(ψ)` (which avoid
+/// a cancellation at large ψ):
+/// `A = xI ± x²b K + x³c K²`,
+/// `B = ±x²b Q + x³c P₂ − 2σx⁴(±τ₃ K + xτ₄ K²)`.
+#[inline(always)]
+fn tangent_blocks(x: f64, xi: &Vec6, b: f64, c: f64, t3: f64, t4: f64, sign: f64) -> AdOp {
+    let kv = angular(xi);
+    let q = linear(xi);
+    let th2 = kv.norm_squared();
+    let sigma = kv.dot(&q);
+    let kmat = skew(&kv);
+    let k2 = kv * kv.transpose() - Mat3::from_diagonal_element(th2);
+    let kq = kv * q.transpose();
+    let p2 = kq + kq.transpose() - Mat3::from_diagonal_element(2.0 * sigma);
+    let x2 = x * x;
+    let x3 = x2 * x;
+    let x4 = x2 * x2;
+    let cb = sign * x2 * b;
+    let cc = x3 * c;
+    AdOp {
+        a: Mat3::from_diagonal_element(x) + kmat * cb + k2 * cc,
+        b: skew(&q) * cb + p2 * cc - (kmat * (sign * t3) + k2 * (x * t4)) * (2.0 * sigma * x4),
     }
 }
 
@@ -92,8 +113,8 @@ pub fn exp_ad(x: f64, xi: &Vec6) -> AdOp {
 /// Accuracy: coefficients ≤ 6e-16 relative on both sides of the switch.
 #[inline]
 pub fn tangent(x: f64, xi: &Vec6) -> AdOp {
-    let t = series::tau(x * angular(xi).norm());
-    AdPowers::new(xi).combine(x, scaled(x, t, 1.0))
+    let ([_, b, c], [t3, t4]) = series::abc_tau34(x * angular(xi).norm());
+    tangent_blocks(x, xi, b, c, t3, t4, 1.0)
 }
 
 /// `T₋(x) = Ad⁻¹_{g_n(x)} T(x) = ∫₀ˣ exp(−u·ad_ξ) du
@@ -101,32 +122,19 @@ pub fn tangent(x: f64, xi: &Vec6) -> AdOp {
 /// `S_n(x) = T₋(x) B_n` (D8).
 #[inline]
 pub fn tangent_minus(x: f64, xi: &Vec6) -> AdOp {
-    let t = series::tau(x * angular(xi).norm());
-    AdPowers::new(xi).combine(x, scaled(x, t, -1.0))
+    let ([_, b, c], [t3, t4]) = series::abc_tau34(x * angular(xi).norm());
+    tangent_blocks(x, xi, b, c, t3, t4, -1.0)
 }
 
 /// `exp(x·ξ̂)` and `T₋(x)` together, sharing the trigonometry: the two maps
 /// a PCS kinematics sweep needs at every evaluation point.
 #[inline]
 pub fn exp_and_tangent_minus(x: f64, xi: &Vec6) -> (Pose, AdOp) {
-    let ([a, b, c], t) = series::abc_tau(x * angular(xi).norm());
+    let ([a, b, c], [t3, t4]) = series::abc_tau34(x * angular(xi).norm());
     (
         exp_twist_with(x, xi, a, b, c),
-        AdPowers::new(xi).combine(x, scaled(x, t, -1.0)),
+        tangent_blocks(x, xi, b, c, t3, t4, -1.0),
     )
-}
-
-/// `[x² τ₁, x³ τ₂, x⁴ τ₃, x⁵ τ₄]`, with the odd powers of `ad` signed by `sign`.
-#[inline(always)]
-fn scaled(x: f64, t: [f64; 4], sign: f64) -> [f64; 4] {
-    let x2 = x * x;
-    let x3 = x2 * x;
-    [
-        sign * x2 * t[0],
-        x3 * t[1],
-        sign * x3 * x * t[2],
-        x3 * x2 * t[3],
-    ]
 }
 
 /// Directional derivative of `T(x)` with respect to the strain (D6):

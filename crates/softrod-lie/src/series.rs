@@ -229,6 +229,25 @@ pub fn abc_tau(psi: f64) -> ([f64; 3], [f64; 4]) {
     }
 }
 
+/// `abc(ψ)` and `[τ₃, τ₄]` together: all that `T(x)`, `T₋(x)` and the group
+/// exponential need once `τ₁, τ₂` are folded into `b, c`
+/// (`τ₁ − ψ²τ₃ = b`, `τ₂ − ψ²τ₄ = c`).
+#[inline]
+pub fn abc_tau34(psi: f64) -> ([f64; 3], [f64; 2]) {
+    let psi = psi.abs();
+    if psi < PSI_SWITCH {
+        let u = psi * psi;
+        (
+            abc(psi),
+            [horner(&TAU_SERIES[2], u), horner(&TAU_SERIES[3], u)],
+        )
+    } else {
+        let (s, c) = psi.sin_cos();
+        let t = tau_closed(psi, s, c);
+        (abc_closed(psi, s, c), [t[2], t[3]])
+    }
+}
+
 /// `tau(ψ)` and `rho(ψ)` together, sharing one `sin_cos` above the switch.
 #[inline]
 pub fn tau_rho(psi: f64) -> ([f64; 4], [f64; 4]) {
