@@ -30,7 +30,14 @@ impl SecondOrderSystem for Sys {
         qd: &DVector<f64>,
         qdd: &mut DVector<f64>,
     ) -> Result<(), Self::Error> {
-        let a = forward_dynamics(&self.model, &mut self.data, t, q.as_slice(), qd.as_slice(), None)?;
+        let a = forward_dynamics(
+            &self.model,
+            &mut self.data,
+            t,
+            q.as_slice(),
+            qd.as_slice(),
+            None,
+        )?;
         qdd.copy_from(a);
         Ok(())
     }
@@ -103,8 +110,17 @@ fn sanity_trajectory_matches_the_verified_prototype() {
     }
     .with_t_eval(REFERENCE.iter().map(|r| r.0).collect());
     let zero = DVector::zeros(n);
-    let sol = integrate_second_order(&mut sys, Method::Dopri5, 0.0, 1.0, &zero, &zero, &opts, Hooks::new())
-        .expect("integration succeeds");
+    let sol = integrate_second_order(
+        &mut sys,
+        Method::Dopri5,
+        0.0,
+        1.0,
+        &zero,
+        &zero,
+        &opts,
+        Hooks::new(),
+    )
+    .expect("integration succeeds");
     let rod = &sys.model.rods()[0].spec.rod;
     let mut kin = RodKinematics::new(rod);
     let mut e0 = None;
@@ -129,7 +145,10 @@ fn sanity_trajectory_matches_the_verified_prototype() {
         // Undamped: the total energy stays at its initial value (0 J).
         let total = e.total();
         let e0 = *e0.get_or_insert(0.0);
-        assert!((total - e0).abs() < 1e-8, "energy drift {total:e} J at t = {t}");
+        assert!(
+            (total - e0).abs() < 1e-8,
+            "energy drift {total:e} J at t = {t}"
+        );
     }
     println!("stats: {:?}", sol.stats);
 }

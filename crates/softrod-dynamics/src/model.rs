@@ -74,8 +74,6 @@ pub(crate) struct PieceData {
     pub stiffness: DMatrix<f64>,
     pub damping: DMatrix<f64>,
     pub elastic_offset: DVector<f64>,
-    /// `B_n` padded to 6×6 (columns ≥ k are zero).
-    pub basis6: softrod_lie::Mat6,
     pub has_damping: bool,
     pub has_offset: bool,
 }
@@ -205,9 +203,6 @@ impl Model {
                         loads.push(PlacedLoad { x, index: i });
                     }
                 }
-                let mut basis6 = softrod_lie::Mat6::zeros();
-                let b = piece.basis.matrix();
-                basis6.view_mut((0, 0), (6, b.ncols())).copy_from(b);
                 pieces.push(PieceData {
                     points,
                     loads,
@@ -216,7 +211,6 @@ impl Model {
                     stiffness: m.stiffness,
                     damping: m.damping,
                     elastic_offset: m.elastic_offset,
-                    basis6,
                 });
             }
             let needs_world = spec

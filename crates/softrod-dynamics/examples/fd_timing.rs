@@ -1,0 +1,50 @@
+//! Times forward dynamics on the rod of the criterion bench (all six strains,
+//! N pieces, 4 Gauss points, gravity + elasticity + damping); handy under
+//! `valgrind --tool=callgrind` where criterion is too slow:
+//! `N_PIECES=10 N_ITER=2000 cargo run --release -p softrod-dynamics --example fd_timing`.
+use softrod_dynamics::{Data, Model, RodSpec, forward_dynamics};
+use softrod_kinematics::{Basis, Rod, straight};
+use softrod_lie::{Pose, Vec3};
+use softrod_mechanics::{Material, RodBody, Section};
+
+fn env(name: &str, default: usize) -> usize {
+    std::env::var(name)
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(default)
+}
+
+fn main() {
+    let n = env("N_PIECES", 10);
+    let iters = env("N_ITER", 20000);
+    let rod = Rod::uniform(0.5, n, Basis::all(), straight(), Pose::identity()).unwrap();
+    let material = Material {
+        density: 1000.0,
+        young: 1e7,
+        shear: 1e7 / 3.0,
+        viscosity: 1.0,
+    };
+    let body = RodBody::new(Section::Circle { radius: 0.01 }, material, 0.5).unwrap();
+    let model = Model::new(
+        vec![RodSpec::new("arm", rod, body)],
+        Some(Vec3::new(0.0, 0.0, -9.81)),
+        4,
+    )
+    .unwrap();
+    let mut data = Data::new(&model);
+    let q: Vec<f64> = (0..model.n_dof())
+        .map(|i| if i % 6 < 3 { 0.3 } else { 0.01 } * ((i * 7 % 5) as f64 - 2.0))
+        .collect();
+    let qd: Vec<f64> = (0..model.n_dof())
+        .map(|i| 0.1 * ((i * 3 % 7) as f64 - 3.0))
+        .collect();
+    let t0 = std::time::Instant::now();
+    let mut acc = 0.0;
+    for _ in 0..iters {
+        acc += forward_dynamics(&model, &mut data, 0.0, &q, &qd, None).unwrap()[0];
+    }
+    println!(
+        "N = {n}: {:.2} µs per forward dynamics (checksum {acc:.6e})",
+        t0.elapsed().as_secs_f64() / iters as f64 * 1e6
+    );
+}
