@@ -171,11 +171,22 @@ pub fn forward_dynamics<'a>(
             let k = piece.basis.dof();
             let o = rm.dof_offset + piece.dof_offset;
             let w = &mut data.pieces[r][n];
-            let a6 = w.a_tip.to_mat6();
-            let x = ma_next * w.s_tip;
-            let uhat = w.ut + a6.tr_mul(&x);
-            let mut dhat = w.dt + w.s_tip.tr_mul(&x);
-            let y = ma_next * w.acc_tip + pa_next;
+            // The tip piece has no child (𝓜ᴬ = 0): skip its products.
+            let leaf = n + 1 == pieces.len();
+            let (uhat, mut dhat) = if leaf {
+                (w.ut, w.dt)
+            } else {
+                let x = ma_next * w.s_tip;
+                (
+                    w.ut + w.a_tip.to_mat6().tr_mul(&x),
+                    w.dt + w.s_tip.tr_mul(&x),
+                )
+            };
+            let y = if leaf {
+                pa_next
+            } else {
+                ma_next * w.acc_tip + pa_next
+            };
             let sty = w.s_tip.tr_mul(&y);
             let mut u = Vec6::zeros();
             for i in 0..k {
@@ -188,7 +199,7 @@ pub fn forward_dynamics<'a>(
                     what: "articulated piece inertia D̂_n",
                 });
             }
-            // Z = L⁻¹ Ûᵀ (k×6), so Û D̂⁻¹ Ûᵀ = Zᵀ Z.
+            // Z = L⁻¹ Ûᵀ (k×6), so Û D̂⁻¹ Ûᵀ = Zᵀ Z (symmetric).
             let mut z = Mat6::zeros();
             for c in 0..6 {
                 let mut col = Vec6::zeros();
@@ -198,9 +209,14 @@ pub fn forward_dynamics<'a>(
                 forward_sub(&dhat, k, &mut col);
                 z.set_column(c, &col);
             }
+            let ztz = z.tr_mul(&z);
             let dinv_u = chol_solve(&dhat, k, &u);
-            ma_next = w.mt + a6.tr_mul(&(ma_next * a6)) - z.tr_mul(&z);
-            pa_next = w.p_big + a6.tr_mul(&y) + uhat * dinv_u;
+            ma_next = if leaf {
+                w.mt - ztz
+            } else {
+                w.mt + congruence(&w.a_tip, &ma_next) - ztz
+            };
+            pa_next = w.p_big + w.a_tip.tr_mul_vec(&y) + uhat * dinv_u;
             w.ma = ma_next;
             w.pa = pa_next;
             w.uhat = uhat;
@@ -225,6 +241,28 @@ pub fn forward_dynamics<'a>(
         });
     }
     Ok(&data.qdd)
+}
+
+/// `Aᵀ M A` for a symmetric `M` and a block operator `A = [[a, 0], [b, a]]`:
+/// eleven 3×3 products instead of two dense 6×6 ones, result symmetric.
+#[inline]
+pub(crate) fn congruence(a: &softrod_lie::AdOp, m: &Mat6) -> Mat6 {
+    let m11 = m.fixed_view::<3, 3>(0, 0).into_owned();
+    let m12 = m.fixed_view::<3, 3>(0, 3).into_owned();
+    let m22 = m.fixed_view::<3, 3>(3, 3).into_owned();
+    let y11 = m11 * a.a + m12 * a.b;
+    let y12 = m12 * a.a;
+    let y21 = m12.tr_mul(&a.a) + m22 * a.b;
+    let y22 = m22 * a.a;
+    let tl = a.a.tr_mul(&y11) + a.b.tr_mul(&y21);
+    let tr = a.a.tr_mul(&y12) + a.b.tr_mul(&y22);
+    let br = a.a.tr_mul(&y22);
+    let mut out = Mat6::zeros();
+    out.fixed_view_mut::<3, 3>(0, 0).copy_from(&tl);
+    out.fixed_view_mut::<3, 3>(0, 3).copy_from(&tr);
+    out.fixed_view_mut::<3, 3>(3, 0).copy_from(&tr.transpose());
+    out.fixed_view_mut::<3, 3>(3, 3).copy_from(&br);
+    out
 }
 
 /// Mass matrix `M(q) = ∫ Jᵀ𝓜J ds` (D19) by the composite recursion (D20):

@@ -2,9 +2,7 @@
 
 use crate::data::Data;
 use crate::model::{Model, RodModel};
-use softrod_lie::{
-    AdOp, Mat6, Pose, Vec6, ad_vec, coad_vec, d_tangent_minus_self, exp_and_tangent_minus,
-};
+use softrod_lie::{AdOp, Mat6, PieceMaps, Pose, Vec6, ad_vec, coad_vec};
 
 /// What the outward sweep accumulates per piece.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -195,8 +193,10 @@ pub(crate) fn outward(
             let mut dt = Mat6::zeros();
             let mut sp = SpatialSums::default();
             let mut scols = [Vec6::zeros(); 6];
+            // Everything x-independent of the local maps, once per piece.
+            let maps = PieceMaps::new(&xi, has_vel.then_some(&dxi));
             for qp in &pd.points {
-                let (gl, tm) = exp_and_tangent_minus(qp.x, &xi);
+                let (gl, tm, dbias) = maps.eval(qp.x);
                 let a = gl.ad_inv();
                 let m = &qp.inertia;
                 if pass != Pass::Composite {
@@ -204,7 +204,7 @@ pub(crate) fn outward(
                     let sv = tm.mul_vec(&dxi);
                     let eta = carried + sv;
                     let bias = if has_vel {
-                        ad_vec(&carried, &sv) + d_tangent_minus_self(qp.x, &xi, &dxi)
+                        ad_vec(&carried, &sv) + dbias
                     } else {
                         Vec6::zeros()
                     };
@@ -268,19 +268,19 @@ pub(crate) fn outward(
             if pass != Pass::Composite && !only_gravity {
                 for pl in &pd.loads {
                     let load = &rm.spec.point_loads[pl.index];
-                    let (gl, tm) = exp_and_tangent_minus(pl.x, &xi);
+                    let (gl, tm) = maps.exp_and_tangent_minus(pl.x);
                     let f = load.wrench(&pose.compose(&gl)) * scale;
                     let a = gl.ad_inv();
                     p_big -= a.tr_mul_vec(&f);
                     p_small -= tm.tr_mul_vec(&f);
                 }
             }
-            let (gl, tm) = exp_and_tangent_minus(piece.length, &xi);
+            let (gl, tm, dbias) = maps.eval(piece.length);
             let a = gl.ad_inv();
             let carried = a.mul_vec(&eta0);
             let sv = tm.mul_vec(&dxi);
             let acc = if has_vel {
-                ad_vec(&carried, &sv) + d_tangent_minus_self(piece.length, &xi, &dxi)
+                ad_vec(&carried, &sv) + dbias
             } else {
                 Vec6::zeros()
             };

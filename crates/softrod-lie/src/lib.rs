@@ -25,6 +25,7 @@
 mod adop;
 mod exp;
 mod ops;
+mod piece;
 mod pose;
 pub mod series;
 mod types;
@@ -35,5 +36,6 @@ pub use exp::{
     exp_twist, tangent, tangent_minus,
 };
 pub use ops::{ad, ad_vec, coad, coad_vec, hat, skew, unskew, vee};
+pub use piece::PieceMaps;
 pub use pose::Pose;
 pub use types::*;

@@ -103,8 +103,22 @@ const ABC_SERIES: [[f64; N]; 3] = abc_series();
 /// Only the first `n ≤ N` terms are summed ([`terms`]).
 #[inline(always)]
 fn horner(c: &[f64; N], u: f64, n: usize) -> f64 {
-    let mut acc = c[n - 1];
-    let mut m = n - 1;
+    // A constant term count per arm lets the compiler unroll each loop; a
+    // runtime bound would cost more in loop overhead than the terms saved.
+    match n {
+        7 => horner_k::<7>(c, u),
+        8 => horner_k::<8>(c, u),
+        10 => horner_k::<10>(c, u),
+        11 => horner_k::<11>(c, u),
+        12 => horner_k::<12>(c, u),
+        _ => horner_k::<N>(c, u),
+    }
+}
+
+#[inline(always)]
+fn horner_k<const K: usize>(c: &[f64; N], u: f64) -> f64 {
+    let mut acc = c[K - 1];
+    let mut m = K - 1;
     while m > 0 {
         m -= 1;
         acc = acc * u + c[m];
@@ -274,6 +288,23 @@ pub fn abc_tau34(psi: f64) -> ([f64; 3], [f64; 2]) {
         let (s, c) = psi.sin_cos();
         let t = tau_closed(psi, s, c);
         (abc_closed(psi, s, c), [t[2], t[3]])
+    }
+}
+
+/// `abc(ψ)`, `tau(ψ)` and `rho(ψ)` together: the eleven coefficients of the
+/// pose, `T₋` and its strain derivative at one abscissa.
+#[inline]
+pub fn abc_tau_rho(psi: f64) -> ([f64; 3], [f64; 4], [f64; 4]) {
+    let psi = psi.abs();
+    if psi < PSI_SWITCH {
+        (abc(psi), tau(psi), rho(psi))
+    } else {
+        let (s, c) = psi.sin_cos();
+        (
+            abc_closed(psi, s, c),
+            tau_closed(psi, s, c),
+            rho_closed(psi, s, c),
+        )
     }
 }
 

@@ -1,0 +1,174 @@
+//! The maps of one PCS piece, with everything that does not depend on the
+//! abscissa computed once.
+
+use crate::adop::AdOp;
+use crate::ops::{ad_vec, skew};
+use crate::pose::Pose;
+use crate::series;
+use crate::types::{Mat3, Vec3, Vec6, angular, join, linear};
+
+/// Precomputed parts of `exp(x·ξ̂)`, `T₋(x)` and `D_ξT₋(x)[δ]δ` for a piece of
+/// constant strain `ξ = (k, q)` and strain rate `δ = ξ̇`.
+///
+/// Along a piece only the scalar coefficients `a, b, c, τ_i, ρ_i` depend on
+/// the abscissa `x`; the matrices and vectors they multiply — `k̃`,
+/// `k̃² = kkᵀ − θ²I`, `q̃`, `P₂ = kqᵀ + qkᵀ − 2σI` (see [`crate::tangent`]),
+/// `k × q`, `k × (k × q)`, and for the bias the vectors `v_i = ad_ξ^i δ`,
+/// `e_i` of (D6) — depend only on `ξ` and `δ`. A sweep that evaluates a
+/// piece at its Gauss points and tip builds one `PieceMaps` per piece and
+/// then pays only for the scalar series and a few scaled additions per
+/// point. Results equal [`crate::exp_and_tangent_minus`] and
+/// [`crate::d_tangent_minus_self`] to round-off.
+#[derive(Clone, Debug)]
+pub struct PieceMaps {
+    theta: f64,
+    sigma: f64,
+    q: Vec3,
+    kmat: Mat3,
+    k2: Mat3,
+    qmat: Mat3,
+    p2: Mat3,
+    kq: Vec3,
+    kkq: Vec3,
+    /// `k·δ_k`, `v₁…v₄ = ad^i δ`, `e₂…e₄` (D6); zero without a rate.
+    kd: f64,
+    v: [Vec6; 4],
+    e: [Vec6; 3],
+    has_rate: bool,
+}
+
+impl PieceMaps {
+    /// Precomputes for strain `ξ` and, when the bias is wanted, rate `δ`.
+    pub fn new(xi: &Vec6, delta: Option<&Vec6>) -> Self {
+        let k = angular(xi);
+        let q = linear(xi);
+        let th2 = k.norm_squared();
+        let sigma = k.dot(&q);
+        let kq_outer = k * q.transpose();
+        let kq = k.cross(&q);
+        let mut out = Self {
+            theta: th2.sqrt(),
+            sigma,
+            q,
+            kmat: skew(&k),
+            k2: k * k.transpose() - Mat3::from_diagonal_element(th2),
+            qmat: skew(&q),
+            p2: kq_outer + kq_outer.transpose() - Mat3::from_diagonal_element(2.0 * sigma),
+            kq,
+            kkq: k.cross(&kq),
+            kd: 0.0,
+            v: [Vec6::zeros(); 4],
+            e: [Vec6::zeros(); 3],
+            has_rate: false,
+        };
+        if let Some(d) = delta {
+            // ad³δ = −θ²v₁ − 2σ(0, k×δ_k), ad⁴δ = −θ²v₂ − 2σ(0, k̃²δ_k)
+            // (from P₃, P₄ of `tangent`): two brackets instead of four.
+            let dk = angular(d);
+            let v1 = ad_vec(xi, d);
+            let v2 = ad_vec(xi, &v1);
+            let kdk = k.cross(&dk);
+            let v3 = v1 * (-th2) - join(&Vec3::zeros(), &kdk) * (2.0 * sigma);
+            let v4 = v2 * (-th2) - join(&Vec3::zeros(), &(out.k2 * dk)) * (2.0 * sigma);
+            let e2 = ad_vec(d, &v1);
+            let e3 = ad_vec(d, &v2) + ad_vec(xi, &e2);
+            let e4 = ad_vec(d, &v3) + ad_vec(xi, &e3);
+            out.kd = k.dot(&dk);
+            out.v = [v1, v2, v3, v4];
+            out.e = [e2, e3, e4];
+            out.has_rate = true;
+        }
+        out
+    }
+
+    #[inline(always)]
+    fn pose(&self, x: f64, a: f64, b: f64, c: f64) -> Pose {
+        let x2 = x * x;
+        Pose {
+            rotation: Mat3::identity() + self.kmat * (x * a) + self.k2 * (x2 * b),
+            translation: self.q * x + self.kq * (x2 * b) + self.kkq * (x2 * x * c),
+        }
+    }
+
+    #[inline(always)]
+    fn tangent_minus(&self, x: f64, b: f64, c: f64, t3: f64, t4: f64) -> AdOp {
+        let x2 = x * x;
+        let x3 = x2 * x;
+        let cb = -x2 * b;
+        let cc = x3 * c;
+        let s = 2.0 * self.sigma * x2 * x2;
+        AdOp {
+            a: Mat3::from_diagonal_element(x) + self.kmat * cb + self.k2 * cc,
+            b: self.qmat * cb + self.p2 * cc + self.kmat * (s * t3) - self.k2 * (s * x * t4),
+        }
+    }
+
+    /// `exp(x·ξ̂)` (D4) and `T₋(x)` (D3′).
+    #[inline]
+    pub fn exp_and_tangent_minus(&self, x: f64) -> (Pose, AdOp) {
+        let ([a, b, c], [t3, t4]) = series::abc_tau34(x * self.theta);
+        (self.pose(x, a, b, c), self.tangent_minus(x, b, c, t3, t4))
+    }
+
+    /// `exp(x·ξ̂)`, `T₋(x)` and the bias `D_ξT₋(x)[δ]δ = Ṡ_n(x) q̇_n` (D6, D9),
+    /// which is zero when no rate was given.
+    #[inline]
+    pub fn eval(&self, x: f64) -> (Pose, AdOp, Vec6) {
+        if !self.has_rate {
+            let (g, t) = self.exp_and_tangent_minus(x);
+            return (g, t, Vec6::zeros());
+        }
+        let psi = x * self.theta;
+        let ([a, b, c], t, r) = series::abc_tau_rho(psi);
+        let (t3, t4) = (t[2], t[3]);
+        let x2 = x * x;
+        let x3 = x2 * x;
+        let x4 = x2 * x2;
+        let x5 = x4 * x;
+        let kd = self.kd;
+        let [v1, v2, v3, v4] = &self.v;
+        let [e2, e3, e4] = &self.e;
+        let bias = v1 * (-x4 * r[0] * kd) + (v2 * (x5 * r[1] * kd) + e2 * (x3 * t[1]))
+            - (v3 * (x5 * x * r[2] * kd) + e3 * (x4 * t[2]))
+            + (v4 * (x5 * x2 * r[3] * kd) + e4 * (x5 * t[3]));
+        (
+            self.pose(x, a, b, c),
+            self.tangent_minus(x, b, c, t3, t4),
+            bias,
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{d_tangent_minus_self, exp_and_tangent_minus};
+
+    #[test]
+    fn equals_the_standalone_maps() {
+        let xis = [
+            Vec6::new(0.3, -1.1, 0.7, 1.05, 0.2, -0.1),
+            Vec6::new(0.0, 0.0, 0.0, 1.0, 0.0, 0.0),
+            Vec6::new(1e-9, 0.0, 2e-9, 0.9, 0.01, 0.0),
+            Vec6::new(12.0, -30.0, 5.0, 1.2, -0.3, 0.4),
+        ];
+        let d = Vec6::new(0.2, 0.1, -0.4, 0.3, -0.5, 0.9);
+        for xi in &xis {
+            let pm = PieceMaps::new(xi, Some(&d));
+            for x in [0.0, 0.01, 0.3, 1.0, 2.0] {
+                let (g, t, bias) = pm.eval(x);
+                let (g0, t0) = exp_and_tangent_minus(x, xi);
+                let b0 = d_tangent_minus_self(x, xi, &d);
+                let scale = 1.0 + t0.a.amax() + t0.b.amax();
+                assert!((g.rotation - g0.rotation).amax() < 1e-15);
+                assert!((g.translation - g0.translation).amax() < 1e-15 * (1.0 + x));
+                assert!((t.a - t0.a).amax() < 2e-15 * scale, "{xi:?} {x}");
+                assert!((t.b - t0.b).amax() < 2e-15 * scale, "{xi:?} {x}");
+                assert!(
+                    (bias - b0).amax() < 1e-14 * (1.0 + b0.amax()),
+                    "{xi:?} {x}: {bias:?} vs {b0:?}"
+                );
+            }
+        }
+    }
+}
