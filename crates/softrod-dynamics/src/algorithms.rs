@@ -277,7 +277,11 @@ pub fn mass_matrix<'a>(
 ) -> Result<&'a nalgebra::DMatrix<f64>, DynamicsError> {
     check_vec(model, "q", q)?;
     outward(model, data, q, None, None, Pass::Composite);
-    data.mass.fill(0.0);
+    let n = model.n_dof();
+    if data.mass.nrows() != n {
+        data.mass = nalgebra::DMatrix::zeros(n, n);
+    }
+    data.mass.as_mut_slice().fill(0.0);
     for (r, rm) in model.rods().iter().enumerate() {
         let pieces = rm.spec.rod.pieces();
         let mut mc_next = Mat6::zeros();

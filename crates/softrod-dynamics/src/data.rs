@@ -71,7 +71,9 @@ pub struct Data {
     pub tau: DVector<f64>,
     /// Generalized acceleration from the last forward dynamics (n_dof).
     pub qdd: DVector<f64>,
-    /// Mass matrix from the last [`crate::mass_matrix`] (n_dof × n_dof).
+    /// Mass matrix from the last [`crate::mass_matrix`] (n_dof × n_dof;
+    /// allocated by the first call, empty before, so simulations that only
+    /// use the O(N) recursion never hold an n_dof² matrix).
     pub mass: DMatrix<f64>,
     /// Strain-space forces scratch: `τ_act + τ_c − τ_e − D q̇` (n_dof).
     pub(crate) strain_force: DVector<f64>,
@@ -101,7 +103,7 @@ impl Data {
                 .collect(),
             tau: DVector::zeros(n),
             qdd: DVector::zeros(n),
-            mass: DMatrix::zeros(n, n),
+            mass: DMatrix::zeros(0, 0),
             strain_force: DVector::zeros(n),
             cable_scratch: DVector::zeros(n),
             load_scale: 1.0,

@@ -22,11 +22,13 @@ pub struct StaticsOptions {
 }
 
 impl Default for StaticsOptions {
-    /// `tolerance = 1e-10` (far below the PCS discretization error, well
-    /// above round-off for cond(K) up to ~1e5), 30 iterations, 64 steps.
+    /// `tolerance = 1e-12`: Newton converges quadratically, so the last step
+    /// typically lands near round-off (~1e-15 of the balanced force); 1e-10
+    /// could stop one step early with a 1e-10-relative error in the strains.
+    /// 30 iterations, 64 load steps.
     fn default() -> Self {
         Self {
-            tolerance: 1e-10,
+            tolerance: 1e-12,
             max_iterations: 30,
             max_load_steps: 64,
             time: 0.0,
@@ -113,30 +115,31 @@ impl Newton<'_> {
         Ok(jac)
     }
 
-    /// Newton from `q` at the current load scale; `Ok(Some(residual))` when
-    /// converged (q updated), `Ok(None)` when it failed (q unspecified).
+    /// Newton from `q` at the current load scale: `Ok(Ok(residual))` when
+    /// converged (q updated), `Ok(Err(residual))` with the last residual
+    /// when it failed (q unspecified).
     fn solve(
         &mut self,
         data: &mut Data,
         q: &mut DVector<f64>,
         tol_ref: f64,
         options: &StaticsOptions,
-    ) -> Result<Option<f64>, DynamicsError> {
+    ) -> Result<Result<f64, f64>, DynamicsError> {
         let mut r = self.residual(data, q)?;
         for _ in 0..options.max_iterations {
             let rn = r.amax();
             let kq = (&self.k * &*q).amax();
             let tol = options.tolerance * tol_ref.max(kq);
             if rn <= tol {
-                return Ok(Some(rn));
+                return Ok(Ok(rn));
             }
             self.iterations += 1;
             let jac = self.jacobian(data, q)?;
             let Some(dq) = jac.lu().solve(&(-&r)) else {
-                return Ok(None);
+                return Ok(Err(rn));
             };
             if dq.iter().any(|v| !v.is_finite()) {
-                return Ok(None);
+                return Ok(Err(rn));
             }
             let mut alpha = 1.0;
             loop {
@@ -157,13 +160,13 @@ impl Newton<'_> {
                 if alpha < 1e-6 {
                     // Stagnation at round-off counts as converged if the
                     // residual is already tiny.
-                    return Ok((rn <= 1e3 * tol).then_some(rn));
+                    return Ok(if rn <= 1e3 * tol { Ok(rn) } else { Err(rn) });
                 }
             }
         }
         let rn = r.amax();
         let tol = options.tolerance * tol_ref.max((&self.k * &*q).amax());
-        Ok((rn <= tol).then_some(rn))
+        Ok(if rn <= tol { Ok(rn) } else { Err(rn) })
     }
 }
 
@@ -187,7 +190,7 @@ fn statics_inner(
     // Reference force: the full-load imbalance at the start.
     let tol_ref = r_full.max(f64::MIN_POSITIVE);
     let mut q = start.clone();
-    if let Some(res) = newton.solve(data, &mut q, tol_ref, options)? {
+    if let Ok(res) = newton.solve(data, &mut q, tol_ref, options)? {
         return Ok(StaticsResult {
             q,
             converged: true,
@@ -200,7 +203,7 @@ fn statics_inner(
     let mut lam = 0.0;
     let mut q_prev = start.clone();
     data.load_scale = 0.0;
-    if newton.solve(data, &mut q_prev, tol_ref, options)?.is_none() {
+    if newton.solve(data, &mut q_prev, tol_ref, options)?.is_err() {
         return Err(DynamicsError::StaticsFailed {
             reason: "no equilibrium even without loads (check the stress-free strain)".into(),
             load_fraction: 0.0,
@@ -211,6 +214,8 @@ fn statics_inner(
     let mut step = 0.25;
     let mut steps = 0;
     let mut last_res = 0.0;
+    // Residual of the last failed attempt, for the error message.
+    let mut failed_res = f64::NAN;
     while lam < 1.0 {
         if steps >= options.max_load_steps || step < 1e-5 {
             data.load_scale = lam;
@@ -222,7 +227,11 @@ fn statics_inner(
                 },
                 load_fraction: lam,
                 iterations: newton.iterations,
-                residual: last_res,
+                residual: if failed_res.is_nan() {
+                    last_res
+                } else {
+                    failed_res
+                },
             });
         }
         steps += 1;
@@ -230,13 +239,17 @@ fn statics_inner(
         data.load_scale = target;
         let mut trial = q_prev.clone();
         match newton.solve(data, &mut trial, tol_ref, options)? {
-            Some(res) => {
+            Ok(res) => {
                 lam = target;
                 q_prev = trial;
                 last_res = res;
+                failed_res = f64::NAN;
                 step *= 1.5;
             }
-            None => step *= 0.5,
+            Err(res) => {
+                failed_res = res;
+                step *= 0.5;
+            }
         }
     }
     Ok(StaticsResult {

@@ -521,3 +521,51 @@ fn bad_inputs_are_errors_not_panics() {
     let _ = Pose::identity();
     let _ = straight();
 }
+
+#[test]
+fn statics_defaults_reach_round_off_and_failures_carry_the_residual() {
+    // A follower tip moment on a straight one-piece rod: the exact solution
+    // is the uniform curvature κ = M/(EI) (a circle arc), every other strain
+    // at rest. The default tolerance must land at round-off, not one Newton
+    // step early.
+    let length = 0.3;
+    let rod = Rod::uniform(length, 1, Basis::all(), straight(), Pose::identity()).unwrap();
+    let material = Material::with_poisson(1000.0, 5e6, 0.4, 0.0).unwrap();
+    let body = RodBody::new(Section::Circle { radius: 0.01 }, material, length).unwrap();
+    let ei = material.young * std::f64::consts::PI * 0.01f64.powi(4) / 4.0;
+    let kappa = 2.0 * std::f64::consts::PI / length; // a full circle
+    let mut spec = RodSpec::new("arm", rod, body);
+    spec.point_loads = vec![PointLoad {
+        s: length,
+        force: Vec3::zeros(),
+        moment: Vec3::new(0.0, 0.0, kappa * ei),
+        frame: LoadFrame::Body,
+    }];
+    let m = Model::new(vec![spec], None, 4).unwrap();
+    let mut data = Data::new(&m);
+    let res = statics(&m, &mut data, &[0.0; 6], &StaticsOptions::default()).unwrap();
+    assert!(res.converged);
+    assert!((res.q[2] - kappa).abs() < 1e-12 * kappa, "κ = {}", res.q[2]);
+    for i in [0, 1, 3, 4, 5] {
+        assert!(res.q[i].abs() < 1e-12, "q[{i}] = {}", res.q[i]);
+    }
+    // A hopeless budget: the error reports the residual it stopped at.
+    let opts = StaticsOptions {
+        max_iterations: 1,
+        max_load_steps: 2,
+        ..StaticsOptions::default()
+    };
+    let heavy = model(6, false, CONSERVATIVE);
+    let mut d2 = Data::new(&heavy);
+    let mut m2 = heavy.clone();
+    m2.gravity = Some(Vec3::new(0.0, 0.0, -2000.0));
+    match statics(&m2, &mut d2, &vec![0.0; heavy.n_dof()], &opts) {
+        Err(DynamicsError::StaticsFailed { residual, .. }) => {
+            assert!(
+                residual.is_finite() && residual > 0.0,
+                "residual {residual}"
+            )
+        }
+        other => panic!("expected StaticsFailed, got {other:?}"),
+    }
+}
