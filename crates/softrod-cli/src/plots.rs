@@ -166,7 +166,21 @@ fn shapes(path: &Path, s: &Series, scene: &Scene) -> Res {
             }
         }
     }
+    // Put the legend in the corner the rod visits least, so it hides no shape.
+    let (cx, cz) = (0.5 * (rx.0 + rx.1), 0.5 * (rz.0 + rz.1));
+    let mut counts = [0usize; 4];
+    for p in all() {
+        counts[usize::from(p[0] > cx) + 2 * usize::from(p[2] > cz)] += 1;
+    }
+    let corner = (0..4).min_by_key(|&i| counts[i]).unwrap_or(3);
+    let position = match corner {
+        0 => SeriesLabelPosition::LowerLeft,
+        1 => SeriesLabelPosition::LowerRight,
+        2 => SeriesLabelPosition::UpperLeft,
+        _ => SeriesLabelPosition::UpperRight,
+    };
     c.configure_series_labels()
+        .position(position)
         .background_style(WHITE.mix(0.8))
         .border_style(BLACK)
         .draw()?;
