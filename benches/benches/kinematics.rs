@@ -3,7 +3,7 @@
 //!
 //! (a) `update` (q only) + tip pose + tip Jacobian (body frame), all six
 //!     strains per piece, N = 1 … 1000 pieces (target: N = 10 ≤ 3 µs);
-//! (b) `update` + poses at 4 Gauss points per piece (`pose_in_piece`),
+//! (b) `update` + poses at 4 Gauss points per piece (`poses_along`),
 //!     N = 10, 100, 1000 (target: N = 100 ≤ 30 µs).
 //!
 //! Both should scale linearly in N (criterion reports the time per piece via
@@ -70,11 +70,8 @@ fn gauss_point_poses(c: &mut Criterion) {
         group.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
             b.iter(|| {
                 kin.update(&rod, black_box(&q), None, None).expect("update");
-                for (i, piece) in rod.pieces().iter().enumerate() {
-                    for (k, (x, _)) in rule.on_interval(piece.length).enumerate() {
-                        poses[4 * i + k] = kin.pose_in_piece(i, x);
-                    }
-                }
+                kin.poses_along(&rod, &rule.nodes, &mut poses)
+                    .expect("poses");
                 black_box(&poses);
             })
         });

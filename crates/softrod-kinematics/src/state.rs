@@ -179,6 +179,37 @@ impl RodKinematics {
         Ok(())
     }
 
+    /// World poses at the same relative positions `fractions` (each in
+    /// `[0, 1]`, e.g. the Gauss nodes) of every piece, piece by piece:
+    /// `out[n·m + j] = g(L_{n−1} + fractions[j]·ℓ_n)`, `m = fractions.len()`.
+    /// No Jacobian work, no bounds search: the fast path for drawing a rod or
+    /// evaluating it at quadrature points.
+    pub fn poses_along(
+        &self,
+        rod: &Rod,
+        fractions: &[f64],
+        out: &mut [Pose],
+    ) -> Result<(), KinematicsError> {
+        let m = fractions.len();
+        if out.len() != m * rod.n_pieces() {
+            return Err(KinematicsError::SizeMismatch {
+                what: "output poses",
+                got: out.len(),
+                expected: m * rod.n_pieces(),
+            });
+        }
+        if let Some(&f) = fractions.iter().find(|f| !(0.0..=1.0).contains(*f)) {
+            return Err(KinematicsError::OutOfRod { s: f, length: 1.0 });
+        }
+        for (n, piece) in rod.pieces().iter().enumerate() {
+            let xi = &self.strain[n];
+            for (o, f) in out[n * m..(n + 1) * m].iter_mut().zip(fractions) {
+                *o = self.tip_pose[n].compose(&softrod_lie::exp_twist(f * piece.length, xi));
+            }
+        }
+        Ok(())
+    }
+
     /// Pose at local abscissa `x` of piece `n` (no bounds check beyond debug).
     #[inline]
     pub fn pose_in_piece(&self, n: usize, x: f64) -> Pose {

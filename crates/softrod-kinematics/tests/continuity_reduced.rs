@@ -225,3 +225,30 @@ fn reduced_bases_equal_full_basis_with_fixed_strains() {
     }
     println!("reduced vs full basis: worst {worst:.3e}");
 }
+
+#[test]
+fn poses_along_equals_pose_at() {
+    use softrod_kinematics::{Basis, GaussLegendre, Rod, RodKinematics, straight};
+    use softrod_lie::{Pose, Vec6};
+    let rod = Rod::uniform(0.7, 5, Basis::all(), straight(), Pose::identity()).unwrap();
+    let q: Vec<f64> = (0..rod.n_dof())
+        .map(|i| 0.3 * ((i * 5 % 7) as f64 - 3.0))
+        .collect();
+    let mut kin = RodKinematics::new(&rod);
+    kin.update(&rod, &q, None, None).unwrap();
+    let rule = GaussLegendre::new(4);
+    let mut fr = rule.nodes.clone();
+    fr.push(1.0);
+    let mut out = vec![Pose::identity(); fr.len() * rod.n_pieces()];
+    kin.poses_along(&rod, &fr, &mut out).unwrap();
+    for (n, piece) in rod.pieces().iter().enumerate() {
+        for (j, f) in fr.iter().enumerate() {
+            let g = kin.pose_at(&rod, piece.start + f * piece.length).unwrap();
+            let h = out[n * fr.len() + j];
+            assert!((g.rotation - h.rotation).amax() < 1e-14);
+            assert!((g.translation - h.translation).amax() < 1e-14);
+        }
+    }
+    assert!(kin.poses_along(&rod, &[1.5], &mut out[..5]).is_err());
+    let _ = Vec6::zeros();
+}

@@ -103,6 +103,13 @@ impl PieceMaps {
         }
     }
 
+    /// `exp(x·ξ̂)` (D4) alone: three series and two scaled additions.
+    #[inline]
+    pub fn exp(&self, x: f64) -> Pose {
+        let [a, b, c] = series::abc(x * self.theta);
+        self.pose(x, a, b, c)
+    }
+
     /// `exp(x·ξ̂)` (D4) and `T₋(x)` (D3′).
     #[inline]
     pub fn exp_and_tangent_minus(&self, x: f64) -> (Pose, AdOp) {
@@ -157,6 +164,7 @@ mod tests {
             let pm = PieceMaps::new(xi, Some(&d));
             for x in [0.0, 0.01, 0.3, 1.0, 2.0] {
                 let (g, t, bias) = pm.eval(x);
+                assert_eq!(pm.exp(x), g);
                 let (g0, t0) = exp_and_tangent_minus(x, xi);
                 let b0 = d_tangent_minus_self(x, xi, &d);
                 let scale = 1.0 + t0.a.amax() + t0.b.amax();
