@@ -200,6 +200,36 @@ fn eval<P: Problem, St: Stepper<P>>(st: &St, t: f64, out: &mut DVector<f64>) {
     }
 }
 
+/// The outputs of a run: stored (unless the hooks say not to) and handed to
+/// the output callback.
+struct Outputs {
+    ts: Vec<f64>,
+    ys: Vec<DVector<f64>>,
+    keep: bool,
+}
+
+impl Outputs {
+    /// Records the output `(t, y)`; returns `(stop, system_changed)` from the
+    /// output callback.
+    fn emit<P: Problem>(
+        &mut self,
+        hooks: &mut Hooks<'_, P::User>,
+        p: &mut P,
+        t: f64,
+        y: &DVector<f64>,
+    ) -> (bool, bool) {
+        if self.keep {
+            self.ts.push(t);
+            self.ys.push(y.clone());
+        }
+        match hooks.on_output.as_mut().map(|f| f(t, y, p.user())) {
+            Some(Control::Stop) => (true, false),
+            Some(Control::SystemChanged) => (false, true),
+            _ => (false, false),
+        }
+    }
+}
+
 fn crossed(ga: f64, gb: f64, dir: Direction) -> bool {
     // A crossing starts from a nonzero value; leaving an exact zero is not one.
     let rising = ga < 0.0 && gb >= 0.0;
@@ -271,22 +301,33 @@ fn drive<P: Problem, St: Stepper<P>>(
     let mut stats = Stats::default();
     st.init(p, t0, y0, t1, opts, &mut stats)?;
 
-    let mut ts = Vec::new();
-    let mut ys = Vec::new();
+    let mut out = Outputs {
+        ts: Vec::new(),
+        ys: Vec::new(),
+        keep: hooks.keep_outputs,
+    };
     let mut next_out = 0usize;
     let te: &[f64] = opts.t_eval.as_deref().unwrap_or(&[]);
+    let mut early_stop = false;
+    let mut changed_at_t0 = false;
     match &opts.t_eval {
         None => {
-            ts.push(t0);
-            ys.push(y0.clone());
+            (early_stop, changed_at_t0) = out.emit(&mut hooks, p, t0, y0);
         }
         Some(te) => {
             while next_out < te.len() && te[next_out] == t0 {
-                ts.push(t0);
-                ys.push(y0.clone());
                 next_out += 1;
+                let (stop, ch) = out.emit(&mut hooks, p, t0, y0);
+                changed_at_t0 |= ch;
+                if stop {
+                    early_stop = true;
+                    break;
+                }
             }
         }
+    }
+    if changed_at_t0 && !early_stop {
+        st.system_changed(p, &mut stats)?;
     }
     let mut g_prev: Vec<f64> = hooks.events.iter_mut().map(|e| (e.g)(t0, y0)).collect();
     let mut events = Vec::new();
@@ -294,8 +335,12 @@ fn drive<P: Problem, St: Stepper<P>>(
     let mut status = Status::Completed;
     let mut t_final = t0;
     let mut y_final = y0.clone();
+    if early_stop {
+        status = Status::Stopped;
+    }
+    let mut yo = DVector::zeros(n);
 
-    while st.t() < t1 {
+    while !early_stop && st.t() < t1 {
         if stats.steps >= opts.max_steps {
             return Err(IntegrateError::MaxStepsExceeded {
                 t: st.t(),
@@ -367,31 +412,48 @@ fn drive<P: Problem, St: Stepper<P>>(
 
         // Output.
         let t_out_end = t.min(t_stop);
+        let mut changed = false;
+        let mut stopped_at = None;
         if opts.t_eval.is_some() {
             while next_out < te.len() && te[next_out] <= t_out_end {
-                let mut yo = DVector::zeros(n);
-                eval(st, te[next_out], &mut yo);
-                ts.push(te[next_out]);
-                ys.push(yo);
+                let to = te[next_out];
+                eval(st, to, &mut yo);
                 next_out += 1;
+                let (stop, ch) = out.emit(&mut hooks, p, to, &yo);
+                changed |= ch;
+                if stop {
+                    stopped_at = Some(to);
+                    break;
+                }
             }
+        }
+        if let Some(to) = stopped_at {
+            t_final = to;
+            y_final.copy_from(&yo);
+            events.retain(|r: &EventRecord| r.t <= to);
+            status = Status::Stopped;
+            break;
         }
         if let Some(index) = stop_index {
             eval(st, t_stop, &mut y_final);
             t_final = t_stop;
-            if opts.t_eval.is_none() {
-                ts.push(t_stop);
-                ys.push(y_final.clone());
+            if opts.t_eval.is_none() && out.emit(&mut hooks, p, t_stop, &y_final).0 {
+                status = Status::Stopped;
+                break;
             }
             status = Status::Event { index };
             break;
         }
-        if opts.t_eval.is_none() {
-            ts.push(t);
-            ys.push(st.y().clone());
-        }
         t_final = t;
         y_final.copy_from(st.y());
+        if opts.t_eval.is_none() {
+            let (stop, ch) = out.emit(&mut hooks, p, t, st.y());
+            changed |= ch;
+            if stop {
+                status = Status::Stopped;
+                break;
+            }
+        }
 
         if let Some(cb) = hooks.on_step.as_mut() {
             let info = StepInfo {
@@ -406,20 +468,21 @@ fn drive<P: Problem, St: Stepper<P>>(
                     status = Status::Stopped;
                     break;
                 }
-                Control::SystemChanged => {
-                    st.system_changed(p, &mut stats)?;
-                    let (t, y) = (st.t(), st.y().clone());
-                    for (i, e) in hooks.events.iter_mut().enumerate() {
-                        g_prev[i] = (e.g)(t, &y);
-                    }
-                }
+                Control::SystemChanged => changed = true,
+            }
+        }
+        if changed {
+            st.system_changed(p, &mut stats)?;
+            let (t, y) = (st.t(), st.y().clone());
+            for (i, e) in hooks.events.iter_mut().enumerate() {
+                g_prev[i] = (e.g)(t, &y);
             }
         }
     }
 
     Ok(Solution {
-        t: ts,
-        y: ys,
+        t: out.ts,
+        y: out.ys,
         events,
         t_final,
         y_final,

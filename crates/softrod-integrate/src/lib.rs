@@ -18,7 +18,9 @@
 //!
 //! [`integrate`] (first-order) and [`integrate_second_order`] take the system,
 //! the method, `t0`, `t1`, the initial state, [`Options`] and [`Hooks`]
-//! (per-step callback that may change the system or stop, events, monitors).
+//! (per-step callback that may change the system or stop, an output callback
+//! that streams the dense output at `t_eval` as the run proceeds, events,
+//! monitors).
 //! Output at [`Options::t_eval`] is produced by dense output, never by forcing
 //! steps. Failures are [`IntegrateError`]s with the time, step size and check;
 //! no NaN or Inf is ever written to a [`Solution`]. Runs are deterministic:
@@ -62,8 +64,8 @@ pub use driver::{integrate, integrate_second_order};
 pub use error::{IntegrateError, SystemError};
 pub use genalpha::generalized_alpha_parameters;
 pub use options::{
-    Control, Direction, Event, EventRecord, Hooks, Method, Monitor, Options, ScalarFn, Solution,
-    Stats, Status, StepCallback, StepInfo,
+    Control, Direction, Event, EventRecord, Hooks, Method, Monitor, Options, OutputCallback,
+    ScalarFn, Solution, Stats, Status, StepCallback, StepInfo,
 };
-pub use rod::RodSystem;
+pub use rod::{RodJacobian, RodSystem};
 pub use system::{OdeSystem, SecondOrderSystem, fd_jacobian};

@@ -119,6 +119,25 @@ impl Options {
         }
     }
 
+    /// Linearly implicit generalized-α with fixed step `dt`: one Newton
+    /// iteration per step, always accepted (`newton_max_iter = 1`,
+    /// `newton_tol = ∞`). With a [`RodSystem`](crate::RodSystem) whose
+    /// Jacobians are [`RodJacobian::ElasticOnly`](crate::RodJacobian) this is
+    /// an IMEX scheme: the constant elastic/viscous `K`, `D` (through
+    /// `M(q)⁻¹K`, `M(q)⁻¹D`) implicit, gravity, Coriolis and loads explicit —
+    /// one acceleration evaluation and one LU solve per step. Use it with
+    /// `rho_inf < 1` (the explicitly treated remainder needs a little
+    /// high-frequency dissipation; with `rho_inf = 1` the rod release blows
+    /// up) and a step that resolves the motion (its error is not
+    /// controlled). Non-finite states are still detected and reported.
+    pub fn linearly_implicit(dt: f64) -> Self {
+        Self {
+            newton_tol: f64::INFINITY,
+            newton_max_iter: 1,
+            ..Self::fixed(dt)
+        }
+    }
+
     /// Tolerances `rtol`, `atol`.
     pub fn tol(rtol: f64, atol: f64) -> Self {
         Self {
@@ -209,6 +228,11 @@ pub enum Direction {
 /// A per-step callback: sees the step and may change the system.
 pub type StepCallback<'a, S> = Box<dyn FnMut(&StepInfo<'_>, &mut S) -> Control + 'a>;
 
+/// An output callback: called with each output time `t`, the state `y` there
+/// (from the method's dense output, or the step end itself) and the user's
+/// system (for evaluating derived quantities). It may stop the run.
+pub type OutputCallback<'a, S> = Box<dyn FnMut(f64, &DVector<f64>, &mut S) -> Control + 'a>;
+
 /// A scalar function of `(t, y)`.
 pub type ScalarFn<'a> = Box<dyn FnMut(f64, &DVector<f64>) -> f64 + 'a>;
 
@@ -259,11 +283,25 @@ pub struct Monitor<'a> {
     pub bound: f64,
 }
 
-/// Optional hooks of an integration: per-step callback, events, monitors.
-/// `S` is the user's system type.
+/// Optional hooks of an integration: per-step callback, output callback,
+/// events, monitors. `S` is the user's system type.
 pub struct Hooks<'a, S> {
     /// Called after each accepted step (after output and events).
     pub on_step: Option<StepCallback<'a, S>>,
+    /// Called at each output time as the integration proceeds: every
+    /// [`Options::t_eval`] time (the method's dense output, exact at step
+    /// ends; `t0` first), or `t0` and every accepted step when `t_eval` is
+    /// `None` — the same `(t, y)` that go into [`Solution::t`]/[`Solution::y`],
+    /// in the same order, before the step's `on_step`. Returning
+    /// [`Control::Stop`] ends the run at that output time (`t_final`,
+    /// `y_final` are that output; [`Status::Stopped`]);
+    /// [`Control::SystemChanged`] takes effect at the end of the current step
+    /// (as from `on_step`).
+    pub on_output: Option<OutputCallback<'a, S>>,
+    /// Whether outputs are also stored in the [`Solution`] (default `true`).
+    /// `false` (see [`Hooks::stream_outputs`]) leaves `Solution::t`/`y` empty
+    /// so a long run streamed through `on_output` keeps O(1) memory.
+    pub keep_outputs: bool,
     /// Events, located by root finding on the dense output.
     pub events: Vec<Event<'a>>,
     /// Monitors (blow-up checks).
@@ -274,6 +312,8 @@ impl<S> Default for Hooks<'_, S> {
     fn default() -> Self {
         Self {
             on_step: None,
+            on_output: None,
+            keep_outputs: true,
             events: Vec::new(),
             monitors: Vec::new(),
         }
@@ -289,6 +329,24 @@ impl<'a, S> Hooks<'a, S> {
     /// Sets the per-step callback.
     pub fn on_step(mut self, f: impl FnMut(&StepInfo<'_>, &mut S) -> Control + 'a) -> Self {
         self.on_step = Some(Box::new(f));
+        self
+    }
+
+    /// Sets the output callback (see [`Hooks::on_output`](Hooks#structfield.on_output));
+    /// outputs are still stored in the solution.
+    pub fn on_output(mut self, f: impl FnMut(f64, &DVector<f64>, &mut S) -> Control + 'a) -> Self {
+        self.on_output = Some(Box::new(f));
+        self
+    }
+
+    /// Sets the output callback and stops storing outputs in the solution
+    /// (`keep_outputs = false`): outputs are only streamed to `f`.
+    pub fn stream_outputs(
+        mut self,
+        f: impl FnMut(f64, &DVector<f64>, &mut S) -> Control + 'a,
+    ) -> Self {
+        self.on_output = Some(Box::new(f));
+        self.keep_outputs = false;
         self
     }
 
@@ -343,7 +401,8 @@ pub struct EventRecord {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Solution {
     /// Output times (the requested `t_eval` up to where the run ended, or `t0`
-    /// and every accepted step).
+    /// and every accepted step); empty when [`Hooks::keep_outputs`] is
+    /// `false`.
     pub t: Vec<f64>,
     /// States at `t` (first-order form; `(q, q̇)` for second-order systems).
     pub y: Vec<DVector<f64>>,

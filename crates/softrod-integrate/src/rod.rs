@@ -7,7 +7,10 @@
 //! the true stiffness of shear and extension.
 
 use nalgebra::{DMatrix, DVector};
-use softrod_dynamics::{Data, DynamicsError, Model, dynamics_jacobians, forward_dynamics};
+use softrod_dynamics::{
+    Data, DynamicsError, Model, damping_matrix, dynamics_jacobians, forward_dynamics, mass_matrix,
+    stiffness_matrix,
+};
 use softrod_mechanics::Tension;
 
 use crate::system::SecondOrderSystem;
@@ -22,6 +25,28 @@ pub struct RodSystem {
     /// Actuator generalized force `τ_act` (n_dof); `None` = 0. A per-step
     /// callback may change it (then return `Control::SystemChanged`).
     pub tau: Option<DVector<f64>>,
+    /// Which Jacobians the stiff methods get (default [`RodJacobian::Exact`]).
+    pub jacobian: RodJacobian,
+}
+
+/// The Jacobians [`RodSystem`] hands to the stiff methods.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum RodJacobian {
+    /// `∂q̈/∂q`, `∂q̈/∂q̇` of the full forward dynamics
+    /// (`softrod_dynamics::dynamics_jacobians`: `K`, `D` exact, the geometric
+    /// remainder by central differences; `4·n_dof` inverse dynamics, one `M`).
+    #[default]
+    Exact,
+    /// Only the stiff linear part: `−M(q)⁻¹K` and `−M(q)⁻¹D` (one `M(q)`, one
+    /// Cholesky, two triangular solves with `n_dof` right-hand sides; no
+    /// finite differences). The elastic and viscous forces `K(q − q̄)`, `D q̇`
+    /// are linear with constant `K`, `D` in PCS, and they are what makes the
+    /// rod stiff; gravity, Coriolis and loads are soft and left out. With the
+    /// Rosenbrock–W method (order 3 for any `W`) this is a linearly implicit
+    /// IMEX splitting: stiff elastic/viscous part implicit, the rest explicit.
+    /// Generalized-α still converges to the same step solution (its simplified
+    /// Newton just takes an iteration more when the geometric part matters).
+    ElasticOnly,
 }
 
 impl RodSystem {
@@ -32,6 +57,7 @@ impl RodSystem {
             model,
             data,
             tau: None,
+            jacobian: RodJacobian::Exact,
         }
     }
 }
@@ -71,6 +97,28 @@ impl SecondOrderSystem for RodSystem {
         dqdd_dq: &mut DMatrix<f64>,
         dqdd_dqd: &mut DMatrix<f64>,
     ) -> Result<(), DynamicsError> {
+        if self.jacobian == RodJacobian::ElasticOnly {
+            let m = mass_matrix(&self.model, &mut self.data, q.as_slice())?;
+            let chol = m.clone().cholesky().ok_or(DynamicsError::Singular {
+                rod: 0,
+                piece: 0,
+                what: "mass matrix",
+            })?;
+            let mut k = stiffness_matrix(&self.model);
+            chol.solve_mut(&mut k);
+            dqdd_dq.copy_from(&k);
+            dqdd_dq.neg_mut();
+            let mut d = damping_matrix(&self.model);
+            if d.iter().all(|&v| v == 0.0) {
+                // Undamped: skip the n_dof-column solve.
+                dqdd_dqd.fill(0.0);
+            } else {
+                chol.solve_mut(&mut d);
+                dqdd_dqd.copy_from(&d);
+                dqdd_dqd.neg_mut();
+            }
+            return Ok(());
+        }
         let tau = self.tau.as_ref().map(|v| v.as_slice());
         let j = dynamics_jacobians(
             &self.model,

@@ -506,3 +506,85 @@ proptest! {
         }
     }
 }
+
+/// The output callback sees exactly the stored outputs, in order, as the run
+/// proceeds (before the step's `on_step`); `stream_outputs` stores none;
+/// `Stop` from it ends the run at that output time.
+#[test]
+fn output_callback_streams_dense_output_and_can_stop() {
+    let te: Vec<f64> = (0..=40).map(|k| 0.25 * k as f64).collect();
+    for method in ALL {
+        let opts = opts_for(method, 0.01, 1e-8).with_t_eval(te.clone());
+        let reference = run(method, &mut Linear::undamped(), 10.0, &opts);
+
+        let log = std::cell::RefCell::new(Vec::new());
+        let hooks = Hooks::new()
+            .stream_outputs(|t, y: &DVector<f64>, _: &mut Linear| {
+                log.borrow_mut().push(('o', t, y.clone()));
+                Control::Continue
+            })
+            .on_step(|info: &StepInfo, _: &mut Linear| {
+                log.borrow_mut().push(('s', info.t, info.y.clone()));
+                Control::Continue
+            });
+        let sol = integrate_second_order(
+            &mut Linear::undamped(),
+            method,
+            0.0,
+            10.0,
+            &Linear::q0(),
+            &Linear::qd0(),
+            &opts,
+            hooks,
+        )
+        .unwrap();
+        assert!(sol.t.is_empty() && sol.y.is_empty());
+        assert_eq!(sol.y_final, reference.y_final);
+        let log = log.into_inner();
+        let outs: Vec<_> = log.iter().filter(|e| e.0 == 'o').collect();
+        assert_eq!(outs.len(), te.len());
+        for (o, (t, y)) in outs.iter().zip(reference.t.iter().zip(&reference.y)) {
+            assert_eq!(o.1, *t);
+            assert_eq!(&o.2, y);
+        }
+        // Outputs in (t_prev, t] come before the step's callback at t.
+        let mut last_step_t = 0.0;
+        for e in &log {
+            match e.0 {
+                's' => last_step_t = e.1,
+                _ => assert!(
+                    e.1 >= last_step_t,
+                    "{method:?}: output at {} after step {}",
+                    e.1,
+                    last_step_t
+                ),
+            }
+        }
+
+        // Stop at the 5th output (t = 1).
+        let mut count = 0;
+        let hooks = Hooks::new().on_output(|_, _, _: &mut Linear| {
+            count += 1;
+            if count == 5 {
+                Control::Stop
+            } else {
+                Control::Continue
+            }
+        });
+        let sol = integrate_second_order(
+            &mut Linear::undamped(),
+            method,
+            0.0,
+            10.0,
+            &Linear::q0(),
+            &Linear::qd0(),
+            &opts,
+            hooks,
+        )
+        .unwrap();
+        assert_eq!(sol.status, Status::Stopped);
+        assert_eq!(sol.t_final, 1.0);
+        assert_eq!(sol.t.len(), 5);
+        assert_eq!(sol.y_final, reference.y[4]);
+    }
+}
