@@ -9,7 +9,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use nalgebra::DVector;
 use softrod_dynamics::{Model, energies};
 use softrod_integrate::{
-    Control, Hooks, Method, Options, RodSystem, SecondOrderSystem, Stats, integrate_second_order,
+    Control, Hooks, Method, Options, RodSystem, Stats, integrate_second_order,
 };
 use softrod_scene::{Integrator, Scene};
 
@@ -90,12 +90,6 @@ pub struct Streamer {
     snapshot_at: Vec<usize>,
     poser: Poser,
     n: usize,
-    /// Last accepted point: t, y = (q, q̇), f = (q̇, q̈).
-    ta: f64,
-    ya: DVector<f64>,
-    fa: DVector<f64>,
-    fb: DVector<f64>,
-    y: DVector<f64>,
     pub series: Series,
     pub error: Option<String>,
     pub last_stats: Stats,
@@ -141,11 +135,6 @@ impl Streamer {
             snapshot_at,
             poser: Poser::new(model),
             n,
-            ta: 0.0,
-            ya: DVector::zeros(2 * n),
-            fa: DVector::zeros(2 * n),
-            fb: DVector::zeros(2 * n),
-            y: DVector::zeros(2 * n),
             series: Series::default(),
             error: None,
             last_stats: Stats::default(),
@@ -161,78 +150,16 @@ impl Streamer {
         self.times.len()
     }
 
-    /// `f = (q̇, q̈(t, q, q̇))`.
-    fn deriv(
-        sys: &mut RodSystem,
-        t: f64,
-        y: &DVector<f64>,
-        f: &mut DVector<f64>,
-        n: usize,
-    ) -> Result<(), String> {
-        let q = y.rows(0, n).into_owned();
-        let qd = y.rows(n, n).into_owned();
-        let mut qdd = DVector::zeros(n);
-        sys.accel(t, &q, &qd, &mut qdd)
-            .map_err(|e| format!("accelerations for output at t = {t:e}: {e}"))?;
-        f.rows_mut(0, n).copy_from(&qd);
-        f.rows_mut(n, n).copy_from(&qdd);
-        Ok(())
+    /// The output times, in order.
+    pub fn times(&self) -> &[f64] {
+        &self.times
     }
 
-    /// The initial point (and the output rows at t0).
-    pub fn start(
-        &mut self,
-        sys: &mut RodSystem,
-        t0: f64,
-        y0: &DVector<f64>,
-    ) -> Result<(), CliError> {
-        self.ta = t0;
-        self.ya.copy_from(y0);
-        let mut fa = DVector::zeros(2 * self.n);
-        Self::deriv(sys, t0, y0, &mut fa, self.n).map_err(failed)?;
-        self.fa = fa;
-        while self.next < self.times.len() && self.times[self.next] <= t0 {
-            let y = y0.clone();
-            self.write_row(sys, self.times[self.next], &y)
-                .map_err(failed)?;
-            self.next += 1;
-        }
-        Ok(())
-    }
-
-    /// After an accepted step to `(t, y)`: the output rows in `(t_prev, t]`
-    /// by cubic Hermite interpolation on the step (the driver's own dense
-    /// output is not visible to callbacks).
-    pub fn step(&mut self, sys: &mut RodSystem, t: f64, y: &DVector<f64>) -> Result<(), String> {
-        let n = self.n;
-        let mut fb = std::mem::take(&mut self.fb);
-        Self::deriv(sys, t, y, &mut fb, n)?;
-        self.fb = fb;
-        let h = t - self.ta;
-        while self.next < self.times.len() && self.times[self.next] <= t {
-            let to = self.times[self.next];
-            let th = if h > 0.0 {
-                ((to - self.ta) / h).clamp(0.0, 1.0)
-            } else {
-                1.0
-            };
-            let (t2, t3) = (th * th, th * th * th);
-            let h00 = 2.0 * t3 - 3.0 * t2 + 1.0;
-            let h10 = t3 - 2.0 * t2 + th;
-            let h01 = -2.0 * t3 + 3.0 * t2;
-            let h11 = t3 - t2;
-            let mut yo = std::mem::take(&mut self.y);
-            for i in 0..2 * n {
-                yo[i] = h00 * self.ya[i] + h10 * h * self.fa[i] + h01 * y[i] + h11 * h * self.fb[i];
-            }
-            let r = self.write_row(sys, to, &yo);
-            self.y = yo;
-            r?;
-            self.next += 1;
-        }
-        self.ta = t;
-        self.ya.copy_from(y);
-        std::mem::swap(&mut self.fa, &mut self.fb);
+    /// One output row at `(t, y)`, `y = (q, q̇)`: the integrator's dense
+    /// output at the next output time, handed over by its output callback.
+    pub fn output(&mut self, sys: &mut RodSystem, t: f64, y: &DVector<f64>) -> Result<(), String> {
+        self.write_row(sys, t, y)?;
+        self.next += 1;
         self.last_t = t;
         Ok(())
     }
@@ -375,14 +302,9 @@ pub fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), CliErro
         0,
         times.len(),
     )?;
-    let n = l.built.model.n_dof();
-    let mut y0 = DVector::zeros(2 * n);
-    y0.rows_mut(0, n).copy_from(&l.built.q0);
-    y0.rows_mut(n, n).copy_from(&l.built.qd0);
     let mut sys = RodSystem::new(l.built.model.clone());
     let mut streamer = Streamer::new(&dir, &sys.model, times)?;
     let start = Instant::now();
-    streamer.start(&mut sys, 0.0, &y0)?;
     let bar = (!quiet && std::io::stderr().is_terminal()).then(|| {
         let b = ProgressBar::new(1000);
         if let Ok(style) = ProgressStyle::with_template(
@@ -392,23 +314,31 @@ pub fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), CliErro
         }
         b
     });
-    // Only the final state is kept by the driver; rows are streamed.
-    opts.t_eval = Some(vec![duration]);
+    // Rows are the integrator's dense output at the output times, streamed
+    // by its output callback as the run proceeds; the driver keeps none.
+    opts.t_eval = Some(streamer.times().to_vec());
     let result = {
-        let st = &mut streamer;
+        let st = std::cell::RefCell::new(&mut streamer);
         let bar_ref = bar.as_ref();
-        let hooks = Hooks::new().on_step(move |info, sys: &mut RodSystem| {
-            st.last_stats = *info.stats;
-            if let Err(e) = st.step(sys, info.t, info.y) {
-                st.error = Some(e);
-                return Control::Stop;
-            }
-            if let Some(b) = bar_ref {
-                b.set_position((info.t / duration * 1000.0) as u64);
-                b.set_message(format!("{:.4}", info.t));
-            }
-            Control::Continue
-        });
+        let hooks = Hooks::new()
+            .stream_outputs(|t, y, sys: &mut RodSystem| {
+                let mut st = st.borrow_mut();
+                match st.output(sys, t, y) {
+                    Ok(()) => Control::Continue,
+                    Err(e) => {
+                        st.error = Some(e);
+                        Control::Stop
+                    }
+                }
+            })
+            .on_step(|info, _: &mut RodSystem| {
+                st.borrow_mut().last_stats = *info.stats;
+                if let Some(b) = bar_ref {
+                    b.set_position((info.t / duration * 1000.0) as u64);
+                    b.set_message(format!("{:.4}", info.t));
+                }
+                Control::Continue
+            });
         integrate_second_order(
             &mut sys,
             method,
@@ -429,21 +359,10 @@ pub fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), CliErro
         (Err(e), None) => (format!("error: {e}"), streamer.last_stats, streamer.last_t),
         (Ok(sol), None) => {
             if streamer.rows_written() < streamer.rows_expected() {
-                // Round-off at the end: the remaining output time is the final state.
-                let yf = sol.y_final.clone();
-                while streamer.rows_written() < streamer.rows_expected() {
-                    if let Err(e) = streamer.step(&mut sys, sol.t_final, &yf) {
-                        streamer.error = Some(e);
-                        break;
-                    }
-                    if streamer.rows_written() < streamer.rows_expected() {
-                        streamer.error = Some(format!(
-                            "integration ended at t = {} before the last output time",
-                            sol.t_final
-                        ));
-                        break;
-                    }
-                }
+                streamer.error = Some(format!(
+                    "integration ended at t = {} before the last output time",
+                    sol.t_final
+                ));
             }
             match &streamer.error {
                 Some(e) => (format!("error: {e}"), sol.stats, sol.t_final),
