@@ -88,13 +88,19 @@ enum Command {
         #[arg(long, default_value_t = 10)]
         count: usize,
     },
-    /// Error against run time for several integrators and tolerances (Markdown, CSV, SVG).
+    /// Work-precision report: error against wall time over pieces, quadrature, integrators, tolerances.
     #[command(
-        long_about = "Runs the scene's dynamics with dopri5 and rosenbrock at several \
-        tolerances (and with twice the pieces), measures wall time and the tip error against \
-        a reference run (dopri5 at rtol 1e-10, stated in the report), and writes \
-        DIR/report.md, DIR/report.csv and DIR/report.svg (log-log error vs time).\n\n\
-        Example:\n  softrod report examples/cantilever_gravity.toml --out /tmp/report"
+        long_about = "Sweeps the scene's configurations and measures wall time (median of 3 \
+        repeats, 1 with --quick) and the tip error at the final time and over the run.\n\n\
+        Dynamics: a spatial study (pieces x1, x2, x4 of the scene's, quadrature 2, 4, 6, at a tight \
+        tolerance, against pieces x8 with quadrature 6) and a temporal study (the scene's pieces; \
+        dopri5 and rosenbrock over tolerances, generalized-alpha over steps, against a tight \
+        reference run with the same pieces), both references stated in the report; a scene's \
+        [reference] tip is compared as well. Statics: pieces and quadrature against [reference] \
+        tip, or against pieces x8.\n\n\
+        Writes DIR/report.md, DIR/report.csv, DIR/report.svg (log-log work-precision, one curve \
+        per integrator, Pareto front marked) and DIR/report_spatial.svg.\n\n\
+        Example:\n  softrod report examples/cantilever_gravity.toml --quick --out /tmp/report"
     )]
     Report {
         /// The scene file (TOML).
@@ -102,6 +108,9 @@ enum Command {
         /// Output directory (default ./out/<scene file stem>).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// One repeat per configuration instead of three, shorter time budgets.
+        #[arg(long)]
+        quick: bool,
     },
 }
 
@@ -113,7 +122,9 @@ fn main() -> ExitCode {
         Command::Statics { scene, json } => inspect::statics(&scene, json),
         Command::Run { scene, out } => run::run(&scene, out, quiet),
         Command::Modes { scene, json, count } => inspect::modes(&scene, json, count),
-        Command::Report { scene, out } => report::report(&scene, out, quiet),
+        Command::Report { scene, out, quick } => {
+            report::report(&scene, out, report::ReportOptions { quick, quiet })
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,5 +1,5 @@
-//! SVG plots with plotters: tip trajectory, energy, shape snapshots, and the
-//! log-log chart of `softrod report`.
+//! SVG plots with plotters: tip trajectory, energy, shape snapshots (the
+//! work-precision chart of `softrod report` is in `report.rs`).
 
 use std::path::Path;
 
@@ -186,67 +186,4 @@ fn shapes(path: &Path, s: &Series, scene: &Scene) -> Res {
         .draw()?;
     root.present()?;
     Ok(())
-}
-
-/// Log-log error vs wall time, one line per method.
-pub fn loglog(
-    path: &Path,
-    title: &str,
-    groups: &[(String, Vec<(f64, f64)>)],
-) -> Result<(), CliError> {
-    let r: Res = (|| {
-        let root = SVGBackend::new(path, (1000, 650)).into_drawing_area();
-        root.fill(&WHITE)?;
-        let pts = || {
-            groups
-                .iter()
-                .flat_map(|(_, p)| p.iter())
-                .filter(|(w, e)| *w > 0.0 && *e > 0.0)
-        };
-        let (mut wlo, mut whi, mut elo, mut ehi) = (f64::INFINITY, 0.0f64, f64::INFINITY, 0.0f64);
-        for (w, e) in pts() {
-            wlo = wlo.min(*w);
-            whi = whi.max(*w);
-            elo = elo.min(*e);
-            ehi = ehi.max(*e);
-        }
-        if !wlo.is_finite() || !elo.is_finite() {
-            wlo = 1e-3;
-            whi = 1.0;
-            elo = 1e-12;
-            ehi = 1.0;
-        }
-        let mut c = ChartBuilder::on(&root)
-            .caption(title, ("sans-serif", 20))
-            .margin(15)
-            .x_label_area_size(45)
-            .y_label_area_size(90)
-            .build_cartesian_2d(
-                (wlo / 1.5..whi * 1.5).log_scale(),
-                (elo / 3.0..ehi * 3.0).log_scale(),
-            )?;
-        c.configure_mesh()
-            .x_desc("wall time [s]")
-            .y_desc("tip error [m]")
-            .draw()?;
-        for (k, (name, p)) in groups.iter().enumerate() {
-            let color = COLORS[k % COLORS.len()];
-            let p: Vec<(f64, f64)> = p
-                .iter()
-                .copied()
-                .filter(|(w, e)| *w > 0.0 && *e > 0.0)
-                .collect();
-            c.draw_series(LineSeries::new(p.clone(), color.stroke_width(2)))?
-                .label(name.as_str())
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
-            c.draw_series(p.iter().map(|&q| Circle::new(q, 4, color.filled())))?;
-        }
-        c.configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()?;
-        root.present()?;
-        Ok(())
-    })();
-    r.map_err(|e| failed(format!("plot {}: {e}", path.display())))
 }

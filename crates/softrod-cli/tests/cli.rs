@@ -422,6 +422,7 @@ fn report_writes_table_and_plot() {
         "--out",
         out.to_str().unwrap(),
         "--quiet",
+        "--quick",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let (_, n) = (
@@ -433,11 +434,17 @@ fn report_writes_table_and_plot() {
     );
     assert_eq!(
         n,
-        1 + 3 + 4 + 1,
-        "header, 3 dopri5, 4 rosenbrock, pieces x2"
+        1 + 9 + 6 + 6 + 5,
+        "header, 9 spatial (pieces x3, quadrature x3), 6 dopri5, 6 rosenbrock, 5 generalized-alpha"
     );
     let md = std::fs::read_to_string(out.join("report.md")).unwrap();
-    assert!(md.contains("Reference"));
+    assert!(md.contains("Temporal reference") && md.contains("Spatial reference"));
+    assert!(md.contains("★"), "the Pareto front is marked");
+    assert!(
+        std::fs::read_to_string(out.join("report_spatial.svg"))
+            .unwrap()
+            .contains("</svg>")
+    );
     assert!(
         std::fs::read_to_string(out.join("report.svg"))
             .unwrap()
