@@ -85,6 +85,7 @@ fn simulate_once(
     budget: f64,
 ) -> Result<Outcome, String> {
     let mut sys = RodSystem::new(built.model.clone());
+    sys.jacobian = crate::run::stiff_jacobian();
     let t1 = *times.last().expect("times");
     let opts = Options {
         t_eval: Some(times.to_vec()),

@@ -22,6 +22,16 @@ use crate::plots;
 /// with ω·dt ≪ 1 are second order either way).
 pub const GENERALIZED_ALPHA_RHO_INF: f64 = 0.9;
 
+/// The Jacobian the stiff methods get: `−M⁻¹K`, `−M⁻¹D` only
+/// (`RodJacobian::ElasticOnly`). Rosenbrock-W keeps its order with any
+/// Jacobian, and on the undamped cantilever release it took the same steps
+/// with the same accuracy as with the full finite-difference Jacobian at a
+/// third of the cost (docs/performance.md, "softrod-integrate"); the
+/// geometric stiffness of gravity, loads and cables is soft next to `K`.
+pub fn stiff_jacobian() -> softrod_integrate::RodJacobian {
+    softrod_integrate::RodJacobian::ElasticOnly
+}
+
 /// The integrator and its options for a scene's `[run]`.
 pub fn method_and_options(scene: &Scene) -> Result<(Method, Options), CliError> {
     let run = &scene.run;
@@ -303,6 +313,7 @@ pub fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), CliErro
         times.len(),
     )?;
     let mut sys = RodSystem::new(l.built.model.clone());
+    sys.jacobian = stiff_jacobian();
     let mut streamer = Streamer::new(&dir, &sys.model, times)?;
     let start = Instant::now();
     let bar = (!quiet && std::io::stderr().is_terminal()).then(|| {

@@ -285,12 +285,12 @@ fn bad_input_exits_2_with_the_key_path() {
         ("length = 0.5", "lenght = 0.5", "rod[0].lenght"),
         ("pieces = 8", "pieces = \"eight\"", "rod[0].pieces"),
         (
-            "integrator = \"dopri5\"",
+            "integrator = \"rosenbrock\"",
             "integrator = \"euler\"",
             "run.integrator",
         ),
         (
-            "integrator = \"dopri5\"",
+            "integrator = \"rosenbrock\"",
             "integrator = \"radau5\"",
             "rosenbrock",
         ),
