@@ -60,6 +60,10 @@ pub fn check(path: &Path) -> Result<(), CliError> {
     Ok(())
 }
 
+/// Largest model whose equilibrium `softrod statics` checks for stability
+/// with a modal analysis (dense eigenproblem, ~1 s at this size).
+pub const STABILITY_CHECK_MAX_DOF: usize = 600;
+
 /// Statics from the initial q (or rest) at t = 0.
 pub fn solve_statics(l: &mut Loaded, data: &mut Data) -> Result<StaticsResult, CliError> {
     dyn_statics(
@@ -81,6 +85,20 @@ pub fn statics(path: &Path, json: bool) -> Result<(), CliError> {
     let model = &l.built.model;
     let mut poser = Poser::new(model);
     poser.update(model, res.q.as_slice())?;
+    // Newton finds equilibria, stable or not (a soft rod under gravity has an
+    // unstable upright one): check the lowest linearized mode when that is
+    // affordable (O(n_dof³)).
+    let stable = (model.n_dof() <= STABILITY_CHECK_MAX_DOF)
+        .then(|| softrod_dynamics::modes(model, &mut data, res.q.as_slice(), 0.0))
+        .and_then(Result::ok)
+        .map(|m| (m.omega.iter().all(|w| *w > 0.0), m.omega.min()));
+    if let Some((false, w)) = stable {
+        eprintln!(
+            "warning: this equilibrium is unstable (lowest linearized ω² = {:.3e} rad²/s²); \
+             a stable one may exist nearby: start statics from another [initial] q",
+            -w * w
+        );
+    }
     if json {
         let rods: Vec<_> = model
             .rods()
@@ -95,6 +113,7 @@ pub fn statics(path: &Path, json: bool) -> Result<(), CliError> {
             "iterations": res.iterations,
             "residual": res.residual,
             "load_steps": res.load_steps,
+            "stable": stable.map(|(s, _)| s),
             "q": res.q.as_slice(),
             "tip": pose_json(poser.tip(0)),
             "rods": rods,

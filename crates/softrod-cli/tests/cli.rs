@@ -451,3 +451,31 @@ fn report_writes_table_and_plot() {
             .contains("</svg>")
     );
 }
+
+#[test]
+fn statics_flags_an_unstable_equilibrium() {
+    // A rod standing upright under its own weight: the straight shape is
+    // always an equilibrium (Newton finds it at once), stable only below
+    // Greenhill's self-weight buckling length L_c = (7.837·EI/(ρAg))^{1/3}:
+    // 0.13 m for E = 1e5 Pa (unstable at L = 0.5 m), 0.58 m for E = 1e7 Pa
+    // (stable).
+    let dir = tmp("unstable");
+    let scene = |young: f64| {
+        format!(
+            "[world]\ngravity = [0.0, 0.0, -9.81]\n[[rod]]\nname = \"arm\"\nlength = 0.5\n\
+             pieces = 6\nstrains = [\"ky\", \"qx\", \"qz\"]\n\
+             base = {{ position = [0, 0, 0], rotation = [[0,0,-1],[0,1,0],[1,0,0]] }}\n\
+             section = {{ shape = \"circle\", radius = 0.01 }}\n\
+             material = {{ density = 1000.0, young = {young:e}, poisson = 0.5 }}\n"
+        )
+    };
+    for (young, stable) in [(1.0e5, false), (1.0e7, true)] {
+        let p = dir.join(format!("upright_{young:e}.toml"));
+        std::fs::write(&p, scene(young)).unwrap();
+        let o = run(&["statics", p.to_str().unwrap(), "--json"]);
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+        assert_eq!(v["stable"], serde_json::Value::Bool(stable), "E = {young}");
+        assert_eq!(stderr(&o).contains("unstable"), !stable);
+    }
+}
