@@ -391,6 +391,9 @@ fn work_precision_svg(
         c.configure_mesh()
             .x_desc("wall time [s] (median of repeats)")
             .y_desc("max tip error over the run [m]")
+            // Powers of ten come out of the log axis as 9.999…e-5: round.
+            .y_label_formatter(&|v| format!("{v:.0e}"))
+            .x_label_formatter(&|v| format!("{v:.2}"))
             .draw()?;
         let mut groups: Vec<String> = Vec::new();
         for (g, ..) in &pts {

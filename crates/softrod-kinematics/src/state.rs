@@ -202,9 +202,28 @@ impl RodKinematics {
             return Err(KinematicsError::OutOfRod { s: f, length: 1.0 });
         }
         for (n, piece) in rod.pieces().iter().enumerate() {
+            // g(L_{n−1})·exp(xξ̂) with exp from (D4): R₀R(x) = R₀ + x a R₀k̃ +
+            // x² b R₀k̃², p = p₀ + x R₀q + x² b R₀(k×q) + x³ c R₀(k×(k×q)).
+            // The products with R₀ are formed once per piece, so a point costs
+            // three series and a few scaled additions.
             let xi = &self.strain[n];
+            let base = &self.tip_pose[n];
+            let k = softrod_lie::angular(xi);
+            let q = softrod_lie::linear(xi);
+            let r0 = base.rotation;
+            let r0k = r0 * softrod_lie::skew(&k);
+            let r0k2 = r0k * softrod_lie::skew(&k);
+            let kq = k.cross(&q);
+            let (r0q, r0kq, r0kkq) = (r0 * q, r0 * kq, r0 * k.cross(&kq));
+            let theta = k.norm();
             for (o, f) in out[n * m..(n + 1) * m].iter_mut().zip(fractions) {
-                *o = self.tip_pose[n].compose(&softrod_lie::exp_twist(f * piece.length, xi));
+                let x = f * piece.length;
+                let [a, b, c] = softrod_lie::series::abc(x * theta);
+                let x2b = x * x * b;
+                *o = Pose {
+                    rotation: r0 + r0k * (x * a) + r0k2 * x2b,
+                    translation: base.translation + r0q * x + r0kq * x2b + r0kkq * (x * x * x * c),
+                };
             }
         }
         Ok(())
