@@ -117,7 +117,12 @@ fn tapered() {
     let ei_s = |s: f64| e * PI * rad(s).powi(4) / 4.0;
     let ga_s = |s: f64| g * PI * rad(s).powi(2);
     let p = 1e-4 * ei(e, r0) / (l * l);
-    let delta = simpson(|s| p * (l - s).powi(2) / ei_s(s) + p / ga_s(s), 0.0, l, 20000);
+    let delta = simpson(
+        |s| p * (l - s).powi(2) / ei_s(s) + p / ga_s(s),
+        0.0,
+        l,
+        20000,
+    );
     println!(
         "L = 0.5 m, r = 0.01 → 0.001 m linearly, E = 1e7, G = E/3, strains (ky, qx, qz), P = {p:.4e} N. \
          Continuum (linear Timoshenko): δ = ∫P(L−s)²/EI + ∫P/GA = {delta:.10e} m (Simpson, 20000 \
