@@ -6,65 +6,12 @@
 //! straight horizontal rest, 5 Gauss points per piece. Reference tip
 //! positions from the verified prototype (DOP853, rtol 1e-12).
 
-use nalgebra::{DMatrix, DVector};
-use softrod_dynamics::{Data, Model, RodSpec, energies, forward_dynamics};
-use softrod_integrate::{Hooks, Method, Options, SecondOrderSystem, integrate_second_order};
+use nalgebra::DVector;
+use softrod_dynamics::{Model, RodSpec, energies};
+use softrod_integrate::{Hooks, Method, Options, RodSystem, integrate_second_order};
 use softrod_kinematics::{Basis, Rod, RodKinematics, Strain, straight};
 use softrod_lie::{Pose, Vec3};
 use softrod_mechanics::{Material, RodBody, Section};
-
-struct Sys {
-    model: Model,
-    data: Data,
-}
-
-impl SecondOrderSystem for Sys {
-    type Error = softrod_dynamics::DynamicsError;
-    fn dim(&self) -> usize {
-        self.model.n_dof()
-    }
-    fn accel(
-        &mut self,
-        t: f64,
-        q: &DVector<f64>,
-        qd: &DVector<f64>,
-        qdd: &mut DVector<f64>,
-    ) -> Result<(), Self::Error> {
-        let a = forward_dynamics(
-            &self.model,
-            &mut self.data,
-            t,
-            q.as_slice(),
-            qd.as_slice(),
-            None,
-        )?;
-        qdd.copy_from(a);
-        Ok(())
-    }
-    fn jacobians(
-        &mut self,
-        t: f64,
-        q: &DVector<f64>,
-        qd: &DVector<f64>,
-        dq: &mut DMatrix<f64>,
-        dqd: &mut DMatrix<f64>,
-    ) -> Result<(), Self::Error> {
-        let j = softrod_dynamics::dynamics_jacobians(
-            &self.model,
-            &mut self.data,
-            t,
-            q.as_slice(),
-            qd.as_slice(),
-            None,
-        )?;
-        dq.copy_from(&j.dqdd_dq);
-        dqd.copy_from(&j.dqdd_dqd);
-        Ok(())
-    }
-    fn is_autonomous(&self) -> bool {
-        true
-    }
-}
 
 fn sanity_model() -> Model {
     let rod = Rod::uniform(
@@ -100,8 +47,7 @@ const REFERENCE: [(f64, f64, f64); 3] = [
 fn sanity_trajectory_matches_the_verified_prototype() {
     let model = sanity_model();
     let n = model.n_dof();
-    let data = Data::new(&model);
-    let mut sys = Sys { model, data };
+    let mut sys = RodSystem::new(model);
     let opts = Options {
         rtol: 1e-11,
         atol: 1e-13,
