@@ -14,9 +14,10 @@
 
 use nalgebra::DVector;
 
-use crate::driver::{Stepper, check_underflow, clip_step, initial_step, wrms};
+use crate::driver::{Stepper, check_underflow, clip_step, wrms};
 use crate::error::{IntegrateError, first_non_finite};
 use crate::options::{Options, Stats};
+use crate::state::{StepState, check_dt_if_fixed, non_finite_trial, rejection_reason};
 use crate::system::{Problem, sys_err};
 
 const C2: f64 = 1.0 / 5.0;
@@ -63,13 +64,12 @@ const FAC_MAX: f64 = 5.0; // largest h_new / h
 
 /// DOPRI5 state and buffers (allocated once).
 pub(crate) struct Dopri5 {
-    t: f64,
-    t_prev: f64,
-    h: f64,
+    /// `f` is the first stage `k1` (FSAL: the last stage of the step before).
+    s: StepState,
     h_next: f64,
     err_prev: f64,
-    y: DVector<f64>,
-    k: [DVector<f64>; 7],
+    /// Stages `k2..k7`: `k[0]` is `k2`, …, `k[5]` is `k7`.
+    k: [DVector<f64>; 6],
     ynew: DVector<f64>,
     ytmp: DVector<f64>,
     /// Dense-output coefficients of the last step (`rcont1..5` of DOPRI5).
@@ -80,12 +80,9 @@ impl Dopri5 {
     pub(crate) fn new(n: usize) -> Self {
         let z = DVector::zeros(n);
         Self {
-            t: 0.0,
-            t_prev: 0.0,
-            h: 0.0,
+            s: StepState::new(n),
             h_next: 0.0,
             err_prev: 1e-4,
-            y: z.clone(),
             k: std::array::from_fn(|_| z.clone()),
             ynew: z.clone(),
             ytmp: z.clone(),
@@ -93,15 +90,16 @@ impl Dopri5 {
         }
     }
 
-    /// `ytmp = y + h Σ a_j k_j`.
+    /// `ytmp = y + h Σ a_j k_{j+1}` (`j` = 0 is `k1 = f`).
     fn stage_arg(&mut self, h: f64, coef: &[(usize, f64)]) {
-        self.ytmp.copy_from(&self.y);
+        self.ytmp.copy_from(&self.s.y);
         for &(j, a) in coef {
-            self.ytmp.axpy(h * a, &self.k[j], 1.0);
+            let kj = if j == 0 { &self.s.f } else { &self.k[j - 1] };
+            self.ytmp.axpy(h * a, kj, 1.0);
         }
     }
 
-    /// Tries a step of size `h`; leaves `y₁` in `ynew`, `f(t+h, y₁)` in `k[6]`;
+    /// Tries a step of size `h`; leaves `y₁` in `ynew`, `f(t+h, y₁)` in `k[5]`;
     /// returns the error norm (∞ if the trial is not finite).
     fn attempt<P: Problem>(
         &mut self,
@@ -111,7 +109,7 @@ impl Dopri5 {
         opts: &Options,
         stats: &mut Stats,
     ) -> Result<f64, IntegrateError> {
-        let t = self.t;
+        let t = self.s.t;
         let err = |w| sys_err(t, h, w);
         let stages: [(f64, &[(usize, f64)]); 5] = [
             (C2, &[(0, A21)]),
@@ -122,32 +120,33 @@ impl Dopri5 {
         ];
         for (s, (c, coef)) in stages.iter().enumerate() {
             self.stage_arg(h, coef);
-            let (t_s, dst) = (if s == 4 { t_new } else { t + c * h }, s + 1);
+            let (t_s, dst) = (if s == 4 { t_new } else { t + c * h }, s);
             let (ytmp, k) = (&self.ytmp, &mut self.k[dst]);
             p.rhs(t_s, ytmp, k).map_err(err("rhs"))?;
         }
         self.stage_arg(h, &[(0, A71), (2, A73), (3, A74), (4, A75), (5, A76)]);
         std::mem::swap(&mut self.ynew, &mut self.ytmp);
-        p.rhs(t_new, &self.ynew, &mut self.k[6])
+        p.rhs(t_new, &self.ynew, &mut self.k[5])
             .map_err(err("rhs"))?;
         stats.rhs_evaluations += 6;
         // Error estimate into ytmp.
-        let n = self.y.len();
+        let n = self.s.y.len();
+        let (k1, k) = (&self.s.f, &self.k);
         for i in 0..n {
             self.ytmp[i] = h
-                * (E1 * self.k[0][i]
-                    + E3 * self.k[2][i]
-                    + E4 * self.k[3][i]
-                    + E5 * self.k[4][i]
-                    + E6 * self.k[5][i]
-                    + E7 * self.k[6][i]);
+                * (E1 * k1[i]
+                    + E3 * k[1][i]
+                    + E4 * k[2][i]
+                    + E5 * k[3][i]
+                    + E6 * k[4][i]
+                    + E7 * k[5][i]);
         }
         if first_non_finite(self.ynew.as_slice()).is_some()
-            || first_non_finite(self.k[6].as_slice()).is_some()
+            || first_non_finite(self.k[5].as_slice()).is_some()
         {
             return Ok(f64::INFINITY);
         }
-        let e = wrms(&self.ytmp, &self.y, &self.ynew, opts);
+        let e = wrms(&self.ytmp, &self.s.y, &self.ynew, opts);
         Ok(if e.is_finite() { e } else { f64::INFINITY })
     }
 }
@@ -162,29 +161,13 @@ impl<P: Problem> Stepper<P> for Dopri5 {
         opts: &Options,
         stats: &mut Stats,
     ) -> Result<(), IntegrateError> {
-        if !opts.adaptive && opts.dt.is_none() {
-            return Err(IntegrateError::InvalidInput {
-                what: "a non-adaptive run needs Options::dt".into(),
-            });
-        }
-        self.t = t0;
-        self.t_prev = t0;
-        self.y.copy_from(y0);
+        check_dt_if_fixed(opts)?;
+        self.s.start(t0, y0);
         self.err_prev = 1e-4;
-        self.system_changed(p, stats)?;
-        self.h_next = match opts.dt {
-            Some(dt) => dt.min(opts.h_max),
-            None => initial_step(
-                p,
-                t0,
-                y0,
-                &self.k[0],
-                5,
-                opts,
-                stats,
-                (&mut self.ynew, &mut self.ytmp),
-            )?,
-        };
+        self.s.refresh_derivative(p, stats)?;
+        self.h_next = self
+            .s
+            .first_step(p, 5, opts, stats, (&mut self.ynew, &mut self.ytmp))?;
         Ok(())
     }
 
@@ -198,20 +181,14 @@ impl<P: Problem> Stepper<P> for Dopri5 {
         let mut h = self.h_next.min(opts.h_max);
         let mut rejected_before = false;
         loop {
-            let (hh, last) = clip_step(self.t, h, t_end);
+            let (hh, last) = clip_step(self.s.t, h, t_end);
             h = hh;
-            check_underflow(self.t, h, opts, "error test")?;
-            let t_new = if last { t_end } else { self.t + h };
+            check_underflow(self.s.t, h, opts, "error test")?;
+            let t_new = if last { t_end } else { self.s.t + h };
             let err = self.attempt(p, h, t_new, opts, stats)?;
             if !opts.adaptive {
                 if !err.is_finite() {
-                    let index = first_non_finite(self.ynew.as_slice()).unwrap_or(0);
-                    return Err(IntegrateError::NonFinite {
-                        t: t_new,
-                        h,
-                        what: "state",
-                        index,
-                    });
+                    return Err(non_finite_trial(&self.ynew, t_new, h));
                 }
                 self.accept(h, t_new, stats);
                 self.h_next = opts.dt.unwrap_or(h);
@@ -238,30 +215,16 @@ impl<P: Problem> Stepper<P> for Dopri5 {
             } else {
                 1.0 / FAC_MIN
             };
-            let reason = if err.is_finite() {
-                "error test"
-            } else {
-                "non-finite trial state"
-            };
             h /= fac;
-            check_underflow(self.t, h, opts, reason)?;
+            check_underflow(self.s.t, h, opts, rejection_reason(err))?;
         }
     }
 
-    fn t(&self) -> f64 {
-        self.t
-    }
-    fn t_prev(&self) -> f64 {
-        self.t_prev
-    }
-    fn y(&self) -> &DVector<f64> {
-        &self.y
-    }
-    fn h_last(&self) -> f64 {
-        self.h
+    fn state(&self) -> &StepState {
+        &self.s
     }
     fn dense(&self, t: f64, out: &mut DVector<f64>) {
-        let th = (t - self.t_prev) / self.h;
+        let th = (t - self.s.t_prev) / self.s.h;
         let th1 = 1.0 - th;
         let [r1, r2, r3, r4, r5] = &self.cont;
         for i in 0..out.len() {
@@ -269,47 +232,35 @@ impl<P: Problem> Stepper<P> for Dopri5 {
         }
     }
     fn system_changed(&mut self, p: &mut P, stats: &mut Stats) -> Result<(), IntegrateError> {
-        p.rhs(self.t, &self.y, &mut self.k[0])
-            .map_err(sys_err(self.t, self.h, "rhs"))?;
-        stats.rhs_evaluations += 1;
-        if let Some(index) = first_non_finite(self.k[0].as_slice()) {
-            return Err(IntegrateError::NonFinite {
-                t: self.t,
-                h: self.h,
-                what: "derivative",
-                index,
-            });
-        }
-        Ok(())
+        self.s.refresh_derivative(p, stats)
     }
 }
 
 impl Dopri5 {
-    /// Accepts the trial in `ynew`/`k[6]`: dense coefficients, FSAL shift.
+    /// Accepts the trial in `ynew`/`k[5]`: dense coefficients, FSAL shift
+    /// (`k7` becomes the next `k1 = f`).
     fn accept(&mut self, h: f64, t_new: f64, stats: &mut Stats) {
-        let n = self.y.len();
+        let n = self.s.y.len();
+        let (y, k1, k) = (&self.s.y, &self.s.f, &self.k);
         for i in 0..n {
-            let y0 = self.y[i];
+            let y0 = y[i];
             let y1 = self.ynew[i];
             let ydiff = y1 - y0;
-            let bspl = h * self.k[0][i] - ydiff;
+            let bspl = h * k1[i] - ydiff;
             self.cont[0][i] = y0;
             self.cont[1][i] = ydiff;
             self.cont[2][i] = bspl;
-            self.cont[3][i] = ydiff - h * self.k[6][i] - bspl;
+            self.cont[3][i] = ydiff - h * k[5][i] - bspl;
             self.cont[4][i] = h
-                * (D1 * self.k[0][i]
-                    + D3 * self.k[2][i]
-                    + D4 * self.k[3][i]
-                    + D5 * self.k[4][i]
-                    + D6 * self.k[5][i]
-                    + D7 * self.k[6][i]);
+                * (D1 * k1[i]
+                    + D3 * k[1][i]
+                    + D4 * k[2][i]
+                    + D5 * k[3][i]
+                    + D6 * k[4][i]
+                    + D7 * k[5][i]);
         }
-        std::mem::swap(&mut self.y, &mut self.ynew);
-        self.k.swap(0, 6);
-        self.t_prev = self.t;
-        self.t = t_new;
-        self.h = h;
-        stats.steps += 1;
+        std::mem::swap(&mut self.s.f_prev, &mut self.s.f);
+        std::mem::swap(&mut self.s.f, &mut self.k[5]);
+        self.s.accept(&mut self.ynew, t_new, h, stats);
     }
 }

@@ -14,6 +14,7 @@ use crate::options::{
 };
 use crate::rk4::Rk4;
 use crate::rosw::Rosw34;
+use crate::state::StepState;
 use crate::system::{FirstOrderProblem, OdeSystem, Problem, SecondOrderProblem, SecondOrderSystem};
 
 /// One method's state between steps.
@@ -37,16 +38,29 @@ pub(crate) trait Stepper<P: Problem> {
         opts: &Options,
         stats: &mut Stats,
     ) -> Result<(), IntegrateError>;
+    /// The shared time/state/derivative bookkeeping.
+    fn state(&self) -> &StepState;
     /// Current time.
-    fn t(&self) -> f64;
+    fn t(&self) -> f64 {
+        self.state().t
+    }
     /// Time at the start of the last step.
-    fn t_prev(&self) -> f64;
+    fn t_prev(&self) -> f64 {
+        self.state().t_prev
+    }
     /// Current state.
-    fn y(&self) -> &DVector<f64>;
+    fn y(&self) -> &DVector<f64> {
+        &self.state().y
+    }
     /// Size of the last step.
-    fn h_last(&self) -> f64;
-    /// Dense output at `t ∈ [t_prev, t]` into `out`.
-    fn dense(&self, t: f64, out: &mut DVector<f64>);
+    fn h_last(&self) -> f64 {
+        self.state().h
+    }
+    /// Dense output at `t ∈ [t_prev, t]` into `out` (cubic Hermite unless
+    /// the method has its own).
+    fn dense(&self, t: f64, out: &mut DVector<f64>) {
+        self.state().hermite_dense(t, out);
+    }
     /// The user changed the system: drop cached derivatives/Jacobians.
     fn system_changed(&mut self, p: &mut P, stats: &mut Stats) -> Result<(), IntegrateError>;
 }

@@ -27,9 +27,10 @@
 
 use nalgebra::DVector;
 
-use crate::driver::{Stepper, check_underflow, clip_step, hermite};
+use crate::driver::{Stepper, check_underflow, clip_step};
 use crate::error::{IntegrateError, first_non_finite};
 use crate::options::{Options, Stats};
+use crate::state::{StepState, check_finite};
 use crate::system::{SecondOrderProblem, SecondOrderSystem, sys_err};
 
 /// The four generalized-α parameters from `ρ∞` (Chung–Hulbert 1993, eqs. 25,
@@ -48,9 +49,9 @@ pub(crate) struct GeneralizedAlpha {
     af: f64,
     beta: f64,
     gamma: f64,
-    t: f64,
-    t_prev: f64,
-    h: f64,
+    /// First-order views `y = (q, q̇)`, `f = (q̇, q̈)` for the driver and the
+    /// dense output.
+    s: StepState,
     h_try: f64,
     q: DVector<f64>,
     v: DVector<f64>,
@@ -62,11 +63,6 @@ pub(crate) struct GeneralizedAlpha {
     q_new: DVector<f64>,
     v_new: DVector<f64>,
     g: DVector<f64>,
-    // first-order views for the driver and dense output
-    y: DVector<f64>,
-    f: DVector<f64>,
-    y_prev: DVector<f64>,
-    f_prev: DVector<f64>,
     jac_age: usize,
     lu_key: (f64, f64),
 }
@@ -75,15 +71,12 @@ impl GeneralizedAlpha {
     pub(crate) fn new(n: usize, rho_inf: f64) -> Self {
         let (am, af, beta, gamma) = generalized_alpha_parameters(rho_inf);
         let z = DVector::zeros(n);
-        let z2 = DVector::zeros(2 * n);
         Self {
             am,
             af,
             beta,
             gamma,
-            t: 0.0,
-            t_prev: 0.0,
-            h: 0.0,
+            s: StepState::new(2 * n),
             h_try: 0.0,
             q: z.clone(),
             v: z.clone(),
@@ -94,10 +87,6 @@ impl GeneralizedAlpha {
             q_new: z.clone(),
             v_new: z.clone(),
             g: z,
-            y: z2.clone(),
-            f: z2.clone(),
-            y_prev: z2.clone(),
-            f_prev: z2,
             jac_age: usize::MAX,
             lu_key: (f64::NAN, f64::NAN),
         }
@@ -117,10 +106,10 @@ impl GeneralizedAlpha {
 
     fn set_first_order(&mut self) {
         let n = self.q.len();
-        self.y.rows_mut(0, n).copy_from(&self.q);
-        self.y.rows_mut(n, n).copy_from(&self.v);
-        self.f.rows_mut(0, n).copy_from(&self.v);
-        self.f.rows_mut(n, n).copy_from(&self.qdd);
+        self.s.y.rows_mut(0, n).copy_from(&self.q);
+        self.s.y.rows_mut(n, n).copy_from(&self.v);
+        self.s.f.rows_mut(0, n).copy_from(&self.v);
+        self.s.f.rows_mut(n, n).copy_from(&self.qdd);
     }
 
     /// Simplified Newton for one step of size `h`. `Ok(Ok(()))`: converged
@@ -144,7 +133,7 @@ impl GeneralizedAlpha {
         for k in 1..=opts.newton_max_iter.max(1) {
             self.newmark(h);
             p.accel(t_new, &self.q_new, &self.v_new, &mut self.g)
-                .map_err(sys_err(self.t, h, "accel"))?;
+                .map_err(sys_err(self.s.t, h, "accel"))?;
             stats.rhs_evaluations += 1;
             stats.newton_iterations += 1;
             // Δ = −(I − β'Jq − γ'Jv)⁻¹ (x − g), into g.
@@ -208,8 +197,7 @@ impl<S: SecondOrderSystem> Stepper<SecondOrderProblem<'_, S>> for GeneralizedAlp
             });
         };
         let n = p.n();
-        self.t = t0;
-        self.t_prev = t0;
+        self.s.start(t0, y0);
         self.h_try = dt.min(opts.h_max);
         self.q.copy_from(&y0.rows(0, n));
         self.v.copy_from(&y0.rows(n, n));
@@ -228,12 +216,13 @@ impl<S: SecondOrderSystem> Stepper<SecondOrderProblem<'_, S>> for GeneralizedAlp
         let dt = opts.dt.unwrap_or(self.h_try).min(opts.h_max);
         let mut h = self.h_try.min(dt);
         loop {
-            let (hh, last) = clip_step(self.t, h, t_end);
+            let t = self.s.t;
+            let (hh, last) = clip_step(t, h, t_end);
             h = hh;
-            if let Err(e) = check_underflow(self.t, h, opts, "Newton failure") {
+            if let Err(e) = check_underflow(t, h, opts, "Newton failure") {
                 return Err(if stats.newton_iterations > 0 {
                     IntegrateError::NewtonNonConvergence {
-                        t: self.t,
+                        t,
                         h,
                         iterations: opts.newton_max_iter,
                         what: "step size underflow after repeated Newton failures",
@@ -244,12 +233,12 @@ impl<S: SecondOrderSystem> Stepper<SecondOrderProblem<'_, S>> for GeneralizedAlp
             }
             if self.jac_age >= opts.jacobian_max_age.max(1) {
                 let bad = p
-                    .update_jacobians_qv(self.t, &self.q, &self.v)
-                    .map_err(sys_err(self.t, h, "jacobian"))?;
+                    .update_jacobians_qv(t, &self.q, &self.v)
+                    .map_err(sys_err(t, h, "jacobian"))?;
                 stats.jacobian_evaluations += 1;
                 if let Some(index) = bad {
                     return Err(IntegrateError::NonFinite {
-                        t: self.t,
+                        t,
                         h,
                         what: "Jacobian",
                         index,
@@ -266,7 +255,7 @@ impl<S: SecondOrderSystem> Stepper<SecondOrderProblem<'_, S>> for GeneralizedAlp
                     self.lu_key = (f64::NAN, f64::NAN);
                     if self.jac_age == 0 {
                         return Err(IntegrateError::SingularMatrix {
-                            t: self.t,
+                            t,
                             h,
                             what: "I − β'·∂a/∂q − γ'·∂a/∂q̇",
                         });
@@ -276,20 +265,16 @@ impl<S: SecondOrderSystem> Stepper<SecondOrderProblem<'_, S>> for GeneralizedAlp
                 }
                 self.lu_key = key;
             }
-            let t_new = if last { t_end } else { self.t + h };
+            let t_new = if last { t_end } else { t + h };
             match self.solve_step(p, h, t_new, opts, stats)? {
                 Ok(()) => {
-                    std::mem::swap(&mut self.y_prev, &mut self.y);
-                    std::mem::swap(&mut self.f_prev, &mut self.f);
+                    self.s.save_prev();
                     std::mem::swap(&mut self.q, &mut self.q_new);
                     std::mem::swap(&mut self.v, &mut self.v_new);
                     std::mem::swap(&mut self.acc, &mut self.a_new);
                     std::mem::swap(&mut self.qdd, &mut self.x);
                     self.set_first_order();
-                    self.t_prev = self.t;
-                    self.t = t_new;
-                    self.h = h;
-                    stats.steps += 1;
+                    self.s.advance(t_new, h, stats);
                     self.jac_age = self.jac_age.saturating_add(1);
                     if !last {
                         self.h_try = (2.0 * h).min(dt);
@@ -302,9 +287,9 @@ impl<S: SecondOrderSystem> Stepper<SecondOrderProblem<'_, S>> for GeneralizedAlp
                         self.jac_age = usize::MAX;
                     } else {
                         h *= 0.5;
-                        if check_underflow(self.t, h, opts, "Newton failure").is_err() {
+                        if check_underflow(t, h, opts, "Newton failure").is_err() {
                             return Err(IntegrateError::NewtonNonConvergence {
-                                t: self.t,
+                                t,
                                 h,
                                 iterations,
                                 what,
@@ -316,46 +301,19 @@ impl<S: SecondOrderSystem> Stepper<SecondOrderProblem<'_, S>> for GeneralizedAlp
         }
     }
 
-    fn t(&self) -> f64 {
-        self.t
-    }
-    fn t_prev(&self) -> f64 {
-        self.t_prev
-    }
-    fn y(&self) -> &DVector<f64> {
-        &self.y
-    }
-    fn h_last(&self) -> f64 {
-        self.h
-    }
-    fn dense(&self, t: f64, out: &mut DVector<f64>) {
-        hermite(
-            self.t_prev,
-            &self.y_prev,
-            &self.f_prev,
-            self.t,
-            &self.y,
-            &self.f,
-            t,
-            out,
-        );
+    fn state(&self) -> &StepState {
+        &self.s
     }
     fn system_changed(
         &mut self,
         p: &mut SecondOrderProblem<'_, S>,
         stats: &mut Stats,
     ) -> Result<(), IntegrateError> {
-        p.accel(self.t, &self.q, &self.v, &mut self.qdd)
-            .map_err(sys_err(self.t, self.h, "accel"))?;
+        let (t, h) = (self.s.t, self.s.h);
+        p.accel(t, &self.q, &self.v, &mut self.qdd)
+            .map_err(sys_err(t, h, "accel"))?;
         stats.rhs_evaluations += 1;
-        if let Some(index) = first_non_finite(self.qdd.as_slice()) {
-            return Err(IntegrateError::NonFinite {
-                t: self.t,
-                h: self.h,
-                what: "acceleration",
-                index,
-            });
-        }
+        check_finite(&self.qdd, t, h, "acceleration")?;
         self.set_first_order();
         self.jac_age = usize::MAX;
         self.lu_key = (f64::NAN, f64::NAN);

@@ -95,6 +95,7 @@ mod options;
 mod rk4;
 mod rod;
 mod rosw;
+mod state;
 mod system;
 
 pub use driver::{integrate, integrate_second_order};

@@ -9,20 +9,15 @@
 
 use nalgebra::DVector;
 
-use crate::driver::{Stepper, hermite};
-use crate::error::{IntegrateError, first_non_finite};
+use crate::driver::{Stepper, clip_step};
+use crate::error::IntegrateError;
 use crate::options::{Options, Stats};
+use crate::state::{StepState, check_finite};
 use crate::system::{Problem, sys_err};
 
 /// RK4 state and buffers (allocated once).
 pub(crate) struct Rk4 {
-    t: f64,
-    t_prev: f64,
-    h: f64,
-    y: DVector<f64>,
-    f: DVector<f64>,
-    y_prev: DVector<f64>,
-    f_prev: DVector<f64>,
+    s: StepState,
     k2: DVector<f64>,
     k3: DVector<f64>,
     ytmp: DVector<f64>,
@@ -32,13 +27,7 @@ impl Rk4 {
     pub(crate) fn new(n: usize) -> Self {
         let z = DVector::zeros(n);
         Self {
-            t: 0.0,
-            t_prev: 0.0,
-            h: 0.0,
-            y: z.clone(),
-            f: z.clone(),
-            y_prev: z.clone(),
-            f_prev: z.clone(),
+            s: StepState::new(n),
             k2: z.clone(),
             k3: z.clone(),
             ytmp: z,
@@ -61,10 +50,8 @@ impl<P: Problem> Stepper<P> for Rk4 {
                 what: "RK4 needs a fixed step: set Options::dt".into(),
             });
         }
-        self.t = t0;
-        self.t_prev = t0;
-        self.y.copy_from(y0);
-        self.system_changed(p, stats)
+        self.s.start(t0, y0);
+        self.s.refresh_derivative(p, stats)
     }
 
     fn step(
@@ -75,10 +62,11 @@ impl<P: Problem> Stepper<P> for Rk4 {
         stats: &mut Stats,
     ) -> Result<(), IntegrateError> {
         let dt = opts.dt.unwrap_or(f64::INFINITY).min(opts.h_max);
-        let t = self.t;
-        let (h, last) = crate::driver::clip_step(t, dt, t_end);
+        let t = self.s.t;
+        let (h, last) = clip_step(t, dt, t_end);
         let err = |what| sys_err(t, h, what);
-        let (y, f) = (&self.y, &self.f);
+        let s = &mut self.s;
+        let (y, f) = (&s.y, &s.f);
         // k2
         self.ytmp.copy_from(y);
         self.ytmp.axpy(0.5 * h, f, 1.0);
@@ -92,81 +80,26 @@ impl<P: Problem> Stepper<P> for Rk4 {
         // k4 (into f_prev as scratch)
         self.ytmp.copy_from(y);
         self.ytmp.axpy(h, &self.k3, 1.0);
-        p.rhs(t + h, &self.ytmp, &mut self.f_prev)
+        p.rhs(t + h, &self.ytmp, &mut s.f_prev)
             .map_err(err("rhs"))?;
         // y1 = y + h/6 (k1 + 2 k2 + 2 k3 + k4), into ytmp
         for i in 0..y.len() {
             self.ytmp[i] =
-                y[i] + h / 6.0 * (f[i] + 2.0 * self.k2[i] + 2.0 * self.k3[i] + self.f_prev[i]);
+                y[i] + h / 6.0 * (f[i] + 2.0 * self.k2[i] + 2.0 * self.k3[i] + s.f_prev[i]);
         }
         stats.rhs_evaluations += 3;
         let t_new = if last { t_end } else { t + h };
-        if let Some(index) = first_non_finite(self.ytmp.as_slice()) {
-            return Err(IntegrateError::NonFinite {
-                t: t_new,
-                h,
-                what: "state",
-                index,
-            });
-        }
-        // Shift: prev <- current, current <- new.
-        std::mem::swap(&mut self.y_prev, &mut self.y);
-        std::mem::swap(&mut self.y, &mut self.ytmp);
-        std::mem::swap(&mut self.f_prev, &mut self.f);
-        self.t_prev = t;
-        self.t = t_new;
-        self.h = h;
-        p.rhs(self.t, &self.y, &mut self.f)
-            .map_err(sys_err(self.t, h, "rhs"))?;
-        stats.rhs_evaluations += 1;
-        stats.steps += 1;
-        if let Some(index) = first_non_finite(self.f.as_slice()) {
-            return Err(IntegrateError::NonFinite {
-                t: self.t,
-                h,
-                what: "derivative",
-                index,
-            });
-        }
-        Ok(())
+        check_finite(&self.ytmp, t_new, h, "state")?;
+        // Shift: prev <- current, current <- new; then f at the new point.
+        std::mem::swap(&mut s.f_prev, &mut s.f);
+        s.accept(&mut self.ytmp, t_new, h, stats);
+        s.refresh_derivative(p, stats)
     }
 
-    fn t(&self) -> f64 {
-        self.t
-    }
-    fn t_prev(&self) -> f64 {
-        self.t_prev
-    }
-    fn y(&self) -> &DVector<f64> {
-        &self.y
-    }
-    fn h_last(&self) -> f64 {
-        self.h
-    }
-    fn dense(&self, t: f64, out: &mut DVector<f64>) {
-        hermite(
-            self.t_prev,
-            &self.y_prev,
-            &self.f_prev,
-            self.t,
-            &self.y,
-            &self.f,
-            t,
-            out,
-        );
+    fn state(&self) -> &StepState {
+        &self.s
     }
     fn system_changed(&mut self, p: &mut P, stats: &mut Stats) -> Result<(), IntegrateError> {
-        p.rhs(self.t, &self.y, &mut self.f)
-            .map_err(sys_err(self.t, self.h, "rhs"))?;
-        stats.rhs_evaluations += 1;
-        if let Some(index) = first_non_finite(self.f.as_slice()) {
-            return Err(IntegrateError::NonFinite {
-                t: self.t,
-                h: self.h,
-                what: "derivative",
-                index,
-            });
-        }
-        Ok(())
+        self.s.refresh_derivative(p, stats)
     }
 }

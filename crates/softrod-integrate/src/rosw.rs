@@ -29,9 +29,10 @@
 
 use nalgebra::DVector;
 
-use crate::driver::{Stepper, check_underflow, clip_step, hermite, initial_step, wrms};
+use crate::driver::{Stepper, check_underflow, clip_step, wrms};
 use crate::error::{IntegrateError, first_non_finite};
 use crate::options::{Options, Stats};
+use crate::state::{StepState, check_dt_if_fixed, non_finite_trial, rejection_reason};
 use crate::system::{Problem, sys_err};
 
 const S: usize = 4;
@@ -130,14 +131,8 @@ impl Tableau {
 /// ROS34PW2 state and buffers (allocated once).
 pub(crate) struct Rosw34 {
     tab: Tableau,
-    t: f64,
-    t_prev: f64,
-    h: f64,
+    s: StepState,
     h_next: f64,
-    y: DVector<f64>,
-    f: DVector<f64>,
-    y_prev: DVector<f64>,
-    f_prev: DVector<f64>,
     ft: DVector<f64>,
     ft_valid: bool,
     u: [DVector<f64>; S],
@@ -154,14 +149,8 @@ impl Rosw34 {
         let z = DVector::zeros(n);
         Self {
             tab: Tableau::new(),
-            t: 0.0,
-            t_prev: 0.0,
-            h: 0.0,
+            s: StepState::new(n),
             h_next: 0.0,
-            y: z.clone(),
-            f: z.clone(),
-            y_prev: z.clone(),
-            f_prev: z.clone(),
             ft: z.clone(),
             ft_valid: false,
             u: std::array::from_fn(|_| z.clone()),
@@ -179,12 +168,12 @@ impl Rosw34 {
         stats: &mut Stats,
     ) -> Result<(), IntegrateError> {
         let bad = p
-            .update_jacobian(self.t, &self.y)
-            .map_err(sys_err(self.t, h, "jacobian"))?;
+            .update_jacobian(self.s.t, &self.s.y)
+            .map_err(sys_err(self.s.t, h, "jacobian"))?;
         stats.jacobian_evaluations += 1;
         if let Some(index) = bad {
             return Err(IntegrateError::NonFinite {
-                t: self.t,
+                t: self.s.t,
                 h,
                 what: "Jacobian",
                 index,
@@ -205,15 +194,15 @@ impl Rosw34 {
         opts: &Options,
         stats: &mut Stats,
     ) -> Result<f64, IntegrateError> {
-        let t = self.t;
+        let t = self.s.t;
         let tab = &self.tab;
         for i in 0..S {
             // Stage argument and right-hand side.
             let rhs_i = if i == 0 {
-                self.ytmp.copy_from(&self.f);
+                self.ytmp.copy_from(&self.s.f);
                 &mut self.ytmp
             } else {
-                self.ynew.copy_from(&self.y);
+                self.ynew.copy_from(&self.s.y);
                 for j in 0..i {
                     if tab.a[i][j] != 0.0 {
                         self.ynew.axpy(tab.a[i][j], &self.u[j], 1.0);
@@ -241,7 +230,7 @@ impl Rosw34 {
             stats.lu_solves += 1;
             self.u[i].copy_from(rhs_i);
         }
-        self.ynew.copy_from(&self.y);
+        self.ynew.copy_from(&self.s.y);
         self.ytmp.fill(0.0);
         for j in 0..S {
             self.ynew.axpy(tab.m[j], &self.u[j], 1.0);
@@ -250,7 +239,7 @@ impl Rosw34 {
         if first_non_finite(self.ynew.as_slice()).is_some() {
             return Ok(f64::INFINITY);
         }
-        let e = wrms(&self.ytmp, &self.y, &self.ynew, opts);
+        let e = wrms(&self.ytmp, &self.s.y, &self.ynew, opts);
         Ok(if e.is_finite() { e } else { f64::INFINITY })
     }
 }
@@ -265,28 +254,12 @@ impl<P: Problem> Stepper<P> for Rosw34 {
         opts: &Options,
         stats: &mut Stats,
     ) -> Result<(), IntegrateError> {
-        if !opts.adaptive && opts.dt.is_none() {
-            return Err(IntegrateError::InvalidInput {
-                what: "a non-adaptive run needs Options::dt".into(),
-            });
-        }
-        self.t = t0;
-        self.t_prev = t0;
-        self.y.copy_from(y0);
+        check_dt_if_fixed(opts)?;
+        self.s.start(t0, y0);
         self.system_changed(p, stats)?;
-        self.h_next = match opts.dt {
-            Some(dt) => dt.min(opts.h_max),
-            None => initial_step(
-                p,
-                t0,
-                y0,
-                &self.f,
-                3,
-                opts,
-                stats,
-                (&mut self.ynew, &mut self.ytmp),
-            )?,
-        };
+        self.h_next = self
+            .s
+            .first_step(p, 3, opts, stats, (&mut self.ynew, &mut self.ytmp))?;
         Ok(())
     }
 
@@ -302,22 +275,22 @@ impl<P: Problem> Stepper<P> for Rosw34 {
         // ∂f/∂t at (t, y), once per step.
         self.ft_valid = false;
         if !p.is_autonomous() {
-            let t = self.t;
+            let t = self.s.t;
             let delta = (f64::EPSILON * t.abs().max(1e-5)).sqrt();
-            p.rhs(t + delta, &self.y, &mut self.ft)
+            p.rhs(t + delta, &self.s.y, &mut self.ft)
                 .map_err(sys_err(t, h, "rhs"))?;
             stats.rhs_evaluations += 1;
-            self.ft.axpy(-1.0, &self.f, 1.0);
+            self.ft.axpy(-1.0, &self.s.f, 1.0);
             self.ft /= delta;
             if first_non_finite(self.ft.as_slice()).is_none() {
                 self.ft_valid = true;
             }
         }
         loop {
-            let (hh, last) = clip_step(self.t, h, t_end);
+            let (hh, last) = clip_step(self.s.t, h, t_end);
             h = hh;
             check_underflow(
-                self.t,
+                self.s.t,
                 h,
                 opts,
                 if rejected_before {
@@ -340,7 +313,7 @@ impl<P: Problem> Stepper<P> for Rosw34 {
                         self.jac_age = usize::MAX;
                     } else if !opts.adaptive {
                         return Err(IntegrateError::SingularMatrix {
-                            t: self.t,
+                            t: self.s.t,
                             h,
                             what: "I/(hγ) − J",
                         });
@@ -352,7 +325,7 @@ impl<P: Problem> Stepper<P> for Rosw34 {
                     continue;
                 }
             }
-            let t_new = if last { t_end } else { self.t + h };
+            let t_new = if last { t_end } else { self.s.t + h };
             let err = self.attempt(p, h, t_new, opts, stats)?;
             let accept = if opts.adaptive {
                 err <= 1.0
@@ -360,35 +333,25 @@ impl<P: Problem> Stepper<P> for Rosw34 {
                 err.is_finite()
             };
             if !opts.adaptive && !accept {
-                let index = first_non_finite(self.ynew.as_slice()).unwrap_or(0);
-                return Err(IntegrateError::NonFinite {
-                    t: t_new,
-                    h,
-                    what: "state",
-                    index,
-                });
+                return Err(non_finite_trial(&self.ynew, t_new, h));
             }
             if accept {
                 // Derivative at the new point (next step's first stage).
-                std::mem::swap(&mut self.f_prev, &mut self.f);
-                p.rhs(t_new, &self.ynew, &mut self.f)
+                let s = &mut self.s;
+                std::mem::swap(&mut s.f_prev, &mut s.f);
+                p.rhs(t_new, &self.ynew, &mut s.f)
                     .map_err(sys_err(t_new, h, "rhs"))?;
                 stats.rhs_evaluations += 1;
-                if first_non_finite(self.f.as_slice()).is_some() && opts.adaptive {
+                if first_non_finite(s.f.as_slice()).is_some() && opts.adaptive {
                     // Treat like a non-finite trial: reject and shrink.
-                    std::mem::swap(&mut self.f_prev, &mut self.f);
+                    std::mem::swap(&mut s.f_prev, &mut s.f);
                     stats.rejected_steps += 1;
                     rejected_before = true;
                     h *= FAC_MIN;
-                    check_underflow(self.t, h, opts, "non-finite derivative")?;
+                    check_underflow(s.t, h, opts, "non-finite derivative")?;
                     continue;
                 }
-                std::mem::swap(&mut self.y_prev, &mut self.y);
-                std::mem::swap(&mut self.y, &mut self.ynew);
-                self.t_prev = self.t;
-                self.t = t_new;
-                self.h = h;
-                stats.steps += 1;
+                s.accept(&mut self.ynew, t_new, h, stats);
                 self.jac_age = self.jac_age.saturating_add(1);
                 self.h_next = if opts.adaptive {
                     let fac = (SAFETY * err.max(1e-300).powf(-1.0 / 3.0)).clamp(FAC_MIN, FAC_MAX);
@@ -406,11 +369,7 @@ impl<P: Problem> Stepper<P> for Rosw34 {
             }
             stats.rejected_steps += 1;
             rejected_before = true;
-            let reason = if err.is_finite() {
-                "error test"
-            } else {
-                "non-finite trial state"
-            };
+            let reason = rejection_reason(err);
             if self.jac_age != 0 {
                 // A stale W may be the cause: refresh it before shrinking much.
                 self.jac_age = usize::MAX;
@@ -421,46 +380,15 @@ impl<P: Problem> Stepper<P> for Rosw34 {
                 FAC_MIN
             };
             h *= fac;
-            check_underflow(self.t, h, opts, reason)?;
+            check_underflow(self.s.t, h, opts, reason)?;
         }
     }
 
-    fn t(&self) -> f64 {
-        self.t
-    }
-    fn t_prev(&self) -> f64 {
-        self.t_prev
-    }
-    fn y(&self) -> &DVector<f64> {
-        &self.y
-    }
-    fn h_last(&self) -> f64 {
-        self.h
-    }
-    fn dense(&self, t: f64, out: &mut DVector<f64>) {
-        hermite(
-            self.t_prev,
-            &self.y_prev,
-            &self.f_prev,
-            self.t,
-            &self.y,
-            &self.f,
-            t,
-            out,
-        );
+    fn state(&self) -> &StepState {
+        &self.s
     }
     fn system_changed(&mut self, p: &mut P, stats: &mut Stats) -> Result<(), IntegrateError> {
-        p.rhs(self.t, &self.y, &mut self.f)
-            .map_err(sys_err(self.t, self.h, "rhs"))?;
-        stats.rhs_evaluations += 1;
-        if let Some(index) = first_non_finite(self.f.as_slice()) {
-            return Err(IntegrateError::NonFinite {
-                t: self.t,
-                h: self.h,
-                what: "derivative",
-                index,
-            });
-        }
+        self.s.refresh_derivative(p, stats)?;
         self.jac_age = usize::MAX;
         self.lu_shift = f64::NAN;
         Ok(())
