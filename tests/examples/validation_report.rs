@@ -11,6 +11,7 @@
 //! continuum integral of a tapered cantilever, the prototype's sanity
 //! trajectory (derivations §8(h)) and energy conservation.
 
+use softrod_tests::simpson;
 use std::f64::consts::PI;
 use std::time::Instant;
 
@@ -43,24 +44,6 @@ fn tip(model: &Model, q: &[f64]) -> Pose {
 
 fn ei(e: f64, r: f64) -> f64 {
     e * PI * r.powi(4) / 4.0
-}
-
-fn simpson(f: impl Fn(f64) -> f64, a: f64, b: f64, m: usize) -> f64 {
-    let h = (b - a) / m as f64;
-    (0..=m)
-        .map(|k| {
-            let w = if k == 0 || k == m {
-                1.0
-            } else if k % 2 == 1 {
-                4.0
-            } else {
-                2.0
-            };
-            w * f(a + k as f64 * h)
-        })
-        .sum::<f64>()
-        * h
-        / 3.0
 }
 
 fn three_turns() {

@@ -15,6 +15,7 @@
 //! `examples/extreme/`. Every test prints its measured numbers
 //! (`cargo test -p softrod-tests --test extreme -- --nocapture`).
 
+use softrod_tests::simpson;
 use std::f64::consts::PI;
 use std::time::Instant;
 
@@ -693,30 +694,12 @@ fn tapered_rod() {
     // δ_N = Σ (∫_n M)² / (P ∫_n EI) + Σ P ℓ² / ∫_n GA (Simpson per piece).
     let predicted = |n: usize| {
         let hl = l / n as f64;
-        let simpson = |f: &dyn Fn(f64) -> f64, a: f64| {
-            let k = 200;
-            let hh = hl / k as f64;
-            (0..=k)
-                .map(|i| {
-                    let w = if i == 0 || i == k {
-                        1.0
-                    } else if i % 2 == 1 {
-                        4.0
-                    } else {
-                        2.0
-                    };
-                    w * f(a + i as f64 * hh)
-                })
-                .sum::<f64>()
-                * hh
-                / 3.0
-        };
         (0..n)
             .map(|k| {
                 let a = k as f64 * hl;
-                let im = simpson(&|s| p * (l - s), a);
-                let iei = simpson(&ei_s, a);
-                let iga = simpson(&ga_s, a);
+                let im = simpson(|s| p * (l - s), a, a + hl, 200);
+                let iei = simpson(&ei_s, a, a + hl, 200);
+                let iga = simpson(&ga_s, a, a + hl, 200);
                 im * im / (p * iei) + p * hl * hl / iga
             })
             .sum::<f64>()
