@@ -698,8 +698,8 @@ fn tapered_rod() {
             .map(|k| {
                 let a = k as f64 * hl;
                 let im = simpson(|s| p * (l - s), a, a + hl, 200);
-                let iei = simpson(&ei_s, a, a + hl, 200);
-                let iga = simpson(&ga_s, a, a + hl, 200);
+                let iei = simpson(ei_s, a, a + hl, 200);
+                let iga = simpson(ga_s, a, a + hl, 200);
                 im * im / (p * iei) + p * hl * hl / iga
             })
             .sum::<f64>()
