@@ -1,8 +1,9 @@
 //! Times forward dynamics on the rod of the criterion bench (all six strains,
 //! N pieces, 4 Gauss points, gravity + elasticity + damping); handy under
-//! `valgrind --tool=callgrind` where criterion is too slow:
+//! `valgrind --tool=callgrind` where criterion is too slow (`WHAT` = `fd`,
+//! `id` or `mm` for forward, inverse dynamics or the mass matrix):
 //! `N_PIECES=10 N_ITER=2000 cargo run --release -p softrod-dynamics --example fd_timing`.
-use softrod_dynamics::{Data, Model, RodSpec, forward_dynamics};
+use softrod_dynamics::{Data, Model, RodSpec, forward_dynamics, inverse_dynamics, mass_matrix};
 use softrod_kinematics::{Basis, Rod, straight};
 use softrod_lie::{Pose, Vec3};
 use softrod_mechanics::{Material, RodBody, Section};
@@ -38,13 +39,19 @@ fn main() {
     let qd: Vec<f64> = (0..model.n_dof())
         .map(|i| 0.1 * ((i * 3 % 7) as f64 - 3.0))
         .collect();
+    let what = std::env::var("WHAT").unwrap_or_else(|_| "fd".into());
+    let qdd = vec![0.5; model.n_dof()];
     let t0 = std::time::Instant::now();
     let mut acc = 0.0;
     for _ in 0..iters {
-        acc += forward_dynamics(&model, &mut data, 0.0, &q, &qd, None).unwrap()[0];
+        acc += match what.as_str() {
+            "id" => inverse_dynamics(&model, &mut data, 0.0, &q, &qd, &qdd).unwrap()[0],
+            "mm" => mass_matrix(&model, &mut data, &q).unwrap()[(0, 0)],
+            _ => forward_dynamics(&model, &mut data, 0.0, &q, &qd, None).unwrap()[0],
+        };
     }
     println!(
-        "N = {n}: {:.2} µs per forward dynamics (checksum {acc:.6e})",
+        "N = {n}: {:.2} µs per {what} (checksum {acc:.6e})",
         t0.elapsed().as_secs_f64() / iters as f64 * 1e6
     );
 }

@@ -1,14 +1,14 @@
 //! Inverse dynamics, O(N) forward dynamics, the mass matrix and the
 //! Cholesky forward dynamics.
 
+use crate::blocks::{Blk6, Sym6};
+use crate::chol::{chol_solve, cholesky_k, forward_sub_cols};
 use crate::data::Data;
 use crate::error::DynamicsError;
 use crate::model::Model;
-use crate::passes::{
-    Pass, chol_solve, cholesky_k, forward_sub, gravity_base_acceleration, outward,
-};
+use crate::passes::{Pass, gravity_base_acceleration, outward, project_add};
 use nalgebra::DVector;
-use softrod_lie::{Mat6, Vec6};
+use softrod_lie::Vec6;
 
 /// Checks a generalized vector argument: length `n_dof`, all finite.
 pub(crate) fn check_vec(model: &Model, what: &'static str, v: &[f64]) -> Result<(), DynamicsError> {
@@ -52,24 +52,17 @@ pub(crate) fn strain_forces(
         for (piece, pd) in rod.pieces().iter().zip(&rm.pieces) {
             let k = piece.basis.dof();
             let o = off + piece.dof_offset;
-            let qn = &q[o..o + k];
-            for i in 0..k {
-                let mut e: f64 = qn
-                    .iter()
-                    .enumerate()
-                    .map(|(j, x)| pd.stiffness[(i, j)] * x)
-                    .sum();
-                if pd.has_offset {
-                    e += pd.elastic_offset[i];
-                }
-                if let (true, Some(v)) = (pd.has_damping, qd) {
-                    e += v[o..o + k]
-                        .iter()
-                        .enumerate()
-                        .map(|(j, x)| pd.damping[(i, j)] * x)
-                        .sum::<f64>();
-                }
-                sf[o + i] -= e;
+            // Zero padding keeps `K_n q_n` exact: the pad adds exact zeros.
+            let pad = |v: &[f64]| Vec6::from_fn(|i, _| if i < k { v[i] } else { 0.0 });
+            let mut e = pd.stiffness6 * pad(&q[o..o + k]);
+            if pd.has_offset {
+                e += pd.offset6;
+            }
+            if let (true, Some(v)) = (pd.has_damping, qd) {
+                e += pd.damping6 * pad(&v[o..o + k]);
+            }
+            for (s, ei) in sf.as_mut_slice()[o..o + k].iter_mut().zip(e.iter()) {
+                *s -= ei;
             }
         }
         if !rm.spec.cables.is_empty() {
@@ -165,7 +158,7 @@ pub fn forward_dynamics<'a>(
     let scale = data.load_scale;
     for (r, rm) in model.rods().iter().enumerate() {
         let pieces = rm.spec.rod.pieces();
-        let mut ma_next = Mat6::zeros();
+        let mut ma_next = Sym6::default();
         let mut pa_next = Vec6::zeros();
         for (n, piece) in pieces.iter().enumerate().rev() {
             let k = piece.basis.dof();
@@ -173,21 +166,22 @@ pub fn forward_dynamics<'a>(
             let w = &mut data.pieces[r][n];
             // The tip piece has no child (𝓜ᴬ = 0): skip its products.
             let leaf = n + 1 == pieces.len();
-            let (uhat, mut dhat) = if leaf {
-                (w.ut, w.dt)
-            } else {
-                let x = ma_next * w.s_tip;
-                (
-                    w.ut + w.a_tip.to_mat6().tr_mul(&x),
-                    w.dt + w.s_tip.tr_mul(&x),
-                )
-            };
+            let mut uhat = w.ut;
+            let mut dhat = w.dt;
             let y = if leaf {
                 pa_next
             } else {
-                ma_next * w.acc_tip + pa_next
+                // Û = 𝓤 + A_ℓᵀ𝓜ᴬT₋(ℓ)B, D̂ = 𝓓 + BᵀT₋(ℓ)ᵀ𝓜ᴬT₋(ℓ)B (D24).
+                let mat = ma_next.mul_op(&w.tm_tip);
+                let atmt = Blk6::tr_premul(&w.a_tip, &mat).dense();
+                let ttmt = Blk6::tr_premul_sym(&w.tm_tip, &mat).dense();
+                project_add(&piece.basis, &atmt, &ttmt, &mut uhat, &mut dhat);
+                ma_next.mul_vec(&w.acc_tip) + pa_next
             };
-            let sty = w.s_tip.tr_mul(&y);
+            let mut sty = Vec6::zeros();
+            piece
+                .basis
+                .tr_apply(&w.tm_tip.tr_mul_vec(&y), &mut sty.as_mut_slice()[..k]);
             let mut u = Vec6::zeros();
             for i in 0..k {
                 u[i] = data.strain_force[o + i] - w.p_small[i] - sty[i];
@@ -200,25 +194,18 @@ pub fn forward_dynamics<'a>(
                 });
             }
             // Z = L⁻¹ Ûᵀ (k×6), so Û D̂⁻¹ Ûᵀ = Zᵀ Z (symmetric).
-            let mut z = Mat6::zeros();
-            for c in 0..6 {
-                let mut col = Vec6::zeros();
-                for i in 0..k {
-                    col[i] = uhat[(c, i)];
-                }
-                forward_sub(&dhat, k, &mut col);
-                z.set_column(c, &col);
-            }
-            let ztz = z.tr_mul(&z);
+            let mut z = uhat.transpose();
+            forward_sub_cols(&dhat, k, &mut z);
+            let ztz = Sym6::from_mat6(&z.tr_mul(&z));
             let dinv_u = chol_solve(&dhat, k, &u);
-            ma_next = if leaf {
-                w.mt - ztz
+            let mut next = if leaf {
+                w.mt
             } else {
-                w.mt + congruence(&w.a_tip, &ma_next) - ztz
+                w.mt + ma_next.congruence(&w.a_tip)
             };
+            next -= ztz;
+            ma_next = next;
             pa_next = w.p_big + w.a_tip.tr_mul_vec(&y) + uhat * dinv_u;
-            w.ma = ma_next;
-            w.pa = pa_next;
             w.uhat = uhat;
             w.dhat_chol = dhat;
             w.u = u;
@@ -231,7 +218,8 @@ pub fn forward_dynamics<'a>(
             let rhs = w.u - w.uhat.tr_mul(&etadot);
             let qn = chol_solve(&w.dhat_chol, k, &rhs);
             data.qdd.as_mut_slice()[o..o + k].copy_from_slice(&qn.as_slice()[..k]);
-            etadot = w.a_tip.mul_vec(&etadot) + w.s_tip * qn + w.acc_tip;
+            let sq = w.tm_tip.mul_vec(&piece.basis.apply(&qn.as_slice()[..k]));
+            etadot = w.a_tip.mul_vec(&etadot) + sq + w.acc_tip;
         }
     }
     if let Some((i, v)) = data.qdd.iter().enumerate().find(|(_, v)| !v.is_finite()) {
@@ -241,28 +229,6 @@ pub fn forward_dynamics<'a>(
         });
     }
     Ok(&data.qdd)
-}
-
-/// `Aᵀ M A` for a symmetric `M` and a block operator `A = [[a, 0], [b, a]]`:
-/// eleven 3×3 products instead of two dense 6×6 ones, result symmetric.
-#[inline]
-pub(crate) fn congruence(a: &softrod_lie::AdOp, m: &Mat6) -> Mat6 {
-    let m11 = m.fixed_view::<3, 3>(0, 0).into_owned();
-    let m12 = m.fixed_view::<3, 3>(0, 3).into_owned();
-    let m22 = m.fixed_view::<3, 3>(3, 3).into_owned();
-    let y11 = m11 * a.a + m12 * a.b;
-    let y12 = m12 * a.a;
-    let y21 = m12.tr_mul(&a.a) + m22 * a.b;
-    let y22 = m22 * a.a;
-    let tl = a.a.tr_mul(&y11) + a.b.tr_mul(&y21);
-    let tr = a.a.tr_mul(&y12) + a.b.tr_mul(&y22);
-    let br = a.a.tr_mul(&y22);
-    let mut out = Mat6::zeros();
-    out.fixed_view_mut::<3, 3>(0, 0).copy_from(&tl);
-    out.fixed_view_mut::<3, 3>(0, 3).copy_from(&tr);
-    out.fixed_view_mut::<3, 3>(3, 0).copy_from(&tr.transpose());
-    out.fixed_view_mut::<3, 3>(3, 3).copy_from(&br);
-    out
 }
 
 /// Mass matrix `M(q) = ∫ Jᵀ𝓜J ds` (D19) by the composite recursion (D20):
@@ -281,39 +247,51 @@ pub fn mass_matrix<'a>(
     if data.mass.nrows() != n {
         data.mass = nalgebra::DMatrix::zeros(n, n);
     }
-    data.mass.as_mut_slice().fill(0.0);
+    // One rod writes every entry below; several leave cross-rod blocks that
+    // must be zero.
+    if model.rods().len() > 1 {
+        data.mass.as_mut_slice().fill(0.0);
+    }
     for (r, rm) in model.rods().iter().enumerate() {
         let pieces = rm.spec.rod.pieces();
-        let mut mc_next = Mat6::zeros();
+        let mut mc_next = Sym6::default();
         for m in (0..pieces.len()).rev() {
             let w = &data.pieces[r][m];
             let km = pieces[m].basis.dof();
             let om = rm.dof_offset + pieces[m].dof_offset;
-            let a6 = w.a_tip.to_mat6();
-            let x = mc_next * w.s_tip;
-            let mmm = w.dt + w.s_tip.tr_mul(&x);
-            let mut f = w.ut + a6.tr_mul(&x);
-            for i in 0..km {
-                for j in 0..km {
-                    data.mass[(om + i, om + j)] = mmm[(i, j)];
-                }
+            // M_mm = 𝓓 + BᵀT₋ᵀ𝓜ᶜT₋B, F = 𝓤 + A_ℓᵀ𝓜ᶜT₋B (D20).
+            let mut f = w.ut;
+            let mut mmm = w.dt;
+            let mct = mc_next.mul_op(&w.tm_tip);
+            project_add(
+                &pieces[m].basis,
+                &Blk6::tr_premul(&w.a_tip, &mct).dense(),
+                &Blk6::tr_premul_sym(&w.tm_tip, &mct).dense(),
+                &mut f,
+                &mut mmm,
+            );
+            // Upper triangle only (rows of earlier pieces); mirrored below.
+            for j in 0..km {
+                data.mass
+                    .view_mut((om, om + j), (j + 1, 1))
+                    .copy_from(&mmm.view((0, j), (j + 1, 1)));
             }
             for n in (0..m).rev() {
                 let wn = &data.pieces[r][n];
                 let kn = pieces[n].basis.dof();
                 let on = rm.dof_offset + pieces[n].dof_offset;
+                // Dense 6×6 products: cheaper here than column-wise block
+                // products (measured).
                 let blk = wn.s_tip.tr_mul(&f);
-                for i in 0..kn {
-                    for j in 0..km {
-                        data.mass[(on + i, om + j)] = blk[(i, j)];
-                        data.mass[(om + j, on + i)] = blk[(i, j)];
-                    }
-                }
+                data.mass
+                    .view_mut((on, om), (kn, km))
+                    .copy_from(&blk.view((0, 0), (kn, km)));
                 f = wn.a_tip.to_mat6().tr_mul(&f);
             }
-            mc_next = w.mt + a6.tr_mul(&(mc_next * a6));
+            mc_next = w.mt + mc_next.congruence(&w.a_tip);
         }
     }
+    data.mass.fill_lower_triangle_with_upper_triangle();
     Ok(&data.mass)
 }
 

@@ -1,5 +1,6 @@
 //! Reusable buffers: everything one evaluation needs, allocated once.
 
+use crate::blocks::Sym6;
 use crate::model::Model;
 use nalgebra::{DMatrix, DVector};
 use softrod_lie::{AdOp, Mat6, Pose, Vec6};
@@ -21,15 +22,13 @@ pub(crate) struct PieceWork {
     pub s_tip: Mat6,
     pub acc_tip: Vec6,
     /// (D20): `𝓜ᵗ`, `𝓤` (6×k), `𝓓` (k×k).
-    pub mt: Mat6,
+    pub mt: Sym6,
     pub ut: Mat6,
     pub dt: Mat6,
     /// (D23): `𝓟ᵗ` (6) and `𝓹` (k), or the inverse-dynamics sums of (D17–D18).
     pub p_big: Vec6,
     pub p_small: Vec6,
     /// (D24–D26): articulated inertia and bias of the subtree from this piece.
-    pub ma: Mat6,
-    pub pa: Vec6,
     pub uhat: Mat6,
     pub dhat_chol: Mat6,
     pub u: Vec6,
@@ -47,13 +46,11 @@ impl PieceWork {
             tm_tip: AdOp::zeros(),
             s_tip: Mat6::zeros(),
             acc_tip: Vec6::zeros(),
-            mt: Mat6::zeros(),
+            mt: Sym6::default(),
             ut: Mat6::zeros(),
             dt: Mat6::zeros(),
             p_big: Vec6::zeros(),
             p_small: Vec6::zeros(),
-            ma: Mat6::zeros(),
-            pa: Vec6::zeros(),
             uhat: Mat6::zeros(),
             dhat_chol: Mat6::zeros(),
             u: Vec6::zeros(),

@@ -23,6 +23,8 @@
 #![warn(missing_docs)]
 
 mod algorithms;
+mod blocks;
+mod chol;
 mod data;
 mod derivatives;
 mod energy;

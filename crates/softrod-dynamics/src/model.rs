@@ -1,9 +1,9 @@
 //! The immutable description of what is simulated.
 
 use crate::error::DynamicsError;
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DMatrix;
 use softrod_kinematics::{GaussLegendre, Rod};
-use softrod_lie::{Vec3, Vec6};
+use softrod_lie::{Mat6, Vec3, Vec6};
 use softrod_mechanics::{
     Cable, DistributedLoad, Drag, LoadFrame, PointLoad, RodBody, piece_matrices,
 };
@@ -70,12 +70,17 @@ pub(crate) struct PlacedLoad {
 pub(crate) struct PieceData {
     pub points: Vec<QuadPoint>,
     pub loads: Vec<PlacedLoad>,
-    /// `K_n` (k×k), `D_n` (k×k), elastic offset `∫Bᵀ Γ (ξ̄ − ξ*)` (k).
+    /// `K_n` (k×k), `D_n` (k×k).
     pub stiffness: DMatrix<f64>,
     pub damping: DMatrix<f64>,
-    pub elastic_offset: DVector<f64>,
     pub has_damping: bool,
     pub has_offset: bool,
+    /// `K_n`, `D_n` and the elastic offset `∫Bᵀ Γ (ξ̄ − ξ*)` (k), zero-padded
+    /// to fixed size for the per-evaluation strain forces (no heap indexing
+    /// in the hot loop).
+    pub stiffness6: Mat6,
+    pub damping6: Mat6,
+    pub offset6: Vec6,
 }
 
 /// A rod inside a [`Model`], with precomputed piece data.
@@ -203,14 +208,20 @@ impl Model {
                         loads.push(PlacedLoad { x, index: i });
                     }
                 }
+                let k = m.stiffness.nrows();
+                let pad = |d: &DMatrix<f64>| {
+                    Mat6::from_fn(|i, j| if i < k && j < k { d[(i, j)] } else { 0.0 })
+                };
                 pieces.push(PieceData {
                     points,
                     loads,
+                    stiffness6: pad(&m.stiffness),
+                    damping6: pad(&m.damping),
+                    offset6: Vec6::from_fn(|i, _| if i < k { m.elastic_offset[i] } else { 0.0 }),
                     has_damping: m.damping.iter().any(|v| *v != 0.0),
                     has_offset: m.elastic_offset.iter().any(|v| *v != 0.0),
                     stiffness: m.stiffness,
                     damping: m.damping,
-                    elastic_offset: m.elastic_offset,
                 });
             }
             let needs_world = spec

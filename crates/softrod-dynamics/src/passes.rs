@@ -1,5 +1,6 @@
 //! The outward sweep shared by every algorithm, and small fixed-size helpers.
 
+use crate::blocks::Sym6;
 use crate::data::Data;
 use crate::model::{Model, RodModel};
 use softrod_lie::{AdOp, Mat6, PieceMaps, Pose, Vec6, ad_vec, coad_vec};
@@ -107,16 +108,100 @@ struct SpatialSums {
 
 impl SpatialSums {
     /// `[[Σ R J Rᵀ + Σm|p|² I − Σm ppᵀ, (Σ m p)~], [−(Σ m p)~, Σm I]]`.
-    fn to_mat6(&self) -> Mat6 {
-        let mut out = Mat6::zeros();
-        let tl = self.rot + softrod_lie::Mat3::from_diagonal_element(self.mp2) - self.mpp;
-        let s = softrod_lie::skew(&self.mp);
-        out.fixed_view_mut::<3, 3>(0, 0).copy_from(&tl);
-        out.fixed_view_mut::<3, 3>(0, 3).copy_from(&s);
-        out.fixed_view_mut::<3, 3>(3, 0).copy_from(&(-s));
-        out.fixed_view_mut::<3, 3>(3, 3)
-            .copy_from(&softrod_lie::Mat3::from_diagonal_element(self.mass));
-        out
+    fn to_sym6(&self) -> Sym6 {
+        Sym6 {
+            a: self.rot + softrod_lie::Mat3::from_diagonal_element(self.mp2) - self.mpp,
+            b: softrod_lie::skew(&self.mp),
+            c: softrod_lie::Mat3::from_diagonal_element(self.mass),
+        }
+    }
+}
+
+/// Running sums of `𝓤ᶠ = Σ w Aᵀ𝓜T₋` and `𝓓ᶠ = Σ w T₋ᵀ𝓜T₋` in 3×3
+/// blocks, before the projection on the basis (`𝓤 = 𝓤ᶠB`, `𝓓 = Bᵀ𝓓ᶠB`).
+/// With `𝓜T₋ = [[P, 0], [Q, R]]` (`P = J_ω T_a`, `Q = m T_b`, `R = m T_a`)
+/// both are nine 3×3 products per point, where the column-by-column form
+/// costs `k` matrix–vector products and `k(k+1)/2` 6-vector dots: for
+/// `k ≥ 4` the blocks win.
+#[derive(Default)]
+struct FullSums {
+    u11: softrod_lie::Mat3,
+    u12: softrod_lie::Mat3,
+    u21: softrod_lie::Mat3,
+    u22: softrod_lie::Mat3,
+    d11: softrod_lie::Mat3,
+    d12: softrod_lie::Mat3,
+    d22: softrod_lie::Mat3,
+}
+
+impl FullSums {
+    #[inline(always)]
+    fn add(&mut self, a: &AdOp, t: &AdOp, mw: &Vec6) {
+        let (p, r, q) = scaled_blocks(&softrod_lie::angular(mw), &softrod_lie::linear(mw), t);
+        self.d11 += t.a.tr_mul(&p) + t.b.tr_mul(&q);
+        self.d12 += t.b.tr_mul(&r);
+        self.d22 += t.a.tr_mul(&r);
+        self.u11 += a.a.tr_mul(&p) + a.b.tr_mul(&q);
+        self.u12 += a.b.tr_mul(&r);
+        self.u21 += a.a.tr_mul(&q);
+        self.u22 += a.a.tr_mul(&r);
+    }
+
+    /// Projects on the basis: `ut = 𝓤ᶠB` (6×k), `dt = Bᵀ𝓓ᶠB` (k×k, full).
+    fn project(&self, basis: &softrod_kinematics::Basis, ut: &mut Mat6, dt: &mut Mat6) {
+        let mut uf = Mat6::zeros();
+        uf.fixed_view_mut::<3, 3>(0, 0).copy_from(&self.u11);
+        uf.fixed_view_mut::<3, 3>(0, 3).copy_from(&self.u12);
+        uf.fixed_view_mut::<3, 3>(3, 0).copy_from(&self.u21);
+        uf.fixed_view_mut::<3, 3>(3, 3).copy_from(&self.u22);
+        let df = Sym6 {
+            a: self.d11,
+            b: self.d12,
+            c: self.d22,
+        }
+        .dense();
+        *ut = Mat6::zeros();
+        *dt = Mat6::zeros();
+        project_add(basis, &uf, &df, ut, dt);
+    }
+}
+
+/// `ut += X_u B` (6×k) and `dt += Bᵀ X_d B` (k×k) for full-coordinate
+/// matrices `X_u`, `X_d` (6×6): column gathers for a selection basis, a
+/// plain copy for the identity.
+#[inline]
+pub(crate) fn project_add(
+    basis: &softrod_kinematics::Basis,
+    xu: &Mat6,
+    xd: &Mat6,
+    ut: &mut Mat6,
+    dt: &mut Mat6,
+) {
+    match basis.selection() {
+        Some([0, 1, 2, 3, 4, 5]) => {
+            *ut += xu;
+            *dt += xd;
+        }
+        Some(sel) => {
+            for (c, &j) in sel.iter().enumerate() {
+                let mut col = ut.column_mut(c);
+                col += xu.column(j);
+                for (r, &i) in sel.iter().enumerate() {
+                    dt[(r, c)] += xd[(i, j)];
+                }
+            }
+        }
+        None => {
+            for c in 0..basis.dof() {
+                let bc = basis.column(c);
+                let mut col = ut.column_mut(c);
+                col += xu * bc;
+                let xb = xd * bc;
+                for r in 0..basis.dof() {
+                    dt[(r, c)] += basis.column(r).dot(&xb);
+                }
+            }
+        }
     }
 }
 
@@ -192,6 +277,8 @@ pub(crate) fn outward(
             let mut ut = Mat6::zeros();
             let mut dt = Mat6::zeros();
             let mut sp = SpatialSums::default();
+            let mut fs = FullSums::default();
+            let full = piece.basis.dof() >= 4;
             let mut scols = [Vec6::zeros(); 6];
             // Everything x-independent of the local maps, once per piece.
             let maps = PieceMaps::new(&xi, has_vel.then_some(&dxi));
@@ -233,14 +320,18 @@ pub(crate) fn outward(
                     // 𝓤 += w Aᵀ𝓜S and 𝓓 += w Sᵀ𝓜S column by column on
                     // S = T₋B: k tr-products and k(k+1)/2 dots, far cheaper
                     // than 6×6 sandwiches when k < 6 and no dearer at k = 6.
-                    let k = s_columns(&tm, &piece.basis, &mut scols);
-                    for c in 0..k {
-                        let ms = mw.component_mul(&scols[c]);
-                        let u = a.tr_mul_vec(&ms);
-                        let mut col = ut.fixed_view_mut::<6, 1>(0, c);
-                        col += u;
-                        for r in 0..=c {
-                            dt[(r, c)] += scols[r].dot(&ms);
+                    if full {
+                        fs.add(&a, &tm, &mw);
+                    } else {
+                        let k = s_columns(&tm, &piece.basis, &mut scols);
+                        for c in 0..k {
+                            let ms = mw.component_mul(&scols[c]);
+                            let u = a.tr_mul_vec(&ms);
+                            let mut col = ut.fixed_view_mut::<6, 1>(0, c);
+                            col += u;
+                            for r in 0..=c {
+                                dt[(r, c)] += scols[r].dot(&ms);
+                            }
                         }
                     }
                     // 𝓜ᵗ += w Aᵀ𝓜A: with an isotropic linear inertia m·I and
@@ -297,12 +388,16 @@ pub(crate) fn outward(
                 for (c, col) in scols.iter().enumerate().take(k) {
                     w.s_tip.set_column(c, col);
                 }
-                for c in 0..k {
-                    for r in 0..c {
-                        dt[(c, r)] = dt[(r, c)];
+                if full {
+                    fs.project(&piece.basis, &mut ut, &mut dt);
+                } else {
+                    for c in 0..k {
+                        for r in 0..c {
+                            dt[(c, r)] = dt[(r, c)];
+                        }
                     }
                 }
-                w.mt = mt + sp.to_mat6();
+                w.mt = Sym6::from_mat6(&mt) + sp.to_sym6();
                 w.ut = ut;
                 w.dt = dt;
                 w.p_small = Vec6::zeros();
@@ -314,65 +409,4 @@ pub(crate) fn outward(
             pose = pose.compose(&gl);
         }
     }
-}
-
-/// In-place Cholesky of the leading `k×k` block of `m` (lower factor written
-/// to the lower triangle). Returns `false` if a pivot is not positive.
-#[inline]
-pub(crate) fn cholesky_k(m: &mut Mat6, k: usize) -> bool {
-    for j in 0..k {
-        let mut d = m[(j, j)];
-        for p in 0..j {
-            d -= m[(j, p)] * m[(j, p)];
-        }
-        if d.is_nan() || d <= 0.0 {
-            return false;
-        }
-        let d = d.sqrt();
-        m[(j, j)] = d;
-        for i in (j + 1)..k {
-            let mut s = m[(i, j)];
-            for p in 0..j {
-                s -= m[(i, p)] * m[(j, p)];
-            }
-            m[(i, j)] = s / d;
-        }
-    }
-    true
-}
-
-/// Solves `L y = b` (forward) in the leading `k` entries.
-#[inline]
-pub(crate) fn forward_sub(l: &Mat6, k: usize, b: &mut Vec6) {
-    for i in 0..k {
-        let mut s = b[i];
-        for p in 0..i {
-            s -= l[(i, p)] * b[p];
-        }
-        b[i] = s / l[(i, i)];
-    }
-}
-
-/// Solves `Lᵀ x = y` (backward) in the leading `k` entries.
-#[inline]
-pub(crate) fn backward_sub(l: &Mat6, k: usize, b: &mut Vec6) {
-    for i in (0..k).rev() {
-        let mut s = b[i];
-        for p in (i + 1)..k {
-            s -= l[(p, i)] * b[p];
-        }
-        b[i] = s / l[(i, i)];
-    }
-}
-
-/// `x = (L Lᵀ)⁻¹ b` in the leading `k` entries.
-#[inline]
-pub(crate) fn chol_solve(l: &Mat6, k: usize, b: &Vec6) -> Vec6 {
-    let mut x = *b;
-    for v in x.iter_mut().skip(k) {
-        *v = 0.0;
-    }
-    forward_sub(l, k, &mut x);
-    backward_sub(l, k, &mut x);
-    x
 }

@@ -35,6 +35,17 @@ fn bases() -> Vec<Basis> {
         Basis::select(&[Strain::Ky, Strain::Qx, Strain::Qz]).unwrap(),
         Basis::select(&[Strain::Kx, Strain::Kz, Strain::Qy]).unwrap(),
         Basis::kirchhoff(),
+        // k ≥ 4 takes the block-accumulation path: a permuted selection and
+        // general (non-selection) matrices exercise its projections.
+        Basis::select(&[Strain::Qz, Strain::Kx, Strain::Qx, Strain::Kz, Strain::Ky]).unwrap(),
+        Basis::from_matrix(Matrix6xX::from_fn(4, |i, j| {
+            ((i * 4 + j) as f64 * 0.9 + 0.3).sin() + if i == j { 1.5 } else { 0.0 }
+        }))
+        .unwrap(),
+        Basis::from_matrix(Matrix6xX::from_fn(6, |i, j| {
+            ((i * 6 + j) as f64 * 0.7).cos() * 0.4 + if i == j { 1.0 } else { 0.0 }
+        }))
+        .unwrap(),
     ]
 }
 
