@@ -2,7 +2,7 @@
 //! Cholesky forward dynamics.
 
 use crate::blocks::{Blk6, Sym6};
-use crate::chol::{chol_solve, cholesky_k, forward_sub_cols};
+use crate::chol::{backward_sub, cholesky_k, forward_sub, right_solve_lt};
 use crate::data::Data;
 use crate::error::DynamicsError;
 use crate::model::Model;
@@ -166,8 +166,8 @@ pub fn forward_dynamics<'a>(
             let w = &mut data.pieces[r][n];
             // The tip piece has no child (𝓜ᴬ = 0): skip its products.
             let leaf = n + 1 == pieces.len();
-            let mut uhat = w.ut;
-            let mut dhat = w.dt;
+            // In place: `ut` becomes Û, then W = Û L⁻ᵀ; `dt` becomes D̂,
+            // then its factor L.
             let y = if leaf {
                 pa_next
             } else {
@@ -175,7 +175,7 @@ pub fn forward_dynamics<'a>(
                 let mat = ma_next.mul_op(&w.tm_tip);
                 let atmt = Blk6::tr_premul(&w.a_tip, &mat).dense();
                 let ttmt = Blk6::tr_premul_sym(&w.tm_tip, &mat).dense();
-                project_add(&piece.basis, &atmt, &ttmt, &mut uhat, &mut dhat);
+                project_add(&piece.basis, &atmt, &ttmt, &mut w.ut, &mut w.dt);
                 ma_next.mul_vec(&w.acc_tip) + pa_next
             };
             let mut sty = Vec6::zeros();
@@ -186,28 +186,33 @@ pub fn forward_dynamics<'a>(
             for i in 0..k {
                 u[i] = data.strain_force[o + i] - w.p_small[i] - sty[i];
             }
-            if !cholesky_k(&mut dhat, k) {
+            if !cholesky_k(&mut w.dt, k) {
                 return Err(DynamicsError::Singular {
                     rod: r,
                     piece: n,
                     what: "articulated piece inertia D̂_n",
                 });
             }
-            // Z = L⁻¹ Ûᵀ (k×6), so Û D̂⁻¹ Ûᵀ = Zᵀ Z (symmetric).
-            let mut z = uhat.transpose();
-            forward_sub_cols(&dhat, k, &mut z);
-            let ztz = Sym6::from_mat6(&z.tr_mul(&z));
-            let dinv_u = chol_solve(&dhat, k, &u);
+            // With D̂ = LLᵀ, W = ÛL⁻ᵀ and ũ = L⁻¹u: ÛD̂⁻¹Ûᵀ = WWᵀ and
+            // ÛD̂⁻¹u = Wũ, and pass 3 needs only q̈ = L⁻ᵀ(ũ − Wᵀη̇).
+            right_solve_lt(&w.dt, k, &mut w.ut);
+            forward_sub(&w.dt, k, &mut u);
+            let wm = &w.ut;
+            let w1 = wm.fixed_rows::<3>(0);
+            let w2 = wm.fixed_rows::<3>(3);
+            let wwt = Sym6 {
+                a: w1 * w1.transpose(),
+                b: w1 * w2.transpose(),
+                c: w2 * w2.transpose(),
+            };
             let mut next = if leaf {
                 w.mt
             } else {
                 w.mt + ma_next.congruence(&w.a_tip)
             };
-            next -= ztz;
+            next -= wwt;
             ma_next = next;
-            pa_next = w.p_big + w.a_tip.tr_mul_vec(&y) + uhat * dinv_u;
-            w.uhat = uhat;
-            w.dhat_chol = dhat;
+            pa_next = w.p_big + w.a_tip.tr_mul_vec(&y) + wm * u;
             w.u = u;
         }
         let mut etadot = gravity_base_acceleration(model, rm, scale);
@@ -215,8 +220,8 @@ pub fn forward_dynamics<'a>(
             let k = piece.basis.dof();
             let o = rm.dof_offset + piece.dof_offset;
             let w = &data.pieces[r][n];
-            let rhs = w.u - w.uhat.tr_mul(&etadot);
-            let qn = chol_solve(&w.dhat_chol, k, &rhs);
+            let mut qn = w.u - w.ut.tr_mul(&etadot);
+            backward_sub(&w.dt, k, &mut qn);
             data.qdd.as_mut_slice()[o..o + k].copy_from_slice(&qn.as_slice()[..k]);
             let sq = w.tm_tip.mul_vec(&piece.basis.apply(&qn.as_slice()[..k]));
             etadot = w.a_tip.mul_vec(&etadot) + sq + w.acc_tip;

@@ -51,49 +51,56 @@ fn cholesky_n<const K: usize>(m: &mut Mat6) -> bool {
     true
 }
 
-/// `X ← L⁻¹ X` on the leading `k` rows of every column of `X`.
+/// `W ← W L⁻ᵀ` on the leading `k` columns of `W` (6×k): the right-hand
+/// triangular solve, column operations on whole 6-vectors.
 #[inline]
-pub(crate) fn forward_sub_cols(l: &Mat6, k: usize, x: &mut Mat6) {
-    dispatch!(k, forward_sub_cols_n(l, x))
+pub(crate) fn right_solve_lt(l: &Mat6, k: usize, w: &mut Mat6) {
+    dispatch!(k, right_solve_lt_n(l, w))
 }
 
 #[inline(always)]
-fn forward_sub_cols_n<const K: usize>(l: &Mat6, x: &mut Mat6) {
-    for c in 0..6 {
-        for i in 0..K {
-            let mut s = x[(i, c)];
-            for p in 0..i {
-                s -= l[(i, p)] * x[(p, c)];
-            }
-            x[(i, c)] = s / l[(i, i)];
+fn right_solve_lt_n<const K: usize>(l: &Mat6, w: &mut Mat6) {
+    for i in 0..K {
+        let mut col = w.column(i).into_owned();
+        for p in 0..i {
+            col -= w.column(p) * l[(i, p)];
         }
+        w.set_column(i, &(col / l[(i, i)]));
     }
 }
 
-/// `x = (L Lᵀ)⁻¹ b` in the leading `k` entries (the rest zero).
+/// `b ← L⁻¹ b` in the leading `k` entries.
 #[inline]
-pub(crate) fn chol_solve(l: &Mat6, k: usize, b: &Vec6) -> Vec6 {
-    dispatch!(k, chol_solve_n(l, b))
+pub(crate) fn forward_sub(l: &Mat6, k: usize, b: &mut Vec6) {
+    dispatch!(k, forward_sub_n(l, b))
 }
 
 #[inline(always)]
-fn chol_solve_n<const K: usize>(l: &Mat6, b: &Vec6) -> Vec6 {
-    let mut x = Vec6::zeros();
+fn forward_sub_n<const K: usize>(l: &Mat6, b: &mut Vec6) {
     for i in 0..K {
         let mut s = b[i];
         for p in 0..i {
-            s -= l[(i, p)] * x[p];
+            s -= l[(i, p)] * b[p];
         }
-        x[i] = s / l[(i, i)];
+        b[i] = s / l[(i, i)];
     }
+}
+
+/// `b ← L⁻ᵀ b` in the leading `k` entries.
+#[inline]
+pub(crate) fn backward_sub(l: &Mat6, k: usize, b: &mut Vec6) {
+    dispatch!(k, backward_sub_n(l, b))
+}
+
+#[inline(always)]
+fn backward_sub_n<const K: usize>(l: &Mat6, b: &mut Vec6) {
     for i in (0..K).rev() {
-        let mut s = x[i];
+        let mut s = b[i];
         for p in (i + 1)..K {
-            s -= l[(p, i)] * x[p];
+            s -= l[(p, i)] * b[p];
         }
-        x[i] = s / l[(i, i)];
+        b[i] = s / l[(i, i)];
     }
-    x
 }
 
 #[cfg(test)]
@@ -111,20 +118,27 @@ mod tests {
             let a = spd.view((0, 0), (k, k)).into_owned();
             let inv = a.clone().try_inverse().unwrap();
             let b = Vec6::from_fn(|i, _| (i as f64 + 0.5).cos());
-            let x = chol_solve(&m, k, &b);
+            let mut x = b;
+            forward_sub(&m, k, &mut x);
+            backward_sub(&m, k, &mut x);
             let xr = &inv * b.rows(0, k);
-            for i in 0..6 {
-                let expect = if i < k { xr[i] } else { 0.0 };
-                assert_relative_eq!(x[i], expect, epsilon = 1e-12, max_relative = 1e-12);
+            for i in 0..k {
+                assert_relative_eq!(x[i], xr[i], epsilon = 1e-12, max_relative = 1e-12);
             }
-            // Zᵀ Z = Xᵀ A⁻¹ X for Z = L⁻¹ X.
-            let xm = Mat6::from_fn(|i, j| ((i + 2 * j) as f64).sin());
-            let mut z = xm;
-            forward_sub_cols(&m, k, &mut z);
-            let zk = z.rows(0, k).into_owned();
-            let xk = xm.rows(0, k).into_owned();
-            let lhs = zk.transpose() * zk;
-            let rhs = xk.transpose() * &inv * xk;
+            // W Wᵀ = X A⁻¹ Xᵀ for W = X L⁻ᵀ (X 6×k).
+            let xm = Mat6::from_fn(|i, j| {
+                if j < k {
+                    ((i + 2 * j) as f64).sin()
+                } else {
+                    0.0
+                }
+            });
+            let mut wm = xm;
+            right_solve_lt(&m, k, &mut wm);
+            let xk = xm.columns(0, k).into_owned();
+            let wk = wm.columns(0, k).into_owned();
+            let lhs = &wk * wk.transpose();
+            let rhs = &xk * &inv * xk.transpose();
             assert_relative_eq!(lhs, rhs, epsilon = 1e-11, max_relative = 1e-11);
         }
     }

@@ -29,8 +29,6 @@ pub(crate) struct PieceWork {
     pub p_big: Vec6,
     pub p_small: Vec6,
     /// (D24–D26): articulated inertia and bias of the subtree from this piece.
-    pub uhat: Mat6,
-    pub dhat_chol: Mat6,
     pub u: Vec6,
 }
 
@@ -51,8 +49,6 @@ impl PieceWork {
             dt: Mat6::zeros(),
             p_big: Vec6::zeros(),
             p_small: Vec6::zeros(),
-            uhat: Mat6::zeros(),
-            dhat_chol: Mat6::zeros(),
             u: Vec6::zeros(),
         }
     }

@@ -271,8 +271,8 @@ pub(crate) fn outward(
             w.base_pose = pose;
             w.eta0 = eta0;
             w.etadot0 = etadot0;
-            let mut p_big = Vec6::zeros();
-            let mut p_small = Vec6::zeros();
+            let (mut pb_m, mut pb_n) = (softrod_lie::Vec3::zeros(), softrod_lie::Vec3::zeros());
+            let (mut ps_m, mut ps_n) = (softrod_lie::Vec3::zeros(), softrod_lie::Vec3::zeros());
             let mut mt = Mat6::zeros();
             let mut ut = Mat6::zeros();
             let mut dt = Mat6::zeros();
@@ -312,8 +312,14 @@ pub(crate) fn outward(
                     } else {
                         diag_mul(m, &bias) + gyro - ext
                     };
-                    p_big += a.tr_mul_vec(&f) * qp.w;
-                    p_small += tm.tr_mul_vec(&f) * qp.w;
+                    // Aᵀ(wf) and T₋ᵀ(wf) on the 3-vector halves: one split of
+                    // f for both, no 6-vector temporaries.
+                    let fw = f * qp.w;
+                    let (fm, fn_) = (softrod_lie::angular(&fw), softrod_lie::linear(&fw));
+                    pb_m += a.a.tr_mul(&fm) + a.b.tr_mul(&fn_);
+                    pb_n += a.a.tr_mul(&fn_);
+                    ps_m += tm.a.tr_mul(&fm) + tm.b.tr_mul(&fn_);
+                    ps_n += tm.a.tr_mul(&fn_);
                 }
                 if pass != Pass::Inverse {
                     let mw = m * qp.w;
@@ -356,6 +362,8 @@ pub(crate) fn outward(
                     }
                 }
             }
+            let mut p_big = softrod_lie::join(&pb_m, &pb_n);
+            let mut p_small = softrod_lie::join(&ps_m, &ps_n);
             if pass != Pass::Composite && !only_gravity {
                 for pl in &pd.loads {
                     let load = &rm.spec.point_loads[pl.index];
@@ -383,10 +391,14 @@ pub(crate) fn outward(
                 w.p_small = p_small;
                 etadot0 = a.mul_vec(&etadot0) + tm.mul_vec(&ddxi) + acc;
             } else {
-                let k = s_columns(&tm, &piece.basis, &mut scols);
-                w.s_tip = Mat6::zeros();
-                for (c, col) in scols.iter().enumerate().take(k) {
-                    w.s_tip.set_column(c, col);
+                let k = piece.basis.dof();
+                if pass == Pass::Composite {
+                    // Only the mass matrix's off-diagonal blocks use S(ℓ).
+                    s_columns(&tm, &piece.basis, &mut scols);
+                    w.s_tip = Mat6::zeros();
+                    for (c, col) in scols.iter().enumerate().take(k) {
+                        w.s_tip.set_column(c, col);
+                    }
                 }
                 if full {
                     fs.project(&piece.basis, &mut ut, &mut dt);
