@@ -8,7 +8,7 @@ use crate::error::DynamicsError;
 use crate::model::Model;
 use crate::passes::{Pass, gravity_base_acceleration, outward, project_add};
 use nalgebra::DVector;
-use softrod_lie::Vec6;
+use softrod_lie::{Mat6, Vec6};
 
 /// Checks a generalized vector argument: length `n_dof`, all finite.
 pub(crate) fn check_vec(model: &Model, what: &'static str, v: &[f64]) -> Result<(), DynamicsError> {
@@ -281,17 +281,23 @@ pub fn mass_matrix<'a>(
                     .view_mut((om, om + j), (j + 1, 1))
                     .copy_from(&mmm.view((0, j), (j + 1, 1)));
             }
-            for n in (0..m).rev() {
+            // M_nm = S_n(ℓ)ᵀ A…ᵀ F for n < m, evaluated as the pairing of
+            // the world-frame twists Ad_{g_n(ℓ)}S_n(ℓ) with the world-frame
+            // wrench Ad*_{g_m(0)⁻¹}F: one 6×6 product per block instead
+            // of carrying F down the chain with a second one.
+            let to_world = w.base_pose.ad_inv();
+            let mut f_world = Mat6::zeros();
+            for j in 0..km {
+                f_world.set_column(j, &to_world.tr_mul_vec(&f.column(j).into_owned()));
+            }
+            for n in 0..m {
                 let wn = &data.pieces[r][n];
                 let kn = pieces[n].basis.dof();
                 let on = rm.dof_offset + pieces[n].dof_offset;
-                // Dense 6×6 products: cheaper here than column-wise block
-                // products (measured).
-                let blk = wn.s_tip.tr_mul(&f);
+                let blk = wn.s_world.tr_mul(&f_world);
                 data.mass
                     .view_mut((on, om), (kn, km))
                     .copy_from(&blk.view((0, 0), (kn, km)));
-                f = wn.a_tip.to_mat6().tr_mul(&f);
             }
             mc_next = w.mt + mc_next.congruence(&w.a_tip);
         }

@@ -19,7 +19,7 @@ pub(crate) struct PieceWork {
     /// `A_ℓ = Ad⁻¹_{g_n(ℓ)}`, `T₋(ℓ)`, `S_ℓ = T₋(ℓ)B` (6×k), bias `a_ℓ`.
     pub a_tip: AdOp,
     pub tm_tip: AdOp,
-    pub s_tip: Mat6,
+    pub s_world: Mat6,
     pub acc_tip: Vec6,
     /// (D20): `𝓜ᵗ`, `𝓤` (6×k), `𝓓` (k×k).
     pub mt: Sym6,
@@ -42,7 +42,7 @@ impl PieceWork {
             etadot0: Vec6::zeros(),
             a_tip: AdOp::identity(),
             tm_tip: AdOp::zeros(),
-            s_tip: Mat6::zeros(),
+            s_world: Mat6::zeros(),
             acc_tip: Vec6::zeros(),
             mt: Sym6::default(),
             ut: Mat6::zeros(),

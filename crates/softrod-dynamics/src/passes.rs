@@ -393,11 +393,13 @@ pub(crate) fn outward(
             } else {
                 let k = piece.basis.dof();
                 if pass == Pass::Composite {
-                    // Only the mass matrix's off-diagonal blocks use S(ℓ).
+                    // The mass matrix's off-diagonal blocks pair S(ℓ) with
+                    // wrenches in the world frame: Ad_{g(ℓ)} S(ℓ).
                     s_columns(&tm, &piece.basis, &mut scols);
-                    w.s_tip = Mat6::zeros();
+                    let ad_tip = pose.compose(&gl).ad();
+                    w.s_world = Mat6::zeros();
                     for (c, col) in scols.iter().enumerate().take(k) {
-                        w.s_tip.set_column(c, col);
+                        w.s_world.set_column(c, &ad_tip.mul_vec(col));
                     }
                 }
                 if full {
