@@ -10,6 +10,24 @@
 use softrod_lie::{AdOp, Mat3, Mat6, Vec6};
 use std::ops::{Add, AddAssign, Sub, SubAssign};
 
+/// `a₁ᵀb₁ + a₂ᵀb₂` for a sum the caller knows to be symmetric: the six
+/// upper entries as column dots, mirrored (a third fewer multiplications
+/// than two full products).
+#[inline(always)]
+pub(crate) fn tr_mul_sym2(a1: &Mat3, b1: &Mat3, a2: &Mat3, b2: &Mat3) -> Mat3 {
+    let e = |i: usize, j: usize| a1.column(i).dot(&b1.column(j)) + a2.column(i).dot(&b2.column(j));
+    let (m00, m01, m02, m11, m12, m22) = (e(0, 0), e(0, 1), e(0, 2), e(1, 1), e(1, 2), e(2, 2));
+    Mat3::new(m00, m01, m02, m01, m11, m12, m02, m12, m22)
+}
+
+/// `aᵀb` known to be symmetric: six dots, mirrored.
+#[inline(always)]
+pub(crate) fn tr_mul_sym(a: &Mat3, b: &Mat3) -> Mat3 {
+    let e = |i: usize, j: usize| a.column(i).dot(&b.column(j));
+    let (m00, m01, m02, m11, m12, m22) = (e(0, 0), e(0, 1), e(0, 2), e(1, 1), e(1, 2), e(2, 2));
+    Mat3::new(m00, m01, m02, m01, m11, m12, m02, m12, m22)
+}
+
 /// A symmetric 6×6 matrix `[[a, b], [bᵀ, c]]`.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Sym6 {
@@ -108,9 +126,9 @@ impl Blk6 {
     #[inline]
     pub fn tr_premul_sym(x: &AdOp, y: &Blk6) -> Sym6 {
         Sym6 {
-            a: x.a.tr_mul(&y.m11) + x.b.tr_mul(&y.m21),
+            a: tr_mul_sym2(&x.a, &y.m11, &x.b, &y.m21),
             b: x.a.tr_mul(&y.m12) + x.b.tr_mul(&y.m22),
-            c: x.a.tr_mul(&y.m22),
+            c: tr_mul_sym(&x.a, &y.m22),
         }
     }
 

@@ -1,6 +1,6 @@
 //! The outward sweep shared by every algorithm, and small fixed-size helpers.
 
-use crate::blocks::Sym6;
+use crate::blocks::{Sym6, tr_mul_sym, tr_mul_sym2};
 use crate::data::Data;
 use crate::model::{Model, RodModel};
 use softrod_lie::{AdOp, Mat6, PieceMaps, Pose, Vec6, ad_vec, coad_vec};
@@ -138,9 +138,10 @@ impl FullSums {
     #[inline(always)]
     fn add(&mut self, a: &AdOp, t: &AdOp, mw: &Vec6) {
         let (p, r, q) = scaled_blocks(&softrod_lie::angular(mw), &softrod_lie::linear(mw), t);
-        self.d11 += t.a.tr_mul(&p) + t.b.tr_mul(&q);
+        // Taᵀ J Ta + Tbᵀ m Tb and Taᵀ m Ta are symmetric.
+        self.d11 += tr_mul_sym2(&t.a, &p, &t.b, &q);
         self.d12 += t.b.tr_mul(&r);
-        self.d22 += t.a.tr_mul(&r);
+        self.d22 += tr_mul_sym(&t.a, &r);
         self.u11 += a.a.tr_mul(&p) + a.b.tr_mul(&q);
         self.u12 += a.b.tr_mul(&r);
         self.u21 += a.a.tr_mul(&q);
