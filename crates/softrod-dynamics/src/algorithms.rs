@@ -290,10 +290,9 @@ pub fn mass_matrix<'a>(
             for j in 0..km {
                 f_world.set_column(j, &to_world.tr_mul_vec(&f.column(j).into_owned()));
             }
-            for n in 0..m {
-                let wn = &data.pieces[r][n];
-                let kn = pieces[n].basis.dof();
-                let on = rm.dof_offset + pieces[n].dof_offset;
+            for (wn, pn) in data.pieces[r][..m].iter().zip(&pieces[..m]) {
+                let kn = pn.basis.dof();
+                let on = rm.dof_offset + pn.dof_offset;
                 let blk = wn.s_world.tr_mul(&f_world);
                 data.mass
                     .view_mut((on, om), (kn, km))
