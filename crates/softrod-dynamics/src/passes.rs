@@ -161,9 +161,14 @@ impl FullSums {
             c: self.d22,
         }
         .dense();
-        *ut = Mat6::zeros();
-        *dt = Mat6::zeros();
-        project_add(basis, &uf, &df, ut, dt);
+        if let Some([0, 1, 2, 3, 4, 5]) = basis.selection() {
+            *ut = uf;
+            *dt = df;
+        } else {
+            *ut = Mat6::zeros();
+            *dt = Mat6::zeros();
+            project_add(basis, &uf, &df, ut, dt);
+        }
     }
 }
 
