@@ -76,6 +76,27 @@ fn add_sandwich(
     v += br;
 }
 
+/// `p̃ X`, column by column as cross products (18 multiplications).
+#[inline(always)]
+fn cross_cols(p: &softrod_lie::Vec3, x: &softrod_lie::Mat3) -> softrod_lie::Mat3 {
+    softrod_lie::Mat3::from_columns(&[
+        p.cross(&x.column(0)),
+        p.cross(&x.column(1)),
+        p.cross(&x.column(2)),
+    ])
+}
+
+/// `Ad⁻¹_g η = (Rᵀω, Rᵀ(v − p × ω))` without building the operator.
+#[inline(always)]
+fn ad_inv_vec(g: &Pose, eta: &Vec6) -> Vec6 {
+    let w = softrod_lie::angular(eta);
+    let v = softrod_lie::linear(eta);
+    softrod_lie::join(
+        &g.rotation.tr_mul(&w),
+        &g.rotation.tr_mul(&(v - g.translation.cross(&w))),
+    )
+}
+
 /// External distributed wrench density at a point (body frame, applied):
 /// drag on the body velocity plus distributed loads.
 #[inline]
@@ -136,16 +157,23 @@ struct FullSums {
 
 impl FullSums {
     #[inline(always)]
-    fn add(&mut self, a: &AdOp, t: &AdOp, mw: &Vec6) {
+    /// Adds one point, `A = Ad⁻¹_g` given by `g = (R, p)`: with
+    /// `Aᵀ = [[R, p̃R], [0, R]]` the U blocks are `RP + p̃(RQ)`, `p̃(RR')`,
+    /// `RQ`, `RR'`: three products and two cross-product sweeps, and no
+    /// `Ad⁻¹` block built.
+    fn add(&mut self, g: &Pose, t: &AdOp, mw: &Vec6) {
         let (p, r, q) = scaled_blocks(&softrod_lie::angular(mw), &softrod_lie::linear(mw), t);
         // Taᵀ J Ta + Tbᵀ m Tb and Taᵀ m Ta are symmetric.
         self.d11 += tr_mul_sym2(&t.a, &p, &t.b, &q);
         self.d12 += t.b.tr_mul(&r);
         self.d22 += tr_mul_sym(&t.a, &r);
-        self.u11 += a.a.tr_mul(&p) + a.b.tr_mul(&q);
-        self.u12 += a.b.tr_mul(&r);
-        self.u21 += a.a.tr_mul(&q);
-        self.u22 += a.a.tr_mul(&r);
+        let rot = &g.rotation;
+        let rq = rot * q;
+        let rr = rot * r;
+        self.u11 += rot * p + cross_cols(&g.translation, &rq);
+        self.u12 += cross_cols(&g.translation, &rr);
+        self.u21 += rq;
+        self.u22 += rr;
     }
 
     /// Projects on the basis: `ut = 𝓤ᶠB` (6×k), `dt = Bᵀ𝓓ᶠB` (k×k, full).
@@ -290,10 +318,9 @@ pub(crate) fn outward(
             let maps = PieceMaps::new(&xi, has_vel.then_some(&dxi));
             for qp in &pd.points {
                 let (gl, tm, dbias) = maps.eval(qp.x);
-                let a = gl.ad_inv();
                 let m = &qp.inertia;
                 if pass != Pass::Composite {
-                    let carried = a.mul_vec(&eta0);
+                    let carried = ad_inv_vec(&gl, &eta0);
                     let sv = tm.mul_vec(&dxi);
                     let eta = carried + sv;
                     let bias = if has_vel {
@@ -313,7 +340,7 @@ pub(crate) fn outward(
                     };
                     let gyro = coad_vec(&eta, &diag_mul(m, &eta));
                     let f = if pass == Pass::Inverse {
-                        let etadot = a.mul_vec(&etadot0) + tm.mul_vec(&ddxi) + bias;
+                        let etadot = ad_inv_vec(&gl, &etadot0) + tm.mul_vec(&ddxi) + bias;
                         diag_mul(m, &etadot) + gyro - ext
                     } else {
                         diag_mul(m, &bias) + gyro - ext
@@ -322,8 +349,10 @@ pub(crate) fn outward(
                     // f for both, no 6-vector temporaries.
                     let fw = f * qp.w;
                     let (fm, fn_) = (softrod_lie::angular(&fw), softrod_lie::linear(&fw));
-                    pb_m += a.a.tr_mul(&fm) + a.b.tr_mul(&fn_);
-                    pb_n += a.a.tr_mul(&fn_);
+                    // Aᵀ(wf) = (R f_M + p × R f_N, R f_N).
+                    let rfn = gl.rotation * fn_;
+                    pb_m += gl.rotation * fm + gl.translation.cross(&rfn);
+                    pb_n += rfn;
                     ps_m += tm.a.tr_mul(&fm) + tm.b.tr_mul(&fn_);
                     ps_n += tm.a.tr_mul(&fn_);
                 }
@@ -333,8 +362,9 @@ pub(crate) fn outward(
                     // S = T₋B: k tr-products and k(k+1)/2 dots, far cheaper
                     // than 6×6 sandwiches when k < 6 and no dearer at k = 6.
                     if full {
-                        fs.add(&a, &tm, &mw);
+                        fs.add(&gl, &tm, &mw);
                     } else {
+                        let a = gl.ad_inv();
                         let k = s_columns(&tm, &piece.basis, &mut scols);
                         for c in 0..k {
                             let ms = mw.component_mul(&scols[c]);
@@ -361,6 +391,7 @@ pub(crate) fn outward(
                         sp.mpp += pt * pt.transpose() * mw[3];
                         sp.mp2 += pt.norm_squared() * mw[3];
                     } else {
+                        let a = gl.ad_inv();
                         let dw = softrod_lie::angular(&mw);
                         let dv = softrod_lie::linear(&mw);
                         let m_a = scaled_blocks(&dw, &dv, &a);
