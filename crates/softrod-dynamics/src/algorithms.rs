@@ -1,7 +1,7 @@
 //! Inverse dynamics, O(N) forward dynamics, the mass matrix and the
 //! Cholesky forward dynamics.
 
-use crate::blocks::{Blk6, Sym6};
+use crate::blocks::{Blk6, Sym6, ad_inv_tr_premul, ad_inv_tr_vec, ad_inv_vec};
 use crate::chol::{backward_sub, cholesky_k, forward_sub, right_solve_lt};
 use crate::data::Data;
 use crate::error::DynamicsError;
@@ -124,7 +124,7 @@ pub(crate) fn inward_inverse(model: &Model, data: &mut Data) {
             piece
                 .basis
                 .tr_apply(&v, &mut data.tau.as_mut_slice()[o..o + k]);
-            wv = w.p_big + w.a_tip.tr_mul_vec(&wv);
+            wv = w.p_big + ad_inv_tr_vec(&w.tip, &wv);
         }
     }
     data.tau -= &data.strain_force;
@@ -173,7 +173,7 @@ pub fn forward_dynamics<'a>(
             } else {
                 // Û = 𝓤 + A_ℓᵀ𝓜ᴬT₋(ℓ)B, D̂ = 𝓓 + BᵀT₋(ℓ)ᵀ𝓜ᴬT₋(ℓ)B (D24).
                 let mat = ma_next.mul_op(&w.tm_tip);
-                let atmt = Blk6::tr_premul(&w.a_tip, &mat).dense();
+                let atmt = ad_inv_tr_premul(&w.tip, &mat).dense();
                 let ttmt = Blk6::tr_premul_sym(&w.tm_tip, &mat).dense();
                 project_add(&piece.basis, &atmt, &ttmt, &mut w.ut, &mut w.dt);
                 ma_next.mul_vec(&w.acc_tip) + pa_next
@@ -208,11 +208,11 @@ pub fn forward_dynamics<'a>(
             let mut next = if leaf {
                 w.mt
             } else {
-                w.mt + ma_next.congruence(&w.a_tip)
+                w.mt + ma_next.congruence_ad_inv(&w.tip)
             };
             next -= wwt;
             ma_next = next;
-            pa_next = w.p_big + w.a_tip.tr_mul_vec(&y) + wm * u;
+            pa_next = w.p_big + ad_inv_tr_vec(&w.tip, &y) + wm * u;
             w.u = u;
         }
         let mut etadot = gravity_base_acceleration(model, rm, scale);
@@ -224,7 +224,7 @@ pub fn forward_dynamics<'a>(
             backward_sub(&w.dt, k, &mut qn);
             data.qdd.as_mut_slice()[o..o + k].copy_from_slice(&qn.as_slice()[..k]);
             let sq = w.tm_tip.mul_vec(&piece.basis.apply(&qn.as_slice()[..k]));
-            etadot = w.a_tip.mul_vec(&etadot) + sq + w.acc_tip;
+            etadot = ad_inv_vec(&w.tip, &etadot) + sq + w.acc_tip;
         }
     }
     if let Some((i, v)) = data.qdd.iter().enumerate().find(|(_, v)| !v.is_finite()) {
@@ -270,7 +270,7 @@ pub fn mass_matrix<'a>(
             let mct = mc_next.mul_op(&w.tm_tip);
             project_add(
                 &pieces[m].basis,
-                &Blk6::tr_premul(&w.a_tip, &mct).dense(),
+                &ad_inv_tr_premul(&w.tip, &mct).dense(),
                 &Blk6::tr_premul_sym(&w.tm_tip, &mct).dense(),
                 &mut f,
                 &mut mmm,
@@ -298,7 +298,7 @@ pub fn mass_matrix<'a>(
                     .view_mut((on, om), (kn, km))
                     .copy_from(&blk.view((0, 0), (kn, km)));
             }
-            mc_next = w.mt + mc_next.congruence(&w.a_tip);
+            mc_next = w.mt + mc_next.congruence_ad_inv(&w.tip);
         }
     }
     data.mass.fill_lower_triangle_with_upper_triangle();

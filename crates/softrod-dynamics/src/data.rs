@@ -17,7 +17,8 @@ pub(crate) struct PieceWork {
     pub eta0: Vec6,
     pub etadot0: Vec6,
     /// `A_ℓ = Ad⁻¹_{g_n(ℓ)}`, `T₋(ℓ)`, `S_ℓ = T₋(ℓ)B` (6×k), bias `a_ℓ`.
-    pub a_tip: AdOp,
+    /// Local tip pose `g_n(ℓ_n)` (its `Ad⁻¹` carries twists across the joint).
+    pub tip: Pose,
     pub tm_tip: AdOp,
     pub s_world: Mat6,
     pub acc_tip: Vec6,
@@ -40,7 +41,7 @@ impl PieceWork {
             base_pose: Pose::identity(),
             eta0: Vec6::zeros(),
             etadot0: Vec6::zeros(),
-            a_tip: AdOp::identity(),
+            tip: Pose::identity(),
             tm_tip: AdOp::zeros(),
             s_world: Mat6::zeros(),
             acc_tip: Vec6::zeros(),

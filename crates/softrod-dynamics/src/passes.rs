@@ -1,6 +1,6 @@
 //! The outward sweep shared by every algorithm, and small fixed-size helpers.
 
-use crate::blocks::{Sym6, tr_mul_sym, tr_mul_sym2};
+use crate::blocks::{Sym6, ad_inv_vec, cross_cols, tr_mul_sym, tr_mul_sym2};
 use crate::data::Data;
 use crate::model::{Model, RodModel};
 use softrod_lie::{AdOp, Mat6, PieceMaps, Pose, Vec6, ad_vec, coad_vec};
@@ -74,27 +74,6 @@ fn add_sandwich(
     v += bl;
     let mut v = acc.fixed_view_mut::<3, 3>(3, 3);
     v += br;
-}
-
-/// `p̃ X`, column by column as cross products (18 multiplications).
-#[inline(always)]
-fn cross_cols(p: &softrod_lie::Vec3, x: &softrod_lie::Mat3) -> softrod_lie::Mat3 {
-    softrod_lie::Mat3::from_columns(&[
-        p.cross(&x.column(0)),
-        p.cross(&x.column(1)),
-        p.cross(&x.column(2)),
-    ])
-}
-
-/// `Ad⁻¹_g η = (Rᵀω, Rᵀ(v − p × ω))` without building the operator.
-#[inline(always)]
-fn ad_inv_vec(g: &Pose, eta: &Vec6) -> Vec6 {
-    let w = softrod_lie::angular(eta);
-    let v = softrod_lie::linear(eta);
-    softrod_lie::join(
-        &g.rotation.tr_mul(&w),
-        &g.rotation.tr_mul(&(v - g.translation.cross(&w))),
-    )
 }
 
 /// External distributed wrench density at a point (body frame, applied):
@@ -412,21 +391,20 @@ pub(crate) fn outward(
                 }
             }
             let (gl, tm, dbias) = maps.eval(piece.length);
-            let a = gl.ad_inv();
-            let carried = a.mul_vec(&eta0);
+            let carried = ad_inv_vec(&gl, &eta0);
             let sv = tm.mul_vec(&dxi);
             let acc = if has_vel {
                 ad_vec(&carried, &sv) + dbias
             } else {
                 Vec6::zeros()
             };
-            w.a_tip = a;
+            w.tip = gl;
             w.tm_tip = tm;
             w.acc_tip = acc;
             w.p_big = p_big;
             if pass == Pass::Inverse {
                 w.p_small = p_small;
-                etadot0 = a.mul_vec(&etadot0) + tm.mul_vec(&ddxi) + acc;
+                etadot0 = ad_inv_vec(&gl, &etadot0) + tm.mul_vec(&ddxi) + acc;
             } else {
                 let k = piece.basis.dof();
                 if pass == Pass::Composite {
