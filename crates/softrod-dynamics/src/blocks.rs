@@ -133,12 +133,18 @@ impl Sym6 {
     #[inline]
     pub fn dense(&self) -> Mat6 {
         let mut m = Mat6::zeros();
+        self.write_dense(&mut m);
+        m
+    }
+
+    /// Writes the dense form into `m`.
+    #[inline]
+    pub fn write_dense(&self, m: &mut Mat6) {
         m.fixed_view_mut::<3, 3>(0, 0).copy_from(&self.a);
         m.fixed_view_mut::<3, 3>(0, 3).copy_from(&self.b);
         m.fixed_view_mut::<3, 3>(3, 0)
             .copy_from(&self.b.transpose());
         m.fixed_view_mut::<3, 3>(3, 3).copy_from(&self.c);
-        m
     }
 
     /// `self · x` for a block operator `x = [[xa, 0], [xb, xa]]`.

@@ -157,24 +157,27 @@ impl FullSums {
 
     /// Projects on the basis: `ut = 𝓤ᶠB` (6×k), `dt = Bᵀ𝓓ᶠB` (k×k, full).
     fn project(&self, basis: &softrod_kinematics::Basis, ut: &mut Mat6, dt: &mut Mat6) {
-        let mut uf = Mat6::zeros();
-        uf.fixed_view_mut::<3, 3>(0, 0).copy_from(&self.u11);
-        uf.fixed_view_mut::<3, 3>(0, 3).copy_from(&self.u12);
-        uf.fixed_view_mut::<3, 3>(3, 0).copy_from(&self.u21);
-        uf.fixed_view_mut::<3, 3>(3, 3).copy_from(&self.u22);
-        let df = Sym6 {
+        let d = Sym6 {
             a: self.d11,
             b: self.d12,
             c: self.d22,
-        }
-        .dense();
+        };
         if let Some([0, 1, 2, 3, 4, 5]) = basis.selection() {
-            *ut = uf;
-            *dt = df;
+            // In place: no 6×6 temporaries to copy.
+            ut.fixed_view_mut::<3, 3>(0, 0).copy_from(&self.u11);
+            ut.fixed_view_mut::<3, 3>(0, 3).copy_from(&self.u12);
+            ut.fixed_view_mut::<3, 3>(3, 0).copy_from(&self.u21);
+            ut.fixed_view_mut::<3, 3>(3, 3).copy_from(&self.u22);
+            d.write_dense(dt);
         } else {
-            *ut = Mat6::zeros();
-            *dt = Mat6::zeros();
-            project_add(basis, &uf, &df, ut, dt);
+            let mut uf = Mat6::zeros();
+            uf.fixed_view_mut::<3, 3>(0, 0).copy_from(&self.u11);
+            uf.fixed_view_mut::<3, 3>(0, 3).copy_from(&self.u12);
+            uf.fixed_view_mut::<3, 3>(3, 0).copy_from(&self.u21);
+            uf.fixed_view_mut::<3, 3>(3, 3).copy_from(&self.u22);
+            ut.fill(0.0);
+            dt.fill(0.0);
+            project_add(basis, &uf, &d.dense(), ut, dt);
         }
     }
 }
@@ -287,8 +290,11 @@ pub(crate) fn outward(
             let (mut pb_m, mut pb_n) = (softrod_lie::Vec3::zeros(), softrod_lie::Vec3::zeros());
             let (mut ps_m, mut ps_n) = (softrod_lie::Vec3::zeros(), softrod_lie::Vec3::zeros());
             let mut mt = Mat6::zeros();
-            let mut ut = Mat6::zeros();
-            let mut dt = Mat6::zeros();
+            let mut sandwiched = false;
+            if pass != Pass::Inverse {
+                w.ut.fill(0.0);
+                w.dt.fill(0.0);
+            }
             let mut sp = SpatialSums::default();
             let mut fs = FullSums::default();
             let full = piece.basis.dof() >= 4;
@@ -348,10 +354,10 @@ pub(crate) fn outward(
                         for c in 0..k {
                             let ms = mw.component_mul(&scols[c]);
                             let u = a.tr_mul_vec(&ms);
-                            let mut col = ut.fixed_view_mut::<6, 1>(0, c);
+                            let mut col = w.ut.fixed_view_mut::<6, 1>(0, c);
                             col += u;
                             for r in 0..=c {
-                                dt[(r, c)] += scols[r].dot(&ms);
+                                w.dt[(r, c)] += scols[r].dot(&ms);
                             }
                         }
                     }
@@ -375,6 +381,7 @@ pub(crate) fn outward(
                         let dv = softrod_lie::linear(&mw);
                         let m_a = scaled_blocks(&dw, &dv, &a);
                         add_sandwich(&mut mt, &a, &m_a);
+                        sandwiched = true;
                     }
                 }
             }
@@ -418,17 +425,19 @@ pub(crate) fn outward(
                     }
                 }
                 if full {
-                    fs.project(&piece.basis, &mut ut, &mut dt);
+                    fs.project(&piece.basis, &mut w.ut, &mut w.dt);
                 } else {
                     for c in 0..k {
                         for r in 0..c {
-                            dt[(c, r)] = dt[(r, c)];
+                            w.dt[(c, r)] = w.dt[(r, c)];
                         }
                     }
                 }
-                w.mt = Sym6::from_mat6(&mt) + sp.to_sym6();
-                w.ut = ut;
-                w.dt = dt;
+                w.mt = if sandwiched {
+                    Sym6::from_mat6(&mt) + sp.to_sym6()
+                } else {
+                    sp.to_sym6()
+                };
                 w.p_small = Vec6::zeros();
                 piece
                     .basis
