@@ -356,8 +356,8 @@ pub(crate) fn outward(
                             let u = a.tr_mul_vec(&ms);
                             let mut col = w.ut.fixed_view_mut::<6, 1>(0, c);
                             col += u;
-                            for r in 0..=c {
-                                w.dt[(r, c)] += scols[r].dot(&ms);
+                            for (r, sr) in scols.iter().enumerate().take(c + 1) {
+                                w.dt[(r, c)] += sr.dot(&ms);
                             }
                         }
                     }
