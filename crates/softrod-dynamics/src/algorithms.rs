@@ -6,7 +6,7 @@ use crate::chol::{backward_sub, cholesky_k, forward_sub, right_solve_lt};
 use crate::data::Data;
 use crate::error::DynamicsError;
 use crate::model::Model;
-use crate::passes::{Pass, gravity_base_acceleration, outward, project_add};
+use crate::passes::{Pass, gravity_base_acceleration, outward, project_add_blocks};
 use nalgebra::DVector;
 use softrod_lie::{Mat6, Vec6};
 
@@ -173,9 +173,13 @@ pub fn forward_dynamics<'a>(
             } else {
                 // Û = 𝓤 + A_ℓᵀ𝓜ᴬT₋(ℓ)B, D̂ = 𝓓 + BᵀT₋(ℓ)ᵀ𝓜ᴬT₋(ℓ)B (D24).
                 let mat = ma_next.mul_op(&w.tm_tip);
-                let atmt = ad_inv_tr_premul(&w.tip, &mat).dense();
-                let ttmt = Blk6::tr_premul_sym(&w.tm_tip, &mat).dense();
-                project_add(&piece.basis, &atmt, &ttmt, &mut w.ut, &mut w.dt);
+                project_add_blocks(
+                    &piece.basis,
+                    &ad_inv_tr_premul(&w.tip, &mat),
+                    &Blk6::tr_premul_sym(&w.tm_tip, &mat),
+                    &mut w.ut,
+                    &mut w.dt,
+                );
                 ma_next.mul_vec(&w.acc_tip) + pa_next
             };
             let mut sty = Vec6::zeros();
@@ -198,13 +202,7 @@ pub fn forward_dynamics<'a>(
             right_solve_lt(&w.dt, k, &mut w.ut);
             forward_sub(&w.dt, k, &mut u);
             let wm = &w.ut;
-            let w1 = wm.fixed_rows::<3>(0);
-            let w2 = wm.fixed_rows::<3>(3);
-            let wwt = Sym6 {
-                a: w1 * w1.transpose(),
-                b: w1 * w2.transpose(),
-                c: w2 * w2.transpose(),
-            };
+            let wwt = Sym6::gram_rows(wm);
             let mut next = if leaf {
                 w.mt
             } else {
@@ -268,10 +266,10 @@ pub fn mass_matrix<'a>(
             let mut f = w.ut;
             let mut mmm = w.dt;
             let mct = mc_next.mul_op(&w.tm_tip);
-            project_add(
+            project_add_blocks(
                 &pieces[m].basis,
-                &ad_inv_tr_premul(&w.tip, &mct).dense(),
-                &Blk6::tr_premul_sym(&w.tm_tip, &mct).dense(),
+                &ad_inv_tr_premul(&w.tip, &mct),
+                &Blk6::tr_premul_sym(&w.tm_tip, &mct),
                 &mut f,
                 &mut mmm,
             );

@@ -137,6 +137,44 @@ impl Sym6 {
         m
     }
 
+    /// `m += self` (dense `m`).
+    #[inline]
+    pub fn add_to(&self, m: &mut Mat6) {
+        let mut v = m.fixed_view_mut::<3, 3>(0, 0);
+        v += self.a;
+        let mut v = m.fixed_view_mut::<3, 3>(0, 3);
+        v += self.b;
+        let mut v = m.fixed_view_mut::<3, 3>(3, 0);
+        v += self.b.transpose();
+        let mut v = m.fixed_view_mut::<3, 3>(3, 3);
+        v += self.c;
+    }
+
+    /// `W Wᵀ` for a 6×6 `W` (rows split 3 + 3): exactly symmetric, the
+    /// diagonal blocks by their upper halves.
+    #[inline]
+    pub fn gram_rows(w: &Mat6) -> Sym6 {
+        let w1 = w.fixed_rows::<3>(0);
+        let w2 = w.fixed_rows::<3>(3);
+        let sym = |x: &nalgebra::MatrixView<
+            f64,
+            nalgebra::U3,
+            nalgebra::U6,
+            nalgebra::U1,
+            nalgebra::U6,
+        >| {
+            let e = |i: usize, j: usize| x.row(i).dot(&x.row(j));
+            let (m00, m01, m02, m11, m12, m22) =
+                (e(0, 0), e(0, 1), e(0, 2), e(1, 1), e(1, 2), e(2, 2));
+            Mat3::new(m00, m01, m02, m01, m11, m12, m02, m12, m22)
+        };
+        Sym6 {
+            a: sym(&w1),
+            b: w1 * w2.transpose(),
+            c: sym(&w2),
+        }
+    }
+
     /// Writes the dense form into `m`.
     #[inline]
     pub fn write_dense(&self, m: &mut Mat6) {
@@ -197,6 +235,19 @@ impl Sym6 {
 }
 
 impl Blk6 {
+    /// `m += self` (dense `m`).
+    #[inline]
+    pub fn add_to(&self, m: &mut Mat6) {
+        let mut v = m.fixed_view_mut::<3, 3>(0, 0);
+        v += self.m11;
+        let mut v = m.fixed_view_mut::<3, 3>(0, 3);
+        v += self.m12;
+        let mut v = m.fixed_view_mut::<3, 3>(3, 0);
+        v += self.m21;
+        let mut v = m.fixed_view_mut::<3, 3>(3, 3);
+        v += self.m22;
+    }
+
     /// Dense form.
     #[inline]
     pub fn dense(&self) -> Mat6 {
@@ -324,6 +375,12 @@ mod tests {
         }
         let v = Vec6::from_fn(|i, _| (i as f64).cos());
         assert_relative_eq!(s.mul_vec(&v), m * v, epsilon = 1e-13);
+        let g = Sym6::gram_rows(&xm);
+        assert_relative_eq!(g.dense(), xm * xm.transpose(), epsilon = 1e-13);
+        let mut acc = xm;
+        s.add_to(&mut acc);
+        my.add_to(&mut acc);
+        assert_relative_eq!(acc, xm + m + myd, epsilon = 1e-13);
         // Rigid forms against the dense Ad⁻¹_g, including a far-off p.
         for (axis, p) in [
             (Vec3::new(0.3, -1.2, 0.5), Vec3::new(0.1, 0.2, -0.3)),

@@ -182,6 +182,24 @@ impl FullSums {
     }
 }
 
+/// [`project_add`] for block-form `X_u`, `X_d`: an `I₆` piece adds the
+/// blocks in place, other bases go through the dense forms.
+#[inline]
+pub(crate) fn project_add_blocks(
+    basis: &softrod_kinematics::Basis,
+    xu: &crate::blocks::Blk6,
+    xd: &Sym6,
+    ut: &mut Mat6,
+    dt: &mut Mat6,
+) {
+    if let Some([0, 1, 2, 3, 4, 5]) = basis.selection() {
+        xu.add_to(ut);
+        xd.add_to(dt);
+    } else {
+        project_add(basis, &xu.dense(), &xd.dense(), ut, dt);
+    }
+}
+
 /// `ut += X_u B` (6×k) and `dt += Bᵀ X_d B` (k×k) for full-coordinate
 /// matrices `X_u`, `X_d` (6×6): column gathers for a selection basis, a
 /// plain copy for the identity.
