@@ -235,10 +235,13 @@ pub fn forward_dynamics<'a>(
 }
 
 /// Mass matrix `M(q) = ∫ Jᵀ𝓜J ds` (D19) by the composite recursion (D20):
-/// `𝓜ᶜ_n = 𝓜ᵗ_n + A_ℓᵀ𝓜ᶜ_{n+1}A_ℓ`, `M_mm = 𝓓_m + S_ℓᵀ𝓜ᶜ_{m+1}S_ℓ`, and the
-/// off-diagonal blocks by carrying `F = 𝓤_m + A_ℓᵀ𝓜ᶜ_{m+1}S_ℓ` down the
-/// chain. Block diagonal across rods. Result in `data.mass` (n_dof × n_dof,
-/// symmetric positive definite). Cost O(N·n_dof).
+/// `𝓜ᶜ_n = 𝓜ᵗ_n + A_ℓᵀ𝓜ᶜ_{n+1}A_ℓ`, `M_mm = 𝓓_m + S_ℓᵀ𝓜ᶜ_{m+1}S_ℓ`, and
+/// the off-diagonal blocks `M_nm = S_n(ℓ)ᵀ A…ᵀ F_m` (n < m) of
+/// `F_m = 𝓤_m + A_ℓᵀ𝓜ᶜ_{m+1}S_ℓ` carried down the chain, evaluated as the
+/// pairing `(Ad_{g_n(ℓ)}S_n(ℓ))ᵀ(Ad*_{g_m(0)⁻¹}F_m)` of world-frame twists
+/// and wrenches (the pairing is frame-independent). Block diagonal across
+/// rods. Result in `data.mass` (n_dof × n_dof, symmetric positive
+/// definite). Cost O(N·n_dof).
 pub fn mass_matrix<'a>(
     model: &Model,
     data: &'a mut Data,
