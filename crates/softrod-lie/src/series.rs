@@ -94,34 +94,88 @@ const TAU_SERIES: [[f64; N]; 4] = tau_series();
 const RHO_SERIES: [[f64; N]; 4] = rho_series();
 const ABC_SERIES: [[f64; N]; 3] = abc_series();
 
-/// Horner in `u`. Plain `acc * u + c` on purpose, not `f64::mul_add`: on the
-/// default `x86_64` target (no `fma` feature) `mul_add` is an out-of-line
-/// libm call per step, which made the series branch ~3× slower than the closed
-/// forms; the separate rounding costs nothing measurable in accuracy
-/// (tests/accuracy.rs) and gives the same bits on every target.
+/// Coefficient tables laid out term by term (`rows[m][j]` = coefficient `m`
+/// of family `j`), 16-byte aligned, so the Horner steps of neighbouring
+/// families run side by side in the two lanes of one SIMD register. Padding
+/// lanes hold zeros and are never read by the callers.
+#[repr(C, align(16))]
+struct Packed<const F: usize> {
+    rows: [[f64; F]; N],
+}
+
+const fn pack<const F: usize>(fams: &[&[f64; N]]) -> Packed<F> {
+    let mut rows = [[0.0; F]; N];
+    let mut j = 0;
+    while j < fams.len() {
+        let mut m = 0;
+        while m < N {
+            rows[m][j] = fams[j][m];
+            m += 1;
+        }
+        j += 1;
+    }
+    Packed { rows }
+}
+
+/// `[a, b, c, ·]`.
+static ABC_P: Packed<4> = pack(&[&ABC_SERIES[0], &ABC_SERIES[1], &ABC_SERIES[2]]);
+/// `[a, b, c, τ₃, τ₄, ·]`.
+static ABC_T34_P: Packed<6> = pack(&[
+    &ABC_SERIES[0],
+    &ABC_SERIES[1],
+    &ABC_SERIES[2],
+    &TAU_SERIES[2],
+    &TAU_SERIES[3],
+]);
+/// `[τ₁, …, τ₄]`.
+static TAU_P: Packed<4> = pack(&[
+    &TAU_SERIES[0],
+    &TAU_SERIES[1],
+    &TAU_SERIES[2],
+    &TAU_SERIES[3],
+]);
+/// `[ρ₁, …, ρ₄]`.
+static RHO_P: Packed<4> = pack(&[
+    &RHO_SERIES[0],
+    &RHO_SERIES[1],
+    &RHO_SERIES[2],
+    &RHO_SERIES[3],
+]);
+
+/// Horner in `u` on every family of a packed table at once. Plain
+/// `acc * u + c` on purpose, not `f64::mul_add`: on the default `x86_64`
+/// target (no `fma` feature) `mul_add` is an out-of-line libm call per step,
+/// which made the series branch ~3× slower than the closed forms; the
+/// separate rounding costs nothing measurable in accuracy
+/// (tests/accuracy.rs) and gives the same bits on every target. Each lane
+/// performs exactly the operations of a one-family Horner loop, so packing
+/// changes no bit of the results.
 ///
-/// Only the first `n ≤ N` terms are summed ([`terms`]).
+/// Only the first `n ≤ N` terms are summed ([`terms`]); a constant term
+/// count per arm lets the compiler unroll each loop (a runtime bound would
+/// cost more in loop overhead than the terms saved).
 #[inline(always)]
-fn horner(c: &[f64; N], u: f64, n: usize) -> f64 {
-    // A constant term count per arm lets the compiler unroll each loop; a
-    // runtime bound would cost more in loop overhead than the terms saved.
+fn horner_packed<const F: usize>(t: &Packed<F>, u: f64, n: usize) -> [f64; F] {
     match n {
-        7 => horner_k::<7>(c, u),
-        8 => horner_k::<8>(c, u),
-        10 => horner_k::<10>(c, u),
-        11 => horner_k::<11>(c, u),
-        12 => horner_k::<12>(c, u),
-        _ => horner_k::<N>(c, u),
+        7 => horner_packed_k::<F, 7>(t, u),
+        8 => horner_packed_k::<F, 8>(t, u),
+        10 => horner_packed_k::<F, 10>(t, u),
+        11 => horner_packed_k::<F, 11>(t, u),
+        12 => horner_packed_k::<F, 12>(t, u),
+        _ => horner_packed_k::<F, N>(t, u),
     }
 }
 
 #[inline(always)]
-fn horner_k<const K: usize>(c: &[f64; N], u: f64) -> f64 {
-    let mut acc = c[K - 1];
+fn horner_packed_k<const F: usize, const K: usize>(t: &Packed<F>, u: f64) -> [f64; F] {
+    let mut acc = t.rows[K - 1];
     let mut m = K - 1;
     while m > 0 {
         m -= 1;
-        acc = acc * u + c[m];
+        let row = &t.rows[m];
+        for j in 0..F {
+            acc[j] = acc[j] * u + row[j];
+        }
     }
     acc
 }
@@ -151,17 +205,13 @@ fn terms(u: f64) -> usize {
 
 /// The coefficients `(a, b, c)` of the group exponential (D4):
 /// `a = sinψ/ψ`, `b = (1 − cosψ)/ψ²`, `c = (ψ − sinψ)/ψ³`.
-#[inline]
+#[inline(always)]
 pub fn abc(psi: f64) -> [f64; 3] {
     let psi = psi.abs();
     if psi < PSI_SWITCH {
         let u = psi * psi;
-        let n = terms(u);
-        [
-            horner(&ABC_SERIES[0], u, n),
-            horner(&ABC_SERIES[1], u, n),
-            horner(&ABC_SERIES[2], u, n),
-        ]
+        let [a, b, c, _] = horner_packed(&ABC_P, u, terms(u));
+        [a, b, c]
     } else {
         let (s, c) = psi.sin_cos();
         abc_closed(psi, s, c)
@@ -183,13 +233,7 @@ pub fn tau(psi: f64) -> [f64; 4] {
     let psi = psi.abs();
     if psi < PSI_SWITCH {
         let u = psi * psi;
-        let n = terms(u);
-        [
-            horner(&TAU_SERIES[0], u, n),
-            horner(&TAU_SERIES[1], u, n),
-            horner(&TAU_SERIES[2], u, n),
-            horner(&TAU_SERIES[3], u, n),
-        ]
+        horner_packed(&TAU_P, u, terms(u))
     } else {
         let (s, c) = psi.sin_cos();
         tau_closed(psi, s, c)
@@ -229,13 +273,7 @@ pub fn rho(psi: f64) -> [f64; 4] {
     let psi = psi.abs();
     if psi < PSI_SWITCH {
         let u = psi * psi;
-        let n = terms(u);
-        [
-            horner(&RHO_SERIES[0], u, n),
-            horner(&RHO_SERIES[1], u, n),
-            horner(&RHO_SERIES[2], u, n),
-            horner(&RHO_SERIES[3], u, n),
-        ]
+        horner_packed(&RHO_P, u, terms(u))
     } else {
         let (s, c) = psi.sin_cos();
         rho_closed(psi, s, c)
@@ -274,16 +312,13 @@ pub fn abc_tau(psi: f64) -> ([f64; 3], [f64; 4]) {
 /// `abc(ψ)` and `[τ₃, τ₄]` together: all that `T(x)`, `T₋(x)` and the group
 /// exponential need once `τ₁, τ₂` are folded into `b, c`
 /// (`τ₁ − ψ²τ₃ = b`, `τ₂ − ψ²τ₄ = c`).
-#[inline]
+#[inline(always)]
 pub fn abc_tau34(psi: f64) -> ([f64; 3], [f64; 2]) {
     let psi = psi.abs();
     if psi < PSI_SWITCH {
         let u = psi * psi;
-        let n = terms(u);
-        (
-            abc(psi),
-            [horner(&TAU_SERIES[2], u, n), horner(&TAU_SERIES[3], u, n)],
-        )
+        let [a, b, c, t3, t4, _] = horner_packed(&ABC_T34_P, u, terms(u));
+        ([a, b, c], [t3, t4])
     } else {
         let (s, c) = psi.sin_cos();
         let t = tau_closed(psi, s, c);
@@ -335,6 +370,31 @@ pub fn closed_forms(psi: f64) -> ([f64; 3], [f64; 4], [f64; 4]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// One family, the first `n` terms: the reference for the packed tables.
+    fn horner(c: &[f64; N], u: f64, n: usize) -> f64 {
+        let mut acc = c[n - 1];
+        for m in (0..n - 1).rev() {
+            acc = acc * u + c[m];
+        }
+        acc
+    }
+
+    #[test]
+    fn packed_tables_give_the_one_family_bits() {
+        for psi in [0.0, 1e-9, 0.1, 0.2499, 0.3, 0.7, 1.2, 1.7, 2.2, 2.4999] {
+            let u: f64 = psi * psi;
+            let n = terms(u);
+            let one = |f: &[f64; N]| horner(f, u, n);
+            let [a, b, c] = abc(psi);
+            assert_eq!([a, b, c], [0, 1, 2].map(|j| one(&ABC_SERIES[j])));
+            let (abc2, t34) = abc_tau34(psi);
+            assert_eq!(abc2, [a, b, c]);
+            assert_eq!(t34, [one(&TAU_SERIES[2]), one(&TAU_SERIES[3])]);
+            assert_eq!(tau(psi), [0, 1, 2, 3].map(|i| one(&TAU_SERIES[i])));
+            assert_eq!(rho(psi), [0, 1, 2, 3].map(|i| one(&RHO_SERIES[i])));
+        }
+    }
 
     #[test]
     fn truncated_series_match_full_series() {
