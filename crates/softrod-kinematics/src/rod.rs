@@ -248,7 +248,12 @@ impl Piece {
     /// The piece's strain `ξ_n = B_n q_n + ξ̄_n` for the full coordinate vector `q`.
     #[inline]
     pub fn strain(&self, q: &[f64]) -> Vec6 {
-        self.basis.apply(&q[self.dofs()]) + self.rest_strain
+        let q = &q[self.dofs()];
+        if self.basis.identity {
+            // Inline, without the call into `apply` (the sweep's hot path).
+            return Vec6::from_column_slice(q) + self.rest_strain;
+        }
+        self.basis.apply(q) + self.rest_strain
     }
 
     /// The strain rate `ξ̇_n = B_n q̇_n` for the full velocity vector `q̇`.

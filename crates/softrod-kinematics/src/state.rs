@@ -130,10 +130,14 @@ impl RodKinematics {
             let xi = piece.strain(q);
             strain[n] = xi;
             let (g, tm) = exp_and_tangent_minus(piece.length, &xi);
-            let a = g.ad_inv();
+            // Stored at once and used from the buffers below: keeping local
+            // copies alive made the compiler move them with memcpy calls.
+            tip_tm[n] = tm;
+            tip_ad_inv[n] = g.ad_inv();
+            let (tm, a) = (&tip_tm[n], &tip_ad_inv[n]);
             let cols = 6 * piece.dof_offset..6 * (piece.dof_offset + piece.basis.dof());
             if piece.basis.selection().is_none() {
-                write_op_columns(&tm, &piece.basis, &mut tip_s[cols]);
+                write_op_columns(tm, &piece.basis, &mut tip_s[cols]);
             }
             tip_pose[n + 1] = tip_pose[n].compose(&g);
             if let Some(qd) = qd {
@@ -163,8 +167,6 @@ impl RodKinematics {
                     tip_acc[n + 1] = Vec6::zeros();
                 }
             }
-            tip_ad_inv[n] = a;
-            tip_tm[n] = tm;
         }
         Ok(())
     }
