@@ -241,22 +241,30 @@ impl RodKinematics {
             // g(L_{n−1})·exp(xξ̂) with exp from (D4): R₀R(x) = R₀ + x a R₀k̃ +
             // x² b R₀k̃², p = p₀ + x R₀q + x² b R₀(k×q) + x³ c R₀(k×(k×q)).
             // The products with R₀ are formed once per piece, so a point costs
-            // three series and a few scaled additions. Row i of R₀k̃ is
-            // r_i × k (r_i = row i of R₀), of R₀k̃² it is (r_i × k) × k:
-            // cross products instead of products with skew matrices.
+            // three series and a few scaled additions. Column j of M k̃ is
+            // M (k × e_j), a difference of two scaled columns of M; applied
+            // to R₀ and then to R₀k̃ it gives R₀k̃ and R₀k̃² without products
+            // with skew matrices.
             let k = softrod_lie::angular(xi);
             let q = softrod_lie::linear(xi);
-            let r0 = &base.rotation;
-            let rk: [Vec3; 3] = std::array::from_fn(|i| r0.row(i).transpose().cross(&k));
-            let rkk: [Vec3; 3] = std::array::from_fn(|i| rk[i].cross(&k));
+            let times_k = |m: [Vec3; 3]| {
+                [
+                    m[1] * k[2] - m[2] * k[1],
+                    m[2] * k[0] - m[0] * k[2],
+                    m[0] * k[1] - m[1] * k[0],
+                ]
+            };
+            let r0c = [0, 1, 2].map(|j| base.rotation.column(j).into_owned());
+            let rk = times_k(r0c);
+            let rkk = times_k(rk);
             // Column-major 3×3 blocks as plain arrays: the per-point update is
             // then 12 independent scaled sums the compiler packs into SIMD.
-            let r0: [f64; 9] = r0.as_slice().try_into().expect("3×3");
-            let r0k: [f64; 9] = std::array::from_fn(|e| rk[e % 3][e / 3]);
-            let r0k2: [f64; 9] = std::array::from_fn(|e| rkk[e % 3][e / 3]);
-            let kq = k.cross(&q);
-            let rot = &base.rotation;
-            let (r0q, r0kq, r0kkq) = (rot * q, rot * kq, rot * k.cross(&kq));
+            let r0: [f64; 9] = base.rotation.as_slice().try_into().expect("3×3");
+            let r0k: [f64; 9] = std::array::from_fn(|e| rk[e / 3][e % 3]);
+            let r0k2: [f64; 9] = std::array::from_fn(|e| rkk[e / 3][e % 3]);
+            // R₀q, R₀(k×q) = (R₀k̃)q, R₀(k×(k×q)) = (R₀k̃²)q from the columns.
+            let times_q = |m: &[Vec3; 3]| m[0] * q[0] + m[1] * q[1] + m[2] * q[2];
+            let (r0q, r0kq, r0kkq) = (times_q(&r0c), times_q(&rk), times_q(&rkk));
             let p0 = base.translation;
             let theta = k.norm();
             for (o, f) in out.iter_mut().zip(fractions) {
