@@ -40,8 +40,10 @@ pub struct RodKinematics {
     tip_vel: Vec<Vec6>,
     /// `η̇(L_n)`, `n = 0…N`.
     tip_acc: Vec<Vec6>,
-    /// `A_{n,ℓ} = Ad⁻¹_{g_n(ℓ_n)}` per piece.
-    tip_ad_inv: Vec<AdOp>,
+    /// `g_n(ℓ_n) = exp(ℓ_n ξ̂_n)` per piece, the local transform whose
+    /// `Ad⁻¹` is `A_{n,ℓ}` (applied through `Pose::ad_inv_vec` and
+    /// `AdOp::mul_ad_inv`, never formed).
+    tip_local: Vec<Pose>,
     /// `T₋(ℓ_n)` per piece (`S_n(ℓ_n) = T₋(ℓ_n) B_n`).
     tip_tm: Vec<AdOp>,
     /// `S_n(ℓ_n)` in the columns of piece n (6 × n_dof), for general bases
@@ -69,7 +71,7 @@ impl RodKinematics {
             tip_pose: vec![*rod.base(); n + 1],
             tip_vel: vec![Vec6::zeros(); n + 1],
             tip_acc: vec![Vec6::zeros(); n + 1],
-            tip_ad_inv: vec![AdOp::identity(); n],
+            tip_local: vec![Pose::identity(); n],
             tip_tm: vec![AdOp::zeros(); n],
             tip_s: Matrix6xX::zeros(rod.n_dof()),
             tip_sdot: Matrix6xX::zeros(rod.n_dof()),
@@ -120,7 +122,7 @@ impl RodKinematics {
         let strain = &mut self.strain[..np];
         let strain_rate = &mut self.strain_rate[..np];
         let strain_acc = &mut self.strain_acc[..np];
-        let tip_ad_inv = &mut self.tip_ad_inv[..np];
+        let tip_local = &mut self.tip_local[..np];
         let tip_tm = &mut self.tip_tm[..np];
         let tip_pose = &mut self.tip_pose[..np + 1];
         let tip_vel = &mut self.tip_vel[..np + 1];
@@ -133,13 +135,13 @@ impl RodKinematics {
             // Stored at once and used from the buffers below: keeping local
             // copies alive made the compiler move them with memcpy calls.
             tip_tm[n] = tm;
-            tip_ad_inv[n] = g.ad_inv();
-            let (tm, a) = (&tip_tm[n], &tip_ad_inv[n]);
+            tip_local[n] = g;
+            let (tm, g) = (&tip_tm[n], &tip_local[n]);
             let cols = 6 * piece.dof_offset..6 * (piece.dof_offset + piece.basis.dof());
             if piece.basis.selection().is_none() {
                 write_op_columns(tm, &piece.basis, &mut tip_s[cols]);
             }
-            tip_pose[n + 1] = tip_pose[n].compose(&g);
+            tip_pose[n + 1] = tip_pose[n].compose(g);
             if let Some(qd) = qd {
                 let dxi = piece.strain_rate(qd);
                 let ddxi = qdd.map_or(Vec6::zeros(), |v| piece.strain_rate(v));
@@ -147,10 +149,10 @@ impl RodKinematics {
                 strain_acc[n] = ddxi;
                 let dt = d_tangent_minus(piece.length, &xi, &dxi);
                 op_times_basis(&dt, &piece.basis, &mut self.tip_sdot, piece.dof_offset);
-                let carried = a.mul_vec(&tip_vel[n]);
+                let carried = g.ad_inv_vec(&tip_vel[n]);
                 let local_v = tm.mul_vec(&dxi);
                 tip_vel[n + 1] = carried + local_v;
-                tip_acc[n + 1] = a.mul_vec(&tip_acc[n])
+                tip_acc[n + 1] = g.ad_inv_vec(&tip_acc[n])
                     + tm.mul_vec(&ddxi)
                     + ad_vec(&carried, &local_v)
                     + d_tangent_minus_self(piece.length, &xi, &dxi);
@@ -161,7 +163,7 @@ impl RodKinematics {
                 if let Some(qdd) = qdd {
                     let ddxi = piece.strain_rate(qdd);
                     strain_acc[n] = ddxi;
-                    tip_acc[n + 1] = a.mul_vec(&tip_acc[n]) + tm.mul_vec(&ddxi);
+                    tip_acc[n + 1] = g.ad_inv_vec(&tip_acc[n]) + tm.mul_vec(&ddxi);
                 } else {
                     strain_acc[n] = Vec6::zeros();
                     tip_acc[n + 1] = Vec6::zeros();
@@ -350,7 +352,7 @@ impl RodKinematics {
             // At a piece tip everything is in the sweep's cache (same values
             // `local` would recompute): g(L_n), A_ℓ and the columns S_ℓ.
             self.write_tip_s(p, n, &mut os[cols]);
-            (self.tip_pose[n + 1], self.tip_ad_inv[n])
+            (self.tip_pose[n + 1], self.tip_local[n].ad_inv())
         } else {
             let (g, a, tm) = self.local(n, x);
             write_op_columns(&tm, &p.basis, &mut os[cols]);
@@ -376,7 +378,7 @@ impl RodKinematics {
                     o.copy_from_slice(carry.mul_vec(&Vec6::from_column_slice(t)).as_slice());
                 }
             }
-            carry = carry * self.tip_ad_inv[i];
+            carry = carry.mul_ad_inv(&self.tip_local[i]);
         }
         apply_frame(&g, frame, out);
         Ok(())
@@ -434,7 +436,7 @@ impl RodKinematics {
                 out.fixed_view_mut::<6, 1>(0, c)
                     .copy_from(&to_frame(&g, &col, frame));
             }
-            carry = carry * self.tip_ad_inv[i];
+            carry = carry.mul_ad_inv(&self.tip_local[i]);
         }
         Ok(())
     }
