@@ -55,22 +55,14 @@ pub fn exp_twist(x: f64, xi: &Vec6) -> Pose {
 fn exp_twist_with(x: f64, xi: &Vec6, a: f64, b: f64, c: f64) -> Pose {
     let kv = angular(xi);
     let q = linear(xi);
-    let xa = x * a;
+    // k̃² = kkᵀ − θ²I: no 3×3 product needed. Kept as whole-matrix
+    // operations on purpose: the entrywise symmetric + skew form (as in
+    // `tangent_blocks`) runs 25 fewer instructions but measured 14–33 %
+    // slower under criterion (not investigated further).
+    let rotation = Mat3::from_diagonal_element(1.0 - x * x * b * kv.norm_squared())
+        + skew(&kv) * (x * a)
+        + (kv * kv.transpose()) * (x * x * b);
     let x2b = x * x * b;
-    // R = I + x a k̃ + x² b (kkᵀ − θ²I), written entrywise as a symmetric part
-    // plus the skew part x a k̃: each product is formed once for the two
-    // mirrored entries, and no 3×3 matrix of zeros is ever multiplied.
-    let d = 1.0 - x2b * kv.norm_squared();
-    let (k0, k1, k2) = (kv[0], kv[1], kv[2]);
-    let rotation = sym_plus_skew(
-        [
-            d + (k0 * k0) * x2b,
-            d + (k1 * k1) * x2b,
-            d + (k2 * k2) * x2b,
-        ],
-        [(k0 * k1) * x2b, (k0 * k2) * x2b, (k1 * k2) * x2b],
-        &(kv * xa),
-    );
     let kq = kv.cross(&q);
     let translation = q * x + kq * x2b + kv.cross(&kq) * (x * x * x * c);
     Pose {
