@@ -52,6 +52,9 @@ pub struct Basis {
     /// When every column is a unit vector, the component each selects:
     /// `B q` and `Bᵀ w` then become gathers/scatters.
     selection: Option<Vec<usize>>,
+    /// `B = I₆` (all six strains in order): `B q` is a copy and `op · B` is
+    /// `op` itself, the common Cosserat case the hot loops special-case.
+    identity: bool,
 }
 
 impl Basis {
@@ -96,6 +99,7 @@ impl Basis {
         }
         Ok(Self {
             matrix,
+            identity: idx == [0, 1, 2, 3, 4, 5],
             selection: Some(idx.to_vec()),
         })
     }
@@ -129,7 +133,12 @@ impl Basis {
             }
         }
         let selection = (sel.len() == k).then_some(sel);
-        Ok(Self { matrix, selection })
+        let identity = selection.as_deref() == Some(&[0, 1, 2, 3, 4, 5][..]);
+        Ok(Self {
+            matrix,
+            selection,
+            identity,
+        })
     }
 
     /// Number of generalized coordinates `k_n` of a piece with this basis.
@@ -149,15 +158,24 @@ impl Basis {
         self.selection.as_deref()
     }
 
+    /// Whether `B_n = I₆` (all six strains, in order).
+    #[inline]
+    pub fn is_identity(&self) -> bool {
+        self.identity
+    }
+
     /// `B q` for the piece's coordinates `q` (length `k_n`).
     #[inline]
     pub fn apply(&self, q: &[f64]) -> Vec6 {
         debug_assert_eq!(q.len(), self.dof());
+        if self.identity {
+            return Vec6::from_column_slice(q);
+        }
         let mut out = Vec6::zeros();
         match &self.selection {
             Some(sel) => {
-                for (c, &i) in sel.iter().enumerate() {
-                    out[i] = q[c];
+                for (&i, &qc) in sel.iter().zip(q) {
+                    out[i] = qc;
                 }
             }
             None => {
@@ -173,10 +191,14 @@ impl Basis {
     #[inline]
     pub fn tr_apply(&self, w: &Vec6, out: &mut [f64]) {
         debug_assert_eq!(out.len(), self.dof());
+        if self.identity {
+            out.copy_from_slice(w.as_slice());
+            return;
+        }
         match &self.selection {
             Some(sel) => {
-                for (c, &i) in sel.iter().enumerate() {
-                    out[c] = w[i];
+                for (o, &i) in out.iter_mut().zip(sel) {
+                    *o = w[i];
                 }
             }
             None => {
@@ -226,7 +248,12 @@ impl Piece {
     /// The piece's strain `ξ_n = B_n q_n + ξ̄_n` for the full coordinate vector `q`.
     #[inline]
     pub fn strain(&self, q: &[f64]) -> Vec6 {
-        self.basis.apply(&q[self.dofs()]) + self.rest_strain
+        let q = &q[self.dofs()];
+        if self.basis.identity {
+            // Inline, without the call into `apply` (the sweep's hot path).
+            return Vec6::from_column_slice(q) + self.rest_strain;
+        }
+        self.basis.apply(q) + self.rest_strain
     }
 
     /// The strain rate `ξ̇_n = B_n q̇_n` for the full velocity vector `q̇`.

@@ -1,5 +1,6 @@
 //! The block structure shared by every function of `ad_ξ`.
 
+use crate::pose::Pose;
 use crate::types::{Mat3, Mat6, Vec3, Vec6, angular, join, linear};
 use std::ops::{Add, Mul, Sub};
 
@@ -101,6 +102,27 @@ impl AdOp {
         }
     }
 
+    /// `self · Ad⁻¹_g` for a pose `g = (R, p)`, without forming `Ad⁻¹_g`:
+    /// with `Ad⁻¹_g = [[Rᵀ, 0], [−Rᵀp̃, Rᵀ]]` the product is
+    /// `(A Rᵀ, B Rᵀ − (A Rᵀ) p̃)`, and `M p̃` is a combination of the columns
+    /// of `M` (column j is `M (p × e_j)`): 72 multiplications instead of 81.
+    #[inline]
+    pub fn mul_ad_inv(&self, g: &Pose) -> AdOp {
+        let rt = g.rotation.transpose();
+        let a = self.a * rt;
+        let p = &g.translation;
+        let (c0, c1, c2) = (a.column(0), a.column(1), a.column(2));
+        let ap = Mat3::from_columns(&[
+            c1 * p[2] - c2 * p[1],
+            c2 * p[0] - c0 * p[2],
+            c0 * p[1] - c1 * p[0],
+        ]);
+        AdOp {
+            a,
+            b: self.b * rt - ap,
+        }
+    }
+
     /// Applies `self` to the 3-vector pair `(w, v)` given separately.
     #[inline(always)]
     pub fn mul_parts(&self, w: &Vec3, v: &Vec3) -> (Vec3, Vec3) {
@@ -160,5 +182,34 @@ impl Sub for AdOp {
 impl From<AdOp> for Mat6 {
     fn from(op: AdOp) -> Mat6 {
         op.to_mat6()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mul_ad_inv_equals_the_product_with_ad_inv() {
+        let xis = [
+            Vec6::new(0.3, -1.1, 0.7, 1.05, 0.2, -0.1),
+            Vec6::new(1e-9, 0.0, 2e-9, 0.9, 0.01, 0.0),
+            Vec6::new(12.0, -30.0, 5.0, 1.2, -0.3, 0.4),
+        ];
+        let c = AdOp {
+            a: Mat3::new(0.3, -0.2, 0.9, 1.1, 0.5, -0.7, 0.2, 0.4, 0.8),
+            b: Mat3::new(-1.3, 0.6, 0.1, 0.0, 2.5, -0.4, 0.9, -0.8, 0.3),
+        };
+        for xi in &xis {
+            for x in [0.0, 0.4, 3.0] {
+                let mut g = crate::exp_twist(x, xi);
+                g.translation += Vec3::new(5.0, -2.0, 0.5);
+                let dense = c * g.ad_inv();
+                let fast = c.mul_ad_inv(&g);
+                let scale = 1.0 + dense.a.amax() + dense.b.amax();
+                assert!((fast.a - dense.a).amax() < 1e-15 * scale);
+                assert!((fast.b - dense.b).amax() < 4e-15 * scale, "{xi:?} {x}");
+            }
+        }
     }
 }

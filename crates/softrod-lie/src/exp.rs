@@ -8,7 +8,7 @@ use crate::adop::AdOp;
 use crate::ops::{ad_vec, skew};
 use crate::pose::Pose;
 use crate::series;
-use crate::types::{Mat3, Vec6, angular, linear};
+use crate::types::{Mat3, Vec3, Vec6, angular, linear};
 
 /// Powers `ad_ξ^i = [[K^i, 0], [P_i, K^i]]`, `i = 1…4`, with `K = k̃`, `Q = q̃`,
 /// `P₁ = Q`, `P_{i+1} = Q K^i + K P_i`, and `K³ = −θ²K`, `K⁴ = −θ²K²`.
@@ -55,16 +55,37 @@ pub fn exp_twist(x: f64, xi: &Vec6) -> Pose {
 fn exp_twist_with(x: f64, xi: &Vec6, a: f64, b: f64, c: f64) -> Pose {
     let kv = angular(xi);
     let q = linear(xi);
-    // k̃² = kkᵀ − θ²I: no 3×3 product needed.
+    // k̃² = kkᵀ − θ²I: no 3×3 product needed. Kept as whole-matrix
+    // operations on purpose: the entrywise symmetric + skew form (as in
+    // `tangent_blocks`) runs 25 fewer instructions but measured 14–33 %
+    // slower under criterion (not investigated further).
     let rotation = Mat3::from_diagonal_element(1.0 - x * x * b * kv.norm_squared())
         + skew(&kv) * (x * a)
         + (kv * kv.transpose()) * (x * x * b);
+    let x2b = x * x * b;
     let kq = kv.cross(&q);
-    let translation = q * x + kq * (x * x * b) + kv.cross(&kq) * (x * x * x * c);
+    let translation = q * x + kq * x2b + kv.cross(&kq) * (x * x * x * c);
     Pose {
         rotation,
         translation,
     }
+}
+
+/// The 3×3 matrix `S + w̃` from the diagonal `d` and the upper off-diagonal
+/// entries `o = (S₀₁, S₀₂, S₁₂)` of a symmetric `S` and the axial vector `w`.
+#[inline(always)]
+fn sym_plus_skew(d: [f64; 3], o: [f64; 3], w: &Vec3) -> Mat3 {
+    Mat3::new(
+        d[0],
+        o[0] - w[2],
+        o[1] + w[1],
+        o[0] + w[2],
+        d[1],
+        o[2] - w[0],
+        o[1] - w[1],
+        o[2] + w[0],
+        d[2],
+    )
 }
 
 /// `T(x)` (`sign = +1`) or `T₋(x)` (`sign = −1`) in block form from the
@@ -84,18 +105,47 @@ fn tangent_blocks(x: f64, xi: &Vec6, b: f64, c: f64, t3: f64, t4: f64, sign: f64
     let q = linear(xi);
     let th2 = kv.norm_squared();
     let sigma = kv.dot(&q);
-    let kmat = skew(&kv);
-    let k2 = kv * kv.transpose() - Mat3::from_diagonal_element(th2);
-    let kq = kv * q.transpose();
-    let p2 = kq + kq.transpose() - Mat3::from_diagonal_element(2.0 * sigma);
     let x2 = x * x;
     let x3 = x2 * x;
     let x4 = x2 * x2;
     let cb = sign * x2 * b;
     let cc = x3 * c;
+    let s = 2.0 * sigma * x4;
+    let s3 = s * (sign * t3);
+    let s4 = s * (x * t4);
+    // Split into symmetric parts (from K² = kkᵀ − θ²I and P₂) and skew parts
+    // (from K and Q): A = xI + cc K² + (cb k)~,
+    // B = cc P₂ − s₄ K² + (cb q − s₃ k)~, each mirrored pair sharing products.
+    let (k0, k1, k2) = (kv[0], kv[1], kv[2]);
+    let (q0, q1, q2) = (q[0], q[1], q[2]);
+    let kk = [k0 * k1, k0 * k2, k1 * k2];
+    let kkd = [k0 * k0 - th2, k1 * k1 - th2, k2 * k2 - th2];
+    let p2 = [k0 * q1 + q0 * k1, k0 * q2 + q0 * k2, k1 * q2 + q1 * k2];
+    let two_sigma = 2.0 * sigma;
+    let p2d = [
+        2.0 * (k0 * q0) - two_sigma,
+        2.0 * (k1 * q1) - two_sigma,
+        2.0 * (k2 * q2) - two_sigma,
+    ];
     AdOp {
-        a: Mat3::from_diagonal_element(x) + kmat * cb + k2 * cc,
-        b: skew(&q) * cb + p2 * cc - (kmat * (sign * t3) + k2 * (x * t4)) * (2.0 * sigma * x4),
+        a: sym_plus_skew(
+            [x + kkd[0] * cc, x + kkd[1] * cc, x + kkd[2] * cc],
+            [kk[0] * cc, kk[1] * cc, kk[2] * cc],
+            &(kv * cb),
+        ),
+        b: sym_plus_skew(
+            [
+                p2d[0] * cc - kkd[0] * s4,
+                p2d[1] * cc - kkd[1] * s4,
+                p2d[2] * cc - kkd[2] * s4,
+            ],
+            [
+                p2[0] * cc - kk[0] * s4,
+                p2[1] * cc - kk[1] * s4,
+                p2[2] * cc - kk[2] * s4,
+            ],
+            &(q * cb - kv * s3),
+        ),
     }
 }
 
@@ -128,7 +178,7 @@ pub fn tangent_minus(x: f64, xi: &Vec6) -> AdOp {
 
 /// `exp(x·ξ̂)` and `T₋(x)` together, sharing the trigonometry: the two maps
 /// a PCS kinematics sweep needs at every evaluation point.
-#[inline]
+#[inline(always)]
 pub fn exp_and_tangent_minus(x: f64, xi: &Vec6) -> (Pose, AdOp) {
     let ([a, b, c], [t3, t4]) = series::abc_tau34(x * angular(xi).norm());
     (

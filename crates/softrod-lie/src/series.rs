@@ -94,34 +94,88 @@ const TAU_SERIES: [[f64; N]; 4] = tau_series();
 const RHO_SERIES: [[f64; N]; 4] = rho_series();
 const ABC_SERIES: [[f64; N]; 3] = abc_series();
 
-/// Horner in `u`. Plain `acc * u + c` on purpose, not `f64::mul_add`: on the
-/// default `x86_64` target (no `fma` feature) `mul_add` is an out-of-line
-/// libm call per step, which made the series branch ~3× slower than the closed
-/// forms; the separate rounding costs nothing measurable in accuracy
-/// (tests/accuracy.rs) and gives the same bits on every target.
+/// Coefficient tables laid out term by term (`rows[m][j]` = coefficient `m`
+/// of family `j`), 16-byte aligned, so the Horner steps of neighbouring
+/// families run side by side in the two lanes of one SIMD register. Padding
+/// lanes hold zeros and are never read by the callers.
+#[repr(C, align(16))]
+struct Packed<const F: usize> {
+    rows: [[f64; F]; N],
+}
+
+const fn pack<const F: usize>(fams: &[&[f64; N]]) -> Packed<F> {
+    let mut rows = [[0.0; F]; N];
+    let mut j = 0;
+    while j < fams.len() {
+        let mut m = 0;
+        while m < N {
+            rows[m][j] = fams[j][m];
+            m += 1;
+        }
+        j += 1;
+    }
+    Packed { rows }
+}
+
+/// `[a, b, c, ·]`.
+static ABC_P: Packed<4> = pack(&[&ABC_SERIES[0], &ABC_SERIES[1], &ABC_SERIES[2]]);
+/// `[a, b, c, τ₃, τ₄, ·]`.
+static ABC_T34_P: Packed<6> = pack(&[
+    &ABC_SERIES[0],
+    &ABC_SERIES[1],
+    &ABC_SERIES[2],
+    &TAU_SERIES[2],
+    &TAU_SERIES[3],
+]);
+/// `[τ₁, …, τ₄]`.
+static TAU_P: Packed<4> = pack(&[
+    &TAU_SERIES[0],
+    &TAU_SERIES[1],
+    &TAU_SERIES[2],
+    &TAU_SERIES[3],
+]);
+/// `[ρ₁, …, ρ₄]`.
+static RHO_P: Packed<4> = pack(&[
+    &RHO_SERIES[0],
+    &RHO_SERIES[1],
+    &RHO_SERIES[2],
+    &RHO_SERIES[3],
+]);
+
+/// Horner in `u` on every family of a packed table at once. Plain
+/// `acc * u + c` on purpose, not `f64::mul_add`: on the default `x86_64`
+/// target (no `fma` feature) `mul_add` is an out-of-line libm call per step,
+/// which made the series branch ~3× slower than the closed forms; the
+/// separate rounding costs nothing measurable in accuracy
+/// (tests/accuracy.rs) and gives the same bits on every target. Each lane
+/// performs exactly the operations of a one-family Horner loop, so packing
+/// changes no bit of the results.
 ///
-/// Only the first `n ≤ N` terms are summed ([`terms`]).
+/// Only the first `n ≤ N` terms are summed ([`terms`]); a constant term
+/// count per arm lets the compiler unroll each loop (a runtime bound would
+/// cost more in loop overhead than the terms saved).
 #[inline(always)]
-fn horner(c: &[f64; N], u: f64, n: usize) -> f64 {
-    // A constant term count per arm lets the compiler unroll each loop; a
-    // runtime bound would cost more in loop overhead than the terms saved.
+fn horner_packed<const F: usize>(t: &Packed<F>, u: f64, n: usize) -> [f64; F] {
     match n {
-        7 => horner_k::<7>(c, u),
-        8 => horner_k::<8>(c, u),
-        10 => horner_k::<10>(c, u),
-        11 => horner_k::<11>(c, u),
-        12 => horner_k::<12>(c, u),
-        _ => horner_k::<N>(c, u),
+        7 => horner_packed_k::<F, 7>(t, u),
+        8 => horner_packed_k::<F, 8>(t, u),
+        10 => horner_packed_k::<F, 10>(t, u),
+        11 => horner_packed_k::<F, 11>(t, u),
+        12 => horner_packed_k::<F, 12>(t, u),
+        _ => horner_packed_k::<F, N>(t, u),
     }
 }
 
 #[inline(always)]
-fn horner_k<const K: usize>(c: &[f64; N], u: f64) -> f64 {
-    let mut acc = c[K - 1];
+fn horner_packed_k<const F: usize, const K: usize>(t: &Packed<F>, u: f64) -> [f64; F] {
+    let mut acc = t.rows[K - 1];
     let mut m = K - 1;
     while m > 0 {
         m -= 1;
-        acc = acc * u + c[m];
+        let row = &t.rows[m];
+        for j in 0..F {
+            acc[j] = acc[j] * u + row[j];
+        }
     }
     acc
 }
@@ -149,21 +203,104 @@ fn terms(u: f64) -> usize {
     }
 }
 
+/// Taylor coefficients of `sin r = r + r·u·Σ_{m≥1} (−1)^m u^{m−1}/(2m+1)!` and
+/// `cos r = 1 − u/2 + u²·Σ_{m≥2} (−1)^m u^{m−2}/(2m)!`, `u = r²`, side by side
+/// (`[sin, cos]` per term) for one packed Horner. Eight terms each: on
+/// `|r| ≤ π/4` the first neglected terms are below 1e-19 relative.
+#[repr(C, align(16))]
+struct SinCosTable([[f64; 2]; 8]);
+
+const fn sin_cos_table() -> SinCosTable {
+    let mut rows = [[0.0; 2]; 8];
+    let mut j = 0;
+    while j < 8 {
+        let sign = if j % 2 == 0 { -1.0 } else { 1.0 };
+        rows[j] = [sign * INV_FACT[2 * j + 3], -sign * INV_FACT[2 * j + 4]];
+        j += 1;
+    }
+    SinCosTable(rows)
+}
+
+static SIN_COS: SinCosTable = sin_cos_table();
+
+/// Above this `|ψ|` the reduction below is not exact enough; `f64::sin_cos`.
+const SIN_COS_FAST_MAX: f64 = 1_048_576.0; // 2^20
+
+/// `(sin ψ, cos ψ)` in one go for the closed forms.
+///
+/// `f64::sin_cos` is two libm calls (`sin` and `cos`, each reducing the
+/// argument again): 210 of the 373 instructions of `exp_twist` on the closed
+/// branch. Here the argument is reduced once, `ψ = k·π/2 + r`, `|r| ≤ π/4`,
+/// with π/2 split in three parts (33 + 33 + 53 bits: `k·P₁`, `k·P₂` are exact
+/// for `|k| < 2^20`, `ψ − k·P₁` is exact by Sterbenz) and the reduced
+/// argument kept as a double-double `r + r_lo`; both Taylor polynomials then
+/// run in the two lanes of one register, and the quadrant `k mod 4` picks
+/// signs and order. Error ≤ 1 ulp against a correctly rounded sine and
+/// cosine (tested against `f64::sin_cos`); beyond `|ψ| = 2^20` it defers to
+/// `f64::sin_cos`.
+#[inline(always)]
+fn sin_cos(psi: f64) -> (f64, f64) {
+    // π/2 = P1 + P2 + P3 + O(1e-37).
+    const P1: f64 = f64::from_bits(0x3ff9_21fb_5440_0000);
+    const P2: f64 = f64::from_bits(0x3dd0_b461_1a60_0000);
+    const P3: f64 = f64::from_bits(0x3ba3_198a_2e03_7073);
+    // Adding and subtracting 1.5·2^52 rounds to the nearest integer (ties to
+    // even) for |x| < 2^51 without a libm call (`round` is one on x86_64
+    // without SSE4.1).
+    const SHIFT: f64 = 6_755_399_441_055_744.0;
+    // NaN takes the fast path and comes out NaN.
+    if psi.abs() >= SIN_COS_FAST_MAX {
+        return psi.sin_cos();
+    }
+    let kf = (psi * std::f64::consts::FRAC_2_PI + SHIFT) - SHIFT;
+    let t = psi - kf * P1;
+    let w = kf * P2;
+    // Two-sum t − w: the rounding error is kept, whatever the magnitudes.
+    let r1 = t - w;
+    let bv = r1 - t;
+    let e1 = (t - (r1 - bv)) + (-w - bv);
+    let lo = e1 - kf * P3;
+    let r = r1 + lo;
+    let r_lo = lo - (r - r1);
+    let u = r * r;
+    // Estrin, not Horner: the whole function is one dependency chain
+    // (reduction, polynomial, reconstruction), and pairing the terms halves
+    // the polynomial's depth (4 instead of 8 multiply-add steps) for two
+    // extra multiplications. The terms fall off by ≥ 1/30 each, so the
+    // evaluation order changes nothing at the ulp level (tested below).
+    let t = &SIN_COS.0;
+    let u2 = u * u;
+    let u4 = u2 * u2;
+    let pair = |i: usize| [t[i][0] + t[i + 1][0] * u, t[i][1] + t[i + 1][1] * u];
+    let (p01, p23, p45, p67) = (pair(0), pair(2), pair(4), pair(6));
+    let q0 = [p01[0] + p23[0] * u2, p01[1] + p23[1] * u2];
+    let q1 = [p45[0] + p67[0] * u2, p45[1] + p67[1] * u2];
+    let acc = [q0[0] + q1[0] * u4, q0[1] + q1[1] * u4];
+    let h = 0.5 * u;
+    // sin(r + r_lo) ≈ sin r + r_lo·cos r, cos(r + r_lo) ≈ cos r − r_lo·r;
+    // 1 − h is split into its rounded value and its exact error.
+    let s = r + (r_lo * (1.0 - h) + r * u * acc[0]);
+    let hw = 1.0 - h;
+    let c = hw + (((1.0 - hw) - h) + (u2 * acc[1] - r * r_lo));
+    match (kf as i64) & 3 {
+        0 => (s, c),
+        1 => (c, -s),
+        2 => (-s, -c),
+        _ => (-c, s),
+    }
+}
+
 /// The coefficients `(a, b, c)` of the group exponential (D4):
 /// `a = sinψ/ψ`, `b = (1 − cosψ)/ψ²`, `c = (ψ − sinψ)/ψ³`.
-#[inline]
+#[inline(always)]
 pub fn abc(psi: f64) -> [f64; 3] {
     let psi = psi.abs();
     if psi < PSI_SWITCH {
         let u = psi * psi;
-        let n = terms(u);
-        [
-            horner(&ABC_SERIES[0], u, n),
-            horner(&ABC_SERIES[1], u, n),
-            horner(&ABC_SERIES[2], u, n),
-        ]
+        let [a, b, c, _] = horner_packed(&ABC_P, u, terms(u));
+        [a, b, c]
     } else {
-        let (s, c) = psi.sin_cos();
+        let (s, c) = sin_cos(psi);
         abc_closed(psi, s, c)
     }
 }
@@ -183,15 +320,9 @@ pub fn tau(psi: f64) -> [f64; 4] {
     let psi = psi.abs();
     if psi < PSI_SWITCH {
         let u = psi * psi;
-        let n = terms(u);
-        [
-            horner(&TAU_SERIES[0], u, n),
-            horner(&TAU_SERIES[1], u, n),
-            horner(&TAU_SERIES[2], u, n),
-            horner(&TAU_SERIES[3], u, n),
-        ]
+        horner_packed(&TAU_P, u, terms(u))
     } else {
-        let (s, c) = psi.sin_cos();
+        let (s, c) = sin_cos(psi);
         tau_closed(psi, s, c)
     }
 }
@@ -229,15 +360,9 @@ pub fn rho(psi: f64) -> [f64; 4] {
     let psi = psi.abs();
     if psi < PSI_SWITCH {
         let u = psi * psi;
-        let n = terms(u);
-        [
-            horner(&RHO_SERIES[0], u, n),
-            horner(&RHO_SERIES[1], u, n),
-            horner(&RHO_SERIES[2], u, n),
-            horner(&RHO_SERIES[3], u, n),
-        ]
+        horner_packed(&RHO_P, u, terms(u))
     } else {
-        let (s, c) = psi.sin_cos();
+        let (s, c) = sin_cos(psi);
         rho_closed(psi, s, c)
     }
 }
@@ -266,7 +391,7 @@ pub fn abc_tau(psi: f64) -> ([f64; 3], [f64; 4]) {
     if psi < PSI_SWITCH {
         (abc(psi), tau(psi))
     } else {
-        let (s, c) = psi.sin_cos();
+        let (s, c) = sin_cos(psi);
         (abc_closed(psi, s, c), tau_closed(psi, s, c))
     }
 }
@@ -274,18 +399,15 @@ pub fn abc_tau(psi: f64) -> ([f64; 3], [f64; 4]) {
 /// `abc(ψ)` and `[τ₃, τ₄]` together: all that `T(x)`, `T₋(x)` and the group
 /// exponential need once `τ₁, τ₂` are folded into `b, c`
 /// (`τ₁ − ψ²τ₃ = b`, `τ₂ − ψ²τ₄ = c`).
-#[inline]
+#[inline(always)]
 pub fn abc_tau34(psi: f64) -> ([f64; 3], [f64; 2]) {
     let psi = psi.abs();
     if psi < PSI_SWITCH {
         let u = psi * psi;
-        let n = terms(u);
-        (
-            abc(psi),
-            [horner(&TAU_SERIES[2], u, n), horner(&TAU_SERIES[3], u, n)],
-        )
+        let [a, b, c, t3, t4, _] = horner_packed(&ABC_T34_P, u, terms(u));
+        ([a, b, c], [t3, t4])
     } else {
-        let (s, c) = psi.sin_cos();
+        let (s, c) = sin_cos(psi);
         let t = tau_closed(psi, s, c);
         (abc_closed(psi, s, c), [t[2], t[3]])
     }
@@ -299,7 +421,7 @@ pub fn abc_tau_rho(psi: f64) -> ([f64; 3], [f64; 4], [f64; 4]) {
     if psi < PSI_SWITCH {
         (abc(psi), tau(psi), rho(psi))
     } else {
-        let (s, c) = psi.sin_cos();
+        let (s, c) = sin_cos(psi);
         (
             abc_closed(psi, s, c),
             tau_closed(psi, s, c),
@@ -315,7 +437,7 @@ pub fn tau_rho(psi: f64) -> ([f64; 4], [f64; 4]) {
     if psi < PSI_SWITCH {
         (tau(psi), rho(psi))
     } else {
-        let (s, c) = psi.sin_cos();
+        let (s, c) = sin_cos(psi);
         (tau_closed(psi, s, c), rho_closed(psi, s, c))
     }
 }
@@ -324,7 +446,7 @@ pub fn tau_rho(psi: f64) -> ([f64; 4], [f64; 4]) {
 /// tests that measure the series against them, and for users who want to
 /// see why the series exist. Returns `(abc, tau, rho)`.
 pub fn closed_forms(psi: f64) -> ([f64; 3], [f64; 4], [f64; 4]) {
-    let (s, c) = psi.sin_cos();
+    let (s, c) = sin_cos(psi);
     (
         abc_closed(psi, s, c),
         tau_closed(psi, s, c),
@@ -335,6 +457,31 @@ pub fn closed_forms(psi: f64) -> ([f64; 3], [f64; 4], [f64; 4]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// One family, the first `n` terms: the reference for the packed tables.
+    fn horner(c: &[f64; N], u: f64, n: usize) -> f64 {
+        let mut acc = c[n - 1];
+        for m in (0..n - 1).rev() {
+            acc = acc * u + c[m];
+        }
+        acc
+    }
+
+    #[test]
+    fn packed_tables_give_the_one_family_bits() {
+        for psi in [0.0, 1e-9, 0.1, 0.2499, 0.3, 0.7, 1.2, 1.7, 2.2, 2.4999] {
+            let u: f64 = psi * psi;
+            let n = terms(u);
+            let one = |f: &[f64; N]| horner(f, u, n);
+            let [a, b, c] = abc(psi);
+            assert_eq!([a, b, c], [0, 1, 2].map(|j| one(&ABC_SERIES[j])));
+            let (abc2, t34) = abc_tau34(psi);
+            assert_eq!(abc2, [a, b, c]);
+            assert_eq!(t34, [one(&TAU_SERIES[2]), one(&TAU_SERIES[3])]);
+            assert_eq!(tau(psi), [0, 1, 2, 3].map(|i| one(&TAU_SERIES[i])));
+            assert_eq!(rho(psi), [0, 1, 2, 3].map(|i| one(&RHO_SERIES[i])));
+        }
+    }
 
     #[test]
     fn truncated_series_match_full_series() {
@@ -355,6 +502,32 @@ mod tests {
                     "psi {psi}: {cut} vs {full}"
                 );
             }
+        }
+    }
+
+    #[test]
+    fn sin_cos_within_an_ulp_of_libm() {
+        // Dense sweeps over the closed-form range and beyond, plus points
+        // next to multiples of π/2 (where the reduction must be exact).
+        let ulp = |v: f64| f64::from_bits(v.abs().to_bits() + 1) - v.abs();
+        let mut psis: Vec<f64> = (0..200_000).map(|i| 2.5 + i as f64 * 1.3e-3).collect();
+        psis.extend((0..20_000).map(|i| 0.1 + i as f64 * 52.4287));
+        for k in 1..2000 {
+            let m = k as f64 * std::f64::consts::FRAC_PI_2;
+            psis.extend([
+                m,
+                f64::from_bits(m.to_bits() + 1),
+                f64::from_bits(m.to_bits() - 1),
+            ]);
+        }
+        psis.extend([-3.0, -1e3, 1e-300, 0.0, 1048575.9, 1048576.0, 3e7]);
+        let (s, c) = sin_cos(f64::NAN);
+        assert!(s.is_nan() && c.is_nan());
+        for psi in psis {
+            let (s, c) = sin_cos(psi);
+            let (s0, c0) = psi.sin_cos();
+            assert!((s - s0).abs() <= ulp(s0), "sin({psi:e}): {s:e} vs {s0:e}");
+            assert!((c - c0).abs() <= ulp(c0), "cos({psi:e}): {c:e} vs {c0:e}");
         }
     }
 
