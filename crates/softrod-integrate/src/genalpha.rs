@@ -31,7 +31,7 @@ use crate::driver::{Stepper, check_underflow, clip_step};
 use crate::error::{IntegrateError, first_non_finite};
 use crate::options::{Options, Stats};
 use crate::state::{StepState, check_finite};
-use crate::system::{SecondOrderProblem, SecondOrderSystem, sys_err};
+use crate::system::{Problem, SecondOrderProblem, SecondOrderSystem, sys_err};
 
 /// The four generalized-α parameters from `ρ∞` (Chung–Hulbert 1993, eqs. 25,
 /// 17, 20): returns `(α_m, α_f, β, γ)`.
@@ -315,6 +315,7 @@ impl<S: SecondOrderSystem> Stepper<SecondOrderProblem<'_, S>> for GeneralizedAlp
         stats.rhs_evaluations += 1;
         check_finite(&self.qdd, t, h, "acceleration")?;
         self.set_first_order();
+        p.system_changed();
         self.jac_age = usize::MAX;
         self.lu_key = (f64::NAN, f64::NAN);
         Ok(())

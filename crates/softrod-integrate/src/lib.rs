@@ -20,8 +20,11 @@
 //! constant `K`, `D`, and they are what makes a rod stiff (shear and
 //! extension, `EA/EI ~ 1/r²`). [`RodJacobian::ElasticOnly`] hands the stiff
 //! methods `W = (−M(q)⁻¹K, −M(q)⁻¹D)` instead of the full Jacobian: one
-//! mass matrix and one Cholesky, no finite differences (at 5 pieces ~10×
-//! cheaper than `dynamics_jacobians`). [`Options::linearly_implicit`] then
+//! mass matrix, no finite differences (at 5 pieces ~10× cheaper than
+//! `dynamics_jacobians`), in mass-matrix form
+//! ([`SecondOrderSystem::mass_form_jacobians`]): the iteration matrix
+//! `I − β'W_q − γ'W_v = M⁻¹(M + β'K + γ'D)` is solved by a Cholesky of the
+//! SPD bracket and one product with `M` per solve, `M⁻¹K` is never formed. [`Options::linearly_implicit`] then
 //! makes generalized-α take exactly one Newton iteration per step: the
 //! elastic/viscous part is implicit, gravity, Coriolis and loads explicit —
 //! one acceleration evaluation and one LU solve per step.
