@@ -132,15 +132,11 @@ impl GeneralizedAlpha {
         let n = self.q.len();
         for k in 1..=opts.newton_max_iter.max(1) {
             self.newmark(h);
-            p.accel(t_new, &self.q_new, &self.v_new, &mut self.g)
+            // Δ = (I − β'Jq − γ'Jv)⁻¹ (a(qₙ₊₁, q̇ₙ₊₁) − x), into g.
+            p.newmark_correction(t_new, &self.q_new, &self.v_new, &self.x, &mut self.g)
                 .map_err(sys_err(self.s.t, h, "accel"))?;
             stats.rhs_evaluations += 1;
             stats.newton_iterations += 1;
-            // Δ = −(I − β'Jq − γ'Jv)⁻¹ (x − g), into g.
-            for i in 0..n {
-                self.g[i] -= self.x[i];
-            }
-            p.solve_n(&mut self.g);
             stats.lu_solves += 1;
             self.x += &self.g;
             let mut s = 0.0;

@@ -8,8 +8,8 @@
 
 use nalgebra::{DMatrix, DVector};
 use softrod_dynamics::{
-    Data, DynamicsError, Model, damping_matrix, dynamics_jacobians, forward_dynamics, mass_matrix,
-    stiffness_matrix,
+    Data, DynamicsError, Model, damping_matrix, dynamics_jacobians, forward_dynamics,
+    inverse_dynamics, mass_matrix, stiffness_matrix,
 };
 use softrod_mechanics::Tension;
 
@@ -154,6 +154,34 @@ impl SecondOrderSystem for RodSystem {
         if let Some((k, d)) = constant {
             k.copy_from(&stiffness_matrix(&self.model));
             d.copy_from(&damping_matrix(&self.model));
+        }
+        Ok(true)
+    }
+
+    /// `r = ID(t, q, q̇, q̈) − τ_act = M(q) q̈ − f` by the O(N) inverse
+    /// dynamics (with [`RodJacobian::ElasticOnly`], the mass-matrix form's
+    /// partner; not provided otherwise).
+    fn force_residual(
+        &mut self,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+        qdd: &DVector<f64>,
+        r: &mut DVector<f64>,
+    ) -> Result<bool, DynamicsError> {
+        if self.jacobian != RodJacobian::ElasticOnly {
+            return Ok(false);
+        }
+        r.copy_from(inverse_dynamics(
+            &self.model,
+            &mut self.data,
+            t,
+            q.as_slice(),
+            qd.as_slice(),
+            qdd.as_slice(),
+        )?);
+        if let Some(tau) = &self.tau {
+            *r -= tau;
         }
         Ok(true)
     }

@@ -137,6 +137,32 @@ pub trait SecondOrderSystem {
         Ok(false)
     }
 
+    /// Optional, with [`mass_form_jacobians`](Self::mass_form_jacobians):
+    /// the residual of the equation of motion in force form,
+    /// `r = M(q) q̈ − f(t, q, q̇)` for a given `q̈` (for a rod: inverse
+    /// dynamics minus the actuator force), into `r`; returns `Ok(true)`.
+    /// The default returns `Ok(false)`.
+    ///
+    /// Generalized-α then takes its Newton correction as
+    /// `Δ = −(M_J + β'K + γ'D)⁻¹ r(qₙ₊₁, q̇ₙ₊₁, x)` (`M_J`: the mass matrix of
+    /// the last Jacobian update) instead of `(M_J + β'K + γ'D)⁻¹ M_J (a − x)`:
+    /// the same Newton iteration on the same equation, whose fixed point is
+    /// `x = a`, but an inverse dynamics costs a fraction of a forward
+    /// dynamics (no articulated inertias) and the product with `M_J` goes.
+    /// With one iteration per step (the linearly implicit scheme) the two
+    /// differ by `(M − M_J)(a − x)`, second order small.
+    fn force_residual(
+        &mut self,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+        qdd: &DVector<f64>,
+        r: &mut DVector<f64>,
+    ) -> Result<bool, Self::Error> {
+        let _ = (t, q, qd, qdd, r);
+        Ok(false)
+    }
+
     /// Whether `a` does not depend on `t` explicitly (see
     /// [`OdeSystem::is_autonomous`]). Default `false`.
     fn is_autonomous(&self) -> bool {
@@ -299,6 +325,9 @@ pub(crate) struct SecondOrderProblem<'a, S: SecondOrderSystem> {
     mass_form: bool,
     /// Whether `k`, `d` hold the system's constant `K`, `D`.
     kd_valid: bool,
+    /// Whether the system provides [`SecondOrderSystem::force_residual`]
+    /// (`None`: not asked yet).
+    has_residual: Option<bool>,
     /// `D ≠ 0` (else its products are skipped).
     damped: bool,
     /// `K`, `D` symmetric (the bracket is then factored by Cholesky, else
@@ -324,6 +353,7 @@ impl<'a, S: SecondOrderSystem> SecondOrderProblem<'a, S> {
             d: DMatrix::zeros(0, 0),
             mass_form: false,
             kd_valid: false,
+            has_residual: None,
             damped: false,
             symmetric: false,
             lu: DenseLu::new(n),
@@ -450,6 +480,38 @@ impl<'a, S: SecondOrderSystem> SecondOrderProblem<'a, S> {
         } else {
             self.lu.solve_in_place(b);
         }
+    }
+
+    /// The generalized-α Newton correction at the trial `(q, q̇)` for the
+    /// unknown `x = q̈ₙ₊₁`: `Δ = (I − β'Jq − γ'Jv)⁻¹ (a(t, q, q̇) − x)` with
+    /// the last [`factor_newmark`](Self::factor_newmark), into `out`. In
+    /// mass-matrix form with a force residual `r = M x − f`:
+    /// `Δ = −(M_J + β'K + γ'D)⁻¹ r` (see
+    /// [`SecondOrderSystem::force_residual`]).
+    pub(crate) fn newmark_correction(
+        &mut self,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+        x: &DVector<f64>,
+        out: &mut DVector<f64>,
+    ) -> Result<(), SystemError> {
+        if self.mass_form && self.has_residual != Some(false) {
+            let has = self
+                .sys
+                .force_residual(t, q, qd, x, out)
+                .map_err(|e| Box::new(e) as SystemError)?;
+            self.has_residual = Some(has);
+            if has {
+                out.neg_mut();
+                self.lu.solve_in_place(out);
+                return Ok(());
+            }
+        }
+        self.accel(t, q, qd, out)?;
+        *out -= x;
+        self.solve_n(out);
+        Ok(())
     }
 
     /// `qdd = a(t, q, q̇)` without splitting a first-order state.
