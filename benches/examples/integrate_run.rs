@@ -167,7 +167,23 @@ fn main() {
         );
         refs = vec![ta, tb];
     }
-    for (dt, _) in dts.iter().flat_map(|&dt| (0..reps).map(move |r| (dt, r))) {
+    // TOL=rtol list: error-controlled runs (atol = rtol/100) instead of DT.
+    let tols: Vec<f64> = std::env::var("TOL")
+        .map(|v| {
+            v.split(',')
+                .map(|x| x.trim().parse().expect("TOL: numbers separated by commas"))
+                .collect()
+        })
+        .unwrap_or_default();
+    let settings: Vec<(f64, bool)> = if tols.is_empty() {
+        dts.iter().map(|&d| (d, false)).collect()
+    } else {
+        tols.iter().map(|&t| (t, true)).collect()
+    };
+    for ((dt, controlled), _) in settings
+        .iter()
+        .flat_map(|&s| (0..reps).map(move |r| (s, r)))
+    {
         let t0 = Instant::now();
         let mut sys = RodSystem::new(m.clone());
         sys.jacobian = RodJacobian::ElasticOnly;
@@ -175,9 +191,15 @@ fn main() {
         let opts = Options {
             t_eval: Some(times.clone()),
             max_steps: 10_000_000,
-            ..Options::linearly_implicit(dt)
+            ..if controlled {
+                Options::linearly_implicit_tol(dt, dt * 1e-2)
+            } else {
+                Options::linearly_implicit(dt)
+            }
         };
-        let method = Method::GeneralizedAlpha { rho_inf: 0.8 };
+        let method = Method::GeneralizedAlpha {
+            rho_inf: env("RHO", 0.8),
+        };
         let sol = if accel_form {
             let mut sys = NoResidual(sys);
             integrate_second_order(&mut sys, method, 0.0, 1.0, &z, &z, &opts, Hooks::new())
@@ -189,7 +211,8 @@ fn main() {
         let tips: Vec<_> = sol.y.iter().map(|y| tip(&m, y)).collect();
         let p = tips[99];
         println!(
-            "dt {dt:e}: tip [{:.12e}, {:.12e}, {:.12e}] {:?} wall {:.2} ms",
+            "{} {dt:e}: tip [{:.12e}, {:.12e}, {:.12e}] {:?} wall {:.2} ms",
+            if controlled { "rtol" } else { "dt" },
             p[0],
             p[1],
             p[2],

@@ -12,7 +12,7 @@
 //! | [`Method::Rk4`] | explicit RK | 4 | fixed `dt` | non-stiff, reference runs |
 //! | [`Method::Dopri5`] | explicit RK 5(4), PI control, dense order 4 | 5 | adaptive | non-stiff, accurate |
 //! | [`Method::Rosw34`] | Rosenbrock–W ROS34PW2, L-stable, Jacobian/LU reuse | 3 | adaptive | stiff (rods) |
-//! | [`Method::GeneralizedAlpha`] | implicit structural, `ρ∞` dissipation | 2 | fixed `dt` | large fixed steps |
+//! | [`Method::GeneralizedAlpha`] | implicit structural, `ρ∞` dissipation | 2 | fixed `dt`, or adaptive with [`Options::error_control`] | large fixed steps |
 //!
 //! # Stiff rods: the linearly implicit (IMEX) path
 //!
@@ -27,7 +27,12 @@
 //! SPD bracket and one product with `M` per solve, `M⁻¹K` is never formed. [`Options::linearly_implicit`] then
 //! makes generalized-α take exactly one Newton iteration per step: the
 //! elastic/viscous part is implicit, gravity, Coriolis and loads explicit —
-//! one acceleration evaluation and one LU solve per step.
+//! one evaluation and one solve per step. With the mass-matrix form the
+//! evaluation is the force residual `M(q) x − f` by the O(N) inverse
+//! dynamics ([`SecondOrderSystem::force_residual`]) rather than a forward
+//! dynamics. [`Options::linearly_implicit_tol`] adds error control (a free
+//! local error estimate from the step's two auxiliary accelerations, PI step
+//! control; see [`Method::GeneralizedAlpha`]).
 //!
 //! Measured (`benches/benches/integrate.rs`, docs/performance.md): 1 s of the
 //! undamped release of a soft cantilever (L = 0.5 m, E = 1e7, all strains)
@@ -52,7 +57,10 @@
 //! Use `rho_inf < 1` with it (the explicit remainder needs a little
 //! high-frequency dissipation: with ρ∞ = 1 the release blows up) and a step
 //! that resolves the motion — its error is not controlled; check with a
-//! halved step or with ROS34PW2 when accuracy matters.
+//! halved step, with ROS34PW2 or with [`Options::linearly_implicit_tol`]
+//! when accuracy matters (on this undamped scene error control resolves the
+//! ringing like the other error-controlled methods: ~6400 steps at rtol 1e-2
+//! for 20 pieces, against 667 fixed steps).
 //!
 //! # One interface
 //!
