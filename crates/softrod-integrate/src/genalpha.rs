@@ -233,7 +233,7 @@ impl GeneralizedAlpha {
                     // steps at 20 pieces) for small changes: [0.9, 1.2]
                     // against RADAU5's [1, 1.2] took 45 % fewer
                     // factorizations and 8 % fewer steps on the 20-piece
-                    // rod (rtol 1e-2, ρ∞ 0), 25 % less wall.
+                    // rod (rtol 1e-2, ρ∞ 0), 23 % less wall.
                     self.h_try = if (KEEP_MIN..=KEEP_MAX).contains(&fac) {
                         h
                     } else {
