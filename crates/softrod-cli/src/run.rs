@@ -45,6 +45,7 @@ pub fn method_and_options(scene: &Scene) -> Result<(Method, Options), CliError> 
             Options {
                 rtol: run.rtol,
                 atol: run.atol,
+                error_control: run.error_control,
                 ..Options::fixed(run.dt)
             },
         ),
@@ -57,7 +58,8 @@ pub fn method_and_options(scene: &Scene) -> Result<(Method, Options), CliError> 
             )));
         }
     };
-    if run.integrator.is_adaptive() {
+    let gen_alpha_controlled = run.integrator == Integrator::GeneralizedAlpha && run.error_control;
+    if run.integrator.is_adaptive() || gen_alpha_controlled {
         // The scene's dt is the initial step of adaptive methods.
         opts.dt = Some(run.dt.min(run.duration));
         opts.max_steps = 50_000_000;
@@ -418,7 +420,31 @@ pub fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), CliErro
 
 #[cfg(test)]
 mod tests {
-    use super::output_times;
+    use super::{method_and_options, output_times};
+    use softrod_scene::Scene;
+
+    /// `[run] error_control` reaches the integrator options of
+    /// generalized-alpha, with `dt` as the first step and an adaptive step
+    /// budget; without it generalized-alpha keeps its fixed step.
+    #[test]
+    fn generalized_alpha_error_control_is_wired_through() {
+        let scene = |extra: &str| {
+            let text = format!(
+                "[[rod]]\nname = \"r\"\nlength = 0.4\npieces = 2\n\
+                 section = {{ shape = \"circle\", radius = 0.01 }}\n\
+                 material = {{ density = 1200, young = 2e6, poisson = 0.45 }}\n\
+                 [run]\nintegrator = \"generalized-alpha\"\ndt = 1e-3\nrtol = 1e-4\n{extra}\n"
+            );
+            Scene::from_str(&text, "t.toml").unwrap().0
+        };
+        let (_, o) = method_and_options(&scene("error_control = true")).unwrap();
+        assert!(o.error_control);
+        assert_eq!((o.dt, o.rtol), (Some(1e-3), 1e-4));
+        assert!(o.max_steps > 1_000_000);
+        let (_, o) = method_and_options(&scene("")).unwrap();
+        assert!(!o.error_control);
+        assert_eq!(o.max_steps, 2 * 1000 + 100);
+    }
 
     #[test]
     fn output_times_include_both_ends() {

@@ -27,11 +27,11 @@
 
 use nalgebra::DVector;
 
-use crate::driver::{Stepper, check_underflow, clip_step};
+use crate::driver::{Stepper, check_underflow, clip_step, initial_step};
 use crate::error::{IntegrateError, first_non_finite};
 use crate::options::{Options, Stats};
 use crate::state::{StepState, check_finite};
-use crate::system::{SecondOrderProblem, SecondOrderSystem, sys_err};
+use crate::system::{Problem, SecondOrderProblem, SecondOrderSystem, sys_err};
 
 /// The four generalized-α parameters from `ρ∞` (Chung–Hulbert 1993, eqs. 25,
 /// 17, 20): returns `(α_m, α_f, β, γ)`.
@@ -65,7 +65,25 @@ pub(crate) struct GeneralizedAlpha {
     g: DVector<f64>,
     jac_age: usize,
     lu_key: (f64, f64),
+    // error control
+    /// `β + δ/2 − 1/6`, `δ = α_m − α_f`: the local position error is this
+    /// times `h² (aₙ₊₁ − aₙ)`.
+    err_coef: f64,
+    /// The last accepted error norm (PI controller).
+    err_prev: f64,
 }
+
+/// Error control: safety factor and step-change bounds (as ROS34PW2).
+const SAFETY: f64 = 0.9;
+const FAC_MIN: f64 = 0.2;
+const FAC_MAX: f64 = 5.0;
+/// Step-change factors within which `h` is kept.
+const KEEP_MIN: f64 = 0.9;
+const KEEP_MAX: f64 = 1.2;
+/// PI exponents (Gustafsson: `0.7/k`, `0.4/k` for an error estimate
+/// `O(hᵏ)`, here `k = 2`: the velocity estimate).
+const PI_ALPHA: f64 = 0.7 / 2.0;
+const PI_BETA: f64 = 0.4 / 2.0;
 
 impl GeneralizedAlpha {
     pub(crate) fn new(n: usize, rho_inf: f64) -> Self {
@@ -89,6 +107,159 @@ impl GeneralizedAlpha {
             g: z,
             jac_age: usize::MAX,
             lu_key: (f64::NAN, f64::NAN),
+            err_coef: beta + 0.5 * (am - af) - 1.0 / 6.0,
+            err_prev: 1.0,
+        }
+    }
+
+    /// Weighted RMS over `(q, q̇)` of the local error estimates
+    /// `(β + δ/2 − 1/6) h² (aₙ₊₁ − aₙ)` (positions) and `½ h (aₙ₊₁ − aₙ)`
+    /// (velocities) of the trial in `a_new, q_new, v_new` (∞ if not finite).
+    fn error_norm(&self, h: f64, opts: &Options) -> f64 {
+        let n = self.q.len();
+        if n == 0 {
+            return 0.0;
+        }
+        let cq = self.err_coef * h * h;
+        let cv = 0.5 * h;
+        let mut s = 0.0;
+        for i in 0..n {
+            let da = self.a_new[i] - self.acc[i];
+            let wq = opts.atol + opts.rtol * self.q[i].abs().max(self.q_new[i].abs());
+            let wv = opts.atol + opts.rtol * self.v[i].abs().max(self.v_new[i].abs());
+            let eq = cq * da / wq;
+            let ev = cv * da / wv;
+            s += eq * eq + ev * ev;
+        }
+        let e = (s / (2 * n) as f64).sqrt();
+        if e.is_finite() { e } else { f64::INFINITY }
+    }
+
+    /// Accepts the trial step of size `h` to `t_new`.
+    fn accept(&mut self, t_new: f64, h: f64, stats: &mut Stats) {
+        self.s.save_prev();
+        std::mem::swap(&mut self.q, &mut self.q_new);
+        std::mem::swap(&mut self.v, &mut self.v_new);
+        std::mem::swap(&mut self.acc, &mut self.a_new);
+        std::mem::swap(&mut self.qdd, &mut self.x);
+        self.set_first_order();
+        self.s.advance(t_new, h, stats);
+        self.jac_age = self.jac_age.saturating_add(1);
+    }
+
+    /// Refreshes the Jacobian if it is older than allowed.
+    fn refresh_jacobian<S: SecondOrderSystem>(
+        &mut self,
+        p: &mut SecondOrderProblem<'_, S>,
+        h: f64,
+        opts: &Options,
+        stats: &mut Stats,
+    ) -> Result<(), IntegrateError> {
+        if self.jac_age >= opts.jacobian_max_age.max(1) {
+            let t = self.s.t;
+            let bad = p
+                .update_jacobians_qv(t, &self.q, &self.v)
+                .map_err(sys_err(t, h, "jacobian"))?;
+            stats.jacobian_evaluations += 1;
+            if let Some(index) = bad {
+                return Err(IntegrateError::NonFinite {
+                    t,
+                    h,
+                    what: "Jacobian",
+                    index,
+                });
+            }
+            self.jac_age = 0;
+            self.lu_key = (f64::NAN, f64::NAN);
+        }
+        Ok(())
+    }
+
+    /// One error-controlled step (see [`Method::GeneralizedAlpha`](crate::Method)).
+    fn step_controlled<S: SecondOrderSystem>(
+        &mut self,
+        p: &mut SecondOrderProblem<'_, S>,
+        t_end: f64,
+        opts: &Options,
+        stats: &mut Stats,
+    ) -> Result<(), IntegrateError> {
+        let mut h = self.h_try.min(opts.h_max);
+        let mut rejected_before = false;
+        let mut reason = "step size";
+        loop {
+            let t = self.s.t;
+            let (hh, last) = clip_step(t, h, t_end);
+            h = hh;
+            check_underflow(t, h, opts, reason)?;
+            self.refresh_jacobian(p, h, opts, stats)?;
+            let c = (1.0 - self.af) / (1.0 - self.am);
+            let key = (h * h * self.beta * c, h * self.gamma * c);
+            if key != self.lu_key {
+                stats.factorizations += 1;
+                if !p.factor_newmark(key.0, key.1) {
+                    self.lu_key = (f64::NAN, f64::NAN);
+                    stats.rejected_steps += 1;
+                    rejected_before = true;
+                    reason = "singular iteration matrix";
+                    if self.jac_age != 0 {
+                        self.jac_age = usize::MAX;
+                    } else {
+                        h *= 0.5;
+                    }
+                    continue;
+                }
+                self.lu_key = key;
+            }
+            let t_new = if last { t_end } else { t + h };
+            let err = match self.solve_step(p, h, t_new, opts, stats)? {
+                Ok(()) => self.error_norm(h, opts),
+                Err((what, _)) => {
+                    // A Newton failure: like an error-test failure with no
+                    // usable error (refresh an old Jacobian, else shrink).
+                    reason = what;
+                    f64::INFINITY
+                }
+            };
+            if err <= 1.0 {
+                self.accept(t_new, h, stats);
+                if !last {
+                    let mut fac =
+                        (SAFETY * err.max(1e-10).powf(-PI_ALPHA) * self.err_prev.powf(PI_BETA))
+                            .clamp(FAC_MIN, FAC_MAX);
+                    if rejected_before {
+                        fac = fac.min(1.0);
+                    }
+                    // Keep h (and the factorization, which costs several
+                    // steps at 20 pieces) for small changes: [0.9, 1.2]
+                    // against RADAU5's [1, 1.2] took 45 % fewer
+                    // factorizations and 8 % fewer steps on the 20-piece
+                    // rod (rtol 1e-2, ρ∞ 0), 23 % less wall.
+                    self.h_try = if (KEEP_MIN..=KEEP_MAX).contains(&fac) {
+                        h
+                    } else {
+                        h * fac
+                    };
+                }
+                self.err_prev = err.max(1e-4);
+                return Ok(());
+            }
+            stats.rejected_steps += 1;
+            rejected_before = true;
+            if err.is_finite() {
+                reason = "error test";
+            }
+            let stale = self.jac_age != 0;
+            if stale {
+                // A stale W may be the cause: refresh it before shrinking much.
+                self.jac_age = usize::MAX;
+            }
+            h *= if err.is_finite() {
+                (SAFETY * err.powf(-0.5)).clamp(FAC_MIN, 1.0)
+            } else if stale {
+                1.0
+            } else {
+                0.5
+            };
         }
     }
 
@@ -132,15 +303,11 @@ impl GeneralizedAlpha {
         let n = self.q.len();
         for k in 1..=opts.newton_max_iter.max(1) {
             self.newmark(h);
-            p.accel(t_new, &self.q_new, &self.v_new, &mut self.g)
+            // Δ = (I − β'Jq − γ'Jv)⁻¹ (a(qₙ₊₁, q̇ₙ₊₁) − x), into g.
+            p.newmark_correction(t_new, &self.q_new, &self.v_new, &self.x, &mut self.g)
                 .map_err(sys_err(self.s.t, h, "accel"))?;
             stats.rhs_evaluations += 1;
             stats.newton_iterations += 1;
-            // Δ = −(I − β'Jq − γ'Jv)⁻¹ (x − g), into g.
-            for i in 0..n {
-                self.g[i] -= self.x[i];
-            }
-            p.solve_n(&mut self.g);
             stats.lu_solves += 1;
             self.x += &self.g;
             let mut s = 0.0;
@@ -191,18 +358,37 @@ impl<S: SecondOrderSystem> Stepper<SecondOrderProblem<'_, S>> for GeneralizedAlp
         opts: &Options,
         stats: &mut Stats,
     ) -> Result<(), IntegrateError> {
-        let Some(dt) = opts.dt else {
+        if opts.dt.is_none() && !opts.error_control {
             return Err(IntegrateError::InvalidInput {
-                what: "generalized-α needs a fixed step: set Options::dt".into(),
+                what:
+                    "generalized-α needs a fixed step: set Options::dt (or Options::error_control)"
+                        .into(),
             });
-        };
+        }
         let n = p.n();
         self.s.start(t0, y0);
-        self.h_try = dt.min(opts.h_max);
         self.q.copy_from(&y0.rows(0, n));
         self.v.copy_from(&y0.rows(n, n));
         self.system_changed(p, stats)?;
         self.acc.copy_from(&self.qdd);
+        self.err_prev = 1.0;
+        self.h_try = match opts.dt {
+            Some(dt) => dt.min(opts.h_max),
+            // Once per run: scratch of the first-order dimension.
+            None => {
+                let mut scratch = (DVector::zeros(2 * n), DVector::zeros(2 * n));
+                initial_step(
+                    p,
+                    t0,
+                    &self.s.y,
+                    &self.s.f,
+                    2,
+                    opts,
+                    stats,
+                    (&mut scratch.0, &mut scratch.1),
+                )?
+            }
+        };
         Ok(())
     }
 
@@ -213,6 +399,9 @@ impl<S: SecondOrderSystem> Stepper<SecondOrderProblem<'_, S>> for GeneralizedAlp
         opts: &Options,
         stats: &mut Stats,
     ) -> Result<(), IntegrateError> {
+        if opts.error_control {
+            return self.step_controlled(p, t_end, opts, stats);
+        }
         let dt = opts.dt.unwrap_or(self.h_try).min(opts.h_max);
         let mut h = self.h_try.min(dt);
         loop {
@@ -315,6 +504,7 @@ impl<S: SecondOrderSystem> Stepper<SecondOrderProblem<'_, S>> for GeneralizedAlp
         stats.rhs_evaluations += 1;
         check_finite(&self.qdd, t, h, "acceleration")?;
         self.set_first_order();
+        p.system_changed();
         self.jac_age = usize::MAX;
         self.lu_key = (f64::NAN, f64::NAN);
         Ok(())

@@ -1,14 +1,28 @@
-//! A dense LU factorization with partial pivoting that works in buffers
-//! allocated once (nalgebra's `LU` takes its matrix by value and allocates).
+//! Dense LU (partial pivoting) and Cholesky factorizations that work in
+//! buffers allocated once (nalgebra's `LU`/`Cholesky` take their matrix by
+//! value and allocate).
 
 use nalgebra::{DMatrix, DVector};
 
-/// `P·A = L·U` of a square matrix, stored in place (unit lower `L` below the
-/// diagonal, `U` on and above), with row pivots.
+/// Which factorization the buffer holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Kind {
+    /// `P·A = L·U`: unit lower `L` below the diagonal, `U` on and above.
+    Lu,
+    /// `A = L·Lᵀ`: `L` on and below the diagonal (the upper part is stale);
+    /// the reciprocals of `diag(L)` are kept in `inv_diag`.
+    Cholesky,
+}
+
+/// A square matrix factored in place: `P·A = L·U` with row pivots, or, for a
+/// symmetric positive definite `A`, `A = L·Lᵀ` (half the flops of the LU, no
+/// pivoting, and it cannot silently succeed on an indefinite matrix).
 #[derive(Debug, Clone)]
 pub(crate) struct DenseLu {
     a: DMatrix<f64>,
     piv: Vec<usize>,
+    inv_diag: Vec<f64>,
+    kind: Kind,
 }
 
 impl DenseLu {
@@ -17,7 +31,44 @@ impl DenseLu {
         Self {
             a: DMatrix::zeros(n, n),
             piv: vec![0; n],
+            inv_diag: vec![0.0; n],
+            kind: Kind::Lu,
         }
+    }
+
+    /// Cholesky `A = L·Lᵀ` in place, reading only the lower triangle of the
+    /// matrix (left-looking by columns: column `j` of `L` is column `j` of
+    /// `A` minus `Σₖ<ⱼ L[j,k]·L[j.., k]`, then scaled by `1/√pivot`; the
+    /// inner loops run down contiguous columns). Returns `false` if a pivot
+    /// is not positive and finite (the matrix is not numerically SPD; the
+    /// buffer is then destroyed).
+    pub(crate) fn factor_cholesky(&mut self) -> bool {
+        let n = self.a.nrows();
+        self.kind = Kind::Cholesky;
+        let a = self.a.as_mut_slice();
+        for j in 0..n {
+            let (left, right) = a.split_at_mut(j * n);
+            let col_j = &mut right[j..n];
+            for k in 0..j {
+                let col_k = &left[k * n + j..k * n + n];
+                let ljk = col_k[0];
+                if ljk != 0.0 {
+                    for (x, &l) in col_j.iter_mut().zip(col_k) {
+                        *x -= ljk * l;
+                    }
+                }
+            }
+            let d = col_j[0];
+            if !(d > 0.0 && d.is_finite()) {
+                return false;
+            }
+            let inv = 1.0 / d.sqrt();
+            for x in col_j.iter_mut() {
+                *x *= inv;
+            }
+            self.inv_diag[j] = inv;
+        }
+        true
     }
 
     /// The matrix to fill before [`factor`](Self::factor).
@@ -29,6 +80,7 @@ impl DenseLu {
     /// pivoting). Returns `false` if a pivot is zero or not finite.
     pub(crate) fn factor(&mut self) -> bool {
         let n = self.a.nrows();
+        self.kind = Kind::Lu;
         let a = &mut self.a;
         for k in 0..n {
             let mut p = k;
@@ -66,6 +118,10 @@ impl DenseLu {
 
     /// Solves `A x = b` in place with the factorization.
     pub(crate) fn solve_in_place(&self, b: &mut DVector<f64>) {
+        if self.kind == Kind::Cholesky {
+            self.solve_cholesky(b.as_mut_slice());
+            return;
+        }
         let n = self.a.nrows();
         let a = &self.a;
         for k in 0..n {
@@ -96,6 +152,49 @@ impl DenseLu {
     }
 }
 
+impl DenseLu {
+    /// `L·Lᵀ x = b`: forward substitution by columns, back substitution by
+    /// dot products with the columns of `L` (both contiguous).
+    fn solve_cholesky(&self, b: &mut [f64]) {
+        let n = self.a.nrows();
+        let a = self.a.as_slice();
+        for j in 0..n {
+            let col = &a[j * n + j..j * n + n];
+            let y = b[j] * self.inv_diag[j];
+            b[j] = y;
+            if y != 0.0 {
+                for (x, &l) in b[j + 1..].iter_mut().zip(&col[1..]) {
+                    *x -= l * y;
+                }
+            }
+        }
+        for j in (0..n).rev() {
+            let col = &a[j * n + j + 1..j * n + n];
+            let s = dot(col, &b[j + 1..]);
+            b[j] = (b[j] - s) * self.inv_diag[j];
+        }
+    }
+}
+
+/// `Σ aᵢbᵢ` in four interleaved partial sums (a fixed order, so the result
+/// is deterministic; the compiler keeps them in vector registers where one
+/// running sum would serialize on the adder's latency).
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let mut acc = [0.0; 4];
+    let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
+    let (ra, rb) = (ca.remainder(), cb.remainder());
+    for (x, y) in ca.zip(cb) {
+        for l in 0..4 {
+            acc[l] += x[l] * y[l];
+        }
+    }
+    let mut s = (acc[0] + acc[2]) + (acc[1] + acc[3]);
+    for (x, y) in ra.iter().zip(rb) {
+        s += x * y;
+    }
+    s
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -120,6 +219,38 @@ mod tests {
         lu.solve_in_place(&mut x);
         let r = &m * &x - &b;
         assert!(r.amax() < 1e-13, "residual {r}");
+    }
+
+    #[test]
+    fn cholesky_solves_an_spd_system_and_rejects_an_indefinite_one() {
+        // A = BᵀB + I with a non-symmetric B: SPD, well conditioned.
+        let n = 7;
+        let b = DMatrix::from_fn(n, n, |i, j| ((3 * i + 5 * j) % 11) as f64 / 7.0 - 0.6);
+        let m = b.transpose() * &b + DMatrix::identity(n, n);
+        let rhs = DVector::from_fn(n, |i, _| (i as f64 + 1.0).sin());
+        let mut f = DenseLu::new(n);
+        f.matrix_mut().copy_from(&m);
+        // Only the lower triangle is read.
+        for j in 1..n {
+            for i in 0..j {
+                f.matrix_mut()[(i, j)] = f64::NAN;
+            }
+        }
+        assert!(f.factor_cholesky());
+        let mut x = rhs.clone();
+        f.solve_in_place(&mut x);
+        let expect = m.clone().lu().solve(&rhs).unwrap();
+        assert!((&x - &expect).amax() < 1e-13, "{x} vs {expect}");
+        // The same buffers then take an LU again.
+        f.matrix_mut().copy_from(&m);
+        assert!(f.factor());
+        let mut y = rhs.clone();
+        f.solve_in_place(&mut y);
+        assert!((&y - &expect).amax() < 1e-13);
+        // Indefinite: refused.
+        f.matrix_mut()
+            .copy_from(&DMatrix::from_row_slice(2, 2, &[1.0, 2.0, 2.0, 1.0]).resize(n, n, 0.0));
+        assert!(!f.factor_cholesky());
     }
 
     #[test]

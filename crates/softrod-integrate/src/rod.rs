@@ -8,8 +8,8 @@
 
 use nalgebra::{DMatrix, DVector};
 use softrod_dynamics::{
-    Data, DynamicsError, Model, damping_matrix, dynamics_jacobians, forward_dynamics, mass_matrix,
-    stiffness_matrix,
+    Data, DynamicsError, Model, damping_matrix, dynamics_jacobians, forward_dynamics,
+    inverse_dynamics, mass_matrix, stiffness_matrix,
 };
 use softrod_mechanics::Tension;
 
@@ -37,9 +37,12 @@ pub enum RodJacobian {
     /// remainder by central differences; `4·n_dof` inverse dynamics, one `M`).
     #[default]
     Exact,
-    /// Only the stiff linear part: `−M(q)⁻¹K` and `−M(q)⁻¹D` (one `M(q)`, one
-    /// Cholesky, two triangular solves with `n_dof` right-hand sides; no
-    /// finite differences). The elastic and viscous forces `K(q − q̄)`, `D q̇`
+    /// Only the stiff linear part: `−M(q)⁻¹K` and `−M(q)⁻¹D` (one `M(q)`, no
+    /// finite differences). The integrators get it in mass-matrix form
+    /// ([`SecondOrderSystem::mass_form_jacobians`]) and never form `M⁻¹K`:
+    /// they factor `M + β'K + γ'D` (generalized-α) or `c²M + cD + K`
+    /// (Rosenbrock) by Cholesky; [`SecondOrderSystem::jacobians`] still
+    /// returns the dense `−M⁻¹K`, `−M⁻¹D`. The elastic and viscous forces `K(q − q̄)`, `D q̇`
     /// are linear with constant `K`, `D` in PCS, and they are what makes the
     /// rod stiff; gravity, Coriolis and loads are soft and left out. With the
     /// Rosenbrock–W method (order 3 for any `W`) this is a linearly implicit
@@ -131,6 +134,56 @@ impl SecondOrderSystem for RodSystem {
         dqdd_dq.copy_from(&j.dqdd_dq);
         dqdd_dqd.copy_from(&j.dqdd_dqd);
         Ok(())
+    }
+
+    /// [`RodJacobian::ElasticOnly`]: `M(q)` and the constant `K`, `D` (the
+    /// methods then factor `M + β'K + γ'D` or `c²M + cD + K` by Cholesky
+    /// instead of forming `M⁻¹K`). [`RodJacobian::Exact`]: not provided.
+    fn mass_form_jacobians(
+        &mut self,
+        _t: f64,
+        q: &DVector<f64>,
+        _qd: &DVector<f64>,
+        mass: &mut DMatrix<f64>,
+        constant: Option<(&mut DMatrix<f64>, &mut DMatrix<f64>)>,
+    ) -> Result<bool, DynamicsError> {
+        if self.jacobian != RodJacobian::ElasticOnly {
+            return Ok(false);
+        }
+        mass.copy_from(mass_matrix(&self.model, &mut self.data, q.as_slice())?);
+        if let Some((k, d)) = constant {
+            k.copy_from(&stiffness_matrix(&self.model));
+            d.copy_from(&damping_matrix(&self.model));
+        }
+        Ok(true)
+    }
+
+    /// `r = ID(t, q, q̇, q̈) − τ_act = M(q) q̈ − f` by the O(N) inverse
+    /// dynamics (with [`RodJacobian::ElasticOnly`], the mass-matrix form's
+    /// partner; not provided otherwise).
+    fn force_residual(
+        &mut self,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+        qdd: &DVector<f64>,
+        r: &mut DVector<f64>,
+    ) -> Result<bool, DynamicsError> {
+        if self.jacobian != RodJacobian::ElasticOnly {
+            return Ok(false);
+        }
+        r.copy_from(inverse_dynamics(
+            &self.model,
+            &mut self.data,
+            t,
+            q.as_slice(),
+            qd.as_slice(),
+            qdd.as_slice(),
+        )?);
+        if let Some(tau) = &self.tau {
+            *r -= tau;
+        }
+        Ok(true)
     }
 
     /// Time enters only through cable tension tables.

@@ -388,6 +388,7 @@ impl<P: Problem> Stepper<P> for Rosw34 {
         &self.s
     }
     fn system_changed(&mut self, p: &mut P, stats: &mut Stats) -> Result<(), IntegrateError> {
+        p.system_changed();
         self.s.refresh_derivative(p, stats)?;
         self.jac_age = usize::MAX;
         self.lu_shift = f64::NAN;

@@ -120,6 +120,7 @@ pub(crate) struct RawRun {
     pub dt: Option<f64>,
     pub output_every: Option<f64>,
     pub quadrature: Option<i64>,
+    pub error_control: Option<bool>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -154,6 +154,10 @@ pub struct Run {
     pub output_every: f64,
     /// Gauss points per piece, ≥ 1 (default [`Run::DEFAULT_QUADRATURE`]).
     pub quadrature: usize,
+    /// `generalized-alpha` only (an extension of the format): control the
+    /// local error to `rtol`/`atol` and adapt the step, `dt` being the first
+    /// step (default `false`: fixed step `dt`).
+    pub error_control: bool,
 }
 
 impl Run {
@@ -185,6 +189,7 @@ impl Default for Run {
             dt: Run::DEFAULT_DT,
             output_every: Run::DEFAULT_DURATION / 1000.0,
             quadrature: Run::DEFAULT_QUADRATURE,
+            error_control: false,
         }
     }
 }

@@ -912,6 +912,20 @@ impl Ctx<'_> {
             Some(n) if n >= 1 => n as usize,
             Some(n) => return Err(self.out_of_range("run.quadrature", n, ">= 1")),
         };
+        let error_control = r.error_control.unwrap_or(d.error_control);
+        if error_control && integrator != Integrator::GeneralizedAlpha {
+            self.warn(
+                "run.error_control",
+                format!(
+                    "error_control only applies to generalized-alpha ({integrator} is {}): ignored",
+                    if integrator.is_adaptive() {
+                        "adaptive already"
+                    } else {
+                        "fixed-step"
+                    }
+                ),
+            );
+        }
         if r.dt.is_some() && dt > duration {
             self.warn(
                 "run.dt",
@@ -936,6 +950,7 @@ impl Ctx<'_> {
             dt,
             output_every,
             quadrature,
+            error_control,
         })
     }
 

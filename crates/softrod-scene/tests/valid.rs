@@ -77,6 +77,7 @@ fn contract_example_has_the_written_values() {
             dt: 1e-4,
             output_every: 1e-3,
             quadrature: 4,
+            error_control: false,
         }
     );
     assert_eq!(s.reference, None);
@@ -484,4 +485,28 @@ fn every_example_scene_validates() {
         }
     }
     assert!(n >= 3, "expected the example scenes in {}", dir.display());
+}
+
+/// `[run] error_control` (extension): read for generalized-alpha, default
+/// false, and a warning (ignored) with an integrator that does not use it.
+#[test]
+fn run_error_control_is_read_and_warned_where_it_does_not_apply() {
+    let (s, warnings) = parse(&minimal(
+        "[run]\nintegrator = \"generalized-alpha\"\nerror_control = true",
+    ));
+    assert!(warnings.is_empty(), "{warnings:?}");
+    assert!(s.run.error_control);
+    let (s, _) = parse(&minimal("[run]\nintegrator = \"generalized-alpha\""));
+    assert!(!s.run.error_control);
+    let (s, warnings) = parse(&minimal(
+        "[run]\nintegrator = \"dopri5\"\nerror_control = true",
+    ));
+    assert!(s.run.error_control);
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    assert_eq!(warnings[0].path, "run.error_control");
+    assert!(
+        warnings[0].message.contains("ignored"),
+        "{}",
+        warnings[0].message
+    );
 }
