@@ -9,38 +9,32 @@ use softrod_lie::{AdOp, Mat6, Pose, Vec6};
 /// quantities live in the top-left of 6×6 / the head of 6-vectors).
 #[derive(Clone, Debug)]
 pub(crate) struct PieceWork {
-    pub xi: Vec6,
-    pub dxi: Vec6,
-    /// World pose, velocity and (fictitious, gravity included) acceleration
-    /// at the piece base `L_{n−1}`.
-    pub base_pose: Pose,
-    pub eta0: Vec6,
-    pub etadot0: Vec6,
-    /// `A_ℓ = Ad⁻¹_{g_n(ℓ)}`, `T₋(ℓ)`, `S_ℓ = T₋(ℓ)B` (6×k), bias `a_ℓ`.
-    /// Local tip pose `g_n(ℓ_n)` (its `Ad⁻¹` carries twists across the joint).
+    /// Local tip pose `g_n(ℓ_n)`: `A_ℓ = Ad⁻¹_{g_n(ℓ)}` carries twists across
+    /// the joint to the next piece.
     pub tip: Pose,
+    /// `T₋(ℓ)` and the velocity-product acceleration `a_ℓ` at the tip.
     pub tm_tip: AdOp,
-    pub s_world: Mat6,
     pub acc_tip: Vec6,
-    /// (D20): `𝓜ᵗ`, `𝓤` (6×k), `𝓓` (k×k).
+    /// (D20): `𝓜ᵗ`, `𝓤` (6×k), `𝓓` (k×k). The forward dynamics overwrites
+    /// `ut` with `W = ÛL⁻ᵀ` and `dt` with the Cholesky factor `L` of `D̂`.
     pub mt: Sym6,
     pub ut: Mat6,
     pub dt: Mat6,
     /// (D23): `𝓟ᵗ` (6) and `𝓹` (k), or the inverse-dynamics sums of (D17–D18).
     pub p_big: Vec6,
     pub p_small: Vec6,
-    /// (D24–D26): articulated inertia and bias of the subtree from this piece.
+    /// (D26): `ũ = L⁻¹u`, the articulated bias force projected on the piece.
     pub u: Vec6,
+    /// Mass matrix only (kept last, out of the forward dynamics' cache
+    /// lines): world pose at the piece base and `Ad_{g(ℓ)}S_ℓ` (6×k).
+    pub base_pose: Pose,
+    pub s_world: Mat6,
 }
 
 impl PieceWork {
     fn new() -> Self {
         Self {
-            xi: Vec6::zeros(),
-            dxi: Vec6::zeros(),
             base_pose: Pose::identity(),
-            eta0: Vec6::zeros(),
-            etadot0: Vec6::zeros(),
             tip: Pose::identity(),
             tm_tip: AdOp::zeros(),
             s_world: Mat6::zeros(),

@@ -300,11 +300,9 @@ pub(crate) fn outward(
             let xi = piece.strain(qr);
             let dxi = qdr.map_or(Vec6::zeros(), |v| piece.strain_rate(v));
             let ddxi = qddr.map_or(Vec6::zeros(), |v| piece.strain_rate(v));
-            w.xi = xi;
-            w.dxi = dxi;
-            w.base_pose = pose;
-            w.eta0 = eta0;
-            w.etadot0 = etadot0;
+            if pass == Pass::Composite {
+                w.base_pose = pose;
+            }
             let (mut pb_m, mut pb_n) = (softrod_lie::Vec3::zeros(), softrod_lie::Vec3::zeros());
             let (mut ps_m, mut ps_n) = (softrod_lie::Vec3::zeros(), softrod_lie::Vec3::zeros());
             let mut mt = Mat6::zeros();
