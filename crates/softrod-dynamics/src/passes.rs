@@ -120,7 +120,8 @@ impl SpatialSums {
 /// Running sums of `𝓤ᶠ = Σ w Aᵀ𝓜T₋` and `𝓓ᶠ = Σ w T₋ᵀ𝓜T₋` in 3×3
 /// blocks, before the projection on the basis (`𝓤 = 𝓤ᶠB`, `𝓓 = Bᵀ𝓓ᶠB`).
 /// With `𝓜T₋ = [[P, 0], [Q, R]]` (`P = J_ω T_a`, `Q = m T_b`, `R = m T_a`)
-/// both are nine 3×3 products per point, where the column-by-column form
+/// both cost six 3×3 products (the symmetric ones by their upper halves)
+/// and two cross-product sweeps per point, where the column-by-column form
 /// costs `k` matrix–vector products and `k(k+1)/2` 6-vector dots: for
 /// `k ≥ 4` the blocks win.
 #[derive(Default)]
@@ -135,11 +136,11 @@ struct FullSums {
 }
 
 impl FullSums {
-    #[inline(always)]
     /// Adds one point, `A = Ad⁻¹_g` given by `g = (R, p)`: with
     /// `Aᵀ = [[R, p̃R], [0, R]]` the U blocks are `RP + p̃(RQ)`, `p̃(RR')`,
     /// `RQ`, `RR'`: three products and two cross-product sweeps, and no
     /// `Ad⁻¹` block built.
+    #[inline(always)]
     fn add(&mut self, g: &Pose, t: &AdOp, mw: &Vec6) {
         let (p, r, q) = scaled_blocks(&softrod_lie::angular(mw), &softrod_lie::linear(mw), t);
         // Taᵀ J Ta + Tbᵀ m Tb and Taᵀ m Ta are symmetric.
@@ -162,7 +163,7 @@ impl FullSums {
             b: self.d12,
             c: self.d22,
         };
-        if let Some([0, 1, 2, 3, 4, 5]) = basis.selection() {
+        if basis.is_identity() {
             // In place: no 6×6 temporaries to copy.
             ut.fixed_view_mut::<3, 3>(0, 0).copy_from(&self.u11);
             ut.fixed_view_mut::<3, 3>(0, 3).copy_from(&self.u12);
@@ -192,7 +193,7 @@ pub(crate) fn project_add_blocks(
     ut: &mut Mat6,
     dt: &mut Mat6,
 ) {
-    if let Some([0, 1, 2, 3, 4, 5]) = basis.selection() {
+    if basis.is_identity() {
         xu.add_to(ut);
         xd.add_to(dt);
     } else {
@@ -211,11 +212,12 @@ pub(crate) fn project_add(
     ut: &mut Mat6,
     dt: &mut Mat6,
 ) {
+    if basis.is_identity() {
+        *ut += xu;
+        *dt += xd;
+        return;
+    }
     match basis.selection() {
-        Some([0, 1, 2, 3, 4, 5]) => {
-            *ut += xu;
-            *dt += xd;
-        }
         Some(sel) => {
             for (c, &j) in sel.iter().enumerate() {
                 let mut col = ut.column_mut(c);
@@ -359,9 +361,9 @@ pub(crate) fn outward(
                 }
                 if pass != Pass::Inverse {
                     let mw = m * qp.w;
-                    // 𝓤 += w Aᵀ𝓜S and 𝓓 += w Sᵀ𝓜S column by column on
-                    // S = T₋B: k tr-products and k(k+1)/2 dots, far cheaper
-                    // than 6×6 sandwiches when k < 6 and no dearer at k = 6.
+                    // 𝓤 += w Aᵀ𝓜S and 𝓓 += w Sᵀ𝓜S: in 3×3 blocks of the
+                    // full T₋ for k ≥ 4 ([`FullSums`]), column by column on
+                    // S = T₋B (k products and k(k+1)/2 dots) below that.
                     if full {
                         fs.add(&gl, &tm, &mw);
                     } else {
