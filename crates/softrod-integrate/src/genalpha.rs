@@ -420,22 +420,7 @@ impl<S: SecondOrderSystem> Stepper<SecondOrderProblem<'_, S>> for GeneralizedAlp
                     e
                 });
             }
-            if self.jac_age >= opts.jacobian_max_age.max(1) {
-                let bad = p
-                    .update_jacobians_qv(t, &self.q, &self.v)
-                    .map_err(sys_err(t, h, "jacobian"))?;
-                stats.jacobian_evaluations += 1;
-                if let Some(index) = bad {
-                    return Err(IntegrateError::NonFinite {
-                        t,
-                        h,
-                        what: "Jacobian",
-                        index,
-                    });
-                }
-                self.jac_age = 0;
-                self.lu_key = (f64::NAN, f64::NAN);
-            }
+            self.refresh_jacobian(p, h, opts, stats)?;
             let c = (1.0 - self.af) / (1.0 - self.am);
             let key = (h * h * self.beta * c, h * self.gamma * c);
             if key != self.lu_key {
