@@ -58,6 +58,13 @@ pub fn method_and_options(scene: &Scene) -> Result<(Method, Options), CliError> 
             )));
         }
     };
+    if run.integrator == Integrator::GeneralizedAlpha && run.linearly_implicit {
+        // One iteration with W = M⁻¹K, always accepted: the IMEX scheme of
+        // `Options::linearly_implicit` (ρ∞ = GENERALIZED_ALPHA_RHO_INF < 1,
+        // which its explicit remainder needs).
+        opts.newton_tol = f64::INFINITY;
+        opts.newton_max_iter = 1;
+    }
     let gen_alpha_controlled = run.integrator == Integrator::GeneralizedAlpha && run.error_control;
     if run.integrator.is_adaptive() || gen_alpha_controlled {
         // The scene's dt is the initial step of adaptive methods.
@@ -444,6 +451,15 @@ mod tests {
         let (_, o) = method_and_options(&scene("")).unwrap();
         assert!(!o.error_control);
         assert_eq!(o.max_steps, 2 * 1000 + 100);
+        assert!(o.newton_max_iter > 1);
+        // linearly_implicit = the options of `Options::linearly_implicit`.
+        let (_, o) = method_and_options(&scene("linearly_implicit = true")).unwrap();
+        let li = softrod_integrate::Options::linearly_implicit(1e-3);
+        assert_eq!(
+            (o.newton_max_iter, o.newton_tol),
+            (li.newton_max_iter, li.newton_tol)
+        );
+        assert_eq!(o.dt, Some(1e-3));
     }
 
     #[test]

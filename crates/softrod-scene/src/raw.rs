@@ -121,6 +121,7 @@ pub(crate) struct RawRun {
     pub output_every: Option<f64>,
     pub quadrature: Option<i64>,
     pub error_control: Option<bool>,
+    pub linearly_implicit: Option<bool>,
 }
 
 #[derive(Debug, Deserialize)]

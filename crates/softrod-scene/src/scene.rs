@@ -158,6 +158,12 @@ pub struct Run {
     /// local error to `rtol`/`atol` and adapt the step, `dt` being the first
     /// step (default `false`: fixed step `dt`).
     pub error_control: bool,
+    /// `generalized-alpha` only (an extension of the format): one Newton
+    /// iteration per step with the elastic Jacobian, i.e. the linearly
+    /// implicit (IMEX) scheme — elastic and viscous forces implicit,
+    /// gravity, Coriolis, loads and cables explicit (default `false`: Newton
+    /// to convergence).
+    pub linearly_implicit: bool,
 }
 
 impl Run {
@@ -190,6 +196,7 @@ impl Default for Run {
             output_every: Run::DEFAULT_DURATION / 1000.0,
             quadrature: Run::DEFAULT_QUADRATURE,
             error_control: false,
+            linearly_implicit: false,
         }
     }
 }

@@ -926,6 +926,15 @@ impl Ctx<'_> {
                 ),
             );
         }
+        let linearly_implicit = r.linearly_implicit.unwrap_or(d.linearly_implicit);
+        if linearly_implicit && integrator != Integrator::GeneralizedAlpha {
+            self.warn(
+                "run.linearly_implicit",
+                format!(
+                    "linearly_implicit only applies to generalized-alpha ({integrator}): ignored"
+                ),
+            );
+        }
         if r.dt.is_some() && dt > duration {
             self.warn(
                 "run.dt",
@@ -951,6 +960,7 @@ impl Ctx<'_> {
             output_every,
             quadrature,
             error_control,
+            linearly_implicit,
         })
     }
 

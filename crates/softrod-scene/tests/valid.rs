@@ -78,6 +78,7 @@ fn contract_example_has_the_written_values() {
             output_every: 1e-3,
             quadrature: 4,
             error_control: false,
+            linearly_implicit: false,
         }
     );
     assert_eq!(s.reference, None);
@@ -509,4 +510,31 @@ fn run_error_control_is_read_and_warned_where_it_does_not_apply() {
         "{}",
         warnings[0].message
     );
+}
+
+/// `[run] linearly_implicit` (extension): read for generalized-alpha,
+/// default false, a warning (ignored) elsewhere; a non-boolean is an error
+/// naming the key.
+#[test]
+fn run_linearly_implicit_is_read_and_warned_where_it_does_not_apply() {
+    let (s, warnings) = parse(&minimal(
+        "[run]\nintegrator = \"generalized-alpha\"\nlinearly_implicit = true",
+    ));
+    assert!(warnings.is_empty(), "{warnings:?}");
+    assert!(s.run.linearly_implicit);
+    let (s, _) = parse(&minimal("[run]\nintegrator = \"generalized-alpha\""));
+    assert!(!s.run.linearly_implicit);
+    let (_, warnings) = parse(&minimal(
+        "[run]\nintegrator = \"rosenbrock\"\nlinearly_implicit = true",
+    ));
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    assert_eq!(warnings[0].path, "run.linearly_implicit");
+    assert!(warnings[0].message.contains("ignored"));
+    let err = Scene::from_str(
+        &minimal("[run]\nintegrator = \"generalized-alpha\"\nlinearly_implicit = 1"),
+        "t.toml",
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(err.contains("run.linearly_implicit"), "{err}");
 }
