@@ -442,14 +442,7 @@ impl<S: SecondOrderSystem> Stepper<SecondOrderProblem<'_, S>> for GeneralizedAlp
             let t_new = if last { t_end } else { t + h };
             match self.solve_step(p, h, t_new, opts, stats)? {
                 Ok(()) => {
-                    self.s.save_prev();
-                    std::mem::swap(&mut self.q, &mut self.q_new);
-                    std::mem::swap(&mut self.v, &mut self.v_new);
-                    std::mem::swap(&mut self.acc, &mut self.a_new);
-                    std::mem::swap(&mut self.qdd, &mut self.x);
-                    self.set_first_order();
-                    self.s.advance(t_new, h, stats);
-                    self.jac_age = self.jac_age.saturating_add(1);
+                    self.accept(t_new, h, stats);
                     if !last {
                         self.h_try = (2.0 * h).min(dt);
                     }
