@@ -296,6 +296,10 @@ pub(crate) fn outward(
             Vec6::zeros()
         };
         let has_vel = qdr.is_some();
+        // Drag or distributed loads on this rod (else the density is zero
+        // and `f` skips it).
+        let has_ext =
+            !only_gravity && (rm.spec.drag.is_some() || !rm.spec.distributed_loads.is_empty());
         let need_world = rm.needs_world_pose_at_points;
         for (n, (piece, pd)) in rod.pieces().iter().zip(&rm.pieces).enumerate() {
             let w = &mut data.pieces[r][n];
@@ -336,18 +340,16 @@ pub(crate) fn outward(
                     } else {
                         Pose::identity()
                     };
-                    let ext = if only_gravity {
-                        Vec6::zeros()
-                    } else {
-                        external_density(rm, scale, &world, &eta)
-                    };
                     let gyro = coad_vec(&eta, &diag_mul(m, &eta));
-                    let f = if pass == Pass::Inverse {
+                    let mut f = if pass == Pass::Inverse {
                         let etadot = ad_inv_vec(&gl, &etadot0) + tm.mul_vec(&ddxi) + bias;
-                        diag_mul(m, &etadot) + gyro - ext
+                        diag_mul(m, &etadot) + gyro
                     } else {
-                        diag_mul(m, &bias) + gyro - ext
+                        diag_mul(m, &bias) + gyro
                     };
+                    if has_ext {
+                        f -= external_density(rm, scale, &world, &eta);
+                    }
                     // Aᵀ(wf) and T₋ᵀ(wf) on the 3-vector halves: one split of
                     // f for both, no 6-vector temporaries.
                     let fw = f * qp.w;
