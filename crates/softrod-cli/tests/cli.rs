@@ -27,6 +27,17 @@ fn run(args: &[&str]) -> Output {
     bin().args(args).output().expect("runs the binary")
 }
 
+/// `softrod run SCENE --out OUT --quiet`.
+fn run_scene(scene: &Path, out: &Path) -> Output {
+    run(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ])
+}
+
 fn stdout(o: &Output) -> String {
     String::from_utf8_lossy(&o.stdout).into_owned()
 }
@@ -133,13 +144,7 @@ fn run_writes_valid_streams_and_conserves_energy() {
         &dir,
     );
     let out = dir.join("out");
-    let o = run(&[
-        "run",
-        scene.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--quiet",
-    ]);
+    let o = run_scene(&scene, &out);
     assert!(o.status.success(), "{}", stderr(&o));
     let (header, rows) = csv(&out.join("trajectory.csv"));
     let n_dof = 24;
@@ -201,13 +206,7 @@ fn linearly_implicit_generalized_alpha_tracks_a_tight_rosenbrock_run() {
         std::fs::create_dir_all(&sub).unwrap();
         let scene = with_run("cantilever_gravity.toml", table, &sub);
         let out = sub.join("out");
-        let o = run(&[
-            "run",
-            scene.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--quiet",
-        ]);
+        let o = run_scene(&scene, &out);
         assert!(o.status.success(), "{name}: {}", stderr(&o));
         let summary: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
@@ -262,13 +261,7 @@ fn stiff_and_cable_examples_run_with_rosenbrock() {
         &dir,
     );
     let out = dir.join("out");
-    let o = run(&[
-        "run",
-        scene.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--quiet",
-    ]);
+    let o = run_scene(&scene, &out);
     assert!(o.status.success(), "{}", stderr(&o));
     let (_, rows) = csv(&out.join("trajectory.csv"));
     assert_eq!(rows.len(), 11);
@@ -355,13 +348,7 @@ fn bad_input_exits_2_with_the_key_path() {
         std::fs::write(&p, good.replacen(from, to, 1)).unwrap();
         for cmd in ["check", "run"] {
             let o = if cmd == "run" {
-                run(&[
-                    cmd,
-                    p.to_str().unwrap(),
-                    "--out",
-                    dir.join("o").to_str().unwrap(),
-                    "--quiet",
-                ])
+                run_scene(&p, &dir.join("o"))
             } else {
                 run(&[cmd, p.to_str().unwrap()])
             };
@@ -395,13 +382,7 @@ fn unstable_explicit_run_fails_with_exit_1_and_a_summary() {
         &dir,
     );
     let out = dir.join("out");
-    let o = run(&[
-        "run",
-        scene.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--quiet",
-    ]);
+    let o = run_scene(&scene, &out);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
@@ -439,13 +420,7 @@ fn every_example_checks_and_the_3d_arm_leaves_the_plane() {
         &dir,
     );
     let out = dir.join("out");
-    let o = run(&[
-        "run",
-        scene.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--quiet",
-    ]);
+    let o = run_scene(&scene, &out);
     assert!(o.status.success(), "{}", stderr(&o));
     let (_, rows) = csv(&out.join("trajectory.csv"));
     let last = rows.last().unwrap();
