@@ -233,9 +233,10 @@ const SIN_COS_FAST_MAX: f64 = 1_048_576.0; // 2^20
 /// branch. Here the argument is reduced once, `ψ = k·π/2 + r`, `|r| ≤ π/4`,
 /// with π/2 split in three parts (33 + 33 + 53 bits: `k·P₁`, `k·P₂` are exact
 /// for `|k| < 2^20`, `ψ − k·P₁` is exact by Sterbenz) and the reduced
-/// argument kept as a double-double `r + r_lo`; both Taylor polynomials then
-/// run in the two lanes of one register, and the quadrant `k mod 4` picks
-/// signs and order. Error ≤ 1 ulp against a correctly rounded sine and
+/// argument kept as an unnormalized double-double `r₁ + lo` (the rounded
+/// difference and its exact error); both Taylor polynomials then run on `r₁`
+/// in the two lanes of one register, `lo` enters to first order, and the
+/// quadrant `k mod 4` picks signs and order. Error ≤ 1 ulp against a correctly rounded sine and
 /// cosine (tested against `f64::sin_cos`); beyond `|ψ| = 2^20` it defers to
 /// `f64::sin_cos`.
 #[inline(always)]
@@ -260,8 +261,12 @@ fn sin_cos(psi: f64) -> (f64, f64) {
     let bv = r1 - t;
     let e1 = (t - (r1 - bv)) + (-w - bv);
     let lo = e1 - kf * P3;
-    let r = r1 + lo;
-    let r_lo = lo - (r - r1);
+    // The polynomials run on the rounded head `r1` alone and the tail `lo`
+    // (|lo| ≲ ulp(r1)) enters only through the first-order terms below:
+    // sin(r1 + lo) = sin r1 + lo·cos r1 + O(lo²), and likewise for cos.
+    // Renormalizing `r1 + lo` first would put three more dependent
+    // additions in front of the polynomial for no digit.
+    let (r, r_lo) = (r1, lo);
     let u = r * r;
     // Estrin, not Horner: the whole function is one dependency chain
     // (reduction, polynomial, reconstruction), and pairing the terms halves
