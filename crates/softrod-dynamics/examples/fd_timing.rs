@@ -33,12 +33,31 @@ fn main() {
     )
     .unwrap();
     let mut data = Data::new(&model);
-    let q: Vec<f64> = (0..model.n_dof())
-        .map(|i| if i % 6 < 3 { 0.3 } else { 0.01 } * ((i * 7 % 5) as f64 - 2.0))
-        .collect();
-    let qd: Vec<f64> = (0..model.n_dof())
-        .map(|i| 0.1 * ((i * 3 % 7) as f64 - 3.0))
-        .collect();
+    let (q, qd): (Vec<f64>, Vec<f64>) = if std::env::var("STATE").as_deref() == Ok("bench") {
+        let mut st: u64 = 7;
+        let mut next = || {
+            st = st.wrapping_add(0x9E37_79B9_7F4A_7C15);
+            let mut z = st;
+            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            z ^= z >> 31;
+            (z >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+        };
+        let q = (0..model.n_dof())
+            .map(|i| if i % 6 < 3 { 2.0 } else { 0.02 } * next())
+            .collect();
+        let qd = (0..model.n_dof()).map(|_| next()).collect();
+        (q, qd)
+    } else {
+        (
+            (0..model.n_dof())
+                .map(|i| if i % 6 < 3 { 0.3 } else { 0.01 } * ((i * 7 % 5) as f64 - 2.0))
+                .collect(),
+            (0..model.n_dof())
+                .map(|i| 0.1 * ((i * 3 % 7) as f64 - 3.0))
+                .collect(),
+        )
+    };
     let what = std::env::var("WHAT").unwrap_or_else(|_| "fd".into());
     let qdd = vec![0.5; model.n_dof()];
     let t0 = std::time::Instant::now();
