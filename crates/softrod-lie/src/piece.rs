@@ -111,7 +111,7 @@ impl PieceMaps {
     }
 
     /// `exp(x·ξ̂)` (D4) and `T₋(x)` (D3′).
-    #[inline]
+    #[inline(always)]
     pub fn exp_and_tangent_minus(&self, x: f64) -> (Pose, AdOp) {
         let ([a, b, c], [t3, t4]) = series::abc_tau34(x * self.theta);
         (self.pose(x, a, b, c), self.tangent_minus(x, b, c, t3, t4))
@@ -119,7 +119,7 @@ impl PieceMaps {
 
     /// `exp(x·ξ̂)`, `T₋(x)` and the bias `D_ξT₋(x)[δ]δ = Ṡ_n(x) q̇_n` (D6, D9),
     /// which is zero when no rate was given.
-    #[inline]
+    #[inline(always)]
     pub fn eval(&self, x: f64) -> (Pose, AdOp, Vec6) {
         if !self.has_rate {
             let (g, t) = self.exp_and_tangent_minus(x);
