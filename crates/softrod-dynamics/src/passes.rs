@@ -124,6 +124,15 @@ impl SpatialSums {
 /// and two cross-product sweeps per point, where the column-by-column form
 /// costs `k` matrix–vector products and `k(k+1)/2` 6-vector dots: for
 /// `k ≥ 4` the blocks win.
+///
+/// With an isotropic linear inertia `m·I` (every Cosserat section) two of
+/// the three rotations go: for a constant strain `R(x) T_a(x) = T_aᵀ(x)` and
+/// `R(x) T_b(x) = T_bᵀ(x) − p̃ T_aᵀ(x)` exactly. Both follow from
+/// `Ad_g T₋ = ∫₀ˣ e^{u ad_ξ} du = T₊` (substitute `u = x − s`) and from the
+/// blocks of `T₊` being the transposes of those of `T₋` (in the block form of
+/// `tangent_blocks`, the sign flips exactly the skew parts). So
+/// `RR' = m T_aᵀ` and `RQ = m(T_bᵀ − p̃T_aᵀ)` need no product, `𝓤₂₂ = (Σ m T_a)ᵀ`,
+/// `𝓤₂₁ = (Σ m T_b)ᵀ − 𝓤₁₂` are formed once per piece.
 #[derive(Default)]
 struct FullSums {
     u11: softrod_lie::Mat3,
@@ -133,6 +142,10 @@ struct FullSums {
     d11: softrod_lie::Mat3,
     d12: softrod_lie::Mat3,
     d22: softrod_lie::Mat3,
+    /// `Σ m T_a`, `Σ m T_b` of the isotropic form (`u21`, `u22` unused).
+    ta_m: softrod_lie::Mat3,
+    tb_m: softrod_lie::Mat3,
+    isotropic: bool,
 }
 
 impl FullSums {
@@ -147,6 +160,17 @@ impl FullSums {
         self.d11 += tr_mul_sym2(&t.a, &p, &t.b, &q);
         self.d12 += t.b.tr_mul(&r);
         self.d22 += tr_mul_sym(&t.a, &r);
+        if self.isotropic {
+            // RQ = m(T_bᵀ − p̃T_aᵀ) and p̃RR' = m p̃T_aᵀ (see the type's docs).
+            let m = mw[3];
+            let pta = cross_cols(&g.translation, &t.a.transpose()) * m;
+            let rq = q.transpose() - pta;
+            self.u11 += g.rotation * p + cross_cols(&g.translation, &rq);
+            self.u12 += pta;
+            self.ta_m += r;
+            self.tb_m += q;
+            return;
+        }
         let rot = &g.rotation;
         let rq = rot * q;
         let rr = rot * r;
@@ -157,7 +181,11 @@ impl FullSums {
     }
 
     /// Projects on the basis: `ut = 𝓤ᶠB` (6×k), `dt = Bᵀ𝓓ᶠB` (k×k, full).
-    fn project(&self, basis: &softrod_kinematics::Basis, ut: &mut Mat6, dt: &mut Mat6) {
+    fn project(&mut self, basis: &softrod_kinematics::Basis, ut: &mut Mat6, dt: &mut Mat6) {
+        if self.isotropic {
+            self.u22 = self.ta_m.transpose();
+            self.u21 = self.tb_m.transpose() - self.u12;
+        }
         let d = Sym6 {
             a: self.d11,
             b: self.d12,
@@ -318,7 +346,13 @@ pub(crate) fn outward(
                 w.dt.fill(0.0);
             }
             let mut sp = SpatialSums::default();
-            let mut fs = FullSums::default();
+            let mut fs = FullSums {
+                isotropic: pd
+                    .points
+                    .iter()
+                    .all(|p| p.inertia[3] == p.inertia[4] && p.inertia[3] == p.inertia[5]),
+                ..FullSums::default()
+            };
             let full = piece.basis.dof() >= 4;
             let mut scols = [Vec6::zeros(); 6];
             // Everything x-independent of the local maps, once per piece.

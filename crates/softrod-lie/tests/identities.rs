@@ -121,6 +121,22 @@ proptest! {
     }
 
     #[test]
+    fn tangent_plus_blocks_are_transposes_of_tangent_minus(xi in vec6(3.0), s in 0.0..4.0f64) {
+        // Ad_g T₋ = T₊ with T₊ = [[T_aᵀ, 0], [T_bᵀ, T_aᵀ]]: so R T_a = T_aᵀ
+        // and R T_b = T_bᵀ − p̃ T_aᵀ (the dynamics' inertia sums use both).
+        let (g, tm) = lie::exp_and_tangent_minus(s, &xi);
+        let tp = lie::tangent(s, &xi);
+        prop_assert!((tp.a - tm.a.transpose()).amax() < 1e-14 * (1.0 + tm.a.amax()));
+        prop_assert!((tp.b - tm.b.transpose()).amax() < 1e-14 * (1.0 + tm.b.amax()));
+        let ra = g.rotation * tm.a;
+        prop_assert!((ra - tm.a.transpose()).amax() < 1e-14 * (1.0 + tm.a.amax()));
+        let rb = g.rotation * tm.b;
+        let pta = lie::skew(&g.translation) * tm.a.transpose();
+        let scale = 1.0 + tm.b.amax() + pta.amax();
+        prop_assert!((rb - (tm.b.transpose() - pta)).amax() < 1e-14 * scale);
+    }
+
+    #[test]
     fn ad_of_self_vanishes(xi in vec6(3.0)) {
         let tol = 8.0 * f64::EPSILON * xi.amax() * xi.amax();
         prop_assert!((lie::ad(&xi) * xi).amax() <= tol);
