@@ -6,7 +6,7 @@ use crate::chol::{backward_sub, cholesky_k, forward_sub, right_solve_lt};
 use crate::data::Data;
 use crate::error::DynamicsError;
 use crate::model::Model;
-use crate::passes::{Pass, gravity_base_acceleration, outward, project_add_blocks};
+use crate::passes::{Pass, gravity_base_acceleration, outward, outward_inl, project_add_blocks};
 use nalgebra::DVector;
 use softrod_lie::{Mat6, Vec6};
 
@@ -30,6 +30,7 @@ pub(crate) fn check_vec(model: &Model, what: &'static str, v: &[f64]) -> Result<
 
 /// Strain-space generalized forces into `data.strain_force`:
 /// `τ_act + λ τ_c(q, t) − τ_e(q) − D q̇` ((D13), (D15); `λ` = `data.load_scale`).
+#[inline(always)]
 pub(crate) fn strain_forces(
     model: &Model,
     data: &mut Data,
@@ -86,16 +87,22 @@ pub(crate) fn strain_forces(
     }
 }
 
-/// Inverse dynamics by recursive Newton–Euler for PCS (derivations §4):
-/// the actuator force `τ_act` (n_dof) that produces `q̈` at `(q, q̇, t)`,
-///
-/// `τ_act = M q̈ + C q̇ + G + τ_e + D q̇ − τ_c − Σ Jᵀ𝓕_p − ∫Jᵀ𝓕_d`.
-///
-/// Outward pass (D7–D10) at the Gauss points, point-load abscissae and piece
-/// tips; inward pass (D17) for the transmitted wrenches `W_n`; projection
-/// (D18) on each piece's `S_n`. Gravity enters as a base acceleration. O(N).
-/// `q`, `q̇`, `q̈`: dim `n_dof`. Result in `data.tau`.
-pub fn inverse_dynamics<'a>(
+crate::simd::dispatch! {
+    /// Inverse dynamics by recursive Newton–Euler for PCS (derivations §4):
+    /// the actuator force `τ_act` (n_dof) that produces `q̈` at `(q, q̇, t)`,
+    ///
+    /// `τ_act = M q̈ + C q̇ + G + τ_e + D q̇ − τ_c − Σ Jᵀ𝓕_p − ∫Jᵀ𝓕_d`.
+    ///
+    /// Outward pass (D7–D10) at the Gauss points, point-load abscissae and piece
+    /// tips; inward pass (D17) for the transmitted wrenches `W_n`; projection
+    /// (D18) on each piece's `S_n`. Gravity enters as a base acceleration. O(N).
+    /// `q`, `q̇`, `q̈`: dim `n_dof`. Result in `data.tau`.
+    pub fn inverse_dynamics<'a>(model: &Model, data: &'a mut Data, t: f64, q: &[f64], qd: &[f64], qdd: &[f64]) -> Result<&'a DVector<f64>, DynamicsError>
+    => inverse_dynamics_impl, inverse_dynamics_avx2
+}
+
+#[inline(always)]
+pub(crate) fn inverse_dynamics_impl<'a>(
     model: &Model,
     data: &'a mut Data,
     t: f64,
@@ -106,7 +113,7 @@ pub fn inverse_dynamics<'a>(
     check_vec(model, "q", q)?;
     check_vec(model, "qdot", qd)?;
     check_vec(model, "qddot", qdd)?;
-    outward(model, data, q, Some(qd), Some(qdd), Pass::Inverse);
+    outward_inl(model, data, q, Some(qd), Some(qdd), Pass::Inverse);
     strain_forces(model, data, t, q, Some(qd), None);
     inward_inverse(model, data);
     Ok(&data.tau)
@@ -130,17 +137,23 @@ pub(crate) fn inward_inverse(model: &Model, data: &mut Data) {
     data.tau -= &data.strain_force;
 }
 
-/// Forward dynamics by the O(N) articulated recursion (derivations §6, the
-/// corrected seed (14)–(22)): `q̈` (n_dof) at `(q, q̇, t)` under actuator
-/// force `τ_act` (n_dof, `None` = 0) and every term of the model.
-///
-/// Pass 1 (outward): `g, η`, the per-piece integrals (D20) and bias sums (D23).
-/// Pass 2 (inward): articulated inertia and bias (D24–D26), one `k_n×k_n`
-/// Cholesky per piece. Pass 3 (outward): `q̈_n` and `η̇(L_n)` (D27). Cost
-/// O(N·n_g). Result in `data.qdd`.
-///
-/// Fails if `D̂_n` is not positive definite (a degenerate basis or inertia).
-pub fn forward_dynamics<'a>(
+crate::simd::dispatch! {
+    /// Forward dynamics by the O(N) articulated recursion (derivations §6, the
+    /// corrected seed (14)–(22)): `q̈` (n_dof) at `(q, q̇, t)` under actuator
+    /// force `τ_act` (n_dof, `None` = 0) and every term of the model.
+    ///
+    /// Pass 1 (outward): `g, η`, the per-piece integrals (D20) and bias sums (D23).
+    /// Pass 2 (inward): articulated inertia and bias (D24–D26), one `k_n×k_n`
+    /// Cholesky per piece. Pass 3 (outward): `q̈_n` and `η̇(L_n)` (D27). Cost
+    /// O(N·n_g). Result in `data.qdd`.
+    ///
+    /// Fails if `D̂_n` is not positive definite (a degenerate basis or inertia).
+    pub fn forward_dynamics<'a>(model: &Model, data: &'a mut Data, t: f64, q: &[f64], qd: &[f64], tau_act: Option<&[f64]>) -> Result<&'a DVector<f64>, DynamicsError>
+    => forward_dynamics_impl, forward_dynamics_avx2
+}
+
+#[inline(always)]
+pub(crate) fn forward_dynamics_impl<'a>(
     model: &Model,
     data: &'a mut Data,
     t: f64,
@@ -153,7 +166,7 @@ pub fn forward_dynamics<'a>(
     if let Some(ta) = tau_act {
         check_vec(model, "tau", ta)?;
     }
-    outward(model, data, q, Some(qd), None, Pass::Articulated);
+    outward_inl(model, data, q, Some(qd), None, Pass::Articulated);
     strain_forces(model, data, t, q, Some(qd), tau_act);
     let scale = data.load_scale;
     for (r, rm) in model.rods().iter().enumerate() {
@@ -234,21 +247,27 @@ pub fn forward_dynamics<'a>(
     Ok(&data.qdd)
 }
 
-/// Mass matrix `M(q) = ∫ Jᵀ𝓜J ds` (D19) by the composite recursion (D20):
-/// `𝓜ᶜ_n = 𝓜ᵗ_n + A_ℓᵀ𝓜ᶜ_{n+1}A_ℓ`, `M_mm = 𝓓_m + S_ℓᵀ𝓜ᶜ_{m+1}S_ℓ`, and
-/// the off-diagonal blocks `M_nm = S_n(ℓ)ᵀ A…ᵀ F_m` (n < m) of
-/// `F_m = 𝓤_m + A_ℓᵀ𝓜ᶜ_{m+1}S_ℓ` carried down the chain, evaluated as the
-/// pairing `(Ad_{g_n(ℓ)}S_n(ℓ))ᵀ(Ad*_{g_m(0)⁻¹}F_m)` of world-frame twists
-/// and wrenches (the pairing is frame-independent). Block diagonal across
-/// rods. Result in `data.mass` (n_dof × n_dof, symmetric positive
-/// definite). Cost O(N·n_dof).
-pub fn mass_matrix<'a>(
+crate::simd::dispatch! {
+    /// Mass matrix `M(q) = ∫ Jᵀ𝓜J ds` (D19) by the composite recursion (D20):
+    /// `𝓜ᶜ_n = 𝓜ᵗ_n + A_ℓᵀ𝓜ᶜ_{n+1}A_ℓ`, `M_mm = 𝓓_m + S_ℓᵀ𝓜ᶜ_{m+1}S_ℓ`, and
+    /// the off-diagonal blocks `M_nm = S_n(ℓ)ᵀ A…ᵀ F_m` (n < m) of
+    /// `F_m = 𝓤_m + A_ℓᵀ𝓜ᶜ_{m+1}S_ℓ` carried down the chain, evaluated as the
+    /// pairing `(Ad_{g_n(ℓ)}S_n(ℓ))ᵀ(Ad*_{g_m(0)⁻¹}F_m)` of world-frame twists
+    /// and wrenches (the pairing is frame-independent). Block diagonal across
+    /// rods. Result in `data.mass` (n_dof × n_dof, symmetric positive
+    /// definite). Cost O(N·n_dof).
+    pub fn mass_matrix<'a>(model: &Model, data: &'a mut Data, q: &[f64]) -> Result<&'a nalgebra::DMatrix<f64>, DynamicsError>
+    => mass_matrix_impl, mass_matrix_avx2
+}
+
+#[inline(always)]
+pub(crate) fn mass_matrix_impl<'a>(
     model: &Model,
     data: &'a mut Data,
     q: &[f64],
 ) -> Result<&'a nalgebra::DMatrix<f64>, DynamicsError> {
     check_vec(model, "q", q)?;
-    outward(model, data, q, None, None, Pass::Composite);
+    outward_inl(model, data, q, None, None, Pass::Composite);
     let n = model.n_dof();
     if data.mass.nrows() != n {
         data.mass = nalgebra::DMatrix::zeros(n, n);

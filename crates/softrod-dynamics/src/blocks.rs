@@ -87,7 +87,7 @@ pub(crate) fn ad_inv_tr_vec(g: &Pose, f: &Vec6) -> Vec6 {
 
 /// `(Ad⁻¹_g)ᵀ Y` with `(Ad⁻¹_g)ᵀ = [[R, p̃R], [0, R]]`: four products and
 /// two cross-product sweeps instead of six products.
-#[inline]
+#[inline(always)]
 pub(crate) fn ad_inv_tr_premul(g: &Pose, y: &Blk6) -> Blk6 {
     let r = &g.rotation;
     let p = &g.translation;
@@ -120,7 +120,7 @@ pub(crate) struct Blk6 {
 
 impl Sym6 {
     /// Reads the upper blocks of a matrix known to be symmetric.
-    #[inline]
+    #[inline(always)]
     pub fn from_mat6(m: &Mat6) -> Self {
         Self {
             a: m.fixed_view::<3, 3>(0, 0).into_owned(),
@@ -130,7 +130,7 @@ impl Sym6 {
     }
 
     /// Dense form.
-    #[inline]
+    #[inline(always)]
     pub fn dense(&self) -> Mat6 {
         let mut m = Mat6::zeros();
         self.write_dense(&mut m);
@@ -138,7 +138,7 @@ impl Sym6 {
     }
 
     /// `m += self` (dense `m`).
-    #[inline]
+    #[inline(always)]
     pub fn add_to(&self, m: &mut Mat6) {
         let mut v = m.fixed_view_mut::<3, 3>(0, 0);
         v += self.a;
@@ -152,7 +152,7 @@ impl Sym6 {
 
     /// `W Wᵀ` for a 6×6 `W` (rows split 3 + 3): exactly symmetric, the
     /// diagonal blocks by their upper halves.
-    #[inline]
+    #[inline(always)]
     pub fn gram_rows(w: &Mat6) -> Sym6 {
         let w1 = w.fixed_rows::<3>(0);
         let w2 = w.fixed_rows::<3>(3);
@@ -176,7 +176,7 @@ impl Sym6 {
     }
 
     /// Writes the dense form into `m`.
-    #[inline]
+    #[inline(always)]
     pub fn write_dense(&self, m: &mut Mat6) {
         m.fixed_view_mut::<3, 3>(0, 0).copy_from(&self.a);
         m.fixed_view_mut::<3, 3>(0, 3).copy_from(&self.b);
@@ -186,7 +186,7 @@ impl Sym6 {
     }
 
     /// `self · x` for a block operator `x = [[xa, 0], [xb, xa]]`.
-    #[inline]
+    #[inline(always)]
     pub fn mul_op(&self, x: &AdOp) -> Blk6 {
         let y12 = self.b * x.a;
         Blk6 {
@@ -198,7 +198,7 @@ impl Sym6 {
     }
 
     /// `self · v`.
-    #[inline]
+    #[inline(always)]
     pub fn mul_vec(&self, v: &Vec6) -> Vec6 {
         let w = softrod_lie::angular(v);
         let u = softrod_lie::linear(v);
@@ -214,7 +214,7 @@ impl Sym6 {
     /// its transpose on the right, `b ← b + p̃c`, `a ← a + p̃bᵀ + b p̃ᵀ +
     /// p̃ c p̃ᵀ`. About 200 multiplications instead of the ~280 of the
     /// generic block congruence; exactly symmetric.
-    #[inline]
+    #[inline(always)]
     pub fn congruence_ad_inv(&self, g: &Pose) -> Sym6 {
         let r = &g.rotation;
         let p = &g.translation;
@@ -236,7 +236,7 @@ impl Sym6 {
 
 impl Blk6 {
     /// `m += self` (dense `m`).
-    #[inline]
+    #[inline(always)]
     pub fn add_to(&self, m: &mut Mat6) {
         let mut v = m.fixed_view_mut::<3, 3>(0, 0);
         v += self.m11;
@@ -249,7 +249,7 @@ impl Blk6 {
     }
 
     /// Dense form.
-    #[inline]
+    #[inline(always)]
     pub fn dense(&self) -> Mat6 {
         let mut m = Mat6::zeros();
         m.fixed_view_mut::<3, 3>(0, 0).copy_from(&self.m11);
@@ -261,7 +261,7 @@ impl Blk6 {
 
     /// `xᵀ · y` where the caller knows the product is symmetric (`y = M x`
     /// with `M` symmetric): the lower-left block is not computed.
-    #[inline]
+    #[inline(always)]
     pub fn tr_premul_sym(x: &AdOp, y: &Blk6) -> Sym6 {
         Sym6 {
             a: tr_mul_sym2(&x.a, &y.m11, &x.b, &y.m21),
@@ -297,7 +297,7 @@ impl Sym6 {
 
 impl Add for Sym6 {
     type Output = Sym6;
-    #[inline]
+    #[inline(always)]
     fn add(self, o: Sym6) -> Sym6 {
         Sym6 {
             a: self.a + o.a,
@@ -309,7 +309,7 @@ impl Add for Sym6 {
 
 impl Sub for Sym6 {
     type Output = Sym6;
-    #[inline]
+    #[inline(always)]
     fn sub(self, o: Sym6) -> Sym6 {
         Sym6 {
             a: self.a - o.a,
@@ -320,7 +320,7 @@ impl Sub for Sym6 {
 }
 
 impl AddAssign for Sym6 {
-    #[inline]
+    #[inline(always)]
     fn add_assign(&mut self, o: Sym6) {
         self.a += o.a;
         self.b += o.b;
@@ -329,7 +329,7 @@ impl AddAssign for Sym6 {
 }
 
 impl SubAssign for Sym6 {
-    #[inline]
+    #[inline(always)]
     fn sub_assign(&mut self, o: Sym6) {
         self.a -= o.a;
         self.b -= o.b;

@@ -23,7 +23,7 @@ macro_rules! dispatch {
 
 /// In-place Cholesky `m = L Lᵀ` of the leading `k×k` block (`L` written to
 /// the lower triangle). Returns `false` if a pivot is not positive (or NaN).
-#[inline]
+#[inline(always)]
 pub(crate) fn cholesky_k(m: &mut Mat6, k: usize) -> bool {
     dispatch!(k, cholesky_n(m))
 }
@@ -53,7 +53,7 @@ fn cholesky_n<const K: usize>(m: &mut Mat6) -> bool {
 
 /// `W ← W L⁻ᵀ` on the leading `k` columns of `W` (6×k): the right-hand
 /// triangular solve, column operations on whole 6-vectors.
-#[inline]
+#[inline(always)]
 pub(crate) fn right_solve_lt(l: &Mat6, k: usize, w: &mut Mat6) {
     dispatch!(k, right_solve_lt_n(l, w))
 }
@@ -70,7 +70,7 @@ fn right_solve_lt_n<const K: usize>(l: &Mat6, w: &mut Mat6) {
 }
 
 /// `b ← L⁻¹ b` in the leading `k` entries.
-#[inline]
+#[inline(always)]
 pub(crate) fn forward_sub(l: &Mat6, k: usize, b: &mut Vec6) {
     dispatch!(k, forward_sub_n(l, b))
 }
@@ -87,7 +87,7 @@ fn forward_sub_n<const K: usize>(l: &Mat6, b: &mut Vec6) {
 }
 
 /// `b ← L⁻ᵀ b` in the leading `k` entries.
-#[inline]
+#[inline(always)]
 pub(crate) fn backward_sub(l: &Mat6, k: usize, b: &mut Vec6) {
     dispatch!(k, backward_sub_n(l, b))
 }

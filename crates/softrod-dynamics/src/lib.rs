@@ -33,6 +33,7 @@ mod matrices;
 mod model;
 mod modes;
 mod passes;
+mod simd;
 mod statics;
 
 pub use algorithms::{

@@ -213,7 +213,7 @@ impl FullSums {
 
 /// [`project_add`] for block-form `X_u`, `X_d`: an `I₆` piece adds the
 /// blocks in place, other bases go through the dense forms.
-#[inline]
+#[inline(always)]
 pub(crate) fn project_add_blocks(
     basis: &softrod_kinematics::Basis,
     xu: &crate::blocks::Blk6,
@@ -232,7 +232,7 @@ pub(crate) fn project_add_blocks(
 /// `ut += X_u B` (6×k) and `dt += Bᵀ X_d B` (k×k) for full-coordinate
 /// matrices `X_u`, `X_d` (6×6): column gathers for a selection basis, a
 /// plain copy for the identity.
-#[inline]
+#[inline(always)]
 pub(crate) fn project_add(
     basis: &softrod_kinematics::Basis,
     xu: &Mat6,
@@ -301,6 +301,20 @@ fn s_columns(tm: &AdOp, basis: &softrod_kinematics::Basis, out: &mut [Vec6; 6]) 
 /// model's full vectors; `qd = None` means at rest, `qdd` only for
 /// [`Pass::Inverse`].
 pub(crate) fn outward(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    qd: Option<&[f64]>,
+    qdd: Option<&[f64]>,
+    pass: Pass,
+) {
+    outward_inl(model, data, q, qd, qdd, pass);
+}
+
+/// [`outward`] inlined into its caller: the hot algorithms inline it into
+/// both their baseline and their AVX2 copies (`crate::simd`).
+#[inline(always)]
+pub(crate) fn outward_inl(
     model: &Model,
     data: &mut Data,
     q: &[f64],
