@@ -1,7 +1,7 @@
 //! Inverse dynamics, O(N) forward dynamics, the mass matrix and the
 //! Cholesky forward dynamics.
 
-use crate::blocks::{Blk6, Sym6, ad_inv_tr_premul, ad_inv_tr_vec, ad_inv_vec};
+use crate::blocks::{Blk6, Sym6, ad_inv_tr_vec, ad_inv_vec};
 use crate::chol::{backward_sub, cholesky_k, forward_sub, right_solve_lt};
 use crate::data::Data;
 use crate::error::DynamicsError;
@@ -181,15 +181,24 @@ pub(crate) fn forward_dynamics_impl<'a>(
             let leaf = n + 1 == pieces.len();
             // In place: `ut` becomes Û, then W = Û L⁻ᵀ; `dt` becomes D̂,
             // then its factor L.
+            // The child's inertia carried to this piece's base,
+            // C = A_ℓᵀ𝓜ᴬA_ℓ, is needed below anyway; with T₋(ℓ) = A_ℓT₊(ℓ)
+            // it also gives A_ℓᵀ𝓜ᴬT₋ = C T₊ and T₋ᵀ𝓜ᴬT₋ = T₊ᵀ C T₊.
+            let carried = if leaf {
+                Sym6::default()
+            } else {
+                ma_next.congruence_ad_inv(&w.tip)
+            };
             let y = if leaf {
                 pa_next
             } else {
                 // Û = 𝓤 + A_ℓᵀ𝓜ᴬT₋(ℓ)B, D̂ = 𝓓 + BᵀT₋(ℓ)ᵀ𝓜ᴬT₋(ℓ)B (D24).
-                let mat = ma_next.mul_op(&w.tm_tip);
+                let tplus = w.tm_tip.transpose_blocks();
+                let mat = carried.mul_op(&tplus);
                 project_add_blocks(
                     &piece.basis,
-                    &ad_inv_tr_premul(&w.tip, &mat),
-                    &Blk6::tr_premul_sym(&w.tm_tip, &mat),
+                    &mat,
+                    &Blk6::tr_premul_sym(&tplus, &mat),
                     &mut w.ut,
                     &mut w.dt,
                 );
@@ -216,11 +225,7 @@ pub(crate) fn forward_dynamics_impl<'a>(
             forward_sub(&w.dt, k, &mut u);
             let wm = &w.ut;
             let wwt = Sym6::gram_rows(wm);
-            let mut next = if leaf {
-                w.mt
-            } else {
-                w.mt + ma_next.congruence_ad_inv(&w.tip)
-            };
+            let mut next = if leaf { w.mt } else { w.mt + carried };
             next -= wwt;
             ma_next = next;
             pa_next = w.p_big + ad_inv_tr_vec(&w.tip, &y) + wm * u;
@@ -284,14 +289,18 @@ pub(crate) fn mass_matrix_impl<'a>(
             let w = &data.pieces[r][m];
             let km = pieces[m].basis.dof();
             let om = rm.dof_offset + pieces[m].dof_offset;
-            // M_mm = 𝓓 + BᵀT₋ᵀ𝓜ᶜT₋B, F = 𝓤 + A_ℓᵀ𝓜ᶜT₋B (D20).
+            // M_mm = 𝓓 + BᵀT₋ᵀ𝓜ᶜT₋B, F = 𝓤 + A_ℓᵀ𝓜ᶜT₋B (D20), from
+            // C = A_ℓᵀ𝓜ᶜA_ℓ (needed for 𝓜ᶜ_m anyway) and T₋ = A_ℓT₊ as in
+            // the forward dynamics.
             let mut f = w.ut;
             let mut mmm = w.dt;
-            let mct = mc_next.mul_op(&w.tm_tip);
+            let carried = mc_next.congruence_ad_inv(&w.tip);
+            let tplus = w.tm_tip.transpose_blocks();
+            let mct = carried.mul_op(&tplus);
             project_add_blocks(
                 &pieces[m].basis,
-                &ad_inv_tr_premul(&w.tip, &mct),
-                &Blk6::tr_premul_sym(&w.tm_tip, &mct),
+                &mct,
+                &Blk6::tr_premul_sym(&tplus, &mct),
                 &mut f,
                 &mut mmm,
             );
@@ -314,7 +323,7 @@ pub(crate) fn mass_matrix_impl<'a>(
                 let blk = wn.s_world.tr_mul(&f_world);
                 put_block(&mut data.mass, on, om, &blk, kn, km);
             }
-            mc_next = w.mt + mc_next.congruence_ad_inv(&w.tip);
+            mc_next = w.mt + carried;
         }
     }
     data.mass.fill_lower_triangle_with_upper_triangle();

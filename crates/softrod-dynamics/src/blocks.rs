@@ -85,22 +85,6 @@ pub(crate) fn ad_inv_tr_vec(g: &Pose, f: &Vec6) -> Vec6 {
     )
 }
 
-/// `(Ad⁻¹_g)ᵀ Y` with `(Ad⁻¹_g)ᵀ = [[R, p̃R], [0, R]]`: four products and
-/// two cross-product sweeps instead of six products.
-#[inline(always)]
-pub(crate) fn ad_inv_tr_premul(g: &Pose, y: &Blk6) -> Blk6 {
-    let r = &g.rotation;
-    let p = &g.translation;
-    let r21 = r * y.m21;
-    let r22 = r * y.m22;
-    Blk6 {
-        m11: r * y.m11 + cross_cols(p, &r21),
-        m12: r * y.m12 + cross_cols(p, &r22),
-        m21: r21,
-        m22: r22,
-    }
-}
-
 /// A symmetric 6×6 matrix `[[a, b], [bᵀ, c]]`.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Sym6 {
@@ -397,14 +381,6 @@ mod tests {
                 }
             }
             assert_eq!(cong.a, cong.a.transpose());
-            let tp = ad_inv_tr_premul(&g, &my);
-            let tpd = ai.transpose() * myd;
-            let scale = tpd.amax();
-            for i in 0..6 {
-                for j in 0..6 {
-                    assert_relative_eq!(tp.get(i, j), tpd[(i, j)], epsilon = 1e-13 * scale);
-                }
-            }
             assert_relative_eq!(ad_inv_vec(&g, &v), ai * v, epsilon = 1e-12);
             assert_relative_eq!(ad_inv_tr_vec(&g, &v), ai.transpose() * v, epsilon = 1e-12);
         }

@@ -22,6 +22,18 @@ pub struct AdOp {
 }
 
 impl AdOp {
+    /// `[[Aᵀ, 0], [Bᵀ, Aᵀ]]`, the blockwise transpose (not the 6×6
+    /// transpose). For the tangent operators of a constant strain it maps
+    /// `T₋(x)` to `T₊(x) = Ad_{g(x)}T₋(x)`: the sign of `ξ` flips exactly
+    /// the skew parts of both blocks.
+    #[inline(always)]
+    pub fn transpose_blocks(&self) -> AdOp {
+        AdOp {
+            a: self.a.transpose(),
+            b: self.b.transpose(),
+        }
+    }
+
     /// The identity `I₆`.
     #[inline]
     pub fn identity() -> Self {
