@@ -39,6 +39,7 @@ pub struct PieceMaps {
 
 impl PieceMaps {
     /// Precomputes for strain `ξ` and, when the bias is wanted, rate `δ`.
+    #[inline(always)]
     pub fn new(xi: &Vec6, delta: Option<&Vec6>) -> Self {
         let k = angular(xi);
         let q = linear(xi);

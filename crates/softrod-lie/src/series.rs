@@ -420,7 +420,7 @@ pub fn abc_tau34(psi: f64) -> ([f64; 3], [f64; 2]) {
 
 /// `abc(ψ)`, `tau(ψ)` and `rho(ψ)` together: the eleven coefficients of the
 /// pose, `T₋` and its strain derivative at one abscissa.
-#[inline]
+#[inline(always)]
 pub fn abc_tau_rho(psi: f64) -> ([f64; 3], [f64; 4], [f64; 4]) {
     let psi = psi.abs();
     if psi < PSI_SWITCH {
