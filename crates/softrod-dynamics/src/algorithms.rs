@@ -55,12 +55,18 @@ pub(crate) fn strain_forces(
             let o = off + piece.dof_offset;
             // Zero padding keeps `K_n q_n` exact: the pad adds exact zeros.
             let pad = |v: &[f64]| Vec6::from_fn(|i, _| if i < k { v[i] } else { 0.0 });
-            let mut e = pd.stiffness6 * pad(&q[o..o + k]);
+            let mut e = match &pd.diagonal {
+                Some((kd, _)) => kd.component_mul(&pad(&q[o..o + k])),
+                None => pd.stiffness6 * pad(&q[o..o + k]),
+            };
             if pd.has_offset {
                 e += pd.offset6;
             }
             if let (true, Some(v)) = (pd.has_damping, qd) {
-                e += pd.damping6 * pad(&v[o..o + k]);
+                e += match &pd.diagonal {
+                    Some((_, dd)) => dd.component_mul(&pad(&v[o..o + k])),
+                    None => pd.damping6 * pad(&v[o..o + k]),
+                };
             }
             for (s, ei) in sf.as_mut_slice()[o..o + k].iter_mut().zip(e.iter()) {
                 *s -= ei;

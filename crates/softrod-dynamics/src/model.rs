@@ -80,6 +80,10 @@ pub(crate) struct PieceData {
     /// in the hot loop).
     pub stiffness6: Mat6,
     pub damping6: Mat6,
+    /// The diagonals of `stiffness6`, `damping6` when both are diagonal
+    /// (every piece whose basis selects strains of a diagonal `Γ`): the
+    /// strain forces then cost 12 multiplications instead of 72.
+    pub diagonal: Option<(Vec6, Vec6)>,
     pub offset6: Vec6,
 }
 
@@ -212,11 +216,17 @@ impl Model {
                 let pad = |d: &DMatrix<f64>| {
                     Mat6::from_fn(|i, j| if i < k && j < k { d[(i, j)] } else { 0.0 })
                 };
+                let (stiffness6, damping6) = (pad(&m.stiffness), pad(&m.damping));
+                let off_diagonal_zero =
+                    |a: &Mat6| (0..6).all(|i| (0..6).all(|j| i == j || a[(i, j)] == 0.0));
+                let diagonal = (off_diagonal_zero(&stiffness6) && off_diagonal_zero(&damping6))
+                    .then(|| (stiffness6.diagonal(), damping6.diagonal()));
                 pieces.push(PieceData {
                     points,
                     loads,
-                    stiffness6: pad(&m.stiffness),
-                    damping6: pad(&m.damping),
+                    stiffness6,
+                    damping6,
+                    diagonal,
                     offset6: Vec6::from_fn(|i, _| if i < k { m.elastic_offset[i] } else { 0.0 }),
                     has_damping: m.damping.iter().any(|v| *v != 0.0),
                     has_offset: m.elastic_offset.iter().any(|v| *v != 0.0),
