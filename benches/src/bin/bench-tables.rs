@@ -8,6 +8,19 @@
 //!
 //! The numbers are whatever the last `cargo bench` measured; nothing is typed
 //! by hand.
+//!
+//! On a shared virtual machine the same binary measures up to 1.6× slower in
+//! some minutes than in others (docs/performance.md). Several complete runs,
+//! each saved as a criterion baseline, are tabulated side by side with
+//! `--runs`, plus the fastest median of each benchmark (contention only ever
+//! adds time):
+//!
+//! ```sh
+//! for r in run1 run2 run3; do
+//!   cargo bench -p softrod-benches --bench dynamics -- --save-baseline $r
+//! done
+//! cargo run -p softrod-benches --bin bench-tables -- --runs run1,run2,run3
+//! ```
 
 use std::path::{Path, PathBuf};
 
@@ -38,15 +51,24 @@ fn sort_key(id: &str) -> (u64, String) {
 }
 
 fn main() {
-    let root: PathBuf = std::env::args()
-        .nth(1)
-        .map(PathBuf::from)
-        .unwrap_or_else(|| {
-            Path::new(env!("CARGO_MANIFEST_DIR"))
-                .join("..")
-                .join("target")
-                .join("criterion")
-        });
+    let mut args: Vec<String> = std::env::args().skip(1).collect();
+    let runs: Option<Vec<String>> = match args.iter().position(|a| a == "--runs") {
+        Some(i) => {
+            let Some(list) = args.get(i + 1).cloned() else {
+                eprintln!("--runs needs a comma-separated list of baseline names");
+                std::process::exit(2);
+            };
+            args.drain(i..i + 2);
+            Some(list.split(',').map(str::to_string).collect())
+        }
+        None => None,
+    };
+    let root: PathBuf = args.first().map(PathBuf::from).unwrap_or_else(|| {
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("..")
+            .join("target")
+            .join("criterion")
+    });
     let Ok(groups) = std::fs::read_dir(&root) else {
         eprintln!(
             "no criterion results in {} (run cargo bench first)",
@@ -60,6 +82,10 @@ fn main() {
         .filter(|p| p.is_dir())
         .collect();
     groups.sort();
+    if let Some(runs) = runs {
+        print_runs(&groups, &runs);
+        return;
+    }
     println!("| benchmark | median | 95 % interval |");
     println!("|---|---|---|");
     for g in groups {
@@ -84,6 +110,49 @@ fn main() {
                     fmt_time(hi)
                 );
             }
+        }
+    }
+}
+
+/// One column per saved baseline (its median) and the fastest of them.
+fn print_runs(groups: &[PathBuf], runs: &[String]) {
+    println!("| benchmark | {} | fastest |", runs.join(" | "));
+    println!("|---|{}---|", "---|".repeat(runs.len()));
+    for g in groups {
+        let name = g.file_name().unwrap().to_string_lossy().to_string();
+        if name == "report" {
+            continue;
+        }
+        let mut ids: Vec<String> = std::fs::read_dir(g)
+            .into_iter()
+            .flatten()
+            .flatten()
+            .filter(|e| {
+                runs.iter()
+                    .any(|r| e.path().join(r).join("estimates.json").exists())
+            })
+            .map(|e| e.file_name().to_string_lossy().to_string())
+            .collect();
+        ids.sort_by_key(|id| sort_key(id));
+        for id in ids {
+            let medians: Vec<Option<f64>> = runs
+                .iter()
+                .map(|r| median_ns(&g.join(&id).join(r).join("estimates.json")).map(|m| m.0))
+                .collect();
+            let cells: Vec<String> = medians
+                .iter()
+                .map(|m| m.map_or_else(|| "–".to_string(), fmt_time))
+                .collect();
+            let best = medians
+                .iter()
+                .flatten()
+                .copied()
+                .fold(f64::INFINITY, f64::min);
+            println!(
+                "| {name}/{id} | {} | **{}** |",
+                cells.join(" | "),
+                fmt_time(best)
+            );
         }
     }
 }
