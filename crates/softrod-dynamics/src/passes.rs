@@ -355,7 +355,10 @@ pub(crate) fn outward_inl(
             let (mut ps_m, mut ps_n) = (softrod_lie::Vec3::zeros(), softrod_lie::Vec3::zeros());
             let mut mt = Mat6::zeros();
             let mut sandwiched = false;
-            if pass != Pass::Inverse {
+            let full = piece.basis.dof() >= 4;
+            // The column-by-column sums (k < 4) accumulate in place; the
+            // block sums overwrite both in `project`.
+            if pass != Pass::Inverse && !full {
                 w.ut.fill(0.0);
                 w.dt.fill(0.0);
             }
@@ -367,7 +370,6 @@ pub(crate) fn outward_inl(
                     .all(|p| p.inertia[3] == p.inertia[4] && p.inertia[3] == p.inertia[5]),
                 ..FullSums::default()
             };
-            let full = piece.basis.dof() >= 4;
             let mut scols = [Vec6::zeros(); 6];
             // Everything x-independent of the local maps, once per piece.
             let maps = PieceMaps::new(&xi, has_vel.then_some(&dxi));
