@@ -47,28 +47,88 @@ impl AdPowers {
 #[inline]
 pub fn exp_twist(x: f64, xi: &Vec6) -> Pose {
     let kv = angular(xi);
-    let [a, b, c] = series::abc(x * kv.norm());
-    exp_twist_with(x, xi, a, b, c)
+    let th = kv.norm();
+    let psi = x * th;
+    if psi.abs() < series::PSI_SWITCH {
+        let [a, b, c] = series::abc_below_switch(psi);
+        exp_twist_with(x, xi, a, b, c)
+    } else {
+        exp_twist_closed(x, xi, th, psi)
+    }
+}
+
+/// The closed branch of [`exp_twist`] without a division after the sine:
+/// with `θ = |k| > 0`, `x·a = sinψ/θ`, `x²b = (1 − cosψ)/θ²`,
+/// `x³c = (ψ − sinψ)/θ³` (`ψ = xθ`, either sign), and `1/θ` is ready long
+/// before `sin_cos` is; the diagonal `1 − x²bθ²` of `R` is `cosψ` itself.
+/// (Dividing by `ψ` after the sine measured 20 % slower: the division sits
+/// on the dependency chain.) Out of line: inlined, its register needs
+/// slowed the series branch by ~8 %.
+#[inline(never)]
+fn exp_twist_closed(x: f64, xi: &Vec6, th: f64, psi: f64) -> Pose {
+    let inv = 1.0 / th;
+    let inv2 = inv * inv;
+    let (s, c) = series::sin_cos(psi);
+    pose_from(
+        x,
+        xi,
+        &PoseCoefficients {
+            diag: c,
+            xa: s * inv,
+            x2b: (1.0 - c) * inv2,
+            x3c: (psi - s) * (inv2 * inv),
+        },
+    )
+}
+
+/// The scalars of (D4) as they enter the pose: `R = d I + (xa) k̃ + (x²b) kkᵀ`
+/// (`d = 1 − x²bθ²`, from `k̃² = kkᵀ − θ²I`) and
+/// `p = x q + (x²b) k×q + (x³c) k×(k×q)`.
+struct PoseCoefficients {
+    diag: f64,
+    xa: f64,
+    x2b: f64,
+    x3c: f64,
+}
+
+impl PoseCoefficients {
+    #[inline(always)]
+    fn from_abc(x: f64, th2: f64, a: f64, b: f64, c: f64) -> Self {
+        let x2b = x * x * b;
+        Self {
+            diag: 1.0 - x2b * th2,
+            xa: x * a,
+            x2b,
+            x3c: x * x * x * c,
+        }
+    }
 }
 
 #[inline(always)]
-fn exp_twist_with(x: f64, xi: &Vec6, a: f64, b: f64, c: f64) -> Pose {
+fn pose_from(x: f64, xi: &Vec6, k: &PoseCoefficients) -> Pose {
     let kv = angular(xi);
     let q = linear(xi);
-    // k̃² = kkᵀ − θ²I: no 3×3 product needed. Kept as whole-matrix
-    // operations on purpose: the entrywise symmetric + skew form (as in
-    // `tangent_blocks`) runs 25 fewer instructions but measured 14–33 %
-    // slower under criterion (not investigated further).
-    let rotation = Mat3::from_diagonal_element(1.0 - x * x * b * kv.norm_squared())
-        + skew(&kv) * (x * a)
-        + (kv * kv.transpose()) * (x * x * b);
-    let x2b = x * x * b;
+    // No 3×3 product needed. Kept as whole-matrix operations on purpose: the
+    // entrywise symmetric + skew form (as in `tangent_blocks`) runs 25 fewer
+    // instructions but measured 14–33 % slower under criterion (not
+    // investigated further).
+    let rotation =
+        Mat3::from_diagonal_element(k.diag) + skew(&kv) * k.xa + (kv * kv.transpose()) * k.x2b;
     let kq = kv.cross(&q);
-    let translation = q * x + kq * x2b + kv.cross(&kq) * (x * x * x * c);
+    let translation = q * x + kq * k.x2b + kv.cross(&kq) * k.x3c;
     Pose {
         rotation,
         translation,
     }
+}
+
+#[inline(always)]
+fn exp_twist_with(x: f64, xi: &Vec6, a: f64, b: f64, c: f64) -> Pose {
+    pose_from(
+        x,
+        xi,
+        &PoseCoefficients::from_abc(x, angular(xi).norm_squared(), a, b, c),
+    )
 }
 
 /// The 3×3 matrix `S + w̃` from the diagonal `d` and the upper off-diagonal

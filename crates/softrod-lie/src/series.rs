@@ -240,7 +240,7 @@ const SIN_COS_FAST_MAX: f64 = 1_048_576.0; // 2^20
 /// cosine (tested against `f64::sin_cos`); beyond `|ψ| = 2^20` it defers to
 /// `f64::sin_cos`.
 #[inline(always)]
-fn sin_cos(psi: f64) -> (f64, f64) {
+pub(crate) fn sin_cos(psi: f64) -> (f64, f64) {
     // π/2 = P1 + P2 + P3 + O(1e-37).
     const P1: f64 = f64::from_bits(0x3ff9_21fb_5440_0000);
     const P2: f64 = f64::from_bits(0x3dd0_b461_1a60_0000);
@@ -301,13 +301,19 @@ fn sin_cos(psi: f64) -> (f64, f64) {
 pub fn abc(psi: f64) -> [f64; 3] {
     let psi = psi.abs();
     if psi < PSI_SWITCH {
-        let u = psi * psi;
-        let [a, b, c, _] = horner_packed(&ABC_P, u, terms(u));
-        [a, b, c]
+        abc_below_switch(psi)
     } else {
         let (s, c) = sin_cos(psi);
         abc_closed(psi, s, c)
     }
+}
+
+/// The series branch of [`abc`] (`|ψ| <` [`PSI_SWITCH`]).
+#[inline(always)]
+pub(crate) fn abc_below_switch(psi: f64) -> [f64; 3] {
+    let u = psi * psi;
+    let [a, b, c, _] = horner_packed(&ABC_P, u, terms(u));
+    [a, b, c]
 }
 
 #[inline(always)]

@@ -103,6 +103,15 @@ proptest! {
     }
 
     #[test]
+    fn exp_at_negative_length_is_the_inverse(xi in vec6(3.0), s in 0.0..4.0f64) {
+        // ψ = sθ reaches ~20: both branches, and a negative x on each.
+        let g = lie::exp_twist(s, &xi);
+        let a = lie::exp_twist(-s, &xi) * g;
+        let scale = 1.0 + g.translation.amax();
+        prop_assert!((a.to_homogeneous() - Mat4::identity()).amax() < 1e-14 * scale);
+    }
+
+    #[test]
     fn tangent_derivative_in_s_is_exp(xi in vec6(2.0), s in 0.1..3.0f64) {
         // Central difference, h = 1e-4: error ≈ h²/6·|T'''| + ε/h ≲ 1e-8.
         let h = 1e-4;
