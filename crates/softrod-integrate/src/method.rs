@@ -2,6 +2,7 @@
 
 /// The integration method.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub enum Method {
     /// Classical 4th-order Runge–Kutta with a fixed step
     /// ([`StepControl::Fixed`](crate::StepControl::Fixed); the last step is shortened to land on `t1`).
@@ -83,4 +84,20 @@ pub enum Method {
         /// Spectral radius at infinite frequency, in `[0, 1]`.
         rho_inf: f64,
     },
+    /// ESDIRK4(3)6L\[2\]SA (Kennedy & Carpenter, Appl. Numer. Math. 44 (2003)
+    /// 139–181): an adaptive implicit Runge–Kutta method of order 4 with an
+    /// embedded order 3, L-stable and stiffly accurate, six stages of which
+    /// five implicit with one diagonal `γ = 1/4`. Each implicit stage is one
+    /// equation in its acceleration, solved by simplified Newton on the
+    /// force residual with the iteration matrix `M(q) + h²γ²K + hγD` — the
+    /// structured O(N) solve of
+    /// [`SecondOrderSystem::factor_shifted_mass`](crate::SecondOrderSystem::factor_shifted_mass)
+    /// when the system has it — and on the exact dense Jacobian when that
+    /// converges badly. Jacobian and factorization are kept while the
+    /// iteration contracts fast and `h` changes by less than 20 %. Dense
+    /// output: quintic Hermite in `(q, q̇, q̈)`. Only for
+    /// [`SecondOrderSystem`](crate::SecondOrderSystem). With
+    /// [`StepControl::Fixed`](crate::StepControl::Fixed) every step is
+    /// accepted (for convergence studies).
+    Esdirk46,
 }

@@ -13,6 +13,7 @@ use softrod_dynamics::{
 };
 use softrod_mechanics::Tension;
 
+use crate::linalg::DenseLu;
 use crate::system::SecondOrderSystem;
 
 /// A rod model ready for integration: `q̈ = FD(t, q, q̇, τ)`.
@@ -27,6 +28,18 @@ pub struct RodSystem {
     pub tau: Option<DVector<f64>>,
     /// Which Jacobians the stiff methods get (default [`RodJacobian::Exact`]).
     pub jacobian: RodJacobian,
+    /// The factored `M(q) + aK + bD` of
+    /// [`SecondOrderSystem::factor_shifted_mass`].
+    shifted: ShiftedMass,
+}
+
+/// `S = M(q) + aK + bD`, factored densely (Cholesky) in buffers allocated on
+/// first use.
+// TODO(deriv): softrod_dynamics::ShiftedSolver (O(N)) replaces this.
+#[derive(Clone, Debug, Default)]
+struct ShiftedMass {
+    k: Option<(nalgebra::DMatrix<f64>, nalgebra::DMatrix<f64>)>,
+    lu: Option<DenseLu>,
 }
 
 /// The Jacobians [`RodSystem`] hands to the stiff methods.
@@ -61,6 +74,7 @@ impl RodSystem {
             data,
             tau: None,
             jacobian: RodJacobian::Exact,
+            shifted: ShiftedMass::default(),
         }
     }
 }
@@ -158,9 +172,12 @@ impl SecondOrderSystem for RodSystem {
         Ok(true)
     }
 
+    fn has_mass_form(&self) -> bool {
+        self.jacobian == RodJacobian::ElasticOnly
+    }
+
     /// `r = ID(t, q, q̇, q̈) − τ_act = M(q) q̈ − f` by the O(N) inverse
-    /// dynamics (with [`RodJacobian::ElasticOnly`], the mass-matrix form's
-    /// partner; not provided otherwise).
+    /// dynamics.
     fn force_residual(
         &mut self,
         t: f64,
@@ -169,9 +186,6 @@ impl SecondOrderSystem for RodSystem {
         qdd: &DVector<f64>,
         r: &mut DVector<f64>,
     ) -> Result<bool, DynamicsError> {
-        if self.jacobian != RodJacobian::ElasticOnly {
-            return Ok(false);
-        }
         r.copy_from(inverse_dynamics(
             &self.model,
             &mut self.data,
@@ -184,6 +198,45 @@ impl SecondOrderSystem for RodSystem {
             *r -= tau;
         }
         Ok(true)
+    }
+
+    /// `M(q) + aK + bD` (a Cholesky factorization).
+    fn factor_shifted_mass(
+        &mut self,
+        _t: f64,
+        q: &DVector<f64>,
+        a: f64,
+        b: f64,
+    ) -> Result<bool, DynamicsError> {
+        let n = self.model.n_dof();
+        let sm = &mut self.shifted;
+        let (k, d) = sm
+            .k
+            .get_or_insert_with(|| (stiffness_matrix(&self.model), damping_matrix(&self.model)));
+        let lu = sm.lu.get_or_insert_with(|| DenseLu::new(n));
+        let m = mass_matrix(&self.model, &mut self.data, q.as_slice())?;
+        let dst = lu.matrix_mut();
+        for i in 0..n * n {
+            dst.as_mut_slice()[i] = m.as_slice()[i] + a * k.as_slice()[i] + b * d.as_slice()[i];
+        }
+        if !lu.factor_cholesky() {
+            return Err(DynamicsError::Singular {
+                rod: 0,
+                piece: 0,
+                what: "M(q) + aK + bD",
+            });
+        }
+        Ok(true)
+    }
+
+    fn solve_shifted_mass(&mut self, x: &mut DVector<f64>) -> Result<(), DynamicsError> {
+        let lu = self
+            .shifted
+            .lu
+            .as_ref()
+            .expect("factor_shifted_mass before solve_shifted_mass");
+        lu.solve_in_place(x);
+        Ok(())
     }
 
     /// Time enters only through cable tension tables.
