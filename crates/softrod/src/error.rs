@@ -13,7 +13,7 @@ use softrod_scene::SceneError;
 pub enum Error {
     /// A scene file or text is invalid (names file, line, column, key path).
     #[error(transparent)]
-    Scene(#[from] SceneError),
+    Scene(Box<SceneError>),
     /// The model or a dynamics evaluation rejected its input.
     #[error(transparent)]
     Dynamics(#[from] DynamicsError),
@@ -23,7 +23,7 @@ pub enum Error {
     /// The time integration failed (time, step size and the check that
     /// fired are in the source).
     #[error("simulation failed: {0}")]
-    Integration(#[source] IntegrateError),
+    Integration(#[source] Box<IntegrateError>),
     /// A run setting is invalid.
     #[error("run.{key}: {message}")]
     InvalidSetting {
@@ -53,6 +53,18 @@ pub enum Error {
         /// What the observer reported.
         message: String,
     },
+}
+
+impl From<SceneError> for Error {
+    fn from(e: SceneError) -> Self {
+        Error::Scene(Box::new(e))
+    }
+}
+
+impl From<IntegrateError> for Error {
+    fn from(e: IntegrateError) -> Self {
+        Error::Integration(Box::new(e))
+    }
 }
 
 impl Error {

@@ -153,7 +153,7 @@ impl Settings {
             opts.dt = Some(self.dt.min(duration));
             opts.max_steps = 50_000_000;
         } else {
-            if !(fixed_steps < 1e12) {
+            if fixed_steps.is_nan() || fixed_steps >= 1e12 {
                 return Err(Error::InvalidSetting {
                     key: "dt",
                     message: format!(

@@ -473,7 +473,7 @@ impl Simulation {
         if let Some((t, message)) = failure.into_inner() {
             return Err(Error::Output { t, message });
         }
-        let sol = result.map_err(Error::Integration)?;
+        let sol = result?;
         let status = if sol.status == softrod_integrate::Status::Completed {
             RunStatus::Completed
         } else {
