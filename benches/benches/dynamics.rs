@@ -6,7 +6,9 @@
 //! `cargo bench -p softrod-benches --bench dynamics -- --warm-up-time 1 --measurement-time 2`
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
-use softrod_dynamics::{Data, Model, RodSpec, forward_dynamics, inverse_dynamics, mass_matrix};
+use softrod_dynamics::{
+    Data, Model, RodSpec, ShiftedSolver, forward_dynamics, inverse_dynamics, mass_matrix,
+};
 use softrod_kinematics::{Basis, Rod, straight};
 use softrod_lie::{Pose, Vec3};
 use softrod_mechanics::{Material, RodBody, Section};
@@ -88,6 +90,25 @@ fn bench_dynamics(c: &mut Criterion) {
                     black_box(&qdd),
                 )
                 .unwrap()[0]
+            })
+        });
+    }
+    g.finish();
+
+    // One Newton matrix of an implicit step: factor S = M + aK + bD and
+    // solve once (a, b of a step of ~1e-3 s), O(N).
+    let mut g = c.benchmark_group("shifted_factor_solve");
+    for n in [10usize, 100, 1000] {
+        let m = model(n);
+        let mut solver = ShiftedSolver::new(&m);
+        let (q, qd, _) = state(m.n_dof(), 42);
+        let mut x = qd.clone();
+        g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+            b.iter(|| {
+                solver.factor(&m, black_box(&q), 2.5e-7, 5e-4).unwrap();
+                x.copy_from_slice(&qd);
+                solver.solve(&m, &mut x).unwrap();
+                x[0]
             })
         });
     }

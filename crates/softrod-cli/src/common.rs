@@ -2,10 +2,11 @@
 
 use std::path::{Path, PathBuf};
 
+use softrod::{Error, Simulation};
 use softrod_dynamics::Model;
 use softrod_kinematics::RodKinematics;
 use softrod_lie::Pose;
-use softrod_scene::{Built, Scene, Warning};
+use softrod_scene::{Scene, Warning};
 
 /// A failure with its exit code.
 #[derive(Debug, thiserror::Error)]
@@ -31,20 +32,30 @@ pub fn failed(e: impl std::fmt::Display) -> CliError {
     CliError::Failed(e.to_string())
 }
 
-/// A scene read, validated and built.
+impl From<Error> for CliError {
+    fn from(e: Error) -> Self {
+        if e.is_input() {
+            CliError::Input(e.to_string())
+        } else {
+            CliError::Failed(e.to_string())
+        }
+    }
+}
+
+/// A scene read, validated and built into a simulation: what every command
+/// starts from, so that `check` rejects exactly what `run` would.
 pub struct Loaded {
     pub scene: Scene,
     pub warnings: Vec<Warning>,
-    pub built: Built,
+    pub sim: Simulation,
 }
 
 pub fn load(path: &Path) -> Result<Loaded, CliError> {
-    let (scene, warnings) = Scene::from_path(path).map_err(|e| CliError::Input(e.to_string()))?;
-    let built = scene.build().map_err(|e| CliError::Input(e.to_string()))?;
+    let (sim, scene, warnings) = Simulation::from_scene_file(path)?;
     Ok(Loaded {
         scene,
         warnings,
-        built,
+        sim,
     })
 }
 
@@ -122,9 +133,4 @@ pub fn position(p: &Pose) -> [f64; 3] {
 /// JSON of a pose: `{ "position": [..], "rotation": [[..],..] }`.
 pub fn pose_json(p: &Pose) -> serde_json::Value {
     serde_json::json!({ "position": position(p), "rotation": rotation_rows(p) })
-}
-
-/// Whether the scene has static loads (gravity, point loads, cables).
-pub fn has_static_loads(scene: &Scene) -> bool {
-    scene.has_gravity() || !scene.loads.is_empty() || !scene.cables.is_empty()
 }

@@ -2,20 +2,17 @@
 
 use std::path::Path;
 
-use nalgebra::DVector;
-use softrod_dynamics::{
-    Data, StaticsOptions, StaticsResult, modes as dyn_modes, statics as dyn_statics,
-};
+use softrod::Equilibrium;
 
-use crate::common::{CliError, Loaded, Poser, failed, has_static_loads, load, pose_json};
+use crate::common::{CliError, Loaded, Poser, failed, load, pose_json};
 
 pub fn check(path: &Path) -> Result<(), CliError> {
     let Loaded {
         scene,
         warnings,
-        built,
+        sim,
     } = load(path)?;
-    let m = &built.model;
+    let m = sim.model();
     println!("scene: {}", scene.source);
     println!("degrees of freedom: {}", m.n_dof());
     for (r, rm) in scene.rods.iter().zip(m.rods()) {
@@ -64,34 +61,22 @@ pub fn check(path: &Path) -> Result<(), CliError> {
 /// with a modal analysis (dense eigenproblem, ~1 s at this size).
 pub const STABILITY_CHECK_MAX_DOF: usize = 600;
 
-/// Statics from the initial q (or rest) at t = 0.
-pub fn solve_statics(l: &mut Loaded, data: &mut Data) -> Result<StaticsResult, CliError> {
-    dyn_statics(
-        &l.built.model,
-        data,
-        l.built.q0.as_slice(),
-        &StaticsOptions::default(),
-    )
-    .map_err(failed)
-}
-
 pub fn statics(path: &Path, json: bool) -> Result<(), CliError> {
     let mut l = load(path)?;
-    let mut data = Data::new(&l.built.model);
-    let res = solve_statics(&mut l, &mut data)?;
+    let res = l.sim.statics()?;
     if res.q.iter().any(|v| !v.is_finite()) || !res.residual.is_finite() {
         return Err(failed("statics returned a non-finite state"));
     }
-    let model = &l.built.model;
-    let mut poser = Poser::new(model);
-    poser.update(model, res.q.as_slice())?;
     // Newton finds equilibria, stable or not (a soft rod under gravity has an
     // unstable upright one): check the lowest linearized mode when that is
     // affordable (O(n_dof³)).
-    let stable = (model.n_dof() <= STABILITY_CHECK_MAX_DOF)
-        .then(|| softrod_dynamics::modes(model, &mut data, res.q.as_slice(), 0.0))
+    let stable = (l.sim.n_dof() <= STABILITY_CHECK_MAX_DOF)
+        .then(|| l.sim.modes_about(res.q.as_slice()))
         .and_then(Result::ok)
         .map(|m| (m.omega.iter().all(|w| *w > 0.0), m.omega.min()));
+    let model = l.sim.model();
+    let mut poser = Poser::new(model);
+    poser.update(model, res.q.as_slice())?;
     if let Some((false, w)) = stable {
         eprintln!(
             "warning: this equilibrium is unstable (lowest linearized ω² = {:.3e} rad²/s²); \
@@ -150,13 +135,12 @@ pub fn statics(path: &Path, json: bool) -> Result<(), CliError> {
 
 pub fn modes(path: &Path, json: bool, count: usize) -> Result<(), CliError> {
     let mut l = load(path)?;
-    let mut data = Data::new(&l.built.model);
-    let (q_eq, equilibrium) = if has_static_loads(&l.scene) {
-        (solve_statics(&mut l, &mut data)?.q, "statics")
-    } else {
-        (DVector::zeros(l.built.model.n_dof()), "rest")
+    let analysis = l.sim.modes()?;
+    let m = &analysis.modes;
+    let equilibrium = match analysis.equilibrium {
+        Equilibrium::Rest => "rest",
+        Equilibrium::Statics(_) => "statics",
     };
-    let m = dyn_modes(&l.built.model, &mut data, q_eq.as_slice(), 0.0).map_err(failed)?;
     let f: Vec<f64> = m.frequencies_hz().into_iter().take(count).collect();
     if f.iter().any(|v| !v.is_finite()) {
         return Err(failed("modal analysis gave a non-finite frequency"));
@@ -175,7 +159,7 @@ pub fn modes(path: &Path, json: bool, count: usize) -> Result<(), CliError> {
                 "static equilibrium"
             },
             f.len(),
-            l.built.model.n_dof()
+            l.sim.n_dof()
         );
         for (i, v) in f.iter().enumerate() {
             println!("  mode {:>2}: {v:.6} Hz", i + 1);

@@ -32,7 +32,7 @@ use softrod_integrate::{
 use softrod_scene::{Built, Mode, Scene};
 
 use crate::common::{CliError, Poser, failed, load, out_dir};
-use crate::run::GENERALIZED_ALPHA_RHO_INF;
+use softrod::GENERALIZED_ALPHA_RHO_INF;
 
 /// Comparison intervals over the run (N_COMPARE + 1 times, both ends included).
 const N_COMPARE: usize = 50;
@@ -85,7 +85,7 @@ fn simulate_once(
     budget: f64,
 ) -> Result<Outcome, String> {
     let mut sys = RodSystem::new(built.model.clone());
-    sys.jacobian = crate::run::stiff_jacobian();
+    sys.jacobian = softrod::Settings::default().stiff_jacobian();
     let t1 = *times.last().expect("times");
     let opts = Options {
         t_eval: Some(times.to_vec()),

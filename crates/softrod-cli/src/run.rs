@@ -6,89 +6,13 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
-use nalgebra::DVector;
-use softrod_dynamics::{Model, energies};
-use softrod_integrate::{
-    Control, Hooks, Method, Options, RodSystem, Stats, integrate_second_order,
-};
-use softrod_scene::{Integrator, Scene};
+use softrod::dynamics::{Model, energies};
+use softrod::integrate::Stats;
+use softrod::{Flow, Observer, Sample, output_times};
+use softrod_scene::Scene;
 
 use crate::common::{CliError, Poser, failed, load, out_dir, position, quaternion};
 use crate::plots;
-
-/// High-frequency spectral radius used for `integrator = "generalized-alpha"`:
-/// 0.9 damps the unresolved shear/extension modes a little while keeping the
-/// resolved bending modes almost undamped (period error and damping of a mode
-/// with ω·dt ≪ 1 are second order either way).
-pub const GENERALIZED_ALPHA_RHO_INF: f64 = 0.9;
-
-/// The Jacobian the stiff methods get: `−M⁻¹K`, `−M⁻¹D` only
-/// (`RodJacobian::ElasticOnly`). Rosenbrock-W keeps its order with any
-/// Jacobian, and on the undamped cantilever release it took the same steps
-/// with the same accuracy as with the full finite-difference Jacobian at a
-/// third of the cost (docs/performance.md, "softrod-integrate"); the
-/// geometric stiffness of gravity, loads and cables is soft next to `K`.
-pub fn stiff_jacobian() -> softrod_integrate::RodJacobian {
-    softrod_integrate::RodJacobian::ElasticOnly
-}
-
-/// The integrator and its options for a scene's `[run]`.
-pub fn method_and_options(scene: &Scene) -> Result<(Method, Options), CliError> {
-    let run = &scene.run;
-    let fixed_steps = (run.duration / run.dt).ceil() as usize;
-    let (method, mut opts) = match run.integrator {
-        Integrator::Rk4 => (Method::Rk4, Options::fixed(run.dt)),
-        Integrator::GeneralizedAlpha => (
-            Method::GeneralizedAlpha {
-                rho_inf: GENERALIZED_ALPHA_RHO_INF,
-            },
-            Options {
-                rtol: run.rtol,
-                atol: run.atol,
-                error_control: run.error_control,
-                ..Options::fixed(run.dt)
-            },
-        ),
-        Integrator::Dopri5 => (Method::Dopri5, Options::tol(run.rtol, run.atol)),
-        Integrator::Rosenbrock => (Method::Rosw34, Options::tol(run.rtol, run.atol)),
-        Integrator::Radau5 => {
-            return Err(CliError::Input(format!(
-                "{}: run.integrator: \"radau5\" is not implemented yet, use \"rosenbrock\" (stiff, adaptive)",
-                scene.source
-            )));
-        }
-    };
-    if run.integrator == Integrator::GeneralizedAlpha && run.linearly_implicit {
-        // One iteration with W = M⁻¹K, always accepted: the IMEX scheme of
-        // `Options::linearly_implicit` (ρ∞ = GENERALIZED_ALPHA_RHO_INF < 1,
-        // which its explicit remainder needs).
-        opts.newton_tol = f64::INFINITY;
-        opts.newton_max_iter = 1;
-    }
-    let gen_alpha_controlled = run.integrator == Integrator::GeneralizedAlpha && run.error_control;
-    if run.integrator.is_adaptive() || gen_alpha_controlled {
-        // The scene's dt is the initial step of adaptive methods.
-        opts.dt = Some(run.dt.min(run.duration));
-        opts.max_steps = 50_000_000;
-    } else {
-        opts.max_steps = 2 * fixed_steps + 100;
-    }
-    Ok((method, opts))
-}
-
-/// Output times `0, Δ, 2Δ, …` up to the duration, which is always included.
-pub fn output_times(duration: f64, every: f64) -> Vec<f64> {
-    let n = (duration / every + 1e-9).floor() as usize;
-    let mut t: Vec<f64> = (0..=n).map(|k| (k as f64 * every).min(duration)).collect();
-    if duration - t[t.len() - 1] > 1e-9 * duration {
-        t.push(duration);
-    } else {
-        let last = t.len() - 1;
-        t[last] = duration;
-    }
-    t.dedup();
-    t
-}
 
 /// What is kept in memory for the plots.
 #[derive(Default)]
@@ -104,7 +28,7 @@ pub struct Series {
 pub struct Streamer {
     traj: BufWriter<File>,
     shape: BufWriter<File>,
-    times: Vec<f64>,
+    expected: usize,
     next: usize,
     snapshot_at: Vec<usize>,
     poser: Poser,
@@ -113,6 +37,8 @@ pub struct Streamer {
     pub error: Option<String>,
     pub last_stats: Stats,
     pub last_t: f64,
+    bar: Option<ProgressBar>,
+    duration: f64,
 }
 
 fn create(path: &Path) -> Result<BufWriter<File>, CliError> {
@@ -122,7 +48,12 @@ fn create(path: &Path) -> Result<BufWriter<File>, CliError> {
 }
 
 impl Streamer {
-    pub fn new(dir: &Path, model: &Model, times: Vec<f64>) -> Result<Self, CliError> {
+    pub fn new(
+        dir: &Path,
+        model: &Model,
+        times: Vec<f64>,
+        bar: Option<ProgressBar>,
+    ) -> Result<Self, CliError> {
         let n = model.n_dof();
         let mut traj = create(&dir.join("trajectory.csv"))?;
         let mut header = String::from("t,tip_x,tip_y,tip_z,tip_qw,tip_qx,tip_qy,tip_qz,energy");
@@ -149,7 +80,6 @@ impl Streamer {
         Ok(Self {
             traj,
             shape,
-            times,
             next: 0,
             snapshot_at,
             poser: Poser::new(model),
@@ -158,6 +88,9 @@ impl Streamer {
             error: None,
             last_stats: Stats::default(),
             last_t: 0.0,
+            duration: times.last().copied().unwrap_or(0.0),
+            expected: times.len(),
+            bar,
         })
     }
 
@@ -166,41 +99,25 @@ impl Streamer {
     }
 
     pub fn rows_expected(&self) -> usize {
-        self.times.len()
+        self.expected
     }
 
-    /// The output times, in order.
-    pub fn times(&self) -> &[f64] {
-        &self.times
-    }
-
-    /// One output row at `(t, y)`, `y = (q, q̇)`: the integrator's dense
-    /// output at the next output time, handed over by its output callback.
-    pub fn output(&mut self, sys: &mut RodSystem, t: f64, y: &DVector<f64>) -> Result<(), String> {
-        self.write_row(sys, t, y)?;
-        self.next += 1;
-        self.last_t = t;
-        Ok(())
-    }
-
-    fn write_row(&mut self, sys: &mut RodSystem, t: f64, y: &DVector<f64>) -> Result<(), String> {
-        let n = self.n;
-        if let Some(i) = y.iter().position(|v| !v.is_finite()) {
-            let what = if i < n {
-                format!("q{i}")
-            } else {
-                format!("qdot{}", i - n)
-            };
-            return Err(format!("non-finite {what} at t = {t:e}; output stopped"));
+    fn write_row(&mut self, s: Sample<'_>) -> Result<(), String> {
+        let (t, q, qd, model) = (s.t, s.q, s.qd, s.model);
+        let non_finite = |v: &[f64]| v.iter().position(|x| !x.is_finite());
+        if let Some(i) = non_finite(q) {
+            return Err(format!("non-finite q{i} at t = {t:e}; output stopped"));
         }
-        let (q, qd) = (&y.as_slice()[..n], &y.as_slice()[n..]);
-        let e = energies(&sys.model, &mut sys.data, q, qd)
-            .map_err(|e| format!("energy at t = {t:e}: {e}"))?;
+        if let Some(i) = non_finite(qd) {
+            return Err(format!("non-finite qdot{i} at t = {t:e}; output stopped"));
+        }
+        debug_assert_eq!(q.len(), self.n);
+        let e = energies(model, s.data, q, qd).map_err(|e| format!("energy at t = {t:e}: {e}"))?;
         if !e.total().is_finite() {
             return Err(format!("non-finite energy at t = {t:e}; output stopped"));
         }
         self.poser
-            .update(&sys.model, q)
+            .update(model, q)
             .map_err(|e| format!("at t = {t:e}: {e}"))?;
         let tip = *self.poser.tip(0);
         let p = position(&tip);
@@ -228,7 +145,7 @@ impl Streamer {
         self.traj.flush().map_err(io)?;
         let mut shape_rows = String::new();
         let mut snap = Vec::new();
-        for (r, rm) in sys.model.rods().iter().enumerate() {
+        for (r, rm) in model.rods().iter().enumerate() {
             let rod = &rm.spec.rod;
             let mut pts = Vec::new();
             for (k, g) in self.poser.boundaries(r).iter().enumerate() {
@@ -268,6 +185,28 @@ impl Streamer {
     }
 }
 
+impl Observer for Streamer {
+    /// One output row: the integrator's dense output at the next output time.
+    fn sample(&mut self, s: Sample<'_>) -> Result<Flow, String> {
+        let t = s.t;
+        if let Err(e) = self.write_row(s) {
+            self.error = Some(e.clone());
+            return Err(e);
+        }
+        self.next += 1;
+        self.last_t = t;
+        Ok(Flow::Continue)
+    }
+
+    fn step(&mut self, t: f64, stats: &Stats) {
+        self.last_stats = *stats;
+        if let Some(b) = &self.bar {
+            b.set_position((t / self.duration * 1000.0) as u64);
+            b.set_message(format!("{t:.4}"));
+        }
+    }
+}
+
 /// The summary object.
 #[allow(clippy::too_many_arguments)]
 pub fn write_summary(
@@ -302,14 +241,13 @@ pub fn write_summary(
 }
 
 pub fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), CliError> {
-    let l = load(path)?;
-    let (method, mut opts) = method_and_options(&l.scene)?;
+    let mut l = load(path)?;
     let dir = out_dir(path, out);
     std::fs::create_dir_all(&dir)
         .map_err(|e| failed(format!("cannot create {}: {e}", dir.display())))?;
     let scene = &l.scene;
     let duration = scene.run.duration;
-    let times = output_times(duration, scene.run.output_every);
+    let times = output_times(duration, l.sim.settings().output_spacing(duration));
     // Written first so that an interrupted run leaves a summary that says so.
     write_summary(
         &dir,
@@ -321,10 +259,6 @@ pub fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), CliErro
         0,
         times.len(),
     )?;
-    let mut sys = RodSystem::new(l.built.model.clone());
-    sys.jacobian = stiff_jacobian();
-    let mut streamer = Streamer::new(&dir, &sys.model, times)?;
-    let start = Instant::now();
     let bar = (!quiet && std::io::stderr().is_terminal()).then(|| {
         let b = ProgressBar::new(1000);
         if let Ok(style) = ProgressStyle::with_template(
@@ -334,59 +268,28 @@ pub fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), CliErro
         }
         b
     });
+    let mut streamer = Streamer::new(&dir, l.sim.model(), times, bar)?;
+    let start = Instant::now();
     // Rows are the integrator's dense output at the output times, streamed
-    // by its output callback as the run proceeds; the driver keeps none.
-    opts.t_eval = Some(streamer.times().to_vec());
-    let result = {
-        let st = std::cell::RefCell::new(&mut streamer);
-        let bar_ref = bar.as_ref();
-        let hooks = Hooks::new()
-            .stream_outputs(|t, y, sys: &mut RodSystem| {
-                let mut st = st.borrow_mut();
-                match st.output(sys, t, y) {
-                    Ok(()) => Control::Continue,
-                    Err(e) => {
-                        st.error = Some(e);
-                        Control::Stop
-                    }
-                }
-            })
-            .on_step(|info, _: &mut RodSystem| {
-                st.borrow_mut().last_stats = *info.stats;
-                if let Some(b) = bar_ref {
-                    b.set_position((info.t / duration * 1000.0) as u64);
-                    b.set_message(format!("{:.4}", info.t));
-                }
-                Control::Continue
-            });
-        integrate_second_order(
-            &mut sys,
-            method,
-            0.0,
-            duration,
-            &l.built.q0,
-            &l.built.qd0,
-            &opts,
-            hooks,
-        )
-    };
-    if let Some(b) = &bar {
+    // to the observer as the run proceeds; nothing is kept in between.
+    let result = l.sim.simulate_with(duration, &mut streamer);
+    if let Some(b) = &streamer.bar {
         b.finish_and_clear();
     }
     let wall = start.elapsed().as_secs_f64();
     let (status, stats, t_final) = match (&result, &streamer.error) {
         (_, Some(e)) => (format!("error: {e}"), streamer.last_stats, streamer.last_t),
         (Err(e), None) => (format!("error: {e}"), streamer.last_stats, streamer.last_t),
-        (Ok(sol), None) => {
+        (Ok(sum), None) => {
             if streamer.rows_written() < streamer.rows_expected() {
                 streamer.error = Some(format!(
                     "integration ended at t = {} before the last output time",
-                    sol.t_final
+                    sum.t_final
                 ));
             }
             match &streamer.error {
-                Some(e) => (format!("error: {e}"), sol.stats, sol.t_final),
-                None => ("ok".to_string(), sol.stats, sol.t_final),
+                Some(e) => (format!("error: {e}"), sum.stats, sum.t_final),
+                None => ("ok".to_string(), sum.stats, sum.t_final),
             }
         }
     };
@@ -423,54 +326,4 @@ pub fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), CliErro
         );
     }
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::{method_and_options, output_times};
-    use softrod_scene::Scene;
-
-    /// `[run] error_control` reaches the integrator options of
-    /// generalized-alpha, with `dt` as the first step and an adaptive step
-    /// budget; without it generalized-alpha keeps its fixed step.
-    #[test]
-    fn generalized_alpha_error_control_is_wired_through() {
-        let scene = |extra: &str| {
-            let text = format!(
-                "[[rod]]\nname = \"r\"\nlength = 0.4\npieces = 2\n\
-                 section = {{ shape = \"circle\", radius = 0.01 }}\n\
-                 material = {{ density = 1200, young = 2e6, poisson = 0.45 }}\n\
-                 [run]\nintegrator = \"generalized-alpha\"\ndt = 1e-3\nrtol = 1e-4\n{extra}\n"
-            );
-            Scene::from_str(&text, "t.toml").unwrap().0
-        };
-        let (_, o) = method_and_options(&scene("error_control = true")).unwrap();
-        assert!(o.error_control);
-        assert_eq!((o.dt, o.rtol), (Some(1e-3), 1e-4));
-        assert!(o.max_steps > 1_000_000);
-        let (_, o) = method_and_options(&scene("")).unwrap();
-        assert!(!o.error_control);
-        assert_eq!(o.max_steps, 2 * 1000 + 100);
-        assert!(o.newton_max_iter > 1);
-        // linearly_implicit = the options of `Options::linearly_implicit`.
-        let (_, o) = method_and_options(&scene("linearly_implicit = true")).unwrap();
-        let li = softrod_integrate::Options::linearly_implicit(1e-3);
-        assert_eq!(
-            (o.newton_max_iter, o.newton_tol),
-            (li.newton_max_iter, li.newton_tol)
-        );
-        assert_eq!(o.dt, Some(1e-3));
-    }
-
-    #[test]
-    fn output_times_include_both_ends() {
-        let t = output_times(1.0, 0.25);
-        assert_eq!(t, vec![0.0, 0.25, 0.5, 0.75, 1.0]);
-        let t = output_times(1.0, 0.3);
-        assert_eq!(t.len(), 5);
-        assert_eq!(*t.last().unwrap(), 1.0);
-        let t = output_times(1.0, 1e-3);
-        assert_eq!(t.len(), 1001);
-        assert_eq!(*t.last().unwrap(), 1.0);
-    }
 }

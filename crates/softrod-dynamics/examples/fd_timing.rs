@@ -1,10 +1,14 @@
 //! Times forward dynamics on the rod of the criterion bench (all six strains,
 //! N pieces, 4 Gauss points, gravity + elasticity + damping); handy under
 //! `valgrind --tool=callgrind` where criterion is too slow (`WHAT` = `fd`,
-//! `id` or `mm` for forward, inverse dynamics or the mass matrix):
+//! `id`, `mm` or `shifted` for forward, inverse dynamics, the mass matrix or
+//! one factor + solve of `M + aK + bD`; `BASIS=planar` selects the strains
+//! `ky, qx, qz` on every piece instead of all six):
 //! `N_PIECES=10 N_ITER=2000 cargo run --release -p softrod-dynamics --example fd_timing`.
-use softrod_dynamics::{Data, Model, RodSpec, forward_dynamics, inverse_dynamics, mass_matrix};
-use softrod_kinematics::{Basis, Rod, straight};
+use softrod_dynamics::{
+    Data, Model, RodSpec, ShiftedSolver, forward_dynamics, inverse_dynamics, mass_matrix,
+};
+use softrod_kinematics::{Basis, Rod, Strain, straight};
 use softrod_lie::{Pose, Vec3};
 use softrod_mechanics::{Material, RodBody, Section};
 
@@ -18,7 +22,16 @@ fn env(name: &str, default: usize) -> usize {
 fn main() {
     let n = env("N_PIECES", 10);
     let iters = env("N_ITER", 20000);
-    let rod = Rod::uniform(0.5, n, Basis::all(), straight(), Pose::identity()).unwrap();
+    let planar = std::env::var("BASIS").as_deref() == Ok("planar");
+    let basis = if planar {
+        Basis::select(&[Strain::Ky, Strain::Qx, Strain::Qz]).unwrap()
+    } else {
+        Basis::all()
+    };
+    // Position of each coordinate's strain in (kx, ky, kz, qx, qy, qz), so
+    // the planar state draws curvatures and stretches as the full one does.
+    let component = |i: usize| if planar { [1, 3, 5][i % 3] } else { i % 6 };
+    let rod = Rod::uniform(0.5, n, basis, straight(), Pose::identity()).unwrap();
     let material = Material {
         density: 1000.0,
         young: 1e7,
@@ -44,14 +57,14 @@ fn main() {
             (z >> 11) as f64 / (1u64 << 52) as f64 - 1.0
         };
         let q = (0..model.n_dof())
-            .map(|i| if i % 6 < 3 { 2.0 } else { 0.02 } * next())
+            .map(|i| if component(i) < 3 { 2.0 } else { 0.02 } * next())
             .collect();
         let qd = (0..model.n_dof()).map(|_| next()).collect();
         (q, qd)
     } else {
         (
             (0..model.n_dof())
-                .map(|i| if i % 6 < 3 { 0.3 } else { 0.01 } * ((i * 7 % 5) as f64 - 2.0))
+                .map(|i| if component(i) < 3 { 0.3 } else { 0.01 } * ((i * 7 % 5) as f64 - 2.0))
                 .collect(),
             (0..model.n_dof())
                 .map(|i| 0.1 * ((i * 3 % 7) as f64 - 3.0))
@@ -62,10 +75,18 @@ fn main() {
     let qdd = vec![0.5; model.n_dof()];
     let t0 = std::time::Instant::now();
     let mut acc = 0.0;
+    let mut solver = ShiftedSolver::new(&model);
+    let mut x = qd.clone();
     for _ in 0..iters {
         acc += match what.as_str() {
             "id" => inverse_dynamics(&model, &mut data, 0.0, &q, &qd, &qdd).unwrap()[0],
             "mm" => mass_matrix(&model, &mut data, &q).unwrap()[(0, 0)],
+            "shifted" => {
+                solver.factor(&model, &q, 2.5e-7, 5e-4).unwrap();
+                x.copy_from_slice(&qd);
+                solver.solve(&model, &mut x).unwrap();
+                x[0]
+            }
             _ => forward_dynamics(&model, &mut data, 0.0, &q, &qd, None).unwrap()[0],
         };
     }

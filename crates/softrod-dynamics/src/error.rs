@@ -49,6 +49,32 @@ pub enum DynamicsError {
         /// Residual norm (max-abs, N or N·m per coordinate) at the stop.
         residual: f64,
     },
+    /// A shift coefficient of `M + a·K + b·D` is negative or not finite
+    /// ([`crate::ShiftedSolver::factor`]).
+    #[error("shift coefficient {what} = {value} must be finite and non-negative")]
+    InvalidShift {
+        /// `"a"` (stiffness) or `"b"` (damping).
+        what: &'static str,
+        /// The value given.
+        value: f64,
+    },
+    /// A solve was asked of a factorization that does not exist yet (or
+    /// whose last `factor` failed).
+    #[error("{what}: solve called before a successful factor")]
+    NotFactored {
+        /// Which solver.
+        what: &'static str,
+    },
+    /// A workspace was built for a model of another shape.
+    #[error("{what} was built for a model with {built} coordinates, used with one of {got}")]
+    WorkspaceMismatch {
+        /// Which workspace.
+        what: &'static str,
+        /// `n_dof` of the model it was built for.
+        built: usize,
+        /// `n_dof` of the model it is used with.
+        got: usize,
+    },
     /// The modal eigenproblem failed.
     #[error("modal analysis failed: {0}")]
     Modes(String),

@@ -18,6 +18,7 @@
 //! | [`statics`] | equilibrium, Newton + line search + continuation | |
 //! | [`modes`] | natural frequencies about an equilibrium | |
 //! | [`dynamics_jacobians`] | `∂q̈/∂q`, `∂q̈/∂q̇` | |
+//! | [`ShiftedSolver`] | `(M + aK + bD)⁻¹ x`, O(N) | §6 with armature `aK_n + bD_n` |
 //!
 //! Units SI; twists and wrenches angular first; body frame (see `softrod-lie`).
 #![warn(missing_docs)]
@@ -33,6 +34,7 @@ mod matrices;
 mod model;
 mod modes;
 mod passes;
+mod shifted;
 mod simd;
 mod statics;
 
@@ -48,4 +50,5 @@ pub use matrices::{
 };
 pub use model::{Model, RodModel, RodSpec};
 pub use modes::{Modes, modes};
+pub use shifted::ShiftedSolver;
 pub use statics::{StaticsOptions, StaticsResult, statics};

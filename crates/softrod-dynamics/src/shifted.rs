@@ -1,0 +1,228 @@
+//! O(N) factorization and solve of the shifted mass matrix
+//! `S = M(q) + a·K + b·D`, the Newton matrix of the implicit integrators.
+//!
+//! `K = diag(K_n)` and `D = diag(D_n)` are block-diagonal per piece (D13),
+//! so `S` is the mass matrix of the same chain with a per-piece "armature"
+//! `a·K_n + b·D_n` added to each piece's own block. The articulated
+//! recursion of the forward dynamics (derivations §6) eliminates exactly
+//! those blocks: adding the armature to `D̂_n` (D24) makes the inward pass
+//! (D24–D25) an `LDLᵀ`-like factorization of `S` and the bias-free
+//! inward/outward sweeps (D26–D27) a solve, both O(N) — no `n_dof × n_dof`
+//! matrix is formed.
+
+use crate::algorithms::check_vec;
+use crate::blocks::{Blk6, Sym6, ad_inv_tr_vec, ad_inv_vec};
+use crate::chol::{backward_sub, cholesky_k, forward_sub, right_solve_lt};
+use crate::data::Data;
+use crate::error::DynamicsError;
+use crate::model::Model;
+use crate::passes::{Pass, outward_inl, project_add_blocks};
+use softrod_lie::Vec6;
+
+/// Factorization of `S = M(q) + a·K + b·D` by the articulated recursion,
+/// with every buffer allocated once in [`ShiftedSolver::new`].
+///
+/// ```
+/// # use softrod_dynamics::*;
+/// # use softrod_kinematics::{Basis, Rod, straight};
+/// # use softrod_lie::{Pose, Vec3};
+/// # use softrod_mechanics::{Material, RodBody, Section};
+/// let rod = Rod::uniform(0.5, 4, Basis::all(), straight(), Pose::identity()).unwrap();
+/// let material = Material::with_poisson(1000.0, 1e6, 0.5, 1.0).unwrap();
+/// let body = RodBody::new(Section::Circle { radius: 0.01 }, material, 0.5).unwrap();
+/// let model = Model::new(vec![RodSpec::new("arm", rod, body)], Some(Vec3::new(0.0, 0.0, -9.81)), 4).unwrap();
+/// let q = vec![0.1; model.n_dof()];
+/// let mut solver = ShiftedSolver::new(&model);
+/// solver.factor(&model, &q, 1e-4, 1e-2).unwrap(); // S = M + 1e-4 K + 1e-2 D
+/// let mut x = vec![1.0; model.n_dof()];
+/// solver.solve(&model, &mut x).unwrap(); // x ← S⁻¹ x
+/// ```
+#[derive(Clone, Debug)]
+pub struct ShiftedSolver {
+    /// Per-piece tip maps `A_ℓ`, `T₋(ℓ)`, the factor `L_n` of `D̂_n` (in
+    /// `dt`) and `W_n = Û_n L_n⁻ᵀ` (in `ut`), as the forward dynamics
+    /// leaves them.
+    data: Data,
+    factored: bool,
+    n_dof: usize,
+}
+
+impl ShiftedSolver {
+    /// Allocates the per-piece buffers for `model`.
+    pub fn new(model: &Model) -> Self {
+        Self {
+            data: Data::new(model),
+            factored: false,
+            n_dof: model.n_dof(),
+        }
+    }
+
+    fn check_model(&self, model: &Model) -> Result<(), DynamicsError> {
+        if model.n_dof() != self.n_dof || model.rods().len() != self.data.pieces.len() {
+            return Err(DynamicsError::WorkspaceMismatch {
+                what: "ShiftedSolver",
+                built: self.n_dof,
+                got: model.n_dof(),
+            });
+        }
+        Ok(())
+    }
+
+    /// Factors `S = M(q) + a·K + b·D` (`a, b ≥ 0`, finite) by the
+    /// articulated recursion: outward pass for the per-piece inertia
+    /// integrals (D20), inward pass (D24–D25) with `D̂_n = 𝓓_n + a·K_n +
+    /// b·D_n + S_ℓᵀ𝓜ᴬ_{n+1}S_ℓ`, one `k_n×k_n` Cholesky per piece. O(N), no
+    /// allocation. `q`: dim `n_dof`. `K`, `D` are those of
+    /// [`crate::stiffness_matrix`], [`crate::damping_matrix`] (units of `a`:
+    /// s², of `b`: s, for `S` in kg-like units of `M`).
+    ///
+    /// Fails on a negative or non-finite shift, a bad `q`, or a `D̂_n` that is
+    /// not positive definite (then no factorization is kept).
+    pub fn factor(
+        &mut self,
+        model: &Model,
+        q: &[f64],
+        a: f64,
+        b: f64,
+    ) -> Result<(), DynamicsError> {
+        self.check_model(model)?;
+        self.factored = false;
+        for (what, value) in [("a", a), ("b", b)] {
+            if !(value.is_finite() && value >= 0.0) {
+                return Err(DynamicsError::InvalidShift { what, value });
+            }
+        }
+        check_vec(model, "q", q)?;
+        shifted_factor(model, &mut self.data, q, a, b)?;
+        self.factored = true;
+        Ok(())
+    }
+
+    /// `x ← S⁻¹ x` with the last factorization: the bias-free inward pass
+    /// (D26, `ũ_n = L_n⁻¹(x_n − S_ℓᵀ𝓟ᴬ_{n+1})`, `𝓟ᴬ_n = A_ℓᵀ𝓟ᴬ_{n+1} +
+    /// W_n ũ_n`) and outward pass (D27, `x_n = L_n⁻ᵀ(ũ_n − W_nᵀ η̇(L_{n−1}))`).
+    /// O(N), no allocation. `x`: dim `n_dof`.
+    ///
+    /// Fails before a successful [`Self::factor`], on a wrong length or
+    /// non-finite entries of `x`, and if the result is not finite.
+    pub fn solve(&self, model: &Model, x: &mut [f64]) -> Result<(), DynamicsError> {
+        self.check_model(model)?;
+        if !self.factored {
+            return Err(DynamicsError::NotFactored {
+                what: "ShiftedSolver",
+            });
+        }
+        check_vec(model, "x", x)?;
+        shifted_solve(model, &self.data, x);
+        if let Some((i, v)) = x.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(DynamicsError::NotFinite {
+                what: format!("shifted solve x[{i}]"),
+                value: *v,
+            });
+        }
+        Ok(())
+    }
+}
+
+crate::simd::dispatch! {
+    /// The factorization of [`ShiftedSolver::factor`] into `data` (arguments
+    /// checked by the caller).
+    pub fn shifted_factor<'a>(model: &Model, data: &'a mut Data, q: &[f64], a: f64, b: f64) -> Result<&'a Data, DynamicsError>
+    => shifted_factor_impl, shifted_factor_avx2
+}
+
+#[inline(always)]
+fn shifted_factor_impl<'a>(
+    model: &Model,
+    data: &'a mut Data,
+    q: &[f64],
+    a: f64,
+    b: f64,
+) -> Result<&'a Data, DynamicsError> {
+    outward_inl(model, data, q, None, None, Pass::Composite);
+    for (r, rm) in model.rods().iter().enumerate() {
+        let pieces = rm.spec.rod.pieces();
+        let mut ma_next = Sym6::default();
+        for (n, (piece, pd)) in pieces.iter().zip(&rm.pieces).enumerate().rev() {
+            let k = piece.basis.dof();
+            let w = &mut data.pieces[r][n];
+            let leaf = n + 1 == pieces.len();
+            // As in the forward dynamics: C = A_ℓᵀ𝓜ᴬA_ℓ, Û = 𝓤 + C T₊B,
+            // D̂ = 𝓓 + BᵀT₊ᵀ C T₊B (D24).
+            let carried = if leaf {
+                Sym6::default()
+            } else {
+                ma_next.congruence_ad_inv(&w.tip)
+            };
+            if !leaf {
+                let tplus = w.tm_tip.transpose_blocks();
+                let mat = carried.mul_op(&tplus);
+                project_add_blocks(
+                    &piece.basis,
+                    &mat,
+                    &Blk6::tr_premul_sym(&tplus, &mat),
+                    &mut w.ut,
+                    &mut w.dt,
+                );
+            }
+            // The armature: K_n, D_n are zero-padded, so the padding of
+            // `dt` (never read past k) stays as it was.
+            if a != 0.0 {
+                w.dt += pd.stiffness6 * a;
+            }
+            if b != 0.0 && pd.has_damping {
+                w.dt += pd.damping6 * b;
+            }
+            if !cholesky_k(&mut w.dt, k) {
+                return Err(DynamicsError::Singular {
+                    rod: r,
+                    piece: n,
+                    what: "shifted articulated block D̂_n + aK_n + bD_n",
+                });
+            }
+            right_solve_lt(&w.dt, k, &mut w.ut);
+            let mut next = if leaf { w.mt } else { w.mt + carried };
+            next -= Sym6::gram_rows(&w.ut);
+            ma_next = next;
+        }
+    }
+    Ok(data)
+}
+
+/// The solve of [`ShiftedSolver::solve`] (arguments checked by the caller).
+fn shifted_solve(model: &Model, data: &Data, x: &mut [f64]) {
+    for (r, rm) in model.rods().iter().enumerate() {
+        let pieces = rm.spec.rod.pieces();
+        let mut pa = Vec6::zeros();
+        for (n, piece) in pieces.iter().enumerate().rev() {
+            let k = piece.basis.dof();
+            let o = rm.dof_offset + piece.dof_offset;
+            let w = &data.pieces[r][n];
+            let mut sty = Vec6::zeros();
+            piece
+                .basis
+                .tr_apply(&w.tm_tip.tr_mul_vec(&pa), &mut sty.as_mut_slice()[..k]);
+            let mut u = Vec6::zeros();
+            for i in 0..k {
+                u[i] = x[o + i] - sty[i];
+            }
+            forward_sub(&w.dt, k, &mut u);
+            // ũ_n waits in x_n for the outward pass.
+            x[o..o + k].copy_from_slice(&u.as_slice()[..k]);
+            pa = ad_inv_tr_vec(&w.tip, &pa) + w.ut * u;
+        }
+        let mut etadot = Vec6::zeros();
+        for (n, piece) in pieces.iter().enumerate() {
+            let k = piece.basis.dof();
+            let o = rm.dof_offset + piece.dof_offset;
+            let w = &data.pieces[r][n];
+            let mut u = Vec6::zeros();
+            u.as_mut_slice()[..k].copy_from_slice(&x[o..o + k]);
+            let mut qn = u - w.ut.tr_mul(&etadot);
+            backward_sub(&w.dt, k, &mut qn);
+            x[o..o + k].copy_from_slice(&qn.as_slice()[..k]);
+            let sq = w.tm_tip.mul_vec(&piece.basis.apply(&qn.as_slice()[..k]));
+            etadot = ad_inv_vec(&w.tip, &etadot) + sq;
+        }
+    }
+}

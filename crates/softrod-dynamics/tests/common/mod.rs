@@ -1,0 +1,253 @@
+//! Model builders and a seeded generator shared by the test files of the
+//! shifted solve and the derivatives (every test file compiles this module
+//! on its own, so not every item is used by each).
+#![allow(dead_code)]
+
+use nalgebra::Matrix6xX;
+use softrod_dynamics::{Model, RodSpec};
+use softrod_kinematics::{Basis, PieceSpec, Rod, Strain};
+use softrod_lie::{Pose, Vec3, Vec6, exp_twist};
+use softrod_mechanics::{
+    Cable, DistributedLoad, Drag, LoadFrame, Material, PointLoad, RodBody, Routing, Section,
+    Tension,
+};
+
+/// Small deterministic generator (tests must be reproducible), uniform in [−1, 1).
+pub struct Lcg(pub u64);
+impl Lcg {
+    pub fn next(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((self.0 >> 11) as f64) / ((1u64 << 53) as f64) * 2.0 - 1.0
+    }
+    pub fn vec(&mut self, n: usize, scale: f64) -> Vec<f64> {
+        (0..n).map(|_| scale * self.next()).collect()
+    }
+}
+
+/// Every kind of basis: all six, single strain, planar, a 3-strain
+/// selection, Kirchhoff, a permuted 5-strain selection, general 6×4 and
+/// 6×6 matrices (not selections).
+pub fn bases() -> Vec<Basis> {
+    vec![
+        Basis::all(),
+        Basis::select(&[Strain::Ky]).unwrap(),
+        Basis::select(&[Strain::Ky, Strain::Qx, Strain::Qz]).unwrap(),
+        Basis::select(&[Strain::Kx, Strain::Kz, Strain::Qy]).unwrap(),
+        Basis::kirchhoff(),
+        Basis::select(&[Strain::Qz, Strain::Kx, Strain::Qx, Strain::Kz, Strain::Ky]).unwrap(),
+        Basis::from_matrix(Matrix6xX::from_fn(4, |i, j| {
+            ((i * 4 + j) as f64 * 0.9 + 0.3).sin() + if i == j { 1.5 } else { 0.0 }
+        }))
+        .unwrap(),
+        Basis::from_matrix(Matrix6xX::from_fn(6, |i, j| {
+            ((i * 6 + j) as f64 * 0.7).cos() * 0.4 + if i == j { 1.0 } else { 0.0 }
+        }))
+        .unwrap(),
+    ]
+}
+
+/// Which force terms a test model carries.
+#[derive(Clone, Copy, Debug)]
+pub struct Terms {
+    pub gravity: bool,
+    pub damping: bool,
+    /// Dead (world-frame) point loads, one at the tip and one inside a piece.
+    pub dead_point: bool,
+    /// A follower (body-frame) point load inside a piece.
+    pub follower_point: bool,
+    /// A world-frame and a body-frame distributed load.
+    pub distributed: bool,
+    pub cable: bool,
+    pub drag: bool,
+}
+
+impl Terms {
+    pub const NONE: Terms = Terms {
+        gravity: false,
+        damping: false,
+        dead_point: false,
+        follower_point: false,
+        distributed: false,
+        cable: false,
+        drag: false,
+    };
+    pub const ALL: Terms = Terms {
+        gravity: true,
+        damping: true,
+        dead_point: true,
+        follower_point: true,
+        distributed: true,
+        cable: true,
+        drag: true,
+    };
+}
+
+/// How the pieces of a test rod are shaped.
+#[derive(Clone, Debug)]
+pub struct Shape {
+    pub pieces: usize,
+    pub length: f64,
+    /// Bases cycle through these.
+    pub bases: Vec<Basis>,
+    pub tapered: bool,
+    /// Rest strain of every piece.
+    pub rest: Vec6,
+}
+
+impl Shape {
+    pub fn new(pieces: usize, bases: Vec<Basis>) -> Self {
+        Self {
+            pieces,
+            length: 0.4,
+            bases,
+            tapered: false,
+            rest: Vec6::new(0.1, 0.5, -0.3, 1.0, 0.0, 0.0),
+        }
+    }
+}
+
+/// One rod: precurved rest strain, tilted base, soft silicone-like material.
+pub fn rod_spec(name: &str, shape: &Shape, terms: Terms, base: Pose) -> RodSpec {
+    let length = shape.length;
+    let specs: Vec<PieceSpec> = (0..shape.pieces)
+        .map(|i| PieceSpec {
+            length: length / shape.pieces as f64,
+            basis: shape.bases[i % shape.bases.len()].clone(),
+            rest_strain: shape.rest,
+        })
+        .collect();
+    let rod = Rod::from_pieces(specs, base).unwrap();
+    let viscosity = if terms.damping { 30.0 } else { 0.0 };
+    let section = if shape.tapered {
+        Section::TaperedCircle {
+            radius_base: 0.016,
+            radius_tip: 0.006,
+        }
+    } else {
+        Section::Circle { radius: 0.012 }
+    };
+    let body = RodBody::new(
+        section,
+        Material::with_poisson(1100.0, 2e6, 0.45, viscosity).unwrap(),
+        length,
+    )
+    .unwrap();
+    let mut spec = RodSpec::new(name, rod, body);
+    if terms.dead_point {
+        spec.point_loads.push(PointLoad {
+            s: length,
+            force: Vec3::new(0.1, -0.2, 0.3),
+            moment: Vec3::new(0.01, 0.0, -0.02),
+            frame: LoadFrame::World,
+        });
+        spec.point_loads.push(PointLoad {
+            s: 0.61 * length,
+            force: Vec3::new(0.07, 0.05, -0.1),
+            moment: Vec3::new(0.0, -0.01, 0.015),
+            frame: LoadFrame::World,
+        });
+    }
+    if terms.follower_point {
+        spec.point_loads.push(PointLoad {
+            s: 0.37 * length,
+            force: Vec3::new(-0.05, 0.1, 0.0),
+            moment: Vec3::new(0.0, 0.01, 0.0),
+            frame: LoadFrame::Body,
+        });
+    }
+    if terms.distributed {
+        spec.distributed_loads = vec![
+            DistributedLoad {
+                force: Vec3::new(0.0, 0.3, 0.1),
+                moment: Vec3::new(0.0, 0.0, 0.02),
+                frame: LoadFrame::World,
+            },
+            DistributedLoad {
+                force: Vec3::new(0.0, 0.0, -0.2),
+                moment: Vec3::new(0.01, 0.0, 0.0),
+                frame: LoadFrame::Body,
+            },
+        ];
+    }
+    if terms.drag {
+        spec.drag = Some(Drag {
+            translational: 0.5,
+            rotational: 1e-3,
+        });
+    }
+    if terms.cable {
+        spec.cables = vec![
+            Cable {
+                routing: Routing::Path(vec![[0.0, 0.008, 0.0], [length, 0.002, 0.004]]),
+                from: 0.0,
+                to: 0.8 * length,
+                tension: Tension::Constant(1.5),
+            },
+            Cable {
+                routing: Routing::Offset {
+                    y: -0.004,
+                    z: 0.006,
+                },
+                from: 0.2 * length,
+                to: length,
+                tension: Tension::Constant(0.7),
+            },
+        ];
+    }
+    spec
+}
+
+/// The base pose of the test rods (tilted and offset).
+pub fn tilted_base() -> Pose {
+    exp_twist(1.0, &Vec6::new(0.2, -0.4, 0.1, 0.0, 0.05, 0.1))
+}
+
+/// Oblique gravity, so that no component vanishes by symmetry.
+pub fn gravity(terms: Terms) -> Option<Vec3> {
+    terms.gravity.then(|| Vec3::new(0.3, -1.0, -9.81))
+}
+
+/// A one-rod model.
+pub fn model(shape: &Shape, terms: Terms) -> Model {
+    Model::new(
+        vec![rod_spec("arm", shape, terms, tilted_base())],
+        gravity(terms),
+        4,
+    )
+    .unwrap()
+}
+
+/// Two rods from different bases: one with mixed bases, one Cosserat.
+pub fn two_rods(n: usize, terms: Terms) -> Model {
+    let mut b = Shape::new(n + 1, vec![Basis::all()]);
+    b.tapered = true;
+    let second_base = exp_twist(1.0, &Vec6::new(-0.3, 0.2, 0.6, 0.1, -0.2, 0.05));
+    Model::new(
+        vec![
+            rod_spec("first", &Shape::new(n, bases()), terms, tilted_base()),
+            rod_spec("second", &b, terms, second_base),
+        ],
+        gravity(terms),
+        4,
+    )
+    .unwrap()
+}
+
+/// A curved, moving state: strains within ±`q_scale` of the rest strain,
+/// rates within ±`qd_scale`, accelerations within ±`qdd_scale`.
+pub fn state(
+    rng: &mut Lcg,
+    n: usize,
+    q_scale: f64,
+    qd_scale: f64,
+    qdd_scale: f64,
+) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+    (
+        rng.vec(n, q_scale),
+        rng.vec(n, qd_scale),
+        rng.vec(n, qdd_scale),
+    )
+}

@@ -1,0 +1,89 @@
+//! The facade's error: every failure a user of [`Simulation`](crate::Simulation)
+//! can meet, with the lower crates' errors as sources.
+
+use softrod_dynamics::DynamicsError;
+use softrod_integrate::IntegrateError;
+use softrod_kinematics::KinematicsError;
+use softrod_scene::SceneError;
+
+/// Why a call failed. Bad input ([`Error::is_input`]) is distinguished from
+/// a simulation that failed on valid input.
+#[non_exhaustive]
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// A scene file or text is invalid (names file, line, column, key path).
+    #[error(transparent)]
+    Scene(Box<SceneError>),
+    /// The model or a dynamics evaluation rejected its input.
+    #[error(transparent)]
+    Dynamics(#[from] DynamicsError),
+    /// A kinematics query rejected its input (abscissa outside the rod, …).
+    #[error(transparent)]
+    Kinematics(#[from] KinematicsError),
+    /// The time integration failed (time, step size and the check that
+    /// fired are in the source).
+    #[error("simulation failed: {0}")]
+    Integration(#[source] Box<IntegrateError>),
+    /// A run setting is invalid.
+    #[error("run.{key}: {message}")]
+    InvalidSetting {
+        /// The setting (as named in a scene's `[run]`).
+        key: &'static str,
+        /// What is wrong.
+        message: String,
+    },
+    /// An argument has the wrong length.
+    #[error("{what} has {got} entries, expected {expected}")]
+    SizeMismatch {
+        /// Which argument.
+        what: &'static str,
+        /// Its length.
+        got: usize,
+        /// The length required.
+        expected: usize,
+    },
+    /// No rod of that name or index.
+    #[error("no rod {0}")]
+    UnknownRod(String),
+    /// An observer ended the run with an error at time `t`.
+    #[error("output at t = {t:e} s failed: {message}")]
+    Output {
+        /// The output time.
+        t: f64,
+        /// What the observer reported.
+        message: String,
+    },
+}
+
+impl From<SceneError> for Error {
+    fn from(e: SceneError) -> Self {
+        Error::Scene(Box::new(e))
+    }
+}
+
+impl From<IntegrateError> for Error {
+    fn from(e: IntegrateError) -> Self {
+        Error::Integration(Box::new(e))
+    }
+}
+
+impl Error {
+    /// Whether this is bad input (a scene, setting or argument the caller
+    /// can fix) rather than a failed simulation.
+    pub fn is_input(&self) -> bool {
+        matches!(
+            self,
+            Error::Scene(_) | Error::InvalidSetting { .. } | Error::SizeMismatch { .. }
+        ) || matches!(
+            self,
+            Error::Dynamics(
+                DynamicsError::InvalidModel(_)
+                    | DynamicsError::SizeMismatch { .. }
+                    | DynamicsError::NotFinite { .. }
+            )
+        )
+    }
+}
+
+/// `Result` with the facade's [`Error`].
+pub type Result<T, E = Error> = std::result::Result<T, E>;

@@ -1,0 +1,260 @@
+//! Run settings: which integrator, its tolerances or step, and the output
+//! spacing — with the recommended defaults, which live here (not in a
+//! front end) so that every user of the library gets the same ones.
+
+use softrod_integrate::{Iteration, Method, Options, RodJacobian, StepControl};
+use softrod_scene::{Integrator, Run};
+
+use crate::error::Error;
+
+/// High-frequency spectral radius of generalized-α as softrod uses it: 0.9
+/// damps the unresolved shear/extension modes a little while keeping the
+/// resolved bending modes almost undamped (period error and damping of a
+/// mode with ω·dt ≪ 1 are second order either way).
+pub const GENERALIZED_ALPHA_RHO_INF: f64 = 0.9;
+
+/// How [`Simulation::simulate`](crate::Simulation::simulate) integrates.
+///
+/// [`Settings::default`] is the recommended setting (the one a scene without
+/// `[run]` keys gets), chosen by `softrod report` on the shipped examples
+/// (docs/defaults.md).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Settings {
+    /// The integrator.
+    pub integrator: Integrator,
+    /// Relative tolerance of the adaptive methods.
+    pub rtol: f64,
+    /// Absolute tolerance of the adaptive methods (units of `q`, `q̇`).
+    pub atol: f64,
+    /// Step of the fixed-step methods, first step of the adaptive ones [s].
+    pub dt: f64,
+    /// Time between output samples [s]; `None`: a thousandth of the duration.
+    pub output_every: Option<f64>,
+    /// Generalized-α only: control the local error and adapt the step.
+    pub error_control: bool,
+    /// Generalized-α only: one Newton iteration per step with the elastic
+    /// Jacobian (the linearly implicit, IMEX scheme).
+    pub linearly_implicit: bool,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self::from_run(&Run::default())
+    }
+}
+
+impl Settings {
+    /// The settings of a scene's `[run]` table (every default filled in by
+    /// the scene).
+    pub fn from_run(run: &Run) -> Self {
+        Self {
+            integrator: run.integrator,
+            rtol: run.rtol,
+            atol: run.atol,
+            dt: run.dt,
+            output_every: Some(run.output_every),
+            error_control: run.error_control,
+            linearly_implicit: run.linearly_implicit,
+        }
+    }
+
+    /// The recommended integrator with tolerances `rtol`, `atol`.
+    pub fn tolerances(rtol: f64, atol: f64) -> Self {
+        Self {
+            rtol,
+            atol,
+            ..Self::default()
+        }
+    }
+
+    /// These settings with another integrator.
+    pub fn with_integrator(mut self, integrator: Integrator) -> Self {
+        self.integrator = integrator;
+        self
+    }
+
+    /// These settings with samples every `every` seconds.
+    pub fn with_output_every(mut self, every: f64) -> Self {
+        self.output_every = Some(every);
+        self
+    }
+
+    /// The Jacobian the stiff methods get: `−M⁻¹K`, `−M⁻¹D` only
+    /// (`RodJacobian::ElasticOnly`). Rosenbrock–W keeps its order with any
+    /// Jacobian, and on the undamped cantilever release it took the same
+    /// steps with the same accuracy as with the full Jacobian at a third of
+    /// the cost (docs/performance.md, "softrod-integrate"); the geometric
+    /// stiffness of gravity, loads and cables is soft next to `K`.
+    pub fn stiff_jacobian(&self) -> RodJacobian {
+        RodJacobian::ElasticOnly
+    }
+
+    /// Checks the values (positive, finite) and that the integrator exists.
+    pub fn validate(&self) -> Result<(), Error> {
+        for (what, v) in [("rtol", self.rtol), ("atol", self.atol), ("dt", self.dt)] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(Error::InvalidSetting {
+                    key: what,
+                    message: format!("must be positive and finite, got {v}"),
+                });
+            }
+        }
+        if let Some(e) = self.output_every {
+            if !(e.is_finite() && e > 0.0) {
+                return Err(Error::InvalidSetting {
+                    key: "output_every",
+                    message: format!("must be positive and finite, got {e}"),
+                });
+            }
+        }
+        if self.integrator == Integrator::Radau5 {
+            return Err(Error::InvalidSetting {
+                key: "integrator",
+                message: "\"radau5\" is not implemented yet, use \"rosenbrock\" (stiff, adaptive)"
+                    .into(),
+            });
+        }
+        Ok(())
+    }
+
+    /// The integrator method and options for a run of `duration` seconds
+    /// (the step budget depends on it).
+    pub fn method_and_options(&self, duration: f64) -> Result<(Method, Options), Error> {
+        self.validate()?;
+        let fixed_steps = (duration / self.dt).ceil();
+        let method = match self.integrator {
+            Integrator::Rk4 => Method::Rk4,
+            Integrator::GeneralizedAlpha => Method::GeneralizedAlpha {
+                rho_inf: GENERALIZED_ALPHA_RHO_INF,
+            },
+            Integrator::Dopri5 => Method::Dopri5,
+            Integrator::Rosenbrock => Method::Rosw34,
+            Integrator::Radau5 => unreachable!("rejected by validate"),
+        };
+        // Generalized-α steps with the fixed dt unless error control is on;
+        // rk4 always does; the other methods are adaptive with dt as their
+        // first step.
+        let adaptive = match self.integrator {
+            Integrator::Rk4 => false,
+            Integrator::GeneralizedAlpha => self.error_control,
+            _ => true,
+        };
+        let mut opts = Options {
+            rtol: self.rtol,
+            atol: self.atol,
+            step: if adaptive {
+                StepControl::Adaptive {
+                    h0: Some(self.dt.min(duration)),
+                }
+            } else {
+                StepControl::Fixed(self.dt)
+            },
+            ..Options::default()
+        };
+        if self.integrator == Integrator::GeneralizedAlpha && self.linearly_implicit {
+            // One iteration with W = M⁻¹K, always accepted: the IMEX scheme
+            // (ρ∞ < 1, which its explicit remainder needs).
+            opts.iteration = Iteration::LinearlyImplicit;
+        }
+        if adaptive {
+            opts.max_steps = 50_000_000;
+        } else {
+            if fixed_steps.is_nan() || fixed_steps >= 1e12 {
+                return Err(Error::InvalidSetting {
+                    key: "dt",
+                    message: format!(
+                        "{duration} s in steps of {} s is more than 1e12 steps",
+                        self.dt
+                    ),
+                });
+            }
+            opts.max_steps = 2 * fixed_steps as usize + 100;
+        }
+        Ok((method, opts))
+    }
+
+    /// The output spacing for a run of `duration` seconds.
+    pub fn output_spacing(&self, duration: f64) -> f64 {
+        self.output_every.unwrap_or(duration / 1000.0)
+    }
+}
+
+/// Output times `0, Δ, 2Δ, …` up to `duration`, which is always included.
+pub fn output_times(duration: f64, every: f64) -> Vec<f64> {
+    let n = (duration / every + 1e-9).floor() as usize;
+    let mut t: Vec<f64> = (0..=n).map(|k| (k as f64 * every).min(duration)).collect();
+    if duration - t[t.len() - 1] > 1e-9 * duration {
+        t.push(duration);
+    } else {
+        let last = t.len() - 1;
+        t[last] = duration;
+    }
+    t.dedup();
+    t
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn output_times_include_both_ends() {
+        assert_eq!(output_times(1.0, 0.25), vec![0.0, 0.25, 0.5, 0.75, 1.0]);
+        let t = output_times(1.0, 0.3);
+        assert_eq!(t.len(), 5);
+        assert_eq!(*t.last().unwrap(), 1.0);
+        let t = output_times(1.0, 1e-3);
+        assert_eq!(t.len(), 1001);
+        assert_eq!(*t.last().unwrap(), 1.0);
+    }
+
+    /// Generalized-α: error control gets the adaptive budget and `dt` as
+    /// its first step; without it the fixed step keeps a budget of twice
+    /// the step count; `linearly_implicit` is `Options::linearly_implicit`.
+    #[test]
+    fn generalized_alpha_flags_reach_the_options() {
+        let base = Settings {
+            integrator: Integrator::GeneralizedAlpha,
+            dt: 1e-3,
+            rtol: 1e-4,
+            ..Settings::default()
+        };
+        let (_, o) = Settings {
+            error_control: true,
+            ..base.clone()
+        }
+        .method_and_options(1.0)
+        .unwrap();
+        assert_eq!(o.step, StepControl::Adaptive { h0: Some(1e-3) });
+        assert_eq!(o.rtol, 1e-4);
+        assert!(o.max_steps > 1_000_000);
+        let (_, o) = base.method_and_options(1.0).unwrap();
+        assert_eq!(o.step, StepControl::Fixed(1e-3));
+        assert_eq!(o.max_steps, 2 * 1000 + 100);
+        assert!(matches!(o.iteration, Iteration::Newton { max_iter, .. } if max_iter > 1));
+        let (_, o) = Settings {
+            linearly_implicit: true,
+            ..base
+        }
+        .method_and_options(1.0)
+        .unwrap();
+        assert_eq!(o.iteration, Iteration::LinearlyImplicit);
+        assert_eq!(o.step, StepControl::Fixed(1e-3));
+    }
+
+    /// A duration that would need more steps than a machine can count is
+    /// refused, not wrapped.
+    #[test]
+    fn absurd_fixed_step_budgets_are_refused() {
+        let s = Settings {
+            integrator: Integrator::Rk4,
+            dt: 1e-4,
+            ..Settings::default()
+        };
+        let err = s.method_and_options(1e300).unwrap_err();
+        assert!(
+            matches!(err, Error::InvalidSetting { key: "dt", .. }),
+            "{err}"
+        );
+    }
+}

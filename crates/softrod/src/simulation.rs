@@ -1,0 +1,489 @@
+//! [`Simulation`]: a model, its initial state and its run settings, with
+//! everything a user does with them.
+
+use std::cell::RefCell;
+use std::path::Path;
+
+use nalgebra::{DMatrix, DVector, Matrix6xX};
+use softrod_dynamics::{
+    Data, Energies, Model, Modes, StaticsOptions, StaticsResult, energies, forward_dynamics,
+    inverse_dynamics, mass_matrix, modes, statics,
+};
+use softrod_integrate::{Control, Hooks, RodSystem, Stats, integrate_second_order};
+use softrod_kinematics::{Frame, RodKinematics};
+use softrod_lie::Pose;
+use softrod_scene::{Scene, Warning};
+
+use crate::error::{Error, Result};
+use crate::settings::{Settings, output_times};
+
+/// A model with its initial state and run settings: the front door of
+/// softrod. Every evaluation reuses buffers held inside, so a `Simulation`
+/// is `&mut` for calls and [`Clone`] for parallel runs.
+///
+/// Coordinates: `q` (strain coordinates, `n_dof`), `q̇`, `q̈` in the
+/// model's order (rods in order, pieces base to tip, selected strains in
+/// canonical order); SI units; poses in the world frame.
+#[derive(Clone, Debug)]
+pub struct Simulation {
+    system: RodSystem,
+    settings: Settings,
+    q0: DVector<f64>,
+    qd0: DVector<f64>,
+}
+
+/// Which equilibrium [`Simulation::modes`] linearized about.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Equilibrium {
+    /// The rest shape `q = 0` (the model has no static loads).
+    Rest,
+    /// The static equilibrium under the model's static loads.
+    Statics(DVector<f64>),
+}
+
+/// Natural modes and the equilibrium they are about.
+#[derive(Clone, Debug)]
+pub struct ModalAnalysis {
+    /// Frequencies and shapes (see [`Modes`]).
+    pub modes: Modes,
+    /// The equilibrium.
+    pub equilibrium: Equilibrium,
+}
+
+/// What an [`Observer`] sees at each output time.
+pub struct Sample<'a> {
+    /// Time [s].
+    pub t: f64,
+    /// Coordinates (n_dof).
+    pub q: &'a [f64],
+    /// Velocities (n_dof).
+    pub qd: &'a [f64],
+    /// The model, for derived quantities.
+    pub model: &'a Model,
+    /// Its buffers, for evaluations at this sample (energies, …).
+    pub data: &'a mut Data,
+}
+
+/// Whether a run goes on after a sample.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Flow {
+    /// Go on.
+    Continue,
+    /// End the run here ([`RunStatus::Stopped`]).
+    Stop,
+}
+
+/// Receives a run's samples as the integration produces them (streaming:
+/// nothing is kept unless the observer keeps it).
+pub trait Observer {
+    /// Called at `t = 0` and at every output time, in order. An error ends
+    /// the run with [`Error::Output`].
+    fn sample(&mut self, sample: Sample<'_>) -> Result<Flow, String>;
+
+    /// Called after each accepted step (e.g. for a progress bar).
+    fn step(&mut self, _t: f64, _stats: &Stats) {}
+}
+
+/// How a run ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RunStatus {
+    /// The full duration was simulated.
+    Completed,
+    /// The observer stopped it.
+    Stopped,
+}
+
+/// Summary of a run.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RunSummary {
+    /// How it ended.
+    pub status: RunStatus,
+    /// Time reached [s].
+    pub t_final: f64,
+    /// The integrator's work counters.
+    pub stats: Stats,
+    /// Samples delivered to the observer.
+    pub samples: usize,
+}
+
+/// A run kept in memory: samples at the output times.
+#[derive(Clone, Debug)]
+pub struct Trajectory {
+    /// Output times [s].
+    pub t: Vec<f64>,
+    /// Coordinates at each time.
+    pub q: Vec<DVector<f64>>,
+    /// Velocities at each time.
+    pub qd: Vec<DVector<f64>>,
+    /// Tip pose of every rod (world frame) at each time: `tips[i][rod]`.
+    pub tips: Vec<Vec<Pose>>,
+    /// Energies at each time.
+    pub energies: Vec<Energies>,
+    /// How the run ended.
+    pub summary: RunSummary,
+}
+
+impl Trajectory {
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.t.len()
+    }
+
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.t.is_empty()
+    }
+
+    /// Tip position of rod `rod` at sample `i` [m, world frame].
+    pub fn tip_position(&self, i: usize, rod: usize) -> [f64; 3] {
+        let p = self.tips[i][rod].translation;
+        [p[0], p[1], p[2]]
+    }
+}
+
+/// The observer behind [`Simulation::simulate`]: keeps every sample.
+struct Keep {
+    traj: Trajectory,
+    kin: Vec<RodKinematics>,
+}
+
+impl Observer for Keep {
+    fn sample(&mut self, s: Sample<'_>) -> Result<Flow, String> {
+        let e = energies(s.model, s.data, s.q, s.qd).map_err(|e| e.to_string())?;
+        let mut tips = Vec::with_capacity(self.kin.len());
+        for (k, r) in self.kin.iter_mut().zip(s.model.rods()) {
+            k.update(&r.spec.rod, &s.q[r.dofs()], None, None)
+                .map_err(|e| e.to_string())?;
+            tips.push(*k.tip_pose());
+        }
+        let t = &mut self.traj;
+        t.t.push(s.t);
+        t.q.push(DVector::from_column_slice(s.q));
+        t.qd.push(DVector::from_column_slice(s.qd));
+        t.tips.push(tips);
+        t.energies.push(e);
+        Ok(Flow::Continue)
+    }
+}
+
+impl Simulation {
+    /// A simulation of `model` from its rest shape, at rest, with the
+    /// recommended settings.
+    pub fn new(model: Model) -> Self {
+        let n = model.n_dof();
+        Self {
+            system: RodSystem::new(model),
+            settings: Settings::default(),
+            q0: DVector::zeros(n),
+            qd0: DVector::zeros(n),
+        }
+    }
+
+    /// The simulation a validated scene describes: its model, `[initial]`
+    /// state and `[run]` settings.
+    pub fn from_scene(scene: &Scene) -> Result<Self> {
+        let built = scene.build()?;
+        let settings = Settings::from_run(&scene.run);
+        settings.validate()?;
+        let mut sim = Self::new(built.model);
+        sim.settings = settings;
+        sim.q0 = built.q0;
+        sim.qd0 = built.qd0;
+        Ok(sim)
+    }
+
+    /// Reads, validates and builds the scene file at `path`; returns the
+    /// simulation and the scene's warnings (suspicious but legal input).
+    pub fn from_scene_file(path: impl AsRef<Path>) -> Result<(Self, Scene, Vec<Warning>)> {
+        let (scene, warnings) = Scene::from_path(path.as_ref())?;
+        Ok((Self::from_scene(&scene)?, scene, warnings))
+    }
+
+    /// As [`Simulation::from_scene_file`] for scene text; `name` stands for
+    /// the file in messages.
+    pub fn from_toml(text: &str, name: &str) -> Result<(Self, Scene, Vec<Warning>)> {
+        let (scene, warnings) = Scene::from_str(text, name)?;
+        Ok((Self::from_scene(&scene)?, scene, warnings))
+    }
+
+    /// The model.
+    pub fn model(&self) -> &Model {
+        &self.system.model
+    }
+
+    /// Number of generalized coordinates.
+    pub fn n_dof(&self) -> usize {
+        self.system.model.n_dof()
+    }
+
+    /// The run settings.
+    pub fn settings(&self) -> &Settings {
+        &self.settings
+    }
+
+    /// Replaces the run settings (checked).
+    pub fn set_settings(&mut self, settings: Settings) -> Result<()> {
+        settings.validate()?;
+        self.settings = settings;
+        Ok(())
+    }
+
+    /// Initial coordinates and velocities.
+    pub fn initial_state(&self) -> (&DVector<f64>, &DVector<f64>) {
+        (&self.q0, &self.qd0)
+    }
+
+    /// Sets the initial state (each of length `n_dof`, finite).
+    pub fn set_initial_state(&mut self, q: &[f64], qd: &[f64]) -> Result<()> {
+        self.check("q", q)?;
+        self.check("qdot", qd)?;
+        self.q0 = DVector::from_column_slice(q);
+        self.qd0 = DVector::from_column_slice(qd);
+        Ok(())
+    }
+
+    fn check(&self, what: &'static str, v: &[f64]) -> Result<()> {
+        let n = self.n_dof();
+        if v.len() != n {
+            return Err(Error::SizeMismatch {
+                what,
+                got: v.len(),
+                expected: n,
+            });
+        }
+        Ok(())
+    }
+
+    fn rod_index(&self, rod: &str) -> Result<usize> {
+        self.model()
+            .rods()
+            .iter()
+            .position(|r| r.spec.name == rod)
+            .ok_or_else(|| Error::UnknownRod(format!("'{rod}'")))
+    }
+
+    fn kinematics(&self, rod: &str, q: &[f64]) -> Result<(usize, RodKinematics)> {
+        self.check("q", q)?;
+        let i = self.rod_index(rod)?;
+        let r = &self.model().rods()[i];
+        let mut k = RodKinematics::new(&r.spec.rod);
+        k.update(&r.spec.rod, &q[r.dofs()], None, None)?;
+        Ok((i, k))
+    }
+
+    /// World pose of rod `rod` at abscissa `s` [m] for coordinates `q` (D7).
+    pub fn pose(&self, rod: &str, s: f64, q: &[f64]) -> Result<Pose> {
+        let (i, k) = self.kinematics(rod, q)?;
+        Ok(k.pose_at(&self.model().rods()[i].spec.rod, s)?)
+    }
+
+    /// Tip pose of rod `rod` for coordinates `q` (world frame).
+    pub fn tip_pose(&self, rod: &str, q: &[f64]) -> Result<Pose> {
+        Ok(*self.kinematics(rod, q)?.1.tip_pose())
+    }
+
+    /// Geometric Jacobian `J(s)` (6 × n_dof) of rod `rod` at `s` in `frame`:
+    /// the twist of the section is `J q̇` (D11). Columns of other rods are 0.
+    pub fn jacobian(&self, rod: &str, s: f64, q: &[f64], frame: Frame) -> Result<Matrix6xX<f64>> {
+        let (i, k) = self.kinematics(rod, q)?;
+        let r = &self.model().rods()[i];
+        let mut local = Matrix6xX::zeros(r.n_dof());
+        k.jacobian_at(&r.spec.rod, s, frame, &mut local)?;
+        let mut j = Matrix6xX::zeros(self.n_dof());
+        j.columns_mut(r.dof_offset, r.n_dof()).copy_from(&local);
+        Ok(j)
+    }
+
+    /// Forward dynamics `q̈(t, q, q̇)` under actuator force `tau` (n_dof,
+    /// `None`: 0) by the O(N) articulated recursion (D23–D27).
+    pub fn forward_dynamics(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        qd: &[f64],
+        tau: Option<&[f64]>,
+    ) -> Result<DVector<f64>> {
+        let s = &mut self.system;
+        Ok(forward_dynamics(&s.model, &mut s.data, t, q, qd, tau)?.clone())
+    }
+
+    /// Inverse dynamics: the actuator force `τ_act` that gives `q̈` at
+    /// `(t, q, q̇)` (D17–D18).
+    pub fn inverse_dynamics(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        qd: &[f64],
+        qdd: &[f64],
+    ) -> Result<DVector<f64>> {
+        let s = &mut self.system;
+        Ok(inverse_dynamics(&s.model, &mut s.data, t, q, qd, qdd)?.clone())
+    }
+
+    /// Mass matrix `M(q)` (n_dof × n_dof, symmetric positive definite; D19–D20).
+    pub fn mass_matrix(&mut self, q: &[f64]) -> Result<DMatrix<f64>> {
+        let s = &mut self.system;
+        Ok(mass_matrix(&s.model, &mut s.data, q)?.clone())
+    }
+
+    /// Kinetic, elastic and gravitational energy at `(q, q̇)` [J].
+    pub fn energies(&mut self, q: &[f64], qd: &[f64]) -> Result<Energies> {
+        let s = &mut self.system;
+        Ok(energies(&s.model, &mut s.data, q, qd)?)
+    }
+
+    /// Whether the model has static loads (gravity, point or distributed
+    /// loads, cables): then its equilibrium differs from the rest shape.
+    pub fn has_static_loads(&self) -> bool {
+        let m = self.model();
+        m.gravity.is_some()
+            || m.rods().iter().any(|r| {
+                !r.spec.cables.is_empty()
+                    || !r.spec.point_loads.is_empty()
+                    || !r.spec.distributed_loads.is_empty()
+            })
+    }
+
+    /// Static equilibrium under every static term at `t = 0`, from the
+    /// initial `q` (Newton with line search and load continuation).
+    pub fn statics(&mut self) -> Result<StaticsResult> {
+        let s = &mut self.system;
+        Ok(statics(
+            &s.model,
+            &mut s.data,
+            self.q0.as_slice(),
+            &StaticsOptions::default(),
+        )?)
+    }
+
+    /// Undamped natural modes about the static equilibrium (the rest shape
+    /// when the model has no static loads).
+    pub fn modes(&mut self) -> Result<ModalAnalysis> {
+        let equilibrium = if self.has_static_loads() {
+            Equilibrium::Statics(self.statics()?.q)
+        } else {
+            Equilibrium::Rest
+        };
+        let q = match &equilibrium {
+            Equilibrium::Rest => DVector::zeros(self.n_dof()),
+            Equilibrium::Statics(q) => q.clone(),
+        };
+        let modes = self.modes_about(q.as_slice())?;
+        Ok(ModalAnalysis { modes, equilibrium })
+    }
+
+    /// Undamped natural modes of the model linearized about `q` (which
+    /// should be an equilibrium; an unstable one shows negative `ω`).
+    pub fn modes_about(&mut self, q: &[f64]) -> Result<Modes> {
+        let s = &mut self.system;
+        Ok(modes(&s.model, &mut s.data, q, 0.0)?)
+    }
+
+    /// Integrates `duration` seconds from the initial state with the run
+    /// settings and keeps the samples (every `output_every`).
+    pub fn simulate(&mut self, duration: f64) -> Result<Trajectory> {
+        let mut keep = Keep {
+            traj: Trajectory {
+                t: Vec::new(),
+                q: Vec::new(),
+                qd: Vec::new(),
+                tips: Vec::new(),
+                energies: Vec::new(),
+                summary: RunSummary {
+                    status: RunStatus::Completed,
+                    t_final: 0.0,
+                    stats: Stats::default(),
+                    samples: 0,
+                },
+            },
+            kin: self
+                .model()
+                .rods()
+                .iter()
+                .map(|r| RodKinematics::new(&r.spec.rod))
+                .collect(),
+        };
+        let summary = self.simulate_with(duration, &mut keep)?;
+        keep.traj.summary = summary;
+        Ok(keep.traj)
+    }
+
+    /// Integrates `duration` seconds from the initial state, handing each
+    /// sample to `observer` as it is produced (the integrator's dense output
+    /// at the output times; nothing is kept here).
+    pub fn simulate_with(
+        &mut self,
+        duration: f64,
+        observer: &mut dyn Observer,
+    ) -> Result<RunSummary> {
+        if !(duration.is_finite() && duration > 0.0) {
+            return Err(Error::InvalidSetting {
+                key: "duration",
+                message: format!("must be positive and finite, got {duration}"),
+            });
+        }
+        let (method, mut opts) = self.settings.method_and_options(duration)?;
+        opts.t_eval = Some(output_times(
+            duration,
+            self.settings.output_spacing(duration),
+        ));
+        self.system.jacobian = self.settings.stiff_jacobian();
+        let n = self.n_dof();
+        let failure: RefCell<Option<(f64, String)>> = RefCell::new(None);
+        let samples = RefCell::new(0usize);
+        let observer = RefCell::new(observer);
+        let hooks = Hooks::new()
+            .stream_outputs(|t, y, sys: &mut RodSystem| {
+                let (q, qd) = y.as_slice().split_at(n);
+                let sample = Sample {
+                    t,
+                    q,
+                    qd,
+                    model: &sys.model,
+                    data: &mut sys.data,
+                };
+                match observer.borrow_mut().sample(sample) {
+                    Ok(flow) => {
+                        *samples.borrow_mut() += 1;
+                        match flow {
+                            Flow::Continue => Control::Continue,
+                            Flow::Stop => Control::Stop,
+                        }
+                    }
+                    Err(message) => {
+                        *failure.borrow_mut() = Some((t, message));
+                        Control::Stop
+                    }
+                }
+            })
+            .on_step(|info, _: &mut RodSystem| {
+                observer.borrow_mut().step(info.t, info.stats);
+                Control::Continue
+            });
+        let result = integrate_second_order(
+            &mut self.system,
+            method,
+            0.0,
+            duration,
+            &self.q0,
+            &self.qd0,
+            &opts,
+            hooks,
+        );
+        if let Some((t, message)) = failure.into_inner() {
+            return Err(Error::Output { t, message });
+        }
+        let sol = result?;
+        let status = if sol.status == softrod_integrate::Status::Completed {
+            RunStatus::Completed
+        } else {
+            RunStatus::Stopped
+        };
+        Ok(RunSummary {
+            status,
+            t_final: sol.t_final,
+            stats: sol.stats,
+            samples: samples.into_inner(),
+        })
+    }
+}
