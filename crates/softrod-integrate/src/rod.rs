@@ -8,12 +8,11 @@
 
 use nalgebra::{DMatrix, DVector};
 use softrod_dynamics::{
-    Data, DynamicsError, Model, damping_matrix, dynamics_jacobians, forward_dynamics,
-    inverse_dynamics, mass_matrix, stiffness_matrix,
+    Data, DynamicsError, Model, ShiftedSolver, damping_matrix, dynamics_jacobians,
+    forward_dynamics, inverse_dynamics, mass_matrix, stiffness_matrix,
 };
 use softrod_mechanics::Tension;
 
-use crate::linalg::DenseLu;
 use crate::system::SecondOrderSystem;
 
 /// A rod model ready for integration: `q̈ = FD(t, q, q̇, τ)`.
@@ -29,39 +28,34 @@ pub struct RodSystem {
     /// Which Jacobians the stiff methods get (default [`RodJacobian::Exact`]).
     pub jacobian: RodJacobian,
     /// The factored `M(q) + aK + bD` of
-    /// [`SecondOrderSystem::factor_shifted_mass`].
-    shifted: ShiftedMass,
-}
-
-/// `S = M(q) + aK + bD`, factored densely (Cholesky) in buffers allocated on
-/// first use.
-// TODO(deriv): softrod_dynamics::ShiftedSolver (O(N)) replaces this.
-#[derive(Clone, Debug, Default)]
-struct ShiftedMass {
-    k: Option<(nalgebra::DMatrix<f64>, nalgebra::DMatrix<f64>)>,
-    lu: Option<DenseLu>,
+    /// [`SecondOrderSystem::factor_shifted_mass`] (O(N), no `n×n` matrix).
+    shifted: ShiftedSolver,
 }
 
 /// The Jacobians [`RodSystem`] hands to the stiff methods.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum RodJacobian {
     /// `∂q̈/∂q`, `∂q̈/∂q̇` of the full forward dynamics
-    /// (`softrod_dynamics::dynamics_jacobians`: `K`, `D` exact, the geometric
-    /// remainder by central differences; `4·n_dof` inverse dynamics, one `M`).
+    /// (`softrod_dynamics::dynamics_jacobians`).
     #[default]
     Exact,
     /// Only the stiff linear part: `−M(q)⁻¹K` and `−M(q)⁻¹D` (one `M(q)`, no
-    /// finite differences). The integrators get it in mass-matrix form
+    /// derivatives). The integrators get it in mass-matrix form
     /// ([`SecondOrderSystem::mass_form_jacobians`]) and never form `M⁻¹K`:
-    /// they factor `M + β'K + γ'D` (generalized-α) or `c²M + cD + K`
-    /// (Rosenbrock) by Cholesky; [`SecondOrderSystem::jacobians`] still
-    /// returns the dense `−M⁻¹K`, `−M⁻¹D`. The elastic and viscous forces `K(q − q̄)`, `D q̇`
-    /// are linear with constant `K`, `D` in PCS, and they are what makes the
-    /// rod stiff; gravity, Coriolis and loads are soft and left out. With the
-    /// Rosenbrock–W method (order 3 for any `W`) this is a linearly implicit
-    /// IMEX splitting: stiff elastic/viscous part implicit, the rest explicit.
-    /// Generalized-α still converges to the same step solution (its simplified
-    /// Newton just takes an iteration more when the geometric part matters).
+    /// generalized-α factors `M + β'K + γ'D` by the O(N)
+    /// [`SecondOrderSystem::factor_shifted_mass`], ROS34PW2 `c²M + cD + K`
+    /// by a dense Cholesky; [`SecondOrderSystem::jacobians`] still returns
+    /// the dense `−M⁻¹K`, `−M⁻¹D`. The elastic and viscous forces
+    /// `K(q − q̄)`, `D q̇` are linear with constant `K`, `D` in PCS, and they
+    /// are what makes the rod stiff; gravity, Coriolis and loads are soft and
+    /// left out. With the Rosenbrock–W method (order 3 for any `W`) this is a
+    /// linearly implicit IMEX splitting: stiff elastic/viscous part implicit,
+    /// the rest explicit. Generalized-α still converges to the same step
+    /// solution (its simplified Newton just takes an iteration more when the
+    /// geometric part matters). [`Method::Esdirk46`](crate::Method::Esdirk46)
+    /// needs neither: it iterates on the shifted mass matrix whatever this
+    /// says and falls back to [`SecondOrderSystem::jacobians`], which should
+    /// then be `Exact`.
     ElasticOnly,
 }
 
@@ -69,12 +63,13 @@ impl RodSystem {
     /// A system for `model`, no actuator force.
     pub fn new(model: Model) -> Self {
         let data = Data::new(&model);
+        let shifted = ShiftedSolver::new(&model);
         Self {
             model,
             data,
             tau: None,
             jacobian: RodJacobian::Exact,
-            shifted: ShiftedMass::default(),
+            shifted,
         }
     }
 }
@@ -200,7 +195,8 @@ impl SecondOrderSystem for RodSystem {
         Ok(true)
     }
 
-    /// `M(q) + aK + bD` (a Cholesky factorization).
+    /// `M(q) + aK + bD` by the O(N) articulated recursion
+    /// (`softrod_dynamics::ShiftedSolver`).
     fn factor_shifted_mass(
         &mut self,
         _t: f64,
@@ -208,35 +204,12 @@ impl SecondOrderSystem for RodSystem {
         a: f64,
         b: f64,
     ) -> Result<bool, DynamicsError> {
-        let n = self.model.n_dof();
-        let sm = &mut self.shifted;
-        let (k, d) = sm
-            .k
-            .get_or_insert_with(|| (stiffness_matrix(&self.model), damping_matrix(&self.model)));
-        let lu = sm.lu.get_or_insert_with(|| DenseLu::new(n));
-        let m = mass_matrix(&self.model, &mut self.data, q.as_slice())?;
-        let dst = lu.matrix_mut();
-        for i in 0..n * n {
-            dst.as_mut_slice()[i] = m.as_slice()[i] + a * k.as_slice()[i] + b * d.as_slice()[i];
-        }
-        if !lu.factor_cholesky() {
-            return Err(DynamicsError::Singular {
-                rod: 0,
-                piece: 0,
-                what: "M(q) + aK + bD",
-            });
-        }
+        self.shifted.factor(&self.model, q.as_slice(), a, b)?;
         Ok(true)
     }
 
     fn solve_shifted_mass(&mut self, x: &mut DVector<f64>) -> Result<(), DynamicsError> {
-        let lu = self
-            .shifted
-            .lu
-            .as_ref()
-            .expect("factor_shifted_mass before solve_shifted_mass");
-        lu.solve_in_place(x);
-        Ok(())
+        self.shifted.solve(&self.model, x.as_mut_slice())
     }
 
     /// Time enters only through cable tension tables.
