@@ -64,6 +64,8 @@ fn main() {
                 Options::tol(rtol, atol)
             },
         ),
+        "radau" => (Method::Radau5, Options::tol(rtol, atol)),
+        "radaufix" => (Method::Radau5, Options::fixed(dt)),
         "esdirkfix" => (Method::Esdirk46, Options::fixed(dt)),
         s => panic!("method {s}"),
     };

@@ -100,4 +100,16 @@ pub enum Method {
     /// [`StepControl::Fixed`](crate::StepControl::Fixed) every step is
     /// accepted (for convergence studies).
     Esdirk46,
+    /// Radau IIA of order 5 (Ehle; three-stage collocation, L-stable,
+    /// stiffly accurate), in the design of Hairer & Wanner's RADAU5
+    /// (*Solving ODEs II*, §IV.8): simplified Newton on the exact dense
+    /// Jacobian in the variables that split the stage system into one real
+    /// and one complex `n×n` system, Jacobian and factorization reuse,
+    /// filtered error estimate, predictive step control, collocation dense
+    /// output. For first- and second-order systems (the latter through `n×n`
+    /// Schur complements, the error measured in positions as for
+    /// [`Method::Esdirk46`]). Its complex shift has no real-shifted
+    /// structured counterpart, so it always works on dense `n×n` matrices:
+    /// for small stiff systems and tight tolerances.
+    Radau5,
 }

@@ -6,8 +6,9 @@
 use nalgebra::{DMatrix, DVector};
 
 use crate::error::{IntegrateError, SystemError, first_non_finite};
-use crate::linalg::DenseLu;
+use crate::linalg::{ComplexLu, DenseLu};
 use crate::system::{OdeSystem, SecondOrderSystem};
+use nalgebra::Complex;
 
 /// What the methods need from a problem: evaluations, a Jacobian kept inside,
 /// and solves with the shifted matrix `(c·I − J)`. Implemented by the two
@@ -25,10 +26,31 @@ pub(crate) trait Problem {
     /// Evaluates and stores `J = ∂f/∂y(t, y)`. Returns `Err(what)` on a system
     /// error; non-finite entries are reported as `Ok(Some(index))`.
     fn update_jacobian(&mut self, t: f64, y: &DVector<f64>) -> Result<Option<usize>, SystemError>;
+    /// Whether [`update_jacobian`](Self::update_jacobian) gives a cheap
+    /// approximation (the mass-matrix form) rather than the exact Jacobian.
+    fn has_cheap_jacobian(&self) -> bool {
+        false
+    }
+    /// Evaluates and stores the exact `J` (the same as
+    /// [`update_jacobian`](Self::update_jacobian) unless that is a cheap
+    /// approximation).
+    fn update_exact_jacobian(
+        &mut self,
+        t: f64,
+        y: &DVector<f64>,
+    ) -> Result<Option<usize>, SystemError> {
+        self.update_jacobian(t, y)
+    }
     /// Factors `c·I − J`; `false` if singular.
     fn factor_shifted(&mut self, c: f64) -> bool;
     /// Solves `(c·I − J) x = b` in place with the last factorization.
     fn solve_shifted(&mut self, b: &mut DVector<f64>);
+    /// Factors the complex `(α + iβ)·I − J` (kept beside the real one);
+    /// `false` if singular.
+    fn factor_shifted_complex(&mut self, alpha: f64, beta: f64) -> bool;
+    /// Solves `((α + iβ)·I − J)(x_r + i x_i) = b_r + i b_i` in place with
+    /// the last complex factorization.
+    fn solve_shifted_complex(&mut self, br: &mut DVector<f64>, bi: &mut DVector<f64>);
     /// The system changed (a callback said so): parts of the Jacobian kept
     /// for the whole run (the constant `K`, `D` of the mass-matrix form) are
     /// fetched again at the next update.
@@ -49,6 +71,10 @@ pub(crate) struct FirstOrderProblem<'a, S: OdeSystem> {
     sys: &'a mut S,
     jac: DMatrix<f64>,
     lu: DenseLu,
+    /// The complex factorization and its right-hand side (allocated on
+    /// first use).
+    clu: ComplexLu,
+    cb: Vec<Complex<f64>>,
 }
 
 impl<'a, S: OdeSystem> FirstOrderProblem<'a, S> {
@@ -58,6 +84,8 @@ impl<'a, S: OdeSystem> FirstOrderProblem<'a, S> {
             sys,
             jac: DMatrix::zeros(n, n),
             lu: DenseLu::new(n),
+            clu: ComplexLu::new(0),
+            cb: Vec::new(),
         }
     }
 }
@@ -94,6 +122,34 @@ impl<S: OdeSystem> Problem for FirstOrderProblem<'_, S> {
     }
     fn solve_shifted(&mut self, b: &mut DVector<f64>) {
         self.lu.solve_in_place(b);
+    }
+    fn factor_shifted_complex(&mut self, alpha: f64, beta: f64) -> bool {
+        let n = self.jac.nrows();
+        if self.clu.dim() != n {
+            self.clu = ComplexLu::new(n);
+            self.cb = vec![Complex::new(0.0, 0.0); n];
+        }
+        for j in 0..n {
+            for i in 0..n {
+                let d = if i == j {
+                    Complex::new(alpha, beta)
+                } else {
+                    Complex::new(0.0, 0.0)
+                };
+                self.clu.set(i, j, d - self.jac[(i, j)]);
+            }
+        }
+        self.clu.factor()
+    }
+    fn solve_shifted_complex(&mut self, br: &mut DVector<f64>, bi: &mut DVector<f64>) {
+        for i in 0..br.len() {
+            self.cb[i] = Complex::new(br[i], bi[i]);
+        }
+        self.clu.solve_in_place(&mut self.cb);
+        for i in 0..br.len() {
+            br[i] = self.cb[i].re;
+            bi[i] = self.cb[i].im;
+        }
     }
 }
 
@@ -161,6 +217,12 @@ pub(crate) struct SecondOrderProblem<'a, S: SecondOrderSystem> {
     lu: DenseLu,
     shift: f64,
     tmp: DVector<f64>,
+    /// The complex Schur complement `c²I − cJv − Jq` (or `c²M + cD + K`)
+    /// for `c = α + iβ`, its shift and a right-hand side (allocated on
+    /// first use).
+    clu: ComplexLu,
+    cshift: Complex<f64>,
+    cb: Vec<Complex<f64>>,
     /// Zeros, and two residuals (error filter).
     zero: DVector<f64>,
     r0: DVector<f64>,
@@ -191,6 +253,9 @@ impl<'a, S: SecondOrderSystem> SecondOrderProblem<'a, S> {
             lu: DenseLu::new(0),
             shift: 0.0,
             tmp: DVector::zeros(n),
+            clu: ComplexLu::new(0),
+            cshift: Complex::new(0.0, 0.0),
+            cb: Vec::new(),
             zero: DVector::zeros(n),
             r0: DVector::zeros(n),
             r1: DVector::zeros(n),
@@ -592,6 +657,24 @@ impl<S: SecondOrderSystem> Problem for SecondOrderProblem<'_, S> {
         self.kd_valid = false;
         self.kind = JacKind::None;
     }
+    fn has_cheap_jacobian(&self) -> bool {
+        self.sys.has_mass_form()
+    }
+    fn update_exact_jacobian(
+        &mut self,
+        t: f64,
+        y: &DVector<f64>,
+    ) -> Result<Option<usize>, SystemError> {
+        let n = self.n;
+        let mut q = std::mem::take(&mut self.q);
+        let mut qd = std::mem::take(&mut self.qd);
+        q.copy_from(&y.rows(0, n));
+        qd.copy_from(&y.rows(n, n));
+        let r = self.eval_full(t, &q, &qd);
+        self.q = q;
+        self.qd = qd;
+        r
+    }
     fn factor_shifted(&mut self, c: f64) -> bool {
         let n = self.n;
         self.shift = c;
@@ -638,6 +721,85 @@ impl<S: SecondOrderSystem> Problem for SecondOrderProblem<'_, S> {
             let b1 = b[i];
             b[i] = self.tmp[i];
             b[n + i] = c * self.tmp[i] - b1;
+        }
+    }
+    fn factor_shifted_complex(&mut self, alpha: f64, beta: f64) -> bool {
+        let n = self.n;
+        if self.clu.dim() != n {
+            self.clu = ComplexLu::new(n);
+            self.cb = vec![Complex::new(0.0, 0.0); n];
+        }
+        let c = Complex::new(alpha, beta);
+        let c2 = c * c;
+        self.cshift = c;
+        let mass = self.kind == JacKind::MassForm;
+        for j in 0..n {
+            for i in 0..n {
+                let v = if mass {
+                    // c²M + cD + K
+                    c2 * self.jq[(i, j)] + c * self.d[(i, j)] + self.k[(i, j)]
+                } else {
+                    let d = if i == j { c2 } else { Complex::new(0.0, 0.0) };
+                    d - c * self.jv[(i, j)] - self.jq[(i, j)]
+                };
+                self.clu.set(i, j, v);
+            }
+        }
+        self.clu.factor()
+    }
+    fn solve_shifted_complex(&mut self, br: &mut DVector<f64>, bi: &mut DVector<f64>) {
+        let n = self.n;
+        let c = self.cshift;
+        // b1 = br[..n] + i bi[..n], b2 = br[n..] + i bi[n..].
+        let mass = self.kind == JacKind::MassForm;
+        for i in 0..n {
+            let b1 = Complex::new(br[i], bi[i]);
+            let b2 = Complex::new(br[n + i], bi[n + i]);
+            self.cb[i] = b2 + c * b1;
+        }
+        if mass {
+            // M (b2 + c b1) + D b1, by real products: real parts into qdd,
+            // imaginary parts into tmp.
+            for i in 0..n {
+                self.q[i] = self.cb[i].re;
+                self.qd[i] = self.cb[i].im;
+            }
+            self.qdd.gemv(1.0, &self.jq, &self.q, 0.0);
+            self.tmp.gemv(1.0, &self.jq, &self.qd, 0.0);
+            if self.damped {
+                self.q.copy_from(&br.rows(0, n));
+                self.qd.copy_from(&bi.rows(0, n));
+                self.qdd.gemv(1.0, &self.d, &self.q, 1.0);
+                self.tmp.gemv(1.0, &self.d, &self.qd, 1.0);
+            }
+            for i in 0..n {
+                self.cb[i] = Complex::new(self.qdd[i], self.tmp[i]);
+            }
+        } else {
+            // b2 + c b1 − Jv b1.
+            for part in 0..2 {
+                for i in 0..n {
+                    self.q[i] = if part == 0 { br[i] } else { bi[i] };
+                }
+                self.tmp.gemv(1.0, &self.jv, &self.q, 0.0);
+                for i in 0..n {
+                    if part == 0 {
+                        self.cb[i].re -= self.tmp[i];
+                    } else {
+                        self.cb[i].im -= self.tmp[i];
+                    }
+                }
+            }
+        }
+        self.clu.solve_in_place(&mut self.cb);
+        for i in 0..n {
+            let b1 = Complex::new(br[i], bi[i]);
+            let x1 = self.cb[i];
+            let x2 = c * x1 - b1;
+            br[i] = x1.re;
+            bi[i] = x1.im;
+            br[n + i] = x2.re;
+            bi[n + i] = x2.im;
         }
     }
 }

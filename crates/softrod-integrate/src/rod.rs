@@ -44,8 +44,9 @@ pub enum RodJacobian {
     /// ([`SecondOrderSystem::mass_form_jacobians`]) and never form `M⁻¹K`:
     /// generalized-α factors `M + β'K + γ'D` by the O(N)
     /// [`SecondOrderSystem::factor_shifted_mass`], ROS34PW2 `c²M + cD + K`
-    /// by a dense Cholesky; [`SecondOrderSystem::jacobians`] still returns
-    /// the dense `−M⁻¹K`, `−M⁻¹D`. The elastic and viscous forces
+    /// by a dense Cholesky ([`RodSystem::elastic_jacobians`] gives the dense
+    /// `−M⁻¹K`, `−M⁻¹D` for comparisons; [`SecondOrderSystem::jacobians`]
+    /// stays exact, for the methods to refresh to). The elastic and viscous forces
     /// `K(q − q̄)`, `D q̇` are linear with constant `K`, `D` in PCS, and they
     /// are what makes the rod stiff; gravity, Coriolis and loads are soft and
     /// left out. With the Rosenbrock–W method (order 3 for any `W`) this is a
@@ -53,9 +54,8 @@ pub enum RodJacobian {
     /// the rest explicit. Generalized-α still converges to the same step
     /// solution (its simplified Newton just takes an iteration more when the
     /// geometric part matters). [`Method::Esdirk46`](crate::Method::Esdirk46)
-    /// needs neither: it iterates on the shifted mass matrix whatever this
-    /// says and falls back to [`SecondOrderSystem::jacobians`], which should
-    /// then be `Exact`.
+    /// does not look at it: it iterates on the shifted mass matrix and falls
+    /// back to the exact [`SecondOrderSystem::jacobians`].
     ElasticOnly,
 }
 
@@ -71,6 +71,41 @@ impl RodSystem {
             jacobian: RodJacobian::Exact,
             shifted,
         }
+    }
+}
+
+impl RodSystem {
+    /// The dense elastic/viscous Jacobian approximation `∂q̈/∂q ≈ −M(q)⁻¹K`,
+    /// `∂q̈/∂q̇ ≈ −M(q)⁻¹D` (n_dof × n_dof each; one mass matrix, one dense
+    /// Cholesky, `n_dof` solves; allocates). The integrators never form it
+    /// (they use the mass-matrix form of [`RodJacobian::ElasticOnly`]); it is
+    /// here for comparisons.
+    pub fn elastic_jacobians(
+        &mut self,
+        q: &DVector<f64>,
+        dqdd_dq: &mut DMatrix<f64>,
+        dqdd_dqd: &mut DMatrix<f64>,
+    ) -> Result<(), DynamicsError> {
+        let m = mass_matrix(&self.model, &mut self.data, q.as_slice())?;
+        let chol = m.clone().cholesky().ok_or(DynamicsError::Singular {
+            rod: 0,
+            piece: 0,
+            what: "mass matrix",
+        })?;
+        let mut k = stiffness_matrix(&self.model);
+        chol.solve_mut(&mut k);
+        dqdd_dq.copy_from(&k);
+        dqdd_dq.neg_mut();
+        let mut d = damping_matrix(&self.model);
+        if d.iter().all(|&v| v == 0.0) {
+            // Undamped: skip the n_dof-column solve.
+            dqdd_dqd.fill(0.0);
+        } else {
+            chol.solve_mut(&mut d);
+            dqdd_dqd.copy_from(&d);
+            dqdd_dqd.neg_mut();
+        }
+        Ok(())
     }
 }
 
@@ -101,6 +136,10 @@ impl SecondOrderSystem for RodSystem {
         Ok(())
     }
 
+    /// The exact `∂q̈/∂q`, `∂q̈/∂q̇` (`softrod_dynamics::dynamics_jacobians`)
+    /// whatever [`RodSystem::jacobian`] says: the cheap approximation of
+    /// [`RodJacobian::ElasticOnly`] is the mass-matrix form, and this is what
+    /// the methods refresh to when it stops working.
     fn jacobians(
         &mut self,
         t: f64,
@@ -109,28 +148,6 @@ impl SecondOrderSystem for RodSystem {
         dqdd_dq: &mut DMatrix<f64>,
         dqdd_dqd: &mut DMatrix<f64>,
     ) -> Result<(), DynamicsError> {
-        if self.jacobian == RodJacobian::ElasticOnly {
-            let m = mass_matrix(&self.model, &mut self.data, q.as_slice())?;
-            let chol = m.clone().cholesky().ok_or(DynamicsError::Singular {
-                rod: 0,
-                piece: 0,
-                what: "mass matrix",
-            })?;
-            let mut k = stiffness_matrix(&self.model);
-            chol.solve_mut(&mut k);
-            dqdd_dq.copy_from(&k);
-            dqdd_dq.neg_mut();
-            let mut d = damping_matrix(&self.model);
-            if d.iter().all(|&v| v == 0.0) {
-                // Undamped: skip the n_dof-column solve.
-                dqdd_dqd.fill(0.0);
-            } else {
-                chol.solve_mut(&mut d);
-                dqdd_dqd.copy_from(&d);
-                dqdd_dqd.neg_mut();
-            }
-            return Ok(());
-        }
         let tau = self.tau.as_ref().map(|v| v.as_slice());
         let j = dynamics_jacobians(
             &self.model,
