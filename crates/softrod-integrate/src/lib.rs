@@ -125,6 +125,7 @@ mod stepper;
 mod methods;
 
 mod driver;
+mod recommended;
 
 pub use driver::{integrate, integrate_second_order};
 pub use error::{IntegrateError, SystemError};
@@ -134,6 +135,7 @@ pub use hooks::{
 pub use method::Method;
 pub use methods::generalized_alpha_parameters;
 pub use options::{Iteration, Options, StepControl};
+pub use recommended::Recommended;
 pub use rod::{RodJacobian, RodSystem};
 pub use solution::{EventRecord, Solution, Stats, Status};
 pub use system::{OdeSystem, SecondOrderSystem, fd_jacobian};
