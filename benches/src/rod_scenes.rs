@@ -1,15 +1,11 @@
 //! The rod scenes of the integrator studies (issue 13) and what measuring a
-//! run on them needs: tip trajectories, converged references (cached on
-//! disk), errors, work and wall time.
+//! run on them needs: tip positions, output times, tip errors, the cache
+//! directory of converged references.
 
 use std::path::PathBuf;
-use std::time::Instant;
 
 use nalgebra::DVector;
 use softrod_dynamics::{Model, RodSpec};
-use softrod_integrate::{
-    Control, Hooks, Method, Options, RodSystem, Stats, Status, integrate_second_order,
-};
 use softrod_kinematics::{Basis, Rod, RodKinematics, Strain, straight};
 use softrod_lie::{Pose, Vec3};
 use softrod_mechanics::{Material, RodBody, Section};
@@ -84,67 +80,9 @@ impl TipProbe {
     }
 }
 
-/// A measured run.
-#[derive(Clone, Debug)]
-pub struct Measured {
-    /// Tip positions at the output times.
-    pub tips: Vec<[f64; 3]>,
-    /// Work counters.
-    pub stats: Stats,
-    /// Wall seconds of the integration (outputs included, tip evaluation
-    /// not).
-    pub wall: f64,
-}
-
 /// Output times `k·t1/n`, `k = 0 … n`.
 pub fn times(t1: f64, n: usize) -> Vec<f64> {
     (0..=n).map(|k| t1 * k as f64 / n as f64).collect()
-}
-
-/// Integrates `model` from rest with `method`, `opts` to the last of
-/// `times` (the outputs), stopping as a failure beyond `budget` wall
-/// seconds. `setup` may configure the system (e.g. its Jacobian choice).
-pub fn measure(
-    model: &Model,
-    setup: impl FnOnce(&mut RodSystem),
-    method: Method,
-    opts: &Options,
-    times: &[f64],
-    budget: f64,
-) -> Result<Measured, String> {
-    let mut sys = RodSystem::new(model.clone());
-    setup(&mut sys);
-    let n = model.n_dof();
-    let z = DVector::zeros(n);
-    let t1 = *times.last().unwrap();
-    let opts = Options {
-        t_eval: Some(times.to_vec()),
-        max_steps: usize::MAX,
-        ..opts.clone()
-    };
-    let start = Instant::now();
-    let hooks = Hooks::new().on_step(move |_, _: &mut RodSystem| {
-        if start.elapsed().as_secs_f64() > budget {
-            Control::Stop
-        } else {
-            Control::Continue
-        }
-    });
-    let sol = integrate_second_order(&mut sys, method, 0.0, t1, &z, &z, &opts, hooks)
-        .map_err(|e| e.to_string())?;
-    let wall = start.elapsed().as_secs_f64();
-    if sol.status == Status::Stopped {
-        return Err(format!(
-            "over the budget of {budget} s at t = {:.4} ({} steps)",
-            sol.t_final, sol.stats.steps
-        ));
-    }
-    let mut probe = TipProbe::new(model);
-    Ok(Measured {
-        tips: sol.y.iter().map(|y| probe.tip(y)).collect(),
-        stats: sol.stats,
-        wall,
-    })
 }
 
 /// Largest Euclidean distance between matching tips.
@@ -165,30 +103,4 @@ pub fn cache_dir() -> PathBuf {
         .unwrap_or_else(|| {
             PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../target/integrate-study")
         })
-}
-
-/// The tip trajectory of a converged run at `times`, computed once with
-/// `method`, `opts` and cached under `name` (a JSON array of `[x, y, z]`;
-/// delete the file to recompute). Returns the tips and, when it was
-/// computed now, its work and wall time.
-pub fn reference(
-    name: &str,
-    model: &Model,
-    method: Method,
-    opts: &Options,
-    times: &[f64],
-) -> (Vec<[f64; 3]>, Option<Measured>) {
-    let dir = cache_dir();
-    let path = dir.join(format!("{name}.json"));
-    if let Ok(text) = std::fs::read_to_string(&path)
-        && let Ok(tips) = serde_json::from_str::<Vec<[f64; 3]>>(&text)
-        && tips.len() == times.len()
-    {
-        return (tips, None);
-    }
-    let m = measure(model, |_| {}, method, opts, times, f64::INFINITY)
-        .unwrap_or_else(|e| panic!("reference {name} failed: {e}"));
-    std::fs::create_dir_all(&dir).unwrap();
-    std::fs::write(&path, serde_json::to_string(&m.tips).unwrap()).unwrap();
-    (m.tips.clone(), Some(m))
 }

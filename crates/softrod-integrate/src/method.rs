@@ -19,17 +19,21 @@ pub enum Method {
     /// L-stable and stiffly accurate. Linearly implicit: no Newton iteration;
     /// 4 solves with one LU of `I/(hγ) − J` per step.
     ///
-    /// Why this one: (1) as a *W*-method it keeps order 3 with any
-    /// approximation of the Jacobian, so the Jacobian may be reused across
-    /// many steps and the LU across steps of equal size without losing
-    /// accuracy — a plain Rosenbrock method (RODAS) needs the exact Jacobian at
-    /// every step; (2) no Newton iteration, hence no convergence failure mode
-    /// and bit-reproducible cost; (3) L-stability damps the shear/extension
-    /// modes (EA/EI ~ 1/r²) instead of ringing; (4) stiff accuracy gives no
-    /// order reduction on the elastic relaxation. Radau IIA 5 is more accurate
-    /// at tight tolerances but needs a Newton iteration with a complex 2×2
-    /// block system; for the rod's moderate tolerances (1e-3…1e-6) order 3 is
-    /// the better trade.
+    /// Why it is kept beside the Newton methods: (1) as a *W*-method it
+    /// keeps order 3 with any approximation of the Jacobian, so the Jacobian
+    /// is reused across many steps and the LU across steps of equal size —
+    /// with [`RodJacobian::ElasticOnly`](crate::RodJacobian::ElasticOnly) it
+    /// is a linearly implicit IMEX scheme; (2) no Newton iteration, hence no
+    /// convergence failure mode and bit-reproducible cost; (3) L-stability
+    /// and stiff accuracy. A cheap Jacobian is kept only while it works: when
+    /// rejections cluster, the step collapses or drifts down, or it is about
+    /// to underflow, ROS34PW2 switches to the exact Jacobian
+    /// ([`SecondOrderSystem::jacobians`](crate::SecondOrderSystem::jacobians))
+    /// for a window of steps, kept while it takes clearly larger steps.
+    /// Its embedded estimate is first-order-norm (positions and
+    /// velocities), so on undamped rods it resolves the high modes the
+    /// release excites: 10–100× slower than [`Method::Esdirk46`] at equal
+    /// tip error (docs/performance.md).
     Rosw34,
     /// Generalized-α for second-order systems (Chung & Hulbert, J. Appl.
     /// Mech. 60 (1993) 371–375) in the form of Arnold & Brüls (Multibody Syst.

@@ -19,6 +19,11 @@
 //! [`Options::jacobian_max_age`] steps) and the LU of `I/(hγ) − W` is reused
 //! while `h` does not change; the controller keeps `h` when it would grow by
 //! less than 20 % (as RADAU5 does) so that reuse actually happens.
+//! When the problem's Jacobian is a cheap approximation (the mass-matrix
+//! form) ROS34PW2 watches it: rejections clustering, the step collapsing or
+//! drifting down, or an imminent underflow switch it to the exact Jacobian
+//! for a window of accepted steps (see `Choice`), so a poor `W` costs steps,
+//! never the run.
 //! `∂f/∂t` is a forward difference (one right-hand side per step) unless the
 //! system declares itself autonomous. Dense output: cubic Hermite from the
 //! step's end values and derivatives (`f(t₁, y₁)` is the next step's first
