@@ -81,7 +81,10 @@ impl CableInputs {
             let col = &mut self.scratch[..k];
             col.fill(0.0);
             cable.add_force_per_tension(rod, &q[*off..*off + k], &model.quadrature, col);
-            for (t, c) in tau.as_mut_slice()[*off..*off + k].iter_mut().zip(col.iter()) {
+            for (t, c) in tau.as_mut_slice()[*off..*off + k]
+                .iter_mut()
+                .zip(col.iter())
+            {
                 *t += u * c;
             }
         }
@@ -96,7 +99,14 @@ impl CableInputs {
     ) -> Result<&DVector<f64>, DynamicsError> {
         self.update_tau(q);
         let s = &mut self.sys;
-        forward_dynamics(&s.model, &mut s.data, t, q, qd, s.tau.as_ref().map(|v| v.as_slice()))
+        forward_dynamics(
+            &s.model,
+            &mut s.data,
+            t,
+            q,
+            qd,
+            s.tau.as_ref().map(|v| v.as_slice()),
+        )
     }
 }
 
@@ -227,7 +237,11 @@ pub fn check_tensions(n_cables: usize, what: &str, u: &[f64]) -> Result<(), Stri
             u.len()
         ));
     }
-    if let Some((i, v)) = u.iter().enumerate().find(|(_, v)| !(v.is_finite() && **v >= 0.0)) {
+    if let Some((i, v)) = u
+        .iter()
+        .enumerate()
+        .find(|(_, v)| !(v.is_finite() && **v >= 0.0))
+    {
         return Err(format!(
             "{what}[{i}] = {v}: cable tensions must be finite and >= 0 (a cable cannot push)"
         ));
@@ -247,7 +261,8 @@ pub enum ControlError {
 }
 
 /// A controller: `u = f(t, q, q̇)`, written into `u`.
-pub type ControllerFn<'a> = dyn FnMut(f64, &[f64], &[f64], &mut Vec<f64>) -> Result<(), pyo3::PyErr> + 'a;
+pub type ControllerFn<'a> =
+    dyn FnMut(f64, &[f64], &[f64], &mut Vec<f64>) -> Result<(), pyo3::PyErr> + 'a;
 
 /// Integrates `duration` seconds from `(q0, q̇0)` with `u` from `controller`
 /// held constant between updates (zero-order hold): at `t = 0`, then after
@@ -265,12 +280,13 @@ pub fn simulate_controlled(
     control_every: Option<f64>,
     controller: &mut ControllerFn<'_>,
 ) -> Result<Trajectory, ControlError> {
-    let (method, base_opts) = settings
-        .method_and_options(duration)
-        .map_err(|e| ControlError::Output {
-            t: 0.0,
-            message: e.to_string(),
-        })?;
+    let (method, base_opts) =
+        settings
+            .method_and_options(duration)
+            .map_err(|e| ControlError::Output {
+                t: 0.0,
+                message: e.to_string(),
+            })?;
     inputs.sys.jacobian = settings.stiff_jacobian();
     let times = output_times(duration, settings.output_spacing(duration));
     let n = inputs.dim();

@@ -97,6 +97,9 @@ pub fn guard<T>(f: impl FnOnce() -> PyResult<T>) -> PyResult<T> {
 
 /// [`guard`] with the GIL released while `f` runs (for calls longer than
 /// the few microseconds that releasing and re-taking it costs).
-pub fn guard_detached<T: Send>(py: Python<'_>, f: impl FnOnce() -> PyResult<T> + Send) -> PyResult<T> {
+pub fn guard_detached<T: Send>(
+    py: Python<'_>,
+    f: impl FnOnce() -> PyResult<T> + Send,
+) -> PyResult<T> {
     py.detach(|| guard(f))
 }

@@ -37,7 +37,10 @@ fn batch<'py>(
         )));
     }
     Ok(Some(
-        a.slice().chunks(n).map(DVector::from_column_slice).collect(),
+        a.slice()
+            .chunks(n)
+            .map(DVector::from_column_slice)
+            .collect(),
     ))
 }
 
@@ -103,7 +106,8 @@ pub fn run_many(
             return Err(input("threads must be at least 1"));
         }
     }
-    let threads = threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let threads =
+        threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     let results = py.detach(|| {
         guard(|| {
             let pool = rayon::ThreadPoolBuilder::new()

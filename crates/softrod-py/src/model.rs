@@ -30,8 +30,7 @@ fn section<T: pyo3::PyClass<BaseType = Section>>(
     s: mech::Section,
     kind: T,
 ) -> PyResult<PyClassInitializer<T>> {
-    s.validate()
-        .map_err(|e| input(format!("{name}: {e}")))?;
+    s.validate().map_err(|e| input(format!("{name}: {e}")))?;
     Ok(PyClassInitializer::from(Section { inner: s }).add_subclass(kind))
 }
 
@@ -99,10 +98,14 @@ pub struct Tube;
 impl Tube {
     #[new]
     fn new(radius: f64, inner_radius: f64) -> PyResult<PyClassInitializer<Self>> {
-        section("Tube", mech::Section::Tube {
+        section(
+            "Tube",
+            mech::Section::Tube {
                 radius,
                 inner_radius,
-            }, Tube)
+            },
+            Tube,
+        )
     }
 }
 
@@ -114,7 +117,11 @@ pub struct Rectangle;
 impl Rectangle {
     #[new]
     fn new(width: f64, height: f64) -> PyResult<PyClassInitializer<Self>> {
-        section("Rectangle", mech::Section::Rectangle { width, height }, Rectangle)
+        section(
+            "Rectangle",
+            mech::Section::Rectangle { width, height },
+            Rectangle,
+        )
     }
 }
 
@@ -127,10 +134,14 @@ pub struct TaperedCircle;
 impl TaperedCircle {
     #[new]
     fn new(radius_base: f64, radius_tip: f64) -> PyResult<PyClassInitializer<Self>> {
-        section("TaperedCircle", mech::Section::TaperedCircle {
+        section(
+            "TaperedCircle",
+            mech::Section::TaperedCircle {
                 radius_base,
                 radius_tip,
-            }, TaperedCircle)
+            },
+            TaperedCircle,
+        )
     }
 }
 

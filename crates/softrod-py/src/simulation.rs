@@ -117,8 +117,10 @@ impl Settings {
         error_control: Option<bool>,
         linearly_implicit: Option<bool>,
     ) -> PyResult<Self> {
-        let mut inner = RustSettings::default();
-        inner.output_every = None;
+        let mut inner = RustSettings {
+            output_every: None,
+            ..RustSettings::default()
+        };
         overrides(
             &mut inner,
             integrator,
@@ -392,7 +394,13 @@ impl Simulation {
         s: &Bound<'py, PyAny>,
         q: &Bound<'py, PyAny>,
         item: &[usize],
-        f: &dyn Fn(&RodKinematics, &softrod::kinematics::Rod, usize, f64, &mut [f64]) -> PyResult<()>,
+        f: &dyn Fn(
+            &RodKinematics,
+            &softrod::kinematics::Rod,
+            usize,
+            f64,
+            &mut [f64],
+        ) -> PyResult<()>,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let q = vector(q, "q", self.n())?;
         let i = rod_index(self.sim.model(), rod)?;
@@ -466,7 +474,15 @@ impl Simulation {
                 return Err(input("quadrature must be at least 1 Gauss point per piece"));
             }
             let model = build_model(&refs, g, quadrature)?;
-            Ok(Self::wrap(softrod::Simulation::new(model), Vec::new()))
+            let mut sim = softrod::Simulation::new(model);
+            // Samples every thousandth of the run, whatever its length (a
+            // scene's [run] default is a fixed spacing).
+            sim.set_settings(RustSettings {
+                output_every: None,
+                ..sim.settings().clone()
+            })
+            .map_err(to_py)?;
+            Ok(Self::wrap(sim, Vec::new()))
         })
     }
 
@@ -476,7 +492,10 @@ impl Simulation {
     /// newline or "="). Invalid scenes raise `softrod.SceneError` naming the
     /// file, line, column and key path; warnings are in `.warnings`.
     #[classmethod]
-    fn from_toml(_cls: &Bound<'_, pyo3::types::PyType>, scene: &Bound<'_, PyAny>) -> PyResult<Self> {
+    fn from_toml(
+        _cls: &Bound<'_, pyo3::types::PyType>,
+        scene: &Bound<'_, PyAny>,
+    ) -> PyResult<Self> {
         guard(|| {
             let text: Option<String> = match scene.cast::<PyString>() {
                 Ok(s) => {
@@ -844,7 +863,8 @@ impl Simulation {
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         guard(|| {
             let q = vector(q, "q", self.n())?;
-            let a: DMatrix<f64> = actuation_matrix(self.sim.model(), q.slice()).map_err(dynamics)?;
+            let a: DMatrix<f64> =
+                actuation_matrix(self.sim.model(), q.slice()).map_err(dynamics)?;
             Ok(mat_out(py, &a))
         })
     }
@@ -1009,22 +1029,19 @@ impl Simulation {
                 inputs.tau_extra = None;
                 let call = |t: f64, q: &[f64], qd: &[f64], u: &mut Vec<f64>| -> PyResult<()> {
                     Python::attach(|py| {
-                        let r = f.bind(py).call1((
-                            t,
-                            vec_out(py, q),
-                            vec_out(py, qd),
-                        ))?;
+                        let r = f.bind(py).call1((t, vec_out(py, q), vec_out(py, qd)))?;
                         let a = vector(&r, "the controller's u", nc)?;
                         u.clear();
                         u.extend_from_slice(a.slice());
                         Ok(())
                     })
                 };
-                let mut controller = |t: f64, q: &[f64], qd: &[f64], u: &mut Vec<f64>| -> PyResult<()> {
-                    call(t, q, qd, u)?;
-                    check_tensions(nc, "the controller's u", u)
-                        .map_err(|m| input(format!("at t = {t:e}: {m}")))
-                };
+                let mut controller =
+                    |t: f64, q: &[f64], qd: &[f64], u: &mut Vec<f64>| -> PyResult<()> {
+                        call(t, q, qd, u)?;
+                        check_tensions(nc, "the controller's u", u)
+                            .map_err(|m| input(format!("at t = {t:e}: {m}")))
+                    };
                 let r = py.detach(|| {
                     guard(|| {
                         Ok(simulate_controlled(
@@ -1068,7 +1085,8 @@ impl Simulation {
         u: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<State> {
         let n = self.n();
-        let q = DVector::from_column_slice(vector(state.q.bind(py).as_any(), "state.q", n)?.slice());
+        let q =
+            DVector::from_column_slice(vector(state.q.bind(py).as_any(), "state.q", n)?.slice());
         let qd = DVector::from_column_slice(
             vector(state.qdot.bind(py).as_any(), "state.qdot", n)?.slice(),
         );
@@ -1081,7 +1099,9 @@ impl Simulation {
                 inputs.u = u;
                 inputs.tau_extra = None;
                 inputs.sys.jacobian = settings.stiff_jacobian();
-                guard_detached(py, || step(inputs, &settings, t, dt, &q, &qd).map_err(to_py))?
+                guard_detached(py, || {
+                    step(inputs, &settings, t, dt, &q, &qd).map_err(to_py)
+                })?
             }
             None => {
                 if self.stepper.is_none() {
@@ -1089,7 +1109,9 @@ impl Simulation {
                 }
                 let sys = self.stepper.as_mut().expect("just set");
                 sys.jacobian = settings.stiff_jacobian();
-                guard_detached(py, || step(&mut **sys, &settings, t, dt, &q, &qd).map_err(to_py))?
+                guard_detached(py, || {
+                    step(&mut **sys, &settings, t, dt, &q, &qd).map_err(to_py)
+                })?
             }
         };
         State::from_slices(py, t + dt, q1.as_slice(), qd1.as_slice())

@@ -45,13 +45,16 @@ pub struct Trajectory {
     model: Model,
 }
 
-fn rows<'py>(py: Python<'py>, v: &[nalgebra::DVector<f64>], n: usize) -> PyResult<Bound<'py, PyArray2<f64>>> {
+fn rows<'py>(
+    py: Python<'py>,
+    v: &[nalgebra::DVector<f64>],
+    n: usize,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let mut data = Vec::with_capacity(v.len() * n);
     for r in v {
         data.extend_from_slice(r.as_slice());
     }
-    Ok(PyArray1::from_vec(py, data)
-        .reshape([v.len(), n])?)
+    PyArray1::from_vec(py, data).reshape([v.len(), n])
 }
 
 impl Trajectory {
@@ -304,7 +307,12 @@ impl State {
 impl State {
     #[new]
     #[pyo3(signature = (t, q, qdot))]
-    fn new(py: Python<'_>, t: f64, q: &Bound<'_, PyAny>, qdot: &Bound<'_, PyAny>) -> PyResult<Self> {
+    fn new(
+        py: Python<'_>,
+        t: f64,
+        q: &Bound<'_, PyAny>,
+        qdot: &Bound<'_, PyAny>,
+    ) -> PyResult<Self> {
         let qa = array(q, "q")?;
         if qa.shape().len() != 1 {
             return Err(input(format!("q must be 1-D, got shape {:?}", qa.shape())));
@@ -333,6 +341,10 @@ impl State {
     }
 
     fn __repr__(&self, py: Python<'_>) -> String {
-        format!("State(t={:?}, n_dof={})", self.t, numpy::PyUntypedArrayMethods::len(self.q.bind(py)))
+        format!(
+            "State(t={:?}, n_dof={})",
+            self.t,
+            numpy::PyUntypedArrayMethods::len(self.q.bind(py))
+        )
     }
 }
