@@ -21,7 +21,7 @@ use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use nalgebra::DVector;
 use softrod_dynamics::{Data, Model, RodSpec, modes};
 use softrod_integrate::{
-    Hooks, Method, Options, RodJacobian, RodSystem, Stats, integrate_second_order,
+    Hooks, Iteration, Method, Options, RodJacobian, RodSystem, Stats, integrate_second_order,
 };
 use softrod_kinematics::{Basis, Rod, RodKinematics, straight};
 use softrod_lie::{Pose, Vec3};
@@ -266,7 +266,10 @@ fn bench_integrate(c: &mut Criterion) {
         &m20,
         &Setup {
             opts: Options {
-                newton_tol: 1e-3,
+                iteration: Iteration::Newton {
+                    tol: 1e-3,
+                    max_iter: 8,
+                },
                 ..Options::fixed(5e-5)
             },
             ..ga("ref", 1.0, ElasticOnly, 5e-5, false)

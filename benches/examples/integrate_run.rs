@@ -12,7 +12,8 @@
 use nalgebra::{DMatrix, DVector};
 use softrod_dynamics::{Model, RodSpec};
 use softrod_integrate::{
-    Hooks, Method, Options, RodJacobian, RodSystem, SecondOrderSystem, integrate_second_order,
+    Hooks, Iteration, Method, Options, RodJacobian, RodSystem, SecondOrderSystem,
+    integrate_second_order,
 };
 use softrod_kinematics::{Basis, Rod, RodKinematics, straight};
 use softrod_lie::{Pose, Vec3};
@@ -133,7 +134,10 @@ fn main() {
     if env("REF", 0) == 1 {
         let z = DVector::zeros(n);
         let opts = Options {
-            newton_tol: 1e-3,
+            iteration: Iteration::Newton {
+                tol: 1e-3,
+                max_iter: 8,
+            },
             t_eval: Some(times.clone()),
             max_steps: 10_000_000,
             ..Options::fixed(5e-5)

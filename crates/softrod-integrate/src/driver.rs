@@ -6,64 +6,15 @@
 
 use nalgebra::DVector;
 
-use crate::dopri5::Dopri5;
 use crate::error::{IntegrateError, first_non_finite};
-use crate::genalpha::GeneralizedAlpha;
-use crate::options::{
-    Control, Direction, EventRecord, Hooks, Method, Options, Solution, Stats, Status, StepInfo,
-};
-use crate::rk4::Rk4;
-use crate::rosw::Rosw34;
-use crate::state::StepState;
-use crate::system::{FirstOrderProblem, OdeSystem, Problem, SecondOrderProblem, SecondOrderSystem};
-
-/// One method's state between steps.
-pub(crate) trait Stepper<P: Problem> {
-    /// Sets the initial state (and evaluates what the first step needs).
-    fn init(
-        &mut self,
-        p: &mut P,
-        t0: f64,
-        y0: &DVector<f64>,
-        t1: f64,
-        opts: &Options,
-        stats: &mut Stats,
-    ) -> Result<(), IntegrateError>;
-    /// Takes one accepted step, never beyond `t_end` (landing on it exactly
-    /// when it is reached).
-    fn step(
-        &mut self,
-        p: &mut P,
-        t_end: f64,
-        opts: &Options,
-        stats: &mut Stats,
-    ) -> Result<(), IntegrateError>;
-    /// The shared time/state/derivative bookkeeping.
-    fn state(&self) -> &StepState;
-    /// Current time.
-    fn t(&self) -> f64 {
-        self.state().t
-    }
-    /// Time at the start of the last step.
-    fn t_prev(&self) -> f64 {
-        self.state().t_prev
-    }
-    /// Current state.
-    fn y(&self) -> &DVector<f64> {
-        &self.state().y
-    }
-    /// Size of the last step.
-    fn h_last(&self) -> f64 {
-        self.state().h
-    }
-    /// Dense output at `t ∈ [t_prev, t]` into `out` (cubic Hermite unless
-    /// the method has its own).
-    fn dense(&self, t: f64, out: &mut DVector<f64>) {
-        self.state().hermite_dense(t, out);
-    }
-    /// The user changed the system: drop cached derivatives/Jacobians.
-    fn system_changed(&mut self, p: &mut P, stats: &mut Stats) -> Result<(), IntegrateError>;
-}
+use crate::hooks::{Control, Direction, Hooks, StepInfo};
+use crate::method::Method;
+use crate::methods::{Dopri5, GeneralizedAlpha, Rk4, Rosw34};
+use crate::options::Options;
+use crate::problem::{FirstOrderProblem, Problem, SecondOrderProblem};
+use crate::solution::{EventRecord, Solution, Stats, Status};
+use crate::stepper::Stepper;
+use crate::system::{OdeSystem, SecondOrderSystem};
 
 /// Integrates a first-order system `y' = f(t, y)` from `t0` to `t1 ≥ t0`.
 ///
@@ -94,6 +45,7 @@ pub fn integrate<S: OdeSystem>(
             what: format!("y0 has dimension {} but the system has {n}", y0.len()),
         });
     }
+    opts.validate(method)?;
     let mut p = FirstOrderProblem::new(sys);
     match method {
         Method::Rk4 => drive(&mut p, &mut Rk4::new(n), t0, t1, y0, opts, hooks),
@@ -134,6 +86,7 @@ pub fn integrate_second_order<S: SecondOrderSystem>(
             ),
         });
     }
+    opts.validate(method)?;
     let mut y0 = DVector::zeros(2 * n);
     y0.rows_mut(0, n).copy_from(q0);
     y0.rows_mut(n, n).copy_from(qd0);
@@ -143,25 +96,20 @@ pub fn integrate_second_order<S: SecondOrderSystem>(
         Method::Rk4 => drive(&mut p, &mut Rk4::new(m), t0, t1, &y0, opts, hooks),
         Method::Dopri5 => drive(&mut p, &mut Dopri5::new(m), t0, t1, &y0, opts, hooks),
         Method::Rosw34 => drive(&mut p, &mut Rosw34::new(m), t0, t1, &y0, opts, hooks),
-        Method::GeneralizedAlpha { rho_inf } => {
-            if !(0.0..=1.0).contains(&rho_inf) {
-                return Err(IntegrateError::InvalidInput {
-                    what: format!("rho_inf = {rho_inf} is not in [0, 1]"),
-                });
-            }
-            drive(
-                &mut p,
-                &mut GeneralizedAlpha::new(n, rho_inf),
-                t0,
-                t1,
-                &y0,
-                opts,
-                hooks,
-            )
-        }
+        Method::GeneralizedAlpha { rho_inf } => drive(
+            &mut p,
+            &mut GeneralizedAlpha::new(n, rho_inf),
+            t0,
+            t1,
+            &y0,
+            opts,
+            hooks,
+        ),
     }
 }
 
+/// The checks that depend on the run: time span, output times within it,
+/// finite initial state (the settings were checked by [`Options::validate`]).
 fn validate(t0: f64, t1: f64, y0: &DVector<f64>, opts: &Options) -> Result<(), IntegrateError> {
     let bad = |what: String| Err(IntegrateError::InvalidInput { what });
     if !(t0.is_finite() && t1.is_finite()) || t1 < t0 {
@@ -169,30 +117,10 @@ fn validate(t0: f64, t1: f64, y0: &DVector<f64>, opts: &Options) -> Result<(), I
             "time span [{t0}, {t1}] must be finite with t1 >= t0"
         ));
     }
-    if !(opts.rtol >= 0.0 && opts.atol >= 0.0 && opts.rtol + opts.atol > 0.0) {
-        return bad(format!(
-            "tolerances rtol = {}, atol = {} must be >= 0 and not both 0",
-            opts.rtol, opts.atol
-        ));
-    }
-    if let Some(dt) = opts.dt
-        && !(dt > 0.0 && dt.is_finite())
+    if let Some(te) = &opts.t_eval
+        && te.iter().any(|&t| !(t >= t0 && t <= t1))
     {
-        return bad(format!("dt = {dt} must be positive and finite"));
-    }
-    if !(opts.h_max > 0.0) || !(opts.h_min >= 0.0) || opts.h_min > opts.h_max {
-        return bad(format!(
-            "need 0 <= h_min ({}) <= h_max ({}), h_max > 0",
-            opts.h_min, opts.h_max
-        ));
-    }
-    if let Some(te) = &opts.t_eval {
-        if te.windows(2).any(|w| !(w[0] <= w[1])) {
-            return bad("t_eval must be sorted".into());
-        }
-        if te.iter().any(|&t| !(t >= t0 && t <= t1)) {
-            return bad(format!("t_eval must lie in [{t0}, {t1}]"));
-        }
+        return bad(format!("t_eval must lie in [{t0}, {t1}]"));
     }
     if let Some(i) = first_non_finite(y0.as_slice()) {
         return Err(IntegrateError::NonFinite {
@@ -505,123 +433,6 @@ fn drive<P: Problem, St: Stepper<P>>(
     })
 }
 
-/// Weighted RMS norm of `e` with weights `atol + rtol·max(|ya|, |yb|)`
-/// (Hairer–Wanner's error norm).
-pub(crate) fn wrms(e: &DVector<f64>, ya: &DVector<f64>, yb: &DVector<f64>, opts: &Options) -> f64 {
-    let n = e.len();
-    if n == 0 {
-        return 0.0;
-    }
-    let mut s = 0.0;
-    for i in 0..n {
-        let sc = opts.atol + opts.rtol * ya[i].abs().max(yb[i].abs());
-        let r = e[i] / sc;
-        s += r * r;
-    }
-    (s / n as f64).sqrt()
-}
-
-/// Cubic Hermite interpolation on `[ta, tb]` from values and derivatives
-/// (Hairer–Nørsett–Wanner, *ODEs I*, eq. II.6.7).
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn hermite(
-    ta: f64,
-    ya: &DVector<f64>,
-    fa: &DVector<f64>,
-    tb: f64,
-    yb: &DVector<f64>,
-    fb: &DVector<f64>,
-    t: f64,
-    out: &mut DVector<f64>,
-) {
-    let h = tb - ta;
-    let th = (t - ta) / h;
-    let th1 = th - 1.0;
-    for i in 0..out.len() {
-        let dy = yb[i] - ya[i];
-        out[i] = (1.0 - th) * ya[i]
-            + th * yb[i]
-            + th * th1 * ((1.0 - 2.0 * th) * dy + th1 * h * fa[i] + th * h * fb[i]);
-    }
-}
-
-/// The step to take toward `t_end` from `t` with proposed size `h`: returns
-/// `(h, last)`; the step is stretched to `t_end` if it would leave less than
-/// 1 % of `h` (Hairer's rule), and `last` means land exactly on `t_end`.
-pub(crate) fn clip_step(t: f64, h: f64, t_end: f64) -> (f64, bool) {
-    if t + 1.01 * h >= t_end {
-        let rem = t_end - t;
-        // Within rounding of h: keep h itself so a fixed-step method keeps its
-        // LU (the time still lands exactly on t_end).
-        if (rem - h).abs() <= 1e-12 * h {
-            (h, true)
-        } else {
-            (rem, true)
-        }
-    } else {
-        (h, false)
-    }
-}
-
-/// Starting step of an adaptive method of order `order` (Hairer–Nørsett–
-/// Wanner, *ODEs I*, §II.4, "Starting step size"); one right-hand side.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn initial_step<P: Problem>(
-    p: &mut P,
-    t0: f64,
-    y0: &DVector<f64>,
-    f0: &DVector<f64>,
-    order: i32,
-    opts: &Options,
-    stats: &mut Stats,
-    scratch: (&mut DVector<f64>, &mut DVector<f64>),
-) -> Result<f64, IntegrateError> {
-    let (y1, f1) = scratch;
-    let zero = y0;
-    let d0 = wrms(y0, zero, zero, opts);
-    let d1 = wrms(f0, zero, zero, opts);
-    let mut h0 = if d0 < 1e-10 || d1 < 1e-10 {
-        1e-6
-    } else {
-        0.01 * d0 / d1
-    };
-    h0 = h0.min(opts.h_max);
-    y1.copy_from(y0);
-    y1.axpy(h0, f0, 1.0);
-    p.rhs(t0 + h0, y1, f1)
-        .map_err(crate::system::sys_err(t0, h0, "rhs"))?;
-    stats.rhs_evaluations += 1;
-    f1.axpy(-1.0, f0, 1.0);
-    let d2 = wrms(f1, zero, zero, opts) / h0;
-    let dm = d1.max(d2);
-    let h1 = if !(dm > 1e-15) {
-        (h0 * 1e-3).max(1e-6)
-    } else {
-        (0.01 / dm).powf(1.0 / (order as f64 + 1.0))
-    };
-    let h = (100.0 * h0).min(h1).min(opts.h_max);
-    Ok(if h.is_finite() { h } else { 1e-6 })
-}
-
-/// Checks the step size against `h_min` and the resolution of `t`.
-pub(crate) fn check_underflow(
-    t: f64,
-    h: f64,
-    opts: &Options,
-    reason: &'static str,
-) -> Result<(), IntegrateError> {
-    let floor = opts.h_min.max(16.0 * f64::EPSILON * t.abs());
-    if !(h >= floor) || h == 0.0 {
-        return Err(IntegrateError::StepSizeUnderflow {
-            t,
-            h,
-            h_min: floor,
-            reason,
-        });
-    }
-    Ok(())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -635,15 +446,5 @@ mod tests {
         // Leaving a zero is not a new crossing.
         assert!(!crossed(0.0, 1.0, Direction::Either));
         assert!(!crossed(1.0, 2.0, Direction::Either));
-    }
-
-    #[test]
-    fn hermite_reproduces_cubics() {
-        // y = t³ − 2t, y' = 3t² − 2 on [0.5, 1.5].
-        let y = |t: f64| DVector::from_element(1, t * t * t - 2.0 * t);
-        let f = |t: f64| DVector::from_element(1, 3.0 * t * t - 2.0);
-        let mut out = DVector::zeros(1);
-        hermite(0.5, &y(0.5), &f(0.5), 1.5, &y(1.5), &f(1.5), 0.8, &mut out);
-        assert!((out[0] - y(0.8)[0]).abs() < 1e-14);
     }
 }

@@ -12,7 +12,7 @@
 //! | [`Method::Rk4`] | explicit RK | 4 | fixed `dt` | non-stiff, reference runs |
 //! | [`Method::Dopri5`] | explicit RK 5(4), PI control, dense order 4 | 5 | adaptive | non-stiff, accurate |
 //! | [`Method::Rosw34`] | Rosenbrock–W ROS34PW2, L-stable, Jacobian/LU reuse | 3 | adaptive | stiff (rods) |
-//! | [`Method::GeneralizedAlpha`] | implicit structural, `ρ∞` dissipation | 2 | fixed `dt`, or adaptive with [`Options::error_control`] | large fixed steps |
+//! | [`Method::GeneralizedAlpha`] | implicit structural, `ρ∞` dissipation | 2 | fixed `dt`, or adaptive ([`StepControl::Adaptive`]) | large fixed steps |
 //!
 //! # Stiff rods: the linearly implicit (IMEX) path
 //!
@@ -103,24 +103,37 @@
 //! ```
 #![warn(missing_docs)]
 
-mod dopri5;
-mod driver;
+// Floors, bottom up (each imports only from below): errors and the plain
+// data (options, method, hooks, solution); the user traits and the
+// adaptors the methods run on; the step control shared by all methods; the
+// steppers; the driver.
 mod error;
-mod genalpha;
-mod linalg;
+mod hooks;
+mod method;
 mod options;
-mod rk4;
+mod solution;
+
+mod linalg;
+mod problem;
 mod rod;
-mod rosw;
-mod state;
 mod system;
+
+mod control;
+mod state;
+mod stepper;
+
+mod methods;
+
+mod driver;
 
 pub use driver::{integrate, integrate_second_order};
 pub use error::{IntegrateError, SystemError};
-pub use genalpha::generalized_alpha_parameters;
-pub use options::{
-    Control, Direction, Event, EventRecord, Hooks, Method, Monitor, Options, OutputCallback,
-    ScalarFn, Solution, Stats, Status, StepCallback, StepInfo,
+pub use hooks::{
+    Control, Direction, Event, Hooks, Monitor, OutputCallback, ScalarFn, StepCallback, StepInfo,
 };
+pub use method::Method;
+pub use methods::generalized_alpha_parameters;
+pub use options::{Iteration, Options, StepControl};
 pub use rod::{RodJacobian, RodSystem};
+pub use solution::{EventRecord, Solution, Stats, Status};
 pub use system::{OdeSystem, SecondOrderSystem, fd_jacobian};

@@ -3,10 +3,11 @@
 
 use nalgebra::DVector;
 
-use crate::driver::{hermite, initial_step};
-use crate::error::{IntegrateError, first_non_finite};
-use crate::options::{Options, Stats};
-use crate::system::{Problem, sys_err};
+use crate::control::{check_finite, initial_step};
+use crate::error::IntegrateError;
+use crate::options::{Options, StepControl};
+use crate::problem::{Problem, sys_err};
+use crate::solution::Stats;
 
 /// Time, state and derivative at the end (`t`, `y`, `f`) and the start
 /// (`t_prev`, `y_prev`, `f_prev`) of the last accepted step of size `h`
@@ -85,9 +86,9 @@ impl StepState {
         stats.steps += 1;
     }
 
-    /// The first step of an adaptive method of order `order` from the start
-    /// `(t, y, f)`: `dt` (at most `h_max`) if set, else [`initial_step`] (one
-    /// right-hand side, in `scratch`).
+    /// The first step of a method of order `order` from the start
+    /// `(t, y, f)`: the fixed `dt` or the given `h0` (at most `h_max`), else
+    /// [`initial_step`] (one right-hand side, in `scratch`).
     pub(crate) fn first_step<P: Problem>(
         &self,
         p: &mut P,
@@ -96,9 +97,11 @@ impl StepState {
         stats: &mut Stats,
         scratch: (&mut DVector<f64>, &mut DVector<f64>),
     ) -> Result<f64, IntegrateError> {
-        match opts.dt {
-            Some(dt) => Ok(dt.min(opts.h_max)),
-            None => initial_step(p, self.t, &self.y, &self.f, order, opts, stats, scratch),
+        match opts.step {
+            StepControl::Fixed(h) | StepControl::Adaptive { h0: Some(h) } => Ok(h.min(opts.h_max)),
+            StepControl::Adaptive { h0: None } => {
+                initial_step(p, self.t, &self.y, &self.f, order, opts, stats, scratch)
+            }
         }
     }
 
@@ -118,47 +121,41 @@ impl StepState {
     }
 }
 
-/// An adaptive method run with `adaptive = false` needs a fixed step.
-pub(crate) fn check_dt_if_fixed(opts: &Options) -> Result<(), IntegrateError> {
-    if !opts.adaptive && opts.dt.is_none() {
-        return Err(IntegrateError::InvalidInput {
-            what: "a non-adaptive run needs Options::dt".into(),
-        });
-    }
-    Ok(())
-}
-
-/// [`IntegrateError::NonFinite`] for the first non-finite entry of `v`.
-pub(crate) fn check_finite(
-    v: &DVector<f64>,
+/// Cubic Hermite interpolation on `[ta, tb]` from values and derivatives
+/// (Hairer–Nørsett–Wanner, *ODEs I*, eq. II.6.7).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn hermite(
+    ta: f64,
+    ya: &DVector<f64>,
+    fa: &DVector<f64>,
+    tb: f64,
+    yb: &DVector<f64>,
+    fb: &DVector<f64>,
     t: f64,
-    h: f64,
-    what: &'static str,
-) -> Result<(), IntegrateError> {
-    match first_non_finite(v.as_slice()) {
-        Some(index) => Err(IntegrateError::NonFinite { t, h, what, index }),
-        None => Ok(()),
+    out: &mut DVector<f64>,
+) {
+    let h = tb - ta;
+    let th = (t - ta) / h;
+    let th1 = th - 1.0;
+    for i in 0..out.len() {
+        let dy = yb[i] - ya[i];
+        out[i] = (1.0 - th) * ya[i]
+            + th * yb[i]
+            + th * th1 * ((1.0 - 2.0 * th) * dy + th1 * h * fa[i] + th * h * fb[i]);
     }
 }
 
-/// A non-adaptive step whose trial `ynew` (or its error estimate) is not
-/// finite: [`IntegrateError::NonFinite`] at the first bad entry of `ynew`
-/// (index 0 if `ynew` itself is finite).
-pub(crate) fn non_finite_trial(ynew: &DVector<f64>, t_new: f64, h: f64) -> IntegrateError {
-    let index = first_non_finite(ynew.as_slice()).unwrap_or(0);
-    IntegrateError::NonFinite {
-        t: t_new,
-        h,
-        what: "state",
-        index,
-    }
-}
+#[cfg(test)]
+mod tests {
+    use super::*;
 
-/// Why an adaptive step was rejected, from its error norm.
-pub(crate) fn rejection_reason(err: f64) -> &'static str {
-    if err.is_finite() {
-        "error test"
-    } else {
-        "non-finite trial state"
+    #[test]
+    fn hermite_reproduces_cubics() {
+        // y = t³ − 2t, y' = 3t² − 2 on [0.5, 1.5].
+        let y = |t: f64| DVector::from_element(1, t * t * t - 2.0 * t);
+        let f = |t: f64| DVector::from_element(1, 3.0 * t * t - 2.0);
+        let mut out = DVector::zeros(1);
+        hermite(0.5, &y(0.5), &f(0.5), 1.5, &y(1.5), &f(1.5), 0.8, &mut out);
+        assert!((out[0] - y(0.8)[0]).abs() < 1e-14);
     }
 }

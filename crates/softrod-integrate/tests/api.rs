@@ -9,8 +9,8 @@ use common::{Linear, VanDerPol, dist, dv};
 use nalgebra::{DMatrix, DVector};
 use proptest::prelude::*;
 use softrod_integrate::{
-    Control, Direction, Event, Hooks, IntegrateError, Method, Options, SecondOrderSystem, Status,
-    StepInfo, integrate, integrate_second_order,
+    Control, Direction, Event, Hooks, IntegrateError, Iteration, Method, Options,
+    SecondOrderSystem, Status, StepInfo, integrate, integrate_second_order,
 };
 
 const ALL: [Method; 4] = [
@@ -368,7 +368,33 @@ fn run_m(
 fn invalid_input_is_rejected() {
     let mut s = Linear::undamped();
     let cases: Vec<(Method, Options, f64)> = vec![
-        (Method::Rk4, Options::default(), 1.0), // no dt
+        (Method::Rk4, Options::default(), 1.0), // adaptive: no error estimate
+        (Method::Rk4, Options::fixed(0.0), 1.0),
+        (Method::Dopri5, Options::fixed(f64::NAN), 1.0),
+        (Method::Dopri5, Options::default().with_h0(-1.0), 1.0),
+        (Method::Rosw34, Options::linearly_implicit(0.1), 1.0), // gen-α only
+        (
+            Method::GeneralizedAlpha { rho_inf: 0.8 },
+            Options {
+                iteration: Iteration::Newton {
+                    tol: 1e-2,
+                    max_iter: 0,
+                },
+                ..Options::fixed(0.1)
+            },
+            1.0,
+        ),
+        (
+            Method::GeneralizedAlpha { rho_inf: 0.8 },
+            Options {
+                iteration: Iteration::Newton {
+                    tol: f64::NAN,
+                    max_iter: 4,
+                },
+                ..Options::fixed(0.1)
+            },
+            1.0,
+        ),
         (
             Method::GeneralizedAlpha { rho_inf: 1.5 },
             Options::fixed(0.1),
@@ -388,6 +414,18 @@ fn invalid_input_is_rejected() {
         ),
     ];
     for (m, o, t1) in cases {
+        // The settings alone are rejected by Options::validate unless the
+        // fault is in the time span.
+        if t1 >= 0.0
+            && o.t_eval
+                .as_ref()
+                .is_none_or(|te| te.iter().all(|&t| t <= t1))
+        {
+            assert!(
+                matches!(o.validate(m), Err(IntegrateError::InvalidInput { .. })),
+                "{m:?} {o:?}"
+            );
+        }
         match run_m(m, &mut s, t1, &o, Hooks::new()) {
             Err(IntegrateError::InvalidInput { what }) => println!("{m:?}: {what}"),
             r => panic!("{m:?}: expected InvalidInput, got {r:?}"),

@@ -1,4 +1,4 @@
-//! Error control of generalized-α (`Options::error_control`), in particular
+//! Error control of generalized-α (`StepControl::Adaptive`), in particular
 //! of the linearly implicit scheme (`Options::linearly_implicit_tol`), on the
 //! matrix-form linear oscillators with exact solutions `exp(A t) y0`
 //! (undamped and damped, two coupled modes, about one period to t = 4).
@@ -122,15 +122,8 @@ fn too_large_steps_are_rejected_and_shrunk() {
     let sys = Linear::damped();
     let tol = 1e-6;
     for opts in [
-        Options {
-            dt: Some(1.0),
-            ..Options::linearly_implicit_tol(tol, tol)
-        },
-        Options {
-            dt: Some(1.0),
-            error_control: true,
-            ..Options::tol(tol, tol)
-        },
+        Options::linearly_implicit_tol(tol, tol).with_h0(1.0),
+        Options::tol(tol, tol).with_h0(1.0),
     ] {
         let (sol, calls, first_h) = run(&sys, 0.8, &opts);
         let (eq, ey) = errors(&sys, &sol);
@@ -143,21 +136,4 @@ fn too_large_steps_are_rejected_and_shrunk() {
         assert!(eq <= 6.0 * tol && ey <= 15.0 * tol);
         assert_eq!(sol.stats.rhs_evaluations, calls);
     }
-}
-
-/// Without error control generalized-α still needs a step.
-#[test]
-fn fixed_step_generalized_alpha_still_needs_dt() {
-    let mut s = Linear::damped();
-    let r = integrate_second_order(
-        &mut s,
-        Method::GeneralizedAlpha { rho_inf: 0.8 },
-        0.0,
-        1.0,
-        &Linear::q0(),
-        &Linear::qd0(),
-        &Options::default(),
-        Hooks::new(),
-    );
-    assert!(r.is_err());
 }

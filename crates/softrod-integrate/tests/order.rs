@@ -10,14 +10,10 @@ use softrod_integrate::{Hooks, Method, Options, integrate, integrate_second_orde
 
 const T1: f64 = 4.0;
 
-/// Error at `T1` with fixed step `h` (adaptive methods run non-adaptively).
+/// Error at `T1` with fixed step `h` (adaptive methods too).
 fn fixed_error(sys: &Linear, method: Method, h: f64) -> f64 {
     let mut s = sys.clone();
-    let opts = Options {
-        dt: Some(h),
-        adaptive: false,
-        ..Options::default()
-    };
+    let opts = Options::fixed(h);
     let sol = integrate_second_order(
         &mut s,
         method,
@@ -74,11 +70,7 @@ fn rosw34_is_third_order_on_a_non_autonomous_problem() {
     // ∂f/∂t enters through the γᵢ terms; a wrong one drops the order.
     let err = |h: f64| {
         let mut s = Forced { w: 2.0, big_w: 1.3 };
-        let opts = Options {
-            dt: Some(h),
-            adaptive: false,
-            ..Options::default()
-        };
+        let opts = Options::fixed(h);
         let sol = integrate_second_order(
             &mut s,
             Method::Rosw34,
@@ -114,11 +106,7 @@ fn first_order_path_with_finite_difference_jacobian_matches() {
     let sys = Linear::damped();
     let run = |h: f64| {
         let mut s = LinearFirstOrder(sys.a());
-        let opts = Options {
-            dt: Some(h),
-            adaptive: false,
-            ..Options::default()
-        };
+        let opts = Options::fixed(h);
         let sol = integrate(
             &mut s,
             Method::Rosw34,

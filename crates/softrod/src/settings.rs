@@ -2,7 +2,7 @@
 //! spacing — with the recommended defaults, which live here (not in a
 //! front end) so that every user of the library gets the same ones.
 
-use softrod_integrate::{Method, Options, RodJacobian};
+use softrod_integrate::{Iteration, Method, Options, RodJacobian, StepControl};
 use softrod_scene::{Integrator, Run};
 
 use crate::error::Error;
@@ -122,35 +122,41 @@ impl Settings {
     pub fn method_and_options(&self, duration: f64) -> Result<(Method, Options), Error> {
         self.validate()?;
         let fixed_steps = (duration / self.dt).ceil();
-        let (method, mut opts) = match self.integrator {
-            Integrator::Rk4 => (Method::Rk4, Options::fixed(self.dt)),
-            Integrator::GeneralizedAlpha => (
-                Method::GeneralizedAlpha {
-                    rho_inf: GENERALIZED_ALPHA_RHO_INF,
-                },
-                Options {
-                    rtol: self.rtol,
-                    atol: self.atol,
-                    error_control: self.error_control,
-                    ..Options::fixed(self.dt)
-                },
-            ),
-            Integrator::Dopri5 => (Method::Dopri5, Options::tol(self.rtol, self.atol)),
-            Integrator::Rosenbrock => (Method::Rosw34, Options::tol(self.rtol, self.atol)),
+        let method = match self.integrator {
+            Integrator::Rk4 => Method::Rk4,
+            Integrator::GeneralizedAlpha => Method::GeneralizedAlpha {
+                rho_inf: GENERALIZED_ALPHA_RHO_INF,
+            },
+            Integrator::Dopri5 => Method::Dopri5,
+            Integrator::Rosenbrock => Method::Rosw34,
             Integrator::Radau5 => unreachable!("rejected by validate"),
+        };
+        // Generalized-α steps with the fixed dt unless error control is on;
+        // rk4 always does; the other methods are adaptive with dt as their
+        // first step.
+        let adaptive = match self.integrator {
+            Integrator::Rk4 => false,
+            Integrator::GeneralizedAlpha => self.error_control,
+            _ => true,
+        };
+        let mut opts = Options {
+            rtol: self.rtol,
+            atol: self.atol,
+            step: if adaptive {
+                StepControl::Adaptive {
+                    h0: Some(self.dt.min(duration)),
+                }
+            } else {
+                StepControl::Fixed(self.dt)
+            },
+            ..Options::default()
         };
         if self.integrator == Integrator::GeneralizedAlpha && self.linearly_implicit {
             // One iteration with W = M⁻¹K, always accepted: the IMEX scheme
-            // of `Options::linearly_implicit` (ρ∞ < 1, which its explicit
-            // remainder needs).
-            let li = Options::linearly_implicit(self.dt);
-            opts.newton_tol = li.newton_tol;
-            opts.newton_max_iter = li.newton_max_iter;
+            // (ρ∞ < 1, which its explicit remainder needs).
+            opts.iteration = Iteration::LinearlyImplicit;
         }
-        let controlled = self.integrator == Integrator::GeneralizedAlpha && self.error_control;
-        if self.integrator.is_adaptive() || controlled {
-            // dt is the first step of adaptive methods.
-            opts.dt = Some(self.dt.min(duration));
+        if adaptive {
             opts.max_steps = 50_000_000;
         } else {
             if fixed_steps.is_nan() || fixed_steps >= 1e12 {
@@ -219,24 +225,21 @@ mod tests {
         }
         .method_and_options(1.0)
         .unwrap();
-        assert!(o.error_control);
-        assert_eq!((o.dt, o.rtol), (Some(1e-3), 1e-4));
+        assert_eq!(o.step, StepControl::Adaptive { h0: Some(1e-3) });
+        assert_eq!(o.rtol, 1e-4);
         assert!(o.max_steps > 1_000_000);
         let (_, o) = base.method_and_options(1.0).unwrap();
-        assert!(!o.error_control);
+        assert_eq!(o.step, StepControl::Fixed(1e-3));
         assert_eq!(o.max_steps, 2 * 1000 + 100);
-        assert!(o.newton_max_iter > 1);
+        assert!(matches!(o.iteration, Iteration::Newton { max_iter, .. } if max_iter > 1));
         let (_, o) = Settings {
             linearly_implicit: true,
             ..base
         }
         .method_and_options(1.0)
         .unwrap();
-        let li = Options::linearly_implicit(1e-3);
-        assert_eq!(
-            (o.newton_max_iter, o.newton_tol),
-            (li.newton_max_iter, li.newton_tol)
-        );
+        assert_eq!(o.iteration, Iteration::LinearlyImplicit);
+        assert_eq!(o.step, StepControl::Fixed(1e-3));
     }
 
     /// A duration that would need more steps than a machine can count is

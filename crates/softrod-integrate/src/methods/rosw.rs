@@ -29,11 +29,13 @@
 
 use nalgebra::DVector;
 
-use crate::driver::{Stepper, check_underflow, clip_step, wrms};
+use crate::control::{check_underflow, clip_step, non_finite_trial, rejection_reason, wrms};
 use crate::error::{IntegrateError, first_non_finite};
-use crate::options::{Options, Stats};
-use crate::state::{StepState, check_dt_if_fixed, non_finite_trial, rejection_reason};
-use crate::system::{Problem, sys_err};
+use crate::options::Options;
+use crate::problem::{Problem, sys_err};
+use crate::solution::Stats;
+use crate::state::StepState;
+use crate::stepper::Stepper;
 
 const S: usize = 4;
 /// Diagonal `γ` of ROS34PW2.
@@ -254,7 +256,6 @@ impl<P: Problem> Stepper<P> for Rosw34 {
         opts: &Options,
         stats: &mut Stats,
     ) -> Result<(), IntegrateError> {
-        check_dt_if_fixed(opts)?;
         self.s.start(t0, y0);
         self.system_changed(p, stats)?;
         self.h_next = self
@@ -271,6 +272,7 @@ impl<P: Problem> Stepper<P> for Rosw34 {
         stats: &mut Stats,
     ) -> Result<(), IntegrateError> {
         let mut h = self.h_next.min(opts.h_max);
+        let adaptive = opts.is_adaptive();
         let mut rejected_before = false;
         // ∂f/∂t at (t, y), once per step.
         self.ft_valid = false;
@@ -311,7 +313,7 @@ impl<P: Problem> Stepper<P> for Rosw34 {
                     self.lu_shift = f64::NAN;
                     if self.jac_age != 0 {
                         self.jac_age = usize::MAX;
-                    } else if !opts.adaptive {
+                    } else if !adaptive {
                         return Err(IntegrateError::SingularMatrix {
                             t: self.s.t,
                             h,
@@ -327,12 +329,12 @@ impl<P: Problem> Stepper<P> for Rosw34 {
             }
             let t_new = if last { t_end } else { self.s.t + h };
             let err = self.attempt(p, h, t_new, opts, stats)?;
-            let accept = if opts.adaptive {
+            let accept = if adaptive {
                 err <= 1.0
             } else {
                 err.is_finite()
             };
-            if !opts.adaptive && !accept {
+            if !adaptive && !accept {
                 return Err(non_finite_trial(&self.ynew, t_new, h));
             }
             if accept {
@@ -342,7 +344,7 @@ impl<P: Problem> Stepper<P> for Rosw34 {
                 p.rhs(t_new, &self.ynew, &mut s.f)
                     .map_err(sys_err(t_new, h, "rhs"))?;
                 stats.rhs_evaluations += 1;
-                if first_non_finite(s.f.as_slice()).is_some() && opts.adaptive {
+                if first_non_finite(s.f.as_slice()).is_some() && adaptive {
                     // Treat like a non-finite trial: reject and shrink.
                     std::mem::swap(&mut s.f_prev, &mut s.f);
                     stats.rejected_steps += 1;
@@ -353,7 +355,7 @@ impl<P: Problem> Stepper<P> for Rosw34 {
                 }
                 s.accept(&mut self.ynew, t_new, h, stats);
                 self.jac_age = self.jac_age.saturating_add(1);
-                self.h_next = if opts.adaptive {
+                self.h_next = if adaptive {
                     let fac = (SAFETY * err.max(1e-300).powf(-1.0 / 3.0)).clamp(FAC_MIN, FAC_MAX);
                     let fac = if rejected_before { fac.min(1.0) } else { fac };
                     // Keep h (and the LU) for small increases.
@@ -363,7 +365,7 @@ impl<P: Problem> Stepper<P> for Rosw34 {
                         h * fac
                     }
                 } else {
-                    opts.dt.unwrap_or(h)
+                    opts.fixed_dt().unwrap_or(h)
                 };
                 return Ok(());
             }

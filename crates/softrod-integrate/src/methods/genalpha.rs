@@ -27,11 +27,14 @@
 
 use nalgebra::DVector;
 
-use crate::driver::{Stepper, check_underflow, clip_step, initial_step};
+use crate::control::{check_finite, check_underflow, clip_step, initial_step};
 use crate::error::{IntegrateError, first_non_finite};
-use crate::options::{Options, Stats};
-use crate::state::{StepState, check_finite};
-use crate::system::{Problem, SecondOrderProblem, SecondOrderSystem, sys_err};
+use crate::options::{Iteration, Options, StepControl};
+use crate::problem::{Problem, SecondOrderProblem, sys_err};
+use crate::solution::Stats;
+use crate::state::StepState;
+use crate::stepper::Stepper;
+use crate::system::SecondOrderSystem;
 
 /// The four generalized-α parameters from `ρ∞` (Chung–Hulbert 1993, eqs. 25,
 /// 17, 20): returns `(α_m, α_f, β, γ)`.
@@ -175,7 +178,7 @@ impl GeneralizedAlpha {
         Ok(())
     }
 
-    /// One error-controlled step (see [`Method::GeneralizedAlpha`](crate::Method)).
+    /// One error-controlled step (see [`Method::GeneralizedAlpha`](crate::Method::GeneralizedAlpha)).
     fn step_controlled<S: SecondOrderSystem>(
         &mut self,
         p: &mut SecondOrderProblem<'_, S>,
@@ -301,7 +304,8 @@ impl GeneralizedAlpha {
         self.x.copy_from(&self.qdd);
         let mut norm_prev = f64::NAN;
         let n = self.q.len();
-        for k in 1..=opts.newton_max_iter.max(1) {
+        let max_iter = opts.iteration.max_iter();
+        for k in 1..=max_iter {
             self.newmark(h);
             // Δ = (I − β'Jq − γ'Jv)⁻¹ (a(qₙ₊₁, q̇ₙ₊₁) − x), into g.
             p.newmark_correction(t_new, &self.q_new, &self.v_new, &self.x, &mut self.g)
@@ -326,7 +330,14 @@ impl GeneralizedAlpha {
             if !norm.is_finite() || first_non_finite(self.x.as_slice()).is_some() {
                 return Ok(Err(("non-finite iterate", k)));
             }
-            let tol = opts.newton_tol;
+            let tol = match opts.iteration {
+                // One iteration, accepted whatever its size.
+                Iteration::LinearlyImplicit => {
+                    self.newmark(h);
+                    return Ok(Ok(()));
+                }
+                Iteration::Newton { tol, .. } => tol,
+            };
             if k == 1 {
                 if norm <= 1e-2 * tol {
                     self.newmark(h);
@@ -344,7 +355,7 @@ impl GeneralizedAlpha {
             }
             norm_prev = norm;
         }
-        Ok(Err(("max iterations", opts.newton_max_iter)))
+        Ok(Err(("max iterations", max_iter)))
     }
 }
 
@@ -358,13 +369,6 @@ impl<S: SecondOrderSystem> Stepper<SecondOrderProblem<'_, S>> for GeneralizedAlp
         opts: &Options,
         stats: &mut Stats,
     ) -> Result<(), IntegrateError> {
-        if opts.dt.is_none() && !opts.error_control {
-            return Err(IntegrateError::InvalidInput {
-                what:
-                    "generalized-α needs a fixed step: set Options::dt (or Options::error_control)"
-                        .into(),
-            });
-        }
         let n = p.n();
         self.s.start(t0, y0);
         self.q.copy_from(&y0.rows(0, n));
@@ -372,10 +376,10 @@ impl<S: SecondOrderSystem> Stepper<SecondOrderProblem<'_, S>> for GeneralizedAlp
         self.system_changed(p, stats)?;
         self.acc.copy_from(&self.qdd);
         self.err_prev = 1.0;
-        self.h_try = match opts.dt {
-            Some(dt) => dt.min(opts.h_max),
+        self.h_try = match opts.step {
+            StepControl::Fixed(h) | StepControl::Adaptive { h0: Some(h) } => h.min(opts.h_max),
             // Once per run: scratch of the first-order dimension.
-            None => {
+            StepControl::Adaptive { h0: None } => {
                 let mut scratch = (DVector::zeros(2 * n), DVector::zeros(2 * n));
                 initial_step(
                     p,
@@ -399,10 +403,10 @@ impl<S: SecondOrderSystem> Stepper<SecondOrderProblem<'_, S>> for GeneralizedAlp
         opts: &Options,
         stats: &mut Stats,
     ) -> Result<(), IntegrateError> {
-        if opts.error_control {
-            return self.step_controlled(p, t_end, opts, stats);
-        }
-        let dt = opts.dt.unwrap_or(self.h_try).min(opts.h_max);
+        let dt = match opts.step {
+            StepControl::Adaptive { .. } => return self.step_controlled(p, t_end, opts, stats),
+            StepControl::Fixed(dt) => dt.min(opts.h_max),
+        };
         let mut h = self.h_try.min(dt);
         loop {
             let t = self.s.t;
@@ -413,7 +417,7 @@ impl<S: SecondOrderSystem> Stepper<SecondOrderProblem<'_, S>> for GeneralizedAlp
                     IntegrateError::NewtonNonConvergence {
                         t,
                         h,
-                        iterations: opts.newton_max_iter,
+                        iterations: opts.iteration.max_iter(),
                         what: "step size underflow after repeated Newton failures",
                     }
                 } else {

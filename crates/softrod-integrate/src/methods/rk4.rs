@@ -9,11 +9,13 @@
 
 use nalgebra::DVector;
 
-use crate::driver::{Stepper, clip_step};
+use crate::control::{check_finite, clip_step};
 use crate::error::IntegrateError;
-use crate::options::{Options, Stats};
-use crate::state::{StepState, check_finite};
-use crate::system::{Problem, sys_err};
+use crate::options::Options;
+use crate::problem::{Problem, sys_err};
+use crate::solution::Stats;
+use crate::state::StepState;
+use crate::stepper::Stepper;
 
 /// RK4 state and buffers (allocated once).
 pub(crate) struct Rk4 {
@@ -42,14 +44,9 @@ impl<P: Problem> Stepper<P> for Rk4 {
         t0: f64,
         y0: &DVector<f64>,
         _t1: f64,
-        opts: &Options,
+        _opts: &Options,
         stats: &mut Stats,
     ) -> Result<(), IntegrateError> {
-        if opts.dt.is_none() {
-            return Err(IntegrateError::InvalidInput {
-                what: "RK4 needs a fixed step: set Options::dt".into(),
-            });
-        }
         self.s.start(t0, y0);
         self.s.refresh_derivative(p, stats)
     }
@@ -61,7 +58,8 @@ impl<P: Problem> Stepper<P> for Rk4 {
         opts: &Options,
         stats: &mut Stats,
     ) -> Result<(), IntegrateError> {
-        let dt = opts.dt.unwrap_or(f64::INFINITY).min(opts.h_max);
+        // Options::validate allows RK4 fixed steps only.
+        let dt = opts.fixed_dt().unwrap_or(f64::INFINITY).min(opts.h_max);
         let t = self.s.t;
         let (h, last) = clip_step(t, dt, t_end);
         let err = |what| sys_err(t, h, what);

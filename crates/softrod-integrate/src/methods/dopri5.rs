@@ -14,11 +14,13 @@
 
 use nalgebra::DVector;
 
-use crate::driver::{Stepper, check_underflow, clip_step, wrms};
+use crate::control::{check_underflow, clip_step, non_finite_trial, rejection_reason, wrms};
 use crate::error::{IntegrateError, first_non_finite};
-use crate::options::{Options, Stats};
-use crate::state::{StepState, check_dt_if_fixed, non_finite_trial, rejection_reason};
-use crate::system::{Problem, sys_err};
+use crate::options::{Options, StepControl};
+use crate::problem::{Problem, sys_err};
+use crate::solution::Stats;
+use crate::state::StepState;
+use crate::stepper::Stepper;
 
 const C2: f64 = 1.0 / 5.0;
 const C3: f64 = 3.0 / 10.0;
@@ -161,7 +163,6 @@ impl<P: Problem> Stepper<P> for Dopri5 {
         opts: &Options,
         stats: &mut Stats,
     ) -> Result<(), IntegrateError> {
-        check_dt_if_fixed(opts)?;
         self.s.start(t0, y0);
         self.err_prev = 1e-4;
         self.s.refresh_derivative(p, stats)?;
@@ -186,12 +187,12 @@ impl<P: Problem> Stepper<P> for Dopri5 {
             check_underflow(self.s.t, h, opts, "error test")?;
             let t_new = if last { t_end } else { self.s.t + h };
             let err = self.attempt(p, h, t_new, opts, stats)?;
-            if !opts.adaptive {
+            if let StepControl::Fixed(dt) = opts.step {
                 if !err.is_finite() {
                     return Err(non_finite_trial(&self.ynew, t_new, h));
                 }
                 self.accept(h, t_new, stats);
-                self.h_next = opts.dt.unwrap_or(h);
+                self.h_next = dt;
                 return Ok(());
             }
             if err <= 1.0 {

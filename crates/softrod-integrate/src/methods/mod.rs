@@ -1,0 +1,13 @@
+//! The steppers, one per method. Each builds on the step control below it
+//! (`control`, `state`, `stepper`); the driver above picks one.
+
+mod dopri5;
+mod genalpha;
+mod rk4;
+mod rosw;
+
+pub(crate) use dopri5::Dopri5;
+pub(crate) use genalpha::GeneralizedAlpha;
+pub use genalpha::generalized_alpha_parameters;
+pub(crate) use rk4::Rk4;
+pub(crate) use rosw::Rosw34;

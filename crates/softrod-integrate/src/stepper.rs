@@ -1,0 +1,58 @@
+//! What the driver needs from a method: its state between steps and one
+//! accepted step at a time.
+
+use nalgebra::DVector;
+
+use crate::error::IntegrateError;
+use crate::options::Options;
+use crate::problem::Problem;
+use crate::solution::Stats;
+use crate::state::StepState;
+
+/// One method's state between steps.
+pub(crate) trait Stepper<P: Problem> {
+    /// Sets the initial state (and evaluates what the first step needs).
+    fn init(
+        &mut self,
+        p: &mut P,
+        t0: f64,
+        y0: &DVector<f64>,
+        t1: f64,
+        opts: &Options,
+        stats: &mut Stats,
+    ) -> Result<(), IntegrateError>;
+    /// Takes one accepted step, never beyond `t_end` (landing on it exactly
+    /// when it is reached).
+    fn step(
+        &mut self,
+        p: &mut P,
+        t_end: f64,
+        opts: &Options,
+        stats: &mut Stats,
+    ) -> Result<(), IntegrateError>;
+    /// The shared time/state/derivative bookkeeping.
+    fn state(&self) -> &StepState;
+    /// Current time.
+    fn t(&self) -> f64 {
+        self.state().t
+    }
+    /// Time at the start of the last step.
+    fn t_prev(&self) -> f64 {
+        self.state().t_prev
+    }
+    /// Current state.
+    fn y(&self) -> &DVector<f64> {
+        &self.state().y
+    }
+    /// Size of the last step.
+    fn h_last(&self) -> f64 {
+        self.state().h
+    }
+    /// Dense output at `t ∈ [t_prev, t]` into `out` (cubic Hermite unless
+    /// the method has its own).
+    fn dense(&self, t: f64, out: &mut DVector<f64>) {
+        self.state().hermite_dense(t, out);
+    }
+    /// The user changed the system: drop cached derivatives/Jacobians.
+    fn system_changed(&mut self, p: &mut P, stats: &mut Stats) -> Result<(), IntegrateError>;
+}
