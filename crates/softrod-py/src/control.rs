@@ -14,7 +14,7 @@ use nalgebra::DVector;
 use softrod::Settings;
 use softrod::dynamics::{DynamicsError, Model, RodSpec, energies, forward_dynamics};
 use softrod::integrate::{
-    Control, Hooks, IntegrateError, Options, RodSystem, SecondOrderSystem, Status,
+    Control, Hooks, IntegrateError, Options, RodSystem, SecondOrderSystem, Status, StepControl,
     integrate_second_order,
 };
 use softrod::kinematics::RodKinematics;
@@ -321,8 +321,10 @@ pub fn simulate_controlled(
         }
         let mut opts: Options = base_opts.clone();
         opts.t_eval = Some(times[first..next_output].to_vec());
-        if let Some(dt) = opts.dt {
-            opts.dt = Some(dt.min(t1 - t0));
+        if let StepControl::Adaptive { h0: Some(h) } = opts.step {
+            opts.step = StepControl::Adaptive {
+                h0: Some(h.min(t1 - t0)),
+            };
         }
         let failure: std::cell::RefCell<Option<ControlError>> = std::cell::RefCell::new(None);
         let rec_cell = std::cell::RefCell::new(&mut rec);

@@ -97,7 +97,7 @@ def test_simulate_many_errors_name_the_run():
     bad = softrod.Settings(integrator="rk4", dt=0.01)  # far past rk4's stability limit
     sims[1].settings = bad
     with pytest.raises(softrod.SimulationError) as e:
-        softrod.simulate_many(sims, 1.0, threads=2)
+        softrod.simulate_many(sims, 0.05, threads=2)
     assert "in run 1 of simulate_many" in e.value.__notes__
     assert e.value.time is not None
 
