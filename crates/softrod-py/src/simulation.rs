@@ -326,6 +326,8 @@ fn modes_py(py: Python<'_>, m: &softrod::dynamics::Modes, eq: &'static str, q: &
 pub struct Simulation {
     pub(crate) sim: softrod::Simulation,
     warnings: Vec<String>,
+    /// The scene's `[run] duration` [s] (None when built in Python).
+    duration: Option<f64>,
     /// Buffers for the lower-crate evaluations the facade does not offer.
     data: Data,
     /// The cable-free model for inputs `u`, built on first use.
@@ -339,6 +341,7 @@ impl Clone for Simulation {
         Self {
             sim: self.sim.clone(),
             warnings: self.warnings.clone(),
+            duration: self.duration,
             data: self.data.clone(),
             inputs: self.inputs.clone(),
             stepper: self.stepper.clone(),
@@ -347,11 +350,16 @@ impl Clone for Simulation {
 }
 
 impl Simulation {
-    pub(crate) fn wrap(sim: softrod::Simulation, warnings: Vec<String>) -> Self {
+    pub(crate) fn wrap(
+        sim: softrod::Simulation,
+        warnings: Vec<String>,
+        duration: Option<f64>,
+    ) -> Self {
         let data = Data::new(sim.model());
         Self {
             sim,
             warnings,
+            duration,
             data,
             inputs: None,
             stepper: None,
@@ -482,7 +490,7 @@ impl Simulation {
                 ..sim.settings().clone()
             })
             .map_err(to_py)?;
-            Ok(Self::wrap(sim, Vec::new()))
+            Ok(Self::wrap(sim, Vec::new(), None))
         })
     }
 
@@ -504,7 +512,7 @@ impl Simulation {
                 }
                 Err(_) => None,
             };
-            let (sim, _scene, warnings) = match text {
+            let (sim, scene, warnings) = match text {
                 Some(t) => softrod::Simulation::from_toml(&t, "<string>"),
                 None => {
                     let path: std::path::PathBuf = scene
@@ -517,6 +525,7 @@ impl Simulation {
             Ok(Self::wrap(
                 sim,
                 warnings.iter().map(|w| w.to_string()).collect(),
+                Some(scene.run.duration),
             ))
         })
     }
@@ -531,6 +540,24 @@ impl Simulation {
     #[getter]
     fn n_cables(&self) -> usize {
         self.sim.model().n_cables()
+    }
+
+    /// The scene's `[run] duration` [s], the default of `simulate`; None
+    /// for a simulation built in Python.
+    #[getter]
+    fn duration(&self) -> Option<f64> {
+        self.duration
+    }
+
+    /// Rod lengths L [m], in model order.
+    #[getter]
+    fn rod_lengths(&self) -> Vec<f64> {
+        self.sim
+            .model()
+            .rods()
+            .iter()
+            .map(|r| r.spec.rod.length())
+            .collect()
     }
 
     /// Rod names, in model order.
@@ -926,7 +953,8 @@ impl Simulation {
         Ok(modes_py(py, &m, "given", &qv))
     }
 
-    /// Integrates `duration` seconds and returns a `softrod.Trajectory`.
+    /// Integrates `duration` seconds (default: the scene's `[run]
+    /// duration`) and returns a `softrod.Trajectory`.
     ///
     /// Keywords override the run settings for this call only:
     /// `integrator`, `rtol`, `atol`, `dt`, `output_every`, `error_control`,
@@ -948,14 +976,14 @@ impl Simulation {
     /// `control_every=None` it runs once per integrator step, so a stiff
     /// adaptive run of 1 s with ~500 steps pays it ~500 times. An exception
     /// raised by the controller ends the run and propagates.
-    #[pyo3(signature = (duration, *, output_every = None, integrator = None, rtol = None,
+    #[pyo3(signature = (duration = None, *, output_every = None, integrator = None, rtol = None,
                         atol = None, dt = None, error_control = None, linearly_implicit = None,
                         q0 = None, qdot0 = None, controller = None, control_every = None))]
     #[allow(clippy::too_many_arguments)]
     fn simulate(
         &mut self,
         py: Python<'_>,
-        duration: f64,
+        duration: Option<f64>,
         output_every: Option<f64>,
         integrator: Option<&str>,
         rtol: Option<f64>,
@@ -968,6 +996,9 @@ impl Simulation {
         controller: Option<Py<PyAny>>,
         control_every: Option<f64>,
     ) -> PyResult<Trajectory> {
+        let duration = duration.or(self.duration).ok_or_else(|| {
+            input("simulate needs a duration (this simulation has no scene [run] duration)")
+        })?;
         let mut settings = self.sim.settings().clone();
         overrides(
             &mut settings,

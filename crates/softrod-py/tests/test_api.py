@@ -215,3 +215,16 @@ def test_help_is_useful():
                 softrod.Trajectory, softrod.simulate_many, softrod.Simulation.forward_dynamics,
                 softrod.Simulation.step, softrod.Simulation.from_toml]:
         assert obj.__doc__ and len(obj.__doc__) > 60, obj
+
+
+def test_duration_defaults_to_the_scenes():
+    sim = softrod.Simulation.from_toml(scene_text(extra="[run]\nduration = 0.02\noutput_every = 0.01\n"))
+    assert sim.duration == 0.02
+    assert sim.rod_lengths == [0.5]
+    assert sim.simulate().t[-1] == 0.02
+    built = softrod.Simulation(rods=[rod(pieces=2)])
+    assert built.duration is None
+    with pytest.raises(softrod.InputError, match="needs a duration"):
+        built.simulate()
+    # Python-built simulations sample every thousandth of the run.
+    assert len(built.simulate(0.01)) == 1001
