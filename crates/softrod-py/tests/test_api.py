@@ -220,7 +220,7 @@ def test_help_is_useful():
 def test_duration_defaults_to_the_scenes():
     sim = softrod.Simulation.from_toml(scene_text(extra="[run]\nduration = 0.02\noutput_every = 0.01\n"))
     assert sim.duration == 0.02
-    assert sim.rod_lengths == [0.5]
+    assert sim.rod_lengths == pytest.approx([0.5], rel=1e-15)
     assert sim.simulate().t[-1] == 0.02
     built = softrod.Simulation(rods=[rod(pieces=2)])
     assert built.duration is None
