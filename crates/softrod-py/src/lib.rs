@@ -69,6 +69,27 @@ fn _simulate_many_timed(
     many::run_many(py, sims, duration, threads, None, None, &|_| Ok(()))
 }
 
+/// Seconds per call of the facade's `forward_dynamics` at `(q, qdot)`,
+/// `tau = 0`, timed over `calls` calls in a Rust loop: the Rust side of the
+/// Python call-overhead bench (crates/softrod-py/bench/forward_dynamics.py).
+#[pyfunction]
+fn _time_forward_dynamics(
+    sim: &mut simulation::Simulation,
+    q: Vec<f64>,
+    qdot: Vec<f64>,
+    calls: usize,
+) -> PyResult<f64> {
+    let start = std::time::Instant::now();
+    for _ in 0..calls {
+        let qdd = sim
+            .sim
+            .forward_dynamics(0.0, &q, &qdot, None)
+            .map_err(errors::to_py)?;
+        std::hint::black_box(qdd);
+    }
+    Ok(start.elapsed().as_secs_f64() / calls.max(1) as f64)
+}
+
 /// Panics inside Rust, to test that a panic reaches Python as
 /// `softrod.InternalError` (a `RuntimeError`) and not as an abort.
 #[pyfunction]
@@ -104,5 +125,6 @@ fn _softrod(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(simulate_many, m)?)?;
     m.add_function(wrap_pyfunction!(_simulate_many_timed, m)?)?;
     m.add_function(wrap_pyfunction!(_panic, m)?)?;
+    m.add_function(wrap_pyfunction!(_time_forward_dynamics, m)?)?;
     Ok(())
 }
