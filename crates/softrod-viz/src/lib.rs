@@ -1,0 +1,23 @@
+//! softrod-viz: what a person looks at after a softrod run.
+//!
+//! - [`html`]: an animated 3-D view in one self-contained HTML file (inline
+//!   WebGL, no network), from [`ViewData`].
+//! - [`plot`]: SVG figures for publication (tip trajectory, shapes, energy,
+//!   strains, cable tensions and actuator power, mode shapes), from plain
+//!   series.
+//! - [`run_dir`]: reading and writing a run directory's `shape.csv`,
+//!   `view.json` and `bodies.csv`, so a view can be rebuilt from files alone.
+//!
+//! The crate depends on no physics crate: every input is plain data in SI
+//! units and the world frame (see [`data`]).
+#![warn(missing_docs)]
+
+pub mod data;
+pub mod demo;
+pub mod decimate;
+pub mod error;
+pub mod html;
+
+pub use data::{BodyShape, BodyTrack, CableTrack, Pose, RodTrack, ViewData};
+pub use error::VizError;
+pub use html::{ViewOptions, ViewStats, render_html, write_html};
