@@ -315,6 +315,7 @@
   // ---------- camera ----------
   var cam = { az: 0, el: 0, dist: 1, target: center.slice() };
   function fit() {
+    cam.moved = false;
     var ex = Math.abs(dot(sub(hi, lo), e1)), ey = Math.abs(dot(sub(hi, lo), e2));
     // Look across the plane of widest motion, turned 28° for depth.
     cam.az = (ex >= ey ? -90 + 28 : 180 - 28) * Math.PI / 180;
@@ -458,6 +459,7 @@
     if (!drag) { return; }
     var dx = e.clientX - drag.x, dy = e.clientY - drag.y;
     drag.x = e.clientX; drag.y = e.clientY;
+    cam.moved = true;
     if (drag.pan) {
       var eye = eyePos(), fwd = unit(sub(cam.target, eye)), right = unit(cross(fwd, up)), u2 = cross(right, fwd);
       var per = 2 * cam.dist * Math.tan(FOV / 2) / Math.max(1, canvas.clientHeight);
@@ -470,12 +472,15 @@
   });
   canvas.addEventListener('wheel', function (e) {
     e.preventDefault();
+    cam.moved = true;
     cam.dist *= Math.exp(Math.max(-0.5, Math.min(0.5, e.deltaY * 0.0015)));
     cam.dist = Math.max(sceneR * 1e-3, Math.min(sceneR * 1e3, cam.dist));
     draw();
   }, { passive: false });
   canvas.addEventListener('dblclick', function () { fit(); draw(); });
-  window.addEventListener('resize', function () { resize(); draw(); });
+  // Until the user moves the camera, a resize refits the view (a window
+  // that opens small and grows shows the same framing as one opened large).
+  window.addEventListener('resize', function () { resize(); if (!cam.moved) { fit(); } draw(); });
   function resize() {
     // The stage ends above the control bar, so the fitted view is not hidden under it.
     var stage = document.getElementById('stage');
@@ -688,6 +693,13 @@
 
     var tt = t.toFixed(decimals);
     timeEl.textContent = 't = ' + tt + ' s / ' + t1.toFixed(decimals) + ' s  frame ' + String(frame).padStart(width, ' ') + '/' + (nFrames - 1);
+    // Where each rod's tip is on screen (CSS pixels): lets a test compare
+    // the drawn picture with the data.
+    status.setAttribute('data-tips', rods.map(function (r) {
+      var p = project(mvp, r.tip);
+      return p ? (p[0] / dpr).toFixed(1) + ',' + (p[1] / dpr).toFixed(1) : 'behind';
+    }).join(';'));
+    status.setAttribute('data-viewport', window.innerWidth + 'x' + window.innerHeight);
     status.setAttribute('data-frame', String(frame));
     status.setAttribute('data-ready', '1');
   }
@@ -699,6 +711,10 @@
     return m[1] === 'last' ? nFrames - 1 : Number(m[1]);
   }
   window.addEventListener('hashchange', function () { var k = hashFrame(); if (k !== null) { setPlaying(false); setFrame(k); } });
+  // Hash options (for links and tests): frame=N|last, trace=0, grid=0, axes=1.
+  if (/(?:^#|&)trace=0/.test(location.hash)) { cbTrace.checked = false; }
+  if (/(?:^#|&)grid=0/.test(location.hash)) { cbGrid.checked = false; }
+  if (/(?:^#|&)axes=1/.test(location.hash)) { cbAxes.checked = true; }
   resize();
   fit();
   var start = hashFrame();
