@@ -17,6 +17,7 @@ pub mod demo;
 pub mod decimate;
 pub mod error;
 pub mod html;
+pub mod run_dir;
 
 pub use data::{BodyShape, BodyTrack, CableTrack, Pose, RodTrack, ViewData};
 pub use error::VizError;
