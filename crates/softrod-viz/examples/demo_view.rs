@@ -6,7 +6,9 @@ use softrod_viz::demo::SwingingRods;
 use softrod_viz::{ViewOptions, write_html};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let dir = std::env::args().nth(1).unwrap_or_else(|| "target/viz-demo".into());
+    let dir = std::env::args()
+        .nth(1)
+        .unwrap_or_else(|| "target/viz-demo".into());
     std::fs::create_dir_all(&dir)?;
     let cases = [
         ("one_rod", SwingingRods::default()),

@@ -34,7 +34,12 @@ pub fn arc_frame(base: &Pose, kappa: f64, phi: f64, s: f64) -> Pose {
         one_minus_cos_over * axe[2],
     ];
     let half = 0.5 * th;
-    let qa = [half.cos(), 0.0, half.sin() * phi.cos(), half.sin() * phi.sin()];
+    let qa = [
+        half.cos(),
+        0.0,
+        half.sin() * phi.cos(),
+        half.sin() * phi.sin(),
+    ];
     Pose {
         position: base.apply(local),
         rotation: quat_mul(base.rotation, qa),
@@ -98,68 +103,70 @@ impl SwingingRods {
             cable,
             body,
         } = *self;
-    let times_v: Vec<f64> = (0..times)
-        .map(|k| duration * k as f64 / (times.max(2) - 1) as f64)
-        .collect();
-    let mut view =
-            ViewData::new(format!("demo: {rods} swinging rods"), times_v.clone());
-    for j in 0..rods {
-        let ang = std::f64::consts::TAU * j as f64 / rods.max(1) as f64;
-        let spacing = if rods > 1 { 0.6 * length } else { 0.0 };
-        // Base pointing down (local x → world −z), local z → world x.
-        let down = [
-            std::f64::consts::FRAC_1_SQRT_2,
-            0.0,
-            std::f64::consts::FRAC_1_SQRT_2,
-            0.0,
-        ];
-        let spin = [(0.5 * ang).cos(), (0.5 * ang).sin(), 0.0, 0.0];
-        let base = Pose {
-            position: [spacing * ang.cos(), spacing * ang.sin(), 0.0],
-            rotation: quat_mul(down, spin),
-        };
-        let s: Vec<f64> = (0..samples)
-            .map(|i| length * i as f64 / (samples - 1) as f64)
+        let times_v: Vec<f64> = (0..times)
+            .map(|k| duration * k as f64 / (times.max(2) - 1) as f64)
             .collect();
-        let r: Vec<f64> = s.iter().map(|v| radius * (1.0 - 0.5 * v / length)).collect();
-        let frames = times_v
-            .iter()
-            .map(|t| {
-                let kappa = std::f64::consts::PI / length
-                    * (std::f64::consts::TAU * t / duration + j as f64).sin();
-                s.iter()
-                    .map(|sv| arc_frame(&base, kappa, 0.0, *sv))
-                    .collect()
-            })
-            .collect();
-        view.rods.push(RodTrack {
-            name: format!("rod {j}"),
-            s,
-            radius: r,
-            frames,
-            tip_trace: None,
-        });
-    }
-    if cable && !view.rods.is_empty() {
-        let rod = &view.rods[0];
-        let path = [[0.0, 0.0, 0.8 * radius], [length, 0.0, 0.4 * radius]];
-        view.cables.push(CableTrack {
-            name: "cable 0".into(),
-            points: routed_cable(rod, &path),
-        });
-    }
-    if body && !view.rods.is_empty() {
-        let rod = &view.rods[0];
-        let poses = rod.frames.iter().map(|f| f[f.len() - 1]).collect();
-        view.bodies.push(BodyTrack {
-            name: "tip mass".into(),
-            shape: BodyShape::Sphere {
-                radius: 2.0 * radius,
-            },
-            poses,
-        });
-    }
-    view
+        let mut view = ViewData::new(format!("demo: {rods} swinging rods"), times_v.clone());
+        for j in 0..rods {
+            let ang = std::f64::consts::TAU * j as f64 / rods.max(1) as f64;
+            let spacing = if rods > 1 { 0.6 * length } else { 0.0 };
+            // Base pointing down (local x → world −z), local z → world x.
+            let down = [
+                std::f64::consts::FRAC_1_SQRT_2,
+                0.0,
+                std::f64::consts::FRAC_1_SQRT_2,
+                0.0,
+            ];
+            let spin = [(0.5 * ang).cos(), (0.5 * ang).sin(), 0.0, 0.0];
+            let base = Pose {
+                position: [spacing * ang.cos(), spacing * ang.sin(), 0.0],
+                rotation: quat_mul(down, spin),
+            };
+            let s: Vec<f64> = (0..samples)
+                .map(|i| length * i as f64 / (samples - 1) as f64)
+                .collect();
+            let r: Vec<f64> = s
+                .iter()
+                .map(|v| radius * (1.0 - 0.5 * v / length))
+                .collect();
+            let frames = times_v
+                .iter()
+                .map(|t| {
+                    let kappa = std::f64::consts::PI / length
+                        * (std::f64::consts::TAU * t / duration + j as f64).sin();
+                    s.iter()
+                        .map(|sv| arc_frame(&base, kappa, 0.0, *sv))
+                        .collect()
+                })
+                .collect();
+            view.rods.push(RodTrack {
+                name: format!("rod {j}"),
+                s,
+                radius: r,
+                frames,
+                tip_trace: None,
+            });
+        }
+        if cable && !view.rods.is_empty() {
+            let rod = &view.rods[0];
+            let path = [[0.0, 0.0, 0.8 * radius], [length, 0.0, 0.4 * radius]];
+            view.cables.push(CableTrack {
+                name: "cable 0".into(),
+                points: routed_cable(rod, &path),
+            });
+        }
+        if body && !view.rods.is_empty() {
+            let rod = &view.rods[0];
+            let poses = rod.frames.iter().map(|f| f[f.len() - 1]).collect();
+            view.bodies.push(BodyTrack {
+                name: "tip mass".into(),
+                shape: BodyShape::Sphere {
+                    radius: 2.0 * radius,
+                },
+                poses,
+            });
+        }
+        view
     }
 }
 

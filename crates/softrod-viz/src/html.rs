@@ -173,8 +173,14 @@ impl Quantizer {
             rod.frames.iter().flatten().for_each(|f| add(&f.position));
             rod.tip_trace.iter().flatten().for_each(&mut add);
         }
-        d.cables.iter().flat_map(|c| c.points.iter().flatten()).for_each(&mut add);
-        d.bodies.iter().flat_map(|b| &b.poses).for_each(|p| add(&p.position));
+        d.cables
+            .iter()
+            .flat_map(|c| c.points.iter().flatten())
+            .for_each(&mut add);
+        d.bodies
+            .iter()
+            .flat_map(|b| &b.poses)
+            .for_each(|p| add(&p.position));
         let origin = [0, 1, 2].map(|j| 0.5 * (lo[j] + hi[j]));
         let extent = (0..3).map(|j| 0.5 * (hi[j] - lo[j])).fold(0.0, f64::max);
         let extent = if extent > 0.0 { extent } else { 1.0 };

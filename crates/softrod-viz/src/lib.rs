@@ -13,10 +13,11 @@
 #![warn(missing_docs)]
 
 pub mod data;
-pub mod demo;
 pub mod decimate;
+pub mod demo;
 pub mod error;
 pub mod html;
+pub mod plot;
 pub mod run_dir;
 
 pub use data::{BodyShape, BodyTrack, CableTrack, Pose, RodTrack, ViewData};

@@ -243,7 +243,11 @@ fn complete(path: &Path, line: u64, rods: &[RodShape], n: usize, t: f64) -> Resu
             return Err(csv_err(
                 path,
                 line,
-                format!("rod {:?} has {have} of its {} samples at t = {t}", r.name, r.s.len()),
+                format!(
+                    "rod {:?} has {have} of its {} samples at t = {t}",
+                    r.name,
+                    r.s.len()
+                ),
             ));
         }
     }
@@ -299,7 +303,10 @@ pub fn read_shape_csv(path: &Path) -> Result<ShapeData, VizError> {
             return Err(csv_err(
                 path,
                 line,
-                format!("rod {name:?} has no rows at t = {}", times[rod.frames.len()]),
+                format!(
+                    "rod {name:?} has no rows at t = {}",
+                    times[rod.frames.len()]
+                ),
             ));
         }
         if rod.frames.len() == k {
@@ -360,7 +367,10 @@ pub fn read_bodies_csv(path: &Path) -> Result<(Vec<f64>, Vec<(String, Vec<Pose>)
             return Err(csv_err(
                 path,
                 line,
-                format!("body {name:?}: {} poses before t = {t}, expected {k}", bodies[b].1.len()),
+                format!(
+                    "body {name:?}: {} poses before t = {t}, expected {k}",
+                    bodies[b].1.len()
+                ),
             ));
         }
         bodies[b].1.push(pose_of(&v));
@@ -575,7 +585,9 @@ pub fn view_from_dir(dir: &Path) -> Result<ViewData, VizError> {
     if !spec.bodies.is_empty() {
         let path = dir.join(BODIES_CSV);
         let (times, poses) = read_bodies_csv(&path)?;
-        if times.len() != view.times.len() || !times.iter().zip(&view.times).all(|(a, b)| same(*a, *b)) {
+        if times.len() != view.times.len()
+            || !times.iter().zip(&view.times).all(|(a, b)| same(*a, *b))
+        {
             return Err(csv_err(
                 &path,
                 0,
@@ -588,7 +600,11 @@ pub fn view_from_dir(dir: &Path) -> Result<ViewData, VizError> {
         }
         for b in &spec.bodies {
             let p = poses.iter().find(|p| p.0 == b.name).ok_or_else(|| {
-                csv_err(&path, 0, format!("no rows for body {:?} of {VIEW_JSON}", b.name))
+                csv_err(
+                    &path,
+                    0,
+                    format!("no rows for body {:?} of {VIEW_JSON}", b.name),
+                )
             })?;
             view.bodies.push(BodyTrack {
                 name: b.name.clone(),

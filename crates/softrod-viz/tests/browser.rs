@@ -24,7 +24,11 @@ fn chromium() -> PathBuf {
     if let Some(p) = std::env::var_os("SOFTROD_CHROMIUM") {
         return PathBuf::from(p);
     }
-    for p in ["/usr/bin/chromium", "/usr/bin/chromium-browser", "/usr/bin/google-chrome"] {
+    for p in [
+        "/usr/bin/chromium",
+        "/usr/bin/chromium-browser",
+        "/usr/bin/google-chrome",
+    ] {
         if Path::new(p).exists() {
             return PathBuf::from(p);
         }
@@ -38,10 +42,8 @@ fn chromium() -> PathBuf {
 }
 
 fn scratch(name: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!(
-        "softrod-viz-browser-{}-{name}",
-        std::process::id()
-    ));
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("softrod-viz-browser-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d
@@ -153,7 +155,9 @@ fn status_in(dir: &Path, page: &Path, hash: &str, tag: &str, window: (u32, u32))
         .split(';')
         .filter(|s| !s.is_empty())
         .map(|p| {
-            let (x, y) = p.split_once(',').unwrap_or_else(|| panic!("tip {p:?} not on screen"));
+            let (x, y) = p
+                .split_once(',')
+                .unwrap_or_else(|| panic!("tip {p:?} not on screen"));
             (x.parse().unwrap(), y.parse().unwrap())
         })
         .collect();
@@ -181,7 +185,10 @@ fn screenshot(dir: &Path, page: &Path, hash: &str, tag: &str) -> Image {
         dir,
         tag,
         (WIDTH, HEIGHT),
-        &[format!("--screenshot={}", png_path.display()), url(page, hash)],
+        &[
+            format!("--screenshot={}", png_path.display()),
+            url(page, hash),
+        ],
     );
     let decoder = png::Decoder::new(std::io::BufReader::new(
         std::fs::File::open(&png_path).expect("screenshot written"),
@@ -283,7 +290,10 @@ fn rod_pixels_move_between_frames_and_page_logs_no_error() {
         }
     }
     // The tube covers ~2000 px in each frame; most of it moves.
-    assert!(gone > 500 && came > 500, "rod pixels gone {gone}, appeared {came}");
+    assert!(
+        gone > 500 && came > 500,
+        "rod pixels gone {gone}, appeared {came}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -328,7 +338,11 @@ fn varied_scenes_render_without_error() {
         let view = demo.build();
         write_html(&page, &view, &ViewOptions::default()).unwrap();
         let s = status(&dir, &page, "frame=last&axes=1", name);
-        assert_eq!(s.errors, 0, "{name}: page reported errors: {}", s.error_text);
+        assert_eq!(
+            s.errors, 0,
+            "{name}: page reported errors: {}",
+            s.error_text
+        );
         assert!(s.ready, "{name}: not drawn");
         assert_eq!(s.frame, 10, "{name}");
         assert_eq!(s.tips.len(), view.rods.len(), "{name}");

@@ -13,11 +13,17 @@ const PARSE_ULP: f64 = 2.5e-16;
 
 fn close(a: &[f64], b: &[f64]) -> bool {
     a.len() == b.len()
-        && a.iter().zip(b).all(|(x, y)| (x - y).abs() <= PARSE_ULP * x.abs().max(y.abs()))
+        && a.iter()
+            .zip(b)
+            .all(|(x, y)| (x - y).abs() <= PARSE_ULP * x.abs().max(y.abs()))
 }
 
 fn nums(v: &serde_json::Value) -> Vec<f64> {
-    v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect()
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect()
 }
 
 /// Every kept frame decodes back to the input pose: positions within half
@@ -67,7 +73,9 @@ fn embedded_data_decodes_to_the_input() {
         let tp = nums(&jr["trace"]["p"]);
         let last = rod.frames[30][rod.s.len() - 1].position;
         for j in 0..3 {
-            assert!((origin[j] + tp[3 * 30 + j] * quantum - last[j]).abs() <= 0.5 * quantum * 1.001);
+            assert!(
+                (origin[j] + tp[3 * 30 + j] * quantum - last[j]).abs() <= 0.5 * quantum * 1.001
+            );
         }
     }
     assert_eq!(d["cables"][0]["frames"].as_array().unwrap().len(), 31);
@@ -84,7 +92,9 @@ fn same_input_gives_the_same_bytes() {
     }
     .build();
     let a = render_html(&view, &ViewOptions::default()).unwrap().0;
-    let b = render_html(&view.clone(), &ViewOptions::default()).unwrap().0;
+    let b = render_html(&view.clone(), &ViewOptions::default())
+        .unwrap()
+        .0;
     assert!(a == b, "two renders differ");
 }
 
@@ -94,15 +104,35 @@ fn same_input_gives_the_same_bytes() {
 fn page_needs_no_network_and_is_well_formed() {
     let view = SwingingRods::default().build();
     let page = render_html(&view, &ViewOptions::default()).unwrap().0;
-    for bad in ["http:", "https:", "src=", "href=", "@import", "url(", "fetch(", "XMLHttpRequest"] {
+    for bad in [
+        "http:",
+        "https:",
+        "src=",
+        "href=",
+        "@import",
+        "url(",
+        "fetch(",
+        "XMLHttpRequest",
+    ] {
         assert!(!page.contains(bad), "page contains {bad:?}");
     }
     assert!(page.starts_with("<!DOCTYPE html>\n<html lang=\"en\">"));
     assert!(page.trim_end().ends_with("</html>"));
-    assert_eq!(page.matches("<script").count(), page.matches("</script>").count());
+    assert_eq!(
+        page.matches("<script").count(),
+        page.matches("</script>").count()
+    );
     assert_eq!(page.matches("<script").count(), 3, "guard, data, view");
     assert!(!page.contains("@@"), "a template marker was left");
-    for id in ["id=\"gl\"", "id=\"slider\"", "id=\"play\"", "id=\"speed\"", "id=\"axes\"", "id=\"legend\"", "id=\"time\""] {
+    for id in [
+        "id=\"gl\"",
+        "id=\"slider\"",
+        "id=\"play\"",
+        "id=\"speed\"",
+        "id=\"axes\"",
+        "id=\"legend\"",
+        "id=\"time\"",
+    ] {
         assert!(page.contains(id), "{id} missing");
     }
 }
@@ -169,7 +199,11 @@ fn byte_budget_is_respected() {
     let (page, stats) = render_html(&view, &opts).unwrap();
     assert!(page.len() <= max_bytes, "{} > {max_bytes}", page.len());
     assert_eq!(stats.bytes, page.len());
-    assert!(stats.frames.len() < 400 && stats.frames.len() > 50, "{}", stats.frames.len());
+    assert!(
+        stats.frames.len() < 400 && stats.frames.len() > 50,
+        "{}",
+        stats.frames.len()
+    );
     assert_eq!((stats.frames[0], *stats.frames.last().unwrap()), (0, 399));
     let tiny = ViewOptions {
         max_bytes: 1000,
@@ -204,7 +238,11 @@ fn bad_input_is_a_structured_error() {
     view.rods[0].radius.pop();
     assert!(matches!(
         render_html(&view, &ViewOptions::default()),
-        Err(VizError::Count { got: 40, expected: 41, .. })
+        Err(VizError::Count {
+            got: 40,
+            expected: 41,
+            ..
+        })
     ));
     view.rods.clear();
     assert!(matches!(

@@ -95,7 +95,9 @@ fn expect_csv_error(text: &str, line: u64, contains: &str) {
     let path = dir.join("shape.csv");
     std::fs::write(&path, text).unwrap();
     match read_shape_csv(&path) {
-        Err(VizError::Csv { line: l, problem, .. }) => {
+        Err(VizError::Csv {
+            line: l, problem, ..
+        }) => {
             assert_eq!(l, line, "{problem}");
             assert!(problem.contains(contains), "{problem:?} lacks {contains:?}");
         }
@@ -109,15 +111,23 @@ fn bad_shape_files_are_clear_errors() {
     let head = "t,rod,s,x,y,z,qw,qx,qy,qz\n";
     expect_csv_error("t,name,s,x,y,z,qw,qx,qy,qz\n", 1, "header");
     expect_csv_error(&format!("{head}0,a,0,0,0,NaN,1,0,0,0\n"), 2, "column z");
-    expect_csv_error(&format!("{head}0,a,0,0,0,zero,1,0,0,0\n"), 2, "not a finite number");
+    expect_csv_error(
+        &format!("{head}0,a,0,0,0,zero,1,0,0,0\n"),
+        2,
+        "not a finite number",
+    );
     expect_csv_error(&format!("{head}0,a,0,0,0,0,1,0,0\n"), 2, "fields");
     expect_csv_error(
-        &format!("{head}0,a,0,0,0,0,1,0,0,0\n0,a,0.5,0,0,0,1,0,0,0\n1,a,0,0,0,0,1,0,0,0\n2,a,0,0,0,0,1,0,0,0\n"),
+        &format!(
+            "{head}0,a,0,0,0,0,1,0,0,0\n0,a,0.5,0,0,0,1,0,0,0\n1,a,0,0,0,0,1,0,0,0\n2,a,0,0,0,0,1,0,0,0\n"
+        ),
         5,
         "1 of its 2 samples",
     );
     expect_csv_error(
-        &format!("{head}0,a,0,0,0,0,1,0,0,0\n0,a,0.5,0,0,0,1,0,0,0\n1,a,0,0,0,0,1,0,0,0\n1,a,0.4,0,0,0,1,0,0,0\n"),
+        &format!(
+            "{head}0,a,0,0,0,0,1,0,0,0\n0,a,0.5,0,0,0,1,0,0,0\n1,a,0,0,0,0,1,0,0,0\n1,a,0.4,0,0,0,1,0,0,0\n"
+        ),
         5,
         "the first time had s = 0.5",
     );
@@ -126,7 +136,11 @@ fn bad_shape_files_are_clear_errors() {
         3,
         "does not increase",
     );
-    expect_csv_error(&format!("{head}1,a,0,0,0,0,1,0,0,0\n0,a,0,0,0,0,1,0,0,0\n"), 3, "after");
+    expect_csv_error(
+        &format!("{head}1,a,0,0,0,0,1,0,0,0\n0,a,0,0,0,0,1,0,0,0\n"),
+        3,
+        "after",
+    );
 }
 
 /// A directory with shape.csv, view.json and bodies.csv becomes the view:
@@ -143,10 +157,13 @@ fn view_from_files_alone() {
     let view = demo.build();
     let rod = &view.rods[0];
     {
-        let mut w = ShapeCsvWriter::new(std::fs::File::create(dir.join("shape.csv")).unwrap()).unwrap();
-        let mut b = BodiesCsvWriter::new(std::fs::File::create(dir.join("bodies.csv")).unwrap()).unwrap();
+        let mut w =
+            ShapeCsvWriter::new(std::fs::File::create(dir.join("shape.csv")).unwrap()).unwrap();
+        let mut b =
+            BodiesCsvWriter::new(std::fs::File::create(dir.join("bodies.csv")).unwrap()).unwrap();
         for (k, t) in view.times.iter().enumerate() {
-            w.write_frame(*t, &rod.name, &rod.s, &rod.frames[k]).unwrap();
+            w.write_frame(*t, &rod.name, &rod.s, &rod.frames[k])
+                .unwrap();
             b.write_pose(*t, "ball, 20 g", &rod.frames[k][10]).unwrap();
         }
         w.flush().unwrap();
@@ -189,7 +206,10 @@ fn view_from_files_alone() {
         let z = z0 + (z1 - z0) * s / 0.5;
         let expect = [z, y0, -s];
         for j in 0..3 {
-            assert!((p[j] - expect[j]).abs() < 1e-15, "s = {s}: {p:?} vs {expect:?}");
+            assert!(
+                (p[j] - expect[j]).abs() < 1e-15,
+                "s = {s}: {p:?} vs {expect:?}"
+            );
         }
     }
     assert_eq!(v.bodies[0].name, "ball, 20 g");
@@ -217,9 +237,11 @@ fn defaults_and_spec_errors() {
     .build();
     let rod = &view.rods[0];
     {
-        let mut w = ShapeCsvWriter::new(std::fs::File::create(dir.join("shape.csv")).unwrap()).unwrap();
+        let mut w =
+            ShapeCsvWriter::new(std::fs::File::create(dir.join("shape.csv")).unwrap()).unwrap();
         for (k, t) in view.times.iter().enumerate() {
-            w.write_frame(*t, &rod.name, &rod.s, &rod.frames[k]).unwrap();
+            w.write_frame(*t, &rod.name, &rod.s, &rod.frames[k])
+                .unwrap();
         }
     }
     let v = view_from_dir(&dir).unwrap();
@@ -236,7 +258,11 @@ fn defaults_and_spec_errors() {
         Err(VizError::Invalid { problem, .. }) => assert!(problem.contains("\"nope\"")),
         other => panic!("{other:?}"),
     }
-    std::fs::write(dir.join("view.json"), "{\"format\":\"softrod-view\",\"version\":1,\"titel\":\"x\"}").unwrap();
+    std::fs::write(
+        dir.join("view.json"),
+        "{\"format\":\"softrod-view\",\"version\":1,\"titel\":\"x\"}",
+    )
+    .unwrap();
     assert!(matches!(view_from_dir(&dir), Err(VizError::Json { .. })));
     let _ = std::fs::remove_dir_all(&dir);
 }
