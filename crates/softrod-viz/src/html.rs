@@ -164,9 +164,9 @@ impl Quantizer {
     fn new(d: &ViewData) -> Self {
         let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
         let mut add = |p: &[f64; 3]| {
-            for j in 0..3 {
-                lo[j] = lo[j].min(p[j]);
-                hi[j] = hi[j].max(p[j]);
+            for ((l, h), v) in lo.iter_mut().zip(hi.iter_mut()).zip(p) {
+                *l = l.min(*v);
+                *h = h.max(*v);
             }
         };
         for rod in &d.rods {
@@ -189,8 +189,8 @@ impl Quantizer {
     }
 
     fn push_point(&self, out: &mut String, p: &[f64; 3]) {
-        for j in 0..3 {
-            let v = ((p[j] - self.origin[j]) / self.quantum).round() as i64;
+        for (x, o) in p.iter().zip(&self.origin) {
+            let v = ((x - o) / self.quantum).round() as i64;
             let _ = write!(out, "{v},");
         }
     }

@@ -10,6 +10,16 @@
 //!
 //! The crate depends on no physics crate: every input is plain data in SI
 //! units and the world frame (see [`data`]).
+//!
+//! ```
+//! use softrod_viz::demo::SwingingRods;
+//! use softrod_viz::{ViewOptions, render_html};
+//!
+//! let view = SwingingRods { rods: 2, ..SwingingRods::default() }.build();
+//! let (page, stats) = render_html(&view, &ViewOptions::default()).unwrap();
+//! assert!(page.starts_with("<!DOCTYPE html>"));
+//! assert_eq!(stats.frames.len(), 201); // all output times fit the budget
+//! ```
 #![warn(missing_docs)]
 
 pub mod data;

@@ -162,13 +162,13 @@ fn csv_err(path: &Path, line: u64, problem: impl Into<String>) -> VizError {
     }
 }
 
-/// Rows of a CSV file with a required header prefix: `(line, time, name,
-/// numbers)` where `numbers` are the `n_num` columns after the name.
-fn read_rows(
-    path: &Path,
-    header: &[&str],
-    n_num: usize,
-) -> Result<Vec<(u64, f64, String, Vec<f64>)>, VizError> {
+/// One data row: `(line, time, name, numbers)`, `numbers` being the
+/// columns after the name.
+type Row = (u64, f64, String, Vec<f64>);
+
+/// Rows of a CSV file with a required header prefix, `n_num` numbers after
+/// the name column.
+fn read_rows(path: &Path, header: &[&str], n_num: usize) -> Result<Vec<Row>, VizError> {
     let mut rdr = csv::ReaderBuilder::new()
         .has_headers(true)
         .from_path(path)
@@ -345,9 +345,12 @@ pub fn read_shape_csv(path: &Path) -> Result<ShapeData, VizError> {
     Ok(ShapeData { times, rods })
 }
 
-/// Reads `bodies.csv`: per body (in order of first appearance) its pose at
-/// each time, and the times.
-pub fn read_bodies_csv(path: &Path) -> Result<(Vec<f64>, Vec<(String, Vec<Pose>)>), VizError> {
+/// A body's poses over time, as read from `bodies.csv`.
+pub type BodyPoses = (String, Vec<Pose>);
+
+/// Reads `bodies.csv`: the times, and per body (in order of first
+/// appearance) its name and pose at each time.
+pub fn read_bodies_csv(path: &Path) -> Result<(Vec<f64>, Vec<BodyPoses>), VizError> {
     let rows = read_rows(path, &BODIES_HEADER, 7)?;
     let mut times: Vec<f64> = Vec::new();
     let mut bodies: Vec<(String, Vec<Pose>)> = Vec::new();

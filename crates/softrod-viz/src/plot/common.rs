@@ -503,10 +503,10 @@ pub(crate) fn format_tick(v: f64, d: usize) -> String {
 /// panel's data box `(x range, y range)` is centred and widened so that
 /// `span_x / width = span_y / height = scale` with the largest scale any
 /// panel needs.
-pub(crate) fn equal_aspect_ranges(
-    boxes: &[((f64, f64), (f64, f64))],
-    sizes: &[(u32, u32)],
-) -> Vec<((f64, f64), (f64, f64))> {
+/// A panel's (horizontal, vertical) data ranges.
+pub(crate) type Box2 = ((f64, f64), (f64, f64));
+
+pub(crate) fn equal_aspect_ranges(boxes: &[Box2], sizes: &[(u32, u32)]) -> Vec<Box2> {
     let scale = boxes
         .iter()
         .zip(sizes)

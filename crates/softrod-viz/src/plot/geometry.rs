@@ -5,7 +5,7 @@ use plotters::prelude::*;
 use super::common::{
     Area, LEGEND_W, LegendEntry, Marker, PanelSpec, Stroke, Swatch, TITLE_H, bounds, check_finite,
     check_len, color, draw_legend, draw_panel, equal_aspect_ranges, extent, length_unit, lighten,
-    plot_err, plot_size, range, sequential, significant, titled,
+    plot_err, plot_size, sequential, significant, titled,
 };
 use super::{Figure, PanelInfo};
 use crate::error::VizError;
@@ -62,6 +62,9 @@ struct Curve3 {
     width: u32,
     dashed: bool,
 }
+
+type Planes = Vec<(usize, usize, String)>;
+type PanelContents = Vec<(Vec<Curve3>, Vec<Marker3>)>;
 
 enum Marker3 {
     Circle([f64; 3], RGBColor),
@@ -191,10 +194,7 @@ fn geometry_figure(
 fn three_projections(
     curves: Vec<Curve3>,
     markers: Vec<Marker3>,
-) -> (
-    Vec<(usize, usize, String)>,
-    Vec<(Vec<Curve3>, Vec<Marker3>)>,
-) {
+) -> (Planes, PanelContents) {
     let planes = PROJECTIONS
         .iter()
         .map(|(a, b)| (*a, *b, format!("{}–{} projection", AXES[*a], AXES[*b])))
