@@ -191,10 +191,7 @@ fn geometry_figure(
     Ok(Figure { svg, panels: infos })
 }
 
-fn three_projections(
-    curves: Vec<Curve3>,
-    markers: Vec<Marker3>,
-) -> (Planes, PanelContents) {
+fn three_projections(curves: Vec<Curve3>, markers: Vec<Marker3>) -> (Planes, PanelContents) {
     let planes = PROJECTIONS
         .iter()
         .map(|(a, b)| (*a, *b, format!("{}–{} projection", AXES[*a], AXES[*b])))
