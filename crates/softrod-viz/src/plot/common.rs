@@ -310,7 +310,7 @@ pub(crate) fn titled<'a>(
 /// Margins and label areas of every panel, px.
 pub(crate) const MARGIN: u32 = 14;
 pub(crate) const X_LABEL_AREA: u32 = 58;
-pub(crate) const Y_LABEL_AREA: u32 = 84;
+pub(crate) const Y_LABEL_AREA: u32 = 96;
 
 fn builder<'a, 'b>(area: &'a Area<'b>) -> ChartBuilder<'a, 'b, SVGBackend<'b>> {
     let mut b = ChartBuilder::on(area);

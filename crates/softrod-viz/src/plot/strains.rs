@@ -49,6 +49,11 @@ impl StrainComponent {
         }
     }
 
+    /// Its symbol (`k_y`).
+    pub fn symbol(self) -> &'static str {
+        ["k_x", "k_y", "k_z", "q_x", "q_y", "q_z"][self.index()]
+    }
+
     /// What it measures.
     pub fn meaning(self) -> &'static str {
         match self {
@@ -161,12 +166,20 @@ pub fn strains(title: &str, p: &StrainProfiles) -> Result<Figure, VizError> {
         for (c, comp) in p.components.iter().enumerate() {
             let j = comp.index();
             let yr = range(p.values.iter().flatten().map(|v| v[j]), 0.08);
+            // Small (or huge) strains get a power of ten in the label, so
+            // ticks read 1, 2, 3 instead of 0.00010, 0.00020, 0.00030.
+            let (power, y_scale) = decade(yr.0.abs().max(yr.1.abs()));
+            let y_label = match (power, comp.index() < 3) {
+                (0, _) => comp.label().to_string(),
+                (e, true) => format!("{} [10{} 1/m]", comp.symbol(), superscript(e)),
+                (e, false) => format!("{} [10{}]", comp.symbol(), superscript(e)),
+            };
             let spec = PanelSpec {
                 title: format!("{} ({})", comp.meaning(), p.rod),
                 x_label: format!("s [{su}]"),
-                y_label: comp.label().into(),
+                y_label,
                 x_scale: sf,
-                y_scale: 1.0,
+                y_scale,
                 strokes: p
                     .values
                     .iter()
@@ -194,4 +207,27 @@ pub fn strains(title: &str, p: &StrainProfiles) -> Result<Figure, VizError> {
         root.present().map_err(plot_err(plot))?;
     }
     Ok(Figure { svg, panels: infos })
+}
+
+/// The power of ten `e` to print in the label of values up to `max_abs`
+/// (0 for 0.01 ≤ max_abs < 10⁴), and the display factor `10^−e`.
+fn decade(max_abs: f64) -> (i32, f64) {
+    if !(max_abs.is_finite() && max_abs > 0.0) || (1e-2..1e4).contains(&max_abs) {
+        return (0, 1.0);
+    }
+    let e = max_abs.log10().floor() as i32;
+    (e, 10f64.powi(-e))
+}
+
+/// `e` as superscript digits (`−4` → `⁻⁴`).
+fn superscript(e: i32) -> String {
+    const DIGITS: [char; 10] = ['⁰', '¹', '²', '³', '⁴', '⁵', '⁶', '⁷', '⁸', '⁹'];
+    let mut out = String::new();
+    if e < 0 {
+        out.push('⁻');
+    }
+    for c in e.unsigned_abs().to_string().chars() {
+        out.push(DIGITS[c.to_digit(10).unwrap_or(0) as usize]);
+    }
+    out
 }
