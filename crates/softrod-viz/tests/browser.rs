@@ -363,3 +363,26 @@ fn varied_scenes_render_without_error() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The error marker works: a page whose data is corrupted (a rod that is
+/// `null`) reports the script error in the DOM and never claims to be drawn,
+/// so the zero-error assertions above are not vacuous.
+#[test]
+fn a_script_error_is_reported_in_the_dom() {
+    let dir = scratch("error");
+    let view = SwingingRods {
+        times: 3,
+        ..SwingingRods::default()
+    }
+    .build();
+    let (page, _) = softrod_viz::render_html(&view, &ViewOptions::default()).unwrap();
+    let broken = page.replacen("\"rods\":[", "\"rods\":[null,", 1);
+    assert_ne!(broken, page);
+    let path = dir.join("broken.html");
+    std::fs::write(&path, broken).unwrap();
+    let s = status_in(&dir, &path, "frame=0", "broken", (WIDTH, HEIGHT));
+    assert!(s.errors >= 1, "no error reported");
+    assert!(!s.ready, "a broken page claims to be drawn");
+    assert!(s.error_text.contains("error"), "{}", s.error_text);
+    let _ = std::fs::remove_dir_all(&dir);
+}

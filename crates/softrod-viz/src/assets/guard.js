@@ -4,12 +4,16 @@
 (function () {
   'use strict';
   var pending = [];
-  function record(text) {
+  // Errors raised before the body exists wait in `pending`.
+  function flush() {
     var st = document.getElementById('softrod-status');
     var box = document.getElementById('errors');
-    if (!st || !box) { pending.push(text); return; }
+    if (!st || !box) { return; }
     while (pending.length) { add(st, box, pending.shift()); }
-    add(st, box, text);
+  }
+  function record(text) {
+    pending.push(text);
+    flush();
   }
   function add(st, box, text) {
     st.setAttribute('data-errors', String(Number(st.getAttribute('data-errors') || 0) + 1));
@@ -31,7 +35,5 @@
     record('console.error: ' + Array.prototype.map.call(arguments, String).join(' '));
     if (original) { original.apply(console, arguments); }
   };
-  document.addEventListener('DOMContentLoaded', function () {
-    if (pending.length) { record(pending.pop()); }
-  });
+  document.addEventListener('DOMContentLoaded', flush);
 })();
