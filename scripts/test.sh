@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# Every test of the repository: the Rust workspace, then the Python package.
+#
+#   bash scripts/test.sh
+#
+# Needs the Rust toolchain and Python >= 3.10 with pip. The Python tests run
+# in .venv/ (created if missing; SOFTROD_VENV picks another), with maturin,
+# numpy, pytest and cosseratbench at the versions pinned in
+# crates/softrod-py/requirements-dev.txt, against a dev-profile build that
+# shares target/ with cargo test.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+venv="${SOFTROD_VENV:-.venv}"
+
+echo "== Rust tests"
+cargo test --workspace
+
+echo "== Python package (dev build into $venv)"
+bash scripts/install.sh --dev "$venv"
+
+echo "== Python tests"
+# The CLI-equality tests run the `softrod` binary cargo test just built.
+SOFTROD_BIN="$PWD/target/debug/softrod" "$venv/bin/python" -m pytest crates/softrod-py/tests -q
