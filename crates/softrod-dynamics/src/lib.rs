@@ -30,10 +30,12 @@ mod data;
 mod derivatives;
 mod energy;
 mod error;
+mod id_derivatives;
 mod matrices;
 mod model;
 mod modes;
 mod passes;
+mod piece_derivs;
 mod shifted;
 mod simd;
 mod statics;
@@ -45,6 +47,7 @@ pub use data::Data;
 pub use derivatives::{DynamicsJacobians, dynamics_jacobians};
 pub use energy::{Energies, energies};
 pub use error::DynamicsError;
+pub use id_derivatives::{IdDerivatives, inverse_dynamics_derivatives};
 pub use matrices::{
     actuation_matrix, coriolis_matrix, damping_matrix, generalized_gravity, stiffness_matrix,
 };
