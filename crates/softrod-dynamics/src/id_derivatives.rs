@@ -9,11 +9,11 @@ use crate::algorithms::check_vec;
 use crate::error::DynamicsError;
 use crate::model::{Model, RodModel};
 use crate::passes::gravity_base_acceleration;
-use crate::piece_derivs::{Coefficients, PieceDerivMaps, lambda};
+use crate::piece_derivs::{Coefficients, PieceDerivMaps, lambda, tangent_transpose_form};
 use nalgebra::{DMatrix, DVector};
 use softrod_kinematics::{Basis, Piece};
 use softrod_lie::{
-    Mat3, Mat6, PieceMaps, Pose, Vec6, ad, ad_vec, angular, coad, coad_vec, linear, skew,
+    AdOp, Mat3, Mat6, PieceMaps, Pose, Vec6, ad, ad_vec, angular, coad, coad_vec, linear, skew,
 };
 use softrod_mechanics::{Cable, LoadFrame, Routing};
 
@@ -51,7 +51,9 @@ struct PieceWork {
     /// `φ_i`, `χ_i` of (D36).
     phi: [Vec6; 4],
     chi: [Vec6; 4],
-    maps: Option<PieceDerivMaps>,
+    /// `P^i = ad_ξ^i` and `k̄ = (k; 0)` for 𝒬 (D36).
+    powers: [Mat6; 4],
+    kbar: Vec6,
     /// Pairing quantities in the world frame (D46), `k` columns (or rows).
     s_world: Mat6,
     dwq_world: Mat6,
@@ -96,7 +98,8 @@ impl PieceWork {
             dv_w: z,
             phi: [Vec6::zeros(); 4],
             chi: [Vec6::zeros(); 4],
-            maps: None,
+            powers: [z; 4],
+            kbar: Vec6::zeros(),
             s_world: z,
             dwq_world: z,
             dwv_world: z,
@@ -200,6 +203,12 @@ fn diag_mul(d: &Vec6, x: &Mat6) -> Mat6 {
     Mat6::from_fn(|i, j| d[i] * x[(i, j)])
 }
 
+/// `X diag(d)`.
+#[inline]
+fn scale_columns(x: &Mat6, d: &Vec6) -> Mat6 {
+    Mat6::from_fn(|i, j| x[(i, j)] * d[j])
+}
+
 /// One evaluation point of a piece, linearized (D39–D41).
 struct PointLin {
     a: Mat6,
@@ -235,12 +244,16 @@ fn linearize_point(
     let d2 = dm.d_tangent_applied(&co, true);
     let dd = dm.bias_strain_derivative(&co);
     let td = dm.tangent_rate(&co);
-    let adc = ad(&c);
-    let adc_t = adc * t;
+    // Products of block operators [[A, 0], [B, A]] in that form (3 instead
+    // of 8 3×3 products).
+    let adc_op = AdOp::ad(&c);
+    let adc_t_op = adc_op * tm;
+    let adc_t = adc_t_op.to_mat6();
     // (D39): δη = ad_c Δ + 𝒟_ξ̇ ζ with Δ = T₋ζ.
     let h_eta = adc_t + d1;
     // (D40): δη̇′ = ad_{a₀}Δ − ad_{Tξ̇} ad_c Δ + 𝒟_ξ̈ ζ + ad_c 𝒟_ξ̇ ζ + 𝒟² ζ.
-    let h_etad = ad(&a0) * t - ad(&sv) * adc_t + d2 + adc * d1 + dd;
+    let h_etad =
+        (AdOp::ad(&a0) * tm - AdOp::ad(&sv) * adc_t_op).to_mat6() + d2 + adc_op.to_mat6() * d1 + dd;
     // (D41): ∂η̇′/∂ξ̇ = ad_c T₋ + 𝒟_ξ̇ + Ṫ.
     let h_vd = h_eta + td;
     (
@@ -374,15 +387,20 @@ pub fn inverse_dynamics_derivatives<'a>(
         pairs(rm, work, r);
     }
     for (what, m) in [("dtau/dq", &work.dtau_dq), ("dtau/dqdot", &work.dtau_dqd)] {
-        if let Some((i, v)) = m.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-            return Err(DynamicsError::NotFinite {
-                what: format!(
-                    "{what} entry ({}, {}) at t = {t}",
-                    i % m.nrows(),
-                    i / m.nrows()
-                ),
-                value: *v,
-            });
+        // One vectorizable pass (x·0 is NaN exactly for non-finite x), the
+        // index search only on failure.
+        let probe: f64 = m.as_slice().iter().map(|v| v * 0.0).sum();
+        if probe.is_nan() {
+            if let Some((i, v)) = m.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+                return Err(DynamicsError::NotFinite {
+                    what: format!(
+                        "{what} entry ({}, {}) at t = {t}",
+                        i % m.nrows(),
+                        i / m.nrows()
+                    ),
+                    value: *v,
+                });
+            }
         }
     }
     Ok(work)
@@ -430,7 +448,7 @@ fn outward(
             let me = m.component_mul(&p.eta);
             let mut f = m.component_mul(&p.etad) + coad_vec(&p.eta, &me);
             // (D38): b = Λ(𝓜η) + ad*_η 𝓜 + C, the velocity part of δf.
-            let mut b = lambda(&me) + coad(&p.eta) * Mat6::from_diagonal(m);
+            let mut b = lambda(&me) + scale_columns(&coad(&p.eta), m);
             if let Some(c) = &drag {
                 f += c.component_mul(&p.eta);
                 b += Mat6::from_diagonal(c);
@@ -512,7 +530,8 @@ fn outward(
         w.h_etad = p.h_etad;
         w.h_vd = p.h_vd;
         w.co_tip = p.co;
-        w.maps = Some(dm);
+        w.powers = dm.p;
+        w.kbar = dm.kbar();
         eta0 = p.eta;
         etad0 = p.etad;
         pose = pose.compose(&g);
@@ -553,13 +572,12 @@ fn inward(
         let dwn_q = mc * wq + bc * uq + yc * tl;
         let wv = w.h_vd + adeta * tl;
         let dwn_v = mc * wv + bc * tl;
-        let maps = w.maps.as_ref().expect("set by the outward sweep");
         let (mut phi, mut chi) = (w.phi, w.chi);
         for i in 0..4 {
             phi[i] += wn * w.co_tip.d[i];
             chi[i] += wn * w.co_tip.c[i];
         }
-        let qform = maps.tangent_transpose_form(&phi, &chi);
+        let qform = tangent_transpose_form(&w.powers, &w.kbar, &phi, &chi);
         let tlt = tl.transpose();
         let diag_q = w.dq_diag + tlt * dwn_q + qform;
         let diag_v = w.dv_diag + tlt * dwn_v;
@@ -632,10 +650,17 @@ fn pairs(rm: &RodModel, work: &mut IdDerivatives, r: usize) {
                     wi.rcv_m * wj.src_wv + wi.rcv_b * wj.src_uv,
                 )
             };
-            for a in 0..ki {
-                for c in 0..kj {
-                    work.dtau_dq[(oi + a, oj + c)] = bq[(a, c)];
-                    work.dtau_dqd[(oi + a, oj + c)] = bv[(a, c)];
+            let ld = work.dtau_dq.nrows();
+            let (sq, sv) = (work.dtau_dq.as_mut_slice(), work.dtau_dqd.as_mut_slice());
+            for c in 0..kj {
+                let col = (oj + c) * ld + oi;
+                // Element loops, not `copy_from_slice`: a `memcpy` call per
+                // column of at most six entries costs more than the copy.
+                for (d, v) in sq[col..col + ki].iter_mut().zip(&bq.as_slice()[6 * c..]) {
+                    *d = *v;
+                }
+                for (d, v) in sv[col..col + ki].iter_mut().zip(&bv.as_slice()[6 * c..]) {
+                    *d = *v;
                 }
             }
         }

@@ -221,10 +221,13 @@ impl PieceDerivMaps {
         } else {
             (&self.vd, &self.ed)
         };
+        let mut u = Vec6::zeros();
         let mut out = Mat6::zeros();
         for i in 0..4 {
-            out += pv[i] * (self.kbar.transpose() * co.d[i]) - e[i] * co.c[i];
+            u.axpy(co.d[i], &pv[i], 1.0);
+            axpy6(&mut out, -co.c[i], &e[i]);
         }
+        add_outer_angular(&mut out, &u, &self.kbar);
         out
     }
 
@@ -233,7 +236,8 @@ impl PieceDerivMaps {
     pub fn tangent_rate(&self, co: &Coefficients) -> Mat6 {
         let mut out = Mat6::zeros();
         for i in 0..4 {
-            out += self.p[i] * (co.d[i] * self.kd) + self.f[i] * co.c[i];
+            axpy6(&mut out, co.d[i] * self.kd, &self.p[i]);
+            axpy6(&mut out, co.c[i], &self.f[i]);
         }
         out
     }
@@ -241,39 +245,72 @@ impl PieceDerivMaps {
     /// `𝒟²(x)` with `𝒟² ζ = D_ξ(D_ξT₋(x)[ξ̇]ξ̇)[ζ]` (D35):
     /// `Σ_i h_i(k·ξ̇_k)(P^iξ̇)k̄ᵀ + d_i(P^iξ̇)ξ̇̄ᵀ − d_i(k·ξ̇_k)E_i(ξ̇) + d_i e_i k̄ᵀ + c_i Ê_i`.
     pub fn bias_strain_derivative(&self, co: &Coefficients) -> Mat6 {
+        let mut uk = Vec6::zeros();
+        let mut ud = Vec6::zeros();
         let mut out = Mat6::zeros();
         for i in 0..4 {
-            out += self.vd[i]
-                * (self.kbar.transpose() * (co.h[i] * self.kd) + self.kdbar.transpose() * co.d[i])
-                + self.e[i] * (self.kbar.transpose() * co.d[i])
-                + self.ehat[i] * co.c[i]
-                - self.ed[i] * (co.d[i] * self.kd);
+            uk.axpy(co.h[i] * self.kd, &self.vd[i], 1.0);
+            uk.axpy(co.d[i], &self.e[i], 1.0);
+            ud.axpy(co.d[i], &self.vd[i], 1.0);
+            axpy6(&mut out, co.c[i], &self.ehat[i]);
+            axpy6(&mut out, -co.d[i] * self.kd, &self.ed[i]);
         }
+        add_outer_angular(&mut out, &uk, &self.kbar);
+        add_outer_angular(&mut out, &ud, &self.kdbar);
         out
     }
 
-    /// `𝒬` of (D36) from the sums `φ_i = Σ w d_i f`, `χ_i = Σ w c_i f` of a
-    /// wrench field `f` over the evaluation points of the piece: the matrix
-    /// with `(Σ w D_ξT₋(x)[ζ]ᵀ f)ᵀ y = yᵀ 𝒬 ζ`,
-    /// `𝒬 = Σ_i (P^{iᵀ}φ_i) k̄ᵀ − Σ_i Σ_{l<i} (P^{i−1−l})ᵀ Λ((Pᵀ)^l χ_i)`.
-    pub fn tangent_transpose_form(&self, phi: &[Vec6; 4], chi: &[Vec6; 4]) -> Mat6 {
-        let mut out = Mat6::zeros();
-        for i in 0..4 {
-            out += (self.p[i].transpose() * phi[i]) * self.kbar.transpose();
-            let mut fl = chi[i];
-            for l in 0..=i {
-                // (P^{i−l})ᵀ with P^0 = I, for the term l of i + 1 (1-based).
-                let lam = lambda(&fl);
-                let m = i - l;
-                if m == 0 {
-                    out -= lam;
-                } else {
-                    out -= self.p[m - 1].transpose() * lam;
-                }
-                fl = self.p[0].transpose() * fl;
+    /// `k̄ = (k; 0)`.
+    pub fn kbar(&self) -> Vec6 {
+        self.kbar
+    }
+}
+
+/// `𝒬` of (D36) from the powers `P^i = ad_ξ^i` (`p[i − 1]`), `k̄ = (k; 0)`
+/// and the sums `φ_i = Σ w d_i f`, `χ_i = Σ w c_i f` of a wrench field `f`
+/// over evaluation points of the piece: the matrix with
+/// `(Σ w D_ξT₋(x)[ζ]ᵀ f)ᵀ y = yᵀ 𝒬 ζ`,
+/// `𝒬 = Σ_i (P^{iᵀ}φ_i) k̄ᵀ − Σ_i Σ_{l<i} (P^{i−1−l})ᵀ Λ((Pᵀ)^l χ_i)`.
+pub(crate) fn tangent_transpose_form(
+    p: &[Mat6; 4],
+    kbar: &Vec6,
+    phi: &[Vec6; 4],
+    chi: &[Vec6; 4],
+) -> Mat6 {
+    let mut out = Mat6::zeros();
+    for i in 0..4 {
+        out += (p[i].transpose() * phi[i]) * kbar.transpose();
+        let mut fl = chi[i];
+        for l in 0..=i {
+            // (P^{i−l})ᵀ with P^0 = I, for the term l of i + 1 (1-based).
+            let lam = lambda(&fl);
+            let m = i - l;
+            if m == 0 {
+                out -= lam;
+            } else {
+                out -= p[m - 1].transpose() * lam;
             }
+            fl = p[0].transpose() * fl;
         }
-        out
+    }
+    out
+}
+
+/// `m += c·x` entrywise.
+#[inline(always)]
+fn axpy6(m: &mut Mat6, c: f64, x: &Mat6) {
+    for (a, b) in m.as_mut_slice().iter_mut().zip(x.as_slice()) {
+        *a += c * b;
+    }
+}
+
+/// `m += u vᵀ` for a `v` whose linear half is zero (`k̄`, `ξ̇̄`): only the
+/// first three columns change.
+#[inline(always)]
+fn add_outer_angular(m: &mut Mat6, u: &Vec6, v: &Vec6) {
+    for j in 0..3 {
+        let mut col = m.column_mut(j);
+        col.axpy(v[j], u, 1.0);
     }
 }
 
@@ -382,7 +419,7 @@ mod tests {
                     phi[i] = f * co.d[i];
                     chi[i] = f * co.c[i];
                 }
-                let q = pm.tangent_transpose_form(&phi, &chi);
+                let q = tangent_transpose_form(&pm.p, &pm.kbar(), &phi, &chi);
                 let y = Vec6::new(-0.4, 0.6, 0.2, 0.8, 0.1, -0.9);
                 let lhs = (y.transpose() * q * z)[0];
                 let rhs = f.dot(&(dz * y));
