@@ -565,7 +565,7 @@ fn inward(
         let al = w.tip.ad_inv().to_mat6();
         let tl = w.tm_tip;
         let adeta = ad(&w.eta_tip);
-        // (D44): the subtree's wrench at L_n changes by
+        // (D43): the subtree's wrench at L_n changes by
         // 𝓜ᶜ w̄ + 𝓑ᶜ u + 𝒴ᶜ Δ, with u = δη(ℓ), w̄ = δη̇′(ℓ) + ad_η(ℓ) δη(ℓ).
         let wq = w.h_etad + adeta * w.h_eta;
         let uq = w.h_eta;
