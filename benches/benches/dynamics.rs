@@ -7,7 +7,8 @@
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use softrod_dynamics::{
-    Data, Model, RodSpec, ShiftedSolver, forward_dynamics, inverse_dynamics, mass_matrix,
+    Data, FdDerivatives, IdDerivatives, Model, RodSpec, ShiftedSolver, forward_dynamics,
+    forward_dynamics_derivatives, inverse_dynamics, inverse_dynamics_derivatives, mass_matrix,
 };
 use softrod_kinematics::{Basis, Rod, Strain, straight};
 use softrod_lie::{Pose, Vec3};
@@ -99,7 +100,7 @@ fn bench_dynamics(c: &mut Criterion) {
             Basis::select(&[Strain::Ky, Strain::Qx, Strain::Qz]).unwrap(),
         );
         let mut data = Data::new(&m);
-        let (q, qd, _) = planar_state(m.n_dof(), 42);
+        let (q, qd) = planar_state(m.n_dof(), 42);
         g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
             b.iter(|| {
                 forward_dynamics(&m, &mut data, 0.0, black_box(&q), black_box(&qd), None).unwrap()
@@ -144,6 +145,81 @@ fn bench_dynamics(c: &mut Criterion) {
                 x.copy_from_slice(&qd);
                 solver.solve(&m, &mut x).unwrap();
                 x[0]
+            })
+        });
+    }
+    g.finish();
+
+    // The analytic pair ∂τ/∂q, ∂τ/∂q̇ (docs/theory-derivatives.md) beside
+    // what central differences cost: 4·n_dof inverse dynamics.
+    let mut g = c.benchmark_group("id_derivatives");
+    for n in [10usize, 100] {
+        let m = model(n);
+        let mut work = IdDerivatives::new(&m);
+        let (q, qd, qdd) = state(m.n_dof(), 42);
+        g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+            b.iter(|| {
+                inverse_dynamics_derivatives(&m, &mut work, 0.0, black_box(&q), &qd, &qdd)
+                    .unwrap()
+                    .dtau_dq[(0, 0)]
+            })
+        });
+    }
+    g.finish();
+
+    let mut g = c.benchmark_group("id_derivatives_central_differences");
+    g.sample_size(10);
+    for n in [10usize, 40] {
+        let m = model(n);
+        let mut data = Data::new(&m);
+        let (q, qd, qdd) = state(m.n_dof(), 42);
+        let (mut qp, mut qdp) = (q.clone(), qd.clone());
+        let mut col = vec![0.0; m.n_dof()];
+        g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+            b.iter(|| {
+                for j in 0..m.n_dof() {
+                    for which in 0..2 {
+                        let x = if which == 0 { &mut qp } else { &mut qdp };
+                        let x0 = x[j];
+                        let h = 6e-6 * x0.abs().max(1.0);
+                        x[j] = x0 + h;
+                        let plus = inverse_dynamics(&m, &mut data, 0.0, &qp, &qdp, &qdd).unwrap();
+                        col.copy_from_slice(plus.as_slice());
+                        let x = if which == 0 { &mut qp } else { &mut qdp };
+                        x[j] = x0 - h;
+                        let minus = inverse_dynamics(&m, &mut data, 0.0, &qp, &qdp, &qdd).unwrap();
+                        for (c, mi) in col.iter_mut().zip(minus.iter()) {
+                            *c = (*c - mi) / (2.0 * h);
+                        }
+                        let x = if which == 0 { &mut qp } else { &mut qdp };
+                        x[j] = x0;
+                    }
+                }
+                black_box(col[0])
+            })
+        });
+    }
+    g.finish();
+
+    let mut g = c.benchmark_group("forward_dynamics_derivatives");
+    for n in [10usize, 100] {
+        let m = model(n);
+        let mut data = Data::new(&m);
+        let mut work = FdDerivatives::new(&m);
+        let (q, qd, _) = state(m.n_dof(), 42);
+        g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+            b.iter(|| {
+                forward_dynamics_derivatives(
+                    &m,
+                    &mut data,
+                    &mut work,
+                    0.0,
+                    black_box(&q),
+                    &qd,
+                    None,
+                )
+                .unwrap()
+                .dqdd_dq[(0, 0)]
             })
         });
     }
