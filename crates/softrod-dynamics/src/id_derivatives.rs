@@ -176,6 +176,7 @@ impl IdDerivatives {
 }
 
 /// `B` as a zero-padded 6×6 (columns past `k` are zero).
+#[inline(always)]
 fn basis6(basis: &Basis) -> Mat6 {
     let mut b = Mat6::zeros();
     for c in 0..basis.dof() {
@@ -188,6 +189,7 @@ fn basis6(basis: &Basis) -> Mat6 {
 /// (body components) with respect to a body-frame perturbation `Δ = (ω, v)`
 /// of the section it acts on (D38): the net force density `−F` changes by
 /// `(ω × m; ω × f) = Y Δ`, `Y = [[−m̃, 0], [−f̃, 0]]`.
+#[inline(always)]
 fn dead_load_map(w: &Vec6) -> Mat6 {
     let mut y = Mat6::zeros();
     y.fixed_view_mut::<3, 3>(0, 0)
@@ -198,21 +200,40 @@ fn dead_load_map(w: &Vec6) -> Mat6 {
 }
 
 /// `diag(d) X`.
-#[inline]
+#[inline(always)]
 fn diag_mul(d: &Vec6, x: &Mat6) -> Mat6 {
     Mat6::from_fn(|i, j| d[i] * x[(i, j)])
 }
 
 /// `X diag(d)`.
-#[inline]
+#[inline(always)]
 fn scale_columns(x: &Mat6, d: &Vec6) -> Mat6 {
     Mat6::from_fn(|i, j| x[(i, j)] * d[j])
 }
 
+/// `X · Op` for a block operator (dense: nalgebra's unrolled 6×6 product
+/// measured cheaper than six 3×3 block products with their copies).
+#[inline(always)]
+fn mul_op(x: &Mat6, op: &AdOp) -> Mat6 {
+    x * op.to_mat6()
+}
+
+/// `Op · X`.
+#[inline(always)]
+fn op_mul(op: &AdOp, x: &Mat6) -> Mat6 {
+    op.to_mat6() * x
+}
+
+/// `Opᵀ · X`.
+#[inline(always)]
+fn op_tr_mul(op: &AdOp, x: &Mat6) -> Mat6 {
+    op.to_mat6().tr_mul(x)
+}
+
 /// One evaluation point of a piece, linearized (D39–D41).
 struct PointLin {
-    a: Mat6,
-    t: Mat6,
+    a: AdOp,
+    t: AdOp,
     eta: Vec6,
     etad: Vec6,
     h_eta: Mat6,
@@ -222,6 +243,7 @@ struct PointLin {
 }
 
 #[allow(clippy::too_many_arguments)]
+#[inline(always)]
 fn linearize_point(
     maps: &PieceMaps,
     dm: &PieceDerivMaps,
@@ -232,13 +254,13 @@ fn linearize_point(
     xidd: &Vec6,
 ) -> (Pose, PointLin) {
     let (g, tm, beta) = maps.eval(x);
-    let a = g.ad_inv().to_mat6();
-    let t = tm.to_mat6();
-    let c = a * eta0;
-    let sv = t * xid;
+    let a = g.ad_inv();
+    let t = tm;
+    let c = a.mul_vec(eta0);
+    let sv = t.mul_vec(xid);
     let eta = c + sv;
-    let a0 = a * etad0;
-    let etad = a0 + t * xidd + ad_vec(&c, &sv) + beta;
+    let a0 = a.mul_vec(etad0);
+    let etad = a0 + t.mul_vec(xidd) + ad_vec(&c, &sv) + beta;
     let co = Coefficients::at(x, dm.theta);
     let d1 = dm.d_tangent_applied(&co, false);
     let d2 = dm.d_tangent_applied(&co, true);
@@ -253,7 +275,7 @@ fn linearize_point(
     let h_eta = adc_t + d1;
     // (D40): δη̇′ = ad_{a₀}Δ − ad_{Tξ̇} ad_c Δ + 𝒟_ξ̈ ζ + ad_c 𝒟_ξ̇ ζ + 𝒟² ζ.
     let h_etad =
-        (AdOp::ad(&a0) * tm - AdOp::ad(&sv) * adc_t_op).to_mat6() + d2 + adc_op.to_mat6() * d1 + dd;
+        (AdOp::ad(&a0) * tm - AdOp::ad(&sv) * adc_t_op).to_mat6() + d2 + op_mul(&adc_op, &d1) + dd;
     // (D41): ∂η̇′/∂ξ̇ = ad_c T₋ + 𝒟_ξ̇ + Ṫ.
     let h_vd = h_eta + td;
     (
@@ -300,6 +322,7 @@ fn for_each_cable_node(cable: &Cable, piece: &Piece, model: &Model, mut f: impl 
 /// `w = (d × t̂; t̂)` (the part `+λT ∫ w` of `τ = … − τ_c`), and of
 /// `λT ∫ H P Hᵀ/|v| ds` (its strain derivative), `H = [d̃; I]`,
 /// `P = I − t̂t̂ᵀ`.
+#[inline(always)]
 fn cable_terms(
     model: &Model,
     rm: &RodModel,
@@ -341,24 +364,30 @@ fn cable_terms(
     (force, hess)
 }
 
-/// Analytic `∂τ/∂q` and `∂τ/∂q̇` of the inverse dynamics
-/// `τ = ID(q, q̇, q̈)` at time `t` (docs/theory-derivatives.md, (D37)–(D47)),
-/// with every term of the model: inertia, Coriolis and centrifugal forces,
-/// gravity, elasticity and Kelvin–Voigt damping, cables, dead and follower
-/// point loads, distributed loads, drag. `∂τ/∂q̈ = M(q)`
-/// ([`crate::mass_matrix`]).
-///
-/// One outward sweep linearizes every evaluation point in its own piece's
-/// strain (D39–D42); one inward sweep carries the composite inertia,
-/// velocity-product and dead-load operators (D43) and forms each piece's
-/// diagonal block and the change of its transmitted wrench (D44); the
-/// off-diagonal blocks are pairings of per-piece world-frame quantities
-/// (D45–D46). Cost O(N·n_dof) (the result is dense), no allocation.
-///
-/// `q`, `q̇`, `q̈`: dim `n_dof`. Results in `work.dtau_dq`, `work.dtau_dqd`
-/// (n_dof × n_dof, row = component of `τ`, column = coordinate) and
-/// `work.tau`. Loads and cable tensions are scaled by `work.load_scale`.
-pub fn inverse_dynamics_derivatives<'a>(
+crate::simd::dispatch! {
+    /// Analytic `∂τ/∂q` and `∂τ/∂q̇` of the inverse dynamics
+    /// `τ = ID(q, q̇, q̈)` at time `t` (docs/theory-derivatives.md, (D37)–(D47)),
+    /// with every term of the model: inertia, Coriolis and centrifugal forces,
+    /// gravity, elasticity and Kelvin–Voigt damping, cables, dead and follower
+    /// point loads, distributed loads, drag. `∂τ/∂q̈ = M(q)`
+    /// ([`crate::mass_matrix`]).
+    ///
+    /// One outward sweep linearizes every evaluation point in its own piece's
+    /// strain (D39–D42); one inward sweep carries the composite inertia,
+    /// velocity-product and dead-load operators (D43) and forms each piece's
+    /// diagonal block and the change of its transmitted wrench (D44); the
+    /// off-diagonal blocks are pairings of per-piece world-frame quantities
+    /// (D45–D46). Cost O(N·n_dof) (the result is dense), no allocation.
+    ///
+    /// `q`, `q̇`, `q̈`: dim `n_dof`. Results in `work.dtau_dq`, `work.dtau_dqd`
+    /// (n_dof × n_dof, row = component of `τ`, column = coordinate) and
+    /// `work.tau`. Loads and cable tensions are scaled by `work.load_scale`.
+    pub fn inverse_dynamics_derivatives<'a>(model: &Model, work: &'a mut IdDerivatives, t: f64, q: &[f64], qd: &[f64], qdd: &[f64]) -> Result<&'a IdDerivatives, DynamicsError>
+    => id_derivatives_impl, id_derivatives_avx2
+}
+
+#[inline(always)]
+fn id_derivatives_impl<'a>(
     model: &Model,
     work: &'a mut IdDerivatives,
     t: f64,
@@ -408,6 +437,7 @@ pub fn inverse_dynamics_derivatives<'a>(
 
 /// The outward sweep (D39–D43): velocities, accelerations, force
 /// densities and their linearizations at every point; own-point sums.
+#[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn outward(
     model: &Model,
@@ -467,33 +497,39 @@ fn outward(
                 }
             }
             let wt = qp.w;
-            let df_q =
-                diag_mul(m, &p.h_etad) + b * p.h_eta + if has_y { y * p.t } else { Mat6::zeros() };
-            let df_v = diag_mul(m, &p.h_vd) + b * p.t;
-            let at = p.a.transpose();
-            let tt = p.t.transpose();
-            w.dq_diag += tt * df_q * wt;
-            w.dv_diag += tt * df_v * wt;
-            w.dq_w += at * (lambda(&f) * p.t + df_q) * wt;
-            w.dv_w += at * df_v * wt;
-            w.tsum += tt * f * wt;
-            w.wsum += at * f * wt;
+            let df_q = (diag_mul(m, &p.h_etad)
+                + b * p.h_eta
+                + if has_y {
+                    mul_op(&y, &p.t)
+                } else {
+                    Mat6::zeros()
+                })
+                * wt;
+            let df_v = (diag_mul(m, &p.h_vd) + mul_op(&b, &p.t)) * wt;
+            let fw = f * wt;
+            w.dq_diag += op_tr_mul(&p.t, &df_q);
+            w.dv_diag += op_tr_mul(&p.t, &df_v);
+            w.dq_w += op_tr_mul(&p.a, &(mul_op(&lambda(&fw), &p.t) + df_q));
+            w.dv_w += op_tr_mul(&p.a, &df_v);
+            w.tsum += p.t.tr_mul_vec(&fw);
+            w.wsum += p.a.tr_mul_vec(&fw);
             for i in 0..4 {
                 w.phi[i] += f * (wt * p.co.d[i]);
                 w.chi[i] += f * (wt * p.co.c[i]);
             }
             // (D43): B̄ = b − 𝓜 ad_η.
             let bbar = b - diag_mul(m, &ad(&p.eta));
-            let ma = diag_mul(m, &p.a);
-            let ba = bbar * p.a;
-            w.mt += at * ma * wt;
-            w.bt += at * ba * wt;
-            w.rm += tt * ma * wt;
-            w.rb += tt * ba * wt;
+            let pa = p.a.to_mat6();
+            let ma = diag_mul(&(m * wt), &pa);
+            let ba = mul_op(&(bbar * wt), &p.a);
+            w.mt += op_tr_mul(&p.a, &ma);
+            w.bt += op_tr_mul(&p.a, &ba);
+            w.rm += op_tr_mul(&p.t, &ma);
+            w.rb += op_tr_mul(&p.t, &ba);
             if has_y {
-                let ya = y * p.a;
-                w.yt += at * ya * wt;
-                w.ry += tt * ya * wt;
+                let ya = mul_op(&(y * wt), &p.a);
+                w.yt += op_tr_mul(&p.a, &ya);
+                w.ry += op_tr_mul(&p.t, &ya);
             }
         }
         for pl in &pd.loads {
@@ -524,7 +560,7 @@ fn outward(
         }
         let (g, p) = linearize_point(&maps, &dm, piece.length, &eta0, &etad0, &xid, &xidd);
         w.tip = g;
-        w.tm_tip = p.t;
+        w.tm_tip = p.t.to_mat6();
         w.eta_tip = p.eta;
         w.h_eta = p.h_eta;
         w.h_etad = p.h_etad;
@@ -556,6 +592,8 @@ fn inward(
     let mut mc = Mat6::zeros();
     let mut bc = Mat6::zeros();
     let mut yc = Mat6::zeros();
+    // Dead loads only: the 𝒴 composites and receivers are zero otherwise.
+    let dead = has_dead_loads(rm);
     let mut wn = Vec6::zeros();
     for (n, (piece, pd)) in rod.pieces().iter().zip(&rm.pieces).enumerate().rev() {
         let w = &mut work.pieces[r][n];
@@ -569,7 +607,10 @@ fn inward(
         // 𝓜ᶜ w̄ + 𝓑ᶜ u + 𝒴ᶜ Δ, with u = δη(ℓ), w̄ = δη̇′(ℓ) + ad_η(ℓ) δη(ℓ).
         let wq = w.h_etad + adeta * w.h_eta;
         let uq = w.h_eta;
-        let dwn_q = mc * wq + bc * uq + yc * tl;
+        let mut dwn_q = mc * wq + bc * uq;
+        if dead {
+            dwn_q += yc * tl;
+        }
         let wv = w.h_vd + adeta * tl;
         let dwn_v = mc * wv + bc * tl;
         let (mut phi, mut chi) = (w.phi, w.chi);
@@ -597,11 +638,15 @@ fn inward(
         let bt_ = bm.transpose();
         w.rcv_m = bt_ * (w.rm + tlt * mc * al) * base_inv;
         w.rcv_b = bt_ * (w.rb + tlt * bc * al) * base_inv;
-        w.rcv_y = bt_ * (w.ry + tlt * yc * al) * base_inv;
+        if dead {
+            w.rcv_y = bt_ * (w.ry + tlt * yc * al) * base_inv;
+        }
         // Composites carried to L_{n−1} (D43).
         mc = w.mt + alt * mc * al;
         bc = w.bt + alt * bc * al;
-        yc = w.yt + alt * yc * al;
+        if dead {
+            yc = w.yt + alt * yc * al;
+        }
         // τ_n (D18) and the strain-space terms (D13, D15, D47).
         let xi = piece.strain(&q[rm.dofs()]);
         let (cable_force, cable_hess) = cable_terms(model, rm, piece, &xi, t, scale);
@@ -622,11 +667,26 @@ fn inward(
     }
 }
 
+/// Whether a rod carries dead (world-frame) point or distributed loads, the
+/// only terms with a nonzero `Y` (D38).
+fn has_dead_loads(rm: &RodModel) -> bool {
+    rm.spec
+        .point_loads
+        .iter()
+        .any(|l| l.frame == LoadFrame::World)
+        || rm
+            .spec
+            .distributed_loads
+            .iter()
+            .any(|l| l.frame == LoadFrame::World)
+}
+
 /// The off-diagonal blocks (D45–D46): `i < j` pairs the world tip column
 /// `Ad_{G_i}S_i(ℓ)` with the change of the transmitted wrench of piece `j`;
 /// `i > j` pairs the receivers of piece `i` with the tip sources of `j`.
 fn pairs(rm: &RodModel, work: &mut IdDerivatives, r: usize) {
     let pieces = rm.spec.rod.pieces();
+    let dead = has_dead_loads(rm);
     let ws = &work.pieces[r];
     for (j, pj) in pieces.iter().enumerate() {
         let kj = pj.basis.dof();
@@ -646,7 +706,11 @@ fn pairs(rm: &RodModel, work: &mut IdDerivatives, r: usize) {
                 )
             } else {
                 (
-                    wi.rcv_m * wj.src_wq + wi.rcv_b * wj.src_uq + wi.rcv_y * wj.s_world,
+                    if dead {
+                        wi.rcv_m * wj.src_wq + wi.rcv_b * wj.src_uq + wi.rcv_y * wj.s_world
+                    } else {
+                        wi.rcv_m * wj.src_wq + wi.rcv_b * wj.src_uq
+                    },
                     wi.rcv_m * wj.src_wv + wi.rcv_b * wj.src_uv,
                 )
             };

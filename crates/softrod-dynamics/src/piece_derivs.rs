@@ -17,6 +17,7 @@ use softrod_lie::{Mat6, Vec6, ad, angular, linear};
 /// `σ_i = Σ_{m≥2} 4m(m−1) c_{i,m} u^{m−2}/(i+2m+1)`, `u = ψ²`, Horner), closed
 /// form `σ_i = (ψP_i′ − (i+3)P_i)/(2ψ^{i+5})`, `P_i = ψN_i′ − (i+1)N_i`,
 /// `P_i′ = ψN_i″ − iN_i′` above (`N_i` of (D3)).
+#[inline(always)]
 pub(crate) fn sigma(psi: f64) -> [f64; 4] {
     let psi = psi.abs();
     if psi < PSI_SWITCH {
@@ -63,6 +64,7 @@ const fn sigma_table() -> [[f64; SIGMA_TERMS]; 4] {
 
 static SIGMA_SERIES: [[f64; SIGMA_TERMS]; 4] = sigma_table();
 
+#[inline(always)]
 fn sigma_series(u: f64) -> [f64; 4] {
     let mut out = [0.0; 4];
     for (o, row) in out.iter_mut().zip(SIGMA_SERIES.iter()) {
@@ -75,6 +77,7 @@ fn sigma_series(u: f64) -> [f64; 4] {
     out
 }
 
+#[inline(always)]
 fn sigma_closed(p: f64) -> [f64; 4] {
     let (s, c) = p.sin_cos();
     // N_i, N_i′, N_i″ (D3, D5).
@@ -110,6 +113,7 @@ pub(crate) struct Coefficients {
 }
 
 impl Coefficients {
+    #[inline(always)]
     pub fn at(x: f64, theta: f64) -> Self {
         let psi = x * theta;
         let (t, r) = tau_rho(psi);
@@ -156,6 +160,7 @@ pub(crate) struct PieceDerivMaps {
 }
 
 impl PieceDerivMaps {
+    #[inline(always)]
     pub fn new(xi: &Vec6, xid: &Vec6, xidd: &Vec6) -> Self {
         let k = angular(xi);
         let pm = ad(xi);
@@ -215,6 +220,7 @@ impl PieceDerivMaps {
 
     /// `𝒟_v(x)` with `𝒟_v ζ = D_ξT₋(x)[ζ] v` (D32) for `v = ξ̇` (`acc = false`)
     /// or `v = ξ̈` (`acc = true`): `Σ_i d_i (P^i v) k̄ᵀ − c_i E_i(v)`.
+    #[inline(always)]
     pub fn d_tangent_applied(&self, co: &Coefficients, acc: bool) -> Mat6 {
         let (pv, e) = if acc {
             (&self.vdd, &self.edd)
@@ -233,6 +239,7 @@ impl PieceDerivMaps {
 
     /// `Ṫ(x) = D_ξT₋(x)[ξ̇] = Σ_i d_i (k·ξ̇_k) P^i + c_i F_i` (D33), the
     /// matrix of `Ṡ_n = Ṫ B_n` (D9).
+    #[inline(always)]
     pub fn tangent_rate(&self, co: &Coefficients) -> Mat6 {
         let mut out = Mat6::zeros();
         for i in 0..4 {
@@ -244,6 +251,7 @@ impl PieceDerivMaps {
 
     /// `𝒟²(x)` with `𝒟² ζ = D_ξ(D_ξT₋(x)[ξ̇]ξ̇)[ζ]` (D35):
     /// `Σ_i h_i(k·ξ̇_k)(P^iξ̇)k̄ᵀ + d_i(P^iξ̇)ξ̇̄ᵀ − d_i(k·ξ̇_k)E_i(ξ̇) + d_i e_i k̄ᵀ + c_i Ê_i`.
+    #[inline(always)]
     pub fn bias_strain_derivative(&self, co: &Coefficients) -> Mat6 {
         let mut uk = Vec6::zeros();
         let mut ud = Vec6::zeros();
@@ -271,6 +279,7 @@ impl PieceDerivMaps {
 /// over evaluation points of the piece: the matrix with
 /// `(Σ w D_ξT₋(x)[ζ]ᵀ f)ᵀ y = yᵀ 𝒬 ζ`,
 /// `𝒬 = Σ_i (P^{iᵀ}φ_i) k̄ᵀ − Σ_i Σ_{l<i} (P^{i−1−l})ᵀ Λ((Pᵀ)^l χ_i)`.
+#[inline(always)]
 pub(crate) fn tangent_transpose_form(
     p: &[Mat6; 4],
     kbar: &Vec6,
@@ -316,7 +325,7 @@ fn add_outer_angular(m: &mut Mat6, u: &Vec6, v: &Vec6) {
 
 /// `Λ(h)` with `Λ(h) ζ = ad*_ζ h`: `[[−m̃, −ñ], [−ñ, 0]]` for `h = (m, n)`,
 /// skew-symmetric.
-#[inline]
+#[inline(always)]
 pub(crate) fn lambda(h: &Vec6) -> Mat6 {
     let m = softrod_lie::skew(&angular(h));
     let n = softrod_lie::skew(&linear(h));
