@@ -168,7 +168,7 @@ pub struct Linearization {
     /// `f(x₀, u₀) = (q̇, q̈)` at the point (2n): zero at an equilibrium.
     pub xdot: DVector<f64>,
     /// The operating inputs `u₀`: each cable's tension at `t` times the load
-    /// factor [N].
+    /// factor \[N\].
     pub u: DVector<f64>,
 }
 
