@@ -387,7 +387,7 @@ crate::simd::dispatch! {
 }
 
 #[inline(always)]
-fn id_derivatives_impl<'a>(
+pub(crate) fn id_derivatives_impl<'a>(
     model: &Model,
     work: &'a mut IdDerivatives,
     t: f64,

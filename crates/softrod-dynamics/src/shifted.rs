@@ -132,7 +132,7 @@ crate::simd::dispatch! {
 }
 
 #[inline(always)]
-fn shifted_factor_impl<'a>(
+pub(crate) fn shifted_factor_impl<'a>(
     model: &Model,
     data: &'a mut Data,
     q: &[f64],
