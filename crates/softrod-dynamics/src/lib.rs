@@ -17,7 +17,10 @@
 //! | [`energies`] | kinetic, elastic, gravitational | §7 |
 //! | [`statics`] | equilibrium, Newton + line search + continuation | |
 //! | [`modes`] | natural frequencies about an equilibrium | |
-//! | [`dynamics_jacobians`] | `∂q̈/∂q`, `∂q̈/∂q̇` | |
+//! | [`inverse_dynamics_derivatives`] | `∂τ/∂q`, `∂τ/∂q̇` (`∂τ/∂q̈ = M`) | docs/theory-derivatives.md (D37–D47) |
+//! | [`forward_dynamics_derivatives`] | `∂q̈/∂q`, `∂q̈/∂q̇`, `∂q̈/∂u` | (D48) |
+//! | [`linearize`] | `(A, B)` of `ẋ = f(x, u)`, `x = (q, q̇)` | (D49) |
+//! | [`dynamics_jacobians`] | `∂q̈/∂q`, `∂q̈/∂q̇` (allocating) | (D48) |
 //! | [`ShiftedSolver`] | `(M + aK + bD)⁻¹ x`, O(N) | §6 with armature `aK_n + bD_n` |
 //!
 //! Units SI; twists and wrenches angular first; body frame (see `softrod-lie`).
@@ -30,10 +33,12 @@ mod data;
 mod derivatives;
 mod energy;
 mod error;
+mod id_derivatives;
 mod matrices;
 mod model;
 mod modes;
 mod passes;
+mod piece_derivs;
 mod shifted;
 mod simd;
 mod statics;
@@ -42,9 +47,13 @@ pub use algorithms::{
     bias_force, forward_dynamics, forward_dynamics_cholesky, inverse_dynamics, mass_matrix,
 };
 pub use data::Data;
-pub use derivatives::{DynamicsJacobians, dynamics_jacobians};
+pub use derivatives::{
+    DynamicsJacobians, FdDerivatives, Linearization, dynamics_jacobians,
+    forward_dynamics_derivatives, linearize,
+};
 pub use energy::{Energies, energies};
 pub use error::DynamicsError;
+pub use id_derivatives::{IdDerivatives, inverse_dynamics_derivatives};
 pub use matrices::{
     actuation_matrix, coriolis_matrix, damping_matrix, generalized_gravity, stiffness_matrix,
 };
