@@ -12,6 +12,18 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 venv="${SOFTROD_VENV:-.venv}"
 
+# The 3-D view is tested in a real headless browser (crates/softrod-viz/tests/browser.rs).
+if [[ -z "${SOFTROD_CHROMIUM:-}" ]] && ! command -v chromium >/dev/null 2>&1; then
+    if command -v apt-get >/dev/null 2>&1 && [[ "$(id -u)" == 0 ]]; then
+        echo "== installing Debian's chromium for the browser test"
+        apt-get update -qq
+        DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null
+    else
+        echo "scripts/test.sh: the browser test needs chromium (apt-get install chromium, or set SOFTROD_CHROMIUM)" >&2
+        exit 1
+    fi
+fi
+
 echo "== Rust tests"
 cargo test --workspace
 
