@@ -32,12 +32,13 @@ impl Rng {
 fn model(n: usize) -> Model {
     let length = 0.5;
     let rod = Rod::uniform(length, n, Basis::all(), straight(), Pose::identity()).unwrap();
-    let material = Material {
-        density: 1000.0,
-        young: 1e7,
-        shear: 1e7 / 3.0,
-        viscosity: 1.0,
-    };
+    let material = Material::builder()
+        .density(1000.0)
+        .young(1e7)
+        .shear_modulus(1e7 / 3.0)
+        .viscosity(1.0)
+        .build()
+        .unwrap();
     let body = RodBody::new(Section::Circle { radius: 0.01 }, material, length).unwrap();
     let spec = RodSpec::new("bench", rod, body);
     let m = Model::new(vec![spec], Some(Vec3::new(0.0, 0.0, -9.81)), 4).unwrap();

@@ -19,12 +19,13 @@ fn main() {
     let n = env("N_PIECES", 10);
     let iters = env("N_ITER", 20000);
     let rod = Rod::uniform(0.5, n, Basis::all(), straight(), Pose::identity()).unwrap();
-    let material = Material {
-        density: 1000.0,
-        young: 1e7,
-        shear: 1e7 / 3.0,
-        viscosity: 1.0,
-    };
+    let material = Material::builder()
+        .density(1000.0)
+        .young(1e7)
+        .shear_modulus(1e7 / 3.0)
+        .viscosity(1.0)
+        .build()
+        .unwrap();
     let body = RodBody::new(Section::Circle { radius: 0.01 }, material, 0.5).unwrap();
     let model = Model::new(
         vec![RodSpec::new("arm", rod, body)],

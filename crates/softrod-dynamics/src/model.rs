@@ -165,14 +165,9 @@ impl Model {
             let name = spec.name.clone();
             let invalid =
                 |what: String| DynamicsError::InvalidModel(format!("rod '{name}': {what}"));
-            spec.body.validate().map_err(|e| invalid(e.to_string()))?;
-            if (spec.body.length - rod.length()).abs() > 1e-9 * rod.length() {
-                return Err(invalid(format!(
-                    "body length {} differs from the rod length {}",
-                    spec.body.length,
-                    rod.length()
-                )));
-            }
+            spec.body
+                .check_rod(rod)
+                .map_err(|e| invalid(e.to_string()))?;
             if let Some(sf) = &spec.stress_free {
                 if sf.len() != rod.n_pieces() {
                     return Err(invalid(format!(

@@ -1,6 +1,6 @@
 //! Cross-sections: area and second moments, possibly varying along the rod.
 
-use crate::error::{MechanicsError, non_negative, positive};
+use crate::error::{MechanicsError, Quantity, non_negative, positive};
 use std::f64::consts::PI;
 
 /// A rod cross-section in the local `(y, z)` plane (local x is the tangent).
@@ -70,13 +70,13 @@ impl Section {
     /// inner radius lies in `[0, radius)`.
     pub fn validate(&self) -> Result<(), MechanicsError> {
         match *self {
-            Section::Circle { radius } => positive("section radius [m]", radius),
+            Section::Circle { radius } => positive(Quantity::Radius, radius),
             Section::Tube {
                 radius,
                 inner_radius,
             } => {
-                positive("tube outer radius [m]", radius)?;
-                non_negative("tube inner radius [m]", inner_radius)?;
+                positive(Quantity::Radius, radius)?;
+                non_negative(Quantity::InnerRadius, inner_radius)?;
                 if inner_radius >= radius {
                     return Err(MechanicsError::InnerRadius {
                         inner: inner_radius,
@@ -86,15 +86,15 @@ impl Section {
                 Ok(())
             }
             Section::Rectangle { width, height } => {
-                positive("rectangle width [m]", width)?;
-                positive("rectangle height [m]", height)
+                positive(Quantity::Width, width)?;
+                positive(Quantity::Height, height)
             }
             Section::TaperedCircle {
                 radius_base,
                 radius_tip,
             } => {
-                positive("tapered section base radius [m]", radius_base)?;
-                positive("tapered section tip radius [m]", radius_tip)
+                positive(Quantity::BaseRadius, radius_base)?;
+                positive(Quantity::TipRadius, radius_tip)
             }
         }
     }
@@ -155,13 +155,23 @@ impl Section {
     }
 
     /// Radius of the smallest centred circle containing the section at `u = s/L`
-    /// [m]: `r`, the outer radius, `½√(w² + h²)`, or `r(u)`. Used to warn about
-    /// cables routed outside the body.
+    /// [m]: `r`, the outer radius, `½√(w² + h²)`, or `r(u)`.
     #[inline]
     pub fn outer_radius(&self, u: f64) -> f64 {
         match *self {
-            Section::Circle { radius } | Section::Tube { radius, .. } => radius,
             Section::Rectangle { width, height } => 0.5 * width.hypot(height),
+            _ => self.half_size(u),
+        }
+    }
+
+    /// Half the largest extent of the section at `u = s/L` [m]: the (outer)
+    /// radius of a circle, tube or taper, half the longer side of a
+    /// rectangle. The size scale a rod's pieces should be long against.
+    #[inline]
+    pub fn half_size(&self, u: f64) -> f64 {
+        match *self {
+            Section::Circle { radius } | Section::Tube { radius, .. } => radius,
+            Section::Rectangle { width, height } => 0.5 * width.max(height),
             Section::TaperedCircle {
                 radius_base,
                 radius_tip,
@@ -169,6 +179,18 @@ impl Section {
                 let u = u.clamp(0.0, 1.0);
                 radius_base + (radius_tip - radius_base) * u
             }
+        }
+    }
+
+    /// Whether the point `(y, z)` [m] of the section plane at `u = s/L` lies
+    /// inside the section's outer boundary (boundary included). A tube's
+    /// bore counts as inside (a cable may run in the lumen).
+    pub fn contains(&self, u: f64, y: f64, z: f64) -> bool {
+        match *self {
+            Section::Rectangle { width, height } => {
+                y.abs() <= 0.5 * width && z.abs() <= 0.5 * height
+            }
+            _ => y.hypot(z) <= self.half_size(u),
         }
     }
 }

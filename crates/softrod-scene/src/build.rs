@@ -85,14 +85,12 @@ pub fn build(scene: &Scene) -> Result<Built, SceneError> {
         let rod = KinRod::with_lengths(&r.piece_lengths, basis, rest, base_pose(&r.base))
             .map_err(|e| invalid(scene, p("pieces"), e.to_string()))?;
         let m = &r.material;
-        let material = mech::Material {
-            density: m.density,
-            young: m.young,
-            shear: m.shear_modulus,
-            viscosity: m.viscosity,
-        };
-        material
-            .validate()
+        let material = mech::Material::builder()
+            .density(m.density)
+            .young(m.young)
+            .shear_modulus(m.shear_modulus)
+            .viscosity(m.viscosity)
+            .build()
             .map_err(|e| invalid(scene, p("material"), e.to_string()))?;
         let body = mech::RodBody::new(section(&r.section), material, rod.length())
             .map_err(|e| invalid(scene, p("section"), e.to_string()))?;
@@ -111,8 +109,10 @@ pub fn build(scene: &Scene) -> Result<Built, SceneError> {
                 Routing::Offset([y, z]) => mech::Routing::Offset { y: *y, z: *z },
                 Routing::Path(pts) => mech::Routing::Path(pts.clone()),
             },
-            from: c.from,
-            to: c.to,
+            span: mech::Span::Between {
+                from: c.from,
+                to: c.to,
+            },
             tension: match &c.tension {
                 Tension::Constant(v) => mech::Tension::Constant(*v),
                 Tension::Schedule { times, values } => mech::Tension::Table {
