@@ -67,9 +67,7 @@ pub fn dynamics_jacobians(
         }
     }
     let m = mass_matrix(model, data, q)?.clone();
-    let chol = m.cholesky().ok_or(DynamicsError::Singular {
-        rod: 0,
-        piece: 0,
+    let chol = m.cholesky().ok_or(DynamicsError::NotPositiveDefinite {
         what: "mass matrix",
     })?;
     Ok(DynamicsJacobians {
