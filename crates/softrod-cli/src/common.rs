@@ -126,5 +126,5 @@ pub fn pose_json(p: &Pose) -> serde_json::Value {
 
 /// Whether the scene has static loads (gravity, point loads, cables).
 pub fn has_static_loads(scene: &Scene) -> bool {
-    scene.has_gravity() || !scene.loads.is_empty() || !scene.cables.is_empty()
+    scene.has_gravity() || scene.n_point_loads() > 0 || scene.n_cables() > 0
 }

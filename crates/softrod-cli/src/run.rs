@@ -51,12 +51,6 @@ pub fn method_and_options(scene: &Scene) -> Result<(Method, Options), CliError> 
         ),
         Integrator::Dopri5 => (Method::Dopri5, Options::tol(run.rtol, run.atol)),
         Integrator::Rosenbrock => (Method::Rosw34, Options::tol(run.rtol, run.atol)),
-        Integrator::Radau5 => {
-            return Err(CliError::Input(format!(
-                "{}: run.integrator: \"radau5\" is not implemented yet, use \"rosenbrock\" (stiff, adaptive)",
-                scene.source
-            )));
-        }
     };
     if run.integrator == Integrator::GeneralizedAlpha && run.linearly_implicit {
         // One iteration with W = M⁻¹K, always accepted: the IMEX scheme of

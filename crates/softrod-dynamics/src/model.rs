@@ -39,7 +39,7 @@ use softrod_mechanics::{
 /// assert_eq!(arm.rod.n_dof(), 24);
 /// assert!(RodSpec::builder(-0.5).circle(0.01).material(silicone).build().is_err());
 /// ```
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct RodSpec {
     /// A name for messages and outputs.
     pub name: String,
@@ -61,7 +61,7 @@ pub struct RodSpec {
 }
 
 impl RodSpec {
-    /// A builder for a rod of undeformed length `length` [m] (see
+    /// A builder for a rod of undeformed length `length` \[m\] (see
     /// [`RodSpecBuilder`]).
     pub fn builder(length: f64) -> RodSpecBuilder {
         RodSpecBuilder::new(length)

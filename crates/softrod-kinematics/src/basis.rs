@@ -4,6 +4,7 @@ use crate::error::KinematicsError;
 use crate::strain::Strain;
 use nalgebra::Matrix6xX;
 use softrod_lie::Vec6;
+use std::fmt;
 
 /// A strain basis `B_n ∈ R^{6×k_n}`, `1 ≤ k_n ≤ 6`, of full column rank:
 /// the strain of the piece is `ξ_n = B_n q_n + ξ̄_n`.
@@ -184,5 +185,24 @@ impl Basis {
     #[inline]
     pub fn column(&self, c: usize) -> Vec6 {
         self.matrix.fixed_view::<6, 1>(0, c).into_owned()
+    }
+}
+
+impl fmt::Display for Basis {
+    /// A selection as its strain names in column order (`ky, qx, qz`); a
+    /// general matrix as `general 6×k basis`.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match &self.selection {
+            Some(sel) => {
+                for (c, &i) in sel.iter().enumerate() {
+                    if c > 0 {
+                        f.write_str(", ")?;
+                    }
+                    f.write_str(Strain::ALL[i].name())?;
+                }
+                Ok(())
+            }
+            None => write!(f, "general 6×{} basis", self.dof()),
+        }
     }
 }

@@ -129,6 +129,10 @@ fn bad_bases() {
     sel[(1, 1)] = 1.0;
     let s = Basis::from_matrix(sel).unwrap();
     assert_eq!(s.selection(), Some(&[4usize, 1][..]));
+    assert_eq!(s.strains(), Some(vec![Strain::Qy, Strain::Ky]));
+    assert_eq!(s.to_string(), "qy, ky");
+    assert_eq!(ok.strains(), None);
+    assert_eq!(ok.to_string(), "general 6×1 basis");
 }
 
 #[test]
