@@ -63,7 +63,7 @@ pub struct RodSpecBuilder {
 }
 
 impl RodSpecBuilder {
-    /// A rod of undeformed length `length` [m] (> 0).
+    /// A rod of undeformed length `length` \[m\] (> 0).
     pub fn new(length: f64) -> Self {
         Self {
             length,
@@ -94,7 +94,7 @@ impl RodSpecBuilder {
         self
     }
 
-    /// Pieces of these lengths [m], base to tip; they must sum to the rod
+    /// Pieces of these lengths \[m\], base to tip; they must sum to the rod
     /// length (to `RodBody::LENGTH_RTOL`).
     pub fn piece_lengths(mut self, lengths: &[f64]) -> Self {
         self.pieces = Pieces::Lengths(lengths.to_vec());
@@ -134,7 +134,7 @@ impl RodSpecBuilder {
         self
     }
 
-    /// Shorthand for a solid circular section of radius `radius` [m].
+    /// Shorthand for a solid circular section of radius `radius` \[m\].
     pub fn circle(self, radius: f64) -> Self {
         self.section(Section::Circle { radius })
     }

@@ -85,9 +85,9 @@ pub enum DynamicsError {
     PieceLengthSum {
         /// Which rod.
         rod: RodId,
-        /// `Σ ℓ_n` [m].
+        /// `Σ ℓ_n` \[m\].
         sum: f64,
-        /// The length given [m].
+        /// The length given \[m\].
         length: f64,
     },
     /// Not one stress-free strain per piece.

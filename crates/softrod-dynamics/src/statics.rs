@@ -17,7 +17,7 @@ pub struct StaticsOptions {
     pub max_iterations: usize,
     /// Maximum number of continuation steps (load increments).
     pub max_load_steps: usize,
-    /// Time at which time-dependent loads (cable tensions) are evaluated [s].
+    /// Time at which time-dependent loads (cable tensions) are evaluated \[s\].
     pub time: f64,
 }
 

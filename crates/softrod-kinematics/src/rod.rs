@@ -10,9 +10,9 @@ use softrod_lie::{Pose, Vec6};
 /// `ξ_n = B_n q_n + ξ̄_n`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Piece {
-    /// Length `ℓ_n` [m].
+    /// Length `ℓ_n` \[m\].
     pub length: f64,
-    /// Abscissa of the piece base `L_{n−1}` [m].
+    /// Abscissa of the piece base `L_{n−1}` \[m\].
     pub start: f64,
     /// Strain basis `B_n`.
     pub basis: Basis,
@@ -23,7 +23,7 @@ pub struct Piece {
 }
 
 impl Piece {
-    /// Abscissa of the piece tip `L_n` [m].
+    /// Abscissa of the piece tip `L_n` \[m\].
     #[inline]
     pub fn end(&self) -> f64 {
         self.start + self.length
@@ -56,7 +56,7 @@ impl Piece {
 /// Description of one piece for [`Rod::from_pieces`].
 #[derive(Clone, Debug)]
 pub struct PieceSpec {
-    /// Length [m].
+    /// Length \[m\].
     pub length: f64,
     /// Strain basis.
     pub basis: Basis,
@@ -201,7 +201,7 @@ impl Rod {
         self.n_dof
     }
 
-    /// Total (material, unstretched) length `L` [m].
+    /// Total (material, unstretched) length `L` \[m\].
     #[inline]
     pub fn length(&self) -> f64 {
         self.length
@@ -213,7 +213,7 @@ impl Rod {
         &self.base
     }
 
-    /// The lengths `ℓ_n` of the pieces, base to tip [m].
+    /// The lengths `ℓ_n` of the pieces, base to tip \[m\].
     pub fn piece_lengths(&self) -> impl ExactSizeIterator<Item = f64> + '_ {
         self.pieces.iter().map(|p| p.length)
     }

@@ -10,7 +10,7 @@ use softrod_lie::Vec6;
 /// velocities into internal wrenches and inertia (seed (5)–(6)).
 ///
 /// Valid by construction ([`RodBody::new`]). All per-`s` queries take the
-/// material abscissa `s ∈ [0, L]` [m] (clamped); only a tapered section
+/// material abscissa `s ∈ [0, L]` \[m\] (clamped); only a tapered section
 /// depends on it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RodBody {
@@ -26,7 +26,7 @@ impl RodBody {
     /// stay inside).
     pub const LENGTH_RTOL: f64 = 1e-9;
 
-    /// A body of undeformed length `length > 0` [m]; checks the length and
+    /// A body of undeformed length `length > 0` \[m\]; checks the length and
     /// the section ([`Section::validate`]). The material is valid by
     /// construction.
     pub fn new(section: Section, material: Material, length: f64) -> Result<Self, MechanicsError> {
@@ -51,7 +51,7 @@ impl RodBody {
         &self.material
     }
 
-    /// Undeformed length `L` [m]; equals the kinematic rod's length.
+    /// Undeformed length `L` \[m\]; equals the kinematic rod's length.
     #[inline]
     pub fn length(&self) -> f64 {
         self.length
@@ -68,7 +68,7 @@ impl RodBody {
         Ok(())
     }
 
-    /// Section properties at abscissa `s` [m].
+    /// Section properties at abscissa `s` \[m\].
     #[inline]
     pub fn properties(&self, s: f64) -> SectionProperties {
         self.section.properties(s / self.length)

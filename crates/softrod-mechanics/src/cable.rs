@@ -14,20 +14,20 @@ use softrod_lie::{Vec3, Vec6, Wrench, angular, join, linear};
 /// Path of a cable in the cross-section, as a function of the abscissa `s`.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Routing {
-    /// Constant offset `d = (0, y, z)` [m] over the span (`d′ = 0`).
+    /// Constant offset `d = (0, y, z)` \[m\] over the span (`d′ = 0`).
     Offset {
-        /// Offset along local y [m].
+        /// Offset along local y \[m\].
         y: f64,
-        /// Offset along local z [m].
+        /// Offset along local z \[m\].
         z: f64,
     },
-    /// Piecewise-linear offset through the points `(s, y, z)` [m]: at least
+    /// Piecewise-linear offset through the points `(s, y, z)` \[m\]: at least
     /// two, `s` strictly increasing within the rod, covering the cable's span.
     Path(Vec<[f64; 3]>),
 }
 
 impl Routing {
-    /// Offset `d(s) = (0, y(s), z(s))` [m] and its derivative `d′(s)` (body
+    /// Offset `d(s) = (0, y(s), z(s))` \[m\] and its derivative `d′(s)` (body
     /// frame). A path is linear between its points; at a point the
     /// derivative of the segment to the right is returned; beyond the ends
     /// `d` is held and `d′ = 0`.
@@ -39,7 +39,7 @@ impl Routing {
         }
     }
 
-    /// Largest `|d(s)|` over the routing [m].
+    /// Largest `|d(s)|` over the routing \[m\].
     pub fn max_offset(&self) -> f64 {
         match self {
             Routing::Offset { y, z } => y.hypot(*z),
@@ -56,23 +56,23 @@ impl Routing {
     }
 }
 
-/// Cable tension `T(t)` [N] as a function of time.
+/// Cable tension `T(t)` \[N\] as a function of time.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Tension {
-    /// Constant tension `T ≥ 0` [N].
+    /// Constant tension `T ≥ 0` \[N\].
     Constant(f64),
     /// Piecewise-linear in time through `(times[i], values[i])` [s, N],
     /// times strictly increasing, values `≥ 0`; held constant beyond the ends.
     Table {
-        /// Times [s], strictly increasing.
+        /// Times \[s\], strictly increasing.
         times: Vec<f64>,
-        /// Tensions [N], `≥ 0`.
+        /// Tensions \[N\], `≥ 0`.
         values: Vec<f64>,
     },
 }
 
 impl Tension {
-    /// `T(t)` [N]: the constant, or linear interpolation in the table,
+    /// `T(t)` \[N\]: the constant, or linear interpolation in the table,
     /// held at the first/last value outside it.
     #[inline]
     pub fn at(&self, t: f64) -> f64 {
@@ -82,7 +82,7 @@ impl Tension {
         }
     }
 
-    /// Largest tension over all time [N].
+    /// Largest tension over all time \[N\].
     pub fn max(&self) -> f64 {
         match self {
             Tension::Constant(v) => *v,
@@ -130,11 +130,11 @@ pub enum Span {
     /// The whole rod, `[0, L]`, anchored at the tip.
     #[default]
     Whole,
-    /// `[from, to]` [m], `0 ≤ from < to ≤ L`, anchored at `to`.
+    /// `[from, to]` \[m\], `0 ≤ from < to ≤ L`, anchored at `to`.
     Between {
-        /// Where the cable enters the rod [m].
+        /// Where the cable enters the rod \[m\].
         from: f64,
-        /// The anchor [m].
+        /// The anchor \[m\].
         to: f64,
     },
 }
@@ -172,14 +172,14 @@ impl Cable {
         }
     }
 
-    /// The same cable over `[from, to]` [m] only (anchored at `to`).
+    /// The same cable over `[from, to]` \[m\] only (anchored at `to`).
     #[must_use]
     pub fn between(mut self, from: f64, to: f64) -> Self {
         self.span = Span::Between { from, to };
         self
     }
 
-    /// The span `(from, to)` [m] on a rod of length `rod_length`.
+    /// The span `(from, to)` \[m\] on a rod of length `rod_length`.
     #[inline]
     pub fn bounds(&self, rod_length: f64) -> (f64, f64) {
         match self.span {
@@ -218,20 +218,20 @@ impl Cable {
         self.tension.validate()
     }
 
-    /// Tension `T(t) ≥ 0` [N] ([`Tension::at`]); negative inputs (only
+    /// Tension `T(t) ≥ 0` \[N\] ([`Tension::at`]); negative inputs (only
     /// possible without [`Self::validate`]) are clamped to 0.
     #[inline]
     pub fn tension_at(&self, t: f64) -> f64 {
         self.tension.at(t).max(0.0)
     }
 
-    /// Offset `d(s)` and `d′(s)` [m] ([`Routing::offset`]).
+    /// Offset `d(s)` and `d′(s)` \[m\] ([`Routing::offset`]).
     #[inline]
     pub fn offset(&self, s: f64) -> (Vec3, Vec3) {
         self.routing.offset(s)
     }
 
-    /// Largest `|d(s)|` over the routing [m] ([`Routing::max_offset`]).
+    /// Largest `|d(s)|` over the routing \[m\] ([`Routing::max_offset`]).
     pub fn max_offset(&self) -> f64 {
         self.routing.max_offset()
     }
@@ -252,7 +252,7 @@ impl Cable {
         join(&d.cross(&t), &t)
     }
 
-    /// Cable length `ℓ_c = ∫_from^to |q + k × d + d′| ds` [m] at coordinates `q`,
+    /// Cable length `ℓ_c = ∫_from^to |q + k × d + d′| ds` \[m\] at coordinates `q`,
     /// with the Gauss rule on each sub-interval of `piece ∩ [from, to]` split
     /// at the routing knots.
     pub fn length(&self, rod: &Rod, q: &[f64], quadrature: &GaussLegendre) -> f64 {

@@ -111,7 +111,7 @@ pub fn piece_matrices(
         .collect()
 }
 
-/// Elastic energy (§7) `V_e = ½ Σ_n ∫ (ξ_n − ξ*_n)ᵀ Γ(s) (ξ_n − ξ*_n) ds` [J].
+/// Elastic energy (§7) `V_e = ½ Σ_n ∫ (ξ_n − ξ*_n)ᵀ Γ(s) (ξ_n − ξ*_n) ds` \[J\].
 ///
 /// The strain is constant on a piece, so this is `½ Σ_n δ_nᵀ diag(∫Γ ds) δ_n`
 /// with `δ_n = B_n q_n + ξ̄_n − ξ*_n`; `∫Γ` as in [`integrated_constitutive`].

@@ -170,9 +170,9 @@ pub enum MechanicsError {
     /// A tube's inner radius is not smaller than its outer radius.
     #[error("tube inner radius {inner} m must be smaller than its outer radius {outer} m")]
     InnerRadius {
-        /// Inner radius [m].
+        /// Inner radius \[m\].
         inner: f64,
-        /// Outer radius [m].
+        /// Outer radius \[m\].
         outer: f64,
     },
     /// A Poisson ratio outside `(−1, 0.5]`.
@@ -184,19 +184,19 @@ pub enum MechanicsError {
     /// A cable span that does not start in `[0, L)`.
     #[error("cable span start from = {from} m must lie in [0, rod length {length}) m")]
     CableFrom {
-        /// Start of the span [m].
+        /// Start of the span \[m\].
         from: f64,
-        /// Rod length [m].
+        /// Rod length \[m\].
         length: f64,
     },
     /// A cable span whose end is not in `(from, L]`.
     #[error("cable span end to = {to} m must lie in (from = {from}, rod length {length}] m")]
     CableTo {
-        /// Start of the span [m].
+        /// Start of the span \[m\].
         from: f64,
-        /// End (anchor) of the span [m].
+        /// End (anchor) of the span \[m\].
         to: f64,
-        /// Rod length [m].
+        /// Rod length \[m\].
         length: f64,
     },
     /// A cable path with fewer than two points.
@@ -213,9 +213,9 @@ pub enum MechanicsError {
     PathOutsideRod {
         /// Point index.
         index: usize,
-        /// Its abscissa [m].
+        /// Its abscissa \[m\].
         s: f64,
-        /// The rod length [m].
+        /// The rod length \[m\].
         length: f64,
     },
     /// A cable path that does not cover the cable's span (it is not extrapolated).
@@ -224,13 +224,13 @@ pub enum MechanicsError {
          extend the path or set from/to"
     )]
     PathCoverage {
-        /// Abscissa of the first point [m].
+        /// Abscissa of the first point \[m\].
         first: f64,
-        /// Abscissa of the last point [m].
+        /// Abscissa of the last point \[m\].
         last: f64,
-        /// Span start [m].
+        /// Span start \[m\].
         from: f64,
-        /// Span end [m].
+        /// Span end \[m\].
         to: f64,
     },
     /// A table's abscissae (path `s`, tension times) are not strictly increasing.
@@ -266,9 +266,9 @@ pub enum MechanicsError {
     /// The mechanical body and the kinematic rod disagree on the length.
     #[error("body length {body} m differs from the rod length {rod} m")]
     LengthMismatch {
-        /// Length of the [`crate::RodBody`] [m].
+        /// Length of the [`crate::RodBody`] \[m\].
         body: f64,
-        /// Length of the kinematic rod [m].
+        /// Length of the kinematic rod \[m\].
         rod: f64,
     },
     /// An abscissa outside the rod.
@@ -276,9 +276,9 @@ pub enum MechanicsError {
     OutOfRod {
         /// Which abscissa.
         quantity: Quantity,
-        /// The abscissa [m].
+        /// The abscissa \[m\].
         s: f64,
-        /// The rod length [m].
+        /// The rod length \[m\].
         length: f64,
     },
     /// A load frame name that is not `world` or `body`.

@@ -63,16 +63,16 @@ impl FromStr for LoadFrame {
     }
 }
 
-/// A concentrated force `f` [N] and moment `m` [N·m] applied at abscissa `s` [m].
+/// A concentrated force `f` \[N\] and moment `m` [N·m] applied at abscissa `s` \[m\].
 ///
 /// `frame = World`: dead load (fixed world direction); `Body`: follower load.
 /// Dead forces are conservative (`V = −f·p(s)`); dead moments in 3D and all
 /// follower loads are not.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PointLoad {
-    /// Material abscissa of the point of application [m], in `[0, L]`.
+    /// Material abscissa of the point of application \[m\], in `[0, L]`.
     pub s: f64,
-    /// Force [N], components in `frame`.
+    /// Force \[N\], components in `frame`.
     pub force: Vec3,
     /// Moment [N·m], components in `frame`.
     pub moment: Vec3,

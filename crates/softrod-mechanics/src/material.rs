@@ -2,8 +2,8 @@
 
 use crate::error::{MechanicsError, Quantity, non_negative, positive};
 
-/// Material constants (SI): density `ρ` [kg/m³], Young's modulus `E` [Pa],
-/// shear modulus `G` [Pa] and Kelvin–Voigt shear viscosity `μ` [Pa·s].
+/// Material constants (SI): density `ρ` [kg/m³], Young's modulus `E` \[Pa\],
+/// shear modulus `G` \[Pa\] and Kelvin–Voigt shear viscosity `μ` [Pa·s].
 ///
 /// Valid by construction (built by [`Material::builder`]): `ρ, E, G > 0`,
 /// `μ ≥ 0`, all finite.
@@ -63,13 +63,13 @@ impl Material {
         self.density
     }
 
-    /// Young's modulus `E` [Pa].
+    /// Young's modulus `E` \[Pa\].
     #[inline]
     pub fn young(&self) -> f64 {
         self.young
     }
 
-    /// Shear modulus `G` [Pa]: as given, or `E / (2(1 + ν))`.
+    /// Shear modulus `G` \[Pa\]: as given, or `E / (2(1 + ν))`.
     #[inline]
     pub fn shear_modulus(&self) -> f64 {
         self.shear
@@ -112,7 +112,7 @@ impl MaterialBuilder {
         self
     }
 
-    /// Young's modulus `E > 0` [Pa] (required).
+    /// Young's modulus `E > 0` \[Pa\] (required).
     pub fn young(mut self, young: f64) -> Self {
         self.young = Some(young);
         self
@@ -125,7 +125,7 @@ impl MaterialBuilder {
         self
     }
 
-    /// Shear modulus `G > 0` [Pa]. Give this or [`Self::poisson`].
+    /// Shear modulus `G > 0` \[Pa\]. Give this or [`Self::poisson`].
     pub fn shear_modulus(mut self, shear: f64) -> Self {
         self.shear = Some(shear);
         self

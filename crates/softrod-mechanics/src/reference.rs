@@ -98,7 +98,7 @@ pub fn line_load_force_by_jacobian(
     })
 }
 
-/// Gravitational potential energy (§7) `V_g = −∫₀ᴸ ρA(s) g_w·p(s) ds` [J],
+/// Gravitational potential energy (§7) `V_g = −∫₀ᴸ ρA(s) g_w·p(s) ds` \[J\],
 /// `p(s)` the world position of the section centre, by Gauss quadrature on
 /// each piece.
 pub fn gravity_potential(
@@ -128,7 +128,7 @@ pub fn point_load_force_by_jacobian(rod: &Rod, load: &PointLoad, q: &[f64]) -> D
     j.tr_mul(&load.wrench(&pose))
 }
 
-/// Potential of a dead point force, `V = −f_w·p(s̄)` [J].
+/// Potential of a dead point force, `V = −f_w·p(s̄)` \[J\].
 ///
 /// Only the force enters: a dead (world-fixed) moment is not conservative in
 /// 3D, so this is the potential of the load only when `moment = 0`.

@@ -6,50 +6,50 @@ use std::f64::consts::PI;
 /// A rod cross-section in the local `(y, z)` plane (local x is the tangent).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Section {
-    /// Solid circle of radius `radius` [m].
+    /// Solid circle of radius `radius` \[m\].
     Circle {
-        /// Radius [m].
+        /// Radius \[m\].
         radius: f64,
     },
-    /// Hollow circle (tube): outer `radius`, `inner_radius` ∈ [0, radius) [m].
+    /// Hollow circle (tube): outer `radius`, `inner_radius` ∈ [0, radius) \[m\].
     Tube {
-        /// Outer radius [m].
+        /// Outer radius \[m\].
         radius: f64,
-        /// Inner radius [m].
+        /// Inner radius \[m\].
         inner_radius: f64,
     },
-    /// Solid rectangle: `width` along local y, `height` along local z [m].
+    /// Solid rectangle: `width` along local y, `height` along local z \[m\].
     Rectangle {
-        /// Extent along local y [m].
+        /// Extent along local y \[m\].
         width: f64,
-        /// Extent along local z [m].
+        /// Extent along local z \[m\].
         height: f64,
     },
     /// Solid circle whose radius varies linearly from `radius_base` at `s = 0`
     /// to `radius_tip` at `s = L`: `r(u) = r_b + (r_t − r_b) u`, `u = s/L`.
     TaperedCircle {
-        /// Radius at the base [m].
+        /// Radius at the base \[m\].
         radius_base: f64,
-        /// Radius at the tip [m].
+        /// Radius at the tip \[m\].
         radius_tip: f64,
     },
 }
 
-/// Geometric properties of a section: area `A` [m²], second moments
-/// `Jy = ∫z² dA`, `Jz = ∫y² dA` and `Jx = Jy + Jz` [m⁴].
+/// Geometric properties of a section: area `A` \[m²\], second moments
+/// `Jy = ∫z² dA`, `Jz = ∫y² dA` and `Jx = Jy + Jz` \[m⁴\].
 ///
 /// `Jx` is the polar moment, the model convention of the seed (torsional
 /// stiffness `G·Jx`); for non-circular sections it is not the Saint-Venant
 /// torsion constant.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SectionProperties {
-    /// Area `A` [m²].
+    /// Area `A` \[m²\].
     pub area: f64,
-    /// Second moment about local y, `∫ z² dA` [m⁴] (bending `ky`).
+    /// Second moment about local y, `∫ z² dA` \[m⁴\] (bending `ky`).
     pub jy: f64,
-    /// Second moment about local z, `∫ y² dA` [m⁴] (bending `kz`).
+    /// Second moment about local z, `∫ y² dA` \[m⁴\] (bending `kz`).
     pub jz: f64,
-    /// Polar moment `Jx = Jy + Jz` [m⁴] (torsion `kx`).
+    /// Polar moment `Jx = Jy + Jz` \[m⁴\] (torsion `kx`).
     pub jx: f64,
 }
 
@@ -155,7 +155,7 @@ impl Section {
     }
 
     /// Radius of the smallest centred circle containing the section at `u = s/L`
-    /// [m]: `r`, the outer radius, `½√(w² + h²)`, or `r(u)`.
+    /// \[m\]: `r`, the outer radius, `½√(w² + h²)`, or `r(u)`.
     #[inline]
     pub fn outer_radius(&self, u: f64) -> f64 {
         match *self {
@@ -164,7 +164,7 @@ impl Section {
         }
     }
 
-    /// Half the largest extent of the section at `u = s/L` [m]: the (outer)
+    /// Half the largest extent of the section at `u = s/L` \[m\]: the (outer)
     /// radius of a circle, tube or taper, half the longer side of a
     /// rectangle. The size scale a rod's pieces should be long against.
     #[inline]
@@ -182,7 +182,7 @@ impl Section {
         }
     }
 
-    /// Whether the point `(y, z)` [m] of the section plane at `u = s/L` lies
+    /// Whether the point `(y, z)` \[m\] of the section plane at `u = s/L` lies
     /// inside the section's outer boundary (boundary included). A tube's
     /// bore counts as inside (a cable may run in the lumen).
     pub fn contains(&self, u: f64, y: f64, z: f64) -> bool {
