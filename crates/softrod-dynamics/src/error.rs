@@ -214,10 +214,11 @@ pub enum DynamicsError {
     },
 }
 
-impl DynamicsError {
-    /// The rod a model-building error is about, if any.
-    pub fn rod(&self) -> Option<&RodId> {
-        match self {
+/// The rod field of the model-building variants, by reference of either
+/// mutability (match ergonomics give `&RodId` or `&mut RodId`).
+macro_rules! rod_of {
+    ($e:expr) => {
+        match $e {
             DynamicsError::RodGeometry { rod, .. }
             | DynamicsError::RodBody { rod, .. }
             | DynamicsError::MissingSection { rod }
@@ -231,30 +232,20 @@ impl DynamicsError {
             | DynamicsError::Drag { rod, .. } => Some(rod),
             _ => None,
         }
+    };
+}
+
+impl DynamicsError {
+    /// The rod a model-building error is about, if any.
+    pub fn rod(&self) -> Option<&RodId> {
+        rod_of!(self)
     }
 
     /// The same error with the rod's index in the model set.
     pub(crate) fn at_rod_index(mut self, index: usize) -> Self {
-        if let Some(rod) = self.rod_mut() {
+        if let Some(rod) = rod_of!(&mut self) {
             rod.index = Some(index);
         }
         self
-    }
-
-    fn rod_mut(&mut self) -> Option<&mut RodId> {
-        match self {
-            DynamicsError::RodGeometry { rod, .. }
-            | DynamicsError::RodBody { rod, .. }
-            | DynamicsError::MissingSection { rod }
-            | DynamicsError::MissingMaterial { rod }
-            | DynamicsError::PieceLengthSum { rod, .. }
-            | DynamicsError::StressFreeCount { rod, .. }
-            | DynamicsError::StressFreeNotFinite { rod, .. }
-            | DynamicsError::Cable { rod, .. }
-            | DynamicsError::PointLoad { rod, .. }
-            | DynamicsError::DistributedLoad { rod, .. }
-            | DynamicsError::Drag { rod, .. } => Some(rod),
-            _ => None,
-        }
     }
 }
