@@ -40,12 +40,13 @@ fn model(n: usize) -> Model {
 fn model_with(n: usize, basis: Basis) -> Model {
     let length = 0.5;
     let rod = Rod::uniform(length, n, basis, straight(), Pose::identity()).unwrap();
-    let material = Material {
-        density: 1000.0,
-        young: 1e7,
-        shear: 1e7 / 3.0,
-        viscosity: 1.0,
-    };
+    let material = Material::builder()
+        .density(1000.0)
+        .young(1e7)
+        .shear_modulus(1e7 / 3.0)
+        .viscosity(1.0)
+        .build()
+        .unwrap();
     let body = RodBody::new(Section::Circle { radius: 0.01 }, material, length).unwrap();
     let spec = RodSpec::new("bench", rod, body);
     let m = Model::new(vec![spec], Some(Vec3::new(0.0, 0.0, -9.81)), 4).unwrap();

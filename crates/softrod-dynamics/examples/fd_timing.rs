@@ -34,12 +34,13 @@ fn main() {
     // the planar state draws curvatures and stretches as the full one does.
     let component = |i: usize| if planar { [1, 3, 5][i % 3] } else { i % 6 };
     let rod = Rod::uniform(0.5, n, basis, straight(), Pose::identity()).unwrap();
-    let material = Material {
-        density: 1000.0,
-        young: 1e7,
-        shear: 1e7 / 3.0,
-        viscosity: 1.0,
-    };
+    let material = Material::builder()
+        .density(1000.0)
+        .young(1e7)
+        .shear_modulus(1e7 / 3.0)
+        .viscosity(1.0)
+        .build()
+        .unwrap();
     let body = RodBody::new(Section::Circle { radius: 0.01 }, material, 0.5).unwrap();
     let model = Model::new(
         vec![RodSpec::new("arm", rod, body)],

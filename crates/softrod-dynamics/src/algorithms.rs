@@ -388,9 +388,7 @@ pub fn forward_dynamics_cholesky<'a>(
         .mass
         .clone()
         .cholesky()
-        .ok_or(DynamicsError::Singular {
-            rod: 0,
-            piece: 0,
+        .ok_or(DynamicsError::NotPositiveDefinite {
             what: "mass matrix",
         })?;
     data.qdd = chol.solve(&rhs);

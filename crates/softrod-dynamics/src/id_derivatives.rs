@@ -15,7 +15,7 @@ use softrod_kinematics::{Basis, Piece};
 use softrod_lie::{
     AdOp, Mat3, Mat6, PieceMaps, Pose, Vec6, ad, ad_vec, angular, coad, coad_vec, linear, skew,
 };
-use softrod_mechanics::{Cable, LoadFrame, Routing};
+use softrod_mechanics::LoadFrame;
 
 /// Per-piece buffers of the derivative sweeps (all fixed-size; `k_n`-sized
 /// quantities in the leading columns / rows of 6×6).
@@ -293,31 +293,6 @@ fn linearize_point(
     )
 }
 
-/// Calls `f(s, w)` for every node of the cable's quadrature on
-/// `piece ∩ [from, to]`, split at the routing knots: the nodes
-/// `Cable::add_force_per_tension` integrates on, so the derivative is that
-/// of the discrete force.
-fn for_each_cable_node(cable: &Cable, piece: &Piece, model: &Model, mut f: impl FnMut(f64, f64)) {
-    let a = piece.start.max(cable.from);
-    let b = piece.end().min(cable.to);
-    if b <= a {
-        return;
-    }
-    let mut rule = |lo: f64, hi: f64| {
-        for (x, w) in model.quadrature.on_interval(hi - lo) {
-            f(lo + x, w);
-        }
-    };
-    let mut lo = a;
-    if let Routing::Path(pts) = &cable.routing {
-        for knot in pts.iter().map(|p| p[0]).filter(|&k| k > a && k < b) {
-            rule(lo, knot);
-            lo = knot;
-        }
-    }
-    rule(lo, b);
-}
-
 /// Cable terms of one piece (D47): the sum over cables of `λT ∫ w ds` with
 /// `w = (d × t̂; t̂)` (the part `+λT ∫ w` of `τ = … − τ_c`), and of
 /// `λT ∫ H P Hᵀ/|v| ds` (its strain derivative), `H = [d̃; I]`,
@@ -339,7 +314,7 @@ fn cable_terms(
         if tension == 0.0 {
             continue;
         }
-        for_each_cable_node(cable, piece, model, |s, w| {
+        cable.for_each_node(piece, &model.quadrature, |s, w| {
             let (d, dp) = cable.offset(s);
             let v = qv + k.cross(&d) + dp;
             let nv = v.norm();

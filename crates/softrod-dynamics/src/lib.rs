@@ -3,7 +3,8 @@
 //! layer of softrod.
 //!
 //! A [`Model`] (rods, their bodies and force terms, gravity, quadrature) is
-//! immutable; a [`Data`] holds every buffer an evaluation needs. Algorithms
+//! immutable, built with [`Model::builder`] from rods built with
+//! [`RodSpec::builder`]; a [`Data`] holds every buffer an evaluation needs. Algorithms
 //! are free functions that write into `data` and return a reference to the
 //! result:
 //!
@@ -28,6 +29,7 @@
 
 mod algorithms;
 mod blocks;
+mod builder;
 mod chol;
 mod data;
 mod derivatives;
@@ -46,13 +48,14 @@ mod statics;
 pub use algorithms::{
     bias_force, forward_dynamics, forward_dynamics_cholesky, inverse_dynamics, mass_matrix,
 };
+pub use builder::{IntoRodSpec, ModelBuilder, RodSpecBuilder};
 pub use data::Data;
 pub use derivatives::{
     DynamicsJacobians, FdDerivatives, Linearization, dynamics_jacobians,
     forward_dynamics_derivatives, linearize,
 };
 pub use energy::{Energies, energies};
-pub use error::DynamicsError;
+pub use error::{DynamicsError, RodId};
 pub use id_derivatives::{IdDerivatives, inverse_dynamics_derivatives};
 pub use matrices::{
     actuation_matrix, coriolis_matrix, damping_matrix, generalized_gravity, stiffness_matrix,

@@ -97,7 +97,13 @@ mod tests {
         let rod = Rod::from_pieces(specs, base).unwrap();
         let body = RodBody::new(
             Section::Circle { radius: 0.012 },
-            Material::with_poisson(1100.0, 2e6, 0.45, 30.0).unwrap(),
+            Material::builder()
+                .density(1100.0)
+                .young(2e6)
+                .poisson(0.45)
+                .viscosity(30.0)
+                .build()
+                .unwrap(),
             0.9,
         )
         .unwrap();

@@ -169,45 +169,40 @@ impl Material {
         viscosity: f64,
     ) -> PyResult<Self> {
         let bad = |e: mech::MechanicsError| input(format!("Material: {e}"));
+        let b = mech::Material::builder()
+            .density(density)
+            .young(young)
+            .viscosity(viscosity);
         let inner = match (poisson, shear_modulus) {
-            (Some(nu), None) => {
-                mech::Material::with_poisson(density, young, nu, viscosity).map_err(bad)?
-            }
-            (None, Some(g)) => {
-                let m = mech::Material {
-                    density,
-                    young,
-                    shear: g,
-                    viscosity,
-                };
-                m.validate().map_err(bad)?;
-                m
-            }
+            (Some(nu), None) => b.poisson(nu),
+            (None, Some(g)) => b.shear_modulus(g),
             _ => {
                 return Err(input(
                     "Material: give exactly one of poisson or shear_modulus",
                 ));
             }
-        };
+        }
+        .build()
+        .map_err(bad)?;
         Ok(Self { inner })
     }
 
     /// Density ρ [kg/m³].
     #[getter]
     fn density(&self) -> f64 {
-        self.inner.density
+        self.inner.density()
     }
 
     /// Young's modulus E [Pa].
     #[getter]
     fn young(&self) -> f64 {
-        self.inner.young
+        self.inner.young()
     }
 
     /// Shear modulus G [Pa].
     #[getter]
     fn shear_modulus(&self) -> f64 {
-        self.inner.shear
+        self.inner.shear_modulus()
     }
 
     /// Poisson's ratio implied by E and G, ν = E/(2G) − 1.
@@ -219,14 +214,17 @@ impl Material {
     /// Kelvin–Voigt shear viscosity μ [Pa·s].
     #[getter]
     fn viscosity(&self) -> f64 {
-        self.inner.viscosity
+        self.inner.viscosity()
     }
 
     fn __repr__(&self) -> String {
         let m = &self.inner;
         format!(
             "Material(density={:?}, young={:?}, shear_modulus={:?}, viscosity={:?})",
-            m.density, m.young, m.shear, m.viscosity
+            m.density(),
+            m.young(),
+            m.shear_modulus(),
+            m.viscosity()
         )
     }
 }
@@ -331,12 +329,8 @@ impl Cable {
 impl Cable {
     /// The mechanics cable on a rod of length `length` (span end defaulted).
     pub(crate) fn mech(&self, length: f64) -> mech::Cable {
-        mech::Cable {
-            routing: self.routing.clone(),
-            from: self.from,
-            to: self.to.unwrap_or(length),
-            tension: self.tension.clone(),
-        }
+        mech::Cable::new(self.routing.clone(), self.tension.clone())
+            .between(self.from, self.to.unwrap_or(length))
     }
 }
 
@@ -454,7 +448,7 @@ fn strain_indices(strains: &Bound<'_, PyAny>) -> PyResult<Vec<usize>> {
         .map_err(|_| input("Rod(strains) must be \"all\" or a list of strain names"))?;
     let mut mask = [false; 6];
     for n in &names {
-        let s = Strain::from_name(n).ok_or_else(|| {
+        let s: Strain = n.parse().map_err(|_| {
             input(format!(
                 "Rod(strains): unknown strain {n:?} (valid: kx, ky, kz, qx, qy, qz)"
             ))

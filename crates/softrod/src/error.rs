@@ -71,17 +71,26 @@ impl Error {
     /// Whether this is bad input (a scene, setting or argument the caller
     /// can fix) rather than a failed simulation.
     pub fn is_input(&self) -> bool {
-        matches!(
-            self,
-            Error::Scene(_) | Error::InvalidSetting { .. } | Error::SizeMismatch { .. }
-        ) || matches!(
-            self,
-            Error::Dynamics(
-                DynamicsError::InvalidModel(_)
-                    | DynamicsError::SizeMismatch { .. }
-                    | DynamicsError::NotFinite { .. }
-            )
-        )
+        match self {
+            Error::Scene(_)
+            | Error::InvalidSetting { .. }
+            | Error::SizeMismatch { .. }
+            | Error::UnknownRod(_)
+            | Error::Kinematics(_) => true,
+            Error::Dynamics(e) => {
+                e.rod().is_some()
+                    || matches!(
+                        e,
+                        DynamicsError::NoRods
+                            | DynamicsError::NoQuadraturePoints
+                            | DynamicsError::GravityNotFinite { .. }
+                            | DynamicsError::SizeMismatch { .. }
+                            | DynamicsError::NotFinite { .. }
+                            | DynamicsError::InvalidShift { .. }
+                    )
+            }
+            Error::Integration(_) | Error::Output { .. } => false,
+        }
     }
 }
 

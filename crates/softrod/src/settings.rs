@@ -89,7 +89,7 @@ impl Settings {
         RodJacobian::ElasticOnly
     }
 
-    /// Checks the values (positive, finite) and that the integrator exists.
+    /// Checks the values (positive and finite).
     pub fn validate(&self) -> Result<(), Error> {
         for (what, v) in [("rtol", self.rtol), ("atol", self.atol), ("dt", self.dt)] {
             if !(v.is_finite() && v > 0.0) {
@@ -107,13 +107,6 @@ impl Settings {
                 });
             }
         }
-        if self.integrator == Integrator::Radau5 {
-            return Err(Error::InvalidSetting {
-                key: "integrator",
-                message: "\"radau5\" is not implemented yet, use \"rosenbrock\" (stiff, adaptive)"
-                    .into(),
-            });
-        }
         Ok(())
     }
 
@@ -129,7 +122,6 @@ impl Settings {
             },
             Integrator::Dopri5 => Method::Dopri5,
             Integrator::Rosenbrock => Method::Rosw34,
-            Integrator::Radau5 => unreachable!("rejected by validate"),
         };
         // Generalized-α steps with the fixed dt unless error control is on;
         // rk4 always does; the other methods are adaptive with dt as their

@@ -183,21 +183,19 @@ pub fn rod_spec(name: &str, shape: &Shape, terms: Terms, base: Pose) -> RodSpec 
     }
     if terms.cable {
         spec.cables = vec![
-            Cable {
-                routing: Routing::Path(vec![[0.0, 0.008, 0.0], [length, 0.002, 0.004]]),
-                from: 0.0,
-                to: 0.8 * length,
-                tension: Tension::Constant(1.5),
-            },
-            Cable {
-                routing: Routing::Offset {
+            Cable::new(
+                Routing::Path(vec![[0.0, 0.008, 0.0], [length, 0.002, 0.004]]),
+                Tension::Constant(1.5),
+            )
+            .between(0.0, 0.8 * length),
+            Cable::new(
+                Routing::Offset {
                     y: -0.004,
                     z: 0.006,
                 },
-                from: 0.2 * length,
-                to: length,
-                tension: Tension::Constant(0.7),
-            },
+                Tension::Constant(0.7),
+            )
+            .between(0.2 * length, length),
         ];
     }
     spec
