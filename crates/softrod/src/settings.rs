@@ -26,9 +26,9 @@ pub struct Settings {
     pub rtol: f64,
     /// Absolute tolerance of the adaptive methods (units of `q`, `q̇`).
     pub atol: f64,
-    /// Step of the fixed-step methods, first step of the adaptive ones [s].
+    /// Step of the fixed-step methods, first step of the adaptive ones \[s\].
     pub dt: f64,
-    /// Time between output samples [s]; `None`: a thousandth of the duration.
+    /// Time between output samples \[s\]; `None`: a thousandth of the duration.
     pub output_every: Option<f64>,
     /// Generalized-α only: control the local error and adapt the step.
     pub error_control: bool,

@@ -52,7 +52,7 @@ pub struct ModalAnalysis {
 
 /// What an [`Observer`] sees at each output time.
 pub struct Sample<'a> {
-    /// Time [s].
+    /// Time \[s\].
     pub t: f64,
     /// Coordinates (n_dof).
     pub q: &'a [f64],
@@ -98,7 +98,7 @@ pub enum RunStatus {
 pub struct RunSummary {
     /// How it ended.
     pub status: RunStatus,
-    /// Time reached [s].
+    /// Time reached \[s\].
     pub t_final: f64,
     /// The integrator's work counters.
     pub stats: Stats,
@@ -109,7 +109,7 @@ pub struct RunSummary {
 /// A run kept in memory: samples at the output times.
 #[derive(Clone, Debug)]
 pub struct Trajectory {
-    /// Output times [s].
+    /// Output times \[s\].
     pub t: Vec<f64>,
     /// Coordinates at each time.
     pub q: Vec<DVector<f64>>,
@@ -271,7 +271,7 @@ impl Simulation {
         Ok((i, k))
     }
 
-    /// World pose of rod `rod` at abscissa `s` [m] for coordinates `q` (D7).
+    /// World pose of rod `rod` at abscissa `s` \[m\] for coordinates `q` (D7).
     pub fn pose(&self, rod: &str, s: f64, q: &[f64]) -> Result<Pose> {
         let (i, k) = self.kinematics(rod, q)?;
         Ok(k.pose_at(&self.model().rods()[i].spec.rod, s)?)
@@ -326,7 +326,7 @@ impl Simulation {
         Ok(mass_matrix(&s.model, &mut s.data, q)?.clone())
     }
 
-    /// Kinetic, elastic and gravitational energy at `(q, q̇)` [J].
+    /// Kinetic, elastic and gravitational energy at `(q, q̇)` \[J\].
     pub fn energies(&mut self, q: &[f64], qd: &[f64]) -> Result<Energies> {
         let s = &mut self.system;
         Ok(energies(&s.model, &mut s.data, q, qd)?)
