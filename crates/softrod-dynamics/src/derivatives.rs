@@ -111,6 +111,11 @@ pub fn forward_dynamics_derivatives<'a>(
     forward_dynamics(model, data, t, q, qd, tau_act)?;
     work.qdd.copy_from(&data.qdd);
     work.id.load_scale = data.load_scale;
+    match (data.cable_tensions(), &mut work.id.tensions) {
+        (None, t) => *t = None,
+        (Some(u), Some(t)) => t.as_mut_slice().copy_from_slice(u),
+        (Some(u), t) => *t = Some(DVector::from_column_slice(u)),
+    }
     inverse_dynamics_derivatives(model, &mut work.id, t, q, qd, work.qdd.as_slice())?;
     work.solver.factor(model, q, 0.0, 0.0)?;
     work.dqdd_dq.copy_from(&work.id.dtau_dq);
@@ -174,7 +179,8 @@ pub struct Linearization {
 
 /// Linearizes `ẋ = f(x, u)`, `x = (q, q̇)`, about `(q, q̇)` at time `t`
 /// under `τ_act` (`None` = 0), with `u` the cable tensions (their operating
-/// values are the tension schedules at `t`, times `data.load_scale`):
+/// values are the tension schedules at `t`, or the inputs set by
+/// [`Data::set_cable_tensions`], times `data.load_scale`):
 /// `ẋ ≈ f(x₀, u₀) + A (x − x₀) + B (u − u₀)` with `A`, `B` of
 /// [`Linearization`], from [`forward_dynamics_derivatives`]. What
 /// model-based control (LQR, MPC, trajectory optimization) needs. Allocates
@@ -202,11 +208,9 @@ pub fn linearize(
     xdot.rows_mut(n, n).copy_from(&work.qdd);
     let u = DVector::from_iterator(
         nu,
-        model
-            .rods()
-            .iter()
-            .flat_map(|r| r.spec.cables.iter())
-            .map(|c| c.tension_at(t) * data.load_scale),
+        model.rods().iter().flat_map(|r| {
+            (0..r.spec.cables.len()).map(|c| data.tension(r, c, t) * data.load_scale)
+        }),
     );
     Ok(Linearization { a, b, xdot, u })
 }

@@ -173,6 +173,22 @@ pub enum DynamicsError {
         /// `n_dof`.
         expected: usize,
     },
+    /// The cable-tension inputs do not match the model's cables.
+    #[error("{got} cable tensions given, the model has {expected} cables")]
+    TensionCount {
+        /// Tensions given.
+        got: usize,
+        /// [`crate::Model::n_cables`].
+        expected: usize,
+    },
+    /// A cable-tension input is negative or not finite (a cable can only pull).
+    #[error("cable tension u[{index}] = {value} N must be finite and non-negative")]
+    InvalidTension {
+        /// Index of the cable in model order.
+        index: usize,
+        /// The value given.
+        value: f64,
+    },
     /// A value is NaN or infinite.
     #[error("{what} is not finite ({value})")]
     NotFinite {

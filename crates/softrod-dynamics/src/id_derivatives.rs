@@ -6,6 +6,7 @@
 //! derivatives of its maps (D30)–(D36).
 
 use crate::algorithms::check_vec;
+use crate::data::cable_tension;
 use crate::error::DynamicsError;
 use crate::model::{Model, RodModel};
 use crate::passes::gravity_base_acceleration;
@@ -149,6 +150,10 @@ pub struct IdDerivatives {
     /// Factor on every external load and cable tension, as
     /// [`crate::Data::load_scale`]; 1 by default.
     pub load_scale: f64,
+    /// Cable tensions replacing the schedules, as
+    /// [`crate::Data::set_cable_tensions`] (copied from the `Data` by
+    /// [`crate::forward_dynamics_derivatives`]).
+    pub tensions: Option<DVector<f64>>,
     n_dof: usize,
 }
 
@@ -170,6 +175,7 @@ impl IdDerivatives {
             dtau_dqd: DMatrix::zeros(n, n),
             tau: DVector::zeros(n),
             load_scale: 1.0,
+            tensions: None,
             n_dof: n,
         }
     }
@@ -305,12 +311,13 @@ fn cable_terms(
     xi: &Vec6,
     t: f64,
     scale: f64,
+    tensions: Option<&DVector<f64>>,
 ) -> (Vec6, Mat6) {
     let mut force = Vec6::zeros();
     let mut hess = Mat6::zeros();
     let (k, qv) = (angular(xi), linear(xi));
-    for cable in &rm.spec.cables {
-        let tension = cable.tension_at(t) * scale;
+    for (c, cable) in rm.spec.cables.iter().enumerate() {
+        let tension = cable_tension(tensions, rm, c, t) * scale;
         if tension == 0.0 {
             continue;
         }
@@ -624,7 +631,8 @@ fn inward(
         }
         // τ_n (D18) and the strain-space terms (D13, D15, D47).
         let xi = piece.strain(&q[rm.dofs()]);
-        let (cable_force, cable_hess) = cable_terms(model, rm, piece, &xi, t, scale);
+        let (cable_force, cable_hess) =
+            cable_terms(model, rm, piece, &xi, t, scale, work.tensions.as_ref());
         let tau6 = w.tsum + tlt * wn;
         wn = w.wsum + alt * wn;
         let dq6 = bt_ * (diag_q + cable_hess) * bm;

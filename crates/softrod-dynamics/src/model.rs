@@ -203,6 +203,9 @@ pub struct RodModel {
     /// Whether world poses at evaluation points are needed (world-frame
     /// distributed loads, gravity potential).
     pub(crate) needs_world_pose_at_points: bool,
+    /// Index of the rod's first cable among the model's cables (the order
+    /// of the inputs `u`).
+    pub cable_offset: usize,
 }
 
 impl RodModel {
@@ -271,6 +274,7 @@ impl Model {
         let gl = GaussLegendre::new(quadrature);
         let mut out = Vec::with_capacity(rods.len());
         let mut off = 0;
+        let mut cables = 0;
         for (index, spec) in rods.into_iter().enumerate() {
             spec.check(Some(index))?;
             let rod = &spec.rod;
@@ -323,13 +327,16 @@ impl Model {
                 .iter()
                 .any(|d| d.frame == LoadFrame::World);
             let n = rod.n_dof();
+            let n_cables = spec.cables.len();
             out.push(RodModel {
                 spec,
                 dof_offset: off,
                 pieces,
                 needs_world_pose_at_points: needs_world,
+                cable_offset: cables,
             });
             off += n;
+            cables += n_cables;
         }
         Ok(Self {
             rods: out,

@@ -35,6 +35,9 @@ pub struct Settings {
     /// Generalized-α only: one Newton iteration per step with the elastic
     /// Jacobian (the linearly implicit, IMEX scheme).
     pub linearly_implicit: bool,
+    /// The run length a scene asks for (`[run] duration`) \[s\]: what a
+    /// front end simulates when the user names no duration.
+    pub duration: f64,
 }
 
 impl Default for Settings {
@@ -55,6 +58,7 @@ impl Settings {
             output_every: Some(run.output_every),
             error_control: run.error_control,
             linearly_implicit: run.linearly_implicit,
+            duration: run.duration,
         }
     }
 
@@ -91,7 +95,12 @@ impl Settings {
 
     /// Checks the values (positive and finite).
     pub fn validate(&self) -> Result<(), Error> {
-        for (what, v) in [("rtol", self.rtol), ("atol", self.atol), ("dt", self.dt)] {
+        for (what, v) in [
+            ("rtol", self.rtol),
+            ("atol", self.atol),
+            ("dt", self.dt),
+            ("duration", self.duration),
+        ] {
             if !(v.is_finite() && v > 0.0) {
                 return Err(Error::InvalidSetting {
                     key: what,
