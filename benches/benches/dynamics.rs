@@ -7,9 +7,10 @@
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use softrod_dynamics::{
-    Data, Model, RodSpec, ShiftedSolver, forward_dynamics, inverse_dynamics, mass_matrix,
+    Data, FdDerivatives, IdDerivatives, Model, RodSpec, ShiftedSolver, forward_dynamics,
+    forward_dynamics_derivatives, inverse_dynamics, inverse_dynamics_derivatives, mass_matrix,
 };
-use softrod_kinematics::{Basis, Rod, straight};
+use softrod_kinematics::{Basis, Rod, Strain, straight};
 use softrod_lie::{Pose, Vec3};
 use softrod_mechanics::{Material, RodBody, Section};
 use std::hint::black_box;
@@ -32,14 +33,20 @@ impl Rng {
 /// G = E/3) with viscosity μ = 1 Pa·s, all six strains on each of `n` equal
 /// pieces, gravity (0, 0, −9.81), 4 Gauss points per piece.
 fn model(n: usize) -> Model {
+    model_with(n, Basis::all())
+}
+
+/// [`model`] with the given basis on every piece.
+fn model_with(n: usize, basis: Basis) -> Model {
     let length = 0.5;
-    let rod = Rod::uniform(length, n, Basis::all(), straight(), Pose::identity()).unwrap();
-    let material = Material {
-        density: 1000.0,
-        young: 1e7,
-        shear: 1e7 / 3.0,
-        viscosity: 1.0,
-    };
+    let rod = Rod::uniform(length, n, basis, straight(), Pose::identity()).unwrap();
+    let material = Material::builder()
+        .density(1000.0)
+        .young(1e7)
+        .shear_modulus(1e7 / 3.0)
+        .viscosity(1.0)
+        .build()
+        .unwrap();
     let body = RodBody::new(Section::Circle { radius: 0.01 }, material, length).unwrap();
     let spec = RodSpec::new("bench", rod, body);
     let m = Model::new(vec![spec], Some(Vec3::new(0.0, 0.0, -9.81)), 4).unwrap();
@@ -59,12 +66,42 @@ fn state(n_dof: usize, seed: u64) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
     (q, qd, qdd)
 }
 
+/// [`state`] for the planar basis `(ky, qx, qz)`: curvature in ±2 rad/m,
+/// stretch and shear in ±0.02, rates in ±1 /s.
+fn planar_state(n_dof: usize, seed: u64) -> (Vec<f64>, Vec<f64>) {
+    let mut rng = Rng(seed);
+    let q = (0..n_dof)
+        .map(|i| if i % 3 == 0 { 2.0 } else { 0.02 } * rng.next())
+        .collect();
+    let qd = (0..n_dof).map(|_| rng.next()).collect();
+    (q, qd)
+}
+
 fn bench_dynamics(c: &mut Criterion) {
     let mut g = c.benchmark_group("forward_dynamics");
     for n in [1usize, 4, 10, 40, 100, 1000] {
         let m = model(n);
         let mut data = Data::new(&m);
         let (q, qd, _) = state(m.n_dof(), 42);
+        g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+            b.iter(|| {
+                forward_dynamics(&m, &mut data, 0.0, black_box(&q), black_box(&qd), None).unwrap()
+                    [0]
+            })
+        });
+    }
+    g.finish();
+
+    // The planar rod (strains ky, qx, qz on every piece) beside the 3-D one
+    // of the same size: the cost per evaluation of a planar scene.
+    let mut g = c.benchmark_group("forward_dynamics_planar");
+    for n in [8usize, 10] {
+        let m = model_with(
+            n,
+            Basis::select(&[Strain::Ky, Strain::Qx, Strain::Qz]).unwrap(),
+        );
+        let mut data = Data::new(&m);
+        let (q, qd) = planar_state(m.n_dof(), 42);
         g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
             b.iter(|| {
                 forward_dynamics(&m, &mut data, 0.0, black_box(&q), black_box(&qd), None).unwrap()
@@ -109,6 +146,81 @@ fn bench_dynamics(c: &mut Criterion) {
                 x.copy_from_slice(&qd);
                 solver.solve(&m, &mut x).unwrap();
                 x[0]
+            })
+        });
+    }
+    g.finish();
+
+    // The analytic pair ∂τ/∂q, ∂τ/∂q̇ (docs/theory-derivatives.md) beside
+    // what central differences cost: 4·n_dof inverse dynamics.
+    let mut g = c.benchmark_group("id_derivatives");
+    for n in [10usize, 100] {
+        let m = model(n);
+        let mut work = IdDerivatives::new(&m);
+        let (q, qd, qdd) = state(m.n_dof(), 42);
+        g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+            b.iter(|| {
+                inverse_dynamics_derivatives(&m, &mut work, 0.0, black_box(&q), &qd, &qdd)
+                    .unwrap()
+                    .dtau_dq[(0, 0)]
+            })
+        });
+    }
+    g.finish();
+
+    let mut g = c.benchmark_group("id_derivatives_central_differences");
+    g.sample_size(10);
+    for n in [10usize, 40] {
+        let m = model(n);
+        let mut data = Data::new(&m);
+        let (q, qd, qdd) = state(m.n_dof(), 42);
+        let (mut qp, mut qdp) = (q.clone(), qd.clone());
+        let mut col = vec![0.0; m.n_dof()];
+        g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+            b.iter(|| {
+                for j in 0..m.n_dof() {
+                    for which in 0..2 {
+                        let x = if which == 0 { &mut qp } else { &mut qdp };
+                        let x0 = x[j];
+                        let h = 6e-6 * x0.abs().max(1.0);
+                        x[j] = x0 + h;
+                        let plus = inverse_dynamics(&m, &mut data, 0.0, &qp, &qdp, &qdd).unwrap();
+                        col.copy_from_slice(plus.as_slice());
+                        let x = if which == 0 { &mut qp } else { &mut qdp };
+                        x[j] = x0 - h;
+                        let minus = inverse_dynamics(&m, &mut data, 0.0, &qp, &qdp, &qdd).unwrap();
+                        for (c, mi) in col.iter_mut().zip(minus.iter()) {
+                            *c = (*c - mi) / (2.0 * h);
+                        }
+                        let x = if which == 0 { &mut qp } else { &mut qdp };
+                        x[j] = x0;
+                    }
+                }
+                black_box(col[0])
+            })
+        });
+    }
+    g.finish();
+
+    let mut g = c.benchmark_group("forward_dynamics_derivatives");
+    for n in [10usize, 100] {
+        let m = model(n);
+        let mut data = Data::new(&m);
+        let mut work = FdDerivatives::new(&m);
+        let (q, qd, _) = state(m.n_dof(), 42);
+        g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+            b.iter(|| {
+                forward_dynamics_derivatives(
+                    &m,
+                    &mut data,
+                    &mut work,
+                    0.0,
+                    black_box(&q),
+                    &qd,
+                    None,
+                )
+                .unwrap()
+                .dqdd_dq[(0, 0)]
             })
         });
     }

@@ -68,7 +68,7 @@ enum Command {
     Run {
         /// The scene file (TOML).
         scene: PathBuf,
-        /// Output directory (default ./out/<scene file stem>).
+        /// Output directory (default: ./out/STEM, STEM being the scene file name without its extension).
         #[arg(long)]
         out: Option<PathBuf>,
     },
@@ -105,7 +105,7 @@ enum Command {
     Report {
         /// The scene file (TOML).
         scene: PathBuf,
-        /// Output directory (default ./out/<scene file stem>).
+        /// Output directory (default: ./out/STEM, STEM being the scene file name without its extension).
         #[arg(long)]
         out: Option<PathBuf>,
         /// One repeat per configuration instead of three, shorter time budgets.

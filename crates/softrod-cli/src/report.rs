@@ -156,25 +156,24 @@ fn simulate(
 
 /// The scene with every piece cut in `k` equal parts (same strains,
 /// `[initial]` values repeated) and `quadrature` Gauss points per piece.
-fn variant(scene: &Scene, k: usize, quadrature: usize) -> Scene {
+fn variant(scene: &Scene, k: usize, quadrature: usize) -> Result<Scene, CliError> {
     let mut s = scene.clone();
     s.run.quadrature = quadrature;
     if k == 1 {
-        return s;
+        return Ok(s);
     }
     for r in &mut s.rods {
-        r.piece_lengths = r
-            .piece_lengths
-            .iter()
-            .flat_map(|&l| std::iter::repeat_n(l / k as f64, k))
-            .collect();
+        r.rod = r
+            .rod
+            .subdivided(k)
+            .map_err(|e| failed(format!("pieces x{k}: {e}")))?;
     }
     let dup = |v: &Vec<f64>| -> Vec<f64> {
         let mut out = Vec::with_capacity(k * v.len());
         let mut off = 0;
         for r in &scene.rods {
-            let c = r.strains.count();
-            for _ in 0..r.n_pieces() {
+            let c = r.rod.pieces()[0].basis.dof();
+            for _ in 0..r.rod.n_pieces() {
                 for _ in 0..k {
                     out.extend_from_slice(&v[off..off + c]);
                 }
@@ -185,17 +184,17 @@ fn variant(scene: &Scene, k: usize, quadrature: usize) -> Scene {
     };
     s.initial.q = scene.initial.q.as_ref().map(dup);
     s.initial.qdot = scene.initial.qdot.as_ref().map(dup);
-    s
+    Ok(s)
 }
 
 fn build_variant(scene: &Scene, k: usize, quadrature: usize) -> Result<Built, CliError> {
-    variant(scene, k, quadrature)
+    variant(scene, k, quadrature)?
         .build()
         .map_err(|e| failed(format!("pieces x{k}, quadrature {quadrature}: {e}")))
 }
 
 fn pieces(scene: &Scene) -> usize {
-    scene.rods.iter().map(|r| r.n_pieces()).sum()
+    scene.rods.iter().map(|r| r.rod.n_pieces()).sum()
 }
 
 /// A row of a study.
@@ -996,13 +995,13 @@ mod tests {
                     material = { density = 1000.0, young = 1.0e6, poisson = 0.5 }\n\
                     [initial]\nq = [1.0, 0.1, 2.0, 0.2]\n";
         let (s, _) = Scene::from_str(text, "t.toml").unwrap();
-        let v = variant(&s, 4, 6);
-        assert_eq!(v.rods[0].n_pieces(), 8);
+        let v = variant(&s, 4, 6).unwrap();
+        assert_eq!(v.rods[0].rod.n_pieces(), 8);
         assert_eq!(v.run.quadrature, 6);
         assert!(
             v.rods[0]
-                .piece_lengths
-                .iter()
+                .rod
+                .piece_lengths()
                 .all(|l| (l - 0.05).abs() < 1e-15)
         );
         let q = v.initial.q.clone().unwrap();

@@ -1,12 +1,14 @@
 //! Times forward dynamics on the rod of the criterion bench (all six strains,
 //! N pieces, 4 Gauss points, gravity + elasticity + damping); handy under
 //! `valgrind --tool=callgrind` where criterion is too slow (`WHAT` = `fd`,
-//! `id`, `mm` or `shifted` for forward, inverse dynamics, the mass matrix or
-//! one factor + solve of `M + aK + bD`; `BASIS=planar` selects the strains
+//! `id`, `mm`, `shifted` or `did` for forward, inverse dynamics, the mass
+//! matrix, one factor + solve of `M + aK + bD` or the analytic pair
+//! `∂τ/∂q, ∂τ/∂q̇`; `BASIS=planar` selects the strains
 //! `ky, qx, qz` on every piece instead of all six):
 //! `N_PIECES=10 N_ITER=2000 cargo run --release -p softrod-dynamics --example fd_timing`.
 use softrod_dynamics::{
-    Data, Model, RodSpec, ShiftedSolver, forward_dynamics, inverse_dynamics, mass_matrix,
+    Data, IdDerivatives, Model, RodSpec, ShiftedSolver, forward_dynamics, inverse_dynamics,
+    inverse_dynamics_derivatives, mass_matrix,
 };
 use softrod_kinematics::{Basis, Rod, Strain, straight};
 use softrod_lie::{Pose, Vec3};
@@ -32,12 +34,13 @@ fn main() {
     // the planar state draws curvatures and stretches as the full one does.
     let component = |i: usize| if planar { [1, 3, 5][i % 3] } else { i % 6 };
     let rod = Rod::uniform(0.5, n, basis, straight(), Pose::identity()).unwrap();
-    let material = Material {
-        density: 1000.0,
-        young: 1e7,
-        shear: 1e7 / 3.0,
-        viscosity: 1.0,
-    };
+    let material = Material::builder()
+        .density(1000.0)
+        .young(1e7)
+        .shear_modulus(1e7 / 3.0)
+        .viscosity(1.0)
+        .build()
+        .unwrap();
     let body = RodBody::new(Section::Circle { radius: 0.01 }, material, 0.5).unwrap();
     let model = Model::new(
         vec![RodSpec::new("arm", rod, body)],
@@ -76,11 +79,17 @@ fn main() {
     let t0 = std::time::Instant::now();
     let mut acc = 0.0;
     let mut solver = ShiftedSolver::new(&model);
+    let mut derivs = IdDerivatives::new(&model);
     let mut x = qd.clone();
     for _ in 0..iters {
         acc += match what.as_str() {
             "id" => inverse_dynamics(&model, &mut data, 0.0, &q, &qd, &qdd).unwrap()[0],
             "mm" => mass_matrix(&model, &mut data, &q).unwrap()[(0, 0)],
+            "did" => {
+                inverse_dynamics_derivatives(&model, &mut derivs, 0.0, &q, &qd, &qdd)
+                    .unwrap()
+                    .dtau_dq[(0, 0)]
+            }
             "shifted" => {
                 solver.factor(&model, &q, 2.5e-7, 5e-4).unwrap();
                 x.copy_from_slice(&qd);

@@ -3,7 +3,7 @@
 
 use crate::blocks::{Blk6, Sym6, ad_inv_tr_vec, ad_inv_vec};
 use crate::chol::{backward_sub, cholesky_k, forward_sub, right_solve_lt};
-use crate::data::Data;
+use crate::data::{Data, cable_tension};
 use crate::error::DynamicsError;
 use crate::model::Model;
 use crate::passes::{Pass, gravity_base_acceleration, outward, outward_inl, project_add_blocks};
@@ -74,8 +74,8 @@ pub(crate) fn strain_forces(
         }
         if !rm.spec.cables.is_empty() {
             let range = rm.dofs();
-            for cable in &rm.spec.cables {
-                let tension = cable.tension_at(t) * data.load_scale;
+            for (c, cable) in rm.spec.cables.iter().enumerate() {
+                let tension = cable_tension(data.tensions.as_ref(), rm, c, t) * data.load_scale;
                 if tension == 0.0 {
                     continue;
                 }
@@ -388,9 +388,7 @@ pub fn forward_dynamics_cholesky<'a>(
         .mass
         .clone()
         .cholesky()
-        .ok_or(DynamicsError::Singular {
-            rod: 0,
-            piece: 0,
+        .ok_or(DynamicsError::NotPositiveDefinite {
             what: "mass matrix",
         })?;
     data.qdd = chol.solve(&rhs);

@@ -1,7 +1,8 @@
 //! Reusable buffers: everything one evaluation needs, allocated once.
 
 use crate::blocks::Sym6;
-use crate::model::Model;
+use crate::error::DynamicsError;
+use crate::model::{Model, RodModel};
 use nalgebra::{DMatrix, DVector};
 use softrod_lie::{AdOp, Mat6, Pose, Vec6};
 
@@ -73,6 +74,9 @@ pub struct Data {
     pub load_scale: f64,
     /// When set, the sweeps include gravity only (for [`crate::generalized_gravity`]).
     pub(crate) only_gravity: bool,
+    /// Cable tensions that replace the cables' schedules (the inputs `u`,
+    /// one per cable in model order), set by [`Data::set_cable_tensions`].
+    pub(crate) tensions: Option<DVector<f64>>,
 }
 
 impl Data {
@@ -96,6 +100,69 @@ impl Data {
             cable_scratch: DVector::zeros(n),
             load_scale: 1.0,
             only_gravity: false,
+            tensions: None,
         }
+    }
+
+    /// Sets the cable tensions `u` \[N\] (one per cable, in model order:
+    /// rods in order, each rod's cables in order) that every evaluation
+    /// with this `Data` uses instead of the cables' tension schedules — the
+    /// inputs of a controller (D15: `τ_c = Σ_c u_c ∂ℓ_c/∂q`, still scaled by
+    /// [`Data::load_scale`]). `None` goes back to the schedules.
+    ///
+    /// Errors: a length other than [`Model::n_cables`], or a tension that
+    /// is negative or not finite (a cable can only pull).
+    pub fn set_cable_tensions(
+        &mut self,
+        model: &Model,
+        u: Option<&[f64]>,
+    ) -> Result<(), DynamicsError> {
+        let Some(u) = u else {
+            self.tensions = None;
+            return Ok(());
+        };
+        if u.len() != model.n_cables() {
+            return Err(DynamicsError::TensionCount {
+                got: u.len(),
+                expected: model.n_cables(),
+            });
+        }
+        if let Some((i, v)) = u
+            .iter()
+            .enumerate()
+            .find(|(_, v)| !(v.is_finite() && **v >= 0.0))
+        {
+            return Err(DynamicsError::InvalidTension {
+                index: i,
+                value: *v,
+            });
+        }
+        match &mut self.tensions {
+            Some(t) => t.as_mut_slice().copy_from_slice(u),
+            None => self.tensions = Some(DVector::from_column_slice(u)),
+        }
+        Ok(())
+    }
+
+    /// The tensions set by [`Data::set_cable_tensions`], if any.
+    pub fn cable_tensions(&self) -> Option<&[f64]> {
+        self.tensions.as_ref().map(|t| t.as_slice())
+    }
+
+    /// Tension of cable `c` of rod `rm` at time `t` \[N\]: the override
+    /// when set, else the cable's schedule (without the load factor).
+    #[inline]
+    pub(crate) fn tension(&self, rm: &RodModel, c: usize, t: f64) -> f64 {
+        cable_tension(self.tensions.as_ref(), rm, c, t)
+    }
+}
+
+/// Tension of cable `c` of rod `rm` at time `t` \[N\]: `u[cable_offset + c]`
+/// when inputs are given, else the cable's schedule.
+#[inline]
+pub(crate) fn cable_tension(u: Option<&DVector<f64>>, rm: &RodModel, c: usize, t: f64) -> f64 {
+    match u {
+        Some(u) => u[rm.cable_offset + c],
+        None => rm.spec.cables[c].tension_at(t),
     }
 }

@@ -7,7 +7,7 @@ use crate::model::Model;
 use softrod_lie::{Vec6, exp_and_tangent_minus, exp_twist};
 use softrod_mechanics::elastic_energy;
 
-/// Mechanical energies of the model at `(q, q̇)` [J].
+/// Mechanical energies of the model at `(q, q̇)` \[J\].
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Energies {
     /// `½ q̇ᵀ M q̇ = ½ ∫ ηᵀ𝓜η ds` (same quadrature as `M`).

@@ -1,12 +1,168 @@
 //! Errors of model building and the dynamics algorithms.
 
+use softrod_kinematics::{KinematicsError, Strain};
+use softrod_mechanics::MechanicsError;
+use std::fmt;
+
+/// A rod as errors name it: its index in the model (`None` before it is in
+/// one, e.g. from [`crate::RodSpecBuilder::build`]) and its name.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct RodId {
+    /// Position in the model's rods (0-based), when known.
+    pub index: Option<usize>,
+    /// [`crate::RodSpec::name`] (may be empty).
+    pub name: String,
+}
+
+impl fmt::Display for RodId {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match (self.index, self.name.is_empty()) {
+            (Some(i), false) => write!(f, "rod {i} ('{}')", self.name),
+            (Some(i), true) => write!(f, "rod {i}"),
+            (None, false) => write!(f, "rod '{}'", self.name),
+            (None, true) => f.write_str("rod"),
+        }
+    }
+}
+
 /// What went wrong, with the values that did.
+///
+/// Model-building variants name the rod ([`RodId`]) and chain the lower
+/// layer's error as [`std::error::Error::source`], so a caller (a scene
+/// loader) can map it back to its input by matching, not by reading text.
 #[non_exhaustive]
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum DynamicsError {
-    /// The model description is inconsistent.
-    #[error("invalid model: {0}")]
-    InvalidModel(String),
+    /// A model with no rod.
+    #[error("a model needs at least one rod")]
+    NoRods,
+    /// Zero Gauss points per piece.
+    #[error("quadrature needs at least one Gauss point per piece")]
+    NoQuadraturePoints,
+    /// A gravity component is NaN or infinite.
+    #[error("gravity component {component} is not finite ({value})")]
+    GravityNotFinite {
+        /// 0 = x, 1 = y, 2 = z (world).
+        component: usize,
+        /// The value.
+        value: f64,
+    },
+    /// The kinematic description of a rod (length, pieces, strains, rest
+    /// strain, base pose) is invalid.
+    #[error("{rod}: {source}")]
+    RodGeometry {
+        /// Which rod.
+        rod: RodId,
+        /// What the kinematics layer rejected.
+        #[source]
+        source: KinematicsError,
+    },
+    /// The body of a rod (length, section) is invalid, or does not match
+    /// the kinematic rod's length.
+    #[error("{rod}: {source}")]
+    RodBody {
+        /// Which rod.
+        rod: RodId,
+        /// What the mechanics layer rejected.
+        #[source]
+        source: MechanicsError,
+    },
+    /// [`crate::RodSpecBuilder::build`] without a section.
+    #[error("{rod}: no section given")]
+    MissingSection {
+        /// Which rod.
+        rod: RodId,
+    },
+    /// [`crate::RodSpecBuilder::build`] without a material.
+    #[error("{rod}: no material given")]
+    MissingMaterial {
+        /// Which rod.
+        rod: RodId,
+    },
+    /// Piece lengths that do not sum to the rod length (to
+    /// `softrod_mechanics::RodBody::LENGTH_RTOL`).
+    #[error("{rod}: piece lengths sum to {sum} m but the rod length is {length} m")]
+    PieceLengthSum {
+        /// Which rod.
+        rod: RodId,
+        /// `Σ ℓ_n` \[m\].
+        sum: f64,
+        /// The length given \[m\].
+        length: f64,
+    },
+    /// Not one stress-free strain per piece.
+    #[error("{rod}: {got} stress-free strains given for {expected} pieces")]
+    StressFreeCount {
+        /// Which rod.
+        rod: RodId,
+        /// Strains given.
+        got: usize,
+        /// Pieces of the rod.
+        expected: usize,
+    },
+    /// A stress-free strain component is NaN or infinite.
+    #[error("{rod}: stress-free strain {component} of piece {piece} is not finite ({value})")]
+    StressFreeNotFinite {
+        /// Which rod.
+        rod: RodId,
+        /// Piece index.
+        piece: usize,
+        /// The component.
+        component: Strain,
+        /// The value.
+        value: f64,
+    },
+    /// A cable of a rod is invalid on that rod.
+    #[error("{rod}, cable {cable}: {source}")]
+    Cable {
+        /// Which rod.
+        rod: RodId,
+        /// Index in [`crate::RodSpec::cables`].
+        cable: usize,
+        /// What the mechanics layer rejected.
+        #[source]
+        source: MechanicsError,
+    },
+    /// A point load of a rod is invalid on that rod.
+    #[error("{rod}, point load {load}: {source}")]
+    PointLoad {
+        /// Which rod.
+        rod: RodId,
+        /// Index in [`crate::RodSpec::point_loads`].
+        load: usize,
+        /// What the mechanics layer rejected.
+        #[source]
+        source: MechanicsError,
+    },
+    /// A distributed load of a rod is invalid.
+    #[error("{rod}, distributed load {load}: {source}")]
+    DistributedLoad {
+        /// Which rod.
+        rod: RodId,
+        /// Index in [`crate::RodSpec::distributed_loads`].
+        load: usize,
+        /// What the mechanics layer rejected.
+        #[source]
+        source: MechanicsError,
+    },
+    /// The drag of a rod is invalid.
+    #[error("{rod}, drag: {source}")]
+    Drag {
+        /// Which rod.
+        rod: RodId,
+        /// What the mechanics layer rejected.
+        #[source]
+        source: MechanicsError,
+    },
+    /// A kinematic query of an evaluation failed.
+    #[error("kinematics of rod {rod}: {source}")]
+    Kinematics {
+        /// Rod index in the model.
+        rod: usize,
+        /// The kinematics layer's error.
+        #[source]
+        source: KinematicsError,
+    },
     /// A vector argument has the wrong length.
     #[error("{what} has {got} entries, the model has {expected} coordinates")]
     SizeMismatch {
@@ -17,6 +173,22 @@ pub enum DynamicsError {
         /// `n_dof`.
         expected: usize,
     },
+    /// The cable-tension inputs do not match the model's cables.
+    #[error("{got} cable tensions given, the model has {expected} cables")]
+    TensionCount {
+        /// Tensions given.
+        got: usize,
+        /// [`crate::Model::n_cables`].
+        expected: usize,
+    },
+    /// A cable-tension input is negative or not finite (a cable can only pull).
+    #[error("cable tension u[{index}] = {value} N must be finite and non-negative")]
+    InvalidTension {
+        /// Index of the cable in model order.
+        index: usize,
+        /// The value given.
+        value: f64,
+    },
     /// A value is NaN or infinite.
     #[error("{what} is not finite ({value})")]
     NotFinite {
@@ -25,13 +197,20 @@ pub enum DynamicsError {
         /// The value.
         value: f64,
     },
-    /// A matrix that must be positive definite is not.
+    /// A per-piece matrix that must be positive definite is not.
     #[error("{what} of rod {rod}, piece {piece} is not positive definite")]
     Singular {
         /// Rod index.
         rod: usize,
         /// Piece index.
         piece: usize,
+        /// Which matrix.
+        what: &'static str,
+    },
+    /// A whole-model matrix (the mass matrix) that must be positive definite
+    /// is not; its Cholesky factorization does not say where.
+    #[error("{what} is not positive definite")]
+    NotPositiveDefinite {
         /// Which matrix.
         what: &'static str,
     },
@@ -75,7 +254,40 @@ pub enum DynamicsError {
         /// `n_dof` of the model it is used with.
         got: usize,
     },
-    /// The modal eigenproblem failed.
-    #[error("modal analysis failed: {0}")]
-    Modes(String),
+}
+
+/// The rod field of the model-building variants, by reference of either
+/// mutability (match ergonomics give `&RodId` or `&mut RodId`).
+macro_rules! rod_of {
+    ($e:expr) => {
+        match $e {
+            DynamicsError::RodGeometry { rod, .. }
+            | DynamicsError::RodBody { rod, .. }
+            | DynamicsError::MissingSection { rod }
+            | DynamicsError::MissingMaterial { rod }
+            | DynamicsError::PieceLengthSum { rod, .. }
+            | DynamicsError::StressFreeCount { rod, .. }
+            | DynamicsError::StressFreeNotFinite { rod, .. }
+            | DynamicsError::Cable { rod, .. }
+            | DynamicsError::PointLoad { rod, .. }
+            | DynamicsError::DistributedLoad { rod, .. }
+            | DynamicsError::Drag { rod, .. } => Some(rod),
+            _ => None,
+        }
+    };
+}
+
+impl DynamicsError {
+    /// The rod a model-building error is about, if any.
+    pub fn rod(&self) -> Option<&RodId> {
+        rod_of!(self)
+    }
+
+    /// The same error with the rod's index in the model set.
+    pub(crate) fn at_rod_index(mut self, index: usize) -> Self {
+        if let Some(rod) = rod_of!(&mut self) {
+            rod.index = Some(index);
+        }
+        self
+    }
 }

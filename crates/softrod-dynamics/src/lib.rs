@@ -3,7 +3,8 @@
 //! layer of softrod.
 //!
 //! A [`Model`] (rods, their bodies and force terms, gravity, quadrature) is
-//! immutable; a [`Data`] holds every buffer an evaluation needs. Algorithms
+//! immutable, built with [`Model::builder`] from rods built with
+//! [`RodSpec::builder`]; a [`Data`] holds every buffer an evaluation needs. Algorithms
 //! are free functions that write into `data` and return a reference to the
 //! result:
 //!
@@ -17,7 +18,10 @@
 //! | [`energies`] | kinetic, elastic, gravitational | §7 |
 //! | [`statics`] | equilibrium, Newton + line search + continuation | |
 //! | [`modes`] | natural frequencies about an equilibrium | |
-//! | [`dynamics_jacobians`] | `∂q̈/∂q`, `∂q̈/∂q̇` | |
+//! | [`inverse_dynamics_derivatives`] | `∂τ/∂q`, `∂τ/∂q̇` (`∂τ/∂q̈ = M`) | docs/theory-derivatives.md (D37–D47) |
+//! | [`forward_dynamics_derivatives`] | `∂q̈/∂q`, `∂q̈/∂q̇`, `∂q̈/∂u` | (D48) |
+//! | [`linearize`] | `(A, B)` of `ẋ = f(x, u)`, `x = (q, q̇)` | (D49) |
+//! | [`dynamics_jacobians`] | `∂q̈/∂q`, `∂q̈/∂q̇` (allocating) | (D48) |
 //! | [`ShiftedSolver`] | `(M + aK + bD)⁻¹ x`, O(N) | §6 with armature `aK_n + bD_n` |
 //!
 //! Units SI; twists and wrenches angular first; body frame (see `softrod-lie`).
@@ -25,15 +29,18 @@
 
 mod algorithms;
 mod blocks;
+mod builder;
 mod chol;
 mod data;
 mod derivatives;
 mod energy;
 mod error;
+mod id_derivatives;
 mod matrices;
 mod model;
 mod modes;
 mod passes;
+mod piece_derivs;
 mod shifted;
 mod simd;
 mod statics;
@@ -41,10 +48,15 @@ mod statics;
 pub use algorithms::{
     bias_force, forward_dynamics, forward_dynamics_cholesky, inverse_dynamics, mass_matrix,
 };
+pub use builder::{IntoRodSpec, ModelBuilder, RodSpecBuilder};
 pub use data::Data;
-pub use derivatives::{DynamicsJacobians, dynamics_jacobians};
+pub use derivatives::{
+    DynamicsJacobians, FdDerivatives, Linearization, dynamics_jacobians,
+    forward_dynamics_derivatives, linearize,
+};
 pub use energy::{Energies, energies};
-pub use error::DynamicsError;
+pub use error::{DynamicsError, RodId};
+pub use id_derivatives::{IdDerivatives, inverse_dynamics_derivatives};
 pub use matrices::{
     actuation_matrix, coriolis_matrix, damping_matrix, generalized_gravity, stiffness_matrix,
 };

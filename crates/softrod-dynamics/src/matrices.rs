@@ -96,13 +96,14 @@ pub fn coriolis_matrix(
     check_vec(model, "qdot", qd)?;
     let n = model.n_dof();
     let mut c = DMatrix::zeros(n, n);
-    for rm in model.rods() {
+    for (r, rm) in model.rods().iter().enumerate() {
+        let kinematics = |source| DynamicsError::Kinematics { rod: r, source };
         let rod = &rm.spec.rod;
         let range = rm.dofs();
         let k = rod.n_dof();
         let mut kin = RodKinematics::new(rod);
         kin.update(rod, &q[range.clone()], Some(&qd[range.clone()]), None)
-            .map_err(|e| DynamicsError::InvalidModel(e.to_string()))?;
+            .map_err(kinematics)?;
         let mut j = Matrix6xX::zeros(k);
         let mut jd = Matrix6xX::zeros(k);
         let qdr = DVector::from_column_slice(&qd[range.clone()]);
@@ -110,9 +111,9 @@ pub fn coriolis_matrix(
             for qp in &pd.points {
                 let s = piece.start + qp.x;
                 kin.jacobian_at(rod, s, Frame::Body, &mut j)
-                    .map_err(|e| DynamicsError::InvalidModel(e.to_string()))?;
+                    .map_err(kinematics)?;
                 kin.jacobian_dot_at(rod, s, Frame::Body, &mut jd)
-                    .map_err(|e| DynamicsError::InvalidModel(e.to_string()))?;
+                    .map_err(kinematics)?;
                 let eta: softrod_lie::Vec6 = (&j * &qdr).fixed_rows::<6>(0).into_owned();
                 // inner = Λ(𝓜η) J + 𝓜 J̇ (6×k), Λ(F) jc = ad*_{jc} F.
                 let m_eta = qp.inertia.component_mul(&eta);

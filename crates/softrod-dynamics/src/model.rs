@@ -1,8 +1,9 @@
 //! The immutable description of what is simulated.
 
-use crate::error::DynamicsError;
+use crate::builder::{ModelBuilder, RodSpecBuilder};
+use crate::error::{DynamicsError, RodId};
 use nalgebra::DMatrix;
-use softrod_kinematics::{GaussLegendre, Rod};
+use softrod_kinematics::{GaussLegendre, Rod, Strain};
 use softrod_lie::{Mat6, Vec3, Vec6};
 use softrod_mechanics::{
     Cable, DistributedLoad, Drag, LoadFrame, PointLoad, RodBody, piece_matrices,
@@ -11,7 +12,34 @@ use softrod_mechanics::{
 /// Everything about one rod: its geometry and strain bases, its body
 /// (section + material), and the force terms acting on it. Only the terms
 /// present are evaluated (an empty `cables` list costs nothing).
-#[derive(Clone, Debug)]
+///
+/// Build one with [`RodSpec::builder`] (the length given once), or from its
+/// parts with [`RodSpec::new`]. The fields are public; [`Model::new`]
+/// checks them ([`RodSpec::validate`]) when the rod enters a model.
+///
+/// ```
+/// use softrod_dynamics::RodSpec;
+/// use softrod_kinematics::Strain;
+/// use softrod_mechanics::Material;
+///
+/// let silicone = Material::builder()
+///     .density(1000.0)
+///     .young(1.0e6)
+///     .poisson(0.5)
+///     .build()
+///     .unwrap();
+/// let arm = RodSpec::builder(0.5)
+///     .name("arm")
+///     .pieces(8)
+///     .strains([Strain::Ky, Strain::Qx, Strain::Qz])
+///     .circle(0.01)
+///     .material(silicone)
+///     .build()
+///     .unwrap();
+/// assert_eq!(arm.rod.n_dof(), 24);
+/// assert!(RodSpec::builder(-0.5).circle(0.01).material(silicone).build().is_err());
+/// ```
+#[derive(Clone, Debug, PartialEq)]
 pub struct RodSpec {
     /// A name for messages and outputs.
     pub name: String,
@@ -33,7 +61,14 @@ pub struct RodSpec {
 }
 
 impl RodSpec {
-    /// A rod with no loads, cables or drag.
+    /// A builder for a rod of undeformed length `length` \[m\] (see
+    /// [`RodSpecBuilder`]).
+    pub fn builder(length: f64) -> RodSpecBuilder {
+        RodSpecBuilder::new(length)
+    }
+
+    /// A rod with no loads, cables or drag, from its kinematic rod and body
+    /// (which must have the same length).
     pub fn new(name: impl Into<String>, rod: Rod, body: RodBody) -> Self {
         Self {
             name: name.into(),
@@ -45,6 +80,76 @@ impl RodSpec {
             drag: None,
             cables: Vec::new(),
         }
+    }
+
+    /// Checks what the public fields may have put together inconsistently:
+    /// body and rod lengths, one finite stress-free strain per piece, the
+    /// drag, every cable, point and distributed load on this rod. (The rod
+    /// and the body are valid by construction.)
+    pub fn validate(&self) -> Result<(), DynamicsError> {
+        self.check(None)
+    }
+
+    pub(crate) fn id(&self, index: Option<usize>) -> RodId {
+        RodId {
+            index,
+            name: self.name.clone(),
+        }
+    }
+
+    pub(crate) fn check(&self, index: Option<usize>) -> Result<(), DynamicsError> {
+        let rod = || self.id(index);
+        let length = self.rod.length();
+        self.body
+            .check_rod(&self.rod)
+            .map_err(|source| DynamicsError::RodBody { rod: rod(), source })?;
+        if let Some(sf) = &self.stress_free {
+            if sf.len() != self.rod.n_pieces() {
+                return Err(DynamicsError::StressFreeCount {
+                    rod: rod(),
+                    got: sf.len(),
+                    expected: self.rod.n_pieces(),
+                });
+            }
+            for (piece, xi) in sf.iter().enumerate() {
+                if let Some((c, &value)) = xi.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+                    return Err(DynamicsError::StressFreeNotFinite {
+                        rod: rod(),
+                        piece,
+                        component: Strain::ALL[c],
+                        value,
+                    });
+                }
+            }
+        }
+        if let Some(d) = &self.drag {
+            d.validate()
+                .map_err(|source| DynamicsError::Drag { rod: rod(), source })?;
+        }
+        for (cable, c) in self.cables.iter().enumerate() {
+            c.validate(length).map_err(|source| DynamicsError::Cable {
+                rod: rod(),
+                cable,
+                source,
+            })?;
+        }
+        for (load, l) in self.point_loads.iter().enumerate() {
+            l.validate(length)
+                .map_err(|source| DynamicsError::PointLoad {
+                    rod: rod(),
+                    load,
+                    source,
+                })?;
+        }
+        for (load, l) in self.distributed_loads.iter().enumerate() {
+            l.validate()
+                .map_err(|source| DynamicsError::DistributedLoad {
+                    rod: rod(),
+                    load,
+                    source,
+                })?;
+        }
+        Ok(())
     }
 }
 
@@ -98,6 +203,9 @@ pub struct RodModel {
     /// Whether world poses at evaluation points are needed (world-frame
     /// distributed loads, gravity potential).
     pub(crate) needs_world_pose_at_points: bool,
+    /// Index of the rod's first cable among the model's cables (the order
+    /// of the inputs `u`).
+    pub cable_offset: usize,
 }
 
 impl RodModel {
@@ -128,68 +236,48 @@ pub struct Model {
 }
 
 impl Model {
-    /// Builds a model; precomputes `K_n`, `D_n` (D13), the quadrature points
-    /// with their inertia, and the placement of point loads on pieces.
+    /// Gauss points per piece when none are asked for: 4 integrate
+    /// polynomials of degree 7 exactly, the inertia of a uniform piece to
+    /// ~1e-10 for curvatures up to a few rad per piece length.
+    pub const DEFAULT_QUADRATURE: usize = 4;
+
+    /// A builder: rods, gravity, quadrature (see [`ModelBuilder`]).
+    pub fn builder() -> ModelBuilder {
+        ModelBuilder::default()
+    }
+
+    /// Builds a model; checks every rod ([`RodSpec::validate`], errors name
+    /// the rod by index and name) and precomputes `K_n`, `D_n` (D13), the
+    /// quadrature points with their inertia, and the placement of point
+    /// loads on pieces.
     ///
-    /// `quadrature` is the number of Gauss–Legendre points per piece (≥ 1;
-    /// 4 integrates the inertia of a uniform piece to ~1e-10 for curvatures
-    /// up to a few rad per piece length).
+    /// `gravity` is the world acceleration `g_w` [m/s²] (`None` or zero: no
+    /// gravity term); `quadrature` the number of Gauss–Legendre points per
+    /// piece (≥ 1; see [`Self::DEFAULT_QUADRATURE`]).
     pub fn new(
         rods: Vec<RodSpec>,
         gravity: Option<Vec3>,
         quadrature: usize,
     ) -> Result<Self, DynamicsError> {
         if rods.is_empty() {
-            return Err(DynamicsError::InvalidModel(
-                "a model needs at least one rod".into(),
-            ));
+            return Err(DynamicsError::NoRods);
         }
         if quadrature == 0 {
-            return Err(DynamicsError::InvalidModel(
-                "quadrature needs at least one Gauss point per piece".into(),
-            ));
+            return Err(DynamicsError::NoQuadraturePoints);
         }
         if let Some(g) = gravity {
-            if g.iter().any(|v| !v.is_finite()) {
-                return Err(DynamicsError::InvalidModel(format!(
-                    "gravity {g:?} is not finite"
-                )));
+            if let Some((component, &value)) = g.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+                return Err(DynamicsError::GravityNotFinite { component, value });
             }
         }
         let gravity = gravity.filter(|g| g.norm() > 0.0);
         let gl = GaussLegendre::new(quadrature);
         let mut out = Vec::with_capacity(rods.len());
         let mut off = 0;
-        for spec in rods {
+        let mut cables = 0;
+        for (index, spec) in rods.into_iter().enumerate() {
+            spec.check(Some(index))?;
             let rod = &spec.rod;
-            let name = spec.name.clone();
-            let invalid =
-                |what: String| DynamicsError::InvalidModel(format!("rod '{name}': {what}"));
-            spec.body.validate().map_err(|e| invalid(e.to_string()))?;
-            if (spec.body.length - rod.length()).abs() > 1e-9 * rod.length() {
-                return Err(invalid(format!(
-                    "body length {} differs from the rod length {}",
-                    spec.body.length,
-                    rod.length()
-                )));
-            }
-            if let Some(sf) = &spec.stress_free {
-                if sf.len() != rod.n_pieces() {
-                    return Err(invalid(format!(
-                        "{} stress-free strains given for {} pieces",
-                        sf.len(),
-                        rod.n_pieces()
-                    )));
-                }
-            }
-            for c in &spec.cables {
-                c.validate(rod.length())
-                    .map_err(|e| invalid(e.to_string()))?;
-            }
-            for (i, l) in spec.point_loads.iter().enumerate() {
-                rod.locate(l.s)
-                    .map_err(|e| invalid(format!("point load {i}: {e}")))?;
-            }
             let mats = piece_matrices(rod, &spec.body, spec.stress_free.as_deref(), &gl);
             let mut pieces = Vec::with_capacity(rod.n_pieces());
             for (n, (piece, m)) in rod.pieces().iter().zip(mats).enumerate() {
@@ -207,7 +295,7 @@ impl Model {
                     .collect();
                 let mut loads = Vec::new();
                 for (i, l) in spec.point_loads.iter().enumerate() {
-                    let (pn, x) = rod.locate(l.s).expect("checked above");
+                    let (pn, x) = rod.locate(l.s).expect("PointLoad::validate checked s");
                     if pn == n {
                         loads.push(PlacedLoad { x, index: i });
                     }
@@ -239,13 +327,16 @@ impl Model {
                 .iter()
                 .any(|d| d.frame == LoadFrame::World);
             let n = rod.n_dof();
+            let n_cables = spec.cables.len();
             out.push(RodModel {
                 spec,
                 dof_offset: off,
                 pieces,
                 needs_world_pose_at_points: needs_world,
+                cable_offset: cables,
             });
             off += n;
+            cables += n_cables;
         }
         Ok(Self {
             rods: out,

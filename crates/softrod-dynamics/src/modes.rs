@@ -64,12 +64,16 @@ pub fn modes(
     let m = mass_matrix(model, data, q_eq)?.clone();
     let l = m
         .cholesky()
-        .ok_or_else(|| DynamicsError::Modes("mass matrix is not positive definite".into()))?
+        .ok_or(DynamicsError::NotPositiveDefinite {
+            what: "mass matrix",
+        })?
         .l();
     let linv = l
         .clone()
         .try_inverse()
-        .ok_or_else(|| DynamicsError::Modes("singular Cholesky factor".into()))?;
+        .ok_or(DynamicsError::NotPositiveDefinite {
+            what: "mass matrix (singular Cholesky factor)",
+        })?;
     let c = &linv * ksym * linv.transpose();
     let c = (&c + c.transpose()) * 0.5;
     let eig = c.symmetric_eigen();
@@ -84,8 +88,11 @@ pub fn modes(
         let v = &lt_inv * eig.eigenvectors.column(o);
         shapes.set_column(i, &v);
     }
-    if omega.iter().any(|v| !v.is_finite()) {
-        return Err(DynamicsError::Modes("non-finite eigenvalue".into()));
+    if let Some((i, &value)) = omega.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        return Err(DynamicsError::NotFinite {
+            what: format!("angular frequency of mode {i} [rad/s]"),
+            value,
+        });
     }
     Ok(Modes {
         omega,

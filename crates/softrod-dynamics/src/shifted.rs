@@ -8,7 +8,7 @@
 //! those blocks: adding the armature to `D̂_n` (D24) makes the inward pass
 //! (D24–D25) an `LDLᵀ`-like factorization of `S` and the bias-free
 //! inward/outward sweeps (D26–D27) a solve, both O(N) — no `n_dof × n_dof`
-//! matrix is formed.
+//! matrix is formed (docs/theory-derivatives.md §6).
 
 use crate::algorithms::check_vec;
 use crate::blocks::{Blk6, Sym6, ad_inv_tr_vec, ad_inv_vec};
@@ -132,7 +132,7 @@ crate::simd::dispatch! {
 }
 
 #[inline(always)]
-fn shifted_factor_impl<'a>(
+pub(crate) fn shifted_factor_impl<'a>(
     model: &Model,
     data: &'a mut Data,
     q: &[f64],

@@ -2,7 +2,8 @@
 //!
 //! The crate is compiled for the baseline target (x86-64 SSE2 by default),
 //! so the same binary runs everywhere. [`forward_dynamics`],
-//! [`inverse_dynamics`] and [`mass_matrix`] are each compiled twice — as is,
+//! [`inverse_dynamics`], [`mass_matrix`], the shifted factorization and the
+//! outward sweep of the inverse-dynamics derivatives are each compiled twice — as is,
 //! and with AVX2 enabled (wider vectors, three-operand encodings) — and the
 //! AVX2 copy runs when the CPU has it. FMA is deliberately not enabled and
 //! Rust never contracts `a * b + c` on its own, so both copies perform the
@@ -96,7 +97,13 @@ mod tests {
         let rod = Rod::from_pieces(specs, base).unwrap();
         let body = RodBody::new(
             Section::Circle { radius: 0.012 },
-            Material::with_poisson(1100.0, 2e6, 0.45, 30.0).unwrap(),
+            Material::builder()
+                .density(1100.0)
+                .young(2e6)
+                .poisson(0.45)
+                .viscosity(30.0)
+                .build()
+                .unwrap(),
             0.9,
         )
         .unwrap();
@@ -150,6 +157,40 @@ mod tests {
         let b = unsafe { forward_dynamics_avx2(&model, &mut d2, 0.3, &q, &qd, None) }.unwrap();
         assert!(a.iter().all(|x| x.is_finite()) && a.amax() > 0.0);
         assert_eq!(bits(a.as_slice()), bits(b.as_slice()), "forward dynamics");
+
+        let mut w1 = crate::IdDerivatives::new(&model);
+        let mut w2 = crate::IdDerivatives::new(&model);
+        crate::id_derivatives::id_derivatives_impl(&model, &mut w1, 0.3, &q, &qd, &qdd).unwrap();
+        // SAFETY: as above.
+        unsafe { crate::id_derivatives::id_derivatives_avx2(&model, &mut w2, 0.3, &q, &qd, &qdd) }
+            .unwrap();
+        assert!(w1.dtau_dq.amax() > 0.0);
+        assert_eq!(
+            bits(w1.dtau_dq.as_slice()),
+            bits(w2.dtau_dq.as_slice()),
+            "dτ/dq"
+        );
+        assert_eq!(
+            bits(w1.dtau_dqd.as_slice()),
+            bits(w2.dtau_dqd.as_slice()),
+            "dτ/dq̇"
+        );
+
+        crate::shifted::shifted_factor_impl(&model, &mut d1, &q, 1e-4, 1e-2).unwrap();
+        // SAFETY: as above.
+        unsafe { crate::shifted::shifted_factor_avx2(&model, &mut d2, &q, 1e-4, 1e-2) }.unwrap();
+        for (p1, p2) in d1.pieces[0].iter().zip(&d2.pieces[0]) {
+            assert_eq!(
+                bits(p1.dt.as_slice()),
+                bits(p2.dt.as_slice()),
+                "shifted factor"
+            );
+            assert_eq!(
+                bits(p1.ut.as_slice()),
+                bits(p2.ut.as_slice()),
+                "shifted factor"
+            );
+        }
 
         let a = mass_matrix_impl(&model, &mut d1, &q).unwrap().clone();
         // SAFETY: as above.

@@ -17,7 +17,7 @@ pub struct StaticsOptions {
     pub max_iterations: usize,
     /// Maximum number of continuation steps (load increments).
     pub max_load_steps: usize,
-    /// Time at which time-dependent loads (cable tensions) are evaluated [s].
+    /// Time at which time-dependent loads (cable tensions) are evaluated \[s\].
     pub time: f64,
 }
 
@@ -36,14 +36,12 @@ impl Default for StaticsOptions {
     }
 }
 
-/// A converged equilibrium.
+/// A converged equilibrium (failures are [`DynamicsError::StaticsFailed`],
+/// never a result).
 #[derive(Clone, Debug)]
 pub struct StaticsResult {
     /// Equilibrium coordinates (n_dof).
     pub q: DVector<f64>,
-    /// Always true in a returned result (failures are errors); kept for
-    /// machine-readable outputs.
-    pub converged: bool,
     /// Newton iterations over all continuation steps.
     pub iterations: usize,
     /// Final residual `‖r‖∞` [N or N·m per coordinate].
@@ -193,7 +191,6 @@ fn statics_inner(
     if let Ok(res) = newton.solve(data, &mut q, tol_ref, options)? {
         return Ok(StaticsResult {
             q,
-            converged: true,
             iterations: newton.iterations,
             residual: res,
             load_steps: 1,
@@ -254,7 +251,6 @@ fn statics_inner(
     }
     Ok(StaticsResult {
         q: q_prev,
-        converged: true,
         iterations: newton.iterations,
         residual: last_res,
         load_steps: steps,

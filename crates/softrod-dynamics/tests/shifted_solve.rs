@@ -111,7 +111,7 @@ fn several_rods_and_strongly_curved_states() {
         damping: true,
         ..Terms::NONE
     };
-    let m = two_rods(5, terms);
+    let m = two_rods(5, terms, 2e6);
     let (q, _, _) = state(&mut rng, m.n_dof(), 0.8, 0.0, 0.0);
     check(&m, &q, &mut rng, "two rods");
     // Curvatures up to 60 rad/m on 0.05 m pieces: several radians per

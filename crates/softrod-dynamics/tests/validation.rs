@@ -27,12 +27,12 @@ const E: f64 = 1e7;
 const G: f64 = E / 3.0;
 
 fn material() -> Material {
-    Material {
-        density: RHO,
-        young: E,
-        shear: G,
-        viscosity: 0.0,
-    }
+    Material::builder()
+        .density(RHO)
+        .young(E)
+        .shear_modulus(G)
+        .build()
+        .unwrap()
 }
 
 fn second_moment(r: f64) -> f64 {

@@ -13,12 +13,16 @@
 //! Units SI; twists angular first (see `softrod-lie`).
 #![warn(missing_docs)]
 
+mod basis;
 mod error;
 mod quadrature;
 mod rod;
 mod state;
+mod strain;
 
-pub use error::KinematicsError;
+pub use basis::Basis;
+pub use error::{KinematicsError, LengthOf};
 pub use quadrature::GaussLegendre;
-pub use rod::{Basis, Piece, PieceSpec, Rod, Strain, straight};
+pub use rod::{Piece, PieceSpec, Rod, straight};
 pub use state::{Frame, RodKinematics};
+pub use strain::Strain;

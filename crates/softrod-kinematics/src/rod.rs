@@ -1,228 +1,18 @@
 //! A rod cut into PCS pieces: lengths, strain bases, rest strain, base pose.
 
-use crate::error::KinematicsError;
-use nalgebra::{DVector, Matrix6xX};
+use crate::basis::Basis;
+use crate::error::{KinematicsError, LengthOf};
+use crate::strain::Strain;
+use nalgebra::DVector;
 use softrod_lie::{Pose, Vec6};
-
-/// One of the six strain components, in softrod's order `(kx, ky, kz, qx, qy, qz)`:
-/// torsion, the two bendings, extension, the two shears.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Strain {
-    /// Torsion (rad/m).
-    Kx = 0,
-    /// Bending about the local y axis (rad/m).
-    Ky = 1,
-    /// Bending about the local z axis (rad/m).
-    Kz = 2,
-    /// Extension (1 at rest).
-    Qx = 3,
-    /// Shear along local y.
-    Qy = 4,
-    /// Shear along local z.
-    Qz = 5,
-}
-
-impl Strain {
-    /// All six, in order.
-    pub const ALL: [Strain; 6] = [
-        Strain::Kx,
-        Strain::Ky,
-        Strain::Kz,
-        Strain::Qx,
-        Strain::Qy,
-        Strain::Qz,
-    ];
-
-    /// The scene-file name (`"kx"` … `"qz"`).
-    pub fn name(self) -> &'static str {
-        ["kx", "ky", "kz", "qx", "qy", "qz"][self as usize]
-    }
-
-    /// Parses a scene-file name.
-    pub fn from_name(name: &str) -> Option<Strain> {
-        Strain::ALL.into_iter().find(|s| s.name() == name)
-    }
-}
-
-/// A strain basis `B_n ∈ R^{6×k_n}`, `1 ≤ k_n ≤ 6`, of full column rank:
-/// the strain of the piece is `ξ_n = B_n q_n + ξ̄_n`.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Basis {
-    matrix: Matrix6xX<f64>,
-    /// When every column is a unit vector, the component each selects:
-    /// `B q` and `Bᵀ w` then become gathers/scatters.
-    selection: Option<Vec<usize>>,
-    /// `B = I₆` (all six strains in order): `B q` is a copy and `op · B` is
-    /// `op` itself, the common Cosserat case the hot loops special-case.
-    identity: bool,
-}
-
-impl Basis {
-    /// All six strains (`B = I₆`), the Cosserat rod.
-    pub fn all() -> Self {
-        Self::select(&Strain::ALL).expect("six distinct strains")
-    }
-
-    /// Kirchhoff rod: inextensible, unshearable (`kx, ky, kz`).
-    pub fn kirchhoff() -> Self {
-        Self::select(&[Strain::Kx, Strain::Ky, Strain::Kz]).expect("distinct")
-    }
-
-    /// Selects a subset of strains, in the order given (e.g. planar `kz, qx, qy`).
-    pub fn select(components: &[Strain]) -> Result<Self, KinematicsError> {
-        let idx: Vec<usize> = components.iter().map(|&c| c as usize).collect();
-        Self::from_indices(&idx)
-    }
-
-    /// Selects strains by index (0 = kx … 5 = qz), in the order given.
-    pub fn from_indices(idx: &[usize]) -> Result<Self, KinematicsError> {
-        let bad = |reason: String| KinematicsError::BadBasis { piece: 0, reason };
-        if idx.is_empty() || idx.len() > 6 {
-            return Err(bad(format!("needs 1 to 6 strains, got {}", idx.len())));
-        }
-        let mut seen = [false; 6];
-        for &i in idx {
-            if i >= 6 {
-                return Err(bad(format!("strain index {i} is not in 0..6")));
-            }
-            if seen[i] {
-                return Err(bad(format!(
-                    "strain {} selected twice",
-                    Strain::ALL[i].name()
-                )));
-            }
-            seen[i] = true;
-        }
-        let mut matrix = Matrix6xX::zeros(idx.len());
-        for (c, &i) in idx.iter().enumerate() {
-            matrix[(i, c)] = 1.0;
-        }
-        Ok(Self {
-            matrix,
-            identity: idx == [0, 1, 2, 3, 4, 5],
-            selection: Some(idx.to_vec()),
-        })
-    }
-
-    /// A general basis matrix (6×k). It must be finite and of full column
-    /// rank (smallest singular value > 1e-10 × largest).
-    pub fn from_matrix(matrix: Matrix6xX<f64>) -> Result<Self, KinematicsError> {
-        let bad = |reason: String| KinematicsError::BadBasis { piece: 0, reason };
-        let k = matrix.ncols();
-        if k == 0 || k > 6 {
-            return Err(bad(format!("needs 1 to 6 columns, got {k}")));
-        }
-        if matrix.iter().any(|v| !v.is_finite()) {
-            return Err(bad("contains NaN or infinity".into()));
-        }
-        let sv = matrix.clone().svd(false, false).singular_values;
-        let (max, min) = (sv.max(), sv.min());
-        if min.is_nan() || min <= 1e-10 * max {
-            return Err(bad(format!(
-                "not of full column rank (singular values {max:.3e} … {min:.3e})"
-            )));
-        }
-        // Recognise pure selections so they get the fast path.
-        let mut sel = Vec::with_capacity(k);
-        for c in 0..k {
-            let col = matrix.column(c);
-            let ones: Vec<usize> = (0..6).filter(|&r| col[r] == 1.0).collect();
-            let nonzero = (0..6).filter(|&r| col[r] != 0.0).count();
-            if ones.len() == 1 && nonzero == 1 {
-                sel.push(ones[0]);
-            }
-        }
-        let selection = (sel.len() == k).then_some(sel);
-        let identity = selection.as_deref() == Some(&[0, 1, 2, 3, 4, 5][..]);
-        Ok(Self {
-            matrix,
-            selection,
-            identity,
-        })
-    }
-
-    /// Number of generalized coordinates `k_n` of a piece with this basis.
-    #[inline]
-    pub fn dof(&self) -> usize {
-        self.matrix.ncols()
-    }
-
-    /// The matrix `B_n` (6×k_n).
-    #[inline]
-    pub fn matrix(&self) -> &Matrix6xX<f64> {
-        &self.matrix
-    }
-
-    /// The selected components if `B_n` is a column selection of `I₆`.
-    pub fn selection(&self) -> Option<&[usize]> {
-        self.selection.as_deref()
-    }
-
-    /// Whether `B_n = I₆` (all six strains, in order).
-    #[inline]
-    pub fn is_identity(&self) -> bool {
-        self.identity
-    }
-
-    /// `B q` for the piece's coordinates `q` (length `k_n`).
-    #[inline]
-    pub fn apply(&self, q: &[f64]) -> Vec6 {
-        debug_assert_eq!(q.len(), self.dof());
-        if self.identity {
-            return Vec6::from_column_slice(q);
-        }
-        let mut out = Vec6::zeros();
-        match &self.selection {
-            Some(sel) => {
-                for (&i, &qc) in sel.iter().zip(q) {
-                    out[i] = qc;
-                }
-            }
-            None => {
-                for (c, qc) in q.iter().enumerate() {
-                    out += self.matrix.column(c) * *qc;
-                }
-            }
-        }
-        out
-    }
-
-    /// `out = Bᵀ w` (length `k_n`).
-    #[inline]
-    pub fn tr_apply(&self, w: &Vec6, out: &mut [f64]) {
-        debug_assert_eq!(out.len(), self.dof());
-        if self.identity {
-            out.copy_from_slice(w.as_slice());
-            return;
-        }
-        match &self.selection {
-            Some(sel) => {
-                for (o, &i) in out.iter_mut().zip(sel) {
-                    *o = w[i];
-                }
-            }
-            None => {
-                for (c, o) in out.iter_mut().enumerate() {
-                    *o = self.matrix.column(c).dot(w);
-                }
-            }
-        }
-    }
-
-    /// Column `c` of `B_n` as a 6-vector.
-    #[inline]
-    pub fn column(&self, c: usize) -> Vec6 {
-        self.matrix.fixed_view::<6, 1>(0, c).into_owned()
-    }
-}
 
 /// One PCS piece: `s ∈ [start, start + length]`, constant strain
 /// `ξ_n = B_n q_n + ξ̄_n`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Piece {
-    /// Length `ℓ_n` [m].
+    /// Length `ℓ_n` \[m\].
     pub length: f64,
-    /// Abscissa of the piece base `L_{n−1}` [m].
+    /// Abscissa of the piece base `L_{n−1}` \[m\].
     pub start: f64,
     /// Strain basis `B_n`.
     pub basis: Basis,
@@ -233,7 +23,7 @@ pub struct Piece {
 }
 
 impl Piece {
-    /// Abscissa of the piece tip `L_n` [m].
+    /// Abscissa of the piece tip `L_n` \[m\].
     #[inline]
     pub fn end(&self) -> f64 {
         self.start + self.length
@@ -249,7 +39,7 @@ impl Piece {
     #[inline]
     pub fn strain(&self, q: &[f64]) -> Vec6 {
         let q = &q[self.dofs()];
-        if self.basis.identity {
+        if self.basis.is_identity() {
             // Inline, without the call into `apply` (the sweep's hot path).
             return Vec6::from_column_slice(q) + self.rest_strain;
         }
@@ -266,7 +56,7 @@ impl Piece {
 /// Description of one piece for [`Rod::from_pieces`].
 #[derive(Clone, Debug)]
 pub struct PieceSpec {
-    /// Length [m].
+    /// Length \[m\].
     pub length: f64,
     /// Strain basis.
     pub basis: Basis,
@@ -291,6 +81,16 @@ pub struct Rod {
 }
 
 impl Rod {
+    /// Upper bound on the number of pieces: far beyond any useful
+    /// discretization, low enough that a typo (`10000000000` pieces) is an
+    /// error instead of an attempt to allocate terabytes.
+    pub const MAX_PIECES: usize = 1_000_000;
+
+    /// Tolerance on `R Rᵀ = I` (entrywise) and `det R = 1` of the base
+    /// rotation: rotations typed with 7 significant digits pass, a scaled or
+    /// sheared matrix does not.
+    pub const ROTATION_TOL: f64 = 1e-6;
+
     /// `n` equal pieces over `length`, the same basis and rest strain on each.
     pub fn uniform(
         length: f64,
@@ -302,7 +102,13 @@ impl Rod {
         if n == 0 {
             return Err(KinematicsError::NoPieces);
         }
-        check_length("rod length", length)?;
+        if n > Self::MAX_PIECES {
+            return Err(KinematicsError::TooManyPieces {
+                pieces: n,
+                max: Self::MAX_PIECES,
+            });
+        }
+        check_length(LengthOf::Rod, length)?;
         let lengths = vec![length / n as f64; n];
         Self::with_lengths(&lengths, basis, rest_strain, base)
     }
@@ -326,30 +132,37 @@ impl Rod {
     }
 
     /// General constructor: each piece with its own basis and rest strain.
+    ///
+    /// Checks: 1 to [`Self::MAX_PIECES`] pieces, every length positive and
+    /// finite, rest strains finite, the base pose finite with a rotation
+    /// orthonormal of determinant +1 (to [`Self::ROTATION_TOL`]).
     pub fn from_pieces(specs: Vec<PieceSpec>, base: Pose) -> Result<Self, KinematicsError> {
         if specs.is_empty() {
             return Err(KinematicsError::NoPieces);
         }
-        let finite = |what: &str, v: f64| {
-            if v.is_finite() {
-                Ok(())
-            } else {
-                Err(KinematicsError::NotFinite {
-                    what: what.to_string(),
-                    value: v,
-                })
-            }
-        };
-        for v in base.rotation.iter().chain(base.translation.iter()) {
-            finite("base pose", *v)?;
+        if specs.len() > Self::MAX_PIECES {
+            return Err(KinematicsError::TooManyPieces {
+                pieces: specs.len(),
+                max: Self::MAX_PIECES,
+            });
         }
+        check_base(&base)?;
         let mut pieces = Vec::with_capacity(specs.len());
         let mut start = 0.0;
         let mut off = 0;
         for (i, spec) in specs.into_iter().enumerate() {
-            check_length(&format!("piece {i} length"), spec.length)?;
-            for v in spec.rest_strain.iter() {
-                finite(&format!("piece {i} rest strain"), *v)?;
+            check_length(LengthOf::Piece(i), spec.length)?;
+            if let Some((c, &value)) = spec
+                .rest_strain
+                .iter()
+                .enumerate()
+                .find(|(_, v)| !v.is_finite())
+            {
+                return Err(KinematicsError::RestStrainNotFinite {
+                    piece: i,
+                    component: Strain::ALL[c],
+                    value,
+                });
             }
             let k = spec.basis.dof();
             pieces.push(Piece {
@@ -388,7 +201,7 @@ impl Rod {
         self.n_dof
     }
 
-    /// Total (material, unstretched) length `L` [m].
+    /// Total (material, unstretched) length `L` \[m\].
     #[inline]
     pub fn length(&self) -> f64 {
         self.length
@@ -398,6 +211,40 @@ impl Rod {
     #[inline]
     pub fn base(&self) -> &Pose {
         &self.base
+    }
+
+    /// The lengths `ℓ_n` of the pieces, base to tip \[m\].
+    pub fn piece_lengths(&self) -> impl ExactSizeIterator<Item = f64> + '_ {
+        self.pieces.iter().map(|p| p.length)
+    }
+
+    /// The basis shared by every piece, or `None` when the pieces differ.
+    pub fn uniform_basis(&self) -> Option<&Basis> {
+        let first = &self.pieces[0].basis;
+        self.pieces[1..]
+            .iter()
+            .all(|p| p.basis == *first)
+            .then_some(first)
+    }
+
+    /// The same rod with every piece cut into `k ≥ 1` equal parts (bases and
+    /// rest strains repeated): a refinement of the discretization.
+    pub fn subdivided(&self, k: usize) -> Result<Self, KinematicsError> {
+        let specs = self
+            .pieces
+            .iter()
+            .flat_map(|p| {
+                std::iter::repeat_n(
+                    PieceSpec {
+                        length: p.length / k as f64,
+                        basis: p.basis.clone(),
+                        rest_strain: p.rest_strain,
+                    },
+                    k,
+                )
+            })
+            .collect();
+        Self::from_pieces(specs, self.base)
     }
 
     /// The piece containing `s` and the local abscissa `x = s − L_{n−1}`.
@@ -448,23 +295,40 @@ impl Rod {
                 expected: self.n_dof,
             });
         }
-        if let Some((i, x)) = v.iter().enumerate().find(|(_, x)| !x.is_finite()) {
-            return Err(KinematicsError::NotFinite {
-                what: format!("{what}[{i}]"),
-                value: *x,
-            });
+        if let Some((index, &value)) = v.iter().enumerate().find(|(_, x)| !x.is_finite()) {
+            return Err(KinematicsError::NotFinite { what, index, value });
         }
         Ok(())
     }
 }
 
-fn check_length(what: &str, v: f64) -> Result<(), KinematicsError> {
-    if v.is_finite() && v > 0.0 {
+fn check_length(what: LengthOf, value: f64) -> Result<(), KinematicsError> {
+    if value.is_finite() && value > 0.0 {
         Ok(())
     } else {
-        Err(KinematicsError::BadLength {
-            what: what.to_string(),
-            value: v,
-        })
+        Err(KinematicsError::BadLength { what, value })
     }
+}
+
+/// A finite base whose rotation is orthonormal with determinant +1.
+fn check_base(base: &Pose) -> Result<(), KinematicsError> {
+    if let Some(&value) = base
+        .rotation
+        .iter()
+        .chain(base.translation.iter())
+        .find(|v| !v.is_finite())
+    {
+        return Err(KinematicsError::BaseNotFinite { value });
+    }
+    let r = &base.rotation;
+    let deviation = (r * r.transpose() - softrod_lie::Mat3::identity()).amax();
+    let determinant = r.determinant();
+    if deviation > Rod::ROTATION_TOL || (determinant - 1.0).abs() > Rod::ROTATION_TOL {
+        return Err(KinematicsError::BaseNotRotation {
+            deviation,
+            determinant,
+            tolerance: Rod::ROTATION_TOL,
+        });
+    }
+    Ok(())
 }

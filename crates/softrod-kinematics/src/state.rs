@@ -1,7 +1,8 @@
 //! Kinematic state of a rod: one O(N) sweep, then cheap point queries.
 
+use crate::basis::Basis;
 use crate::error::KinematicsError;
-use crate::rod::{Basis, Piece, Rod};
+use crate::rod::{Piece, Rod};
 use nalgebra::{DVectorView, Matrix6xX};
 use softrod_lie::{
     AdOp, Mat3, Pose, Vec3, Vec6, ad_vec, d_tangent_minus, d_tangent_minus_self,

@@ -3,7 +3,7 @@
 
 use nalgebra::Matrix6xX;
 use softrod_kinematics::{
-    Basis, Frame, KinematicsError, PieceSpec, Rod, RodKinematics, Strain, straight,
+    Basis, Frame, KinematicsError, LengthOf, PieceSpec, Rod, RodKinematics, Strain, straight,
 };
 use softrod_lie::{Pose, Vec6};
 
@@ -16,13 +16,19 @@ fn bad_lengths() {
     for l in [0.0, -1.0, -0.0, f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
         let e = Rod::uniform(l, 3, Basis::all(), straight(), id()).unwrap_err();
         assert!(
-            matches!(e, KinematicsError::BadLength { .. }),
+            matches!(
+                e,
+                KinematicsError::BadLength {
+                    what: LengthOf::Rod,
+                    ..
+                }
+            ),
             "uniform({l}): {e:?}"
         );
         let e = Rod::with_lengths(&[0.2, l, 0.3], Basis::all(), straight(), id()).unwrap_err();
         match e {
             KinematicsError::BadLength { what, value } => {
-                assert!(what.contains('1'), "names piece 1: {what}");
+                assert_eq!(what, LengthOf::Piece(1), "names piece 1: {what}");
                 assert!(value.to_bits() == l.to_bits() || (value.is_nan() && l.is_nan()));
             }
             other => panic!("with_lengths({l}): {other:?}"),
@@ -48,15 +54,38 @@ fn no_pieces() {
 
 #[test]
 fn bad_bases() {
-    let is_bad =
-        |r: Result<Basis, KinematicsError>| matches!(r, Err(KinematicsError::BadBasis { .. }));
+    let is_bad = |r: Result<Basis, KinematicsError>| {
+        matches!(
+            r,
+            Err(KinematicsError::BasisColumns { .. }
+                | KinematicsError::StrainIndex { .. }
+                | KinematicsError::DuplicateStrain { .. }
+                | KinematicsError::BasisNotFinite
+                | KinematicsError::RankDeficient { .. })
+        )
+    };
     // Duplicate strain.
-    assert!(is_bad(Basis::select(&[Strain::Ky, Strain::Qx, Strain::Ky])));
-    assert!(is_bad(Basis::from_indices(&[3, 3])));
+    assert_eq!(
+        Basis::select(&[Strain::Ky, Strain::Qx, Strain::Ky]),
+        Err(KinematicsError::DuplicateStrain { strain: Strain::Ky })
+    );
+    assert_eq!(
+        Basis::from_indices(&[3, 3]),
+        Err(KinematicsError::DuplicateStrain { strain: Strain::Qx })
+    );
     // Index out of range, empty, too many.
-    assert!(is_bad(Basis::from_indices(&[6])));
-    assert!(is_bad(Basis::from_indices(&[])));
-    assert!(is_bad(Basis::from_indices(&[0, 1, 2, 3, 4, 5, 0])));
+    assert_eq!(
+        Basis::from_indices(&[6]),
+        Err(KinematicsError::StrainIndex { index: 6 })
+    );
+    assert_eq!(
+        Basis::from_indices(&[]),
+        Err(KinematicsError::BasisColumns { columns: 0 })
+    );
+    assert_eq!(
+        Basis::from_indices(&[0, 1, 2, 3, 4, 5, 0]),
+        Err(KinematicsError::BasisColumns { columns: 7 })
+    );
     // Rank-deficient matrices: parallel columns, a zero column, all zero.
     let c = [0.3, 1.0, -0.2, 0.1, 0.0, 0.05];
     let par: Vec<f64> = c
@@ -100,6 +129,10 @@ fn bad_bases() {
     sel[(1, 1)] = 1.0;
     let s = Basis::from_matrix(sel).unwrap();
     assert_eq!(s.selection(), Some(&[4usize, 1][..]));
+    assert_eq!(s.strains(), Some(vec![Strain::Qy, Strain::Ky]));
+    assert_eq!(s.to_string(), "qy, ky");
+    assert_eq!(ok.strains(), None);
+    assert_eq!(ok.to_string(), "general 6×1 basis");
 }
 
 #[test]
@@ -107,11 +140,21 @@ fn non_finite_rod_data() {
     let mut rest = straight();
     rest[1] = f64::NAN;
     let e = Rod::uniform(1.0, 2, Basis::all(), rest, id()).unwrap_err();
-    assert!(matches!(e, KinematicsError::NotFinite { .. }), "{e:?}");
+    assert!(
+        matches!(
+            e,
+            KinematicsError::RestStrainNotFinite {
+                piece: 0,
+                component: Strain::Ky,
+                ..
+            }
+        ),
+        "{e:?}"
+    );
     let mut base = id();
     base.translation[2] = f64::INFINITY;
     let e = Rod::uniform(1.0, 2, Basis::all(), straight(), base).unwrap_err();
-    assert!(matches!(e, KinematicsError::NotFinite { .. }), "{e:?}");
+    assert!(matches!(e, KinematicsError::BaseNotFinite { .. }), "{e:?}");
     let e = Rod::from_pieces(
         vec![PieceSpec {
             length: 1.0,
@@ -121,7 +164,10 @@ fn non_finite_rod_data() {
         id(),
     )
     .unwrap_err();
-    assert!(matches!(e, KinematicsError::NotFinite { .. }), "{e:?}");
+    assert!(
+        matches!(e, KinematicsError::RestStrainNotFinite { .. }),
+        "{e:?}"
+    );
 }
 
 fn rod() -> Rod {
@@ -239,4 +285,59 @@ fn errors_display() {
     assert!(e.to_string().contains("-2"), "{e}");
     let e = Basis::select(&[Strain::Kz, Strain::Kz]).unwrap_err();
     assert!(e.to_string().contains("kz"), "{e}");
+}
+
+#[test]
+fn base_must_be_a_rotation() {
+    let mut scaled = id();
+    scaled.rotation[(1, 1)] = 2.0;
+    match Rod::uniform(1.0, 2, Basis::all(), straight(), scaled).unwrap_err() {
+        KinematicsError::BaseNotRotation {
+            deviation,
+            determinant,
+            ..
+        } => {
+            // R Rᵀ − I has the entry 2² − 1 = 3; det = 2.
+            assert_eq!((deviation, determinant), (3.0, 2.0));
+        }
+        other => panic!("{other:?}"),
+    }
+    let mut reflection = id();
+    reflection.rotation[(2, 2)] = -1.0;
+    let e = Rod::uniform(1.0, 2, Basis::all(), straight(), reflection).unwrap_err();
+    assert!(e.to_string().contains("det R = -1"), "{e}");
+    // Seven significant digits of cos/sin 30° pass.
+    let mut rounded = id();
+    rounded.rotation[(0, 0)] = 0.8660254;
+    rounded.rotation[(1, 1)] = 0.8660254;
+    rounded.rotation[(0, 1)] = -0.5;
+    rounded.rotation[(1, 0)] = 0.5;
+    Rod::uniform(1.0, 2, Basis::all(), straight(), rounded).unwrap();
+}
+
+#[test]
+fn too_many_pieces() {
+    let n = Rod::MAX_PIECES + 1;
+    assert_eq!(
+        Rod::uniform(1.0, n, Basis::all(), straight(), id()).unwrap_err(),
+        KinematicsError::TooManyPieces {
+            pieces: n,
+            max: Rod::MAX_PIECES
+        }
+    );
+}
+
+#[test]
+fn strain_names_parse_and_display() {
+    for s in Strain::ALL {
+        assert_eq!(s.name().parse::<Strain>(), Ok(s));
+        assert_eq!(s.to_string(), s.name());
+        assert_eq!(Strain::ALL[s.index()], s);
+    }
+    assert_eq!(
+        "kw".parse::<Strain>(),
+        Err(KinematicsError::UnknownStrain { name: "kw".into() })
+    );
+    let names: Vec<&str> = Strain::ALL.iter().map(|s| s.name()).collect();
+    assert_eq!(names, ["kx", "ky", "kz", "qx", "qy", "qz"]);
 }

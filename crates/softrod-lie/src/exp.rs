@@ -248,7 +248,7 @@ pub fn exp_and_tangent_minus(x: f64, xi: &Vec6) -> (Pose, AdOp) {
 }
 
 /// Directional derivative of `T(x)` with respect to the strain (D6):
-/// `D_ξ T(x)[δ] = Σ_{i=1}^{4} ( x^{i+3} ρ_i(ψ) (k·δ_k) ad_ξ^i
+/// `D_ξ T(x)\[δ\] = Σ_{i=1}^{4} ( x^{i+3} ρ_i(ψ) (k·δ_k) ad_ξ^i
 ///   + x^{i+1} τ_i(ψ) Σ_{j=0}^{i−1} ad_ξ^j ad_δ ad_ξ^{i−1−j} )`.
 ///
 /// Accuracy: ~1e-15 relative (ρ_i ≤ 4e-15).

@@ -8,14 +8,14 @@ use nalgebra as na;
 /// A pose `g = (R, p) ∈ SE(3)`, `g = [[R, p], [0, 1]]`.
 ///
 /// For a rod section, `R` maps the section's local frame (x = tangent) to the
-/// reference frame and `p` is the section centre [m] in the reference frame.
+/// reference frame and `p` is the section centre \[m\] in the reference frame.
 /// `R` is stored as a plain matrix (kept orthonormal by construction through
 /// [`crate::exp_twist`] and products) because the hot loops need it as one.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Pose {
     /// Rotation matrix `R` (local → reference).
     pub rotation: Mat3,
-    /// Translation `p` [m].
+    /// Translation `p` \[m\].
     pub translation: Vec3,
 }
 

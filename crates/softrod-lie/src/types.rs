@@ -17,7 +17,7 @@ pub type Mat4 = na::Matrix4<f64>;
 /// A twist `(ω, v)`: body velocity [rad/s, m/s], or a strain `ξ = (k, q)`
 /// [rad/m, 1] (the strain is the twist per unit arc length).
 pub type Twist = Vec6;
-/// A wrench `(M, N)`: moment [N·m] then force [N], or densities per unit length.
+/// A wrench `(M, N)`: moment [N·m] then force \[N\], or densities per unit length.
 pub type Wrench = Vec6;
 
 /// Index of the angular block in a 6-vector (`v.fixed_rows::<3>(ANGULAR)`).

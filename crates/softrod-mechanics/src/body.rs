@@ -1,6 +1,6 @@
 //! The mechanical description of one rod: section, material, length.
 
-use crate::error::{MechanicsError, positive};
+use crate::error::{MechanicsError, Quantity, positive};
 use crate::material::Material;
 use crate::section::{Section, SectionProperties};
 use softrod_kinematics::Rod;
@@ -9,40 +9,57 @@ use softrod_lie::Vec6;
 /// Section + material + length of one rod: everything that turns strains and
 /// velocities into internal wrenches and inertia (seed (5)–(6)).
 ///
-/// All per-`s` queries take the material abscissa `s ∈ [0, L]` [m] (clamped);
-/// only a tapered section depends on it.
+/// Valid by construction ([`RodBody::new`]). All per-`s` queries take the
+/// material abscissa `s ∈ [0, L]` \[m\] (clamped); only a tapered section
+/// depends on it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RodBody {
-    /// Cross-section (possibly varying along `s`).
-    pub section: Section,
-    /// Material.
-    pub material: Material,
-    /// Undeformed length `L` [m]; must equal the kinematic rod's length.
-    pub length: f64,
+    section: Section,
+    material: Material,
+    length: f64,
 }
 
 impl RodBody {
-    /// A validated body.
+    /// Relative tolerance of [`Self::check_rod`]: the body and the kinematic
+    /// rod describe the same length when they agree to 1e-9 (a rod of `n`
+    /// equal pieces sums to its length within `n` ulps; a million pieces
+    /// stay inside).
+    pub const LENGTH_RTOL: f64 = 1e-9;
+
+    /// A body of undeformed length `length > 0` \[m\]; checks the length and
+    /// the section ([`Section::validate`]). The material is valid by
+    /// construction.
     pub fn new(section: Section, material: Material, length: f64) -> Result<Self, MechanicsError> {
-        let b = Self {
+        positive(Quantity::RodLength, length)?;
+        section.validate()?;
+        Ok(Self {
             section,
             material,
             length,
-        };
-        b.validate()?;
-        Ok(b)
+        })
     }
 
-    /// Validates section, material and length.
-    pub fn validate(&self) -> Result<(), MechanicsError> {
-        positive("rod length [m]", self.length)?;
-        self.section.validate()?;
-        self.material.validate()
+    /// Cross-section (possibly varying along `s`).
+    #[inline]
+    pub fn section(&self) -> &Section {
+        &self.section
     }
 
-    /// Checks that `rod` has this body's length (to 1e-12 relative).
+    /// Material.
+    #[inline]
+    pub fn material(&self) -> &Material {
+        &self.material
+    }
+
+    /// Undeformed length `L` \[m\]; equals the kinematic rod's length.
+    #[inline]
+    pub fn length(&self) -> f64 {
+        self.length
+    }
+
+    /// Checks that `rod` has this body's length (to [`Self::LENGTH_RTOL`] relative).
     pub fn check_rod(&self, rod: &Rod) -> Result<(), MechanicsError> {
-        if (rod.length() - self.length).abs() > 1e-12 * self.length.max(rod.length()) {
+        if (rod.length() - self.length).abs() > Self::LENGTH_RTOL * self.length.max(rod.length()) {
             return Err(MechanicsError::LengthMismatch {
                 body: self.length,
                 rod: rod.length(),
@@ -51,7 +68,7 @@ impl RodBody {
         Ok(())
     }
 
-    /// Section properties at abscissa `s` [m].
+    /// Section properties at abscissa `s` \[m\].
     #[inline]
     pub fn properties(&self, s: f64) -> SectionProperties {
         self.section.properties(s / self.length)
@@ -63,7 +80,7 @@ impl RodBody {
     #[inline]
     pub fn screw_inertia(&self, s: f64) -> Vec6 {
         let p = self.properties(s);
-        let r = self.material.density;
+        let r = self.material.density();
         Vec6::new(
             r * p.jx,
             r * p.jy,
@@ -80,7 +97,7 @@ impl RodBody {
     #[inline]
     pub fn stiffness(&self, s: f64) -> Vec6 {
         let p = self.properties(s);
-        let (e, g) = (self.material.young, self.material.shear);
+        let (e, g) = (self.material.young(), self.material.shear_modulus());
         Vec6::new(
             g * p.jx,
             e * p.jy,
@@ -96,7 +113,7 @@ impl RodBody {
     #[inline]
     pub fn viscosity(&self, s: f64) -> Vec6 {
         let p = self.properties(s);
-        let m = self.material.viscosity;
+        let m = self.material.viscosity();
         Vec6::new(
             m * p.jx,
             3.0 * m * p.jy,
@@ -110,7 +127,7 @@ impl RodBody {
     /// Mass per unit length `ρA(s)` [kg/m].
     #[inline]
     pub fn mass_per_length(&self, s: f64) -> f64 {
-        self.material.density * self.properties(s).area
+        self.material.density() * self.properties(s).area
     }
 
     /// True when every property is constant along the rod.

@@ -7,158 +7,233 @@
 //! its generalized force is `τ_c = −T ∂ℓ_c/∂q`,
 //! `τ_c,n = −T ∫_{piece n ∩ [from, to]} B_nᵀ (d × t̂; t̂) ds` (D15).
 
-use crate::error::{MechanicsError, finite, non_negative};
+use crate::error::{MechanicsError, Quantity, finite, non_negative};
 use softrod_kinematics::{GaussLegendre, Piece, Rod};
 use softrod_lie::{Vec3, Vec6, Wrench, angular, join, linear};
 
 /// Path of a cable in the cross-section, as a function of the abscissa `s`.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Routing {
-    /// Constant offset `d = (0, y, z)` [m] over the span (`d′ = 0`).
+    /// Constant offset `d = (0, y, z)` \[m\] over the span (`d′ = 0`).
     Offset {
-        /// Offset along local y [m].
+        /// Offset along local y \[m\].
         y: f64,
-        /// Offset along local z [m].
+        /// Offset along local z \[m\].
         z: f64,
     },
-    /// Piecewise-linear offset through the points `(s, y, z)` [m], `s` strictly
-    /// increasing; constant beyond the first and last points.
+    /// Piecewise-linear offset through the points `(s, y, z)` \[m\]: at least
+    /// two, `s` strictly increasing within the rod, covering the cable's span.
     Path(Vec<[f64; 3]>),
 }
 
-/// Cable tension `T(t)` [N] as a function of time.
+impl Routing {
+    /// Offset `d(s) = (0, y(s), z(s))` \[m\] and its derivative `d′(s)` (body
+    /// frame). A path is linear between its points; at a point the
+    /// derivative of the segment to the right is returned; beyond the ends
+    /// `d` is held and `d′ = 0`.
+    #[inline]
+    pub fn offset(&self, s: f64) -> (Vec3, Vec3) {
+        match self {
+            Routing::Offset { y, z } => (Vec3::new(0.0, *y, *z), Vec3::zeros()),
+            Routing::Path(pts) => path_offset(pts, s),
+        }
+    }
+
+    /// Largest `|d(s)|` over the routing \[m\].
+    pub fn max_offset(&self) -> f64 {
+        match self {
+            Routing::Offset { y, z } => y.hypot(*z),
+            Routing::Path(pts) => pts.iter().map(|p| p[1].hypot(p[2])).fold(0.0, f64::max),
+        }
+    }
+
+    /// The points of a path (none for a constant offset): where `d′` jumps.
+    fn points(&self) -> &[[f64; 3]] {
+        match self {
+            Routing::Offset { .. } => &[],
+            Routing::Path(pts) => pts,
+        }
+    }
+}
+
+/// Cable tension `T(t)` \[N\] as a function of time.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Tension {
-    /// Constant tension `T ≥ 0` [N].
+    /// Constant tension `T ≥ 0` \[N\].
     Constant(f64),
     /// Piecewise-linear in time through `(times[i], values[i])` [s, N],
     /// times strictly increasing, values `≥ 0`; held constant beyond the ends.
     Table {
-        /// Times [s], strictly increasing.
+        /// Times \[s\], strictly increasing.
         times: Vec<f64>,
-        /// Tensions [N], `≥ 0`.
+        /// Tensions \[N\], `≥ 0`.
         values: Vec<f64>,
     },
 }
 
-/// A cable: routing, span `[from, to]` (anchored at `to`) and tension.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Cable {
-    /// Offset of the cable in the section along `s`.
-    pub routing: Routing,
-    /// Start of the span [m] (where the cable enters the rod).
-    pub from: f64,
-    /// End of the span, the anchor [m].
-    pub to: f64,
-    /// Tension schedule.
-    pub tension: Tension,
-}
+impl Tension {
+    /// `T(t)` \[N\]: the constant, or linear interpolation in the table,
+    /// held at the first/last value outside it.
+    #[inline]
+    pub fn at(&self, t: f64) -> f64 {
+        match self {
+            Tension::Constant(v) => *v,
+            Tension::Table { times, values } => interpolate(times, values, t),
+        }
+    }
 
-impl Cable {
-    /// Checks `0 ≤ from < to ≤ L` (to 1e-12·L), finite routing, strictly
-    /// increasing routing abscissae and tension times, non-negative tensions.
-    pub fn validate(&self, rod_length: f64) -> Result<(), MechanicsError> {
-        let tol = 1e-12 * rod_length;
-        if !(self.from.is_finite()
-            && self.to.is_finite()
-            && self.from >= -tol
-            && self.from < self.to
-            && self.to <= rod_length + tol)
-        {
-            return Err(MechanicsError::CableSpan {
-                from: self.from,
-                to: self.to,
-                length: rod_length,
-            });
+    /// Largest tension over all time \[N\].
+    pub fn max(&self) -> f64 {
+        match self {
+            Tension::Constant(v) => *v,
+            Tension::Table { values, .. } => values.iter().copied().fold(0.0, f64::max),
         }
-        match &self.routing {
-            Routing::Offset { y, z } => {
-                finite("cable offset y [m]", *y)?;
-                finite("cable offset z [m]", *z)?;
-            }
-            Routing::Path(pts) => {
-                if pts.is_empty() {
-                    return Err(MechanicsError::Empty {
-                        what: "cable routing path".into(),
-                    });
-                }
-                for (i, p) in pts.iter().enumerate() {
-                    for (c, v) in ["s", "y", "z"].iter().zip(p) {
-                        finite(&format!("cable routing point {i} {c} [m]"), *v)?;
-                    }
-                    if i > 0 && p[0] <= pts[i - 1][0] {
-                        return Err(MechanicsError::NotIncreasing {
-                            what: "cable routing abscissae s".into(),
-                            index: i,
-                            value: p[0],
-                            previous: pts[i - 1][0],
-                        });
-                    }
-                }
-            }
-        }
-        match &self.tension {
-            Tension::Constant(t) => non_negative("cable tension [N]", *t)?,
+    }
+
+    fn validate(&self) -> Result<(), MechanicsError> {
+        match self {
+            Tension::Constant(t) => non_negative(Quantity::Tension, *t),
             Tension::Table { times, values } => {
                 if times.is_empty() {
                     return Err(MechanicsError::Empty {
-                        what: "cable tension table".into(),
+                        quantity: Quantity::TensionTimes,
                     });
                 }
                 if values.len() != times.len() {
                     return Err(MechanicsError::SizeMismatch {
-                        what: "cable tension values".into(),
+                        quantity: Quantity::TensionValues,
                         got: values.len(),
                         expected: times.len(),
                     });
                 }
                 for (i, (&t, &v)) in times.iter().zip(values).enumerate() {
-                    finite(&format!("cable tension time {i} [s]"), t)?;
-                    non_negative(&format!("cable tension value {i} [N]"), v)?;
+                    finite(Quantity::TensionTime(i), t)?;
+                    non_negative(Quantity::TensionValue(i), v)?;
                     if i > 0 && t <= times[i - 1] {
                         return Err(MechanicsError::NotIncreasing {
-                            what: "cable tension times".into(),
+                            quantity: Quantity::TensionTimes,
                             index: i,
                             value: t,
                             previous: times[i - 1],
                         });
                     }
                 }
+                Ok(())
             }
         }
-        Ok(())
+    }
+}
+
+/// Where along the rod a cable runs.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum Span {
+    /// The whole rod, `[0, L]`, anchored at the tip.
+    #[default]
+    Whole,
+    /// `[from, to]` \[m\], `0 ≤ from < to ≤ L`, anchored at `to`.
+    Between {
+        /// Where the cable enters the rod \[m\].
+        from: f64,
+        /// The anchor \[m\].
+        to: f64,
+    },
+}
+
+/// A cable: routing, span (anchored at its end) and tension.
+///
+/// ```
+/// use softrod_mechanics::{Cable, Routing, Tension};
+///
+/// // 8 mm off the centreline along local z, 2 N, over the whole rod.
+/// let c = Cable::new(Routing::Offset { y: 0.0, z: 0.008 }, Tension::Constant(2.0));
+/// assert_eq!(c.bounds(0.5), (0.0, 0.5));
+/// assert!(c.validate(0.5).is_ok());
+/// // Over the distal half only.
+/// let distal = c.clone().between(0.25, 0.5);
+/// assert_eq!(distal.bounds(0.5), (0.25, 0.5));
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub struct Cable {
+    /// Offset of the cable in the section along `s`.
+    pub routing: Routing,
+    /// Tension schedule.
+    pub tension: Tension,
+    /// Where along the rod it runs.
+    pub span: Span,
+}
+
+impl Cable {
+    /// A cable over the whole rod.
+    pub fn new(routing: Routing, tension: Tension) -> Self {
+        Self {
+            routing,
+            tension,
+            span: Span::Whole,
+        }
     }
 
-    /// Tension `T(t) ≥ 0` [N]: the constant, or linear interpolation in the
-    /// table, clamped to the first/last value outside it. Negative inputs
-    /// (only possible without [`Self::validate`]) are clamped to 0.
+    /// The same cable over `[from, to]` \[m\] only (anchored at `to`).
+    #[must_use]
+    pub fn between(mut self, from: f64, to: f64) -> Self {
+        self.span = Span::Between { from, to };
+        self
+    }
+
+    /// The span `(from, to)` \[m\] on a rod of length `rod_length`.
+    #[inline]
+    pub fn bounds(&self, rod_length: f64) -> (f64, f64) {
+        match self.span {
+            Span::Whole => (0.0, rod_length),
+            Span::Between { from, to } => (from, to),
+        }
+    }
+
+    /// Checks, on a rod of length `rod_length` (abscissae to 1e-12·L): the
+    /// span `0 ≤ from < to ≤ L`; a finite routing, a path of at least two
+    /// points with strictly increasing `s` in `[0, L]` covering the span;
+    /// strictly increasing tension times and non-negative tensions.
+    pub fn validate(&self, rod_length: f64) -> Result<(), MechanicsError> {
+        let tol = 1e-12 * rod_length;
+        let (from, to) = self.bounds(rod_length);
+        if !(from.is_finite() && from >= -tol && from < rod_length) {
+            return Err(MechanicsError::CableFrom {
+                from,
+                length: rod_length,
+            });
+        }
+        if !(to.is_finite() && to > from && to <= rod_length + tol) {
+            return Err(MechanicsError::CableTo {
+                from,
+                to,
+                length: rod_length,
+            });
+        }
+        match &self.routing {
+            Routing::Offset { y, z } => {
+                finite(Quantity::OffsetY, *y)?;
+                finite(Quantity::OffsetZ, *z)?;
+            }
+            Routing::Path(pts) => validate_path(pts, rod_length, from, to)?,
+        }
+        self.tension.validate()
+    }
+
+    /// Tension `T(t) ≥ 0` \[N\] ([`Tension::at`]); negative inputs (only
+    /// possible without [`Self::validate`]) are clamped to 0.
     #[inline]
     pub fn tension_at(&self, t: f64) -> f64 {
-        let v = match &self.tension {
-            Tension::Constant(v) => *v,
-            Tension::Table { times, values } => interpolate(times, values, t),
-        };
-        v.max(0.0)
+        self.tension.at(t).max(0.0)
     }
 
-    /// Offset `d(s) = (0, y(s), z(s))` [m] and its derivative `d′(s)` (body
-    /// frame). For a path, at a knot the derivative of the segment to the right
-    /// is returned; beyond the ends `d` is constant and `d′ = 0`.
+    /// Offset `d(s)` and `d′(s)` \[m\] ([`Routing::offset`]).
     #[inline]
     pub fn offset(&self, s: f64) -> (Vec3, Vec3) {
-        match &self.routing {
-            Routing::Offset { y, z } => (Vec3::new(0.0, *y, *z), Vec3::zeros()),
-            Routing::Path(pts) => path_offset(pts, s),
-        }
+        self.routing.offset(s)
     }
 
-    /// Largest `|d(s)|` over the routing [m] (for checks against the section's
-    /// outer radius).
+    /// Largest `|d(s)|` over the routing \[m\] ([`Routing::max_offset`]).
     pub fn max_offset(&self) -> f64 {
-        match &self.routing {
-            Routing::Offset { y, z } => y.hypot(*z),
-            Routing::Path(pts) => pts.iter().map(|p| p[1].hypot(p[2])).fold(0.0, f64::max),
-        }
+        self.routing.max_offset()
     }
 
     /// The cable's body wrench per unit tension at `s` for the strain
@@ -177,7 +252,7 @@ impl Cable {
         join(&d.cross(&t), &t)
     }
 
-    /// Cable length `ℓ_c = ∫_from^to |q + k × d + d′| ds` [m] at coordinates `q`,
+    /// Cable length `ℓ_c = ∫_from^to |q + k × d + d′| ds` \[m\] at coordinates `q`,
     /// with the Gauss rule on each sub-interval of `piece ∩ [from, to]` split
     /// at the routing knots.
     pub fn length(&self, rod: &Rod, q: &[f64], quadrature: &GaussLegendre) -> f64 {
@@ -222,15 +297,19 @@ impl Cable {
     }
 
     /// Calls `f(s, w)` for every quadrature node of `piece ∩ [from, to]`, the
-    /// overlap split at the routing knots, the Gauss rule on each part.
-    fn for_each_node(
+    /// overlap split at the routing knots, the Gauss rule on each part: the
+    /// nodes [`Cable::add_force_per_tension`] integrates on (so that a
+    /// derivative of the discrete force can use the same ones).
+    pub fn for_each_node(
         &self,
         piece: &Piece,
         quadrature: &GaussLegendre,
         mut f: impl FnMut(f64, f64),
     ) {
-        let a = piece.start.max(self.from);
-        let b = piece.end().min(self.to);
+        let (a, b) = match self.span {
+            Span::Whole => (piece.start, piece.end()),
+            Span::Between { from, to } => (piece.start.max(from), piece.end().min(to)),
+        };
         if b <= a {
             return;
         }
@@ -240,14 +319,55 @@ impl Cable {
             }
         };
         let mut lo = a;
-        if let Routing::Path(pts) = &self.routing {
-            for knot in pts.iter().map(|p| p[0]).filter(|&k| k > a && k < b) {
-                rule(lo, knot);
-                lo = knot;
-            }
+        for knot in self
+            .routing
+            .points()
+            .iter()
+            .map(|p| p[0])
+            .filter(|&k| k > a && k < b)
+        {
+            rule(lo, knot);
+            lo = knot;
         }
         rule(lo, b);
     }
+}
+
+fn validate_path(pts: &[[f64; 3]], length: f64, from: f64, to: f64) -> Result<(), MechanicsError> {
+    if pts.len() < 2 {
+        return Err(MechanicsError::PathTooShort { points: pts.len() });
+    }
+    let tol = 1e-12 * length;
+    for (index, p) in pts.iter().enumerate() {
+        for (component, &v) in p.iter().enumerate() {
+            finite(Quantity::PathPoint { index, component }, v)?;
+        }
+        if !(p[0] >= -tol && p[0] <= length + tol) {
+            return Err(MechanicsError::PathOutsideRod {
+                index,
+                s: p[0],
+                length,
+            });
+        }
+        if index > 0 && p[0] <= pts[index - 1][0] {
+            return Err(MechanicsError::NotIncreasing {
+                quantity: Quantity::Path,
+                index,
+                value: p[0],
+                previous: pts[index - 1][0],
+            });
+        }
+    }
+    let (first, last) = (pts[0][0], pts[pts.len() - 1][0]);
+    if first > from + tol || last < to - tol {
+        return Err(MechanicsError::PathCoverage {
+            first,
+            last,
+            from,
+            to,
+        });
+    }
+    Ok(())
 }
 
 fn interpolate(times: &[f64], values: &[f64], t: f64) -> f64 {

@@ -111,39 +111,7 @@ pub fn piece_matrices(
         .collect()
 }
 
-/// Adds the elastic force `τ_e,n = K_n q_n + e_n` (D13) of every piece into
-/// `out` (length n_dof). Allocation-free.
-pub fn add_elastic_force(rod: &Rod, matrices: &[PieceMatrices], q: &[f64], out: &mut [f64]) {
-    for (p, m) in rod.pieces().iter().zip(matrices) {
-        let r = p.dofs();
-        let qn = &q[r.clone()];
-        for (i, o) in out[r].iter_mut().enumerate() {
-            let mut acc = m.elastic_offset[i];
-            for (j, qj) in qn.iter().enumerate() {
-                acc += m.stiffness[(i, j)] * qj;
-            }
-            *o += acc;
-        }
-    }
-}
-
-/// Adds the viscous force `τ_d,n = D_n q̇_n` (D13) of every piece into `out`.
-/// Allocation-free.
-pub fn add_damping_force(rod: &Rod, matrices: &[PieceMatrices], qd: &[f64], out: &mut [f64]) {
-    for (p, m) in rod.pieces().iter().zip(matrices) {
-        let r = p.dofs();
-        let qn = &qd[r.clone()];
-        for (i, o) in out[r].iter_mut().enumerate() {
-            let mut acc = 0.0;
-            for (j, qj) in qn.iter().enumerate() {
-                acc += m.damping[(i, j)] * qj;
-            }
-            *o += acc;
-        }
-    }
-}
-
-/// Elastic energy (§7) `V_e = ½ Σ_n ∫ (ξ_n − ξ*_n)ᵀ Γ(s) (ξ_n − ξ*_n) ds` [J].
+/// Elastic energy (§7) `V_e = ½ Σ_n ∫ (ξ_n − ξ*_n)ᵀ Γ(s) (ξ_n − ξ*_n) ds` \[J\].
 ///
 /// The strain is constant on a piece, so this is `½ Σ_n δ_nᵀ diag(∫Γ ds) δ_n`
 /// with `δ_n = B_n q_n + ξ̄_n − ξ*_n`; `∫Γ` as in [`integrated_constitutive`].

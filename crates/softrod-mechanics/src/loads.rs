@@ -1,4 +1,5 @@
-//! External loads: gravity, point loads, distributed loads, viscous drag (D14).
+//! External loads: point loads, distributed loads, viscous drag (D14).
+//! Gravity is a base acceleration of the dynamics layer (`Model::gravity`).
 //!
 //! Every load returns a body-frame wrench `(M, N)` at the section it acts on
 //! (moment first). Densities are per unit undeformed length [N·m/m, N/m];
@@ -6,8 +7,10 @@
 //! All hot functions are `#[inline]`, allocation-free and cost a few 3×3
 //! products at most.
 
-use crate::error::{MechanicsError, finite, non_negative};
+use crate::error::{MechanicsError, Quantity, finite3, non_negative};
 use softrod_lie::{Pose, Twist, Vec3, Wrench, angular, join, linear};
+use std::fmt;
+use std::str::FromStr;
 
 /// The frame a load's components are given in.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -20,6 +23,14 @@ pub enum LoadFrame {
 }
 
 impl LoadFrame {
+    /// The scene-file name (`"world"`, `"body"`).
+    pub fn name(self) -> &'static str {
+        match self {
+            LoadFrame::World => "world",
+            LoadFrame::Body => "body",
+        }
+    }
+
     /// Body-frame components of a vector `v` given in this frame at a section
     /// with pose `pose`: `Rᵀ v` (World) or `v` (Body).
     #[inline]
@@ -31,47 +42,37 @@ impl LoadFrame {
     }
 }
 
-/// Uniform gravity field: world acceleration `g_w` [m/s²], any direction
-/// (e.g. `(0, 0, −9.81)`); the seed's `𝒢 = (0; g_w)`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Gravity {
-    /// World-frame gravitational acceleration `g_w` [m/s²].
-    pub acceleration: Vec3,
-}
-
-fn finite3(what: &str, v: &Vec3) -> Result<(), MechanicsError> {
-    for (c, x) in ["x", "y", "z"].iter().zip(v.iter()) {
-        finite(&format!("{what} {c}"), *x)?;
-    }
-    Ok(())
-}
-
-impl Gravity {
-    /// Checks that the acceleration is finite.
-    pub fn validate(&self) -> Result<(), MechanicsError> {
-        finite3("gravity [m/s^2]", &self.acceleration)
-    }
-
-    /// Body wrench density (D14) `𝓕_g = 𝓜 Ad⁻¹_g 𝒢 = (0; ρA Rᵀ g_w)` [N/m],
-    /// for mass per length `ρA` [kg/m] and the section's world pose `g = (R, p)`.
-    /// Conservative, potential density `−ρA g_w·p`.
-    #[inline]
-    pub fn wrench_density(&self, mass_per_length: f64, pose: &Pose) -> Wrench {
-        let f = pose.rotation.tr_mul(&self.acceleration) * mass_per_length;
-        Wrench::new(0.0, 0.0, 0.0, f[0], f[1], f[2])
+impl fmt::Display for LoadFrame {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
     }
 }
 
-/// A concentrated force `f` [N] and moment `m` [N·m] applied at abscissa `s` [m].
+impl FromStr for LoadFrame {
+    type Err = MechanicsError;
+
+    /// `"world"` or `"body"`; anything else is [`MechanicsError::UnknownLoadFrame`].
+    fn from_str(name: &str) -> Result<Self, Self::Err> {
+        match name {
+            "world" => Ok(LoadFrame::World),
+            "body" => Ok(LoadFrame::Body),
+            _ => Err(MechanicsError::UnknownLoadFrame {
+                name: name.to_owned(),
+            }),
+        }
+    }
+}
+
+/// A concentrated force `f` \[N\] and moment `m` [N·m] applied at abscissa `s` \[m\].
 ///
 /// `frame = World`: dead load (fixed world direction); `Body`: follower load.
 /// Dead forces are conservative (`V = −f·p(s)`); dead moments in 3D and all
 /// follower loads are not.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PointLoad {
-    /// Material abscissa of the point of application [m], in `[0, L]`.
+    /// Material abscissa of the point of application \[m\], in `[0, L]`.
     pub s: f64,
-    /// Force [N], components in `frame`.
+    /// Force \[N\], components in `frame`.
     pub force: Vec3,
     /// Moment [N·m], components in `frame`.
     pub moment: Vec3,
@@ -85,13 +86,13 @@ impl PointLoad {
         let tol = 1e-12 * rod_length;
         if !(self.s >= -tol && self.s <= rod_length + tol) {
             return Err(MechanicsError::OutOfRod {
-                what: "point load".into(),
+                quantity: Quantity::LoadPosition,
                 s: self.s,
                 length: rod_length,
             });
         }
-        finite3("point load force [N]", &self.force)?;
-        finite3("point load moment [N m]", &self.moment)
+        finite3(Quantity::Force, &self.force)?;
+        finite3(Quantity::Moment, &self.moment)
     }
 
     /// Applied body wrench at `s` (D14): `(Rᵀ m_w; Rᵀ f_w)` for a dead load,
@@ -120,8 +121,8 @@ pub struct DistributedLoad {
 impl DistributedLoad {
     /// Checks finite force and moment densities.
     pub fn validate(&self) -> Result<(), MechanicsError> {
-        finite3("distributed force [N/m]", &self.force)?;
-        finite3("distributed moment [N m/m]", &self.moment)
+        finite3(Quantity::ForceDensity, &self.force)?;
+        finite3(Quantity::MomentDensity, &self.moment)
     }
 
     /// Body wrench density (D14): `(Rᵀ m; Rᵀ f)` (World) or `(m; f)` (Body).
@@ -148,11 +149,8 @@ pub struct Drag {
 impl Drag {
     /// Checks `c_t, c_r ≥ 0`, finite.
     pub fn validate(&self) -> Result<(), MechanicsError> {
-        non_negative(
-            "translational drag coefficient [N s/m^2]",
-            self.translational,
-        )?;
-        non_negative("rotational drag coefficient [N m s/m]", self.rotational)
+        non_negative(Quantity::TranslationalDrag, self.translational)?;
+        non_negative(Quantity::RotationalDrag, self.rotational)
     }
 
     /// Body wrench density `(−c_r ω; −c_t v)` for the body velocity `η = (ω, v)`.
@@ -162,49 +160,5 @@ impl Drag {
             &(angular(eta) * -self.rotational),
             &(linear(eta) * -self.translational),
         )
-    }
-}
-
-/// The distributed (per-unit-length) terms behind one interface, so a model
-/// can hold a `Vec<LineLoad>` of exactly the terms its scene has and evaluate
-/// them without trait objects.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum LineLoad {
-    /// Gravity (needs the pose and `ρA`).
-    Gravity(Gravity),
-    /// A uniformly distributed force/moment (needs the pose if World).
-    Distributed(DistributedLoad),
-    /// Viscous drag (needs the velocity).
-    Drag(Drag),
-}
-
-impl LineLoad {
-    /// Body wrench density at a section with mass per length `ρA` [kg/m],
-    /// world pose `pose` and body velocity `eta` (D14); dispatches to the
-    /// variant's `wrench_density`.
-    #[inline]
-    pub fn wrench_density(&self, mass_per_length: f64, pose: &Pose, eta: &Twist) -> Wrench {
-        match self {
-            LineLoad::Gravity(g) => g.wrench_density(mass_per_length, pose),
-            LineLoad::Distributed(d) => d.wrench_density(pose),
-            LineLoad::Drag(d) => d.wrench_density(eta),
-        }
-    }
-
-    /// True if the wrench depends on the velocity (it then belongs to the
-    /// velocity-dependent part of the dynamics and to `∂/∂q̇` in implicit solvers).
-    #[inline]
-    pub fn depends_on_velocity(&self) -> bool {
-        matches!(self, LineLoad::Drag(_))
-    }
-
-    /// True if the load derives from a potential (gravity; a world-frame
-    /// distributed force with zero moment).
-    pub fn is_conservative(&self) -> bool {
-        match self {
-            LineLoad::Gravity(_) => true,
-            LineLoad::Distributed(d) => d.frame == LoadFrame::World && d.moment == Vec3::zeros(),
-            LineLoad::Drag(_) => false,
-        }
     }
 }

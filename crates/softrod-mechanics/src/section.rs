@@ -1,55 +1,55 @@
 //! Cross-sections: area and second moments, possibly varying along the rod.
 
-use crate::error::{MechanicsError, non_negative, positive};
+use crate::error::{MechanicsError, Quantity, non_negative, positive};
 use std::f64::consts::PI;
 
 /// A rod cross-section in the local `(y, z)` plane (local x is the tangent).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Section {
-    /// Solid circle of radius `radius` [m].
+    /// Solid circle of radius `radius` \[m\].
     Circle {
-        /// Radius [m].
+        /// Radius \[m\].
         radius: f64,
     },
-    /// Hollow circle (tube): outer `radius`, `inner_radius` ∈ [0, radius) [m].
+    /// Hollow circle (tube): outer `radius`, `inner_radius` ∈ [0, radius) \[m\].
     Tube {
-        /// Outer radius [m].
+        /// Outer radius \[m\].
         radius: f64,
-        /// Inner radius [m].
+        /// Inner radius \[m\].
         inner_radius: f64,
     },
-    /// Solid rectangle: `width` along local y, `height` along local z [m].
+    /// Solid rectangle: `width` along local y, `height` along local z \[m\].
     Rectangle {
-        /// Extent along local y [m].
+        /// Extent along local y \[m\].
         width: f64,
-        /// Extent along local z [m].
+        /// Extent along local z \[m\].
         height: f64,
     },
     /// Solid circle whose radius varies linearly from `radius_base` at `s = 0`
     /// to `radius_tip` at `s = L`: `r(u) = r_b + (r_t − r_b) u`, `u = s/L`.
     TaperedCircle {
-        /// Radius at the base [m].
+        /// Radius at the base \[m\].
         radius_base: f64,
-        /// Radius at the tip [m].
+        /// Radius at the tip \[m\].
         radius_tip: f64,
     },
 }
 
-/// Geometric properties of a section: area `A` [m²], second moments
-/// `Jy = ∫z² dA`, `Jz = ∫y² dA` and `Jx = Jy + Jz` [m⁴].
+/// Geometric properties of a section: area `A` \[m²\], second moments
+/// `Jy = ∫z² dA`, `Jz = ∫y² dA` and `Jx = Jy + Jz` \[m⁴\].
 ///
 /// `Jx` is the polar moment, the model convention of the seed (torsional
 /// stiffness `G·Jx`); for non-circular sections it is not the Saint-Venant
 /// torsion constant.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SectionProperties {
-    /// Area `A` [m²].
+    /// Area `A` \[m²\].
     pub area: f64,
-    /// Second moment about local y, `∫ z² dA` [m⁴] (bending `ky`).
+    /// Second moment about local y, `∫ z² dA` \[m⁴\] (bending `ky`).
     pub jy: f64,
-    /// Second moment about local z, `∫ y² dA` [m⁴] (bending `kz`).
+    /// Second moment about local z, `∫ y² dA` \[m⁴\] (bending `kz`).
     pub jz: f64,
-    /// Polar moment `Jx = Jy + Jz` [m⁴] (torsion `kx`).
+    /// Polar moment `Jx = Jy + Jz` \[m⁴\] (torsion `kx`).
     pub jx: f64,
 }
 
@@ -70,13 +70,13 @@ impl Section {
     /// inner radius lies in `[0, radius)`.
     pub fn validate(&self) -> Result<(), MechanicsError> {
         match *self {
-            Section::Circle { radius } => positive("section radius [m]", radius),
+            Section::Circle { radius } => positive(Quantity::Radius, radius),
             Section::Tube {
                 radius,
                 inner_radius,
             } => {
-                positive("tube outer radius [m]", radius)?;
-                non_negative("tube inner radius [m]", inner_radius)?;
+                positive(Quantity::Radius, radius)?;
+                non_negative(Quantity::InnerRadius, inner_radius)?;
                 if inner_radius >= radius {
                     return Err(MechanicsError::InnerRadius {
                         inner: inner_radius,
@@ -86,15 +86,15 @@ impl Section {
                 Ok(())
             }
             Section::Rectangle { width, height } => {
-                positive("rectangle width [m]", width)?;
-                positive("rectangle height [m]", height)
+                positive(Quantity::Width, width)?;
+                positive(Quantity::Height, height)
             }
             Section::TaperedCircle {
                 radius_base,
                 radius_tip,
             } => {
-                positive("tapered section base radius [m]", radius_base)?;
-                positive("tapered section tip radius [m]", radius_tip)
+                positive(Quantity::BaseRadius, radius_base)?;
+                positive(Quantity::TipRadius, radius_tip)
             }
         }
     }
@@ -155,13 +155,23 @@ impl Section {
     }
 
     /// Radius of the smallest centred circle containing the section at `u = s/L`
-    /// [m]: `r`, the outer radius, `½√(w² + h²)`, or `r(u)`. Used to warn about
-    /// cables routed outside the body.
+    /// \[m\]: `r`, the outer radius, `½√(w² + h²)`, or `r(u)`.
     #[inline]
     pub fn outer_radius(&self, u: f64) -> f64 {
         match *self {
-            Section::Circle { radius } | Section::Tube { radius, .. } => radius,
             Section::Rectangle { width, height } => 0.5 * width.hypot(height),
+            _ => self.half_size(u),
+        }
+    }
+
+    /// Half the largest extent of the section at `u = s/L` \[m\]: the (outer)
+    /// radius of a circle, tube or taper, half the longer side of a
+    /// rectangle. The size scale a rod's pieces should be long against.
+    #[inline]
+    pub fn half_size(&self, u: f64) -> f64 {
+        match *self {
+            Section::Circle { radius } | Section::Tube { radius, .. } => radius,
+            Section::Rectangle { width, height } => 0.5 * width.max(height),
             Section::TaperedCircle {
                 radius_base,
                 radius_tip,
@@ -169,6 +179,18 @@ impl Section {
                 let u = u.clamp(0.0, 1.0);
                 radius_base + (radius_tip - radius_base) * u
             }
+        }
+    }
+
+    /// Whether the point `(y, z)` \[m\] of the section plane at `u = s/L` lies
+    /// inside the section's outer boundary (boundary included). A tube's
+    /// bore counts as inside (a cable may run in the lumen).
+    pub fn contains(&self, u: f64, y: f64, z: f64) -> bool {
+        match *self {
+            Section::Rectangle { width, height } => {
+                y.abs() <= 0.5 * width && z.abs() <= 0.5 * height
+            }
+            _ => y.hypot(z) <= self.half_size(u),
         }
     }
 }

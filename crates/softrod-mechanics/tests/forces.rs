@@ -10,6 +10,7 @@ use common::*;
 use nalgebra::{DVector, Matrix6, Matrix6xX};
 use softrod_kinematics::{Basis, Frame, GaussLegendre, Rod, RodKinematics, straight};
 use softrod_lie::{Vec3, Vec6, Wrench, angular, coad_vec, join, linear};
+use softrod_mechanics::reference::*;
 use softrod_mechanics::*;
 use std::f64::consts::PI;
 
@@ -38,7 +39,7 @@ fn gravity_force_is_minus_gradient_of_potential() {
             Vec3::new(0.0, 0.0, -9.81),
         ),
     ] {
-        let g = Gravity { acceleration: gw };
+        let g = gw;
         let mut rng = Rng::new(11);
         for _ in 0..3 {
             let q = random_q(&rod, &mut rng, 0.8);
@@ -47,8 +48,9 @@ fn gravity_force_is_minus_gradient_of_potential() {
             let e = rel_err(&f, &fd);
             worst = worst.max(e);
             // The generic line-load projection gives the same vector.
-            let ll =
-                line_load_force_by_jacobian(&rod, &body, &LineLoad::Gravity(g), &q, None, &quad);
+            let ll = line_load_force_by_jacobian(&rod, &q, None, &quad, |s, pose, _| {
+                gravity_wrench_density(body.mass_per_length(s), pose, &g)
+            });
             assert!((&ll - &f).amax() <= 1e-15 * f.amax());
         }
     }
@@ -111,15 +113,16 @@ fn follower_and_dead_loads_agree_in_the_reference_configuration() {
 #[test]
 fn drag_dissipates() {
     let rod = mixed_rod(L, oblique_base());
-    let body = taper_body(L);
     let mut rng = Rng::new(3);
     let q = random_q(&rod, &mut rng, 0.5);
     let qd = random_q(&rod, &mut rng, 2.0);
-    let drag = LineLoad::Drag(Drag {
+    let drag = Drag {
         translational: 3.0,
         rotational: 0.2,
+    };
+    let f = line_load_force_by_jacobian(&rod, &q, Some(&qd), &gauss(5), |_, _, eta| {
+        drag.wrench_density(eta)
     });
-    let f = line_load_force_by_jacobian(&rod, &body, &drag, &q, Some(&qd), &gauss(5));
     let power = f.dot(&DVector::from_column_slice(&qd));
     assert!(power < 0.0, "{power}");
 }
@@ -218,7 +221,7 @@ fn taper_integrals_converge_with_quadrature_order() {
     // Exact ∫ r⁴ and ∫ r² over a piece.
     let int_pow =
         |a: f64, b: f64, k: i32| (r(b).powi(k + 1) - r(a).powi(k + 1)) / ((k + 1) as f64 * dr);
-    let mat = body.material;
+    let mat = *body.material();
     let mut errs_k = Vec::new();
     for ng in 1..=5 {
         let mut e: f64 = 0.0;
@@ -227,20 +230,20 @@ fn taper_integrals_converge_with_quadrature_order() {
             let i4 = int_pow(p.start, p.end(), 4);
             let i2 = int_pow(p.start, p.end(), 2);
             let exact_g = Vec6::new(
-                mat.shear * PI * i4 / 2.0,
-                mat.young * PI * i4 / 4.0,
-                mat.young * PI * i4 / 4.0,
-                mat.young * PI * i2,
-                mat.shear * PI * i2,
-                mat.shear * PI * i2,
+                mat.shear_modulus() * PI * i4 / 2.0,
+                mat.young() * PI * i4 / 4.0,
+                mat.young() * PI * i4 / 4.0,
+                mat.young() * PI * i2,
+                mat.shear_modulus() * PI * i2,
+                mat.shear_modulus() * PI * i2,
             );
             let exact_v = Vec6::new(
-                mat.viscosity * PI * i4 / 2.0,
-                3.0 * mat.viscosity * PI * i4 / 4.0,
-                3.0 * mat.viscosity * PI * i4 / 4.0,
-                3.0 * mat.viscosity * PI * i2,
-                mat.viscosity * PI * i2,
-                mat.viscosity * PI * i2,
+                mat.viscosity() * PI * i4 / 2.0,
+                3.0 * mat.viscosity() * PI * i4 / 4.0,
+                3.0 * mat.viscosity() * PI * i4 / 4.0,
+                3.0 * mat.viscosity() * PI * i2,
+                mat.viscosity() * PI * i2,
+                mat.viscosity() * PI * i2,
             );
             for i in 0..6 {
                 e = e.max((gi[i] - exact_g[i]).abs() / exact_g[i]);
@@ -260,9 +263,7 @@ fn taper_integrals_converge_with_quadrature_order() {
     );
 
     // Gravity on a bent tapered rod: not polynomial in s; converges spectrally.
-    let g = Gravity {
-        acceleration: Vec3::new(0.5, -2.0, -9.81),
-    };
+    let g = Vec3::new(0.5, -2.0, -9.81);
     let q = random_q(&rod, &mut Rng::new(23), 1.0);
     let reference = generalized_gravity_by_jacobian(&rod, &body, &g, &q, &gauss(20));
     let errs: Vec<f64> = (1..=7)
@@ -298,9 +299,11 @@ fn test_cables() -> Vec<Cable> {
                 [0.2, 0.006, 0.002],
                 [0.33, 0.0, -0.005],
             ]),
-            from: 0.04,
-            to: 0.31,
             tension: Tension::Constant(1.0),
+            span: Span::Between {
+                from: 0.04,
+                to: 0.31,
+            },
         },
         Cable {
             routing: Routing::Path(vec![
@@ -308,18 +311,19 @@ fn test_cables() -> Vec<Cable> {
                 [0.25, 0.008, 0.0],
                 [0.5, 0.0, -0.008],
             ]),
-            from: 0.0,
-            to: 0.45,
             tension: Tension::Constant(1.0),
+            span: Span::Between {
+                from: 0.0,
+                to: 0.45,
+            },
         },
         Cable {
             routing: Routing::Offset {
                 y: 0.006,
                 z: -0.004,
             },
-            from: 0.1,
-            to: 0.4,
             tension: Tension::Constant(1.0),
+            span: Span::Between { from: 0.1, to: 0.4 },
         },
     ]
 }
@@ -343,8 +347,9 @@ fn cable_force_is_minus_gradient_of_length() {
                 let fd = -fd_gradient(&q, 1e-6, |x| cable.length(&rod, x, &quad));
                 worst = worst.max(rel_err(&f, &fd));
                 // Coordinates of pieces wholly outside the span get nothing.
+                let (from, to) = cable.bounds(L);
                 for p in rod.pieces() {
-                    if p.end() <= cable.from || p.start >= cable.to {
+                    if p.end() <= from || p.start >= to {
                         assert!(p.dofs().all(|c| f[c] == 0.0));
                     }
                 }
@@ -361,9 +366,8 @@ fn cable_straight_rod_sign_check() {
     let rod = Rod::uniform(L, 1, Basis::all(), straight(), identity_base()).unwrap();
     let c = Cable {
         routing: Routing::Offset { y: 0.01, z: 0.0 },
-        from: 0.0,
-        to: L,
         tension: Tension::Constant(2.0),
+        span: Span::Between { from: 0.0, to: L },
     };
     let mut f = vec![0.0; 6];
     c.add_force_per_tension(&rod, &[0.0; 6], &gauss(2), &mut f);
@@ -409,9 +413,10 @@ fn cable_force_equals_projected_wrench_form() {
         if let Routing::Path(pts) = &cable.routing {
             breaks.extend(pts.iter().map(|p| p[0]));
         }
-        breaks.retain(|&b| b > cable.from && b < cable.to);
-        breaks.push(cable.from);
-        breaks.push(cable.to);
+        let (from, to) = cable.bounds(L);
+        breaks.retain(|&b| b > from && b < to);
+        breaks.push(from);
+        breaks.push(to);
         breaks.sort_by(f64::total_cmp);
         breaks.dedup();
         let piece_of = |s: f64| {
@@ -451,7 +456,7 @@ fn cable_force_equals_projected_wrench_form() {
         let f = DVector::from_vec(f);
         worst = worst.max(rel_err(&tau, &f));
         // And the crate's wrench function is the same 𝓦/T.
-        let s = 0.5 * (cable.from + cable.to);
+        let s = 0.5 * (from + to);
         let (xi, d, _) = local(s, s - 1e-9, s + 1e-9);
         let dp = cable.offset(s).1;
         let w_here = wrench_and_derivative(&xi, &d, &dp).0;
@@ -503,7 +508,12 @@ fn solve_equilibrium(gamma: &Vec6, rest: &Vec6, tension: f64, d: &Vec3) -> Vec6 
 fn cable_uniform_strain_equilibrium() {
     let len = 0.2;
     let (e, nu) = (1e6, 0.45);
-    let mat = Material::with_poisson(1000.0, e, nu, 0.0).unwrap();
+    let mat = Material::builder()
+        .density(1000.0)
+        .young(e)
+        .poisson(nu)
+        .build()
+        .unwrap();
     let g_mod = e / (2.0 * (1.0 + nu));
     let quad = gauss(3);
     let mut report = Vec::new();
@@ -549,9 +559,8 @@ fn cable_uniform_strain_equilibrium() {
         let mut fc = vec![0.0; 6];
         let cable = Cable {
             routing: Routing::Offset { y, z },
-            from: 0.0,
-            to: len,
             tension: Tension::Constant(tension),
+            span: Span::Between { from: 0.0, to: len },
         };
         cable.add_force_per_tension(&rod, &q, &quad, &mut fc);
         let t = cable.tension_at(0.0);

@@ -5,6 +5,7 @@ mod common;
 use approx::assert_relative_eq;
 use common::*;
 use softrod_lie::{Pose, Vec3, Vec6};
+use softrod_mechanics::reference::gravity_wrench_density;
 use softrod_mechanics::*;
 use std::f64::consts::PI;
 
@@ -107,9 +108,25 @@ fn taper_interpolates_linearly() {
 
 #[test]
 fn body_diagonals_follow_the_model() {
-    let m = Material::with_poisson(1200.0, 2e6, 0.25, 50.0).unwrap();
-    assert_relative_eq!(m.shear, 2e6 / 2.5, max_relative = 1e-15);
+    let m = Material::builder()
+        .density(1200.0)
+        .young(2e6)
+        .poisson(0.25)
+        .viscosity(50.0)
+        .build()
+        .unwrap();
+    assert_relative_eq!(m.shear_modulus(), 2e6 / 2.5, max_relative = 1e-15);
     assert_relative_eq!(m.poisson(), 0.25, max_relative = 1e-14);
+    assert_eq!(m.specified_poisson(), Some(0.25));
+    let by_shear = Material::builder()
+        .density(1200.0)
+        .young(2e6)
+        .shear_modulus(0.8e6)
+        .build()
+        .unwrap();
+    assert_eq!(by_shear.specified_poisson(), None);
+    assert_relative_eq!(by_shear.poisson(), 0.25, max_relative = 1e-14);
+    assert_eq!(by_shear.viscosity(), 0.0);
     let sec = Section::Rectangle {
         width: 0.02,
         height: 0.01,
@@ -173,25 +190,67 @@ fn invalid_descriptions_are_reported_with_their_values() {
         .validate()
         .is_err()
     );
+    let silicone = |nu: f64, mu: f64| {
+        Material::builder()
+            .density(1000.0)
+            .young(1e6)
+            .poisson(nu)
+            .viscosity(mu)
+            .build()
+    };
     assert!(matches!(
-        Material::with_poisson(1000.0, 1e6, 0.6, 0.0),
+        silicone(0.6, 0.0),
         Err(MechanicsError::PoissonRatio { value }) if value == 0.6
     ));
-    assert!(Material::with_poisson(1000.0, 1e6, -1.0, 0.0).is_err());
-    assert!(Material::with_poisson(1000.0, 1e6, 0.5, 0.0).is_ok());
-    assert!(Material::with_poisson(1000.0, 1e6, 0.3, -1.0).is_err());
+    assert!(silicone(-1.0, 0.0).is_err());
+    assert!(silicone(0.5, 0.0).is_ok());
+    assert_eq!(
+        silicone(0.3, -1.0),
+        Err(MechanicsError::Negative {
+            quantity: Quantity::Viscosity,
+            value: -1.0
+        })
+    );
+    // Missing and conflicting constants name the quantity.
+    assert_eq!(
+        Material::builder().young(1e6).poisson(0.3).build(),
+        Err(MechanicsError::Missing {
+            quantity: Quantity::Density
+        })
+    );
+    assert_eq!(
+        Material::builder().density(1e3).young(1e6).build(),
+        Err(MechanicsError::Missing {
+            quantity: Quantity::PoissonRatio
+        })
+    );
+    assert!(matches!(
+        Material::builder()
+            .density(1e3)
+            .young(1e6)
+            .poisson(0.3)
+            .shear_modulus(4e5)
+            .build(),
+        Err(MechanicsError::Conflict { .. })
+    ));
+    assert_eq!(
+        Material::builder()
+            .density(1e3)
+            .young(-1e6)
+            .poisson(0.3)
+            .build(),
+        Err(MechanicsError::NotPositive {
+            quantity: Quantity::YoungsModulus,
+            value: -1e6
+        })
+    );
     let body = RodBody::new(Section::Circle { radius: 0.01 }, soft_material(), 1.0).unwrap();
     let rod = mixed_rod(0.9, identity_base());
     assert!(matches!(
         body.check_rod(&rod),
         Err(MechanicsError::LengthMismatch { .. })
     ));
-    let cable = |routing, from, to, tension| Cable {
-        routing,
-        from,
-        to,
-        tension,
-    };
+    let cable = |routing, from, to, tension| Cable::new(routing, tension).between(from, to);
     let off = Routing::Offset { y: 0.01, z: 0.0 };
     assert!(
         cable(off.clone(), 0.0, 1.0, Tension::Constant(1.0))
@@ -200,7 +259,7 @@ fn invalid_descriptions_are_reported_with_their_values() {
     );
     assert!(matches!(
         cable(off.clone(), 0.5, 0.5, Tension::Constant(1.0)).validate(1.0),
-        Err(MechanicsError::CableSpan { .. })
+        Err(MechanicsError::CableTo { .. })
     ));
     assert!(
         cable(off.clone(), 0.0, 1.1, Tension::Constant(1.0))
@@ -234,9 +293,9 @@ fn invalid_descriptions_are_reported_with_their_values() {
         )
         .validate(1.0),
         Err(MechanicsError::SizeMismatch {
+            quantity: Quantity::TensionValues,
             got: 1,
             expected: 2,
-            ..
         })
     ));
     assert!(
@@ -271,13 +330,6 @@ fn invalid_descriptions_are_reported_with_their_values() {
         .is_err()
     );
     assert!(
-        Gravity {
-            acceleration: Vec3::new(0.0, f64::NAN, 0.0)
-        }
-        .validate()
-        .is_err()
-    );
-    assert!(
         DistributedLoad {
             force: Vec3::zeros(),
             moment: Vec3::zeros(),
@@ -298,12 +350,11 @@ fn invalid_descriptions_are_reported_with_their_values() {
 fn tension_tables_interpolate_and_clamp() {
     let c = Cable {
         routing: Routing::Offset { y: 0.0, z: 0.01 },
-        from: 0.0,
-        to: 1.0,
         tension: Tension::Table {
             times: vec![0.0, 1.0, 3.0],
             values: vec![0.0, 2.0, 1.0],
         },
+        span: Span::Between { from: 0.0, to: 1.0 },
     };
     assert_eq!(c.tension_at(-1.0), 0.0);
     assert_relative_eq!(c.tension_at(0.25), 0.5, max_relative = 1e-15);
@@ -312,13 +363,29 @@ fn tension_tables_interpolate_and_clamp() {
     assert_eq!(c.tension_at(10.0), 1.0);
 }
 
+/// Moved with the interpolation from the scene crate: exact values at the
+/// knots, linear between, held outside.
+#[test]
+fn tension_schedule_is_piecewise_linear_and_held() {
+    let t = Tension::Table {
+        times: vec![0.0, 0.5, 1.0],
+        values: vec![0.0, 2.0, 1.0],
+    };
+    assert_eq!(t.at(-1.0), 0.0);
+    assert_eq!(t.at(0.25), 1.0);
+    assert_eq!(t.at(0.5), 2.0);
+    assert_eq!(t.at(0.75), 1.5);
+    assert_eq!(t.at(9.0), 1.0);
+    assert_eq!(t.max(), 2.0);
+    assert_eq!(Tension::Constant(0.7).max(), 0.7);
+}
+
 #[test]
 fn path_routing_is_piecewise_linear() {
     let c = Cable {
         routing: Routing::Path(vec![[0.1, 0.01, 0.0], [0.3, 0.0, 0.02]]),
-        from: 0.0,
-        to: 0.5,
         tension: Tension::Constant(1.0),
+        span: Span::Between { from: 0.0, to: 0.5 },
     };
     let (d, dp) = c.offset(0.2);
     assert_relative_eq!(d, Vec3::new(0.0, 0.005, 0.01), max_relative = 1e-14);
@@ -326,6 +393,12 @@ fn path_routing_is_piecewise_linear() {
     assert_eq!(c.offset(0.0), (Vec3::new(0.0, 0.01, 0.0), Vec3::zeros()));
     assert_eq!(c.offset(0.4), (Vec3::new(0.0, 0.0, 0.02), Vec3::zeros()));
     assert_relative_eq!(c.max_offset(), 0.02);
+    // The scene's contract example path: (s, y, z) = (0, 0, 0.008) to (0.5, 0.004, 0).
+    let r = Routing::Path(vec![[0.0, 0.0, 0.008], [0.5, 0.004, 0.0]]);
+    assert_eq!(r.offset(0.0).0, Vec3::new(0.0, 0.0, 0.008));
+    let (m, _) = r.offset(0.25);
+    assert!((m[1] - 0.002).abs() < 1e-15 && (m[2] - 0.004).abs() < 1e-15);
+    assert_eq!(r.offset(1.0).0, Vec3::new(0.0, 0.004, 0.0));
 }
 
 #[test]
@@ -333,17 +406,19 @@ fn load_wrenches_in_body_frame() {
     let mut rng = Rng::new(7);
     let r = nalgebra::Rotation3::from_scaled_axis(rng.vec3(2.0)).into_inner();
     let pose = Pose::new(r, rng.vec3(1.0));
-    let g = Gravity {
-        acceleration: Vec3::new(0.0, 0.0, -9.81),
-    };
-    let w = g.wrench_density(0.3, &pose);
+    let g = Vec3::new(0.0, 0.0, -9.81);
+    let w = gravity_wrench_density(0.3, &pose, &g);
     // 𝓜 Ad⁻¹_g 𝒢 with the dense operators.
     let body = RodBody::new(Section::Circle { radius: 0.01 }, soft_material(), 1.0).unwrap();
     let mpl = body.mass_per_length(0.0);
     let calg = Vec6::new(0.0, 0.0, 0.0, 0.0, 0.0, -9.81);
     let dense =
         nalgebra::Matrix6::from_diagonal(&body.screw_inertia(0.0)) * pose.ad_inv().to_mat6() * calg;
-    assert_relative_eq!(g.wrench_density(mpl, &pose), dense, epsilon = 1e-15);
+    assert_relative_eq!(
+        gravity_wrench_density(mpl, &pose, &g),
+        dense,
+        epsilon = 1e-15
+    );
     assert_relative_eq!(
         (r * softrod_lie::linear(&w)).z,
         -9.81 * 0.3,
@@ -382,11 +457,4 @@ fn load_wrenches_in_body_frame() {
         drag.wrench_density(&eta),
         Vec6::new(-0.5, -1.0, -1.5, -8.0, -10.0, -12.0)
     );
-    let ll = LineLoad::Drag(drag);
-    assert!(ll.depends_on_velocity() && !ll.is_conservative());
-    assert_eq!(
-        ll.wrench_density(1.0, &pose, &eta),
-        drag.wrench_density(&eta)
-    );
-    assert!(LineLoad::Gravity(g).is_conservative());
 }

@@ -51,13 +51,19 @@ fn key(path: &str) -> &str {
     if path.is_empty() { "(top level)" } else { path }
 }
 
+/// The lower layer's error behind a [`SceneError`]: a
+/// `softrod_kinematics::KinematicsError`, `softrod_mechanics::MechanicsError`
+/// or `softrod_dynamics::DynamicsError` (downcast to inspect it).
+pub type Cause = Box<dyn std::error::Error + Send + Sync + 'static>;
+
 /// Everything that can be wrong with a scene file.
 ///
 /// The `Display` form is one line meant for a person:
 /// `scene.toml:12:9: rod[0].material.young: out of range: -5 (must be > 0)`.
 /// Every variant (except [`SceneError::Io`]) carries the file name given for
 /// messages, the key path (empty for the document itself) and, where known,
-/// the [`Location`] of the offending key or value.
+/// the [`Location`] of the offending key or value. Values the library layers
+/// rejected keep their error as [`std::error::Error::source`] (a [`Cause`]).
 #[non_exhaustive]
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
@@ -95,6 +101,9 @@ pub enum SceneError {
         at: Option<Location>,
         /// Extra explanation, e.g. ` (give pieces or piece_lengths)`; may be empty.
         note: String,
+        /// The library error behind it, if a lower layer rejected the value.
+        #[source]
+        source: Option<Cause>,
     },
 
     /// A value has the wrong type or shape (string for a number, 2 numbers for 3).
@@ -134,6 +143,9 @@ pub enum SceneError {
         at: Option<Location>,
         /// The literal as written.
         value: String,
+        /// The library error behind it, if a lower layer rejected the value.
+        #[source]
+        source: Option<Cause>,
     },
 
     /// A number outside its allowed range.
@@ -149,6 +161,9 @@ pub enum SceneError {
         value: String,
         /// The allowed range, e.g. `> 0` or `in (-1, 0.5]`.
         expected: String,
+        /// The library error behind it, if a lower layer rejected the value.
+        #[source]
+        source: Option<Cause>,
     },
 
     /// Lengths that must agree do not (`initial.q` vs the number of DoF,
@@ -163,6 +178,9 @@ pub enum SceneError {
         at: Option<Location>,
         /// What disagrees, with the numbers.
         message: String,
+        /// The library error behind it, if a lower layer rejected the value.
+        #[source]
+        source: Option<Cause>,
     },
 
     /// A cable, load or reference names a rod that the scene does not define.
@@ -193,6 +211,9 @@ pub enum SceneError {
         value: String,
         /// The valid values.
         valid: Vec<String>,
+        /// The library error behind it, if a lower layer rejected the value.
+        #[source]
+        source: Option<Cause>,
     },
 
     /// Any other invalid value or combination of keys (non-orthonormal rotation,
@@ -207,6 +228,9 @@ pub enum SceneError {
         at: Option<Location>,
         /// What is wrong, with the values.
         message: String,
+        /// The library error behind it, if a lower layer rejected the value.
+        #[source]
+        source: Option<Cause>,
     },
 }
 
@@ -244,6 +268,21 @@ impl SceneError {
             | SceneError::UnknownName { at, .. }
             | SceneError::Invalid { at, .. } => *at,
         }
+    }
+
+    /// The same error with `cause` as its source (for the variants that
+    /// carry one).
+    pub(crate) fn caused_by(mut self, cause: Cause) -> Self {
+        match &mut self {
+            SceneError::Missing { source, .. }
+            | SceneError::NotFinite { source, .. }
+            | SceneError::OutOfRange { source, .. }
+            | SceneError::InconsistentLengths { source, .. }
+            | SceneError::UnknownName { source, .. }
+            | SceneError::Invalid { source, .. } => *source = Some(cause),
+            _ => {}
+        }
+        self
     }
 
     /// The file name given for messages.

@@ -3,15 +3,22 @@
 //! `docs/scene-format-extensions.md` (what this crate adds).
 //!
 //! [`Scene::from_path`] / [`Scene::from_str`] read a scene into raw serde
-//! structs that deny unknown keys, then validate every value into a typed
-//! [`Scene`] with SI units and all defaults filled in. Errors are one
-//! [`SceneError`] naming the file, the key path (`rod[0].material.young`), the
-//! line and column where known, and what is wrong; suspicious but legal input
-//! comes back as [`Warning`]s next to the scene.
+//! structs that deny unknown keys, then validate it straight into the
+//! library's own types: each rod is a `softrod_dynamics::RodSpec` (its
+//! `Section`, `Material`, strain basis, cables, point loads and drag are
+//! those of `softrod-mechanics` and `softrod-kinematics`), built by the
+//! library's builders, which check every value once. This crate keeps only
+//! what is a scene's: the [`World`], the [`Initial`] state, the [`Run`]
+//! settings, the [`Reference`] answer, the source file and the [`Warning`]s.
 //!
-//! [`Scene::build`] (module [`build`]) turns a scene into a
-//! `softrod_dynamics::Model` holding only the terms the scene has, plus the
-//! initial state.
+//! Errors are one [`SceneError`] naming the file, the key path
+//! (`rod[0].material.young`), the line and column where known, and what is
+//! wrong; when a library constructor rejected the value, its structured
+//! error (mapped to the key path by variant and quantity, never by its text)
+//! is the [`SceneError`]'s `source()`.
+//!
+//! [`Scene::build`] turns a scene into a `softrod_dynamics::Model` holding
+//! only the terms the scene has, plus the initial state ([`Built`]).
 //!
 //! ```
 //! use softrod_scene::Scene;
@@ -28,25 +35,37 @@
 //! let (scene, warnings) = Scene::from_str(text, "arm.toml").unwrap();
 //! assert!(warnings.is_empty());
 //! assert_eq!(scene.n_dof(), 8);
-//! assert_eq!(scene.rods[0].material.shear_modulus, 1.0e6 / 3.0);
+//! assert_eq!(scene.rods[0].body.material().shear_modulus(), 1.0e6 / 3.0);
+//! assert_eq!(scene.build().unwrap().model.n_dof(), 8);
 //!
 //! let err = Scene::from_str("[[rod]]\nname = \"arm\"\nlenght = 0.5\n", "bad.toml").unwrap_err();
 //! assert!(err.to_string().starts_with("bad.toml:3:1: rod[0].lenght: unknown key"));
+//!
+//! let bad = text.replace("young = 1.0e6", "young = -1.0");
+//! let err = Scene::from_str(&bad, "arm.toml").unwrap_err();
+//! assert_eq!(err.path(), Some("rod[0].material.young"));
+//! // The library's own error is the source.
+//! let cause = std::error::Error::source(&err).unwrap();
+//! assert!(cause.to_string().starts_with("Young's modulus [Pa] must be positive"));
 //! ```
 
 #![warn(missing_docs)]
+// A SceneError carries the file, key path, location, value, allowed range and
+// the library cause (~140 bytes): returned once per load, on a cold path,
+// where boxing would only add an allocation and an indirection for callers.
+#![allow(clippy::result_large_err)]
 
-mod actuation;
-pub mod build;
+mod build;
 mod error;
+mod keys;
 mod locate;
 mod raw;
-mod rod;
+mod reporter;
+mod run;
 mod scene;
 mod validate;
 
-pub use actuation::{Cable, Load, LoadFrame, Routing, Tension};
 pub use build::Built;
-pub use error::{Location, SceneError, Warning};
-pub use rod::{Drag, Material, Pose, Rod, STRAIN_NAMES, Section, StrainSelection};
-pub use scene::{Initial, Integrator, Mode, Reference, Run, Scene, UnknownIntegrator, World};
+pub use error::{Cause, Location, SceneError, Warning};
+pub use run::{Integrator, Mode, Run, UnknownIntegrator};
+pub use scene::{Initial, Reference, Scene, World};

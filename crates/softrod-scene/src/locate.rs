@@ -177,6 +177,7 @@ pub(crate) fn map_toml_error(
             path: join(&path, field),
             at,
             note: String::new(),
+            source: None,
         };
     }
     if let Some(field) = backticked(&msg, "unknown field ") {
@@ -219,6 +220,7 @@ pub(crate) fn map_toml_error(
             path,
             at,
             value: format!("{value} ({msg})"),
+            source: None,
         };
     }
     SceneError::Invalid {
@@ -226,6 +228,7 @@ pub(crate) fn map_toml_error(
         path,
         at,
         message: msg,
+        source: None,
     }
 }
 

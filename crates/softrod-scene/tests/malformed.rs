@@ -236,6 +236,51 @@ const CASES: &[Case] = &[
         path: "reference.time",
         says: &["out of range", "2", "run.duration = 1"],
     },
+    Case {
+        name: "too many pieces",
+        edits: &[("pieces = 4", "pieces = 2000000")],
+        path: "rod[0].pieces",
+        says: &["out of range", "2000000", "in [1, 1000000]"],
+    },
+    Case {
+        name: "negative pieces",
+        edits: &[("pieces = 4", "pieces = -3")],
+        path: "rod[0].pieces",
+        says: &["out of range", "-3"],
+    },
+    Case {
+        name: "negative piece length",
+        edits: &[("pieces = 4", "piece_lengths = [0.25, -0.25, 0.5]")],
+        path: "rod[0].piece_lengths[1]",
+        says: &["out of range", "-0.25", "> 0"],
+    },
+    Case {
+        name: "negative shear modulus",
+        edits: &[("poisson = 0.5", "shear_modulus = -3e5")],
+        path: "rod[0].material.shear_modulus",
+        says: &["out of range", "-300000", "> 0"],
+    },
+    Case {
+        name: "negative rectangle width",
+        edits: &[(
+            "shape = \"circle\", radius = 0.01",
+            "shape = \"rectangle\", width = -0.02, height = 0.01",
+        )],
+        path: "rod[0].section.width",
+        says: &["out of range", "-0.02"],
+    },
+    Case {
+        name: "cable starting beyond the rod",
+        edits: &[("tension = 2.0", "tension = 2.0\nfrom = 0.6")],
+        path: "cable[0].from",
+        says: &["out of range", "0.6", "in [0, length = 0.5)"],
+    },
+    Case {
+        name: "negative rotational drag",
+        edits: &[("rotational = 0.0", "rotational = -1e-3")],
+        path: "rod[0].drag.rotational",
+        says: &["out of range", "-0.001", ">= 0"],
+    },
     // --- unknown names
     Case {
         name: "unknown rod in a cable",
@@ -264,9 +309,14 @@ const CASES: &[Case] = &[
             "rk4",
             "dopri5",
             "rosenbrock",
-            "radau5",
             "generalized-alpha",
         ],
+    },
+    Case {
+        name: "integrator planned but not implemented",
+        edits: &[("integrator = \"dopri5\"", "integrator = \"radau5\"")],
+        path: "run.integrator",
+        says: &["\"radau5\" is not implemented yet", "rosenbrock"],
     },
     Case {
         name: "unknown mode",
@@ -425,6 +475,18 @@ const CASES: &[Case] = &[
         says: &["covers s in [0.1, 0.5]", "from = 0"],
     },
     Case {
+        name: "path of one point",
+        edits: &[("offset = [0.0, 0.008]", "path = [[0.0, 0.0, 0.008]]")],
+        path: "cable[0].path",
+        says: &["at least two points", "found 1", "use offset"],
+    },
+    Case {
+        name: "empty piece lengths",
+        edits: &[("pieces = 4", "piece_lengths = []")],
+        path: "rod[0].piece_lengths",
+        says: &["at least one piece"],
+    },
+    Case {
         name: "offset and path together",
         edits: &[(
             "offset = [0.0, 0.008]",
@@ -527,14 +589,64 @@ fn malformed_scenes_are_rejected_with_path_and_problem() {
     assert!(failures.is_empty(), "\n{}", failures.join("\n"));
 }
 
+/// Values the library rejects keep its structured error as the source: the
+/// key path comes from the variant and quantity, not from the message.
+#[test]
+fn library_errors_are_the_source() {
+    use softrod_dynamics::DynamicsError;
+    use softrod_kinematics::KinematicsError;
+    use softrod_mechanics::{MechanicsError, Quantity};
+    use std::error::Error;
+
+    let text = apply(&[("poisson = 0.5", "poisson = 0.7")]);
+    let e = Scene::from_str(&text, FILE).unwrap_err();
+    let cause = e.source().expect("chained");
+    assert_eq!(
+        cause.downcast_ref::<MechanicsError>(),
+        Some(&MechanicsError::PoissonRatio { value: 0.7 })
+    );
+
+    let text = apply(&[("radius = 0.01", "radius = -0.01")]);
+    let e = Scene::from_str(&text, FILE).unwrap_err();
+    assert_eq!(e.path(), Some("rod[0].section.radius"));
+    let cause = e.source().unwrap().downcast_ref::<DynamicsError>().unwrap();
+    assert!(
+        matches!(
+            cause,
+            DynamicsError::RodBody {
+                source: MechanicsError::NotPositive {
+                    quantity: Quantity::Radius,
+                    ..
+                },
+                ..
+            }
+        ),
+        "{cause:?}"
+    );
+
+    let text = apply(&[("[[1,0,0],[0,1,0],[0,0,1]]", "[[1,0,0],[0,1,0],[0,0,-1]]")]);
+    let e = Scene::from_str(&text, FILE).unwrap_err();
+    let kin = e.source().and_then(|c| c.source()).unwrap();
+    assert!(matches!(
+        kin.downcast_ref::<KinematicsError>(),
+        Some(KinematicsError::BaseNotRotation { .. })
+    ));
+    // Scene-only rules (which keys go together) have no library cause.
+    let text = apply(&[("poisson = 0.5", "poisson = 0.5, shear_modulus = 3e5")]);
+    let e = Scene::from_str(&text, FILE).unwrap_err();
+    assert!(e.source().is_some(), "the builder's Conflict is the cause");
+    let e = Scene::from_str(&apply(&[("[[rod]]", "[not_a_rod]")]), FILE).unwrap_err();
+    assert!(e.source().is_none());
+}
+
 #[test]
 fn poisson_one_half_is_valid() {
     let text = apply(&[("poisson = 0.5", "poisson = 0.5")]);
     let (scene, warnings) = Scene::from_str(&text, FILE).unwrap();
     assert!(warnings.is_empty());
-    let m = scene.rods[0].material;
-    assert_eq!(m.poisson, Some(0.5));
-    assert_eq!(m.shear_modulus, 1.0e6 / 3.0);
+    let m = scene.rods[0].body.material();
+    assert_eq!(m.specified_poisson(), Some(0.5));
+    assert_eq!(m.shear_modulus(), 1.0e6 / 3.0);
     // Just inside the open end is valid too.
     let text = apply(&[("poisson = 0.5", "poisson = -0.99")]);
     assert!(Scene::from_str(&text, FILE).is_ok());

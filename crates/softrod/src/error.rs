@@ -4,6 +4,7 @@
 use softrod_dynamics::DynamicsError;
 use softrod_integrate::IntegrateError;
 use softrod_kinematics::KinematicsError;
+use softrod_mechanics::MechanicsError;
 use softrod_scene::SceneError;
 
 /// Why a call failed. Bad input ([`Error::is_input`]) is distinguished from
@@ -17,6 +18,9 @@ pub enum Error {
     /// The model or a dynamics evaluation rejected its input.
     #[error(transparent)]
     Dynamics(#[from] DynamicsError),
+    /// A material, section, load or cable description is invalid.
+    #[error(transparent)]
+    Mechanics(#[from] MechanicsError),
     /// A kinematics query rejected its input (abscissa outside the rod, …).
     #[error(transparent)]
     Kinematics(#[from] KinematicsError),
@@ -71,17 +75,27 @@ impl Error {
     /// Whether this is bad input (a scene, setting or argument the caller
     /// can fix) rather than a failed simulation.
     pub fn is_input(&self) -> bool {
-        matches!(
-            self,
-            Error::Scene(_) | Error::InvalidSetting { .. } | Error::SizeMismatch { .. }
-        ) || matches!(
-            self,
-            Error::Dynamics(
-                DynamicsError::InvalidModel(_)
-                    | DynamicsError::SizeMismatch { .. }
-                    | DynamicsError::NotFinite { .. }
-            )
-        )
+        match self {
+            Error::Scene(_)
+            | Error::InvalidSetting { .. }
+            | Error::SizeMismatch { .. }
+            | Error::UnknownRod(_)
+            | Error::Mechanics(_)
+            | Error::Kinematics(_) => true,
+            Error::Dynamics(e) => {
+                e.rod().is_some()
+                    || matches!(
+                        e,
+                        DynamicsError::NoRods
+                            | DynamicsError::NoQuadraturePoints
+                            | DynamicsError::GravityNotFinite { .. }
+                            | DynamicsError::SizeMismatch { .. }
+                            | DynamicsError::NotFinite { .. }
+                            | DynamicsError::InvalidShift { .. }
+                    )
+            }
+            Error::Integration(_) | Error::Output { .. } => false,
+        }
     }
 }
 

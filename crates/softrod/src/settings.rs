@@ -26,15 +26,18 @@ pub struct Settings {
     pub rtol: f64,
     /// Absolute tolerance of the adaptive methods (units of `q`, `q̇`).
     pub atol: f64,
-    /// Step of the fixed-step methods, first step of the adaptive ones [s].
+    /// Step of the fixed-step methods, first step of the adaptive ones \[s\].
     pub dt: f64,
-    /// Time between output samples [s]; `None`: a thousandth of the duration.
+    /// Time between output samples \[s\]; `None`: a thousandth of the duration.
     pub output_every: Option<f64>,
     /// Generalized-α only: control the local error and adapt the step.
     pub error_control: bool,
     /// Generalized-α only: one Newton iteration per step with the elastic
     /// Jacobian (the linearly implicit, IMEX scheme).
     pub linearly_implicit: bool,
+    /// The run length a scene asks for (`[run] duration`) \[s\]: what a
+    /// front end simulates when the user names no duration.
+    pub duration: f64,
 }
 
 impl Default for Settings {
@@ -55,6 +58,7 @@ impl Settings {
             output_every: Some(run.output_every),
             error_control: run.error_control,
             linearly_implicit: run.linearly_implicit,
+            duration: run.duration,
         }
     }
 
@@ -89,9 +93,14 @@ impl Settings {
         RodJacobian::ElasticOnly
     }
 
-    /// Checks the values (positive, finite) and that the integrator exists.
+    /// Checks the values (positive and finite).
     pub fn validate(&self) -> Result<(), Error> {
-        for (what, v) in [("rtol", self.rtol), ("atol", self.atol), ("dt", self.dt)] {
+        for (what, v) in [
+            ("rtol", self.rtol),
+            ("atol", self.atol),
+            ("dt", self.dt),
+            ("duration", self.duration),
+        ] {
             if !(v.is_finite() && v > 0.0) {
                 return Err(Error::InvalidSetting {
                     key: what,
@@ -106,13 +115,6 @@ impl Settings {
                     message: format!("must be positive and finite, got {e}"),
                 });
             }
-        }
-        if self.integrator == Integrator::Radau5 {
-            return Err(Error::InvalidSetting {
-                key: "integrator",
-                message: "\"radau5\" is not implemented yet, use \"rosenbrock\" (stiff, adaptive)"
-                    .into(),
-            });
         }
         Ok(())
     }
@@ -129,7 +131,6 @@ impl Settings {
             },
             Integrator::Dopri5 => Method::Dopri5,
             Integrator::Rosenbrock => Method::Rosw34,
-            Integrator::Radau5 => unreachable!("rejected by validate"),
         };
         // Generalized-α steps with the fixed dt unless error control is on;
         // rk4 always does; the other methods are adaptive with dt as their

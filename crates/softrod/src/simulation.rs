@@ -6,8 +6,10 @@ use std::path::Path;
 
 use nalgebra::{DMatrix, DVector, Matrix6xX};
 use softrod_dynamics::{
-    Data, Energies, Model, Modes, StaticsOptions, StaticsResult, energies, forward_dynamics,
-    inverse_dynamics, mass_matrix, modes, statics,
+    Data, Energies, FdDerivatives, Linearization, Model, Modes, StaticsOptions, StaticsResult,
+    actuation_matrix, bias_force, coriolis_matrix, damping_matrix, energies, forward_dynamics,
+    generalized_gravity, inverse_dynamics, linearize, mass_matrix, modes, statics,
+    stiffness_matrix,
 };
 use softrod_integrate::{Control, Hooks, RodSystem, Stats, integrate_second_order};
 use softrod_kinematics::{Frame, RodKinematics};
@@ -52,7 +54,7 @@ pub struct ModalAnalysis {
 
 /// What an [`Observer`] sees at each output time.
 pub struct Sample<'a> {
-    /// Time [s].
+    /// Time \[s\].
     pub t: f64,
     /// Coordinates (n_dof).
     pub q: &'a [f64],
@@ -82,6 +84,16 @@ pub trait Observer {
 
     /// Called after each accepted step (e.g. for a progress bar).
     fn step(&mut self, _t: f64, _stats: &Stats) {}
+
+    /// A controller in the loop: called after each accepted step with the
+    /// state there; write new cable tensions into `u` (one per cable, model
+    /// order, \[N\], ≥ 0; it holds the current ones) and return `true` to
+    /// apply them from this time on (zero-order hold; the integrator then
+    /// discards its cached derivatives, which costs one extra evaluation of
+    /// the dynamics per change). The default never changes them.
+    fn inputs(&mut self, _t: f64, _q: &[f64], _qd: &[f64], _u: &mut [f64]) -> bool {
+        false
+    }
 }
 
 /// How a run ended.
@@ -98,7 +110,7 @@ pub enum RunStatus {
 pub struct RunSummary {
     /// How it ended.
     pub status: RunStatus,
-    /// Time reached [s].
+    /// Time reached \[s\].
     pub t_final: f64,
     /// The integrator's work counters.
     pub stats: Stats,
@@ -109,7 +121,7 @@ pub struct RunSummary {
 /// A run kept in memory: samples at the output times.
 #[derive(Clone, Debug)]
 pub struct Trajectory {
-    /// Output times [s].
+    /// Output times \[s\].
     pub t: Vec<f64>,
     /// Coordinates at each time.
     pub q: Vec<DVector<f64>>,
@@ -271,7 +283,7 @@ impl Simulation {
         Ok((i, k))
     }
 
-    /// World pose of rod `rod` at abscissa `s` [m] for coordinates `q` (D7).
+    /// World pose of rod `rod` at abscissa `s` \[m\] for coordinates `q` (D7).
     pub fn pose(&self, rod: &str, s: f64, q: &[f64]) -> Result<Pose> {
         let (i, k) = self.kinematics(rod, q)?;
         Ok(k.pose_at(&self.model().rods()[i].spec.rod, s)?)
@@ -326,10 +338,73 @@ impl Simulation {
         Ok(mass_matrix(&s.model, &mut s.data, q)?.clone())
     }
 
-    /// Kinetic, elastic and gravitational energy at `(q, q̇)` [J].
+    /// Kinetic, elastic and gravitational energy at `(q, q̇)` \[J\].
     pub fn energies(&mut self, q: &[f64], qd: &[f64]) -> Result<Energies> {
         let s = &mut self.system;
         Ok(energies(&s.model, &mut s.data, q, qd)?)
+    }
+
+    /// Bias force `b(q, q̇) = C q̇ + G + τ_e + D q̇ − τ_c − Q_ext` at time `t`
+    /// (n_dof): `M q̈ + b = τ_act` (D21–D22).
+    pub fn bias_force(&mut self, t: f64, q: &[f64], qd: &[f64]) -> Result<DVector<f64>> {
+        let s = &mut self.system;
+        Ok(bias_force(&s.model, &mut s.data, t, q, qd)?.clone())
+    }
+
+    /// Coriolis matrix `C(q, q̇)` (n_dof × n_dof, D21), with `Ṁ − 2C`
+    /// skew-symmetric.
+    pub fn coriolis_matrix(&self, q: &[f64], qd: &[f64]) -> Result<DMatrix<f64>> {
+        Ok(coriolis_matrix(self.model(), q, qd)?)
+    }
+
+    /// Generalized gravity `G(q) = ∂V_g/∂q` (n_dof, D22).
+    pub fn gravity_force(&mut self, q: &[f64]) -> Result<DVector<f64>> {
+        let s = &mut self.system;
+        Ok(generalized_gravity(&s.model, &mut s.data, q)?)
+    }
+
+    /// Stiffness matrix `K` (n_dof × n_dof, block-diagonal per piece, D13).
+    pub fn stiffness_matrix(&self) -> DMatrix<f64> {
+        stiffness_matrix(self.model())
+    }
+
+    /// Damping matrix `D` (n_dof × n_dof, block-diagonal per piece, D13).
+    pub fn damping_matrix(&self) -> DMatrix<f64> {
+        damping_matrix(self.model())
+    }
+
+    /// Actuation matrix `∂τ_c/∂u` at `q` (n_dof × n_cables): the
+    /// generalized force of each cable per newton of tension (D15).
+    pub fn actuation_matrix(&self, q: &[f64]) -> Result<DMatrix<f64>> {
+        Ok(actuation_matrix(self.model(), q)?)
+    }
+
+    /// Number of cables: the length of the inputs `u`.
+    pub fn n_cables(&self) -> usize {
+        self.model().n_cables()
+    }
+
+    /// Sets cable-tension inputs `u` (one per cable in model order, \[N\],
+    /// ≥ 0) that replace the cables' schedules in every evaluation and run
+    /// of this simulation; `None` restores the schedules.
+    pub fn set_cable_tensions(&mut self, u: Option<&[f64]>) -> Result<()> {
+        let s = &mut self.system;
+        Ok(s.data.set_cable_tensions(&s.model, u)?)
+    }
+
+    /// The inputs set by [`Simulation::set_cable_tensions`], if any.
+    pub fn cable_tensions(&self) -> Option<&[f64]> {
+        self.system.data.cable_tensions()
+    }
+
+    /// Linearization `ẋ ≈ f(x₀, u₀) + A (x − x₀) + B (u − u₀)` of the
+    /// dynamics about `(q, q̇)` at `t`, `x = (q, q̇)` (2·n_dof), `u` the cable
+    /// tensions (the inputs, or the schedules at `t`), from the analytic
+    /// derivatives (D30–D49): what LQR, MPC and trajectory optimization need.
+    pub fn linearize(&mut self, t: f64, q: &[f64], qd: &[f64]) -> Result<Linearization> {
+        let s = &mut self.system;
+        let mut work = FdDerivatives::new(&s.model);
+        Ok(linearize(&s.model, &mut s.data, &mut work, t, q, qd, None)?)
     }
 
     /// Whether the model has static loads (gravity, point or distributed
@@ -422,13 +497,72 @@ impl Simulation {
                 message: format!("must be positive and finite, got {duration}"),
             });
         }
-        let (method, mut opts) = self.settings.method_and_options(duration)?;
-        opts.t_eval = Some(output_times(
-            duration,
-            self.settings.output_spacing(duration),
-        ));
+        let times = output_times(duration, self.settings.output_spacing(duration));
+        let (q0, qd0) = (self.q0.clone(), self.qd0.clone());
+        self.integrate_span(0.0, duration, times, &q0, &qd0, observer)
+    }
+
+    /// One step of `dt` seconds from `(t, q, q̇)` with the run settings'
+    /// integrator and the current inputs ([`Simulation::set_cable_tensions`]):
+    /// the state at `t + dt`. For reinforcement-learning and MPC loops that
+    /// set `u` between steps. Each call starts the integrator afresh (an
+    /// adaptive method takes as many internal steps as its tolerance needs;
+    /// a stiff one evaluates its Jacobian once per call).
+    pub fn step(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        qd: &[f64],
+        dt: f64,
+    ) -> Result<(DVector<f64>, DVector<f64>)> {
+        self.check("q", q)?;
+        self.check("qdot", qd)?;
+        if !(dt.is_finite() && dt > 0.0 && (t + dt) > t) {
+            return Err(Error::InvalidSetting {
+                key: "dt",
+                message: format!("a step must be positive and finite, got {dt} at t = {t}"),
+            });
+        }
+        struct Last(Option<(DVector<f64>, DVector<f64>)>);
+        impl Observer for Last {
+            fn sample(&mut self, s: Sample<'_>) -> Result<Flow, String> {
+                self.0 = Some((
+                    DVector::from_column_slice(s.q),
+                    DVector::from_column_slice(s.qd),
+                ));
+                Ok(Flow::Continue)
+            }
+        }
+        let mut last = Last(None);
+        let (q0, qd0) = (
+            DVector::from_column_slice(q),
+            DVector::from_column_slice(qd),
+        );
+        self.integrate_span(t, t + dt, vec![t, t + dt], &q0, &qd0, &mut last)?;
+        last.0.ok_or(Error::Output {
+            t: t + dt,
+            message: "the step produced no state".into(),
+        })
+    }
+
+    /// The integration from `t0` to `t1` with samples at `times`.
+    fn integrate_span(
+        &mut self,
+        t0: f64,
+        t1: f64,
+        times: Vec<f64>,
+        q0: &DVector<f64>,
+        qd0: &DVector<f64>,
+        observer: &mut dyn Observer,
+    ) -> Result<RunSummary> {
+        let (method, mut opts) = self.settings.method_and_options(t1 - t0)?;
+        opts.t_eval = Some(times);
         self.system.jacobian = self.settings.stiff_jacobian();
         let n = self.n_dof();
+        let saved_inputs = self.system.data.cable_tensions().map(<[f64]>::to_vec);
+        let mut u = saved_inputs
+            .clone()
+            .unwrap_or_else(|| vec![0.0; self.n_cables()]);
         let failure: RefCell<Option<(f64, String)>> = RefCell::new(None);
         let samples = RefCell::new(0usize);
         let observer = RefCell::new(observer);
@@ -456,20 +590,25 @@ impl Simulation {
                     }
                 }
             })
-            .on_step(|info, _: &mut RodSystem| {
-                observer.borrow_mut().step(info.t, info.stats);
+            .on_step(|info, sys: &mut RodSystem| {
+                let mut obs = observer.borrow_mut();
+                obs.step(info.t, info.stats);
+                let (q, qd) = info.y.as_slice().split_at(n);
+                if !u.is_empty() && obs.inputs(info.t, q, qd, &mut u) {
+                    if let Err(e) = sys.data.set_cable_tensions(&sys.model, Some(&u)) {
+                        *failure.borrow_mut() = Some((info.t, format!("controller: {e}")));
+                        return Control::Stop;
+                    }
+                    return Control::SystemChanged;
+                }
                 Control::Continue
             });
-        let result = integrate_second_order(
-            &mut self.system,
-            method,
-            0.0,
-            duration,
-            &self.q0,
-            &self.qd0,
-            &opts,
-            hooks,
-        );
+        let result =
+            integrate_second_order(&mut self.system, method, t0, t1, q0, qd0, &opts, hooks);
+        let s = &mut self.system;
+        s.data
+            .set_cable_tensions(&s.model, saved_inputs.as_deref())
+            .expect("restoring inputs that were valid");
         if let Some((t, message)) = failure.into_inner() {
             return Err(Error::Output { t, message });
         }

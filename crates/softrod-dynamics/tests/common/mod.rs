@@ -95,6 +95,8 @@ pub struct Shape {
     pub tapered: bool,
     /// Rest strain of every piece.
     pub rest: Vec6,
+    /// Young's modulus [Pa].
+    pub young: f64,
 }
 
 impl Shape {
@@ -105,6 +107,7 @@ impl Shape {
             bases,
             tapered: false,
             rest: Vec6::new(0.1, 0.5, -0.3, 1.0, 0.0, 0.0),
+            young: 2e6,
         }
     }
 }
@@ -131,7 +134,7 @@ pub fn rod_spec(name: &str, shape: &Shape, terms: Terms, base: Pose) -> RodSpec 
     };
     let body = RodBody::new(
         section,
-        Material::with_poisson(1100.0, 2e6, 0.45, viscosity).unwrap(),
+        Material::with_poisson(1100.0, shape.young, 0.45, viscosity).unwrap(),
         length,
     )
     .unwrap();
@@ -180,21 +183,19 @@ pub fn rod_spec(name: &str, shape: &Shape, terms: Terms, base: Pose) -> RodSpec 
     }
     if terms.cable {
         spec.cables = vec![
-            Cable {
-                routing: Routing::Path(vec![[0.0, 0.008, 0.0], [length, 0.002, 0.004]]),
-                from: 0.0,
-                to: 0.8 * length,
-                tension: Tension::Constant(1.5),
-            },
-            Cable {
-                routing: Routing::Offset {
+            Cable::new(
+                Routing::Path(vec![[0.0, 0.008, 0.0], [length, 0.002, 0.004]]),
+                Tension::Constant(1.5),
+            )
+            .between(0.0, 0.8 * length),
+            Cable::new(
+                Routing::Offset {
                     y: -0.004,
                     z: 0.006,
                 },
-                from: 0.2 * length,
-                to: length,
-                tension: Tension::Constant(0.7),
-            },
+                Tension::Constant(0.7),
+            )
+            .between(0.2 * length, length),
         ];
     }
     spec
@@ -220,14 +221,18 @@ pub fn model(shape: &Shape, terms: Terms) -> Model {
     .unwrap()
 }
 
-/// Two rods from different bases: one with mixed bases, one Cosserat.
-pub fn two_rods(n: usize, terms: Terms) -> Model {
+/// Two rods from different bases: one with mixed bases, one tapered
+/// Cosserat rod; Young's modulus `young` [Pa].
+pub fn two_rods(n: usize, terms: Terms, young: f64) -> Model {
+    let mut a = Shape::new(n, bases());
+    a.young = young;
     let mut b = Shape::new(n + 1, vec![Basis::all()]);
     b.tapered = true;
+    b.young = young;
     let second_base = exp_twist(1.0, &Vec6::new(-0.3, 0.2, 0.6, 0.1, -0.2, 0.05));
     Model::new(
         vec![
-            rod_spec("first", &Shape::new(n, bases()), terms, tilted_base()),
+            rod_spec("first", &a, terms, tilted_base()),
             rod_spec("second", &b, terms, second_base),
         ],
         gravity(terms),

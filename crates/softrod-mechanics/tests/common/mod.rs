@@ -4,7 +4,7 @@
 use nalgebra::{DVector, Matrix6xX};
 use softrod_kinematics::{Basis, GaussLegendre, PieceSpec, Rod, Strain, straight};
 use softrod_lie::{Mat3, Pose, Vec3, Vec6};
-use softrod_mechanics::{Material, RodBody, Section};
+use softrod_mechanics::{Material, PieceMatrices, RodBody, Section};
 
 /// Small deterministic xorshift generator (no dependency needed).
 pub struct Rng(u64);
@@ -78,7 +78,13 @@ pub fn mixed_rod(length: f64, base: Pose) -> Rod {
 }
 
 pub fn soft_material() -> Material {
-    Material::with_poisson(1000.0, 1e6, 0.45, 300.0).unwrap()
+    Material::builder()
+        .density(1000.0)
+        .young(1e6)
+        .poisson(0.45)
+        .viscosity(300.0)
+        .build()
+        .unwrap()
 }
 
 pub fn taper_body(length: f64) -> RodBody {
@@ -116,4 +122,35 @@ pub fn rel_err(a: &DVector<f64>, b: &DVector<f64>) -> f64 {
 
 pub fn gauss(n: usize) -> GaussLegendre {
     GaussLegendre::new(n)
+}
+
+/// Adds the elastic force `τ_e,n = K_n q_n + e_n` (D13) of every piece into
+/// `out` (length n_dof).
+pub fn add_elastic_force(rod: &Rod, matrices: &[PieceMatrices], q: &[f64], out: &mut [f64]) {
+    for (p, m) in rod.pieces().iter().zip(matrices) {
+        let r = p.dofs();
+        let qn = &q[r.clone()];
+        for (i, o) in out[r].iter_mut().enumerate() {
+            let mut acc = m.elastic_offset[i];
+            for (j, qj) in qn.iter().enumerate() {
+                acc += m.stiffness[(i, j)] * qj;
+            }
+            *o += acc;
+        }
+    }
+}
+
+/// Adds the viscous force `τ_d,n = D_n q̇_n` (D13) of every piece into `out`.
+pub fn add_damping_force(rod: &Rod, matrices: &[PieceMatrices], qd: &[f64], out: &mut [f64]) {
+    for (p, m) in rod.pieces().iter().zip(matrices) {
+        let r = p.dofs();
+        let qn = &qd[r.clone()];
+        for (i, o) in out[r].iter_mut().enumerate() {
+            let mut acc = 0.0;
+            for (j, qj) in qn.iter().enumerate() {
+                acc += m.damping[(i, j)] * qj;
+            }
+            *o += acc;
+        }
+    }
 }

@@ -1,0 +1,331 @@
+//! Builders of [`RodSpec`] and [`Model`]: named arguments, the rod length
+//! given once, every value checked once where it enters (the lower layers'
+//! constructors, then [`RodSpec::validate`]).
+
+use crate::error::{DynamicsError, RodId};
+use crate::model::{Model, RodSpec};
+use softrod_kinematics::{Basis, Rod, Strain, straight};
+use softrod_lie::{Pose, Vec3, Vec6};
+use softrod_mechanics::{
+    Cable, DistributedLoad, Drag, Material, MechanicsError, PointLoad, RodBody, Section,
+};
+
+/// How the rod is cut into pieces.
+#[derive(Clone, Debug, PartialEq)]
+enum Pieces {
+    /// `n` equal pieces.
+    Equal(usize),
+    /// Pieces of these lengths [m], base to tip.
+    Lengths(Vec<f64>),
+}
+
+/// Which strains are coordinates.
+#[derive(Clone, Debug, PartialEq)]
+enum Strains {
+    /// A selection, in coordinate order.
+    Select(Vec<Strain>),
+    /// A general basis.
+    Basis(Basis),
+}
+
+/// The stress-free strain `ξ*`.
+#[derive(Clone, Debug, PartialEq)]
+enum StressFree {
+    /// The same on every piece.
+    Uniform(Vec6),
+    /// One per piece.
+    PerPiece(Vec<Vec6>),
+}
+
+/// Builder of a [`RodSpec`] ([`RodSpec::builder`]): a rod of undeformed
+/// length `L` given once, clamped at its base.
+///
+/// Defaults: one piece, all six strains, the straight unstretched rest
+/// strain `(0, 0, 0, 1, 0, 0)` (stress-free), base at the world origin with
+/// the local axes along the world's, no drag, cables or loads. A section
+/// and a material are required.
+#[derive(Clone, Debug)]
+#[must_use]
+pub struct RodSpecBuilder {
+    length: f64,
+    name: String,
+    pieces: Pieces,
+    strains: Strains,
+    rest_strain: Vec6,
+    base: Pose,
+    section: Option<Section>,
+    material: Option<Material>,
+    stress_free: Option<StressFree>,
+    drag: Option<Drag>,
+    cables: Vec<Cable>,
+    point_loads: Vec<PointLoad>,
+    distributed_loads: Vec<DistributedLoad>,
+}
+
+impl RodSpecBuilder {
+    /// A rod of undeformed length `length` \[m\] (> 0).
+    pub fn new(length: f64) -> Self {
+        Self {
+            length,
+            name: String::new(),
+            pieces: Pieces::Equal(1),
+            strains: Strains::Select(Strain::ALL.to_vec()),
+            rest_strain: straight(),
+            base: Pose::identity(),
+            section: None,
+            material: None,
+            stress_free: None,
+            drag: None,
+            cables: Vec::new(),
+            point_loads: Vec::new(),
+            distributed_loads: Vec::new(),
+        }
+    }
+
+    /// A name for messages and outputs.
+    pub fn name(mut self, name: impl Into<String>) -> Self {
+        self.name = name.into();
+        self
+    }
+
+    /// `n` equal pieces (1 to `Rod::MAX_PIECES`).
+    pub fn pieces(mut self, n: usize) -> Self {
+        self.pieces = Pieces::Equal(n);
+        self
+    }
+
+    /// Pieces of these lengths \[m\], base to tip; they must sum to the rod
+    /// length (to `RodBody::LENGTH_RTOL`).
+    pub fn piece_lengths(mut self, lengths: &[f64]) -> Self {
+        self.pieces = Pieces::Lengths(lengths.to_vec());
+        self
+    }
+
+    /// The strains that are coordinates, in the order of each piece's
+    /// coordinates (e.g. planar bending and shear `[Ky, Qx, Qz]`); default
+    /// all six.
+    pub fn strains(mut self, strains: impl IntoIterator<Item = Strain>) -> Self {
+        self.strains = Strains::Select(strains.into_iter().collect());
+        self
+    }
+
+    /// A general strain basis `B` (6×k) for every piece instead of a selection.
+    pub fn basis(mut self, basis: Basis) -> Self {
+        self.strains = Strains::Basis(basis);
+        self
+    }
+
+    /// Rest strain `ξ̄` (the strain at `q = 0`) of every piece; default
+    /// straight, `(0, 0, 0, 1, 0, 0)`.
+    pub fn rest_strain(mut self, rest_strain: Vec6) -> Self {
+        self.rest_strain = rest_strain;
+        self
+    }
+
+    /// Pose of the clamped base in the world; default identity.
+    pub fn base(mut self, base: Pose) -> Self {
+        self.base = base;
+        self
+    }
+
+    /// The cross-section.
+    pub fn section(mut self, section: Section) -> Self {
+        self.section = Some(section);
+        self
+    }
+
+    /// Shorthand for a solid circular section of radius `radius` \[m\].
+    pub fn circle(self, radius: f64) -> Self {
+        self.section(Section::Circle { radius })
+    }
+
+    /// The material (density, elastic constants, viscosity).
+    pub fn material(mut self, material: Material) -> Self {
+        self.material = Some(material);
+        self
+    }
+
+    /// Stress-free strain `ξ*` of every piece when it differs from the rest
+    /// strain (a pre-stressed rod); default `ξ* = ξ̄`.
+    pub fn stress_free(mut self, strain: Vec6) -> Self {
+        self.stress_free = Some(StressFree::Uniform(strain));
+        self
+    }
+
+    /// Stress-free strain `ξ*_n` of each piece, base to tip.
+    pub fn stress_free_per_piece(mut self, strains: Vec<Vec6>) -> Self {
+        self.stress_free = Some(StressFree::PerPiece(strains));
+        self
+    }
+
+    /// Linear drag of a surrounding fluid.
+    pub fn drag(mut self, drag: Drag) -> Self {
+        self.drag = Some(drag);
+        self
+    }
+
+    /// Adds a cable (its span defaults to the whole rod, `Cable::new`).
+    pub fn cable(mut self, cable: Cable) -> Self {
+        self.cables.push(cable);
+        self
+    }
+
+    /// Adds a point load.
+    pub fn point_load(mut self, load: PointLoad) -> Self {
+        self.point_loads.push(load);
+        self
+    }
+
+    /// Adds a uniformly distributed load.
+    pub fn distributed_load(mut self, load: DistributedLoad) -> Self {
+        self.distributed_loads.push(load);
+        self
+    }
+
+    /// The rod, or the first thing wrong with it: the section and material
+    /// present, the length and the section (mechanics), the pieces,
+    /// strains, rest strain and base (kinematics), the piece lengths against
+    /// the length, then [`RodSpec::validate`].
+    /// Errors name the rod by its name (the index is set when it enters a
+    /// model).
+    pub fn build(self) -> Result<RodSpec, DynamicsError> {
+        let id = || RodId {
+            index: None,
+            name: self.name.clone(),
+        };
+        let section = self
+            .section
+            .ok_or_else(|| DynamicsError::MissingSection { rod: id() })?;
+        let material = self
+            .material
+            .ok_or_else(|| DynamicsError::MissingMaterial { rod: id() })?;
+        // The body first: it owns the check of the length, whichever way
+        // the pieces are given.
+        let body = RodBody::new(section, material, self.length)
+            .map_err(|source| DynamicsError::RodBody { rod: id(), source })?;
+        let geometry = |source| DynamicsError::RodGeometry { rod: id(), source };
+        let basis = match self.strains {
+            Strains::Select(list) => Basis::select(&list).map_err(geometry)?,
+            Strains::Basis(b) => b,
+        };
+        let rod = match &self.pieces {
+            Pieces::Equal(n) => Rod::uniform(self.length, *n, basis, self.rest_strain, self.base),
+            Pieces::Lengths(l) => Rod::with_lengths(l, basis, self.rest_strain, self.base),
+        }
+        .map_err(geometry)?;
+        if let Err(MechanicsError::LengthMismatch { body, rod }) = body.check_rod(&rod) {
+            return Err(DynamicsError::PieceLengthSum {
+                rod: id(),
+                sum: rod,
+                length: body,
+            });
+        }
+        let stress_free = self.stress_free.map(|sf| match sf {
+            StressFree::Uniform(xi) => vec![xi; rod.n_pieces()],
+            StressFree::PerPiece(v) => v,
+        });
+        let spec = RodSpec {
+            name: self.name,
+            rod,
+            body,
+            stress_free,
+            point_loads: self.point_loads,
+            distributed_loads: self.distributed_loads,
+            drag: self.drag,
+            cables: self.cables,
+        };
+        spec.validate()?;
+        Ok(spec)
+    }
+}
+
+/// What [`ModelBuilder::rod`] takes: a finished [`RodSpec`] or its builder
+/// (built with the model, errors then carry the rod's index).
+pub trait IntoRodSpec {
+    /// The rod description.
+    fn into_rod_spec(self) -> Result<RodSpec, DynamicsError>;
+}
+
+impl IntoRodSpec for RodSpec {
+    fn into_rod_spec(self) -> Result<RodSpec, DynamicsError> {
+        Ok(self)
+    }
+}
+
+impl IntoRodSpec for RodSpecBuilder {
+    fn into_rod_spec(self) -> Result<RodSpec, DynamicsError> {
+        self.build()
+    }
+}
+
+/// Builder of a [`Model`] ([`Model::builder`]): rods in order (their
+/// coordinates are concatenated in this order), optional gravity, Gauss
+/// points per piece (default [`Model::DEFAULT_QUADRATURE`]).
+///
+/// ```
+/// use softrod_dynamics::{Model, RodSpec};
+/// use softrod_mechanics::Material;
+///
+/// let steel = Material::builder()
+///     .density(7850.0)
+///     .young(2.0e11)
+///     .poisson(0.3)
+///     .build()
+///     .unwrap();
+/// let model = Model::builder()
+///     .rod(RodSpec::builder(1.0).name("wire").pieces(10).circle(1e-3).material(steel))
+///     .gravity([0.0, 0.0, -9.81])
+///     .build()
+///     .unwrap();
+/// assert_eq!(model.n_dof(), 60);
+/// ```
+#[derive(Debug, Default)]
+#[must_use]
+pub struct ModelBuilder {
+    rods: Vec<Result<RodSpec, DynamicsError>>,
+    gravity: Option<Vec3>,
+    quadrature: Option<usize>,
+}
+
+impl ModelBuilder {
+    /// Adds a rod (a [`RodSpec`] or a [`RodSpecBuilder`]).
+    pub fn rod(mut self, rod: impl IntoRodSpec) -> Self {
+        self.rods.push(rod.into_rod_spec());
+        self
+    }
+
+    /// Adds several rods.
+    pub fn rods<R: IntoRodSpec>(mut self, rods: impl IntoIterator<Item = R>) -> Self {
+        self.rods
+            .extend(rods.into_iter().map(IntoRodSpec::into_rod_spec));
+        self
+    }
+
+    /// Uniform gravity, world acceleration `g_w` [m/s²] (e.g. `[0, 0, -9.81]`).
+    pub fn gravity(mut self, gravity: impl Into<Vec3>) -> Self {
+        self.gravity = Some(gravity.into());
+        self
+    }
+
+    /// Gauss–Legendre points per piece (≥ 1).
+    pub fn quadrature(mut self, points: usize) -> Self {
+        self.quadrature = Some(points);
+        self
+    }
+
+    /// The model ([`Model::new`]), or the first error, naming the rod by
+    /// index and name.
+    pub fn build(self) -> Result<Model, DynamicsError> {
+        let rods = self
+            .rods
+            .into_iter()
+            .enumerate()
+            .map(|(i, r)| r.map_err(|e| e.at_rod_index(i)))
+            .collect::<Result<Vec<_>, _>>()?;
+        Model::new(
+            rods,
+            self.gravity,
+            self.quadrature.unwrap_or(Model::DEFAULT_QUADRATURE),
+        )
+    }
+}

@@ -1,0 +1,86 @@
+"""softrod: soft manipulators (slender soft arms, tentacles, cable-driven
+continuum robots) simulated with the Piecewise Constant Strain Cosserat-rod
+model, from Python.
+
+>>> import softrod
+>>> rod = softrod.Rod(length=0.5, pieces=8, strains=["ky", "qx", "qz"],
+...                   section=softrod.Circle(0.01),
+...                   material=softrod.Material(density=1000, young=1e7, poisson=0.5))
+>>> sim = softrod.Simulation(rods=[rod], gravity=[0, 0, -9.81])
+>>> traj = sim.simulate(duration=0.1, output_every=1e-2)
+>>> traj.tip_position.shape
+(11, 3)
+
+Or from a scene file: ``softrod.Simulation.from_toml("examples/cantilever_gravity.toml")``.
+
+Units are SI. ``q`` are strain coordinates (rods in order, pieces base to
+tip, the selected strains in the order kx, ky, kz, qx, qy, qz); arrays are
+float64 numpy arrays; poses are 4x4 homogeneous transforms in the world
+frame; twists and wrenches are 6-vectors, angular part first. The
+equations are in docs/theory.md of the repository.
+"""
+
+from __future__ import annotations
+
+from softrod._errors import (
+    InputError,
+    InternalError,
+    SceneError,
+    SimulationError,
+    SoftrodError,
+)
+from softrod._softrod import (
+    Cable,
+    Circle,
+    Energies,
+    Material,
+    Modes,
+    PointLoad,
+    Rectangle,
+    Rod,
+    Section,
+    Settings,
+    Simulation,
+    State,
+    Statics,
+    TaperedCircle,
+    Trajectory,
+    Tube,
+    __version__,
+    simulate_many,
+)
+
+#: The integrator names ``Settings(integrator=...)`` and ``simulate`` accept.
+INTEGRATORS = ("rosenbrock", "dopri5", "rk4", "generalized-alpha")
+
+#: The strain names of ``Rod(strains=...)``, in coordinate order: torsion,
+#: two bendings, stretch, two shears (body frame, local x along the rod).
+STRAINS = ("kx", "ky", "kz", "qx", "qy", "qz")
+
+__all__ = [
+    "INTEGRATORS",
+    "STRAINS",
+    "Cable",
+    "Circle",
+    "Energies",
+    "InputError",
+    "InternalError",
+    "Material",
+    "Modes",
+    "PointLoad",
+    "Rectangle",
+    "Rod",
+    "SceneError",
+    "Section",
+    "Settings",
+    "Simulation",
+    "SimulationError",
+    "SoftrodError",
+    "State",
+    "Statics",
+    "TaperedCircle",
+    "Trajectory",
+    "Tube",
+    "__version__",
+    "simulate_many",
+]

@@ -1,0 +1,372 @@
+"""Type stubs of the compiled module softrod._softrod (re-exported by softrod).
+
+Arrays are float64 numpy arrays; ``ArrayLike`` inputs are converted with
+``numpy.ascontiguousarray(x, dtype=float64)`` (a float64 C-contiguous array
+is read in place). Shapes are checked: a wrong one raises
+``softrod.InputError`` naming the argument and both shapes.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Sequence
+from typing import Literal, final, overload
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+_F64 = NDArray[np.float64]
+_RodRef = str | int
+_Frame = Literal["body", "world"]
+_IntegratorName = Literal["rosenbrock", "dopri5", "rk4", "generalized-alpha"]
+_Controller = Callable[[float, _F64, _F64], ArrayLike]
+
+__version__: str
+
+class Section:
+    """A cross-section; construct a Circle, Tube, Rectangle or TaperedCircle."""
+    @property
+    def shape(self) -> Literal["circle", "tube", "rectangle", "tapered_circle"]: ...
+    @property
+    def area(self) -> float:
+        """Area A [m^2] at the base."""
+    @property
+    def second_moments(self) -> tuple[float, float, float]:
+        """(Jx, Jy, Jz) [m^4] at the base; Jx = Jy + Jz."""
+
+@final
+class Circle(Section):
+    """Solid circle of radius `radius` [m]."""
+    def __new__(cls, radius: float) -> Circle: ...
+
+@final
+class Tube(Section):
+    """Hollow circle: outer `radius`, `inner_radius` in [0, radius) [m]."""
+    def __new__(cls, radius: float, inner_radius: float) -> Tube: ...
+
+@final
+class Rectangle(Section):
+    """Solid rectangle: `width` along local y, `height` along local z [m]."""
+    def __new__(cls, width: float, height: float) -> Rectangle: ...
+
+@final
+class TaperedCircle(Section):
+    """Solid circle, radius linear from `radius_base` (s = 0) to `radius_tip` (s = L) [m]."""
+    def __new__(cls, radius_base: float, radius_tip: float) -> TaperedCircle: ...
+
+@final
+class Material:
+    """Linear elastic, Kelvin-Voigt viscous material: density [kg/m^3], Young's
+    modulus [Pa], exactly one of `poisson` or `shear_modulus` [Pa], and the
+    shear viscosity [Pa s] (bending damping 3 mu J against stiffness E J)."""
+    def __new__(
+        cls,
+        density: float,
+        young: float,
+        poisson: float | None = None,
+        shear_modulus: float | None = None,
+        viscosity: float = 0.0,
+    ) -> Material: ...
+    @property
+    def density(self) -> float: ...
+    @property
+    def young(self) -> float: ...
+    @property
+    def shear_modulus(self) -> float: ...
+    @property
+    def poisson(self) -> float: ...
+    @property
+    def viscosity(self) -> float: ...
+
+@final
+class Cable:
+    """A cable through the section: `offset=(y, z)` [m] or `path=[(s, y, z), ...]`,
+    `tension` [N] constant or `(times, values)`, span `from_`..`to` [m]."""
+    def __new__(
+        cls,
+        offset: ArrayLike | None = None,
+        *,
+        path: ArrayLike | None = None,
+        tension: float | tuple[ArrayLike, ArrayLike] | None = None,
+        from_: float = 0.0,
+        to: float | None = None,
+    ) -> Cable: ...
+
+@final
+class PointLoad:
+    """A point load at `s` [m]: `force` [N], `moment` [N m] in `frame`
+    ("world": dead load, "body": follower load)."""
+    def __new__(
+        cls,
+        s: float,
+        force: ArrayLike,
+        moment: ArrayLike | None = None,
+        frame: Literal["world", "body"] = "world",
+    ) -> PointLoad: ...
+
+@final
+class Rod:
+    """One rod: `pieces` (count or lengths [m]), `strains` ("all" or names of
+    kx, ky, kz, qx, qy, qz; coordinates in that canonical order), `section`,
+    `material`, optional `name`, `base` (4x4 transform or {"position",
+    "rotation"}), `rest_strain` (6,), `drag` (translational, rotational),
+    `cables`, `loads`."""
+    def __new__(
+        cls,
+        length: float,
+        pieces: int | Sequence[float] | ArrayLike,
+        strains: Literal["all"] | Sequence[str] | None = None,
+        *,
+        section: Section,
+        material: Material,
+        name: str | None = None,
+        base: ArrayLike | dict[str, ArrayLike] | None = None,
+        rest_strain: ArrayLike | None = None,
+        drag: tuple[float, float] | None = None,
+        cables: list[Cable] | None = None,
+        loads: list[PointLoad] | None = None,
+    ) -> Rod: ...
+    @property
+    def name(self) -> str: ...
+    @property
+    def length(self) -> float: ...
+    @property
+    def n_pieces(self) -> int: ...
+    @property
+    def n_dof(self) -> int: ...
+    @property
+    def n_cables(self) -> int: ...
+
+@final
+class Settings:
+    """Run settings; Settings() is the recommended setting (docs/defaults.md)."""
+    def __new__(
+        cls,
+        integrator: _IntegratorName | None = None,
+        rtol: float | None = None,
+        atol: float | None = None,
+        dt: float | None = None,
+        output_every: float | None = None,
+        error_control: bool | None = None,
+        linearly_implicit: bool | None = None,
+    ) -> Settings: ...
+    @property
+    def integrator(self) -> _IntegratorName: ...
+    @property
+    def rtol(self) -> float: ...
+    @property
+    def atol(self) -> float: ...
+    @property
+    def dt(self) -> float: ...
+    @property
+    def output_every(self) -> float | None: ...
+    @property
+    def error_control(self) -> bool: ...
+    @property
+    def linearly_implicit(self) -> bool: ...
+
+@final
+class Energies:
+    """Energies at one state [J]."""
+    @property
+    def kinetic(self) -> float: ...
+    @property
+    def elastic(self) -> float: ...
+    @property
+    def gravitational(self) -> float: ...
+    @property
+    def total(self) -> float: ...
+
+@final
+class Statics:
+    """A static equilibrium."""
+    @property
+    def q(self) -> _F64:
+        """(n_dof,)"""
+    @property
+    def iterations(self) -> int: ...
+    @property
+    def residual(self) -> float: ...
+    @property
+    def load_steps(self) -> int: ...
+
+@final
+class Modes:
+    """Undamped natural modes, lowest first."""
+    @property
+    def omega(self) -> _F64:
+        """(n_modes,) [rad/s]"""
+    @property
+    def frequencies_hz(self) -> _F64:
+        """(n_modes,) [Hz]"""
+    @property
+    def shapes(self) -> _F64:
+        """(n_dof, n_modes), M-orthonormal columns"""
+    @property
+    def q_equilibrium(self) -> _F64:
+        """(n_dof,)"""
+    @property
+    def equilibrium(self) -> Literal["rest", "statics", "given"]: ...
+    @property
+    def asymmetry(self) -> float: ...
+
+@final
+class State:
+    """State of the step API (t [s], q and qdot (n_dof,), read-only copies)."""
+    def __new__(cls, t: float, q: ArrayLike, qdot: ArrayLike) -> State: ...
+    @property
+    def t(self) -> float: ...
+    @property
+    def q(self) -> _F64: ...
+    @property
+    def qdot(self) -> _F64: ...
+
+@final
+class Trajectory:
+    """A run: read-only arrays at the output times (index 0 is t = 0)."""
+    @property
+    def t(self) -> _F64:
+        """(n_samples,) [s]"""
+    @property
+    def q(self) -> _F64:
+        """(n_samples, n_dof)"""
+    @property
+    def qdot(self) -> _F64:
+        """(n_samples, n_dof)"""
+    @property
+    def tip_position(self) -> _F64:
+        """(n_samples, 3) [m], first rod"""
+    @property
+    def tip_rotation(self) -> _F64:
+        """(n_samples, 3, 3), first rod"""
+    @property
+    def tip_positions(self) -> _F64:
+        """(n_samples, n_rods, 3) [m]"""
+    @property
+    def tip_rotations(self) -> _F64:
+        """(n_samples, n_rods, 3, 3)"""
+    @property
+    def kinetic(self) -> _F64: ...
+    @property
+    def elastic(self) -> _F64: ...
+    @property
+    def gravitational(self) -> _F64: ...
+    @property
+    def energy(self) -> _F64:
+        """(n_samples,) [J], kinetic + elastic + gravitational"""
+    @property
+    def status(self) -> Literal["completed", "stopped"]: ...
+    @property
+    def t_final(self) -> float: ...
+    @property
+    def stats(self) -> dict[str, int]: ...
+    def shape(self, i: int = -1, rod: _RodRef | None = None, s: ArrayLike | None = None) -> _F64:
+        """Positions (N + 1, 3) at the piece boundaries, or (len(s), 3), at sample i."""
+    def __len__(self) -> int: ...
+
+@final
+class Simulation:
+    """A model with its initial state and run settings (see help(softrod.Simulation))."""
+    def __new__(
+        cls, rods: list[Rod], gravity: ArrayLike | None = None, *, quadrature: int = 4
+    ) -> Simulation: ...
+    @classmethod
+    def from_toml(cls, scene: str | os.PathLike[str]) -> Simulation: ...
+    @property
+    def n_dof(self) -> int: ...
+    @property
+    def n_cables(self) -> int: ...
+    @property
+    def duration(self) -> float | None:
+        """The scene's [run] duration [s]; None when built in Python."""
+    @property
+    def rod_lengths(self) -> list[float]: ...
+    @property
+    def rod_names(self) -> list[str]: ...
+    @property
+    def rod_dofs(self) -> list[tuple[str, int, int]]: ...
+    @property
+    def terms(self) -> list[str]: ...
+    @property
+    def warnings(self) -> list[str]: ...
+    @property
+    def gravity(self) -> _F64: ...
+    @property
+    def has_static_loads(self) -> bool: ...
+    @property
+    def settings(self) -> Settings: ...
+    @settings.setter
+    def settings(self, settings: Settings) -> None: ...
+    def initial_state(self) -> tuple[_F64, _F64]: ...
+    def set_initial_state(self, q: ArrayLike, qdot: ArrayLike) -> None: ...
+    def initial(self) -> State: ...
+    def pose(self, rod: _RodRef, s: float | ArrayLike, q: ArrayLike) -> _F64:
+        """(4, 4), or (len(s), 4, 4)"""
+    def tip_pose(self, rod: _RodRef, q: ArrayLike) -> _F64:
+        """(4, 4)"""
+    def jacobian(self, rod: _RodRef, s: float | ArrayLike, q: ArrayLike, frame: _Frame = "body") -> _F64:
+        """(6, n_dof), or (len(s), 6, n_dof)"""
+    def forward_dynamics(
+        self, t: float, q: ArrayLike, qdot: ArrayLike, tau: ArrayLike | None = None, *,
+        u: ArrayLike | None = None,
+    ) -> _F64:
+        """(n_dof,)"""
+    def inverse_dynamics(
+        self, t: float, q: ArrayLike, qdot: ArrayLike, qddot: ArrayLike, *,
+        u: ArrayLike | None = None,
+    ) -> _F64:
+        """(n_dof,)"""
+    def mass_matrix(self, q: ArrayLike) -> _F64:
+        """(n_dof, n_dof)"""
+    def bias_force(self, t: float, q: ArrayLike, qdot: ArrayLike) -> _F64: ...
+    def coriolis_matrix(self, q: ArrayLike, qdot: ArrayLike) -> _F64: ...
+    def coriolis_force(self, q: ArrayLike, qdot: ArrayLike) -> _F64: ...
+    def gravity_force(self, q: ArrayLike) -> _F64: ...
+    def stiffness_matrix(self) -> _F64: ...
+    def damping_matrix(self) -> _F64: ...
+    def actuation_matrix(self, q: ArrayLike) -> _F64:
+        """(n_dof, n_cables)"""
+    def energies(self, q: ArrayLike, qdot: ArrayLike) -> Energies: ...
+    def statics(self) -> Statics: ...
+    def modes(self) -> Modes: ...
+    def modes_about(self, q: ArrayLike) -> Modes: ...
+    def simulate(
+        self,
+        duration: float | None = None,
+        *,
+        output_every: float | None = None,
+        integrator: _IntegratorName | None = None,
+        rtol: float | None = None,
+        atol: float | None = None,
+        dt: float | None = None,
+        error_control: bool | None = None,
+        linearly_implicit: bool | None = None,
+        q0: ArrayLike | None = None,
+        qdot0: ArrayLike | None = None,
+        controller: _Controller | None = None,
+        control_every: float | None = None,
+    ) -> Trajectory: ...
+    def step(self, state: State, dt: float, u: ArrayLike | None = None) -> State: ...
+    def copy(self) -> Simulation: ...
+    def __copy__(self) -> Simulation: ...
+    def __deepcopy__(self, memo: object) -> Simulation: ...
+
+@overload
+def simulate_many(
+    sims: list[Simulation], duration: float, *, threads: int | None = None,
+    q0: None = None, qdot0: None = None, output_every: float | None = None,
+    integrator: _IntegratorName | None = None, rtol: float | None = None,
+    atol: float | None = None, dt: float | None = None,
+) -> list[Trajectory]: ...
+@overload
+def simulate_many(
+    sims: Simulation, duration: float, *, threads: int | None = None,
+    q0: ArrayLike | None = None, qdot0: ArrayLike | None = None,
+    output_every: float | None = None, integrator: _IntegratorName | None = None,
+    rtol: float | None = None, atol: float | None = None, dt: float | None = None,
+) -> list[Trajectory]: ...
+def _simulate_many_timed(
+    sims: list[Simulation], duration: float, *, threads: int | None = None
+) -> tuple[list[Trajectory], list[tuple[float, float, int]]]: ...
+def _panic(message: str, release_gil: bool) -> None: ...
+def _time_forward_dynamics(sim: Simulation, q: Sequence[float], qdot: Sequence[float], calls: int) -> float: ...

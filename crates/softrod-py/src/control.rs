@@ -1,0 +1,412 @@
+//! Cable-tension inputs `u` and the integration paths that use them: the
+//! step API and simulation with a controller in the loop.
+//!
+//! The dynamics layer has no tension override yet, so it is built here on
+//! the lower crates: [`CableInputs`] holds a copy of the model *without* its
+//! cables (their scheduled tensions removed) and the cables themselves; the
+//! input `u` (one tension per cable, in model order: rod by rod, in the
+//! order given) enters as the actuator force `τ_act = A(q) u`, with
+//! `A(q) = −∂ℓ/∂q` the actuation matrix (D15) evaluated at the current `q`
+//! in every right-hand side (so the force follows the rod within a step; it
+//! is `u` that is held, not `τ`).
+
+use nalgebra::DVector;
+use softrod::Settings;
+use softrod::dynamics::{DynamicsError, Model, RodSpec, energies, forward_dynamics};
+use softrod::integrate::{
+    Control, Hooks, IntegrateError, Options, RodSystem, SecondOrderSystem, Status, StepControl,
+    integrate_second_order,
+};
+use softrod::kinematics::RodKinematics;
+use softrod::mechanics::Cable;
+use softrod::{RunStatus, RunSummary, Trajectory, output_times};
+
+/// A model's cables as inputs: the cable-free model and `A(q) u`.
+#[derive(Clone, Debug)]
+pub struct CableInputs {
+    /// The model with every cable removed, and its buffers; its `tau` is
+    /// rewritten as `A(q) u (+ τ_extra)` before each evaluation.
+    pub sys: RodSystem,
+    /// `(rod index, first coordinate, cable)` in model order.
+    cables: Vec<(usize, usize, Cable)>,
+    /// The tensions `u` [N] (n_cables).
+    pub u: Vec<f64>,
+    /// An extra actuator force added to `A(q) u` (n_dof), if any.
+    pub tau_extra: Option<DVector<f64>>,
+    /// One rod's column of `A(q)` (length of the largest rod's `q`).
+    scratch: Vec<f64>,
+}
+
+impl CableInputs {
+    /// The inputs of `model` (any number of cables, zero included).
+    pub fn new(model: &Model) -> Result<Self, DynamicsError> {
+        let mut cables = Vec::new();
+        let mut specs: Vec<RodSpec> = Vec::with_capacity(model.rods().len());
+        for (r, rm) in model.rods().iter().enumerate() {
+            let mut spec = rm.spec.clone();
+            for c in spec.cables.drain(..) {
+                cables.push((r, rm.dof_offset, c));
+            }
+            specs.push(spec);
+        }
+        let free = Model::new(specs, model.gravity, model.quadrature.len())?;
+        let n = free.n_dof();
+        let mut sys = RodSystem::new(free);
+        sys.tau = Some(DVector::zeros(n));
+        let widest = model.rods().iter().map(|r| r.n_dof()).max().unwrap_or(0);
+        Ok(Self {
+            sys,
+            u: vec![0.0; cables.len()],
+            cables,
+            tau_extra: None,
+            scratch: vec![0.0; widest],
+        })
+    }
+
+    /// Writes `τ_act = A(q) u + τ_extra` into the system's `tau`, one
+    /// column of `A` at a time through the preallocated `scratch`.
+    fn update_tau(&mut self, q: &[f64]) {
+        let model = &self.sys.model;
+        let tau = self.sys.tau.as_mut().expect("set in new");
+        match &self.tau_extra {
+            Some(t) => tau.copy_from(t),
+            None => tau.fill(0.0),
+        }
+        for ((r, off, cable), &u) in self.cables.iter().zip(&self.u) {
+            if u == 0.0 {
+                continue;
+            }
+            let rod = &model.rods()[*r].spec.rod;
+            let k = rod.n_dof();
+            let col = &mut self.scratch[..k];
+            col.fill(0.0);
+            cable.add_force_per_tension(rod, &q[*off..*off + k], &model.quadrature, col);
+            for (t, c) in tau.as_mut_slice()[*off..*off + k]
+                .iter_mut()
+                .zip(col.iter())
+            {
+                *t += u * c;
+            }
+        }
+    }
+
+    /// Forward dynamics `q̈` under the inputs.
+    pub fn forward_dynamics(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        qd: &[f64],
+    ) -> Result<&DVector<f64>, DynamicsError> {
+        self.update_tau(q);
+        let s = &mut self.sys;
+        forward_dynamics(
+            &s.model,
+            &mut s.data,
+            t,
+            q,
+            qd,
+            s.tau.as_ref().map(|v| v.as_slice()),
+        )
+    }
+}
+
+impl SecondOrderSystem for CableInputs {
+    type Error = DynamicsError;
+
+    fn dim(&self) -> usize {
+        self.sys.dim()
+    }
+
+    fn accel(
+        &mut self,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+        qdd: &mut DVector<f64>,
+    ) -> Result<(), DynamicsError> {
+        self.update_tau(q.as_slice());
+        self.sys.accel(t, q, qd, qdd)
+    }
+
+    /// The cable-free system's Jacobians with `τ_act` frozen at its last
+    /// value: `∂(A(q)u)/∂q` is left out, which the stiff methods tolerate
+    /// (Rosenbrock–W keeps its order with any Jacobian; generalized-α's
+    /// Newton converges to the same step), as they tolerate the elastic-only
+    /// Jacobian the facade gives them.
+    fn jacobians(
+        &mut self,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+        dqdd_dq: &mut nalgebra::DMatrix<f64>,
+        dqdd_dqd: &mut nalgebra::DMatrix<f64>,
+    ) -> Result<(), DynamicsError> {
+        self.update_tau(q.as_slice());
+        self.sys.jacobians(t, q, qd, dqdd_dq, dqdd_dqd)
+    }
+
+    fn mass_form_jacobians(
+        &mut self,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+        mass: &mut nalgebra::DMatrix<f64>,
+        constant: Option<(&mut nalgebra::DMatrix<f64>, &mut nalgebra::DMatrix<f64>)>,
+    ) -> Result<bool, DynamicsError> {
+        self.sys.mass_form_jacobians(t, q, qd, mass, constant)
+    }
+
+    fn force_residual(
+        &mut self,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+        qdd: &DVector<f64>,
+        r: &mut DVector<f64>,
+    ) -> Result<bool, DynamicsError> {
+        self.update_tau(q.as_slice());
+        self.sys.force_residual(t, q, qd, qdd, r)
+    }
+
+    /// `u` is piecewise constant (a change is signalled to the integrator),
+    /// so time enters only as it does in the cable-free model.
+    fn is_autonomous(&self) -> bool {
+        self.sys.is_autonomous()
+    }
+}
+
+/// Keeps the samples of a run, as the facade's `Simulation::simulate` does
+/// (energies of the cable-free model equal those of the full one: cables
+/// store no energy).
+pub struct Recorder {
+    pub traj: Trajectory,
+    kin: Vec<RodKinematics>,
+}
+
+impl Recorder {
+    pub fn new(model: &Model) -> Self {
+        Self {
+            traj: Trajectory {
+                t: Vec::new(),
+                q: Vec::new(),
+                qd: Vec::new(),
+                tips: Vec::new(),
+                energies: Vec::new(),
+                summary: RunSummary {
+                    status: RunStatus::Completed,
+                    t_final: 0.0,
+                    stats: Default::default(),
+                    samples: 0,
+                },
+            },
+            kin: model
+                .rods()
+                .iter()
+                .map(|r| RodKinematics::new(&r.spec.rod))
+                .collect(),
+        }
+    }
+
+    /// Records the state `y = (q, q̇)` at `t`.
+    pub fn record(&mut self, sys: &mut RodSystem, t: f64, y: &DVector<f64>) -> Result<(), String> {
+        let n = sys.model.n_dof();
+        let (q, qd) = y.as_slice().split_at(n);
+        let e = energies(&sys.model, &mut sys.data, q, qd).map_err(|e| e.to_string())?;
+        let mut tips = Vec::with_capacity(self.kin.len());
+        for (k, r) in self.kin.iter_mut().zip(sys.model.rods()) {
+            k.update(&r.spec.rod, &q[r.dofs()], None, None)
+                .map_err(|e| e.to_string())?;
+            tips.push(*k.tip_pose());
+        }
+        let tr = &mut self.traj;
+        tr.t.push(t);
+        tr.q.push(DVector::from_column_slice(q));
+        tr.qd.push(DVector::from_column_slice(qd));
+        tr.tips.push(tips);
+        tr.energies.push(e);
+        tr.summary.samples += 1;
+        Ok(())
+    }
+}
+
+/// Checks `u`: one finite, non-negative tension per cable.
+pub fn check_tensions(n_cables: usize, what: &str, u: &[f64]) -> Result<(), String> {
+    if u.len() != n_cables {
+        return Err(format!(
+            "{what} must have shape ({n_cables},) (one tension per cable), got ({},)",
+            u.len()
+        ));
+    }
+    if let Some((i, v)) = u
+        .iter()
+        .enumerate()
+        .find(|(_, v)| !(v.is_finite() && **v >= 0.0))
+    {
+        return Err(format!(
+            "{what}[{i}] = {v}: cable tensions must be finite and >= 0 (a cable cannot push)"
+        ));
+    }
+    Ok(())
+}
+
+/// Why a controlled run stopped early.
+pub enum ControlError {
+    /// The integrator failed.
+    Integrate(IntegrateError),
+    /// The controller (Python) raised or returned a bad `u`: already a
+    /// Python exception.
+    Controller(pyo3::PyErr),
+    /// Recording a sample failed.
+    Output { t: f64, message: String },
+}
+
+/// A controller: `u = f(t, q, q̇)`, written into `u`.
+pub type ControllerFn<'a> =
+    dyn FnMut(f64, &[f64], &[f64], &mut Vec<f64>) -> Result<(), pyo3::PyErr> + 'a;
+
+/// Integrates `duration` seconds from `(q0, q̇0)` with `u` from `controller`
+/// held constant between updates (zero-order hold): at `t = 0`, then after
+/// every accepted integrator step (`control_every = None`) or every
+/// `control_every` seconds (the run is integrated in segments of that
+/// length, restarting the integrator at each, so the hold is exact whatever
+/// the integrator's steps).
+#[allow(clippy::too_many_arguments)]
+pub fn simulate_controlled(
+    inputs: &mut CableInputs,
+    settings: &Settings,
+    duration: f64,
+    q0: &DVector<f64>,
+    qd0: &DVector<f64>,
+    control_every: Option<f64>,
+    controller: &mut ControllerFn<'_>,
+) -> Result<Trajectory, ControlError> {
+    let (method, base_opts) =
+        settings
+            .method_and_options(duration)
+            .map_err(|e| ControlError::Output {
+                t: 0.0,
+                message: e.to_string(),
+            })?;
+    inputs.sys.jacobian = settings.stiff_jacobian();
+    let times = output_times(duration, settings.output_spacing(duration));
+    let n = inputs.dim();
+    let mut rec = Recorder::new(&inputs.sys.model);
+    let mut stats = softrod::integrate::Stats::default();
+    let mut u = std::mem::take(&mut inputs.u);
+    controller(0.0, q0.as_slice(), qd0.as_slice(), &mut u).map_err(ControlError::Controller)?;
+    inputs.u = u;
+
+    let segments: Vec<(f64, f64)> = match control_every {
+        None => vec![(0.0, duration)],
+        Some(dc) => {
+            let k = (duration / dc - 1e-9).ceil().max(1.0) as usize;
+            (0..k)
+                .map(|i| (i as f64 * dc, ((i + 1) as f64 * dc).min(duration)))
+                .collect()
+        }
+    };
+    let (mut q, mut qd) = (q0.clone(), qd0.clone());
+    let mut next_output = 0usize;
+    let per_step = control_every.is_none();
+    for (k, &(t0, t1)) in segments.iter().enumerate() {
+        if k > 0 {
+            let mut u = std::mem::take(&mut inputs.u);
+            controller(t0, q.as_slice(), qd.as_slice(), &mut u)
+                .map_err(ControlError::Controller)?;
+            inputs.u = u;
+        }
+        let first = next_output;
+        while next_output < times.len() && (times[next_output] <= t1 || k + 1 == segments.len()) {
+            next_output += 1;
+        }
+        let mut opts: Options = base_opts.clone();
+        opts.t_eval = Some(times[first..next_output].to_vec());
+        if let StepControl::Adaptive { h0: Some(h) } = opts.step {
+            opts.step = StepControl::Adaptive {
+                h0: Some(h.min(t1 - t0)),
+            };
+        }
+        let failure: std::cell::RefCell<Option<ControlError>> = std::cell::RefCell::new(None);
+        let rec_cell = std::cell::RefCell::new(&mut rec);
+        let ctl = std::cell::RefCell::new(&mut *controller);
+        let mut hooks = Hooks::new().stream_outputs(|t, y, sys: &mut CableInputs| {
+            match rec_cell.borrow_mut().record(&mut sys.sys, t, y) {
+                Ok(()) => Control::Continue,
+                Err(message) => {
+                    *failure.borrow_mut() = Some(ControlError::Output { t, message });
+                    Control::Stop
+                }
+            }
+        });
+        if per_step {
+            hooks = hooks.on_step(|info, sys: &mut CableInputs| {
+                let (q, qd) = info.y.as_slice().split_at(n);
+                let mut u = std::mem::take(&mut sys.u);
+                let r = {
+                    let mut c = ctl.borrow_mut();
+                    (*c)(info.t, q, qd, &mut u)
+                };
+                sys.u = u;
+                match r {
+                    Ok(()) => Control::SystemChanged,
+                    Err(e) => {
+                        *failure.borrow_mut() = Some(ControlError::Controller(e));
+                        Control::Stop
+                    }
+                }
+            });
+        }
+        let result = integrate_second_order(inputs, method, t0, t1, &q, &qd, &opts, hooks);
+        if let Some(f) = failure.into_inner() {
+            return Err(f);
+        }
+        let sol = result.map_err(ControlError::Integrate)?;
+        add_stats(&mut stats, &sol.stats);
+        q.copy_from(&sol.y_final.rows(0, n));
+        qd.copy_from(&sol.y_final.rows(n, n));
+        rec.traj.summary.t_final = sol.t_final;
+        if sol.status != Status::Completed {
+            rec.traj.summary.status = RunStatus::Stopped;
+            break;
+        }
+    }
+    rec.traj.summary.stats = stats;
+    Ok(rec.traj)
+}
+
+fn add_stats(acc: &mut softrod::integrate::Stats, s: &softrod::integrate::Stats) {
+    acc.steps += s.steps;
+    acc.rejected_steps += s.rejected_steps;
+    acc.rhs_evaluations += s.rhs_evaluations;
+    acc.jacobian_evaluations += s.jacobian_evaluations;
+    acc.factorizations += s.factorizations;
+    acc.lu_solves += s.lu_solves;
+    acc.newton_iterations += s.newton_iterations;
+}
+
+/// One step of the step API: from `(t, q, q̇)` over `dt` with the run
+/// settings' integrator, on `sys` (a [`RodSystem`] with the scheduled
+/// tensions, or [`CableInputs`] with `u` held). Returns `(q, q̇)` at `t + dt`.
+pub fn step<S: SecondOrderSystem>(
+    sys: &mut S,
+    settings: &Settings,
+    t: f64,
+    dt: f64,
+    q: &DVector<f64>,
+    qd: &DVector<f64>,
+) -> Result<(DVector<f64>, DVector<f64>), softrod::Error> {
+    if !(dt.is_finite() && dt > 0.0) {
+        return Err(softrod::Error::InvalidSetting {
+            key: "dt",
+            message: format!("the step length must be positive and finite, got {dt}"),
+        });
+    }
+    let (method, mut opts) = settings.method_and_options(dt)?;
+    opts.t_eval = Some(Vec::new());
+    let n = sys.dim();
+    let sol = integrate_second_order(sys, method, t, t + dt, q, qd, &opts, Hooks::new())?;
+    Ok((
+        sol.y_final.rows(0, n).into_owned(),
+        sol.y_final.rows(n, n).into_owned(),
+    ))
+}

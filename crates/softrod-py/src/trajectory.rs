@@ -1,0 +1,350 @@
+//! A run as numpy arrays, and the state of the step API.
+
+use numpy::{PyArray1, PyArray2, PyArrayDyn, PyArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use softrod::dynamics::Model;
+use softrod::kinematics::RodKinematics;
+use softrod::{RunStatus, Trajectory as RustTrajectory};
+
+use crate::convert::{array, array_out, vec_out, vector};
+use crate::errors::input;
+
+/// Makes `a` read-only: the arrays of a trajectory are shared by every
+/// access, so an in-place change by the caller must not alter the record.
+fn frozen<'py, T>(a: Bound<'py, T>) -> PyResult<Bound<'py, T>> {
+    a.as_any().getattr("flags")?.setattr("writeable", false)?;
+    Ok(a)
+}
+
+/// A simulated run: samples at the output times, as read-only float64
+/// numpy arrays (index 0 is `t = 0`).
+///
+/// - `t` (n_samples,) [s]
+/// - `q`, `qdot` (n_samples, n_dof): strain coordinates and their rates
+/// - `tip_position` (n_samples, 3) [m], `tip_rotation` (n_samples, 3, 3):
+///   the tip pose of the first rod in the world frame; `tip_positions`
+///   (n_samples, n_rods, 3), `tip_rotations` (n_samples, n_rods, 3, 3) for
+///   every rod
+/// - `kinetic`, `elastic`, `gravitational`, `energy` (n_samples,) [J]
+/// - `shape(i, rod, s)`: positions along a rod at sample `i`
+#[pyclass(frozen, module = "softrod")]
+pub struct Trajectory {
+    t: Py<PyArray1<f64>>,
+    q: Py<PyArray2<f64>>,
+    qdot: Py<PyArray2<f64>>,
+    tip_positions: Py<PyArrayDyn<f64>>,
+    tip_rotations: Py<PyArrayDyn<f64>>,
+    kinetic: Py<PyArray1<f64>>,
+    elastic: Py<PyArray1<f64>>,
+    gravitational: Py<PyArray1<f64>>,
+    status: &'static str,
+    t_final: f64,
+    stats: softrod::integrate::Stats,
+    n: usize,
+    model: Model,
+}
+
+fn rows<'py>(
+    py: Python<'py>,
+    v: &[nalgebra::DVector<f64>],
+    n: usize,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let mut data = Vec::with_capacity(v.len() * n);
+    for r in v {
+        data.extend_from_slice(r.as_slice());
+    }
+    PyArray1::from_vec(py, data).reshape([v.len(), n])
+}
+
+impl Trajectory {
+    /// The Python view of a run of `model`.
+    pub fn new(py: Python<'_>, tr: RustTrajectory, model: &Model) -> PyResult<Self> {
+        let n = model.n_dof();
+        let m = tr.len();
+        let nr = model.rods().len();
+        let mut tp = Vec::with_capacity(m * nr * 3);
+        let mut tr9 = Vec::with_capacity(m * nr * 9);
+        for tips in &tr.tips {
+            for g in tips {
+                tp.extend_from_slice(g.translation.as_slice());
+                for i in 0..3 {
+                    for j in 0..3 {
+                        tr9.push(g.rotation[(i, j)]);
+                    }
+                }
+            }
+        }
+        let e = |f: fn(&softrod::dynamics::Energies) -> f64| -> Vec<f64> {
+            tr.energies.iter().map(f).collect()
+        };
+        Ok(Self {
+            t: frozen(vec_out(py, &tr.t))?.unbind(),
+            q: frozen(rows(py, &tr.q, n)?)?.unbind(),
+            qdot: frozen(rows(py, &tr.qd, n)?)?.unbind(),
+            tip_positions: frozen(array_out(py, tp, &[m, nr, 3])?)?.unbind(),
+            tip_rotations: frozen(array_out(py, tr9, &[m, nr, 3, 3])?)?.unbind(),
+            kinetic: frozen(PyArray1::from_vec(py, e(|e| e.kinetic)))?.unbind(),
+            elastic: frozen(PyArray1::from_vec(py, e(|e| e.elastic)))?.unbind(),
+            gravitational: frozen(PyArray1::from_vec(py, e(|e| e.gravitational)))?.unbind(),
+            status: match tr.summary.status {
+                RunStatus::Completed => "completed",
+                RunStatus::Stopped => "stopped",
+            },
+            t_final: tr.summary.t_final,
+            stats: tr.summary.stats,
+            n: m,
+            model: model.clone(),
+        })
+    }
+
+    fn rod_index(&self, rod: &Bound<'_, PyAny>) -> PyResult<usize> {
+        crate::simulation::rod_index(&self.model, rod)
+    }
+}
+
+#[pymethods]
+impl Trajectory {
+    /// Output times (n_samples,) [s].
+    #[getter]
+    fn t<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.t.bind(py).clone()
+    }
+
+    /// Coordinates (n_samples, n_dof).
+    #[getter]
+    fn q<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        self.q.bind(py).clone()
+    }
+
+    /// Velocities (n_samples, n_dof).
+    #[getter]
+    fn qdot<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        self.qdot.bind(py).clone()
+    }
+
+    /// Tip position of the first rod (n_samples, 3) [m, world frame].
+    #[getter]
+    fn tip_position<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        self.tip_positions
+            .bind(py)
+            .as_any()
+            .get_item((pyo3::types::PySlice::full(py), 0))
+    }
+
+    /// Tip rotation matrix of the first rod (n_samples, 3, 3), local → world.
+    #[getter]
+    fn tip_rotation<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        self.tip_rotations
+            .bind(py)
+            .as_any()
+            .get_item((pyo3::types::PySlice::full(py), 0))
+    }
+
+    /// Tip positions of every rod (n_samples, n_rods, 3) [m].
+    #[getter]
+    fn tip_positions<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+        self.tip_positions.bind(py).clone()
+    }
+
+    /// Tip rotations of every rod (n_samples, n_rods, 3, 3).
+    #[getter]
+    fn tip_rotations<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+        self.tip_rotations.bind(py).clone()
+    }
+
+    /// Kinetic energy ½ q̇ᵀM q̇ (n_samples,) [J].
+    #[getter]
+    fn kinetic<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.kinetic.bind(py).clone()
+    }
+
+    /// Elastic energy (n_samples,) [J].
+    #[getter]
+    fn elastic<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.elastic.bind(py).clone()
+    }
+
+    /// Gravitational energy (n_samples,) [J] (zero without gravity).
+    #[getter]
+    fn gravitational<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.gravitational.bind(py).clone()
+    }
+
+    /// Total mechanical energy kinetic + elastic + gravitational (n_samples,)
+    /// [J]: conserved without damping, drag, actuation and non-conservative
+    /// loads.
+    #[getter]
+    fn energy<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let (k, e, g) = (
+            self.kinetic.bind(py).readonly(),
+            self.elastic.bind(py).readonly(),
+            self.gravitational.bind(py).readonly(),
+        );
+        let total: Vec<f64> = k
+            .as_slice()?
+            .iter()
+            .zip(e.as_slice()?)
+            .zip(g.as_slice()?)
+            .map(|((a, b), c)| a + b + c)
+            .collect();
+        Ok(PyArray1::from_vec(py, total))
+    }
+
+    /// "completed", or "stopped" (a controller or callback ended the run).
+    #[getter]
+    fn status(&self) -> &'static str {
+        self.status
+    }
+
+    /// Time reached [s].
+    #[getter]
+    fn t_final(&self) -> f64 {
+        self.t_final
+    }
+
+    /// The integrator's work: steps, rejected_steps, rhs_evaluations,
+    /// jacobian_evaluations, factorizations, lu_solves, newton_iterations.
+    #[getter]
+    fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        let s = &self.stats;
+        d.set_item("steps", s.steps)?;
+        d.set_item("rejected_steps", s.rejected_steps)?;
+        d.set_item("rhs_evaluations", s.rhs_evaluations)?;
+        d.set_item("jacobian_evaluations", s.jacobian_evaluations)?;
+        d.set_item("factorizations", s.factorizations)?;
+        d.set_item("lu_solves", s.lu_solves)?;
+        d.set_item("newton_iterations", s.newton_iterations)?;
+        Ok(d)
+    }
+
+    /// Positions [m, world frame] along rod `rod` (name or index) at sample
+    /// `i` (negative counts from the end): at the N + 1 piece boundaries
+    /// (shape (N + 1, 3)), or at the abscissae `s` [m] (shape (len(s), 3)).
+    #[pyo3(signature = (i = -1, rod = None, s = None))]
+    fn shape<'py>(
+        &self,
+        py: Python<'py>,
+        i: isize,
+        rod: Option<&Bound<'py, PyAny>>,
+        s: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let q = self.q.bind(py).readonly();
+        let q = q.as_array();
+        let m = q.nrows() as isize;
+        let k = if i < 0 { m + i } else { i };
+        if !(0..m).contains(&k) {
+            return Err(pyo3::exceptions::PyIndexError::new_err(format!(
+                "sample {i} out of range for {m} samples"
+            )));
+        }
+        let r = match rod {
+            Some(r) => self.rod_index(r)?,
+            None => 0,
+        };
+        let rm = &self.model.rods()[r];
+        let row: Vec<f64> = q.row(k as usize).iter().copied().collect();
+        let mut kin = RodKinematics::new(&rm.spec.rod);
+        kin.update(&rm.spec.rod, &row[rm.dofs()], None, None)
+            .map_err(|e| input(e.to_string()))?;
+        let mut out = Vec::new();
+        match s {
+            None => {
+                for g in kin.boundary_poses() {
+                    out.extend_from_slice(g.translation.as_slice());
+                }
+            }
+            Some(s) => {
+                let a = array(s, "s")?;
+                if a.shape().len() != 1 {
+                    return Err(input(format!("s must be 1-D, got shape {:?}", a.shape())));
+                }
+                for &x in a.slice() {
+                    let g = kin
+                        .pose_at(&rm.spec.rod, x)
+                        .map_err(|e| input(format!("s = {x}: {e}")))?;
+                    out.extend_from_slice(g.translation.as_slice());
+                }
+            }
+        }
+        let rows = out.len() / 3;
+        array_out(py, out, &[rows, 3])
+    }
+
+    fn __len__(&self) -> usize {
+        self.n
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Trajectory({} samples, t_final={:?}, status={:?}, steps={})",
+            self.n, self.t_final, self.status, self.stats.steps
+        )
+    }
+}
+
+/// The state of the step API: time `t` [s], coordinates `q` and velocities
+/// `qdot` (float64 arrays of length n_dof, copied on construction).
+#[pyclass(frozen, module = "softrod")]
+pub struct State {
+    pub(crate) t: f64,
+    pub(crate) q: Py<PyArray1<f64>>,
+    pub(crate) qdot: Py<PyArray1<f64>>,
+}
+
+impl State {
+    pub fn from_slices(py: Python<'_>, t: f64, q: &[f64], qd: &[f64]) -> PyResult<Self> {
+        Ok(Self {
+            t,
+            q: frozen(vec_out(py, q))?.unbind(),
+            qdot: frozen(vec_out(py, qd))?.unbind(),
+        })
+    }
+}
+
+#[pymethods]
+impl State {
+    #[new]
+    #[pyo3(signature = (t, q, qdot))]
+    fn new(
+        py: Python<'_>,
+        t: f64,
+        q: &Bound<'_, PyAny>,
+        qdot: &Bound<'_, PyAny>,
+    ) -> PyResult<Self> {
+        let qa = array(q, "q")?;
+        if qa.shape().len() != 1 {
+            return Err(input(format!("q must be 1-D, got shape {:?}", qa.shape())));
+        }
+        let n = qa.slice().len();
+        let qd = vector(qdot, "qdot", n)?;
+        Self::from_slices(py, t, qa.slice(), qd.slice())
+    }
+
+    /// Time [s].
+    #[getter]
+    fn t(&self) -> f64 {
+        self.t
+    }
+
+    /// Coordinates (n_dof,), read-only.
+    #[getter]
+    fn q<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.q.bind(py).clone()
+    }
+
+    /// Velocities (n_dof,), read-only.
+    #[getter]
+    fn qdot<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.qdot.bind(py).clone()
+    }
+
+    fn __repr__(&self, py: Python<'_>) -> String {
+        format!(
+            "State(t={:?}, n_dof={})",
+            self.t,
+            numpy::PyUntypedArrayMethods::len(self.q.bind(py))
+        )
+    }
+}

@@ -1,0 +1,180 @@
+//! Run settings (`[run]`): mode, integrator, tolerances, steps, output.
+
+use std::fmt;
+use std::str::FromStr;
+
+use serde::Serialize;
+
+/// What `run.mode` asks for. Commands ignore it when they imply a mode
+/// (`softrod statics` always computes the equilibrium).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Mode {
+    /// Time integration (default).
+    #[default]
+    Dynamics,
+    /// Static equilibrium.
+    Statics,
+}
+
+impl Mode {
+    /// The name used in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Mode::Dynamics => "dynamics",
+            Mode::Statics => "statics",
+        }
+    }
+}
+
+/// Time integrator named by `run.integrator`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+pub enum Integrator {
+    /// Classical 4th-order Runge–Kutta, fixed step `dt` (`"rk4"`).
+    #[serde(rename = "rk4")]
+    Rk4,
+    /// Dormand–Prince 5(4), adaptive explicit (`"dopri5"`).
+    #[serde(rename = "dopri5")]
+    Dopri5,
+    /// Linearly-implicit Rosenbrock method, adaptive, for stiff problems (`"rosenbrock"`).
+    #[serde(rename = "rosenbrock")]
+    Rosenbrock,
+    /// Generalized-α (Chung–Hulbert), implicit second-order method with
+    /// controllable numerical damping (`"generalized-alpha"`).
+    #[serde(rename = "generalized-alpha")]
+    GeneralizedAlpha,
+}
+
+impl Integrator {
+    /// Every integrator, in the order error messages list them.
+    pub const ALL: [Integrator; 4] = [
+        Integrator::Rk4,
+        Integrator::Dopri5,
+        Integrator::Rosenbrock,
+        Integrator::GeneralizedAlpha,
+    ];
+
+    /// Names that are planned but not implemented, each with the method to
+    /// use meanwhile: `check` rejects them with this advice, so that `check`
+    /// and `run` agree.
+    pub const NOT_YET: [(&'static str, Integrator); 1] = [("radau5", Integrator::Rosenbrock)];
+
+    /// Default when the scene names none: the stiff, error-controlled method.
+    /// `softrod report` (docs/defaults.md) found generalized-α cheaper per
+    /// accuracy but without error control (and gaining energy on a fast
+    /// whirl), and dopri5 stability-limited or failing on stiff rods.
+    pub const DEFAULT: Integrator = Integrator::Rosenbrock;
+
+    /// The name used in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Integrator::Rk4 => "rk4",
+            Integrator::Dopri5 => "dopri5",
+            Integrator::Rosenbrock => "rosenbrock",
+            Integrator::GeneralizedAlpha => "generalized-alpha",
+        }
+    }
+
+    /// Whether the method adapts its step to `rtol`/`atol` (otherwise it steps with `dt`).
+    pub fn is_adaptive(self) -> bool {
+        !matches!(self, Integrator::Rk4 | Integrator::GeneralizedAlpha)
+    }
+
+    /// Whether the method is implicit or linearly implicit (suited to stiff problems).
+    pub fn is_implicit(self) -> bool {
+        !matches!(self, Integrator::Rk4 | Integrator::Dopri5)
+    }
+}
+
+impl fmt::Display for Integrator {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Error of [`Integrator::from_str`]: the name is not one of [`Integrator::ALL`].
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown integrator {name:?} (valid: rk4, dopri5, rosenbrock, generalized-alpha)")]
+pub struct UnknownIntegrator {
+    /// The name given.
+    pub name: String,
+}
+
+impl FromStr for Integrator {
+    type Err = UnknownIntegrator;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Integrator::ALL
+            .into_iter()
+            .find(|i| i.name() == s)
+            .ok_or_else(|| UnknownIntegrator { name: s.to_owned() })
+    }
+}
+
+/// Run settings (`[run]`), all defaults filled.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Run {
+    /// Dynamics or statics (default dynamics).
+    pub mode: Mode,
+    /// Simulated time, s, > 0 (default [`Run::DEFAULT_DURATION`]).
+    pub duration: f64,
+    /// Time integrator (default [`Integrator::DEFAULT`]).
+    pub integrator: Integrator,
+    /// Relative tolerance of adaptive methods, > 0 (default [`Run::DEFAULT_RTOL`]).
+    pub rtol: f64,
+    /// Absolute tolerance of adaptive methods, > 0 (default [`Run::DEFAULT_ATOL`]).
+    pub atol: f64,
+    /// Step of fixed-step methods, initial step of adaptive ones, s, > 0
+    /// (default [`Run::DEFAULT_DT`]).
+    pub dt: f64,
+    /// Time between output rows, s, > 0 (default `duration / 1000`).
+    pub output_every: f64,
+    /// Gauss points per piece, ≥ 1 (default [`Run::DEFAULT_QUADRATURE`]).
+    pub quadrature: usize,
+    /// `generalized-alpha` only (an extension of the format): control the
+    /// local error to `rtol`/`atol` and adapt the step, `dt` being the first
+    /// step (default `false`: fixed step `dt`).
+    pub error_control: bool,
+    /// `generalized-alpha` only (an extension of the format): one Newton
+    /// iteration per step with the elastic Jacobian, i.e. the linearly
+    /// implicit (IMEX) scheme — elastic and viscous forces implicit,
+    /// gravity, Coriolis, loads and cables explicit (default `false`: Newton
+    /// to convergence).
+    pub linearly_implicit: bool,
+}
+
+impl Run {
+    /// Default `duration`, s (the contract's).
+    pub const DEFAULT_DURATION: f64 = 1.0;
+    /// Default `rtol`: with the default `rosenbrock`, the best measured by
+    /// `softrod report` on the cantilever and steel-wire scenes
+    /// (docs/defaults.md): tip errors 3e-7 m and 6e-6 m, far below the
+    /// spatial (PCS) error, where rtol 1e-6 was 20–200× slower because
+    /// error control then resolves the ringing shear/extension modes.
+    pub const DEFAULT_RTOL: f64 = 1.0e-3;
+    /// Default `atol` (with [`Run::DEFAULT_RTOL`], from the same report).
+    pub const DEFAULT_ATOL: f64 = 1.0e-6;
+    /// Default `dt`, s (the contract's example value).
+    pub const DEFAULT_DT: f64 = 1.0e-4;
+    /// Default Gauss points per piece: the model's
+    /// ([`softrod_dynamics::Model::DEFAULT_QUADRATURE`], 4: polynomials of
+    /// degree 7 exactly, ample for the smooth integrands of a piece).
+    pub const DEFAULT_QUADRATURE: usize = softrod_dynamics::Model::DEFAULT_QUADRATURE;
+}
+
+impl Default for Run {
+    fn default() -> Self {
+        Run {
+            mode: Mode::Dynamics,
+            duration: Run::DEFAULT_DURATION,
+            integrator: Integrator::DEFAULT,
+            rtol: Run::DEFAULT_RTOL,
+            atol: Run::DEFAULT_ATOL,
+            dt: Run::DEFAULT_DT,
+            output_every: Run::DEFAULT_DURATION / 1000.0,
+            quadrature: Run::DEFAULT_QUADRATURE,
+            error_control: false,
+            linearly_implicit: false,
+        }
+    }
+}

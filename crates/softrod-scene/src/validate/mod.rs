@@ -1,0 +1,128 @@
+//! From raw TOML structs to a validated [`Scene`]: one file per scene
+//! section. Values are checked by the library constructors they enter
+//! (kinematics, mechanics, the rod builder); this module fills in defaults,
+//! checks what only the file layout has (which keys go together, names,
+//! the order of `q`), maps the library's errors to key paths (`crate::keys`)
+//! and collects warnings.
+
+mod body;
+mod cables;
+mod initial;
+mod loads;
+mod reference;
+mod rods;
+mod run;
+
+use crate::error::{Location, SceneError, Warning};
+use crate::locate::{SpanMap, map_toml_error};
+use crate::raw::RawScene;
+use crate::reporter::Reporter;
+use crate::scene::{Origins, Scene};
+
+type Result<T> = std::result::Result<T, SceneError>;
+
+/// Parses and validates a scene; `file` names it in messages.
+pub(crate) fn parse(text: &str, file: &str) -> Result<(Scene, Vec<Warning>)> {
+    let spans = SpanMap::build(text).map_err(|e| map_toml_error(&e, text, file, None))?;
+    let raw: RawScene =
+        toml::from_str(text).map_err(|e| map_toml_error(&e, text, file, Some(&spans)))?;
+    if let Some((path, literal, span)) = &spans.non_finite {
+        return Err(SceneError::NotFinite {
+            file: file.to_owned(),
+            path: path.clone(),
+            at: Some(Location::of_offset(text, span.start)),
+            value: literal.clone(),
+            source: None,
+        });
+    }
+    let mut cx = Ctx {
+        r: Reporter::new(file, text, &spans),
+        warnings: Vec::new(),
+    };
+    let scene = cx.scene(raw)?;
+    Ok((scene, cx.warnings))
+}
+
+/// Validation context: where errors point, and the warnings so far.
+struct Ctx<'a> {
+    r: Reporter<'a>,
+    warnings: Vec<Warning>,
+}
+
+impl Ctx<'_> {
+    fn warn(&mut self, path: &str, message: String) {
+        let at = self.r.at(path);
+        self.warnings.push(Warning {
+            path: path.to_owned(),
+            at,
+            message,
+        });
+    }
+
+    /// `v > 0` (for the scene's own settings; library values are checked
+    /// where they enter the library).
+    fn positive(&self, path: &str, v: f64) -> Result<f64> {
+        if v > 0.0 {
+            Ok(v)
+        } else {
+            Err(self.r.out_of_range(path, v, "> 0"))
+        }
+    }
+
+    /// A number: an integer or a float.
+    fn number(&self, p: &str, v: &toml::Value) -> Result<f64> {
+        match v {
+            toml::Value::Integer(i) => Ok(*i as f64),
+            toml::Value::Float(f) => Ok(*f),
+            other => Err(self
+                .r
+                .wrong_type(p, format!("expected a number, found {}", other.type_str()))),
+        }
+    }
+
+    /// A list of numbers.
+    fn numbers(&self, p: &str, v: &toml::Value) -> Result<Vec<f64>> {
+        let toml::Value::Array(a) = v else {
+            return Err(self.r.wrong_type(
+                p,
+                format!("expected a list of numbers, found {}", v.type_str()),
+            ));
+        };
+        a.iter()
+            .enumerate()
+            .map(|(k, x)| self.number(&format!("{p}[{k}]"), x))
+            .collect()
+    }
+
+    fn scene(&mut self, raw: RawScene) -> Result<Scene> {
+        let world = reference::world(raw.world);
+        let mut rods = self.rods(raw.rod)?;
+        let run = self.run(raw.run)?;
+        let mut origins = Origins {
+            cables: vec![Vec::new(); rods.len()],
+            loads: vec![Vec::new(); rods.len()],
+        };
+        for (j, c) in raw.cable.into_iter().enumerate() {
+            let i = self.cable(j, c, &mut rods)?;
+            origins.cables[i].push(j);
+        }
+        for (j, l) in raw.load.into_iter().enumerate() {
+            let i = self.load(j, l, &mut rods)?;
+            origins.loads[i].push(j);
+        }
+        let initial = self.initial(raw.initial, &rods)?;
+        let reference = raw
+            .reference
+            .map(|r| self.reference(r, &rods, &run))
+            .transpose()?;
+        Ok(Scene {
+            source: self.r.file().to_owned(),
+            world,
+            rods,
+            initial,
+            run,
+            reference,
+            origins,
+        })
+    }
+}

@@ -1,0 +1,104 @@
+//! `[run]`: mode, integrator, tolerances, steps, output, quadrature.
+
+use super::{Ctx, Result};
+use crate::raw::RawRun;
+use crate::run::{Integrator, Mode, Run};
+
+impl Ctx<'_> {
+    pub(super) fn run(&mut self, raw: Option<RawRun>) -> Result<Run> {
+        let Some(r) = raw else {
+            return Ok(Run::default());
+        };
+        let d = Run::default();
+        let mode = match r.mode.as_deref() {
+            None => d.mode,
+            Some("dynamics") => Mode::Dynamics,
+            Some("statics") => Mode::Statics,
+            Some(other) => {
+                return Err(self
+                    .r
+                    .unknown_name("run.mode", other, &["dynamics", "statics"]));
+            }
+        };
+        let duration = self.positive("run.duration", r.duration.unwrap_or(d.duration))?;
+        let integrator = match r.integrator.as_deref() {
+            None => d.integrator,
+            Some(name) => {
+                // Planned methods: rejected here with the advice `run` would
+                // give, so that `check` and `run` agree.
+                if let Some((_, instead)) = Integrator::NOT_YET.iter().find(|(n, _)| *n == name) {
+                    return Err(self.r.invalid(
+                        "run.integrator",
+                        format!("{name:?} is not implemented yet, use \"{instead}\""),
+                    ));
+                }
+                name.parse::<Integrator>().map_err(|_| {
+                    let valid: Vec<&str> = Integrator::ALL.iter().map(|i| i.name()).collect();
+                    self.r.unknown_name("run.integrator", name, &valid)
+                })?
+            }
+        };
+        let rtol = self.positive("run.rtol", r.rtol.unwrap_or(d.rtol))?;
+        let atol = self.positive("run.atol", r.atol.unwrap_or(d.atol))?;
+        let dt = self.positive("run.dt", r.dt.unwrap_or(d.dt))?;
+        let output_every = self.positive(
+            "run.output_every",
+            r.output_every.unwrap_or(duration / 1000.0),
+        )?;
+        let quadrature = match r.quadrature {
+            None => d.quadrature,
+            Some(n) if n >= 1 => n as usize,
+            Some(n) => return Err(self.r.out_of_range("run.quadrature", n, ">= 1")),
+        };
+        let error_control = r.error_control.unwrap_or(d.error_control);
+        if error_control && integrator != Integrator::GeneralizedAlpha {
+            self.warn(
+                "run.error_control",
+                format!(
+                    "error_control only applies to generalized-alpha ({integrator} is {}): ignored",
+                    if integrator.is_adaptive() {
+                        "adaptive already"
+                    } else {
+                        "fixed-step"
+                    }
+                ),
+            );
+        }
+        let linearly_implicit = r.linearly_implicit.unwrap_or(d.linearly_implicit);
+        if linearly_implicit && integrator != Integrator::GeneralizedAlpha {
+            self.warn(
+                "run.linearly_implicit",
+                format!(
+                    "linearly_implicit only applies to generalized-alpha ({integrator}): ignored"
+                ),
+            );
+        }
+        if r.dt.is_some() && dt > duration {
+            self.warn(
+                "run.dt",
+                format!("dt = {dt} s is longer than the whole run (duration = {duration} s)"),
+            );
+        }
+        if output_every > duration {
+            self.warn(
+                "run.output_every",
+                format!(
+                    "output_every = {output_every} s is longer than duration = {duration} s: \
+                     only the initial and final states will be written"
+                ),
+            );
+        }
+        Ok(Run {
+            mode,
+            duration,
+            integrator,
+            rtol,
+            atol,
+            dt,
+            output_every,
+            quadrature,
+            error_control,
+            linearly_implicit,
+        })
+    }
+}

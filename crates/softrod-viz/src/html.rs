@@ -1,0 +1,403 @@
+//! The animated 3-D view: one self-contained HTML file (inline CSS, inline
+//! WebGL 1 code of our own, the data as embedded JSON; no network access).
+//!
+//! # Budget
+//!
+//! A view keeps at most [`ViewOptions::max_frames`] frames (default
+//! [`DEFAULT_MAX_FRAMES`] = 2000) spread evenly over the output times, the
+//! first and last always included ([`crate::decimate::spread`]), and the
+//! whole file stays within [`ViewOptions::max_bytes`] (default
+//! [`DEFAULT_MAX_BYTES`] = 30 MB): when the frames would not fit, fewer are
+//! kept. Tip traces keep up to [`ViewOptions::max_trace_points`] points
+//! (default 20 000) each, independently. The page says how many frames of how
+//! many it shows.
+//!
+//! # Embedded data (`<script type="application/json" id="softrod-data">`)
+//!
+//! Positions are integers `round((p − origin) / quantum)` with a power-of-two
+//! `quantum` about 2⁻²⁰ of the scene's extent (a relative resolution of
+//! ~1e-6, far below a pixel), quaternions are integers `round(10⁴ · q)` with
+//! `w ≥ 0`. Keys:
+//!
+//! ```text
+//! format "softrod-view", version 1, title, up [3], origin [3] (m), quantum (m),
+//! quatScale 10000, sourceFrames M, frames [indices into the M output times],
+//! times [s, one per kept frame], budget {maxFrames, maxBytes, maxTracePoints},
+//! options {speed (null = auto), axes (bool)},
+//! rods [{name, s [m], radius [m], frames [[x,y,z,qw,qx,qy,qz] × samples, one array per kept frame],
+//!        trace {t [s], p [x,y,z,…]}}],
+//! cables [{name, frames [[x,y,z,…] per kept frame]}],
+//! bodies [{name, shape "box"|"sphere", size [3] | radius, frames [[x,y,z,qw,qx,qy,qz] per kept frame]}]
+//! ```
+//!
+//! The output is deterministic: the same data and options give the same
+//! bytes (no clock, no random numbers, no hash-map order).
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use crate::data::{BodyShape, Pose, ViewData};
+use crate::decimate::spread;
+use crate::error::VizError;
+
+/// Default most frames a view keeps.
+pub const DEFAULT_MAX_FRAMES: usize = 2000;
+/// Default largest file, bytes (30 MB: a browser parses it in about a second).
+pub const DEFAULT_MAX_BYTES: usize = 30_000_000;
+/// Default most points of each tip trace.
+pub const DEFAULT_MAX_TRACE_POINTS: usize = 20_000;
+/// Quaternion components are stored as integers of this many units.
+pub const QUAT_SCALE: f64 = 10_000.0;
+/// Positions are stored in units of about `extent · 2^-QUANT_BITS`.
+pub const QUANT_BITS: i32 = 20;
+
+/// How the view is built.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ViewOptions {
+    /// Most frames kept (≥ 2).
+    pub max_frames: usize,
+    /// Largest file size, bytes.
+    pub max_bytes: usize,
+    /// Most points kept of each tip trace (≥ 2).
+    pub max_trace_points: usize,
+    /// Initial playback speed (simulated seconds per wall second); `None`:
+    /// chosen so the run plays in about 10 s.
+    pub speed: Option<f64>,
+    /// Show the centreline frame axes at start.
+    pub show_frame_axes: bool,
+}
+
+impl Default for ViewOptions {
+    fn default() -> Self {
+        Self {
+            max_frames: DEFAULT_MAX_FRAMES,
+            max_bytes: DEFAULT_MAX_BYTES,
+            max_trace_points: DEFAULT_MAX_TRACE_POINTS,
+            speed: None,
+            show_frame_axes: false,
+        }
+    }
+}
+
+/// What [`render_html`] kept.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ViewStats {
+    /// Indices of the kept output times (first and last included).
+    pub frames: Vec<usize>,
+    /// Number of output times in the input.
+    pub source_frames: usize,
+    /// Size of the page, bytes.
+    pub bytes: usize,
+}
+
+const TEMPLATE: &str = include_str!("assets/view.html");
+const CSS: &str = include_str!("assets/view.css");
+const JS: &str = include_str!("assets/view.js");
+const GUARD_JS: &str = include_str!("assets/guard.js");
+
+/// The page for `data`, and what it kept. Validates `data` first.
+pub fn render_html(data: &ViewData, opts: &ViewOptions) -> Result<(String, ViewStats), VizError> {
+    data.validate()?;
+    if opts.max_frames < 2 || opts.max_trace_points < 2 {
+        return Err(VizError::Invalid {
+            what: "ViewOptions".into(),
+            problem: format!(
+                "max_frames = {} and max_trace_points = {} must be ≥ 2",
+                opts.max_frames, opts.max_trace_points
+            ),
+        });
+    }
+    if let Some(v) = opts.speed.filter(|v| !(v.is_finite() && *v > 0.0)) {
+        return Err(VizError::Invalid {
+            what: "ViewOptions::speed".into(),
+            problem: format!("{v} (must be finite and > 0)"),
+        });
+    }
+    let m = data.times.len();
+    let q = Quantizer::new(data);
+    let mut n = opts.max_frames.min(m);
+    loop {
+        let frames = spread(m, n);
+        let page = assemble(data, opts, &q, &frames);
+        if page.len() <= opts.max_bytes {
+            let bytes = page.len();
+            return Ok((
+                page,
+                ViewStats {
+                    frames,
+                    source_frames: m,
+                    bytes,
+                },
+            ));
+        }
+        if n <= 2 {
+            return Err(VizError::TooLarge {
+                bytes: page.len(),
+                max_bytes: opts.max_bytes,
+            });
+        }
+        // Per-frame bytes are nearly equal; shrink to fit with 2 % margin.
+        let fixed = assemble(data, opts, &q, &[]).len();
+        let per = (page.len() - fixed.min(page.len())) as f64 / n as f64;
+        let fit = ((opts.max_bytes.saturating_sub(fixed)) as f64 / per * 0.98).floor() as usize;
+        n = fit.clamp(2, n - 1);
+    }
+}
+
+/// [`render_html`] written to `path`.
+pub fn write_html(path: &Path, data: &ViewData, opts: &ViewOptions) -> Result<ViewStats, VizError> {
+    let (page, stats) = render_html(data, opts)?;
+    std::fs::write(path, page).map_err(|source| VizError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    Ok(stats)
+}
+
+/// Maps world positions to integers.
+struct Quantizer {
+    origin: [f64; 3],
+    quantum: f64,
+}
+
+impl Quantizer {
+    fn new(d: &ViewData) -> Self {
+        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        let mut add = |p: &[f64; 3]| {
+            for ((l, h), v) in lo.iter_mut().zip(hi.iter_mut()).zip(p) {
+                *l = l.min(*v);
+                *h = h.max(*v);
+            }
+        };
+        for rod in &d.rods {
+            rod.frames.iter().flatten().for_each(|f| add(&f.position));
+            rod.tip_trace.iter().flatten().for_each(&mut add);
+        }
+        d.cables
+            .iter()
+            .flat_map(|c| c.points.iter().flatten())
+            .for_each(&mut add);
+        d.bodies
+            .iter()
+            .flat_map(|b| &b.poses)
+            .for_each(|p| add(&p.position));
+        let origin = [0, 1, 2].map(|j| 0.5 * (lo[j] + hi[j]));
+        let extent = (0..3).map(|j| 0.5 * (hi[j] - lo[j])).fold(0.0, f64::max);
+        let extent = if extent > 0.0 { extent } else { 1.0 };
+        let quantum = 2f64.powi(extent.log2().ceil() as i32 - QUANT_BITS);
+        Self { origin, quantum }
+    }
+
+    fn push_point(&self, out: &mut String, p: &[f64; 3]) {
+        for (x, o) in p.iter().zip(&self.origin) {
+            let v = ((x - o) / self.quantum).round() as i64;
+            let _ = write!(out, "{v},");
+        }
+    }
+
+    fn push_pose(&self, out: &mut String, p: &Pose) {
+        self.push_point(out, &p.position);
+        let r = p.rotation;
+        let n = (r[0] * r[0] + r[1] * r[1] + r[2] * r[2] + r[3] * r[3]).sqrt();
+        let sign = if r[0] < 0.0 { -1.0 } else { 1.0 };
+        for v in r {
+            let i = (sign * v / n * QUAT_SCALE).round() as i64;
+            let _ = write!(out, "{},", i);
+        }
+    }
+}
+
+fn close_array(out: &mut String) {
+    if out.ends_with(',') {
+        out.pop();
+    }
+    out.push(']');
+}
+
+fn json_str(s: &str) -> String {
+    serde_json::to_string(s).unwrap_or_else(|_| "\"\"".into())
+}
+
+fn json_f64s(out: &mut String, v: impl Iterator<Item = f64>) {
+    out.push('[');
+    for x in v {
+        // serde_json prints the shortest representation that reads back
+        // exactly (ryu): deterministic.
+        let _ = write!(out, "{},", serde_json::Value::from(x));
+    }
+    close_array(out);
+}
+
+/// The embedded JSON for the kept `frames`.
+fn data_json(d: &ViewData, opts: &ViewOptions, q: &Quantizer, frames: &[usize]) -> String {
+    let mut o = String::new();
+    let up_n = d.up.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let _ = write!(
+        o,
+        "{{\"format\":\"softrod-view\",\"version\":1,\"title\":{},\"up\":",
+        json_str(&d.title)
+    );
+    json_f64s(&mut o, d.up.iter().map(|v| v / up_n));
+    o.push_str(",\"origin\":");
+    json_f64s(&mut o, q.origin.iter().copied());
+    let _ = write!(
+        o,
+        ",\"quantum\":{},\"quatScale\":{},\"sourceFrames\":{},\"frames\":[",
+        serde_json::Value::from(q.quantum),
+        QUAT_SCALE,
+        d.times.len()
+    );
+    for k in frames {
+        let _ = write!(o, "{k},");
+    }
+    close_array(&mut o);
+    o.push_str(",\"times\":");
+    json_f64s(&mut o, frames.iter().map(|&k| d.times[k]));
+    let _ = write!(
+        o,
+        ",\"budget\":{{\"maxFrames\":{},\"maxBytes\":{},\"maxTracePoints\":{}}}",
+        opts.max_frames, opts.max_bytes, opts.max_trace_points
+    );
+    let _ = write!(
+        o,
+        ",\"options\":{{\"speed\":{},\"axes\":{}}}",
+        opts.speed
+            .map(|v| serde_json::Value::from(v).to_string())
+            .unwrap_or_else(|| "null".into()),
+        opts.show_frame_axes
+    );
+    o.push_str(",\"rods\":[");
+    let trace_idx = spread(d.times.len(), opts.max_trace_points);
+    for rod in &d.rods {
+        let _ = write!(o, "{{\"name\":{},\"s\":", json_str(&rod.name));
+        json_f64s(&mut o, rod.s.iter().copied());
+        o.push_str(",\"radius\":");
+        json_f64s(&mut o, rod.radius.iter().copied());
+        o.push_str(",\"frames\":[");
+        for &k in frames {
+            o.push('[');
+            for p in &rod.frames[k] {
+                q.push_pose(&mut o, p);
+            }
+            close_array(&mut o);
+            o.push(',');
+        }
+        close_array(&mut o);
+        o.push_str(",\"trace\":{\"t\":");
+        json_f64s(&mut o, trace_idx.iter().map(|&k| d.times[k]));
+        o.push_str(",\"p\":[");
+        for &k in &trace_idx {
+            let p = match &rod.tip_trace {
+                Some(t) => t[k],
+                None => rod.frames[k][rod.s.len() - 1].position,
+            };
+            q.push_point(&mut o, &p);
+        }
+        close_array(&mut o);
+        o.push_str("}},");
+    }
+    close_array(&mut o);
+    o.push_str(",\"cables\":[");
+    for c in &d.cables {
+        let _ = write!(o, "{{\"name\":{},\"frames\":[", json_str(&c.name));
+        for &k in frames {
+            o.push('[');
+            for p in &c.points[k] {
+                q.push_point(&mut o, p);
+            }
+            close_array(&mut o);
+            o.push(',');
+        }
+        close_array(&mut o);
+        o.push_str("},");
+    }
+    close_array(&mut o);
+    o.push_str(",\"bodies\":[");
+    for b in &d.bodies {
+        let _ = write!(o, "{{\"name\":{},", json_str(&b.name));
+        match b.shape {
+            BodyShape::Box { size } => {
+                o.push_str("\"shape\":\"box\",\"size\":");
+                json_f64s(&mut o, size.into_iter());
+            }
+            BodyShape::Sphere { radius } => {
+                let _ = write!(
+                    o,
+                    "\"shape\":\"sphere\",\"radius\":{}",
+                    serde_json::Value::from(radius)
+                );
+            }
+        }
+        o.push_str(",\"frames\":[");
+        for &k in frames {
+            o.push('[');
+            q.push_pose(&mut o, &b.poses[k]);
+            close_array(&mut o);
+            o.push(',');
+        }
+        close_array(&mut o);
+        o.push_str("},");
+    }
+    close_array(&mut o);
+    o.push('}');
+    // `<` occurs only inside JSON strings; escaping it keeps a name such as
+    // "</script>" from closing the data block.
+    o.replace('<', "\\u003c")
+}
+
+fn html_escape(s: &str) -> String {
+    let mut o = String::with_capacity(s.len());
+    for c in s.chars() {
+        match c {
+            '&' => o.push_str("&amp;"),
+            '<' => o.push_str("&lt;"),
+            '>' => o.push_str("&gt;"),
+            '"' => o.push_str("&quot;"),
+            '\'' => o.push_str("&#39;"),
+            _ => o.push(c),
+        }
+    }
+    o
+}
+
+/// The page: the template's `@@NAME@@` markers replaced in one pass over
+/// the template (so a marker inside the data is never expanded).
+fn assemble(d: &ViewData, opts: &ViewOptions, q: &Quantizer, frames: &[usize]) -> String {
+    let data = data_json(d, opts, q, frames);
+    let title = html_escape(&d.title);
+    let mut out = String::with_capacity(data.len() + TEMPLATE.len() + CSS.len() + JS.len());
+    let mut rest = TEMPLATE;
+    while let Some(i) = rest.find("@@") {
+        out.push_str(&rest[..i]);
+        let after = &rest[i + 2..];
+        let Some(j) = after.find("@@") else {
+            out.push_str(&rest[i..]);
+            rest = "";
+            break;
+        };
+        match &after[..j] {
+            "TITLE" => out.push_str(&title),
+            "CSS" => out.push_str(CSS),
+            "GUARD" => out.push_str(GUARD_JS),
+            "JS" => out.push_str(JS),
+            "DATA" => out.push_str(&data),
+            other => {
+                out.push_str("@@");
+                out.push_str(other);
+                out.push_str("@@");
+            }
+        }
+        rest = &after[j + 2..];
+    }
+    out.push_str(rest);
+    out
+}
+
+/// The JSON embedded in a page written by [`render_html`], parsed (for
+/// tests and tools that read a view back).
+pub fn embedded_data(page: &str) -> Option<serde_json::Value> {
+    let start_tag = "<script type=\"application/json\" id=\"softrod-data\">";
+    let i = page.find(start_tag)? + start_tag.len();
+    let j = page[i..].find("</script>")? + i;
+    serde_json::from_str(&page[i..j]).ok()
+}

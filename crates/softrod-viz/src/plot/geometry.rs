@@ -1,0 +1,465 @@
+//! Geometry figures: tip trajectory, rod shapes, mode shapes (equal aspect).
+
+use plotters::prelude::*;
+
+use super::common::{
+    Area, LEGEND_W, LegendEntry, Marker, PanelSpec, Stroke, Swatch, TITLE_H, bounds, check_finite,
+    check_len, color, draw_legend, draw_panel, equal_aspect_ranges, extent, length_unit, lighten,
+    plot_err, plot_size, sequential, significant, titled,
+};
+use super::{Figure, PanelInfo};
+use crate::error::VizError;
+
+/// A named polyline in the world frame (m): a rod's centreline (sampled
+/// within pieces, base to tip) or a tip's path over time.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RodCurve {
+    /// Rod name (legend).
+    pub name: String,
+    /// Points, world frame, m.
+    pub points: Vec<[f64; 3]>,
+}
+
+/// The rods' shapes at one time (`t = None`: a static shape).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ShapeSnapshot {
+    /// Time, s, or `None` for an equilibrium.
+    pub t: Option<f64>,
+    /// One curve per rod.
+    pub rods: Vec<RodCurve>,
+}
+
+/// One vibration mode.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Mode {
+    /// Natural frequency, Hz.
+    pub frequency_hz: f64,
+    /// The rods displaced along the mode (equilibrium + a visible
+    /// amplitude, e.g. a tenth of the rod length at the largest point); one
+    /// curve per rod, with as many points as its equilibrium curve.
+    pub displaced: Vec<RodCurve>,
+}
+
+/// Mode shapes about an equilibrium.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModeShapes {
+    /// The equilibrium shape, one curve per rod.
+    pub equilibrium: Vec<RodCurve>,
+    /// The modes, lowest first.
+    pub modes: Vec<Mode>,
+}
+
+const AXES: [&str; 3] = ["x", "y", "z"];
+/// The three projections: (horizontal axis, vertical axis).
+const PROJECTIONS: [(usize, usize); 3] = [(0, 2), (1, 2), (0, 1)];
+const PANEL_W: u32 = 430;
+const PANEL_H: u32 = 450;
+const PLOT: &str = "geometry";
+
+struct Curve3 {
+    points: Vec<[f64; 3]>,
+    color: RGBColor,
+    width: u32,
+    dashed: bool,
+}
+
+type Planes = Vec<(usize, usize, String)>;
+type PanelContents = Vec<(Vec<Curve3>, Vec<Marker3>)>;
+
+enum Marker3 {
+    Circle([f64; 3], RGBColor),
+    Square([f64; 3], RGBColor),
+}
+
+fn check_curves(what: &str, curves: &[RodCurve]) -> Result<(), VizError> {
+    for (i, c) in curves.iter().enumerate() {
+        if c.points.is_empty() {
+            return Err(VizError::Empty("a curve's points"));
+        }
+        for p in &c.points {
+            check_finite(&format!("{what}[{i}] ('{}').points", c.name), p)?;
+        }
+    }
+    Ok(())
+}
+
+/// Panels with equal aspect and one common scale, plus a legend column.
+/// `planes[k]` = (horizontal, vertical) axes and title of panel `k`.
+#[allow(clippy::too_many_arguments)]
+fn geometry_figure(
+    title: &str,
+    planes: &[(usize, usize, String)],
+    per_panel: &[(Vec<Curve3>, Vec<Marker3>)],
+    cols: usize,
+    legend: &[LegendEntry],
+    plot: &'static str,
+) -> Result<Figure, VizError> {
+    let rows = planes.len().div_ceil(cols);
+    let (w, h) = (
+        cols as u32 * PANEL_W + LEGEND_W,
+        TITLE_H + rows as u32 * PANEL_H,
+    );
+    let mut svg = String::new();
+    let mut infos: Vec<PanelInfo> = Vec::new();
+    {
+        let root: Area = SVGBackend::with_string(&mut svg, (w, h)).into_drawing_area();
+        let body = titled(&root, title, plot)?;
+        let (panels_area, legend_area) = body.split_horizontally(cols as u32 * PANEL_W);
+        let cells = panels_area.split_evenly((rows, cols));
+        // Data boxes, then one scale for all panels.
+        let all = per_panel
+            .iter()
+            .flat_map(|(c, m)| {
+                c.iter()
+                    .flat_map(|c| c.points.iter().copied())
+                    .chain(m.iter().map(|m| match m {
+                        Marker3::Circle(p, _) | Marker3::Square(p, _) => *p,
+                    }))
+            })
+            .collect::<Vec<_>>();
+        let span = (0..3)
+            .map(|j| extent(all.iter().map(|p| p[j])))
+            .fold(0.0, f64::max);
+        let (unit, factor) = length_unit(span);
+        let mut boxes = Vec::new();
+        let mut sizes = Vec::new();
+        for (k, (a, b, ptitle)) in planes.iter().enumerate() {
+            let pts = || {
+                per_panel[k]
+                    .0
+                    .iter()
+                    .flat_map(|c| c.points.iter())
+                    .copied()
+                    .chain(per_panel[k].1.iter().map(|m| match m {
+                        Marker3::Circle(p, _) | Marker3::Square(p, _) => *p,
+                    }))
+            };
+            let ra = bounds(pts().map(|p| p[*a]));
+            let rb = bounds(pts().map(|p| p[*b]));
+            // A flat projection (a planar motion seen edge-on) gets a tenth
+            // of the other axis' span, so its line sits mid-panel; both get
+            // the same 6 % padding. A single point gets ±1 mm.
+            let s = (ra.1 - ra.0).max(rb.1 - rb.0);
+            let s = if s > 0.0 { s } else { 1e-3 };
+            let widen = |r: (f64, f64)| {
+                let c = 0.5 * (r.0 + r.1);
+                let half = (0.5 * (r.1 - r.0)).max(0.05 * s) + 0.06 * s;
+                (c - half, c + half)
+            };
+            boxes.push((widen(ra), widen(rb)));
+            sizes.push(plot_size(&cells[k], ptitle, plot)?);
+        }
+        let ranges = equal_aspect_ranges(&boxes, &sizes);
+        for (k, (a, b, ptitle)) in planes.iter().enumerate() {
+            let (curves, markers) = &per_panel[k];
+            let spec = PanelSpec {
+                title: ptitle.clone(),
+                x_label: format!("{} [{unit}]", AXES[*a]),
+                y_label: format!("{} [{unit}]", AXES[*b]),
+                x_scale: factor,
+                y_scale: factor,
+                strokes: curves
+                    .iter()
+                    .map(|c| Stroke {
+                        points: c.points.iter().map(|p| (p[*a], p[*b])).collect(),
+                        color: c.color,
+                        width: c.width,
+                        dashed: c.dashed,
+                    })
+                    .collect(),
+                markers: markers
+                    .iter()
+                    .map(|m| match m {
+                        Marker3::Circle(p, c) => Marker::Circle((p[*a], p[*b]), *c),
+                        Marker3::Square(p, c) => Marker::Square((p[*a], p[*b]), *c),
+                    })
+                    .collect(),
+                zero_line: false,
+            };
+            infos.push(draw_panel(
+                &cells[k],
+                &spec,
+                ranges[k].0,
+                ranges[k].1,
+                true,
+                plot,
+            )?);
+        }
+        draw_legend(&legend_area, 40, legend, plot)?;
+        root.present().map_err(plot_err(plot))?;
+    }
+    Ok(Figure { svg, panels: infos })
+}
+
+fn three_projections(curves: Vec<Curve3>, markers: Vec<Marker3>) -> (Planes, PanelContents) {
+    let planes = PROJECTIONS
+        .iter()
+        .map(|(a, b)| (*a, *b, format!("{}–{} projection", AXES[*a], AXES[*b])))
+        .collect();
+    let copy = |c: &Curve3| Curve3 {
+        points: c.points.clone(),
+        color: c.color,
+        width: c.width,
+        dashed: c.dashed,
+    };
+    let copy_m = |m: &Marker3| match m {
+        Marker3::Circle(p, c) => Marker3::Circle(*p, *c),
+        Marker3::Square(p, c) => Marker3::Square(*p, *c),
+    };
+    let per = (0..3)
+        .map(|_| {
+            (
+                curves.iter().map(copy).collect(),
+                markers.iter().map(copy_m).collect(),
+            )
+        })
+        .collect();
+    (planes, per)
+}
+
+/// The tip path of each rod over a run, in the x–z, y–z and x–y
+/// projections (equal aspect, one scale), start ● and end ■ marked, rods in
+/// the palette's colours. `tips[r].points` are the tip positions at the
+/// output times.
+pub fn tip_trajectory(title: &str, tips: &[RodCurve]) -> Result<Figure, VizError> {
+    if tips.is_empty() {
+        return Err(VizError::Empty("tips"));
+    }
+    check_curves("tips", tips)?;
+    let mut curves = Vec::new();
+    let mut markers = Vec::new();
+    let mut legend = vec![LegendEntry::header(if tips.len() == 1 {
+        "tip of"
+    } else {
+        "tips of"
+    })];
+    for (r, tip) in tips.iter().enumerate() {
+        let c = color(r);
+        curves.push(Curve3 {
+            points: tip.points.clone(),
+            color: c,
+            width: 2,
+            dashed: false,
+        });
+        markers.push(Marker3::Circle(tip.points[0], c));
+        markers.push(Marker3::Square(tip.points[tip.points.len() - 1], c));
+        legend.push(LegendEntry::line(tip.name.clone(), c, 3));
+    }
+    legend.push(LegendEntry {
+        label: "start".into(),
+        swatch: Swatch::Circle(RGBColor(90, 90, 90)),
+    });
+    legend.push(LegendEntry {
+        label: "end".into(),
+        swatch: Swatch::Square(RGBColor(90, 90, 90)),
+    });
+    let (planes, per) = three_projections(curves, markers);
+    geometry_figure(title, &planes, &per, 3, &legend, PLOT)
+}
+
+/// Rod shapes (centrelines, sampled within pieces) at one or more times, in
+/// the three projections (equal aspect, one scale). One rod: a colour per
+/// time (dark → light green = early → late) with the times in the legend.
+/// Several rods: a colour per rod, earlier snapshots lighter.
+pub fn shapes(title: &str, snapshots: &[ShapeSnapshot]) -> Result<Figure, VizError> {
+    if snapshots.is_empty() {
+        return Err(VizError::Empty("snapshots"));
+    }
+    let n_rods = snapshots[0].rods.len();
+    for (k, s) in snapshots.iter().enumerate() {
+        check_len(&format!("snapshots[{k}].rods"), s.rods.len(), n_rods)?;
+        check_curves(&format!("snapshots[{k}].rods"), &s.rods)?;
+    }
+    let m = snapshots.len();
+    let time_text = |s: &ShapeSnapshot| match s.t {
+        Some(t) => format!("t = {}", short_time(t)),
+        None => "equilibrium".to_string(),
+    };
+    let mut curves = Vec::new();
+    let mut markers = Vec::new();
+    let mut legend = Vec::new();
+    if n_rods == 1 {
+        legend.push(LegendEntry::header(snapshots[0].rods[0].name.clone()));
+        for (k, s) in snapshots.iter().enumerate() {
+            let c = if m == 1 {
+                color(0)
+            } else {
+                sequential(k as f64 / (m - 1) as f64)
+            };
+            curves.push(Curve3 {
+                points: s.rods[0].points.clone(),
+                color: c,
+                width: 2,
+                dashed: false,
+            });
+            markers.push(Marker3::Circle(s.rods[0].points[0], RGBColor(60, 60, 60)));
+            legend.push(LegendEntry::line(time_text(s), c, 3));
+        }
+    } else {
+        legend.push(LegendEntry::header("rods"));
+        for (r, rod) in snapshots[0].rods.iter().enumerate() {
+            legend.push(LegendEntry::line(rod.name.clone(), color(r), 3));
+        }
+        for (k, s) in snapshots.iter().enumerate() {
+            // Earlier snapshots mixed with white, the last at full colour.
+            let fade = if m == 1 {
+                0.0
+            } else {
+                0.7 * (1.0 - k as f64 / (m - 1) as f64)
+            };
+            for (r, rod) in s.rods.iter().enumerate() {
+                curves.push(Curve3 {
+                    points: rod.points.clone(),
+                    color: lighten(color(r), fade),
+                    width: 2,
+                    dashed: false,
+                });
+            }
+        }
+        if m > 1 {
+            legend.push(LegendEntry {
+                label: "lighter = earlier:".into(),
+                swatch: Swatch::Note,
+            });
+            legend.push(LegendEntry {
+                label: format!(
+                    "{} … {}",
+                    time_text(&snapshots[0]),
+                    time_text(&snapshots[m - 1])
+                ),
+                swatch: Swatch::Note,
+            });
+        }
+    }
+    let (planes, per) = three_projections(curves, markers);
+    geometry_figure(title, &planes, &per, 3, &legend, PLOT)
+}
+
+/// A time printed with up to 4 significant digits: `0.125 s`, `1.5e-05 s`.
+fn short_time(t: f64) -> String {
+    if t == 0.0 {
+        return "0 s".into();
+    }
+    let a = t.abs();
+    if (1e-3..1e4).contains(&a) {
+        let d = (3 - a.log10().floor() as i32).max(0) as usize;
+        let s = format!("{t:.d$}");
+        let s = if s.contains('.') {
+            s.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            s
+        };
+        format!("{s} s")
+    } else {
+        format!("{t:.3e} s")
+    }
+}
+
+/// Mode shapes: one panel per mode (up to 3 per row), each in the
+/// axis-aligned plane that shows it best (horizontal: the axis along which
+/// the equilibrium extends most; vertical: of the other two, the one with
+/// the largest modal displacement), equal aspect with one scale for all.
+/// Equilibrium in grey, `+` mode solid, `−` mode (mirrored) dashed.
+pub fn modes(title: &str, shapes: &ModeShapes) -> Result<Figure, VizError> {
+    if shapes.modes.is_empty() {
+        return Err(VizError::Empty("modes"));
+    }
+    check_curves("equilibrium", &shapes.equilibrium)?;
+    let grey = RGBColor(150, 150, 150);
+    let mut planes = Vec::new();
+    let mut per = Vec::new();
+    for (k, mode) in shapes.modes.iter().enumerate() {
+        check_len(
+            &format!("modes[{k}].displaced"),
+            mode.displaced.len(),
+            shapes.equilibrium.len(),
+        )?;
+        check_curves(&format!("modes[{k}].displaced"), &mode.displaced)?;
+        check_finite(&format!("modes[{k}].frequency_hz"), &[mode.frequency_hz])?;
+        let mut spread = [0.0f64; 3];
+        let mut disp = [0.0f64; 3];
+        for (e, d) in shapes.equilibrium.iter().zip(&mode.displaced) {
+            check_len(
+                &format!("modes[{k}].displaced ('{}').points", d.name),
+                d.points.len(),
+                e.points.len(),
+            )?;
+            for j in 0..3 {
+                spread[j] = spread[j].max(extent(e.points.iter().map(|p| p[j])));
+                disp[j] += e
+                    .points
+                    .iter()
+                    .zip(&d.points)
+                    .map(|(p, q)| (q[j] - p[j]).powi(2))
+                    .sum::<f64>();
+            }
+        }
+        let a = (0..3)
+            .max_by(|i, j| spread[*i].total_cmp(&spread[*j]))
+            .unwrap_or(0);
+        let b = (0..3)
+            .filter(|j| *j != a)
+            .max_by(|i, j| disp[*i].total_cmp(&disp[*j]))
+            .unwrap_or(2);
+        planes.push((
+            a,
+            b,
+            format!(
+                "mode {}: {} Hz  ({}–{})",
+                k + 1,
+                significant(mode.frequency_hz, 4),
+                AXES[a],
+                AXES[b]
+            ),
+        ));
+        let mut curves = Vec::new();
+        for (r, (e, d)) in shapes.equilibrium.iter().zip(&mode.displaced).enumerate() {
+            curves.push(Curve3 {
+                points: e.points.clone(),
+                color: grey,
+                width: 2,
+                dashed: false,
+            });
+            let mirrored = e
+                .points
+                .iter()
+                .zip(&d.points)
+                .map(|(p, q)| [2.0 * p[0] - q[0], 2.0 * p[1] - q[1], 2.0 * p[2] - q[2]])
+                .collect();
+            curves.push(Curve3 {
+                points: mirrored,
+                color: color(r),
+                width: 2,
+                dashed: true,
+            });
+            curves.push(Curve3 {
+                points: d.points.clone(),
+                color: color(r),
+                width: 3,
+                dashed: false,
+            });
+        }
+        per.push((curves, Vec::new()));
+    }
+    let mut legend = vec![LegendEntry::line("equilibrium", grey, 2)];
+    if shapes.equilibrium.len() > 1 {
+        legend.push(LegendEntry::header("rods"));
+    }
+    for (r, e) in shapes.equilibrium.iter().enumerate() {
+        legend.push(LegendEntry::line(
+            format!("{}: + mode", e.name),
+            color(r),
+            3,
+        ));
+        legend.push(LegendEntry {
+            label: format!("{}: − mode", e.name),
+            swatch: Swatch::Line {
+                color: color(r),
+                width: 2,
+                dashed: true,
+            },
+        });
+    }
+    let cols = shapes.modes.len().min(3);
+    geometry_figure(title, &planes, &per, cols, &legend, PLOT)
+}

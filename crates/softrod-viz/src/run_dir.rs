@@ -1,0 +1,629 @@
+//! A run directory as files: `shape.csv` (the contract's
+//! `t,rod,s,x,y,z,qw,qx,qy,qz`), `view.json` (radii, cables, bodies, title,
+//! up direction) and `bodies.csv` (`t,body,x,y,z,qw,qx,qy,qz`), read and
+//! written with a real CSV parser so any rod name (commas, quotes, line
+//! breaks) survives. Layout of `view.json`: docs/scene-format-extensions.md,
+//! "The view files".
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::data::{BodyShape, BodyTrack, CableTrack, Pose, RodTrack, ViewData, routed_cable};
+use crate::error::VizError;
+use crate::html::{ViewOptions, ViewStats, write_html};
+
+/// File names inside a run directory.
+pub const SHAPE_CSV: &str = "shape.csv";
+/// See [`SHAPE_CSV`].
+pub const VIEW_JSON: &str = "view.json";
+/// See [`SHAPE_CSV`].
+pub const BODIES_CSV: &str = "bodies.csv";
+/// See [`SHAPE_CSV`].
+pub const VIEW_HTML: &str = "view.html";
+/// The contract's header of `shape.csv` (more columns may follow).
+pub const SHAPE_HEADER: [&str; 10] = ["t", "rod", "s", "x", "y", "z", "qw", "qx", "qy", "qz"];
+/// The header of `bodies.csv` (more columns may follow).
+pub const BODIES_HEADER: [&str; 9] = ["t", "body", "x", "y", "z", "qw", "qx", "qy", "qz"];
+/// Radius of a rod that `view.json` does not describe, as a fraction of its
+/// sampled length (visible, and plainly not a measured radius).
+pub const DEFAULT_RADIUS_FRACTION: f64 = 0.01;
+/// Two samples' abscissae (or two files' times) are the same when they agree
+/// to this relative tolerance: both were printed as shortest round-trip
+/// decimals of the same `f64`, so they agree exactly unless rewritten.
+pub const SAME_NUMBER_RTOL: f64 = 1e-12;
+
+/// The shapes read from `shape.csv`: per rod, fixed samples over time.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ShapeData {
+    /// Output times, s, in file order.
+    pub times: Vec<f64>,
+    /// The rods, in order of first appearance.
+    pub rods: Vec<RodShape>,
+}
+
+/// One rod of [`ShapeData`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct RodShape {
+    /// Rod name.
+    pub name: String,
+    /// Material abscissae of the samples, m.
+    pub s: Vec<f64>,
+    /// `frames[k][i]`: pose at sample `i`, time `k`.
+    pub frames: Vec<Vec<Pose>>,
+}
+
+/// Writes `shape.csv` row by row (header first), as a run produces frames.
+pub struct ShapeCsvWriter<W: Write> {
+    w: csv::Writer<W>,
+}
+
+/// Shortest round-trip decimal (`{:?}` of f64: `0.1`, `1e-7`, `1.0`), read
+/// back exactly by Rust, Python and numpy.
+fn num(v: f64) -> String {
+    format!("{v:?}")
+}
+
+impl<W: Write> ShapeCsvWriter<W> {
+    /// Starts the file with the contract's header.
+    pub fn new(inner: W) -> Result<Self, csv::Error> {
+        let mut w = csv::Writer::from_writer(inner);
+        w.write_record(SHAPE_HEADER)?;
+        Ok(Self { w })
+    }
+
+    /// The rows of one rod at time `t`: one per sample, base to tip.
+    /// `s.len()` must equal `poses.len()`.
+    pub fn write_frame(
+        &mut self,
+        t: f64,
+        rod: &str,
+        s: &[f64],
+        poses: &[Pose],
+    ) -> Result<(), csv::Error> {
+        debug_assert_eq!(s.len(), poses.len());
+        let t = num(t);
+        for (sv, p) in s.iter().zip(poses) {
+            let [x, y, z] = p.position;
+            let [qw, qx, qy, qz] = p.rotation;
+            self.w.write_record([
+                t.as_str(),
+                rod,
+                &num(*sv),
+                &num(x),
+                &num(y),
+                &num(z),
+                &num(qw),
+                &num(qx),
+                &num(qy),
+                &num(qz),
+            ])?;
+        }
+        Ok(())
+    }
+
+    /// Flushes buffered rows (call after each output time so an
+    /// interrupted run leaves whole rows).
+    pub fn flush(&mut self) -> std::io::Result<()> {
+        self.w.flush()
+    }
+
+    /// Flushes and returns the inner writer.
+    pub fn into_inner(self) -> Result<W, VizError> {
+        self.w.into_inner().map_err(|e| VizError::Io {
+            path: PathBuf::from(SHAPE_CSV),
+            source: e.into_error(),
+        })
+    }
+}
+
+/// Writes `bodies.csv` row by row.
+pub struct BodiesCsvWriter<W: Write> {
+    w: csv::Writer<W>,
+}
+
+impl<W: Write> BodiesCsvWriter<W> {
+    /// Starts the file with [`BODIES_HEADER`].
+    pub fn new(inner: W) -> Result<Self, csv::Error> {
+        let mut w = csv::Writer::from_writer(inner);
+        w.write_record(BODIES_HEADER)?;
+        Ok(Self { w })
+    }
+
+    /// One body's pose at time `t`.
+    pub fn write_pose(&mut self, t: f64, body: &str, p: &Pose) -> Result<(), csv::Error> {
+        let [x, y, z] = p.position;
+        let [qw, qx, qy, qz] = p.rotation;
+        self.w.write_record([
+            num(t).as_str(),
+            body,
+            &num(x),
+            &num(y),
+            &num(z),
+            &num(qw),
+            &num(qx),
+            &num(qy),
+            &num(qz),
+        ])
+    }
+
+    /// Flushes buffered rows.
+    pub fn flush(&mut self) -> std::io::Result<()> {
+        self.w.flush()
+    }
+}
+
+fn csv_err(path: &Path, line: u64, problem: impl Into<String>) -> VizError {
+    VizError::Csv {
+        path: path.to_path_buf(),
+        line,
+        problem: problem.into(),
+    }
+}
+
+/// One data row: `(line, time, name, numbers)`, `numbers` being the
+/// columns after the name.
+type Row = (u64, f64, String, Vec<f64>);
+
+/// Rows of a CSV file with a required header prefix, `n_num` numbers after
+/// the name column.
+fn read_rows(path: &Path, header: &[&str], n_num: usize) -> Result<Vec<Row>, VizError> {
+    let mut rdr = csv::ReaderBuilder::new()
+        .has_headers(true)
+        .from_path(path)
+        .map_err(|e| match e.into_kind() {
+            csv::ErrorKind::Io(source) => VizError::Io {
+                path: path.to_path_buf(),
+                source,
+            },
+            other => csv_err(path, 0, format!("{other:?}")),
+        })?;
+    let head = rdr
+        .headers()
+        .map_err(|e| csv_err(path, 1, e.to_string()))?
+        .clone();
+    let got: Vec<&str> = head.iter().take(header.len()).collect();
+    if got != header {
+        return Err(csv_err(
+            path,
+            1,
+            format!(
+                "header starts {:?}, expected {:?}",
+                got.join(","),
+                header.join(",")
+            ),
+        ));
+    }
+    let mut rows = Vec::new();
+    for rec in rdr.records() {
+        let rec = rec.map_err(|e| {
+            let line = e.position().map_or(0, |p| p.line());
+            csv_err(path, line, e.to_string())
+        })?;
+        let line = rec.position().map_or(0, |p| p.line());
+        if rec.len() < header.len() {
+            return Err(csv_err(
+                path,
+                line,
+                format!("{} fields, expected at least {}", rec.len(), header.len()),
+            ));
+        }
+        let parse = |i: usize| -> Result<f64, VizError> {
+            let text = &rec[i];
+            match text.trim().parse::<f64>() {
+                Ok(v) if v.is_finite() => Ok(v),
+                _ => Err(csv_err(
+                    path,
+                    line,
+                    format!("column {}: not a finite number: {text:?}", header[i]),
+                )),
+            }
+        };
+        let t = parse(0)?;
+        let nums = (2..2 + n_num).map(parse).collect::<Result<Vec<_>, _>>()?;
+        rows.push((line, t, rec[1].to_string(), nums));
+    }
+    Ok(rows)
+}
+
+fn same(a: f64, b: f64) -> bool {
+    (a - b).abs() <= SAME_NUMBER_RTOL * a.abs().max(b.abs()).max(1e-300)
+}
+
+/// Every rod has all its samples at each of the `n` times so far.
+fn complete(path: &Path, line: u64, rods: &[RodShape], n: usize, t: f64) -> Result<(), VizError> {
+    for r in rods {
+        let have = if r.frames.len() == n {
+            r.frames[n - 1].len()
+        } else {
+            0
+        };
+        if have != r.s.len() {
+            return Err(csv_err(
+                path,
+                line,
+                format!(
+                    "rod {:?} has {have} of its {} samples at t = {t}",
+                    r.name,
+                    r.s.len()
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+fn pose_of(v: &[f64]) -> Pose {
+    Pose {
+        position: [v[0], v[1], v[2]],
+        rotation: [v[3], v[4], v[5], v[6]],
+    }
+}
+
+/// Reads `shape.csv`. Rows of one time come together (rods in any order,
+/// each rod's samples base to tip); every rod has the same samples `s` at
+/// every time. Columns after the contract's ten are ignored.
+pub fn read_shape_csv(path: &Path) -> Result<ShapeData, VizError> {
+    let rows = read_rows(path, &SHAPE_HEADER, 8)?;
+    let mut times: Vec<f64> = Vec::new();
+    let mut rods: Vec<RodShape> = Vec::new();
+    for (line, t, name, v) in rows {
+        let new_time = times.last().is_none_or(|last| !same(*last, t));
+        if new_time {
+            if let Some(&last) = times.last() {
+                if t < last {
+                    return Err(csv_err(path, line, format!("time {t} after {last}")));
+                }
+                complete(path, line, &rods, times.len(), last)?;
+            }
+            times.push(t);
+        }
+        let k = times.len() - 1;
+        let r = match rods.iter().position(|r| r.name == name) {
+            Some(r) => r,
+            None => {
+                if k > 0 {
+                    return Err(csv_err(
+                        path,
+                        line,
+                        format!("rod {name:?} first appears at t = {t}, not at the first time"),
+                    ));
+                }
+                rods.push(RodShape {
+                    name: name.clone(),
+                    s: Vec::new(),
+                    frames: Vec::new(),
+                });
+                rods.len() - 1
+            }
+        };
+        let rod = &mut rods[r];
+        if rod.frames.len() < k {
+            return Err(csv_err(
+                path,
+                line,
+                format!(
+                    "rod {name:?} has no rows at t = {}",
+                    times[rod.frames.len()]
+                ),
+            ));
+        }
+        if rod.frames.len() == k {
+            rod.frames.push(Vec::new());
+        }
+        let i = rod.frames[k].len();
+        let s = v[0];
+        if k == 0 {
+            if rod.s.last().is_some_and(|last| s <= *last) {
+                return Err(csv_err(
+                    path,
+                    line,
+                    format!("rod {name:?}: s = {s} does not increase"),
+                ));
+            }
+            rod.s.push(s);
+        } else if i >= rod.s.len() || !same(rod.s[i], s) {
+            return Err(csv_err(
+                path,
+                line,
+                format!(
+                    "rod {name:?} at t = {t}: sample {i} at s = {s}, the first time had {}",
+                    rod.s
+                        .get(i)
+                        .map_or("no such sample".into(), |v| format!("s = {v}"))
+                ),
+            ));
+        }
+        rod.frames[k].push(pose_of(&v[1..8]));
+    }
+    if times.is_empty() {
+        return Err(csv_err(path, 2, "no rows"));
+    }
+    let last = times[times.len() - 1];
+    complete(path, 0, &rods, times.len(), last)?;
+    Ok(ShapeData { times, rods })
+}
+
+/// A body's poses over time, as read from `bodies.csv`.
+pub type BodyPoses = (String, Vec<Pose>);
+
+/// Reads `bodies.csv`: the times, and per body (in order of first
+/// appearance) its name and pose at each time.
+pub fn read_bodies_csv(path: &Path) -> Result<(Vec<f64>, Vec<BodyPoses>), VizError> {
+    let rows = read_rows(path, &BODIES_HEADER, 7)?;
+    let mut times: Vec<f64> = Vec::new();
+    let mut bodies: Vec<(String, Vec<Pose>)> = Vec::new();
+    for (line, t, name, v) in rows {
+        if times.last().is_none_or(|last| !same(*last, t)) {
+            times.push(t);
+        }
+        let k = times.len() - 1;
+        let b = match bodies.iter().position(|b| b.0 == name) {
+            Some(b) => b,
+            None => {
+                bodies.push((name.clone(), Vec::new()));
+                bodies.len() - 1
+            }
+        };
+        if bodies[b].1.len() != k {
+            return Err(csv_err(
+                path,
+                line,
+                format!(
+                    "body {name:?}: {} poses before t = {t}, expected {k}",
+                    bodies[b].1.len()
+                ),
+            ));
+        }
+        bodies[b].1.push(pose_of(&v));
+    }
+    Ok((times, bodies))
+}
+
+/// The radius profile of a rod in `view.json`: `r` (m) at abscissae `s`
+/// (m), linear between them, constant beyond the ends.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RadiusProfile {
+    /// Abscissae, m, strictly increasing.
+    pub s: Vec<f64>,
+    /// Radii, m, ≥ 0; as many as `s`.
+    pub r: Vec<f64>,
+}
+
+impl RadiusProfile {
+    /// A constant radius.
+    pub fn constant(r: f64) -> Self {
+        Self {
+            s: vec![0.0],
+            r: vec![r],
+        }
+    }
+
+    /// The radius at `s` (linear interpolation, clamped).
+    pub fn at(&self, s: f64) -> f64 {
+        let n = self.s.len();
+        if n == 0 {
+            return 0.0;
+        }
+        let i = self.s.partition_point(|v| *v <= s);
+        if i == 0 {
+            return self.r[0];
+        }
+        if i >= n {
+            return self.r[n - 1];
+        }
+        let u = (s - self.s[i - 1]) / (self.s[i] - self.s[i - 1]);
+        self.r[i - 1] + u * (self.r[i] - self.r[i - 1])
+    }
+}
+
+/// A rod entry of `view.json`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RodSpec {
+    /// Name, as in `shape.csv`.
+    pub name: String,
+    /// Outer radius along the rod.
+    pub radius: RadiusProfile,
+}
+
+/// A cable entry of `view.json`: routed through a rod's cross-sections.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CableSpec {
+    /// Name shown in the legend.
+    pub name: String,
+    /// The rod it runs along.
+    pub rod: String,
+    /// `(s, y, z)` points, m: abscissa and offset in the rod's local frame,
+    /// straight between points (the scene's `[[cable]] path`; a constant
+    /// `offset` over `[from, to]` is the two points `(from, y, z)`, `(to, y, z)`).
+    pub path: Vec<[f64; 3]>,
+}
+
+/// A body entry of `view.json`; its poses are in `bodies.csv`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BodySpec {
+    /// Name, as in `bodies.csv`.
+    pub name: String,
+    /// Shape and size.
+    #[serde(flatten)]
+    pub shape: BodyShape,
+}
+
+/// `view.json`: what the 3-D view needs beyond `shape.csv`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ViewSpec {
+    /// Always `"softrod-view"`.
+    pub format: String,
+    /// Layout version, 1.
+    pub version: u32,
+    /// Page title (e.g. the scene's name).
+    #[serde(default)]
+    pub title: String,
+    /// World direction drawn upward (default `[0, 0, 1]`; the CLI writes
+    /// `−g/|g|` when there is gravity).
+    #[serde(default = "default_up")]
+    pub up: [f64; 3],
+    /// Radii of the rods (rods of `shape.csv` missing here get
+    /// [`DEFAULT_RADIUS_FRACTION`] of their length).
+    #[serde(default)]
+    pub rods: Vec<RodSpec>,
+    /// Cables.
+    #[serde(default)]
+    pub cables: Vec<CableSpec>,
+    /// Rigid bodies.
+    #[serde(default)]
+    pub bodies: Vec<BodySpec>,
+}
+
+fn default_up() -> [f64; 3] {
+    [0.0, 0.0, 1.0]
+}
+
+impl ViewSpec {
+    /// An empty spec (version 1) with a title.
+    pub fn new(title: impl Into<String>) -> Self {
+        Self {
+            format: "softrod-view".into(),
+            version: 1,
+            title: title.into(),
+            up: default_up(),
+            rods: Vec::new(),
+            cables: Vec::new(),
+            bodies: Vec::new(),
+        }
+    }
+
+    /// Writes it, pretty-printed.
+    pub fn write(&self, path: &Path) -> Result<(), VizError> {
+        let text = serde_json::to_string_pretty(self).map_err(|source| VizError::Json {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        std::fs::write(path, text + "\n").map_err(|source| VizError::Io {
+            path: path.to_path_buf(),
+            source,
+        })
+    }
+
+    /// Reads it and checks `format` and `version`.
+    pub fn read(path: &Path) -> Result<Self, VizError> {
+        let text = std::fs::read_to_string(path).map_err(|source| VizError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let spec: Self = serde_json::from_str(&text).map_err(|source| VizError::Json {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        if spec.format != "softrod-view" || spec.version != 1 {
+            return Err(VizError::Invalid {
+                what: path.display().to_string(),
+                problem: format!(
+                    "format {:?} version {} (expected \"softrod-view\" version 1)",
+                    spec.format, spec.version
+                ),
+            });
+        }
+        Ok(spec)
+    }
+}
+
+/// The view of a run directory from its files: `shape.csv` (required),
+/// `view.json` and `bodies.csv` (optional).
+pub fn view_from_dir(dir: &Path) -> Result<ViewData, VizError> {
+    let shape = read_shape_csv(&dir.join(SHAPE_CSV))?;
+    let spec_path = dir.join(VIEW_JSON);
+    let spec = if spec_path.exists() {
+        ViewSpec::read(&spec_path)?
+    } else {
+        ViewSpec::new(
+            dir.file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+        )
+    };
+    let mut view = ViewData::new(spec.title.clone(), shape.times.clone());
+    view.up = spec.up;
+    for rod in shape.rods {
+        let radius: Vec<f64> = match spec.rods.iter().find(|r| r.name == rod.name) {
+            Some(r) => rod.s.iter().map(|s| r.radius.at(*s)).collect(),
+            None => {
+                let len = rod.s.last().unwrap_or(&0.0) - rod.s.first().unwrap_or(&0.0);
+                vec![DEFAULT_RADIUS_FRACTION * len; rod.s.len()]
+            }
+        };
+        view.rods.push(RodTrack {
+            name: rod.name,
+            s: rod.s,
+            radius,
+            frames: rod.frames,
+            tip_trace: None,
+        });
+    }
+    for c in &spec.cables {
+        let rod = view
+            .rods
+            .iter()
+            .find(|r| r.name == c.rod)
+            .ok_or_else(|| VizError::Invalid {
+                what: format!("{}: cable {:?}", spec_path.display(), c.name),
+                problem: format!("unknown rod {:?}", c.rod),
+            })?;
+        if c.path.len() < 2 || c.path.windows(2).any(|w| w[1][0] <= w[0][0]) {
+            return Err(VizError::Invalid {
+                what: format!("{}: cable {:?}.path", spec_path.display(), c.name),
+                problem: "needs at least 2 points with increasing s".into(),
+            });
+        }
+        view.cables.push(CableTrack {
+            name: c.name.clone(),
+            points: routed_cable(rod, &c.path),
+        });
+    }
+    if !spec.bodies.is_empty() {
+        let path = dir.join(BODIES_CSV);
+        let (times, poses) = read_bodies_csv(&path)?;
+        if times.len() != view.times.len()
+            || !times.iter().zip(&view.times).all(|(a, b)| same(*a, *b))
+        {
+            return Err(csv_err(
+                &path,
+                0,
+                format!(
+                    "{} times, not the {} times of {SHAPE_CSV}",
+                    times.len(),
+                    view.times.len()
+                ),
+            ));
+        }
+        for b in &spec.bodies {
+            let p = poses.iter().find(|p| p.0 == b.name).ok_or_else(|| {
+                csv_err(
+                    &path,
+                    0,
+                    format!("no rows for body {:?} of {VIEW_JSON}", b.name),
+                )
+            })?;
+            view.bodies.push(BodyTrack {
+                name: b.name.clone(),
+                shape: b.shape,
+                poses: p.1.clone(),
+            });
+        }
+    }
+    Ok(view)
+}
+
+/// Regenerates `DIR/view.html` from the directory's files (what `softrod
+/// view DIR` does); returns its path and what it kept.
+pub fn write_view(dir: &Path, opts: &ViewOptions) -> Result<(PathBuf, ViewStats), VizError> {
+    let view = view_from_dir(dir)?;
+    let out = dir.join(VIEW_HTML);
+    let stats = write_html(&out, &view, opts)?;
+    Ok((out, stats))
+}

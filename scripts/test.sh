@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# Every test of the repository: the Rust workspace, then the Python package.
+#
+#   bash scripts/test.sh
+#
+# Needs the Rust toolchain and Python >= 3.10 with pip. The Python tests run
+# in .venv/ (created if missing; SOFTROD_VENV picks another), with maturin,
+# numpy, pytest and cosseratbench at the versions pinned in
+# crates/softrod-py/requirements-dev.txt, against a dev-profile build that
+# shares target/ with cargo test.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+venv="${SOFTROD_VENV:-.venv}"
+
+# The 3-D view is tested in a real headless browser (crates/softrod-viz/tests/browser.rs).
+if [[ -z "${SOFTROD_CHROMIUM:-}" ]] && ! command -v chromium >/dev/null 2>&1; then
+    if command -v apt-get >/dev/null 2>&1 && [[ "$(id -u)" == 0 ]]; then
+        echo "== installing Debian's chromium for the browser test"
+        apt-get update -qq
+        DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null
+    else
+        echo "scripts/test.sh: the browser test needs chromium (apt-get install chromium, or set SOFTROD_CHROMIUM)" >&2
+        exit 1
+    fi
+fi
+
+echo "== Rust tests"
+cargo test --workspace
+
+echo "== Python package (dev build into $venv)"
+bash scripts/install.sh --dev "$venv"
+
+echo "== Python tests"
+# The CLI-equality tests run the `softrod` binary cargo test just built.
+SOFTROD_BIN="$PWD/target/debug/softrod" "$venv/bin/python" -m pytest crates/softrod-py/tests -q
