@@ -1,15 +1,15 @@
 //! The PCS rod equations of motion as a [`SecondOrderSystem`].
 //!
 //! [`RodSystem`] wraps a `softrod_dynamics::Model` and its `Data`:
-//! accelerations by the O(N) articulated forward dynamics, Jacobians by
-//! `dynamics_jacobians` (the elastic `K` and viscous `D` parts exact, only the
-//! soft geometric remainder by central differences), so the stiff methods see
-//! the true stiffness of shear and extension.
+//! accelerations by the O(N) articulated forward dynamics, the force residual
+//! by the O(N) inverse dynamics, the shifted mass matrix `M + aK + bD` by the
+//! O(N) `ShiftedSolver`, and the exact Jacobians by the analytic derivatives
+//! of the forward dynamics.
 
 use nalgebra::{DMatrix, DVector};
 use softrod_dynamics::{
-    Data, DynamicsError, Model, ShiftedSolver, damping_matrix, dynamics_jacobians,
-    forward_dynamics, inverse_dynamics, mass_matrix, stiffness_matrix,
+    Data, DynamicsError, FdDerivatives, Model, ShiftedSolver, damping_matrix, forward_dynamics,
+    forward_dynamics_derivatives, inverse_dynamics, mass_matrix, stiffness_matrix,
 };
 use softrod_mechanics::Tension;
 
@@ -30,13 +30,16 @@ pub struct RodSystem {
     /// The factored `M(q) + aK + bD` of
     /// [`SecondOrderSystem::factor_shifted_mass`] (O(N), no `n×n` matrix).
     shifted: ShiftedSolver,
+    /// The workspace of the analytic derivatives, allocated when the exact
+    /// Jacobian is first asked for (it holds `n_dof × n_dof` matrices).
+    derivatives: Option<Box<FdDerivatives>>,
 }
 
 /// The Jacobians [`RodSystem`] hands to the stiff methods.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum RodJacobian {
     /// `∂q̈/∂q`, `∂q̈/∂q̇` of the full forward dynamics
-    /// (`softrod_dynamics::dynamics_jacobians`).
+    /// (`softrod_dynamics::forward_dynamics_derivatives`, analytic).
     #[default]
     Exact,
     /// Only the stiff linear part: `−M(q)⁻¹K` and `−M(q)⁻¹D` (one `M(q)`, no
@@ -70,6 +73,7 @@ impl RodSystem {
             tau: None,
             jacobian: RodJacobian::Exact,
             shifted,
+            derivatives: None,
         }
     }
 }
@@ -136,7 +140,9 @@ impl SecondOrderSystem for RodSystem {
         Ok(())
     }
 
-    /// The exact `∂q̈/∂q`, `∂q̈/∂q̇` (`softrod_dynamics::dynamics_jacobians`)
+    /// The exact `∂q̈/∂q`, `∂q̈/∂q̇` (the analytic derivatives of
+    /// `softrod_dynamics::forward_dynamics_derivatives`, no allocation after
+    /// the first call)
     /// whatever [`RodSystem::jacobian`] says: the cheap approximation of
     /// [`RodJacobian::ElasticOnly`] is the mass-matrix form, and this is what
     /// the methods refresh to when it stops working.
@@ -149,9 +155,13 @@ impl SecondOrderSystem for RodSystem {
         dqdd_dqd: &mut DMatrix<f64>,
     ) -> Result<(), DynamicsError> {
         let tau = self.tau.as_ref().map(|v| v.as_slice());
-        let j = dynamics_jacobians(
+        let work = self
+            .derivatives
+            .get_or_insert_with(|| Box::new(FdDerivatives::new(&self.model)));
+        let j = forward_dynamics_derivatives(
             &self.model,
             &mut self.data,
+            work,
             t,
             q.as_slice(),
             qd.as_slice(),
