@@ -9,7 +9,7 @@ use nalgebra::DVector;
 use crate::error::{IntegrateError, first_non_finite};
 use crate::hooks::{Control, Direction, Hooks, StepInfo};
 use crate::method::Method;
-use crate::methods::{Dopri5, GeneralizedAlpha, Rk4, Rosw34};
+use crate::methods::{Dopri5, Esdirk, GeneralizedAlpha, Radau5, Rk4, Rosw34};
 use crate::options::Options;
 use crate::problem::{FirstOrderProblem, Problem, SecondOrderProblem};
 use crate::solution::{EventRecord, Solution, Stats, Status};
@@ -20,7 +20,8 @@ use crate::system::{OdeSystem, SecondOrderSystem};
 ///
 /// * `sys`: the system, dim `n`.
 /// * `method`: [`Method::Rk4`], [`Method::Dopri5`] or [`Method::Rosw34`]
-///   ([`Method::GeneralizedAlpha`] needs a [`SecondOrderSystem`]: use
+///   ([`Method::GeneralizedAlpha`] and [`Method::Esdirk46`] need a
+///   [`SecondOrderSystem`]: use
 ///   [`integrate_second_order`]).
 /// * `y0`: initial state, dim `n`.
 /// * `opts`: tolerances, steps, output times ([`Options`]).
@@ -51,8 +52,9 @@ pub fn integrate<S: OdeSystem>(
         Method::Rk4 => drive(&mut p, &mut Rk4::new(n), t0, t1, y0, opts, hooks),
         Method::Dopri5 => drive(&mut p, &mut Dopri5::new(n), t0, t1, y0, opts, hooks),
         Method::Rosw34 => drive(&mut p, &mut Rosw34::new(n), t0, t1, y0, opts, hooks),
-        Method::GeneralizedAlpha { .. } => Err(IntegrateError::InvalidInput {
-            what: "generalized-α needs a SecondOrderSystem: use integrate_second_order".into(),
+        Method::Radau5 => drive(&mut p, &mut Radau5::new(n, None), t0, t1, y0, opts, hooks),
+        Method::GeneralizedAlpha { .. } | Method::Esdirk46 => Err(IntegrateError::InvalidInput {
+            what: format!("{method:?} needs a SecondOrderSystem: use integrate_second_order"),
         }),
     }
 }
@@ -96,6 +98,16 @@ pub fn integrate_second_order<S: SecondOrderSystem>(
         Method::Rk4 => drive(&mut p, &mut Rk4::new(m), t0, t1, &y0, opts, hooks),
         Method::Dopri5 => drive(&mut p, &mut Dopri5::new(m), t0, t1, &y0, opts, hooks),
         Method::Rosw34 => drive(&mut p, &mut Rosw34::new(m), t0, t1, &y0, opts, hooks),
+        Method::Radau5 => drive(
+            &mut p,
+            &mut Radau5::new(m, Some(n)),
+            t0,
+            t1,
+            &y0,
+            opts,
+            hooks,
+        ),
+        Method::Esdirk46 => drive(&mut p, &mut Esdirk::new(n), t0, t1, &y0, opts, hooks),
         Method::GeneralizedAlpha { rho_inf } => drive(
             &mut p,
             &mut GeneralizedAlpha::new(n, rho_inf),

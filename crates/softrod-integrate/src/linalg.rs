@@ -2,7 +2,7 @@
 //! buffers allocated once (nalgebra's `LU`/`Cholesky` take their matrix by
 //! value and allocate).
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{Complex, DMatrix, DVector};
 
 /// Which factorization the buffer holds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -195,6 +195,104 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     s
 }
 
+/// A complex square matrix factored in place, `P·A = L·U` with partial
+/// pivoting (the complex iteration matrix of Radau IIA), in buffers
+/// allocated once.
+#[derive(Debug, Clone)]
+pub(crate) struct ComplexLu {
+    n: usize,
+    /// Column-major.
+    a: Vec<Complex<f64>>,
+    piv: Vec<usize>,
+}
+
+impl ComplexLu {
+    /// Buffers for an `n×n` matrix.
+    pub(crate) fn new(n: usize) -> Self {
+        Self {
+            n,
+            a: vec![Complex::new(0.0, 0.0); n * n],
+            piv: vec![0; n],
+        }
+    }
+
+    /// Dimension.
+    pub(crate) fn dim(&self) -> usize {
+        self.n
+    }
+
+    /// Entry `(i, j)` of the matrix to fill before [`factor`](Self::factor).
+    pub(crate) fn set(&mut self, i: usize, j: usize, v: Complex<f64>) {
+        self.a[j * self.n + i] = v;
+    }
+
+    /// Factors in place (right-looking, partial pivoting on the modulus).
+    /// Returns `false` if a pivot is zero or not finite.
+    pub(crate) fn factor(&mut self) -> bool {
+        let n = self.n;
+        let a = &mut self.a;
+        for k in 0..n {
+            let mut p = k;
+            let mut best = a[k * n + k].norm();
+            for i in k + 1..n {
+                let v = a[k * n + i].norm();
+                if v > best {
+                    best = v;
+                    p = i;
+                }
+            }
+            if best == 0.0 || !best.is_finite() {
+                return false;
+            }
+            self.piv[k] = p;
+            if p != k {
+                for j in 0..n {
+                    a.swap(j * n + p, j * n + k);
+                }
+            }
+            let inv = Complex::new(1.0, 0.0) / a[k * n + k];
+            for i in k + 1..n {
+                a[k * n + i] *= inv;
+            }
+            for j in k + 1..n {
+                let akj = a[j * n + k];
+                if akj != Complex::new(0.0, 0.0) {
+                    for i in k + 1..n {
+                        let lik = a[k * n + i];
+                        a[j * n + i] -= lik * akj;
+                    }
+                }
+            }
+        }
+        true
+    }
+
+    /// Solves `A x = b` in place with the factorization.
+    pub(crate) fn solve_in_place(&self, b: &mut [Complex<f64>]) {
+        let n = self.n;
+        let a = &self.a;
+        for k in 0..n {
+            let p = self.piv[k];
+            if p != k {
+                b.swap(p, k);
+            }
+        }
+        for j in 0..n {
+            let bj = b[j];
+            for i in j + 1..n {
+                b[i] -= a[j * n + i] * bj;
+            }
+        }
+        for j in (0..n).rev() {
+            b[j] /= a[j * n + j];
+            let bj = b[j];
+            for i in 0..j {
+                b[i] -= a[j * n + i] * bj;
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -251,6 +349,38 @@ mod tests {
         f.matrix_mut()
             .copy_from(&DMatrix::from_row_slice(2, 2, &[1.0, 2.0, 2.0, 1.0]).resize(n, n, 0.0));
         assert!(!f.factor_cholesky());
+    }
+
+    #[test]
+    fn complex_lu_solves_like_a_real_block_system() {
+        // (A + iB) x = b against the real 2n×2n form [[A, −B], [B, A]].
+        let n = 5;
+        let re = DMatrix::from_fn(n, n, |i, j| {
+            ((2 * i + 3 * j) % 7) as f64 - 3.0 + 4.0 * (i == j) as u8 as f64
+        });
+        let im = DMatrix::from_fn(n, n, |i, j| ((i + 5 * j) % 4) as f64 * 0.5 - 0.7);
+        let b: Vec<Complex<f64>> = (0..n)
+            .map(|i| Complex::new((i as f64).cos(), (i as f64 * 0.3).sin()))
+            .collect();
+        let mut lu = ComplexLu::new(n);
+        for j in 0..n {
+            for i in 0..n {
+                lu.set(i, j, Complex::new(re[(i, j)], im[(i, j)]));
+            }
+        }
+        assert!(lu.factor());
+        let mut x = b.clone();
+        lu.solve_in_place(&mut x);
+        let mut big = DMatrix::zeros(2 * n, 2 * n);
+        big.view_mut((0, 0), (n, n)).copy_from(&re);
+        big.view_mut((0, n), (n, n)).copy_from(&(-&im));
+        big.view_mut((n, 0), (n, n)).copy_from(&im);
+        big.view_mut((n, n), (n, n)).copy_from(&re);
+        let rhs = DVector::from_fn(2 * n, |i, _| if i < n { b[i].re } else { b[i - n].im });
+        let y = big.lu().solve(&rhs).unwrap();
+        for i in 0..n {
+            assert!((x[i].re - y[i]).abs() < 1e-13 && (x[i].im - y[n + i]).abs() < 1e-13);
+        }
     }
 
     #[test]

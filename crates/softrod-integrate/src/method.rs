@@ -2,6 +2,7 @@
 
 /// The integration method.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub enum Method {
     /// Classical 4th-order Runge–Kutta with a fixed step
     /// ([`StepControl::Fixed`](crate::StepControl::Fixed); the last step is shortened to land on `t1`).
@@ -18,17 +19,21 @@ pub enum Method {
     /// L-stable and stiffly accurate. Linearly implicit: no Newton iteration;
     /// 4 solves with one LU of `I/(hγ) − J` per step.
     ///
-    /// Why this one: (1) as a *W*-method it keeps order 3 with any
-    /// approximation of the Jacobian, so the Jacobian may be reused across
-    /// many steps and the LU across steps of equal size without losing
-    /// accuracy — a plain Rosenbrock method (RODAS) needs the exact Jacobian at
-    /// every step; (2) no Newton iteration, hence no convergence failure mode
-    /// and bit-reproducible cost; (3) L-stability damps the shear/extension
-    /// modes (EA/EI ~ 1/r²) instead of ringing; (4) stiff accuracy gives no
-    /// order reduction on the elastic relaxation. Radau IIA 5 is more accurate
-    /// at tight tolerances but needs a Newton iteration with a complex 2×2
-    /// block system; for the rod's moderate tolerances (1e-3…1e-6) order 3 is
-    /// the better trade.
+    /// Why it is kept beside the Newton methods: (1) as a *W*-method it
+    /// keeps order 3 with any approximation of the Jacobian, so the Jacobian
+    /// is reused across many steps and the LU across steps of equal size —
+    /// with [`RodJacobian::ElasticOnly`](crate::RodJacobian::ElasticOnly) it
+    /// is a linearly implicit IMEX scheme; (2) no Newton iteration, hence no
+    /// convergence failure mode and bit-reproducible cost; (3) L-stability
+    /// and stiff accuracy. A cheap Jacobian is kept only while it works: when
+    /// rejections cluster, the step collapses or drifts down, or it is about
+    /// to underflow, ROS34PW2 switches to the exact Jacobian
+    /// ([`SecondOrderSystem::jacobians`](crate::SecondOrderSystem::jacobians))
+    /// for a window of steps, kept while it takes clearly larger steps.
+    /// Its embedded estimate is first-order-norm (positions and
+    /// velocities), so on undamped rods it resolves the high modes the
+    /// release excites: 10–100× slower than [`Method::Esdirk46`] at equal
+    /// tip error (docs/performance.md).
     Rosw34,
     /// Generalized-α for second-order systems (Chung & Hulbert, J. Appl.
     /// Mech. 60 (1993) 371–375) in the form of Arnold & Brüls (Multibody Syst.
@@ -83,4 +88,32 @@ pub enum Method {
         /// Spectral radius at infinite frequency, in `[0, 1]`.
         rho_inf: f64,
     },
+    /// ESDIRK4(3)6L\[2\]SA (Kennedy & Carpenter, Appl. Numer. Math. 44 (2003)
+    /// 139–181): an adaptive implicit Runge–Kutta method of order 4 with an
+    /// embedded order 3, L-stable and stiffly accurate, six stages of which
+    /// five implicit with one diagonal `γ = 1/4`. Each implicit stage is one
+    /// equation in its acceleration, solved by simplified Newton on the
+    /// force residual with the iteration matrix `M(q) + h²γ²K + hγD` — the
+    /// structured O(N) solve of
+    /// [`SecondOrderSystem::factor_shifted_mass`](crate::SecondOrderSystem::factor_shifted_mass)
+    /// when the system has it — and on the exact dense Jacobian when that
+    /// converges badly. Jacobian and factorization are kept while the
+    /// iteration contracts fast and `h` changes by less than 20 %. Dense
+    /// output: quintic Hermite in `(q, q̇, q̈)`. Only for
+    /// [`SecondOrderSystem`](crate::SecondOrderSystem). With
+    /// [`StepControl::Fixed`](crate::StepControl::Fixed) every step is
+    /// accepted (for convergence studies).
+    Esdirk46,
+    /// Radau IIA of order 5 (Ehle; three-stage collocation, L-stable,
+    /// stiffly accurate), in the design of Hairer & Wanner's RADAU5
+    /// (*Solving ODEs II*, §IV.8): simplified Newton on the exact dense
+    /// Jacobian in the variables that split the stage system into one real
+    /// and one complex `n×n` system, Jacobian and factorization reuse,
+    /// filtered error estimate, predictive step control, collocation dense
+    /// output. For first- and second-order systems (the latter through `n×n`
+    /// Schur complements, the error measured in positions as for
+    /// [`Method::Esdirk46`]). Its complex shift has no real-shifted
+    /// structured counterpart, so it always works on dense `n×n` matrices:
+    /// for small stiff systems and tight tolerances.
+    Radau5,
 }

@@ -1,15 +1,15 @@
 //! The PCS rod equations of motion as a [`SecondOrderSystem`].
 //!
 //! [`RodSystem`] wraps a `softrod_dynamics::Model` and its `Data`:
-//! accelerations by the O(N) articulated forward dynamics, Jacobians by
-//! `dynamics_jacobians` (the elastic `K` and viscous `D` parts exact, only the
-//! soft geometric remainder by central differences), so the stiff methods see
-//! the true stiffness of shear and extension.
+//! accelerations by the O(N) articulated forward dynamics, the force residual
+//! by the O(N) inverse dynamics, the shifted mass matrix `M + aK + bD` by the
+//! O(N) `ShiftedSolver`, and the exact Jacobians by the analytic derivatives
+//! of the forward dynamics.
 
 use nalgebra::{DMatrix, DVector};
 use softrod_dynamics::{
-    Data, DynamicsError, Model, damping_matrix, dynamics_jacobians, forward_dynamics,
-    inverse_dynamics, mass_matrix, stiffness_matrix,
+    Data, DynamicsError, FdDerivatives, Model, ShiftedSolver, damping_matrix, forward_dynamics,
+    forward_dynamics_derivatives, inverse_dynamics, mass_matrix, stiffness_matrix,
 };
 use softrod_mechanics::Tension;
 
@@ -27,28 +27,38 @@ pub struct RodSystem {
     pub tau: Option<DVector<f64>>,
     /// Which Jacobians the stiff methods get (default [`RodJacobian::Exact`]).
     pub jacobian: RodJacobian,
+    /// The factored `M(q) + aK + bD` of
+    /// [`SecondOrderSystem::factor_shifted_mass`] (O(N), no `n×n` matrix).
+    shifted: ShiftedSolver,
+    /// The workspace of the analytic derivatives, allocated when the exact
+    /// Jacobian is first asked for (it holds `n_dof × n_dof` matrices).
+    derivatives: Option<Box<FdDerivatives>>,
 }
 
 /// The Jacobians [`RodSystem`] hands to the stiff methods.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum RodJacobian {
     /// `∂q̈/∂q`, `∂q̈/∂q̇` of the full forward dynamics
-    /// (`softrod_dynamics::dynamics_jacobians`: `K`, `D` exact, the geometric
-    /// remainder by central differences; `4·n_dof` inverse dynamics, one `M`).
+    /// (`softrod_dynamics::forward_dynamics_derivatives`, analytic).
     #[default]
     Exact,
     /// Only the stiff linear part: `−M(q)⁻¹K` and `−M(q)⁻¹D` (one `M(q)`, no
-    /// finite differences). The integrators get it in mass-matrix form
+    /// derivatives). The integrators get it in mass-matrix form
     /// ([`SecondOrderSystem::mass_form_jacobians`]) and never form `M⁻¹K`:
-    /// they factor `M + β'K + γ'D` (generalized-α) or `c²M + cD + K`
-    /// (Rosenbrock) by Cholesky; [`SecondOrderSystem::jacobians`] still
-    /// returns the dense `−M⁻¹K`, `−M⁻¹D`. The elastic and viscous forces `K(q − q̄)`, `D q̇`
-    /// are linear with constant `K`, `D` in PCS, and they are what makes the
-    /// rod stiff; gravity, Coriolis and loads are soft and left out. With the
-    /// Rosenbrock–W method (order 3 for any `W`) this is a linearly implicit
-    /// IMEX splitting: stiff elastic/viscous part implicit, the rest explicit.
-    /// Generalized-α still converges to the same step solution (its simplified
-    /// Newton just takes an iteration more when the geometric part matters).
+    /// generalized-α factors `M + β'K + γ'D` by the O(N)
+    /// [`SecondOrderSystem::factor_shifted_mass`], ROS34PW2 `c²M + cD + K`
+    /// by a dense Cholesky ([`RodSystem::elastic_jacobians`] gives the dense
+    /// `−M⁻¹K`, `−M⁻¹D` for comparisons; [`SecondOrderSystem::jacobians`]
+    /// stays exact, for the methods to refresh to). The elastic and viscous forces
+    /// `K(q − q̄)`, `D q̇` are linear with constant `K`, `D` in PCS, and they
+    /// are what makes the rod stiff; gravity, Coriolis and loads are soft and
+    /// left out. With the Rosenbrock–W method (order 3 for any `W`) this is a
+    /// linearly implicit IMEX splitting: stiff elastic/viscous part implicit,
+    /// the rest explicit. Generalized-α still converges to the same step
+    /// solution (its simplified Newton just takes an iteration more when the
+    /// geometric part matters). [`Method::Esdirk46`](crate::Method::Esdirk46)
+    /// does not look at it: it iterates on the shifted mass matrix and falls
+    /// back to the exact [`SecondOrderSystem::jacobians`].
     ElasticOnly,
 }
 
@@ -56,12 +66,50 @@ impl RodSystem {
     /// A system for `model`, no actuator force.
     pub fn new(model: Model) -> Self {
         let data = Data::new(&model);
+        let shifted = ShiftedSolver::new(&model);
         Self {
             model,
             data,
             tau: None,
             jacobian: RodJacobian::Exact,
+            shifted,
+            derivatives: None,
         }
+    }
+}
+
+impl RodSystem {
+    /// The dense elastic/viscous Jacobian approximation `∂q̈/∂q ≈ −M(q)⁻¹K`,
+    /// `∂q̈/∂q̇ ≈ −M(q)⁻¹D` (n_dof × n_dof each; one mass matrix, one dense
+    /// Cholesky, `n_dof` solves; allocates). The integrators never form it
+    /// (they use the mass-matrix form of [`RodJacobian::ElasticOnly`]); it is
+    /// here for comparisons.
+    pub fn elastic_jacobians(
+        &mut self,
+        q: &DVector<f64>,
+        dqdd_dq: &mut DMatrix<f64>,
+        dqdd_dqd: &mut DMatrix<f64>,
+    ) -> Result<(), DynamicsError> {
+        let m = mass_matrix(&self.model, &mut self.data, q.as_slice())?;
+        let chol = m.clone().cholesky().ok_or(DynamicsError::Singular {
+            rod: 0,
+            piece: 0,
+            what: "mass matrix",
+        })?;
+        let mut k = stiffness_matrix(&self.model);
+        chol.solve_mut(&mut k);
+        dqdd_dq.copy_from(&k);
+        dqdd_dq.neg_mut();
+        let mut d = damping_matrix(&self.model);
+        if d.iter().all(|&v| v == 0.0) {
+            // Undamped: skip the n_dof-column solve.
+            dqdd_dqd.fill(0.0);
+        } else {
+            chol.solve_mut(&mut d);
+            dqdd_dqd.copy_from(&d);
+            dqdd_dqd.neg_mut();
+        }
+        Ok(())
     }
 }
 
@@ -92,6 +140,12 @@ impl SecondOrderSystem for RodSystem {
         Ok(())
     }
 
+    /// The exact `∂q̈/∂q`, `∂q̈/∂q̇` (the analytic derivatives of
+    /// `softrod_dynamics::forward_dynamics_derivatives`, no allocation after
+    /// the first call)
+    /// whatever [`RodSystem::jacobian`] says: the cheap approximation of
+    /// [`RodJacobian::ElasticOnly`] is the mass-matrix form, and this is what
+    /// the methods refresh to when it stops working.
     fn jacobians(
         &mut self,
         t: f64,
@@ -100,32 +154,14 @@ impl SecondOrderSystem for RodSystem {
         dqdd_dq: &mut DMatrix<f64>,
         dqdd_dqd: &mut DMatrix<f64>,
     ) -> Result<(), DynamicsError> {
-        if self.jacobian == RodJacobian::ElasticOnly {
-            let m = mass_matrix(&self.model, &mut self.data, q.as_slice())?;
-            let chol = m.clone().cholesky().ok_or(DynamicsError::Singular {
-                rod: 0,
-                piece: 0,
-                what: "mass matrix",
-            })?;
-            let mut k = stiffness_matrix(&self.model);
-            chol.solve_mut(&mut k);
-            dqdd_dq.copy_from(&k);
-            dqdd_dq.neg_mut();
-            let mut d = damping_matrix(&self.model);
-            if d.iter().all(|&v| v == 0.0) {
-                // Undamped: skip the n_dof-column solve.
-                dqdd_dqd.fill(0.0);
-            } else {
-                chol.solve_mut(&mut d);
-                dqdd_dqd.copy_from(&d);
-                dqdd_dqd.neg_mut();
-            }
-            return Ok(());
-        }
         let tau = self.tau.as_ref().map(|v| v.as_slice());
-        let j = dynamics_jacobians(
+        let work = self
+            .derivatives
+            .get_or_insert_with(|| Box::new(FdDerivatives::new(&self.model)));
+        let j = forward_dynamics_derivatives(
             &self.model,
             &mut self.data,
+            work,
             t,
             q.as_slice(),
             qd.as_slice(),
@@ -158,9 +194,12 @@ impl SecondOrderSystem for RodSystem {
         Ok(true)
     }
 
+    fn has_mass_form(&self) -> bool {
+        self.jacobian == RodJacobian::ElasticOnly
+    }
+
     /// `r = ID(t, q, q̇, q̈) − τ_act = M(q) q̈ − f` by the O(N) inverse
-    /// dynamics (with [`RodJacobian::ElasticOnly`], the mass-matrix form's
-    /// partner; not provided otherwise).
+    /// dynamics.
     fn force_residual(
         &mut self,
         t: f64,
@@ -169,9 +208,6 @@ impl SecondOrderSystem for RodSystem {
         qdd: &DVector<f64>,
         r: &mut DVector<f64>,
     ) -> Result<bool, DynamicsError> {
-        if self.jacobian != RodJacobian::ElasticOnly {
-            return Ok(false);
-        }
         r.copy_from(inverse_dynamics(
             &self.model,
             &mut self.data,
@@ -184,6 +220,23 @@ impl SecondOrderSystem for RodSystem {
             *r -= tau;
         }
         Ok(true)
+    }
+
+    /// `M(q) + aK + bD` by the O(N) articulated recursion
+    /// (`softrod_dynamics::ShiftedSolver`).
+    fn factor_shifted_mass(
+        &mut self,
+        _t: f64,
+        q: &DVector<f64>,
+        a: f64,
+        b: f64,
+    ) -> Result<bool, DynamicsError> {
+        self.shifted.factor(&self.model, q.as_slice(), a, b)?;
+        Ok(true)
+    }
+
+    fn solve_shifted_mass(&mut self, x: &mut DVector<f64>) -> Result<(), DynamicsError> {
+        self.shifted.solve(&self.model, x.as_mut_slice())
     }
 
     /// Time enters only through cable tension tables.

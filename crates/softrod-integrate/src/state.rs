@@ -121,6 +121,42 @@ impl StepState {
     }
 }
 
+impl StepState {
+    /// Quintic Hermite dense output on `[t_prev, t]` for a second-order
+    /// state `y = (q, q̇)`, `f = (q̇, q̈)` (dim `2n` each): `q` from its
+    /// values, first and second derivatives at both ends (exact for quintic
+    /// polynomials, error `O(h⁶)`), `q̇` the interpolant's derivative
+    /// (`O(h⁵)`).
+    pub(crate) fn quintic_dense(&self, t: f64, out: &mut DVector<f64>) {
+        let n = out.len() / 2;
+        let h = self.t - self.t_prev;
+        let th = (t - self.t_prev) / h;
+        let (t2, t3) = (th * th, th * th * th);
+        let (t4, t5) = (t3 * th, t3 * t2);
+        // Basis on [0, 1]: value, derivative and second derivative at 0 and 1.
+        let h0 = 1.0 - 10.0 * t3 + 15.0 * t4 - 6.0 * t5;
+        let h1 = th - 6.0 * t3 + 8.0 * t4 - 3.0 * t5;
+        let h2 = 0.5 * t2 - 1.5 * t3 + 1.5 * t4 - 0.5 * t5;
+        let h3 = 0.5 * t3 - t4 + 0.5 * t5;
+        let h4 = -4.0 * t3 + 7.0 * t4 - 3.0 * t5;
+        let h5 = 10.0 * t3 - 15.0 * t4 + 6.0 * t5;
+        // Their θ-derivatives.
+        let d0 = -30.0 * t2 + 60.0 * t3 - 30.0 * t4;
+        let d1 = 1.0 - 18.0 * t2 + 32.0 * t3 - 15.0 * t4;
+        let d2 = th - 4.5 * t2 + 6.0 * t3 - 2.5 * t4;
+        let d3 = 1.5 * t2 - 4.0 * t3 + 2.5 * t4;
+        let d4 = -12.0 * t2 + 28.0 * t3 - 15.0 * t4;
+        let d5 = -d0;
+        let (ya, fa, yb, fb) = (&self.y_prev, &self.f_prev, &self.y, &self.f);
+        for i in 0..n {
+            let (q0, v0, a0) = (ya[i], fa[i], fa[n + i]);
+            let (q1, v1, a1) = (yb[i], fb[i], fb[n + i]);
+            out[i] = h0 * q0 + h5 * q1 + h * (h1 * v0 + h4 * v1) + h * h * (h2 * a0 + h3 * a1);
+            out[n + i] = (d0 * q0 + d5 * q1) / h + d1 * v0 + d4 * v1 + h * (d2 * a0 + d3 * a1);
+        }
+    }
+}
+
 /// Cubic Hermite interpolation on `[ta, tb]` from values and derivatives
 /// (Hairer–Nørsett–Wanner, *ODEs I*, eq. II.6.7).
 #[allow(clippy::too_many_arguments)]
@@ -148,6 +184,28 @@ pub(crate) fn hermite(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn quintic_hermite_reproduces_quintics() {
+        // q = t⁵ − 2t³ + t, on [0.5, 1.3] (n = 1).
+        let q = |t: f64| t.powi(5) - 2.0 * t.powi(3) + t;
+        let v = |t: f64| 5.0 * t.powi(4) - 6.0 * t * t + 1.0;
+        let a = |t: f64| 20.0 * t.powi(3) - 12.0 * t;
+        let mut s = StepState::new(2);
+        let (ta, tb) = (0.5, 1.3);
+        s.t_prev = ta;
+        s.t = tb;
+        s.y_prev = DVector::from_row_slice(&[q(ta), v(ta)]);
+        s.f_prev = DVector::from_row_slice(&[v(ta), a(ta)]);
+        s.y = DVector::from_row_slice(&[q(tb), v(tb)]);
+        s.f = DVector::from_row_slice(&[v(tb), a(tb)]);
+        let mut out = DVector::zeros(2);
+        for t in [0.5, 0.61, 0.9, 1.25, 1.3] {
+            s.quintic_dense(t, &mut out);
+            assert!((out[0] - q(t)).abs() < 1e-14, "q({t})");
+            assert!((out[1] - v(t)).abs() < 1e-13, "v({t})");
+        }
+    }
 
     #[test]
     fn hermite_reproduces_cubics() {

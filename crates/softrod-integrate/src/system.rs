@@ -134,6 +134,16 @@ pub trait SecondOrderSystem {
         Ok(false)
     }
 
+    /// Whether [`mass_form_jacobians`](Self::mass_form_jacobians) is
+    /// provided (asked without evaluating anything). Generalized-α then uses
+    /// [`factor_shifted_mass`](Self::factor_shifted_mass), when provided, in
+    /// place of the dense mass-matrix form (the same matrix `M + β'K + γ'D`,
+    /// factored without an `n×n` buffer). Default `false`; a system that
+    /// overrides `mass_form_jacobians` overrides this to return `true`.
+    fn has_mass_form(&self) -> bool {
+        false
+    }
+
     /// Optional, with [`mass_form_jacobians`](Self::mass_form_jacobians):
     /// the residual of the equation of motion in force form,
     /// `r = M(q) q̈ − f(t, q, q̇)` for a given `q̈` (for a rod: inverse
@@ -165,6 +175,48 @@ pub trait SecondOrderSystem {
     ) -> Result<bool, Self::Error> {
         let _ = (t, q, qd, qdd, r);
         Ok(false)
+    }
+
+    /// Optional, for systems `M(q) q̈ = −K q − D q̇ + f(t, q, q̇)` with
+    /// constant symmetric positive semi-definite `K`, `D`: factors the
+    /// shifted mass matrix `S = M(q) + a·K + b·D` (`a, b ≥ 0`, real) for
+    /// later [`solve_shifted_mass`](Self::solve_shifted_mass) calls, in
+    /// whatever structured way the system knows (for a rod, the O(N)
+    /// articulated recursion with `a K_n + b D_n` added to each piece's
+    /// articulated inertia, instead of a dense `n×n` Cholesky). Returns
+    /// `Ok(true)` if provided; the default returns `Ok(false)` and the
+    /// methods use dense matrices ([`mass_form_jacobians`](Self::mass_form_jacobians)
+    /// or [`jacobians`](Self::jacobians)).
+    ///
+    /// A system that provides it must also provide
+    /// [`force_residual`](Self::force_residual): the implicit methods then
+    /// take Newton corrections `Δ = −S⁻¹ r` on the force residual `r`, with
+    /// no `n×n` matrix anywhere. `S` approximates the step's iteration matrix
+    /// `M + a ∂r/∂q + b ∂r/∂q̇` by its elastic/viscous part (geometric,
+    /// gyroscopic and load terms left out); methods that use it fall back to
+    /// the exact [`jacobians`](Self::jacobians) when Newton converges badly.
+    fn factor_shifted_mass(
+        &mut self,
+        t: f64,
+        q: &DVector<f64>,
+        a: f64,
+        b: f64,
+    ) -> Result<bool, Self::Error> {
+        let _ = (t, q, a, b);
+        Ok(false)
+    }
+
+    /// `x ← S⁻¹ x` with the `S` of the last successful
+    /// [`factor_shifted_mass`](Self::factor_shifted_mass).
+    ///
+    /// # Panics
+    ///
+    /// The default panics: the methods call it only after
+    /// `factor_shifted_mass` returned `Ok(true)`, so a system that overrides
+    /// one must override both.
+    fn solve_shifted_mass(&mut self, x: &mut DVector<f64>) -> Result<(), Self::Error> {
+        let _ = x;
+        unimplemented!("solve_shifted_mass: the system provides factor_shifted_mass but not this")
     }
 
     /// Whether `a` does not depend on `t` explicitly (see

@@ -13,11 +13,12 @@ use softrod_integrate::{
     SecondOrderSystem, Status, StepInfo, integrate, integrate_second_order,
 };
 
-const ALL: [Method; 4] = [
+const ALL: [Method; 5] = [
     Method::Rk4,
     Method::Dopri5,
     Method::Rosw34,
     Method::GeneralizedAlpha { rho_inf: 0.8 },
+    Method::Esdirk46,
 ];
 
 /// Options per method: fixed methods get a step, adaptive ones tolerances.
@@ -273,7 +274,7 @@ fn nan_in_the_model_is_an_error_with_context_never_a_nan_trajectory() {
         match (method, &err) {
             (Method::Rk4, IntegrateError::NonFinite { t, .. }) => assert!(*t > 1.0),
             (
-                Method::Dopri5 | Method::Rosw34,
+                Method::Dopri5 | Method::Rosw34 | Method::Esdirk46,
                 IntegrateError::StepSizeUnderflow { t, reason, .. },
             ) => {
                 assert!((*t - 1.0).abs() < 1e-6, "stopped at {t}");
@@ -490,6 +491,16 @@ fn statistics_count_the_work() {
                 assert_eq!(st.lu_solves, st.newton_iterations);
                 assert_eq!(st.rhs_evaluations, st.newton_iterations + 1);
             }
+            Method::Esdirk46 => {
+                // One residual per Newton iteration, the initial
+                // acceleration and the starting-step guess; one solve per
+                // iteration and per error estimate (accepted or rejected by
+                // the error test).
+                assert_eq!(st.rhs_evaluations, st.newton_iterations + 2);
+                assert!(st.lu_solves >= st.newton_iterations + st.steps);
+                assert!(st.lu_solves <= st.newton_iterations + st.steps + st.rejected_steps);
+            }
+            _ => unreachable!(),
         }
     }
 }

@@ -66,6 +66,70 @@ fn rosw34_is_third_order() {
 }
 
 #[test]
+fn esdirk46_is_fourth_order() {
+    for sys in [Linear::undamped(), Linear::damped()] {
+        assert_order(observed_order(&sys, Method::Esdirk46, 0.1), 4.0);
+    }
+}
+
+#[test]
+fn radau5_is_fifth_order() {
+    // Classical order 5 on linear problems (stage order 3 limits it only on
+    // very stiff nonlinear ones).
+    for sys in [Linear::undamped(), Linear::damped()] {
+        assert_order(observed_order(&sys, Method::Radau5, 0.2), 5.0);
+    }
+}
+
+#[test]
+fn radau5_first_order_form_is_fifth_order() {
+    let lin = Linear::damped();
+    let err = |h: f64| {
+        let mut s = LinearFirstOrder(lin.a());
+        let sol = integrate(
+            &mut s,
+            Method::Radau5,
+            0.0,
+            T1,
+            &Linear::y0(),
+            &Options::fixed(h),
+            Hooks::new(),
+        )
+        .unwrap();
+        dist(&sol.y_final, &lin.exact(T1, &Linear::y0()))
+    };
+    let p = (err(0.2) / err(0.1)).log2();
+    println!("radau5 first-order: observed order {p:.3}");
+    assert_order(p, 5.0);
+}
+
+#[test]
+fn esdirk46_is_fourth_order_on_a_non_autonomous_problem() {
+    // The stage times tₙ + cᵢh enter the forcing; a wrong one drops the
+    // order.
+    let sys = Forced { w: 2.0, big_w: 1.3 };
+    let err = |h: f64| {
+        let mut s = Forced { w: 2.0, big_w: 1.3 };
+        let sol = integrate_second_order(
+            &mut s,
+            Method::Esdirk46,
+            0.0,
+            T1,
+            &dv(&[0.0]),
+            &dv(&[0.0]),
+            &Options::fixed(h),
+            Hooks::new(),
+        )
+        .unwrap();
+        let (q, v) = sys.exact(T1);
+        (sol.y_final[0] - q).abs().max((sol.y_final[1] - v).abs())
+    };
+    let p = (err(0.1) / err(0.05)).log2();
+    println!("esdirk46 forced: observed order {p:.3}");
+    assert_order(p, 4.0);
+}
+
+#[test]
 fn rosw34_is_third_order_on_a_non_autonomous_problem() {
     // ∂f/∂t enters through the γᵢ terms; a wrong one drops the order.
     let err = |h: f64| {
@@ -163,4 +227,8 @@ fn adaptive_methods_show_their_order_in_error_versus_steps() {
     assert!((4.3..=5.8).contains(&p), "dopri5 slope {p}");
     let p = adaptive_slope(Method::Rosw34, 1e-4, 1e-7);
     assert!((2.5..=3.6).contains(&p), "rosw34 slope {p}");
+    let p = adaptive_slope(Method::Esdirk46, 1e-4, 1e-8);
+    assert!((3.4..=4.6).contains(&p), "esdirk46 slope {p}");
+    let p = adaptive_slope(Method::Radau5, 1e-4, 1e-8);
+    assert!((4.3..=5.8).contains(&p), "radau5 slope {p}");
 }

@@ -160,8 +160,9 @@ impl GeneralizedAlpha {
     ) -> Result<(), IntegrateError> {
         if self.jac_age >= opts.jacobian_max_age.max(1) {
             let t = self.s.t;
+            let structured = p.has_mass_form();
             let bad = p
-                .update_jacobians_qv(t, &self.q, &self.v)
+                .update_jacobians_qv(t, &self.q, &self.v, structured)
                 .map_err(sys_err(t, h, "jacobian"))?;
             stats.jacobian_evaluations += 1;
             if let Some(index) = bad {
@@ -199,7 +200,10 @@ impl GeneralizedAlpha {
             let key = (h * h * self.beta * c, h * self.gamma * c);
             if key != self.lu_key {
                 stats.factorizations += 1;
-                if !p.factor_newmark(key.0, key.1) {
+                if !p
+                    .factor_newmark(key.0, key.1)
+                    .map_err(sys_err(t, h, "factorization"))?
+                {
                     self.lu_key = (f64::NAN, f64::NAN);
                     stats.rejected_steps += 1;
                     rejected_before = true;
@@ -429,7 +433,10 @@ impl<S: SecondOrderSystem> Stepper<SecondOrderProblem<'_, S>> for GeneralizedAlp
             let key = (h * h * self.beta * c, h * self.gamma * c);
             if key != self.lu_key {
                 stats.factorizations += 1;
-                if !p.factor_newmark(key.0, key.1) {
+                if !p
+                    .factor_newmark(key.0, key.1)
+                    .map_err(sys_err(t, h, "factorization"))?
+                {
                     self.lu_key = (f64::NAN, f64::NAN);
                     if self.jac_age == 0 {
                         return Err(IntegrateError::SingularMatrix {

@@ -2,12 +2,16 @@
 //! (`control`, `state`, `stepper`); the driver above picks one.
 
 mod dopri5;
+mod esdirk;
 mod genalpha;
+mod radau5;
 mod rk4;
 mod rosw;
 
 pub(crate) use dopri5::Dopri5;
+pub(crate) use esdirk::Esdirk;
 pub(crate) use genalpha::GeneralizedAlpha;
 pub use genalpha::generalized_alpha_parameters;
+pub(crate) use radau5::Radau5;
 pub(crate) use rk4::Rk4;
 pub(crate) use rosw::Rosw34;

@@ -19,6 +19,11 @@
 //! [`Options::jacobian_max_age`] steps) and the LU of `I/(hγ) − W` is reused
 //! while `h` does not change; the controller keeps `h` when it would grow by
 //! less than 20 % (as RADAU5 does) so that reuse actually happens.
+//! When the problem's Jacobian is a cheap approximation (the mass-matrix
+//! form) ROS34PW2 watches it: rejections clustering, the step collapsing or
+//! drifting down, or an imminent underflow switch it to the exact Jacobian
+//! for a window of accepted steps (see `Choice`), so a poor `W` costs steps,
+//! never the run.
 //! `∂f/∂t` is a forward difference (one right-hand side per step) unless the
 //! system declares itself autonomous. Dense output: cubic Hermite from the
 //! step's end values and derivatives (`f(t₁, y₁)` is the next step's first
@@ -144,6 +149,152 @@ pub(crate) struct Rosw34 {
     jac_age: usize,
     /// The shift `c = 1/(hγ)` of the current LU (NaN: none).
     lu_shift: f64,
+    /// Cheap or exact Jacobian, when the problem offers a cheap one.
+    choice: Choice,
+}
+
+/// Which Jacobian ROS34PW2 uses when the problem offers a cheap
+/// approximation (the mass-matrix form): the cheap one while it works, the
+/// exact one after trouble — rejections clustering, the step collapsing or
+/// about to underflow, or the step size drifting down — for a window of
+/// accepted steps, kept (and the window doubled) while it takes clearly
+/// larger steps than the cheap one did, given up otherwise.
+#[derive(Clone, Debug)]
+struct Choice {
+    exact: bool,
+    /// Accepted steps left in the exact window, and its length.
+    left: usize,
+    window: usize,
+    /// Outcomes of the last attempts, newest in bit 0 (1: rejected).
+    history: u32,
+    /// A decaying maximum of the accepted step sizes.
+    h_ref: f64,
+    /// `Σ ln h` and count of the accepted steps in the current block (cheap
+    /// or exact).
+    block: (f64, usize),
+    /// Mean `ln h` of the cheap steps before the last switch to exact.
+    cheap_level: f64,
+    /// Mean `ln h` of a cheap block to which a downward drift is compared
+    /// (NaN: none yet).
+    drift_ref: f64,
+    /// Accepted cheap steps before a cluster may trigger again.
+    cooldown: usize,
+    cooldown_len: usize,
+}
+
+/// Trouble: this many rejections among the last [`CLUSTER_OF`] attempts ...
+const CLUSTER: u32 = 4;
+const CLUSTER_OF: u32 = 8;
+/// ... or the step below this fraction of a maximum of the accepted steps
+/// that decays by [`H_REF_DECAY`] per accepted step ...
+const COLLAPSE: f64 = 1e-2;
+const H_REF_DECAY: f64 = 0.95;
+/// ... or the mean step of a block of [`DRIFT_BLOCK`] cheap steps below
+/// `1/DRIFT` of the reference block's (a gradual collapse).
+const DRIFT_BLOCK: usize = 100;
+const DRIFT: f64 = 4.0;
+/// Accepted steps of the first exact window.
+const EXACT_WINDOW: usize = 20;
+/// The exact Jacobian is kept when its steps are larger by this factor.
+const EXACT_GAIN: f64 = 1.5;
+/// Accepted steps between cluster triggers after a probe that did not pay.
+const COOLDOWN: usize = 100;
+
+impl Choice {
+    fn new() -> Self {
+        Self {
+            exact: false,
+            left: 0,
+            window: EXACT_WINDOW,
+            history: 0,
+            h_ref: 0.0,
+            block: (0.0, 0),
+            cheap_level: f64::NAN,
+            drift_ref: f64::NAN,
+            cooldown: 0,
+            cooldown_len: COOLDOWN,
+        }
+    }
+
+    fn rejected(&mut self) {
+        self.history = (self.history << 1) | 1;
+    }
+
+    fn block_mean(&self) -> f64 {
+        if self.block.1 == 0 {
+            f64::NAN
+        } else {
+            self.block.0 / self.block.1 as f64
+        }
+    }
+
+    /// Records an accepted step of size `h`; returns whether the Jacobian
+    /// must be refreshed (the choice changed).
+    fn accepted(&mut self, h: f64) -> bool {
+        self.history <<= 1;
+        self.h_ref = h.max(H_REF_DECAY * self.h_ref);
+        self.block.0 += h.ln();
+        self.block.1 += 1;
+        if self.exact {
+            self.left = self.left.saturating_sub(1);
+            if self.left > 0 {
+                return false;
+            }
+            let level = self.block_mean();
+            self.block = (0.0, 0);
+            if level > self.cheap_level + EXACT_GAIN.ln() {
+                // It pays: keep it, re-examined after a longer window.
+                self.window = self.window.saturating_mul(2);
+                self.left = self.window;
+                return false;
+            }
+            self.exact = false;
+            self.window = EXACT_WINDOW;
+            self.drift_ref = level;
+            self.cooldown = self.cooldown_len;
+            self.cooldown_len = self.cooldown_len.saturating_mul(2);
+            return true;
+        }
+        self.cooldown = self.cooldown.saturating_sub(1);
+        false
+    }
+
+    /// Whether the cheap Jacobian is in trouble at step size `h` (`underflow`:
+    /// the step is about to fall below the minimum); if so, switches to the
+    /// exact one.
+    fn trouble(&mut self, h: f64, underflow: bool) -> bool {
+        if self.exact {
+            return false;
+        }
+        let mask = (1u32 << CLUSTER_OF) - 1;
+        let clustered = self.cooldown == 0 && (self.history & mask).count_ones() >= CLUSTER;
+        let collapsed = h < COLLAPSE * self.h_ref;
+        let mut drifted = false;
+        if self.block.1 >= DRIFT_BLOCK {
+            let level = self.block_mean();
+            if self.drift_ref.is_nan() {
+                self.drift_ref = level;
+            }
+            drifted = level < self.drift_ref - DRIFT.ln();
+            self.block = (0.0, 0);
+            if !drifted {
+                self.drift_ref = self.drift_ref.max(level);
+            }
+        }
+        if !(clustered || collapsed || drifted || underflow) {
+            return false;
+        }
+        self.cheap_level = if self.block.1 > 0 {
+            self.block_mean()
+        } else {
+            h.ln()
+        };
+        self.exact = true;
+        self.left = self.window;
+        self.history = 0;
+        self.block = (0.0, 0);
+        true
+    }
 }
 
 impl Rosw34 {
@@ -160,7 +311,19 @@ impl Rosw34 {
             ytmp: z,
             jac_age: usize::MAX,
             lu_shift: f64::NAN,
+            choice: Choice::new(),
         }
+    }
+
+    /// With a cheap Jacobian in trouble at step size `h` (`underflow`: the
+    /// step is about to fall below the minimum), switches to the exact one
+    /// and returns `true`.
+    fn refresh_to_exact<P: Problem>(&mut self, p: &P, h: f64, underflow: bool) -> bool {
+        if !p.has_cheap_jacobian() || !self.choice.trouble(h, underflow) {
+            return false;
+        }
+        self.jac_age = usize::MAX;
+        true
     }
 
     fn update_jacobian<P: Problem>(
@@ -169,9 +332,12 @@ impl Rosw34 {
         h: f64,
         stats: &mut Stats,
     ) -> Result<(), IntegrateError> {
-        let bad = p
-            .update_jacobian(self.s.t, &self.s.y)
-            .map_err(sys_err(self.s.t, h, "jacobian"))?;
+        let bad = if self.choice.exact {
+            p.update_exact_jacobian(self.s.t, &self.s.y)
+        } else {
+            p.update_jacobian(self.s.t, &self.s.y)
+        }
+        .map_err(sys_err(self.s.t, h, "jacobian"))?;
         stats.jacobian_evaluations += 1;
         if let Some(index) = bad {
             return Err(IntegrateError::NonFinite {
@@ -291,16 +457,19 @@ impl<P: Problem> Stepper<P> for Rosw34 {
         loop {
             let (hh, last) = clip_step(self.s.t, h, t_end);
             h = hh;
-            check_underflow(
-                self.s.t,
-                h,
-                opts,
-                if rejected_before {
-                    "error test"
-                } else {
-                    "step size"
-                },
-            )?;
+            let reason = if rejected_before {
+                "error test"
+            } else {
+                "step size"
+            };
+            if let Err(e) = check_underflow(self.s.t, h, opts, reason) {
+                if !self.refresh_to_exact(p, h, true) {
+                    return Err(e);
+                }
+                // Retry from the last good step size with the exact Jacobian.
+                h = self.choice.h_ref.max(h);
+                continue;
+            }
             if self.jac_age >= opts.jacobian_max_age.max(1) {
                 self.update_jacobian(p, h, stats)?;
             }
@@ -355,6 +524,13 @@ impl<P: Problem> Stepper<P> for Rosw34 {
                 }
                 s.accept(&mut self.ynew, t_new, h, stats);
                 self.jac_age = self.jac_age.saturating_add(1);
+                if self.choice.accepted(h) {
+                    self.jac_age = usize::MAX;
+                }
+                if !self.choice.exact && p.has_cheap_jacobian() && self.choice.trouble(h, false) {
+                    // A drift seen at the end of a block.
+                    self.jac_age = usize::MAX;
+                }
                 self.h_next = if adaptive {
                     let fac = (SAFETY * err.max(1e-300).powf(-1.0 / 3.0)).clamp(FAC_MIN, FAC_MAX);
                     let fac = if rejected_before { fac.min(1.0) } else { fac };
@@ -371,6 +547,7 @@ impl<P: Problem> Stepper<P> for Rosw34 {
             }
             stats.rejected_steps += 1;
             rejected_before = true;
+            self.choice.rejected();
             let reason = rejection_reason(err);
             if self.jac_age != 0 {
                 // A stale W may be the cause: refresh it before shrinking much.
@@ -382,7 +559,15 @@ impl<P: Problem> Stepper<P> for Rosw34 {
                 FAC_MIN
             };
             h *= fac;
-            check_underflow(self.s.t, h, opts, reason)?;
+            if self.refresh_to_exact(p, h, false) {
+                continue;
+            }
+            if let Err(e) = check_underflow(self.s.t, h, opts, reason) {
+                if !self.refresh_to_exact(p, h, true) {
+                    return Err(e);
+                }
+                h = self.choice.h_ref.max(h);
+            }
         }
     }
 
@@ -394,6 +579,7 @@ impl<P: Problem> Stepper<P> for Rosw34 {
         self.s.refresh_derivative(p, stats)?;
         self.jac_age = usize::MAX;
         self.lu_shift = f64::NAN;
+        self.choice = Choice::new();
         Ok(())
     }
 }
