@@ -28,9 +28,17 @@ fn moving_state(model: &Model) -> (DVector<f64>, DVector<f64>) {
     r.configure(&mut sys);
     let n = model.n_dof();
     let z = DVector::zeros(n);
-    let sol =
-        integrate_second_order(&mut sys, r.method, 0.0, 5e-3, &z, &z, &r.options, Hooks::new())
-            .unwrap();
+    let sol = integrate_second_order(
+        &mut sys,
+        r.method,
+        0.0,
+        5e-3,
+        &z,
+        &z,
+        &r.options,
+        Hooks::new(),
+    )
+    .unwrap();
     let y = sol.y_final;
     (y.rows(0, n).into_owned(), y.rows(n, n).into_owned())
 }
@@ -95,8 +103,17 @@ fn bench_release(c: &mut Criterion) {
         r.configure(&mut sys);
         g.bench_function(name, |b| {
             b.iter(|| {
-                integrate_second_order(&mut sys, r.method, 0.0, t1, &z, &z, &r.options, Hooks::new())
-                    .unwrap()
+                integrate_second_order(
+                    &mut sys,
+                    r.method,
+                    0.0,
+                    t1,
+                    &z,
+                    &z,
+                    &r.options,
+                    Hooks::new(),
+                )
+                .unwrap()
             })
         });
     }

@@ -140,7 +140,11 @@ fn reference(case: &Case, radau: bool) -> Vec<[f64; 3]> {
         case.name,
         case.model.n_dof(),
         case.t1,
-        if radau { "radau5_1e-13" } else { "dopri5_1e-10" }
+        if radau {
+            "radau5_1e-13"
+        } else {
+            "dopri5_1e-10"
+        }
     ));
     if let Ok(text) = std::fs::read_to_string(&file)
         && let Ok(tips) = serde_json::from_str::<Vec<[f64; 3]>>(&text)
@@ -148,9 +152,17 @@ fn reference(case: &Case, radau: bool) -> Vec<[f64; 3]> {
         return tips;
     }
     let s = if radau {
-        setting(Method::Radau5, Options::tol(1e-13, 1e-13), RodJacobian::Exact)
+        setting(
+            Method::Radau5,
+            Options::tol(1e-13, 1e-13),
+            RodJacobian::Exact,
+        )
     } else {
-        setting(Method::Dopri5, Options::tol(1e-10, 1e-12), RodJacobian::Exact)
+        setting(
+            Method::Dopri5,
+            Options::tol(1e-10, 1e-12),
+            RodJacobian::Exact,
+        )
     };
     let r = measure(case, &s, 1, f64::INFINITY).unwrap();
     println!(
@@ -209,7 +221,9 @@ fn study_methods(reps: usize) {
         let tol = |m: Method, j: RodJacobian, r: f64, a: f64| setting(m, Options::tol(r, a), j);
         let e = RodJacobian::Exact;
         let el = RodJacobian::ElasticOnly;
-        let rtols = [1e-2, 3e-3, 1e-3, 3e-4, 1e-4, 3e-5, 1e-5, 3e-6, 1e-6, 3e-7, 1e-7];
+        let rtols = [
+            1e-2, 3e-3, 1e-3, 3e-4, 1e-4, 3e-5, 1e-5, 3e-6, 1e-6, 3e-7, 1e-7,
+        ];
         let dts = [4e-3, 2e-3, 1e-3, 5e-4, 2.5e-4, 1.25e-4, 6e-5];
         let families: Vec<(&str, Vec<(String, Recommended)>)> = vec![
             (
@@ -230,14 +244,24 @@ fn study_methods(reps: usize) {
                 "ROS34PW2, W = M⁻¹K (refreshed)",
                 rtols
                     .iter()
-                    .map(|&r| (format!("rtol {r:e}, atol {:e}", r * 1e-2), tol(Method::Rosw34, el, r, r * 1e-2)))
+                    .map(|&r| {
+                        (
+                            format!("rtol {r:e}, atol {:e}", r * 1e-2),
+                            tol(Method::Rosw34, el, r, r * 1e-2),
+                        )
+                    })
                     .collect(),
             ),
             (
                 "DOPRI5",
                 [1e-3, 1e-4, 1e-5, 1e-6]
                     .iter()
-                    .map(|&r| (format!("rtol {r:e}, atol {:e}", r * 1e-3), tol(Method::Dopri5, e, r, r * 1e-3)))
+                    .map(|&r| {
+                        (
+                            format!("rtol {r:e}, atol {:e}", r * 1e-3),
+                            tol(Method::Dopri5, e, r, r * 1e-3),
+                        )
+                    })
                     .collect(),
             ),
             (
@@ -270,21 +294,33 @@ fn study_methods(reps: usize) {
                 let r = measure(&case, &s, reps, budget);
                 let ok = r.as_ref().is_ok_and(|r| max_error(&r.tips, &rf) <= target);
                 let over = matches!(&r, Err(e) if e.contains("budget"));
-                println!("{}", row(family, &format!("{label}{}", if ok { " ✓" } else { "" }), &r, &rf));
+                println!(
+                    "{}",
+                    row(
+                        family,
+                        &format!("{label}{}", if ok { " ✓" } else { "" }),
+                        &r,
+                        &rf
+                    )
+                );
                 if ok || over {
                     met = ok;
                     break;
                 }
             }
             if !met {
-                println!("| {family} | (target not met within the budget of {budget} s) | | | | | | |");
+                println!(
+                    "| {family} | (target not met within the budget of {budget} s) | | | | | | |"
+                );
             }
         }
     }
 }
 
 fn study_wire(reps: usize) {
-    println!("\n### Steel wire (10 pieces, all strains, undamped, 1 s), recommended setting\n\n{HEADER}");
+    println!(
+        "\n### Steel wire (10 pieces, all strains, undamped, 1 s), recommended setting\n\n{HEADER}"
+    );
     let case = Case::rest("wire", steel_wire(10), 1.0);
     // Radau IIA at 1e-13: DOPRI5 at 1e-10 did not finish in 20 min (the
     // shear-rotation modes near 4e6 rad/s hold it below 1e-6 s); Radau IIA at
@@ -292,7 +328,11 @@ fn study_wire(reps: usize) {
     let rf = reference(&case, true);
     let coarse = measure(
         &case,
-        &setting(Method::Radau5, Options::tol(1e-11, 1e-11), RodJacobian::Exact),
+        &setting(
+            Method::Radau5,
+            Options::tol(1e-11, 1e-11),
+            RodJacobian::Exact,
+        ),
         1,
         f64::INFINITY,
     )
@@ -353,12 +393,17 @@ fn study_examples(reps: usize) {
 }
 
 fn study_big(reps: usize) {
-    println!("\n### 0.01 s of the 3-D release, 500 pieces (n_dof 3000), recommended setting\n\n{HEADER}");
+    println!(
+        "\n### 0.01 s of the 3-D release, 500 pieces (n_dof 3000), recommended setting\n\n{HEADER}"
+    );
     let case = Case::rest("3d500", release_3d(500), 0.01);
     let rf = reference(&case, false);
     for rtol in [1e-3, 1e-6] {
         let r = measure(&case, &Recommended::tolerance(rtol), reps, 300.0);
-        println!("{}", row("3-D, 500 pieces", &format!("rtol {rtol:e}"), &r, &rf));
+        println!(
+            "{}",
+            row("3-D, 500 pieces", &format!("rtol {rtol:e}"), &r, &rf)
+        );
     }
 }
 
