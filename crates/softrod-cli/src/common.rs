@@ -8,6 +8,8 @@ use softrod_kinematics::RodKinematics;
 use softrod_lie::Pose;
 use softrod_scene::{Scene, Warning};
 
+use crate::outputs::RodSampling;
+
 /// A failure with its exit code.
 #[derive(Debug, thiserror::Error)]
 pub enum CliError {
@@ -99,9 +101,42 @@ impl Poser {
         self.kin[i].tip_pose()
     }
 
-    /// Piece-boundary poses of rod `i` (N+1, base to tip).
-    pub fn boundaries(&self, i: usize) -> &[Pose] {
-        self.kin[i].boundary_poses()
+    /// Strain `ξ_n` of each piece of rod `i` at the last update.
+    pub fn strains(&self, i: usize) -> &[softrod_lie::Vec6] {
+        self.kin[i].strains()
+    }
+
+    /// Exact poses of rod `i` at `sampling` (points of the PCS arcs within
+    /// each piece, then the tip) into `out` (`sampling.s.len()` poses).
+    pub fn sample(
+        &self,
+        model: &Model,
+        i: usize,
+        sampling: &RodSampling,
+        out: &mut [Pose],
+    ) -> Result<(), CliError> {
+        let rod = &model.rods()[i].spec.rod;
+        let n = out.len() - 1;
+        self.kin[i]
+            .poses_along(rod, &sampling.fractions, &mut out[..n])
+            .map_err(|e| failed(format!("sampling rod '{}': {e}", model.rods()[i].spec.name)))?;
+        out[n] = *self.tip(i);
+        Ok(())
+    }
+
+    /// Sampled centrelines of every rod (world frame, m).
+    pub fn centrelines(
+        &self,
+        model: &Model,
+        sampling: &[RodSampling],
+    ) -> Result<Vec<Vec<[f64; 3]>>, CliError> {
+        let mut out = Vec::with_capacity(sampling.len());
+        for (i, sm) in sampling.iter().enumerate() {
+            let mut poses = vec![Pose::identity(); sm.s.len()];
+            self.sample(model, i, sm, &mut poses)?;
+            out.push(poses.iter().map(position).collect());
+        }
+        Ok(out)
     }
 }
 

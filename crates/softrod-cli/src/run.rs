@@ -1,38 +1,44 @@
 //! `softrod run`: integrate, stream the trajectory, write shape, summary, plots.
 
 use std::fs::File;
-use std::io::{BufWriter, IsTerminal, Write};
+use std::io::{BufWriter, IsTerminal};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
-use softrod::dynamics::{Model, energies};
+use softrod::dynamics::{Model, actuation_matrix, energies};
 use softrod::integrate::Stats;
+use softrod::lie::Pose;
 use softrod::{Flow, Observer, Sample, output_times};
 use softrod_scene::Scene;
+use softrod_viz::Pose as VizPose;
+use softrod_viz::run_dir::ShapeCsvWriter;
 
 use crate::common::{CliError, Poser, failed, load, out_dir, position, quaternion};
-use crate::plots;
+use crate::outputs::{self, RodSampling, default_points_per_piece, num};
+use crate::plots::{self, Series, Snapshot};
 
-/// What is kept in memory for the plots.
-#[derive(Default)]
-pub struct Series {
-    pub t: Vec<f64>,
-    pub tip: Vec<[f64; 3]>,
-    pub energy: Vec<[f64; 4]>,
-    /// Snapshots: time and, per rod, the boundary positions.
-    pub shapes: Vec<(f64, Vec<Vec<[f64; 3]>>)>,
-}
+/// The contract's first columns of `trajectory.csv` (the `q` columns follow).
+pub const TRAJECTORY_HEADER: [&str; 9] = [
+    "t", "tip_x", "tip_y", "tip_z", "tip_qw", "tip_qx", "tip_qy", "tip_qz", "energy",
+];
 
 /// Writes output rows as the integration produces them.
 pub struct Streamer {
-    traj: BufWriter<File>,
-    shape: BufWriter<File>,
+    traj: csv::Writer<BufWriter<File>>,
+    shape: ShapeCsvWriter<BufWriter<File>>,
     expected: usize,
     next: usize,
     snapshot_at: Vec<usize>,
     poser: Poser,
+    sampling: Vec<RodSampling>,
+    /// Per rod, the sampled poses of the current row (allocated once).
+    poses: Vec<Vec<Pose>>,
+    viz_poses: Vec<Vec<VizPose>>,
+    row: Vec<String>,
     n: usize,
+    /// The last row's snapshot, kept so the figures end where the run did.
+    last_snapshot: Option<Snapshot>,
     pub series: Series,
     pub error: Option<String>,
     pub last_stats: Stats,
@@ -47,44 +53,75 @@ fn create(path: &Path) -> Result<BufWriter<File>, CliError> {
         .map_err(|e| failed(format!("cannot create {}: {e}", path.display())))
 }
 
+/// Rows (indices into the output times) whose shapes and strains are drawn:
+/// six spread evenly, first and last included.
+fn snapshot_rows(m: usize) -> Vec<usize> {
+    let snaps = 6.min(m);
+    let mut v: Vec<usize> = (0..snaps)
+        .map(|k| {
+            if snaps == 1 {
+                0
+            } else {
+                k * (m - 1) / (snaps - 1)
+            }
+        })
+        .collect();
+    v.dedup();
+    v
+}
+
 impl Streamer {
     pub fn new(
         dir: &Path,
         model: &Model,
         times: Vec<f64>,
+        per_piece: &[usize],
         bar: Option<ProgressBar>,
     ) -> Result<Self, CliError> {
         let n = model.n_dof();
-        let mut traj = create(&dir.join("trajectory.csv"))?;
-        let mut header = String::from("t,tip_x,tip_y,tip_z,tip_qw,tip_qx,tip_qy,tip_qz,energy");
-        for i in 0..n {
-            header.push_str(&format!(",q{i}"));
-        }
-        let mut shape = create(&dir.join("shape.csv"))?;
-        let io = |e: std::io::Error| failed(format!("writing outputs: {e}"));
-        writeln!(traj, "{header}").map_err(io)?;
-        traj.flush().map_err(io)?;
-        writeln!(shape, "t,rod,s,x,y,z,qw,qx,qy,qz").map_err(io)?;
-        let m = times.len();
-        let snaps = 6.min(m);
-        let mut snapshot_at: Vec<usize> = (0..snaps)
-            .map(|k| {
-                if snaps == 1 {
-                    0
-                } else {
-                    k * (m - 1) / (snaps - 1)
-                }
-            })
+        let io = |e: csv::Error| failed(format!("writing outputs: {e}"));
+        let mut traj = csv::Writer::from_writer(create(&dir.join("trajectory.csv"))?);
+        let mut header: Vec<String> = TRAJECTORY_HEADER.iter().map(|h| h.to_string()).collect();
+        header.extend((0..n).map(|i| format!("q{i}")));
+        traj.write_record(&header).map_err(io)?;
+        traj.flush()
+            .map_err(|e| failed(format!("writing trajectory.csv: {e}")))?;
+        let shape = ShapeCsvWriter::new(create(&dir.join("shape.csv"))?).map_err(io)?;
+        let sampling: Vec<RodSampling> = model
+            .rods()
+            .iter()
+            .zip(per_piece)
+            .map(|(r, &m)| RodSampling::new(&r.spec.rod, m))
             .collect();
-        snapshot_at.dedup();
+        let poses = sampling
+            .iter()
+            .map(|s| vec![Pose::identity(); s.s.len()])
+            .collect();
+        let viz_poses = sampling
+            .iter()
+            .map(|s| vec![VizPose::at([0.0; 3]); s.s.len()])
+            .collect();
+        let n_rods = model.rods().len();
+        let n_cables = model.n_cables();
+        let series = Series {
+            tips: vec![Vec::new(); n_rods],
+            tensions: vec![Vec::new(); n_cables],
+            power: vec![Vec::new(); n_cables],
+            ..Series::default()
+        };
         Ok(Self {
             traj,
             shape,
             next: 0,
-            snapshot_at,
+            snapshot_at: snapshot_rows(times.len()),
             poser: Poser::new(model),
+            sampling,
+            poses,
+            viz_poses,
+            row: Vec::with_capacity(header.len()),
             n,
-            series: Series::default(),
+            last_snapshot: None,
+            series,
             error: None,
             last_stats: Stats::default(),
             last_t: 0.0,
@@ -100,6 +137,17 @@ impl Streamer {
 
     pub fn rows_expected(&self) -> usize {
         self.expected
+    }
+
+    /// The series for the figures, with the last row as the final snapshot
+    /// (a run that stopped early is drawn up to where it stopped).
+    pub fn finish_series(&mut self) -> &Series {
+        if let Some(last) = self.last_snapshot.take() {
+            if self.series.snapshots.last().is_none_or(|s| s.t < last.t) {
+                self.series.snapshots.push(last);
+            }
+        }
+        &self.series
     }
 
     fn write_row(&mut self, s: Sample<'_>) -> Result<(), String> {
@@ -125,61 +173,93 @@ impl Streamer {
         if p.iter().chain(qt.iter()).any(|v| !v.is_finite()) {
             return Err(format!("non-finite tip pose at t = {t:e}; output stopped"));
         }
-        let mut line = format!(
-            "{t},{},{},{},{},{},{},{},{}",
-            p[0],
-            p[1],
-            p[2],
-            qt[0],
-            qt[1],
-            qt[2],
-            qt[3],
-            e.total()
-        );
-        for v in q {
-            line.push(',');
-            line.push_str(&v.to_string());
-        }
-        let io = |e: std::io::Error| format!("writing trajectory.csv: {e}");
-        writeln!(self.traj, "{line}").map_err(io)?;
-        self.traj.flush().map_err(io)?;
-        let mut shape_rows = String::new();
-        let mut snap = Vec::new();
-        for (r, rm) in model.rods().iter().enumerate() {
-            let rod = &rm.spec.rod;
-            let mut pts = Vec::new();
-            for (k, g) in self.poser.boundaries(r).iter().enumerate() {
-                let s = if k == 0 {
-                    0.0
-                } else {
-                    rod.pieces()[k - 1].end()
-                };
-                let p = position(g);
-                let qq = quaternion(g);
-                if p.iter().chain(qq.iter()).any(|v| !v.is_finite()) {
+        for r in 0..model.rods().len() {
+            self.poser
+                .sample(model, r, &self.sampling[r], &mut self.poses[r])
+                .map_err(|e| format!("at t = {t:e}: {e}"))?;
+            let rm = &model.rods()[r];
+            for (i, (g, v)) in self.poses[r]
+                .iter()
+                .zip(self.viz_poses[r].iter_mut())
+                .enumerate()
+            {
+                let (pp, qq) = (position(g), quaternion(g));
+                if pp.iter().chain(qq.iter()).any(|v| !v.is_finite()) {
                     return Err(format!(
-                        "non-finite pose of rod '{}' at s = {s} m, t = {t:e}; output stopped",
-                        rm.spec.name
+                        "non-finite pose of rod '{}' at s = {} m, t = {t:e}; output stopped",
+                        rm.spec.name, self.sampling[r].s[i]
                     ));
                 }
-                shape_rows.push_str(&format!(
-                    "{t},{},{s},{},{},{},{},{},{},{}\n",
-                    rm.spec.name, p[0], p[1], p[2], qq[0], qq[1], qq[2], qq[3]
-                ));
-                pts.push(p);
+                *v = VizPose {
+                    position: pp,
+                    rotation: qq,
+                };
             }
-            snap.push(pts);
         }
-        let io = |e: std::io::Error| format!("writing shape.csv: {e}");
-        self.shape.write_all(shape_rows.as_bytes()).map_err(io)?;
-        self.shape.flush().map_err(io)?;
+        // Cables: tension and the power it puts in, T_c (B_c · q̇) (D15).
+        let (mut tensions, mut power) = (Vec::new(), Vec::new());
+        if model.n_cables() > 0 {
+            let b = actuation_matrix(model, q).map_err(|e| format!("cables at t = {t:e}: {e}"))?;
+            let qdv = nalgebra::DVectorView::from_slice(qd, qd.len());
+            for rm in model.rods() {
+                for (c, cable) in rm.spec.cables.iter().enumerate() {
+                    let tension = cable.tension_at(t);
+                    let col = rm.cable_offset + c;
+                    tensions.push(tension);
+                    power.push(tension * b.column(col).dot(&qdv));
+                }
+            }
+        }
+        self.row.clear();
+        self.row.push(num(t));
+        self.row.extend(p.iter().chain(&qt).map(|v| num(*v)));
+        self.row.push(num(e.total()));
+        self.row.extend(q.iter().map(|v| num(*v)));
+        let io = |e: csv::Error| format!("writing trajectory.csv: {e}");
+        self.traj.write_record(&self.row).map_err(io)?;
+        self.traj
+            .flush()
+            .map_err(|e| format!("writing trajectory.csv: {e}"))?;
+        let io = |e: csv::Error| format!("writing shape.csv: {e}");
+        for (r, rm) in model.rods().iter().enumerate() {
+            self.shape
+                .write_frame(t, &rm.spec.name, &self.sampling[r].s, &self.viz_poses[r])
+                .map_err(io)?;
+        }
+        self.shape
+            .flush()
+            .map_err(|e| format!("writing shape.csv: {e}"))?;
         self.series.t.push(t);
-        self.series.tip.push(p);
-        self.series
-            .energy
-            .push([e.total(), e.kinetic, e.elastic, e.gravitational]);
+        for (r, tips) in self.series.tips.iter_mut().enumerate() {
+            tips.push(position(self.poser.tip(r)));
+        }
+        self.series.energies.push(e);
+        for (c, (tn, pw)) in tensions.into_iter().zip(power).enumerate() {
+            self.series.tensions[c].push(tn);
+            self.series.power[c].push(pw);
+        }
+        let snapshot = Snapshot {
+            t,
+            centrelines: self
+                .viz_poses
+                .iter()
+                .map(|ps| ps.iter().map(|p| p.position).collect())
+                .collect(),
+            strains: (0..model.rods().len())
+                .map(|r| {
+                    self.poser
+                        .strains(r)
+                        .iter()
+                        .map(|x| [x[0], x[1], x[2], x[3], x[4], x[5]])
+                        .collect()
+                })
+                .collect(),
+        };
         if self.snapshot_at.contains(&self.next) {
-            self.series.shapes.push((t, snap));
+            self.series.snapshots.push(snapshot);
+            self.last_snapshot = None;
+        } else {
+            self.last_snapshot = Some(snapshot);
         }
         Ok(())
     }
@@ -240,6 +320,12 @@ pub fn write_summary(
         .map_err(|e| failed(format!("cannot write {}: {e}", path.display())))
 }
 
+/// The scene's file stem: the title of figures and view.
+pub fn scene_title(path: &Path) -> String {
+    path.file_stem()
+        .map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned())
+}
+
 pub fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), CliError> {
     let mut l = load(path)?;
     let dir = out_dir(path, out);
@@ -268,7 +354,14 @@ pub fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), CliErro
         }
         b
     });
-    let mut streamer = Streamer::new(&dir, l.sim.model(), times, bar)?;
+    let per_piece: Vec<usize> = l
+        .sim
+        .model()
+        .rods()
+        .iter()
+        .map(|r| default_points_per_piece(r.spec.rod.n_pieces()))
+        .collect();
+    let mut streamer = Streamer::new(&dir, l.sim.model(), times, &per_piece, bar)?;
     let start = Instant::now();
     // Rows are the integrator's dense output at the output times, streamed
     // to the observer as the run proceeds; nothing is kept in between.
@@ -303,8 +396,18 @@ pub fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), CliErro
         streamer.rows_written(),
         streamer.rows_expected(),
     )?;
-    // Plots of whatever was computed (also after a failure: they show where it went wrong).
-    let plot_result = plots::all(&dir, &streamer.series, scene);
+    // Plots and view of whatever was computed (also after a failure: they
+    // show where it went wrong).
+    let title = scene_title(path);
+    let model = l.sim.model();
+    let plot_result =
+        plots::run_figures(&dir, streamer.finish_series(), model, &title).and_then(|_| {
+            if streamer.rows_written() > 0 {
+                outputs::write_view(&dir, model, &title).map(|_| ())
+            } else {
+                Ok(())
+            }
+        });
     if status != "ok" {
         return Err(failed(format!(
             "simulation failed: {} (outputs up to t = {} in {})",
@@ -323,6 +426,31 @@ pub fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), CliErro
             stats.rejected_steps,
             stats.rhs_evaluations,
             dir.display()
+        );
+    }
+    Ok(())
+}
+
+/// `softrod view DIR`: rebuilds `DIR/view.html` and prints its path.
+pub fn view(dir: &Path, quiet: bool) -> Result<(), CliError> {
+    if !dir.join(softrod_viz::run_dir::SHAPE_CSV).is_file() {
+        return Err(CliError::Input(format!(
+            "{}: not a run directory (no {}; write one with `softrod run SCENE --out DIR`)",
+            dir.display(),
+            softrod_viz::run_dir::SHAPE_CSV
+        )));
+    }
+    let stats = softrod_viz::run_dir::write_view(dir, &softrod_viz::ViewOptions::default())
+        .map_err(|e| CliError::Input(format!("{}: {e}", dir.display())))?
+        .1;
+    let page = dir.join(softrod_viz::run_dir::VIEW_HTML);
+    println!("{}", page.display());
+    if !quiet {
+        eprintln!(
+            "softrod: {} frames of {} output times, {} bytes; open it in a browser",
+            stats.frames.len(),
+            stats.source_frames,
+            stats.bytes
         );
     }
     Ok(())

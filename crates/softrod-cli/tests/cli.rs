@@ -171,8 +171,9 @@ fn run_writes_valid_streams_and_conserves_energy() {
         drift < 1e-5 * scale.max(1e-12),
         "energy drift {drift:e}, scale {scale:e}"
     );
-    // Shape: N+1 = 9 boundaries per output time, from the base at s = 0 to the tip.
-    assert_eq!(shape, 21 * 9);
+    // Shape: 8 pieces sampled at 8 points each (the default for 8 pieces)
+    // plus the tip: 65 samples per output time, from the base at s = 0.
+    assert_eq!(shape, 21 * 65);
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["status"], "ok");
@@ -180,7 +181,12 @@ fn run_writes_valid_streams_and_conserves_energy() {
     for k in ["steps", "rejected_steps", "rhs_evaluations", "wall_seconds"] {
         assert!(summary[k].is_number(), "{k}");
     }
-    for svg in ["tip_trajectory.svg", "energy.svg", "shapes.svg"] {
+    for svg in [
+        "tip_trajectory.svg",
+        "energy.svg",
+        "shapes.svg",
+        "strains.svg",
+    ] {
         let t = std::fs::read_to_string(out.join(svg)).unwrap();
         assert!(t.starts_with("<svg") && t.contains("</svg>"), "{svg}");
     }
@@ -506,4 +512,134 @@ fn statics_flags_an_unstable_equilibrium() {
         assert_eq!(v["stable"], serde_json::Value::Bool(stable), "E = {young}");
         assert_eq!(stderr(&o).contains("unstable"), !stable);
     }
+}
+
+/// A rod's samples in shape.csv lie on the exact PCS arc, not on chords:
+/// one piece bent at curvature κ about local y (base rotated so local x is
+/// world x) is the circle x = sin(κs)/κ, z = −(1 − cos κs)/κ, here checked
+/// at t = 0 for every sample, the piece's inside included; the number of
+/// samples follows `[run] shape_points_per_piece`.
+#[test]
+fn shape_samples_lie_on_the_exact_arc() {
+    let dir = tmp("arc");
+    let kappa = 4.0;
+    let p = dir.join("arc.toml");
+    std::fs::write(
+        &p,
+        format!(
+            "[[rod]]\nname = \"arc\"\nlength = 0.5\npieces = 1\nstrains = [\"ky\"]\n\
+             section = {{ shape = \"circle\", radius = 0.01 }}\n\
+             material = {{ density = 1000.0, young = 1.0e6, poisson = 0.5 }}\n\
+             [initial]\nq = [{kappa}]\n\
+             [run]\nduration = 0.001\noutput_every = 0.001\n"
+        ),
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let o = run_scene(&p, &out);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(out.join("shape.csv")).unwrap();
+    let rows: Vec<Vec<f64>> = text
+        .lines()
+        .skip(1)
+        .map(|l| {
+            l.split(',')
+                .enumerate()
+                .filter(|(i, _)| *i != 1)
+                .map(|(_, v)| v.parse().unwrap())
+                .collect()
+        })
+        .filter(|r: &Vec<f64>| r[0] == 0.0)
+        .collect();
+    // One piece: the default is 16 points per piece, plus the tip.
+    assert_eq!(rows.len(), 17);
+    for r in &rows {
+        let (s, x, z) = (r[1], r[2], r[4]);
+        // Bending about local y by +κ turns x toward −z.
+        let (ex, ez) = (
+            (kappa * s).sin() / kappa,
+            -(1.0 - (kappa * s).cos()) / kappa,
+        );
+        assert!(
+            (x - ex).abs() < 1e-12 && (z - ez).abs() < 1e-12 && r[3].abs() < 1e-15,
+            "s = {s}: ({x}, {z}) vs the arc ({ex}, {ez})"
+        );
+    }
+    assert_eq!(rows[16][1], 0.5, "the tip");
+}
+
+/// `softrod run` writes a self-contained 3-D view (no network reference),
+/// its view.json (radius, cables), the strain and actuator figures;
+/// `softrod view DIR` rebuilds the page from the files; a directory without
+/// a run is bad input (exit 2).
+#[test]
+fn run_writes_the_view_and_view_rebuilds_it() {
+    let dir = tmp("view");
+    let scene = with_run(
+        "cable_planar_arm.toml",
+        "[run]\nduration = 0.1\nintegrator = \"rosenbrock\"\noutput_every = 0.01",
+        &dir,
+    );
+    let out = dir.join("out");
+    let o = run_scene(&scene, &out);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let page = std::fs::read_to_string(out.join("view.html")).unwrap();
+    assert!(page.starts_with("<!DOCTYPE html>"));
+    for net in ["src=\"http", "href=\"http", "import(", "fetch("] {
+        assert!(!page.contains(net), "the page reaches out: {net}");
+    }
+    let spec: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("view.json")).unwrap()).unwrap();
+    assert_eq!(spec["rods"][0]["radius"]["r"][0], 0.01);
+    assert_eq!(spec["cables"].as_array().unwrap().len(), 2);
+    assert_eq!(spec["cables"][1]["path"][0][2], -0.008);
+    assert_eq!(spec["up"], serde_json::json!([0.0, 0.0, 1.0]));
+    for svg in ["strains.svg", "actuators.svg", "shapes.svg"] {
+        let t = std::fs::read_to_string(out.join(svg)).unwrap();
+        assert!(t.starts_with("<svg") && t.contains("</svg>"), "{svg}");
+    }
+    std::fs::remove_file(out.join("view.html")).unwrap();
+    let o = run(&["view", out.to_str().unwrap(), "--quiet"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(stdout(&o).trim(), out.join("view.html").to_str().unwrap());
+    assert_eq!(
+        std::fs::read_to_string(out.join("view.html")).unwrap(),
+        page
+    );
+    let o = run(&["view", dir.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("not a run directory"), "{}", stderr(&o));
+}
+
+/// `statics --out` writes the equilibrium's figure, `modes --out` the mode
+/// shapes; the JSON on stdout is unchanged by it.
+#[test]
+fn statics_and_modes_write_their_figures() {
+    let dir = tmp("figures");
+    let scene = examples().join("tip_load_statics.toml");
+    let o = run(&[
+        "statics",
+        scene.to_str().unwrap(),
+        "--json",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let _: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let t = std::fs::read_to_string(dir.join("statics_shape.svg")).unwrap();
+    assert!(t.contains("</svg>") && t.contains("equilibrium"));
+    let o = run(&[
+        "modes",
+        examples().join("cantilever_gravity.toml").to_str().unwrap(),
+        "--count",
+        "3",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let t = std::fs::read_to_string(dir.join("modes.svg")).unwrap();
+    assert!(
+        t.contains("</svg>") && t.contains("mode 3"),
+        "three modes drawn"
+    );
 }
