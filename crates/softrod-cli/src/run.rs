@@ -23,6 +23,20 @@ pub const TRAJECTORY_HEADER: [&str; 9] = [
     "t", "tip_x", "tip_y", "tip_z", "tip_qw", "tip_qx", "tip_qy", "tip_qz", "energy",
 ];
 
+/// The columns of `trajectory.csv` after the contract's nine: `q0…` (the
+/// contract's), then (added, docs/scene-format-extensions.md) `qdot0…`, the
+/// energy components `kinetic, elastic, gravitational` (J; they sum to
+/// `energy`) and, with cables, `tension0…` (N) and `power0…` (W, the power
+/// each cable puts into the rods).
+pub fn extra_columns(n_dof: usize, n_cables: usize) -> Vec<String> {
+    let mut h: Vec<String> = (0..n_dof).map(|i| format!("q{i}")).collect();
+    h.extend((0..n_dof).map(|i| format!("qdot{i}")));
+    h.extend(["kinetic", "elastic", "gravitational"].map(String::from));
+    h.extend((0..n_cables).map(|c| format!("tension{c}")));
+    h.extend((0..n_cables).map(|c| format!("power{c}")));
+    h
+}
+
 /// Writes output rows as the integration produces them.
 pub struct Streamer {
     traj: csv::Writer<BufWriter<File>>,
@@ -82,7 +96,7 @@ impl Streamer {
         let io = |e: csv::Error| failed(format!("writing outputs: {e}"));
         let mut traj = csv::Writer::from_writer(create(&dir.join("trajectory.csv"))?);
         let mut header: Vec<String> = TRAJECTORY_HEADER.iter().map(|h| h.to_string()).collect();
-        header.extend((0..n).map(|i| format!("q{i}")));
+        header.extend(extra_columns(n, model.n_cables()));
         traj.write_record(&header).map_err(io)?;
         traj.flush()
             .map_err(|e| failed(format!("writing trajectory.csv: {e}")))?;
@@ -215,6 +229,11 @@ impl Streamer {
         self.row.extend(p.iter().chain(&qt).map(|v| num(*v)));
         self.row.push(num(e.total()));
         self.row.extend(q.iter().map(|v| num(*v)));
+        self.row.extend(qd.iter().map(|v| num(*v)));
+        self.row
+            .extend([e.kinetic, e.elastic, e.gravitational].map(num));
+        self.row.extend(tensions.iter().map(|v| num(*v)));
+        self.row.extend(power.iter().map(|v| num(*v)));
         let io = |e: csv::Error| format!("writing trajectory.csv: {e}");
         self.traj.write_record(&self.row).map_err(io)?;
         self.traj
@@ -234,7 +253,7 @@ impl Streamer {
             tips.push(position(self.poser.tip(r)));
         }
         self.series.energies.push(e);
-        for (c, (tn, pw)) in tensions.into_iter().zip(power).enumerate() {
+        for (c, (&tn, &pw)) in tensions.iter().zip(&power).enumerate() {
             self.series.tensions[c].push(tn);
             self.series.power[c].push(pw);
         }
@@ -287,37 +306,61 @@ impl Observer for Streamer {
     }
 }
 
-/// The summary object.
-#[allow(clippy::too_many_arguments)]
-pub fn write_summary(
-    dir: &Path,
-    stats: &Stats,
-    wall: f64,
-    final_time: f64,
-    status: &str,
-    scene: &Scene,
-    rows: usize,
-    rows_expected: usize,
-) -> Result<(), CliError> {
-    let v = serde_json::json!({
-        "steps": stats.steps,
-        "rejected_steps": stats.rejected_steps,
-        "rhs_evaluations": stats.rhs_evaluations,
-        "wall_seconds": wall,
-        "final_time": final_time,
-        "status": status,
-        "integrator": scene.run.integrator.name(),
-        "jacobian_evaluations": stats.jacobian_evaluations,
-        "factorizations": stats.factorizations,
-        "duration": scene.run.duration,
-        "output_rows": rows,
-        "output_rows_expected": rows_expected,
-        "n_dof": scene.n_dof(),
-    });
-    let path = dir.join("summary.json");
-    let text = serde_json::to_string_pretty(&v).map_err(failed)?;
-    std::fs::write(&path, text + "\n")
-        .map_err(|e| failed(format!("cannot write {}: {e}", path.display())))
+/// `summary.json`: the run's fixed facts and, at each write, its progress.
+/// Written atomically (a temporary file renamed over it), so a reader never
+/// sees half a file, even of a killed run.
+pub struct Summary {
+    path: PathBuf,
+    fixed: serde_json::Map<String, serde_json::Value>,
+}
+
+impl Summary {
+    pub fn new(dir: &Path, scene: &Scene, q_names: Vec<String>, rows_expected: usize) -> Self {
+        let v = serde_json::json!({
+            "integrator": scene.run.integrator.name(),
+            "duration": scene.run.duration,
+            "output_rows_expected": rows_expected,
+            "n_dof": scene.n_dof(),
+            "q_names": q_names,
+        });
+        let serde_json::Value::Object(fixed) = v else {
+            unreachable!("a JSON object literal")
+        };
+        Self {
+            path: dir.join("summary.json"),
+            fixed,
+        }
+    }
+
+    /// Writes the summary with the given progress.
+    pub fn write(
+        &self,
+        stats: &Stats,
+        wall: f64,
+        final_time: f64,
+        status: &str,
+        rows: usize,
+    ) -> Result<(), CliError> {
+        let mut v = serde_json::json!({
+            "steps": stats.steps,
+            "rejected_steps": stats.rejected_steps,
+            "rhs_evaluations": stats.rhs_evaluations,
+            "wall_seconds": wall,
+            "final_time": final_time,
+            "status": status,
+            "jacobian_evaluations": stats.jacobian_evaluations,
+            "factorizations": stats.factorizations,
+            "output_rows": rows,
+        });
+        if let serde_json::Value::Object(m) = &mut v {
+            m.extend(self.fixed.clone());
+        }
+        let text = serde_json::to_string_pretty(&v).map_err(failed)? + "\n";
+        let tmp = self.path.with_extension("json.tmp");
+        std::fs::write(&tmp, text)
+            .and_then(|()| std::fs::rename(&tmp, &self.path))
+            .map_err(|e| failed(format!("cannot write {}: {e}", self.path.display())))
+    }
 }
 
 /// The scene's file stem: the title of figures and view.
@@ -335,15 +378,13 @@ pub fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), CliErro
     let duration = scene.run.duration;
     let times = output_times(duration, l.sim.settings().output_spacing(duration));
     // Written first so that an interrupted run leaves a summary that says so.
-    write_summary(
-        &dir,
+    let summary = Summary::new(&dir, scene, l.sim.q_names(), times.len());
+    summary.write(
         &Stats::default(),
         0.0,
         0.0,
         "error: did not finish (running, or interrupted)",
-        scene,
         0,
-        times.len(),
     )?;
     let bar = (!quiet && std::io::stderr().is_terminal()).then(|| {
         let b = ProgressBar::new(1000);
@@ -359,7 +400,12 @@ pub fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), CliErro
         .model()
         .rods()
         .iter()
-        .map(|r| default_points_per_piece(r.spec.rod.n_pieces()))
+        .map(|r| {
+            scene
+                .run
+                .shape_points_per_piece
+                .unwrap_or_else(|| default_points_per_piece(r.spec.rod.n_pieces()))
+        })
         .collect();
     let mut streamer = Streamer::new(&dir, l.sim.model(), times, &per_piece, bar)?;
     let start = Instant::now();
@@ -386,16 +432,7 @@ pub fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), CliErro
             }
         }
     };
-    write_summary(
-        &dir,
-        &stats,
-        wall,
-        t_final,
-        &status,
-        scene,
-        streamer.rows_written(),
-        streamer.rows_expected(),
-    )?;
+    summary.write(&stats, wall, t_final, &status, streamer.rows_written())?;
     // Plots and view of whatever was computed (also after a failure: they
     // show where it went wrong).
     let title = scene_title(path);
