@@ -52,13 +52,34 @@ pub struct Loaded {
     pub sim: Simulation,
 }
 
+/// Loads a scene and prints its warnings on stderr (every command but
+/// `check`, which lists them in its summary: [`load_silent`]).
 pub fn load(path: &Path) -> Result<Loaded, CliError> {
+    let l = load_silent(path)?;
+    for w in &l.warnings {
+        eprintln!("softrod: warning: {}", warning_text(&l.scene.source, w));
+    }
+    Ok(l)
+}
+
+/// Loads a scene without printing its warnings.
+pub fn load_silent(path: &Path) -> Result<Loaded, CliError> {
     let (sim, scene, warnings) = Simulation::from_scene_file(path)?;
     Ok(Loaded {
         scene,
         warnings,
         sim,
     })
+}
+
+/// `FILE:LINE:COL: KEY: message`, the layout of errors (`FILE: KEY:
+/// message` when the location is unknown).
+pub fn warning_text(source: &str, w: &Warning) -> String {
+    if w.at.is_some() {
+        format!("{source}:{w}")
+    } else {
+        format!("{source}: {w}")
+    }
 }
 
 /// `./out/<file stem>` unless given.

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use softrod::Equilibrium;
 use softrod::dynamics::Model;
 
-use crate::common::{CliError, Loaded, Poser, failed, load, pose_json};
+use crate::common::{CliError, Loaded, Poser, failed, load, load_silent, pose_json, warning_text};
 use crate::outputs::{RodSampling, default_points_per_piece};
 use crate::plots;
 use crate::run::scene_title;
@@ -15,7 +15,7 @@ pub fn check(path: &Path) -> Result<(), CliError> {
         scene,
         warnings,
         sim,
-    } = load(path)?;
+    } = load_silent(path)?;
     let m = sim.model();
     println!("scene: {}", scene.source);
     println!("degrees of freedom: {}", m.n_dof());
@@ -55,7 +55,7 @@ pub fn check(path: &Path) -> Result<(), CliError> {
     } else {
         println!("warnings: {}", warnings.len());
         for w in &warnings {
-            println!("  warning: {}: {w}", scene.source);
+            println!("  warning: {}", warning_text(&scene.source, w));
         }
     }
     Ok(())
@@ -245,10 +245,38 @@ pub fn modes(path: &Path, json: bool, count: usize, out: Option<PathBuf>) -> Res
     if f.iter().any(|v| !v.is_finite()) {
         return Err(failed("modal analysis gave a non-finite frequency"));
     }
+    // ω² < 0: the equilibrium is unstable along that mode, whose
+    // "frequency" is imaginary, i·|f|: it grows like exp(2π|f| t). The
+    // library reports such ω as −√|ω²|, hence negative entries.
+    let imaginary: Vec<f64> = m
+        .frequencies_hz()
+        .into_iter()
+        .filter(|v| *v < 0.0)
+        .map(f64::abs)
+        .collect();
+    let unstable = !imaginary.is_empty();
+    if unstable {
+        eprintln!(
+            "softrod: warning: the equilibrium is unstable: {} mode(s) with ω² < 0 \
+             (imaginary frequencies i·{} Hz, printed as negative numbers; such a mode grows \
+             like exp(2π·f·t) instead of oscillating)",
+            imaginary.len(),
+            imaginary
+                .iter()
+                .map(|v| format!("{v:.6}"))
+                .collect::<Vec<_>>()
+                .join(", i·")
+        );
+    }
     if json {
         println!(
             "{}",
-            serde_json::json!({ "frequencies_hz": f, "equilibrium": equilibrium })
+            serde_json::json!({
+                "frequencies_hz": f,
+                "equilibrium": equilibrium,
+                "unstable": unstable,
+                "imaginary_frequencies_hz": imaginary,
+            })
         );
     } else {
         println!(
@@ -262,7 +290,16 @@ pub fn modes(path: &Path, json: bool, count: usize, out: Option<PathBuf>) -> Res
             l.sim.n_dof()
         );
         for (i, v) in f.iter().enumerate() {
-            println!("  mode {:>2}: {v:.6} Hz", i + 1);
+            if *v < 0.0 {
+                println!(
+                    "  mode {:>2}: i·{:.6} Hz (unstable: grows like exp(2π·{:.6}·t))",
+                    i + 1,
+                    -v,
+                    -v
+                );
+            } else {
+                println!("  mode {:>2}: {v:.6} Hz", i + 1);
+            }
         }
         if m.asymmetry > 1e-8 {
             println!(

@@ -9,6 +9,7 @@ mod outputs;
 mod plots;
 mod report;
 mod run;
+mod signals;
 
 use std::path::PathBuf;
 use std::process::ExitCode;

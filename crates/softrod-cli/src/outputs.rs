@@ -128,7 +128,89 @@ pub fn write_view(dir: &Path, model: &Model, title: &str) -> Result<ViewStats, C
 pub fn regenerate_view(dir: &Path) -> Result<ViewStats, CliError> {
     softrod_viz::run_dir::write_view(dir, &ViewOptions::default())
         .map(|(_, stats)| stats)
-        .map_err(|e| failed(format!("3-D view: {e}")))
+        .map_err(|e| {
+            // Never leave a truncated page (a full disk) behind.
+            let _ = std::fs::remove_file(dir.join(softrod_viz::run_dir::VIEW_HTML));
+            failed(format!("3-D view: {e}"))
+        })
+}
+
+/// The files `softrod run` writes (besides `strains_R.svg`): removed at the
+/// start of a run, so that a directory never mixes two runs' outputs.
+pub const RUN_OUTPUTS: [&str; 13] = [
+    "trajectory.csv",
+    "shape.csv",
+    "bodies.csv",
+    "summary.json",
+    "summary.json.tmp",
+    "view.json",
+    "view.html",
+    "tip_trajectory.svg",
+    "energy.svg",
+    "shapes.svg",
+    "strains.svg",
+    "actuators.svg",
+    "shape.svg",
+];
+
+/// Whether `name` is a file `softrod run` writes.
+fn is_run_output(name: &str) -> bool {
+    RUN_OUTPUTS.contains(&name)
+        || name
+            .strip_prefix("strains_")
+            .and_then(|r| r.strip_suffix(".svg"))
+            .is_some_and(|r| !r.is_empty() && r.bytes().all(|b| b.is_ascii_digit()))
+}
+
+/// Makes `dir` ready for outputs: creates it, and checks that files can be
+/// written there. Problems are bad input (exit 2) naming the directory.
+pub fn prepare_out_dir(dir: &Path) -> Result<(), CliError> {
+    let bad = |why: String| CliError::Input(format!("output directory {}: {why}", dir.display()));
+    if dir.exists() && !dir.is_dir() {
+        return Err(bad("exists and is not a directory".into()));
+    }
+    std::fs::create_dir_all(dir).map_err(|e| bad(format!("cannot create it: {e}")))?;
+    let probe = dir.join(".softrod-write-probe");
+    std::fs::write(&probe, b"").map_err(|e| bad(format!("cannot write in it: {e}")))?;
+    let _ = std::fs::remove_file(&probe);
+    Ok(())
+}
+
+/// Removes the outputs of a previous run from `dir` (regular files with the
+/// names `softrod run` writes; anything else is left alone). Returns the
+/// names removed.
+pub fn clear_stale(dir: &Path) -> Result<Vec<String>, CliError> {
+    let mut removed = Vec::new();
+    let entries = std::fs::read_dir(dir)
+        .map_err(|e| CliError::Input(format!("output directory {}: {e}", dir.display())))?;
+    for entry in entries.flatten() {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let regular = entry.file_type().is_ok_and(|t| t.is_file());
+        if regular && is_run_output(&name) {
+            std::fs::remove_file(entry.path()).map_err(|e| {
+                CliError::Input(format!(
+                    "cannot remove the previous run's {}: {e}",
+                    entry.path().display()
+                ))
+            })?;
+            removed.push(name);
+        }
+    }
+    removed.sort();
+    Ok(removed)
+}
+
+/// One CSV record (RFC 4180: fields quoted when they hold a comma, quote or
+/// line break), with its line end.
+pub fn csv_line<I, S>(fields: I) -> String
+where
+    I: IntoIterator<Item = S>,
+    S: AsRef<[u8]>,
+{
+    let mut w = csv::Writer::from_writer(Vec::new());
+    // Writing into memory cannot fail.
+    let _ = w.write_record(fields);
+    String::from_utf8(w.into_inner().unwrap_or_default()).unwrap_or_default()
 }
 
 /// A number as CSV text: the shortest decimal that reads back to the same
@@ -174,6 +256,39 @@ mod tests {
         assert_eq!(default_points_per_piece(1), 16);
         assert_eq!(default_points_per_piece(100), 1);
         assert_eq!(default_points_per_piece(0), 16);
+    }
+
+    #[test]
+    fn csv_lines_quote_what_needs_it_and_read_back() {
+        let fields = ["a,b", "say \"hi\"", "two\nlines", "plain"];
+        let line = csv_line(fields);
+        assert_eq!(line, "\"a,b\",\"say \"\"hi\"\"\",\"two\nlines\",plain\n");
+        let mut r = csv::ReaderBuilder::new()
+            .has_headers(false)
+            .from_reader(line.as_bytes());
+        let rec = r.records().next().unwrap().unwrap();
+        assert_eq!(rec.iter().collect::<Vec<_>>(), fields);
+    }
+
+    #[test]
+    fn only_run_outputs_count_as_stale() {
+        for n in [
+            "trajectory.csv",
+            "strains.svg",
+            "strains_12.svg",
+            "view.html",
+        ] {
+            assert!(is_run_output(n), "{n}");
+        }
+        for n in [
+            "notes.txt",
+            "strains_.svg",
+            "strains_a.svg",
+            "report.csv",
+            "mine.svg",
+        ] {
+            assert!(!is_run_output(n), "{n}");
+        }
     }
 
     #[test]

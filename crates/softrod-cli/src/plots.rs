@@ -74,8 +74,12 @@ fn write(
     name: &str,
     fig: Result<Figure, softrod_viz::VizError>,
 ) -> Result<(), CliError> {
-    fig.and_then(|f| f.write(&dir.join(name)))
-        .map_err(|e| failed(format!("plot {name}: {e}")))
+    let path = dir.join(name);
+    fig.and_then(|f| f.write(&path)).map_err(|e| {
+        // Never leave a truncated figure (a full disk) behind.
+        let _ = std::fs::remove_file(&path);
+        failed(format!("plot {name}: {e}"))
+    })
 }
 
 /// Writes every figure of a run: `tip_trajectory.svg`, `energy.svg`,

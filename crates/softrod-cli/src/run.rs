@@ -1,7 +1,7 @@
 //! `softrod run`: integrate, stream the trajectory, write shape, summary, plots.
 
 use std::fs::File;
-use std::io::{BufWriter, IsTerminal};
+use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -12,11 +12,12 @@ use softrod::lie::Pose;
 use softrod::{Flow, Observer, Sample, output_times};
 use softrod_scene::Scene;
 use softrod_viz::Pose as VizPose;
-use softrod_viz::run_dir::ShapeCsvWriter;
+use softrod_viz::run_dir::SHAPE_HEADER;
 
 use crate::common::{CliError, Poser, failed, load, out_dir, position, quaternion};
-use crate::outputs::{self, RodSampling, default_points_per_piece, num};
+use crate::outputs::{self, RodSampling, csv_line, default_points_per_piece, num};
 use crate::plots::{self, Series, Snapshot};
+use crate::signals;
 
 /// The contract's first columns of `trajectory.csv` (the `q` columns follow).
 pub const TRAJECTORY_HEADER: [&str; 9] = [
@@ -37,10 +38,59 @@ pub fn extra_columns(n_dof: usize, n_cables: usize) -> Vec<String> {
     h
 }
 
+/// An output file written row by row, unbuffered (each row is one write),
+/// that knows how many bytes hold whole rows: after a failed write (a full
+/// disk) it is cut back there, so it never ends in half a row.
+struct OutFile {
+    name: &'static str,
+    file: File,
+    committed: u64,
+}
+
+impl OutFile {
+    fn create(dir: &Path, name: &'static str, header: &str) -> Result<Self, CliError> {
+        let path = dir.join(name);
+        let mut file = File::create(&path)
+            .map_err(|e| CliError::Input(format!("cannot create {}: {e}", path.display())))?;
+        file.write_all(header.as_bytes())
+            .map_err(|e| failed(format!("writing {}: {e}", path.display())))?;
+        Ok(Self {
+            name,
+            file,
+            committed: header.len() as u64,
+        })
+    }
+
+    fn append(&mut self, text: &str) -> Result<(), String> {
+        self.file
+            .write_all(text.as_bytes())
+            .map_err(|e| format!("writing {}: {e}", self.name))
+    }
+
+    /// Cuts the file back to its whole rows.
+    fn rollback(&mut self) -> bool {
+        self.file.set_len(self.committed).is_ok()
+    }
+
+    fn commit(&mut self, bytes: usize) {
+        self.committed += bytes as u64;
+    }
+}
+
+/// Longest wall time between two writes of the running summary, s.
+pub const SUMMARY_EVERY: f64 = 0.5;
+
 /// Writes output rows as the integration produces them.
 pub struct Streamer {
-    traj: csv::Writer<BufWriter<File>>,
-    shape: ShapeCsvWriter<BufWriter<File>>,
+    traj: OutFile,
+    shape: OutFile,
+    summary: Summary,
+    start: Instant,
+    summary_written: Option<Instant>,
+    /// The signal that ended the run, if one did.
+    pub interrupted: Option<&'static str>,
+    traj_text: String,
+    shape_text: String,
     expected: usize,
     next: usize,
     snapshot_at: Vec<usize>,
@@ -59,12 +109,6 @@ pub struct Streamer {
     pub last_t: f64,
     bar: Option<ProgressBar>,
     duration: f64,
-}
-
-fn create(path: &Path) -> Result<BufWriter<File>, CliError> {
-    File::create(path)
-        .map(BufWriter::new)
-        .map_err(|e| failed(format!("cannot create {}: {e}", path.display())))
 }
 
 /// Rows (indices into the output times) whose shapes and strains are drawn:
@@ -90,17 +134,14 @@ impl Streamer {
         model: &Model,
         times: Vec<f64>,
         per_piece: &[usize],
+        summary: Summary,
         bar: Option<ProgressBar>,
     ) -> Result<Self, CliError> {
         let n = model.n_dof();
-        let io = |e: csv::Error| failed(format!("writing outputs: {e}"));
-        let mut traj = csv::Writer::from_writer(create(&dir.join("trajectory.csv"))?);
         let mut header: Vec<String> = TRAJECTORY_HEADER.iter().map(|h| h.to_string()).collect();
         header.extend(extra_columns(n, model.n_cables()));
-        traj.write_record(&header).map_err(io)?;
-        traj.flush()
-            .map_err(|e| failed(format!("writing trajectory.csv: {e}")))?;
-        let shape = ShapeCsvWriter::new(create(&dir.join("shape.csv"))?).map_err(io)?;
+        let traj = OutFile::create(dir, "trajectory.csv", &csv_line(&header))?;
+        let shape = OutFile::create(dir, "shape.csv", &csv_line(SHAPE_HEADER))?;
         let sampling: Vec<RodSampling> = model
             .rods()
             .iter()
@@ -126,6 +167,12 @@ impl Streamer {
         Ok(Self {
             traj,
             shape,
+            summary,
+            start: Instant::now(),
+            summary_written: None,
+            interrupted: None,
+            traj_text: String::new(),
+            shape_text: String::new(),
             next: 0,
             snapshot_at: snapshot_rows(times.len()),
             poser: Poser::new(model),
@@ -234,20 +281,39 @@ impl Streamer {
             .extend([e.kinetic, e.elastic, e.gravitational].map(num));
         self.row.extend(tensions.iter().map(|v| num(*v)));
         self.row.extend(power.iter().map(|v| num(*v)));
-        let io = |e: csv::Error| format!("writing trajectory.csv: {e}");
-        self.traj.write_record(&self.row).map_err(io)?;
-        self.traj
-            .flush()
-            .map_err(|e| format!("writing trajectory.csv: {e}"))?;
-        let io = |e: csv::Error| format!("writing shape.csv: {e}");
+        self.traj_text = csv_line(&self.row);
+        self.shape_text.clear();
+        let ts = num(t);
         for (r, rm) in model.rods().iter().enumerate() {
-            self.shape
-                .write_frame(t, &rm.spec.name, &self.sampling[r].s, &self.viz_poses[r])
-                .map_err(io)?;
+            for (sv, p) in self.sampling[r].s.iter().zip(&self.viz_poses[r]) {
+                let [x, y, z] = p.position;
+                let [qw, qx, qy, qz] = p.rotation;
+                let fields = [*sv, x, y, z, qw, qx, qy, qz].map(num);
+                self.shape_text.push_str(&csv_line(
+                    [ts.as_str(), rm.spec.name.as_str()]
+                        .into_iter()
+                        .chain(fields.iter().map(String::as_str)),
+                ));
+            }
         }
-        self.shape
-            .flush()
-            .map_err(|e| format!("writing shape.csv: {e}"))?;
+        // Both files get this time's rows, or neither does.
+        let written = self
+            .shape
+            .append(&self.shape_text)
+            .and_then(|()| self.traj.append(&self.traj_text));
+        if let Err(e) = written {
+            let cut = self.shape.rollback() & self.traj.rollback();
+            return Err(format!(
+                "{e} at t = {t:e}; {}",
+                if cut {
+                    "the partial row was removed: the files hold whole rows up to the previous time"
+                } else {
+                    "the partial row could not be removed either"
+                }
+            ));
+        }
+        self.shape.commit(self.shape_text.len());
+        self.traj.commit(self.traj_text.len());
         self.series.t.push(t);
         for (r, tips) in self.series.tips.iter_mut().enumerate() {
             tips.push(position(self.poser.tip(r)));
@@ -294,6 +360,27 @@ impl Observer for Streamer {
         }
         self.next += 1;
         self.last_t = t;
+        // Keep summary.json current, so a run killed with SIGKILL still
+        // says how far it got (its status stays "running").
+        if self
+            .summary_written
+            .is_none_or(|w| w.elapsed().as_secs_f64() >= SUMMARY_EVERY)
+        {
+            let wall = self.start.elapsed().as_secs_f64();
+            if let Err(e) = self
+                .summary
+                .write(&self.last_stats, wall, t, "running", self.next)
+            {
+                let e = e.to_string();
+                self.error = Some(e.clone());
+                return Err(e);
+            }
+            self.summary_written = Some(Instant::now());
+        }
+        if let Some(sig) = signals::received() {
+            self.interrupted = Some(sig);
+            return Ok(Flow::Stop);
+        }
         Ok(Flow::Continue)
     }
 
@@ -317,6 +404,7 @@ pub struct Summary {
 impl Summary {
     pub fn new(dir: &Path, scene: &Scene, q_names: Vec<String>, rows_expected: usize) -> Self {
         let v = serde_json::json!({
+            "pid": std::process::id(),
             "integrator": scene.run.integrator.name(),
             "duration": scene.run.duration,
             "output_rows_expected": rows_expected,
@@ -351,6 +439,9 @@ impl Summary {
             "jacobian_evaluations": stats.jacobian_evaluations,
             "factorizations": stats.factorizations,
             "output_rows": rows,
+            "updated_unix_seconds": std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map_or(0.0, |d| d.as_secs_f64()),
         });
         if let serde_json::Value::Object(m) = &mut v {
             m.extend(self.fixed.clone());
@@ -372,20 +463,24 @@ pub fn scene_title(path: &Path) -> String {
 pub fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), CliError> {
     let mut l = load(path)?;
     let dir = out_dir(path, out);
-    std::fs::create_dir_all(&dir)
-        .map_err(|e| failed(format!("cannot create {}: {e}", dir.display())))?;
+    outputs::prepare_out_dir(&dir)?;
+    let stale = outputs::clear_stale(&dir)?;
+    if !quiet && !stale.is_empty() {
+        eprintln!(
+            "softrod: removed the previous run's outputs from {}: {}",
+            dir.display(),
+            stale.join(", ")
+        );
+    }
     let scene = &l.scene;
     let duration = scene.run.duration;
     let times = output_times(duration, l.sim.settings().output_spacing(duration));
-    // Written first so that an interrupted run leaves a summary that says so.
+    // Written first so that a run that never gets to its first row leaves
+    // a summary that says so.
     let summary = Summary::new(&dir, scene, l.sim.q_names(), times.len());
-    summary.write(
-        &Stats::default(),
-        0.0,
-        0.0,
-        "error: did not finish (running, or interrupted)",
-        0,
-    )?;
+    summary
+        .write(&Stats::default(), 0.0, 0.0, "running", 0)
+        .map_err(|e| CliError::Input(e.to_string()))?;
     let bar = (!quiet && std::io::stderr().is_terminal()).then(|| {
         let b = ProgressBar::new(1000);
         if let Ok(style) = ProgressStyle::with_template(
@@ -407,7 +502,9 @@ pub fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), CliErro
                 .unwrap_or_else(|| default_points_per_piece(r.spec.rod.n_pieces()))
         })
         .collect();
-    let mut streamer = Streamer::new(&dir, l.sim.model(), times, &per_piece, bar)?;
+    let summary_final = Summary::new(&dir, scene, l.sim.q_names(), times.len());
+    let mut streamer = Streamer::new(&dir, l.sim.model(), times, &per_piece, summary, bar)?;
+    signals::install();
     let start = Instant::now();
     // Rows are the integrator's dense output at the output times, streamed
     // to the observer as the run proceeds; nothing is kept in between.
@@ -417,6 +514,17 @@ pub fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), CliErro
     }
     let wall = start.elapsed().as_secs_f64();
     let (status, stats, t_final) = match (&result, &streamer.error) {
+        (_, None) if streamer.interrupted.is_some() => (
+            format!(
+                "error: interrupted by {} at t = {} ({} of {} output rows written)",
+                streamer.interrupted.unwrap_or("a signal"),
+                streamer.last_t,
+                streamer.rows_written(),
+                streamer.rows_expected()
+            ),
+            result.as_ref().map_or(streamer.last_stats, |s| s.stats),
+            streamer.last_t,
+        ),
         (_, Some(e)) => (format!("error: {e}"), streamer.last_stats, streamer.last_t),
         (Err(e), None) => (format!("error: {e}"), streamer.last_stats, streamer.last_t),
         (Ok(sum), None) => {
@@ -432,7 +540,7 @@ pub fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), CliErro
             }
         }
     };
-    summary.write(&stats, wall, t_final, &status, streamer.rows_written())?;
+    summary_final.write(&stats, wall, t_final, &status, streamer.rows_written())?;
     // Plots and view of whatever was computed (also after a failure: they
     // show where it went wrong).
     let title = scene_title(path);

@@ -863,3 +863,306 @@ fn shape_points_per_piece_sets_the_samples() {
         stderr(&o)
     );
 }
+
+/// A scene whose rod name holds a comma, a quote and a line break.
+const ODD_NAME: &str = "arm, \"left\"\nsecond line";
+
+/// Rod names with commas, quotes and line breaks survive shape.csv (a real
+/// CSV writer quotes them) and the view rebuilt from it.
+#[test]
+fn odd_rod_names_round_trip_through_shape_csv() {
+    let dir = tmp("names");
+    let p = dir.join("odd.toml");
+    let toml_name = ODD_NAME.replace('"', "\\\"").replace('\n', "\\n");
+    std::fs::write(
+        &p,
+        format!(
+            "[world]\ngravity = [0.0, 0.0, -9.81]\n[[rod]]\nname = \"{toml_name}\"\nlength = 0.5\n\
+             pieces = 4\nstrains = [\"ky\", \"qx\", \"qz\"]\n\
+             section = {{ shape = \"circle\", radius = 0.01 }}\n\
+             material = {{ density = 1000.0, young = 1.0e7, poisson = 0.5 }}\n\
+             [run]\nduration = 0.01\noutput_every = 0.005\nshape_points_per_piece = 2\n"
+        ),
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let o = run_scene(&p, &out);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let shape = softrod_viz::run_dir::read_shape_csv(&out.join("shape.csv")).unwrap();
+    assert_eq!(shape.rods.len(), 1);
+    assert_eq!(shape.rods[0].name, ODD_NAME);
+    assert_eq!(shape.times.len(), 3);
+    assert_eq!(shape.rods[0].s.len(), 4 * 2 + 1);
+    let o = run(&["view", out.to_str().unwrap(), "--quiet"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+/// A rerun into the same directory removes the previous run's outputs
+/// (here a cable figure and a second rod's strains this scene does not
+/// make), and leaves the user's own files alone.
+#[test]
+fn a_rerun_removes_the_previous_runs_outputs() {
+    let dir = tmp("stale");
+    let out = dir.join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    for f in ["actuators.svg", "strains_3.svg", "view.html", "notes.txt"] {
+        std::fs::write(out.join(f), "old").unwrap();
+    }
+    let scene = with_run(
+        "cantilever_gravity.toml",
+        "[run]\nduration = 0.01\noutput_every = 0.005",
+        &dir,
+    );
+    let o = run(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("removed the previous run's outputs"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!out.join("actuators.svg").exists());
+    assert!(!out.join("strains_3.svg").exists());
+    assert_eq!(
+        std::fs::read_to_string(out.join("notes.txt")).unwrap(),
+        "old"
+    );
+    assert!(
+        std::fs::read_to_string(out.join("view.html"))
+            .unwrap()
+            .len()
+            > 1000
+    );
+}
+
+/// An output directory that is a file, or lies under one, is bad input.
+#[test]
+fn output_directory_problems_are_bad_input() {
+    let dir = tmp("outdir");
+    let file = dir.join("a_file");
+    std::fs::write(&file, "x").unwrap();
+    let scene = examples().join("cantilever_gravity.toml");
+    for (out, says) in [
+        (file.clone(), "exists and is not a directory"),
+        (file.join("sub"), "cannot create it"),
+    ] {
+        let o = run_scene(&scene, &out);
+        assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+        assert!(stderr(&o).contains(says), "{}", stderr(&o));
+        assert!(stderr(&o).contains(out.to_str().unwrap()), "{}", stderr(&o));
+    }
+    let o = run(&[
+        "statics",
+        scene.to_str().unwrap(),
+        "--out",
+        file.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+}
+
+/// Scene warnings reach the user from every command, in the errors' layout
+/// `FILE:LINE:COL: KEY: message`, on stderr (stdout keeps the JSON clean).
+#[test]
+fn every_command_prints_the_scene_warnings() {
+    let dir = tmp("warnings");
+    let text = std::fs::read_to_string(examples().join("tip_load_statics.toml")).unwrap();
+    let p = dir.join("warn.toml");
+    std::fs::write(
+        &p,
+        format!("{text}\n[[load]]\nrod = \"{}\"\ns = 0.2\n", rod_name(&text)),
+    )
+    .unwrap();
+    let f = p.to_str().unwrap();
+    let out = dir.join("out");
+    for args in [
+        vec!["statics", f, "--json"],
+        vec!["modes", f, "--json"],
+        vec!["run", f, "--out", out.to_str().unwrap(), "--quiet"],
+    ] {
+        let o = run(&args);
+        assert!(o.status.success(), "{args:?}: {}", stderr(&o));
+        let e = stderr(&o);
+        let line = e
+            .lines()
+            .find(|l| l.contains("warning"))
+            .unwrap_or_else(|| panic!("{args:?}: no warning in {e}"));
+        assert!(
+            line.contains(&format!("{f}:")) && line.contains("load["),
+            "{line}"
+        );
+        if args.contains(&"--json") {
+            let _: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+        }
+    }
+}
+
+fn rod_name(scene: &str) -> String {
+    let l = scene.lines().find(|l| l.starts_with("name")).unwrap();
+    l.split('"').nth(1).unwrap().to_string()
+}
+
+/// `modes --json` marks an unstable equilibrium: the upright rod past its
+/// self-weight buckling length (see statics_flags_an_unstable_equilibrium)
+/// has ω² < 0, reported as an imaginary frequency; the short stiff one none.
+#[test]
+fn modes_json_marks_unstable_equilibria() {
+    let dir = tmp("modes_unstable");
+    let scene = |young: f64| {
+        format!(
+            "[world]\ngravity = [0.0, 0.0, -9.81]\n[[rod]]\nname = \"arm\"\nlength = 0.5\n\
+             pieces = 6\nstrains = [\"ky\", \"qx\", \"qz\"]\n\
+             base = {{ position = [0, 0, 0], rotation = [[0,0,-1],[0,1,0],[1,0,0]] }}\n\
+             section = {{ shape = \"circle\", radius = 0.01 }}\n\
+             material = {{ density = 1000.0, young = {young:e}, poisson = 0.5 }}\n"
+        )
+    };
+    for (young, unstable) in [(1.0e5, true), (1.0e7, false)] {
+        let p = dir.join(format!("upright_{young:e}.toml"));
+        std::fs::write(&p, scene(young)).unwrap();
+        let o = run(&["modes", p.to_str().unwrap(), "--json"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+        assert_eq!(v["unstable"], unstable, "E = {young}");
+        let f: Vec<f64> = serde_json::from_value(v["frequencies_hz"].clone()).unwrap();
+        let im: Vec<f64> = serde_json::from_value(v["imaginary_frequencies_hz"].clone()).unwrap();
+        assert_eq!(!im.is_empty(), unstable);
+        assert_eq!(f[0] < 0.0, unstable);
+        if unstable {
+            assert_eq!(im[0], -f[0]);
+            assert!(stderr(&o).contains("unstable"), "{}", stderr(&o));
+        }
+    }
+}
+
+#[cfg(unix)]
+fn summary_of(out: &Path) -> Option<serde_json::Value> {
+    serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).ok()?).ok()
+}
+
+/// SIGTERM and SIGINT end a run cleanly: the summary is current while it
+/// runs ("running", the process id), and after the signal it says so and
+/// matches the files (rows written, last time), the figures of what exists
+/// are drawn, exit 1.
+#[cfg(unix)]
+#[test]
+fn a_signal_ends_the_run_with_a_true_summary() {
+    for (sig, name) in [(libc::SIGTERM, "SIGTERM"), (libc::SIGINT, "SIGINT")] {
+        let dir = tmp(&format!("signal_{name}"));
+        // A long run: explicit steps on a stiff rod (many seconds).
+        let scene = with_run(
+            "cantilever_gravity.toml",
+            "[run]\nduration = 100.0\nintegrator = \"rk4\"\ndt = 1e-5\noutput_every = 0.001",
+            &dir,
+        );
+        let out = dir.join("out");
+        let mut child = bin()
+            .args([
+                "run",
+                scene.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+                "--quiet",
+            ])
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        let start = std::time::Instant::now();
+        loop {
+            let s = summary_of(&out);
+            if let Some(s) = s.filter(|s| s["output_rows"].as_u64().unwrap_or(0) > 2) {
+                assert_eq!(s["status"], "running");
+                assert_eq!(s["pid"], child.id());
+                break;
+            }
+            assert!(start.elapsed().as_secs() < 120, "no running summary");
+            std::thread::sleep(std::time::Duration::from_millis(50));
+        }
+        // SAFETY: a signal to the child this test started, by its id.
+        assert_eq!(unsafe { libc::kill(child.id() as i32, sig) }, 0);
+        let status = child.wait().unwrap();
+        let mut err = String::new();
+        std::io::Read::read_to_string(child.stderr.as_mut().unwrap(), &mut err).unwrap();
+        assert_eq!(status.code(), Some(1), "{name}: {err}");
+        let s = summary_of(&out).unwrap();
+        let st = s["status"].as_str().unwrap();
+        assert!(st.contains(&format!("interrupted by {name}")), "{st}");
+        let (_, rows) = csv(&out.join("trajectory.csv"));
+        assert_eq!(s["output_rows"].as_u64().unwrap() as usize, rows.len());
+        assert_eq!(s["final_time"].as_f64().unwrap(), rows.last().unwrap()[0]);
+        let (_, shape) = csv_shape(&out.join("shape.csv"));
+        assert_eq!(shape, rows.len() * 65);
+        for svg in ["energy.svg", "shapes.svg", "tip_trajectory.svg"] {
+            let t = std::fs::read_to_string(out.join(svg)).unwrap();
+            assert!(t.contains("</svg>"), "{svg}");
+        }
+        assert!(out.join("view.html").exists());
+    }
+}
+
+/// A write error (here the file-size limit, as a full disk would) stops the
+/// run with a status that says so, the partial row removed: both CSVs end
+/// with whole rows of the same times, no figure is left truncated.
+#[cfg(unix)]
+#[test]
+fn a_write_error_drops_the_partial_row_and_says_so() {
+    use std::os::unix::process::CommandExt;
+    let dir = tmp("write_error");
+    let scene = with_run(
+        "cantilever_gravity.toml",
+        "[run]\nduration = 1.0\noutput_every = 0.001",
+        &dir,
+    );
+    let out = dir.join("out");
+    const LIMIT: u64 = 300_000;
+    let mut cmd = bin();
+    cmd.args([
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    // SAFETY: only async-signal-safe calls between fork and exec.
+    unsafe {
+        cmd.pre_exec(|| {
+            let lim = libc::rlimit {
+                rlim_cur: LIMIT,
+                rlim_max: LIMIT,
+            };
+            libc::setrlimit(libc::RLIMIT_FSIZE, &lim);
+            // Fail the write with EFBIG instead of killing the process.
+            libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+            Ok(())
+        });
+    }
+    let o = cmd.output().unwrap();
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let s = summary_of(&out).unwrap();
+    let st = s["status"].as_str().unwrap();
+    assert!(st.starts_with("error: writing shape.csv"), "{st}");
+    assert!(st.contains("the partial row was removed"), "{st}");
+    for f in ["trajectory.csv", "shape.csv"] {
+        let t = std::fs::read_to_string(out.join(f)).unwrap();
+        assert!(t.ends_with('\n'), "{f} ends in a partial row");
+    }
+    let (header, rows) = csv(&out.join("trajectory.csv"));
+    assert!(rows.iter().all(|r| r.len() == header.len()));
+    let (_, shape) = csv_shape(&out.join("shape.csv"));
+    assert_eq!(shape, rows.len() * 65, "the same times in both files");
+    assert_eq!(s["output_rows"].as_u64().unwrap() as usize, rows.len());
+    assert!(rows.len() > 5 && rows.len() < 1001);
+    for e in std::fs::read_dir(&out).unwrap().flatten() {
+        let name = e.file_name().to_string_lossy().into_owned();
+        if name.ends_with(".svg") || name.ends_with(".html") {
+            let t = std::fs::read_to_string(e.path()).unwrap();
+            assert!(
+                t.contains("</svg>") || t.contains("</html>"),
+                "{name} truncated"
+            );
+        }
+    }
+}
