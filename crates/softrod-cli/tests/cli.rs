@@ -1092,7 +1092,13 @@ fn a_signal_ends_the_run_with_a_true_summary() {
         assert!(st.contains(&format!("interrupted by {name}")), "{st}");
         let (_, rows) = csv(&out.join("trajectory.csv"));
         assert_eq!(s["output_rows"].as_u64().unwrap() as usize, rows.len());
-        assert_eq!(s["final_time"].as_f64().unwrap(), rows.last().unwrap()[0]);
+        // Within an ulp or two: serde_json's default float parser does not
+        // round-trip every shortest decimal exactly (0.10300000000000001).
+        let (ft, last) = (s["final_time"].as_f64().unwrap(), rows.last().unwrap()[0]);
+        assert!(
+            (ft - last).abs() <= 4.0 * f64::EPSILON * last,
+            "{ft} vs {last}"
+        );
         let (_, shape) = csv_shape(&out.join("shape.csv"));
         assert_eq!(shape, rows.len() * 65);
         for svg in ["energy.svg", "shapes.svg", "tip_trajectory.svg"] {

@@ -59,7 +59,7 @@ impl Ctx<'_> {
                 return Err(self.r.out_of_range(
                     "run.shape_points_per_piece",
                     n,
-                    &format!("an integer in [1, {}]", Run::MAX_SHAPE_POINTS_PER_PIECE),
+                    format!("an integer in [1, {}]", Run::MAX_SHAPE_POINTS_PER_PIECE),
                 ));
             }
         };
