@@ -67,12 +67,7 @@ pub const STABILITY_CHECK_MAX_DOF: usize = 600;
 
 /// Creates the output directory of a command (exit 2 when it cannot be).
 fn make_dir(dir: &Path) -> Result<(), CliError> {
-    std::fs::create_dir_all(dir).map_err(|e| {
-        CliError::Input(format!(
-            "--out {}: cannot create the directory: {e}",
-            dir.display()
-        ))
-    })
+    crate::outputs::prepare_out_dir(dir)
 }
 
 /// Sampled centrelines of every rod at `q` (the default sampling of `run`).

@@ -955,13 +955,20 @@ fn output_directory_problems_are_bad_input() {
         assert!(stderr(&o).contains(says), "{}", stderr(&o));
         assert!(stderr(&o).contains(out.to_str().unwrap()), "{}", stderr(&o));
     }
-    let o = run(&[
-        "statics",
-        scene.to_str().unwrap(),
-        "--out",
-        file.to_str().unwrap(),
-    ]);
-    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    for cmd in ["statics", "modes", "report"] {
+        let o = run(&[
+            cmd,
+            scene.to_str().unwrap(),
+            "--out",
+            file.to_str().unwrap(),
+        ]);
+        assert_eq!(o.status.code(), Some(2), "{cmd}: {}", stderr(&o));
+        assert!(
+            stderr(&o).contains("exists and is not a directory"),
+            "{}",
+            stderr(&o)
+        );
+    }
 }
 
 /// Scene warnings reach the user from every command, in the errors' layout

@@ -54,8 +54,7 @@ pub(super) fn write(dir: &Path, name: &str, text: &str) -> Result<(), CliError> 
 pub fn report(path: &Path, out: Option<PathBuf>, o: ReportOptions) -> Result<(), CliError> {
     let l = load(path)?;
     let dir = out_dir(path, out);
-    std::fs::create_dir_all(&dir)
-        .map_err(|e| failed(format!("cannot create {}: {e}", dir.display())))?;
+    crate::outputs::prepare_out_dir(&dir)?;
     let md = match l.scene.run.mode {
         Mode::Statics => statics_report(&l.scene, &dir, o)?,
         Mode::Dynamics => dynamics_report(&l.scene, &dir, o)?,
