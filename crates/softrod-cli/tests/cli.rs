@@ -1179,3 +1179,44 @@ fn a_write_error_drops_the_partial_row_and_says_so() {
         }
     }
 }
+
+/// `run --snapshots` chooses the times of the shape and strain figures
+/// (the nearest output times, in the legends); a time outside the run is
+/// bad input, before anything is written.
+#[test]
+fn snapshots_choose_the_drawn_times() {
+    let dir = tmp("snapshots");
+    let scene = with_run(
+        "cantilever_gravity.toml",
+        "[run]\nduration = 0.1\noutput_every = 0.01",
+        &dir,
+    );
+    let out = dir.join("out");
+    let o = run(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+        "--snapshots",
+        "0.031,0.1",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let svg = std::fs::read_to_string(out.join("strains.svg")).unwrap();
+    assert!(
+        svg.contains("t = 0.03 s") && svg.contains("t = 0.1 s"),
+        "legend times"
+    );
+    assert!(!svg.contains("t = 0.02 s") && !svg.contains("t = 0 s"));
+    let o = run(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        dir.join("other").to_str().unwrap(),
+        "--snapshots",
+        "0.5",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--snapshots"), "{}", stderr(&o));
+    assert!(!dir.join("other").exists());
+}
