@@ -2,6 +2,7 @@
 //!
 //! Exit codes: 0 success, 1 simulation failure (reason on stderr), 2 bad input
 //! (the scene error names file:line:col and the key path).
+#![forbid(unsafe_code)]
 
 mod common;
 mod inspect;
