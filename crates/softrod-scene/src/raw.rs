@@ -107,6 +107,8 @@ pub(crate) struct RawLoad {
 pub(crate) struct RawInitial {
     pub q: Option<Vec<f64>>,
     pub qdot: Option<Vec<f64>>,
+    pub trajectory: Option<String>,
+    pub row: Option<i64>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -122,6 +124,7 @@ pub(crate) struct RawRun {
     pub quadrature: Option<i64>,
     pub error_control: Option<bool>,
     pub linearly_implicit: Option<bool>,
+    pub shape_points_per_piece: Option<i64>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -153,9 +153,18 @@ pub struct Run {
     /// gravity, Coriolis, loads and cables explicit (default `false`: Newton
     /// to convergence).
     pub linearly_implicit: bool,
+    /// Samples per piece in `shape.csv` and the 3-D view (an extension of the
+    /// format): points at the fractions `0, 1/m, …, (m−1)/m` of each piece,
+    /// exact on its arc, then the tip; 1 gives the N+1 piece boundaries.
+    /// `None` (default): the front end chooses enough to look smooth.
+    pub shape_points_per_piece: Option<usize>,
 }
 
 impl Run {
+    /// Largest `shape_points_per_piece`: beyond it the chords are far below
+    /// a pixel and only the files grow.
+    pub const MAX_SHAPE_POINTS_PER_PIECE: usize = 1000;
+
     /// Default `duration`, s (the contract's).
     pub const DEFAULT_DURATION: f64 = 1.0;
     /// Default `rtol`: with the default `rosenbrock`, the best measured by
@@ -187,6 +196,7 @@ impl Default for Run {
             quadrature: Run::DEFAULT_QUADRATURE,
             error_control: false,
             linearly_implicit: false,
+            shape_points_per_piece: None,
         }
     }
 }

@@ -81,6 +81,7 @@ fn contract_example_has_the_written_values() {
             quadrature: 4,
             error_control: false,
             linearly_implicit: false,
+            shape_points_per_piece: None,
         }
     );
     assert_eq!(s.reference, None);

@@ -40,6 +40,19 @@ impl Ctx<'_> {
             Some(n) if n >= 1 => n as usize,
             Some(n) => return Err(self.r.out_of_range("run.quadrature", n, ">= 1")),
         };
+        let shape_points_per_piece = match r.shape_points_per_piece {
+            None => None,
+            Some(n) if n >= 1 && n as u64 <= Run::MAX_SHAPE_POINTS_PER_PIECE as u64 => {
+                Some(n as usize)
+            }
+            Some(n) => {
+                return Err(self.r.out_of_range(
+                    "run.shape_points_per_piece",
+                    n,
+                    format!("an integer in [1, {}]", Run::MAX_SHAPE_POINTS_PER_PIECE),
+                ));
+            }
+        };
         let error_control = r.error_control.unwrap_or(d.error_control);
         if error_control && integrator != Integrator::GeneralizedAlpha {
             self.warn(
@@ -89,6 +102,7 @@ impl Ctx<'_> {
             quadrature,
             error_control,
             linearly_implicit,
+            shape_points_per_piece,
         })
     }
 }
