@@ -70,3 +70,8 @@ pub use build::Built;
 pub use error::{Cause, Location, SceneError, Warning};
 pub use run::{Integrator, Mode, Run, UnknownIntegrator};
 pub use scene::{Initial, Reference, Scene, World};
+
+/// The README's examples, compiled and run as doctests.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;
