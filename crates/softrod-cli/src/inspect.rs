@@ -190,7 +190,11 @@ fn mode_curves(
         .fold(0.0, f64::max);
     let freq = modes.frequencies_hz();
     let mut out = Vec::new();
-    for (k, &f) in freq.iter().enumerate().take(count.min(modes.shapes.ncols())) {
+    for (k, &f) in freq
+        .iter()
+        .enumerate()
+        .take(count.min(modes.shapes.ncols()))
+    {
         let v = modes.shapes.column(k);
         let at = |a: f64| -> Result<Vec<Vec<[f64; 3]>>, CliError> {
             let q: Vec<f64> = q_eq.iter().zip(v.iter()).map(|(q, v)| q + a * v).collect();

@@ -2,10 +2,9 @@
 //! of softrod.
 //!
 //! A [`Rod`] is cut into pieces of constant strain `ξ_n = B_n q_n + ξ̄_n`
-//! (seed section 0.3); [`RodKinematics`] evaluates, in one O(N) sweep from the
+//! (docs/theory.md §0.6, (C9)); [`RodKinematics`] evaluates, in one O(N) sweep from the
 //! clamped base to the tip, everything about where the rod is and how it
-//! moves: poses `g(s)` (seed (8), (D7)), velocities `η(s) = J(s) q̇` (seed (10),
-//! (D8)), accelerations `η̇ = J q̈ + J̇ q̇` ((D10)), the geometric Jacobian
+//! moves: poses `g(s)` (D7), velocities `η(s) = J(s) q̇` (D8), accelerations `η̇ = J q̈ + J̇ q̇` ((D10)), the geometric Jacobian
 //! `J(s)` ((D11)) and its time derivative `J̇(s)` ((D12)), in the body frame
 //! or in world axes. [`GaussLegendre`] gives the per-piece quadrature the
 //! layers above integrate with.
