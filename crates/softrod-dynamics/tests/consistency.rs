@@ -1,4 +1,4 @@
-//! Cross-algorithm consistency of the dynamics (design.md, cross-checks 2–4):
+//! Cross-algorithm consistency of the dynamics (docs/theory.md §8, cross-checks 2–4):
 //! every algorithm checked against an independent one — the O(N) recursion
 //! against the mass-matrix path, the composite `M` against `∫JᵀMJ` from
 //! explicit Jacobians, inverse dynamics against the Euler–Lagrange equations

@@ -1,5 +1,5 @@
 //! Validation of the PCS statics and linearized dynamics against analytic
-//! physics (design.md, "Cross-checks that must hold", items 1 and 5).
+//! physics (docs/theory.md §8, "Cross-checks that must hold", items 1 and 5).
 //!
 //! Every reference here is independent of the library: closed-form beam
 //! theory (Timoshenko, exact circle, Euler–Bernoulli modes) or, for the large
@@ -246,8 +246,8 @@ fn pure_tip_moment_is_an_exact_circle() {
             )
             .unwrap();
             // Stopping at ‖r‖∞ ≤ 1e-13 ‖Kq‖∞ leaves a relative κ error
-            // ~1e-13, i.e. ≤ 1e-13·2π rad and ·L m; 1e-12 is the design.md
-            // "exact to ~1e-12" cross-check 1.
+            // ~1e-13, i.e. ≤ 1e-13·2π rad and ·L m; 1e-12 is the
+            // "exact to ~1e-12" of cross-check 1 (docs/theory.md §8).
             assert!(
                 dp < 1e-12,
                 "{label}, N = {n}, κL = {kl}: tip position off by {dp:e} m"
@@ -448,7 +448,7 @@ fn cantilever_natural_frequencies() {
     let given = [1.875104, 4.694091, 7.854757];
     let beta: Vec<f64> = given.iter().map(|&b| cantilever_root(b)).collect();
     for (b, g) in beta.iter().zip(given) {
-        // The design.md constants are the roots rounded to 7 digits.
+        // The quoted constants are the roots rounded to 7 digits.
         assert!((b - g).abs() < 1e-6, "β L root {b} vs {g}");
     }
     let exact: Vec<f64> = beta.iter().map(|b| b * b * scale).collect();

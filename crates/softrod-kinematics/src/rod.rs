@@ -69,7 +69,7 @@ pub fn straight() -> Vec6 {
     Vec6::new(0.0, 0.0, 0.0, 1.0, 0.0, 0.0)
 }
 
-/// A rod clamped at `base`, cut into PCS pieces (seed section 0.3).
+/// A rod clamped at `base`, cut into PCS pieces (docs/theory.md §0.6, (C9)).
 ///
 /// Generalized coordinates `q = (q_1, …, q_N)`, `n_dof = Σ k_n`.
 #[derive(Clone, Debug, PartialEq)]

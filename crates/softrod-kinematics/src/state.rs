@@ -24,7 +24,7 @@ pub enum Frame {
 
 /// Kinematic quantities of a rod at given `q` (and optionally `q̇`, `q̈`).
 ///
-/// [`RodKinematics::update`] runs the recursion of seed (8)–(11) / (D7)–(D12)
+/// [`RodKinematics::update`] runs the recursion (D7)–(D12)
 /// once from base to tip (O(N)) and keeps the piece-tip values; queries at any
 /// `s` then cost one local exponential (O(1)) plus, for Jacobians, one
 /// backward sweep over the pieces before `s` (O(n_dof)). Buffers are allocated

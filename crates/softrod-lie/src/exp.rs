@@ -1,5 +1,5 @@
 //! Exponentials, the tangent operator and its strain derivative, in closed
-//! form with small-angle series (derivations.md §1).
+//! form with small-angle series (docs/theory.md §1).
 //!
 //! All functions take the arc length `x ≥ 0` [m] along a piece and the
 //! constant strain `ξ = (k, q)` of the piece; `θ = |k|`, `ψ = x·θ`.
@@ -39,7 +39,7 @@ impl AdPowers {
 }
 
 /// Group exponential `exp(x·ξ̂)` (D4), the pose of the section at `x`
-/// relative to the piece base (seed (8)):
+/// relative to the piece base (D7)):
 /// `R = I + x a(ψ) k̃ + x² b(ψ) k̃²`, `p = (x I + x² b(ψ) k̃ + x³ c(ψ) k̃²) q`,
 /// `a = sinψ/ψ`, `b = (1−cosψ)/ψ²`, `c = (ψ−sinψ)/ψ³` (series below ψ* = 2.5).
 ///
@@ -218,7 +218,7 @@ pub fn exp_ad(x: f64, xi: &Vec6) -> AdOp {
 }
 
 /// Tangent operator `T(x) = ∫₀ˣ exp(l·ad_ξ) dl = Σ_{i=0}^{4} x^{i+1} τ_i(ψ) ad_ξ^i`
-/// (D3, seed (9) and end of 0.5.1), `τ₀ = 1`.
+/// (D3), `τ₀ = 1`.
 ///
 /// Accuracy: coefficients ≤ 6e-16 relative on both sides of the switch.
 #[inline]

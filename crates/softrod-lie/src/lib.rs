@@ -16,10 +16,11 @@
 //! The closed forms divide by up to `ψ⁷` (`ψ = x·|k|`); below the switch point
 //! [`series::PSI_SWITCH`] every coefficient is evaluated by its Taylor series
 //! (14 terms, Horner in `ψ²`), so all maps are accurate to ~1e-15 relative on
-//! both sides of the switch and at `θ = 0` exactly (derivations.md (D5)).
+//! both sides of the switch and at `θ = 0` exactly ((D5)).
 //!
-//! Equation labels `(D·)` refer to `shared/docs/derivations.md`; "seed (k)"
-//! refers to equation k of the model document.
+//! Equation labels `(D·)` refer to `docs/theory.md` of the repository (its
+//! concordance maps the model document's equation numbers to them).
+#![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
 mod adop;
@@ -39,3 +40,8 @@ pub use ops::{ad, ad_vec, coad, coad_vec, hat, skew, unskew, vee};
 pub use piece::PieceMaps;
 pub use pose::Pose;
 pub use types::*;
+
+/// The README's examples, compiled and run as doctests.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;

@@ -1,12 +1,12 @@
 //! Scalar coefficient functions of `ψ = x·θ`, closed form or series.
 //!
-//! Every analytic function of `x·ad_ξ` is a quartic in `ad_ξ` (derivations.md
+//! Every analytic function of `x·ad_ξ` is a quartic in `ad_ξ` (docs/theory.md
 //! (D1): `ad_ξ⁵ = −2θ²ad_ξ³ − θ⁴ad_ξ`), whose coefficients depend on `ψ` only and
 //! are even in `ψ`. The closed forms lose accuracy like `ε/ψ^{2…7}` near 0, so
 //! below [`PSI_SWITCH`] they are replaced by their Taylor series in `u = ψ²`
 //! ((D5), [`SERIES_TERMS`] terms, Horner). Measured against a 60-digit
 //! reference, both sides are accurate to ≤ 6e-16 relative for `τ_i`, `a, b, c`
-//! and ≤ 4e-15 for `ρ_i` (derivations.md §1, table).
+//! and ≤ 4e-15 for `ρ_i` (docs/theory.md §1, table).
 
 /// Switch point `ψ*`: series below, closed form at and above.
 pub const PSI_SWITCH: f64 = 2.5;
@@ -325,7 +325,7 @@ fn abc_closed(psi: f64, s: f64, c: f64) -> [f64; 3] {
 /// The coefficients `[τ₁, τ₂, τ₃, τ₄]` of the tangent operator (D3)
 /// (`τ₀ = 1`): `τ_i = N_i(ψ)/(2ψ^{i+1})` with
 /// `N₁ = 4 − 4cosψ − ψ sinψ`, `N₂ = 4ψ − 5 sinψ + ψ cosψ`,
-/// `N₃ = 2 − 2cosψ − ψ sinψ`, `N₄ = 2ψ − 3 sinψ + ψ cosψ` (seed (9)).
+/// `N₃ = 2 − 2cosψ − ψ sinψ`, `N₄ = 2ψ − 3 sinψ + ψ cosψ` (D3).
 #[inline]
 pub fn tau(psi: f64) -> [f64; 4] {
     let psi = psi.abs();

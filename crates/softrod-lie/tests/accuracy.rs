@@ -8,18 +8,18 @@
 //!   composite Gauss–Legendre quadrature of `expm(l·ad_ξ)` (`f64`), the two
 //!   cross-checked; `T₋` also as the product `exp(−x ad_ξ)·T(x)`;
 //! - `D_ξT[δ]`, `D_ξT₋[δ]` by a three-block Van Loan construction that equals
-//!   the quadrature form of derivations.md §1, by that quadrature form itself,
+//!   the quadrature form of docs/theory.md §1, by that quadrature form itself,
 //!   and by central finite differences in `ξ`; `D_ξ exp(x ad_ξ)[δ]` by the
 //!   Van Loan form of the Fréchet derivative and by finite differences.
 //!
 //! # Tolerances
-//! Error = `max|code − ref| / max(1, max|ref|)`. derivations.md §8(a) measured
+//! Error = `max|code − ref| / max(1, max|ref|)`. docs/theory.md §8(a) measured
 //! ≤ 4e-15 for exp, T, T₋ and D T₋ against an 80-digit reference over the same
 //! θ grid with `xθ ≤ 17.3`, and ≤ 8e-16 across the switch. The irreducible
 //! part is the rounding of `θ = |k|` and `ψ = xθ` (relative ε each), which moves
 //! `sin ψ`, `cos ψ` by up to `ψ·ε ≈ 17.3 × 1.1e-16 ≈ 2e-15`; a few such terms
 //! and the 3×3 products give the ~4e-15 measured. `TOL = 1e-14` leaves a
-//! factor ≈ 2.5 over that. derivations.md measured 7e-14 at θ = 1e3 and
+//! factor ≈ 2.5 over that. docs/theory.md measured 7e-14 at θ = 1e3 and
 //! attributed it to the rounding of `x·θ`; here the reference takes the same
 //! `f64` inputs `x` and `ξ` as the code and forms `x·ξ` exactly, so only the
 //! code's own rounding of `ψ` (≤ 17.3 here too) remains. Measured worst at
@@ -477,7 +477,7 @@ fn continuous_across_the_switch() {
 
 /// `T(x)` built from the naive closed forms `τ_i = N_i/(2ψ^{i+1})`
 /// (`series::closed_forms`) at small ψ is wrong by many orders of magnitude
-/// more than the series version (derivations.md §8(a): 2.5e-4 at θ = 1e-6).
+/// more than the series version (docs/theory.md §8(a): 2.5e-4 at θ = 1e-6).
 #[test]
 fn naive_closed_form_fails_near_zero_series_does_not() {
     let mut rng = Rng::new(3);

@@ -7,7 +7,7 @@ use softrod_kinematics::Rod;
 use softrod_lie::Vec6;
 
 /// Section + material + length of one rod: everything that turns strains and
-/// velocities into internal wrenches and inertia (seed (5)–(6)).
+/// velocities into internal wrenches and inertia ((C5), (C7)).
 ///
 /// Valid by construction ([`RodBody::new`]). All per-`s` queries take the
 /// material abscissa `s ∈ [0, L]` \[m\] (clamped); only a tapered section
@@ -74,7 +74,7 @@ impl RodBody {
         self.section.properties(s / self.length)
     }
 
-    /// Diagonal of the screw inertia per unit length (seed (5), §0)
+    /// Diagonal of the screw inertia per unit length (C5)
     /// `𝓜(s) = diag(ρJx, ρJy, ρJz, ρA, ρA, ρA)` [kg·m, kg·m, kg·m, kg/m ×3],
     /// body frame at the section centre.
     #[inline]
@@ -92,7 +92,7 @@ impl RodBody {
     }
 
     /// Diagonal of the stiffness `Γ(s) = diag(GJx, EJy, EJz, EA, GA, GA)`
-    /// [N·m², N·m², N·m², N, N, N] (seed (6) with bending `EJ`, design.md erratum).
+    /// [N·m², N·m², N·m², N, N, N] (C7); bending takes `E`, docs/theory.md §9 erratum 2.
     /// No shear correction factor is applied.
     #[inline]
     pub fn stiffness(&self, s: f64) -> Vec6 {
@@ -109,7 +109,7 @@ impl RodBody {
     }
 
     /// Diagonal of the Kelvin–Voigt viscosity
-    /// `γ(s) = diag(μJx, 3μJy, 3μJz, 3μA, μA, μA)` [N·m²·s, …, N·s] (seed (6)).
+    /// `γ(s) = diag(μJx, 3μJy, 3μJz, 3μA, μA, μA)` [N·m²·s, …, N·s] (C7).
     #[inline]
     pub fn viscosity(&self, s: f64) -> Vec6 {
         let p = self.properties(s);

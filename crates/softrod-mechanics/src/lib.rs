@@ -4,7 +4,7 @@
 //! - [`Section`], [`Material`], [`RodBody`]: area and second moments, the
 //!   screw inertia `𝓜 = diag(ρJx, ρJy, ρJz, ρA, ρA, ρA)`, stiffness
 //!   `Γ = diag(GJx, EJy, EJz, EA, GA, GA)` and Kelvin–Voigt viscosity
-//!   `γ = diag(μJx, 3μJy, 3μJz, 3μA, μA, μA)` (seed (5)–(6), bending `EJ`).
+//!   `γ = diag(μJx, 3μJy, 3μJz, 3μA, μA, μA)` ((C5), (C7), bending `EJ`).
 //! - [`piece_matrices`]: per-piece `K_n`, `D_n` and the rest offset of the
 //!   elastic force `τ_e = K q + e` (D13); [`elastic_energy`] (§7).
 //! - Loads (D14), each a separate term returning a body-frame wrench:
@@ -19,7 +19,8 @@
 //! Conventions: SI units; 6-vectors angular first (`(M, N)` wrenches,
 //! `(k, q)` strains); body frame at the section centre; `s ∈ [0, L]` is the
 //! undeformed abscissa and densities are per unit undeformed length.
-//! Labels (D·) refer to `docs/derivations.md`.
+//! Labels (C·), (D·) refer to `docs/theory.md` of the repository.
+#![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
 mod body;
@@ -39,3 +40,8 @@ pub use error::{MechanicsError, Quantity};
 pub use loads::{DistributedLoad, Drag, LoadFrame, PointLoad};
 pub use material::{Material, MaterialBuilder};
 pub use section::{Section, SectionProperties};
+
+/// The README's examples, compiled and run as doctests.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;

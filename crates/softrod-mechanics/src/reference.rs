@@ -60,7 +60,7 @@ fn project_density(
     out
 }
 
-/// Generalized gravity force `−G(q) = ∫₀ᴸ J(s)ᵀ 𝓕_g(s) ds` (D14, seed (13)),
+/// Generalized gravity force `−G(q) = ∫₀ᴸ J(s)ᵀ 𝓕_g(s) ds` (D14),
 /// `𝓕_g = (0; ρA(s) R(s)ᵀ g_w)` ([`gravity_wrench_density`]), by Gauss
 /// quadrature on each piece with the body-frame Jacobian. Equals `−∂V_g/∂q`
 /// for [`gravity_potential`] with the same rule. Units: N·m or N per

@@ -38,7 +38,7 @@ pub enum Section {
 /// Geometric properties of a section: area `A` \[m²\], second moments
 /// `Jy = ∫z² dA`, `Jz = ∫y² dA` and `Jx = Jy + Jz` \[m⁴\].
 ///
-/// `Jx` is the polar moment, the model convention of the seed (torsional
+/// `Jx` is the polar moment, the model's convention (docs/theory.md §0.5: torsional
 /// stiffness `G·Jx`); for non-circular sections it is not the Saint-Venant
 /// torsion constant.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -49,6 +49,7 @@
 //! assert!(cause.to_string().starts_with("Young's modulus [Pa] must be positive"));
 //! ```
 
+#![forbid(unsafe_code)]
 #![warn(missing_docs)]
 // A SceneError carries the file, key path, location, value, allowed range and
 // the library cause (~140 bytes): returned once per load, on a cold path,
@@ -69,3 +70,8 @@ pub use build::Built;
 pub use error::{Cause, Location, SceneError, Warning};
 pub use run::{Integrator, Mode, Run, UnknownIntegrator};
 pub use scene::{Initial, Reference, Scene, World};
+
+/// The README's examples, compiled and run as doctests.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;

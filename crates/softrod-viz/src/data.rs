@@ -5,7 +5,7 @@
 //! unstretched arc length, m, base to tip) at every output time; the frame
 //! at a sample maps the rod's local frame to the world frame. The local x axis
 //! is the rod's material tangent (the cross-section normal), local y and z
-//! span the cross-section (design.md, "Conventions"), so the tube is drawn as
+//! span the cross-section (docs/theory.md §0.1), so the tube is drawn as
 //! circles of radius `r(s)` in the local y–z plane: with shear the
 //! cross-section is drawn tilted against the centreline, as the Cosserat model
 //! has it.

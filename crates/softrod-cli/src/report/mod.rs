@@ -8,7 +8,7 @@
 //!   {2, 4, 6}, each at a tight tolerance, against a finer reference
 //!   (pieces ×8, quadrature 6, same tight integrator);
 //! - **temporal study**: the scene's pieces and quadrature; dopri5 and
-//!   rosenbrock over tolerances, generalized-α over steps, against the
+//!   rosenbrock and esdirk over tolerances, generalized-α over steps, against the
 //!   reference integrator at the same pieces;
 //! - an analytic `[reference] tip` (at `[reference] time`, default the end) is
 //!   compared with every run as well.

@@ -6,7 +6,7 @@ use std::time::Instant;
 use softrod_integrate::{
     Control, Hooks, Method, Options, RodSystem, Stats, Status, integrate_second_order,
 };
-use softrod_scene::{Built, Scene};
+use softrod_scene::{Built, Integrator, Scene};
 
 use crate::common::{CliError, Poser, failed};
 
@@ -49,7 +49,15 @@ pub(super) fn simulate_once(
     budget: f64,
 ) -> Result<Outcome, String> {
     let mut sys = RodSystem::new(built.model.clone());
-    sys.jacobian = softrod::Settings::default().stiff_jacobian();
+    // Each method with the Jacobian `softrod run` gives it.
+    let integrator = match method {
+        Method::Esdirk46 => Integrator::Esdirk,
+        Method::Radau5 => Integrator::Radau5,
+        _ => Integrator::Rosenbrock,
+    };
+    sys.jacobian = softrod::Settings::default()
+        .with_integrator(integrator)
+        .stiff_jacobian();
     let t1 = *times.last().expect("times");
     let opts = Options {
         t_eval: Some(times.to_vec()),

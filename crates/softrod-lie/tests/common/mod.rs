@@ -288,7 +288,7 @@ pub fn expm<S: Scalar>(a: &Mat<S>) -> Mat<S> {
 }
 
 // ---------------------------------------------------------------------------
-// se(3) matrices, rebuilt by hand from the conventions of design.md.
+// se(3) matrices, rebuilt by hand from the conventions of docs/theory.md §0.2.
 // ---------------------------------------------------------------------------
 
 pub fn skew_ref(v: &Vec3) -> na::Matrix3<f64> {
@@ -391,7 +391,7 @@ pub fn ref_tangent_minus_product(x: f64, xi: &Vec6) -> Mat6 {
 /// `Z = [[σA, σΔ, 0], [0, σA, I], [0, 0, 0]]` (`A = ad_ξ`, `Δ = ad_δ`, σ = sign),
 /// the (1,3) block of `expm(x·Z)` is
 /// `∫₀ˣ e^{σ(x−l)A} σΔ ∫₀ˡ e^{σuA} du dl`, i.e. `σ∫₀ˣ e^{σ(x−l)A} Δ T_σ(l) dl`,
-/// which is the quadrature form of derivations.md (D6) (it solves
+/// which is the quadrature form of docs/theory.md (D6) (it solves
 /// `∂_x D T_σ = σ(Δ T_σ + A D T_σ)`, from `∂_x T_σ = I + σ A T_σ`).
 pub fn ref_d_tangent(x: f64, xi: &Vec6, delta: &Vec6, sign: f64) -> Mat6 {
     let a = ad_ref(xi) * sign;
@@ -479,7 +479,7 @@ pub fn quad_tangent(x: f64, xi: &Vec6, sign: f64) -> Mat6 {
     })
 }
 
-/// `D_ξT₋(x)[δ] = −∫₀ˣ exp(−(x−l) ad_ξ) ad_δ T₋(l) dl` (derivations.md §1),
+/// `D_ξT₋(x)[δ] = −∫₀ˣ exp(−(x−l) ad_ξ) ad_δ T₋(l) dl` (docs/theory.md §1),
 /// with the double-double `expm` and Van Loan `T₋` inside.
 pub fn quad_d_tangent_minus(x: f64, xi: &Vec6, delta: &Vec6) -> Mat6 {
     let d = ad_ref(delta);

@@ -18,7 +18,7 @@ pub struct NamedSeries {
     pub values: Vec<f64>,
 }
 
-/// Energy components over a run, J (design.md: energy = kinetic + elastic
+/// Energy components over a run, J (docs/theory.md §7: energy = kinetic + elastic
 /// + gravitational potential).
 #[derive(Debug, Clone, PartialEq)]
 pub struct EnergySeries {

@@ -9,7 +9,7 @@ use super::common::{
 use super::{Figure, PanelInfo};
 use crate::error::VizError;
 
-/// A strain component `ξ = (k, q)` (design.md, "Conventions": angular part
+/// A strain component `ξ = (k, q)` (docs/theory.md §0.2: angular part
 /// first; body frame, local x = tangent).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum StrainComponent {
