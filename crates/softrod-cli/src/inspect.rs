@@ -67,12 +67,7 @@ pub const STABILITY_CHECK_MAX_DOF: usize = 600;
 
 /// Creates the output directory of a command (exit 2 when it cannot be).
 fn make_dir(dir: &Path) -> Result<(), CliError> {
-    std::fs::create_dir_all(dir).map_err(|e| {
-        CliError::Input(format!(
-            "--out {}: cannot create the directory: {e}",
-            dir.display()
-        ))
-    })
+    crate::outputs::prepare_out_dir(dir)
 }
 
 /// Sampled centrelines of every rod at `q` (the default sampling of `run`).
@@ -190,7 +185,7 @@ fn mode_curves(
         .fold(0.0, f64::max);
     let freq = modes.frequencies_hz();
     let mut out = Vec::new();
-    for (k, &f) in freq
+    for (k, &f_k) in freq
         .iter()
         .enumerate()
         .take(count.min(modes.shapes.ncols()))
@@ -215,7 +210,7 @@ fn mode_curves(
         if d <= 0.0 || !d.is_finite() {
             continue;
         }
-        out.push((f, at(probe * MODE_AMPLITUDE * length / d)?));
+        out.push((f_k, at(probe * MODE_AMPLITUDE * length / d)?));
     }
     Ok((eq, out))
 }

@@ -78,6 +78,10 @@ enum Command {
         /// Output directory (default: ./out/STEM, STEM being the scene file name without its extension).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Times (s) of the shapes and strain profiles drawn, e.g. `--snapshots 0,0.25,1`
+        /// (each at the nearest output time; default six spread over the run).
+        #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+        snapshots: Option<Vec<f64>>,
     },
     /// Natural frequencies of the model linearized about its static equilibrium.
     #[command(
@@ -157,7 +161,11 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Check { scene } => inspect::check(&scene),
         Command::Statics { scene, json, out } => inspect::statics(&scene, json, out),
-        Command::Run { scene, out } => run::run(&scene, out, quiet),
+        Command::Run {
+            scene,
+            out,
+            snapshots,
+        } => run::run(&scene, out, snapshots, quiet),
         Command::Modes {
             scene,
             json,

@@ -111,8 +111,37 @@ pub struct Streamer {
     duration: f64,
 }
 
-/// Rows (indices into the output times) whose shapes and strains are drawn:
-/// six spread evenly, first and last included.
+/// The output rows nearest the times `chosen` (s, each finite and within
+/// `[0, duration]`; exit 2 otherwise), or six spread evenly when none are.
+pub fn chosen_rows(times: &[f64], chosen: Option<&[f64]>) -> Result<Vec<usize>, CliError> {
+    let Some(chosen) = chosen else {
+        return Ok(snapshot_rows(times.len()));
+    };
+    let end = times.last().copied().unwrap_or(0.0);
+    let mut rows = Vec::with_capacity(chosen.len());
+    for &t in chosen {
+        if !(t.is_finite() && (0.0..=end).contains(&t)) {
+            return Err(CliError::Input(format!(
+                "--snapshots: {t} is not a time of the run (0 to {end} s)"
+            )));
+        }
+        let k = times.partition_point(|x| *x < t);
+        let nearest = if k == 0 {
+            0
+        } else if k == times.len() || t - times[k - 1] <= times[k] - t {
+            k - 1
+        } else {
+            k
+        };
+        rows.push(nearest);
+    }
+    rows.sort_unstable();
+    rows.dedup();
+    Ok(rows)
+}
+
+/// Rows (indices into the output times) whose shapes and strains are drawn
+/// by default: six spread evenly, first and last included.
 fn snapshot_rows(m: usize) -> Vec<usize> {
     let snaps = 6.min(m);
     let mut v: Vec<usize> = (0..snaps)
@@ -134,6 +163,7 @@ impl Streamer {
         model: &Model,
         times: Vec<f64>,
         per_piece: &[usize],
+        snapshot_at: Vec<usize>,
         summary: Summary,
         bar: Option<ProgressBar>,
     ) -> Result<Self, CliError> {
@@ -174,7 +204,7 @@ impl Streamer {
             traj_text: String::new(),
             shape_text: String::new(),
             next: 0,
-            snapshot_at: snapshot_rows(times.len()),
+            snapshot_at,
             poser: Poser::new(model),
             sampling,
             poses,
@@ -200,10 +230,11 @@ impl Streamer {
         self.expected
     }
 
-    /// The series for the figures, with the last row as the final snapshot
-    /// (a run that stopped early is drawn up to where it stopped).
+    /// The series for the figures; a run that stopped early gets its last
+    /// row as the final snapshot, so it is drawn up to where it stopped.
     pub fn finish_series(&mut self) -> &Series {
-        if let Some(last) = self.last_snapshot.take() {
+        let stopped_early = self.next < self.expected;
+        if let Some(last) = self.last_snapshot.take().filter(|_| stopped_early) {
             if self.series.snapshots.last().is_none_or(|s| s.t < last.t) {
                 self.series.snapshots.push(last);
             }
@@ -460,9 +491,18 @@ pub fn scene_title(path: &Path) -> String {
         .map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned())
 }
 
-pub fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), CliError> {
+pub fn run(
+    path: &Path,
+    out: Option<PathBuf>,
+    snapshots: Option<Vec<f64>>,
+    quiet: bool,
+) -> Result<(), CliError> {
     let mut l = load(path)?;
     let dir = out_dir(path, out);
+    let scene = &l.scene;
+    let duration = scene.run.duration;
+    let times = output_times(duration, l.sim.settings().output_spacing(duration));
+    let snapshot_at = chosen_rows(&times, snapshots.as_deref())?;
     outputs::prepare_out_dir(&dir)?;
     let stale = outputs::clear_stale(&dir)?;
     if !quiet && !stale.is_empty() {
@@ -472,9 +512,6 @@ pub fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), CliErro
             stale.join(", ")
         );
     }
-    let scene = &l.scene;
-    let duration = scene.run.duration;
-    let times = output_times(duration, l.sim.settings().output_spacing(duration));
     // Written first so that a run that never gets to its first row leaves
     // a summary that says so.
     let summary = Summary::new(&dir, scene, l.sim.q_names(), times.len());
@@ -503,7 +540,15 @@ pub fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), CliErro
         })
         .collect();
     let summary_final = Summary::new(&dir, scene, l.sim.q_names(), times.len());
-    let mut streamer = Streamer::new(&dir, l.sim.model(), times, &per_piece, summary, bar)?;
+    let mut streamer = Streamer::new(
+        &dir,
+        l.sim.model(),
+        times,
+        &per_piece,
+        snapshot_at,
+        summary,
+        bar,
+    )?;
     signals::install();
     let start = Instant::now();
     // Rows are the integrator's dense output at the output times, streamed

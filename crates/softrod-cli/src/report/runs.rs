@@ -1,0 +1,170 @@
+//! Runs of a study: one configuration integrated (wall time, tips at the
+//! comparison times), scene variants with refined pieces, distances.
+
+use std::time::Instant;
+
+use softrod_integrate::{
+    Control, Hooks, Method, Options, RodSystem, Stats, Status, integrate_second_order,
+};
+use softrod_scene::{Built, Integrator, Scene};
+
+use crate::common::{CliError, Poser, failed};
+
+/// One run's result.
+pub(super) struct Outcome {
+    /// Tip of the first rod at the comparison times.
+    pub(super) tips: Vec<[f64; 3]>,
+    pub(super) stats: Stats,
+    /// Median wall seconds over the repeats.
+    pub(super) wall: f64,
+}
+
+/// A tight integrator setting and its description.
+#[derive(Clone)]
+pub(super) struct Tight {
+    pub(super) method: Method,
+    pub(super) opts: Options,
+    pub(super) text: String,
+}
+
+pub(super) fn dist(p: &[f64; 3], q: &[f64; 3]) -> f64 {
+    ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
+}
+
+pub(super) fn max_dist(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
+    a.iter().zip(b).map(|(p, q)| dist(p, q)).fold(0.0, f64::max)
+}
+
+pub(super) fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// One integration, stopped (as a failure) when it exceeds `budget` wall s.
+pub(super) fn simulate_once(
+    built: &Built,
+    method: Method,
+    opts: &Options,
+    times: &[f64],
+    budget: f64,
+) -> Result<Outcome, String> {
+    let mut sys = RodSystem::new(built.model.clone());
+    // Each method with the Jacobian `softrod run` gives it.
+    let integrator = match method {
+        Method::Esdirk46 => Integrator::Esdirk,
+        Method::Radau5 => Integrator::Radau5,
+        _ => Integrator::Rosenbrock,
+    };
+    sys.jacobian = softrod::Settings::default()
+        .with_integrator(integrator)
+        .stiff_jacobian();
+    let t1 = *times.last().expect("times");
+    let opts = Options {
+        t_eval: Some(times.to_vec()),
+        max_steps: opts.max_steps.max(50_000_000),
+        ..opts.clone()
+    };
+    let start = Instant::now();
+    let hooks = Hooks::new().on_step(move |_, _: &mut RodSystem| {
+        if start.elapsed().as_secs_f64() > budget {
+            Control::Stop
+        } else {
+            Control::Continue
+        }
+    });
+    let sol = integrate_second_order(
+        &mut sys, method, 0.0, t1, &built.q0, &built.qd0, &opts, hooks,
+    )
+    .map_err(|e| e.to_string())?;
+    let wall = start.elapsed().as_secs_f64();
+    if sol.status == Status::Stopped {
+        return Err(format!(
+            "stopped at t = {:.3e} s: over the time budget of {budget} s ({} steps)",
+            sol.t_final, sol.stats.steps
+        ));
+    }
+    let n = sys.model.n_dof();
+    let mut poser = Poser::new(&sys.model);
+    let mut tips = Vec::with_capacity(sol.y.len());
+    for y in &sol.y {
+        poser
+            .update(&sys.model, &y.as_slice()[..n])
+            .map_err(|e| e.to_string())?;
+        let p = poser.tip(0).translation;
+        tips.push([p[0], p[1], p[2]]);
+    }
+    if tips.len() != times.len() {
+        return Err(format!(
+            "run ended at t = {} before the last comparison time",
+            sol.t_final
+        ));
+    }
+    Ok(Outcome {
+        tips,
+        stats: sol.stats,
+        wall,
+    })
+}
+
+/// `repeats` integrations; the median wall time (a failure is not repeated).
+pub(super) fn simulate(
+    built: &Built,
+    method: Method,
+    opts: &Options,
+    times: &[f64],
+    budget: f64,
+    repeats: usize,
+) -> Result<Outcome, String> {
+    let first = simulate_once(built, method, opts, times, budget)?;
+    let mut walls = vec![first.wall];
+    for _ in 1..repeats {
+        walls.push(simulate_once(built, method, opts, times, budget)?.wall);
+    }
+    Ok(Outcome {
+        wall: median(walls),
+        ..first
+    })
+}
+
+/// The scene with every piece cut in `k` equal parts (same strains,
+/// `[initial]` values repeated) and `quadrature` Gauss points per piece.
+pub(super) fn variant(scene: &Scene, k: usize, quadrature: usize) -> Result<Scene, CliError> {
+    let mut s = scene.clone();
+    s.run.quadrature = quadrature;
+    if k == 1 {
+        return Ok(s);
+    }
+    for r in &mut s.rods {
+        r.rod = r
+            .rod
+            .subdivided(k)
+            .map_err(|e| failed(format!("pieces x{k}: {e}")))?;
+    }
+    let dup = |v: &Vec<f64>| -> Vec<f64> {
+        let mut out = Vec::with_capacity(k * v.len());
+        let mut off = 0;
+        for r in &scene.rods {
+            let c = r.rod.pieces()[0].basis.dof();
+            for _ in 0..r.rod.n_pieces() {
+                for _ in 0..k {
+                    out.extend_from_slice(&v[off..off + c]);
+                }
+                off += c;
+            }
+        }
+        out
+    };
+    s.initial.q = scene.initial.q.as_ref().map(dup);
+    s.initial.qdot = scene.initial.qdot.as_ref().map(dup);
+    Ok(s)
+}
+
+pub(super) fn build_variant(scene: &Scene, k: usize, quadrature: usize) -> Result<Built, CliError> {
+    variant(scene, k, quadrature)?
+        .build()
+        .map_err(|e| failed(format!("pieces x{k}, quadrature {quadrature}: {e}")))
+}
+
+pub(super) fn pieces(scene: &Scene) -> usize {
+    scene.rods.iter().map(|r| r.rod.n_pieces()).sum()
+}
