@@ -68,4 +68,6 @@ mod validate;
 pub use build::Built;
 pub use error::{Cause, Location, SceneError, Warning};
 pub use run::{Integrator, Mode, Run, UnknownIntegrator};
+pub use locate::MAX_MAGNITUDE;
+pub use validate::MAX_QUADRATURE;
 pub use scene::{Initial, Reference, Scene, World};

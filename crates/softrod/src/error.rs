@@ -7,6 +7,8 @@ use softrod_kinematics::KinematicsError;
 use softrod_mechanics::MechanicsError;
 use softrod_scene::SceneError;
 
+use crate::limits::human_bytes;
+
 /// Why a call failed. Bad input ([`Error::is_input`]) is distinguished from
 /// a simulation that failed on valid input.
 #[non_exhaustive]
@@ -35,6 +37,23 @@ pub enum Error {
         key: &'static str,
         /// What is wrong.
         message: String,
+    },
+    /// The task would need more memory than the machine has: refused before
+    /// allocating (see [`Limits`](crate::Limits)).
+    #[error(
+        "{key}: {what} need about {} but {} of memory is available",
+        human_bytes(*estimate),
+        human_bytes(*limit)
+    )]
+    TooLarge {
+        /// The scene key that sets the size (`rod[0].pieces`, `run.output_every`).
+        key: String,
+        /// What needs the memory.
+        what: String,
+        /// The estimate \[bytes\].
+        estimate: u64,
+        /// The limit \[bytes\].
+        limit: u64,
     },
     /// An argument has the wrong length.
     #[error("{what} has {got} entries, expected {expected}")]
@@ -78,6 +97,7 @@ impl Error {
         match self {
             Error::Scene(_)
             | Error::InvalidSetting { .. }
+            | Error::TooLarge { .. }
             | Error::SizeMismatch { .. }
             | Error::UnknownRod(_)
             | Error::Mechanics(_)

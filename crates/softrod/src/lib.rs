@@ -36,10 +36,15 @@
 #![forbid(unsafe_code)]
 
 mod error;
+mod limits;
 mod settings;
 mod simulation;
 
 pub use error::{Error, Result};
+pub use limits::{
+    DEFAULT_MEMORY, Limits, MODES_DENSE_MATRICES, STATICS_DENSE_MATRICES, dense_bytes,
+    dense_matrices_of, output_sample_count,
+};
 pub use settings::{GENERALIZED_ALPHA_RHO_INF, Settings, output_times};
 pub use simulation::{
     Equilibrium, Flow, ModalAnalysis, Observer, RunStatus, RunSummary, Sample, Simulation,

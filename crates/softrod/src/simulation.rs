@@ -17,6 +17,10 @@ use softrod_lie::Pose;
 use softrod_scene::{Scene, Warning};
 
 use crate::error::{Error, Result};
+use crate::limits::{
+    Limits, MODES_DENSE_MATRICES, STATICS_DENSE_MATRICES, check_memory, dense_bytes,
+    dense_matrices_of, output_sample_count,
+};
 use crate::settings::{Settings, output_times};
 
 /// A model with its initial state and run settings: the front door of
@@ -32,6 +36,7 @@ pub struct Simulation {
     settings: Settings,
     q0: DVector<f64>,
     qd0: DVector<f64>,
+    limits: Limits,
 }
 
 /// Which equilibrium [`Simulation::modes`] linearized about.
@@ -188,6 +193,7 @@ impl Simulation {
             settings: Settings::default(),
             q0: DVector::zeros(n),
             qd0: DVector::zeros(n),
+            limits: Limits::of_machine(),
         }
     }
 
@@ -238,6 +244,62 @@ impl Simulation {
         settings.validate()?;
         self.settings = settings;
         Ok(())
+    }
+
+    /// The memory limit the tasks are checked against before they allocate
+    /// (default: [`Limits::of_machine`]).
+    pub fn limits(&self) -> &Limits {
+        &self.limits
+    }
+
+    /// Replaces the memory limit.
+    pub fn set_limits(&mut self, limits: Limits) {
+        self.limits = limits;
+    }
+
+    /// Refuses `task` if its `count` dense `n_dof × n_dof` matrices exceed
+    /// the memory limit, naming the `pieces` of the rod with the most DoFs.
+    fn check_dense(&self, task: &str, count: u64) -> Result<()> {
+        let n = self.n_dof();
+        let estimate = dense_bytes(count, n);
+        if estimate <= self.limits.memory {
+            return Ok(());
+        }
+        let (i, r) = self
+            .model()
+            .rods()
+            .iter()
+            .enumerate()
+            .max_by_key(|(_, r)| r.n_dof())
+            .expect("a model with DoFs has rods");
+        check_memory(
+            format!("rod[{i}].pieces"),
+            format!(
+                "{task}: {count} dense {n}×{n} matrices (n_dof = {n}; rod {:?} has {} pieces, {} DoF)",
+                r.spec.name,
+                r.spec.rod.n_pieces(),
+                r.n_dof()
+            ),
+            estimate,
+            &self.limits,
+        )
+    }
+
+    /// Refuses a run whose output samples (`bytes_per_sample` each) exceed
+    /// the memory limit, naming `run.output_every`.
+    fn check_samples(&self, duration: f64, bytes_per_sample: u64) -> Result<()> {
+        let every = self.settings.output_spacing(duration);
+        let estimate = output_sample_count(duration, every)
+            .map_or(u64::MAX, |n| n.saturating_mul(bytes_per_sample));
+        check_memory(
+            "run.output_every".into(),
+            format!(
+                "{duration} s sampled every {every} s: {:.3e} samples of {bytes_per_sample} bytes",
+                duration / every
+            ),
+            estimate,
+            &self.limits,
+        )
     }
 
     /// Initial coordinates and velocities.
@@ -422,6 +484,7 @@ impl Simulation {
     /// Static equilibrium under every static term at `t = 0`, from the
     /// initial `q` (Newton with line search and load continuation).
     pub fn statics(&mut self) -> Result<StaticsResult> {
+        self.check_dense("statics", STATICS_DENSE_MATRICES)?;
         let s = &mut self.system;
         Ok(statics(
             &s.model,
@@ -434,6 +497,7 @@ impl Simulation {
     /// Undamped natural modes about the static equilibrium (the rest shape
     /// when the model has no static loads).
     pub fn modes(&mut self) -> Result<ModalAnalysis> {
+        self.check_dense("modes", STATICS_DENSE_MATRICES + MODES_DENSE_MATRICES)?;
         let equilibrium = if self.has_static_loads() {
             Equilibrium::Statics(self.statics()?.q)
         } else {
@@ -450,6 +514,8 @@ impl Simulation {
     /// Undamped natural modes of the model linearized about `q` (which
     /// should be an equilibrium; an unstable one shows negative `ω`).
     pub fn modes_about(&mut self, q: &[f64]) -> Result<Modes> {
+        self.check("q", q)?;
+        self.check_dense("modes", MODES_DENSE_MATRICES)?;
         let s = &mut self.system;
         Ok(modes(&s.model, &mut s.data, q, 0.0)?)
     }
@@ -457,6 +523,15 @@ impl Simulation {
     /// Integrates `duration` seconds from the initial state with the run
     /// settings and keeps the samples (every `output_every`).
     pub fn simulate(&mut self, duration: f64) -> Result<Trajectory> {
+        let rods = self.model().rods().len();
+        let per_sample = 8
+            + 2 * (std::mem::size_of::<DVector<f64>>() + 8 * self.n_dof())
+            + std::mem::size_of::<Vec<Pose>>()
+            + rods * std::mem::size_of::<Pose>()
+            + std::mem::size_of::<Energies>();
+        if duration.is_finite() && duration > 0.0 {
+            self.check_samples(duration, per_sample as u64)?;
+        }
         let mut keep = Keep {
             traj: Trajectory {
                 t: Vec::new(),
@@ -497,6 +572,9 @@ impl Simulation {
                 message: format!("must be positive and finite, got {duration}"),
             });
         }
+        self.settings.validate()?;
+        // The output times are kept (8 bytes each).
+        self.check_samples(duration, 8)?;
         let times = output_times(duration, self.settings.output_spacing(duration));
         let (q0, qd0) = (self.q0.clone(), self.qd0.clone());
         self.integrate_span(0.0, duration, times, &q0, &qd0, observer)
@@ -556,6 +634,10 @@ impl Simulation {
         observer: &mut dyn Observer,
     ) -> Result<RunSummary> {
         let (method, mut opts) = self.settings.method_and_options(t1 - t0)?;
+        self.check_dense(
+            &format!("the {} integrator", self.settings.integrator.name()),
+            dense_matrices_of(method),
+        )?;
         opts.t_eval = Some(times);
         self.system.jacobian = self.settings.stiff_jacobian();
         let n = self.n_dof();

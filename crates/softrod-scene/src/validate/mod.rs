@@ -13,8 +13,10 @@ mod reference;
 mod rods;
 mod run;
 
+pub use run::MAX_QUADRATURE;
+
 use crate::error::{Location, SceneError, Warning};
-use crate::locate::{SpanMap, map_toml_error};
+use crate::locate::{MAX_MAGNITUDE, SpanMap, map_toml_error};
 use crate::raw::RawScene;
 use crate::reporter::Reporter;
 use crate::scene::{Origins, Scene};
@@ -39,6 +41,13 @@ pub(crate) fn parse(text: &str, file: &str) -> Result<(Scene, Vec<Warning>)> {
         r: Reporter::new(file, text, &spans),
         warnings: Vec::new(),
     };
+    if let Some((path, literal)) = &spans.absurd {
+        return Err(cx.r.out_of_range(
+            path,
+            literal,
+            format!("a magnitude of at most {MAX_MAGNITUDE:e} (no physical scene comes near it)"),
+        ));
+    }
     let scene = cx.scene(raw)?;
     Ok((scene, cx.warnings))
 }
