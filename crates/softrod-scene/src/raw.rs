@@ -122,6 +122,7 @@ pub(crate) struct RawRun {
     pub quadrature: Option<i64>,
     pub error_control: Option<bool>,
     pub linearly_implicit: Option<bool>,
+    pub energy_tolerance: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -55,6 +55,43 @@ pub enum Error {
         /// The limit \[bytes\].
         limit: u64,
     },
+    /// The run broke the energy balance `dE/dt = P_nc` by more than
+    /// `energy_tolerance` of its energy scale (see
+    /// [`EnergyBalance`](crate::EnergyBalance)): the integrator is unstable
+    /// or far from resolving the motion; a smaller step or tolerance, or a
+    /// stiff method, is needed.
+    #[error(
+        "energy balance violated at t = {t:e} s: error {:.3e} J is {relative:.3e} of the energy \
+         scale {:.3e} J, beyond energy_tolerance = {tolerance} (energy change {:.3e} J, work of \
+         the non-conservative forces {:.3e} J); reduce dt or the tolerances, or use a stiff integrator",
+        balance.error, balance.scale, balance.change, balance.work
+    )]
+    EnergyBalance {
+        /// Time of the violation \[s\].
+        t: f64,
+        /// The relative error there.
+        relative: f64,
+        /// The bound.
+        tolerance: f64,
+        /// The balance up to `t`.
+        balance: Box<crate::EnergyBalance>,
+    },
+    /// A piece's stretch `ξ_x` reached zero or below: the rod folded onto
+    /// itself, which no rod model describes.
+    #[error(
+        "stretch not positive at t = {t:e} s: rod {rod:?} piece {piece} has stretch {stretch:e} \
+         (the rod folded onto itself; the run is unstable or the loads exceed what the rod can carry)"
+    )]
+    Stretch {
+        /// Time \[s\].
+        t: f64,
+        /// The rod's name.
+        rod: String,
+        /// The piece.
+        piece: usize,
+        /// Its stretch.
+        stretch: f64,
+    },
     /// An argument has the wrong length.
     #[error("{what} has {got} entries, expected {expected}")]
     SizeMismatch {
@@ -114,7 +151,10 @@ impl Error {
                             | DynamicsError::InvalidShift { .. }
                     )
             }
-            Error::Integration(_) | Error::Output { .. } => false,
+            Error::Integration(_)
+            | Error::Output { .. }
+            | Error::EnergyBalance { .. }
+            | Error::Stretch { .. } => false,
         }
     }
 }

@@ -39,6 +39,7 @@ mod error;
 mod limits;
 mod settings;
 mod simulation;
+mod watch;
 
 pub use error::{Error, Result};
 pub use limits::{
@@ -50,6 +51,8 @@ pub use simulation::{
     Equilibrium, Flow, ModalAnalysis, Observer, RunStatus, RunSummary, Sample, Simulation,
     Trajectory,
 };
+
+pub use watch::EnergyBalance;
 
 pub use softrod_dynamics as dynamics;
 pub use softrod_integrate as integrate;

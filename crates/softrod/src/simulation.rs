@@ -22,6 +22,7 @@ use crate::limits::{
     dense_matrices_of, output_sample_count,
 };
 use crate::settings::{Settings, output_times};
+use crate::watch::{EnergyBalance, Watch};
 
 /// A model with its initial state and run settings: the front door of
 /// softrod. Every evaluation reuses buffers held inside, so a `Simulation`
@@ -111,7 +112,7 @@ pub enum RunStatus {
 }
 
 /// Summary of a run.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct RunSummary {
     /// How it ended.
     pub status: RunStatus,
@@ -121,6 +122,26 @@ pub struct RunSummary {
     pub stats: Stats,
     /// Samples delivered to the observer.
     pub samples: usize,
+    /// The energy balance measured along the run ([`EnergyBalance`];
+    /// `None` for [`Simulation::step`], which does not watch).
+    pub energy: Option<EnergyBalance>,
+    /// What the watch found suspicious but not wrong: an energy drift
+    /// beyond a tenth of `energy_tolerance`, strains or curvatures beyond
+    /// the model's validity.
+    pub warnings: Vec<String>,
+}
+
+impl Default for RunSummary {
+    fn default() -> Self {
+        Self {
+            status: RunStatus::Completed,
+            t_final: 0.0,
+            stats: Stats::default(),
+            samples: 0,
+            energy: None,
+            warnings: Vec::new(),
+        }
+    }
 }
 
 /// A run kept in memory: samples at the output times.
@@ -539,12 +560,7 @@ impl Simulation {
                 qd: Vec::new(),
                 tips: Vec::new(),
                 energies: Vec::new(),
-                summary: RunSummary {
-                    status: RunStatus::Completed,
-                    t_final: 0.0,
-                    stats: Stats::default(),
-                    samples: 0,
-                },
+                summary: RunSummary::default(),
             },
             kin: self
                 .model()
@@ -577,7 +593,7 @@ impl Simulation {
         self.check_samples(duration, 8)?;
         let times = output_times(duration, self.settings.output_spacing(duration));
         let (q0, qd0) = (self.q0.clone(), self.qd0.clone());
-        self.integrate_span(0.0, duration, times, &q0, &qd0, observer)
+        self.integrate_span(0.0, duration, times, &q0, &qd0, observer, true)
     }
 
     /// One step of `dt` seconds from `(t, q, q̇)` with the run settings'
@@ -616,14 +632,16 @@ impl Simulation {
             DVector::from_column_slice(q),
             DVector::from_column_slice(qd),
         );
-        self.integrate_span(t, t + dt, vec![t, t + dt], &q0, &qd0, &mut last)?;
+        self.integrate_span(t, t + dt, vec![t, t + dt], &q0, &qd0, &mut last, false)?;
         last.0.ok_or(Error::Output {
             t: t + dt,
             message: "the step produced no state".into(),
         })
     }
 
-    /// The integration from `t0` to `t1` with samples at `times`.
+    /// The integration from `t0` to `t1` with samples at `times`; `watch`:
+    /// check the energy balance and the strains at every accepted step.
+    #[allow(clippy::too_many_arguments)]
     fn integrate_span(
         &mut self,
         t0: f64,
@@ -632,6 +650,7 @@ impl Simulation {
         q0: &DVector<f64>,
         qd0: &DVector<f64>,
         observer: &mut dyn Observer,
+        watch: bool,
     ) -> Result<RunSummary> {
         let (method, mut opts) = self.settings.method_and_options(t1 - t0)?;
         self.check_dense(
@@ -646,6 +665,15 @@ impl Simulation {
             .clone()
             .unwrap_or_else(|| vec![0.0; self.n_cables()]);
         let failure: RefCell<Option<(f64, String)>> = RefCell::new(None);
+        let violation: RefCell<Option<Error>> = RefCell::new(None);
+        let watch = if watch && self.settings.energy_tolerance.is_finite() {
+            let s = &self.system;
+            let mut w = Watch::new(&s.model, &s.data, self.settings.energy_tolerance)?;
+            w.start(&s.model, &s.data, t0, q0.as_slice(), qd0.as_slice())?;
+            Some(RefCell::new(w))
+        } else {
+            None
+        };
         let samples = RefCell::new(0usize);
         let observer = RefCell::new(observer);
         let hooks = Hooks::new()
@@ -676,10 +704,25 @@ impl Simulation {
                 let mut obs = observer.borrow_mut();
                 obs.step(info.t, info.stats);
                 let (q, qd) = info.y.as_slice().split_at(n);
+                if let Some(w) = &watch {
+                    if let Err(e) = w.borrow_mut().step(&sys.model, &sys.data, info.t, q, qd) {
+                        *violation.borrow_mut() = Some(e);
+                        return Control::Stop;
+                    }
+                }
                 if !u.is_empty() && obs.inputs(info.t, q, qd, &mut u) {
                     if let Err(e) = sys.data.set_cable_tensions(&sys.model, Some(&u)) {
                         *failure.borrow_mut() = Some((info.t, format!("controller: {e}")));
                         return Control::Stop;
+                    }
+                    if let Some(w) = &watch {
+                        let r = w
+                            .borrow_mut()
+                            .inputs_changed(&sys.model, &sys.data, info.t, q, qd);
+                        if let Err(e) = r {
+                            *violation.borrow_mut() = Some(e);
+                            return Control::Stop;
+                        }
                     }
                     return Control::SystemChanged;
                 }
@@ -694,17 +737,29 @@ impl Simulation {
         if let Some((t, message)) = failure.into_inner() {
             return Err(Error::Output { t, message });
         }
+        if let Some(e) = violation.into_inner() {
+            return Err(e);
+        }
         let sol = result?;
         let status = if sol.status == softrod_integrate::Status::Completed {
             RunStatus::Completed
         } else {
             RunStatus::Stopped
         };
+        let (energy, warnings): (Option<EnergyBalance>, Vec<String>) = match watch {
+            Some(w) => {
+                let (b, warn) = w.into_inner().finish();
+                (Some(b), warn)
+            }
+            None => (None, Vec::new()),
+        };
         Ok(RunSummary {
             status,
             t_final: sol.t_final,
             stats: sol.stats,
             samples: samples.into_inner(),
+            energy,
+            warnings,
         })
     }
 }

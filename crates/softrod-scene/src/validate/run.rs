@@ -101,6 +101,10 @@ impl Ctx<'_> {
                 ),
             );
         }
+        let energy_tolerance = self.positive(
+            "run.energy_tolerance",
+            r.energy_tolerance.unwrap_or(d.energy_tolerance),
+        )?;
         Ok(Run {
             mode,
             duration,
@@ -112,6 +116,7 @@ impl Ctx<'_> {
             quadrature,
             error_control,
             linearly_implicit,
+            energy_tolerance,
         })
     }
 }
