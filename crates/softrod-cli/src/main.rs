@@ -2,9 +2,11 @@
 //!
 //! Exit codes: 0 success, 1 simulation failure (reason on stderr), 2 bad input
 //! (the scene error names file:line:col and the key path).
+#![forbid(unsafe_code)]
 
 mod common;
 mod inspect;
+mod linearize;
 mod plots;
 mod report;
 mod run;
@@ -88,13 +90,29 @@ enum Command {
         #[arg(long, default_value_t = 10)]
         count: usize,
     },
+    /// State-space model (A, B) of the dynamics about the static equilibrium.
+    #[command(
+        long_about = "Linearization x' = A x + B u of the dynamics about the static \
+        equilibrium under the scene's static loads (about the rest shape when there are \
+        none), from the analytic derivatives: x = (q, qdot), u = the cable tensions [N]. \
+        Prints the state and input ordering, and A and B for small models (all of them with \
+        --json: { equilibrium, t, state, inputs, q, u, xdot_residual, A, B }, A and B as \
+        lists of rows).\n\nExample:\n  softrod linearize examples/cable_planar_arm.toml --json"
+    )]
+    Linearize {
+        /// The scene file (TOML).
+        scene: PathBuf,
+        /// Print one JSON object on stdout.
+        #[arg(long)]
+        json: bool,
+    },
     /// Work-precision report: error against wall time over pieces, quadrature, integrators, tolerances.
     #[command(
         long_about = "Sweeps the scene's configurations and measures wall time (median of 3 \
         repeats, 1 with --quick) and the tip error at the final time and over the run.\n\n\
         Dynamics: a spatial study (pieces x1, x2, x4 of the scene's, quadrature 2, 4, 6, at a tight \
         tolerance, against pieces x8 with quadrature 6) and a temporal study (the scene's pieces; \
-        dopri5 and rosenbrock over tolerances, generalized-alpha over steps, against a tight \
+        dopri5, rosenbrock and esdirk over tolerances, generalized-alpha over steps, against a tight \
         reference run with the same pieces), both references stated in the report; a scene's \
         [reference] tip is compared as well. Statics: pieces and quadrature against [reference] \
         tip, or against pieces x8.\n\n\
@@ -122,6 +140,7 @@ fn main() -> ExitCode {
         Command::Statics { scene, json } => inspect::statics(&scene, json),
         Command::Run { scene, out } => run::run(&scene, out, quiet),
         Command::Modes { scene, json, count } => inspect::modes(&scene, json, count),
+        Command::Linearize { scene, json } => linearize::linearize(&scene, json),
         Command::Report { scene, out, quick } => {
             report::report(&scene, out, report::ReportOptions { quick, quiet })
         }

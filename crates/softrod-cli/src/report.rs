@@ -8,7 +8,7 @@
 //!   {2, 4, 6}, each at a tight tolerance, against a finer reference
 //!   (pieces ×8, quadrature 6, same tight integrator);
 //! - **temporal study**: the scene's pieces and quadrature; dopri5 and
-//!   rosenbrock over tolerances, generalized-α over steps, against the
+//!   rosenbrock and esdirk over tolerances, generalized-α over steps, against the
 //!   reference integrator at the same pieces;
 //! - an analytic `[reference] tip` (at `[reference] time`, default the end) is
 //!   compared with every run as well.
@@ -29,7 +29,7 @@ use softrod_dynamics::{Data, StaticsOptions, statics};
 use softrod_integrate::{
     Control, Hooks, Method, Options, RodSystem, Stats, Status, integrate_second_order,
 };
-use softrod_scene::{Built, Mode, Scene};
+use softrod_scene::{Built, Integrator, Mode, Scene};
 
 use crate::common::{CliError, Poser, failed, load, out_dir};
 use softrod::GENERALIZED_ALPHA_RHO_INF;
@@ -85,7 +85,15 @@ fn simulate_once(
     budget: f64,
 ) -> Result<Outcome, String> {
     let mut sys = RodSystem::new(built.model.clone());
-    sys.jacobian = softrod::Settings::default().stiff_jacobian();
+    // Each method with the Jacobian `softrod run` gives it.
+    let integrator = match method {
+        Method::Esdirk46 => Integrator::Esdirk,
+        Method::Radau5 => Integrator::Radau5,
+        _ => Integrator::Rosenbrock,
+    };
+    sys.jacobian = softrod::Settings::default()
+        .with_integrator(integrator)
+        .stiff_jacobian();
     let t1 = *times.last().expect("times");
     let opts = Options {
         t_eval: Some(times.to_vec()),
@@ -542,6 +550,14 @@ fn dynamics_report(scene: &Scene, dir: &Path, o: ReportOptions) -> Result<String
             "rosenbrock",
             format!("rtol {rtol:e}"),
             Method::Rosw34,
+            Options::tol(rtol, rtol * 1e-3),
+        ));
+    }
+    for rtol in [1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8] {
+        configs.push((
+            "esdirk",
+            format!("rtol {rtol:e}"),
+            Method::Esdirk46,
             Options::tol(rtol, rtol * 1e-3),
         ));
     }

@@ -85,6 +85,7 @@
 //!     assert!((sol.y[1][0] - (2.0f64).cos()).abs() < 1e-6, "{method:?}");
 //! }
 //! ```
+#![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
 // Floors, bottom up (each imports only from below): errors and the plain

@@ -11,6 +11,7 @@
 //! layers above integrate with.
 //!
 //! Units SI; twists angular first (see `softrod-lie`).
+#![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
 mod basis;

@@ -20,6 +20,7 @@
 //!
 //! Equation labels `(D·)` refer to `shared/docs/derivations.md`; "seed (k)"
 //! refers to equation k of the model document.
+#![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
 mod adop;

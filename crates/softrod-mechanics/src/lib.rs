@@ -20,6 +20,7 @@
 //! `(k, q)` strains); body frame at the section centre; `s ∈ [0, L]` is the
 //! undeformed abscissa and densities are per unit undeformed length.
 //! Labels (D·) refer to `docs/derivations.md`.
+#![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
 mod body;

@@ -294,16 +294,21 @@ impl Cable {
                 }
             }
         };
+        // Checked against an unbounded rod here, against the rod's length
+        // when the Rod is built; a path without `to` spans to its last point
+        // until the rod's length is known.
+        let end = to.unwrap_or(match &routing {
+            mech::Routing::Path(p) => p.last().map_or(f64::MAX, |r| r[0]),
+            _ => f64::MAX,
+        });
         let cable = Self {
             routing,
             from: from_,
             to,
             tension,
         };
-        // Checked against an unbounded rod here, against the rod's length
-        // when the Rod is built.
         cable
-            .mech(to.unwrap_or(f64::MAX))
+            .mech(end)
             .validate(f64::MAX)
             .map_err(|e| input(format!("Cable: {e}")))?;
         Ok(cable)

@@ -47,8 +47,10 @@ pub fn rod_index(model: &Model, rod: &Bound<'_, PyAny>) -> PyResult<usize> {
 
 /// Run settings: integrator, tolerances, steps and output spacing.
 ///
-/// `integrator`: "rosenbrock" (the default: stiff, adaptive, error
-/// controlled), "dopri5" (explicit adaptive), "rk4" (explicit, fixed `dt`)
+/// `integrator`: "esdirk" (the default: stiff, adaptive, error controlled,
+/// Newton on the exact Jacobian), "radau5" (Radau IIA order 5, faster on
+/// small models at tight tolerances), "rosenbrock" (linearly implicit,
+/// adaptive), "dopri5" (explicit adaptive), "rk4" (explicit, fixed `dt`)
 /// or "generalized-alpha" (implicit, fixed `dt`; with `error_control` the
 /// step adapts to `rtol`/`atol`; with `linearly_implicit` one Newton
 /// iteration per step, the fast IMEX scheme). `rtol`, `atol`: tolerances
@@ -542,6 +544,13 @@ impl Simulation {
         self.sim.model().n_cables()
     }
 
+    /// A name for every generalized coordinate, in the order of `q`:
+    /// `"<rod>.p<piece>.<strain>"` (e.g. `"arm.p0.ky"`).
+    #[getter]
+    fn q_names(&self) -> Vec<String> {
+        self.sim.q_names()
+    }
+
     /// The scene's `[run] duration` [s], the default of `simulate`; None
     /// for a simulation built in Python.
     #[getter]
@@ -893,6 +902,47 @@ impl Simulation {
             let a: DMatrix<f64> =
                 actuation_matrix(self.sim.model(), q.slice()).map_err(dynamics)?;
             Ok(mat_out(py, &a))
+        })
+    }
+
+    /// Linearization of `x' = f(x, u)`, `x = (q, qdot)`, about `(t, q, qdot)`
+    /// and the cable tensions `u` (n_cables,) [N] (default: the scheduled
+    /// tensions at `t`), from the analytic derivatives of the dynamics
+    /// (theory-derivatives.md): returns `(A, B)`, `A = df/dx`
+    /// (2 n_dof, 2 n_dof) = `[[0, I], [dqdd/dq, dqdd/dqdot]]`,
+    /// `B = df/du` (2 n_dof, n_cables) [per N]. Rows and columns of `A`
+    /// are `q` then `qdot` in the order of `q_names`. What LQR, MPC and
+    /// trajectory optimization need; about a static equilibrium use
+    /// `statics().q` and zero velocities.
+    #[pyo3(signature = (t, q, qdot, *, u = None))]
+    #[allow(clippy::type_complexity)]
+    fn linearize<'py>(
+        &mut self,
+        py: Python<'py>,
+        t: f64,
+        q: &Bound<'py, PyAny>,
+        qdot: &Bound<'py, PyAny>,
+        u: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>)> {
+        guard(|| {
+            let n = self.n();
+            let (q, qd) = (vector(q, "q", n)?, vector(qdot, "qdot", n)?);
+            let u = match u {
+                Some(u) => Some(self.tensions(u)?),
+                None => None,
+            };
+            let previous = self.sim.cable_tensions().map(<[f64]>::to_vec);
+            if let Some(u) = &u {
+                self.sim.set_cable_tensions(Some(u)).map_err(to_py)?;
+            }
+            let lin = self.sim.linearize(t, q.slice(), qd.slice());
+            if u.is_some() {
+                self.sim
+                    .set_cable_tensions(previous.as_deref())
+                    .map_err(to_py)?;
+            }
+            let lin = lin.map_err(to_py)?;
+            Ok((mat_out(py, &lin.a), mat_out(py, &lin.b)))
         })
     }
 

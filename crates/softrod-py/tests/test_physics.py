@@ -245,3 +245,46 @@ def test_tension_inputs_equal_scheduled_tensions():
     assert np.abs(back).max() < 1e-9 * np.abs(free.bias_force(0.0, q, qd)).max()
     with pytest.raises(softrod.InputError, match="cannot push"):
         free.forward_dynamics(0.0, q, qd, u=[1.0, -0.1])
+
+
+def test_linearize_is_the_derivative_of_the_dynamics():
+    """A and B from the analytic derivatives against central differences of
+    forward_dynamics, on a curved moving state of a rod with two cables
+    (one routed along a path whose offsets change with s)."""
+    cables = [softrod.Cable(offset=(0.0, 0.008), tension=1.5),
+              softrod.Cable(path=[[0.0, 0.004, 0.0], [0.5, 0.0, -0.006]], tension=0.7)]
+    sim = softrod.Simulation(rods=[rod(pieces=3, cables=cables, viscosity=0.02)],
+                             gravity=[0, 0, -9.81])
+    n = sim.n_dof
+    q, qd = smooth_state(n)
+    u = np.array([1.1, 0.4])
+    a, b = sim.linearize(0.0, q, qd, u=u)
+    assert a.shape == (2 * n, 2 * n) and b.shape == (2 * n, 2)
+    assert sim.q_names[:3] == ["rod0.p0.kx", "rod0.p0.ky", "rod0.p0.kz"]
+    np.testing.assert_array_equal(a[:n, :n], np.zeros((n, n)))
+    np.testing.assert_array_equal(a[:n, n:], np.eye(n))
+
+    def f(qq, vv, uu):
+        return sim.forward_dynamics(0.0, qq, vv, u=uu)
+
+    # |qdd| is ~1e8 here (O(0.3) shear strains of a stiff section): steps
+    # are chosen against round-off. qdd is quadratic in qdot at fixed q
+    # (Coriolis, centrifugal, damping), so central differences in qdot are
+    # exact for any step.
+    h, hv = 1e-4, 0.1
+    fd_q = np.column_stack([(f(q + h * e, qd, u) - f(q - h * e, qd, u)) / (2 * h)
+                            for e in np.eye(n)])
+    fd_v = np.column_stack([(f(q, qd + hv * e, u) - f(q, qd - hv * e, u)) / (2 * hv)
+                            for e in np.eye(n)])
+    # qdd is affine in u (the cables act as A(q) u): any step is exact, and a
+    # large one keeps the round-off of the O(1e5) accelerations out.
+    hu = 0.3
+    fd_u = np.column_stack([(f(q, qd, u + hu * e) - f(q, qd, u - hu * e)) / (2 * hu)
+                            for e in np.eye(2)])
+    for got, want in [(a[n:, :n], fd_q), (a[n:, n:], fd_v), (b[n:], fd_u)]:
+        scale = np.abs(want).max()
+        assert np.abs(got - want).max() < 1e-6 * scale
+    # The inputs given for the call do not stay: the schedules apply again.
+    a0, _ = sim.linearize(0.0, q, qd)
+    a1, _ = sim.linearize(0.0, q, qd, u=[1.5, 0.7])
+    np.testing.assert_allclose(a0, a1, rtol=1e-12, atol=1e-12 * np.abs(a0).max())

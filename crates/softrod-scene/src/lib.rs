@@ -49,6 +49,7 @@
 //! assert!(cause.to_string().starts_with("Young's modulus [Pa] must be positive"));
 //! ```
 
+#![forbid(unsafe_code)]
 #![warn(missing_docs)]
 // A SceneError carries the file, key path, location, value, allowed range and
 // the library cause (~140 bytes): returned once per load, on a cold path,

@@ -313,12 +313,6 @@ const CASES: &[Case] = &[
         ],
     },
     Case {
-        name: "integrator planned but not implemented",
-        edits: &[("integrator = \"dopri5\"", "integrator = \"radau5\"")],
-        path: "run.integrator",
-        says: &["\"radau5\" is not implemented yet", "rosenbrock"],
-    },
-    Case {
         name: "unknown mode",
         edits: &[("mode = \"dynamics\"", "mode = \"static\"")],
         path: "run.mode",

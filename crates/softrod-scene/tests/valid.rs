@@ -313,8 +313,8 @@ fn integrator_names_round_trip() {
     assert!(Integrator::Dopri5.is_adaptive() && !Integrator::Dopri5.is_implicit());
     assert!(!Integrator::Rk4.is_adaptive());
     assert!(Integrator::Rosenbrock.is_implicit() && Integrator::GeneralizedAlpha.is_implicit());
-    // Planned but not implemented: not a valid name (`check` rejects it).
-    assert!("radau5".parse::<Integrator>().is_err());
+    assert!(Integrator::Radau5.is_adaptive() && Integrator::Esdirk.is_implicit());
+    assert_eq!("radau5".parse::<Integrator>(), Ok(Integrator::Radau5));
 }
 
 // --- warnings

@@ -20,6 +20,7 @@
 //! assert!(page.starts_with("<!DOCTYPE html>"));
 //! assert_eq!(stats.frames.len(), 201); // all output times fit the budget
 //! ```
+#![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
 pub mod data;

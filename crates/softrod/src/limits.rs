@@ -42,17 +42,18 @@ fn available_memory() -> Option<u64> {
 }
 
 /// How many dense `n × n` matrices of `f64` a time integration of a
-/// [`RodSystem`](softrod_integrate::RodSystem) with `method` allocates. The
-/// explicit methods and the ones with the structured O(N) solve of
-/// `M + aK + bD` (generalized-α, ESDIRK) allocate none; ROS34PW2 holds `M`,
-/// `K`, `D`, its LU, and `∂a/∂q`, `∂a/∂q̇` when it switches to the exact
-/// Jacobian, plus the exact Jacobian's own workspace (counted as two);
-/// Radau IIA adds a complex LU (two real matrices). Unknown methods are
-/// counted as Radau IIA.
+/// [`RodSystem`](softrod_integrate::RodSystem) with `method` may allocate
+/// (lazily, but a run must not abort when it does). The explicit methods
+/// and generalized-α (structured O(N) solve of `M + aK + bD` only) allocate
+/// none; ESDIRK falls back to the dense exact Jacobian when its structured
+/// Newton iteration fails: `∂a/∂q`, `∂a/∂q̇`, their LU, and the exact
+/// Jacobian's workspace (counted as two); ROS34PW2 holds `M`, `K`, `D` and
+/// its LU besides (8); Radau IIA adds a complex LU (two real matrices, 10).
+/// Unknown methods are counted as Radau IIA.
 pub fn dense_matrices_of(method: Method) -> u64 {
     match method {
-        Method::Rk4 | Method::Dopri5 => 0,
-        Method::GeneralizedAlpha { .. } | Method::Esdirk46 => 0,
+        Method::Rk4 | Method::Dopri5 | Method::GeneralizedAlpha { .. } => 0,
+        Method::Esdirk46 => 5,
         Method::Rosw34 => 8,
         _ => 10,
     }

@@ -91,14 +91,20 @@ impl Settings {
         self
     }
 
-    /// The Jacobian the stiff methods get: `−M⁻¹K`, `−M⁻¹D` only
-    /// (`RodJacobian::ElasticOnly`). Rosenbrock–W keeps its order with any
-    /// Jacobian, and on the undamped cantilever release it took the same
-    /// steps with the same accuracy as with the full Jacobian at a third of
-    /// the cost (docs/performance.md, "softrod-integrate"); the geometric
-    /// stiffness of gravity, loads and cables is soft next to `K`.
+    /// The Jacobian the implicit methods get. ESDIRK and Radau IIA iterate
+    /// Newton to convergence and get the exact one (from the analytic
+    /// derivatives, theory-derivatives.md): with only `−M⁻¹K`, `−M⁻¹D`
+    /// their Newton iterations stall on fast 3-D motion, where gyroscopic
+    /// and geometric-stiffness terms matter. Rosenbrock–W and
+    /// generalized-α get the elastic-only Jacobian
+    /// (`RodJacobian::ElasticOnly`, O(N), no `n×n` matrix): Rosenbrock–W
+    /// keeps its order with any Jacobian and refreshes to the exact one
+    /// itself when its steps collapse.
     pub fn stiff_jacobian(&self) -> RodJacobian {
-        RodJacobian::ElasticOnly
+        match self.integrator {
+            Integrator::Esdirk | Integrator::Radau5 => RodJacobian::Exact,
+            _ => RodJacobian::ElasticOnly,
+        }
     }
 
     /// Checks the values (positive and finite).
@@ -145,6 +151,8 @@ impl Settings {
             },
             Integrator::Dopri5 => Method::Dopri5,
             Integrator::Rosenbrock => Method::Rosw34,
+            Integrator::Esdirk => Method::Esdirk46,
+            Integrator::Radau5 => Method::Radau5,
         };
         // Generalized-α steps with the fixed dt unless error control is on;
         // rk4 always does; the other methods are adaptive with dt as their

@@ -490,6 +490,29 @@ impl Simulation {
         Ok(linearize(&s.model, &mut s.data, &mut work, t, q, qd, None)?)
     }
 
+    /// A name for every generalized coordinate, in the order of `q`:
+    /// `"<rod>.p<piece>.<strain>"` (e.g. `"arm.p0.ky"`, pieces from the
+    /// base, strains `kx ky kz qx qy qz` as selected), or
+    /// `"<rod>.p<piece>.b<column>"` for a rod with a custom basis matrix.
+    pub fn q_names(&self) -> Vec<String> {
+        let mut names = Vec::with_capacity(self.n_dof());
+        for r in self.model().rods() {
+            for (k, piece) in r.spec.rod.pieces().iter().enumerate() {
+                match piece.basis.strains() {
+                    Some(strains) => names.extend(
+                        strains
+                            .iter()
+                            .map(|c| format!("{}.p{k}.{}", r.spec.name, c.name())),
+                    ),
+                    None => names.extend(
+                        (0..piece.basis.dof()).map(|c| format!("{}.p{k}.b{c}", r.spec.name)),
+                    ),
+                }
+            }
+        }
+        names
+    }
+
     /// Whether the model has static loads (gravity, point or distributed
     /// loads, cables): then its equilibrium differs from the rest shape.
     pub fn has_static_loads(&self) -> bool {

@@ -234,8 +234,8 @@ fn bad_settings_are_input_errors() {
         s.set_settings(bad),
         Err(Error::InvalidSetting { key: "rtol", .. })
     ));
-    let err = Simulation::from_toml(&scene("", "[run]\nintegrator = \"radau5\"\n"), "r.toml")
-        .unwrap_err();
+    let err =
+        Simulation::from_toml(&scene("", "[run]\nintegrator = \"radau\"\n"), "r.toml").unwrap_err();
     assert!(err.is_input());
     assert!(err.to_string().contains("run.integrator"), "{err}");
     assert!(matches!(

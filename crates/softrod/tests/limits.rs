@@ -63,8 +63,8 @@ fn a_hundred_thousand_pieces_are_refused_not_aborted() {
     too_large(e, "rod[0].pieces");
 }
 
-/// Explicit methods and the structured implicit one allocate no dense
-/// matrix: under a limit that refuses one 30×30 matrix, they still run.
+/// Explicit methods and generalized-α (structured solve only) allocate no
+/// dense matrix: under a limit that refuses one 30×30 matrix, they still run.
 #[test]
 fn explicit_and_structured_methods_need_no_dense_matrix() {
     // 10 pieces × 3 strains; one dense matrix: 30² · 8 = 7200 B.

@@ -51,7 +51,7 @@ from softrod._softrod import (
 )
 
 #: The integrator names ``Settings(integrator=...)`` and ``simulate`` accept.
-INTEGRATORS = ("rosenbrock", "dopri5", "rk4", "generalized-alpha")
+INTEGRATORS = ("esdirk", "radau5", "rosenbrock", "dopri5", "rk4", "generalized-alpha")
 
 #: The strain names of ``Rod(strains=...)``, in coordinate order: torsion,
 #: two bendings, stretch, two shears (body frame, local x along the rod).

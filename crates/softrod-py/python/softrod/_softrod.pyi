@@ -18,7 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 _F64 = NDArray[np.float64]
 _RodRef = str | int
 _Frame = Literal["body", "world"]
-_IntegratorName = Literal["rosenbrock", "dopri5", "rk4", "generalized-alpha"]
+_IntegratorName = Literal["esdirk", "radau5", "rosenbrock", "dopri5", "rk4", "generalized-alpha"]
 _Controller = Callable[[float, _F64, _F64], ArrayLike]
 
 __version__: str
@@ -284,6 +284,8 @@ class Simulation:
     @property
     def rod_names(self) -> list[str]: ...
     @property
+    def q_names(self) -> list[str]: ...
+    @property
     def rod_dofs(self) -> list[tuple[str, int, int]]: ...
     @property
     def terms(self) -> list[str]: ...
@@ -326,6 +328,9 @@ class Simulation:
     def damping_matrix(self) -> _F64: ...
     def actuation_matrix(self, q: ArrayLike) -> _F64:
         """(n_dof, n_cables)"""
+    def linearize(self, t: float, q: ArrayLike, qdot: ArrayLike, *,
+                  u: ArrayLike | None = None) -> tuple[_F64, _F64]:
+        """(A (2 n_dof, 2 n_dof), B (2 n_dof, n_cables)) of x' = f(x, u), x = (q, qdot)."""
     def energies(self, q: ArrayLike, qdot: ArrayLike) -> Energies: ...
     def statics(self) -> Statics: ...
     def modes(self) -> Modes: ...

@@ -31,20 +31,10 @@ impl Ctx<'_> {
         let duration = self.positive("run.duration", r.duration.unwrap_or(d.duration))?;
         let integrator = match r.integrator.as_deref() {
             None => d.integrator,
-            Some(name) => {
-                // Planned methods: rejected here with the advice `run` would
-                // give, so that `check` and `run` agree.
-                if let Some((_, instead)) = Integrator::NOT_YET.iter().find(|(n, _)| *n == name) {
-                    return Err(self.r.invalid(
-                        "run.integrator",
-                        format!("{name:?} is not implemented yet, use \"{instead}\""),
-                    ));
-                }
-                name.parse::<Integrator>().map_err(|_| {
-                    let valid: Vec<&str> = Integrator::ALL.iter().map(|i| i.name()).collect();
-                    self.r.unknown_name("run.integrator", name, &valid)
-                })?
-            }
+            Some(name) => name.parse::<Integrator>().map_err(|_| {
+                let valid: Vec<&str> = Integrator::ALL.iter().map(|i| i.name()).collect();
+                self.r.unknown_name("run.integrator", name, &valid)
+            })?,
         };
         let rtol = self.positive("run.rtol", r.rtol.unwrap_or(d.rtol))?;
         let atol = self.positive("run.atol", r.atol.unwrap_or(d.atol))?;
