@@ -8,7 +8,7 @@ use std::time::Instant;
 use indicatif::{ProgressBar, ProgressStyle};
 use softrod::dynamics::{Model, energies};
 use softrod::integrate::Stats;
-use softrod::{Flow, Observer, Sample, output_times};
+use softrod::{EnergyBalance, Error, Flow, Observer, Sample, output_times};
 use softrod_scene::Scene;
 
 use crate::common::{CliError, Poser, failed, load, out_dir, position, quaternion};
@@ -218,8 +218,9 @@ pub fn write_summary(
     scene: &Scene,
     rows: usize,
     rows_expected: usize,
+    watch: Option<(&EnergyBalance, &[String])>,
 ) -> Result<(), CliError> {
-    let v = serde_json::json!({
+    let mut v = serde_json::json!({
         "steps": stats.steps,
         "rejected_steps": stats.rejected_steps,
         "rhs_evaluations": stats.rhs_evaluations,
@@ -234,6 +235,20 @@ pub fn write_summary(
         "output_rows_expected": rows_expected,
         "n_dof": scene.n_dof(),
     });
+    if let (Some((b, warnings)), Some(map)) = (watch, v.as_object_mut()) {
+        // The energy balance of the run (docs/scene-format-extensions.md,
+        // `[run] energy_tolerance`) and what the run's watch warned about.
+        for (key, value) in [
+            ("energy_error", b.error),
+            ("energy_error_relative", b.relative),
+            ("energy_scale", b.scale),
+            ("energy_change", b.change),
+            ("energy_work", b.work),
+        ] {
+            map.insert(key.into(), serde_json::json!(value));
+        }
+        map.insert("warnings".into(), serde_json::json!(warnings));
+    }
     let path = dir.join("summary.json");
     let text = serde_json::to_string_pretty(&v).map_err(failed)?;
     std::fs::write(&path, text + "\n")
@@ -258,6 +273,7 @@ pub fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), CliErro
         scene,
         0,
         times.len(),
+        None,
     )?;
     let bar = (!quiet && std::io::stderr().is_terminal()).then(|| {
         let b = ProgressBar::new(1000);
@@ -272,7 +288,11 @@ pub fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), CliErro
     let start = Instant::now();
     // Rows are the integrator's dense output at the output times, streamed
     // to the observer as the run proceeds; nothing is kept in between.
-    let result = l.sim.simulate_with(duration, &mut streamer);
+    let result = match l.sim.simulate_with(duration, &mut streamer) {
+        // Refused before it started (too large for the machine): bad input.
+        Err(e) if e.is_input() => return Err(e.into()),
+        r => r,
+    };
     if let Some(b) = &streamer.bar {
         b.finish_and_clear();
     }
@@ -293,6 +313,16 @@ pub fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), CliErro
             }
         }
     };
+    let watch = match &result {
+        Ok(sum) => sum.energy.as_ref().map(|b| (b, sum.warnings.as_slice())),
+        Err(Error::EnergyBalance { balance, .. }) => Some((&**balance, &[][..])),
+        Err(_) => None,
+    };
+    if let (false, Some((_, warnings))) = (quiet, watch) {
+        for w in warnings {
+            eprintln!("softrod: warning: {w}");
+        }
+    }
     write_summary(
         &dir,
         &stats,
@@ -302,6 +332,7 @@ pub fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), CliErro
         scene,
         streamer.rows_written(),
         streamer.rows_expected(),
+        watch,
     )?;
     // Plots of whatever was computed (also after a failure: they show where it went wrong).
     let plot_result = plots::all(&dir, &streamer.series, scene);
