@@ -34,7 +34,13 @@ fn scene(example: &str, run_table: &str, pieces: Option<&str>, dir: &Path) -> Pa
 
 fn run(scene: &Path, out: &Path) -> Output {
     Command::new(env!("CARGO_BIN_EXE_softrod"))
-        .args(["run", scene.to_str().unwrap(), "--out", out.to_str().unwrap(), "--quiet"])
+        .args([
+            "run",
+            scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+        ])
         .output()
         .unwrap()
 }
@@ -54,10 +60,18 @@ fn a_violated_energy_balance_exits_1_and_says_so() {
     );
     let out = dir.join("out");
     let o = run(&s, &out);
-    assert_eq!(o.status.code(), Some(1), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(
+        o.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     let v = summary(&out);
     let status = v["status"].as_str().unwrap();
-    assert!(status.starts_with("error: energy balance violated at t = "), "{v}");
+    assert!(
+        status.starts_with("error: energy balance violated at t = "),
+        "{v}"
+    );
     assert!(v["energy_error_relative"].as_f64().unwrap() > 0.1, "{v}");
 }
 

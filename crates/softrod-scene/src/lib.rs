@@ -68,7 +68,7 @@ mod validate;
 
 pub use build::Built;
 pub use error::{Cause, Location, SceneError, Warning};
-pub use run::{Integrator, Mode, Run, UnknownIntegrator};
 pub use locate::MAX_MAGNITUDE;
-pub use validate::MAX_QUADRATURE;
+pub use run::{Integrator, Mode, Run, UnknownIntegrator};
 pub use scene::{Initial, Reference, Scene, World};
+pub use validate::MAX_QUADRATURE;

@@ -32,7 +32,13 @@ fn non_positive_rest_stretch_is_an_error() {
 
 #[test]
 fn far_from_unit_rest_stretch_is_a_warning() {
-    for (s, warned) in [("0.4", true), ("1.6", true), ("0.5", false), ("1.5", false), ("1", false)] {
+    for (s, warned) in [
+        ("0.4", true),
+        ("1.6", true),
+        ("0.5", false),
+        ("1.5", false),
+        ("1", false),
+    ] {
         let (_, w) = Scene::from_str(
             &edit(
                 "rest_strain = [0, 0, 0, 1, 0, 0]",
@@ -49,7 +55,11 @@ fn far_from_unit_rest_stretch_is_a_warning() {
 #[test]
 fn absurd_magnitudes_are_errors_naming_the_key() {
     for (old, new, path) in [
-        ("gravity = [0.0, 0.0, -9.81]", "gravity = [0.0, 0.0, -1e300]", "world.gravity[2]"),
+        (
+            "gravity = [0.0, 0.0, -9.81]",
+            "gravity = [0.0, 0.0, -1e300]",
+            "world.gravity[2]",
+        ),
         ("length = 0.5", "length = 1e300", "rod[0].length"),
         ("young = 1.0e6", "young = 1e31", "rod[0].material.young"),
         ("tension = 2.0", "tension = -2e40", "cable[0].tension"),
@@ -65,7 +75,11 @@ fn absurd_magnitudes_are_errors_naming_the_key() {
 #[test]
 fn non_finite_numbers_anywhere_are_errors() {
     for (old, new, path) in [
-        ("gravity = [0.0, 0.0, -9.81]", "gravity = [0.0, nan, -9.81]", "world.gravity[1]"),
+        (
+            "gravity = [0.0, 0.0, -9.81]",
+            "gravity = [0.0, nan, -9.81]",
+            "world.gravity[1]",
+        ),
         ("radius = 0.01", "radius = inf", "rod[0].section.radius"),
         ("s = 0.5", "s = -inf", "load[0].s"),
     ] {

@@ -122,7 +122,7 @@ impl Settings {
                 });
             }
         }
-        if !(self.energy_tolerance > 0.0) {
+        if self.energy_tolerance.is_nan() || self.energy_tolerance <= 0.0 {
             return Err(Error::InvalidSetting {
                 key: "energy_tolerance",
                 message: format!("must be positive, got {}", self.energy_tolerance),

@@ -119,7 +119,7 @@ fn conservative_model(model: &Model) -> Result<Option<Model>, Error> {
                 .shear_modulus(m.shear_modulus())
                 .viscosity(0.0)
                 .build()?;
-            s.body = RodBody::new(s.body.section().clone(), elastic, s.body.length())?;
+            s.body = RodBody::new(*s.body.section(), elastic, s.body.length())?;
             Ok(s)
         })
         .collect::<Result<_, Error>>()?;
@@ -265,11 +265,7 @@ impl Watch {
             b.error = error;
             b.t_worst = t;
         }
-        b.relative = if b.error == 0.0 {
-            0.0
-        } else {
-            b.error / scale
-        };
+        b.relative = if b.error == 0.0 { 0.0 } else { b.error / scale };
         if relative > self.tolerance {
             b.relative = relative;
             return Err(Error::EnergyBalance {
@@ -291,7 +287,7 @@ impl Watch {
             for (n, piece) in rod.pieces().iter().enumerate() {
                 let xi = rod.strain(n, qr);
                 let stretch = xi[3];
-                if !(stretch > 0.0) {
+                if stretch.is_nan() || stretch <= 0.0 {
                     return Err(Error::Stretch {
                         t,
                         rod: r.spec.name.clone(),
@@ -301,8 +297,7 @@ impl Watch {
                 }
                 let shear = xi[4].hypot(xi[5]);
                 if !self.warned_strain
-                    && (stretch > 1.0 + STRETCH_WARN
-                        || stretch < 1.0 - STRETCH_WARN
+                    && (!(1.0 - STRETCH_WARN..=1.0 + STRETCH_WARN).contains(&stretch)
                         || shear > SHEAR_WARN)
                 {
                     self.warned_strain = true;

@@ -154,7 +154,10 @@ fn the_bound_is_a_setting() {
     println!("default: {:?}", sum.energy);
     with(&mut s, |x| x.energy_tolerance = 1e-14);
     let e = s.simulate_with(0.05, &mut Discard).unwrap_err();
-    assert!(e.to_string().starts_with("energy balance violated at t = "), "{e}");
+    assert!(
+        e.to_string().starts_with("energy balance violated at t = "),
+        "{e}"
+    );
     let mut bad = s.settings().clone();
     bad.energy_tolerance = 0.0;
     assert!(s.set_settings(bad).unwrap_err().is_input());
@@ -182,6 +185,10 @@ fn shipped_examples_are_not_flagged() {
             .unwrap_or_else(|e| panic!("{}: {e}", p.display()));
         let b = sum.energy.unwrap();
         println!("{}: {b:?} {:?}", p.display(), sum.warnings);
-        assert!(b.relative < softrod_scene::Run::DEFAULT_ENERGY_TOLERANCE, "{}: {b:?}", p.display());
+        assert!(
+            b.relative < softrod_scene::Run::DEFAULT_ENERGY_TOLERANCE,
+            "{}: {b:?}",
+            p.display()
+        );
     }
 }

@@ -59,7 +59,10 @@ fn a_hundred_thousand_pieces_are_refused_not_aborted() {
     assert!(est >= one);
     let e = s.simulate_with(1e-3, &mut Discard).unwrap_err();
     let msg = e.to_string();
-    assert!(msg.contains("rod[0].pieces") && msg.contains("rosenbrock"), "{msg}");
+    assert!(
+        msg.contains("rod[0].pieces") && msg.contains("rosenbrock"),
+        "{msg}"
+    );
     too_large(e, "rod[0].pieces");
 }
 
@@ -82,7 +85,10 @@ fn explicit_and_structured_methods_need_no_dense_matrix() {
     }
     let mut s = sim(&scene(10, "rosenbrock"));
     s.set_limits(limits);
-    too_large(s.simulate_with(2e-3, &mut Discard).unwrap_err(), "rod[0].pieces");
+    too_large(
+        s.simulate_with(2e-3, &mut Discard).unwrap_err(),
+        "rod[0].pieces",
+    );
     too_large(s.statics().unwrap_err(), "rod[0].pieces");
 }
 

@@ -48,9 +48,11 @@ impl Ctx<'_> {
             Some(n) if (1..=MAX_QUADRATURE).contains(&n) => n as usize,
             Some(n) if n < 1 => return Err(self.r.out_of_range("run.quadrature", n, ">= 1")),
             Some(n) => {
-                return Err(self
-                    .r
-                    .out_of_range("run.quadrature", n, format!("<= {MAX_QUADRATURE}")));
+                return Err(self.r.out_of_range(
+                    "run.quadrature",
+                    n,
+                    format!("<= {MAX_QUADRATURE}"),
+                ));
             }
         };
         let error_control = r.error_control.unwrap_or(d.error_control);
