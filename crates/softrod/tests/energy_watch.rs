@@ -192,3 +192,37 @@ fn shipped_examples_are_not_flagged() {
         );
     }
 }
+
+/// Stretch `ξ_x = 1 + q_qx`: a state with a piece folded (stretch −0.5)
+/// fails the run at once; one stretched by 1.7 runs and warns.
+#[test]
+fn folded_pieces_fail_and_overstretched_ones_warn() {
+    let mut s = sim(&cantilever(RUBBER, ""));
+    with(&mut s, |x| {
+        x.integrator = Integrator::Dopri5;
+        x.rtol = 1e-6;
+        x.output_every = Some(1e-4);
+    });
+    let n = s.n_dof();
+    // Coordinates per piece: ky, qx, qz; piece 3's qx is q[3·3 + 1].
+    let mut q = vec![0.0; n];
+    q[10] = -1.5;
+    s.set_initial_state(&q, &vec![0.0; n]).unwrap();
+    match s.simulate_with(1e-3, &mut Discard).unwrap_err() {
+        Error::Stretch { piece, stretch, .. } => {
+            assert_eq!(piece, 3);
+            assert!((stretch + 0.5).abs() < 1e-12, "{stretch}");
+        }
+        e => panic!("{e}"),
+    }
+    q[10] = 0.7;
+    s.set_initial_state(&q, &vec![0.0; n]).unwrap();
+    let sum = s.simulate_with(1e-4, &mut Discard).unwrap();
+    assert!(
+        sum.warnings
+            .iter()
+            .any(|w| w.starts_with("strain beyond the model's validity") && w.contains("piece 3")),
+        "{:?}",
+        sum.warnings
+    );
+}
