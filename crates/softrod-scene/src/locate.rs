@@ -58,8 +58,13 @@ pub(crate) fn join(parent: &str, key: &str) -> String {
 
 impl SpanMap {
     /// Parses `text` and records the spans; a syntax error is returned as is.
+    #[cfg(test)]
     pub fn build(text: &str) -> Result<SpanMap, toml::de::Error> {
-        let doc = DeTable::parse(text)?;
+        Ok(Self::of(&DeTable::parse(text)?))
+    }
+
+    /// Records the spans of a parsed document.
+    pub fn of(doc: &toml::Spanned<DeTable<'_>>) -> SpanMap {
         let mut map = SpanMap {
             entries: Vec::new(),
             by_path: HashMap::new(),
@@ -67,7 +72,7 @@ impl SpanMap {
             absurd: None,
         };
         map.walk_table(doc.get_ref(), "");
-        Ok(map)
+        map
     }
 
     fn walk_table(&mut self, table: &DeTable<'_>, path: &str) {
