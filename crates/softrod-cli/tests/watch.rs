@@ -108,3 +108,32 @@ fn a_run_too_large_for_the_machine_exits_2_naming_the_key() {
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains("rod[0].pieces") && err.contains("GB"), "{err}");
 }
+
+/// The case: rk4 with dt = 1 s over 0.05 s was `ok` with a tip
+/// 6.3 m from the clamp of a 0.5 m rod.
+#[test]
+fn one_unstable_rk4_step_is_not_ok() {
+    let dir = tmp("rk4");
+    let s = scene(
+        "cantilever_gravity.toml",
+        "[run]\nduration = 0.05\nintegrator = \"rk4\"\ndt = 1.0\noutput_every = 0.01",
+        None,
+        &dir,
+    );
+    let out = dir.join("out");
+    let o = run(&s, &out);
+    assert_eq!(
+        o.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let v = summary(&out);
+    assert!(
+        v["status"]
+            .as_str()
+            .unwrap()
+            .starts_with("error: energy balance violated at t = "),
+        "{v}"
+    );
+}

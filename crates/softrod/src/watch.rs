@@ -229,7 +229,8 @@ impl Watch {
         q: &[f64],
         qd: &[f64],
     ) -> Result<(), Error> {
-        self.check_strains(model, t, q)?;
+        // The balance first: after an unstable step it names the cause
+        // better than the folded piece that follows from it.
         self.sync_inputs(model, data)?;
         let p = self.power(model, t, q, qd)?;
         let h = t - self.t_prev;
@@ -275,7 +276,7 @@ impl Watch {
                 balance: Box::new(*b),
             });
         }
-        Ok(())
+        self.check_strains(model, t, q)
     }
 
     /// Stretch positive (else an error); strains far from the small-strain
