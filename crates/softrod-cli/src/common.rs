@@ -8,6 +8,8 @@ use softrod_kinematics::RodKinematics;
 use softrod_lie::Pose;
 use softrod_scene::{Scene, Warning};
 
+use crate::outputs::RodSampling;
+
 /// A failure with its exit code.
 #[derive(Debug, thiserror::Error)]
 pub enum CliError {
@@ -50,13 +52,34 @@ pub struct Loaded {
     pub sim: Simulation,
 }
 
+/// Loads a scene and prints its warnings on stderr (every command but
+/// `check`, which lists them in its summary: [`load_silent`]).
 pub fn load(path: &Path) -> Result<Loaded, CliError> {
+    let l = load_silent(path)?;
+    for w in &l.warnings {
+        eprintln!("softrod: warning: {}", warning_text(&l.scene.source, w));
+    }
+    Ok(l)
+}
+
+/// Loads a scene without printing its warnings.
+pub fn load_silent(path: &Path) -> Result<Loaded, CliError> {
     let (sim, scene, warnings) = Simulation::from_scene_file(path)?;
     Ok(Loaded {
         scene,
         warnings,
         sim,
     })
+}
+
+/// `FILE:LINE:COL: KEY: message`, the layout of errors (`FILE: KEY:
+/// message` when the location is unknown).
+pub fn warning_text(source: &str, w: &Warning) -> String {
+    if w.at.is_some() {
+        format!("{source}:{w}")
+    } else {
+        format!("{source}: {w}")
+    }
 }
 
 /// `./out/<file stem>` unless given.
@@ -99,9 +122,42 @@ impl Poser {
         self.kin[i].tip_pose()
     }
 
-    /// Piece-boundary poses of rod `i` (N+1, base to tip).
-    pub fn boundaries(&self, i: usize) -> &[Pose] {
-        self.kin[i].boundary_poses()
+    /// Strain `ξ_n` of each piece of rod `i` at the last update.
+    pub fn strains(&self, i: usize) -> &[softrod_lie::Vec6] {
+        self.kin[i].strains()
+    }
+
+    /// Exact poses of rod `i` at `sampling` (points of the PCS arcs within
+    /// each piece, then the tip) into `out` (`sampling.s.len()` poses).
+    pub fn sample(
+        &self,
+        model: &Model,
+        i: usize,
+        sampling: &RodSampling,
+        out: &mut [Pose],
+    ) -> Result<(), CliError> {
+        let rod = &model.rods()[i].spec.rod;
+        let n = out.len() - 1;
+        self.kin[i]
+            .poses_along(rod, &sampling.fractions, &mut out[..n])
+            .map_err(|e| failed(format!("sampling rod '{}': {e}", model.rods()[i].spec.name)))?;
+        out[n] = *self.tip(i);
+        Ok(())
+    }
+
+    /// Sampled centrelines of every rod (world frame, m).
+    pub fn centrelines(
+        &self,
+        model: &Model,
+        sampling: &[RodSampling],
+    ) -> Result<Vec<Vec<[f64; 3]>>, CliError> {
+        let mut out = Vec::with_capacity(sampling.len());
+        for (i, sm) in sampling.iter().enumerate() {
+            let mut poses = vec![Pose::identity(); sm.s.len()];
+            self.sample(model, i, sm, &mut poses)?;
+            out.push(poses.iter().map(position).collect());
+        }
+        Ok(out)
     }
 }
 

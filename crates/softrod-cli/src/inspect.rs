@@ -1,17 +1,21 @@
 //! `check`, `statics` and `modes`.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use softrod::Equilibrium;
+use softrod::dynamics::Model;
 
-use crate::common::{CliError, Loaded, Poser, failed, load, pose_json};
+use crate::common::{CliError, Loaded, Poser, failed, load, load_silent, pose_json, warning_text};
+use crate::outputs::{RodSampling, default_points_per_piece};
+use crate::plots;
+use crate::run::scene_title;
 
 pub fn check(path: &Path) -> Result<(), CliError> {
     let Loaded {
         scene,
         warnings,
         sim,
-    } = load(path)?;
+    } = load_silent(path)?;
     let m = sim.model();
     println!("scene: {}", scene.source);
     println!("degrees of freedom: {}", m.n_dof());
@@ -51,7 +55,7 @@ pub fn check(path: &Path) -> Result<(), CliError> {
     } else {
         println!("warnings: {}", warnings.len());
         for w in &warnings {
-            println!("  warning: {}: {w}", scene.source);
+            println!("  warning: {}", warning_text(&scene.source, w));
         }
     }
     Ok(())
@@ -61,7 +65,29 @@ pub fn check(path: &Path) -> Result<(), CliError> {
 /// with a modal analysis (dense eigenproblem, ~1 s at this size).
 pub const STABILITY_CHECK_MAX_DOF: usize = 600;
 
-pub fn statics(path: &Path, json: bool) -> Result<(), CliError> {
+/// Creates the output directory of a command (exit 2 when it cannot be).
+fn make_dir(dir: &Path) -> Result<(), CliError> {
+    std::fs::create_dir_all(dir).map_err(|e| {
+        CliError::Input(format!(
+            "--out {}: cannot create the directory: {e}",
+            dir.display()
+        ))
+    })
+}
+
+/// Sampled centrelines of every rod at `q` (the default sampling of `run`).
+fn centrelines(model: &Model, q: &[f64]) -> Result<Vec<Vec<[f64; 3]>>, CliError> {
+    let mut poser = Poser::new(model);
+    poser.update(model, q)?;
+    let sampling: Vec<RodSampling> = model
+        .rods()
+        .iter()
+        .map(|r| RodSampling::new(&r.spec.rod, default_points_per_piece(r.spec.rod.n_pieces())))
+        .collect();
+    poser.centrelines(model, &sampling)
+}
+
+pub fn statics(path: &Path, json: bool, out: Option<PathBuf>) -> Result<(), CliError> {
     let mut l = load(path)?;
     let res = l.sim.statics()?;
     if res.q.iter().any(|v| !v.is_finite()) || !res.residual.is_finite() {
@@ -83,6 +109,14 @@ pub fn statics(path: &Path, json: bool) -> Result<(), CliError> {
              a stable one may exist nearby: start statics from another [initial] q",
             -w * w
         );
+    }
+    if let Some(dir) = &out {
+        make_dir(dir)?;
+        let c = centrelines(model, res.q.as_slice())?;
+        let name = plots::statics_figure(dir, model, &c, &scene_title(path))?;
+        if !json {
+            println!("wrote {}", dir.join(name).display());
+        }
     }
     if json {
         let rods: Vec<_> = model
@@ -135,10 +169,78 @@ pub fn statics(path: &Path, json: bool) -> Result<(), CliError> {
     Ok(())
 }
 
-pub fn modes(path: &Path, json: bool, count: usize) -> Result<(), CliError> {
+/// Mode shapes drawn by `modes --out`: at most this many.
+const MODE_PLOTS: usize = 6;
+/// Each drawn mode displaces the rods by this fraction of the longest rod
+/// at the point that moves most (visible, still near the linear regime).
+const MODE_AMPLITUDE: f64 = 0.1;
+
+/// The equilibrium and the lowest modes as displaced centrelines.
+fn mode_curves(
+    model: &Model,
+    q_eq: &[f64],
+    modes: &softrod::dynamics::Modes,
+    count: usize,
+) -> Result<ModeCurves, CliError> {
+    let eq = centrelines(model, q_eq)?;
+    let length = model
+        .rods()
+        .iter()
+        .map(|r| r.spec.rod.length())
+        .fold(0.0, f64::max);
+    let freq = modes.frequencies_hz();
+    let mut out = Vec::new();
+    for (k, &f) in freq
+        .iter()
+        .enumerate()
+        .take(count.min(modes.shapes.ncols()))
+    {
+        let v = modes.shapes.column(k);
+        let at = |a: f64| -> Result<Vec<Vec<[f64; 3]>>, CliError> {
+            let q: Vec<f64> = q_eq.iter().zip(v.iter()).map(|(q, v)| q + a * v).collect();
+            centrelines(model, &q)
+        };
+        // Scale from a small probe: the displacement is linear in the
+        // amplitude there, so one probe sets the amplitude.
+        let probe = 1e-6 / v.amax().max(1e-300);
+        let moved = at(probe)?;
+        let d = eq
+            .iter()
+            .flatten()
+            .zip(moved.iter().flatten())
+            .map(|(a, b)| {
+                ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+            })
+            .fold(0.0, f64::max);
+        if d <= 0.0 || !d.is_finite() {
+            continue;
+        }
+        out.push((f, at(probe * MODE_AMPLITUDE * length / d)?));
+    }
+    Ok((eq, out))
+}
+
+type ModeCurves = (Vec<Vec<[f64; 3]>>, Vec<(f64, Vec<Vec<[f64; 3]>>)>);
+
+pub fn modes(path: &Path, json: bool, count: usize, out: Option<PathBuf>) -> Result<(), CliError> {
     let mut l = load(path)?;
     let analysis = l.sim.modes()?;
     let m = &analysis.modes;
+    if let Some(dir) = &out {
+        make_dir(dir)?;
+        let q_eq = match &analysis.equilibrium {
+            Equilibrium::Rest => vec![0.0; l.sim.n_dof()],
+            Equilibrium::Statics(q) => q.as_slice().to_vec(),
+        };
+        let model = l.sim.model();
+        let (eq, curves) = mode_curves(model, &q_eq, m, count.min(MODE_PLOTS))?;
+        if !curves.is_empty() {
+            let name = plots::modes_figure(dir, model, &eq, curves, &scene_title(path))?;
+            if !json {
+                println!("wrote {}", dir.join(name).display());
+            }
+        }
+    }
     let equilibrium = match analysis.equilibrium {
         Equilibrium::Rest => "rest",
         Equilibrium::Statics(_) => "statics",
@@ -147,10 +249,38 @@ pub fn modes(path: &Path, json: bool, count: usize) -> Result<(), CliError> {
     if f.iter().any(|v| !v.is_finite()) {
         return Err(failed("modal analysis gave a non-finite frequency"));
     }
+    // ω² < 0: the equilibrium is unstable along that mode, whose
+    // "frequency" is imaginary, i·|f|: it grows like exp(2π|f| t). The
+    // library reports such ω as −√|ω²|, hence negative entries.
+    let imaginary: Vec<f64> = m
+        .frequencies_hz()
+        .into_iter()
+        .filter(|v| *v < 0.0)
+        .map(f64::abs)
+        .collect();
+    let unstable = !imaginary.is_empty();
+    if unstable {
+        eprintln!(
+            "softrod: warning: the equilibrium is unstable: {} mode(s) with ω² < 0 \
+             (imaginary frequencies i·{} Hz, printed as negative numbers; such a mode grows \
+             like exp(2π·f·t) instead of oscillating)",
+            imaginary.len(),
+            imaginary
+                .iter()
+                .map(|v| format!("{v:.6}"))
+                .collect::<Vec<_>>()
+                .join(", i·")
+        );
+    }
     if json {
         println!(
             "{}",
-            serde_json::json!({ "frequencies_hz": f, "equilibrium": equilibrium })
+            serde_json::json!({
+                "frequencies_hz": f,
+                "equilibrium": equilibrium,
+                "unstable": unstable,
+                "imaginary_frequencies_hz": imaginary,
+            })
         );
     } else {
         println!(
@@ -164,7 +294,16 @@ pub fn modes(path: &Path, json: bool, count: usize) -> Result<(), CliError> {
             l.sim.n_dof()
         );
         for (i, v) in f.iter().enumerate() {
-            println!("  mode {:>2}: {v:.6} Hz", i + 1);
+            if *v < 0.0 {
+                println!(
+                    "  mode {:>2}: i·{:.6} Hz (unstable: grows like exp(2π·{:.6}·t))",
+                    i + 1,
+                    -v,
+                    -v
+                );
+            } else {
+                println!("  mode {:>2}: {v:.6} Hz", i + 1);
+            }
         }
         if m.asymmetry > 1e-8 {
             println!(

@@ -2,14 +2,15 @@
 //!
 //! Exit codes: 0 success, 1 simulation failure (reason on stderr), 2 bad input
 //! (the scene error names file:line:col and the key path).
-#![forbid(unsafe_code)]
 
 mod common;
 mod inspect;
 mod linearize;
+mod outputs;
 mod plots;
 mod report;
 mod run;
+mod signals;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -59,13 +60,17 @@ enum Command {
         /// Print one JSON object (converged, iterations, residual, q, tip, rods) on stdout.
         #[arg(long)]
         json: bool,
+        /// Also write the equilibrium's shape plot, DIR/statics_shape.svg.
+        #[arg(long)]
+        out: Option<PathBuf>,
     },
     /// Integrate the dynamics; write trajectory.csv, shape.csv, summary.json and SVG plots.
     #[command(
         long_about = "Integrate the dynamics with the scene's [run] settings (integrator, \
         tolerances, duration, output_every). Writes DIR/trajectory.csv (streamed row by row), \
         DIR/shape.csv, DIR/summary.json (also on failure) and SVG plots: tip_trajectory.svg, \
-        energy.svg, shapes.svg.\n\nExample:\n  softrod run examples/cantilever_gravity.toml --out /tmp/cantilever"
+        energy.svg, shapes.svg, strains.svg, actuators.svg (with cables), and the 3-D view \
+        DIR/view.html (with view.json, see `softrod view`).\n\nExample:\n  softrod run examples/cantilever_gravity.toml --out /tmp/cantilever"
     )]
     Run {
         /// The scene file (TOML).
@@ -89,6 +94,20 @@ enum Command {
         /// How many frequencies to print (all if the model has fewer).
         #[arg(long, default_value_t = 10)]
         count: usize,
+        /// Also write the mode shapes (the lowest, up to 6), DIR/modes.svg.
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// Rebuild DIR/view.html, the animated 3-D view, from a run directory's files.
+    #[command(
+        long_about = "Rebuilds DIR/view.html (one self-contained page: play/pause, time slider, \
+        speed, orbit/zoom/pan, rods as tubes of their radius, cables, tip trace) from \
+        DIR/shape.csv, DIR/view.json and DIR/bodies.csv, and prints its path to open in a \
+        browser.\n\nExample:\n  softrod view out/cantilever_gravity"
+    )]
+    View {
+        /// A directory written by `softrod run`.
+        dir: PathBuf,
     },
     /// State-space model (A, B) of the dynamics about the static equilibrium.
     #[command(
@@ -137,9 +156,15 @@ fn main() -> ExitCode {
     let quiet = cli.quiet;
     let result = match cli.command {
         Command::Check { scene } => inspect::check(&scene),
-        Command::Statics { scene, json } => inspect::statics(&scene, json),
+        Command::Statics { scene, json, out } => inspect::statics(&scene, json, out),
         Command::Run { scene, out } => run::run(&scene, out, quiet),
-        Command::Modes { scene, json, count } => inspect::modes(&scene, json, count),
+        Command::Modes {
+            scene,
+            json,
+            count,
+            out,
+        } => inspect::modes(&scene, json, count, out),
+        Command::View { dir } => run::view(&dir, quiet),
         Command::Linearize { scene, json } => linearize::linearize(&scene, json),
         Command::Report { scene, out, quick } => {
             report::report(&scene, out, report::ReportOptions { quick, quiet })

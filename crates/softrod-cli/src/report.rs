@@ -312,36 +312,32 @@ fn md_table(rows: &[Row], analytic: bool) -> String {
 
 fn csv_rows(csv: &mut String, rows: &[Row]) {
     for r in rows {
-        let name = r.name().replace(',', ";");
+        let mut f: Vec<String> = vec![
+            r.name(),
+            r.study.to_string(),
+            r.integrator.to_string(),
+            r.setting.to_string(),
+            r.pieces.to_string(),
+            r.quadrature.to_string(),
+        ];
         match &r.result {
-            Ok(o) => {
-                let _ = writeln!(
-                    csv,
-                    "{name},{},{},{},{},{},{},{:e},{:e},{},{},{},{},{},ok",
-                    r.study,
-                    r.integrator,
-                    r.setting,
-                    r.pieces,
-                    r.quadrature,
-                    o.wall,
-                    r.err_final,
-                    r.err_max,
-                    r.err_analytic.map_or(String::new(), |e| format!("{e:e}")),
-                    o.stats.steps,
-                    o.stats.rejected_steps,
-                    o.stats.rhs_evaluations,
-                    r.pareto
-                );
-            }
+            Ok(o) => f.extend([
+                o.wall.to_string(),
+                format!("{:e}", r.err_final),
+                format!("{:e}", r.err_max),
+                r.err_analytic.map_or(String::new(), |e| format!("{e:e}")),
+                o.stats.steps.to_string(),
+                o.stats.rejected_steps.to_string(),
+                o.stats.rhs_evaluations.to_string(),
+                r.pareto.to_string(),
+                "ok".into(),
+            ]),
             Err(e) => {
-                let e = e.replace([',', '\n'], ";");
-                let _ = writeln!(
-                    csv,
-                    "{name},{},{},{},{},{},,,,,,,,false,failed: {e}",
-                    r.study, r.integrator, r.setting, r.pieces, r.quadrature
-                );
+                f.extend(std::iter::repeat_n(String::new(), 7));
+                f.extend(["false".into(), format!("failed: {e}")]);
             }
         }
+        csv.push_str(&crate::outputs::csv_line(&f));
     }
 }
 

@@ -1,38 +1,108 @@
 //! `softrod run`: integrate, stream the trajectory, write shape, summary, plots.
 
 use std::fs::File;
-use std::io::{BufWriter, IsTerminal, Write};
+use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
-use softrod::dynamics::{Model, energies};
+use softrod::dynamics::{Model, actuation_matrix, energies};
 use softrod::integrate::Stats;
+use softrod::lie::Pose;
 use softrod::{EnergyBalance, Error, Flow, Observer, Sample, output_times};
 use softrod_scene::Scene;
+use softrod_viz::Pose as VizPose;
+use softrod_viz::run_dir::SHAPE_HEADER;
 
 use crate::common::{CliError, Poser, failed, load, out_dir, position, quaternion};
-use crate::plots;
+use crate::outputs::{self, RodSampling, csv_line, default_points_per_piece, num};
+use crate::plots::{self, Series, Snapshot};
+use crate::signals;
 
-/// What is kept in memory for the plots.
-#[derive(Default)]
-pub struct Series {
-    pub t: Vec<f64>,
-    pub tip: Vec<[f64; 3]>,
-    pub energy: Vec<[f64; 4]>,
-    /// Snapshots: time and, per rod, the boundary positions.
-    pub shapes: Vec<(f64, Vec<Vec<[f64; 3]>>)>,
+/// The contract's first columns of `trajectory.csv` (the `q` columns follow).
+pub const TRAJECTORY_HEADER: [&str; 9] = [
+    "t", "tip_x", "tip_y", "tip_z", "tip_qw", "tip_qx", "tip_qy", "tip_qz", "energy",
+];
+
+/// The columns of `trajectory.csv` after the contract's nine: `q0…` (the
+/// contract's), then (added, docs/scene-format-extensions.md) `qdot0…`, the
+/// energy components `kinetic, elastic, gravitational` (J; they sum to
+/// `energy`) and, with cables, `tension0…` (N) and `power0…` (W, the power
+/// each cable puts into the rods).
+pub fn extra_columns(n_dof: usize, n_cables: usize) -> Vec<String> {
+    let mut h: Vec<String> = (0..n_dof).map(|i| format!("q{i}")).collect();
+    h.extend((0..n_dof).map(|i| format!("qdot{i}")));
+    h.extend(["kinetic", "elastic", "gravitational"].map(String::from));
+    h.extend((0..n_cables).map(|c| format!("tension{c}")));
+    h.extend((0..n_cables).map(|c| format!("power{c}")));
+    h
 }
+
+/// An output file written row by row, unbuffered (each row is one write),
+/// that knows how many bytes hold whole rows: after a failed write (a full
+/// disk) it is cut back there, so it never ends in half a row.
+struct OutFile {
+    name: &'static str,
+    file: File,
+    committed: u64,
+}
+
+impl OutFile {
+    fn create(dir: &Path, name: &'static str, header: &str) -> Result<Self, CliError> {
+        let path = dir.join(name);
+        let mut file = File::create(&path)
+            .map_err(|e| CliError::Input(format!("cannot create {}: {e}", path.display())))?;
+        file.write_all(header.as_bytes())
+            .map_err(|e| failed(format!("writing {}: {e}", path.display())))?;
+        Ok(Self {
+            name,
+            file,
+            committed: header.len() as u64,
+        })
+    }
+
+    fn append(&mut self, text: &str) -> Result<(), String> {
+        self.file
+            .write_all(text.as_bytes())
+            .map_err(|e| format!("writing {}: {e}", self.name))
+    }
+
+    /// Cuts the file back to its whole rows.
+    fn rollback(&mut self) -> bool {
+        self.file.set_len(self.committed).is_ok()
+    }
+
+    fn commit(&mut self, bytes: usize) {
+        self.committed += bytes as u64;
+    }
+}
+
+/// Longest wall time between two writes of the running summary, s.
+pub const SUMMARY_EVERY: f64 = 0.5;
 
 /// Writes output rows as the integration produces them.
 pub struct Streamer {
-    traj: BufWriter<File>,
-    shape: BufWriter<File>,
+    traj: OutFile,
+    shape: OutFile,
+    summary: Summary,
+    start: Instant,
+    summary_written: Option<Instant>,
+    /// The signal that ended the run, if one did.
+    pub interrupted: Option<&'static str>,
+    traj_text: String,
+    shape_text: String,
     expected: usize,
     next: usize,
     snapshot_at: Vec<usize>,
     poser: Poser,
+    sampling: Vec<RodSampling>,
+    /// Per rod, the sampled poses of the current row (allocated once).
+    poses: Vec<Vec<Pose>>,
+    viz_poses: Vec<Vec<VizPose>>,
+    row: Vec<String>,
     n: usize,
+    /// The last row's snapshot, kept so the figures end where the run did.
+    last_snapshot: Option<Snapshot>,
     pub series: Series,
     pub error: Option<String>,
     pub last_stats: Stats,
@@ -41,10 +111,21 @@ pub struct Streamer {
     duration: f64,
 }
 
-fn create(path: &Path) -> Result<BufWriter<File>, CliError> {
-    File::create(path)
-        .map(BufWriter::new)
-        .map_err(|e| failed(format!("cannot create {}: {e}", path.display())))
+/// Rows (indices into the output times) whose shapes and strains are drawn:
+/// six spread evenly, first and last included.
+fn snapshot_rows(m: usize) -> Vec<usize> {
+    let snaps = 6.min(m);
+    let mut v: Vec<usize> = (0..snaps)
+        .map(|k| {
+            if snaps == 1 {
+                0
+            } else {
+                k * (m - 1) / (snaps - 1)
+            }
+        })
+        .collect();
+    v.dedup();
+    v
 }
 
 impl Streamer {
@@ -52,39 +133,56 @@ impl Streamer {
         dir: &Path,
         model: &Model,
         times: Vec<f64>,
+        per_piece: &[usize],
+        summary: Summary,
         bar: Option<ProgressBar>,
     ) -> Result<Self, CliError> {
         let n = model.n_dof();
-        let mut traj = create(&dir.join("trajectory.csv"))?;
-        let mut header = String::from("t,tip_x,tip_y,tip_z,tip_qw,tip_qx,tip_qy,tip_qz,energy");
-        for i in 0..n {
-            header.push_str(&format!(",q{i}"));
-        }
-        let mut shape = create(&dir.join("shape.csv"))?;
-        let io = |e: std::io::Error| failed(format!("writing outputs: {e}"));
-        writeln!(traj, "{header}").map_err(io)?;
-        traj.flush().map_err(io)?;
-        writeln!(shape, "t,rod,s,x,y,z,qw,qx,qy,qz").map_err(io)?;
-        let m = times.len();
-        let snaps = 6.min(m);
-        let mut snapshot_at: Vec<usize> = (0..snaps)
-            .map(|k| {
-                if snaps == 1 {
-                    0
-                } else {
-                    k * (m - 1) / (snaps - 1)
-                }
-            })
+        let mut header: Vec<String> = TRAJECTORY_HEADER.iter().map(|h| h.to_string()).collect();
+        header.extend(extra_columns(n, model.n_cables()));
+        let traj = OutFile::create(dir, "trajectory.csv", &csv_line(&header))?;
+        let shape = OutFile::create(dir, "shape.csv", &csv_line(SHAPE_HEADER))?;
+        let sampling: Vec<RodSampling> = model
+            .rods()
+            .iter()
+            .zip(per_piece)
+            .map(|(r, &m)| RodSampling::new(&r.spec.rod, m))
             .collect();
-        snapshot_at.dedup();
+        let poses = sampling
+            .iter()
+            .map(|s| vec![Pose::identity(); s.s.len()])
+            .collect();
+        let viz_poses = sampling
+            .iter()
+            .map(|s| vec![VizPose::at([0.0; 3]); s.s.len()])
+            .collect();
+        let n_rods = model.rods().len();
+        let n_cables = model.n_cables();
+        let series = Series {
+            tips: vec![Vec::new(); n_rods],
+            tensions: vec![Vec::new(); n_cables],
+            power: vec![Vec::new(); n_cables],
+            ..Series::default()
+        };
         Ok(Self {
             traj,
             shape,
+            summary,
+            start: Instant::now(),
+            summary_written: None,
+            interrupted: None,
+            traj_text: String::new(),
+            shape_text: String::new(),
             next: 0,
-            snapshot_at,
+            snapshot_at: snapshot_rows(times.len()),
             poser: Poser::new(model),
+            sampling,
+            poses,
+            viz_poses,
+            row: Vec::with_capacity(header.len()),
             n,
-            series: Series::default(),
+            last_snapshot: None,
+            series,
             error: None,
             last_stats: Stats::default(),
             last_t: 0.0,
@@ -100,6 +198,17 @@ impl Streamer {
 
     pub fn rows_expected(&self) -> usize {
         self.expected
+    }
+
+    /// The series for the figures, with the last row as the final snapshot
+    /// (a run that stopped early is drawn up to where it stopped).
+    pub fn finish_series(&mut self) -> &Series {
+        if let Some(last) = self.last_snapshot.take() {
+            if self.series.snapshots.last().is_none_or(|s| s.t < last.t) {
+                self.series.snapshots.push(last);
+            }
+        }
+        &self.series
     }
 
     fn write_row(&mut self, s: Sample<'_>) -> Result<(), String> {
@@ -125,61 +234,117 @@ impl Streamer {
         if p.iter().chain(qt.iter()).any(|v| !v.is_finite()) {
             return Err(format!("non-finite tip pose at t = {t:e}; output stopped"));
         }
-        let mut line = format!(
-            "{t},{},{},{},{},{},{},{},{}",
-            p[0],
-            p[1],
-            p[2],
-            qt[0],
-            qt[1],
-            qt[2],
-            qt[3],
-            e.total()
-        );
-        for v in q {
-            line.push(',');
-            line.push_str(&v.to_string());
-        }
-        let io = |e: std::io::Error| format!("writing trajectory.csv: {e}");
-        writeln!(self.traj, "{line}").map_err(io)?;
-        self.traj.flush().map_err(io)?;
-        let mut shape_rows = String::new();
-        let mut snap = Vec::new();
-        for (r, rm) in model.rods().iter().enumerate() {
-            let rod = &rm.spec.rod;
-            let mut pts = Vec::new();
-            for (k, g) in self.poser.boundaries(r).iter().enumerate() {
-                let s = if k == 0 {
-                    0.0
-                } else {
-                    rod.pieces()[k - 1].end()
-                };
-                let p = position(g);
-                let qq = quaternion(g);
-                if p.iter().chain(qq.iter()).any(|v| !v.is_finite()) {
+        for r in 0..model.rods().len() {
+            self.poser
+                .sample(model, r, &self.sampling[r], &mut self.poses[r])
+                .map_err(|e| format!("at t = {t:e}: {e}"))?;
+            let rm = &model.rods()[r];
+            for (i, (g, v)) in self.poses[r]
+                .iter()
+                .zip(self.viz_poses[r].iter_mut())
+                .enumerate()
+            {
+                let (pp, qq) = (position(g), quaternion(g));
+                if pp.iter().chain(qq.iter()).any(|v| !v.is_finite()) {
                     return Err(format!(
-                        "non-finite pose of rod '{}' at s = {s} m, t = {t:e}; output stopped",
-                        rm.spec.name
+                        "non-finite pose of rod '{}' at s = {} m, t = {t:e}; output stopped",
+                        rm.spec.name, self.sampling[r].s[i]
                     ));
                 }
-                shape_rows.push_str(&format!(
-                    "{t},{},{s},{},{},{},{},{},{},{}\n",
-                    rm.spec.name, p[0], p[1], p[2], qq[0], qq[1], qq[2], qq[3]
-                ));
-                pts.push(p);
+                *v = VizPose {
+                    position: pp,
+                    rotation: qq,
+                };
             }
-            snap.push(pts);
         }
-        let io = |e: std::io::Error| format!("writing shape.csv: {e}");
-        self.shape.write_all(shape_rows.as_bytes()).map_err(io)?;
-        self.shape.flush().map_err(io)?;
+        // Cables: tension and the power it puts in, T_c (B_c · q̇) (D15).
+        let (mut tensions, mut power) = (Vec::new(), Vec::new());
+        if model.n_cables() > 0 {
+            let b = actuation_matrix(model, q).map_err(|e| format!("cables at t = {t:e}: {e}"))?;
+            let qdv = nalgebra::DVectorView::from_slice(qd, qd.len());
+            for rm in model.rods() {
+                for (c, cable) in rm.spec.cables.iter().enumerate() {
+                    let tension = cable.tension_at(t);
+                    let col = rm.cable_offset + c;
+                    tensions.push(tension);
+                    power.push(tension * b.column(col).dot(&qdv));
+                }
+            }
+        }
+        self.row.clear();
+        self.row.push(num(t));
+        self.row.extend(p.iter().chain(&qt).map(|v| num(*v)));
+        self.row.push(num(e.total()));
+        self.row.extend(q.iter().map(|v| num(*v)));
+        self.row.extend(qd.iter().map(|v| num(*v)));
+        self.row
+            .extend([e.kinetic, e.elastic, e.gravitational].map(num));
+        self.row.extend(tensions.iter().map(|v| num(*v)));
+        self.row.extend(power.iter().map(|v| num(*v)));
+        self.traj_text = csv_line(&self.row);
+        self.shape_text.clear();
+        let ts = num(t);
+        for (r, rm) in model.rods().iter().enumerate() {
+            for (sv, p) in self.sampling[r].s.iter().zip(&self.viz_poses[r]) {
+                let [x, y, z] = p.position;
+                let [qw, qx, qy, qz] = p.rotation;
+                let fields = [*sv, x, y, z, qw, qx, qy, qz].map(num);
+                self.shape_text.push_str(&csv_line(
+                    [ts.as_str(), rm.spec.name.as_str()]
+                        .into_iter()
+                        .chain(fields.iter().map(String::as_str)),
+                ));
+            }
+        }
+        // Both files get this time's rows, or neither does.
+        let written = self
+            .shape
+            .append(&self.shape_text)
+            .and_then(|()| self.traj.append(&self.traj_text));
+        if let Err(e) = written {
+            let cut = self.shape.rollback() & self.traj.rollback();
+            return Err(format!(
+                "{e} at t = {t:e}; {}",
+                if cut {
+                    "the partial row was removed: the files hold whole rows up to the previous time"
+                } else {
+                    "the partial row could not be removed either"
+                }
+            ));
+        }
+        self.shape.commit(self.shape_text.len());
+        self.traj.commit(self.traj_text.len());
         self.series.t.push(t);
-        self.series.tip.push(p);
-        self.series
-            .energy
-            .push([e.total(), e.kinetic, e.elastic, e.gravitational]);
+        for (r, tips) in self.series.tips.iter_mut().enumerate() {
+            tips.push(position(self.poser.tip(r)));
+        }
+        self.series.energies.push(e);
+        for (c, (&tn, &pw)) in tensions.iter().zip(&power).enumerate() {
+            self.series.tensions[c].push(tn);
+            self.series.power[c].push(pw);
+        }
+        let snapshot = Snapshot {
+            t,
+            centrelines: self
+                .viz_poses
+                .iter()
+                .map(|ps| ps.iter().map(|p| p.position).collect())
+                .collect(),
+            strains: (0..model.rods().len())
+                .map(|r| {
+                    self.poser
+                        .strains(r)
+                        .iter()
+                        .map(|x| [x[0], x[1], x[2], x[3], x[4], x[5]])
+                        .collect()
+                })
+                .collect(),
+        };
         if self.snapshot_at.contains(&self.next) {
-            self.series.shapes.push((t, snap));
+            self.series.snapshots.push(snapshot);
+            self.last_snapshot = None;
+        } else {
+            self.last_snapshot = Some(snapshot);
         }
         Ok(())
     }
@@ -195,6 +360,27 @@ impl Observer for Streamer {
         }
         self.next += 1;
         self.last_t = t;
+        // Keep summary.json current, so a run killed with SIGKILL still
+        // says how far it got (its status stays "running").
+        if self
+            .summary_written
+            .is_none_or(|w| w.elapsed().as_secs_f64() >= SUMMARY_EVERY)
+        {
+            let wall = self.start.elapsed().as_secs_f64();
+            if let Err(e) = self
+                .summary
+                .write(&self.last_stats, wall, t, "running", self.next)
+            {
+                let e = e.to_string();
+                self.error = Some(e.clone());
+                return Err(e);
+            }
+            self.summary_written = Some(Instant::now());
+        }
+        if let Some(sig) = signals::received() {
+            self.interrupted = Some(sig);
+            return Ok(Flow::Stop);
+        }
         Ok(Flow::Continue)
     }
 
@@ -207,37 +393,36 @@ impl Observer for Streamer {
     }
 }
 
-/// The summary object.
-#[allow(clippy::too_many_arguments)]
-pub fn write_summary(
-    dir: &Path,
-    stats: &Stats,
-    wall: f64,
-    final_time: f64,
-    status: &str,
-    scene: &Scene,
-    rows: usize,
-    rows_expected: usize,
-    watch: Option<(&EnergyBalance, &[String])>,
-) -> Result<(), CliError> {
-    let mut v = serde_json::json!({
-        "steps": stats.steps,
-        "rejected_steps": stats.rejected_steps,
-        "rhs_evaluations": stats.rhs_evaluations,
-        "wall_seconds": wall,
-        "final_time": final_time,
-        "status": status,
-        "integrator": scene.run.integrator.name(),
-        "jacobian_evaluations": stats.jacobian_evaluations,
-        "factorizations": stats.factorizations,
-        "duration": scene.run.duration,
-        "output_rows": rows,
-        "output_rows_expected": rows_expected,
-        "n_dof": scene.n_dof(),
-    });
-    if let (Some((b, warnings)), Some(map)) = (watch, v.as_object_mut()) {
-        // The energy balance of the run (docs/scene-format-extensions.md,
-        // `[run] energy_tolerance`) and what the run's watch warned about.
+/// `summary.json`: the run's fixed facts and, at each write, its progress.
+/// Written atomically (a temporary file renamed over it), so a reader never
+/// sees half a file, even of a killed run.
+pub struct Summary {
+    path: PathBuf,
+    fixed: serde_json::Map<String, serde_json::Value>,
+}
+
+impl Summary {
+    pub fn new(dir: &Path, scene: &Scene, q_names: Vec<String>, rows_expected: usize) -> Self {
+        let v = serde_json::json!({
+            "pid": std::process::id(),
+            "integrator": scene.run.integrator.name(),
+            "duration": scene.run.duration,
+            "output_rows_expected": rows_expected,
+            "n_dof": scene.n_dof(),
+            "q_names": q_names,
+        });
+        let serde_json::Value::Object(fixed) = v else {
+            unreachable!("a JSON object literal")
+        };
+        Self {
+            path: dir.join("summary.json"),
+            fixed,
+        }
+    }
+
+    /// Adds the run's energy balance (docs/scene-format-extensions.md,
+    /// `[run] energy_tolerance`) and what the run's watch warned about.
+    pub fn add_watch(&mut self, b: &EnergyBalance, warnings: &[String]) {
         for (key, value) in [
             ("energy_error", b.error),
             ("energy_error_relative", b.relative),
@@ -245,36 +430,73 @@ pub fn write_summary(
             ("energy_change", b.change),
             ("energy_work", b.work),
         ] {
-            map.insert(key.into(), serde_json::json!(value));
+            self.fixed.insert(key.into(), serde_json::json!(value));
         }
-        map.insert("warnings".into(), serde_json::json!(warnings));
+        self.fixed
+            .insert("warnings".into(), serde_json::json!(warnings));
     }
-    let path = dir.join("summary.json");
-    let text = serde_json::to_string_pretty(&v).map_err(failed)?;
-    std::fs::write(&path, text + "\n")
-        .map_err(|e| failed(format!("cannot write {}: {e}", path.display())))
+
+    /// Writes the summary with the given progress.
+    pub fn write(
+        &self,
+        stats: &Stats,
+        wall: f64,
+        final_time: f64,
+        status: &str,
+        rows: usize,
+    ) -> Result<(), CliError> {
+        let mut v = serde_json::json!({
+            "steps": stats.steps,
+            "rejected_steps": stats.rejected_steps,
+            "rhs_evaluations": stats.rhs_evaluations,
+            "wall_seconds": wall,
+            "final_time": final_time,
+            "status": status,
+            "jacobian_evaluations": stats.jacobian_evaluations,
+            "factorizations": stats.factorizations,
+            "output_rows": rows,
+            "updated_unix_seconds": std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map_or(0.0, |d| d.as_secs_f64()),
+        });
+        if let serde_json::Value::Object(m) = &mut v {
+            m.extend(self.fixed.clone());
+        }
+        let text = serde_json::to_string_pretty(&v).map_err(failed)? + "\n";
+        let tmp = self.path.with_extension("json.tmp");
+        std::fs::write(&tmp, text)
+            .and_then(|()| std::fs::rename(&tmp, &self.path))
+            .map_err(|e| failed(format!("cannot write {}: {e}", self.path.display())))
+    }
+}
+
+/// The scene's file stem: the title of figures and view.
+pub fn scene_title(path: &Path) -> String {
+    path.file_stem()
+        .map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned())
 }
 
 pub fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), CliError> {
     let mut l = load(path)?;
     let dir = out_dir(path, out);
-    std::fs::create_dir_all(&dir)
-        .map_err(|e| failed(format!("cannot create {}: {e}", dir.display())))?;
+    outputs::prepare_out_dir(&dir)?;
+    let stale = outputs::clear_stale(&dir)?;
+    if !quiet && !stale.is_empty() {
+        eprintln!(
+            "softrod: removed the previous run's outputs from {}: {}",
+            dir.display(),
+            stale.join(", ")
+        );
+    }
     let scene = &l.scene;
     let duration = scene.run.duration;
     let times = output_times(duration, l.sim.settings().output_spacing(duration));
-    // Written first so that an interrupted run leaves a summary that says so.
-    write_summary(
-        &dir,
-        &Stats::default(),
-        0.0,
-        0.0,
-        "error: did not finish (running, or interrupted)",
-        scene,
-        0,
-        times.len(),
-        None,
-    )?;
+    // Written first so that a run that never gets to its first row leaves
+    // a summary that says so.
+    let summary = Summary::new(&dir, scene, l.sim.q_names(), times.len());
+    summary
+        .write(&Stats::default(), 0.0, 0.0, "running", 0)
+        .map_err(|e| CliError::Input(e.to_string()))?;
     let bar = (!quiet && std::io::stderr().is_terminal()).then(|| {
         let b = ProgressBar::new(1000);
         if let Ok(style) = ProgressStyle::with_template(
@@ -284,7 +506,21 @@ pub fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), CliErro
         }
         b
     });
-    let mut streamer = Streamer::new(&dir, l.sim.model(), times, bar)?;
+    let per_piece: Vec<usize> = l
+        .sim
+        .model()
+        .rods()
+        .iter()
+        .map(|r| {
+            scene
+                .run
+                .shape_points_per_piece
+                .unwrap_or_else(|| default_points_per_piece(r.spec.rod.n_pieces()))
+        })
+        .collect();
+    let mut summary_final = Summary::new(&dir, scene, l.sim.q_names(), times.len());
+    let mut streamer = Streamer::new(&dir, l.sim.model(), times, &per_piece, summary, bar)?;
+    signals::install();
     let start = Instant::now();
     // Rows are the integrator's dense output at the output times, streamed
     // to the observer as the run proceeds; nothing is kept in between.
@@ -298,6 +534,17 @@ pub fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), CliErro
     }
     let wall = start.elapsed().as_secs_f64();
     let (status, stats, t_final) = match (&result, &streamer.error) {
+        (_, None) if streamer.interrupted.is_some() => (
+            format!(
+                "error: interrupted by {} at t = {} ({} of {} output rows written)",
+                streamer.interrupted.unwrap_or("a signal"),
+                streamer.last_t,
+                streamer.rows_written(),
+                streamer.rows_expected()
+            ),
+            result.as_ref().map_or(streamer.last_stats, |s| s.stats),
+            streamer.last_t,
+        ),
         (_, Some(e)) => (format!("error: {e}"), streamer.last_stats, streamer.last_t),
         (Err(e), None) => (format!("error: {e}"), streamer.last_stats, streamer.last_t),
         (Ok(sum), None) => {
@@ -318,24 +565,27 @@ pub fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), CliErro
         Err(Error::EnergyBalance { balance, .. }) => Some((&**balance, &[][..])),
         Err(_) => None,
     };
-    if let (false, Some((_, warnings))) = (quiet, watch) {
-        for w in warnings {
-            eprintln!("softrod: warning: {w}");
+    if let Some((b, warnings)) = watch {
+        summary_final.add_watch(b, warnings);
+        if !quiet {
+            for w in warnings {
+                eprintln!("softrod: warning: {w}");
+            }
         }
     }
-    write_summary(
-        &dir,
-        &stats,
-        wall,
-        t_final,
-        &status,
-        scene,
-        streamer.rows_written(),
-        streamer.rows_expected(),
-        watch,
-    )?;
-    // Plots of whatever was computed (also after a failure: they show where it went wrong).
-    let plot_result = plots::all(&dir, &streamer.series, scene);
+    summary_final.write(&stats, wall, t_final, &status, streamer.rows_written())?;
+    // Plots and view of whatever was computed (also after a failure: they
+    // show where it went wrong).
+    let title = scene_title(path);
+    let model = l.sim.model();
+    let plot_result =
+        plots::run_figures(&dir, streamer.finish_series(), model, &title).and_then(|_| {
+            if streamer.rows_written() > 0 {
+                outputs::write_view(&dir, model, &title).map(|_| ())
+            } else {
+                Ok(())
+            }
+        });
     if status != "ok" {
         return Err(failed(format!(
             "simulation failed: {} (outputs up to t = {} in {})",
@@ -354,6 +604,31 @@ pub fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), CliErro
             stats.rejected_steps,
             stats.rhs_evaluations,
             dir.display()
+        );
+    }
+    Ok(())
+}
+
+/// `softrod view DIR`: rebuilds `DIR/view.html` and prints its path.
+pub fn view(dir: &Path, quiet: bool) -> Result<(), CliError> {
+    if !dir.join(softrod_viz::run_dir::SHAPE_CSV).is_file() {
+        return Err(CliError::Input(format!(
+            "{}: not a run directory (no {}; write one with `softrod run SCENE --out DIR`)",
+            dir.display(),
+            softrod_viz::run_dir::SHAPE_CSV
+        )));
+    }
+    let stats = softrod_viz::run_dir::write_view(dir, &softrod_viz::ViewOptions::default())
+        .map_err(|e| CliError::Input(format!("{}: {e}", dir.display())))?
+        .1;
+    let page = dir.join(softrod_viz::run_dir::VIEW_HTML);
+    println!("{}", page.display());
+    if !quiet {
+        eprintln!(
+            "softrod: {} frames of {} output times, {} bytes; open it in a browser",
+            stats.frames.len(),
+            stats.source_frames,
+            stats.bytes
         );
     }
     Ok(())

@@ -64,3 +64,8 @@ pub use model::{Model, RodModel, RodSpec};
 pub use modes::{Modes, modes};
 pub use shifted::ShiftedSolver;
 pub use statics::{StaticsOptions, StaticsResult, statics};
+
+/// The README's examples, compiled and run as doctests.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;

@@ -27,3 +27,8 @@ pub use quadrature::GaussLegendre;
 pub use rod::{Piece, PieceSpec, Rod, straight};
 pub use state::{Frame, RodKinematics};
 pub use strain::Strain;
+
+/// The README's examples, compiled and run as doctests.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;

@@ -40,3 +40,8 @@ pub use ops::{ad, ad_vec, coad, coad_vec, hat, skew, unskew, vee};
 pub use piece::PieceMaps;
 pub use pose::Pose;
 pub use types::*;
+
+/// The README's examples, compiled and run as doctests.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;

@@ -40,3 +40,8 @@ pub use error::{MechanicsError, Quantity};
 pub use loads::{DistributedLoad, Drag, LoadFrame, PointLoad};
 pub use material::{Material, MaterialBuilder};
 pub use section::{Section, SectionProperties};
+
+/// The README's examples, compiled and run as doctests.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;

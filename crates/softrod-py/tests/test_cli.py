@@ -12,6 +12,10 @@ import softrod
 from conftest import EXAMPLES, scene_text
 
 
+def sim_names(scene):
+    return softrod.Simulation.from_toml(scene).q_names
+
+
 def test_run_matches_the_cli_trajectory(tmp_path, softrod_bin):
     text = scene_text(
         'strains = ["ky", "qx", "qz"]',
@@ -32,8 +36,11 @@ def test_run_matches_the_cli_trajectory(tmp_path, softrod_bin):
     np.testing.assert_array_equal(csv[:, 0], traj.t)
     np.testing.assert_array_equal(csv[:, 1:4], traj.tip_position)
     np.testing.assert_array_equal(csv[:, 8], traj.energy)
-    np.testing.assert_array_equal(csv[:, 9:], traj.q)
+    n = traj.q.shape[1]
+    np.testing.assert_array_equal(csv[:, 9:9 + n], traj.q)
+    np.testing.assert_array_equal(csv[:, 9 + n:9 + 2 * n], traj.qdot)
     summary = json.loads((out / "summary.json").read_text())
+    assert summary["q_names"] == sim_names(scene)
     assert summary["steps"] == traj.stats["steps"]
 
 

@@ -107,6 +107,8 @@ pub(crate) struct RawLoad {
 pub(crate) struct RawInitial {
     pub q: Option<Vec<f64>>,
     pub qdot: Option<Vec<f64>>,
+    pub trajectory: Option<String>,
+    pub row: Option<i64>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -123,6 +125,7 @@ pub(crate) struct RawRun {
     pub error_control: Option<bool>,
     pub linearly_implicit: Option<bool>,
     pub energy_tolerance: Option<f64>,
+    pub shape_points_per_piece: Option<i64>,
 }
 
 #[derive(Debug, Deserialize)]

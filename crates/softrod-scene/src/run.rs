@@ -157,9 +157,18 @@ pub struct Run {
     /// (an extension of the format; default [`Run::DEFAULT_ENERGY_TOLERANCE`]):
     /// beyond it the run fails, beyond a tenth of it the summary warns.
     pub energy_tolerance: f64,
+    /// Samples per piece in `shape.csv` and the 3-D view (an extension of the
+    /// format): points at the fractions `0, 1/m, …, (m−1)/m` of each piece,
+    /// exact on its arc, then the tip; 1 gives the N+1 piece boundaries.
+    /// `None` (default): the front end chooses enough to look smooth.
+    pub shape_points_per_piece: Option<usize>,
 }
 
 impl Run {
+    /// Largest `shape_points_per_piece`: beyond it the chords are far below
+    /// a pixel and only the files grow.
+    pub const MAX_SHAPE_POINTS_PER_PIECE: usize = 1000;
+
     /// Default `duration`, s (the contract's).
     pub const DEFAULT_DURATION: f64 = 1.0;
     /// Default `rtol`: with the default `rosenbrock`, the best measured by
@@ -197,6 +206,7 @@ impl Default for Run {
             error_control: false,
             linearly_implicit: false,
             energy_tolerance: Run::DEFAULT_ENERGY_TOLERANCE,
+            shape_points_per_piece: None,
         }
     }
 }

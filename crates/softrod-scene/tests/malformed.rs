@@ -231,6 +231,36 @@ const CASES: &[Case] = &[
         says: &["out of range", ">= 1"],
     },
     Case {
+        name: "zero shape points per piece",
+        edits: &[(
+            "quadrature = 4",
+            "quadrature = 4\nshape_points_per_piece = 0",
+        )],
+        path: "run.shape_points_per_piece",
+        says: &["out of range", "[1, 1000]"],
+    },
+    Case {
+        name: "too many shape points per piece",
+        edits: &[(
+            "quadrature = 4",
+            "quadrature = 4\nshape_points_per_piece = 5000",
+        )],
+        path: "run.shape_points_per_piece",
+        says: &["out of range", "5000"],
+    },
+    Case {
+        name: "initial row without a trajectory",
+        edits: &[("", "\n[initial]\nrow = 3\n")],
+        path: "initial.row",
+        says: &["needs initial.trajectory"],
+    },
+    Case {
+        name: "initial trajectory that does not exist",
+        edits: &[("", "\n[initial]\ntrajectory = \"no/such/trajectory.csv\"\n")],
+        path: "initial.trajectory",
+        says: &["no/such/trajectory.csv", "cannot read"],
+    },
+    Case {
         name: "reference time after the run",
         edits: &[("", "\n[reference]\ntip = [0.5, 0, 0]\ntime = 2.0\n")],
         path: "reference.time",

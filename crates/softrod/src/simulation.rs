@@ -12,7 +12,7 @@ use softrod_dynamics::{
     stiffness_matrix,
 };
 use softrod_integrate::{Control, Hooks, RodSystem, Stats, integrate_second_order};
-use softrod_kinematics::{Frame, RodKinematics};
+use softrod_kinematics::{Frame, RodKinematics, Strain};
 use softrod_lie::Pose;
 use softrod_scene::{Scene, Warning};
 
@@ -248,6 +248,30 @@ impl Simulation {
     /// The model.
     pub fn model(&self) -> &Model {
         &self.system.model
+    }
+
+    /// A name for every coordinate of `q`, in its order: `"ROD.pN.STRAIN"`
+    /// (`"arm.p0.ky"`: rod `arm`, piece 0 from the base, bending about local
+    /// y), the strain as the scene's `strains` names it; a piece with a
+    /// general basis matrix names its columns `b0`, `b1`, …. The same names
+    /// serve `q̇` (and the `q`/`qdot` columns of `trajectory.csv`).
+    pub fn q_names(&self) -> Vec<String> {
+        let model = self.model();
+        let mut names = Vec::with_capacity(model.n_dof());
+        for rm in model.rods() {
+            for (n, piece) in rm.spec.rod.pieces().iter().enumerate() {
+                match piece.basis.selection() {
+                    Some(sel) => names.extend(
+                        sel.iter()
+                            .map(|&i| format!("{}.p{n}.{}", rm.spec.name, Strain::ALL[i].name())),
+                    ),
+                    None => names.extend(
+                        (0..piece.basis.dof()).map(|j| format!("{}.p{n}.b{j}", rm.spec.name)),
+                    ),
+                }
+            }
+        }
+        names
     }
 
     /// Number of generalized coordinates.
@@ -488,29 +512,6 @@ impl Simulation {
         let s = &mut self.system;
         let mut work = FdDerivatives::new(&s.model);
         Ok(linearize(&s.model, &mut s.data, &mut work, t, q, qd, None)?)
-    }
-
-    /// A name for every generalized coordinate, in the order of `q`:
-    /// `"<rod>.p<piece>.<strain>"` (e.g. `"arm.p0.ky"`, pieces from the
-    /// base, strains `kx ky kz qx qy qz` as selected), or
-    /// `"<rod>.p<piece>.b<column>"` for a rod with a custom basis matrix.
-    pub fn q_names(&self) -> Vec<String> {
-        let mut names = Vec::with_capacity(self.n_dof());
-        for r in self.model().rods() {
-            for (k, piece) in r.spec.rod.pieces().iter().enumerate() {
-                match piece.basis.strains() {
-                    Some(strains) => names.extend(
-                        strains
-                            .iter()
-                            .map(|c| format!("{}.p{k}.{}", r.spec.name, c.name())),
-                    ),
-                    None => names.extend(
-                        (0..piece.basis.dof()).map(|c| format!("{}.p{k}.b{c}", r.spec.name)),
-                    ),
-                }
-            }
-        }
-        names
     }
 
     /// Whether the model has static loads (gravity, point or distributed

@@ -227,3 +227,24 @@ fn folded_pieces_fail_and_overstretched_ones_warn() {
         sum.warnings
     );
 }
+
+/// Regression (found by the CLI's cable-power test): a tension ramping from
+/// zero makes `P ∝ t³` on the first step, which the trapezoid overestimates
+/// twice while the energy scale is 1e-15 J; the work's own uncertainty is
+/// not held against the run.
+#[test]
+fn a_tension_ramp_from_zero_is_not_flagged() {
+    let mut s = sim(
+        "[[rod]]\nname = \"arm\"\nlength = 0.3\npieces = 4\nstrains = [\"ky\", \"qx\", \"qz\"]\n\
+         section = { shape = \"circle\", radius = 0.01 }\n\
+         material = { density = 1100.0, young = 1.0e6, poisson = 0.5 }\n\
+         [[cable]]\nrod = \"arm\"\noffset = [0.0, 0.008]\n\
+         tension = { times = [0.0, 0.02], values = [0.0, 1.0] }\n\
+         [run]\nintegrator = \"dopri5\"\nrtol = 1e-10\natol = 1e-13\noutput_every = 0.001\n",
+    );
+    let sum = s.simulate_with(0.04, &mut Discard).unwrap();
+    let b = sum.energy.unwrap();
+    assert!(b.non_conservative && b.work > 0.0, "{b:?}");
+    assert!(b.relative < 1e-5, "{b:?}");
+    assert!(sum.warnings.is_empty(), "{:?}", sum.warnings);
+}

@@ -2,6 +2,7 @@
 //! far outside the small-strain range.
 
 use std::f64::consts::PI;
+use std::path::Path;
 
 use softrod_dynamics::RodSpec;
 use softrod_kinematics::Strain;
@@ -28,6 +29,41 @@ impl Ctx<'_> {
             })
             .collect::<Vec<_>>()
             .join(", ");
+        if raw.row.is_some() && raw.trajectory.is_none() {
+            return Err(self.r.invalid(
+                "initial.row",
+                "needs initial.trajectory (the file it is a row of)",
+            ));
+        }
+        let mut raw = raw;
+        if let Some(file) = raw.trajectory.take() {
+            if raw.q.is_some() || raw.qdot.is_some() {
+                return Err(self.r.invalid(
+                    "initial.trajectory",
+                    "conflicting keys: give initial.trajectory (with row) or q/qdot, not both",
+                ));
+            }
+            // Relative to the scene file, so a scene and its runs move together.
+            let path = match Path::new(self.r.file()).parent() {
+                Some(dir) if Path::new(&file).is_relative() => dir.join(&file),
+                _ => Path::new(&file).to_path_buf(),
+            };
+            let (q, qdot) = trajectory_row(&path, raw.row.unwrap_or(-1), n_dof).map_err(|m| {
+                self.r
+                    .invalid("initial.trajectory", format!("{}: {m}", path.display()))
+            })?;
+            if qdot.is_none() {
+                self.warn(
+                    "initial.trajectory",
+                    format!(
+                        "{}: no qdot columns: starting from q at rest",
+                        path.display()
+                    ),
+                );
+            }
+            raw.q = Some(q);
+            raw.qdot = qdot;
+        }
         for (key, v) in [("q", &raw.q), ("qdot", &raw.qdot)] {
             if let Some(v) = v
                 && v.len() != n_dof
@@ -63,6 +99,69 @@ impl Ctx<'_> {
             offset += rod.rod.n_dof();
         }
     }
+}
+
+/// `q` (and `qdot` when the file has those columns) of row `row` of a
+/// `trajectory.csv` written by `softrod run`: data rows counted from 0,
+/// negative from the end (−1 the last). Columns are found by name (`q0`…,
+/// `qdot0`…), so the file's other columns do not matter.
+fn trajectory_row(
+    path: &Path,
+    row: i64,
+    n_dof: usize,
+) -> std::result::Result<(Vec<f64>, Option<Vec<f64>>), String> {
+    let mut rdr = csv::Reader::from_path(path).map_err(|e| format!("cannot read: {e}"))?;
+    let header = rdr.headers().map_err(|e| format!("header: {e}"))?.clone();
+    let column = |name: String| header.iter().position(|h| h == name);
+    let q_cols: Vec<Option<usize>> = (0..n_dof).map(|i| column(format!("q{i}"))).collect();
+    if let Some(i) = q_cols.iter().position(Option::is_none) {
+        return Err(format!(
+            "no column q{i}: the scene has n_dof = {n_dof} (a trajectory of another scene?)"
+        ));
+    }
+    if column(format!("q{n_dof}")).is_some() {
+        return Err(format!(
+            "more q columns than the scene's n_dof = {n_dof} (a trajectory of another scene?)"
+        ));
+    }
+    let qd_cols: Vec<Option<usize>> = (0..n_dof).map(|i| column(format!("qdot{i}"))).collect();
+    let has_qd = qd_cols.iter().all(Option::is_some);
+    let mut records = Vec::new();
+    for rec in rdr.records() {
+        records.push(rec.map_err(|e| format!("{e}"))?);
+    }
+    let n = records.len() as i64;
+    let k = if row < 0 { n + row } else { row };
+    if !(0..n).contains(&k) {
+        return Err(format!("initial.row = {row}: the file has {n} data rows"));
+    }
+    let rec = &records[k as usize];
+    let value = |c: usize, name: &str| -> std::result::Result<f64, String> {
+        let text = rec.get(c).unwrap_or("");
+        match text.trim().parse::<f64>() {
+            Ok(v) if v.is_finite() => Ok(v),
+            _ => Err(format!(
+                "data row {k}, column {name}: not a finite number: {text:?}"
+            )),
+        }
+    };
+    let q = q_cols
+        .iter()
+        .enumerate()
+        .map(|(i, c)| value(c.unwrap_or(usize::MAX), &format!("q{i}")))
+        .collect::<std::result::Result<Vec<_>, _>>()?;
+    let qd = if has_qd {
+        Some(
+            qd_cols
+                .iter()
+                .enumerate()
+                .map(|(i, c)| value(c.unwrap_or(usize::MAX), &format!("qdot{i}")))
+                .collect::<std::result::Result<Vec<_>, _>>()?,
+        )
+    } else {
+        None
+    };
+    Ok((q, qd))
 }
 
 /// The first coordinate of `q` (the rod's own) that bends a piece by more

@@ -55,6 +55,19 @@ impl Ctx<'_> {
                 ));
             }
         };
+        let shape_points_per_piece = match r.shape_points_per_piece {
+            None => None,
+            Some(n) if n >= 1 && n as u64 <= Run::MAX_SHAPE_POINTS_PER_PIECE as u64 => {
+                Some(n as usize)
+            }
+            Some(n) => {
+                return Err(self.r.out_of_range(
+                    "run.shape_points_per_piece",
+                    n,
+                    format!("an integer in [1, {}]", Run::MAX_SHAPE_POINTS_PER_PIECE),
+                ));
+            }
+        };
         let error_control = r.error_control.unwrap_or(d.error_control);
         if error_control && integrator != Integrator::GeneralizedAlpha {
             self.warn(
@@ -109,6 +122,7 @@ impl Ctx<'_> {
             error_control,
             linearly_implicit,
             energy_tolerance,
+            shape_points_per_piece,
         })
     }
 }

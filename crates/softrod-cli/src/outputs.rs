@@ -1,0 +1,302 @@
+//! What a run directory holds besides the numbers: where the rods are
+//! sampled along `s`, the view description (`view.json`) and the 3-D view.
+
+use std::path::Path;
+
+use softrod::dynamics::Model;
+use softrod::kinematics::Rod;
+use softrod::mechanics::{Routing, Section};
+use softrod_viz::run_dir::{CableSpec, RadiusProfile, RodSpec, VIEW_JSON, ViewSpec};
+use softrod_viz::{ViewOptions, ViewStats};
+
+use crate::common::{CliError, failed};
+
+/// Points per piece when `[run] shape_points_per_piece` is not given: a rod
+/// gets about [`SMOOTH_SAMPLES_PER_ROD`] samples, at least one per piece
+/// (the piece boundaries, the contract's N+1 frames) and at most
+/// [`MAX_DEFAULT_POINTS_PER_PIECE`] (a piece is one exact arc: 16 chords of a
+/// quarter turn deviate from it by 0.1 % of the radius).
+pub fn default_points_per_piece(pieces: usize) -> usize {
+    SMOOTH_SAMPLES_PER_ROD
+        .div_ceil(pieces.max(1))
+        .clamp(1, MAX_DEFAULT_POINTS_PER_PIECE)
+}
+
+/// See [`default_points_per_piece`].
+pub const SMOOTH_SAMPLES_PER_ROD: usize = 64;
+/// See [`default_points_per_piece`].
+pub const MAX_DEFAULT_POINTS_PER_PIECE: usize = 16;
+
+/// Where one rod is sampled: `m` points per piece at the local fractions
+/// `0, 1/m, …, (m−1)/m` of each piece, then the tip; `s` strictly
+/// increasing from 0 to L and containing every piece boundary.
+pub struct RodSampling {
+    /// Fractions within a piece, `[0, 1)`.
+    pub fractions: Vec<f64>,
+    /// Material abscissae, m (`n_pieces · m + 1`).
+    pub s: Vec<f64>,
+}
+
+impl RodSampling {
+    pub fn new(rod: &Rod, per_piece: usize) -> Self {
+        let m = per_piece.max(1);
+        let fractions: Vec<f64> = (0..m).map(|j| j as f64 / m as f64).collect();
+        let mut s = Vec::with_capacity(rod.n_pieces() * m + 1);
+        let mut start = 0.0;
+        for p in rod.pieces() {
+            let len = p.end() - start;
+            // j = 0 is exactly the boundary (start), so boundaries keep the
+            // values `shape.csv` always had.
+            s.extend(fractions.iter().map(|f| start + f * len));
+            start = p.end();
+        }
+        s.push(rod.length());
+        Self { fractions, s }
+    }
+}
+
+/// Outer radius profile of a section over a rod of length `length` (the
+/// circumscribed radius of a rectangle), as `view.json` takes it.
+pub fn radius_profile(section: &Section, length: f64) -> RadiusProfile {
+    match *section {
+        Section::Circle { radius } | Section::Tube { radius, .. } => {
+            RadiusProfile::constant(radius)
+        }
+        Section::Rectangle { width, height } => RadiusProfile::constant(0.5 * width.hypot(height)),
+        Section::TaperedCircle {
+            radius_base,
+            radius_tip,
+        } => RadiusProfile {
+            s: vec![0.0, length],
+            r: vec![radius_base, radius_tip],
+        },
+    }
+}
+
+/// `view.json` for a model: title, up (`−g/|g|` with gravity), rod radii,
+/// cable paths as `(s, y, z)` in the rod's frame.
+pub fn view_spec(model: &Model, title: &str) -> ViewSpec {
+    let mut spec = ViewSpec::new(title);
+    if let Some(g) = model.gravity.filter(|g| g.norm() > 0.0) {
+        let u = -g / g.norm();
+        // `+ 0.0` turns −0 into 0 in the file.
+        spec.up = [u[0] + 0.0, u[1] + 0.0, u[2] + 0.0];
+    }
+    let mut cable_no = 0;
+    for rm in model.rods() {
+        let length = rm.spec.rod.length();
+        spec.rods.push(RodSpec {
+            name: rm.spec.name.clone(),
+            radius: radius_profile(rm.spec.body.section(), length),
+        });
+        for c in &rm.spec.cables {
+            let (from, to) = c.bounds(length);
+            let path = match &c.routing {
+                Routing::Offset { y, z } => vec![[from, *y, *z], [to, *y, *z]],
+                Routing::Path(pts) => {
+                    // The cable runs over [from, to] only: clip the path to it.
+                    let at = |s: f64| {
+                        let (d, _) = c.routing.offset(s);
+                        [s, d[1], d[2]]
+                    };
+                    let mut v = vec![at(from)];
+                    v.extend(pts.iter().filter(|p| p[0] > from && p[0] < to).copied());
+                    v.push(at(to));
+                    v
+                }
+            };
+            spec.cables.push(CableSpec {
+                name: format!("cable {cable_no}"),
+                rod: rm.spec.name.clone(),
+                path,
+            });
+            cable_no += 1;
+        }
+    }
+    spec
+}
+
+/// Writes `DIR/view.json` and `DIR/view.html` from the directory's files.
+pub fn write_view(dir: &Path, model: &Model, title: &str) -> Result<ViewStats, CliError> {
+    view_spec(model, title)
+        .write(&dir.join(VIEW_JSON))
+        .map_err(failed)?;
+    regenerate_view(dir)
+}
+
+/// Rebuilds `DIR/view.html` from `shape.csv`, `view.json` and `bodies.csv`.
+pub fn regenerate_view(dir: &Path) -> Result<ViewStats, CliError> {
+    softrod_viz::run_dir::write_view(dir, &ViewOptions::default())
+        .map(|(_, stats)| stats)
+        .map_err(|e| {
+            // Never leave a truncated page (a full disk) behind.
+            let _ = std::fs::remove_file(dir.join(softrod_viz::run_dir::VIEW_HTML));
+            failed(format!("3-D view: {e}"))
+        })
+}
+
+/// The files `softrod run` writes (besides `strains_R.svg`): removed at the
+/// start of a run, so that a directory never mixes two runs' outputs.
+pub const RUN_OUTPUTS: [&str; 13] = [
+    "trajectory.csv",
+    "shape.csv",
+    "bodies.csv",
+    "summary.json",
+    "summary.json.tmp",
+    "view.json",
+    "view.html",
+    "tip_trajectory.svg",
+    "energy.svg",
+    "shapes.svg",
+    "strains.svg",
+    "actuators.svg",
+    "shape.svg",
+];
+
+/// Whether `name` is a file `softrod run` writes.
+fn is_run_output(name: &str) -> bool {
+    RUN_OUTPUTS.contains(&name)
+        || name
+            .strip_prefix("strains_")
+            .and_then(|r| r.strip_suffix(".svg"))
+            .is_some_and(|r| !r.is_empty() && r.bytes().all(|b| b.is_ascii_digit()))
+}
+
+/// Makes `dir` ready for outputs: creates it, and checks that files can be
+/// written there. Problems are bad input (exit 2) naming the directory.
+pub fn prepare_out_dir(dir: &Path) -> Result<(), CliError> {
+    let bad = |why: String| CliError::Input(format!("output directory {}: {why}", dir.display()));
+    if dir.exists() && !dir.is_dir() {
+        return Err(bad("exists and is not a directory".into()));
+    }
+    std::fs::create_dir_all(dir).map_err(|e| bad(format!("cannot create it: {e}")))?;
+    let probe = dir.join(".softrod-write-probe");
+    std::fs::write(&probe, b"").map_err(|e| bad(format!("cannot write in it: {e}")))?;
+    let _ = std::fs::remove_file(&probe);
+    Ok(())
+}
+
+/// Removes the outputs of a previous run from `dir` (regular files with the
+/// names `softrod run` writes; anything else is left alone). Returns the
+/// names removed.
+pub fn clear_stale(dir: &Path) -> Result<Vec<String>, CliError> {
+    let mut removed = Vec::new();
+    let entries = std::fs::read_dir(dir)
+        .map_err(|e| CliError::Input(format!("output directory {}: {e}", dir.display())))?;
+    for entry in entries.flatten() {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let regular = entry.file_type().is_ok_and(|t| t.is_file());
+        if regular && is_run_output(&name) {
+            std::fs::remove_file(entry.path()).map_err(|e| {
+                CliError::Input(format!(
+                    "cannot remove the previous run's {}: {e}",
+                    entry.path().display()
+                ))
+            })?;
+            removed.push(name);
+        }
+    }
+    removed.sort();
+    Ok(removed)
+}
+
+/// One CSV record (RFC 4180: fields quoted when they hold a comma, quote or
+/// line break), with its line end.
+pub fn csv_line<I, S>(fields: I) -> String
+where
+    I: IntoIterator<Item = S>,
+    S: AsRef<[u8]>,
+{
+    let mut w = csv::Writer::from_writer(Vec::new());
+    // Writing into memory cannot fail.
+    let _ = w.write_record(fields);
+    String::from_utf8(w.into_inner().unwrap_or_default()).unwrap_or_default()
+}
+
+/// A number as CSV text: the shortest decimal that reads back to the same
+/// `f64` (`0.1`, `1e-7`, `1.0`), `0` for both zeros (no `-0`).
+pub fn num(v: f64) -> String {
+    if v == 0.0 {
+        "0".into()
+    } else {
+        format!("{v:?}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use softrod::kinematics::Basis;
+    use softrod::lie::Pose;
+
+    #[test]
+    fn sampling_holds_every_boundary_and_increases() {
+        let rod = Rod::with_lengths(
+            &[0.1, 0.15, 0.25],
+            Basis::all(),
+            softrod::kinematics::straight(),
+            Pose::identity(),
+        )
+        .unwrap();
+        let s = RodSampling::new(&rod, 4);
+        assert_eq!(s.s.len(), 3 * 4 + 1);
+        assert!(s.s.windows(2).all(|w| w[1] > w[0]));
+        for (k, b) in [0.0, 0.1, 0.25, 0.5].iter().enumerate() {
+            assert_eq!(s.s[4 * k], *b, "boundary {k}");
+        }
+        assert!((s.s[1] - 0.025).abs() < 1e-15);
+        let one = RodSampling::new(&rod, 1);
+        assert_eq!(one.s, vec![0.0, 0.1, 0.25, 0.5]);
+    }
+
+    #[test]
+    fn default_points_give_a_smooth_rod_and_never_fewer_than_the_boundaries() {
+        assert_eq!(default_points_per_piece(4), 16);
+        assert_eq!(default_points_per_piece(8), 8);
+        assert_eq!(default_points_per_piece(1), 16);
+        assert_eq!(default_points_per_piece(100), 1);
+        assert_eq!(default_points_per_piece(0), 16);
+    }
+
+    #[test]
+    fn csv_lines_quote_what_needs_it_and_read_back() {
+        let fields = ["a,b", "say \"hi\"", "two\nlines", "plain"];
+        let line = csv_line(fields);
+        assert_eq!(line, "\"a,b\",\"say \"\"hi\"\"\",\"two\nlines\",plain\n");
+        let mut r = csv::ReaderBuilder::new()
+            .has_headers(false)
+            .from_reader(line.as_bytes());
+        let rec = r.records().next().unwrap().unwrap();
+        assert_eq!(rec.iter().collect::<Vec<_>>(), fields);
+    }
+
+    #[test]
+    fn only_run_outputs_count_as_stale() {
+        for n in [
+            "trajectory.csv",
+            "strains.svg",
+            "strains_12.svg",
+            "view.html",
+        ] {
+            assert!(is_run_output(n), "{n}");
+        }
+        for n in [
+            "notes.txt",
+            "strains_.svg",
+            "strains_a.svg",
+            "report.csv",
+            "mine.svg",
+        ] {
+            assert!(!is_run_output(n), "{n}");
+        }
+    }
+
+    #[test]
+    fn numbers_round_trip_and_have_no_negative_zero() {
+        for v in [0.1, 1e-7, 0.07200000000000001, 1e300, -2.5, 1.0 / 3.0] {
+            assert_eq!(num(v).parse::<f64>().unwrap(), v);
+        }
+        assert_eq!(num(-0.0), "0");
+        assert_eq!(num(1e-300), "1e-300");
+    }
+}
