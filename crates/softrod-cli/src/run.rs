@@ -9,7 +9,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use softrod::dynamics::{Model, actuation_matrix, energies};
 use softrod::integrate::Stats;
 use softrod::lie::Pose;
-use softrod::{Flow, Observer, Sample, output_times};
+use softrod::{EnergyBalance, Error, Flow, Observer, Sample, output_times};
 use softrod_scene::Scene;
 use softrod_viz::Pose as VizPose;
 use softrod_viz::run_dir::SHAPE_HEADER;
@@ -451,6 +451,22 @@ impl Summary {
         }
     }
 
+    /// Adds the run's energy balance (docs/scene-format-extensions.md,
+    /// `[run] energy_tolerance`) and what the run's watch warned about.
+    pub fn add_watch(&mut self, b: &EnergyBalance, warnings: &[String]) {
+        for (key, value) in [
+            ("energy_error", b.error),
+            ("energy_error_relative", b.relative),
+            ("energy_scale", b.scale),
+            ("energy_change", b.change),
+            ("energy_work", b.work),
+        ] {
+            self.fixed.insert(key.into(), serde_json::json!(value));
+        }
+        self.fixed
+            .insert("warnings".into(), serde_json::json!(warnings));
+    }
+
     /// Writes the summary with the given progress.
     pub fn write(
         &self,
@@ -539,7 +555,7 @@ pub fn run(
                 .unwrap_or_else(|| default_points_per_piece(r.spec.rod.n_pieces()))
         })
         .collect();
-    let summary_final = Summary::new(&dir, scene, l.sim.q_names(), times.len());
+    let mut summary_final = Summary::new(&dir, scene, l.sim.q_names(), times.len());
     let mut streamer = Streamer::new(
         &dir,
         l.sim.model(),
@@ -553,7 +569,11 @@ pub fn run(
     let start = Instant::now();
     // Rows are the integrator's dense output at the output times, streamed
     // to the observer as the run proceeds; nothing is kept in between.
-    let result = l.sim.simulate_with(duration, &mut streamer);
+    let result = match l.sim.simulate_with(duration, &mut streamer) {
+        // Refused before it started (too large for the machine): bad input.
+        Err(e) if e.is_input() => return Err(e.into()),
+        r => r,
+    };
     if let Some(b) = &streamer.bar {
         b.finish_and_clear();
     }
@@ -585,6 +605,19 @@ pub fn run(
             }
         }
     };
+    let watch = match &result {
+        Ok(sum) => sum.energy.as_ref().map(|b| (b, sum.warnings.as_slice())),
+        Err(Error::EnergyBalance { balance, .. }) => Some((&**balance, &[][..])),
+        Err(_) => None,
+    };
+    if let Some((b, warnings)) = watch {
+        summary_final.add_watch(b, warnings);
+        if !quiet {
+            for w in warnings {
+                eprintln!("softrod: warning: {w}");
+            }
+        }
+    }
     summary_final.write(&stats, wall, t_final, &status, streamer.rows_written())?;
     // Plots and view of whatever was computed (also after a failure: they
     // show where it went wrong).

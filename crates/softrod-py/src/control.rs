@@ -192,12 +192,7 @@ impl Recorder {
                 qd: Vec::new(),
                 tips: Vec::new(),
                 energies: Vec::new(),
-                summary: RunSummary {
-                    status: RunStatus::Completed,
-                    t_final: 0.0,
-                    stats: Default::default(),
-                    samples: 0,
-                },
+                summary: RunSummary::default(),
             },
             kin: model
                 .rods()

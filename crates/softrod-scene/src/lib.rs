@@ -68,8 +68,10 @@ mod validate;
 
 pub use build::Built;
 pub use error::{Cause, Location, SceneError, Warning};
+pub use locate::MAX_MAGNITUDE;
 pub use run::{Integrator, Mode, Run, UnknownIntegrator};
 pub use scene::{Initial, Reference, Scene, World};
+pub use validate::MAX_QUADRATURE;
 
 /// The README's examples, compiled and run as doctests.
 #[doc = include_str!("../README.md")]

@@ -13,6 +13,11 @@ use toml::de::{DeTable, DeValue};
 
 use crate::error::{Location, SceneError};
 
+/// Elements of one array whose spans are recorded: a long array (a 10⁷-value
+/// `initial.q`) would otherwise cost a path string and a map entry per value;
+/// errors past the cap point at the array itself.
+const MAX_ELEMENT_SPANS: usize = 1024;
+
 /// Key paths of a parsed document, with the byte span of each key and value.
 pub(crate) struct SpanMap {
     /// (span, path) for every key and every value, in document order.
@@ -21,7 +26,17 @@ pub(crate) struct SpanMap {
     by_path: HashMap<String, Range<usize>>,
     /// The first non-finite float: (path, literal, span).
     pub non_finite: Option<(String, String, Range<usize>)>,
+    /// The first number of absurd magnitude (|x| > [`MAX_MAGNITUDE`]):
+    /// (path, literal).
+    pub absurd: Option<(String, String)>,
 }
+
+/// The largest magnitude a scene number may have. No quantity of a soft
+/// manipulator comes near it (stiff moduli are ~1e12 Pa, lengths ≲ 1e3 m),
+/// and products of a few such numbers — inertia `ρ A L³`, energies
+/// `m g L` — stay far from f64 overflow (1.8e308), so a computation never
+/// meets ∞ for a number the scene accepted.
+pub const MAX_MAGNITUDE: f64 = 1e30;
 
 /// `parent.key`, quoting keys that are not bare TOML keys.
 pub(crate) fn join(parent: &str, key: &str) -> String {
@@ -43,15 +58,21 @@ pub(crate) fn join(parent: &str, key: &str) -> String {
 
 impl SpanMap {
     /// Parses `text` and records the spans; a syntax error is returned as is.
+    #[cfg(test)]
     pub fn build(text: &str) -> Result<SpanMap, toml::de::Error> {
-        let doc = DeTable::parse(text)?;
+        Ok(Self::of(&DeTable::parse(text)?))
+    }
+
+    /// Records the spans of a parsed document.
+    pub fn of(doc: &toml::Spanned<DeTable<'_>>) -> SpanMap {
         let mut map = SpanMap {
             entries: Vec::new(),
             by_path: HashMap::new(),
             non_finite: None,
+            absurd: None,
         };
         map.walk_table(doc.get_ref(), "");
-        Ok(map)
+        map
     }
 
     fn walk_table(&mut self, table: &DeTable<'_>, path: &str) {
@@ -69,17 +90,53 @@ impl SpanMap {
             DeValue::Table(t) => self.walk_table(t, &path),
             DeValue::Array(a) => {
                 for (i, v) in a.iter().enumerate() {
-                    self.walk_value(v.get_ref(), v.span(), format!("{path}[{i}]"));
+                    if i < MAX_ELEMENT_SPANS {
+                        self.walk_value(v.get_ref(), v.span(), format!("{path}[{i}]"));
+                    } else if self.non_finite.is_none() {
+                        // Past the cap only the NaN/∞ search goes on (an
+                        // error deeper in the array points at the array).
+                        self.find_non_finite(v.get_ref(), v.span(), || format!("{path}[{i}]"));
+                    }
                 }
             }
             DeValue::Float(f) if self.non_finite.is_none() => {
                 let literal = f.as_str();
                 let cleaned: String = literal.chars().filter(|&c| c != '_').collect();
-                if let Ok(x) = cleaned.parse::<f64>()
-                    && !x.is_finite()
-                {
-                    self.non_finite = Some((path, literal.to_owned(), span));
+                if let Ok(x) = cleaned.parse::<f64>() {
+                    if !x.is_finite() {
+                        self.non_finite = Some((path, literal.to_owned(), span));
+                    } else if x.abs() > MAX_MAGNITUDE && self.absurd.is_none() {
+                        self.absurd = Some((path, literal.to_owned()));
+                    }
                 }
+            }
+            _ => {}
+        }
+    }
+
+    /// Records the first non-finite float at or inside `value` without
+    /// recording spans.
+    fn find_non_finite(
+        &mut self,
+        value: &DeValue<'_>,
+        span: Range<usize>,
+        path: impl Fn() -> String,
+    ) {
+        match value {
+            DeValue::Float(f) => {
+                let cleaned: String = f.as_str().chars().filter(|&c| c != '_').collect();
+                if let Ok(x) = cleaned.parse::<f64>() {
+                    if !x.is_finite() {
+                        self.non_finite = Some((path(), f.as_str().to_owned(), span));
+                    } else if x.abs() > MAX_MAGNITUDE && self.absurd.is_none() {
+                        self.absurd = Some((path(), f.as_str().to_owned()));
+                    }
+                }
+            }
+            DeValue::Array(_) | DeValue::Table(_) => {
+                // Nested containers past the cap are rare (no scene key
+                // holds them); walk them fully.
+                self.walk_value(value, span, path());
             }
             _ => {}
         }

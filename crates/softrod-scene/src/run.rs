@@ -153,6 +153,10 @@ pub struct Run {
     /// gravity, Coriolis, loads and cables explicit (default `false`: Newton
     /// to convergence).
     pub linearly_implicit: bool,
+    /// Bound on the run's energy-balance error relative to its energy scale
+    /// (an extension of the format; default [`Run::DEFAULT_ENERGY_TOLERANCE`]):
+    /// beyond it the run fails, beyond a tenth of it the summary warns.
+    pub energy_tolerance: f64,
     /// Samples per piece in `shape.csv` and the 3-D view (an extension of the
     /// format): points at the fractions `0, 1/m, …, (m−1)/m` of each piece,
     /// exact on its arc, then the tip; 1 gives the N+1 piece boundaries.
@@ -181,6 +185,11 @@ impl Run {
     /// ([`softrod_dynamics::Model::DEFAULT_QUADRATURE`], 4: polynomials of
     /// degree 7 exactly, ample for the smooth integrands of a piece).
     pub const DEFAULT_QUADRATURE: usize = softrod_dynamics::Model::DEFAULT_QUADRATURE;
+    /// Default `energy_tolerance`: 10 % of the energy in play. A run within
+    /// its integrator's tolerance keeps the balance to about `rtol`
+    /// (1e-3 by default); an unstable or badly under-resolved one breaks it
+    /// by tens of percent or by orders of magnitude (docs/scene-format-extensions.md).
+    pub const DEFAULT_ENERGY_TOLERANCE: f64 = 0.1;
 }
 
 impl Default for Run {
@@ -196,6 +205,7 @@ impl Default for Run {
             quadrature: Run::DEFAULT_QUADRATURE,
             error_control: false,
             linearly_implicit: false,
+            energy_tolerance: Run::DEFAULT_ENERGY_TOLERANCE,
             shape_points_per_piece: None,
         }
     }

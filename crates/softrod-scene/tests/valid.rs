@@ -81,6 +81,7 @@ fn contract_example_has_the_written_values() {
             quadrature: 4,
             error_control: false,
             linearly_implicit: false,
+            energy_tolerance: Run::DEFAULT_ENERGY_TOLERANCE,
             shape_points_per_piece: None,
         }
     );

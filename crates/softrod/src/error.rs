@@ -7,6 +7,8 @@ use softrod_kinematics::KinematicsError;
 use softrod_mechanics::MechanicsError;
 use softrod_scene::SceneError;
 
+use crate::limits::human_bytes;
+
 /// Why a call failed. Bad input ([`Error::is_input`]) is distinguished from
 /// a simulation that failed on valid input.
 #[non_exhaustive]
@@ -35,6 +37,60 @@ pub enum Error {
         key: &'static str,
         /// What is wrong.
         message: String,
+    },
+    /// The task would need more memory than the machine has: refused before
+    /// allocating (see [`Limits`](crate::Limits)).
+    #[error(
+        "{key}: {what} need about {} but {} of memory is available",
+        human_bytes(*estimate),
+        human_bytes(*limit)
+    )]
+    TooLarge {
+        /// The scene key that sets the size (`rod[0].pieces`, `run.output_every`).
+        key: String,
+        /// What needs the memory.
+        what: String,
+        /// The estimate \[bytes\].
+        estimate: u64,
+        /// The limit \[bytes\].
+        limit: u64,
+    },
+    /// The run broke the energy balance `dE/dt = P_nc` by more than
+    /// `energy_tolerance` of its energy scale (see
+    /// [`EnergyBalance`](crate::EnergyBalance)): the integrator is unstable
+    /// or far from resolving the motion; a smaller step or tolerance, or a
+    /// stiff method, is needed.
+    #[error(
+        "energy balance violated at t = {t:e} s: error {:.3e} J is {relative:.3e} of the energy \
+         scale {:.3e} J, beyond energy_tolerance = {tolerance} (energy change {:.3e} J, work of \
+         the non-conservative forces {:.3e} J); reduce dt or the tolerances, or use a stiff integrator",
+        balance.error, balance.scale, balance.change, balance.work
+    )]
+    EnergyBalance {
+        /// Time of the violation \[s\].
+        t: f64,
+        /// The relative error there.
+        relative: f64,
+        /// The bound.
+        tolerance: f64,
+        /// The balance up to `t`.
+        balance: Box<crate::EnergyBalance>,
+    },
+    /// A piece's stretch `ξ_x` reached zero or below: the rod folded onto
+    /// itself, which no rod model describes.
+    #[error(
+        "stretch not positive at t = {t:e} s: rod {rod:?} piece {piece} has stretch {stretch:e} \
+         (the rod folded onto itself; the run is unstable or the loads exceed what the rod can carry)"
+    )]
+    Stretch {
+        /// Time \[s\].
+        t: f64,
+        /// The rod's name.
+        rod: String,
+        /// The piece.
+        piece: usize,
+        /// Its stretch.
+        stretch: f64,
     },
     /// An argument has the wrong length.
     #[error("{what} has {got} entries, expected {expected}")]
@@ -78,6 +134,7 @@ impl Error {
         match self {
             Error::Scene(_)
             | Error::InvalidSetting { .. }
+            | Error::TooLarge { .. }
             | Error::SizeMismatch { .. }
             | Error::UnknownRod(_)
             | Error::Mechanics(_)
@@ -94,7 +151,10 @@ impl Error {
                             | DynamicsError::InvalidShift { .. }
                     )
             }
-            Error::Integration(_) | Error::Output { .. } => false,
+            Error::Integration(_)
+            | Error::Output { .. }
+            | Error::EnergyBalance { .. }
+            | Error::Stretch { .. } => false,
         }
     }
 }

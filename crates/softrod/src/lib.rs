@@ -49,6 +49,16 @@
 //! [`Simulation::from_toml`], with the scene's `[initial]` state and `[run]`
 //! settings.
 //!
+//! Every run of [`Simulation::simulate_with`] watches what physics
+//! guarantees: the energy balance `dE/dt = P_nc` (cables, loads, drag and
+//! viscosity included; [`EnergyBalance`], reported in
+//! [`RunSummary::energy`]), failing with [`Error::EnergyBalance`] beyond
+//! [`Settings::energy_tolerance`] (default 0.1 of the energy in play) and
+//! warning beyond a tenth of it; a positive stretch ([`Error::Stretch`]);
+//! strains inside the model's validity (warnings). Before anything big is
+//! allocated, tasks are checked against the machine's memory ([`Limits`],
+//! [`Error::TooLarge`]).
+//!
 //! Units are SI; twists and wrenches are 6-vectors, angular part first;
 //! velocities and forces are in the body frame of the section, poses in the
 //! world frame. The equations are in `docs/theory.md` of the repository,
@@ -57,15 +67,23 @@
 #![forbid(unsafe_code)]
 
 mod error;
+mod limits;
 mod settings;
 mod simulation;
+mod watch;
 
 pub use error::{Error, Result};
+pub use limits::{
+    DEFAULT_MEMORY, Limits, MODES_DENSE_MATRICES, STATICS_DENSE_MATRICES, dense_bytes,
+    dense_matrices_of, output_sample_count,
+};
 pub use settings::{GENERALIZED_ALPHA_RHO_INF, Settings, output_times};
 pub use simulation::{
     Equilibrium, Flow, ModalAnalysis, Observer, RunStatus, RunSummary, Sample, Simulation,
     Trajectory,
 };
+
+pub use watch::EnergyBalance;
 
 pub use softrod_dynamics as dynamics;
 pub use softrod_integrate as integrate;

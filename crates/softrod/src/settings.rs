@@ -38,6 +38,13 @@ pub struct Settings {
     /// The run length a scene asks for (`[run] duration`) \[s\]: what a
     /// front end simulates when the user names no duration.
     pub duration: f64,
+    /// Bound on the energy-balance error of a run relative to its energy
+    /// scale (see [`EnergyBalance`](crate::EnergyBalance)): beyond it
+    /// [`Simulation::simulate_with`](crate::Simulation::simulate_with) fails
+    /// with [`Error::EnergyBalance`]; beyond a tenth of it the summary warns.
+    /// Default [`Run::DEFAULT_ENERGY_TOLERANCE`] (0.1); `f64::INFINITY`
+    /// turns the check off.
+    pub energy_tolerance: f64,
 }
 
 impl Default for Settings {
@@ -59,6 +66,7 @@ impl Settings {
             error_control: run.error_control,
             linearly_implicit: run.linearly_implicit,
             duration: run.duration,
+            energy_tolerance: run.energy_tolerance,
         }
     }
 
@@ -113,6 +121,12 @@ impl Settings {
                     message: format!("must be positive and finite, got {v}"),
                 });
             }
+        }
+        if self.energy_tolerance.is_nan() || self.energy_tolerance <= 0.0 {
+            return Err(Error::InvalidSetting {
+                key: "energy_tolerance",
+                message: format!("must be positive, got {}", self.energy_tolerance),
+            });
         }
         if let Some(e) = self.output_every {
             if !(e.is_finite() && e > 0.0) {

@@ -17,7 +17,12 @@ use softrod_lie::Pose;
 use softrod_scene::{Scene, Warning};
 
 use crate::error::{Error, Result};
+use crate::limits::{
+    Limits, MODES_DENSE_MATRICES, STATICS_DENSE_MATRICES, check_memory, dense_bytes,
+    dense_matrices_of, output_sample_count,
+};
 use crate::settings::{Settings, output_times};
+use crate::watch::{EnergyBalance, Watch};
 
 /// A model with its initial state and run settings: the front door of
 /// softrod. Every evaluation reuses buffers held inside, so a `Simulation`
@@ -32,6 +37,7 @@ pub struct Simulation {
     settings: Settings,
     q0: DVector<f64>,
     qd0: DVector<f64>,
+    limits: Limits,
 }
 
 /// Which equilibrium [`Simulation::modes`] linearized about.
@@ -106,7 +112,7 @@ pub enum RunStatus {
 }
 
 /// Summary of a run.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct RunSummary {
     /// How it ended.
     pub status: RunStatus,
@@ -116,6 +122,26 @@ pub struct RunSummary {
     pub stats: Stats,
     /// Samples delivered to the observer.
     pub samples: usize,
+    /// The energy balance measured along the run ([`EnergyBalance`];
+    /// `None` for [`Simulation::step`], which does not watch).
+    pub energy: Option<EnergyBalance>,
+    /// What the watch found suspicious but not wrong: an energy drift
+    /// beyond a tenth of `energy_tolerance`, strains or curvatures beyond
+    /// the model's validity.
+    pub warnings: Vec<String>,
+}
+
+impl Default for RunSummary {
+    fn default() -> Self {
+        Self {
+            status: RunStatus::Completed,
+            t_final: 0.0,
+            stats: Stats::default(),
+            samples: 0,
+            energy: None,
+            warnings: Vec::new(),
+        }
+    }
 }
 
 /// A run kept in memory: samples at the output times.
@@ -188,6 +214,7 @@ impl Simulation {
             settings: Settings::default(),
             q0: DVector::zeros(n),
             qd0: DVector::zeros(n),
+            limits: Limits::of_machine(),
         }
     }
 
@@ -262,6 +289,62 @@ impl Simulation {
         settings.validate()?;
         self.settings = settings;
         Ok(())
+    }
+
+    /// The memory limit the tasks are checked against before they allocate
+    /// (default: [`Limits::of_machine`]).
+    pub fn limits(&self) -> &Limits {
+        &self.limits
+    }
+
+    /// Replaces the memory limit.
+    pub fn set_limits(&mut self, limits: Limits) {
+        self.limits = limits;
+    }
+
+    /// Refuses `task` if its `count` dense `n_dof × n_dof` matrices exceed
+    /// the memory limit, naming the `pieces` of the rod with the most DoFs.
+    fn check_dense(&self, task: &str, count: u64) -> Result<()> {
+        let n = self.n_dof();
+        let estimate = dense_bytes(count, n);
+        if estimate <= self.limits.memory {
+            return Ok(());
+        }
+        let (i, r) = self
+            .model()
+            .rods()
+            .iter()
+            .enumerate()
+            .max_by_key(|(_, r)| r.n_dof())
+            .expect("a model with DoFs has rods");
+        check_memory(
+            format!("rod[{i}].pieces"),
+            format!(
+                "{task}: {count} dense {n}×{n} matrices (n_dof = {n}; rod {:?} has {} pieces, {} DoF)",
+                r.spec.name,
+                r.spec.rod.n_pieces(),
+                r.n_dof()
+            ),
+            estimate,
+            &self.limits,
+        )
+    }
+
+    /// Refuses a run whose output samples (`bytes_per_sample` each) exceed
+    /// the memory limit, naming `run.output_every`.
+    fn check_samples(&self, duration: f64, bytes_per_sample: u64) -> Result<()> {
+        let every = self.settings.output_spacing(duration);
+        let estimate = output_sample_count(duration, every)
+            .map_or(u64::MAX, |n| n.saturating_mul(bytes_per_sample));
+        check_memory(
+            "run.output_every".into(),
+            format!(
+                "{duration} s sampled every {every} s: {:.3e} samples of {bytes_per_sample} bytes",
+                duration / every
+            ),
+            estimate,
+            &self.limits,
+        )
     }
 
     /// Initial coordinates and velocities.
@@ -446,6 +529,7 @@ impl Simulation {
     /// Static equilibrium under every static term at `t = 0`, from the
     /// initial `q` (Newton with line search and load continuation).
     pub fn statics(&mut self) -> Result<StaticsResult> {
+        self.check_dense("statics", STATICS_DENSE_MATRICES)?;
         let s = &mut self.system;
         Ok(statics(
             &s.model,
@@ -458,6 +542,7 @@ impl Simulation {
     /// Undamped natural modes about the static equilibrium (the rest shape
     /// when the model has no static loads).
     pub fn modes(&mut self) -> Result<ModalAnalysis> {
+        self.check_dense("modes", STATICS_DENSE_MATRICES + MODES_DENSE_MATRICES)?;
         let equilibrium = if self.has_static_loads() {
             Equilibrium::Statics(self.statics()?.q)
         } else {
@@ -474,6 +559,8 @@ impl Simulation {
     /// Undamped natural modes of the model linearized about `q` (which
     /// should be an equilibrium; an unstable one shows negative `ω`).
     pub fn modes_about(&mut self, q: &[f64]) -> Result<Modes> {
+        self.check("q", q)?;
+        self.check_dense("modes", MODES_DENSE_MATRICES)?;
         let s = &mut self.system;
         Ok(modes(&s.model, &mut s.data, q, 0.0)?)
     }
@@ -481,6 +568,15 @@ impl Simulation {
     /// Integrates `duration` seconds from the initial state with the run
     /// settings and keeps the samples (every `output_every`).
     pub fn simulate(&mut self, duration: f64) -> Result<Trajectory> {
+        let rods = self.model().rods().len();
+        let per_sample = 8
+            + 2 * (std::mem::size_of::<DVector<f64>>() + 8 * self.n_dof())
+            + std::mem::size_of::<Vec<Pose>>()
+            + rods * std::mem::size_of::<Pose>()
+            + std::mem::size_of::<Energies>();
+        if duration.is_finite() && duration > 0.0 {
+            self.check_samples(duration, per_sample as u64)?;
+        }
         let mut keep = Keep {
             traj: Trajectory {
                 t: Vec::new(),
@@ -488,12 +584,7 @@ impl Simulation {
                 qd: Vec::new(),
                 tips: Vec::new(),
                 energies: Vec::new(),
-                summary: RunSummary {
-                    status: RunStatus::Completed,
-                    t_final: 0.0,
-                    stats: Stats::default(),
-                    samples: 0,
-                },
+                summary: RunSummary::default(),
             },
             kin: self
                 .model()
@@ -521,9 +612,12 @@ impl Simulation {
                 message: format!("must be positive and finite, got {duration}"),
             });
         }
+        self.settings.validate()?;
+        // The output times are kept (8 bytes each).
+        self.check_samples(duration, 8)?;
         let times = output_times(duration, self.settings.output_spacing(duration));
         let (q0, qd0) = (self.q0.clone(), self.qd0.clone());
-        self.integrate_span(0.0, duration, times, &q0, &qd0, observer)
+        self.integrate_span(0.0, duration, times, &q0, &qd0, observer, true)
     }
 
     /// One step of `dt` seconds from `(t, q, q̇)` with the run settings'
@@ -562,14 +656,16 @@ impl Simulation {
             DVector::from_column_slice(q),
             DVector::from_column_slice(qd),
         );
-        self.integrate_span(t, t + dt, vec![t, t + dt], &q0, &qd0, &mut last)?;
+        self.integrate_span(t, t + dt, vec![t, t + dt], &q0, &qd0, &mut last, false)?;
         last.0.ok_or(Error::Output {
             t: t + dt,
             message: "the step produced no state".into(),
         })
     }
 
-    /// The integration from `t0` to `t1` with samples at `times`.
+    /// The integration from `t0` to `t1` with samples at `times`; `watch`:
+    /// check the energy balance and the strains at every accepted step.
+    #[allow(clippy::too_many_arguments)]
     fn integrate_span(
         &mut self,
         t0: f64,
@@ -578,8 +674,13 @@ impl Simulation {
         q0: &DVector<f64>,
         qd0: &DVector<f64>,
         observer: &mut dyn Observer,
+        watch: bool,
     ) -> Result<RunSummary> {
         let (method, mut opts) = self.settings.method_and_options(t1 - t0)?;
+        self.check_dense(
+            &format!("the {} integrator", self.settings.integrator.name()),
+            dense_matrices_of(method),
+        )?;
         opts.t_eval = Some(times);
         self.system.jacobian = self.settings.stiff_jacobian();
         let n = self.n_dof();
@@ -588,6 +689,15 @@ impl Simulation {
             .clone()
             .unwrap_or_else(|| vec![0.0; self.n_cables()]);
         let failure: RefCell<Option<(f64, String)>> = RefCell::new(None);
+        let violation: RefCell<Option<Error>> = RefCell::new(None);
+        let watch = if watch && self.settings.energy_tolerance.is_finite() {
+            let s = &self.system;
+            let mut w = Watch::new(&s.model, &s.data, self.settings.energy_tolerance)?;
+            w.start(&s.model, &s.data, t0, q0.as_slice(), qd0.as_slice())?;
+            Some(RefCell::new(w))
+        } else {
+            None
+        };
         let samples = RefCell::new(0usize);
         let observer = RefCell::new(observer);
         let hooks = Hooks::new()
@@ -618,10 +728,25 @@ impl Simulation {
                 let mut obs = observer.borrow_mut();
                 obs.step(info.t, info.stats);
                 let (q, qd) = info.y.as_slice().split_at(n);
+                if let Some(w) = &watch {
+                    if let Err(e) = w.borrow_mut().step(&sys.model, &sys.data, info.t, q, qd) {
+                        *violation.borrow_mut() = Some(e);
+                        return Control::Stop;
+                    }
+                }
                 if !u.is_empty() && obs.inputs(info.t, q, qd, &mut u) {
                     if let Err(e) = sys.data.set_cable_tensions(&sys.model, Some(&u)) {
                         *failure.borrow_mut() = Some((info.t, format!("controller: {e}")));
                         return Control::Stop;
+                    }
+                    if let Some(w) = &watch {
+                        let r = w
+                            .borrow_mut()
+                            .inputs_changed(&sys.model, &sys.data, info.t, q, qd);
+                        if let Err(e) = r {
+                            *violation.borrow_mut() = Some(e);
+                            return Control::Stop;
+                        }
                     }
                     return Control::SystemChanged;
                 }
@@ -636,17 +761,29 @@ impl Simulation {
         if let Some((t, message)) = failure.into_inner() {
             return Err(Error::Output { t, message });
         }
+        if let Some(e) = violation.into_inner() {
+            return Err(e);
+        }
         let sol = result?;
         let status = if sol.status == softrod_integrate::Status::Completed {
             RunStatus::Completed
         } else {
             RunStatus::Stopped
         };
+        let (energy, warnings): (Option<EnergyBalance>, Vec<String>) = match watch {
+            Some(w) => {
+                let (b, warn) = w.into_inner().finish();
+                (Some(b), warn)
+            }
+            None => (None, Vec::new()),
+        };
         Ok(RunSummary {
             status,
             t_final: sol.t_final,
             stats: sol.stats,
             samples: samples.into_inner(),
+            energy,
+            warnings,
         })
     }
 }

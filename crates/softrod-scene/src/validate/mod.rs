@@ -13,8 +13,12 @@ mod reference;
 mod rods;
 mod run;
 
+pub use run::MAX_QUADRATURE;
+
 use crate::error::{Location, SceneError, Warning};
-use crate::locate::{SpanMap, map_toml_error};
+use crate::locate::{MAX_MAGNITUDE, SpanMap, map_toml_error};
+use serde::Deserialize;
+
 use crate::raw::RawScene;
 use crate::reporter::Reporter;
 use crate::scene::{Origins, Scene};
@@ -23,9 +27,12 @@ type Result<T> = std::result::Result<T, SceneError>;
 
 /// Parses and validates a scene; `file` names it in messages.
 pub(crate) fn parse(text: &str, file: &str) -> Result<(Scene, Vec<Warning>)> {
-    let spans = SpanMap::build(text).map_err(|e| map_toml_error(&e, text, file, None))?;
-    let raw: RawScene =
-        toml::from_str(text).map_err(|e| map_toml_error(&e, text, file, Some(&spans)))?;
+    // Parsed once: the spanned document gives the key paths, then it is
+    // deserialized (a 10⁷-value array is not parsed twice).
+    let doc = toml::de::DeTable::parse(text).map_err(|e| map_toml_error(&e, text, file, None))?;
+    let spans = SpanMap::of(&doc);
+    let raw = RawScene::deserialize(toml::de::Deserializer::from(doc))
+        .map_err(|e| map_toml_error(&e, text, file, Some(&spans)))?;
     if let Some((path, literal, span)) = &spans.non_finite {
         return Err(SceneError::NotFinite {
             file: file.to_owned(),
@@ -39,6 +46,13 @@ pub(crate) fn parse(text: &str, file: &str) -> Result<(Scene, Vec<Warning>)> {
         r: Reporter::new(file, text, &spans),
         warnings: Vec::new(),
     };
+    if let Some((path, literal)) = &spans.absurd {
+        return Err(cx.r.out_of_range(
+            path,
+            literal,
+            format!("a magnitude of at most {MAX_MAGNITUDE:e} (no physical scene comes near it)"),
+        ));
+    }
     let scene = cx.scene(raw)?;
     Ok((scene, cx.warnings))
 }

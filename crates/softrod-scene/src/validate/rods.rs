@@ -11,6 +11,9 @@ use super::{Ctx, Result};
 use crate::keys::{self, RodContext, RodKeys};
 use crate::raw::{RawBase, RawRod};
 
+/// The rest stretches `q̄_x` accepted without a warning.
+const REST_STRETCH_WARN: (f64, f64) = (0.5, 1.5);
+
 /// How the file cut the rod into pieces.
 enum Pieces {
     Equal(usize),
@@ -54,6 +57,7 @@ impl Ctx<'_> {
         let pieces = self.pieces(&p, r.pieces, r.piece_lengths)?;
         let strains = self.strains(&format!("{p}.strains"), r.strains.as_ref())?;
         let rest_strain = r.rest_strain.unwrap_or([0.0, 0.0, 0.0, 1.0, 0.0, 0.0]);
+        self.check_rest_stretch(&p, rest_strain[3])?;
         let mut b = RodSpec::builder(r.length)
             .name(r.name)
             .section(section)
@@ -184,6 +188,33 @@ impl Ctx<'_> {
             );
         }
         Ok(Some(listed))
+    }
+
+    /// The rest stretch `q̄_x` (rest arc length per unit of material length
+    /// `s`): `≤ 0` folds the rest shape onto itself (the sections' tangents
+    /// point backwards or the rod has no length) and is an error; outside
+    /// `[0.5, 1.5]` the rest arc length differs from `length` by more than
+    /// half, which is rarely meant, and is a warning.
+    fn check_rest_stretch(&mut self, p: &str, stretch: f64) -> Result<()> {
+        let path = format!("{p}.rest_strain[3]");
+        if stretch <= 0.0 {
+            return Err(self.r.out_of_range(
+                &path,
+                stretch,
+                "> 0 (the rest stretch q̄x; 1 for an unstretched rod)",
+            ));
+        }
+        if !(REST_STRETCH_WARN.0..=REST_STRETCH_WARN.1).contains(&stretch) {
+            self.warn(
+                &path,
+                format!(
+                    "rest stretch {stretch} is outside [{}, {}]: the rod's rest arc length is \
+                     {stretch} × length",
+                    REST_STRETCH_WARN.0, REST_STRETCH_WARN.1
+                ),
+            );
+        }
+        Ok(())
     }
 
     /// Slenderness: a piece shorter than the section is outside what a rod

@@ -1,0 +1,359 @@
+//! What physics guarantees, watched along a run: the energy balance, a
+//! positive stretch, and strains inside the model's range of validity.
+//!
+//! **Energy balance.** With `E = T + V_e + V_g` (kinetic, elastic,
+//! gravitational; [`Energies`]) and `M q̈ + b(t, q, q̇) = 0`,
+//! `b = C q̇ + G + τ_e + D q̇ − τ_c − Q_ext` (D21–D22), the skew symmetry of
+//! `Ṁ − 2C` gives
+//!
+//! `dE/dt = P_nc = q̇ᵀ(τ_c + Q_ext − D q̇)`,
+//!
+//! the power of the cables (tensions × the rates of their lengths), of the
+//! point, distributed and follower loads, of drag, and of the viscous
+//! forces. It is computed as `P_nc = q̇ᵀ(b_c − b)` where `b_c` is the bias of
+//! the *conservative* model — the same rods, inertia, stiffness and gravity,
+//! with no viscosity, drag, cables or loads — so every non-conservative term
+//! of the model is covered, whatever it is, and nothing is assumed about
+//! its form. `W(t) = ∫ P_nc dt` is integrated by the trapezoidal rule over
+//! the accepted steps (second order in the step; `P_nc ≡ 0` and `W = 0`
+//! exactly for a model without such terms). The balance error is
+//! `|E(t) − E(0) − W(t)|`.
+//!
+//! **Energy scale.** The error is compared with the energy in play:
+//! `scale(t) = max_{τ ≤ t} [T(τ) + V_e(τ) + |V_g(τ) − V_g(0)|] + ∫₀ᵗ |P_nc| dτ`
+//! (the gravitational energy counts by its change: its zero is arbitrary).
+//! A run fails when `error(t) − U(t) > energy_tolerance · scale(t)` at an
+//! accepted step, `U = Σ ½h|ΔP_nc|` the trapezoidal work's uncertainty
+//! (zero for a model without non-conservative terms; a drift below it goes
+//! unseen); it warns when the largest error exceeds a tenth of the bound
+//! relative to the final scale (early in a run the scale is tiny and the
+//! ratio to it says little: measured up to 2e-2 in the first microseconds
+//! of correct runs).
+//! Errors below the round-off of the energies, `10³ ε (T + V_e + |V_g| +
+//! ∫|P_nc|)`, count as zero.
+
+use nalgebra::DVector;
+use softrod_dynamics::{Data, DynamicsError, Energies, Model, RodSpec, bias_force, energies};
+use softrod_mechanics::{Material, RodBody};
+
+use crate::error::Error;
+
+/// The energy balance of a run (see the module documentation for the
+/// definitions). Energies in joules, times in seconds.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct EnergyBalance {
+    /// `E(0) = T + V_e + V_g` at the start \[J\].
+    pub initial: f64,
+    /// The measured change `E(t_end) − E(0)` \[J\].
+    pub change: f64,
+    /// The work of the non-conservative forces `W(t_end) = ∫ P_nc dt` \[J\].
+    pub work: f64,
+    /// The largest balance error `|E(t) − E(0) − W(t)|` over the accepted
+    /// steps \[J\].
+    pub error: f64,
+    /// `error / scale`: the largest error relative to the energy scale at
+    /// the end (what the summary reports and warns on).
+    pub relative: f64,
+    /// The energy scale at the end \[J\].
+    pub scale: f64,
+    /// Time of the largest error \[s\].
+    pub t_worst: f64,
+    /// Whether the model has non-conservative terms (else `W ≡ 0`).
+    pub non_conservative: bool,
+    /// The uncertainty of the trapezoidal work, `U = Σ ½h|P_k − P_{k−1}|`
+    /// over the accepted steps (the distance to the one-sided rules; zero
+    /// without non-conservative terms) \[J\].
+    pub quadrature: f64,
+}
+
+/// Stretch `ξ_x` beyond which (or `1/` below which) a run warns: extension
+/// or compression by half is far outside a linear-elastic rod.
+const STRETCH_WARN: f64 = 0.5;
+/// Shear `|(ξ_y, ξ_z)|` beyond which a run warns.
+const SHEAR_WARN: f64 = 0.5;
+
+pub(crate) struct Watch {
+    tolerance: f64,
+    /// The full model's buffers (inputs synchronized before each use).
+    full: Data,
+    /// The conservative model and its buffers (`None`: no non-conservative term).
+    conservative: Option<(Model, Data)>,
+    e0: f64,
+    vg0: f64,
+    t_prev: f64,
+    p_prev: f64,
+    work: f64,
+    abs_work: f64,
+    quadrature: f64,
+    peak: f64,
+    balance: EnergyBalance,
+    warnings: Vec<String>,
+    warned_strain: bool,
+    warned_curvature: bool,
+}
+
+fn dot(a: &[f64], b: &DVector<f64>) -> f64 {
+    a.iter().zip(b.iter()).map(|(x, y)| x * y).sum()
+}
+
+/// The model without viscosity, drag, cables and loads, if it has any.
+fn conservative_model(model: &Model) -> Result<Option<Model>, Error> {
+    let has = model.rods().iter().any(|r| {
+        let s = &r.spec;
+        !s.cables.is_empty()
+            || !s.point_loads.is_empty()
+            || !s.distributed_loads.is_empty()
+            || s.drag
+                .is_some_and(|d| d.translational != 0.0 || d.rotational != 0.0)
+            || s.body.material().viscosity() != 0.0
+    });
+    if !has {
+        return Ok(None);
+    }
+    let specs: Vec<RodSpec> = model
+        .rods()
+        .iter()
+        .map(|r| {
+            let mut s = r.spec.clone();
+            s.cables.clear();
+            s.point_loads.clear();
+            s.distributed_loads.clear();
+            s.drag = None;
+            let m = s.body.material();
+            let elastic = Material::builder()
+                .density(m.density())
+                .young(m.young())
+                .shear_modulus(m.shear_modulus())
+                .viscosity(0.0)
+                .build()?;
+            s.body = RodBody::new(*s.body.section(), elastic, s.body.length())?;
+            Ok(s)
+        })
+        .collect::<Result<_, Error>>()?;
+    Ok(Some(Model::new(
+        specs,
+        model.gravity,
+        model.quadrature.len(),
+    )?))
+}
+
+impl Watch {
+    /// A watch of runs of `model` (whose inputs are in `data`) with
+    /// `tolerance` on the relative balance error.
+    pub(crate) fn new(model: &Model, data: &Data, tolerance: f64) -> Result<Self, Error> {
+        let conservative = conservative_model(model)?.map(|m| {
+            let d = Data::new(&m);
+            (m, d)
+        });
+        Ok(Self {
+            tolerance,
+            full: data.clone(),
+            conservative,
+            e0: 0.0,
+            vg0: 0.0,
+            t_prev: 0.0,
+            p_prev: 0.0,
+            work: 0.0,
+            abs_work: 0.0,
+            quadrature: 0.0,
+            peak: 0.0,
+            balance: EnergyBalance::default(),
+            warnings: Vec::new(),
+            warned_strain: false,
+            warned_curvature: false,
+        })
+    }
+
+    fn sync_inputs(&mut self, model: &Model, data: &Data) -> Result<(), DynamicsError> {
+        if self.full.cable_tensions() != data.cable_tensions() {
+            self.full.set_cable_tensions(model, data.cable_tensions())?;
+        }
+        Ok(())
+    }
+
+    /// `P_nc = q̇ᵀ(b_c − b)` at `(t, q, q̇)` \[W\].
+    fn power(&mut self, model: &Model, t: f64, q: &[f64], qd: &[f64]) -> Result<f64, Error> {
+        let Some((cm, cd)) = &mut self.conservative else {
+            return Ok(0.0);
+        };
+        let full = dot(qd, bias_force(model, &mut self.full, t, q, qd)?);
+        let cons = dot(qd, bias_force(cm, cd, t, q, qd)?);
+        Ok(cons - full)
+    }
+
+    fn energies(&mut self, model: &Model, q: &[f64], qd: &[f64]) -> Result<Energies, Error> {
+        Ok(energies(model, &mut self.full, q, qd)?)
+    }
+
+    /// The initial state.
+    pub(crate) fn start(
+        &mut self,
+        model: &Model,
+        data: &Data,
+        t: f64,
+        q: &[f64],
+        qd: &[f64],
+    ) -> Result<(), Error> {
+        self.sync_inputs(model, data)?;
+        let e = self.energies(model, q, qd)?;
+        self.e0 = e.total();
+        self.vg0 = e.gravitational;
+        self.peak = e.kinetic + e.elastic;
+        self.t_prev = t;
+        self.p_prev = self.power(model, t, q, qd)?;
+        self.balance = EnergyBalance {
+            initial: self.e0,
+            scale: self.peak,
+            t_worst: t,
+            non_conservative: self.conservative.is_some(),
+            ..EnergyBalance::default()
+        };
+        self.check_strains(model, t, q)
+    }
+
+    /// The inputs changed at `t` (zero-order hold): the power from `t` on
+    /// is the new one.
+    pub(crate) fn inputs_changed(
+        &mut self,
+        model: &Model,
+        data: &Data,
+        t: f64,
+        q: &[f64],
+        qd: &[f64],
+    ) -> Result<(), Error> {
+        self.sync_inputs(model, data)?;
+        self.p_prev = self.power(model, t, q, qd)?;
+        Ok(())
+    }
+
+    /// An accepted step ending at `(t, q, q̇)`: the balance and the strains
+    /// there; an error when the balance is violated or a stretch is not
+    /// positive.
+    pub(crate) fn step(
+        &mut self,
+        model: &Model,
+        data: &Data,
+        t: f64,
+        q: &[f64],
+        qd: &[f64],
+    ) -> Result<(), Error> {
+        // The balance first: after an unstable step it names the cause
+        // better than the folded piece that follows from it.
+        self.sync_inputs(model, data)?;
+        let p = self.power(model, t, q, qd)?;
+        let h = t - self.t_prev;
+        self.work += 0.5 * h * (self.p_prev + p);
+        self.abs_work += 0.5 * h * (self.p_prev.abs() + p.abs());
+        self.quadrature += 0.5 * h * (p - self.p_prev).abs();
+        self.t_prev = t;
+        self.p_prev = p;
+        let e = self.energies(model, q, qd)?;
+        self.peak = self
+            .peak
+            .max(e.kinetic + e.elastic + (e.gravitational - self.vg0).abs());
+        let scale = self.peak + self.abs_work;
+        let change = e.total() - self.e0;
+        let error = (change - self.work).abs();
+        let roundoff = 1e3
+            * f64::EPSILON
+            * (e.kinetic + e.elastic + e.gravitational.abs() + self.e0.abs() + self.abs_work);
+        // The failure test compares with the scale so far: a run that blows
+        // up is stopped where it does.
+        let error = if error <= roundoff { 0.0 } else { error };
+        // What the trapezoidal work cannot resolve is not held against the
+        // run (a tension ramp from zero: P ∝ t³ is overestimated 2× on the
+        // first step, when the scale is 1e-15 J).
+        let beyond = (error - self.quadrature).max(0.0);
+        let relative = if !error.is_finite() || !scale.is_finite() {
+            f64::INFINITY
+        } else if beyond == 0.0 {
+            0.0
+        } else {
+            beyond / scale
+        };
+        let b = &mut self.balance;
+        b.change = change;
+        b.work = self.work;
+        b.scale = scale;
+        b.quadrature = self.quadrature;
+        if error > b.error || !error.is_finite() {
+            b.error = error;
+            b.t_worst = t;
+        }
+        b.relative = if b.error == 0.0 { 0.0 } else { b.error / scale };
+        if relative > self.tolerance {
+            b.relative = relative;
+            return Err(Error::EnergyBalance {
+                t,
+                relative,
+                tolerance: self.tolerance,
+                balance: Box::new(*b),
+            });
+        }
+        self.check_strains(model, t, q)
+    }
+
+    /// Stretch positive (else an error); strains far from the small-strain
+    /// range and curvature radii below the section's size warn once each.
+    fn check_strains(&mut self, model: &Model, t: f64, q: &[f64]) -> Result<(), Error> {
+        for r in model.rods() {
+            let rod = &r.spec.rod;
+            let qr = &q[r.dofs()];
+            for (n, piece) in rod.pieces().iter().enumerate() {
+                let xi = rod.strain(n, qr);
+                let stretch = xi[3];
+                if stretch.is_nan() || stretch <= 0.0 {
+                    return Err(Error::Stretch {
+                        t,
+                        rod: r.spec.name.clone(),
+                        piece: n,
+                        stretch,
+                    });
+                }
+                let shear = xi[4].hypot(xi[5]);
+                if !self.warned_strain
+                    && (!(1.0 - STRETCH_WARN..=1.0 + STRETCH_WARN).contains(&stretch)
+                        || shear > SHEAR_WARN)
+                {
+                    self.warned_strain = true;
+                    self.warnings.push(format!(
+                        "strain beyond the model's validity at t = {t:e} s: rod {:?} piece {n} has \
+                         stretch {stretch:.3} and shear {shear:.3} (linear elasticity holds for \
+                         small strains; warned beyond stretch 1 ± {STRETCH_WARN}, shear {SHEAR_WARN})",
+                        r.spec.name
+                    ));
+                }
+                let u = (piece.start + 0.5 * piece.length) / rod.length();
+                let half = r.spec.body.section().half_size(u);
+                let bend = xi[1].hypot(xi[2]);
+                if !self.warned_curvature && bend * half > 1.0 {
+                    self.warned_curvature = true;
+                    self.warnings.push(format!(
+                        "curvature beyond the model's validity at t = {t:e} s: rod {:?} piece {n} \
+                         bends with radius {:.3e} m, less than the section's half size {half:.3e} m \
+                         (the section would overlap itself)",
+                        r.spec.name,
+                        1.0 / bend
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The balance and the warnings of the run.
+    pub(crate) fn finish(mut self) -> (EnergyBalance, Vec<String>) {
+        let b = self.balance;
+        if b.relative > 0.1 * self.tolerance {
+            self.warnings.insert(
+                0,
+                format!(
+                    "energy balance drifts: relative error {:.3e} at t = {:e} s (error {:.3e} J, \
+                     scale {:.3e} J); the run fails beyond energy_tolerance = {}",
+                    b.relative, b.t_worst, b.error, b.scale, self.tolerance
+                ),
+            );
+        }
+        (b, self.warnings)
+    }
+}
