@@ -77,6 +77,14 @@ pub struct Data {
     /// Cable tensions that replace the cables' schedules (the inputs `u`,
     /// one per cable in model order), set by [`Data::set_cable_tensions`].
     pub(crate) tensions: Option<DVector<f64>>,
+    /// Per-node work space of an articulated model (empty otherwise).
+    pub(crate) nodes: Vec<crate::tree_algorithms::NodeWork>,
+    /// World pose of every rod's base frame, from the last [`crate::frames`]
+    /// (one per rod).
+    pub rod_bases: Vec<Pose>,
+    /// World pose of every body's frame, from the last [`crate::frames`]
+    /// (one per body).
+    pub body_poses: Vec<Pose>,
 }
 
 impl Data {
@@ -101,6 +109,13 @@ impl Data {
             load_scale: 1.0,
             only_gravity: false,
             tensions: None,
+            nodes: model.tree.as_ref().map_or(Vec::new(), |t| {
+                (0..t.nodes.len())
+                    .map(|_| crate::tree_algorithms::NodeWork::new())
+                    .collect()
+            }),
+            rod_bases: model.rods().iter().map(|r| *r.spec.rod.base()).collect(),
+            body_poses: vec![Pose::identity(); model.bodies().len()],
         }
     }
 

@@ -36,6 +36,7 @@ mod derivatives;
 mod energy;
 mod error;
 mod id_derivatives;
+mod joint;
 mod matrices;
 mod model;
 mod modes;
@@ -44,6 +45,8 @@ mod piece_derivs;
 mod shifted;
 mod simd;
 mod statics;
+mod tree;
+mod tree_algorithms;
 
 pub use algorithms::{
     bias_force, forward_dynamics, forward_dynamics_cholesky, inverse_dynamics, mass_matrix,
@@ -54,13 +57,14 @@ pub use derivatives::{
     DynamicsJacobians, FdDerivatives, Linearization, dynamics_jacobians,
     forward_dynamics_derivatives, linearize,
 };
-pub use energy::{Energies, energies};
+pub use energy::{Energies, energies, frames};
 pub use error::{DynamicsError, RodId};
 pub use id_derivatives::{IdDerivatives, inverse_dynamics_derivatives};
+pub use joint::{Attachment, BodyLoad, BodySpec, Joint, JointKind};
 pub use matrices::{
     actuation_matrix, coriolis_matrix, damping_matrix, generalized_gravity, stiffness_matrix,
 };
-pub use model::{Model, RodModel, RodSpec};
+pub use model::{BodyModel, Element, ElementInfo, ElementKind, Model, RodModel, RodSpec};
 pub use modes::{Modes, modes};
 pub use shifted::ShiftedSolver;
 pub use statics::{StaticsOptions, StaticsResult, statics};
