@@ -61,11 +61,13 @@ mod keys;
 mod locate;
 mod raw;
 mod reporter;
+mod robot;
 mod run;
 mod scene;
 mod validate;
 
 pub use build::Built;
 pub use error::{Cause, Location, SceneError, Warning};
+pub use robot::Robot;
 pub use run::{Integrator, Mode, Run, UnknownIntegrator};
 pub use scene::{Initial, Reference, Scene, World};
