@@ -7,6 +7,7 @@ mod common;
 mod inspect;
 mod plots;
 mod report;
+mod robot;
 mod run;
 
 use std::path::PathBuf;

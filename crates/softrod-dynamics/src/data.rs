@@ -159,6 +159,14 @@ impl Data {
         Ok(())
     }
 
+    /// The map from the poses `softrod_kinematics` computes for rod `r`
+    /// (which start at `Rod::base()`) to world poses, at the `q` of the last
+    /// [`crate::frames`]: `rod_bases[r] · Rod::base()⁻¹` (D51); the identity
+    /// for a rod clamped to the world.
+    pub fn rod_to_world(&self, model: &Model, r: usize) -> Pose {
+        self.rod_bases[r].compose(&model.rods()[r].spec.rod.base().inverse())
+    }
+
     /// The tensions set by [`Data::set_cable_tensions`], if any.
     pub fn cable_tensions(&self) -> Option<&[f64]> {
         self.tensions.as_ref().map(|t| t.as_slice())
