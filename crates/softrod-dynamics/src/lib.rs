@@ -24,6 +24,17 @@
 //! | [`dynamics_jacobians`] | `∂q̈/∂q`, `∂q̈/∂q̇` (allocating) | (D48) |
 //! | [`ShiftedSolver`] | `(M + aK + bD)⁻¹ x`, O(N) | §6 with armature `aK_n + bD_n` |
 //!
+//! Robots: rods and rigid bodies ([`BodySpec`]) hang from parents (the world,
+//! a rod's piece boundary, a body) through joints ([`Joint`]: fixed,
+//! revolute, prismatic, universal, spherical, free), built with
+//! [`ModelBuilder::rod_on`], [`ModelBuilder::body`] or
+//! [`Model::with_elements`]. A joint is a massless unit PCS piece whose
+//! basis is its motion subspace (docs/theory.md §11, D50–D58); inverse and
+//! forward dynamics, the mass matrix, energies, statics and modes run on the
+//! tree. Models without bodies, parents or joints keep the chain path
+//! unchanged; the analytic derivatives, [`ShiftedSolver`] and
+//! [`coriolis_matrix`] return [`DynamicsError::Unsupported`] for the others.
+//!
 //! Units SI; twists and wrenches angular first; body frame (see `softrod-lie`).
 #![warn(missing_docs)]
 

@@ -603,3 +603,78 @@ fn analytic_derivatives_refuse_articulated_models() {
     let e = solver.factor(&model, &q, 1.0, 0.0).unwrap_err();
     assert!(matches!(e, DynamicsError::Unsupported { .. }), "{e}");
 }
+
+/// A Y of three rods: a trunk clamped to the world, two branches on
+/// revolute joints at its tip, turned ±45° about z, and a third rod welded
+/// at the trunk's middle piece boundary.
+fn y_tree() -> Model {
+    let turn = |a: f64| {
+        Pose::new(
+            *nalgebra::Rotation3::from_axis_angle(&Vec3::z_axis(), a).matrix(),
+            Vec3::zeros(),
+        )
+    };
+    Model::builder()
+        .rod(rod("trunk", 0.3, 4))
+        .rod_on(
+            rod("left", 0.2, 3).base(turn(0.785)),
+            Attachment::to("trunk", Joint::revolute([0.0, 1.0, 0.0])),
+        )
+        .rod_on(
+            rod("right", 0.2, 3).base(turn(-0.785)),
+            Attachment::to("trunk", Joint::revolute([0.0, 1.0, 0.0])),
+        )
+        .rod_on(
+            rod("spur", 0.1, 2).base(turn(1.5)),
+            Attachment::to("trunk", Joint::fixed()).at(0.15),
+        )
+        .gravity([0.0, 0.0, -G])
+        .build()
+        .unwrap()
+}
+
+#[test]
+fn y_tree_forward_equals_cholesky_and_branches_do_not_couple() {
+    let model = y_tree();
+    let mut data = Data::new(&model);
+    let n = model.n_dof();
+    assert_eq!(n, 24 + (1 + 18) * 2 + 12);
+    let mut rng = Lcg(17);
+    let q = rng.vec(n, 0.3);
+    let qd = rng.vec(n, 0.6);
+    let on = forward_dynamics(&model, &mut data, 0.0, &q, &qd, None)
+        .unwrap()
+        .clone();
+    let dense = forward_dynamics_cholesky(&model, &mut data, 0.0, &q, &qd, None)
+        .unwrap()
+        .clone();
+    assert!(rel(&on, &dense) < 1e-9, "{}", rel(&on, &dense));
+    let back = inverse_dynamics(&model, &mut data, 0.0, &q, &qd, on.as_slice())
+        .unwrap()
+        .clone();
+    assert!(back.amax() < 1e-8, "{}", back.amax());
+    // Mass matrix: the branches couple with the trunk, not with each other.
+    let m = mass_matrix(&model, &mut data, &q).unwrap().clone();
+    let el = model.elements();
+    let left = el[1].joint_dofs.start..model.rods()[1].dofs().end;
+    let right = el[2].joint_dofs.start..model.rods()[2].dofs().end;
+    let spur = model.rods()[3].dofs();
+    let trunk = model.rods()[0].dofs();
+    for (a, b) in [(&left, &right), (&left, &spur), (&right, &spur)] {
+        for i in a.clone() {
+            for j in b.clone() {
+                assert_eq!(m[(i, j)], 0.0, "M[{i}, {j}]");
+            }
+        }
+    }
+    assert!(
+        m.view((trunk.start, left.start), (trunk.len(), left.len()))
+            .amax()
+            > 0.0
+    );
+    // The spur hangs at s = 0.15: it couples with the trunk's first two
+    // pieces only (pieces of 0.075 m, 6 strains each).
+    let outboard = m.view((12, spur.start), (12, spur.len())).amax();
+    assert_eq!(outboard, 0.0);
+    assert!(m.view((0, spur.start), (12, spur.len())).amax() > 0.0);
+}
