@@ -263,7 +263,7 @@ impl IntoRodSpec for RodSpecBuilder {
 #[derive(Debug)]
 enum Item {
     Rod(usize, Attachment),
-    Body(BodySpec, Attachment),
+    Body(Box<BodySpec>, Attachment),
 }
 
 /// Builder of a [`Model`] ([`Model::builder`]): rods in order (their
@@ -315,7 +315,7 @@ impl ModelBuilder {
 
     /// Adds a rigid body hanging from a parent through a joint.
     pub fn body(mut self, body: BodySpec, attachment: Attachment) -> Self {
-        self.order.push(Item::Body(body, attachment));
+        self.order.push(Item::Body(Box::new(body), attachment));
         self
     }
 
@@ -353,7 +353,7 @@ impl ModelBuilder {
             .into_iter()
             .map(|item| match item {
                 Item::Rod(i, a) => Element::Rod(rods[i].take().expect("each rod once"), a),
-                Item::Body(b, a) => Element::Body(b, a),
+                Item::Body(b, a) => Element::Body(*b, a),
             })
             .collect();
         Model::with_elements(

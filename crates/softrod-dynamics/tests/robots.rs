@@ -315,7 +315,7 @@ fn free_floating_rod_conserves_momentum_and_falls_at_g() {
         let t = dt * steps as f64;
         let expected = p0 + Vec3::new(0.0, 0.0, if gravity { -mass * G * t } else { 0.0 });
         // RK4 at dt = 2e-5 s on strain frequencies ~1e3 rad/s.
-        let err = (&p1 - &expected).amax();
+        let err = (&p1 - expected).amax();
         assert!(err < 1e-9, "gravity {gravity}: {p1:?} vs {expected:?}");
     }
     // At rest and undeformed under gravity: pure free fall.

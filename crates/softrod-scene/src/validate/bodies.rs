@@ -162,7 +162,9 @@ impl Ctx<'_> {
             }
         }
         // The order of the file: rods and bodies by where their tables start.
-        let mut order: Vec<(Option<(usize, usize)>, usize, ElementKind)> = Vec::new();
+        // (line and column of the table, index, element)
+        type Placed = (Option<(usize, usize)>, usize, ElementKind);
+        let mut order: Vec<Placed> = Vec::new();
         for (e, (p, _, _)) in parents.iter().enumerate() {
             let kind = if e < n_rods {
                 ElementKind::Rod(e)
@@ -296,7 +298,7 @@ impl Ctx<'_> {
         center_of_mass: Option<[f64; 3]>,
         base: Option<crate::raw::RawBase>,
     ) -> Result<BodySpec> {
-        if !(mass > 0.0) {
+        if mass.is_nan() || mass <= 0.0 {
             return Err(self.r.out_of_range(&format!("{p}.mass"), mass, "> 0 kg"));
         }
         let ip = format!("{p}.inertia");
