@@ -92,9 +92,14 @@ pub fn out_dir(scene: &Path, out: Option<PathBuf>) -> PathBuf {
     })
 }
 
-/// Poses of the rods for given coordinates: one kinematics sweep per rod.
+/// Poses of the rods for given coordinates: one kinematics sweep per rod;
+/// for a model with joints or parents, carried into the world by each
+/// rod's base frame (`softrod_dynamics::frames`), and the bodies' poses.
 pub struct Poser {
     kin: Vec<RodKinematics>,
+    /// Articulated models: the dynamics buffers and the world poses of each
+    /// rod's piece boundaries.
+    robot: Option<(softrod_dynamics::Data, Vec<Vec<Pose>>)>,
 }
 
 impl Poser {
@@ -105,6 +110,14 @@ impl Poser {
                 .iter()
                 .map(|r| RodKinematics::new(&r.spec.rod))
                 .collect(),
+            robot: model.is_articulated().then(|| {
+                let world = model
+                    .rods()
+                    .iter()
+                    .map(|r| vec![Pose::identity(); r.spec.rod.n_pieces() + 1])
+                    .collect();
+                (softrod_dynamics::Data::new(model), world)
+            }),
         }
     }
 
@@ -114,12 +127,25 @@ impl Poser {
             k.update(&r.spec.rod, &q[r.dofs()], None, None)
                 .map_err(|e| failed(format!("kinematics of rod '{}': {e}", r.spec.name)))?;
         }
+        if let Some((data, world)) = &mut self.robot {
+            softrod_dynamics::frames(model, data, q)
+                .map_err(|e| failed(format!("frames of the model: {e}")))?;
+            for (r, (k, out)) in self.kin.iter().zip(world.iter_mut()).enumerate() {
+                let to_world = data.rod_to_world(model, r);
+                for (o, p) in out.iter_mut().zip(k.boundary_poses()) {
+                    *o = to_world.compose(p);
+                }
+            }
+        }
         Ok(())
     }
 
     /// Tip pose of rod `i` at the last update.
     pub fn tip(&self, i: usize) -> &Pose {
-        self.kin[i].tip_pose()
+        match &self.robot {
+            Some((_, world)) => world[i].last().expect("N+1 boundaries"),
+            None => self.kin[i].tip_pose(),
+        }
     }
 
     /// Strain `ξ_n` of each piece of rod `i` at the last update.
@@ -141,6 +167,13 @@ impl Poser {
         self.kin[i]
             .poses_along(rod, &sampling.fractions, &mut out[..n])
             .map_err(|e| failed(format!("sampling rod '{}': {e}", model.rods()[i].spec.name)))?;
+        if let Some((data, _)) = &self.robot {
+            // Articulated models: the rod's own frame carried into the world.
+            let to_world = data.rod_to_world(model, i);
+            for p in &mut out[..n] {
+                *p = to_world.compose(p);
+            }
+        }
         out[n] = *self.tip(i);
         Ok(())
     }
@@ -158,6 +191,11 @@ impl Poser {
             out.push(poses.iter().map(position).collect());
         }
         Ok(out)
+    }
+
+    /// World poses of the model's bodies at the last update (empty without).
+    pub fn bodies(&self) -> &[Pose] {
+        self.robot.as_ref().map_or(&[], |(d, _)| &d.body_poses)
     }
 }
 

@@ -31,6 +31,7 @@ pub fn check(path: &Path) -> Result<(), CliError> {
             rm.dofs().end
         );
     }
+    crate::robot::print_elements(m);
     if scene.n_cables() > 0 {
         println!("cables: {}", scene.n_cables());
     }
@@ -134,6 +135,8 @@ pub fn statics(path: &Path, json: bool, out: Option<PathBuf>) -> Result<(), CliE
             "tip": pose_json(poser.tip(0)),
             "rods": rods,
         });
+        let mut v = v;
+        crate::robot::add_statics_json(model, &poser, res.q.as_slice(), &mut v);
         println!("{v}");
     } else {
         println!(

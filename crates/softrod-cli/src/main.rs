@@ -9,6 +9,7 @@ mod linearize;
 mod outputs;
 mod plots;
 mod report;
+mod robot;
 mod run;
 mod signals;
 

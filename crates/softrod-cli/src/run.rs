@@ -12,7 +12,7 @@ use softrod::lie::Pose;
 use softrod::{EnergyBalance, Error, Flow, Observer, Sample, output_times};
 use softrod_scene::Scene;
 use softrod_viz::Pose as VizPose;
-use softrod_viz::run_dir::SHAPE_HEADER;
+use softrod_viz::run_dir::{BODIES_HEADER, SHAPE_HEADER};
 
 use crate::common::{CliError, Poser, failed, load, out_dir, position, quaternion};
 use crate::outputs::{self, RodSampling, csv_line, default_points_per_piece, num};
@@ -84,6 +84,9 @@ pub const SUMMARY_EVERY: f64 = 0.5;
 pub struct Streamer {
     traj: OutFile,
     shape: OutFile,
+    /// `bodies.csv` (t, body, pose), for a model with rigid bodies.
+    bodies: Option<OutFile>,
+    bodies_text: String,
     summary: Summary,
     start: Instant,
     summary_written: Option<Instant>,
@@ -172,6 +175,15 @@ impl Streamer {
         header.extend(extra_columns(n, model.n_cables()));
         let traj = OutFile::create(dir, "trajectory.csv", &csv_line(&header))?;
         let shape = OutFile::create(dir, "shape.csv", &csv_line(SHAPE_HEADER))?;
+        let bodies = if model.bodies().is_empty() {
+            None
+        } else {
+            Some(OutFile::create(
+                dir,
+                "bodies.csv",
+                &csv_line(BODIES_HEADER),
+            )?)
+        };
         let sampling: Vec<RodSampling> = model
             .rods()
             .iter()
@@ -197,6 +209,8 @@ impl Streamer {
         Ok(Self {
             traj,
             shape,
+            bodies,
+            bodies_text: String::new(),
             summary,
             start: Instant::now(),
             summary_written: None,
@@ -327,13 +341,32 @@ impl Streamer {
                 ));
             }
         }
-        // Both files get this time's rows, or neither does.
+        self.bodies_text.clear();
+        for (b, g) in model.bodies().iter().zip(self.poser.bodies()) {
+            let fields: Vec<String> = position(g)
+                .into_iter()
+                .chain(quaternion(g))
+                .map(num)
+                .collect();
+            self.bodies_text.push_str(&csv_line(
+                [ts.as_str(), b.spec.name.as_str()]
+                    .into_iter()
+                    .chain(fields.iter().map(String::as_str)),
+            ));
+        }
+        // Every file gets this time's rows, or none does.
+        let bodies_text = &self.bodies_text;
         let written = self
             .shape
             .append(&self.shape_text)
+            .and_then(|()| match &mut self.bodies {
+                Some(f) => f.append(bodies_text),
+                None => Ok(()),
+            })
             .and_then(|()| self.traj.append(&self.traj_text));
         if let Err(e) = written {
-            let cut = self.shape.rollback() & self.traj.rollback();
+            let bodies_cut = self.bodies.as_mut().is_none_or(OutFile::rollback);
+            let cut = self.shape.rollback() & self.traj.rollback() & bodies_cut;
             return Err(format!(
                 "{e} at t = {t:e}; {}",
                 if cut {
@@ -344,6 +377,9 @@ impl Streamer {
             ));
         }
         self.shape.commit(self.shape_text.len());
+        if let Some(f) = &mut self.bodies {
+            f.commit(self.bodies_text.len());
+        }
         self.traj.commit(self.traj_text.len());
         self.series.t.push(t);
         for (r, tips) in self.series.tips.iter_mut().enumerate() {

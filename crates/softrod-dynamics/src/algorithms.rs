@@ -119,6 +119,10 @@ pub(crate) fn inverse_dynamics_impl<'a>(
     check_vec(model, "q", q)?;
     check_vec(model, "qdot", qd)?;
     check_vec(model, "qddot", qdd)?;
+    if let Some(tree) = &model.tree {
+        crate::tree_algorithms::inverse_dynamics(model, tree, data, t, q, Some(qd), Some(qdd));
+        return Ok(&data.tau);
+    }
     outward_inl(model, data, q, Some(qd), Some(qdd), Pass::Inverse);
     strain_forces(model, data, t, q, Some(qd), None);
     inward_inverse(model, data);
@@ -171,6 +175,10 @@ pub(crate) fn forward_dynamics_impl<'a>(
     check_vec(model, "qdot", qd)?;
     if let Some(ta) = tau_act {
         check_vec(model, "tau", ta)?;
+    }
+    if let Some(tree) = &model.tree {
+        crate::tree_algorithms::forward_dynamics(model, tree, data, t, q, qd, tau_act)?;
+        return check_qdd(data, t);
     }
     outward_inl(model, data, q, Some(qd), None, Pass::Articulated);
     strain_forces(model, data, t, q, Some(qd), tau_act);
@@ -249,6 +257,11 @@ pub(crate) fn forward_dynamics_impl<'a>(
             etadot = ad_inv_vec(&w.tip, &etadot) + sq + w.acc_tip;
         }
     }
+    check_qdd(data, t)
+}
+
+/// `data.qdd`, or the first entry that is not finite as an error.
+fn check_qdd(data: &Data, t: f64) -> Result<&DVector<f64>, DynamicsError> {
     if let Some((i, v)) = data.qdd.iter().enumerate().find(|(_, v)| !v.is_finite()) {
         return Err(DynamicsError::NotFinite {
             what: format!("qddot[{i}] at t = {t}"),
@@ -278,6 +291,10 @@ pub(crate) fn mass_matrix_impl<'a>(
     q: &[f64],
 ) -> Result<&'a nalgebra::DMatrix<f64>, DynamicsError> {
     check_vec(model, "q", q)?;
+    if let Some(tree) = &model.tree {
+        crate::tree_algorithms::mass_matrix(model, tree, data, q);
+        return Ok(&data.mass);
+    }
     outward_inl(model, data, q, None, None, Pass::Composite);
     let n = model.n_dof();
     if data.mass.nrows() != n {
@@ -406,6 +423,10 @@ pub fn bias_force<'a>(
 ) -> Result<&'a DVector<f64>, DynamicsError> {
     check_vec(model, "q", q)?;
     check_vec(model, "qdot", qd)?;
+    if let Some(tree) = &model.tree {
+        crate::tree_algorithms::inverse_dynamics(model, tree, data, t, q, Some(qd), None);
+        return Ok(&data.tau);
+    }
     outward(model, data, q, Some(qd), None, Pass::Inverse);
     strain_forces(model, data, t, q, Some(qd), None);
     inward_inverse(model, data);

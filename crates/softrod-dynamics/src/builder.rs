@@ -3,7 +3,8 @@
 //! constructors, then [`RodSpec::validate`]).
 
 use crate::error::{DynamicsError, RodId};
-use crate::model::{Model, RodSpec};
+use crate::joint::{Attachment, BodySpec};
+use crate::model::{Element, Model, RodSpec};
 use softrod_kinematics::{Basis, Rod, Strain, straight};
 use softrod_lie::{Pose, Vec3, Vec6};
 use softrod_mechanics::{
@@ -258,6 +259,13 @@ impl IntoRodSpec for RodSpecBuilder {
     }
 }
 
+/// An element of a [`ModelBuilder`] in order.
+#[derive(Debug)]
+enum Item {
+    Rod(usize, Attachment),
+    Body(Box<BodySpec>, Attachment),
+}
+
 /// Builder of a [`Model`] ([`Model::builder`]): rods in order (their
 /// coordinates are concatenated in this order), optional gravity, Gauss
 /// points per piece (default [`Model::DEFAULT_QUADRATURE`]).
@@ -283,21 +291,39 @@ impl IntoRodSpec for RodSpecBuilder {
 #[must_use]
 pub struct ModelBuilder {
     rods: Vec<Result<RodSpec, DynamicsError>>,
+    /// Elements in order: rods by index into `rods` with their attachment,
+    /// bodies with theirs.
+    order: Vec<Item>,
     gravity: Option<Vec3>,
     quadrature: Option<usize>,
 }
 
 impl ModelBuilder {
     /// Adds a rod (a [`RodSpec`] or a [`RodSpecBuilder`]).
-    pub fn rod(mut self, rod: impl IntoRodSpec) -> Self {
+    pub fn rod(self, rod: impl IntoRodSpec) -> Self {
+        self.rod_on(rod, Attachment::world())
+    }
+
+    /// Adds a rod hanging from a parent through a joint (docs/theory.md
+    /// §11): its base pose ([`RodSpecBuilder::base`]) is then relative to
+    /// the attachment frame.
+    pub fn rod_on(mut self, rod: impl IntoRodSpec, attachment: Attachment) -> Self {
+        self.order.push(Item::Rod(self.rods.len(), attachment));
         self.rods.push(rod.into_rod_spec());
+        self
+    }
+
+    /// Adds a rigid body hanging from a parent through a joint.
+    pub fn body(mut self, body: BodySpec, attachment: Attachment) -> Self {
+        self.order.push(Item::Body(Box::new(body), attachment));
         self
     }
 
     /// Adds several rods.
     pub fn rods<R: IntoRodSpec>(mut self, rods: impl IntoIterator<Item = R>) -> Self {
-        self.rods
-            .extend(rods.into_iter().map(IntoRodSpec::into_rod_spec));
+        for r in rods {
+            self = self.rod(r);
+        }
         self
     }
 
@@ -316,14 +342,22 @@ impl ModelBuilder {
     /// The model ([`Model::new`]), or the first error, naming the rod by
     /// index and name.
     pub fn build(self) -> Result<Model, DynamicsError> {
-        let rods = self
+        let mut rods = self
             .rods
             .into_iter()
             .enumerate()
-            .map(|(i, r)| r.map_err(|e| e.at_rod_index(i)))
+            .map(|(i, r)| r.map(Some).map_err(|e| e.at_rod_index(i)))
             .collect::<Result<Vec<_>, _>>()?;
-        Model::new(
-            rods,
+        let elements = self
+            .order
+            .into_iter()
+            .map(|item| match item {
+                Item::Rod(i, a) => Element::Rod(rods[i].take().expect("each rod once"), a),
+                Item::Body(b, a) => Element::Body(*b, a),
+            })
+            .collect();
+        Model::with_elements(
+            elements,
             self.gravity,
             self.quadrature.unwrap_or(Model::DEFAULT_QUADRATURE),
         )

@@ -77,6 +77,14 @@ pub struct Data {
     /// Cable tensions that replace the cables' schedules (the inputs `u`,
     /// one per cable in model order), set by [`Data::set_cable_tensions`].
     pub(crate) tensions: Option<DVector<f64>>,
+    /// Per-node work space of an articulated model (empty otherwise).
+    pub(crate) nodes: Vec<crate::tree_algorithms::NodeWork>,
+    /// World pose of every rod's base frame, from the last [`crate::frames`]
+    /// (one per rod).
+    pub rod_bases: Vec<Pose>,
+    /// World pose of every body's frame, from the last [`crate::frames`]
+    /// (one per body).
+    pub body_poses: Vec<Pose>,
 }
 
 impl Data {
@@ -101,6 +109,13 @@ impl Data {
             load_scale: 1.0,
             only_gravity: false,
             tensions: None,
+            nodes: model.tree.as_ref().map_or(Vec::new(), |t| {
+                (0..t.nodes.len())
+                    .map(|_| crate::tree_algorithms::NodeWork::new())
+                    .collect()
+            }),
+            rod_bases: model.rods().iter().map(|r| *r.spec.rod.base()).collect(),
+            body_poses: vec![Pose::identity(); model.bodies().len()],
         }
     }
 
@@ -142,6 +157,14 @@ impl Data {
             None => self.tensions = Some(DVector::from_column_slice(u)),
         }
         Ok(())
+    }
+
+    /// The map from the poses `softrod_kinematics` computes for rod `r`
+    /// (which start at `Rod::base()`) to world poses, at the `q` of the last
+    /// [`crate::frames`]: `rod_bases[r] · Rod::base()⁻¹` (D51); the identity
+    /// for a rod clamped to the world.
+    pub fn rod_to_world(&self, model: &Model, r: usize) -> Pose {
+        self.rod_bases[r].compose(&model.rods()[r].spec.rod.base().inverse())
     }
 
     /// The tensions set by [`Data::set_cable_tensions`], if any.

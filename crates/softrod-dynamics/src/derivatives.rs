@@ -234,6 +234,7 @@ pub fn dynamics_jacobians(
 ) -> Result<DynamicsJacobians, DynamicsError> {
     check_vec(model, "q", q)?;
     check_vec(model, "qdot", qd)?;
+    model.require_chain("dynamics_jacobians")?;
     let mut work = FdDerivatives::new(model);
     forward_dynamics_derivatives(model, data, &mut work, t, q, qd, tau_act)?;
     Ok(DynamicsJacobians {

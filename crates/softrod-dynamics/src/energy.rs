@@ -36,6 +36,9 @@ pub fn energies(
 ) -> Result<Energies, DynamicsError> {
     check_vec(model, "q", q)?;
     check_vec(model, "qdot", qd)?;
+    if let Some(tree) = &model.tree {
+        return Ok(crate::tree_algorithms::energies(model, tree, _data, q, qd));
+    }
     let mut e = Energies::default();
     for rm in model.rods() {
         let rod = &rm.spec.rod;
@@ -69,4 +72,17 @@ pub fn energies(
         }
     }
     Ok(e)
+}
+
+/// World poses of every rod's base frame (`data.rod_bases`, one per rod)
+/// and every rigid body's frame (`data.body_poses`) at `q` (dim n_dof).
+/// A rod's shape in the world is `rod_bases[r] · Rod::base()⁻¹ · g_local(s)`
+/// for the poses of `softrod_kinematics` (which start from `Rod::base()`);
+/// for a model without joints or parents `rod_bases[r] = Rod::base()`.
+pub fn frames(model: &Model, data: &mut Data, q: &[f64]) -> Result<(), DynamicsError> {
+    check_vec(model, "q", q)?;
+    if let Some(tree) = &model.tree {
+        crate::tree_algorithms::frames(model, tree, data, q);
+    }
+    Ok(())
 }

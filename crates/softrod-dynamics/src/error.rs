@@ -244,6 +244,73 @@ pub enum DynamicsError {
         /// Which solver.
         what: &'static str,
     },
+    /// A joint is invalid (axis zero or not finite, parallel universal
+    /// axes, spring/damper/rest vectors of the wrong length or sign).
+    #[error("joint of '{element}': {reason}")]
+    InvalidJoint {
+        /// Name of the element the joint moves.
+        element: String,
+        /// What is wrong, with the values.
+        reason: String,
+    },
+    /// A rigid body is invalid (mass ≤ 0, inertia not symmetric positive
+    /// definite, values not finite).
+    #[error("body '{body}': {reason}")]
+    InvalidBody {
+        /// The body's name.
+        body: String,
+        /// What is wrong, with the values.
+        reason: String,
+    },
+    /// An element names a parent that is no rod or body of the model (or
+    /// a name several elements share).
+    #[error("'{element}': parent '{parent}' is {reason}")]
+    UnknownParent {
+        /// The element.
+        element: String,
+        /// The parent it names.
+        parent: String,
+        /// "not a rod or body of the model" or "ambiguous (…)".
+        reason: String,
+    },
+    /// The parents form a cycle.
+    #[error("'{element}' is its own ancestor (parent cycle)")]
+    ParentCycle {
+        /// An element on the cycle.
+        element: String,
+    },
+    /// An element hangs from a rod at an arc length that is no piece
+    /// boundary (the only places children may attach; docs/theory.md §11).
+    #[error(
+        "'{element}': at = {at} m on rod '{parent}' is not a piece boundary (0, the piece ends {boundaries:?})"
+    )]
+    NotAtBoundary {
+        /// The element.
+        element: String,
+        /// The parent rod.
+        parent: String,
+        /// The arc length asked for \[m\].
+        at: f64,
+        /// The piece ends of the parent rod \[m\].
+        boundaries: Vec<f64>,
+    },
+    /// An articulated-body matrix of a node of a model with joints or
+    /// bodies is not positive definite (e.g. nothing with inertia outboard
+    /// of a joint).
+    #[error("{what} at {node} is not positive definite")]
+    SingularNode {
+        /// Which node (element and part).
+        node: String,
+        /// Which matrix.
+        what: &'static str,
+    },
+    /// An algorithm that does not (yet) cover models with joints, bodies or
+    /// parents was called on one.
+    #[error("{what} does not support models with joints, bodies or parents yet")]
+    Unsupported {
+        /// Which algorithm.
+        what: &'static str,
+    },
     /// A workspace was built for a model of another shape.
     #[error("{what} was built for a model with {built} coordinates, used with one of {got}")]
     WorkspaceMismatch {

@@ -387,6 +387,7 @@ pub(crate) fn id_derivatives_impl<'a>(
     check_vec(model, "q", q)?;
     check_vec(model, "qdot", qd)?;
     check_vec(model, "qddot", qdd)?;
+    model.require_chain("inverse_dynamics_derivatives")?;
     let scale = work.load_scale;
     if model.rods().len() > 1 {
         work.dtau_dq.fill(0.0);

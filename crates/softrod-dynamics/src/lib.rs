@@ -24,6 +24,17 @@
 //! | [`dynamics_jacobians`] | `∂q̈/∂q`, `∂q̈/∂q̇` (allocating) | (D48) |
 //! | [`ShiftedSolver`] | `(M + aK + bD)⁻¹ x`, O(N) | §6 with armature `aK_n + bD_n` |
 //!
+//! Robots: rods and rigid bodies ([`BodySpec`]) hang from parents (the world,
+//! a rod's piece boundary, a body) through joints ([`Joint`]: fixed,
+//! revolute, prismatic, universal, spherical, free), built with
+//! [`ModelBuilder::rod_on`], [`ModelBuilder::body`] or
+//! [`Model::with_elements`]. A joint is a massless unit PCS piece whose
+//! basis is its motion subspace (docs/theory.md §11, D50–D58); inverse and
+//! forward dynamics, the mass matrix, energies, statics and modes run on the
+//! tree. Models without bodies, parents or joints keep the chain path
+//! unchanged; the analytic derivatives, [`ShiftedSolver`] and
+//! [`coriolis_matrix`] return [`DynamicsError::Unsupported`] for the others.
+//!
 //! Units SI; twists and wrenches angular first; body frame (see `softrod-lie`).
 #![warn(missing_docs)]
 
@@ -36,6 +47,7 @@ mod derivatives;
 mod energy;
 mod error;
 mod id_derivatives;
+mod joint;
 mod matrices;
 mod model;
 mod modes;
@@ -44,6 +56,8 @@ mod piece_derivs;
 mod shifted;
 mod simd;
 mod statics;
+mod tree;
+mod tree_algorithms;
 
 pub use algorithms::{
     bias_force, forward_dynamics, forward_dynamics_cholesky, inverse_dynamics, mass_matrix,
@@ -54,13 +68,14 @@ pub use derivatives::{
     DynamicsJacobians, FdDerivatives, Linearization, dynamics_jacobians,
     forward_dynamics_derivatives, linearize,
 };
-pub use energy::{Energies, energies};
+pub use energy::{Energies, energies, frames};
 pub use error::{DynamicsError, RodId};
 pub use id_derivatives::{IdDerivatives, inverse_dynamics_derivatives};
+pub use joint::{Attachment, BodyLoad, BodySpec, Joint, JointKind};
 pub use matrices::{
     actuation_matrix, coriolis_matrix, damping_matrix, generalized_gravity, stiffness_matrix,
 };
-pub use model::{Model, RodModel, RodSpec};
+pub use model::{BodyModel, Element, ElementInfo, ElementKind, Model, RodModel, RodSpec};
 pub use modes::{Modes, modes};
 pub use shifted::ShiftedSolver;
 pub use statics::{StaticsOptions, StaticsResult, statics};

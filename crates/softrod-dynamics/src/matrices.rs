@@ -21,22 +21,42 @@ pub fn generalized_gravity(
     let zero = vec![0.0; model.n_dof()];
     data.only_gravity = true;
     let scale = std::mem::replace(&mut data.load_scale, 1.0);
-    outward(model, data, q, None, Some(&zero), Pass::Inverse);
-    strain_forces(model, data, 0.0, q, None, None);
-    inward_inverse(model, data);
+    if let Some(tree) = &model.tree {
+        crate::tree_algorithms::inverse_dynamics(model, tree, data, 0.0, q, None, Some(&zero));
+    } else {
+        outward(model, data, q, None, Some(&zero), Pass::Inverse);
+        strain_forces(model, data, 0.0, q, None, None);
+        inward_inverse(model, data);
+    }
     data.only_gravity = false;
     data.load_scale = scale;
     Ok(data.tau.clone())
 }
 
-/// Block-diagonal generalized stiffness `K = diag(K_n)`, `K_n = ∫B_nᵀΓB_n ds` (D13).
+/// Block-diagonal generalized stiffness `K = diag(K_n)`, `K_n = ∫B_nᵀΓB_n ds`
+/// (D13), with the joints' spring constants on their coordinates (D53).
 pub fn stiffness_matrix(model: &Model) -> DMatrix<f64> {
-    block_diag(model, |pd| &pd.stiffness)
+    let mut m = block_diag(model, |pd| &pd.stiffness);
+    joint_diag(model, &mut m, 0);
+    m
 }
 
-/// Block-diagonal generalized damping `D = diag(D_n)`, `D_n = ∫B_nᵀγB_n ds` (D13).
+/// Block-diagonal generalized damping `D = diag(D_n)`, `D_n = ∫B_nᵀγB_n ds`
+/// (D13), with the joints' damping constants on their coordinates (D53).
 pub fn damping_matrix(model: &Model) -> DMatrix<f64> {
-    block_diag(model, |pd| &pd.damping)
+    let mut m = block_diag(model, |pd| &pd.damping);
+    joint_diag(model, &mut m, 1);
+    m
+}
+
+/// Joint spring (`which = 0`) or damper (`1`) constants on the diagonal.
+fn joint_diag(model: &Model, m: &mut DMatrix<f64>, which: usize) {
+    for e in model.elements() {
+        for (i, o) in e.joint_dofs.clone().enumerate() {
+            let (k, d, _) = e.attachment.joint.coefficients(i);
+            m[(o, o)] = if which == 0 { k } else { d };
+        }
+    }
 }
 
 fn block_diag(
@@ -94,6 +114,7 @@ pub fn coriolis_matrix(
 ) -> Result<DMatrix<f64>, DynamicsError> {
     check_vec(model, "q", q)?;
     check_vec(model, "qdot", qd)?;
+    model.require_chain("coriolis_matrix")?;
     let n = model.n_dof();
     let mut c = DMatrix::zeros(n, n);
     for (r, rm) in model.rods().iter().enumerate() {

@@ -2,6 +2,8 @@
 
 use crate::builder::{ModelBuilder, RodSpecBuilder};
 use crate::error::{DynamicsError, RodId};
+use crate::joint::{Attachment, BodySpec};
+use crate::tree::Tree;
 use nalgebra::DMatrix;
 use softrod_kinematics::{GaussLegendre, Rod, Strain};
 use softrod_lie::{Mat6, Vec3, Vec6};
@@ -233,6 +235,11 @@ pub struct Model {
     /// Gauss points per piece.
     pub quadrature: GaussLegendre,
     n_dof: usize,
+    pub(crate) bodies: Vec<BodyModel>,
+    pub(crate) elements: Vec<ElementInfo>,
+    /// The tree of nodes of a model with joints, bodies or parents (`None`:
+    /// independent rods clamped to the world, the chain path).
+    pub(crate) tree: Option<Tree>,
 }
 
 impl Model {
@@ -262,6 +269,37 @@ impl Model {
         if rods.is_empty() {
             return Err(DynamicsError::NoRods);
         }
+        Self::with_elements(
+            rods.into_iter()
+                .map(|r| Element::Rod(r, Attachment::world()))
+                .collect(),
+            gravity,
+            quadrature,
+        )
+    }
+
+    /// Builds a model of rods and rigid bodies, each hanging from a parent
+    /// (the world, a rod, a body) through a joint (docs/theory.md §11,
+    /// D50–D55). Coordinates follow the elements' order: for each, its
+    /// joint's coordinates, then (rods) its strains piece by piece.
+    ///
+    /// A child of a rod attaches at a piece boundary (`at` = 0 or a piece
+    /// end, to 1e-9 of the rod's length; default the tip): its frame is the
+    /// rod's frame there, then the element's base pose, then the joint.
+    /// Without any body, parent or non-fixed joint this is [`Model::new`]
+    /// and the algorithms take the chain path unchanged.
+    ///
+    /// Errors: those of [`Model::new`], invalid joints and bodies, unknown
+    /// or ambiguous parents, parent cycles, `at` off a piece boundary.
+    pub fn with_elements(
+        elements: Vec<Element>,
+        gravity: Option<Vec3>,
+        quadrature: usize,
+    ) -> Result<Self, DynamicsError> {
+        // Every output names the first rod's tip: a model needs one.
+        if !elements.iter().any(|e| matches!(e, Element::Rod(..))) {
+            return Err(DynamicsError::NoRods);
+        }
         if quadrature == 0 {
             return Err(DynamicsError::NoQuadraturePoints);
         }
@@ -272,78 +310,61 @@ impl Model {
         }
         let gravity = gravity.filter(|g| g.norm() > 0.0);
         let gl = GaussLegendre::new(quadrature);
-        let mut out = Vec::with_capacity(rods.len());
+        let mut rods = Vec::new();
+        let mut bodies = Vec::new();
+        let mut infos = Vec::with_capacity(elements.len());
         let mut off = 0;
         let mut cables = 0;
-        for (index, spec) in rods.into_iter().enumerate() {
-            spec.check(Some(index))?;
-            let rod = &spec.rod;
-            let mats = piece_matrices(rod, &spec.body, spec.stress_free.as_deref(), &gl);
-            let mut pieces = Vec::with_capacity(rod.n_pieces());
-            for (n, (piece, m)) in rod.pieces().iter().zip(mats).enumerate() {
-                let points = gl
-                    .on_interval(piece.length)
-                    .map(|(x, w)| {
-                        let s = piece.start + x;
-                        QuadPoint {
-                            x,
-                            w,
-                            inertia: spec.body.screw_inertia(s),
-                            mass_per_length: spec.body.mass_per_length(s),
-                        }
-                    })
-                    .collect();
-                let mut loads = Vec::new();
-                for (i, l) in spec.point_loads.iter().enumerate() {
-                    let (pn, x) = rod.locate(l.s).expect("PointLoad::validate checked s");
-                    if pn == n {
-                        loads.push(PlacedLoad { x, index: i });
-                    }
+        for element in elements {
+            match element {
+                Element::Rod(spec, mut attachment) => {
+                    attachment.joint.validate(&spec.name)?;
+                    let jd = attachment.joint.dof();
+                    let index = rods.len();
+                    let rm = build_rod(spec, index, off + jd, cables, &gl)?;
+                    infos.push(ElementInfo {
+                        name: rm.spec.name.clone(),
+                        kind: ElementKind::Rod(index),
+                        attachment,
+                        joint_dofs: off..off + jd,
+                    });
+                    off += jd + rm.n_dof();
+                    cables += rm.spec.cables.len();
+                    rods.push(rm);
                 }
-                let k = m.stiffness.nrows();
-                let pad = |d: &DMatrix<f64>| {
-                    Mat6::from_fn(|i, j| if i < k && j < k { d[(i, j)] } else { 0.0 })
-                };
-                let (stiffness6, damping6) = (pad(&m.stiffness), pad(&m.damping));
-                let off_diagonal_zero =
-                    |a: &Mat6| (0..6).all(|i| (0..6).all(|j| i == j || a[(i, j)] == 0.0));
-                let diagonal = (off_diagonal_zero(&stiffness6) && off_diagonal_zero(&damping6))
-                    .then(|| (stiffness6.diagonal(), damping6.diagonal()));
-                pieces.push(PieceData {
-                    points,
-                    loads,
-                    stiffness6,
-                    damping6,
-                    diagonal,
-                    offset6: Vec6::from_fn(|i, _| if i < k { m.elastic_offset[i] } else { 0.0 }),
-                    has_damping: m.damping.iter().any(|v| *v != 0.0),
-                    has_offset: m.elastic_offset.iter().any(|v| *v != 0.0),
-                    stiffness: m.stiffness,
-                    damping: m.damping,
-                });
+                Element::Body(spec, mut attachment) => {
+                    spec.validate()?;
+                    attachment.joint.validate(&spec.name)?;
+                    let jd = attachment.joint.dof();
+                    infos.push(ElementInfo {
+                        name: spec.name.clone(),
+                        kind: ElementKind::Body(bodies.len()),
+                        attachment,
+                        joint_dofs: off..off + jd,
+                    });
+                    off += jd;
+                    bodies.push(BodyModel {
+                        inertia: spec.spatial_inertia(),
+                        spec,
+                    });
+                }
             }
-            let needs_world = spec
-                .distributed_loads
-                .iter()
-                .any(|d| d.frame == LoadFrame::World);
-            let n = rod.n_dof();
-            let n_cables = spec.cables.len();
-            out.push(RodModel {
-                spec,
-                dof_offset: off,
-                pieces,
-                needs_world_pose_at_points: needs_world,
-                cable_offset: cables,
-            });
-            off += n;
-            cables += n_cables;
         }
-        Ok(Self {
-            rods: out,
+        let articulated =
+            !bodies.is_empty() || infos.iter().any(|e| !e.attachment.is_world_clamp());
+        let mut model = Self {
+            rods,
             gravity,
             quadrature: gl,
             n_dof: off,
-        })
+            bodies,
+            elements: infos,
+            tree: None,
+        };
+        if articulated {
+            model.tree = Some(Tree::build(&model)?);
+        }
+        Ok(model)
     }
 
     /// Total number of generalized coordinates.
@@ -354,6 +375,32 @@ impl Model {
     /// The rods.
     pub fn rods(&self) -> &[RodModel] {
         &self.rods
+    }
+
+    /// The rigid bodies, in the order given.
+    pub fn bodies(&self) -> &[BodyModel] {
+        &self.bodies
+    }
+
+    /// Every element (rods and bodies in the order given) with its
+    /// attachment and the range of its joint's coordinates in `q`.
+    pub fn elements(&self) -> &[ElementInfo] {
+        &self.elements
+    }
+
+    /// Whether the model has joints, bodies or parents (the tree path of
+    /// the algorithms) rather than independent rods clamped to the world.
+    pub fn is_articulated(&self) -> bool {
+        self.tree.is_some()
+    }
+
+    /// [`DynamicsError::Unsupported`] for an algorithm that covers only
+    /// independent clamped rods, called on an articulated model.
+    pub(crate) fn require_chain(&self, what: &'static str) -> Result<(), DynamicsError> {
+        if self.tree.is_some() {
+            return Err(DynamicsError::Unsupported { what });
+        }
+        Ok(())
     }
 
     /// Names of the force terms present, for summaries (`softrod check`).
@@ -378,6 +425,18 @@ impl Model {
         if any(&|r| r.spec.drag.is_some()) {
             t.push("drag".into());
         }
+        if !self.bodies.is_empty() {
+            t.push("rigid bodies".into());
+        }
+        if self.elements.iter().any(|e| e.attachment.joint.dof() > 0) {
+            t.push("joints".into());
+        }
+        if self.elements.iter().any(|e| {
+            let j = &e.attachment.joint;
+            j.stiffness.iter().chain(&j.damping).any(|v| *v != 0.0)
+        }) {
+            t.push("joint springs".into());
+        }
         t
     }
 
@@ -385,4 +444,115 @@ impl Model {
     pub fn n_cables(&self) -> usize {
         self.rods.iter().map(|r| r.spec.cables.len()).sum()
     }
+}
+
+/// Checks one rod and precomputes its pieces (`K_n`, `D_n`, quadrature
+/// points, placed point loads).
+fn build_rod(
+    spec: RodSpec,
+    index: usize,
+    dof_offset: usize,
+    cable_offset: usize,
+    gl: &GaussLegendre,
+) -> Result<RodModel, DynamicsError> {
+    spec.check(Some(index))?;
+    let rod = &spec.rod;
+    let mats = piece_matrices(rod, &spec.body, spec.stress_free.as_deref(), gl);
+    let mut pieces = Vec::with_capacity(rod.n_pieces());
+    for (n, (piece, m)) in rod.pieces().iter().zip(mats).enumerate() {
+        let points = gl
+            .on_interval(piece.length)
+            .map(|(x, w)| {
+                let s = piece.start + x;
+                QuadPoint {
+                    x,
+                    w,
+                    inertia: spec.body.screw_inertia(s),
+                    mass_per_length: spec.body.mass_per_length(s),
+                }
+            })
+            .collect();
+        let mut loads = Vec::new();
+        for (i, l) in spec.point_loads.iter().enumerate() {
+            let (pn, x) = rod.locate(l.s).expect("PointLoad::validate checked s");
+            if pn == n {
+                loads.push(PlacedLoad { x, index: i });
+            }
+        }
+        let k = m.stiffness.nrows();
+        let pad =
+            |d: &DMatrix<f64>| Mat6::from_fn(|i, j| if i < k && j < k { d[(i, j)] } else { 0.0 });
+        let (stiffness6, damping6) = (pad(&m.stiffness), pad(&m.damping));
+        let off_diagonal_zero =
+            |a: &Mat6| (0..6).all(|i| (0..6).all(|j| i == j || a[(i, j)] == 0.0));
+        let diagonal = (off_diagonal_zero(&stiffness6) && off_diagonal_zero(&damping6))
+            .then(|| (stiffness6.diagonal(), damping6.diagonal()));
+        pieces.push(PieceData {
+            points,
+            loads,
+            stiffness6,
+            damping6,
+            diagonal,
+            offset6: Vec6::from_fn(|i, _| if i < k { m.elastic_offset[i] } else { 0.0 }),
+            has_damping: m.damping.iter().any(|v| *v != 0.0),
+            has_offset: m.elastic_offset.iter().any(|v| *v != 0.0),
+            stiffness: m.stiffness,
+            damping: m.damping,
+        });
+    }
+    let needs_world = spec
+        .distributed_loads
+        .iter()
+        .any(|d| d.frame == LoadFrame::World);
+    Ok(RodModel {
+        spec,
+        dof_offset,
+        pieces,
+        needs_world_pose_at_points: needs_world,
+        cable_offset,
+    })
+}
+
+/// An element of a model given to [`Model::with_elements`]: a rod or a
+/// rigid body, with where it hangs.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Element {
+    /// A rod; its base pose ([`softrod_kinematics::Rod::base`]) is relative
+    /// to the attachment frame.
+    Rod(RodSpec, Attachment),
+    /// A rigid body.
+    Body(BodySpec, Attachment),
+}
+
+/// What an element of a [`Model`] is: the index among the model's rods or
+/// bodies.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ElementKind {
+    /// Index in [`Model::rods`].
+    Rod(usize),
+    /// Index in [`Model::bodies`].
+    Body(usize),
+}
+
+/// An element of a [`Model`] as built: name, kind, attachment (the joint's
+/// axes normalized) and its joint's coordinates in `q`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ElementInfo {
+    /// The element's name.
+    pub name: String,
+    /// Rod or body, and its index.
+    pub kind: ElementKind,
+    /// Parent, `at`, joint.
+    pub attachment: Attachment,
+    /// Range of the joint's coordinates in `q` (empty for a fixed joint).
+    pub joint_dofs: std::ops::Range<usize>,
+}
+
+/// A rigid body inside a [`Model`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct BodyModel {
+    /// The description it was built from.
+    pub spec: BodySpec,
+    /// Its screw inertia at the body frame (D52).
+    pub inertia: Mat6,
 }

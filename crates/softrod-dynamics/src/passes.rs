@@ -79,7 +79,7 @@ fn add_sandwich(
 /// External distributed wrench density at a point (body frame, applied):
 /// drag on the body velocity plus distributed loads.
 #[inline]
-fn external_density(rm: &RodModel, scale: f64, world: &Pose, eta: &Vec6) -> Vec6 {
+pub(crate) fn external_density(rm: &RodModel, scale: f64, world: &Pose, eta: &Vec6) -> Vec6 {
     let mut f = Vec6::zeros();
     if let Some(d) = &rm.spec.drag {
         f += d.wrench_density(eta);

@@ -93,6 +93,7 @@ impl ShiftedSolver {
             }
         }
         check_vec(model, "q", q)?;
+        model.require_chain("ShiftedSolver")?;
         shifted_factor(model, &mut self.data, q, a, b)?;
         self.factored = true;
         Ok(())

@@ -154,6 +154,31 @@ impl SecondOrderSystem for RodSystem {
         dqdd_dq: &mut DMatrix<f64>,
         dqdd_dqd: &mut DMatrix<f64>,
     ) -> Result<(), DynamicsError> {
+        if self.model.is_articulated() {
+            // The analytic derivatives do not cover joints and bodies yet
+            // (docs/theory.md §11): forward finite differences of the O(N)
+            // forward dynamics, as the trait's default.
+            let n = q.len();
+            let mut a0 = DVector::zeros(n);
+            let mut scratch = (DVector::zeros(n), DVector::zeros(n));
+            self.accel(t, q, qd, &mut a0)?;
+            crate::system::fd_jacobian(
+                |t, x, dy| self.accel(t, x, qd, dy),
+                t,
+                q,
+                &a0,
+                dqdd_dq,
+                &mut scratch,
+            )?;
+            return crate::system::fd_jacobian(
+                |t, x, dy| self.accel(t, q, x, dy),
+                t,
+                qd,
+                &a0,
+                dqdd_dqd,
+                &mut scratch,
+            );
+        }
         let tau = self.tau.as_ref().map(|v| v.as_slice());
         let work = self
             .derivatives
@@ -231,6 +256,10 @@ impl SecondOrderSystem for RodSystem {
         a: f64,
         b: f64,
     ) -> Result<bool, DynamicsError> {
+        if self.model.is_articulated() {
+            // The O(N) shifted solve covers chains only: dense matrices.
+            return Ok(false);
+        }
         self.shifted.factor(&self.model, q.as_slice(), a, b)?;
         Ok(true)
     }

@@ -76,12 +76,14 @@ fn from_rest(model: &Model, setting: &Recommended, times: &[f64]) -> (RodSystem,
 /// Tip positions (first rod) of the outputs.
 fn tips(model: &Model, sol: &Solution) -> Vec<[f64; 3]> {
     let rod = &model.rods()[0].spec.rod;
-    let n = model.n_dof();
+    // The first rod's own coordinates (scenes with joints put them first).
+    let dofs = model.rods()[0].dofs();
     let mut kin = RodKinematics::new(rod);
     sol.y
         .iter()
         .map(|y| {
-            kin.update(rod, &y.as_slice()[..n], None, None).unwrap();
+            kin.update(rod, &y.as_slice()[dofs.clone()], None, None)
+                .unwrap();
             let p = kin.tip_pose().translation;
             [p.x, p.y, p.z]
         })

@@ -35,13 +35,23 @@ impl Scene {
     /// from the error's rod index, and the model's error as source.
     pub fn build(&self) -> Result<Built, SceneError> {
         let r = Reporter::without_text(&self.source);
-        let mut b = Model::builder()
-            .rods(self.rods.iter().cloned())
-            .quadrature(self.run.quadrature);
-        if self.has_gravity() {
-            b = b.gravity(Vec3::from(self.world.gravity));
-        }
-        let model = b.build().map_err(|e| {
+        let gravity = self.has_gravity().then(|| Vec3::from(self.world.gravity));
+        let built = if self.robot.is_trivial() {
+            let mut b = Model::builder()
+                .rods(self.rods.iter().cloned())
+                .quadrature(self.run.quadrature);
+            if let Some(g) = gravity {
+                b = b.gravity(g);
+            }
+            b.build()
+        } else {
+            Model::with_elements(
+                self.robot.elements(&self.rods),
+                gravity,
+                self.run.quadrature,
+            )
+        };
+        let model = built.map_err(|e| {
             let rod = e
                 .rod()
                 .and_then(|id| id.index)

@@ -15,6 +15,8 @@ pub(crate) struct RawScene {
     #[serde(default)]
     pub rod: Vec<RawRod>,
     #[serde(default)]
+    pub body: Vec<crate::robot::RawBody>,
+    #[serde(default)]
     pub cable: Vec<RawCable>,
     #[serde(default)]
     pub load: Vec<RawLoad>,
@@ -42,6 +44,9 @@ pub(crate) struct RawRod {
     pub section: RawSection,
     pub material: RawMaterial,
     pub drag: Option<RawDrag>,
+    pub parent: Option<String>,
+    pub at: Option<f64>,
+    pub joint: Option<crate::robot::RawJoint>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -95,8 +100,10 @@ pub(crate) struct RawCable {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawLoad {
-    pub rod: String,
-    pub s: f64,
+    pub rod: Option<String>,
+    pub s: Option<f64>,
+    /// A load on a rigid body instead of a rod (at the body frame's origin).
+    pub body: Option<String>,
     pub force: Option<[f64; 3]>,
     pub moment: Option<[f64; 3]>,
     pub frame: Option<String>,

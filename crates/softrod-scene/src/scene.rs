@@ -7,6 +7,7 @@ use serde::Serialize;
 use softrod_dynamics::RodSpec;
 
 use crate::error::{SceneError, Warning};
+use crate::robot::Robot;
 use crate::run::Run;
 
 /// The world: uniform gravity.
@@ -71,6 +72,8 @@ pub struct Scene {
     /// Rods, at least one, with unique names, in file order; each holds the
     /// `[[cable]]` and `[[load]]` entries that name it, in file order.
     pub rods: Vec<RodSpec>,
+    /// Bodies, parents and joints (empty for a scene without them).
+    pub robot: Robot,
     /// Initial state (lengths checked against [`Scene::n_dof`]).
     pub initial: Initial,
     /// Run settings.
@@ -102,9 +105,10 @@ impl Scene {
         crate::validate::parse(text, name)
     }
 
-    /// Total number of generalized coordinates: Σ over rods of pieces × selected strains.
+    /// Total number of generalized coordinates: Σ over rods of pieces ×
+    /// selected strains, plus the joints' coordinates.
     pub fn n_dof(&self) -> usize {
-        self.rods.iter().map(|r| r.rod.n_dof()).sum()
+        self.rods.iter().map(|r| r.rod.n_dof()).sum::<usize>() + self.robot.joint_dofs()
     }
 
     /// Index in `q` of the first coordinate of rod `i` (`i = rods.len()` gives `n_dof()`).
@@ -112,7 +116,15 @@ impl Scene {
     /// # Panics
     /// If `i > rods.len()`.
     pub fn rod_dof_offset(&self, i: usize) -> usize {
-        self.rods[..i].iter().map(|r| r.rod.n_dof()).sum()
+        if self.robot.order.is_empty() || i == self.rods.len() {
+            let strains: usize = self.rods[..i].iter().map(|r| r.rod.n_dof()).sum();
+            return if i == self.rods.len() {
+                strains + self.robot.joint_dofs()
+            } else {
+                strains
+            };
+        }
+        self.robot.rod_dof_offset(&self.rods, i)
     }
 
     /// Index of the rod called `name`.

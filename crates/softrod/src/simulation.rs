@@ -189,10 +189,18 @@ impl Observer for Keep {
     fn sample(&mut self, s: Sample<'_>) -> Result<Flow, String> {
         let e = energies(s.model, s.data, s.q, s.qd).map_err(|e| e.to_string())?;
         let mut tips = Vec::with_capacity(self.kin.len());
-        for (k, r) in self.kin.iter_mut().zip(s.model.rods()) {
+        let articulated = s.model.is_articulated();
+        if articulated {
+            softrod_dynamics::frames(s.model, s.data, s.q).map_err(|e| e.to_string())?;
+        }
+        for (i, (k, r)) in self.kin.iter_mut().zip(s.model.rods()).enumerate() {
             k.update(&r.spec.rod, &s.q[r.dofs()], None, None)
                 .map_err(|e| e.to_string())?;
-            tips.push(*k.tip_pose());
+            tips.push(if articulated {
+                s.data.rod_to_world(s.model, i).compose(k.tip_pose())
+            } else {
+                *k.tip_pose()
+            });
         }
         let t = &mut self.traj;
         t.t.push(s.t);
@@ -390,20 +398,54 @@ impl Simulation {
         Ok((i, k))
     }
 
+    /// The map from rod `i`'s kinematic poses to the world at `q`: the
+    /// identity for a rod clamped to the world, else through its parents'
+    /// poses (allocates a `Data` for a model with joints or parents).
+    fn to_world(&self, i: usize, q: &[f64]) -> Result<Pose> {
+        let model = self.model();
+        if !model.is_articulated() {
+            return Ok(Pose::identity());
+        }
+        let mut data = Data::new(model);
+        softrod_dynamics::frames(model, &mut data, q)?;
+        Ok(data.rod_to_world(model, i))
+    }
+
     /// World pose of rod `rod` at abscissa `s` \[m\] for coordinates `q` (D7).
     pub fn pose(&self, rod: &str, s: f64, q: &[f64]) -> Result<Pose> {
         let (i, k) = self.kinematics(rod, q)?;
-        Ok(k.pose_at(&self.model().rods()[i].spec.rod, s)?)
+        let local = k.pose_at(&self.model().rods()[i].spec.rod, s)?;
+        Ok(self.to_world(i, q)?.compose(&local))
     }
 
     /// Tip pose of rod `rod` for coordinates `q` (world frame).
     pub fn tip_pose(&self, rod: &str, q: &[f64]) -> Result<Pose> {
-        Ok(*self.kinematics(rod, q)?.1.tip_pose())
+        let (i, k) = self.kinematics(rod, q)?;
+        Ok(self.to_world(i, q)?.compose(k.tip_pose()))
+    }
+
+    /// World poses of the rigid bodies' frames for coordinates `q` (one per
+    /// body, in the order of [`Model::bodies`]; empty without bodies).
+    pub fn body_poses(&self, q: &[f64]) -> Result<Vec<Pose>> {
+        self.check("q", q)?;
+        let model = self.model();
+        if model.bodies().is_empty() {
+            return Ok(Vec::new());
+        }
+        let mut data = Data::new(model);
+        softrod_dynamics::frames(model, &mut data, q)?;
+        Ok(data.body_poses)
     }
 
     /// Geometric Jacobian `J(s)` (6 × n_dof) of rod `rod` at `s` in `frame`:
     /// the twist of the section is `J q̇` (D11). Columns of other rods are 0.
     pub fn jacobian(&self, rod: &str, s: f64, q: &[f64], frame: Frame) -> Result<Matrix6xX<f64>> {
+        if self.model().is_articulated() {
+            return Err(softrod_dynamics::DynamicsError::Unsupported {
+                what: "Simulation::jacobian",
+            }
+            .into());
+        }
         let (i, k) = self.kinematics(rod, q)?;
         let r = &self.model().rods()[i];
         let mut local = Matrix6xX::zeros(r.n_dof());

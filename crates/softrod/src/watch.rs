@@ -33,7 +33,9 @@
 //! ∫|P_nc|)`, count as zero.
 
 use nalgebra::DVector;
-use softrod_dynamics::{Data, DynamicsError, Energies, Model, RodSpec, bias_force, energies};
+use softrod_dynamics::{
+    Data, DynamicsError, Element, ElementKind, Energies, Model, RodSpec, bias_force, energies,
+};
 use softrod_mechanics::{Material, RodBody};
 
 use crate::error::Error;
@@ -96,7 +98,9 @@ fn dot(a: &[f64], b: &DVector<f64>) -> f64 {
     a.iter().zip(b.iter()).map(|(x, y)| x * y).sum()
 }
 
-/// The model without viscosity, drag, cables and loads, if it has any.
+/// The model without viscosity, drag, cables and loads (on rods and bodies)
+/// and without joint damping, if it has any of them; joints, bodies and
+/// joint springs stay (they are conservative).
 fn conservative_model(model: &Model) -> Result<Option<Model>, Error> {
     let has = model.rods().iter().any(|r| {
         let s = &r.spec;
@@ -106,32 +110,60 @@ fn conservative_model(model: &Model) -> Result<Option<Model>, Error> {
             || s.drag
                 .is_some_and(|d| d.translational != 0.0 || d.rotational != 0.0)
             || s.body.material().viscosity() != 0.0
-    });
+    }) || model.bodies().iter().any(|b| !b.spec.loads.is_empty())
+        || model
+            .elements()
+            .iter()
+            .any(|e| e.attachment.joint.damping.iter().any(|d| *d != 0.0));
     if !has {
         return Ok(None);
     }
-    let specs: Vec<RodSpec> = model
-        .rods()
+    let conservative_rod = |spec: &RodSpec| -> Result<RodSpec, Error> {
+        let mut s = spec.clone();
+        s.cables.clear();
+        s.point_loads.clear();
+        s.distributed_loads.clear();
+        s.drag = None;
+        let m = s.body.material();
+        let elastic = Material::builder()
+            .density(m.density())
+            .young(m.young())
+            .shear_modulus(m.shear_modulus())
+            .viscosity(0.0)
+            .build()?;
+        s.body = RodBody::new(*s.body.section(), elastic, s.body.length())?;
+        Ok(s)
+    };
+    if !model.is_articulated() {
+        let specs: Vec<RodSpec> = model
+            .rods()
+            .iter()
+            .map(|r| conservative_rod(&r.spec))
+            .collect::<Result<_, Error>>()?;
+        return Ok(Some(Model::new(
+            specs,
+            model.gravity,
+            model.quadrature.len(),
+        )?));
+    }
+    let elements = model
+        .elements()
         .iter()
-        .map(|r| {
-            let mut s = r.spec.clone();
-            s.cables.clear();
-            s.point_loads.clear();
-            s.distributed_loads.clear();
-            s.drag = None;
-            let m = s.body.material();
-            let elastic = Material::builder()
-                .density(m.density())
-                .young(m.young())
-                .shear_modulus(m.shear_modulus())
-                .viscosity(0.0)
-                .build()?;
-            s.body = RodBody::new(*s.body.section(), elastic, s.body.length())?;
-            Ok(s)
+        .map(|e| {
+            let mut at = e.attachment.clone();
+            at.joint.damping.iter_mut().for_each(|d| *d = 0.0);
+            Ok(match e.kind {
+                ElementKind::Rod(i) => Element::Rod(conservative_rod(&model.rods()[i].spec)?, at),
+                ElementKind::Body(i) => {
+                    let mut b = model.bodies()[i].spec.clone();
+                    b.loads.clear();
+                    Element::Body(b, at)
+                }
+            })
         })
-        .collect::<Result<_, Error>>()?;
-    Ok(Some(Model::new(
-        specs,
+        .collect::<Result<Vec<_>, Error>>()?;
+    Ok(Some(Model::with_elements(
+        elements,
         model.gravity,
         model.quadrature.len(),
     )?))

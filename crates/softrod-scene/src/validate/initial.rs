@@ -9,14 +9,21 @@ use softrod_kinematics::Strain;
 
 use super::{Ctx, Result};
 use crate::raw::RawInitial;
+use crate::robot::Robot;
 use crate::scene::Initial;
 
 impl Ctx<'_> {
-    pub(super) fn initial(&mut self, raw: Option<RawInitial>, rods: &[RodSpec]) -> Result<Initial> {
+    pub(super) fn initial(
+        &mut self,
+        raw: Option<RawInitial>,
+        rods: &[RodSpec],
+        robot: &Robot,
+    ) -> Result<Initial> {
         let Some(raw) = raw else {
             return Ok(Initial::default());
         };
-        let n_dof: usize = rods.iter().map(|r| r.rod.n_dof()).sum();
+        let joints = robot.joint_dofs();
+        let n_dof: usize = rods.iter().map(|r| r.rod.n_dof()).sum::<usize>() + joints;
         let per_rod = rods
             .iter()
             .map(|r| {
@@ -27,6 +34,7 @@ impl Ctx<'_> {
                     r.rod.pieces()[0].basis.dof()
                 )
             })
+            .chain((joints > 0).then(|| format!("joints: {joints}")))
             .collect::<Vec<_>>()
             .join(", ");
         if raw.row.is_some() && raw.trajectory.is_none() {
@@ -78,7 +86,7 @@ impl Ctx<'_> {
             }
         }
         if let Some(q) = &raw.q {
-            self.warn_large_strains(q, rods);
+            self.warn_large_strains(q, rods, robot);
         }
         Ok(Initial {
             q: raw.q,
@@ -87,16 +95,15 @@ impl Ctx<'_> {
     }
 
     /// Warns (once per rod) about initial strains far outside the small-strain range.
-    fn warn_large_strains(&mut self, q: &[f64], rods: &[RodSpec]) {
-        let mut offset = 0;
-        for rod in rods {
+    fn warn_large_strains(&mut self, q: &[f64], rods: &[RodSpec], robot: &Robot) {
+        for (i, rod) in rods.iter().enumerate() {
+            let offset = robot.rod_dof_offset(rods, i);
             if let Some((at, why)) = large_strain(&q[offset..offset + rod.rod.n_dof()], rod) {
                 self.warn(
                     &format!("initial.q[{}]", offset + at),
                     format!("rod {:?}: {why}", rod.name),
                 );
             }
-            offset += rod.rod.n_dof();
         }
     }
 }

@@ -13,7 +13,13 @@ impl Ctx<'_> {
     /// `load[j]`, added to the rod it names; returns that rod's index.
     pub(super) fn load(&mut self, j: usize, l: RawLoad, rods: &mut [RodSpec]) -> Result<usize> {
         let p = format!("load[{j}]");
-        let i = self.rod_ref(&format!("{p}.rod"), &l.rod, rods)?;
+        let rod = l
+            .rod
+            .as_deref()
+            .ok_or_else(|| self.r.missing(&format!("{p}.rod"), " (or body = \"…\")"))?;
+        let s =
+            l.s.ok_or_else(|| self.r.missing(&format!("{p}.s"), " (where along the rod)"))?;
+        let i = self.rod_ref(&format!("{p}.rod"), rod, rods)?;
         let length = rods[i].body.length();
         let frame = match l.frame.as_deref() {
             None => LoadFrame::World,
@@ -24,7 +30,7 @@ impl Ctx<'_> {
         let force = l.force.unwrap_or([0.0; 3]);
         let moment = l.moment.unwrap_or([0.0; 3]);
         let load = PointLoad {
-            s: l.s,
+            s,
             force: Vec3::from(force),
             moment: Vec3::from(moment),
             frame,

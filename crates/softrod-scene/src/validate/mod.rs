@@ -5,6 +5,7 @@
 //! the order of `q`), maps the library's errors to key paths (`crate::keys`)
 //! and collects warnings.
 
+mod bodies;
 mod body;
 mod cables;
 mod initial;
@@ -110,7 +111,13 @@ impl Ctx<'_> {
 
     fn scene(&mut self, raw: RawScene) -> Result<Scene> {
         let world = reference::world(raw.world);
-        let mut rods = self.rods(raw.rod)?;
+        let mut raw_rods = raw.rod;
+        let links: Vec<bodies::RodLink> = raw_rods
+            .iter_mut()
+            .map(|r| (r.parent.take(), r.at.take(), r.joint.take()))
+            .collect();
+        let mut rods = self.rods(raw_rods)?;
+        let mut robot = self.robot(links, raw.body, &rods)?;
         let run = self.run(raw.run)?;
         let mut origins = Origins {
             cables: vec![Vec::new(); rods.len()],
@@ -121,10 +128,14 @@ impl Ctx<'_> {
             origins.cables[i].push(j);
         }
         for (j, l) in raw.load.into_iter().enumerate() {
+            if l.body.is_some() {
+                self.body_load(j, l, &mut robot)?;
+                continue;
+            }
             let i = self.load(j, l, &mut rods)?;
             origins.loads[i].push(j);
         }
-        let initial = self.initial(raw.initial, &rods)?;
+        let initial = self.initial(raw.initial, &rods, &robot)?;
         let reference = raw
             .reference
             .map(|r| self.reference(r, &rods, &run))
@@ -133,6 +144,7 @@ impl Ctx<'_> {
             source: self.r.file().to_owned(),
             world,
             rods,
+            robot,
             initial,
             run,
             reference,

@@ -254,7 +254,7 @@ impl Ctx<'_> {
 
 /// The clamped base: `position` (default origin) and the row-major
 /// `rotation` (default identity), local → world.
-fn base(b: Option<RawBase>) -> Pose {
+pub(super) fn base(b: Option<RawBase>) -> Pose {
     let b = b.unwrap_or(RawBase {
         position: None,
         rotation: None,

@@ -1,0 +1,411 @@
+//! Joints, rigid bodies and attachments: the parts of a robot that are not
+//! rods (docs/theory.md §11, D50–D55).
+//!
+//! A joint between an attachment frame and a child element (rod or body) is
+//! a chain of massless *virtual pieces* of unit length whose strain bases
+//! are the joint's motion subspace (D50): revolute `[a; 0]`, prismatic
+//! `[0; a]`, spherical `[I; 0]` (the rotation vector: `exp` of the strain is
+//! `(exp(r̂), 0)`), universal two revolute pieces, free a translation piece
+//! `[0; I]` followed by a spherical one, so `g = (exp(r̂), p)`. The PCS maps
+//! (`exp`, `T₋`, its rate) of a unit piece then give the joint's pose,
+//! motion subspace `T₋(1)B` and velocity-product acceleration exactly.
+
+use crate::error::DynamicsError;
+use nalgebra::Matrix6xX;
+use softrod_lie::{Mat3, Mat6, Pose, Vec3, Wrench, join, skew};
+use softrod_mechanics::LoadFrame;
+
+/// The kind of a joint and its axes (unit vectors in the child element's
+/// frame at joint value 0; normalized by [`Joint::validate`]).
+#[derive(Clone, Debug, PartialEq)]
+pub enum JointKind {
+    /// No relative motion (0 DoF): the element is clamped to its parent.
+    Fixed,
+    /// Rotation by an angle \[rad\] about `axis` (1 DoF).
+    Revolute {
+        /// Rotation axis.
+        axis: Vec3,
+    },
+    /// Translation by a displacement \[m\] along `axis` (1 DoF).
+    Prismatic {
+        /// Translation axis.
+        axis: Vec3,
+    },
+    /// Rotation about `axes[0]` then about `axes[1]` (2 DoF, angles \[rad\]);
+    /// the second axis is in the frame turned by the first rotation (Cardan).
+    Universal {
+        /// The two axes, first then second.
+        axes: [Vec3; 2],
+    },
+    /// Any rotation (3 DoF): the rotation vector `r` \[rad\], `R = exp(r̂)`.
+    Spherical,
+    /// Any rigid motion (6 DoF): `(r, p)`, rotation vector \[rad\] then
+    /// translation \[m\] in the attachment frame, `g = (exp(r̂), p)`: a
+    /// floating base.
+    Free,
+}
+
+impl JointKind {
+    /// Number of coordinates.
+    pub fn dof(&self) -> usize {
+        match self {
+            JointKind::Fixed => 0,
+            JointKind::Revolute { .. } | JointKind::Prismatic { .. } => 1,
+            JointKind::Universal { .. } => 2,
+            JointKind::Spherical => 3,
+            JointKind::Free => 6,
+        }
+    }
+
+    /// The scene-file name (`"fixed"`, `"revolute"`, …).
+    pub fn name(&self) -> &'static str {
+        match self {
+            JointKind::Fixed => "fixed",
+            JointKind::Revolute { .. } => "revolute",
+            JointKind::Prismatic { .. } => "prismatic",
+            JointKind::Universal { .. } => "universal",
+            JointKind::Spherical => "spherical",
+            JointKind::Free => "free",
+        }
+    }
+
+    /// The virtual pieces base to tip (D50): each strain basis (6×k) and the
+    /// index of its first coordinate among the joint's.
+    pub(crate) fn segments(&self) -> Vec<(Matrix6xX<f64>, usize)> {
+        let col = |ang: &Vec3, lin: &Vec3| Matrix6xX::from_column_slice(join(ang, lin).as_slice());
+        let z = Vec3::zeros();
+        let block = |angular: bool| {
+            let mut m = Matrix6xX::zeros(3);
+            for i in 0..3 {
+                m[(if angular { i } else { i + 3 }, i)] = 1.0;
+            }
+            m
+        };
+        match self {
+            JointKind::Fixed => vec![],
+            JointKind::Revolute { axis } => vec![(col(axis, &z), 0)],
+            JointKind::Prismatic { axis } => vec![(col(&z, axis), 0)],
+            JointKind::Universal { axes } => vec![(col(&axes[0], &z), 0), (col(&axes[1], &z), 1)],
+            JointKind::Spherical => vec![(block(true), 0)],
+            // Translation first (coordinates 3..6), then the rotation (0..3):
+            // g = (I, p)(exp r̂, 0) = (exp r̂, p).
+            JointKind::Free => vec![(block(false), 3), (block(true), 0)],
+        }
+    }
+}
+
+/// A joint with optional per-coordinate stiffness \[N/m or N·m/rad\],
+/// damping \[N·s/m or N·m·s/rad\] and rest value (where the spring force is
+/// zero): generalized force `−k_i (q_i − rest_i) − d_i q̇_i` (D53). Empty
+/// vectors mean zero.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Joint {
+    /// Kind and axes.
+    pub kind: JointKind,
+    /// Stiffness per coordinate (empty or `dof` values, ≥ 0).
+    pub stiffness: Vec<f64>,
+    /// Damping per coordinate (empty or `dof` values, ≥ 0).
+    pub damping: Vec<f64>,
+    /// Rest value per coordinate (empty or `dof` values).
+    pub rest: Vec<f64>,
+}
+
+impl Default for Joint {
+    fn default() -> Self {
+        Self::fixed()
+    }
+}
+
+impl Joint {
+    /// A joint of this kind, without spring or damper.
+    pub fn new(kind: JointKind) -> Self {
+        Self {
+            kind,
+            stiffness: Vec::new(),
+            damping: Vec::new(),
+            rest: Vec::new(),
+        }
+    }
+
+    /// [`JointKind::Fixed`].
+    pub fn fixed() -> Self {
+        Self::new(JointKind::Fixed)
+    }
+
+    /// [`JointKind::Revolute`] about `axis`.
+    pub fn revolute(axis: impl Into<Vec3>) -> Self {
+        Self::new(JointKind::Revolute { axis: axis.into() })
+    }
+
+    /// [`JointKind::Prismatic`] along `axis`.
+    pub fn prismatic(axis: impl Into<Vec3>) -> Self {
+        Self::new(JointKind::Prismatic { axis: axis.into() })
+    }
+
+    /// [`JointKind::Universal`] about `a` then `b`.
+    pub fn universal(a: impl Into<Vec3>, b: impl Into<Vec3>) -> Self {
+        Self::new(JointKind::Universal {
+            axes: [a.into(), b.into()],
+        })
+    }
+
+    /// [`JointKind::Spherical`].
+    pub fn spherical() -> Self {
+        Self::new(JointKind::Spherical)
+    }
+
+    /// [`JointKind::Free`].
+    pub fn free() -> Self {
+        Self::new(JointKind::Free)
+    }
+
+    /// With a spring per coordinate.
+    pub fn with_stiffness(mut self, k: &[f64]) -> Self {
+        self.stiffness = k.to_vec();
+        self
+    }
+
+    /// With a damper per coordinate.
+    pub fn with_damping(mut self, d: &[f64]) -> Self {
+        self.damping = d.to_vec();
+        self
+    }
+
+    /// With a rest value per coordinate.
+    pub fn with_rest(mut self, rest: &[f64]) -> Self {
+        self.rest = rest.to_vec();
+        self
+    }
+
+    /// Number of coordinates.
+    pub fn dof(&self) -> usize {
+        self.kind.dof()
+    }
+
+    /// Checks the axes (finite, non-zero; universal: not parallel) and
+    /// normalizes them; checks the spring, damper and rest vectors (empty or
+    /// one finite value per coordinate, stiffness and damping ≥ 0).
+    pub fn validate(&mut self, element: &str) -> Result<(), DynamicsError> {
+        let bad = |reason: String| DynamicsError::InvalidJoint {
+            element: element.to_string(),
+            reason,
+        };
+        let unit = |a: &Vec3, what: &str| -> Result<Vec3, DynamicsError> {
+            let n = a.norm();
+            if !n.is_finite() || n < 1e-12 {
+                return Err(bad(format!(
+                    "{what} [{}, {}, {}] must be finite and non-zero",
+                    a[0], a[1], a[2]
+                )));
+            }
+            Ok(a / n)
+        };
+        match &mut self.kind {
+            JointKind::Revolute { axis } | JointKind::Prismatic { axis } => {
+                *axis = unit(axis, "axis")?;
+            }
+            JointKind::Universal { axes } => {
+                axes[0] = unit(&axes[0], "axes[0]")?;
+                axes[1] = unit(&axes[1], "axes[1]")?;
+                if axes[0].cross(&axes[1]).norm() < 1e-9 {
+                    return Err(bad("the two axes are parallel".into()));
+                }
+            }
+            _ => {}
+        }
+        let k = self.dof();
+        for (what, v, non_neg) in [
+            ("stiffness", &self.stiffness, true),
+            ("damping", &self.damping, true),
+            ("rest", &self.rest, false),
+        ] {
+            if !v.is_empty() && v.len() != k {
+                return Err(bad(format!(
+                    "{what} has {} values, the joint has {k} coordinates",
+                    v.len()
+                )));
+            }
+            if let Some((i, x)) = v
+                .iter()
+                .enumerate()
+                .find(|(_, x)| !x.is_finite() || (non_neg && **x < 0.0))
+            {
+                return Err(bad(format!(
+                    "{what}[{i}] = {x} must be finite{}",
+                    if non_neg { " and non-negative" } else { "" }
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    /// Stiffness, damping and rest of coordinate `i` (zero when not given).
+    pub(crate) fn coefficients(&self, i: usize) -> (f64, f64, f64) {
+        let get = |v: &Vec<f64>| v.get(i).copied().unwrap_or(0.0);
+        (get(&self.stiffness), get(&self.damping), get(&self.rest))
+    }
+}
+
+/// Where an element hangs (D51): its parent (`None`: the world), the arc
+/// length `at` on a parent rod (default its tip; only piece boundaries,
+/// see [`crate::Model::with_elements`]), and the joint. The element's own
+/// base pose (relative to the attachment frame, at joint value 0) is the
+/// rod's [`softrod_kinematics::Rod::base`] or the body's [`BodySpec::base`].
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Attachment {
+    /// Name of the parent rod or body; `None` = the world.
+    pub parent: Option<String>,
+    /// Arc length on a parent rod \[m\]; `None` = its tip.
+    pub at: Option<f64>,
+    /// The joint.
+    pub joint: Joint,
+}
+
+impl Attachment {
+    /// Clamped to the world.
+    pub fn world() -> Self {
+        Self::default()
+    }
+
+    /// To the world through `joint`.
+    pub fn world_joint(joint: Joint) -> Self {
+        Self {
+            joint,
+            ..Self::default()
+        }
+    }
+
+    /// To the element named `parent` (at a parent rod's tip) through `joint`.
+    pub fn to(parent: impl Into<String>, joint: Joint) -> Self {
+        Self {
+            parent: Some(parent.into()),
+            at: None,
+            joint,
+        }
+    }
+
+    /// At arc length `s` \[m\] of the parent rod.
+    pub fn at(mut self, s: f64) -> Self {
+        self.at = Some(s);
+        self
+    }
+
+    /// Whether this is the plain clamp to the world of a rod of the section
+    /// "A scene" (no parent, fixed joint).
+    pub fn is_world_clamp(&self) -> bool {
+        self.parent.is_none() && self.joint.kind == JointKind::Fixed
+    }
+}
+
+/// A concentrated load on a rigid body at its frame's origin.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BodyLoad {
+    /// Force \[N\].
+    pub force: Vec3,
+    /// Moment [N·m].
+    pub moment: Vec3,
+    /// Frame of the components: world (dead load) or body (follower).
+    pub frame: LoadFrame,
+}
+
+impl BodyLoad {
+    /// The body-frame wrench `(M, N)` at a body of world pose `pose`.
+    #[inline]
+    pub fn wrench(&self, pose: &Pose) -> Wrench {
+        join(
+            &self.frame.to_body(pose, &self.moment),
+            &self.frame.to_body(pose, &self.force),
+        )
+    }
+}
+
+/// A rigid body (D52): mass \[kg\] > 0, inertia about the centre of mass
+/// in body axes \[kg·m²\] (symmetric positive definite), centre of mass in
+/// the body frame \[m\], base pose relative to its attachment frame at joint
+/// value 0, and point loads at the body frame's origin.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BodySpec {
+    /// Name for messages, outputs and as a parent.
+    pub name: String,
+    /// Mass \[kg\].
+    pub mass: f64,
+    /// Inertia about the centre of mass, body axes \[kg·m²\].
+    pub inertia: Mat3,
+    /// Centre of mass in the body frame \[m\].
+    pub center_of_mass: Vec3,
+    /// Pose of the body frame relative to the attachment frame (joint at 0).
+    pub base: Pose,
+    /// Loads at the body frame's origin.
+    pub loads: Vec<BodyLoad>,
+}
+
+impl BodySpec {
+    /// A body with its centre of mass at the body frame's origin and the
+    /// identity base pose.
+    pub fn new(name: impl Into<String>, mass: f64, inertia: Mat3) -> Self {
+        Self {
+            name: name.into(),
+            mass,
+            inertia,
+            center_of_mass: Vec3::zeros(),
+            base: Pose::identity(),
+            loads: Vec::new(),
+        }
+    }
+
+    /// Principal moments `[Ixx, Iyy, Izz]` about the centre of mass.
+    pub fn principal(name: impl Into<String>, mass: f64, moments: [f64; 3]) -> Self {
+        Self::new(name, mass, Mat3::from_diagonal(&Vec3::from(moments)))
+    }
+
+    /// Checks mass > 0, a finite symmetric positive-definite inertia, a
+    /// finite centre of mass and finite loads.
+    pub fn validate(&self) -> Result<(), DynamicsError> {
+        let bad = |reason: String| DynamicsError::InvalidBody {
+            body: self.name.clone(),
+            reason,
+        };
+        if !(self.mass.is_finite() && self.mass > 0.0) {
+            return Err(bad(format!("mass = {} kg must be > 0", self.mass)));
+        }
+        let i = &self.inertia;
+        if i.iter().any(|v| !v.is_finite()) {
+            return Err(bad("inertia is not finite".into()));
+        }
+        let scale = i.amax().max(f64::MIN_POSITIVE);
+        if (i - i.transpose()).amax() > 1e-12 * scale {
+            return Err(bad("inertia is not symmetric".into()));
+        }
+        if i.cholesky().is_none() {
+            return Err(bad("inertia is not positive definite".into()));
+        }
+        if self.center_of_mass.iter().any(|v| !v.is_finite()) {
+            return Err(bad("center_of_mass is not finite".into()));
+        }
+        if self.loads.iter().any(|l| {
+            l.force
+                .iter()
+                .chain(l.moment.iter())
+                .any(|v| !v.is_finite())
+        }) {
+            return Err(bad("a load is not finite".into()));
+        }
+        Ok(())
+    }
+
+    /// Screw inertia at the body frame's origin (D52): with `c` the centre
+    /// of mass, `𝓜 = [[I_c − m c̃², m c̃], [−m c̃, m I]]` so that `𝓜η` is the
+    /// (angular about the origin, linear) momentum for `η = (ω, v)`.
+    pub fn spatial_inertia(&self) -> Mat6 {
+        let c = skew(&self.center_of_mass);
+        let m = self.mass;
+        let mut out = Mat6::zeros();
+        out.fixed_view_mut::<3, 3>(0, 0)
+            .copy_from(&(self.inertia - c * c * m));
+        out.fixed_view_mut::<3, 3>(0, 3).copy_from(&(c * m));
+        out.fixed_view_mut::<3, 3>(3, 0).copy_from(&(-c * m));
+        out.fixed_view_mut::<3, 3>(3, 3)
+            .copy_from(&(Mat3::identity() * m));
+        out
+    }
+}

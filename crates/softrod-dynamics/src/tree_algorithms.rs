@@ -1,0 +1,521 @@
+//! The algorithms on the tree of an articulated model (docs/theory.md §11,
+//! D54–D58): the same recursions as the chain path (D17–D27) with a node's
+//! children summed at its tip, joints as massless unit pieces and bodies as
+//! single rigid inertias. Dense 6×6 arithmetic per node (no block tricks):
+//! the chain path of joint-free models is untouched.
+
+use crate::algorithms::strain_forces;
+use crate::data::Data;
+use crate::energy::Energies;
+use crate::error::DynamicsError;
+use crate::model::Model;
+use crate::passes::external_density;
+use crate::tree::{NodeKind, Tree};
+use nalgebra::DVector;
+use softrod_lie::{Mat6, PieceMaps, Pose, Vec6, ad_vec, coad_vec};
+use softrod_mechanics::elastic_energy;
+
+/// Per-node work space (all fixed-size).
+#[derive(Clone, Debug)]
+pub(crate) struct NodeWork {
+    /// World pose of the node's base frame.
+    pub base_world: Pose,
+    /// Local tip pose `g(ℓ)`, `S(ℓ) = T₋(ℓ)B` (6×k padded), the tip's
+    /// velocity-product acceleration.
+    pub tip: Pose,
+    pub s_tip: Mat6,
+    pub acc_tip: Vec6,
+    /// Velocity and acceleration of the tip frame (tip axes).
+    pub eta_tip: Vec6,
+    pub etadot_tip: Vec6,
+    /// (D20) `𝓜ᵗ = Σ wAᵀ𝓜A`, `𝓤 = Σ wAᵀ𝓜S`, `𝓓 = Σ wSᵀ𝓜S` of the node's
+    /// own mass; (D23/D17) bias sums `𝓟ᵗ` (6) and `𝓹 = Bᵀ Σ T₋ᵀ f` (k).
+    pub mt: Mat6,
+    pub ut: Mat6,
+    pub dt: Mat6,
+    pub p_big: Vec6,
+    pub p_small: Vec6,
+    /// What the children hand to the tip (tip axes): articulated or
+    /// composite inertia, and bias or transmitted wrench.
+    pub m_tip: Mat6,
+    pub f_tip: Vec6,
+    /// Forward dynamics: `Û`, `D̂⁻¹` (k×k padded), `u` (k).
+    pub uhat: Mat6,
+    pub dinv: Mat6,
+    pub u: Vec6,
+    /// Mass matrix: `Ad_{g_world(ℓ)} S(ℓ)` (world twists per unit rate).
+    pub s_world: Mat6,
+}
+
+impl NodeWork {
+    pub(crate) fn new() -> Self {
+        Self {
+            base_world: Pose::identity(),
+            tip: Pose::identity(),
+            s_tip: Mat6::zeros(),
+            acc_tip: Vec6::zeros(),
+            eta_tip: Vec6::zeros(),
+            etadot_tip: Vec6::zeros(),
+            mt: Mat6::zeros(),
+            ut: Mat6::zeros(),
+            dt: Mat6::zeros(),
+            p_big: Vec6::zeros(),
+            p_small: Vec6::zeros(),
+            m_tip: Mat6::zeros(),
+            f_tip: Vec6::zeros(),
+            uhat: Mat6::zeros(),
+            dinv: Mat6::zeros(),
+            u: Vec6::zeros(),
+            s_world: Mat6::zeros(),
+        }
+    }
+}
+
+/// What the outward sweep accumulates.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum TreePass {
+    /// Inverse dynamics: `f = 𝓜η̇ + ad*_η𝓜η − 𝓕_ext` with `q̈` given.
+    Inverse,
+    /// Forward dynamics: inertia sums and `h = 𝓜a + ad*_η𝓜η − 𝓕_ext`.
+    Articulated,
+    /// Mass matrix: inertia sums only, at rest.
+    Composite,
+}
+
+/// The acceleration standing for gravity, world axes: the world frame is
+/// accelerated by `−g` (derivations §4), so every node, body and point sees
+/// gravity without a per-point wrench.
+fn world_acceleration(model: &Model, scale: f64) -> Vec6 {
+    match model.gravity {
+        Some(g) => {
+            let a = -g * scale;
+            Vec6::new(0.0, 0.0, 0.0, a[0], a[1], a[2])
+        }
+        None => Vec6::zeros(),
+    }
+}
+
+/// `q_n` (or a rate) of a node, zero-padded to 6.
+#[inline]
+fn local(v: &[f64], dof: usize, k: usize) -> Vec6 {
+    Vec6::from_fn(|i, _| if i < k { v[dof + i] } else { 0.0 })
+}
+
+/// The outward sweep over the nodes (D7–D10, D54): poses, velocities,
+/// accelerations (inverse), and per node what `pass` needs.
+pub(crate) fn outward(
+    model: &Model,
+    tree: &Tree,
+    data: &mut Data,
+    q: &[f64],
+    qd: Option<&[f64]>,
+    qdd: Option<&[f64]>,
+    pass: TreePass,
+) {
+    let scale = data.load_scale;
+    let only_gravity = data.only_gravity;
+    let a_world = if pass == TreePass::Inverse {
+        world_acceleration(model, scale)
+    } else {
+        Vec6::zeros()
+    };
+    let has_vel = qd.is_some();
+    for (i, node) in tree.nodes.iter().enumerate() {
+        let (parent_pose, eta_p, etadot_p) = match node.parent {
+            Some(p) => {
+                let w = &data.nodes[p];
+                (w.base_world.compose(&w.tip), w.eta_tip, w.etadot_tip)
+            }
+            None => (Pose::identity(), Vec6::zeros(), a_world),
+        };
+        let x = node.offset.ad_inv();
+        let eta_b = x.mul_vec(&eta_p);
+        let etadot_b = x.mul_vec(&etadot_p);
+        let base_world = parent_pose.compose(&node.offset);
+        let w = &mut data.nodes[i];
+        w.base_world = base_world;
+        w.mt = Mat6::zeros();
+        w.ut = Mat6::zeros();
+        w.dt = Mat6::zeros();
+        w.p_big = Vec6::zeros();
+        w.p_small = Vec6::zeros();
+        let k = node.k;
+        let mut ps6 = Vec6::zeros();
+        // (ξ, ξ̇, ξ̈, piece length) of a piece-like node; bodies apart.
+        let (xi, dxi, ddxi, length) = match node.kind {
+            NodeKind::Body { body } => {
+                let bm = &model.bodies[body];
+                let m = &bm.inertia;
+                let mut f = coad_vec(&eta_b, &(m * eta_b));
+                if pass == TreePass::Inverse {
+                    f += m * etadot_b;
+                }
+                if !only_gravity && pass != TreePass::Composite {
+                    for l in &bm.spec.loads {
+                        f -= l.wrench(&base_world) * scale;
+                    }
+                }
+                w.p_big = f;
+                w.mt = *m;
+                w.tip = Pose::identity();
+                w.s_tip = Mat6::zeros();
+                w.acc_tip = Vec6::zeros();
+                w.eta_tip = eta_b;
+                w.etadot_tip = etadot_b;
+                if pass == TreePass::Composite {
+                    w.s_world = Mat6::zeros();
+                }
+                continue;
+            }
+            NodeKind::Joint { .. } => {
+                let b = &node.bpad;
+                (
+                    b * local(q, node.dof, k),
+                    qd.map_or(Vec6::zeros(), |v| b * local(v, node.dof, k)),
+                    qdd.map_or(Vec6::zeros(), |v| b * local(v, node.dof, k)),
+                    1.0,
+                )
+            }
+            NodeKind::Piece { rod, piece } => {
+                let rm = &model.rods[rod];
+                let pc = &rm.spec.rod.pieces()[piece];
+                let r = rm.dofs();
+                (
+                    pc.strain(&q[r.clone()]),
+                    qd.map_or(Vec6::zeros(), |v| pc.strain_rate(&v[r.clone()])),
+                    qdd.map_or(Vec6::zeros(), |v| pc.strain_rate(&v[r.clone()])),
+                    pc.length,
+                )
+            }
+        };
+        let maps = PieceMaps::new(&xi, has_vel.then_some(&dxi));
+        if let NodeKind::Piece { rod, piece } = node.kind {
+            let rm = &model.rods[rod];
+            let pd = &rm.pieces[piece];
+            let has_ext =
+                !only_gravity && (rm.spec.drag.is_some() || !rm.spec.distributed_loads.is_empty());
+            for qp in &pd.points {
+                let (gl, tm, dbias) = maps.eval(qp.x);
+                let a = gl.ad_inv();
+                let m = &qp.inertia;
+                if pass != TreePass::Composite {
+                    let carried = a.mul_vec(&eta_b);
+                    let sv = tm.mul_vec(&dxi);
+                    let eta = carried + sv;
+                    let bias = if has_vel {
+                        ad_vec(&carried, &sv) + dbias
+                    } else {
+                        Vec6::zeros()
+                    };
+                    let mut f = coad_vec(&eta, &m.component_mul(&eta));
+                    f += if pass == TreePass::Inverse {
+                        let etadot = a.mul_vec(&etadot_b) + tm.mul_vec(&ddxi) + bias;
+                        m.component_mul(&etadot)
+                    } else {
+                        m.component_mul(&bias)
+                    };
+                    if has_ext {
+                        f -= external_density(rm, scale, &base_world.compose(&gl), &eta);
+                    }
+                    let fw = f * qp.w;
+                    w.p_big += a.tr_mul_vec(&fw);
+                    ps6 += tm.tr_mul_vec(&fw);
+                }
+                if pass != TreePass::Inverse {
+                    let am = a.to_mat6();
+                    let s = tm.to_mat6() * node.bpad;
+                    let mw = Mat6::from_diagonal(&(m * qp.w));
+                    let mwa = mw * am;
+                    let mws = mw * s;
+                    w.mt += am.transpose() * mwa;
+                    w.ut += am.transpose() * mws;
+                    w.dt += s.transpose() * mws;
+                }
+            }
+            if pass != TreePass::Composite && !only_gravity {
+                for pl in &pd.loads {
+                    let load = &rm.spec.point_loads[pl.index];
+                    let (gl, tm) = maps.exp_and_tangent_minus(pl.x);
+                    let f = load.wrench(&base_world.compose(&gl)) * scale;
+                    w.p_big -= gl.ad_inv().tr_mul_vec(&f);
+                    ps6 -= tm.tr_mul_vec(&f);
+                }
+            }
+        }
+        w.p_small = node.bpad.tr_mul(&ps6);
+        let (gl, tm, dbias) = maps.eval(length);
+        let a = gl.ad_inv();
+        let carried = a.mul_vec(&eta_b);
+        let sv = tm.mul_vec(&dxi);
+        let acc = if has_vel {
+            ad_vec(&carried, &sv) + dbias
+        } else {
+            Vec6::zeros()
+        };
+        w.tip = gl;
+        w.s_tip = tm.to_mat6() * node.bpad;
+        w.acc_tip = acc;
+        w.eta_tip = carried + sv;
+        w.etadot_tip = a.mul_vec(&etadot_b) + tm.mul_vec(&ddxi) + acc;
+        if pass == TreePass::Composite {
+            w.s_world = base_world.compose(&gl).ad().to_mat6() * w.s_tip;
+        }
+    }
+}
+
+/// `τ ← τ − k(q − q_rest) − d q̇` of every joint (D53), into the strain
+/// forces (skipped for gravity only).
+fn joint_forces(model: &Model, data: &mut Data, q: &[f64], qd: Option<&[f64]>) {
+    if data.only_gravity {
+        return;
+    }
+    for e in &model.elements {
+        let j = &e.attachment.joint;
+        if j.stiffness.is_empty() && j.damping.is_empty() {
+            continue;
+        }
+        for (i, o) in e.joint_dofs.clone().enumerate() {
+            let (k, d, rest) = j.coefficients(i);
+            let v = qd.map_or(0.0, |v| v[o]);
+            data.strain_force[o] -= k * (q[o] - rest) + d * v;
+        }
+    }
+}
+
+/// Inverse dynamics on the tree (D17–D18 with children summed at the tip,
+/// D55). Result in `data.tau`.
+pub(crate) fn inverse_dynamics(
+    model: &Model,
+    tree: &Tree,
+    data: &mut Data,
+    t: f64,
+    q: &[f64],
+    qd: Option<&[f64]>,
+    qdd: Option<&[f64]>,
+) {
+    outward(model, tree, data, q, qd, qdd, TreePass::Inverse);
+    strain_forces(model, data, t, q, qd, None);
+    joint_forces(model, data, q, qd);
+    for w in &mut data.nodes {
+        w.f_tip = Vec6::zeros();
+    }
+    for (i, node) in tree.nodes.iter().enumerate().rev() {
+        let w = &data.nodes[i];
+        let v = w.p_small + w.s_tip.tr_mul(&w.f_tip);
+        for c in 0..node.k {
+            data.tau[node.dof + c] = v[c];
+        }
+        let wb = w.p_big + w.tip.ad_inv().tr_mul_vec(&w.f_tip);
+        if let Some(p) = node.parent {
+            data.nodes[p].f_tip += node.offset.ad_inv().tr_mul_vec(&wb);
+        }
+    }
+    data.tau -= &data.strain_force;
+}
+
+/// `D̂⁻¹` of a `k×k` block padded to 6×6 (zeros outside), or `None` if not
+/// positive definite.
+fn inverse_k(d: &Mat6, k: usize) -> Option<Mat6> {
+    let padded = Mat6::from_fn(|i, j| {
+        if i < k && j < k {
+            0.5 * (d[(i, j)] + d[(j, i)])
+        } else if i == j {
+            1.0
+        } else {
+            0.0
+        }
+    });
+    let inv = padded.cholesky()?.inverse();
+    Some(Mat6::from_fn(|i, j| {
+        if i < k && j < k { inv[(i, j)] } else { 0.0 }
+    }))
+}
+
+/// O(N) forward dynamics on the tree: the articulated-body recursion of
+/// (D24–D27) with the children's articulated inertias and biases summed at
+/// each tip (D56). Result in `data.qdd`.
+pub(crate) fn forward_dynamics(
+    model: &Model,
+    tree: &Tree,
+    data: &mut Data,
+    t: f64,
+    q: &[f64],
+    qd: &[f64],
+    tau_act: Option<&[f64]>,
+) -> Result<(), DynamicsError> {
+    outward(model, tree, data, q, Some(qd), None, TreePass::Articulated);
+    strain_forces(model, data, t, q, Some(qd), tau_act);
+    joint_forces(model, data, q, Some(qd));
+    for w in &mut data.nodes {
+        w.m_tip = Mat6::zeros();
+        w.f_tip = Vec6::zeros();
+    }
+    for (i, node) in tree.nodes.iter().enumerate().rev() {
+        let k = node.k;
+        let sf = local(data.strain_force.as_slice(), node.dof, k);
+        let w = &mut data.nodes[i];
+        let a = w.tip.ad_inv().to_mat6();
+        let ma = w.m_tip;
+        let mas = ma * w.s_tip;
+        let uhat = w.ut + a.transpose() * mas;
+        let dhat = w.dt + w.s_tip.transpose() * mas;
+        let y = ma * w.acc_tip + w.f_tip;
+        let u = sf - w.p_small - w.s_tip.tr_mul(&y);
+        let u = Vec6::from_fn(|r, _| if r < k { u[r] } else { 0.0 });
+        let dinv = if k > 0 {
+            inverse_k(&dhat, k).ok_or_else(|| DynamicsError::SingularNode {
+                node: tree.describe(model, i),
+                what: "articulated inertia D̂",
+            })?
+        } else {
+            Mat6::zeros()
+        };
+        let ud = uhat * dinv;
+        let mb = w.mt + a.transpose() * ma * a - ud * uhat.transpose();
+        let pb = w.p_big + a.transpose() * y + ud * u;
+        w.uhat = uhat;
+        w.dinv = dinv;
+        w.u = u;
+        if let Some(p) = node.parent {
+            let x = node.offset.ad_inv().to_mat6();
+            let pw = &mut data.nodes[p];
+            pw.m_tip += x.transpose() * mb * x;
+            pw.f_tip += x.transpose() * pb;
+        }
+    }
+    let a_world = world_acceleration(model, data.load_scale);
+    for (i, node) in tree.nodes.iter().enumerate() {
+        let etadot_p = match node.parent {
+            Some(p) => data.nodes[p].etadot_tip,
+            None => a_world,
+        };
+        let etadot_b = node.offset.ad_inv().mul_vec(&etadot_p);
+        let w = &mut data.nodes[i];
+        let qn = w.dinv * (w.u - w.uhat.tr_mul(&etadot_b));
+        for c in 0..node.k {
+            data.qdd[node.dof + c] = qn[c];
+        }
+        w.etadot_tip = w.tip.ad_inv().mul_vec(&etadot_b) + w.s_tip * qn + w.acc_tip;
+    }
+    Ok(())
+}
+
+/// Mass matrix on the tree by the composite recursion (D20, D57): for node
+/// `i`, `M_ii = 𝓓 + S(ℓ)ᵀ𝓜ᶜS(ℓ)` and, for every ancestor `j` with
+/// coordinates, `M_ji = (Ad_{g_j(ℓ)}S_j(ℓ))ᵀ Ad*_{g_i(0)⁻¹}F_i` with
+/// `F_i = 𝓤 + A_ℓᵀ𝓜ᶜS(ℓ)` — the motion of an ancestor moves `i`'s base
+/// rigidly. Nodes off each other's paths to the root do not couple.
+pub(crate) fn mass_matrix(model: &Model, tree: &Tree, data: &mut Data, q: &[f64]) {
+    outward(model, tree, data, q, None, None, TreePass::Composite);
+    let n = model.n_dof();
+    if data.mass.nrows() != n {
+        data.mass = nalgebra::DMatrix::zeros(n, n);
+    }
+    data.mass.fill(0.0);
+    for w in &mut data.nodes {
+        w.m_tip = Mat6::zeros();
+    }
+    for (i, node) in tree.nodes.iter().enumerate().rev() {
+        let k = node.k;
+        let w = &data.nodes[i];
+        let a = w.tip.ad_inv().to_mat6();
+        let mc = w.m_tip;
+        let mcs = mc * w.s_tip;
+        let f = w.ut + a.transpose() * mcs;
+        let mii = w.dt + w.s_tip.transpose() * mcs;
+        let mb = w.mt + a.transpose() * mc * a;
+        for r in 0..k {
+            for c in 0..k {
+                data.mass[(node.dof + r, node.dof + c)] = mii[(r, c)];
+            }
+        }
+        if k > 0 {
+            let f_world = w.base_world.ad_inv().to_mat6().transpose() * f;
+            let mut anc = node.parent;
+            while let Some(j) = anc {
+                let nj = &tree.nodes[j];
+                if nj.k > 0 {
+                    let blk = data.nodes[j].s_world.transpose() * f_world;
+                    for r in 0..nj.k {
+                        for c in 0..k {
+                            data.mass[(nj.dof + r, node.dof + c)] = blk[(r, c)];
+                            data.mass[(node.dof + c, nj.dof + r)] = blk[(r, c)];
+                        }
+                    }
+                }
+                anc = nj.parent;
+            }
+        }
+        if let Some(p) = node.parent {
+            let x = node.offset.ad_inv().to_mat6();
+            data.nodes[p].m_tip += x.transpose() * mb * x;
+        }
+    }
+}
+
+/// Energies on the tree: kinetic `½q̇ᵀMq̇`, elastic (rods and joint
+/// springs), gravitational (rod points and bodies' centres of mass).
+pub(crate) fn energies(
+    model: &Model,
+    tree: &Tree,
+    data: &mut Data,
+    q: &[f64],
+    qd: &[f64],
+) -> Energies {
+    mass_matrix(model, tree, data, q);
+    let v = DVector::from_column_slice(qd);
+    let mut e = Energies {
+        kinetic: 0.5 * v.dot(&(&data.mass * &v)),
+        ..Energies::default()
+    };
+    for rm in model.rods() {
+        e.elastic += elastic_energy(
+            &rm.spec.rod,
+            &rm.spec.body,
+            rm.spec.stress_free.as_deref(),
+            &q[rm.dofs()],
+            &model.quadrature,
+        );
+    }
+    for el in &model.elements {
+        for (i, o) in el.joint_dofs.clone().enumerate() {
+            let (k, _, rest) = el.attachment.joint.coefficients(i);
+            e.elastic += 0.5 * k * (q[o] - rest).powi(2);
+        }
+    }
+    if let Some(g) = model.gravity {
+        for (i, node) in tree.nodes.iter().enumerate() {
+            let base = &data.nodes[i].base_world;
+            match node.kind {
+                NodeKind::Piece { rod, piece } => {
+                    let rm = &model.rods[rod];
+                    let pc = &rm.spec.rod.pieces()[piece];
+                    let maps = PieceMaps::new(&pc.strain(&q[rm.dofs()]), None);
+                    for qp in &rm.pieces[piece].points {
+                        let p = base.transform_point(&maps.exp(qp.x).translation);
+                        e.gravitational -= qp.w * qp.mass_per_length * g.dot(&p);
+                    }
+                }
+                NodeKind::Body { body } => {
+                    let b = &model.bodies[body].spec;
+                    let p = base.transform_point(&b.center_of_mass);
+                    e.gravitational -= b.mass * g.dot(&p);
+                }
+                NodeKind::Joint { .. } => {}
+            }
+        }
+    }
+    e
+}
+
+/// World poses of every rod's base frame and every body's frame into
+/// `data.rod_bases`, `data.body_poses` (D51).
+pub(crate) fn frames(model: &Model, tree: &Tree, data: &mut Data, q: &[f64]) {
+    outward(model, tree, data, q, None, None, TreePass::Inverse);
+    for (r, nodes) in tree.rod_nodes.iter().enumerate() {
+        data.rod_bases[r] = data.nodes[nodes[0]].base_world;
+    }
+    for (b, &i) in tree.body_nodes.iter().enumerate() {
+        data.body_poses[b] = data.nodes[i].base_world;
+    }
+}

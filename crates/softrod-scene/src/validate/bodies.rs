@@ -1,0 +1,395 @@
+//! `parent`, `at`, `joint` on rods and bodies, `[[body]]`, and `[[load]]`
+//! with `body = …`: into the library's `Joint`, `BodySpec`, `Attachment`
+//! (scene-format.md, "Bodies, joints, bases and closures").
+
+use nalgebra::Matrix3;
+use softrod_dynamics::{Attachment, BodyLoad, BodySpec, ElementKind, Joint, JointKind, RodSpec};
+use softrod_lie::Vec3;
+use softrod_mechanics::LoadFrame;
+
+use super::{Ctx, Result};
+use crate::keys;
+use crate::raw::RawLoad;
+use crate::robot::{RawBody, RawJoint, Robot};
+
+/// What a `[[rod]]` says about where it hangs.
+pub(super) type RodLink = (Option<String>, Option<f64>, Option<RawJoint>);
+
+const JOINTS: [&str; 6] = [
+    "fixed",
+    "revolute",
+    "prismatic",
+    "universal",
+    "spherical",
+    "free",
+];
+
+impl Ctx<'_> {
+    /// The elements' attachments and the bodies, checked: names unique over
+    /// rods and bodies, parents known and acyclic, `at` on a piece boundary
+    /// of a parent rod, joints and bodies valid.
+    pub(super) fn robot(
+        &mut self,
+        links: Vec<RodLink>,
+        raw_bodies: Vec<RawBody>,
+        rods: &[RodSpec],
+    ) -> Result<Robot> {
+        let mut robot = Robot::default();
+        let mut parents: Vec<(String, Option<String>, Option<f64>)> = Vec::new();
+        for (i, (parent, at, joint)) in links.into_iter().enumerate() {
+            let p = format!("rod[{i}]");
+            let joint = self.joint(&format!("{p}.joint"), joint)?;
+            parents.push((p, parent.clone(), at));
+            robot.rod_attachments.push(Attachment {
+                parent: parent.filter(|n| n != "world"),
+                at,
+                joint,
+            });
+        }
+        for (j, b) in raw_bodies.into_iter().enumerate() {
+            let p = format!("body[{j}]");
+            if b.name.trim().is_empty() {
+                return Err(self
+                    .r
+                    .invalid(&format!("{p}.name"), "body name must not be empty"));
+            }
+            if b.name == "world" {
+                return Err(self
+                    .r
+                    .invalid(&format!("{p}.name"), "\"world\" names the world frame"));
+            }
+            if let Some(i) = rods.iter().position(|r| r.name == b.name) {
+                return Err(self.r.invalid(
+                    &format!("{p}.name"),
+                    format!("duplicate name {:?} (also rod[{i}])", b.name),
+                ));
+            }
+            if let Some(k) = robot.bodies.iter().position(|o| o.name == b.name) {
+                return Err(self.r.invalid(
+                    &format!("{p}.name"),
+                    format!("duplicate body name {:?} (also body[{k}])", b.name),
+                ));
+            }
+            let joint = self.joint(&format!("{p}.joint"), b.joint)?;
+            let body = self.body(&p, b.name, b.mass, &b.inertia, b.center_of_mass, b.base)?;
+            parents.push((p, Some(b.parent.clone()), b.at));
+            robot.body_attachments.push(Attachment {
+                parent: Some(b.parent).filter(|n| n != "world"),
+                at: b.at,
+                joint,
+            });
+            robot.bodies.push(body);
+        }
+        if rods.iter().any(|r| r.name == "world") {
+            let i = rods.iter().position(|r| r.name == "world").unwrap_or(0);
+            if parents
+                .iter()
+                .any(|(_, p, _)| p.as_deref() == Some("world"))
+            {
+                return Err(self.r.invalid(
+                    &format!("rod[{i}].name"),
+                    "\"world\" names the world frame; rename the rod",
+                ));
+            }
+        }
+        // Elements by name: rods then bodies, as indices into `parents`.
+        let names: Vec<String> = rods
+            .iter()
+            .map(|r| r.name.clone())
+            .chain(robot.bodies.iter().map(|b| b.name.clone()))
+            .collect();
+        let n_rods = rods.len();
+        let mut parent_of = vec![None; names.len()];
+        for (e, (p, parent, at)) in parents.iter().enumerate() {
+            let Some(name) = parent.as_deref().filter(|n| *n != "world") else {
+                if at.is_some() {
+                    self.warn(
+                        &format!("{p}.at"),
+                        "at is not used: the parent is the world".to_owned(),
+                    );
+                }
+                continue;
+            };
+            let Some(k) = names.iter().position(|n| n == name) else {
+                let mut valid: Vec<&str> = names.iter().map(String::as_str).collect();
+                valid.push("world");
+                return Err(self.r.unknown_name(&format!("{p}.parent"), name, &valid));
+            };
+            parent_of[e] = Some(k);
+            if k < n_rods {
+                let rod = &rods[k].rod;
+                let len = rod.length();
+                if let Some(s) = *at {
+                    if !(0.0..=len).contains(&s) {
+                        return Err(self.r.out_of_range(
+                            &format!("{p}.at"),
+                            s,
+                            format!("in [0, {len}] (the length of rod {name:?})"),
+                        ));
+                    }
+                    let tol = 1e-9 * len;
+                    let ends: Vec<f64> = rod.pieces().iter().map(|pc| pc.end()).collect();
+                    if s.abs() > tol && !ends.iter().any(|e| (e - s).abs() <= tol) {
+                        return Err(self.r.invalid(
+                            &format!("{p}.at"),
+                            format!(
+                                "{s} m is not a piece boundary of rod {name:?} (0 or {ends:?}); \
+                                 children attach at piece boundaries"
+                            ),
+                        ));
+                    }
+                }
+            } else if at.is_some() {
+                self.warn(
+                    &format!("{p}.at"),
+                    format!("at is not used: the parent {name:?} is a body"),
+                );
+            }
+        }
+        for start in 0..names.len() {
+            let mut e = start;
+            for _ in 0..=names.len() {
+                match parent_of[e] {
+                    Some(k) if k == start => {
+                        return Err(self.r.invalid(
+                            &format!("{}.parent", parents[start].0),
+                            format!("parent cycle: {:?} is its own ancestor", names[start]),
+                        ));
+                    }
+                    Some(k) => e = k,
+                    None => break,
+                }
+            }
+        }
+        // The order of the file: rods and bodies by where their tables start.
+        // (line and column of the table, index, element)
+        type Placed = (Option<(usize, usize)>, usize, ElementKind);
+        let mut order: Vec<Placed> = Vec::new();
+        for (e, (p, _, _)) in parents.iter().enumerate() {
+            let kind = if e < n_rods {
+                ElementKind::Rod(e)
+            } else {
+                ElementKind::Body(e - n_rods)
+            };
+            order.push((self.r.at(p).map(|l| (l.line, l.column)), e, kind));
+        }
+        order.sort_by_key(|(at, e, _)| (*at, *e));
+        robot.order = order.into_iter().map(|(_, _, k)| k).collect();
+        Ok(robot)
+    }
+
+    /// `joint = { … }` (default fixed).
+    fn joint(&self, p: &str, raw: Option<RawJoint>) -> Result<Joint> {
+        let Some(raw) = raw else {
+            return Ok(Joint::fixed());
+        };
+        if raw.prescribed.is_some() {
+            return Err(self.r.invalid(
+                &format!("{p}.prescribed"),
+                "prescribed joints are not supported yet",
+            ));
+        }
+        let axis = |key: &str, a: Option<[f64; 3]>| -> Result<Vec3> {
+            let a = a.ok_or_else(|| {
+                self.r
+                    .missing(&format!("{p}.{key}"), &format!(" (a {} joint)", raw.kind))
+            })?;
+            let v = Vec3::from(a);
+            if v.norm() < 1e-12 {
+                return Err(self.r.invalid(
+                    &format!("{p}.{key}"),
+                    format!("{a:?} is not a direction (zero vector)"),
+                ));
+            }
+            Ok(v)
+        };
+        let needs_axis = matches!(raw.kind.as_str(), "revolute" | "prismatic");
+        if raw.axis.is_some() && !needs_axis {
+            return Err(self.r.invalid(
+                &format!("{p}.axis"),
+                format!("a {} joint has no axis", raw.kind),
+            ));
+        }
+        if raw.axes.is_some() && raw.kind != "universal" {
+            return Err(self.r.invalid(
+                &format!("{p}.axes"),
+                format!("a {} joint has no axes (only universal)", raw.kind),
+            ));
+        }
+        let kind = match raw.kind.as_str() {
+            "fixed" => JointKind::Fixed,
+            "revolute" => JointKind::Revolute {
+                axis: axis("axis", raw.axis)?,
+            },
+            "prismatic" => JointKind::Prismatic {
+                axis: axis("axis", raw.axis)?,
+            },
+            "universal" => {
+                let axes = raw.axes.ok_or_else(|| {
+                    self.r
+                        .missing(&format!("{p}.axes"), " (a universal joint: two axes)")
+                })?;
+                let (a, b) = (Vec3::from(axes[0]), Vec3::from(axes[1]));
+                for (k, v) in [a, b].iter().enumerate() {
+                    if v.norm() < 1e-12 {
+                        return Err(self
+                            .r
+                            .invalid(&format!("{p}.axes[{k}]"), "not a direction (zero vector)"));
+                    }
+                }
+                if a.normalize().cross(&b.normalize()).norm() < 1e-9 {
+                    return Err(self
+                        .r
+                        .invalid(&format!("{p}.axes"), "the two axes are parallel"));
+                }
+                JointKind::Universal { axes: [a, b] }
+            }
+            "spherical" => JointKind::Spherical,
+            "free" => JointKind::Free,
+            other => return Err(self.r.unknown_name(&format!("{p}.type"), other, &JOINTS)),
+        };
+        let mut joint = Joint::new(kind);
+        let k = joint.dof();
+        let per_dof = |key: &str, v: &Option<toml::Value>, non_negative: bool| {
+            let Some(v) = v else {
+                return Ok(Vec::new());
+            };
+            let path = format!("{p}.{key}");
+            if k == 0 {
+                return Err(self.r.invalid(&path, "a fixed joint has no coordinates"));
+            }
+            let values = match v {
+                toml::Value::Array(_) => self.numbers(&path, v)?,
+                _ => vec![self.number(&path, v)?; k],
+            };
+            if values.len() != k {
+                return Err(self.r.inconsistent(
+                    &path,
+                    format!(
+                        "{} values, but a {} joint has {k} coordinates",
+                        values.len(),
+                        raw.kind
+                    ),
+                ));
+            }
+            for (i, x) in values.iter().enumerate() {
+                if non_negative && *x < 0.0 {
+                    return Err(self.r.out_of_range(&format!("{path}[{i}]"), x, ">= 0"));
+                }
+            }
+            Ok(values)
+        };
+        joint.stiffness = per_dof("stiffness", &raw.stiffness, true)?;
+        joint.damping = per_dof("damping", &raw.damping, true)?;
+        joint.rest = per_dof("rest", &raw.rest, false)?;
+        joint
+            .validate(p)
+            .map_err(|e| self.r.invalid(p, e.to_string()))?;
+        Ok(joint)
+    }
+
+    /// `body[j]`'s mass, inertia, centre of mass and base.
+    fn body(
+        &self,
+        p: &str,
+        name: String,
+        mass: f64,
+        inertia: &toml::Value,
+        center_of_mass: Option<[f64; 3]>,
+        base: Option<crate::raw::RawBase>,
+    ) -> Result<BodySpec> {
+        if mass.is_nan() || mass <= 0.0 {
+            return Err(self.r.out_of_range(&format!("{p}.mass"), mass, "> 0 kg"));
+        }
+        let ip = format!("{p}.inertia");
+        let wrong = || {
+            self.r.wrong_type(
+                &ip,
+                "expected principal moments [Ixx, Iyy, Izz] or a 3x3 matrix [[…], […], […]]",
+            )
+        };
+        let toml::Value::Array(rows) = inertia else {
+            return Err(wrong());
+        };
+        let m = match rows.first() {
+            Some(toml::Value::Array(_)) => {
+                if rows.len() != 3 {
+                    return Err(wrong());
+                }
+                let mut m = Matrix3::zeros();
+                for (i, row) in rows.iter().enumerate() {
+                    let r = self.numbers(&format!("{ip}[{i}]"), row)?;
+                    if r.len() != 3 {
+                        return Err(wrong());
+                    }
+                    for (j, x) in r.iter().enumerate() {
+                        m[(i, j)] = *x;
+                    }
+                }
+                m
+            }
+            _ => {
+                let d = self.numbers(&ip, inertia)?;
+                if d.len() != 3 {
+                    return Err(wrong());
+                }
+                Matrix3::from_diagonal(&Vec3::new(d[0], d[1], d[2]))
+            }
+        };
+        let mut body = BodySpec::new(name, mass, m);
+        body.center_of_mass = Vec3::from(center_of_mass.unwrap_or([0.0; 3]));
+        body.base = super::rods::base(base);
+        body.validate().map_err(|e| {
+            let key = if e.to_string().contains("inertia") {
+                ip.clone()
+            } else {
+                p.to_owned()
+            };
+            self.r.invalid(&key, &e).caused_by(Box::new(e.clone()))
+        })?;
+        Ok(body)
+    }
+
+    /// `load[j]` with `body = …`: a load at the body frame's origin.
+    pub(super) fn body_load(&mut self, j: usize, l: RawLoad, robot: &mut Robot) -> Result<()> {
+        let p = format!("load[{j}]");
+        let name = l.body.as_deref().unwrap_or_default();
+        for key in ["rod", "s"] {
+            let given = if key == "rod" {
+                l.rod.is_some()
+            } else {
+                l.s.is_some()
+            };
+            if given {
+                return Err(self.r.invalid(
+                    &format!("{p}.{key}"),
+                    "a load on a body takes body = \"…\", not rod or s",
+                ));
+            }
+        }
+        let Some(b) = robot.bodies.iter().position(|x| x.name == name) else {
+            let valid: Vec<&str> = robot.bodies.iter().map(|x| x.name.as_str()).collect();
+            return Err(self.r.unknown_name(&format!("{p}.body"), name, &valid));
+        };
+        let frame = match l.frame.as_deref() {
+            None => LoadFrame::World,
+            Some(f) => f
+                .parse::<LoadFrame>()
+                .map_err(|e| keys::mechanics(&self.r, &p, f64::NAN, e))?,
+        };
+        let force = l.force.unwrap_or([0.0; 3]);
+        let moment = l.moment.unwrap_or([0.0; 3]);
+        if force == [0.0; 3] && moment == [0.0; 3] {
+            self.warn(
+                &p,
+                "force and moment are both zero: the load has no effect".to_owned(),
+            );
+        }
+        robot.bodies[b].loads.push(BodyLoad {
+            force: Vec3::from(force),
+            moment: Vec3::from(moment),
+            frame,
+        });
+        Ok(())
+    }
+}

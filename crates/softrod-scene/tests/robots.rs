@@ -1,0 +1,226 @@
+//! `parent`, `at`, `base`, `joint` on rods and `[[body]]`
+//! (scene-format.md, "Bodies, joints, bases and closures"): the order of `q`,
+//! the model built, and key-path errors for bad input.
+
+use softrod_dynamics::{ElementKind, JointKind};
+use softrod_scene::Scene;
+
+const ROBOT: &str = r#"
+[world]
+gravity = [0, 0, -9.81]
+
+[[rod]]
+name = "upper"
+length = 0.4
+pieces = 2
+strains = ["ky", "kz"]
+joint = { type = "revolute", axis = [0, 1, 0], stiffness = 0.5, damping = [0.01], rest = 0.1 }
+section = { shape = "circle", radius = 0.01 }
+material = { density = 1000.0, young = 1.0e6, poisson = 0.5 }
+
+[[body]]
+name = "elbow"
+parent = "upper"
+mass = 0.05
+inertia = [[2e-6, 0, 0], [0, 3e-6, 0], [0, 0, 2e-6]]
+center_of_mass = [0.01, 0, 0]
+joint = { type = "universal", axes = [[0, 1, 0], [0, 0, 1]] }
+
+[[rod]]
+name = "lower"
+parent = "elbow"
+base = { position = [0.02, 0, 0] }
+length = 0.3
+pieces = 3
+strains = ["ky"]
+joint = { type = "spherical" }
+section = { shape = "circle", radius = 0.008 }
+material = { density = 1000.0, young = 1.0e6, poisson = 0.5 }
+
+[[body]]
+name = "gripper"
+parent = "lower"
+at = 0.2
+mass = 0.02
+inertia = [1e-6, 1e-6, 1e-6]
+joint = { type = "prismatic", axis = [1, 0, 0] }
+
+[[body]]
+name = "float"
+parent = "world"
+mass = 0.1
+inertia = [1e-4, 1e-4, 1e-4]
+joint = { type = "free" }
+
+[[load]]
+body = "gripper"
+force = [0, 0, -0.1]
+"#;
+
+#[test]
+fn robot_scene_orders_q_as_written_and_builds() {
+    let (scene, warnings) = Scene::from_str(ROBOT, "robot.toml").unwrap();
+    assert!(warnings.is_empty(), "{warnings:?}");
+    let r = &scene.robot;
+    assert_eq!(
+        r.order,
+        vec![
+            ElementKind::Rod(0),
+            ElementKind::Body(0),
+            ElementKind::Rod(1),
+            ElementKind::Body(1),
+            ElementKind::Body(2)
+        ]
+    );
+    // upper: 1 + 4, elbow: 2, lower: 3 + 3, gripper: 1, float: 6.
+    assert_eq!(scene.n_dof(), 5 + 2 + 6 + 1 + 6);
+    assert_eq!(scene.rod_dof_offset(0), 1);
+    assert_eq!(scene.rod_dof_offset(1), 5 + 2 + 3);
+    assert_eq!(r.rod_attachments[0].joint.stiffness, vec![0.5]);
+    assert_eq!(r.bodies[1].loads.len(), 1);
+    let built = scene.build().unwrap();
+    let m = &built.model;
+    assert!(m.is_articulated());
+    assert_eq!(m.n_dof(), 20);
+    assert_eq!(m.rods()[1].dof_offset, 10);
+    let joints: Vec<_> = m
+        .elements()
+        .iter()
+        .map(|e| {
+            (
+                e.name.as_str(),
+                e.attachment.joint.kind.name(),
+                e.joint_dofs.clone(),
+            )
+        })
+        .collect();
+    assert_eq!(
+        joints,
+        vec![
+            ("upper", "revolute", 0..1),
+            ("elbow", "universal", 5..7),
+            ("lower", "spherical", 7..10),
+            ("gripper", "prismatic", 13..14),
+            ("float", "free", 14..20)
+        ]
+    );
+    assert!(matches!(
+        m.elements()[3].attachment.joint.kind,
+        JointKind::Prismatic { .. }
+    ));
+    let mut data = softrod_dynamics::Data::new(m);
+    let q = vec![0.0; 20];
+    let qdd = softrod_dynamics::forward_dynamics(m, &mut data, 0.0, &q, &q, None)
+        .unwrap()
+        .clone();
+    // The free body falls at g.
+    assert!((qdd[19] + 9.81).abs() < 1e-12);
+}
+
+#[test]
+fn plain_scene_has_an_empty_robot() {
+    let text = ROBOT.split("[[body]]").next().unwrap().replace(
+        "joint = { type = \"revolute\", axis = [0, 1, 0], stiffness = 0.5, damping = [0.01], rest = 0.1 }\n",
+        "",
+    );
+    let (scene, _) = Scene::from_str(&text, "plain.toml").unwrap();
+    assert!(scene.robot.is_trivial());
+    assert!(!scene.build().unwrap().model.is_articulated());
+}
+
+/// Each edit of [`ROBOT`] must fail naming this key path and saying this.
+#[test]
+fn bad_robots_name_the_key() {
+    let cases: &[(&str, &str, &str, &str)] = &[
+        (
+            "parent = \"elbow\"",
+            "parent = \"elbo\"",
+            "rod[1].parent",
+            "elbo",
+        ),
+        (
+            "name = \"upper\"\n",
+            "name = \"upper\"\nparent = \"lower\"\n",
+            "rod[0].parent",
+            "cycle",
+        ),
+        (
+            "axis = [0, 1, 0], stiffness",
+            "axis = [0, 0, 0], stiffness",
+            "rod[0].joint.axis",
+            "zero",
+        ),
+        (
+            "axes = [[0, 1, 0], [0, 0, 1]]",
+            "axes = [[0, 1, 0], [0, 2, 0]]",
+            "body[0].joint.axes",
+            "parallel",
+        ),
+        (
+            "type = \"spherical\"",
+            "type = \"ball\"",
+            "rod[1].joint.type",
+            "ball",
+        ),
+        ("mass = 0.05", "mass = 0.0", "body[0].mass", "> 0"),
+        (
+            "inertia = [[2e-6, 0, 0], [0, 3e-6, 0], [0, 0, 2e-6]]",
+            "inertia = [[2e-6, 0, 0], [0, -3e-6, 0], [0, 0, 2e-6]]",
+            "body[0].inertia",
+            "positive definite",
+        ),
+        (
+            "inertia = [[2e-6, 0, 0], [0, 3e-6, 0], [0, 0, 2e-6]]",
+            "inertia = [[2e-6, 1e-6, 0], [0, 3e-6, 0], [0, 0, 2e-6]]",
+            "body[0].inertia",
+            "symmetric",
+        ),
+        ("at = 0.2", "at = 0.15", "body[1].at", "piece boundary"),
+        ("at = 0.2", "at = 0.5", "body[1].at", "0.3"),
+        (
+            "stiffness = 0.5, damping = [0.01]",
+            "stiffness = 0.5, damping = [0.01, 0.02]",
+            "rod[0].joint.damping",
+            "1 coordinates",
+        ),
+        (
+            "stiffness = 0.5,",
+            "stiffness = -0.5,",
+            "rod[0].joint.stiffness[0]",
+            ">= 0",
+        ),
+        (
+            "type = \"prismatic\", axis = [1, 0, 0]",
+            "type = \"prismatic\"",
+            "body[1].joint.axis",
+            "missing",
+        ),
+        (
+            "body = \"gripper\"",
+            "body = \"grip\"",
+            "load[0].body",
+            "grip",
+        ),
+        (
+            "name = \"float\"",
+            "name = \"elbow\"",
+            "body[2].name",
+            "duplicate",
+        ),
+        (
+            "joint = { type = \"free\" }",
+            "joint = { type = \"free\", prescribed = { times = [0, 1], values = [0, 1] } }",
+            "body[2].joint.prescribed",
+            "not supported",
+        ),
+    ];
+    for (old, new, path, says) in cases {
+        assert!(ROBOT.contains(old), "edit target {old:?}");
+        let text = ROBOT.replacen(old, new, 1);
+        let e = Scene::from_str(&text, "bad.toml").unwrap_err();
+        assert_eq!(e.path(), Some(*path), "{new}: {e}");
+        let msg = e.to_string();
+        assert!(msg.contains(says), "{new}: {msg}");
+        assert!(msg.contains("bad.toml"), "{msg}");
+    }
+}

@@ -1,0 +1,68 @@
+//! The facade on scenes with joints and bodies: world poses through the
+//! parents, against closed forms.
+
+use softrod::Simulation;
+
+const SCENE: &str = r#"
+[[rod]]
+name = "arm"
+length = 0.4
+pieces = 2
+strains = ["ky"]
+joint = { type = "revolute", axis = [0, 1, 0] }
+section = { shape = "circle", radius = 0.01 }
+material = { density = 1000.0, young = 1.0e6, poisson = 0.5 }
+
+[[body]]
+name = "hand"
+parent = "arm"
+base = { position = [0.05, 0, 0] }
+mass = 0.02
+inertia = [1e-6, 1e-6, 1e-6]
+
+[[rod]]
+name = "finger"
+parent = "hand"
+length = 0.1
+pieces = 1
+strains = ["ky"]
+joint = { type = "prismatic", axis = [0, 0, 1] }
+section = { shape = "circle", radius = 0.005 }
+material = { density = 1000.0, young = 1.0e6, poisson = 0.5 }
+"#;
+
+#[test]
+fn poses_go_through_the_joints() {
+    let (sim, _, _) = Simulation::from_toml(SCENE, "robot.toml").unwrap();
+    assert_eq!(sim.n_dof(), 1 + 2 + 1 + 1);
+    // Straight rods, arm turned by θ about y, finger slid by d along the
+    // hand's z: closed-form positions.
+    let (theta, d) = (0.3_f64, 0.02);
+    let q = [theta, 0.0, 0.0, d, 0.0];
+    let (c, s) = (theta.cos(), theta.sin());
+    // Rotation about y by θ: x ↦ (c, 0, −s), z ↦ (s, 0, c).
+    let at = |x: f64, z: f64| [x * c + z * s, 0.0, -x * s + z * c];
+    let tip = sim.tip_pose("arm", &q).unwrap().translation;
+    let hand = sim.body_poses(&q).unwrap()[0].translation;
+    let finger = sim.tip_pose("finger", &q).unwrap().translation;
+    let mid = sim.pose("finger", 0.05, &q).unwrap().translation;
+    for (got, want) in [
+        (tip, at(0.4, 0.0)),
+        (hand, at(0.45, 0.0)),
+        (finger, at(0.55, d)),
+        (mid, at(0.5, d)),
+    ] {
+        for k in 0..3 {
+            assert!((got[k] - want[k]).abs() < 1e-14, "{got:?} vs {want:?}");
+        }
+    }
+    // Time runs: the trajectory's tips are world poses too (at t = 0).
+    let mut sim = sim;
+    sim.set_initial_state(&q, &[0.0; 5]).unwrap();
+    let traj = sim.simulate(1e-3).unwrap();
+    let p = traj.tip_position(0, 1);
+    let want = at(0.55, d);
+    for k in 0..3 {
+        assert!((p[k] - want[k]).abs() < 1e-14, "{p:?} vs {want:?}");
+    }
+}
