@@ -57,7 +57,9 @@ pub fn to_py(e: Error) -> PyErr {
     match &e {
         Error::Scene(_) => SceneError::new_err(message),
         Error::Integration(inner) => simulation(message, failure_time(inner)),
-        Error::Output { t, .. } => simulation(message, Some(*t)),
+        Error::Output { t, .. } | Error::EnergyBalance { t, .. } | Error::Stretch { t, .. } => {
+            simulation(message, Some(*t))
+        }
         _ if e.is_input() => input(message),
         Error::Kinematics(_) | Error::UnknownRod(_) => input(message),
         _ => simulation(message, None),
