@@ -197,9 +197,22 @@ fn plain_type_message(msg: &str) -> String {
         Some(rest) => format!("array of length {rest}"),
         None => msg.to_owned(),
     };
-    msg.replace("expected f64", "expected a number")
+    let msg = msg
+        .replace("expected f64", "expected a number")
         .replace("expected i64", "expected an integer")
-        .replace("expected a borrowed string", "expected a string")
+        .replace("expected a borrowed string", "expected a string");
+    // serde names the Rust type it wanted (`expected struct RawMaterial`):
+    // the user wrote TOML, where that is a table.
+    match msg.find("expected struct ") {
+        Some(i) => {
+            let rest = &msg[i + "expected struct ".len()..];
+            let end = rest
+                .find(|c: char| !(c.is_alphanumeric() || c == '_'))
+                .unwrap_or(rest.len());
+            format!("{}expected a table{}", &msg[..i], &rest[end..])
+        }
+        None => msg,
+    }
 }
 
 /// Converts a `toml` parse or deserialization error into a [`SceneError`],
@@ -242,7 +255,10 @@ pub(crate) fn map_toml_error(
             .split_once("expected ")
             .map(|(_, e)| e.trim_start_matches("one of ").to_owned())
             .unwrap_or_else(|| "no keys here".to_owned());
-        let ends_with_field = path == field || path.ends_with(&format!(".{field}"));
+        // The span's path may already end with the key, rendered as the
+        // path renders it (quoted when not bare).
+        let seg = join("", field);
+        let ends_with_field = path == seg || path.ends_with(&format!(".{seg}"));
         let path = if ends_with_field {
             path
         } else {
