@@ -94,7 +94,7 @@ pub(crate) fn strain_forces(
 }
 
 crate::simd::dispatch! {
-    /// Inverse dynamics by recursive Newton–Euler for PCS (derivations §4):
+    /// Inverse dynamics by recursive Newton–Euler for PCS (docs/theory.md §4):
     /// the actuator force `τ_act` (n_dof) that produces `q̈` at `(q, q̇, t)`,
     ///
     /// `τ_act = M q̈ + C q̇ + G + τ_e + D q̇ − τ_c − Σ Jᵀ𝓕_p − ∫Jᵀ𝓕_d`.
@@ -148,8 +148,8 @@ pub(crate) fn inward_inverse(model: &Model, data: &mut Data) {
 }
 
 crate::simd::dispatch! {
-    /// Forward dynamics by the O(N) articulated recursion (derivations §6, the
-    /// corrected seed (14)–(22)): `q̈` (n_dof) at `(q, q̇, t)` under actuator
+    /// Forward dynamics by the O(N) articulated recursion (docs/theory.md
+    /// §6, (D23)–(D27); §9 lists what it corrects in the model document): `q̈` (n_dof) at `(q, q̇, t)` under actuator
     /// force `τ_act` (n_dof, `None` = 0) and every term of the model.
     ///
     /// Pass 1 (outward): `g, η`, the per-piece integrals (D20) and bias sums (D23).

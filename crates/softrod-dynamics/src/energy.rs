@@ -1,4 +1,4 @@
-//! Energies (derivations §7).
+//! Energies (docs/theory.md §7).
 
 use crate::algorithms::check_vec;
 use crate::data::Data;

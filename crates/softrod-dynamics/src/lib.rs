@@ -10,8 +10,8 @@
 //!
 //! | function | computes | reference |
 //! |---|---|---|
-//! | [`inverse_dynamics`] | `τ_act(q, q̇, q̈)` | derivations §4 (D17–D18) |
-//! | [`forward_dynamics`] | `q̈`, O(N) articulated recursion | §6 (D23–D27), seed (14)–(22) corrected |
+//! | [`inverse_dynamics`] | `τ_act(q, q̇, q̈)` | docs/theory.md §4 (D17–D18) |
+//! | [`forward_dynamics`] | `q̈`, O(N) articulated recursion | §6 (D23–D27) |
 //! | [`forward_dynamics_cholesky`] | `q̈ = M⁻¹(τ − b)` | cross-check |
 //! | [`mass_matrix`] | `M(q)`, composite recursion | (D19–D20) |
 //! | [`bias_force`] | `b = C q̇ + G + τ_e + D q̇ − τ_c − Q_ext` | (D21–D22) |

@@ -1,4 +1,4 @@
-//! The matrices of the Lagrangian form, seed (12)–(13), on request.
+//! The matrices of the Lagrangian form, (C10) and (D19)–(D22), on request.
 
 use crate::algorithms::{check_vec, inward_inverse, strain_forces};
 use crate::data::Data;

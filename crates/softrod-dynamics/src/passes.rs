@@ -16,7 +16,7 @@ pub(crate) enum Pass {
     Composite,
 }
 
-/// Base acceleration that stands for gravity (derivations §4): the rod is
+/// Base acceleration that stands for gravity (docs/theory.md §4): the rod is
 /// accelerated upward by `−g` in every section, `η̇(L₀) = −Ad⁻¹_{g_r}𝒢 =
 /// (0; −R_rᵀ g_w)`, so no gravity wrench is computed per point.
 #[inline]

@@ -4,7 +4,7 @@
 //! `K = diag(K_n)` and `D = diag(D_n)` are block-diagonal per piece (D13),
 //! so `S` is the mass matrix of the same chain with a per-piece "armature"
 //! `a·K_n + b·D_n` added to each piece's own block. The articulated
-//! recursion of the forward dynamics (derivations §6) eliminates exactly
+//! recursion of the forward dynamics (docs/theory.md §6) eliminates exactly
 //! those blocks: adding the armature to `D̂_n` (D24) makes the inward pass
 //! (D24–D25) an `LDLᵀ`-like factorization of `S` and the bias-free
 //! inward/outward sweeps (D26–D27) a solve, both O(N) — no `n_dof × n_dof`

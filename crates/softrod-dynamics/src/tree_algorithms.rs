@@ -83,7 +83,7 @@ pub(crate) enum TreePass {
 }
 
 /// The acceleration standing for gravity, world axes: the world frame is
-/// accelerated by `−g` (derivations §4), so every node, body and point sees
+/// accelerated by `−g` (docs/theory.md §4), so every node, body and point sees
 /// gravity without a per-point wrench.
 fn world_acceleration(model: &Model, scale: f64) -> Vec6 {
     match model.gravity {

@@ -200,7 +200,7 @@ fn mass_matrix_is_spd_and_equals_jacobian_integral() {
 
 #[test]
 fn inverse_dynamics_is_linear_in_acceleration() {
-    // ID(q, q̇, q̈) = M q̈ + ID(q, q̇, 0), all terms on (derivations §8(c)).
+    // ID(q, q̇, q̈) = M q̈ + ID(q, q̇, 0), all terms on (docs/theory.md §8(c)).
     let mut rng = Lcg(11);
     let m = model(4, true, ALL);
     let mut data = Data::new(&m);

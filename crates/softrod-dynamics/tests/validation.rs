@@ -18,7 +18,7 @@ use softrod_mechanics::{LoadFrame, Material, PointLoad, RodBody, Section};
 use std::f64::consts::PI;
 use std::fmt::Write as _;
 
-// The rod of derivations §8(h): L = 0.5, r = 0.01, ρ = 1000, E = 1e7,
+// The rod of docs/theory.md §8(h): L = 0.5, r = 0.01, ρ = 1000, E = 1e7,
 // G = E/3 (ν = 0.5, no shear correction factor).
 const L: f64 = 0.5;
 const R: f64 = 0.01;

@@ -35,7 +35,7 @@ impl Recommended {
     /// `1e-2` of the error weights, the exact Jacobian as its fallback.
     ///
     /// Why (measured, docs/performance.md): on the undamped release of the
-    /// soft cantilever (derivations §8(h); 3-D with 32 pieces) the largest
+    /// soft cantilever (docs/theory.md §8(h); 3-D with 32 pieces) the largest
     /// tip error over the second stays within 0.5–2.5× `rtol` in metres from
     /// `rtol = 1e-3` to `1e-8`; it reaches 1e-5 m on the planar scene and
     /// 1e-4 m on the 32-piece one faster than every other method here, and

@@ -1,6 +1,6 @@
 //! The recommended settings ([`Recommended::tolerance`]) never fail on the
 //! scenes of issue 13, at sizes a test affords: the planar release against
-//! the published table of derivations §8(h) at rtol 1e-3 … 1e-8, the 3-D
+//! the published table of docs/theory.md §8(h) at rtol 1e-3 … 1e-8, the 3-D
 //! release against DOPRI5 at rtol 1e-10, the undamped steel wire against
 //! Radau IIA at rtol 1e-10, energy on the undamped release, and every
 //! shipped example (shortened) against Radau IIA at a tight tolerance. The
@@ -36,7 +36,7 @@ fn cantilever(
     .unwrap()
 }
 
-/// The soft cantilever of issue 13 and derivations §8(h).
+/// The soft cantilever of issue 13 and docs/theory.md §8(h).
 const SOFT: (f64, f64, f64, f64, f64) = (0.5, 0.01, 1000.0, 1e7, 0.5);
 /// The steel wire of issue 13: E = 200 GPa, r = 1 mm, L = 1 m (ρ = 7800,
 /// ν = 0.3).
@@ -112,7 +112,7 @@ const TRACKING: f64 = 20.0;
 
 #[test]
 fn planar_release_tracks_rtol_against_the_published_table() {
-    // derivations §8(h): tip (x, z) at t = 0.25, 0.5, 1 s, to 1e-9 m.
+    // docs/theory.md §8(h): tip (x, z) at t = 0.25, 0.5, 1 s, to 1e-9 m.
     const TABLE: [(f64, f64, f64); 3] = [
         (0.25, 0.366446853, -0.314312480),
         (0.50, 0.342225557, -0.338455217),

@@ -1,8 +1,7 @@
 //! Building the physics model from a validated [`Scene`].
 //!
 //! The scene's rods already are the library's `RodSpec`s holding only the
-//! terms the scene has (design.md: "leave out what a given scene does not
-//! need"): no drag term when both coefficients are zero, no cables or loads
+//! terms the scene has (a term a scene does not need costs nothing): no drag term when both coefficients are zero, no cables or loads
 //! unless the scene lists them, a strain basis with only the selected
 //! strains. Building adds gravity (only when non-zero) and the quadrature.
 

@@ -31,7 +31,7 @@
 //! counts as the position error it makes over the step. Why: with the usual
 //! first-order norm `‖(e_q, e_v)‖` the controller resolves every bending
 //! mode whose *velocity* amplitude `ω·A` exceeds the tolerance, although its
-//! displacement `A` is far below it; on the planar release (derivations
+//! displacement `A` is far below it; on the planar release (docs/theory.md
 //! §8(h), `atol = rtol`) that took 3 277 steps at `rtol = 1e-4` for a tip
 //! error of 1.0e-5 m, against 142 steps for 1.3e-4 m and 432 steps for
 //! 1.8e-5 m at `rtol = 1e-5` with the position norm, whose tip error stays
