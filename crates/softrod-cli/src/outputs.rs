@@ -6,6 +6,7 @@ use std::path::Path;
 use softrod::dynamics::Model;
 use softrod::kinematics::Rod;
 use softrod::mechanics::{Routing, Section};
+use softrod_viz::BodyShape;
 use softrod_viz::run_dir::{CableSpec, RadiusProfile, RodSpec, VIEW_JSON, ViewSpec};
 use softrod_viz::{ViewOptions, ViewStats};
 
@@ -113,7 +114,33 @@ pub fn view_spec(model: &Model, title: &str) -> ViewSpec {
             cable_no += 1;
         }
     }
+    for b in model.bodies() {
+        spec.bodies.push(softrod_viz::run_dir::BodySpec {
+            name: b.spec.name.clone(),
+            shape: BodyShape::Box {
+                size: equivalent_box(b.spec.mass, &b.spec.inertia),
+            },
+        });
+    }
     spec
+}
+
+/// Edge lengths [m] of the uniform box with the body's mass and the
+/// diagonal of its inertia (`I_xx = m (b² + c²)/12`, …), what the view draws
+/// for a body: `a² = 6 (I_yy + I_zz − I_xx)/m`. Edges are kept ≥ 1 mm so a
+/// point-like body stays visible.
+fn equivalent_box(mass: f64, inertia: &nalgebra::Matrix3<f64>) -> [f64; 3] {
+    let d = [inertia[(0, 0)], inertia[(1, 1)], inertia[(2, 2)]];
+    let edge = |k: usize| {
+        let (i, j) = ((k + 1) % 3, (k + 2) % 3);
+        let sq = 6.0 * (d[i] + d[j] - d[k]) / mass;
+        if sq.is_finite() {
+            sq.max(0.0).sqrt().max(1e-3)
+        } else {
+            1e-3
+        }
+    };
+    [edge(0), edge(1), edge(2)]
 }
 
 /// Writes `DIR/view.json` and `DIR/view.html` from the directory's files.

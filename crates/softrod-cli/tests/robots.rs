@@ -126,4 +126,16 @@ fn run_writes_bodies_at_their_parents_tips() {
     }
     assert!(moved > 1e-4, "the gripper falls under gravity");
     assert!(out.join("view.html").exists());
+    // view.json names the bodies as boxes of their mass and inertia: the
+    // gripper, 20 g with I = 4e-6 kg m² about every axis, is a cube of
+    // edge sqrt(6 I / m) = 0.0346 m.
+    let view: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("view.json")).unwrap()).unwrap();
+    let bodies = view["bodies"].as_array().unwrap();
+    assert_eq!(bodies.len(), 2);
+    let g = bodies.iter().find(|b| b["name"] == "gripper").unwrap();
+    let edge = (6.0_f64 * 4e-6 / 0.02).sqrt();
+    for k in 0..3 {
+        assert!((g["size"][k].as_f64().unwrap() - edge).abs() < 1e-12, "{g}");
+    }
 }
