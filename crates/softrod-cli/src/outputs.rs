@@ -1,7 +1,7 @@
 //! What a run directory holds besides the numbers: where the rods are
 //! sampled along `s`, the view description (`view.json`) and the 3-D view.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use softrod::dynamics::Model;
 use softrod::kinematics::Rod;
@@ -125,7 +125,7 @@ pub fn view_spec(model: &Model, title: &str) -> ViewSpec {
     spec
 }
 
-/// Edge lengths [m] of the uniform box with the body's mass and the
+/// Edge lengths \[m\] of the uniform box with the body's mass and the
 /// diagonal of its inertia (`I_xx = m (b² + c²)/12`, …), what the view draws
 /// for a body: `a² = 6 (I_yy + I_zz − I_xx)/m`. Edges are kept ≥ 1 mm so a
 /// point-like body stays visible.
@@ -247,6 +247,85 @@ pub fn num(v: f64) -> String {
         "0".into()
     } else {
         format!("{v:?}")
+    }
+}
+
+/// Bytes free for an unprivileged writer on the file system holding `dir`
+/// (or its nearest existing ancestor); `None` where this cannot be asked.
+#[cfg(unix)]
+pub fn free_disk_bytes(dir: &Path) -> Option<u64> {
+    use std::os::unix::ffi::OsStrExt;
+    let mut probe = dir.to_path_buf();
+    while !probe.exists() {
+        if !probe.pop() {
+            probe = PathBuf::from(".");
+            break;
+        }
+    }
+    if probe.as_os_str().is_empty() {
+        probe = PathBuf::from(".");
+    }
+    let c = std::ffi::CString::new(probe.as_os_str().as_bytes()).ok()?;
+    let mut st = std::mem::MaybeUninit::<libc::statvfs>::zeroed();
+    // SAFETY: `c` is a NUL-terminated path and `st` a writable statvfs.
+    let rc = unsafe { libc::statvfs(c.as_ptr(), st.as_mut_ptr()) };
+    if rc != 0 {
+        return None;
+    }
+    // SAFETY: statvfs returned 0, so it filled `st`.
+    let st = unsafe { st.assume_init() };
+    // The field types differ between unix targets (u32 on some).
+    #[allow(clippy::unnecessary_cast)]
+    Some((st.f_bavail as u64).saturating_mul(st.f_frsize as u64))
+}
+
+#[cfg(not(unix))]
+pub fn free_disk_bytes(_dir: &Path) -> Option<u64> {
+    None
+}
+
+/// A lower bound of what `softrod run` writes per output time \[bytes\]:
+/// the `trajectory.csv` row (≥ 8 bytes per number) and the `shape.csv`
+/// rows of every rod's piece boundaries (≥ 60 bytes each).
+pub fn output_bytes_per_row(model: &Model) -> u64 {
+    let numbers = 9 + 2 * model.n_dof() + 3 + 2 * model.n_cables();
+    let shape_rows: usize = model.rods().iter().map(|r| r.spec.rod.n_pieces() + 1).sum();
+    8 * numbers as u64 + 60 * shape_rows as u64
+}
+
+/// Refuses (exit 2, naming `run.output_every`) a run whose outputs cannot
+/// fit on the disk that holds `dir`, before anything is allocated or
+/// written.
+pub fn check_disk_space(
+    dir: &Path,
+    model: &Model,
+    duration: f64,
+    every: f64,
+) -> Result<(), CliError> {
+    let rows = softrod::output_sample_count(duration, every).unwrap_or(u64::MAX);
+    let need = rows.saturating_mul(output_bytes_per_row(model));
+    if let Some(free) = free_disk_bytes(dir) {
+        if need > free {
+            return Err(CliError::Input(format!(
+                "run.output_every: {rows} output times of {every:e} s over {duration} s need at least {} on disk, \
+                 {} free at {}; sample less often",
+                human(need),
+                human(free),
+                dir.display()
+            )));
+        }
+    }
+    Ok(())
+}
+
+fn human(bytes: u64) -> String {
+    let b = bytes as f64;
+    if b >= 1e12 {
+        format!("{:.1} TB", b / 1e12)
+    } else if b >= 1e9 {
+        format!("{:.1} GB", b / 1e9)
+    } else {
+        format!("{:.1} MB", b / 1e6)
     }
 }
 

@@ -553,7 +553,9 @@ pub fn run(
     let dir = out_dir(path, out);
     let scene = &l.scene;
     let duration = scene.run.duration;
-    let times = output_times(duration, l.sim.settings().output_spacing(duration));
+    let every = l.sim.settings().output_spacing(duration);
+    outputs::check_disk_space(&dir, l.sim.model(), duration, every)?;
+    let times = output_times(duration, every);
     let snapshot_at = chosen_rows(&times, snapshots.as_deref())?;
     outputs::prepare_out_dir(&dir)?;
     let stale = outputs::clear_stale(&dir)?;

@@ -137,3 +137,46 @@ fn one_unstable_rk4_step_is_not_ok() {
         "{v}"
     );
 }
+
+/// Outputs that cannot fit on the disk are refused before anything is
+/// written (exit 2, naming `run.output_every` and the sizes): 1e9 output
+/// times of a 24-DoF rod need more than a terabyte.
+#[test]
+fn outputs_larger_than_the_disk_are_refused_up_front() {
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("disk-full-estimate");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../examples/cantilever_gravity.toml"
+    ))
+    .unwrap();
+    let cut = text.find("[run]").unwrap();
+    let scene = dir.join("huge.toml");
+    std::fs::write(
+        &scene,
+        format!(
+            "{}[run]\nduration = 1000.0\noutput_every = 1e-6\n",
+            &text[..cut]
+        ),
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_softrod"))
+        .args([
+            "run",
+            scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("run.output_every") && err.contains("on disk"),
+        "{err}"
+    );
+    assert!(!out.join("trajectory.csv").exists(), "nothing written");
+}

@@ -43,7 +43,7 @@ pub enum Integrator {
     /// controllable numerical damping (`"generalized-alpha"`).
     #[serde(rename = "generalized-alpha")]
     GeneralizedAlpha,
-    /// ESDIRK4(3)6L[2]SA, adaptive, stiffly accurate, Newton on the exact
+    /// ESDIRK4(3)6L\[2\]SA, adaptive, stiffly accurate, Newton on the exact
     /// Jacobian with the O(N) structured solve (`"esdirk"`).
     #[serde(rename = "esdirk")]
     Esdirk,
