@@ -11,10 +11,11 @@
 //! (tested in `algorithms.rs`). Measured on the 2-core development VM:
 //! ~10 % less time per call (docs/performance.md).
 //!
-//! Setting the environment variable `SOFTROD_NO_AVX2` (any value) before
-//! the first call forces the baseline copy: valgrind 3.19 (callgrind, the
-//! instruction counts in docs/performance.md) does not decode every AVX
-//! instruction the AVX2 copy uses.
+//! The copies exist with the cargo feature `avx2` (on by default; the
+//! facade `softrod` and the benches forward it). Without it
+//! (`--no-default-features`) only the baseline copy runs, which is how the
+//! callgrind instruction counts in docs/performance.md are taken: valgrind
+//! 3.19 does not decode every AVX instruction the AVX2 copy uses.
 //!
 //! [`forward_dynamics`]: crate::forward_dynamics
 //! [`inverse_dynamics`]: crate::inverse_dynamics
@@ -25,9 +26,7 @@
 #[inline]
 pub(crate) fn avx2() -> bool {
     static FLAG: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
-    *FLAG.get_or_init(|| {
-        std::env::var_os("SOFTROD_NO_AVX2").is_none() && std::arch::is_x86_feature_detected!("avx2")
-    })
+    *FLAG.get_or_init(|| cfg!(feature = "avx2") && std::arch::is_x86_feature_detected!("avx2"))
 }
 
 /// Defines `pub fn $name` that dispatches to an AVX2 or a baseline copy of
