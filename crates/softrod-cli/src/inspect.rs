@@ -16,6 +16,12 @@ pub fn check(path: &Path) -> Result<(), CliError> {
         warnings,
         sim,
     } = load_silent(path)?;
+    // What `run` or `statics` would refuse before starting, `check` refuses
+    // too (the disk space of `run --out` aside: it depends on the directory).
+    match scene.run.mode {
+        softrod::scene::Mode::Dynamics => sim.check_run(scene.run.duration)?,
+        softrod::scene::Mode::Statics => sim.check_statics()?,
+    }
     let m = sim.model();
     println!("scene: {}", scene.source);
     println!("degrees of freedom: {}", m.n_dof());

@@ -107,6 +107,20 @@ fn a_run_too_large_for_the_machine_exits_2_naming_the_key() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains("rod[0].pieces") && err.contains("GB"), "{err}");
+    // `check` refuses what `run` would, with the same message.
+    let c = Command::new(env!("CARGO_BIN_EXE_softrod"))
+        .args(["check", s.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_eq!(c.status.code(), Some(2));
+    let first = |t: &str| {
+        t.lines()
+            .find(|l| l.contains("need about"))
+            // The free memory moves between the two commands.
+            .and_then(|l| l.split(" but ").next())
+            .map(str::to_owned)
+    };
+    assert_eq!(first(&String::from_utf8_lossy(&c.stderr)), first(&err));
 }
 
 /// The case: rk4 with dt = 1 s over 0.05 s was `ok` with a tip

@@ -571,7 +571,7 @@ impl Simulation {
     /// Static equilibrium under every static term at `t = 0`, from the
     /// initial `q` (Newton with line search and load continuation).
     pub fn statics(&mut self) -> Result<StaticsResult> {
-        self.check_dense("statics", STATICS_DENSE_MATRICES)?;
+        self.check_statics()?;
         let s = &mut self.system;
         Ok(statics(
             &s.model,
@@ -640,14 +640,12 @@ impl Simulation {
         Ok(keep.traj)
     }
 
-    /// Integrates `duration` seconds from the initial state, handing each
-    /// sample to `observer` as it is produced (the integrator's dense output
-    /// at the output times; nothing is kept here).
-    pub fn simulate_with(
-        &mut self,
-        duration: f64,
-        observer: &mut dyn Observer,
-    ) -> Result<RunSummary> {
+    /// The checks a run of `duration` seconds passes before it starts: the
+    /// settings, the output samples and the integrator's dense matrices
+    /// against the machine's memory ([`Error::TooLarge`], naming the key).
+    /// `softrod check` calls it, so that it rejects what `softrod run`
+    /// would.
+    pub fn check_run(&self, duration: f64) -> Result<()> {
         if !(duration.is_finite() && duration > 0.0) {
             return Err(Error::InvalidSetting {
                 key: "duration",
@@ -657,6 +655,28 @@ impl Simulation {
         self.settings.validate()?;
         // The output times are kept (8 bytes each).
         self.check_samples(duration, 8)?;
+        let (method, _) = self.settings.method_and_options(duration)?;
+        self.check_dense(
+            &format!("the {} integrator", self.settings.integrator.name()),
+            dense_matrices_of(method),
+        )
+    }
+
+    /// The check [`Simulation::statics`] passes before it starts: its dense
+    /// matrices against the machine's memory ([`Error::TooLarge`]).
+    pub fn check_statics(&self) -> Result<()> {
+        self.check_dense("statics", STATICS_DENSE_MATRICES)
+    }
+
+    /// Integrates `duration` seconds from the initial state, handing each
+    /// sample to `observer` as it is produced (the integrator's dense output
+    /// at the output times; nothing is kept here).
+    pub fn simulate_with(
+        &mut self,
+        duration: f64,
+        observer: &mut dyn Observer,
+    ) -> Result<RunSummary> {
+        self.check_run(duration)?;
         let times = output_times(duration, self.settings.output_spacing(duration));
         let (q0, qd0) = (self.q0.clone(), self.qd0.clone());
         self.integrate_span(0.0, duration, times, &q0, &qd0, observer, true)
