@@ -120,6 +120,7 @@ pub(crate) fn inverse_dynamics_impl<'a>(
     check_vec(model, "qdot", qd)?;
     check_vec(model, "qddot", qdd)?;
     if let Some(tree) = &model.tree {
+        model.set_time(data, t);
         crate::tree_algorithms::inverse_dynamics(model, tree, data, t, q, Some(qd), Some(qdd));
         return Ok(&data.tau);
     }
@@ -177,6 +178,7 @@ pub(crate) fn forward_dynamics_impl<'a>(
         check_vec(model, "tau", ta)?;
     }
     if let Some(tree) = &model.tree {
+        model.set_time(data, t);
         crate::tree_algorithms::forward_dynamics(model, tree, data, t, q, qd, tau_act)?;
         return check_qdd(data, t);
     }
@@ -279,7 +281,8 @@ crate::simd::dispatch! {
     /// pairing `(Ad_{g_n(ℓ)}S_n(ℓ))ᵀ(Ad*_{g_m(0)⁻¹}F_m)` of world-frame twists
     /// and wrenches (the pairing is frame-independent). Block diagonal across
     /// rods. Result in `data.mass` (n_dof × n_dof, symmetric positive
-    /// definite). Cost O(N·n_dof).
+    /// definite). Cost O(N·n_dof). With prescribed joints (D59), at their
+    /// values of the last [`Model::set_time`] or dynamics evaluation.
     pub fn mass_matrix<'a>(model: &Model, data: &'a mut Data, q: &[f64]) -> Result<&'a nalgebra::DMatrix<f64>, DynamicsError>
     => mass_matrix_impl, mass_matrix_avx2
 }

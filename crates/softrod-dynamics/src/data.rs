@@ -85,13 +85,30 @@ pub struct Data {
     /// World pose of every body's frame, from the last [`crate::frames`]
     /// (one per body).
     pub body_poses: Vec<Pose>,
+    /// Prescribed joint coordinates at [`Data::prescribed_time`]
+    /// ([`Model::n_prescribed`] of them; D59), in rad or m.
+    pub prescribed_q: DVector<f64>,
+    /// Their rates.
+    pub prescribed_qd: DVector<f64>,
+    /// Their accelerations.
+    pub prescribed_qdd: DVector<f64>,
+    /// The time of the prescribed motion in use \[s\] (set by
+    /// [`Model::set_time`] and by forward and inverse dynamics).
+    pub prescribed_time: f64,
+    /// The generalized force each prescribed coordinate needs (N or N·m)
+    /// to follow its motion, from the last forward or inverse dynamics
+    /// (D59).
+    pub prescribed_force: DVector<f64>,
+    /// When set, prescribed joints hold their values at rest (no rate, no
+    /// acceleration): statics and modes about an equilibrium.
+    pub(crate) prescribed_at_rest: bool,
 }
 
 impl Data {
     /// Allocates the buffers for `model`.
     pub fn new(model: &Model) -> Self {
         let n = model.n_dof();
-        Self {
+        let mut data = Self {
             pieces: model
                 .rods()
                 .iter()
@@ -116,7 +133,15 @@ impl Data {
             }),
             rod_bases: model.rods().iter().map(|r| *r.spec.rod.base()).collect(),
             body_poses: vec![Pose::identity(); model.bodies().len()],
-        }
+            prescribed_q: DVector::zeros(model.n_prescribed()),
+            prescribed_qd: DVector::zeros(model.n_prescribed()),
+            prescribed_qdd: DVector::zeros(model.n_prescribed()),
+            prescribed_time: f64::NAN,
+            prescribed_force: DVector::zeros(model.n_prescribed()),
+            prescribed_at_rest: false,
+        };
+        model.set_time(&mut data, 0.0);
+        data
     }
 
     /// Sets the cable tensions `u` \[N\] (one per cable, in model order:

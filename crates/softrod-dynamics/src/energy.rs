@@ -28,6 +28,9 @@ impl Energies {
 
 /// Kinetic, elastic and gravitational energy at `(q, q̇)` (dim n_dof each).
 /// Uses the model's quadrature; O(N). `data` is not modified except as scratch.
+/// With prescribed joints (D59) the configuration and the kinetic energy
+/// include their motion at the time of the last [`Model::set_time`] or
+/// dynamics evaluation.
 pub fn energies(
     model: &Model,
     _data: &mut Data,
@@ -79,6 +82,8 @@ pub fn energies(
 /// A rod's shape in the world is `rod_bases[r] · Rod::base()⁻¹ · g_local(s)`
 /// for the poses of `softrod_kinematics` (which start from `Rod::base()`);
 /// for a model without joints or parents `rod_bases[r] = Rod::base()`.
+/// Prescribed joints (D59) take their values of the last
+/// [`Model::set_time`] or dynamics evaluation.
 pub fn frames(model: &Model, data: &mut Data, q: &[f64]) -> Result<(), DynamicsError> {
     check_vec(model, "q", q)?;
     if let Some(tree) = &model.tree {

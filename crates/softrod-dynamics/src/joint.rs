@@ -11,6 +11,7 @@
 //! motion subspace `T₋(1)B` and velocity-product acceleration exactly.
 
 use crate::error::DynamicsError;
+use crate::prescribed::Prescribed;
 use nalgebra::Matrix6xX;
 use softrod_lie::{Mat3, Mat6, Pose, Vec3, Wrench, join, skew};
 use softrod_mechanics::LoadFrame;
@@ -108,6 +109,10 @@ pub struct Joint {
     pub damping: Vec<f64>,
     /// Rest value per coordinate (empty or `dof` values).
     pub rest: Vec<f64>,
+    /// The joint's coordinates as given functions of time (D59): then they
+    /// are not generalized coordinates, the joint has no spring, damper or
+    /// rest value, and the force it needs is an output.
+    pub prescribed: Option<Prescribed>,
 }
 
 impl Default for Joint {
@@ -124,6 +129,7 @@ impl Joint {
             stiffness: Vec::new(),
             damping: Vec::new(),
             rest: Vec::new(),
+            prescribed: None,
         }
     }
 
@@ -177,9 +183,29 @@ impl Joint {
         self
     }
 
-    /// Number of coordinates.
+    /// With prescribed motion (one curve per coordinate, D59).
+    pub fn with_prescribed(mut self, motion: Prescribed) -> Self {
+        self.prescribed = Some(motion);
+        self
+    }
+
+    /// Number of generalized coordinates: the kind's, or zero when the
+    /// motion is prescribed.
     pub fn dof(&self) -> usize {
-        self.kind.dof()
+        if self.prescribed.is_some() {
+            0
+        } else {
+            self.kind.dof()
+        }
+    }
+
+    /// Number of prescribed coordinates (the kind's when prescribed, else 0).
+    pub fn prescribed_dof(&self) -> usize {
+        if self.prescribed.is_some() {
+            self.kind.dof()
+        } else {
+            0
+        }
     }
 
     /// Checks the axes (finite, non-zero; universal: not parallel) and
@@ -213,7 +239,23 @@ impl Joint {
             }
             _ => {}
         }
-        let k = self.dof();
+        let k = self.kind.dof();
+        if let Some(p) = &self.prescribed {
+            p.validate(k, element)?;
+            if let Some(what) = [
+                ("stiffness", &self.stiffness),
+                ("damping", &self.damping),
+                ("rest", &self.rest),
+            ]
+            .iter()
+            .find(|(_, v)| !v.is_empty())
+            .map(|(w, _)| *w)
+            {
+                return Err(bad(format!(
+                    "{what} on a prescribed joint: its motion is given, a spring or damper would do nothing"
+                )));
+            }
+        }
         for (what, v, non_neg) in [
             ("stiffness", &self.stiffness, true),
             ("damping", &self.damping, true),

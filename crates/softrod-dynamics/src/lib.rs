@@ -53,6 +53,7 @@ mod model;
 mod modes;
 mod passes;
 mod piece_derivs;
+mod prescribed;
 mod shifted;
 mod simd;
 mod statics;
@@ -77,6 +78,7 @@ pub use matrices::{
 };
 pub use model::{BodyModel, Element, ElementInfo, ElementKind, Model, RodModel, RodSpec};
 pub use modes::{Modes, modes};
+pub use prescribed::{Curve, Prescribed, Spline};
 pub use shifted::ShiftedSolver;
 pub use statics::{StaticsOptions, StaticsResult, statics};
 

@@ -235,6 +235,7 @@ pub struct Model {
     /// Gauss points per piece.
     pub quadrature: GaussLegendre,
     n_dof: usize,
+    n_prescribed: usize,
     pub(crate) bodies: Vec<BodyModel>,
     pub(crate) elements: Vec<ElementInfo>,
     /// The tree of nodes of a model with joints, bodies or parents (`None`:
@@ -314,12 +315,14 @@ impl Model {
         let mut bodies = Vec::new();
         let mut infos = Vec::with_capacity(elements.len());
         let mut off = 0;
+        let mut pres = 0;
         let mut cables = 0;
         for element in elements {
             match element {
                 Element::Rod(spec, mut attachment) => {
                     attachment.joint.validate(&spec.name)?;
                     let jd = attachment.joint.dof();
+                    let pd = attachment.joint.prescribed_dof();
                     let index = rods.len();
                     let rm = build_rod(spec, index, off + jd, cables, &gl)?;
                     infos.push(ElementInfo {
@@ -327,7 +330,9 @@ impl Model {
                         kind: ElementKind::Rod(index),
                         attachment,
                         joint_dofs: off..off + jd,
+                        prescribed_dofs: pres..pres + pd,
                     });
+                    pres += pd;
                     off += jd + rm.n_dof();
                     cables += rm.spec.cables.len();
                     rods.push(rm);
@@ -336,12 +341,15 @@ impl Model {
                     spec.validate()?;
                     attachment.joint.validate(&spec.name)?;
                     let jd = attachment.joint.dof();
+                    let pd = attachment.joint.prescribed_dof();
                     infos.push(ElementInfo {
                         name: spec.name.clone(),
                         kind: ElementKind::Body(bodies.len()),
                         attachment,
                         joint_dofs: off..off + jd,
+                        prescribed_dofs: pres..pres + pd,
                     });
+                    pres += pd;
                     off += jd;
                     bodies.push(BodyModel {
                         inertia: spec.spatial_inertia(),
@@ -357,6 +365,7 @@ impl Model {
             gravity,
             quadrature: gl,
             n_dof: off,
+            n_prescribed: pres,
             bodies,
             elements: infos,
             tree: None,
@@ -370,6 +379,36 @@ impl Model {
     /// Total number of generalized coordinates.
     pub fn n_dof(&self) -> usize {
         self.n_dof
+    }
+
+    /// Number of prescribed joint coordinates (D59): given functions of
+    /// time, not in `q`; their forces are an output
+    /// ([`crate::Data::prescribed_force`]).
+    pub fn n_prescribed(&self) -> usize {
+        self.n_prescribed
+    }
+
+    /// Evaluates every prescribed coordinate at `t` \[s\] into `data`
+    /// (values, rates, accelerations), so that the algorithms that take no
+    /// time ([`crate::mass_matrix`], [`crate::energies`], [`crate::frames`])
+    /// see the configuration at `t`. Forward and inverse dynamics do this
+    /// themselves. A no-op without prescribed joints.
+    pub fn set_time(&self, data: &mut crate::Data, t: f64) {
+        if self.n_prescribed == 0 {
+            return;
+        }
+        for e in &self.elements {
+            if let Some(p) = &e.attachment.joint.prescribed {
+                let r = e.prescribed_dofs.clone();
+                p.eval_into(
+                    t,
+                    &mut data.prescribed_q.as_mut_slice()[r.clone()],
+                    &mut data.prescribed_qd.as_mut_slice()[r.clone()],
+                    &mut data.prescribed_qdd.as_mut_slice()[r],
+                );
+            }
+        }
+        data.prescribed_time = t;
     }
 
     /// The rods.
@@ -544,8 +583,12 @@ pub struct ElementInfo {
     pub kind: ElementKind,
     /// Parent, `at`, joint.
     pub attachment: Attachment,
-    /// Range of the joint's coordinates in `q` (empty for a fixed joint).
+    /// Range of the joint's coordinates in `q` (empty for a fixed or a
+    /// prescribed joint).
     pub joint_dofs: std::ops::Range<usize>,
+    /// Range of a prescribed joint's coordinates among the model's
+    /// prescribed coordinates ([`Model::n_prescribed`]; empty otherwise).
+    pub prescribed_dofs: std::ops::Range<usize>,
 }
 
 /// A rigid body inside a [`Model`].

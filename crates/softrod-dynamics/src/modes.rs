@@ -36,7 +36,21 @@ impl Modes {
 /// eigenproblem `K_eff v = ω² M v` with `K_eff = ∂ID(q, 0, 0)/∂q` (elastic
 /// `K` exact, geometric stiffness of gravity/loads/cables by central
 /// differences) and `M = M(q_eq)`, solved as `L⁻¹K_effL⁻ᵀ` with `M = LLᵀ`.
+///
+/// Prescribed joints (D59) hold their values at `time`, at rest.
 pub fn modes(
+    model: &Model,
+    data: &mut Data,
+    q_eq: &[f64],
+    time: f64,
+) -> Result<Modes, DynamicsError> {
+    let at_rest = std::mem::replace(&mut data.prescribed_at_rest, true);
+    let out = modes_inner(model, data, q_eq, time);
+    data.prescribed_at_rest = at_rest;
+    out
+}
+
+fn modes_inner(
     model: &Model,
     data: &mut Data,
     q_eq: &[f64],

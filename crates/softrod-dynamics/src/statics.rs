@@ -69,8 +69,11 @@ pub fn statics(
 ) -> Result<StaticsResult, DynamicsError> {
     check_vec(model, "q0", q0)?;
     let saved = data.load_scale;
+    // Prescribed joints (D59) hold their values at `options.time`, at rest.
+    let at_rest = std::mem::replace(&mut data.prescribed_at_rest, true);
     let out = statics_inner(model, data, q0, options);
     data.load_scale = saved;
+    data.prescribed_at_rest = at_rest;
     out
 }
 

@@ -29,9 +29,13 @@ pub(crate) struct Node {
     /// world's): `X = Ad⁻¹_offset` carries twists across it (D54).
     pub offset: Pose,
     pub kind: NodeKind,
-    /// First coordinate in `q` and number of coordinates `k`.
+    /// First coordinate in `q` and number of coordinates `k` (zero for a
+    /// prescribed joint's piece).
     pub dof: usize,
     pub k: usize,
+    /// A prescribed joint's piece (D59): its first coordinate among the
+    /// prescribed ones and their number (the columns of `bpad`).
+    pub prescribed: Option<(usize, usize)>,
     /// Strain basis zero-padded to 6×6 (joints and pieces; zero for bodies).
     pub bpad: Mat6,
 }
@@ -153,12 +157,18 @@ impl Tree {
             for (basis, local) in info.attachment.joint.kind.segments() {
                 let k = basis.ncols();
                 let bpad = Mat6::from_fn(|i, j| if j < k { basis[(i, j)] } else { 0.0 });
+                let driven = info.attachment.joint.prescribed.is_some();
                 tree.nodes.push(Node {
                     parent: cur.0,
                     offset: cur.1,
                     kind: NodeKind::Joint { element: e },
-                    dof: info.joint_dofs.start + local,
-                    k,
+                    dof: if driven {
+                        0
+                    } else {
+                        info.joint_dofs.start + local
+                    },
+                    k: if driven { 0 } else { k },
+                    prescribed: driven.then_some((info.prescribed_dofs.start + local, k)),
                     bpad,
                 });
                 cur = (Some(tree.nodes.len() - 1), Pose::identity());
@@ -179,6 +189,7 @@ impl Tree {
                             kind: NodeKind::Piece { rod: r, piece: pn },
                             dof: rm.dof_offset + piece.dof_offset,
                             k,
+                            prescribed: None,
                             bpad,
                         });
                         cur = (Some(tree.nodes.len() - 1), Pose::identity());
@@ -192,6 +203,7 @@ impl Tree {
                         kind: NodeKind::Body { body: b },
                         dof: 0,
                         k: 0,
+                        prescribed: None,
                         bpad: Mat6::zeros(),
                     });
                     tree.body_nodes[b] = tree.nodes.len() - 1;

@@ -11,7 +11,6 @@ use crate::error::DynamicsError;
 use crate::model::Model;
 use crate::passes::external_density;
 use crate::tree::{NodeKind, Tree};
-use nalgebra::DVector;
 use softrod_lie::{Mat6, PieceMaps, Pose, Vec6, ad_vec, coad_vec};
 use softrod_mechanics::elastic_energy;
 
@@ -103,6 +102,16 @@ fn local(v: &[f64], dof: usize, k: usize) -> Vec6 {
 
 /// The outward sweep over the nodes (D7–D10, D54): poses, velocities,
 /// accelerations (inverse), and per node what `pass` needs.
+///
+/// Prescribed joints (D59) take their coordinates from
+/// `data.prescribed_q`, their rates when `qd` is given and their
+/// accelerations in the dynamics passes (neither for gravity alone); the
+/// prescribed acceleration is folded into the node's tip acceleration
+/// `acc_tip`, so the recursions treat the node as one without coordinates.
+///
+/// Returns the kinetic energy `½Σ w ηᵀ𝓜η` (points and bodies) for an
+/// `Inverse` pass with `qd` and without `qdd` (what [`energies`] asks), else
+/// zero.
 pub(crate) fn outward(
     model: &Model,
     tree: &Tree,
@@ -111,9 +120,15 @@ pub(crate) fn outward(
     qd: Option<&[f64]>,
     qdd: Option<&[f64]>,
     pass: TreePass,
-) {
+) -> f64 {
     let scale = data.load_scale;
     let only_gravity = data.only_gravity;
+    let want_kinetic = pass == TreePass::Inverse && qd.is_some() && qdd.is_none();
+    let mut kinetic = 0.0;
+    let moving = !only_gravity && !data.prescribed_at_rest;
+    let drive_rates = qd.is_some() && moving;
+    let drive_acc =
+        moving && (pass == TreePass::Articulated || (pass == TreePass::Inverse && qdd.is_some()));
     let a_world = if pass == TreePass::Inverse {
         world_acceleration(model, scale)
     } else {
@@ -121,6 +136,8 @@ pub(crate) fn outward(
     };
     let has_vel = qd.is_some();
     for (i, node) in tree.nodes.iter().enumerate() {
+        // A prescribed joint's acceleration `T₋(1)Bq̈_p`, added to its tip's.
+        let mut drive = Vec6::zeros();
         let (parent_pose, eta_p, etadot_p) = match node.parent {
             Some(p) => {
                 let w = &data.nodes[p];
@@ -155,6 +172,9 @@ pub(crate) fn outward(
                         f -= l.wrench(&base_world) * scale;
                     }
                 }
+                if want_kinetic {
+                    kinetic += 0.5 * eta_b.dot(&(m * eta_b));
+                }
                 w.p_big = f;
                 w.mt = *m;
                 w.tip = Pose::identity();
@@ -169,12 +189,29 @@ pub(crate) fn outward(
             }
             NodeKind::Joint { .. } => {
                 let b = &node.bpad;
-                (
-                    b * local(q, node.dof, k),
-                    qd.map_or(Vec6::zeros(), |v| b * local(v, node.dof, k)),
-                    qdd.map_or(Vec6::zeros(), |v| b * local(v, node.dof, k)),
-                    1.0,
-                )
+                if let Some((o, kp)) = node.prescribed {
+                    let rates = if drive_rates {
+                        b * local(data.prescribed_qd.as_slice(), o, kp)
+                    } else {
+                        Vec6::zeros()
+                    };
+                    if drive_acc {
+                        drive = b * local(data.prescribed_qdd.as_slice(), o, kp);
+                    }
+                    (
+                        b * local(data.prescribed_q.as_slice(), o, kp),
+                        rates,
+                        Vec6::zeros(),
+                        1.0,
+                    )
+                } else {
+                    (
+                        b * local(q, node.dof, k),
+                        qd.map_or(Vec6::zeros(), |v| b * local(v, node.dof, k)),
+                        qdd.map_or(Vec6::zeros(), |v| b * local(v, node.dof, k)),
+                        1.0,
+                    )
+                }
             }
             NodeKind::Piece { rod, piece } => {
                 let rm = &model.rods[rod];
@@ -207,6 +244,9 @@ pub(crate) fn outward(
                     } else {
                         Vec6::zeros()
                     };
+                    if want_kinetic {
+                        kinetic += 0.5 * qp.w * eta.dot(&m.component_mul(&eta));
+                    }
                     let mut f = coad_vec(&eta, &m.component_mul(&eta));
                     f += if pass == TreePass::Inverse {
                         let etadot = a.mul_vec(&etadot_b) + tm.mul_vec(&ddxi) + bias;
@@ -247,11 +287,14 @@ pub(crate) fn outward(
         let a = gl.ad_inv();
         let carried = a.mul_vec(&eta_b);
         let sv = tm.mul_vec(&dxi);
-        let acc = if has_vel {
+        let mut acc = if has_vel {
             ad_vec(&carried, &sv) + dbias
         } else {
             Vec6::zeros()
         };
+        if node.prescribed.is_some() {
+            acc += tm.mul_vec(&drive);
+        }
         w.tip = gl;
         w.s_tip = tm.to_mat6() * node.bpad;
         w.acc_tip = acc;
@@ -261,6 +304,7 @@ pub(crate) fn outward(
             w.s_world = base_world.compose(&gl).ad().to_mat6() * w.s_tip;
         }
     }
+    kinetic
 }
 
 /// `τ ← τ − k(q − q_rest) − d q̇` of every joint (D53), into the strain
@@ -304,6 +348,11 @@ pub(crate) fn inverse_dynamics(
         let v = w.p_small + w.s_tip.tr_mul(&w.f_tip);
         for c in 0..node.k {
             data.tau[node.dof + c] = v[c];
+        }
+        if let Some((o, kp)) = node.prescribed {
+            for c in 0..kp {
+                data.prescribed_force[o + c] = v[c];
+            }
         }
         let wb = w.p_big + w.tip.ad_inv().tr_mul_vec(&w.f_tip);
         if let Some(p) = node.parent {
@@ -396,6 +445,14 @@ pub(crate) fn forward_dynamics(
             data.qdd[node.dof + c] = qn[c];
         }
         w.etadot_tip = w.tip.ad_inv().mul_vec(&etadot_b) + w.s_tip * qn + w.acc_tip;
+        if let Some((o, kp)) = node.prescribed {
+            // What the joint transmits to its child: 𝓜ᴬη̇ + 𝓟ᴬ at its tip,
+            // projected on its motion subspace (D59).
+            let f = w.p_small + w.s_tip.tr_mul(&(w.m_tip * w.etadot_tip + w.f_tip));
+            for c in 0..kp {
+                data.prescribed_force[o + c] = f[c];
+            }
+        }
     }
     Ok(())
 }
@@ -462,10 +519,12 @@ pub(crate) fn energies(
     q: &[f64],
     qd: &[f64],
 ) -> Energies {
-    mass_matrix(model, tree, data, q);
-    let v = DVector::from_column_slice(qd);
+    // Kinetic energy point by point (D59: it includes the prescribed
+    // joints' motion, which `½q̇ᵀMq̇` would miss); the poses of this pass
+    // serve the gravitational energy below.
+    let kinetic = outward(model, tree, data, q, Some(qd), None, TreePass::Inverse);
     let mut e = Energies {
-        kinetic: 0.5 * v.dot(&(&data.mass * &v)),
+        kinetic,
         ..Energies::default()
     };
     for rm in model.rods() {

@@ -1,0 +1,333 @@
+//! Prescribed joints (docs/theory.md §11, D59) against independent answers:
+//! a base accelerated by `a` without gravity moves the rod as gravity `−a`
+//! on a fixed base; the force a prescribed joint reports, applied to the
+//! same joint left free, reproduces the prescribed motion (forward
+//! dynamics of a second model); the work of that force is the change of
+//! the total energy; inverse and forward dynamics agree on it.
+
+use nalgebra::DVector;
+use softrod_dynamics::{
+    Attachment, BodySpec, Curve, Data, Joint, Model, Prescribed, RodSpec, RodSpecBuilder,
+    StaticsOptions, energies, forward_dynamics, inverse_dynamics, mass_matrix, statics,
+};
+use softrod_mechanics::Material;
+
+const G: f64 = 9.81;
+
+fn rod(name: &str, length: f64, pieces: usize) -> RodSpecBuilder {
+    RodSpec::builder(length)
+        .name(name)
+        .pieces(pieces)
+        .circle(0.01)
+        .material(
+            Material::builder()
+                .density(1000.0)
+                .young(1e6)
+                .poisson(0.5)
+                .build()
+                .unwrap(),
+        )
+}
+
+/// A deterministic, varied state (not a special configuration).
+fn state(n: usize, scale: f64, seed: f64) -> Vec<f64> {
+    (0..n)
+        .map(|i| scale * ((i as f64 + 1.0) * 1.7 + seed).sin())
+        .collect()
+}
+
+/// `x(t) = ½at²` sampled at three points: the not-a-knot spline is that
+/// parabola exactly.
+fn constant_acceleration(a: f64) -> Prescribed {
+    let times = [0.0, 1.0, 2.0];
+    let values: Vec<Vec<f64>> = times.iter().map(|t| vec![0.5 * a * t * t]).collect();
+    Prescribed::samples(&times, &values).unwrap()
+}
+
+#[test]
+fn base_acceleration_equals_reversed_gravity() {
+    // Horizontal cantilever along x; the base accelerates up at a = g.
+    let a = G;
+    let driven = Model::builder()
+        .rod_on(
+            rod("arm", 0.4, 4),
+            Attachment::world_joint(
+                Joint::prismatic([0.0, 0.0, 1.0]).with_prescribed(constant_acceleration(a)),
+            ),
+        )
+        .body(
+            BodySpec::principal("tip", 0.02, [1e-6, 2e-6, 3e-6]),
+            Attachment::to("arm", Joint::fixed()),
+        )
+        .build()
+        .unwrap();
+    let fixed = Model::builder()
+        .rod(rod("arm", 0.4, 4))
+        .body(
+            BodySpec::principal("tip", 0.02, [1e-6, 2e-6, 3e-6]),
+            Attachment::to("arm", Joint::fixed()),
+        )
+        .gravity([0.0, 0.0, -a])
+        .build()
+        .unwrap();
+    assert_eq!(
+        driven.n_dof(),
+        fixed.n_dof(),
+        "a prescribed joint adds no DoF"
+    );
+    assert_eq!(driven.n_prescribed(), 1);
+    let n = driven.n_dof();
+    let (mut dd, mut df) = (Data::new(&driven), Data::new(&fixed));
+    for (k, t) in [0.0, 0.3, 1.7].into_iter().enumerate() {
+        let q = state(n, 0.8, k as f64);
+        let v = state(n, 2.0, 0.5 + k as f64);
+        let qa = forward_dynamics(&driven, &mut dd, t, &q, &v, None)
+            .unwrap()
+            .clone();
+        let qb = forward_dynamics(&fixed, &mut df, t, &q, &v, None)
+            .unwrap()
+            .clone();
+        let err = (&qa - &qb).amax() / qb.amax();
+        assert!(err < 1e-12, "t = {t}: relative difference {err}");
+        // The base's velocity a·t does not matter (Galilean invariance),
+        // nor its position.
+        assert!((dd.prescribed_qd[0] - a * t).abs() < 1e-12);
+    }
+}
+
+/// A rod on a joint with the given prescribed motion, and the same model
+/// with the joint free.
+fn pair(joint: Joint, motion: Prescribed) -> (Model, Model) {
+    let build = |j: Joint| {
+        Model::builder()
+            .rod_on(rod("arm", 0.3, 3), Attachment::world_joint(j))
+            .body(
+                BodySpec::principal("tip", 0.01, [1e-6, 1e-6, 1e-6]),
+                Attachment::to("arm", Joint::fixed()),
+            )
+            .gravity([0.0, 0.0, -G])
+            .build()
+            .unwrap()
+    };
+    (build(joint.clone().with_prescribed(motion)), build(joint))
+}
+
+#[test]
+fn reported_force_drives_the_free_joint_along_the_prescribed_motion() {
+    let sine = |k: usize| {
+        Prescribed::new(
+            (0..k)
+                .map(|c| Curve::Sine {
+                    amplitude: 0.3 + 0.1 * c as f64,
+                    frequency: 1.5,
+                    phase: 0.2 * c as f64,
+                    offset: 0.05,
+                })
+                .collect(),
+        )
+    };
+    for (joint, k) in [
+        (Joint::revolute([0.0, 1.0, 0.3]), 1),
+        (Joint::prismatic([1.0, 0.0, 0.5]), 1),
+        (Joint::universal([0.0, 1.0, 0.0], [0.0, 0.0, 1.0]), 2),
+        (Joint::spherical(), 3),
+        (Joint::free(), 6),
+    ] {
+        let name = joint.kind.name();
+        let (driven, free) = pair(joint, sine(k));
+        let n = driven.n_dof();
+        assert_eq!(free.n_dof(), n + k);
+        let (mut dd, mut df) = (Data::new(&driven), Data::new(&free));
+        let t = 0.37;
+        let q = state(n, 0.5, 1.0);
+        let v = state(n, 1.5, 2.0);
+        let qdd = forward_dynamics(&driven, &mut dd, t, &q, &v, None)
+            .unwrap()
+            .clone();
+        let force = dd.prescribed_force.clone();
+        // The free model at the same state: joint coordinates first.
+        let mut qf = dd.prescribed_q.as_slice().to_vec();
+        qf.extend_from_slice(&q);
+        let mut vf = dd.prescribed_qd.as_slice().to_vec();
+        vf.extend_from_slice(&v);
+        let mut tau = force.as_slice().to_vec();
+        tau.extend(std::iter::repeat_n(0.0, n));
+        let qddf = forward_dynamics(&free, &mut df, t, &qf, &vf, Some(&tau))
+            .unwrap()
+            .clone();
+        let scale = qddf.amax();
+        for c in 0..k {
+            let e = (qddf[c] - dd.prescribed_qdd[c]).abs() / scale;
+            assert!(e < 1e-10, "{name}: joint acceleration {c}: {e}");
+        }
+        let e = (qddf.rows(k, n) - &qdd).amax() / scale;
+        assert!(e < 1e-10, "{name}: strain accelerations differ by {e}");
+        // Inverse dynamics at (q, q̇, q̈) needs no strain force and reports
+        // the same joint force.
+        let tau_id = inverse_dynamics(&driven, &mut dd, t, &q, &v, qdd.as_slice())
+            .unwrap()
+            .clone();
+        assert!(
+            tau_id.amax() < 1e-9 * force.amax().max(1.0),
+            "{name}: {tau_id}"
+        );
+        let e = (&dd.prescribed_force - &force).amax() / force.amax();
+        assert!(e < 1e-10, "{name}: inverse vs forward joint force {e}");
+    }
+}
+
+#[test]
+fn work_of_the_prescribed_force_is_the_energy_change() {
+    // A pendulum-like rod on a revolute joint swung by θ(t) = 0.4 sin(2πt).
+    let (driven, _) = pair(
+        Joint::revolute([0.0, 1.0, 0.0]),
+        Prescribed::new(vec![Curve::Sine {
+            amplitude: 0.4,
+            frequency: 1.0,
+            phase: 0.0,
+            offset: 0.0,
+        }]),
+    );
+    let n = driven.n_dof();
+    let mut data = Data::new(&driven);
+    let mut q = DVector::zeros(n);
+    let mut v = DVector::zeros(n);
+    let dt = 2e-4;
+    let steps = 2500;
+    let power = |data: &mut Data, t: f64, q: &DVector<f64>, v: &DVector<f64>| {
+        forward_dynamics(&driven, data, t, q.as_slice(), v.as_slice(), None).unwrap();
+        data.prescribed_force[0] * data.prescribed_qd[0]
+    };
+    driven.set_time(&mut data, 0.0);
+    let e0 = energies(&driven, &mut data, q.as_slice(), v.as_slice())
+        .unwrap()
+        .total();
+    let mut work = 0.0;
+    let mut p_prev = power(&mut data, 0.0, &q, &v);
+    let mut t = 0.0;
+    let mut scale: f64 = 0.0;
+    for _ in 0..steps {
+        // RK4 with the time-dependent forward dynamics.
+        let mut acc = |t: f64, q: &DVector<f64>, v: &DVector<f64>| {
+            forward_dynamics(&driven, &mut data, t, q.as_slice(), v.as_slice(), None)
+                .unwrap()
+                .clone()
+        };
+        let a1 = acc(t, &q, &v);
+        let (q2, v2) = (&q + &v * (dt / 2.0), &v + &a1 * (dt / 2.0));
+        let a2 = acc(t + dt / 2.0, &q2, &v2);
+        let (q3, v3) = (&q + &v2 * (dt / 2.0), &v + &a2 * (dt / 2.0));
+        let a3 = acc(t + dt / 2.0, &q3, &v3);
+        let (q4, v4) = (&q + &v3 * dt, &v + &a3 * dt);
+        let a4 = acc(t + dt, &q4, &v4);
+        q += (&v + &v2 * 2.0 + &v3 * 2.0 + &v4) * (dt / 6.0);
+        v += (&a1 + &a2 * 2.0 + &a3 * 2.0 + &a4) * (dt / 6.0);
+        t += dt;
+        let p = power(&mut data, t, &q, &v);
+        work += 0.5 * dt * (p + p_prev);
+        p_prev = p;
+        scale = scale.max(work.abs());
+    }
+    driven.set_time(&mut data, t);
+    let e1 = energies(&driven, &mut data, q.as_slice(), v.as_slice())
+        .unwrap()
+        .total();
+    let err = ((e1 - e0) - work).abs();
+    // Trapezoidal work: error O(dt²) relative to the work in play.
+    assert!(scale > 1e-3, "the drive does work: {scale}");
+    assert!(
+        err < 1e-5 * scale,
+        "ΔE = {}, W = {work}, scale {scale}",
+        e1 - e0
+    );
+}
+
+#[test]
+fn pointwise_kinetic_energy_equals_the_mass_matrix_form() {
+    // A tree without prescribed joints: ½q̇ᵀMq̇ from the composite mass
+    // matrix against the point-by-point sum of the energies.
+    let model = Model::builder()
+        .rod_on(
+            rod("a", 0.3, 3),
+            Attachment::world_joint(Joint::revolute([0.0, 1.0, 0.2])),
+        )
+        .body(
+            BodySpec::principal("p", 0.03, [1e-6, 2e-6, 3e-6]),
+            Attachment::to("a", Joint::spherical()),
+        )
+        .rod_on(
+            rod("b", 0.2, 2),
+            Attachment::to("a", Joint::prismatic([1.0, 0.0, 0.0])).at(0.1),
+        )
+        .build()
+        .unwrap();
+    let n = model.n_dof();
+    let mut data = Data::new(&model);
+    let q = state(n, 0.4, 3.0);
+    let v = DVector::from_vec(state(n, 1.3, 4.0));
+    let t = energies(&model, &mut data, &q, v.as_slice())
+        .unwrap()
+        .kinetic;
+    let m = mass_matrix(&model, &mut data, &q).unwrap();
+    let expected = 0.5 * v.dot(&(m * &v));
+    assert!((t - expected).abs() < 1e-12 * expected, "{t} vs {expected}");
+}
+
+#[test]
+fn statics_holds_the_prescribed_joint_at_rest() {
+    // A cantilever on a base that rotates: statics at t = 0.25 s holds the
+    // joint at θ(0.25) = 0.5 rad with no motion: the same equilibrium as
+    // a base pose turned by 0.5 rad, i.e. a fixed joint there.
+    let motion = Prescribed::samples(&[0.0, 0.5], &[vec![0.0], vec![1.0]]).unwrap();
+    let driven = Model::builder()
+        .rod_on(
+            rod("arm", 0.3, 3),
+            Attachment::world_joint(Joint::revolute([0.0, 1.0, 0.0]).with_prescribed(motion)),
+        )
+        .gravity([0.0, 0.0, -G])
+        .build()
+        .unwrap();
+    let turned = Model::builder()
+        .rod(rod("arm", 0.3, 3).base(softrod_lie::Pose::new(
+            *nalgebra::Rotation3::from_axis_angle(&nalgebra::Vector3::y_axis(), 0.5).matrix(),
+            softrod_lie::Vec3::zeros(),
+        )))
+        .gravity([0.0, 0.0, -G])
+        .build()
+        .unwrap();
+    let n = driven.n_dof();
+    let opts = StaticsOptions {
+        time: 0.25,
+        ..StaticsOptions::default()
+    };
+    let a = statics(&driven, &mut Data::new(&driven), &vec![0.0; n], &opts).unwrap();
+    let b = statics(&turned, &mut Data::new(&turned), &vec![0.0; n], &opts).unwrap();
+    let e = (&a.q - &b.q).amax() / b.q.amax();
+    assert!(e < 1e-9, "{e}");
+}
+
+#[test]
+fn invalid_prescribed_joints_are_errors() {
+    let with = |j: Joint| {
+        Model::builder()
+            .rod_on(rod("arm", 0.3, 3), Attachment::world_joint(j))
+            .build()
+    };
+    let m = || constant_acceleration(1.0);
+    let e = with(
+        Joint::prismatic([0.0, 0.0, 1.0])
+            .with_stiffness(&[1.0])
+            .with_prescribed(m()),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("stiffness on a prescribed joint"), "{e}");
+    let e = with(Joint::spherical().with_prescribed(m()))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("1 curves for a joint of 3 coordinates"), "{e}");
+    let e = with(Joint::fixed().with_prescribed(m()))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("no coordinate to prescribe"), "{e}");
+}
