@@ -121,13 +121,15 @@ impl Poser {
         }
     }
 
-    /// Updates every rod at `q` (n_dof of the model).
-    pub fn update(&mut self, model: &Model, q: &[f64]) -> Result<(), CliError> {
+    /// Updates every rod at `q` (n_dof of the model), prescribed joints at
+    /// time `t` \[s\].
+    pub fn update(&mut self, model: &Model, t: f64, q: &[f64]) -> Result<(), CliError> {
         for (k, r) in self.kin.iter_mut().zip(model.rods()) {
             k.update(&r.spec.rod, &q[r.dofs()], None, None)
                 .map_err(|e| failed(format!("kinematics of rod '{}': {e}", r.spec.name)))?;
         }
         if let Some((data, world)) = &mut self.robot {
+            model.set_time(data, t);
             softrod_dynamics::frames(model, data, q)
                 .map_err(|e| failed(format!("frames of the model: {e}")))?;
             for (r, (k, out)) in self.kin.iter().zip(world.iter_mut()).enumerate() {

@@ -80,7 +80,7 @@ fn make_dir(dir: &Path) -> Result<(), CliError> {
 /// Sampled centrelines of every rod at `q` (the default sampling of `run`).
 fn centrelines(model: &Model, q: &[f64]) -> Result<Vec<Vec<[f64; 3]>>, CliError> {
     let mut poser = Poser::new(model);
-    poser.update(model, q)?;
+    poser.update(model, 0.0, q)?;
     let sampling: Vec<RodSampling> = model
         .rods()
         .iter()
@@ -104,7 +104,7 @@ pub fn statics(path: &Path, json: bool, out: Option<PathBuf>) -> Result<(), CliE
         .map(|m| (m.omega.iter().all(|w| *w > 0.0), m.omega.min()));
     let model = l.sim.model();
     let mut poser = Poser::new(model);
-    poser.update(model, res.q.as_slice())?;
+    poser.update(model, 0.0, res.q.as_slice())?;
     if let Some((false, w)) = stable {
         eprintln!(
             "warning: this equilibrium is unstable (lowest linearized ω² = {:.3e} rad²/s²); \

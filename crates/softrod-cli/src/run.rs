@@ -271,7 +271,7 @@ impl Streamer {
             return Err(format!("non-finite energy at t = {t:e}; output stopped"));
         }
         self.poser
-            .update(model, q)
+            .update(model, t, q)
             .map_err(|e| format!("at t = {t:e}: {e}"))?;
         let tip = *self.poser.tip(0);
         let p = position(&tip);

@@ -202,7 +202,7 @@ impl SecondOrderSystem for RodSystem {
     /// instead of forming `M⁻¹K`). [`RodJacobian::Exact`]: not provided.
     fn mass_form_jacobians(
         &mut self,
-        _t: f64,
+        t: f64,
         q: &DVector<f64>,
         _qd: &DVector<f64>,
         mass: &mut DMatrix<f64>,
@@ -211,6 +211,7 @@ impl SecondOrderSystem for RodSystem {
         if self.jacobian != RodJacobian::ElasticOnly {
             return Ok(false);
         }
+        self.model.set_time(&mut self.data, t);
         mass.copy_from(mass_matrix(&self.model, &mut self.data, q.as_slice())?);
         if let Some((k, d)) = constant {
             k.copy_from(&stiffness_matrix(&self.model));

@@ -206,6 +206,7 @@ impl Recorder {
     pub fn record(&mut self, sys: &mut RodSystem, t: f64, y: &DVector<f64>) -> Result<(), String> {
         let n = sys.model.n_dof();
         let (q, qd) = y.as_slice().split_at(n);
+        sys.model.set_time(&mut sys.data, t);
         let e = energies(&sys.model, &mut sys.data, q, qd).map_err(|e| e.to_string())?;
         let mut tips = Vec::with_capacity(self.kin.len());
         for (k, r) in self.kin.iter_mut().zip(sys.model.rods()) {

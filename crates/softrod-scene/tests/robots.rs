@@ -118,6 +118,56 @@ fn robot_scene_orders_q_as_written_and_builds() {
 }
 
 #[test]
+fn prescribed_joints_are_not_dof_and_follow_their_curves() {
+    // The elbow's universal joint follows samples; the gripper's prismatic
+    // joint a sinusoid.
+    let text = ROBOT
+        .replacen(
+            "joint = { type = \"universal\", axes = [[0, 1, 0], [0, 0, 1]] }",
+            "joint = { type = \"universal\", axes = [[0, 1, 0], [0, 0, 1]], prescribed = { times = [0, 1, 2], values = [[0, 0], [0.5, 1], [2, 4]] } }",
+            1,
+        )
+        .replacen(
+            "joint = { type = \"prismatic\", axis = [1, 0, 0] }",
+            "joint = { type = \"prismatic\", axis = [1, 0, 0], prescribed = { sine = { amplitude = 0.01, frequency = 2, phase = 0.5 } } }",
+            1,
+        );
+    assert_ne!(text, ROBOT);
+    let (scene, _) = Scene::from_str(&text, "robot.toml").unwrap();
+    assert_eq!(scene.n_dof(), 20 - 3);
+    let m = scene.build().unwrap().model;
+    assert_eq!(m.n_dof(), 17);
+    assert_eq!(m.n_prescribed(), 3);
+    let ranges: Vec<_> = m
+        .elements()
+        .iter()
+        .map(|e| (e.joint_dofs.clone(), e.prescribed_dofs.clone()))
+        .collect();
+    assert_eq!(
+        ranges,
+        vec![
+            (0..1, 0..0),
+            (5..5, 0..2),
+            (5..8, 2..2),
+            (11..11, 2..3),
+            (11..17, 3..3)
+        ]
+    );
+    let mut data = softrod_dynamics::Data::new(&m);
+    m.set_time(&mut data, 1.5);
+    // Parabolas through the samples (x = t²/2, x = t²): rates t, 2t.
+    let pq = data.prescribed_q.as_slice();
+    assert!(
+        (pq[0] - 1.125).abs() < 1e-12 && (pq[1] - 2.25).abs() < 1e-12,
+        "{pq:?}"
+    );
+    let w = 2.0 * std::f64::consts::PI * 2.0;
+    assert!((pq[2] - 0.01 * (w * 1.5 + 0.5).sin()).abs() < 1e-15);
+    assert!((data.prescribed_qd[1] - 3.0).abs() < 1e-12);
+    assert!((data.prescribed_qdd[2] + 0.01 * w * w * (w * 1.5 + 0.5).sin()).abs() < 1e-12);
+}
+
+#[test]
 fn plain_scene_has_an_empty_robot() {
     let text = ROBOT.split("[[body]]").next().unwrap().replace(
         "joint = { type = \"revolute\", axis = [0, 1, 0], stiffness = 0.5, damping = [0.01], rest = 0.1 }\n",
@@ -210,8 +260,56 @@ fn bad_robots_name_the_key() {
         (
             "joint = { type = \"free\" }",
             "joint = { type = \"free\", prescribed = { times = [0, 1], values = [0, 1] } }",
+            "body[2].joint.prescribed.values[0]",
+            "expected a list of numbers",
+        ),
+        (
+            "joint = { type = \"free\" }",
+            "joint = { type = \"free\", prescribed = { times = [0, 1], values = [[0, 1, 0, 0, 0, 0]] } }",
+            "body[2].joint.prescribed.values",
+            "1 values for 2 times",
+        ),
+        (
+            "joint = { type = \"free\" }",
+            "joint = { type = \"free\", prescribed = { times = [0, 1], values = [[0, 0, 0, 0, 0, 0], [0, 1, 0]] } }",
+            "body[2].joint.prescribed.values[1]",
+            "3 values, but the joint has 6 coordinates",
+        ),
+        (
+            "joint = { type = \"free\" }",
+            "joint = { type = \"free\", prescribed = { times = [1, 0], values = [[0, 0, 0, 0, 0, 0], [0, 1, 0, 0, 0, 0]] } }",
             "body[2].joint.prescribed",
-            "not supported",
+            "times must increase strictly",
+        ),
+        (
+            "joint = { type = \"free\" }",
+            "joint = { type = \"free\", prescribed = { sine = { amplitude = 0.1 } } }",
+            "body[2].joint.prescribed.sine.frequency",
+            "missing",
+        ),
+        (
+            "joint = { type = \"free\" }",
+            "joint = { type = \"free\", prescribed = { sine = { amplitude = 0.1, frequency = -1 } } }",
+            "body[2].joint.prescribed.sine.frequency[0]",
+            ">= 0",
+        ),
+        (
+            "joint = { type = \"free\" }",
+            "joint = { type = \"free\", prescribed = { sine = { amplitude = 0.1, frequency = 1, omega = 2 } } }",
+            "body[2].joint.prescribed.sine.omega",
+            "amplitude, frequency, phase or offset",
+        ),
+        (
+            "joint = { type = \"free\" }",
+            "joint = { type = \"free\", prescribed = { time = [0] } }",
+            "body[2].joint.prescribed.time",
+            "times, values or sine",
+        ),
+        (
+            "stiffness = 0.5,",
+            "stiffness = 0.5, prescribed = { times = [0, 1], values = [0, 1] },",
+            "rod[0].joint.stiffness",
+            "no stiffness, damping or rest",
         ),
     ];
     for (old, new, path, says) in cases {

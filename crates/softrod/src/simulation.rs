@@ -407,8 +407,19 @@ impl Simulation {
             return Ok(Pose::identity());
         }
         let mut data = Data::new(model);
+        model.set_time(&mut data, self.system.data.prescribed_time);
         softrod_dynamics::frames(model, &mut data, q)?;
         Ok(data.rod_to_world(model, i))
+    }
+
+    /// Sets the time \[s\] of the prescribed joints' motion (D59) for the
+    /// evaluations that take none: [`Self::pose`], [`Self::tip_pose`],
+    /// [`Self::body_poses`], [`Self::mass_matrix`], [`Self::energies`]. Forward
+    /// and inverse dynamics set it themselves; it starts at 0. A no-op
+    /// without prescribed joints.
+    pub fn set_time(&mut self, t: f64) {
+        let s = &mut self.system;
+        s.model.set_time(&mut s.data, t);
     }
 
     /// World pose of rod `rod` at abscissa `s` \[m\] for coordinates `q` (D7).
@@ -433,6 +444,7 @@ impl Simulation {
             return Ok(Vec::new());
         }
         let mut data = Data::new(model);
+        model.set_time(&mut data, self.system.data.prescribed_time);
         softrod_dynamics::frames(model, &mut data, q)?;
         Ok(data.body_poses)
     }
@@ -765,6 +777,8 @@ impl Simulation {
         let hooks = Hooks::new()
             .stream_outputs(|t, y, sys: &mut RodSystem| {
                 let (q, qd) = y.as_slice().split_at(n);
+                // Prescribed joints (D59) at the sample's time.
+                sys.model.set_time(&mut sys.data, t);
                 let sample = Sample {
                     t,
                     q,

@@ -86,9 +86,9 @@ pub(super) fn simulate_once(
     let n = sys.model.n_dof();
     let mut poser = Poser::new(&sys.model);
     let mut tips = Vec::with_capacity(sol.y.len());
-    for y in &sol.y {
+    for (t, y) in sol.t.iter().zip(&sol.y) {
         poser
-            .update(&sys.model, &y.as_slice()[..n])
+            .update(&sys.model, *t, &y.as_slice()[..n])
             .map_err(|e| e.to_string())?;
         let p = poser.tip(0).translation;
         tips.push([p[0], p[1], p[2]]);

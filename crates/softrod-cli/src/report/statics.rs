@@ -47,7 +47,7 @@ pub(super) fn statics_report(
         let r = result.expect("one repeat");
         let mut poser = Poser::new(&built.model);
         poser
-            .update(&built.model, r.q.as_slice())
+            .update(&built.model, 0.0, r.q.as_slice())
             .map_err(|e| e.to_string())?;
         let p = poser.tip(0).translation;
         let stats = Stats {

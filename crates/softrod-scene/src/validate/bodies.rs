@@ -3,7 +3,9 @@
 //! (scene-format.md, "Bodies, joints, bases and closures").
 
 use nalgebra::Matrix3;
-use softrod_dynamics::{Attachment, BodyLoad, BodySpec, ElementKind, Joint, JointKind, RodSpec};
+use softrod_dynamics::{
+    Attachment, BodyLoad, BodySpec, Curve, ElementKind, Joint, JointKind, Prescribed, RodSpec,
+};
 use softrod_lie::Vec3;
 use softrod_mechanics::LoadFrame;
 
@@ -183,12 +185,6 @@ impl Ctx<'_> {
         let Some(raw) = raw else {
             return Ok(Joint::fixed());
         };
-        if raw.prescribed.is_some() {
-            return Err(self.r.invalid(
-                &format!("{p}.prescribed"),
-                "prescribed joints are not supported yet",
-            ));
-        }
         let axis = |key: &str, a: Option<[f64; 3]>| -> Result<Vec3> {
             let a = a.ok_or_else(|| {
                 self.r
@@ -282,10 +278,145 @@ impl Ctx<'_> {
         joint.stiffness = per_dof("stiffness", &raw.stiffness, true)?;
         joint.damping = per_dof("damping", &raw.damping, true)?;
         joint.rest = per_dof("rest", &raw.rest, false)?;
+        if let Some(v) = &raw.prescribed {
+            let path = format!("{p}.prescribed");
+            if k == 0 {
+                return Err(self.r.invalid(&path, "a fixed joint has no coordinates"));
+            }
+            for (key, given) in [
+                ("stiffness", raw.stiffness.is_some()),
+                ("damping", raw.damping.is_some()),
+                ("rest", raw.rest.is_some()),
+            ] {
+                if given {
+                    return Err(self.r.inconsistent(
+                        &format!("{p}.{key}"),
+                        "a prescribed joint follows its curve: it has no stiffness, damping or rest",
+                    ));
+                }
+            }
+            joint.prescribed = Some(self.prescribed(&path, v, k)?);
+        }
         joint
             .validate(p)
             .map_err(|e| self.r.invalid(p, e.to_string()))?;
         Ok(joint)
+    }
+
+    /// `prescribed = { times, values }` (a spline per coordinate through the
+    /// samples; `values` a list of numbers for one coordinate, else one row
+    /// of `k` numbers per time) or `prescribed = { sine = { amplitude,
+    /// frequency, phase, offset } }` (each a number or `k` numbers).
+    fn prescribed(&self, path: &str, v: &toml::Value, k: usize) -> Result<Prescribed> {
+        let toml::Value::Table(t) = v else {
+            return Err(self
+                .r
+                .wrong_type(path, format!("expected a table, found {}", v.type_str())));
+        };
+        if let Some(key) = t
+            .keys()
+            .find(|key| !["times", "values", "sine"].contains(&key.as_str()))
+        {
+            return Err(self
+                .r
+                .unknown_key(&format!("{path}.{key}"), "times, values or sine"));
+        }
+        if let Some(sine) = t.get("sine") {
+            let sp = format!("{path}.sine");
+            if t.contains_key("times") || t.contains_key("values") {
+                return Err(self
+                    .r
+                    .inconsistent(&sp, "give either sine or times and values, not both"));
+            }
+            let toml::Value::Table(st) = sine else {
+                return Err(self
+                    .r
+                    .wrong_type(&sp, format!("expected a table, found {}", sine.type_str())));
+            };
+            const KEYS: [&str; 4] = ["amplitude", "frequency", "phase", "offset"];
+            if let Some(key) = st.keys().find(|key| !KEYS.contains(&key.as_str())) {
+                return Err(self.r.unknown_key(
+                    &format!("{sp}.{key}"),
+                    "amplitude, frequency, phase or offset",
+                ));
+            }
+            let mut cols = [vec![0.0; k], vec![0.0; k], vec![0.0; k], vec![0.0; k]];
+            for (c, key) in KEYS.iter().enumerate() {
+                let kp = format!("{sp}.{key}");
+                let values = match st.get(*key) {
+                    None if c < 2 => return Err(self.r.missing(&kp, " (a sinusoid)")),
+                    None => continue,
+                    Some(x @ toml::Value::Array(_)) => self.numbers(&kp, x)?,
+                    Some(x) => vec![self.number(&kp, x)?; k],
+                };
+                if values.len() != k {
+                    return Err(self.r.inconsistent(
+                        &kp,
+                        format!("{} values, but the joint has {k} coordinates", values.len()),
+                    ));
+                }
+                if c == 1 {
+                    if let Some((i, f)) = values.iter().enumerate().find(|(_, f)| **f < 0.0) {
+                        return Err(self.r.out_of_range(&format!("{kp}[{i}]"), f, ">= 0"));
+                    }
+                }
+                cols[c] = values;
+            }
+            return Ok(Prescribed::new(
+                (0..k)
+                    .map(|i| Curve::Sine {
+                        amplitude: cols[0][i],
+                        frequency: cols[1][i],
+                        phase: cols[2][i],
+                        offset: cols[3][i],
+                    })
+                    .collect(),
+            ));
+        }
+        let times_path = format!("{path}.times");
+        let values_path = format!("{path}.values");
+        let times = t
+            .get("times")
+            .ok_or_else(|| self.r.missing(&times_path, " (or sine)"))?;
+        let times = self.numbers(&times_path, times)?;
+        let values = t
+            .get("values")
+            .ok_or_else(|| self.r.missing(&values_path, ""))?;
+        let toml::Value::Array(rows) = values else {
+            return Err(self.r.wrong_type(
+                &values_path,
+                format!("expected a list, found {}", values.type_str()),
+            ));
+        };
+        if rows.len() != times.len() {
+            return Err(self.r.inconsistent(
+                &values_path,
+                format!("{} values for {} times", rows.len(), times.len()),
+            ));
+        }
+        let rows: Vec<Vec<f64>> = if k == 1 && !matches!(rows.first(), Some(toml::Value::Array(_)))
+        {
+            self.numbers(&values_path, values)?
+                .into_iter()
+                .map(|x| vec![x])
+                .collect()
+        } else {
+            rows.iter()
+                .enumerate()
+                .map(|(i, r)| {
+                    let rp = format!("{values_path}[{i}]");
+                    let row = self.numbers(&rp, r)?;
+                    if row.len() != k {
+                        return Err(self.r.inconsistent(
+                            &rp,
+                            format!("{} values, but the joint has {k} coordinates", row.len()),
+                        ));
+                    }
+                    Ok(row)
+                })
+                .collect::<Result<_>>()?
+        };
+        Prescribed::samples(&times, &rows).map_err(|e| self.r.invalid(path, e))
     }
 
     /// `body[j]`'s mass, inertia, centre of mass and base.
