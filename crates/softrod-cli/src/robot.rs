@@ -21,7 +21,14 @@ pub fn print_elements(m: &Model) {
             .attachment
             .at
             .map_or(String::new(), |s| format!(" at s = {s} m"));
-        let dofs = if j.dof() > 0 {
+        let dofs = if j.prescribed.is_some() {
+            format!(
+                ", prescribed: {} coordinates, not DoF (prescribed[{}..{}])",
+                j.kind.dof(),
+                e.prescribed_dofs.start,
+                e.prescribed_dofs.end
+            )
+        } else if j.dof() > 0 {
             format!(
                 ", {} DoF (q[{}..{}])",
                 j.dof(),
@@ -47,7 +54,8 @@ pub fn print_elements(m: &Model) {
 }
 
 /// `statics --json`: `"bodies": [{name, position, rotation}]` and
-/// `"joints": [{element, type, values}]`.
+/// `"joints": [{element, type, values}]` (`"prescribed": true` on a
+/// prescribed joint, its values those at t = 0).
 pub fn add_statics_json(m: &Model, poser: &Poser, q: &[f64], v: &mut serde_json::Value) {
     if !m.is_articulated() {
         return;
@@ -65,12 +73,19 @@ pub fn add_statics_json(m: &Model, poser: &Poser, q: &[f64], v: &mut serde_json:
     let joints: Vec<_> = m
         .elements()
         .iter()
-        .map(|e| {
-            serde_json::json!({
+        .map(|e| match &e.attachment.joint.prescribed {
+            // Statics holds a prescribed joint at its value at t = 0, at rest.
+            Some(p) => serde_json::json!({
+                "element": e.name,
+                "type": e.attachment.joint.kind.name(),
+                "values": p.curves.iter().map(|c| c.eval(0.0).0).collect::<Vec<_>>(),
+                "prescribed": true,
+            }),
+            None => serde_json::json!({
                 "element": e.name,
                 "type": e.attachment.joint.kind.name(),
                 "values": &q[e.joint_dofs.clone()],
-            })
+            }),
         })
         .collect();
     v["bodies"] = serde_json::json!(bodies);

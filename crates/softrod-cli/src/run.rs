@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
-use softrod::dynamics::{Model, actuation_matrix, energies};
+use softrod::dynamics::{Model, actuation_matrix, energies, forward_dynamics};
 use softrod::integrate::Stats;
 use softrod::lie::Pose;
 use softrod::{EnergyBalance, Error, Flow, Observer, Sample, output_times};
@@ -27,14 +27,19 @@ pub const TRAJECTORY_HEADER: [&str; 9] = [
 /// The columns of `trajectory.csv` after the contract's nine: `q0…` (the
 /// contract's), then (added, docs/scene-format-extensions.md) `qdot0…`, the
 /// energy components `kinetic, elastic, gravitational` (J; they sum to
-/// `energy`) and, with cables, `tension0…` (N) and `power0…` (W, the power
-/// each cable puts into the rods).
-pub fn extra_columns(n_dof: usize, n_cables: usize) -> Vec<String> {
+/// `energy`), with cables `tension0…` (N) and `power0…` (W, the power
+/// each cable puts into the rods), and with prescribed joints (D59)
+/// `prescribed0…` (their coordinates, rad or m) and `prescribed_force0…`
+/// (the generalized force each needs, N·m or N; summary.json's
+/// `prescribed_names` says which is which).
+pub fn extra_columns(n_dof: usize, n_cables: usize, n_prescribed: usize) -> Vec<String> {
     let mut h: Vec<String> = (0..n_dof).map(|i| format!("q{i}")).collect();
     h.extend((0..n_dof).map(|i| format!("qdot{i}")));
     h.extend(["kinetic", "elastic", "gravitational"].map(String::from));
     h.extend((0..n_cables).map(|c| format!("tension{c}")));
     h.extend((0..n_cables).map(|c| format!("power{c}")));
+    h.extend((0..n_prescribed).map(|c| format!("prescribed{c}")));
+    h.extend((0..n_prescribed).map(|c| format!("prescribed_force{c}")));
     h
 }
 
@@ -172,7 +177,7 @@ impl Streamer {
     ) -> Result<Self, CliError> {
         let n = model.n_dof();
         let mut header: Vec<String> = TRAJECTORY_HEADER.iter().map(|h| h.to_string()).collect();
-        header.extend(extra_columns(n, model.n_cables()));
+        header.extend(extra_columns(n, model.n_cables(), model.n_prescribed()));
         let traj = OutFile::create(dir, "trajectory.csv", &csv_line(&header))?;
         let shape = OutFile::create(dir, "shape.csv", &csv_line(SHAPE_HEADER))?;
         let bodies = if model.bodies().is_empty() {
@@ -326,6 +331,18 @@ impl Streamer {
             .extend([e.kinetic, e.elastic, e.gravitational].map(num));
         self.row.extend(tensions.iter().map(|v| num(*v)));
         self.row.extend(power.iter().map(|v| num(*v)));
+        if model.n_prescribed() > 0 {
+            // The drive's force comes with the accelerations at this state.
+            forward_dynamics(model, s.data, t, q, qd, None)
+                .map_err(|e| format!("prescribed joint forces at t = {t:e}: {e}"))?;
+            let (pq, pf) = (&s.data.prescribed_q, &s.data.prescribed_force);
+            if let Some(i) = pf.iter().position(|v| !v.is_finite()) {
+                return Err(format!(
+                    "non-finite prescribed_force{i} at t = {t:e}; output stopped"
+                ));
+            }
+            self.row.extend(pq.iter().chain(pf.iter()).map(|v| num(*v)));
+        }
         self.traj_text = csv_line(&self.row);
         self.shape_text.clear();
         let ts = num(t);
@@ -469,8 +486,13 @@ pub struct Summary {
 }
 
 impl Summary {
-    pub fn new(dir: &Path, scene: &Scene, q_names: Vec<String>, rows_expected: usize) -> Self {
-        let v = serde_json::json!({
+    pub fn new(
+        dir: &Path,
+        scene: &Scene,
+        (q_names, prescribed_names): (Vec<String>, Vec<String>),
+        rows_expected: usize,
+    ) -> Self {
+        let mut v = serde_json::json!({
             "pid": std::process::id(),
             "integrator": scene.run.integrator.name(),
             "duration": scene.run.duration,
@@ -478,6 +500,9 @@ impl Summary {
             "n_dof": scene.n_dof(),
             "q_names": q_names,
         });
+        if !prescribed_names.is_empty() {
+            v["prescribed_names"] = serde_json::json!(prescribed_names);
+        }
         let serde_json::Value::Object(fixed) = v else {
             unreachable!("a JSON object literal")
         };
@@ -568,7 +593,12 @@ pub fn run(
     }
     // Written first so that a run that never gets to its first row leaves
     // a summary that says so.
-    let summary = Summary::new(&dir, scene, l.sim.q_names(), times.len());
+    let summary = Summary::new(
+        &dir,
+        scene,
+        (l.sim.q_names(), l.sim.prescribed_names()),
+        times.len(),
+    );
     summary
         .write(&Stats::default(), 0.0, 0.0, "running", 0)
         .map_err(|e| CliError::Input(e.to_string()))?;
@@ -593,7 +623,12 @@ pub fn run(
                 .unwrap_or_else(|| default_points_per_piece(r.spec.rod.n_pieces()))
         })
         .collect();
-    let mut summary_final = Summary::new(&dir, scene, l.sim.q_names(), times.len());
+    let mut summary_final = Summary::new(
+        &dir,
+        scene,
+        (l.sim.q_names(), l.sim.prescribed_names()),
+        times.len(),
+    );
     let mut streamer = Streamer::new(
         &dir,
         l.sim.model(),

@@ -416,7 +416,8 @@ pub fn forward_dynamics_cholesky<'a>(
 }
 
 /// The bias `b(q, q̇, t) = ID(q, q̇, 0)`: `C q̇ + G + τ_e + D q̇ − τ_c − Q_ext`
-/// (the equations of motion read `M q̈ + b = τ_act`). Result in `data.tau`.
+/// (the equations of motion read `M q̈ + b = τ_act`), with prescribed joints
+/// (D59) moving as prescribed at `t`. Result in `data.tau`.
 pub fn bias_force<'a>(
     model: &Model,
     data: &'a mut Data,
@@ -427,6 +428,9 @@ pub fn bias_force<'a>(
     check_vec(model, "q", q)?;
     check_vec(model, "qdot", qd)?;
     if let Some(tree) = &model.tree {
+        // With prescribed joints (D59) `b` includes their acceleration's
+        // effect: only the free coordinates' `M q̈` is left out.
+        model.set_time(data, t);
         crate::tree_algorithms::inverse_dynamics(model, tree, data, t, q, Some(qd), None);
         return Ok(&data.tau);
     }

@@ -105,7 +105,8 @@ fn local(v: &[f64], dof: usize, k: usize) -> Vec6 {
 ///
 /// Prescribed joints (D59) take their coordinates from
 /// `data.prescribed_q`, their rates when `qd` is given and their
-/// accelerations in the dynamics passes (neither for gravity alone); the
+/// accelerations in the dynamics passes (neither for gravity alone nor at
+/// rest, `Data::prescribed_at_rest`); the
 /// prescribed acceleration is folded into the node's tip acceleration
 /// `acc_tip`, so the recursions treat the node as one without coordinates.
 ///
@@ -127,8 +128,7 @@ pub(crate) fn outward(
     let mut kinetic = 0.0;
     let moving = !only_gravity && !data.prescribed_at_rest;
     let drive_rates = qd.is_some() && moving;
-    let drive_acc =
-        moving && (pass == TreePass::Articulated || (pass == TreePass::Inverse && qdd.is_some()));
+    let drive_acc = moving && pass != TreePass::Composite;
     let a_world = if pass == TreePass::Inverse {
         world_acceleration(model, scale)
     } else {

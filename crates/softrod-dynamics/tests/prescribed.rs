@@ -8,7 +8,7 @@
 use nalgebra::DVector;
 use softrod_dynamics::{
     Attachment, BodySpec, Curve, Data, Joint, Model, Prescribed, RodSpec, RodSpecBuilder,
-    StaticsOptions, energies, forward_dynamics, inverse_dynamics, mass_matrix, statics,
+    StaticsOptions, bias_force, energies, forward_dynamics, inverse_dynamics, mass_matrix, statics,
 };
 use softrod_mechanics::Material;
 
@@ -98,9 +98,24 @@ fn base_acceleration_equals_reversed_gravity() {
 /// A rod on a joint with the given prescribed motion, and the same model
 /// with the joint free.
 fn pair(joint: Joint, motion: Prescribed) -> (Model, Model) {
+    pair_with(joint, motion, 0.0)
+}
+
+fn pair_with(joint: Joint, motion: Prescribed, viscosity: f64) -> (Model, Model) {
+    let arm = || {
+        rod("arm", 0.3, 3).material(
+            Material::builder()
+                .density(1000.0)
+                .young(1e6)
+                .poisson(0.5)
+                .viscosity(viscosity)
+                .build()
+                .unwrap(),
+        )
+    };
     let build = |j: Joint| {
         Model::builder()
-            .rod_on(rod("arm", 0.3, 3), Attachment::world_joint(j))
+            .rod_on(arm(), Attachment::world_joint(j))
             .body(
                 BodySpec::principal("tip", 0.01, [1e-6, 1e-6, 1e-6]),
                 Attachment::to("arm", Joint::fixed()),
@@ -173,13 +188,28 @@ fn reported_force_drives_the_free_joint_along_the_prescribed_motion() {
         );
         let e = (&dd.prescribed_force - &force).amax() / force.amax();
         assert!(e < 1e-10, "{name}: inverse vs forward joint force {e}");
+        // The O(N) recursion against M⁻¹(τ − b) (dense mass matrix and the
+        // bias `b`, both at the drive's state at t), from a fresh Data so
+        // nothing of the evaluations above is reused.
+        let mut fresh = Data::new(&driven);
+        let b = bias_force(&driven, &mut fresh, t, &q, &v).unwrap().clone();
+        let m = mass_matrix(&driven, &mut fresh, &q).unwrap().clone();
+        let dense = m.cholesky().unwrap().solve(&(-b));
+        let e = (&dense - &qdd).amax() / qdd.amax();
+        assert!(e < 1e-10, "{name}: O(N) vs M⁻¹(τ − b): {e}");
     }
 }
 
 #[test]
 fn work_of_the_prescribed_force_is_the_energy_change() {
+    for viscosity in [0.0, 300.0] {
+        work_balance(viscosity);
+    }
+}
+
+fn work_balance(viscosity: f64) {
     // A pendulum-like rod on a revolute joint swung by θ(t) = 0.4 sin(2πt).
-    let (driven, _) = pair(
+    let (driven, _) = pair_with(
         Joint::revolute([0.0, 1.0, 0.0]),
         Prescribed::new(vec![Curve::Sine {
             amplitude: 0.4,
@@ -187,16 +217,18 @@ fn work_of_the_prescribed_force_is_the_energy_change() {
             phase: 0.0,
             offset: 0.0,
         }]),
+        viscosity,
     );
     let n = driven.n_dof();
     let mut data = Data::new(&driven);
+    let dmat = softrod_dynamics::damping_matrix(&driven);
     let mut q = DVector::zeros(n);
     let mut v = DVector::zeros(n);
     let dt = 2e-4;
     let steps = 2500;
     let power = |data: &mut Data, t: f64, q: &DVector<f64>, v: &DVector<f64>| {
         forward_dynamics(&driven, data, t, q.as_slice(), v.as_slice(), None).unwrap();
-        data.prescribed_force[0] * data.prescribed_qd[0]
+        data.prescribed_force[0] * data.prescribed_qd[0] - v.dot(&(&dmat * v))
     };
     driven.set_time(&mut data, 0.0);
     let e0 = energies(&driven, &mut data, q.as_slice(), v.as_slice())

@@ -6,10 +6,10 @@ use std::path::Path;
 
 use nalgebra::{DMatrix, DVector, Matrix6xX};
 use softrod_dynamics::{
-    Data, Energies, FdDerivatives, Linearization, Model, Modes, StaticsOptions, StaticsResult,
-    actuation_matrix, bias_force, coriolis_matrix, damping_matrix, energies, forward_dynamics,
-    generalized_gravity, inverse_dynamics, linearize, mass_matrix, modes, statics,
-    stiffness_matrix,
+    Data, ElementKind, Energies, FdDerivatives, Linearization, Model, Modes, StaticsOptions,
+    StaticsResult, actuation_matrix, bias_force, coriolis_matrix, damping_matrix, energies,
+    forward_dynamics, generalized_gravity, inverse_dynamics, linearize, mass_matrix, modes,
+    statics, stiffness_matrix,
 };
 use softrod_integrate::{Control, Hooks, RodSystem, Stats, integrate_second_order};
 use softrod_kinematics::{Frame, RodKinematics, Strain};
@@ -261,25 +261,47 @@ impl Simulation {
     /// A name for every coordinate of `q`, in its order: `"ROD.pN.STRAIN"`
     /// (`"arm.p0.ky"`: rod `arm`, piece 0 from the base, bending about local
     /// y), the strain as the scene's `strains` names it; a piece with a
-    /// general basis matrix names its columns `b0`, `b1`, …. The same names
+    /// general basis matrix names its columns `b0`, `b1`, …. A joint's
+    /// coordinates come first in its element's: `"ELEMENT.joint.C"` with `C`
+    /// `theta` (revolute), `d` (prismatic), `theta0`, `theta1` (universal),
+    /// `rx`, `ry`, `rz` (spherical; free adds `x`, `y`, `z`). The same names
     /// serve `q̇` (and the `q`/`qdot` columns of `trajectory.csv`).
     pub fn q_names(&self) -> Vec<String> {
         let model = self.model();
         let mut names = Vec::with_capacity(model.n_dof());
-        for rm in model.rods() {
-            for (n, piece) in rm.spec.rod.pieces().iter().enumerate() {
-                match piece.basis.selection() {
-                    Some(sel) => names.extend(
-                        sel.iter()
-                            .map(|&i| format!("{}.p{n}.{}", rm.spec.name, Strain::ALL[i].name())),
-                    ),
-                    None => names.extend(
-                        (0..piece.basis.dof()).map(|j| format!("{}.p{n}.b{j}", rm.spec.name)),
-                    ),
+        for e in model.elements() {
+            if !e.joint_dofs.is_empty() {
+                names.extend(joint_names(e));
+            }
+            if let ElementKind::Rod(r) = e.kind {
+                let rm = &model.rods()[r];
+                for (n, piece) in rm.spec.rod.pieces().iter().enumerate() {
+                    match piece.basis.selection() {
+                        Some(sel) => {
+                            names.extend(sel.iter().map(|&i| {
+                                format!("{}.p{n}.{}", rm.spec.name, Strain::ALL[i].name())
+                            }))
+                        }
+                        None => names.extend(
+                            (0..piece.basis.dof()).map(|j| format!("{}.p{n}.b{j}", rm.spec.name)),
+                        ),
+                    }
                 }
             }
         }
         names
+    }
+
+    /// A name for every prescribed joint coordinate (D59), in the order of
+    /// [`Data::prescribed_q`] and [`Data::prescribed_force`]: as in
+    /// [`Self::q_names`], `"ELEMENT.joint.C"`.
+    pub fn prescribed_names(&self) -> Vec<String> {
+        self.model()
+            .elements()
+            .iter()
+            .filter(|e| !e.prescribed_dofs.is_empty())
+            .flat_map(joint_names)
+            .collect()
     }
 
     /// Number of generalized coordinates.
@@ -862,4 +884,21 @@ impl Simulation {
             warnings,
         })
     }
+}
+
+/// The names of a joint's coordinates (see [`Simulation::q_names`]).
+fn joint_names(e: &softrod_dynamics::ElementInfo) -> Vec<String> {
+    use softrod_dynamics::JointKind;
+    let parts: &[&str] = match e.attachment.joint.kind {
+        JointKind::Fixed => &[],
+        JointKind::Revolute { .. } => &["theta"],
+        JointKind::Prismatic { .. } => &["d"],
+        JointKind::Universal { .. } => &["theta0", "theta1"],
+        JointKind::Spherical => &["rx", "ry", "rz"],
+        JointKind::Free => &["rx", "ry", "rz", "x", "y", "z"],
+    };
+    parts
+        .iter()
+        .map(|c| format!("{}.joint.{c}", e.name))
+        .collect()
 }

@@ -35,6 +35,7 @@
 use nalgebra::DVector;
 use softrod_dynamics::{
     Data, DynamicsError, Element, ElementKind, Energies, Model, RodSpec, bias_force, energies,
+    forward_dynamics,
 };
 use softrod_mechanics::{Material, RodBody};
 
@@ -203,17 +204,37 @@ impl Watch {
         Ok(())
     }
 
-    /// `P_nc = q̇ᵀ(b_c − b)` at `(t, q, q̇)` \[W\].
+    /// `P_nc = q̇ᵀ(b_c − b)` at `(t, q, q̇)` \[W\], plus, with prescribed
+    /// joints (D59), the power `F_p·q̇_p` of the forces that drive them and
+    /// the power the non-conservative terms exert through them,
+    /// `q̇_pᵀ(F_p,c − F_p)` at `q̈ = 0` (the inertial parts cancel as in `b`).
     fn power(&mut self, model: &Model, t: f64, q: &[f64], qd: &[f64]) -> Result<f64, Error> {
+        let driven = model.n_prescribed() > 0;
+        let mut p = 0.0;
+        if driven {
+            forward_dynamics(model, &mut self.full, t, q, qd, None)?;
+            p += self.full.prescribed_force.dot(&self.full.prescribed_qd);
+        }
         let Some((cm, cd)) = &mut self.conservative else {
-            return Ok(0.0);
+            return Ok(p);
         };
         let full = dot(qd, bias_force(model, &mut self.full, t, q, qd)?);
         let cons = dot(qd, bias_force(cm, cd, t, q, qd)?);
-        Ok(cons - full)
+        if driven {
+            p += cd.prescribed_force.dot(&cd.prescribed_qd)
+                - self.full.prescribed_force.dot(&self.full.prescribed_qd);
+        }
+        Ok(p + cons - full)
     }
 
-    fn energies(&mut self, model: &Model, q: &[f64], qd: &[f64]) -> Result<Energies, Error> {
+    fn energies(
+        &mut self,
+        model: &Model,
+        t: f64,
+        q: &[f64],
+        qd: &[f64],
+    ) -> Result<Energies, Error> {
+        model.set_time(&mut self.full, t);
         Ok(energies(model, &mut self.full, q, qd)?)
     }
 
@@ -227,7 +248,7 @@ impl Watch {
         qd: &[f64],
     ) -> Result<(), Error> {
         self.sync_inputs(model, data)?;
-        let e = self.energies(model, q, qd)?;
+        let e = self.energies(model, t, q, qd)?;
         self.e0 = e.total();
         self.vg0 = e.gravitational;
         self.peak = e.kinetic + e.elastic;
@@ -237,7 +258,7 @@ impl Watch {
             initial: self.e0,
             scale: self.peak,
             t_worst: t,
-            non_conservative: self.conservative.is_some(),
+            non_conservative: self.conservative.is_some() || model.n_prescribed() > 0,
             ..EnergyBalance::default()
         };
         self.check_strains(model, t, q)
@@ -279,7 +300,7 @@ impl Watch {
         self.quadrature += 0.5 * h * (p - self.p_prev).abs();
         self.t_prev = t;
         self.p_prev = p;
-        let e = self.energies(model, q, qd)?;
+        let e = self.energies(model, t, q, qd)?;
         self.peak = self
             .peak
             .max(e.kinetic + e.elastic + (e.gravitational - self.vg0).abs());
