@@ -545,10 +545,39 @@ impl Simulation {
     }
 
     /// A name for every generalized coordinate, in the order of `q`:
-    /// `"<rod>.p<piece>.<strain>"` (e.g. `"arm.p0.ky"`).
+    /// `"<rod>.p<piece>.<strain>"` (e.g. `"arm.p0.ky"`), a joint's
+    /// coordinates `"<element>.joint.<c>"` first in its element's.
     #[getter]
     fn q_names(&self) -> Vec<String> {
         self.sim.q_names()
+    }
+
+    /// The names of the prescribed joint coordinates (D59), in the order
+    /// of `prescribed_forces`; empty without prescribed joints.
+    #[getter]
+    fn prescribed_names(&self) -> Vec<String> {
+        self.sim.prescribed_names()
+    }
+
+    /// The generalized forces [N·m or N] the prescribed joints' drives
+    /// apply at `(t, q, qdot)` (D60), in the order of `prescribed_names`.
+    #[pyo3(signature = (t, q, qdot))]
+    fn prescribed_forces<'py>(
+        &mut self,
+        py: Python<'py>,
+        t: f64,
+        q: &Bound<'py, PyAny>,
+        qdot: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        guard(|| {
+            let n = self.n();
+            let (q, qd) = (vector(q, "q", n)?, vector(qdot, "qdot", n)?);
+            let f = self
+                .sim
+                .prescribed_forces(t, q.slice(), qd.slice(), None)
+                .map_err(to_py)?;
+            Ok(vec_out(py, f.as_slice()))
+        })
     }
 
     /// The scene's `[run] duration` [s], the default of `simulate`; None

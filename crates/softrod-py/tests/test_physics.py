@@ -288,3 +288,42 @@ def test_linearize_is_the_derivative_of_the_dynamics():
     a0, _ = sim.linearize(0.0, q, qd)
     a1, _ = sim.linearize(0.0, q, qd, u=[1.5, 0.7])
     np.testing.assert_allclose(a0, a1, rtol=1e-12, atol=1e-12 * np.abs(a0).max())
+
+
+
+def test_prescribed_force_drives_the_free_joint_along_the_curve(tmp_path):
+    """A tentacle on a sideways-shaken base (examples/oscillating_base.toml):
+    the drive is not a coordinate; the force it reports, applied to the same
+    joint left free (a second scene), gives the joint the prescribed
+    acceleration -A (2 pi f)^2 sin(2 pi f t) and the rod the same strain
+    accelerations."""
+    from conftest import EXAMPLES
+
+    path = EXAMPLES / "oscillating_base.toml"
+    sim = softrod.Simulation.from_toml(path)
+    assert sim.prescribed_names == ["tentacle.joint.d"]
+    assert "tentacle.joint.d" not in sim.q_names
+    text = path.read_text()
+    drive = ", prescribed = { sine = { amplitude = 0.01, frequency = 2.0 } }"
+    assert drive in text
+    free_path = tmp_path / "free.toml"
+    free_path.write_text(text.replace(drive, ""))
+    free = softrod.Simulation.from_toml(free_path)
+    assert free.q_names[0] == "tentacle.joint.d"
+    n = sim.n_dof
+    assert free.n_dof == n + 1
+    w = 2.0 * math.pi * 2.0
+    q, qd = smooth_state(n)
+    for t in [0.0, 0.07, 0.31]:
+        f = sim.prescribed_forces(t, q, qd)
+        assert f.shape == (1,)
+        qdd = sim.forward_dynamics(t, q, qd)
+        x, v = 0.01 * math.sin(w * t), 0.01 * w * math.cos(w * t)
+        tau = np.zeros(n + 1)
+        tau[0] = f[0]
+        qdd_free = free.forward_dynamics(
+            t, np.concatenate([[x], q]), np.concatenate([[v], qd]), tau=tau
+        )
+        scale = np.abs(qdd_free).max()
+        assert abs(qdd_free[0] + 0.01 * w * w * math.sin(w * t)) < 1e-10 * scale
+        assert np.abs(qdd_free[1:] - qdd).max() < 1e-10 * scale

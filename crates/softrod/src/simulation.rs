@@ -502,6 +502,22 @@ impl Simulation {
         Ok(forward_dynamics(&s.model, &mut s.data, t, q, qd, tau)?.clone())
     }
 
+    /// The generalized forces the prescribed joints' drives apply (D60;
+    /// N·m or N, in the order of [`Self::prescribed_names`]) at
+    /// `(t, q, q̇)` under actuator force `tau`, from the forward dynamics;
+    /// empty without prescribed joints.
+    pub fn prescribed_forces(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        qd: &[f64],
+        tau: Option<&[f64]>,
+    ) -> Result<DVector<f64>> {
+        let s = &mut self.system;
+        forward_dynamics(&s.model, &mut s.data, t, q, qd, tau)?;
+        Ok(s.data.prescribed_force.clone())
+    }
+
     /// Inverse dynamics: the actuator force `τ_act` that gives `q̈` at
     /// `(t, q, q̇)` (D17–D18).
     pub fn inverse_dynamics(
