@@ -15,6 +15,7 @@
 
 mod basis;
 mod error;
+mod fit;
 mod quadrature;
 mod rod;
 mod state;
@@ -22,6 +23,7 @@ mod strain;
 
 pub use basis::Basis;
 pub use error::{KinematicsError, LengthOf};
+pub use fit::{CenterlineFit, fit_centerline};
 pub use quadrature::GaussLegendre;
 pub use rod::{Piece, PieceSpec, Rod, straight};
 pub use state::{Frame, RodKinematics};
