@@ -1,14 +1,8 @@
 //! `check` and `statics --json` on a scene with bodies and joints
 //! (scene-format.md, "Bodies, joints, bases and closures").
 
-use std::process::Command;
-
-fn softrod(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_softrod"))
-        .args(args)
-        .output()
-        .expect("runs")
-}
+mod common;
+use common::*;
 
 const SCENE: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
@@ -17,12 +11,8 @@ const SCENE: &str = concat!(
 
 #[test]
 fn check_lists_joints_and_bodies() {
-    let out = softrod(&["check", SCENE]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = run(&["check", SCENE]);
+    assert!(out.status.success(), "{}", stderr(&out));
     let text = String::from_utf8(out.stdout).unwrap();
     assert!(
         text.contains("joint of rod 'lower': revolute on 'connector', 1 DoF (q[12..13])"),
@@ -34,13 +24,9 @@ fn check_lists_joints_and_bodies() {
 
 #[test]
 fn statics_json_has_bodies_and_joints_at_the_rod_tips() {
-    let out = softrod(&["statics", SCENE, "--json"]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let out = run(&["statics", SCENE, "--json"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let v = stdout_json(&out);
     let bodies = v["bodies"].as_array().unwrap();
     assert_eq!(bodies.len(), 2);
     assert_eq!(bodies[1]["name"], "gripper");
@@ -63,14 +49,6 @@ fn statics_json_has_bodies_and_joints_at_the_rod_tips() {
     );
 }
 
-fn rows(path: &std::path::Path) -> Vec<Vec<String>> {
-    let text = std::fs::read_to_string(path).unwrap();
-    text.lines()
-        .skip(1)
-        .map(|l| l.split(',').map(str::to_owned).collect())
-        .collect()
-}
-
 /// `run` writes `bodies.csv` (t, body, pose) beside `shape.csv`: the
 /// connector and the gripper sit at the tips of the rods they hang from
 /// (their base poses are the identity), so each body row equals the last
@@ -79,31 +57,17 @@ fn rows(path: &std::path::Path) -> Vec<Vec<String>> {
 /// for shapes) that must agree. The view is drawn with them.
 #[test]
 fn run_writes_bodies_at_their_parents_tips() {
-    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("robots-run");
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    let text = std::fs::read_to_string(SCENE).unwrap();
-    let cut = text.find("[run]").unwrap();
-    let scene = dir.join("arm.toml");
-    std::fs::write(
-        &scene,
-        format!(
-            "{}[run]\nduration = 0.05\noutput_every = 0.01\n",
-            &text[..cut]
-        ),
-    )
-    .unwrap();
+    let dir = tmp("robots-run");
+    let scene = with_run(
+        "arm_with_payload.toml",
+        "[run]\nduration = 0.05\noutput_every = 0.01\n",
+        &dir,
+    );
     let out = dir.join("out");
-    let o = softrod(&[
-        "run",
-        scene.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--quiet",
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let bodies = rows(&out.join("bodies.csv"));
-    let shape = rows(&out.join("shape.csv"));
+    let o = run_scene(&scene, &out);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let bodies = csv_cells(&out.join("bodies.csv"));
+    let shape = csv_cells(&out.join("shape.csv"));
     assert_eq!(bodies.len(), 6 * 2, "two bodies at six output times");
     let mut moved = 0.0_f64;
     for b in &bodies {
@@ -129,8 +93,7 @@ fn run_writes_bodies_at_their_parents_tips() {
     // view.json names the bodies as boxes of their mass and inertia: the
     // gripper, 20 g with I = 4e-6 kg m² about every axis, is a cube of
     // edge sqrt(6 I / m) = 0.0346 m.
-    let view: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("view.json")).unwrap()).unwrap();
+    let view = json_file(&out.join("view.json"));
     let bodies = view["bodies"].as_array().unwrap();
     assert_eq!(bodies.len(), 2);
     let g = bodies.iter().find(|b| b["name"] == "gripper").unwrap();
