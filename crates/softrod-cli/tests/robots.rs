@@ -102,3 +102,210 @@ fn run_writes_bodies_at_their_parents_tips() {
         assert!((g["size"][k].as_f64().unwrap() - edge).abs() < 1e-12, "{g}");
     }
 }
+
+/// One panel of a geometry figure, read back from the SVG alone: its
+/// data-to-pixel map comes from its printed tick labels (value and pixel of
+/// the first and last tick on each axis, in the unit its axis label names),
+/// not from the plotting code.
+struct PanelAxes {
+    /// World axes shown (horizontal, vertical): 0 = x, 1 = y, 2 = z.
+    axes: (usize, usize),
+    /// `pixel = a + b · metres`, horizontal then vertical.
+    h: (f64, f64),
+    v: (f64, f64),
+    /// Figure pixels of the panel's cell, horizontally.
+    cell: (f64, f64),
+}
+
+impl PanelAxes {
+    fn to_px(&self, p: [f64; 3]) -> (f64, f64) {
+        (
+            self.h.0 + self.h.1 * p[self.axes.0],
+            self.v.0 + self.v.1 * p[self.axes.1],
+        )
+    }
+}
+
+/// `(x, y, text-anchor, rotated, text)` of every `<text>`.
+fn svg_texts(svg: &str) -> Vec<(f64, f64, String, bool, String)> {
+    svg.split("<text")
+        .skip(1)
+        .map(|t| {
+            let tag = &t[..t.find('>').unwrap()];
+            let attr = |k: &str| {
+                tag.split(&format!(" {k}=\""))
+                    .nth(1)
+                    .and_then(|v| v.split('"').next())
+                    .unwrap_or("")
+                    .to_string()
+            };
+            let body = &t[t.find('>').unwrap() + 1..t.find("</text>").unwrap()];
+            (
+                attr("x").parse().unwrap(),
+                attr("y").parse().unwrap(),
+                attr("text-anchor"),
+                tag.contains("rotate("),
+                body.trim().to_string(),
+            )
+        })
+        .collect()
+}
+
+/// The three projection panels of a shape figure (`x–z`, `y–z`, `x–y`
+/// titles; 430 px wide cells, the legend to their right).
+fn panels(svg: &str) -> Vec<PanelAxes> {
+    const CELL_W: f64 = 430.0;
+    let texts = svg_texts(svg);
+    let axis = |c: &str| "xyz".find(c).unwrap();
+    let mut out = Vec::new();
+    for (k, plane) in ["x–z", "y–z", "x–y"].iter().enumerate() {
+        let cell = (k as f64 * CELL_W, (k + 1) as f64 * CELL_W);
+        let mine: Vec<_> = texts
+            .iter()
+            .filter(|t| t.0 >= cell.0 && t.0 < cell.1)
+            .collect();
+        assert!(
+            mine.iter()
+                .any(|t| t.4 == format!("{plane} projection")),
+            "panel {k} is {plane}"
+        );
+        // Axis labels: "x [mm]" (horizontal), "z [mm]" (rotated).
+        let label = |rotated: bool| {
+            let t = mine
+                .iter()
+                .find(|t| t.3 == rotated && t.4.len() > 2 && t.4.as_bytes()[1] == b' ')
+                .expect("an axis label");
+            let unit = t.4[3..t.4.len() - 1].to_string();
+            let per_m = match unit.as_str() {
+                "m" => 1.0,
+                "mm" => 1e3,
+                "µm" => 1e6,
+                u => panic!("unit {u}"),
+            };
+            (axis(&t.4[..1]), per_m)
+        };
+        let ((ha, h_per_m), (va, v_per_m)) = (label(false), label(true));
+        // Ticks: numbers centred under the horizontal axis, right-aligned
+        // left of the vertical one.
+        let fit = |anchor: &str, per_m: f64, horizontal: bool| {
+            let mut ticks: Vec<(f64, f64)> = mine
+                .iter()
+                .filter(|t| t.2 == anchor && !t.3)
+                .filter_map(|t| {
+                    let v: f64 = t.4.parse().ok()?;
+                    Some((v / per_m, if horizontal { t.0 } else { t.1 }))
+                })
+                .collect();
+            ticks.sort_by(|a, b| a.0.total_cmp(&b.0));
+            assert!(ticks.len() >= 2, "ticks of panel {k}");
+            let ((m0, p0), (m1, p1)) = (ticks[0], ticks[ticks.len() - 1]);
+            let b = (p1 - p0) / (m1 - m0);
+            (p0 - b * m0, b)
+        };
+        out.push(PanelAxes {
+            axes: (ha, va),
+            h: fit("middle", h_per_m, true),
+            v: fit("end", v_per_m, false),
+            cell,
+        });
+    }
+    out
+}
+
+/// Centres (px) of the outlined squares the figure draws for bodies.
+fn body_marks(svg: &str) -> Vec<(f64, f64)> {
+    let attr = |tag: &str, k: &str| -> f64 {
+        tag.split(&format!(" {k}=\""))
+            .nth(1)
+            .and_then(|v| v.split('"').next())
+            .and_then(|v| v.parse().ok())
+            .unwrap()
+    };
+    svg.split("<rect")
+        .skip(1)
+        .map(|r| &r[..r.find('>').unwrap()])
+        .filter(|t| t.contains("fill=\"none\""))
+        .map(|t| {
+            (
+                attr(t, "x") + 0.5 * attr(t, "width"),
+                attr(t, "y") + 0.5 * attr(t, "height"),
+            )
+        })
+        .collect()
+}
+
+/// Every body has a mark, in every projection, where the panel's printed
+/// axes put its position (a tick is placed to the pixel, so the map read
+/// back is good to ~1 px over the figure), and its name is printed.
+fn assert_bodies_drawn(svg: &str, bodies: &[(String, [f64; 3])]) {
+    let marks = body_marks(svg);
+    for p in panels(svg) {
+        for (name, pos) in bodies {
+            let (u, v) = p.to_px(*pos);
+            assert!(u > p.cell.0 && u < p.cell.1, "{name} inside its panel");
+            let d = marks
+                .iter()
+                .map(|(x, y)| ((x - u).powi(2) + (y - v).powi(2)).sqrt())
+                .fold(f64::INFINITY, f64::min);
+            assert!(
+                d <= 2.0,
+                "'{name}' at {pos:?}: no mark near ({u:.1}, {v:.1}) px in panel {:?} (nearest {d:.1} px)",
+                p.axes
+            );
+        }
+    }
+    let texts = svg_texts(svg);
+    for (name, _) in bodies {
+        assert!(texts.iter().any(|t| &t.4 == name), "'{name}' named");
+    }
+}
+
+/// statics_shape.svg marks each body at the position `statics --json`
+/// prints for it.
+#[test]
+fn the_statics_figure_draws_the_bodies_where_they_are() {
+    let dir = tmp("statics-figure");
+    let out = run(&["statics", SCENE, "--json", "--out", dir.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let v = stdout_json(&out);
+    let bodies: Vec<(String, [f64; 3])> = v["bodies"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|b| {
+            let p = |k: usize| b["position"][k].as_f64().unwrap();
+            (b["name"].as_str().unwrap().to_string(), [p(0), p(1), p(2)])
+        })
+        .collect();
+    assert_eq!(bodies.len(), 2);
+    let svg = std::fs::read_to_string(dir.join("statics_shape.svg")).unwrap();
+    assert_bodies_drawn(&svg, &bodies);
+}
+
+/// shapes.svg of a run marks each body at its bodies.csv position at the
+/// last output time (the last drawn snapshot).
+#[test]
+fn the_run_shapes_figure_draws_the_bodies_where_they_are() {
+    let dir = tmp("run-figure");
+    let scene = with_run(
+        "arm_with_payload.toml",
+        "[run]\nduration = 0.05\noutput_every = 0.01\n",
+        &dir,
+    );
+    let out = dir.join("out");
+    let o = run_scene(&scene, &out);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let rows = csv_cells(&out.join("bodies.csv"));
+    let last = rows.last().unwrap()[0].clone();
+    let bodies: Vec<(String, [f64; 3])> = rows
+        .iter()
+        .filter(|r| r[0] == last)
+        .map(|r| {
+            let p = |k: usize| r[2 + k].parse::<f64>().unwrap();
+            (r[1].clone(), [p(0), p(1), p(2)])
+        })
+        .collect();
+    assert_eq!(bodies.len(), 2);
+    let svg = std::fs::read_to_string(out.join("shapes.svg")).unwrap();
+    assert_bodies_drawn(&svg, &bodies);
+}

@@ -187,6 +187,8 @@ pub(crate) enum Swatch {
     },
     Circle(RGBColor),
     Square(RGBColor),
+    /// An outlined square: a rigid body's mark.
+    HollowSquare(RGBColor),
     /// A header line (bold text, no swatch).
     Header,
     /// Plain text (a note).
@@ -262,6 +264,12 @@ pub(crate) fn draw_legend(
                 .draw(&Rectangle::new(
                     [(x0 + 10, y - 6), (x0 + 22, y + 6)],
                     c.filled(),
+                ))
+                .map_err(&err)?,
+            Swatch::HollowSquare(c) => area
+                .draw(&Rectangle::new(
+                    [(x0 + 9, y - 7), (x0 + 23, y + 7)],
+                    c.stroke_width(BODY_STROKE),
                 ))
                 .map_err(&err)?,
             Swatch::Header | Swatch::Note => {}
@@ -378,7 +386,15 @@ pub(crate) struct Stroke {
 pub(crate) enum Marker {
     Circle((f64, f64), RGBColor),
     Square((f64, f64), RGBColor),
+    /// A rigid body: an outlined square of ±`BODY_HALF_PX` centred on its
+    /// frame origin, with its name beside it when given.
+    Body((f64, f64), RGBColor, Option<String>),
 }
+
+/// Half the side of a body's mark, px.
+pub(crate) const BODY_HALF_PX: f64 = 7.0;
+/// Line width of a body's mark, px.
+pub(crate) const BODY_STROKE: u32 = 2;
 
 /// What to draw in one panel.
 pub(crate) struct PanelSpec {
@@ -452,6 +468,14 @@ pub(crate) fn draw_panel(
                 .map_err(&err)?;
         }
     }
+    // Data units per pixel, to size marks in pixels whatever the ranges.
+    let (ux, uy) = (
+        (x_range.1 - x_range.0) / f64::from(plot_px.0.max(1)),
+        (y_range.1 - y_range.0) / f64::from(plot_px.1.max(1)),
+    );
+    // Body names placed so far, as pixel boxes (left, bottom, right, top)
+    // relative to the data origin: a name that would cover one moves up.
+    let mut labels: Vec<(f64, f64, f64, f64)> = Vec::new();
     for m in &spec.markers {
         match m {
             Marker::Circle(p, c) => chart
@@ -460,10 +484,6 @@ pub(crate) fn draw_panel(
                 .map_err(&err)?,
             Marker::Square(p, c) => {
                 // A square of ±6 px around p, in data units.
-                let (ux, uy) = (
-                    (x_range.1 - x_range.0) / f64::from(plot_px.0.max(1)),
-                    (y_range.1 - y_range.0) / f64::from(plot_px.1.max(1)),
-                );
                 chart
                     .draw_series([Rectangle::new(
                         [
@@ -474,6 +494,41 @@ pub(crate) fn draw_panel(
                     )])
                     .map(|_| ())
                     .map_err(&err)?
+            }
+            Marker::Body(p, c, label) => {
+                let (hx, hy) = (BODY_HALF_PX * ux, BODY_HALF_PX * uy);
+                chart
+                    .draw_series([Rectangle::new(
+                        [(p.0 - hx, p.1 - hy), (p.0 + hx, p.1 + hy)],
+                        c.stroke_width(BODY_STROKE),
+                    )])
+                    .map_err(&err)?;
+                if let Some(name) = label {
+                    // Up and right of the mark, clear of the rod it ends;
+                    // the width is estimated (≈ 0.6 em a character).
+                    let (w, h) = (
+                        0.6 * f64::from(TICK_PX) * name.chars().count() as f64,
+                        1.2 * f64::from(TICK_PX),
+                    );
+                    let left = p.0 / ux + 1.6 * BODY_HALF_PX;
+                    let mut bottom = p.1 / uy + 1.6 * BODY_HALF_PX;
+                    let overlaps = |b: f64, l: &(f64, f64, f64, f64)| {
+                        left < l.2 && l.0 < left + w && b < l.3 && l.1 < b + h
+                    };
+                    for _ in 0..labels.len() {
+                        match labels.iter().find(|l| overlaps(bottom, l)) {
+                            Some(l) => bottom = l.3,
+                            None => break,
+                        }
+                    }
+                    labels.push((left, bottom, left + w, bottom + h));
+                    let style = TextStyle::from((FONT, TICK_PX).into_font())
+                        .color(&RGBColor(40, 40, 40))
+                        .pos(Pos::new(HPos::Left, VPos::Bottom));
+                    chart
+                        .draw_series([Text::new(name.clone(), (left * ux, bottom * uy), style)])
+                        .map_err(&err)?;
+                }
             }
         }
     }
