@@ -504,23 +504,45 @@ pub(crate) fn draw_panel(
                     )])
                     .map_err(&err)?;
                 if let Some(name) = label {
-                    // Up and right of the mark, clear of the rod it ends;
-                    // the width is estimated (≈ 0.6 em a character).
+                    // Beside the mark, clear of the rod it ends; the text
+                    // box is estimated (≈ 0.52 em a character, sans-serif).
                     let (w, h) = (
-                        0.6 * f64::from(TICK_PX) * name.chars().count() as f64,
+                        0.52 * f64::from(TICK_PX) * name.chars().count() as f64,
                         1.2 * f64::from(TICK_PX),
                     );
-                    let left = p.0 / ux + 1.6 * BODY_HALF_PX;
-                    let mut bottom = p.1 / uy + 1.6 * BODY_HALF_PX;
-                    let overlaps = |b: f64, l: &(f64, f64, f64, f64)| {
-                        left < l.2 && l.0 < left + w && b < l.3 && l.1 < b + h
+                    let overlaps = |l: f64, b: f64, o: &(f64, f64, f64, f64)| {
+                        l < o.2 && o.0 < l + w && b < o.3 && o.1 < b + h
                     };
-                    for _ in 0..labels.len() {
-                        match labels.iter().find(|l| overlaps(bottom, l)) {
-                            Some(l) => bottom = l.3,
-                            None => break,
+                    // The first of up-right, up-left, down-right, down-left
+                    // of the mark that stays in the plot and covers no
+                    // earlier name; else up-right, stacked above those.
+                    let gap = 1.6 * BODY_HALF_PX;
+                    let (cx, cy) = (p.0 / ux, p.1 / uy);
+                    let free = |l: f64, b: f64| {
+                        l >= x_range.0 / ux
+                            && l + w <= x_range.1 / ux
+                            && b >= y_range.0 / uy
+                            && b + h <= y_range.1 / uy
+                            && !labels.iter().any(|o| overlaps(l, b, o))
+                    };
+                    let place = [
+                        (cx + gap, cy + gap),
+                        (cx - gap - w, cy + gap),
+                        (cx + gap, cy - gap - h),
+                        (cx - gap - w, cy - gap - h),
+                    ]
+                    .into_iter()
+                    .find(|&(l, b)| free(l, b));
+                    let (left, bottom) = place.unwrap_or_else(|| {
+                        let (l, mut b) = (cx + gap, cy + gap);
+                        for _ in 0..labels.len() {
+                            match labels.iter().find(|o| overlaps(l, b, o)) {
+                                Some(o) => b = o.3,
+                                None => break,
+                            }
                         }
-                    }
+                        (l, b)
+                    });
                     labels.push((left, bottom, left + w, bottom + h));
                     let style = TextStyle::from((FONT, TICK_PX).into_font())
                         .color(&RGBColor(40, 40, 40))
