@@ -116,8 +116,7 @@ fn run_writes_valid_streams_and_conserves_energy() {
     // Shape: 8 pieces sampled at 8 points each (the default for 8 pieces)
     // plus the tip: 65 samples per output time, from the base at s = 0.
     assert_eq!(shape, 21 * 65);
-    let summary: serde_json::Value =
-        json_file(&out.join("summary.json"));
+    let summary: serde_json::Value = json_file(&out.join("summary.json"));
     assert_eq!(summary["status"], "ok");
     assert!((summary["final_time"].as_f64().unwrap() - 0.05).abs() < 1e-15);
     for k in ["steps", "rejected_steps", "rhs_evaluations", "wall_seconds"] {
@@ -158,8 +157,7 @@ fn linearly_implicit_generalized_alpha_tracks_a_tight_rosenbrock_run() {
         let out = sub.join("out");
         let o = run_scene(&scene, &out);
         assert!(o.status.success(), "{name}: {}", stderr(&o));
-        let summary: serde_json::Value =
-            json_file(&out.join("summary.json"));
+        let summary: serde_json::Value = json_file(&out.join("summary.json"));
         if name == "li" {
             assert_eq!(summary["steps"], 300);
             assert_eq!(summary["rhs_evaluations"], 301);
@@ -325,8 +323,7 @@ fn unstable_explicit_run_fails_with_exit_1_and_a_summary() {
     let out = dir.join("out");
     let o = run_scene(&scene, &out);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
-    let summary: serde_json::Value =
-        json_file(&out.join("summary.json"));
+    let summary: serde_json::Value = json_file(&out.join("summary.json"));
     assert!(
         summary["status"].as_str().unwrap().starts_with("error: "),
         "{summary}"
@@ -570,8 +567,7 @@ fn run_writes_the_view_and_view_rebuilds_it() {
     for net in ["src=\"http", "href=\"http", "import(", "fetch("] {
         assert!(!page.contains(net), "the page reaches out: {net}");
     }
-    let spec: serde_json::Value =
-        json_file(&out.join("view.json"));
+    let spec: serde_json::Value = json_file(&out.join("view.json"));
     assert_eq!(spec["rods"][0]["radius"]["r"][0], 0.01);
     assert_eq!(spec["cables"].as_array().unwrap().len(), 2);
     assert_eq!(spec["cables"][1]["path"][0][2], -0.008);
@@ -680,8 +676,7 @@ fn trajectory_has_velocities_and_energy_components_and_summary_names_q() {
             rows[k][qd]
         );
     }
-    let summary: serde_json::Value =
-        json_file(&out.join("summary.json"));
+    let summary: serde_json::Value = json_file(&out.join("summary.json"));
     let names: Vec<String> = serde_json::from_value(summary["q_names"].clone()).unwrap();
     assert_eq!(names.len(), n);
     assert_eq!(names[..2], ["cantilever.p0.ky", "cantilever.p1.ky"]);

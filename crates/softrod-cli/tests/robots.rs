@@ -165,8 +165,7 @@ fn panels(svg: &str) -> Vec<PanelAxes> {
             .filter(|t| t.0 >= cell.0 && t.0 < cell.1)
             .collect();
         assert!(
-            mine.iter()
-                .any(|t| t.4 == format!("{plane} projection")),
+            mine.iter().any(|t| t.4 == format!("{plane} projection")),
             "panel {k} is {plane}"
         );
         // Axis labels: "x [mm]" (horizontal), "z [mm]" (rotated).

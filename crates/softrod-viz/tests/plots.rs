@@ -268,7 +268,8 @@ fn shapes_mark_bodies_at_their_positions() {
         let ((l, t), (r, btm)) = p.plot_rect;
         let to_px = |x: [f64; 3]| {
             (
-                f64::from(l) + (x[a] - p.x_range.0) / (p.x_range.1 - p.x_range.0) * f64::from(r - l),
+                f64::from(l)
+                    + (x[a] - p.x_range.0) / (p.x_range.1 - p.x_range.0) * f64::from(r - l),
                 f64::from(btm)
                     - (x[b] - p.y_range.0) / (p.y_range.1 - p.y_range.0) * f64::from(btm - t),
             )

@@ -225,12 +225,7 @@ fn three_projections(curves: Vec<Curve3>, markers: Vec<Marker3>) -> (Planes, Pan
         dashed: c.dashed,
     };
     let per = (0..3)
-        .map(|_| {
-            (
-                curves.iter().map(copy).collect(),
-                markers.to_vec(),
-            )
-        })
+        .map(|_| (curves.iter().map(copy).collect(), markers.to_vec()))
         .collect();
     (planes, per)
 }
