@@ -28,21 +28,12 @@ fn tapered_rod() {
     let ga_s = |s: f64| g * PI * rad(s).powi(2);
     // Load: δ/L ≈ 1e-4 from the base stiffness scale.
     let p = 1e-4 * ei(e, r0) / (l * l);
-    let m = 20000;
-    let h = l / m as f64;
-    let mut delta = 0.0;
-    for k in 0..=m {
-        let s = k as f64 * h;
-        let w = if k == 0 || k == m {
-            1.0
-        } else if k % 2 == 1 {
-            4.0
-        } else {
-            2.0
-        };
-        delta += w * (p * (l - s).powi(2) / ei_s(s) + p / ga_s(s));
-    }
-    delta *= h / 3.0;
+    let delta = simpson(
+        |s| p * (l - s).powi(2) / ei_s(s) + p / ga_s(s),
+        0.0,
+        l,
+        20000,
+    );
     let rod = "strains = [\"ky\", \"qx\", \"qz\"]\nsection = { shape = \"circle\", radius_base = 0.01, radius_tip = 0.001 }\n\
                material = { density = 1000.0, young = 1.0e7, poisson = 0.5 }";
     let load = format!(

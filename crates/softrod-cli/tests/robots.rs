@@ -3,6 +3,7 @@
 
 mod common;
 use common::*;
+use softrod_testkit::{svg_outlined_rect_centres, svg_texts};
 
 const SCENE: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
@@ -126,31 +127,6 @@ impl PanelAxes {
     }
 }
 
-/// `(x, y, text-anchor, rotated, text)` of every `<text>`.
-fn svg_texts(svg: &str) -> Vec<(f64, f64, String, bool, String)> {
-    svg.split("<text")
-        .skip(1)
-        .map(|t| {
-            let tag = &t[..t.find('>').unwrap()];
-            let attr = |k: &str| {
-                tag.split(&format!(" {k}=\""))
-                    .nth(1)
-                    .and_then(|v| v.split('"').next())
-                    .unwrap_or("")
-                    .to_string()
-            };
-            let body = &t[t.find('>').unwrap() + 1..t.find("</text>").unwrap()];
-            (
-                attr("x").parse().unwrap(),
-                attr("y").parse().unwrap(),
-                attr("text-anchor"),
-                tag.contains("rotate("),
-                body.trim().to_string(),
-            )
-        })
-        .collect()
-}
-
 /// The three projection panels of a shape figure (`x–z`, `y–z`, `x–y`
 /// titles; 430 px wide cells, the legend to their right).
 fn panels(svg: &str) -> Vec<PanelAxes> {
@@ -162,26 +138,26 @@ fn panels(svg: &str) -> Vec<PanelAxes> {
         let cell = (k as f64 * CELL_W, (k + 1) as f64 * CELL_W);
         let mine: Vec<_> = texts
             .iter()
-            .filter(|t| t.0 >= cell.0 && t.0 < cell.1)
+            .filter(|t| t.x >= cell.0 && t.x < cell.1)
             .collect();
         assert!(
-            mine.iter().any(|t| t.4 == format!("{plane} projection")),
+            mine.iter().any(|t| t.text == format!("{plane} projection")),
             "panel {k} is {plane}"
         );
         // Axis labels: "x [mm]" (horizontal), "z [mm]" (rotated).
         let label = |rotated: bool| {
             let t = mine
                 .iter()
-                .find(|t| t.3 == rotated && t.4.len() > 2 && t.4.as_bytes()[1] == b' ')
+                .find(|t| t.rotated == rotated && t.text.len() > 2 && t.text.as_bytes()[1] == b' ')
                 .expect("an axis label");
-            let unit = t.4[3..t.4.len() - 1].to_string();
+            let unit = t.text[3..t.text.len() - 1].to_string();
             let per_m = match unit.as_str() {
                 "m" => 1.0,
                 "mm" => 1e3,
                 "µm" => 1e6,
                 u => panic!("unit {u}"),
             };
-            (axis(&t.4[..1]), per_m)
+            (axis(&t.text[..1]), per_m)
         };
         let ((ha, h_per_m), (va, v_per_m)) = (label(false), label(true));
         // Ticks: numbers centred under the horizontal axis, right-aligned
@@ -189,10 +165,10 @@ fn panels(svg: &str) -> Vec<PanelAxes> {
         let fit = |anchor: &str, per_m: f64, horizontal: bool| {
             let mut ticks: Vec<(f64, f64)> = mine
                 .iter()
-                .filter(|t| t.2 == anchor && !t.3)
+                .filter(|t| t.anchor == anchor && !t.rotated)
                 .filter_map(|t| {
-                    let v: f64 = t.4.parse().ok()?;
-                    Some((v / per_m, if horizontal { t.0 } else { t.1 }))
+                    let v: f64 = t.text.parse().ok()?;
+                    Some((v / per_m, if horizontal { t.x } else { t.y }))
                 })
                 .collect();
             ticks.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -211,33 +187,11 @@ fn panels(svg: &str) -> Vec<PanelAxes> {
     out
 }
 
-/// Centres (px) of the outlined squares the figure draws for bodies.
-fn body_marks(svg: &str) -> Vec<(f64, f64)> {
-    let attr = |tag: &str, k: &str| -> f64 {
-        tag.split(&format!(" {k}=\""))
-            .nth(1)
-            .and_then(|v| v.split('"').next())
-            .and_then(|v| v.parse().ok())
-            .unwrap()
-    };
-    svg.split("<rect")
-        .skip(1)
-        .map(|r| &r[..r.find('>').unwrap()])
-        .filter(|t| t.contains("fill=\"none\""))
-        .map(|t| {
-            (
-                attr(t, "x") + 0.5 * attr(t, "width"),
-                attr(t, "y") + 0.5 * attr(t, "height"),
-            )
-        })
-        .collect()
-}
-
 /// Every body has a mark, in every projection, where the panel's printed
 /// axes put its position (a tick is placed to the pixel, so the map read
 /// back is good to ~1 px over the figure), and its name is printed.
 fn assert_bodies_drawn(svg: &str, bodies: &[(String, [f64; 3])]) {
-    let marks = body_marks(svg);
+    let marks = svg_outlined_rect_centres(svg);
     for p in panels(svg) {
         for (name, pos) in bodies {
             let (u, v) = p.to_px(*pos);
@@ -255,7 +209,7 @@ fn assert_bodies_drawn(svg: &str, bodies: &[(String, [f64; 3])]) {
     }
     let texts = svg_texts(svg);
     for (name, _) in bodies {
-        assert!(texts.iter().any(|t| &t.4 == name), "'{name}' named");
+        assert!(texts.iter().any(|t| &t.text == name), "'{name}' named");
     }
 }
 

@@ -2,6 +2,7 @@
 //! up, and in every panel of a figure), data inside the ranges, labels with
 //! units and legends present and off the data, and errors on bad input.
 
+use softrod_testkit::svg_outlined_rect_centres;
 use softrod_viz::VizError;
 use softrod_viz::demo::SwingingRods;
 use softrod_viz::plot::{
@@ -201,29 +202,6 @@ fn shapes_one_rod_colours_times_several_rods_colours_rods() {
 /// Kinetic + elastic = a e^{-t} (exchanging), gravity constant: the total's
 /// drift is a (e^{-t} − 1), whose minimum a (e^{-T} − 1) the lower panel's
 /// range must hold, within its 6 % padding.
-/// Centres (px) of the outlined squares (`fill="none"` rects): the body marks
-/// and the legend's swatch.
-fn hollow_square_centres(svg: &str) -> Vec<(f64, f64)> {
-    let attr = |tag: &str, k: &str| -> f64 {
-        tag.split(&format!(" {k}=\""))
-            .nth(1)
-            .and_then(|v| v.split('"').next())
-            .and_then(|v| v.parse().ok())
-            .unwrap()
-    };
-    svg.split("<rect")
-        .skip(1)
-        .map(|r| &r[..r.find('>').unwrap()])
-        .filter(|t| t.contains("fill=\"none\""))
-        .map(|t| {
-            (
-                attr(t, "x") + 0.5 * attr(t, "width"),
-                attr(t, "y") + 0.5 * attr(t, "height"),
-            )
-        })
-        .collect()
-}
-
 /// Bodies are marked at their positions in every projection: the centre
 /// of each outlined square is where the panel's own data-to-pixel map
 /// (its ranges onto its plotting rectangle, y up) puts the body, to the
@@ -260,7 +238,7 @@ fn shapes_mark_bodies_at_their_positions() {
     let f = plot::shapes("bodies", &snaps).unwrap();
     assert_equal_aspect(&f);
     assert_legend_off_data(&f, &["body (frame origin)"]);
-    let centres = hollow_square_centres(&f.svg);
+    let centres = svg_outlined_rect_centres(&f.svg);
     // 2 snapshots × 2 bodies × 3 panels, and the legend's swatch.
     assert_eq!(centres.len(), 13, "{centres:?}");
     let planes = [(0, 2), (1, 2), (0, 1)];
