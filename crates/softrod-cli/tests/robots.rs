@@ -50,6 +50,20 @@ fn statics_json_has_bodies_and_joints_at_the_rod_tips() {
     );
 }
 
+/// The arm with its payload run for 0.05 s (outputs every 0.01 s) into
+/// `DIR/out`, which it returns.
+fn run_arm(dir: &std::path::Path) -> std::path::PathBuf {
+    let scene = with_run(
+        "arm_with_payload.toml",
+        "[run]\nduration = 0.05\noutput_every = 0.01\n",
+        dir,
+    );
+    let out = dir.join("out");
+    let o = run_scene(&scene, &out);
+    assert!(o.status.success(), "{}", stderr(&o));
+    out
+}
+
 /// `run` writes `bodies.csv` (t, body, pose) beside `shape.csv`: the
 /// connector and the gripper sit at the tips of the rods they hang from
 /// (their base poses are the identity), so each body row equals the last
@@ -59,14 +73,7 @@ fn statics_json_has_bodies_and_joints_at_the_rod_tips() {
 #[test]
 fn run_writes_bodies_at_their_parents_tips() {
     let dir = tmp("robots-run");
-    let scene = with_run(
-        "arm_with_payload.toml",
-        "[run]\nduration = 0.05\noutput_every = 0.01\n",
-        &dir,
-    );
-    let out = dir.join("out");
-    let o = run_scene(&scene, &out);
-    assert!(o.status.success(), "{}", stderr(&o));
+    let out = run_arm(&dir);
     let bodies = csv_cells(&out.join("bodies.csv"));
     let shape = csv_cells(&out.join("shape.csv"));
     assert_eq!(bodies.len(), 6 * 2, "two bodies at six output times");
@@ -240,14 +247,7 @@ fn the_statics_figure_draws_the_bodies_where_they_are() {
 #[test]
 fn the_run_shapes_figure_draws_the_bodies_where_they_are() {
     let dir = tmp("run-figure");
-    let scene = with_run(
-        "arm_with_payload.toml",
-        "[run]\nduration = 0.05\noutput_every = 0.01\n",
-        &dir,
-    );
-    let out = dir.join("out");
-    let o = run_scene(&scene, &out);
-    assert!(o.status.success(), "{}", stderr(&o));
+    let out = run_arm(&dir);
     let rows = csv_cells(&out.join("bodies.csv"));
     let last = rows.last().unwrap()[0].clone();
     let bodies: Vec<(String, [f64; 3])> = rows
