@@ -154,12 +154,12 @@ fn tapered() {
         "\nThe discrete prediction holds to −1e-6 relative (the geometric nonlinearity, \
          O((δ/L)²)); the error against the continuum tends to order 2 once the pieces resolve \
          the steep growth of the compliance 1/r⁴ near the thin tip. Asserted in \
-         `tests/tests/extreme.rs` (`tapered_rod`).\n"
+         `tests/tests/extreme_sizes.rs` (`tapered_rod`).\n"
     );
 }
 
-fn sanity_release() {
-    println!("### Sanity release (derivations §8(h)): trajectory and energy conservation\n");
+fn sanity_release(rounds: usize) {
+    println!("### Sanity release (docs/theory.md §8(h)): trajectory and energy conservation\n");
     let text = "[world]\ngravity = [0.0, 0.0, -9.81]\n[[rod]]\nname = \"arm\"\nlength = 0.5\n\
                 pieces = 8\nstrains = [\"ky\", \"qx\", \"qz\"]\n\
                 section = { shape = \"circle\", radius = 0.01 }\n\
@@ -183,7 +183,7 @@ fn sanity_release() {
     println!("|---|---|---|---|---|---|---|---|---|");
     let n = b.model.n_dof();
     let times: Vec<f64> = (0..=200).map(|k| k as f64 / 200.0).collect();
-    let runs: [(&str, &str, Method, Options); 5] = [
+    let runs: [(&str, &str, Method, Options); 7] = [
         (
             "dopri5",
             "rtol 1e-11",
@@ -203,6 +203,18 @@ fn sanity_release() {
             Options::tol(1e-6, 1e-9),
         ),
         (
+            "esdirk",
+            "rtol 1e-6",
+            Method::Esdirk46,
+            Options::tol(1e-6, 1e-9),
+        ),
+        (
+            "esdirk (the default)",
+            "rtol 1e-3",
+            Method::Esdirk46,
+            Options::tol(1e-3, 1e-6),
+        ),
+        (
             "generalized-alpha ρ∞=0.9",
             "dt 1e-4",
             Method::GeneralizedAlpha { rho_inf: 0.9 },
@@ -215,25 +227,40 @@ fn sanity_release() {
             Options::fixed(1e-4),
         ),
     ];
-    for (name, setting, method, opts) in runs {
-        let mut sys = RodSystem::new(b.model.clone());
-        let opts = Options {
-            max_steps: 10_000_000,
-            ..opts
+    // Every round runs every integrator once (interleaved, so a slow spell
+    // of the machine touches all rows alike); the wall time is the median
+    // over the rounds, the rest is deterministic and taken from the last.
+    let mut walls: Vec<Vec<f64>> = vec![Vec::new(); runs.len()];
+    let mut last = Vec::new();
+    for _ in 0..rounds {
+        last.clear();
+        for (k, (_, _, method, opts)) in runs.iter().enumerate() {
+            let mut sys = RodSystem::new(b.model.clone());
+            let opts = Options {
+                max_steps: 10_000_000,
+                ..opts.clone()
+            }
+            .with_t_eval(times.clone());
+            let start = Instant::now();
+            let sol = integrate_second_order(
+                &mut sys,
+                *method,
+                0.0,
+                1.0,
+                &b.q0,
+                &b.qd0,
+                &opts,
+                Hooks::new(),
+            );
+            walls[k].push(start.elapsed().as_secs_f64());
+            last.push((sys, sol));
         }
-        .with_t_eval(times.clone());
-        let start = Instant::now();
-        let sol = integrate_second_order(
-            &mut sys,
-            method,
-            0.0,
-            1.0,
-            &b.q0,
-            &b.qd0,
-            &opts,
-            Hooks::new(),
-        );
-        let wall = start.elapsed().as_secs_f64();
+    }
+    for (k, ((name, setting, _, _), (mut sys, sol))) in runs.iter().zip(last.drain(..)).enumerate()
+    {
+        let mut w = walls[k].clone();
+        w.sort_by(f64::total_cmp);
+        let wall = w[w.len() / 2];
         let sol = match sol {
             Ok(s) => s,
             Err(e) => {
@@ -263,7 +290,20 @@ fn sanity_release() {
         );
     }
     println!(
-        "\nThe prototype's digits are 1e-9 m, so tip errors below ~1e-9 m are agreement. \
+        "\nWall s: median of {rounds} interleaved round(s), one thread, on a machine whose speed \
+         varies up to 1.6× (compare rows of one table, not tables); min–max: {}.\n",
+        runs.iter()
+            .zip(&walls)
+            .map(|((name, setting, _, _), w)| {
+                let lo = w.iter().cloned().fold(f64::INFINITY, f64::min);
+                let hi = w.iter().cloned().fold(0.0, f64::max);
+                format!("{name} {setting} {lo:.3}–{hi:.3}")
+            })
+            .collect::<Vec<_>>()
+            .join("; ")
+    );
+    println!(
+        "The prototype's digits are 1e-9 m, so tip errors below ~1e-9 m are agreement. \
          The undamped release conserves energy to the integrator's tolerance; generalized-α \
          with ρ∞ < 1 dissipates a little by design. `tests/tests/sanity_trajectory.rs` asserts \
          the first row (2e-8 m, 1e-8 J).\n"
@@ -271,14 +311,28 @@ fn sanity_release() {
 }
 
 fn main() {
+    // `--rounds N`: the sanity release's wall times as the median of N
+    // interleaved rounds (default 1).
+    let args: Vec<String> = std::env::args().collect();
+    let rounds = match args.iter().position(|a| a == "--rounds") {
+        Some(i) => match args.get(i + 1).and_then(|v| v.parse::<usize>().ok()) {
+            Some(n) if n >= 1 => n,
+            _ => {
+                eprintln!("--rounds takes a whole number ≥ 1");
+                std::process::exit(2);
+            }
+        },
+        None => 1,
+    };
     println!("## Extreme cases and the sanity release\n");
     println!(
-        "Generated by `cargo run --release -p softrod-tests --example validation_report` \
+        "Generated by `cargo build --release -p softrod-tests --example validation_report`, then \
+         the binary copied out of target/ and run as `validation_report --rounds 3` \
          (tests/examples/validation_report.rs); paste its output over this section. The fast \
-         extreme suite with its assertions is `cargo test -p softrod-tests --test extreme -- \
-         --nocapture`, which prints its measured numbers.\n"
+         extreme suite with its assertions is `cargo test -p softrod-tests --test 'extreme_*' \
+         -- --nocapture`, which prints its measured numbers.\n"
     );
     three_turns();
     tapered();
-    sanity_release();
+    sanity_release(rounds);
 }

@@ -1,6 +1,8 @@
 //! Shared helpers of the validation suite; the cases live in `tests/*.rs`
 //! and the document generators in `examples/`.
 
+pub mod extreme;
+
 /// Composite Simpson rule of `f` on `[a, b]` with `m` (even) intervals:
 /// the independent quadrature the tapered-rod references are built with.
 pub fn simpson(f: impl Fn(f64) -> f64, a: f64, b: f64, m: usize) -> f64 {

@@ -5,7 +5,9 @@ use std::path::{Path, PathBuf};
 use softrod::Equilibrium;
 use softrod::dynamics::Model;
 
-use crate::common::{CliError, Loaded, Poser, failed, load, load_silent, pose_json, warning_text};
+use crate::common::{
+    CliError, Loaded, Poser, failed, load, load_silent, pose_json, position, warning_text,
+};
 use crate::outputs::{RodSampling, default_points_per_piece};
 use crate::plots;
 use crate::run::scene_title;
@@ -115,7 +117,8 @@ pub fn statics(path: &Path, json: bool, out: Option<PathBuf>) -> Result<(), CliE
     if let Some(dir) = &out {
         make_dir(dir)?;
         let c = centrelines(model, res.q.as_slice())?;
-        let name = plots::statics_figure(dir, model, &c, &scene_title(path))?;
+        let bodies: Vec<[f64; 3]> = poser.bodies().iter().map(position).collect();
+        let name = plots::statics_figure(dir, model, &c, &bodies, &scene_title(path))?;
         if !json {
             println!("wrote {}", dir.join(name).display());
         }

@@ -7,7 +7,7 @@ use std::path::Path;
 
 use softrod::dynamics::{Energies, Model};
 use softrod_viz::plot::{
-    self, ActuatorSeries, EnergySeries, Figure, Mode, ModeShapes, NamedSeries, RodCurve,
+    self, ActuatorSeries, BodyMark, EnergySeries, Figure, Mode, ModeShapes, NamedSeries, RodCurve,
     ShapeSnapshot, StrainComponent, StrainProfiles,
 };
 
@@ -22,6 +22,9 @@ pub struct Snapshot {
     pub centrelines: Vec<Vec<[f64; 3]>>,
     /// Per rod: the strain `ξ_n` of each piece.
     pub strains: Vec<Vec<[f64; 6]>>,
+    /// Per rigid body (model order): the origin of its frame (world, m),
+    /// as in bodies.csv.
+    pub bodies: Vec<[f64; 3]>,
 }
 
 /// What a run keeps in memory for its figures (one value per output row;
@@ -66,6 +69,19 @@ fn bounds(model: &Model, r: usize) -> Vec<f64> {
     let rod = &model.rods()[r].spec.rod;
     std::iter::once(0.0)
         .chain(rod.pieces().iter().map(|p| p.end()))
+        .collect()
+}
+
+/// The bodies' marks: names from the model, positions in model order.
+fn body_marks(model: &Model, positions: &[[f64; 3]]) -> Vec<BodyMark> {
+    model
+        .bodies()
+        .iter()
+        .zip(positions)
+        .map(|(b, p)| BodyMark {
+            name: b.spec.name.clone(),
+            position: *p,
+        })
         .collect()
 }
 
@@ -137,6 +153,7 @@ pub fn run_figures(
                         points: p.clone(),
                     })
                     .collect(),
+                bodies: body_marks(model, &sn.bodies),
             })
             .collect();
         write(
@@ -189,11 +206,13 @@ pub fn run_figures(
     Ok(written)
 }
 
-/// `DIR/statics_shape.svg`: the equilibrium in three projections.
+/// `DIR/statics_shape.svg`: the equilibrium in three projections, the rigid
+/// bodies marked at `bodies` (their frame origins, model order, world m).
 pub fn statics_figure(
     dir: &Path,
     model: &Model,
     centrelines: &[Vec<[f64; 3]>],
+    bodies: &[[f64; 3]],
     title: &str,
 ) -> Result<String, CliError> {
     let snap = ShapeSnapshot {
@@ -207,6 +226,7 @@ pub fn statics_figure(
                 points: p.clone(),
             })
             .collect(),
+        bodies: body_marks(model, bodies),
     };
     let name = "statics_shape.svg";
     write(

@@ -423,6 +423,7 @@ impl Streamer {
                         .collect()
                 })
                 .collect(),
+            bodies: self.poser.bodies().iter().map(position).collect(),
         };
         if self.snapshot_at.contains(&self.next) {
             self.series.snapshots.push(snapshot);

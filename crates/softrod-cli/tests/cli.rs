@@ -1,81 +1,20 @@
 //! End-to-end tests of the `softrod` binary: physics checks, not snapshots.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::Path;
 
 use softrod_dynamics::{Data, StaticsOptions, statics};
 use softrod_mechanics::Section;
 use softrod_scene::Scene;
 
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_softrod"))
-}
-
-fn examples() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples")
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join("softrod-cli-tests")
-        .join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn run(args: &[&str]) -> Output {
-    bin().args(args).output().expect("runs the binary")
-}
-
-/// `softrod run SCENE --out OUT --quiet`.
-fn run_scene(scene: &Path, out: &Path) -> Output {
-    run(&[
-        "run",
-        scene.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--quiet",
-    ])
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-/// The example with its `[run]` table replaced (written next to the outputs).
-fn with_run(example: &str, run_table: &str, dir: &Path) -> PathBuf {
-    let text = std::fs::read_to_string(examples().join(example)).unwrap();
-    let cut = text.find("[run]").unwrap_or(text.len());
-    let p = dir.join(example);
-    std::fs::write(&p, format!("{}{run_table}\n", &text[..cut])).unwrap();
-    p
-}
-
-fn csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
-    let text = std::fs::read_to_string(path).unwrap();
-    let mut lines = text.lines();
-    let header: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
-    let rows = lines
-        .map(|l| {
-            l.split(',')
-                .map(|v| v.parse::<f64>().expect("a number"))
-                .collect()
-        })
-        .collect();
-    (header, rows)
-}
+mod common;
+use common::*;
 
 #[test]
 fn statics_tip_matches_timoshenko() {
     let scene_path = examples().join("tip_load_statics.toml");
     let o = run(&["statics", scene_path.to_str().unwrap(), "--json"]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let v: serde_json::Value = stdout_json(&o);
     assert_eq!(v["converged"], true);
     // Analytic small-load answer from the scene's own numbers.
     let (scene, _) = Scene::from_path(&scene_path).unwrap();
@@ -114,7 +53,7 @@ fn statics_json_matches_the_library() {
     let scene_path = examples().join("tip_load_statics.toml");
     let o = run(&["statics", scene_path.to_str().unwrap(), "--json"]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let v: serde_json::Value = stdout_json(&o);
     let (scene, _) = Scene::from_path(&scene_path).unwrap();
     let b = scene.build().unwrap();
     let mut data = Data::new(&b.model);
@@ -177,8 +116,7 @@ fn run_writes_valid_streams_and_conserves_energy() {
     // Shape: 8 pieces sampled at 8 points each (the default for 8 pieces)
     // plus the tip: 65 samples per output time, from the base at s = 0.
     assert_eq!(shape, 21 * 65);
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let summary: serde_json::Value = json_file(&out.join("summary.json"));
     assert_eq!(summary["status"], "ok");
     assert!((summary["final_time"].as_f64().unwrap() - 0.05).abs() < 1e-15);
     for k in ["steps", "rejected_steps", "rhs_evaluations", "wall_seconds"] {
@@ -219,9 +157,7 @@ fn linearly_implicit_generalized_alpha_tracks_a_tight_rosenbrock_run() {
         let out = sub.join("out");
         let o = run_scene(&scene, &out);
         assert!(o.status.success(), "{name}: {}", stderr(&o));
-        let summary: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
-                .unwrap();
+        let summary: serde_json::Value = json_file(&out.join("summary.json"));
         if name == "li" {
             assert_eq!(summary["steps"], 300);
             assert_eq!(summary["rhs_evaluations"], 301);
@@ -294,7 +230,7 @@ fn modes_json_about_statics_and_rest() {
     .unwrap();
     let o = run(&["modes", p.to_str().unwrap(), "--json"]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let v: serde_json::Value = stdout_json(&o);
     assert_eq!(v["equilibrium"], "rest");
     let f: Vec<f64> = serde_json::from_value(v["frequencies_hz"].clone()).unwrap();
     assert_eq!(f.len(), 10);
@@ -315,7 +251,7 @@ fn modes_json_about_statics_and_rest() {
         "--json",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let v: serde_json::Value = stdout_json(&o);
     assert_eq!(v["equilibrium"], "statics");
 }
 
@@ -387,8 +323,7 @@ fn unstable_explicit_run_fails_with_exit_1_and_a_summary() {
     let out = dir.join("out");
     let o = run_scene(&scene, &out);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let summary: serde_json::Value = json_file(&out.join("summary.json"));
     assert!(
         summary["status"].as_str().unwrap().starts_with("error: "),
         "{summary}"
@@ -506,7 +441,7 @@ fn statics_flags_an_unstable_equilibrium() {
         std::fs::write(&p, scene(young)).unwrap();
         let o = run(&["statics", p.to_str().unwrap(), "--json"]);
         assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-        let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+        let v: serde_json::Value = stdout_json(&o);
         assert_eq!(v["stable"], serde_json::Value::Bool(stable), "E = {young}");
         assert_eq!(stderr(&o).contains("unstable"), !stable);
     }
@@ -522,7 +457,7 @@ fn linearize_agrees_with_modes() {
     let p = examples().join("cantilever_gravity.toml");
     let o = run(&["linearize", p.to_str().unwrap(), "--json"]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let v: serde_json::Value = stdout_json(&o);
     assert_eq!(v["equilibrium"], "statics");
     let state = v["state"].as_array().unwrap();
     assert_eq!(state.len(), 48);
@@ -545,7 +480,7 @@ fn linearize_agrees_with_modes() {
     omega.sort_by(f64::total_cmp);
     let o = run(&["modes", p.to_str().unwrap(), "--json", "--count", "6"]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let m: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let m: serde_json::Value = stdout_json(&o);
     let f = m["frequencies_hz"].as_array().unwrap();
     assert_eq!(f.len(), 6);
     for (k, fk) in f.iter().enumerate() {
@@ -632,8 +567,7 @@ fn run_writes_the_view_and_view_rebuilds_it() {
     for net in ["src=\"http", "href=\"http", "import(", "fetch("] {
         assert!(!page.contains(net), "the page reaches out: {net}");
     }
-    let spec: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("view.json")).unwrap()).unwrap();
+    let spec: serde_json::Value = json_file(&out.join("view.json"));
     assert_eq!(spec["rods"][0]["radius"]["r"][0], 0.01);
     assert_eq!(spec["cables"].as_array().unwrap().len(), 2);
     assert_eq!(spec["cables"][1]["path"][0][2], -0.008);
@@ -669,7 +603,7 @@ fn statics_and_modes_write_their_figures() {
         dir.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let _: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let _: serde_json::Value = stdout_json(&o);
     let t = std::fs::read_to_string(dir.join("statics_shape.svg")).unwrap();
     assert!(t.contains("</svg>") && t.contains("equilibrium"));
     let o = run(&[
@@ -742,8 +676,7 @@ fn trajectory_has_velocities_and_energy_components_and_summary_names_q() {
             rows[k][qd]
         );
     }
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let summary: serde_json::Value = json_file(&out.join("summary.json"));
     let names: Vec<String> = serde_json::from_value(summary["q_names"].clone()).unwrap();
     assert_eq!(names.len(), n);
     assert_eq!(names[..2], ["cantilever.p0.ky", "cantilever.p1.ky"]);
@@ -1043,7 +976,7 @@ fn every_command_prints_the_scene_warnings() {
             "{line}"
         );
         if args.contains(&"--json") {
-            let _: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+            let _: serde_json::Value = stdout_json(&o);
         }
     }
 }
@@ -1073,7 +1006,7 @@ fn modes_json_marks_unstable_equilibria() {
         std::fs::write(&p, scene(young)).unwrap();
         let o = run(&["modes", p.to_str().unwrap(), "--json"]);
         assert!(o.status.success(), "{}", stderr(&o));
-        let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+        let v: serde_json::Value = stdout_json(&o);
         assert_eq!(v["unstable"], unstable, "E = {young}");
         let f: Vec<f64> = serde_json::from_value(v["frequencies_hz"].clone()).unwrap();
         let im: Vec<f64> = serde_json::from_value(v["imaginary_frequencies_hz"].clone()).unwrap();

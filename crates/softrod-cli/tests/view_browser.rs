@@ -8,44 +8,25 @@
 //! Without it this test FAILS, it does not skip. The browser helpers are
 //! softrod-testkit's, shared with softrod-viz's browser test.
 
-use std::path::Path;
-
-use std::process::Command;
+mod common;
+use common::*;
 
 use softrod_testkit::{rod_pixel, rod_pixels_near, scratch, screenshot, status};
 
-/// One rod: straight at t = 0, a semicircle a quarter period later. The
-/// page is error-free at both frames, draws them, and the tube is found at
-/// the tip position the page reports for that frame and not there in the
-
+/// The falling cantilever, 0.3 s: the page is error-free at the first and
+/// the last frame, draws both, the tube is found at the tip position the
+/// page reports for each frame, and the rod's pixels moved between them.
 #[test]
 fn the_run_view_shows_the_rod_moving_and_logs_no_error() {
     let dir = scratch(env!("CARGO_TARGET_TMPDIR"), "run");
-    let example =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cantilever_gravity.toml");
-    let text = std::fs::read_to_string(example).unwrap();
-    let cut = text.find("[run]").unwrap();
-    let scene = dir.join("falling.toml");
-    std::fs::write(
-        &scene,
-        format!(
-            "{}[run]\nduration = 0.3\noutput_every = 0.01\n",
-            &text[..cut]
-        ),
-    )
-    .unwrap();
+    let scene = with_run(
+        "cantilever_gravity.toml",
+        "[run]\nduration = 0.3\noutput_every = 0.01\n",
+        &dir,
+    );
     let out = dir.join("out");
-    let o = Command::new(env!("CARGO_BIN_EXE_softrod"))
-        .args([
-            "run",
-            scene.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--quiet",
-        ])
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = run_scene(&scene, &out);
+    assert!(o.status.success(), "{}", stderr(&o));
     let page = out.join("view.html");
     let hash = |f: &str| format!("frame={f}&trace=0&grid=0");
     let sa = status(&dir, &page, &hash("0"), "dom-a");

@@ -3,27 +3,14 @@
 //! fit in memory.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
-fn examples() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples")
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join("softrod-cli-watch")
-        .join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+mod common;
+use common::*;
 
 /// The example (`dir/NAME`) with its `[run]` table replaced, and
 /// `pieces = 8` replaced by `pieces`.
 fn scene(example: &str, run_table: &str, pieces: Option<&str>, dir: &Path) -> PathBuf {
-    let mut text = std::fs::read_to_string(examples().join(example)).unwrap();
-    let cut = text.find("[run]").unwrap_or(text.len());
-    text = format!("{}{run_table}\n", &text[..cut]);
+    let mut text = example_with_run(example, run_table);
     if let Some(p) = pieces {
         text = text.replacen("pieces = 8", p, 1);
     }
@@ -32,21 +19,8 @@ fn scene(example: &str, run_table: &str, pieces: Option<&str>, dir: &Path) -> Pa
     p
 }
 
-fn run(scene: &Path, out: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_softrod"))
-        .args([
-            "run",
-            scene.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--quiet",
-        ])
-        .output()
-        .unwrap()
-}
-
 fn summary(out: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap()
+    json_file(&out.join("summary.json"))
 }
 
 #[test]
@@ -59,7 +33,7 @@ fn a_violated_energy_balance_exits_1_and_says_so() {
         &dir,
     );
     let out = dir.join("out");
-    let o = run(&s, &out);
+    let o = run_scene(&s, &out);
     assert_eq!(
         o.status.code(),
         Some(1),
@@ -85,7 +59,7 @@ fn a_tight_run_reports_its_balance() {
         &dir,
     );
     let out = dir.join("out");
-    let o = run(&s, &out);
+    let o = run_scene(&s, &out);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let v = summary(&out);
     assert_eq!(v["status"], "ok");
@@ -103,15 +77,12 @@ fn a_run_too_large_for_the_machine_exits_2_naming_the_key() {
         Some("pieces = 100000"),
         &dir,
     );
-    let o = run(&s, &dir.join("out"));
+    let o = run_scene(&s, &dir.join("out"));
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains("rod[0].pieces") && err.contains("GB"), "{err}");
     // `check` refuses what `run` would, with the same message.
-    let c = Command::new(env!("CARGO_BIN_EXE_softrod"))
-        .args(["check", s.to_str().unwrap()])
-        .output()
-        .unwrap();
+    let c = run(&["check", s.to_str().unwrap()]);
     assert_eq!(c.status.code(), Some(2));
     let first = |t: &str| {
         t.lines()
@@ -135,7 +106,7 @@ fn one_unstable_rk4_step_is_not_ok() {
         &dir,
     );
     let out = dir.join("out");
-    let o = run(&s, &out);
+    let o = run_scene(&s, &out);
     assert_eq!(
         o.status.code(),
         Some(1),
@@ -157,35 +128,14 @@ fn one_unstable_rk4_step_is_not_ok() {
 /// times of a 24-DoF rod need more than a terabyte.
 #[test]
 fn outputs_larger_than_the_disk_are_refused_up_front() {
-    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("disk-full-estimate");
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    let text = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../examples/cantilever_gravity.toml"
-    ))
-    .unwrap();
-    let cut = text.find("[run]").unwrap();
-    let scene = dir.join("huge.toml");
-    std::fs::write(
-        &scene,
-        format!(
-            "{}[run]\nduration = 1000.0\noutput_every = 1e-6\n",
-            &text[..cut]
-        ),
-    )
-    .unwrap();
+    let dir = tmp("disk-full-estimate");
+    let scene = with_run(
+        "cantilever_gravity.toml",
+        "[run]\nduration = 1000.0\noutput_every = 1e-6\n",
+        &dir,
+    );
     let out = dir.join("out");
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_softrod"))
-        .args([
-            "run",
-            scene.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--quiet",
-        ])
-        .output()
-        .unwrap();
+    let o = run_scene(&scene, &out);
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(

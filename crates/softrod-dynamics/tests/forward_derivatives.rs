@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::{Lcg, Shape, Terms, bases, model, state, two_rods};
+use common::{Lcg, Shape, Terms, bases, model, rel, richardson_jacobians, state, two_rods};
 use nalgebra::{DMatrix, DVector};
 use softrod_dynamics::*;
 use softrod_kinematics::Basis;
@@ -17,41 +17,12 @@ use softrod_mechanics::Tension;
 /// where `q̈ = M⁻¹(τ − b)` is exactly quadratic, with step `0.5·max(1, |q̇_j|)`
 /// (exact up to round-off).
 fn fd(m: &Model, t: f64, q: &[f64], qd: &[f64]) -> (DMatrix<f64>, DMatrix<f64>) {
-    let n = m.n_dof();
     let mut data = Data::new(m);
-    let mut eval = |q: &[f64], qd: &[f64]| {
+    richardson_jacobians(q, qd, |q, qd| {
         forward_dynamics(m, &mut data, t, q, qd, None)
             .unwrap()
             .clone()
-    };
-    let mut dq = DMatrix::zeros(n, n);
-    let mut dqd = DMatrix::zeros(n, n);
-    for j in 0..n {
-        for (which, out) in [(0, &mut dq), (1, &mut dqd)] {
-            let x0 = if which == 0 { q[j] } else { qd[j] };
-            let h = if which == 0 { 1e-3 } else { 0.5 } * x0.abs().max(1.0);
-            let mut d = |h: f64| {
-                let (mut a, mut b) = (q.to_vec(), qd.to_vec());
-                let (mut c, mut e) = (q.to_vec(), qd.to_vec());
-                if which == 0 {
-                    a[j] += h;
-                    c[j] -= h;
-                } else {
-                    b[j] += h;
-                    e[j] -= h;
-                }
-                (eval(&a, &b) - eval(&c, &e)) / (2.0 * h)
-            };
-            let d1 = d(h);
-            let d2 = d(h / 2.0);
-            out.set_column(j, &((d2 * 4.0 - d1) / 3.0));
-        }
-    }
-    (dq, dqd)
-}
-
-fn rel(a: &DMatrix<f64>, b: &DMatrix<f64>) -> f64 {
-    (a - b).amax() / b.amax().max(1e-300)
+    })
 }
 
 /// Analytic against differences of the forward dynamics, relative to the
@@ -170,25 +141,12 @@ fn jacobians_follow_the_load_scale() {
     let mut data = Data::new(&m);
     data.load_scale = 0.4;
     let j = dynamics_jacobians(&m, &mut data, 0.3, &q, &qd, None).unwrap();
-    let n = m.n_dof();
-    let mut dq = DMatrix::zeros(n, n);
-    for c in 0..n {
-        let h = 1e-3 * q[c].abs().max(1.0);
-        let mut d = |h: f64| {
-            let (mut a, mut b) = (q.to_vec(), q.to_vec());
-            a[c] += h;
-            b[c] -= h;
-            let p = forward_dynamics(&m, &mut data, 0.3, &a, &qd, None)
-                .unwrap()
-                .clone();
-            let mi = forward_dynamics(&m, &mut data, 0.3, &b, &qd, None)
-                .unwrap()
-                .clone();
-            (p - mi) / (2.0 * h)
-        };
-        let (d1, d2) = (d(h), d(h / 2.0));
-        dq.set_column(c, &((d2 * 4.0 - d1) / 3.0));
-    }
+    // Differences of the forward dynamics at the same load scale.
+    let (dq, _) = richardson_jacobians(&q, &qd, |a, b| {
+        forward_dynamics(&m, &mut data, 0.3, a, b, None)
+            .unwrap()
+            .clone()
+    });
     let e = rel(&j.dqdd_dq, &dq);
     assert!(e < FD_TOL, "λ = 0.4: {e:e}");
 }

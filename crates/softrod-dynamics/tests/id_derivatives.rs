@@ -7,7 +7,7 @@
 
 mod common;
 
-use common::{Lcg, Shape, Terms, bases, model, state, two_rods};
+use common::{Lcg, Shape, Terms, bases, model, rel, richardson_jacobians, state, two_rods};
 use nalgebra::DMatrix;
 use softrod_dynamics::*;
 use softrod_kinematics::Basis;
@@ -21,42 +21,12 @@ use softrod_kinematics::Basis;
 /// |q̇_j|)` keeps it at ~ε‖τ‖ (a small one would amplify the elastic part
 /// of τ, ~1e4 × the velocity derivatives, by 1/h).
 fn fd(m: &Model, t: f64, q: &[f64], qd: &[f64], qdd: &[f64]) -> (DMatrix<f64>, DMatrix<f64>) {
-    let n = m.n_dof();
     let mut data = Data::new(m);
-    let mut eval = |q: &[f64], qd: &[f64]| {
+    richardson_jacobians(q, qd, |q, qd| {
         inverse_dynamics(m, &mut data, t, q, qd, qdd)
             .unwrap()
             .clone()
-    };
-    let mut dq = DMatrix::zeros(n, n);
-    let mut dqd = DMatrix::zeros(n, n);
-    for j in 0..n {
-        for (which, out) in [(0, &mut dq), (1, &mut dqd)] {
-            let x0 = if which == 0 { q[j] } else { qd[j] };
-            let h = if which == 0 { 1e-3 } else { 0.5 } * x0.abs().max(1.0);
-            let mut d = |h: f64| {
-                let (mut a, mut b) = (q.to_vec(), qd.to_vec());
-                let (mut c, mut e) = (q.to_vec(), qd.to_vec());
-                if which == 0 {
-                    a[j] += h;
-                    c[j] -= h;
-                } else {
-                    b[j] += h;
-                    e[j] -= h;
-                }
-                (eval(&a, &b) - eval(&c, &e)) / (2.0 * h)
-            };
-            let d1 = d(h);
-            let d2 = d(h / 2.0);
-            out.set_column(j, &((d2 * 4.0 - d1) / 3.0));
-        }
-    }
-    (dq, dqd)
-}
-
-/// Largest entry error relative to the largest entry of the reference.
-fn rel(a: &DMatrix<f64>, b: &DMatrix<f64>) -> f64 {
-    (a - b).amax() / b.amax().max(1e-300)
+    })
 }
 
 /// Analytic vs differences, relative to the largest entry of what is

@@ -1,7 +1,9 @@
 //! Test support shared by the browser tests of softrod-viz and softrod-cli:
 //! headless chromium (software WebGL) loading a view page, its status
 //! marker (`#softrod-status`: errors, readiness, frame, tip positions on
-//! screen), screenshots decoded to RGB, and the first rod's pixel colour.
+//! screen), screenshots decoded to RGB, and the first rod's pixel colour;
+//! and the reading of the SVG figures' texts and body marks
+//! ([`svg_texts`], [`svg_outlined_rect_centres`]).
 //! Not published; its functions panic with a message, as tests do.
 //!
 //! Needs chromium (`apt-get install -y chromium`, or `SOFTROD_CHROMIUM`):
@@ -228,4 +230,56 @@ pub fn rod_pixels_near(img: &Image, (x, y): (f64, f64), radius: f64) -> usize {
         }
     }
     n
+}
+
+/// One `<text>` of an SVG figure: its anchor point (px), `text-anchor`,
+/// whether it is rotated (a vertical axis label), and its text.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SvgText {
+    pub x: f64,
+    pub y: f64,
+    pub anchor: String,
+    pub rotated: bool,
+    pub text: String,
+}
+
+/// Every `<text>` element of `svg`, in document order.
+pub fn svg_texts(svg: &str) -> Vec<SvgText> {
+    svg.split("<text")
+        .skip(1)
+        .map(|t| {
+            let end = t.find('>').expect("a closed <text> tag");
+            let tag = &t[..end];
+            let num = |k: &str| attr(tag, &format!(" {k}")).and_then(|v| v.parse().ok());
+            let close = t.find("</text>").expect("a </text>");
+            SvgText {
+                x: num("x").unwrap_or(f64::NAN),
+                y: num("y").unwrap_or(f64::NAN),
+                anchor: attr(tag, " text-anchor").unwrap_or_default(),
+                rotated: tag.contains("rotate("),
+                text: t[end + 1..close].trim().to_string(),
+            }
+        })
+        .collect()
+}
+
+/// Centres (px) of the outlined (`fill="none"`) rectangles of `svg`: the
+/// rigid bodies' marks of the shape figures and their legend swatch.
+pub fn svg_outlined_rect_centres(svg: &str) -> Vec<(f64, f64)> {
+    svg.split("<rect")
+        .skip(1)
+        .map(|r| &r[..r.find('>').expect("a closed <rect> tag")])
+        .filter(|t| t.contains("fill=\"none\""))
+        .map(|t| {
+            let num = |k: &str| -> f64 {
+                attr(t, &format!(" {k}"))
+                    .and_then(|v| v.parse().ok())
+                    .unwrap_or_else(|| panic!("<rect{t}> has no number {k}"))
+            };
+            (
+                num("x") + 0.5 * num("width"),
+                num("y") + 0.5 * num("height"),
+            )
+        })
+        .collect()
 }

@@ -40,6 +40,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                             points: r.frames[i].iter().map(|p| p.position).collect(),
                         })
                         .collect(),
+                    bodies: Vec::new(),
                 }
             })
             .collect()

@@ -2,11 +2,12 @@
 //! up, and in every panel of a figure), data inside the ranges, labels with
 //! units and legends present and off the data, and errors on bad input.
 
+use softrod_testkit::svg_outlined_rect_centres;
 use softrod_viz::VizError;
 use softrod_viz::demo::SwingingRods;
 use softrod_viz::plot::{
-    self, ActuatorSeries, EnergySeries, Figure, Mode, ModeShapes, NamedSeries, PanelInfo, RodCurve,
-    ShapeSnapshot, StrainComponent, StrainProfiles,
+    self, ActuatorSeries, BodyMark, EnergySeries, Figure, Mode, ModeShapes, NamedSeries, PanelInfo,
+    RodCurve, ShapeSnapshot, StrainComponent, StrainProfiles,
 };
 
 /// Relative agreement of the two scales of an equal-aspect panel: both are
@@ -166,6 +167,7 @@ fn shapes_one_rod_colours_times_several_rods_colours_rods() {
                     points: r.frames[k].iter().map(|p| p.position).collect(),
                 })
                 .collect(),
+            bodies: Vec::new(),
         })
         .collect();
     let both = plot::shapes("shapes", &snaps).unwrap();
@@ -176,6 +178,7 @@ fn shapes_one_rod_colours_times_several_rods_colours_rods() {
         .map(|s| ShapeSnapshot {
             t: s.t,
             rods: vec![s.rods[0].clone()],
+            bodies: Vec::new(),
         })
         .collect();
     let f = plot::shapes("shapes", &one).unwrap();
@@ -186,6 +189,7 @@ fn shapes_one_rod_colours_times_several_rods_colours_rods() {
         &[ShapeSnapshot {
             t: None,
             rods: vec![one[1].rods[0].clone()],
+            bodies: Vec::new(),
         }],
     )
     .unwrap();
@@ -198,6 +202,81 @@ fn shapes_one_rod_colours_times_several_rods_colours_rods() {
 /// Kinetic + elastic = a e^{-t} (exchanging), gravity constant: the total's
 /// drift is a (e^{-t} − 1), whose minimum a (e^{-T} − 1) the lower panel's
 /// range must hold, within its 6 % padding.
+/// Bodies are marked at their positions in every projection: the centre
+/// of each outlined square is where the panel's own data-to-pixel map
+/// (its ranges onto its plotting rectangle, y up) puts the body, to the
+/// pixel rounding; each body is named once per panel (last snapshot only),
+/// and the legend says what the squares are.
+#[test]
+fn shapes_mark_bodies_at_their_positions() {
+    let rod = |z: f64| RodCurve {
+        name: "arm".into(),
+        points: (0..=10)
+            .map(|k| [0.03 * k as f64, 0.01 * k as f64, z * (k * k) as f64])
+            .collect(),
+    };
+    let bodies = |z: f64| {
+        vec![
+            BodyMark {
+                name: "hub".into(),
+                position: [0.15, 0.05, 25.0 * z],
+            },
+            BodyMark {
+                name: "tool".into(),
+                position: [0.3, 0.1, 100.0 * z],
+            },
+        ]
+    };
+    let snaps: Vec<ShapeSnapshot> = [(0.0, -1e-4), (1.0, -2e-3)]
+        .iter()
+        .map(|&(t, z)| ShapeSnapshot {
+            t: Some(t),
+            rods: vec![rod(z)],
+            bodies: bodies(z),
+        })
+        .collect();
+    let f = plot::shapes("bodies", &snaps).unwrap();
+    assert_equal_aspect(&f);
+    assert_legend_off_data(&f, &["body (frame origin)"]);
+    let centres = svg_outlined_rect_centres(&f.svg);
+    // 2 snapshots × 2 bodies × 3 panels, and the legend's swatch.
+    assert_eq!(centres.len(), 13, "{centres:?}");
+    let planes = [(0, 2), (1, 2), (0, 1)];
+    for (p, (a, b)) in f.panels.iter().zip(planes) {
+        let ((l, t), (r, btm)) = p.plot_rect;
+        let to_px = |x: [f64; 3]| {
+            (
+                f64::from(l)
+                    + (x[a] - p.x_range.0) / (p.x_range.1 - p.x_range.0) * f64::from(r - l),
+                f64::from(btm)
+                    - (x[b] - p.y_range.0) / (p.y_range.1 - p.y_range.0) * f64::from(btm - t),
+            )
+        };
+        for s in &snaps {
+            for body in &s.bodies {
+                let (u, v) = to_px(body.position);
+                let d = centres
+                    .iter()
+                    .map(|(x, y)| ((x - u).powi(2) + (y - v).powi(2)).sqrt())
+                    .fold(f64::INFINITY, f64::min);
+                assert!(d <= 1.5, "{}: '{}' mark {d:.2} px off", p.title, body.name);
+            }
+        }
+    }
+    for name in ["hub", "tool"] {
+        let n = texts(&f.svg).iter().filter(|(_, s)| s == name).count();
+        assert_eq!(n, 3, "'{name}' named once per panel");
+    }
+    let mut bad = snaps.clone();
+    bad[1].bodies[1].position[2] = f64::NAN;
+    match plot::shapes("s", &bad) {
+        Err(VizError::NotFinite { what, index: 2, .. }) => {
+            assert_eq!(what, "snapshots[1].bodies ('tool').position")
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
 #[test]
 fn energy_components_total_and_drift() {
     let a = 2e-3;

@@ -3,7 +3,7 @@
 //! on its own, so not every item is used by each).
 #![allow(dead_code)]
 
-use nalgebra::Matrix6xX;
+use nalgebra::{DMatrix, DVector, Matrix6xX};
 use softrod_dynamics::{Model, RodSpec};
 use softrod_kinematics::{Basis, PieceSpec, Rod, Strain};
 use softrod_lie::{Pose, Vec3, Vec6, exp_twist};
@@ -255,4 +255,47 @@ pub fn state(
         rng.vec(n, qd_scale),
         rng.vec(n, qdd_scale),
     )
+}
+
+/// Fourth-order central differences (Richardson on steps `h` and `h/2`) of
+/// `eval(q, q̇)` in `q` and in `q̇`, column by column. Steps: `h = 1e-3·max(1,
+/// |q_j|)` in `q` (truncation O(h⁴)); `h = 0.5·max(1, |q̇_j|)` in `q̇`, where
+/// the dynamics is exactly quadratic, so central differences are exact for
+/// any step and a large one keeps the round-off at ~ε‖eval‖ (a small one
+/// would amplify the elastic part, ~1e4 × the velocity derivatives, by 1/h).
+pub fn richardson_jacobians(
+    q: &[f64],
+    qd: &[f64],
+    mut eval: impl FnMut(&[f64], &[f64]) -> DVector<f64>,
+) -> (DMatrix<f64>, DMatrix<f64>) {
+    let n = q.len();
+    let mut dq = DMatrix::zeros(n, n);
+    let mut dqd = DMatrix::zeros(n, n);
+    for j in 0..n {
+        for (which, out) in [(0, &mut dq), (1, &mut dqd)] {
+            let x0 = if which == 0 { q[j] } else { qd[j] };
+            let h = if which == 0 { 1e-3 } else { 0.5 } * x0.abs().max(1.0);
+            let mut d = |h: f64| {
+                let (mut a, mut b) = (q.to_vec(), qd.to_vec());
+                let (mut c, mut e) = (q.to_vec(), qd.to_vec());
+                if which == 0 {
+                    a[j] += h;
+                    c[j] -= h;
+                } else {
+                    b[j] += h;
+                    e[j] -= h;
+                }
+                (eval(&a, &b) - eval(&c, &e)) / (2.0 * h)
+            };
+            let d1 = d(h);
+            let d2 = d(h / 2.0);
+            out.set_column(j, &((d2 * 4.0 - d1) / 3.0));
+        }
+    }
+    (dq, dqd)
+}
+
+/// Largest entry error relative to the largest entry of the reference `b`.
+pub fn rel(a: &DMatrix<f64>, b: &DMatrix<f64>) -> f64 {
+    (a - b).amax() / b.amax().max(1e-300)
 }

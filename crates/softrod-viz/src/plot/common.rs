@@ -187,6 +187,8 @@ pub(crate) enum Swatch {
     },
     Circle(RGBColor),
     Square(RGBColor),
+    /// An outlined square: a rigid body's mark.
+    HollowSquare(RGBColor),
     /// A header line (bold text, no swatch).
     Header,
     /// Plain text (a note).
@@ -262,6 +264,12 @@ pub(crate) fn draw_legend(
                 .draw(&Rectangle::new(
                     [(x0 + 10, y - 6), (x0 + 22, y + 6)],
                     c.filled(),
+                ))
+                .map_err(&err)?,
+            Swatch::HollowSquare(c) => area
+                .draw(&Rectangle::new(
+                    [(x0 + 9, y - 7), (x0 + 23, y + 7)],
+                    c.stroke_width(BODY_STROKE),
                 ))
                 .map_err(&err)?,
             Swatch::Header | Swatch::Note => {}
@@ -378,7 +386,15 @@ pub(crate) struct Stroke {
 pub(crate) enum Marker {
     Circle((f64, f64), RGBColor),
     Square((f64, f64), RGBColor),
+    /// A rigid body: an outlined square of ±`BODY_HALF_PX` centred on its
+    /// frame origin, with its name beside it when given.
+    Body((f64, f64), RGBColor, Option<String>),
 }
+
+/// Half the side of a body's mark, px.
+pub(crate) const BODY_HALF_PX: f64 = 7.0;
+/// Line width of a body's mark, px.
+pub(crate) const BODY_STROKE: u32 = 2;
 
 /// What to draw in one panel.
 pub(crate) struct PanelSpec {
@@ -452,6 +468,14 @@ pub(crate) fn draw_panel(
                 .map_err(&err)?;
         }
     }
+    // Data units per pixel, to size marks in pixels whatever the ranges.
+    let (ux, uy) = (
+        (x_range.1 - x_range.0) / f64::from(plot_px.0.max(1)),
+        (y_range.1 - y_range.0) / f64::from(plot_px.1.max(1)),
+    );
+    // Body names placed so far, as pixel boxes (left, bottom, right, top)
+    // relative to the data origin: a name that would cover one moves up.
+    let mut labels: Vec<(f64, f64, f64, f64)> = Vec::new();
     for m in &spec.markers {
         match m {
             Marker::Circle(p, c) => chart
@@ -460,10 +484,6 @@ pub(crate) fn draw_panel(
                 .map_err(&err)?,
             Marker::Square(p, c) => {
                 // A square of ±6 px around p, in data units.
-                let (ux, uy) = (
-                    (x_range.1 - x_range.0) / f64::from(plot_px.0.max(1)),
-                    (y_range.1 - y_range.0) / f64::from(plot_px.1.max(1)),
-                );
                 chart
                     .draw_series([Rectangle::new(
                         [
@@ -474,6 +494,63 @@ pub(crate) fn draw_panel(
                     )])
                     .map(|_| ())
                     .map_err(&err)?
+            }
+            Marker::Body(p, c, label) => {
+                let (hx, hy) = (BODY_HALF_PX * ux, BODY_HALF_PX * uy);
+                chart
+                    .draw_series([Rectangle::new(
+                        [(p.0 - hx, p.1 - hy), (p.0 + hx, p.1 + hy)],
+                        c.stroke_width(BODY_STROKE),
+                    )])
+                    .map_err(&err)?;
+                if let Some(name) = label {
+                    // Beside the mark, clear of the rod it ends; the text
+                    // box is estimated (≈ 0.52 em a character, sans-serif).
+                    let (w, h) = (
+                        0.52 * f64::from(TICK_PX) * name.chars().count() as f64,
+                        1.2 * f64::from(TICK_PX),
+                    );
+                    let overlaps = |l: f64, b: f64, o: &(f64, f64, f64, f64)| {
+                        l < o.2 && o.0 < l + w && b < o.3 && o.1 < b + h
+                    };
+                    // The first of up-right, up-left, down-right, down-left
+                    // of the mark that stays in the plot and covers no
+                    // earlier name; else up-right, stacked above those.
+                    let gap = 1.6 * BODY_HALF_PX;
+                    let (cx, cy) = (p.0 / ux, p.1 / uy);
+                    let free = |l: f64, b: f64| {
+                        l >= x_range.0 / ux
+                            && l + w <= x_range.1 / ux
+                            && b >= y_range.0 / uy
+                            && b + h <= y_range.1 / uy
+                            && !labels.iter().any(|o| overlaps(l, b, o))
+                    };
+                    let place = [
+                        (cx + gap, cy + gap),
+                        (cx - gap - w, cy + gap),
+                        (cx + gap, cy - gap - h),
+                        (cx - gap - w, cy - gap - h),
+                    ]
+                    .into_iter()
+                    .find(|&(l, b)| free(l, b));
+                    let (left, bottom) = place.unwrap_or_else(|| {
+                        let (l, mut b) = (cx + gap, cy + gap);
+                        for _ in 0..labels.len() {
+                            match labels.iter().find(|o| overlaps(l, b, o)) {
+                                Some(o) => b = o.3,
+                                None => break,
+                            }
+                        }
+                        (l, b)
+                    });
+                    labels.push((left, bottom, left + w, bottom + h));
+                    let style = TextStyle::from((FONT, TICK_PX).into_font())
+                        .color(&RGBColor(40, 40, 40))
+                        .pos(Pos::new(HPos::Left, VPos::Bottom));
+                    chart
+                        .draw_series([Text::new(name.clone(), (left * ux, bottom * uy), style)])
+                        .map_err(&err)?;
+                }
             }
         }
     }

@@ -20,13 +20,25 @@ pub struct RodCurve {
     pub points: Vec<[f64; 3]>,
 }
 
-/// The rods' shapes at one time (`t = None`: a static shape).
+/// A rigid body's frame origin at one time: where [`shapes`] marks it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BodyMark {
+    /// Body name (printed beside its mark).
+    pub name: String,
+    /// Origin of the body frame, world frame, m.
+    pub position: [f64; 3],
+}
+
+/// The rods' shapes and the bodies' positions at one time (`t = None`: a
+/// static shape).
 #[derive(Debug, Clone, PartialEq)]
 pub struct ShapeSnapshot {
     /// Time, s, or `None` for an equilibrium.
     pub t: Option<f64>,
     /// One curve per rod.
     pub rods: Vec<RodCurve>,
+    /// The rigid bodies of an articulated model (empty without bodies).
+    pub bodies: Vec<BodyMark>,
 }
 
 /// One vibration mode.
@@ -66,10 +78,23 @@ struct Curve3 {
 type Planes = Vec<(usize, usize, String)>;
 type PanelContents = Vec<(Vec<Curve3>, Vec<Marker3>)>;
 
+#[derive(Clone)]
 enum Marker3 {
     Circle([f64; 3], RGBColor),
     Square([f64; 3], RGBColor),
+    Body([f64; 3], RGBColor, Option<String>),
 }
+
+impl Marker3 {
+    fn point(&self) -> [f64; 3] {
+        match self {
+            Marker3::Circle(p, _) | Marker3::Square(p, _) | Marker3::Body(p, _, _) => *p,
+        }
+    }
+}
+
+/// Colour of the body marks with several rods (earlier snapshots lighter).
+const BODY_COLOR: RGBColor = RGBColor(40, 40, 40);
 
 fn check_curves(what: &str, curves: &[RodCurve]) -> Result<(), VizError> {
     for (i, c) in curves.iter().enumerate() {
@@ -112,9 +137,7 @@ fn geometry_figure(
             .flat_map(|(c, m)| {
                 c.iter()
                     .flat_map(|c| c.points.iter().copied())
-                    .chain(m.iter().map(|m| match m {
-                        Marker3::Circle(p, _) | Marker3::Square(p, _) => *p,
-                    }))
+                    .chain(m.iter().map(Marker3::point))
             })
             .collect::<Vec<_>>();
         let span = (0..3)
@@ -130,9 +153,7 @@ fn geometry_figure(
                     .iter()
                     .flat_map(|c| c.points.iter())
                     .copied()
-                    .chain(per_panel[k].1.iter().map(|m| match m {
-                        Marker3::Circle(p, _) | Marker3::Square(p, _) => *p,
-                    }))
+                    .chain(per_panel[k].1.iter().map(Marker3::point))
             };
             let ra = bounds(pts().map(|p| p[*a]));
             let rb = bounds(pts().map(|p| p[*b]));
@@ -172,6 +193,7 @@ fn geometry_figure(
                     .map(|m| match m {
                         Marker3::Circle(p, c) => Marker::Circle((p[*a], p[*b]), *c),
                         Marker3::Square(p, c) => Marker::Square((p[*a], p[*b]), *c),
+                        Marker3::Body(p, c, l) => Marker::Body((p[*a], p[*b]), *c, l.clone()),
                     })
                     .collect(),
                 zero_line: false,
@@ -202,17 +224,8 @@ fn three_projections(curves: Vec<Curve3>, markers: Vec<Marker3>) -> (Planes, Pan
         width: c.width,
         dashed: c.dashed,
     };
-    let copy_m = |m: &Marker3| match m {
-        Marker3::Circle(p, c) => Marker3::Circle(*p, *c),
-        Marker3::Square(p, c) => Marker3::Square(*p, *c),
-    };
     let per = (0..3)
-        .map(|_| {
-            (
-                curves.iter().map(copy).collect(),
-                markers.iter().map(copy_m).collect(),
-            )
-        })
+        .map(|_| (curves.iter().map(copy).collect(), markers.to_vec()))
         .collect();
     (planes, per)
 }
@@ -260,7 +273,9 @@ pub fn tip_trajectory(title: &str, tips: &[RodCurve]) -> Result<Figure, VizError
 /// Rod shapes (centrelines, sampled within pieces) at one or more times, in
 /// the three projections (equal aspect, one scale). One rod: a colour per
 /// time (dark → light green = early → late) with the times in the legend.
-/// Several rods: a colour per rod, earlier snapshots lighter.
+/// Several rods: a colour per rod, earlier snapshots lighter. Rigid bodies
+/// are outlined squares at their frame origins, in the same projections,
+/// named at the last snapshot.
 pub fn shapes(title: &str, snapshots: &[ShapeSnapshot]) -> Result<Figure, VizError> {
     if snapshots.is_empty() {
         return Err(VizError::Empty("snapshots"));
@@ -269,6 +284,12 @@ pub fn shapes(title: &str, snapshots: &[ShapeSnapshot]) -> Result<Figure, VizErr
     for (k, s) in snapshots.iter().enumerate() {
         check_len(&format!("snapshots[{k}].rods"), s.rods.len(), n_rods)?;
         check_curves(&format!("snapshots[{k}].rods"), &s.rods)?;
+        for b in &s.bodies {
+            check_finite(
+                &format!("snapshots[{k}].bodies ('{}').position", b.name),
+                &b.position,
+            )?;
+        }
     }
     let m = snapshots.len();
     let time_text = |s: &ShapeSnapshot| match s.t {
@@ -293,6 +314,7 @@ pub fn shapes(title: &str, snapshots: &[ShapeSnapshot]) -> Result<Figure, VizErr
                 dashed: false,
             });
             markers.push(Marker3::Circle(s.rods[0].points[0], RGBColor(60, 60, 60)));
+            body_marks(&mut markers, s, c, k + 1 == m);
             legend.push(LegendEntry::line(time_text(s), c, 3));
         }
     } else {
@@ -315,6 +337,7 @@ pub fn shapes(title: &str, snapshots: &[ShapeSnapshot]) -> Result<Figure, VizErr
                     dashed: false,
                 });
             }
+            body_marks(&mut markers, s, lighten(BODY_COLOR, fade), k + 1 == m);
         }
         if m > 1 {
             legend.push(LegendEntry {
@@ -331,8 +354,22 @@ pub fn shapes(title: &str, snapshots: &[ShapeSnapshot]) -> Result<Figure, VizErr
             });
         }
     }
+    if snapshots.iter().any(|s| !s.bodies.is_empty()) {
+        legend.push(LegendEntry {
+            label: "body (frame origin)".into(),
+            swatch: Swatch::HollowSquare(BODY_COLOR),
+        });
+    }
     let (planes, per) = three_projections(curves, markers);
     geometry_figure(title, &planes, &per, 3, &legend, PLOT)
+}
+
+/// The marks of a snapshot's bodies, drawn after the rods; named on the
+/// last snapshot only (earlier names would pile up on each other).
+fn body_marks(markers: &mut Vec<Marker3>, s: &ShapeSnapshot, c: RGBColor, named: bool) {
+    for b in &s.bodies {
+        markers.push(Marker3::Body(b.position, c, named.then(|| b.name.clone())));
+    }
 }
 
 /// A time printed with up to 4 significant digits: `0.125 s`, `1.5e-05 s`.

@@ -17,7 +17,9 @@ mod geometry;
 mod series;
 mod strains;
 
-pub use geometry::{Mode, ModeShapes, RodCurve, ShapeSnapshot, modes, shapes, tip_trajectory};
+pub use geometry::{
+    BodyMark, Mode, ModeShapes, RodCurve, ShapeSnapshot, modes, shapes, tip_trajectory,
+};
 pub use series::{ActuatorSeries, EnergySeries, NamedSeries, actuators, energy};
 pub use strains::{StrainComponent, StrainProfiles, strains};
 
