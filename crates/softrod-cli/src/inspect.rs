@@ -40,6 +40,29 @@ pub fn check(path: &Path) -> Result<(), CliError> {
         );
     }
     crate::robot::print_elements(m);
+    if !scene.initial.shape.is_empty() {
+        for f in scene
+            .build()
+            .map_err(|e| failed(format!("{e}")))?
+            .shape_fits
+        {
+            println!(
+                "initial shape of rod '{}': strains fitted, distance to the points rms {:.3e} m, max {:.3e} m",
+                f.rod, f.rms, f.max
+            );
+            let length = m
+                .rods()
+                .iter()
+                .find(|r| r.spec.name == f.rod)
+                .map_or(0.0, |r| r.spec.rod.length());
+            if f.max > 0.01 * length {
+                println!(
+                    "  warning: the rod cannot pass within 1% of its length of these points \
+                     (pieces, strains or spacing in arc length do not allow it)"
+                );
+            }
+        }
+    }
     if scene.n_cables() > 0 {
         println!("cables: {}", scene.n_cables());
     }

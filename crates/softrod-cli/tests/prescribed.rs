@@ -2,7 +2,8 @@
 //! `check` says it is not a DoF, `run` moves the rod's base along the curve
 //! (shape.csv's base rows against `x = A sin(2πft)` computed here), writes the
 //! drive's coordinate and force, and the energy balance — which the drive's
-//! force enters as the work it does — holds.
+//! force enters as the work it does — holds. And `[initial] shape`: `check`
+//! reports the fit of a rod's strains to given centreline points.
 
 mod common;
 
@@ -91,4 +92,58 @@ fn statics_json_reports_the_drive_held_at_its_start() {
     // Hanging straight down under gravity: the tip right below the base.
     let tip = &v["rods"][0]["tip"]["position"];
     assert!(tip[0].as_f64().unwrap().abs() < 1e-9 && tip[2].as_f64().unwrap() < -0.29);
+}
+
+/// `check` reports the fit of an `[initial] shape`: a circle arc (exact)
+/// and points the rod cannot reach without stretching (a residual and a
+/// warning).
+#[test]
+fn check_reports_initial_shape_fits() {
+    let dir = tmp("shape");
+    let arc: Vec<String> = (0..=5)
+        .map(|i| {
+            let a = 0.5 * i as f64 / 5.0 / 0.4;
+            format!("[{}, 0, {}]", 0.4 * a.sin(), -0.4 * (1.0 - a.cos()))
+        })
+        .collect();
+    let rod = "[[rod]]\nname = \"arm\"\nlength = 0.5\npieces = 5\nstrains = [\"ky\", \"kz\"]\n\
+               section = { shape = \"circle\", radius = 0.01 }\n\
+               material = { density = 1000.0, young = 1.0e6, poisson = 0.5 }\n";
+    for (name, points, exact) in [
+        ("arc", arc.join(", "), true),
+        (
+            "far",
+            "[0, 0, 0], [0.5, 0, 0], [1.0, 0, 0]".to_string(),
+            false,
+        ),
+    ] {
+        let scene = dir.join(format!("{name}.toml"));
+        std::fs::write(
+            &scene,
+            format!("{rod}[initial]\nshape = [{{ rod = \"arm\", centerline = [{points}] }}]\n"),
+        )
+        .unwrap();
+        let out = run(&["check", scene.to_str().unwrap()]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        let text = stdout(&out);
+        let line = text
+            .lines()
+            .find(|l| l.starts_with("initial shape of rod 'arm': strains fitted"))
+            .unwrap_or_else(|| panic!("{text}"));
+        let max: f64 = line
+            .rsplit("max ")
+            .next()
+            .unwrap()
+            .trim_end_matches(" m")
+            .parse()
+            .unwrap();
+        if exact {
+            assert!(max < 1e-12, "{line}");
+            assert!(!text.contains("cannot pass"), "{text}");
+        } else {
+            // The tip point is 1 m out on a 0.5 m inextensible rod.
+            assert!((max - 0.5).abs() < 1e-6, "{line}");
+            assert!(text.contains("cannot pass within 1%"), "{text}");
+        }
+    }
 }

@@ -1,5 +1,5 @@
 //! Strains from a centreline: the coordinates `q` whose PCS shape passes
-//! closest to given points (docs/theory.md §3, (C13)).
+//! closest to given points (docs/theory.md §2, (D70)).
 //!
 //! Least squares on positions, `min_q Σ_i |p(s_i; q) − p_i|²`, by
 //! Gauss–Newton with the exact Jacobian `∂p/∂q` (the linear rows of the

@@ -6,8 +6,9 @@
 //! strains. Building adds gravity (only when non-zero) and the quadrature.
 
 use nalgebra::DVector;
-use softrod_dynamics::Model;
-use softrod_lie::Vec3;
+use softrod_dynamics::{Data, Model, frames};
+use softrod_kinematics::fit_centerline;
+use softrod_lie::{Pose, Vec3};
 
 use crate::error::SceneError;
 use crate::keys;
@@ -23,6 +24,20 @@ pub struct Built {
     pub q0: DVector<f64>,
     /// Initial velocities (`[initial].qdot`, or zeros).
     pub qd0: DVector<f64>,
+    /// How well each `[initial] shape` was fitted, in the order given.
+    pub shape_fits: Vec<ShapeFit>,
+}
+
+/// The fit of a rod's strains to its `[initial] shape` (least squares on
+/// positions, `softrod_kinematics::fit_centerline`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ShapeFit {
+    /// The rod's name.
+    pub rod: String,
+    /// Root-mean-square distance of the fitted shape to the points \[m\].
+    pub rms: f64,
+    /// Largest distance to a point \[m\].
+    pub max: f64,
 }
 
 impl Scene {
@@ -73,7 +88,47 @@ impl Scene {
                 ),
             ));
         }
-        Ok(Built { model, q0, qd0 })
+        let mut q0 = q0;
+        let mut shape_fits = Vec::with_capacity(self.initial.shape.len());
+        // Rods in model order, so a parent rod is fitted before the rods
+        // that hang from it (their base poses follow from its strains).
+        let mut shapes: Vec<_> = self.initial.shape.iter().enumerate().collect();
+        shapes.sort_by_key(|(_, sh)| model.rods()[sh.rod].dof_offset);
+        let mut fits = vec![None; shapes.len()];
+        for (k, sh) in shapes {
+            let path = format!("initial.shape[{k}]");
+            let rm = &model.rods()[sh.rod];
+            // The points in the frame the rod's kinematics works in.
+            let to_local = if model.is_articulated() {
+                let mut data = Data::new(&model);
+                frames(&model, &mut data, q0.as_slice())
+                    .map_err(|e| r.invalid(&path, format!("the rod's base pose: {e}")))?;
+                data.rod_to_world(&model, sh.rod).inverse()
+            } else {
+                Pose::identity()
+            };
+            let targets: Vec<(f64, Vec3)> = sh
+                .points
+                .iter()
+                .map(|(s, p)| (*s, to_local.transform_point(&Vec3::from(*p))))
+                .collect();
+            let range = rm.dofs();
+            let fit = fit_centerline(&rm.spec.rod, &targets, &q0.as_slice()[range.clone()])
+                .map_err(|e| r.invalid(&path, format!("fitting the strains: {e}")))?;
+            q0.as_mut_slice()[range].copy_from_slice(&fit.q);
+            fits[k] = Some(ShapeFit {
+                rod: rm.spec.name.clone(),
+                rms: fit.rms,
+                max: fit.max,
+            });
+        }
+        shape_fits.extend(fits.into_iter().flatten());
+        Ok(Built {
+            model,
+            q0,
+            qd0,
+            shape_fits,
+        })
     }
 }
 

@@ -68,11 +68,12 @@ mod scene;
 mod validate;
 
 pub use build::Built;
+pub use build::ShapeFit;
 pub use error::{Cause, Location, SceneError, Warning};
 pub use locate::MAX_MAGNITUDE;
 pub use robot::Robot;
 pub use run::{Integrator, Mode, Run, UnknownIntegrator};
-pub use scene::{Initial, Reference, Scene, World};
+pub use scene::{Initial, InitialShape, Reference, Scene, World};
 pub use validate::MAX_QUADRATURE;
 
 /// The README's examples, compiled and run as doctests.

@@ -116,6 +116,15 @@ pub(crate) struct RawInitial {
     pub qdot: Option<Vec<f64>>,
     pub trajectory: Option<String>,
     pub row: Option<i64>,
+    pub shape: Option<Vec<RawShape>>,
+}
+
+/// `[initial] shape = [{ rod, centerline }]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawShape {
+    pub rod: String,
+    pub centerline: Vec<Vec<f64>>,
 }
 
 #[derive(Debug, Deserialize)]

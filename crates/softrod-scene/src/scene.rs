@@ -26,6 +26,20 @@ pub struct Initial {
     pub q: Option<Vec<f64>>,
     /// Generalized velocities q̇, same layout as `q`.
     pub qdot: Option<Vec<f64>>,
+    /// Rods that start from a given centreline (`[initial] shape`): their
+    /// strains are fitted to it when the model is built
+    /// ([`crate::Built::shape_fits`]).
+    pub shape: Vec<InitialShape>,
+}
+
+/// A centreline a rod starts from: points `(s, [x, y, z])` in the world
+/// frame \[m\], base to tip.
+#[derive(Debug, Clone, PartialEq, Default, Serialize)]
+pub struct InitialShape {
+    /// Index of the rod in [`Scene::rods`].
+    pub rod: usize,
+    /// `(s, position)` pairs, `s` strictly increasing in `[0, L]`.
+    pub points: Vec<(f64, [f64; 3])>,
 }
 
 /// Known answer for the scene (`[reference]`, an extension of the format),

@@ -322,3 +322,117 @@ fn bad_robots_name_the_key() {
         assert!(msg.contains("bad.toml"), "{msg}");
     }
 }
+
+/// `[initial] shape`: a rod on a revolute joint turned by `initial.q`
+/// starts on a circle arc given in the world; the fitted curvature is the
+/// arc's, seen in the rod's turned frame, and the arc is reproduced.
+#[test]
+fn initial_shape_is_fitted_in_the_rod_frame_after_its_parents() {
+    let radius = 0.4_f64;
+    let angle = 0.3_f64;
+    // The rod's base turned by `angle` about y (revolute joint, q = angle):
+    // an arc bending towards the rod's −z, expressed in the world.
+    let pts: Vec<String> = (0..=8)
+        .map(|i| {
+            let s = 0.2 * i as f64 / 8.0;
+            let a = s / radius;
+            let (x, z) = (radius * a.sin(), -radius * (1.0 - a.cos()));
+            let (c, sn) = (angle.cos(), angle.sin());
+            // R_y(angle) (x, 0, z): (c x + s z, 0, −s x + c z).
+            format!("[{}, 0, {}]", c * x + sn * z, -sn * x + c * z)
+        })
+        .collect();
+    let text = format!(
+        r#"
+[[rod]]
+name = "arm"
+length = 0.2
+pieces = 4
+strains = ["ky", "kz"]
+joint = {{ type = "revolute", axis = [0, 1, 0] }}
+section = {{ shape = "circle", radius = 0.01 }}
+material = {{ density = 1000.0, young = 1.0e6, poisson = 0.5 }}
+
+[initial]
+q = [{angle}, 0, 0, 0, 0, 0, 0, 0, 0]
+shape = [{{ rod = "arm", centerline = [{}] }}]
+"#,
+        pts.join(", ")
+    );
+    let (scene, _) = Scene::from_str(&text, "shape.toml").unwrap();
+    let built = scene.build().unwrap();
+    assert_eq!(built.q0[0], angle, "the joint keeps initial.q");
+    for p in 0..4 {
+        assert!(
+            (built.q0[1 + 2 * p] - 1.0 / radius).abs() < 1e-9,
+            "{}",
+            built.q0
+        );
+        assert!(built.q0[2 + 2 * p].abs() < 1e-9, "{}", built.q0);
+    }
+    let fit = &built.shape_fits[0];
+    assert_eq!(fit.rod, "arm");
+    assert!(fit.max < 1e-12, "{fit:?}");
+}
+
+#[test]
+fn bad_initial_shapes_name_the_key() {
+    let base = r#"
+[[rod]]
+name = "arm"
+length = 0.2
+pieces = 2
+section = { shape = "circle", radius = 0.01 }
+material = { density = 1000.0, young = 1.0e6, poisson = 0.5 }
+
+[initial]
+"#;
+    let cases = [
+        (
+            r#"shape = [{ rod = "leg", centerline = [[0, 0, 0], [0.2, 0, 0]] }]"#,
+            "initial.shape[0].rod",
+            "leg",
+        ),
+        (
+            r#"shape = [{ rod = "arm", centerline = [[0, 0], [0.2, 0]] }]"#,
+            "initial.shape[0].centerline",
+            "[s, x, y, z]",
+        ),
+        (
+            r#"shape = [{ rod = "arm", centerline = [[0, 0, 0], [0.2, 0]] }]"#,
+            "initial.shape[0].centerline[1]",
+            "2 values",
+        ),
+        (
+            r#"shape = [{ rod = "arm", centerline = [[0, 0, 0]] }]"#,
+            "initial.shape[0].centerline",
+            "at least two",
+        ),
+        (
+            r#"shape = [{ rod = "arm", centerline = [[0, 0, 0, 0], [0.3, 0.2, 0, 0]] }]"#,
+            "initial.shape[0].centerline[1][0]",
+            "[0, 0.2]",
+        ),
+        (
+            r#"shape = [{ rod = "arm", centerline = [[0.1, 0, 0, 0], [0.1, 0.2, 0, 0]] }]"#,
+            "initial.shape[0].centerline[1][0]",
+            "increase strictly",
+        ),
+        (
+            r#"shape = [{ rod = "arm", centerline = [[0, 0, 0], [0.2, 0, 0]] }, { rod = "arm", centerline = [[0, 0, 0], [0.2, 0, 0]] }]"#,
+            "initial.shape[1].rod",
+            "already",
+        ),
+        (
+            r#"shape = [{ rod = "arm", points = [[0, 0, 0], [0.2, 0, 0]] }]"#,
+            "initial.shape[0].points",
+            "unknown key",
+        ),
+    ];
+    for (line, path, says) in cases {
+        let text = format!("{base}{line}\n");
+        let e = Scene::from_str(&text, "bad.toml").unwrap_err();
+        assert_eq!(e.path(), Some(path), "{line}: {e}");
+        assert!(e.to_string().contains(says), "{line}: {e}");
+    }
+}

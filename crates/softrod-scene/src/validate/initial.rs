@@ -8,9 +8,9 @@ use softrod_dynamics::RodSpec;
 use softrod_kinematics::Strain;
 
 use super::{Ctx, Result};
-use crate::raw::RawInitial;
+use crate::raw::{RawInitial, RawShape};
 use crate::robot::Robot;
-use crate::scene::Initial;
+use crate::scene::{Initial, InitialShape};
 
 impl Ctx<'_> {
     pub(super) fn initial(
@@ -88,10 +88,97 @@ impl Ctx<'_> {
         if let Some(q) = &raw.q {
             self.warn_large_strains(q, rods, robot);
         }
+        let shape = match raw.shape {
+            None => Vec::new(),
+            // With `q` (or a trajectory row) as well, the shapes replace
+            // their rods' strains and `q` gives the rest (joints, others).
+            Some(shapes) => self.shapes(shapes, rods)?,
+        };
         Ok(Initial {
             q: raw.q,
             qdot: raw.qdot,
+            shape,
         })
+    }
+
+    /// `[initial] shape`: per entry a known rod (each at most once) and its
+    /// centreline, `[x, y, z]` rows equally spaced in arc length base to
+    /// tip (at least two) or `[s, x, y, z]` rows with `s` strictly
+    /// increasing in `[0, L]` (at least one).
+    fn shapes(&self, shapes: Vec<RawShape>, rods: &[RodSpec]) -> Result<Vec<InitialShape>> {
+        let mut out: Vec<InitialShape> = Vec::with_capacity(shapes.len());
+        for (k, sh) in shapes.into_iter().enumerate() {
+            let p = format!("initial.shape[{k}]");
+            let Some(rod) = rods.iter().position(|r| r.name == sh.rod) else {
+                return Err(self.r.unknown_rod(
+                    &format!("{p}.rod"),
+                    &sh.rod,
+                    rods.iter().map(|r| r.name.clone()).collect(),
+                ));
+            };
+            if out.iter().any(|o| o.rod == rod) {
+                return Err(self.r.invalid(
+                    &format!("{p}.rod"),
+                    format!("rod {:?} has a shape already", sh.rod),
+                ));
+            }
+            let cp = format!("{p}.centerline");
+            let length = rods[rod].rod.length();
+            let width = sh.centerline.first().map_or(0, Vec::len);
+            if width != 3 && width != 4 {
+                return Err(self.r.inconsistent(
+                    &cp,
+                    format!(
+                        "rows must be [x, y, z] (equally spaced in arc length) or [s, x, y, z]; \
+                         the first has {width} values"
+                    ),
+                ));
+            }
+            if let Some(i) = sh.centerline.iter().position(|r| r.len() != width) {
+                return Err(self.r.inconsistent(
+                    &format!("{cp}[{i}]"),
+                    format!(
+                        "{} values, but the first row has {width}",
+                        sh.centerline[i].len()
+                    ),
+                ));
+            }
+            let n = sh.centerline.len();
+            if width == 3 && n < 2 {
+                return Err(self.r.invalid(
+                    &cp,
+                    "[x, y, z] rows need at least two points (base and tip)",
+                ));
+            }
+            let mut points = Vec::with_capacity(n);
+            for (i, row) in sh.centerline.iter().enumerate() {
+                let (s, xyz) = if width == 4 {
+                    (row[0], [row[1], row[2], row[3]])
+                } else {
+                    (length * i as f64 / (n - 1) as f64, [row[0], row[1], row[2]])
+                };
+                if width == 4 {
+                    let sp = format!("{cp}[{i}][0]");
+                    if !(0.0..=length).contains(&s) {
+                        return Err(self.r.out_of_range(
+                            &sp,
+                            &s,
+                            &format!("in [0, {length}] (the rod's length)"),
+                        ));
+                    }
+                    if let Some(&(prev, _)) = points.last()
+                        && s <= prev
+                    {
+                        return Err(self
+                            .r
+                            .invalid(&sp, format!("s must increase strictly: {s} after {prev}")));
+                    }
+                }
+                points.push((s, xyz));
+            }
+            out.push(InitialShape { rod, points });
+        }
+        Ok(out)
     }
 
     /// Warns (once per rod) about initial strains far outside the small-strain range.
