@@ -119,6 +119,11 @@ pub(crate) fn inverse_dynamics_impl<'a>(
     check_vec(model, "q", q)?;
     check_vec(model, "qdot", qd)?;
     check_vec(model, "qddot", qdd)?;
+    if model.has_closures() {
+        return Err(DynamicsError::UnsupportedClosed {
+            what: "inverse_dynamics",
+        });
+    }
     if let Some(tree) = &model.tree {
         crate::tree_algorithms::inverse_dynamics(model, tree, data, t, q, Some(qd), Some(qdd));
         return Ok(&data.tau);
@@ -177,7 +182,11 @@ pub(crate) fn forward_dynamics_impl<'a>(
         check_vec(model, "tau", ta)?;
     }
     if let Some(tree) = &model.tree {
-        crate::tree_algorithms::forward_dynamics(model, tree, data, t, q, qd, tau_act)?;
+        if model.has_closures() {
+            crate::constrained::forward_dynamics(model, tree, data, t, q, qd, tau_act)?;
+        } else {
+            crate::tree_algorithms::forward_dynamics(model, tree, data, t, q, qd, tau_act)?;
+        }
         return check_qdd(data, t);
     }
     outward_inl(model, data, q, Some(qd), None, Pass::Articulated);
@@ -423,6 +432,9 @@ pub fn bias_force<'a>(
 ) -> Result<&'a DVector<f64>, DynamicsError> {
     check_vec(model, "q", q)?;
     check_vec(model, "qdot", qd)?;
+    if model.has_closures() {
+        return Err(DynamicsError::UnsupportedClosed { what: "bias_force" });
+    }
     if let Some(tree) = &model.tree {
         crate::tree_algorithms::inverse_dynamics(model, tree, data, t, q, Some(qd), None);
         return Ok(&data.tau);

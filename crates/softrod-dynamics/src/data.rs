@@ -85,6 +85,8 @@ pub struct Data {
     /// World pose of every body's frame, from the last [`crate::frames`]
     /// (one per body).
     pub body_poses: Vec<Pose>,
+    /// Buffers of the constrained dynamics of a model with closures.
+    pub(crate) closure: Option<crate::constrained::ClosureWork>,
 }
 
 impl Data {
@@ -116,6 +118,9 @@ impl Data {
             }),
             rod_bases: model.rods().iter().map(|r| *r.spec.rod.base()).collect(),
             body_poses: vec![Pose::identity(); model.bodies().len()],
+            closure: model
+                .has_closures()
+                .then(|| crate::constrained::ClosureWork::new(n, model.n_constraints())),
         }
     }
 

@@ -42,6 +42,8 @@ mod algorithms;
 mod blocks;
 mod builder;
 mod chol;
+mod closure;
+mod constrained;
 mod data;
 mod derivatives;
 mod energy;
@@ -63,6 +65,13 @@ pub use algorithms::{
     bias_force, forward_dynamics, forward_dynamics_cholesky, inverse_dynamics, mass_matrix,
 };
 pub use builder::{IntoRodSpec, ModelBuilder, RodSpecBuilder};
+pub use closure::{
+    Closure, ClosureFrame, ClosureKind, check_closures, closure_residuals, constraint_jacobian,
+    constraint_residual,
+};
+pub use constrained::{
+    closure_multipliers, closure_statics, constraint_rank, max_closure_residual,
+};
 pub use data::Data;
 pub use derivatives::{
     DynamicsJacobians, FdDerivatives, Linearization, dynamics_jacobians,

@@ -43,6 +43,10 @@ pub fn modes(
     time: f64,
 ) -> Result<Modes, DynamicsError> {
     check_vec(model, "q", q_eq)?;
+    if let (true, Some(tree)) = (model.has_closures(), &model.tree) {
+        // Closed chains: K and M on the null space of J (docs/theory.md D69).
+        return crate::constrained::modes(model, tree, data, q_eq, time);
+    }
     let n = model.n_dof();
     let k = stiffness_matrix(model);
     let zero = vec![0.0; n];

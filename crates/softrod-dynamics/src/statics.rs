@@ -69,6 +69,12 @@ pub fn statics(
 ) -> Result<StaticsResult, DynamicsError> {
     check_vec(model, "q0", q0)?;
     let saved = data.load_scale;
+    if let (true, Some(tree)) = (model.has_closures(), &model.tree) {
+        // Closed chains: Newton on [τ − Jᵀλ; φ] (docs/theory.md D69).
+        let out = crate::constrained::statics(model, tree, data, q0, options).map(|(r, _)| r);
+        data.load_scale = saved;
+        return out;
+    }
     let out = statics_inner(model, data, q0, options);
     data.load_scale = saved;
     out
