@@ -173,7 +173,7 @@ fn resolve_frame(
     {
         return Err(err(format!("base pose entry {i} is not finite ({v})")));
     }
-    if f.base.orthonormality_error() > 1e-9 {
+    if f.base.orthonormality_error() > 1e-9 || f.base.rotation.determinant() < 0.0 {
         return Err(err(format!(
             "base rotation is not a rotation (‖RᵀR − I‖ = {:.3e})",
             f.base.orthonormality_error()

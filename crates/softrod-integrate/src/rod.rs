@@ -220,7 +220,9 @@ impl SecondOrderSystem for RodSystem {
     }
 
     fn has_mass_form(&self) -> bool {
-        self.jacobian == RodJacobian::ElasticOnly
+        // The mass form M q̈ = f has no room for closure multipliers
+        // (docs/theory.md D67): closed models use the constrained q̈.
+        self.jacobian == RodJacobian::ElasticOnly && !self.model.has_closures()
     }
 
     /// `r = ID(t, q, q̇, q̈) − τ_act = M(q) q̈ − f` by the O(N) inverse
