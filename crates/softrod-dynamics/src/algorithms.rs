@@ -422,7 +422,9 @@ pub fn forward_dynamics_cholesky<'a>(
 }
 
 /// The bias `b(q, q̇, t) = ID(q, q̇, 0)`: `C q̇ + G + τ_e + D q̇ − τ_c − Q_ext`
-/// (the equations of motion read `M q̈ + b = τ_act`). Result in `data.tau`.
+/// (the equations of motion read `M q̈ + b = τ_act`; with loop closures
+/// `M q̈ + b = τ_act + Jᵀλ`, docs/theory.md D67: `b` is the open tree's,
+/// without the constraint forces). Result in `data.tau`.
 pub fn bias_force<'a>(
     model: &Model,
     data: &'a mut Data,
@@ -432,9 +434,6 @@ pub fn bias_force<'a>(
 ) -> Result<&'a DVector<f64>, DynamicsError> {
     check_vec(model, "q", q)?;
     check_vec(model, "qdot", qd)?;
-    if model.has_closures() {
-        return Err(DynamicsError::UnsupportedClosed { what: "bias_force" });
-    }
     if let Some(tree) = &model.tree {
         crate::tree_algorithms::inverse_dynamics(model, tree, data, t, q, Some(qd), None);
         return Ok(&data.tau);
