@@ -235,6 +235,11 @@ impl SecondOrderSystem for RodSystem {
         qdd: &DVector<f64>,
         r: &mut DVector<f64>,
     ) -> Result<bool, DynamicsError> {
+        if self.model.has_closures() {
+            // M q̈ − f leaves out the closure forces Jᵀλ (docs/theory.md
+            // D67): the methods use the constrained q̈ instead.
+            return Ok(false);
+        }
         r.copy_from(inverse_dynamics(
             &self.model,
             &mut self.data,
