@@ -277,7 +277,7 @@ impl Streamer {
             let r = crate::closures::residual(model, s.data, q)
                 .map_err(|e| format!("closure residual at t = {t:e}: {e}"))?;
             self.closure_residual_max = self.closure_residual_max.max(r);
-            if !(r <= self.closure_fail) {
+            if r.is_nan() || r > self.closure_fail {
                 return Err(format!(
                     "closure residual {r:.3e} m at t = {t:e} exceeds {:.3e} m ({:e} of the \
                      longest rod): the closed loop has come apart; output stopped",
@@ -525,8 +525,10 @@ impl Summary {
     /// Adds `closure_residual_max`, the largest closure residual norm over
     /// the output rows \[m\] (docs/scene-format-extensions.md).
     pub fn add_closures(&mut self, residual_max: f64) {
-        self.fixed
-            .insert("closure_residual_max".into(), serde_json::json!(residual_max));
+        self.fixed.insert(
+            "closure_residual_max".into(),
+            serde_json::json!(residual_max),
+        );
     }
 
     /// Writes the summary with the given progress.
@@ -685,7 +687,8 @@ pub fn run(
     if l.sim.model().has_closures() {
         let r = streamer.closure_residual_max;
         summary_final.add_closures(r);
-        let warn = crate::closures::RUN_WARN_RELATIVE * crate::closures::length_scale(l.sim.model());
+        let warn =
+            crate::closures::RUN_WARN_RELATIVE * crate::closures::length_scale(l.sim.model());
         if !quiet && r > warn {
             eprintln!(
                 "softrod: warning: the largest closure residual {r:.3e} m exceeds {warn:.3e} m \

@@ -108,15 +108,21 @@ fn run_reports_a_bounded_closure_residual() {
 
 #[test]
 fn a_closure_that_does_not_hold_is_an_input_error() {
-    let text = std::fs::read_to_string(SCENE)
-        .unwrap()
-        .replacen("position = [-0.025, -0.04330127018922193, 0.0] }", "position = [-0.02, -0.04330127018922193, 0.0] }", 1);
-    let path = std::env::temp_dir().join(format!("softrod-closures-bad-{}.toml", std::process::id()));
+    let text = std::fs::read_to_string(SCENE).unwrap().replacen(
+        "position = [-0.025, -0.04330127018922193, 0.0] }",
+        "position = [-0.02, -0.04330127018922193, 0.0] }",
+        1,
+    );
+    let path =
+        std::env::temp_dir().join(format!("softrod-closures-bad-{}.toml", std::process::id()));
     std::fs::write(&path, text).unwrap();
     let out = softrod(&["check", path.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("closure[1]") && err.contains("leg3 ball"), "{err}");
+    assert!(
+        err.contains("closure[1]") && err.contains("leg3 ball"),
+        "{err}"
+    );
     assert!(err.contains("does not hold"), "{err}");
     std::fs::remove_file(&path).ok();
 }

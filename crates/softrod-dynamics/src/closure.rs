@@ -505,6 +505,7 @@ pub(crate) fn closure_rows(
 /// Adds `sign · C · (spatial columns of the frame)` into the closure's rows
 /// of `jac` (D64): the in-piece block, then every ancestor's
 /// `Ad_{g_world(ℓ)} S(ℓ)`.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn add_frame_columns(
     tree: &Tree,
     data: &Data,
@@ -646,6 +647,28 @@ pub fn check_closures(model: &Model, data: &mut Data, q: &[f64]) -> Result<(), D
     Ok(())
 }
 
+/// [`DynamicsError::WorkspaceMismatch`] when `data` was not made by
+/// [`Data::new`] for this closed model (e.g. before `with_closures`).
+pub(crate) fn check_workspace(model: &Model, data: &Data) -> Result<(), DynamicsError> {
+    let nodes = model.tree.as_ref().map_or(0, |t| t.nodes.len());
+    let (n, m) = (model.n_dof(), model.n_constraints());
+    let fits = data.nodes.len() == nodes
+        && data.tau.len() == n
+        && (m == 0
+            || data
+                .closure
+                .as_ref()
+                .is_some_and(|w| w.jac.nrows() == m && w.jac.ncols() == n));
+    if fits {
+        return Ok(());
+    }
+    Err(DynamicsError::WorkspaceMismatch {
+        what: "Data (make it with Data::new after Model::with_closures)",
+        built: data.tau.len(),
+        got: n,
+    })
+}
+
 pub(crate) fn residual_and_jacobian(
     model: &Model,
     data: &mut Data,
@@ -653,6 +676,7 @@ pub(crate) fn residual_and_jacobian(
     exact: bool,
 ) -> Result<(DVector<f64>, DMatrix<f64>), DynamicsError> {
     crate::algorithms::check_vec(model, "q", q)?;
+    check_workspace(model, data)?;
     let m = model.n_constraints();
     let mut phi = DVector::zeros(m);
     let mut jac = DMatrix::zeros(m, model.n_dof());

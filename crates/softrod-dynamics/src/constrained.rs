@@ -63,7 +63,7 @@ fn cholesky_into(m: &DMatrix<f64>, l: &mut DMatrix<f64>) -> bool {
         for k in 0..j {
             d -= l[(j, k)] * l[(j, k)];
         }
-        if !(d > 0.0) {
+        if d.is_nan() || d <= 0.0 {
             return false;
         }
         let d = d.sqrt();
@@ -117,7 +117,7 @@ fn pivoted_cholesky(a: &mut DMatrix<f64>, perm: &mut [usize]) -> usize {
             .map(|i| (i, &a[(i, i)]))
             .max_by(|x, y| x.1.total_cmp(y.1))
             .expect("k < m");
-        if !(dp > tol) {
+        if dp.is_nan() || dp <= tol {
             return k;
         }
         if p != k {
@@ -178,16 +178,17 @@ pub(crate) fn forward_dynamics(
     qd: &[f64],
     tau_act: Option<&[f64]>,
 ) -> Result<(), DynamicsError> {
-    let mut w = data
-        .closure
-        .take()
-        .expect("Data::new allocates closure work");
+    crate::closure::check_workspace(model, data)?;
+    let Some(mut w) = data.closure.take() else {
+        unreachable!("check_workspace found the closure buffers")
+    };
     let out = forward_inner(model, tree, data, &mut w, t, q, qd, tau_act);
     data.closure = Some(w);
     out
 }
 
-#[allow(clippy::too_many_arguments)]
+// Triangular solves read clearest with explicit indices.
+#[allow(clippy::too_many_arguments, clippy::needless_range_loop)]
 fn forward_inner(
     model: &Model,
     tree: &Tree,
@@ -619,6 +620,7 @@ pub fn closure_statics(
         let r = crate::statics(model, data, q0, options)?;
         return Ok((r, DVector::zeros(0)));
     };
+    crate::closure::check_workspace(model, data)?;
     let saved = data.load_scale;
     let out = statics(model, tree, data, q0, options);
     data.load_scale = saved;

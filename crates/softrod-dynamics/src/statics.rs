@@ -71,6 +71,7 @@ pub fn statics(
     let saved = data.load_scale;
     if let (true, Some(tree)) = (model.has_closures(), &model.tree) {
         // Closed chains: Newton on [τ − Jᵀλ; φ] (docs/theory.md D69).
+        crate::closure::check_workspace(model, data)?;
         let out = crate::constrained::statics(model, tree, data, q0, options).map(|(r, _)| r);
         data.load_scale = saved;
         return out;

@@ -501,6 +501,18 @@ fn closure_errors_name_the_closure_and_what() {
         }
         other => panic!("{other:?}"),
     }
+    // A workspace made before the closures is refused, not a panic.
+    let open = base();
+    let mut stale = Data::new(&open);
+    let z = vec![0.0; model.n_dof()];
+    assert!(matches!(
+        forward_dynamics(&model, &mut stale, 0.0, &z, &z, None),
+        Err(DynamicsError::WorkspaceMismatch { .. })
+    ));
+    assert!(matches!(
+        constraint_residual(&model, &mut stale, &z),
+        Err(DynamicsError::WorkspaceMismatch { .. })
+    ));
     // What is not implemented says so.
     let z = vec![0.0; model.n_dof()];
     assert!(matches!(

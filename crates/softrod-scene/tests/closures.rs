@@ -73,9 +73,12 @@ fn error_of(edits: &[(&str, &str)]) -> softrod_scene::SceneError {
     }
 }
 
+/// (case, edits `(old, new)`, key path, what the message says).
+type Case<'a> = (&'a str, &'a [(&'a str, &'a str)], &'a str, &'a [&'a str]);
+
 #[test]
 fn malformed_closures_name_the_key() {
-    let cases: &[(&str, &[(&str, &str)], &str, &[&str])] = &[
+    let cases: &[Case] = &[
         (
             "unknown element",
             &[("a = { element = \"beam\" }", "a = { element = \"bean\" }")],
@@ -135,7 +138,10 @@ fn malformed_closures_name_the_key() {
         ),
         (
             "duplicate name",
-            &[("type = \"slider\"\n", "type = \"slider\"\nname = \"far end\"\n")],
+            &[(
+                "type = \"slider\"\n",
+                "type = \"slider\"\nname = \"far end\"\n",
+            )],
             "closure[1].name",
             &["duplicate", "far end"],
         ),

@@ -70,9 +70,10 @@ impl Ctx<'_> {
                 "ball" => ClosureKind::Ball,
                 "slider" => {
                     let ap = format!("{p}.axis");
-                    let a = c
-                        .axis
-                        .ok_or_else(|| self.r.missing(&ap, " (a slider: the line's direction in b's frame)"))?;
+                    let a = c.axis.ok_or_else(|| {
+                        self.r
+                            .missing(&ap, " (a slider: the line's direction in b's frame)")
+                    })?;
                     let v = Vec3::from(a);
                     if v.norm() < 1e-12 {
                         return Err(self
