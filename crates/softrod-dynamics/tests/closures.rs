@@ -520,3 +520,83 @@ fn closure_errors_name_the_closure_and_what() {
         Err(DynamicsError::UnsupportedClosed { .. })
     ));
 }
+
+/// Rod `b` hanging from rod `a`'s tip (the tree, no closure) and the same
+/// rod on a free joint from the world welded to `a`'s tip (a closure):
+/// two algorithms for one mechanism.
+fn split_beam(welded: bool) -> Model {
+    let half = 0.25;
+    let a = rod("a", half, 3);
+    let mut b = Model::builder()
+        .rod(a)
+        .gravity([0.0, -2.0, -G])
+        .quadrature(4);
+    b = if welded {
+        b.rod_on(
+            rod("b", half, 3).base(Pose::new(Mat3::identity(), Vec3::new(half, 0.0, 0.0))),
+            Attachment::world_joint(Joint::free()),
+        )
+        .closure(Closure::new(
+            "joint",
+            ClosureKind::Weld,
+            ClosureFrame::on("b", Some(0.0), Pose::identity()),
+            ClosureFrame::on("a", None, Pose::identity()),
+        ))
+    } else {
+        b.rod_on(rod("b", half, 3), Attachment::to("a", Joint::fixed()))
+    };
+    b.build().unwrap()
+}
+
+#[test]
+fn a_weld_to_a_floating_rod_is_the_rigid_attachment() {
+    let (tree, closed) = (split_beam(false), split_beam(true));
+    let n = tree.n_dof();
+    assert_eq!(closed.n_dof(), n + 6);
+    // Closed layout: a's strains, b's free joint (6), b's strains.
+    let na = tree.rods()[0].n_dof();
+    let strains =
+        |qc: &[f64]| -> Vec<f64> { qc[..na].iter().chain(&qc[na + 6..]).copied().collect() };
+    // Statics: the same strains.
+    let opts = StaticsOptions::default();
+    let st = softrod_dynamics::statics(&tree, &mut Data::new(&tree), &vec![0.0; n], &opts).unwrap();
+    let (sc, _) =
+        closure_statics(&closed, &mut Data::new(&closed), &vec![0.0; n + 6], &opts).unwrap();
+    let qc = strains(sc.q.as_slice());
+    let err = (0..n).map(|i| (qc[i] - st.q[i]).abs()).fold(0.0, f64::max);
+    assert!(err < 1e-8 * st.q.amax(), "statics differ by {err:e}");
+    // Dynamics at q = 0 (the loop holds) with a strain velocity and the
+    // joint velocity that keeps the weld (J q̇ = 0): the stabilization is
+    // idle, so the strains accelerate as in the tree.
+    let mut dc = Data::new(&closed);
+    let qc0 = vec![0.0; n + 6];
+    let v = state(n, 11, 0.8);
+    let mut qdc = vec![0.0; n + 6];
+    for i in 0..n {
+        qdc[if i < na { i } else { i + 6 }] = v[i];
+    }
+    let j = constraint_jacobian(&closed, &mut dc, &qc0).unwrap();
+    let jj = j.columns(na, 6).into_owned();
+    let rest = &j * DVector::from_column_slice(&qdc);
+    let vj = jj.lu().solve(&(-rest)).unwrap();
+    for k in 0..6 {
+        qdc[na + k] = vj[k];
+    }
+    let jq = &j * DVector::from_column_slice(&qdc);
+    assert!(jq.amax() < 1e-12, "{jq}");
+    let a_tree = forward_dynamics(&tree, &mut Data::new(&tree), 0.0, &vec![0.0; n], &v, None)
+        .unwrap()
+        .clone();
+    let a_closed = forward_dynamics(&closed, &mut dc, 0.0, &qc0, &qdc, None)
+        .unwrap()
+        .clone();
+    let ac = strains(a_closed.as_slice());
+    let err = (0..n)
+        .map(|i| (ac[i] - a_tree[i]).abs())
+        .fold(0.0, f64::max);
+    assert!(
+        err < 1e-7 * a_tree.amax(),
+        "q̈ differ by {err:e} of {:e}",
+        a_tree.amax()
+    );
+}
