@@ -63,6 +63,7 @@ pub fn check(path: &Path) -> Result<(), CliError> {
             }
         }
     }
+    crate::closures::print_closures(m, sim.initial_state().0.as_slice())?;
     if scene.n_cables() > 0 {
         println!("cables: {}", scene.n_cables());
     }
@@ -169,6 +170,7 @@ pub fn statics(path: &Path, json: bool, out: Option<PathBuf>) -> Result<(), CliE
         });
         let mut v = v;
         crate::robot::add_statics_json(model, &poser, res.q.as_slice(), &mut v);
+        crate::closures::add_statics_json(model, res.q.as_slice(), &mut v)?;
         println!("{v}");
     } else {
         println!(

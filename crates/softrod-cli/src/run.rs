@@ -117,6 +117,10 @@ pub struct Streamer {
     pub last_t: f64,
     bar: Option<ProgressBar>,
     duration: f64,
+    /// Largest closure residual over the rows written \[m\] (0 without
+    /// closures), and the residual that stops the run.
+    pub closure_residual_max: f64,
+    closure_fail: f64,
 }
 
 /// The output rows nearest the times `chosen` (s, each finite and within
@@ -238,6 +242,8 @@ impl Streamer {
             duration: times.last().copied().unwrap_or(0.0),
             expected: times.len(),
             bar,
+            closure_residual_max: 0.0,
+            closure_fail: crate::closures::RUN_FAIL_RELATIVE * crate::closures::length_scale(model),
         })
     }
 
@@ -272,6 +278,19 @@ impl Streamer {
         }
         debug_assert_eq!(q.len(), self.n);
         let e = energies(model, s.data, q, qd).map_err(|e| format!("energy at t = {t:e}: {e}"))?;
+        if model.has_closures() {
+            let r = crate::closures::residual(model, s.data, q)
+                .map_err(|e| format!("closure residual at t = {t:e}: {e}"))?;
+            self.closure_residual_max = self.closure_residual_max.max(r);
+            if r.is_nan() || r > self.closure_fail {
+                return Err(format!(
+                    "closure residual {r:.3e} m at t = {t:e} exceeds {:.3e} m ({:e} of the \
+                     longest rod): the closed loop has come apart; output stopped",
+                    self.closure_fail,
+                    crate::closures::RUN_FAIL_RELATIVE
+                ));
+            }
+        }
         if !e.total().is_finite() {
             return Err(format!("non-finite energy at t = {t:e}; output stopped"));
         }
@@ -529,6 +548,15 @@ impl Summary {
             .insert("warnings".into(), serde_json::json!(warnings));
     }
 
+    /// Adds `closure_residual_max`, the largest closure residual norm over
+    /// the output rows \[m\] (docs/scene-format-extensions.md).
+    pub fn add_closures(&mut self, residual_max: f64) {
+        self.fixed.insert(
+            "closure_residual_max".into(),
+            serde_json::json!(residual_max),
+        );
+    }
+
     /// Writes the summary with the given progress.
     pub fn write(
         &self,
@@ -690,6 +718,19 @@ pub fn run(
             for w in warnings {
                 eprintln!("softrod: warning: {w}");
             }
+        }
+    }
+    if l.sim.model().has_closures() {
+        let r = streamer.closure_residual_max;
+        summary_final.add_closures(r);
+        let warn =
+            crate::closures::RUN_WARN_RELATIVE * crate::closures::length_scale(l.sim.model());
+        if !quiet && r > warn {
+            eprintln!(
+                "softrod: warning: the largest closure residual {r:.3e} m exceeds {warn:.3e} m \
+                 ({:e} of the longest rod): tighten rtol/atol or dt",
+                crate::closures::RUN_WARN_RELATIVE
+            );
         }
     }
     summary_final.write(&stats, wall, t_final, &status, streamer.rows_written())?;

@@ -119,6 +119,11 @@ pub(crate) fn inverse_dynamics_impl<'a>(
     check_vec(model, "q", q)?;
     check_vec(model, "qdot", qd)?;
     check_vec(model, "qddot", qdd)?;
+    if model.has_closures() {
+        return Err(DynamicsError::UnsupportedClosed {
+            what: "inverse_dynamics",
+        });
+    }
     if let Some(tree) = &model.tree {
         model.set_time(data, t);
         crate::tree_algorithms::inverse_dynamics(model, tree, data, t, q, Some(qd), Some(qdd));
@@ -179,7 +184,11 @@ pub(crate) fn forward_dynamics_impl<'a>(
     }
     if let Some(tree) = &model.tree {
         model.set_time(data, t);
-        crate::tree_algorithms::forward_dynamics(model, tree, data, t, q, qd, tau_act)?;
+        if model.has_closures() {
+            crate::constrained::forward_dynamics(model, tree, data, t, q, qd, tau_act)?;
+        } else {
+            crate::tree_algorithms::forward_dynamics(model, tree, data, t, q, qd, tau_act)?;
+        }
         return check_qdd(data, t);
     }
     outward_inl(model, data, q, Some(qd), None, Pass::Articulated);
@@ -416,8 +425,10 @@ pub fn forward_dynamics_cholesky<'a>(
 }
 
 /// The bias `b(q, q̇, t) = ID(q, q̇, 0)`: `C q̇ + G + τ_e + D q̇ − τ_c − Q_ext`
-/// (the equations of motion read `M q̈ + b = τ_act`), with prescribed joints
-/// (D59) moving as prescribed at `t`. Result in `data.tau`.
+/// (the equations of motion read `M q̈ + b = τ_act`; with loop closures
+/// `M q̈ + b = τ_act + Jᵀλ`, docs/theory.md D67: `b` is the open tree's,
+/// without the constraint forces), with prescribed joints (D59) moving as
+/// prescribed at `t`. Result in `data.tau`.
 pub fn bias_force<'a>(
     model: &Model,
     data: &'a mut Data,

@@ -296,6 +296,7 @@ pub struct ModelBuilder {
     order: Vec<Item>,
     gravity: Option<Vec3>,
     quadrature: Option<usize>,
+    closures: Vec<crate::Closure>,
 }
 
 impl ModelBuilder {
@@ -333,6 +334,12 @@ impl ModelBuilder {
         self
     }
 
+    /// Adds a loop closure (docs/theory.md D63; see [`Model::with_closures`]).
+    pub fn closure(mut self, closure: crate::Closure) -> Self {
+        self.closures.push(closure);
+        self
+    }
+
     /// Gauss–Legendre points per piece (≥ 1).
     pub fn quadrature(mut self, points: usize) -> Self {
         self.quadrature = Some(points);
@@ -360,6 +367,7 @@ impl ModelBuilder {
             elements,
             self.gravity,
             self.quadrature.unwrap_or(Model::DEFAULT_QUADRATURE),
-        )
+        )?
+        .with_closures(self.closures)
     }
 }

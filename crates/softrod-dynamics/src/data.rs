@@ -102,6 +102,8 @@ pub struct Data {
     /// When set, prescribed joints hold their values at rest (no rate, no
     /// acceleration): statics and modes about an equilibrium.
     pub(crate) prescribed_at_rest: bool,
+    /// Buffers of the constrained dynamics of a model with closures.
+    pub(crate) closure: Option<crate::constrained::ClosureWork>,
 }
 
 impl Data {
@@ -139,6 +141,9 @@ impl Data {
             prescribed_time: f64::NAN,
             prescribed_force: DVector::zeros(model.n_prescribed()),
             prescribed_at_rest: false,
+            closure: model
+                .has_closures()
+                .then(|| crate::constrained::ClosureWork::new(n, model.n_constraints())),
         };
         model.set_time(&mut data, 0.0);
         data

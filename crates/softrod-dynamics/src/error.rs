@@ -321,6 +321,47 @@ pub enum DynamicsError {
         /// `n_dof` of the model it is used with.
         got: usize,
     },
+    /// An algorithm that does not (yet) cover loop closures was called on a
+    /// model with closures (docs/theory.md §11, D67).
+    #[error("{what} does not support models with loop closures yet")]
+    UnsupportedClosed {
+        /// Which algorithm.
+        what: &'static str,
+    },
+    /// A closure frame is invalid: unknown element, `at` off the rod, a
+    /// base pose that is not a rigid motion.
+    #[error("closure '{closure}', frame {end} (element '{element}'): {reason}")]
+    ClosureFrame {
+        /// The closure's name.
+        closure: String,
+        /// "a" or "b".
+        end: &'static str,
+        /// The element named.
+        element: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A slider closure's axis is zero or not finite.
+    #[error("closure '{closure}': slider axis {axis:?} is zero or not finite")]
+    ClosureAxis {
+        /// The closure's name.
+        closure: String,
+        /// The axis given.
+        axis: softrod_lie::Vec3,
+    },
+    /// A closure does not hold at the initial state (D66).
+    #[error(
+        "closure '{closure}' does not hold at the initial state: residual {residual:.3e} m \
+         > tolerance {tolerance:.3e} m (start from a state where the closed loop is assembled)"
+    )]
+    ClosureNotHeld {
+        /// The closure's name.
+        closure: String,
+        /// Its residual norm `max(‖d‖, ℓ‖r‖)` [m].
+        residual: f64,
+        /// The tolerance `1e-9 ℓ` [m].
+        tolerance: f64,
+    },
 }
 
 /// The rod field of the model-building variants, by reference of either

@@ -35,6 +35,17 @@
 //! unchanged; the analytic derivatives, [`ShiftedSolver`] and
 //! [`coriolis_matrix`] return [`DynamicsError::Unsupported`] for the others.
 //!
+//! Closed chains: [`Closure`]s (weld, ball, slider between rod points at any
+//! `s`, body frames and the world; [`ModelBuilder::closure`],
+//! [`Model::with_closures`]) hold two frames together (docs/theory.md
+//! D63–D69). [`forward_dynamics`] then returns the Baumgarte-stabilized
+//! constrained `q̈` (multipliers in [`closure_multipliers`]), [`statics`]
+//! and [`modes`] solve the constrained system ([`closure_statics`] also
+//! returns the multipliers); [`constraint_residual`], [`constraint_jacobian`],
+//! [`closure_residuals`], [`check_closures`] and [`constraint_rank`] expose
+//! the constraints; [`inverse_dynamics`] returns
+//! [`DynamicsError::UnsupportedClosed`].
+//!
 //! Units SI; twists and wrenches angular first; body frame (see `softrod-lie`).
 #![warn(missing_docs)]
 
@@ -42,6 +53,8 @@ mod algorithms;
 mod blocks;
 mod builder;
 mod chol;
+mod closure;
+mod constrained;
 mod data;
 mod derivatives;
 mod energy;
@@ -64,6 +77,13 @@ pub use algorithms::{
     bias_force, forward_dynamics, forward_dynamics_cholesky, inverse_dynamics, mass_matrix,
 };
 pub use builder::{IntoRodSpec, ModelBuilder, RodSpecBuilder};
+pub use closure::{
+    Closure, ClosureFrame, ClosureKind, check_closures, closure_residuals, constraint_jacobian,
+    constraint_residual,
+};
+pub use constrained::{
+    closure_multipliers, closure_statics, constraint_rank, max_closure_residual,
+};
 pub use data::Data;
 pub use derivatives::{
     DynamicsJacobians, FdDerivatives, Linearization, dynamics_jacobians,

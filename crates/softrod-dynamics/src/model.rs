@@ -241,6 +241,10 @@ pub struct Model {
     /// The tree of nodes of a model with joints, bodies or parents (`None`:
     /// independent rods clamped to the world, the chain path).
     pub(crate) tree: Option<Tree>,
+    /// Loop closures on the tree (D63); empty for open models.
+    pub(crate) closures: Vec<crate::closure::ResolvedClosure>,
+    /// Baumgarte rate `α = β` of the constrained dynamics \[1/s\] (D68).
+    pub(crate) baumgarte: f64,
 }
 
 impl Model {
@@ -369,11 +373,65 @@ impl Model {
             bodies,
             elements: infos,
             tree: None,
+            closures: Vec::new(),
+            baumgarte: 0.0,
         };
         if articulated {
             model.tree = Some(Tree::build(&model)?);
         }
         Ok(model)
+    }
+
+    /// Closure residual tolerance relative to the model's length scale
+    /// (its longest rod): a closure whose residual norm `max(‖d‖, ℓ‖r‖)`
+    /// exceeds `1e-9 ℓ` at the initial state does not hold (D66).
+    pub const CLOSURE_TOLERANCE: f64 = 1e-9;
+
+    /// This model with loop closures (docs/theory.md §11, D63–D69): each
+    /// frame names a rod (at any `s`, default its tip), a body or the
+    /// world. The model takes the tree path from then on (built here if
+    /// every rod was clamped to the world). Replaces any closures given
+    /// before.
+    ///
+    /// Errors: an unknown or ambiguous element, `at` outside `[0, L]`, a
+    /// base pose that is not a rigid motion, a zero or non-finite slider
+    /// axis, both ends on the world — each naming the closure.
+    pub fn with_closures(mut self, closures: Vec<crate::Closure>) -> Result<Self, DynamicsError> {
+        self.closures = Vec::new();
+        if closures.is_empty() {
+            return Ok(self);
+        }
+        if self.tree.is_none() {
+            self.tree = Some(Tree::build(&self)?);
+        }
+        self.closures = crate::closure::resolve(&self, closures)?;
+        self.baumgarte = crate::constrained::baumgarte_rate(&self);
+        Ok(self)
+    }
+
+    /// The closures, as given (slider axes normalized).
+    pub fn closures(&self) -> impl Iterator<Item = &crate::Closure> {
+        self.closures.iter().map(|c| &c.spec)
+    }
+
+    /// Number of scalar closure constraints `m` (6 per weld, 3 per ball, 2
+    /// per slider).
+    pub fn n_constraints(&self) -> usize {
+        self.closures
+            .iter()
+            .map(|c| c.spec.kind.n_constraints())
+            .sum()
+    }
+
+    /// Whether the model has loop closures.
+    pub fn has_closures(&self) -> bool {
+        !self.closures.is_empty()
+    }
+
+    /// The Baumgarte rate `α = β` \[1/s\] of the constrained dynamics
+    /// (D68; 0 without closures).
+    pub fn baumgarte_rate(&self) -> f64 {
+        self.baumgarte
     }
 
     /// Total number of generalized coordinates.
@@ -466,6 +524,9 @@ impl Model {
         }
         if !self.bodies.is_empty() {
             t.push("rigid bodies".into());
+        }
+        if !self.closures.is_empty() {
+            t.push("closures".into());
         }
         if self.elements.iter().any(|e| e.attachment.joint.dof() > 0) {
             t.push("joints".into());

@@ -57,6 +57,11 @@ fn modes_inner(
     time: f64,
 ) -> Result<Modes, DynamicsError> {
     check_vec(model, "q", q_eq)?;
+    if let (true, Some(tree)) = (model.has_closures(), &model.tree) {
+        // Closed chains: K and M on the null space of J (docs/theory.md D69).
+        crate::closure::check_workspace(model, data)?;
+        return crate::constrained::modes(model, tree, data, q_eq, time);
+    }
     let n = model.n_dof();
     let k = stiffness_matrix(model);
     let zero = vec![0.0; n];

@@ -71,6 +71,14 @@ pub fn statics(
     let saved = data.load_scale;
     // Prescribed joints (D59) hold their values at `options.time`, at rest.
     let at_rest = std::mem::replace(&mut data.prescribed_at_rest, true);
+    if let (true, Some(tree)) = (model.has_closures(), &model.tree) {
+        // Closed chains: Newton on [τ − Jᵀλ; φ] (docs/theory.md D69).
+        crate::closure::check_workspace(model, data)?;
+        let out = crate::constrained::statics(model, tree, data, q0, options).map(|(r, _)| r);
+        data.load_scale = saved;
+        data.prescribed_at_rest = at_rest;
+        return out;
+    }
     let out = statics_inner(model, data, q0, options);
     data.load_scale = saved;
     data.prescribed_at_rest = at_rest;

@@ -221,7 +221,9 @@ impl SecondOrderSystem for RodSystem {
     }
 
     fn has_mass_form(&self) -> bool {
-        self.jacobian == RodJacobian::ElasticOnly
+        // The mass form M q̈ = f has no room for closure multipliers
+        // (docs/theory.md D67): closed models use the constrained q̈.
+        self.jacobian == RodJacobian::ElasticOnly && !self.model.has_closures()
     }
 
     /// `r = ID(t, q, q̇, q̈) − τ_act = M(q) q̈ − f` by the O(N) inverse
@@ -234,6 +236,11 @@ impl SecondOrderSystem for RodSystem {
         qdd: &DVector<f64>,
         r: &mut DVector<f64>,
     ) -> Result<bool, DynamicsError> {
+        if self.model.has_closures() {
+            // M q̈ − f leaves out the closure forces Jᵀλ (docs/theory.md
+            // D67): the methods use the constrained q̈ instead.
+            return Ok(false);
+        }
         r.copy_from(inverse_dynamics(
             &self.model,
             &mut self.data,

@@ -72,6 +72,13 @@ impl Scene {
                 .and_then(|i| keys::rod_context(&self.rods, &self.origins, i));
             keys::dynamics(&r, rod, e)
         })?;
+        let model = if self.robot.closures.is_empty() {
+            model
+        } else {
+            model
+                .with_closures(self.robot.closures.clone())
+                .map_err(|e| self.closure_error(&r, e))?
+        };
         let n = model.n_dof();
         let initial = |v: &Option<Vec<f64>>| {
             v.as_ref()
@@ -123,12 +130,39 @@ impl Scene {
             });
         }
         shape_fits.extend(fits.into_iter().flatten());
+        if model.has_closures() {
+            // A closure must hold at the initial state (docs/theory.md D66;
+            // docs/scene-format-extensions.md), after any shape fit: nothing
+            // else assembles it.
+            let mut data = Data::new(&model);
+            softrod_dynamics::check_closures(&model, &mut data, q0.as_slice())
+                .map_err(|e| self.closure_error(&r, e))?;
+        }
         Ok(Built {
             model,
             q0,
             qd0,
             shape_fits,
         })
+    }
+
+    /// A closure error of the model, at the key path of its `[[closure]]`.
+    fn closure_error(&self, r: &Reporter, e: softrod_dynamics::DynamicsError) -> SceneError {
+        use softrod_dynamics::DynamicsError as D;
+        let index = |name: &str| {
+            self.robot
+                .closures
+                .iter()
+                .position(|c| c.name == name)
+                .unwrap_or(0)
+        };
+        let path = match &e {
+            D::ClosureFrame { closure, end, .. } => format!("closure[{}].{end}", index(closure)),
+            D::ClosureAxis { closure, .. } => format!("closure[{}].axis", index(closure)),
+            D::ClosureNotHeld { closure, .. } => format!("closure[{}]", index(closure)),
+            _ => "closure".to_owned(),
+        };
+        r.invalid(&path, &e).caused_by(Box::new(e.clone()))
     }
 }
 

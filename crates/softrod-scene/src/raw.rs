@@ -17,6 +17,8 @@ pub(crate) struct RawScene {
     #[serde(default)]
     pub body: Vec<crate::robot::RawBody>,
     #[serde(default)]
+    pub closure: Vec<crate::validate::closures::RawClosure>,
+    #[serde(default)]
     pub cable: Vec<RawCable>,
     #[serde(default)]
     pub load: Vec<RawLoad>,

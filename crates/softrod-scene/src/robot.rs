@@ -3,7 +3,7 @@
 //! [`Robot`] the model is built from.
 
 use serde::Deserialize;
-use softrod_dynamics::{Attachment, BodySpec, Element, ElementKind, RodSpec};
+use softrod_dynamics::{Attachment, BodySpec, Closure, Element, ElementKind, RodSpec};
 
 use crate::raw::RawBase;
 
@@ -49,12 +49,17 @@ pub struct Robot {
     /// Rods and bodies in the order they appear in the file (the order of
     /// `q`: each element's joint coordinates, then a rod's strains).
     pub order: Vec<ElementKind>,
+    /// The `[[closure]]` tables in file order (name defaults to
+    /// `closure[i]`).
+    pub closures: Vec<Closure>,
 }
 
 impl Robot {
-    /// Whether the scene has no body, parent or joint.
+    /// Whether the scene has no body, parent, joint or closure.
     pub fn is_trivial(&self) -> bool {
-        self.bodies.is_empty() && self.rod_attachments.iter().all(Attachment::is_world_clamp)
+        self.bodies.is_empty()
+            && self.closures.is_empty()
+            && self.rod_attachments.iter().all(Attachment::is_world_clamp)
     }
 
     /// The elements in file order, for [`softrod_dynamics::Model::with_elements`].

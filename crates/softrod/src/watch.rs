@@ -163,11 +163,10 @@ fn conservative_model(model: &Model) -> Result<Option<Model>, Error> {
             })
         })
         .collect::<Result<Vec<_>, Error>>()?;
-    Ok(Some(Model::with_elements(
-        elements,
-        model.gravity,
-        model.quadrature.len(),
-    )?))
+    Ok(Some(
+        Model::with_elements(elements, model.gravity, model.quadrature.len())?
+            .with_closures(model.closures().cloned().collect())?,
+    ))
 }
 
 impl Watch {

@@ -8,6 +8,7 @@
 mod bodies;
 mod body;
 mod cables;
+pub(crate) mod closures;
 mod initial;
 mod loads;
 mod reference;
@@ -118,6 +119,7 @@ impl Ctx<'_> {
             .collect();
         let mut rods = self.rods(raw_rods)?;
         let mut robot = self.robot(links, raw.body, &rods)?;
+        robot.closures = self.closures(raw.closure, &rods, &robot)?;
         let run = self.run(raw.run)?;
         let mut origins = Origins {
             cables: vec![Vec::new(); rods.len()],
