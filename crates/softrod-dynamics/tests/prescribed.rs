@@ -363,3 +363,35 @@ fn invalid_prescribed_joints_are_errors() {
         .to_string();
     assert!(e.contains("no coordinate to prescribe"), "{e}");
 }
+
+#[test]
+fn prescribed_joints_and_closures_are_refused_together() {
+    // Not yet supported: an error naming both, not a silently wrong drive
+    // force.
+    use softrod_dynamics::{Closure, ClosureFrame, ClosureKind};
+    use softrod_lie::Pose;
+    let tip = Pose::new(
+        nalgebra::Matrix3::identity(),
+        softrod_lie::Vec3::new(0.3, 0.0, 0.0),
+    );
+    let e = Model::builder()
+        .rod_on(
+            rod("arm", 0.3, 3),
+            Attachment::world_joint(
+                Joint::prismatic([1.0, 0.0, 0.0]).with_prescribed(constant_acceleration(0.1)),
+            ),
+        )
+        .closure(Closure::new(
+            "pin",
+            ClosureKind::Ball,
+            ClosureFrame::on("arm", None, Pose::identity()),
+            ClosureFrame::world(tip),
+        ))
+        .build()
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("a prescribed joint does not support models with loop closures"),
+        "{e}"
+    );
+}
