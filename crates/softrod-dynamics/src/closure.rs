@@ -293,6 +293,8 @@ pub(crate) struct FrameState {
     pub own: Option<(usize, Mat6)>,
     /// First ancestor node whose coordinates move the frame rigidly.
     pub ancestors: Option<usize>,
+    /// The node whose parent that is (where the path to the root starts).
+    pub from: Option<usize>,
 }
 
 pub(crate) fn frame_state(
@@ -310,6 +312,7 @@ pub(crate) fn frame_state(
             acc: Vec6::zeros(),
             own: None,
             ancestors: None,
+            from: None,
         },
         Target::Body { node } => {
             let w = &data.nodes[node];
@@ -320,6 +323,7 @@ pub(crate) fn frame_state(
                 acc: ad.mul_vec(&w.etadot_tip),
                 own: None,
                 ancestors: tree.nodes[node].parent,
+                from: Some(node),
             }
         }
         Target::Rod {
@@ -329,10 +333,7 @@ pub(crate) fn frame_state(
             node,
         } => {
             let nd = &tree.nodes[node];
-            let (eta_p, etadot_p) = match nd.parent {
-                Some(p) => (data.nodes[p].eta_tip, data.nodes[p].etadot_tip),
-                None => (Vec6::zeros(), Vec6::zeros()),
-            };
+            let (eta_p, etadot_p) = crate::tree_algorithms::parent_motion(tree, data, node);
             let xo = nd.offset.ad_inv();
             let eta_b = xo.mul_vec(&eta_p);
             let etadot_b = xo.mul_vec(&etadot_p);
@@ -361,6 +362,7 @@ pub(crate) fn frame_state(
                 acc: ad.mul_vec(&etadot),
                 own: Some((node, ad.to_mat6() * tm.to_mat6() * nd.bpad)),
                 ancestors: nd.parent,
+                from: Some(node),
             }
         }
     }
@@ -528,14 +530,23 @@ pub(crate) fn add_frame_columns(
         let nd = &tree.nodes[*node];
         put(nd.dof, nd.k, sw);
     }
+    // The column of ancestor j is taken where the path leaves it (its
+    // tip, or inside it: D62).
+    let mut c = fs.from;
     let mut anc = fs.ancestors;
     while let Some(j) = anc {
         let nj = &tree.nodes[j];
         if nj.k > 0 {
-            let w = &data.nodes[j];
-            let sw = w.base_world.compose(&w.tip).ad().to_mat6() * w.s_tip;
+            let sw = match c {
+                Some(c) => crate::tree_algorithms::parent_column(tree, data, c),
+                None => {
+                    let w = &data.nodes[j];
+                    w.base_world.compose(&w.tip).ad().to_mat6() * w.s_tip
+                }
+            };
             put(nj.dof, nj.k, &sw);
         }
+        c = Some(j);
         anc = nj.parent;
     }
 }

@@ -279,20 +279,17 @@ pub enum DynamicsError {
         /// An element on the cycle.
         element: String,
     },
-    /// An element hangs from a rod at an arc length that is no piece
-    /// boundary (the only places children may attach; docs/theory.md §11).
-    #[error(
-        "'{element}': at = {at} m on rod '{parent}' is not a piece boundary (0, the piece ends {boundaries:?})"
-    )]
-    NotAtBoundary {
+    /// An element hangs from a rod at an arc length outside it.
+    #[error("'{element}': at = {at} m is not on rod '{parent}' (0 to {length} m)")]
+    AttachOutsideRod {
         /// The element.
         element: String,
         /// The parent rod.
         parent: String,
         /// The arc length asked for \[m\].
         at: f64,
-        /// The piece ends of the parent rod \[m\].
-        boundaries: Vec<f64>,
+        /// The parent rod's length \[m\].
+        length: f64,
     },
     /// An articulated-body matrix of a node of a model with joints or
     /// bodies is not positive definite (e.g. nothing with inertia outboard

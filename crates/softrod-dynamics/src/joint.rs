@@ -289,7 +289,7 @@ impl Joint {
 }
 
 /// Where an element hangs (D51): its parent (`None`: the world), the arc
-/// length `at` on a parent rod (default its tip; only piece boundaries,
+/// length `at` on a parent rod (default its tip; anywhere on it, D62,
 /// see [`crate::Model::with_elements`]), and the joint. The element's own
 /// base pose (relative to the attachment frame, at joint value 0) is the
 /// rod's [`softrod_kinematics::Rod::base`] or the body's [`BodySpec::base`].

@@ -288,14 +288,14 @@ impl Model {
     /// D50–D55). Coordinates follow the elements' order: for each, its
     /// joint's coordinates, then (rods) its strains piece by piece.
     ///
-    /// A child of a rod attaches at a piece boundary (`at` = 0 or a piece
-    /// end, to 1e-9 of the rod's length; default the tip): its frame is the
-    /// rod's frame there, then the element's base pose, then the joint.
+    /// A child of a rod attaches anywhere on it (`at` in `[0, L]`, default
+    /// the tip; inside a piece as D62 describes): its frame is the rod's
+    /// frame there, then the element's base pose, then the joint.
     /// Without any body, parent or non-fixed joint this is [`Model::new`]
     /// and the algorithms take the chain path unchanged.
     ///
     /// Errors: those of [`Model::new`], invalid joints and bodies, unknown
-    /// or ambiguous parents, parent cycles, `at` off a piece boundary.
+    /// or ambiguous parents, parent cycles, `at` off the parent rod.
     pub fn with_elements(
         elements: Vec<Element>,
         gravity: Option<Vec3>,

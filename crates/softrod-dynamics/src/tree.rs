@@ -36,6 +36,9 @@ pub(crate) struct Node {
     /// A prescribed joint's piece (D59): its first coordinate among the
     /// prescribed ones and their number (the columns of `bpad`).
     pub prescribed: Option<(usize, usize)>,
+    /// Hanging inside the parent piece at local abscissa `x` \[m\] (D62)
+    /// rather than at its tip.
+    pub attach: Option<f64>,
     /// Strain basis zero-padded to 6×6 (joints and pieces; zero for bodies).
     pub bpad: Mat6,
 }
@@ -48,6 +51,8 @@ pub(crate) struct Tree {
     pub rod_nodes: Vec<Vec<usize>>,
     /// Per body: its node.
     pub body_nodes: Vec<usize>,
+    /// Per node: the children that hang inside it (`attach` set), in order.
+    pub inner_children: Vec<Vec<usize>>,
 }
 
 impl Tree {
@@ -115,12 +120,14 @@ impl Tree {
             nodes: Vec::new(),
             rod_nodes: vec![Vec::new(); model.rods.len()],
             body_nodes: vec![0; model.bodies.len()],
+            inner_children: Vec::new(),
         };
         // Per rod: (parent node, offset) of its first piece — where a child
         // at s = 0 hangs.
         let mut rod_base = vec![(None, Pose::identity()); model.rods.len()];
         for &e in &order {
             let info = &els[e];
+            let mut inner = None;
             let (node, attach) = match parent[e] {
                 None => (None, Pose::identity()),
                 Some(p) => match els[p].kind {
@@ -130,6 +137,14 @@ impl Tree {
                         let len = rod.length();
                         let at = info.attachment.at.unwrap_or(len);
                         let tol = 1e-9 * len;
+                        if !(at >= -tol && at <= len + tol) {
+                            return Err(DynamicsError::AttachOutsideRod {
+                                element: info.name.clone(),
+                                parent: els[p].name.clone(),
+                                at,
+                                length: len,
+                            });
+                        }
                         if at.abs() <= tol {
                             rod_base[r]
                         } else if let Some(pn) = rod
@@ -139,12 +154,15 @@ impl Tree {
                         {
                             (Some(tree.rod_nodes[r][pn]), Pose::identity())
                         } else {
-                            return Err(DynamicsError::NotAtBoundary {
-                                element: info.name.clone(),
-                                parent: els[p].name.clone(),
-                                at,
-                                boundaries: rod.pieces().iter().map(|pc| pc.end()).collect(),
-                            });
+                            // Inside a piece (D62).
+                            let pn = rod
+                                .pieces()
+                                .iter()
+                                .position(|pc| at < pc.end())
+                                .unwrap_or(rod.n_pieces() - 1);
+                            let pc = &rod.pieces()[pn];
+                            inner = Some(at - pc.start);
+                            (Some(tree.rod_nodes[r][pn]), Pose::identity())
                         }
                     }
                 },
@@ -169,6 +187,7 @@ impl Tree {
                     },
                     k: if driven { 0 } else { k },
                     prescribed: driven.then_some((info.prescribed_dofs.start + local, k)),
+                    attach: inner.take(),
                     bpad,
                 });
                 cur = (Some(tree.nodes.len() - 1), Pose::identity());
@@ -190,6 +209,7 @@ impl Tree {
                             dof: rm.dof_offset + piece.dof_offset,
                             k,
                             prescribed: None,
+                            attach: inner.take(),
                             bpad,
                         });
                         cur = (Some(tree.nodes.len() - 1), Pose::identity());
@@ -204,10 +224,17 @@ impl Tree {
                         dof: 0,
                         k: 0,
                         prescribed: None,
+                        attach: inner.take(),
                         bpad: Mat6::zeros(),
                     });
                     tree.body_nodes[b] = tree.nodes.len() - 1;
                 }
+            }
+        }
+        tree.inner_children = vec![Vec::new(); tree.nodes.len()];
+        for (i, n) in tree.nodes.iter().enumerate() {
+            if let (Some(p), Some(_)) = (n.parent, n.attach) {
+                tree.inner_children[p].push(i);
             }
         }
         Ok(tree)

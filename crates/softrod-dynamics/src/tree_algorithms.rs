@@ -44,6 +44,19 @@ pub(crate) struct NodeWork {
     pub u: Vec6,
     /// Mass matrix: `Ad_{g_world(ℓ)} S(ℓ)` (world twists per unit rate).
     pub s_world: Mat6,
+    /// A node hanging inside its parent piece at `x` (D62): the parent's
+    /// `g(x)`, `Ad⁻¹_{g(x)}`, `S(x) = T₋(x)B` (6×k padded), the
+    /// velocity-product acceleration there and the motion of that frame
+    /// (its axes), all written by the parent's outward step.
+    pub attach_pose: Pose,
+    pub attach_a: Mat6,
+    pub attach_s: Mat6,
+    pub attach_acc: Vec6,
+    pub attach_eta: Vec6,
+    pub attach_etadot: Vec6,
+    /// Forward dynamics pass 3: the base acceleration and `q̈_n` (padded).
+    pub etadot_base: Vec6,
+    pub qn: Vec6,
 }
 
 impl NodeWork {
@@ -66,7 +79,43 @@ impl NodeWork {
             dinv: Mat6::zeros(),
             u: Vec6::zeros(),
             s_world: Mat6::zeros(),
+            attach_pose: Pose::identity(),
+            attach_a: Mat6::identity(),
+            attach_s: Mat6::zeros(),
+            attach_acc: Vec6::zeros(),
+            attach_eta: Vec6::zeros(),
+            attach_etadot: Vec6::zeros(),
+            etadot_base: Vec6::zeros(),
+            qn: Vec6::zeros(),
         }
+    }
+}
+
+/// The motion `(η, η̇)` of the frame node `c` hangs from (its parent's tip,
+/// or the point inside the parent piece, D62), in that frame's axes.
+pub(crate) fn parent_motion(tree: &Tree, data: &Data, c: usize) -> (Vec6, Vec6) {
+    match tree.nodes[c].parent {
+        None => (Vec6::zeros(), Vec6::zeros()),
+        Some(_) if tree.nodes[c].attach.is_some() => {
+            (data.nodes[c].attach_eta, data.nodes[c].attach_etadot)
+        }
+        Some(p) => (data.nodes[p].eta_tip, data.nodes[p].etadot_tip),
+    }
+}
+
+/// The spatial columns of node `c`'s parent's coordinates at the frame `c`
+/// hangs from, `Ad_{g_world} S` (6×k padded; D57, D62): what moves `c` and
+/// everything beyond it per unit rate of the parent's coordinates.
+pub(crate) fn parent_column(tree: &Tree, data: &Data, c: usize) -> Mat6 {
+    let Some(p) = tree.nodes[c].parent else {
+        return Mat6::zeros();
+    };
+    let wp = &data.nodes[p];
+    if tree.nodes[c].attach.is_some() {
+        let wc = &data.nodes[c];
+        wp.base_world.compose(&wc.attach_pose).ad().to_mat6() * wc.attach_s
+    } else {
+        wp.base_world.compose(&wp.tip).ad().to_mat6() * wp.s_tip
     }
 }
 
@@ -139,6 +188,14 @@ pub(crate) fn outward(
         // A prescribed joint's acceleration `T₋(1)Bq̈_p`, added to its tip's.
         let mut drive = Vec6::zeros();
         let (parent_pose, eta_p, etadot_p) = match node.parent {
+            Some(p) if node.attach.is_some() => {
+                let w = &data.nodes[i];
+                (
+                    data.nodes[p].base_world.compose(&w.attach_pose),
+                    w.attach_eta,
+                    w.attach_etadot,
+                )
+            }
             Some(p) => {
                 let w = &data.nodes[p];
                 (w.base_world.compose(&w.tip), w.eta_tip, w.etadot_tip)
@@ -283,6 +340,27 @@ pub(crate) fn outward(
             }
         }
         w.p_small = node.bpad.tr_mul(&ps6);
+        // Children hanging inside this piece (D62): the frame at x.
+        for &c in &tree.inner_children[i] {
+            let x = tree.nodes[c].attach.unwrap_or(length);
+            let (gl, tm, dbias) = maps.eval(x);
+            let a = gl.ad_inv();
+            let carried = a.mul_vec(&eta_b);
+            let sv = tm.mul_vec(&dxi);
+            let acc = if has_vel {
+                ad_vec(&carried, &sv) + dbias
+            } else {
+                Vec6::zeros()
+            };
+            let wc = &mut data.nodes[c];
+            wc.attach_pose = gl;
+            wc.attach_a = a.to_mat6();
+            wc.attach_s = tm.to_mat6() * node.bpad;
+            wc.attach_acc = acc;
+            wc.attach_eta = carried + sv;
+            wc.attach_etadot = a.mul_vec(&etadot_b) + tm.mul_vec(&ddxi) + acc;
+        }
+        let w = &mut data.nodes[i];
         let (gl, tm, dbias) = maps.eval(length);
         let a = gl.ad_inv();
         let carried = a.mul_vec(&eta_b);
@@ -356,7 +434,16 @@ pub(crate) fn inverse_dynamics(
         }
         let wb = w.p_big + w.tip.ad_inv().tr_mul_vec(&w.f_tip);
         if let Some(p) = node.parent {
-            data.nodes[p].f_tip += node.offset.ad_inv().tr_mul_vec(&wb);
+            let wx = node.offset.ad_inv().tr_mul_vec(&wb);
+            if node.attach.is_some() {
+                // Into the parent piece at x, like a point load (D62).
+                let (a, sx) = (w.attach_a, w.attach_s);
+                let pw = &mut data.nodes[p];
+                pw.p_big += a.transpose() * wx;
+                pw.p_small += sx.transpose() * wx;
+            } else {
+                data.nodes[p].f_tip += wx;
+            }
         }
     }
     data.tau -= &data.strain_force;
@@ -427,20 +514,41 @@ pub(crate) fn forward_dynamics(
         w.u = u;
         if let Some(p) = node.parent {
             let x = node.offset.ad_inv().to_mat6();
-            let pw = &mut data.nodes[p];
-            pw.m_tip += x.transpose() * mb * x;
-            pw.f_tip += x.transpose() * pb;
+            let (mx, px) = (x.transpose() * mb * x, x.transpose() * pb);
+            if node.attach.is_some() {
+                // A rigid articulated inertia inside the parent piece at x
+                // (D62): it joins the piece's own sums (D20, D23).
+                let (a, sx, acc) = (w.attach_a, w.attach_s, w.attach_acc);
+                let y = mx * acc + px;
+                let pw = &mut data.nodes[p];
+                let ma = mx * a;
+                pw.mt += a.transpose() * ma;
+                pw.ut += a.transpose() * mx * sx;
+                pw.dt += sx.transpose() * mx * sx;
+                pw.p_big += a.transpose() * y;
+                pw.p_small += sx.transpose() * y;
+            } else {
+                let pw = &mut data.nodes[p];
+                pw.m_tip += mx;
+                pw.f_tip += px;
+            }
         }
     }
     let a_world = world_acceleration(model, data.load_scale);
     for (i, node) in tree.nodes.iter().enumerate() {
         let etadot_p = match node.parent {
+            Some(p) if node.attach.is_some() => {
+                let (pw, w) = (&data.nodes[p], &data.nodes[i]);
+                w.attach_a * pw.etadot_base + w.attach_s * pw.qn + w.attach_acc
+            }
             Some(p) => data.nodes[p].etadot_tip,
             None => a_world,
         };
         let etadot_b = node.offset.ad_inv().mul_vec(&etadot_p);
         let w = &mut data.nodes[i];
         let qn = w.dinv * (w.u - w.uhat.tr_mul(&etadot_b));
+        w.etadot_base = etadot_b;
+        w.qn = qn;
         for c in 0..node.k {
             data.qdd[node.dof + c] = qn[c];
         }
@@ -488,11 +596,19 @@ pub(crate) fn mass_matrix(model: &Model, tree: &Tree, data: &mut Data, q: &[f64]
         }
         if k > 0 {
             let f_world = w.base_world.ad_inv().to_mat6().transpose() * f;
+            // Walk to the root; the column of ancestor j is taken where the
+            // path leaves it (its tip, or inside it, D62).
+            let mut c = i;
             let mut anc = node.parent;
             while let Some(j) = anc {
                 let nj = &tree.nodes[j];
                 if nj.k > 0 {
-                    let blk = data.nodes[j].s_world.transpose() * f_world;
+                    let col = if tree.nodes[c].attach.is_some() {
+                        parent_column(tree, data, c)
+                    } else {
+                        data.nodes[j].s_world
+                    };
+                    let blk = col.transpose() * f_world;
                     for r in 0..nj.k {
                         for c in 0..k {
                             data.mass[(nj.dof + r, node.dof + c)] = blk[(r, c)];
@@ -500,12 +616,22 @@ pub(crate) fn mass_matrix(model: &Model, tree: &Tree, data: &mut Data, q: &[f64]
                         }
                     }
                 }
+                c = j;
                 anc = nj.parent;
             }
         }
         if let Some(p) = node.parent {
             let x = node.offset.ad_inv().to_mat6();
-            data.nodes[p].m_tip += x.transpose() * mb * x;
+            let mx = x.transpose() * mb * x;
+            if node.attach.is_some() {
+                let (a, sx) = (data.nodes[i].attach_a, data.nodes[i].attach_s);
+                let pw = &mut data.nodes[p];
+                pw.mt += a.transpose() * mx * a;
+                pw.ut += a.transpose() * mx * sx;
+                pw.dt += sx.transpose() * mx * sx;
+            } else {
+                data.nodes[p].m_tip += mx;
+            }
         }
     }
 }

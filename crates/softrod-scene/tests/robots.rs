@@ -225,7 +225,7 @@ fn bad_robots_name_the_key() {
             "body[0].inertia",
             "symmetric",
         ),
-        ("at = 0.2", "at = 0.15", "body[1].at", "piece boundary"),
+        ("at = 0.2", "at = -0.05", "body[1].at", "in [0, 0.3]"),
         ("at = 0.2", "at = 0.5", "body[1].at", "0.3"),
         (
             "stiffness = 0.5, damping = [0.01]",

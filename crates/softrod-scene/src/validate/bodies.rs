@@ -28,8 +28,8 @@ const JOINTS: [&str; 6] = [
 
 impl Ctx<'_> {
     /// The elements' attachments and the bodies, checked: names unique over
-    /// rods and bodies, parents known and acyclic, `at` on a piece boundary
-    /// of a parent rod, joints and bodies valid.
+    /// rods and bodies, parents known and acyclic, `at` within a parent
+    /// rod (anywhere on it, D62), joints and bodies valid.
     pub(super) fn robot(
         &mut self,
         links: Vec<RodLink>,
@@ -127,17 +127,6 @@ impl Ctx<'_> {
                             &format!("{p}.at"),
                             s,
                             format!("in [0, {len}] (the length of rod {name:?})"),
-                        ));
-                    }
-                    let tol = 1e-9 * len;
-                    let ends: Vec<f64> = rod.pieces().iter().map(|pc| pc.end()).collect();
-                    if s.abs() > tol && !ends.iter().any(|e| (e - s).abs() <= tol) {
-                        return Err(self.r.invalid(
-                            &format!("{p}.at"),
-                            format!(
-                                "{s} m is not a piece boundary of rod {name:?} (0 or {ends:?}); \
-                                 children attach at piece boundaries"
-                            ),
                         ));
                     }
                 }
