@@ -1,0 +1,117 @@
+//! Criterion benches of the tree path (docs/theory.md §11): the rod of the
+//! `dynamics` benches (all six strains, 4 Gauss points, gravity, damping)
+//! on a revolute joint (the tree recursion, dense 6×6 per node), on a
+//! prescribed prismatic base (D59), and with its tip welded to the world
+//! (a closed chain, D63–D69: dense mass matrix and its Cholesky factor per
+//! evaluation). Compare with `forward_dynamics/N` of the `dynamics` benches.
+//!
+//! Regenerate (numbers in docs/performance.md, section "Articulated models"):
+//! `cargo bench -p softrod-benches --bench robots -- --warm-up-time 1 --measurement-time 2`
+
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use softrod_dynamics::{
+    Attachment, Closure, ClosureFrame, ClosureKind, Curve, Data, Element, Joint, Model, Prescribed,
+    RodSpec, forward_dynamics,
+};
+use softrod_kinematics::{Basis, Rod, straight};
+use softrod_lie::{Pose, Vec3};
+use softrod_mechanics::{Material, RodBody, Section};
+use std::hint::black_box;
+
+const LENGTH: f64 = 0.5;
+
+fn spec(n: usize) -> RodSpec {
+    let rod = Rod::uniform(LENGTH, n, Basis::all(), straight(), Pose::identity()).unwrap();
+    let material = Material::builder()
+        .density(1000.0)
+        .young(1e7)
+        .shear_modulus(1e7 / 3.0)
+        .viscosity(1.0)
+        .build()
+        .unwrap();
+    let body = RodBody::new(Section::Circle { radius: 0.01 }, material, LENGTH).unwrap();
+    RodSpec::new("bench", rod, body)
+}
+
+fn on(n: usize, joint: Joint) -> Model {
+    Model::with_elements(
+        vec![Element::Rod(spec(n), Attachment::world_joint(joint))],
+        Some(Vec3::new(0.0, 0.0, -9.81)),
+        4,
+    )
+    .unwrap()
+}
+
+/// A smooth, curved, moving state (deterministic).
+fn state(n: usize) -> (Vec<f64>, Vec<f64>) {
+    let q = (0..n)
+        .map(|i| if i % 6 < 3 { 1.5 } else { 0.01 } * (0.7 * i as f64 + 0.3).sin())
+        .collect();
+    let qd = (0..n).map(|i| (1.3 * i as f64).cos()).collect();
+    (q, qd)
+}
+
+fn bench(c: &mut Criterion, group: &str, make: impl Fn(usize) -> Model, sizes: &[usize]) {
+    let mut g = c.benchmark_group(group);
+    for &n in sizes {
+        let m = make(n);
+        let mut data = Data::new(&m);
+        let (q, qd) = state(m.n_dof());
+        g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+            b.iter(|| {
+                forward_dynamics(&m, &mut data, 0.1, black_box(&q), black_box(&qd), None).unwrap()
+                    [0]
+            })
+        });
+    }
+    g.finish();
+}
+
+fn bench_robots(c: &mut Criterion) {
+    let sizes = [10usize, 40];
+    bench(
+        c,
+        "forward_dynamics_tree",
+        |n| on(n, Joint::revolute([0.0, 1.0, 0.0])),
+        &sizes,
+    );
+    bench(
+        c,
+        "forward_dynamics_prescribed",
+        |n| {
+            on(
+                n,
+                Joint::prismatic([0.0, 0.0, 1.0]).with_prescribed(Prescribed::new(vec![
+                    Curve::Sine {
+                        amplitude: 0.01,
+                        frequency: 2.0,
+                        phase: 0.0,
+                        offset: 0.0,
+                    },
+                ])),
+            )
+        },
+        &sizes,
+    );
+    bench(
+        c,
+        "forward_dynamics_closed",
+        |n| {
+            on(n, Joint::fixed())
+                .with_closures(vec![Closure::new(
+                    "tip",
+                    ClosureKind::Weld,
+                    ClosureFrame::on("bench", None, Pose::identity()),
+                    ClosureFrame::world(Pose::new(
+                        nalgebra::Matrix3::identity(),
+                        Vec3::new(LENGTH, 0.0, 0.0),
+                    )),
+                )])
+                .unwrap()
+        },
+        &sizes,
+    );
+}
+
+criterion_group!(benches, bench_robots);
+criterion_main!(benches);
