@@ -3,6 +3,8 @@
 //! Exit codes: 0 success, 1 simulation failure (reason on stderr), 2 bad input
 //! (the scene error names file:line:col and the key path).
 
+#![forbid(unsafe_code)]
+
 mod closures;
 mod common;
 mod inspect;

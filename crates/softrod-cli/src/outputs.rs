@@ -252,9 +252,7 @@ pub fn num(v: f64) -> String {
 
 /// Bytes free for an unprivileged writer on the file system holding `dir`
 /// (or its nearest existing ancestor); `None` where this cannot be asked.
-#[cfg(unix)]
 pub fn free_disk_bytes(dir: &Path) -> Option<u64> {
-    use std::os::unix::ffi::OsStrExt;
     let mut probe = dir.to_path_buf();
     while !probe.exists() {
         if !probe.pop() {
@@ -265,23 +263,7 @@ pub fn free_disk_bytes(dir: &Path) -> Option<u64> {
     if probe.as_os_str().is_empty() {
         probe = PathBuf::from(".");
     }
-    let c = std::ffi::CString::new(probe.as_os_str().as_bytes()).ok()?;
-    let mut st = std::mem::MaybeUninit::<libc::statvfs>::zeroed();
-    // SAFETY: `c` is a NUL-terminated path and `st` a writable statvfs.
-    let rc = unsafe { libc::statvfs(c.as_ptr(), st.as_mut_ptr()) };
-    if rc != 0 {
-        return None;
-    }
-    // SAFETY: statvfs returned 0, so it filled `st`.
-    let st = unsafe { st.assume_init() };
-    // The field types differ between unix targets (u32 on some).
-    #[allow(clippy::unnecessary_cast)]
-    Some((st.f_bavail as u64).saturating_mul(st.f_frsize as u64))
-}
-
-#[cfg(not(unix))]
-pub fn free_disk_bytes(_dir: &Path) -> Option<u64> {
-    None
+    fs4::available_space(&probe).ok()
 }
 
 /// A lower bound of what `softrod run` writes per output time \[bytes\]:
