@@ -5,35 +5,18 @@
 //! composite mass matrix and inverts the inverse dynamics; the kinetic
 //! energy summed point by point equals `½q̇ᵀMq̇`.
 
+mod common;
+
+use common::{soft_rod as rod, wavy as state};
+
 use nalgebra::DVector;
 use softrod_dynamics::{
-    Attachment, BodySpec, Data, Joint, Model, RodSpec, RodSpecBuilder, StaticsOptions, bias_force,
-    energies, forward_dynamics, inverse_dynamics, mass_matrix, statics,
+    Attachment, BodySpec, Data, Joint, Model, StaticsOptions, bias_force, energies,
+    forward_dynamics, inverse_dynamics, mass_matrix, statics,
 };
-use softrod_mechanics::{LoadFrame, Material, PointLoad};
+use softrod_mechanics::{LoadFrame, PointLoad};
 
 const G: f64 = 9.81;
-
-fn rod(name: &str, length: f64, pieces: usize) -> RodSpecBuilder {
-    RodSpec::builder(length)
-        .name(name)
-        .pieces(pieces)
-        .circle(0.01)
-        .material(
-            Material::builder()
-                .density(1000.0)
-                .young(1e6)
-                .poisson(0.5)
-                .build()
-                .unwrap(),
-        )
-}
-
-fn state(n: usize, scale: f64, seed: f64) -> Vec<f64> {
-    (0..n)
-        .map(|i| scale * ((i as f64 + 1.0) * 1.3 + seed).sin())
-        .collect()
-}
 
 #[test]
 fn payload_inside_a_piece_is_a_dead_point_load() {

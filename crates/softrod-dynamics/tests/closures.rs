@@ -5,35 +5,22 @@
 //! `β₁L = 4.7300`), the propped cantilever (tip reaction `3wL/8`), a long
 //! run (bounded residual, conserved energy) and the errors.
 
+mod common;
+
+use common::{soft_material as material, soft_rod as rod};
+
 use nalgebra::DVector;
 use softrod_dynamics::{
     Attachment, BodySpec, Closure, ClosureFrame, ClosureKind, Data, DynamicsError, Joint, Model,
-    ModelBuilder, RodSpec, RodSpecBuilder, StaticsOptions, check_closures, closure_multipliers,
-    closure_residuals, closure_statics, constraint_jacobian, constraint_rank, constraint_residual,
-    energies, forward_dynamics, inverse_dynamics, modes,
+    ModelBuilder, RodSpec, StaticsOptions, check_closures, closure_multipliers, closure_residuals,
+    closure_statics, constraint_jacobian, constraint_rank, constraint_residual, energies,
+    forward_dynamics, inverse_dynamics, modes,
 };
 use softrod_kinematics::Strain;
 use softrod_lie::{Mat3, Pose, Vec3};
-use softrod_mechanics::{LoadFrame, Material, PointLoad};
+use softrod_mechanics::{LoadFrame, PointLoad};
 
 const G: f64 = 9.81;
-
-fn material(young: f64, density: f64) -> Material {
-    Material::builder()
-        .density(density)
-        .young(young)
-        .poisson(0.5)
-        .build()
-        .unwrap()
-}
-
-fn rod(name: &str, length: f64, pieces: usize) -> RodSpecBuilder {
-    RodSpec::builder(length)
-        .name(name)
-        .pieces(pieces)
-        .circle(0.01)
-        .material(material(1e6, 1000.0))
-}
 
 fn rot(a: f64, b: f64, c: f64) -> Mat3 {
     *nalgebra::Rotation3::from_euler_angles(a, b, c).matrix()

@@ -5,36 +5,18 @@
 //! dynamics of a second model); the work of that force is the change of
 //! the total energy; inverse and forward dynamics agree on it.
 
+mod common;
+
+use common::{soft_rod as rod, wavy as state};
+
 use nalgebra::DVector;
 use softrod_dynamics::{
-    Attachment, BodySpec, Curve, Data, Joint, Model, Prescribed, RodSpec, RodSpecBuilder,
-    StaticsOptions, bias_force, energies, forward_dynamics, inverse_dynamics, mass_matrix, statics,
+    Attachment, BodySpec, Curve, Data, Joint, Model, Prescribed, StaticsOptions, bias_force,
+    energies, forward_dynamics, inverse_dynamics, mass_matrix, statics,
 };
 use softrod_mechanics::Material;
 
 const G: f64 = 9.81;
-
-fn rod(name: &str, length: f64, pieces: usize) -> RodSpecBuilder {
-    RodSpec::builder(length)
-        .name(name)
-        .pieces(pieces)
-        .circle(0.01)
-        .material(
-            Material::builder()
-                .density(1000.0)
-                .young(1e6)
-                .poisson(0.5)
-                .build()
-                .unwrap(),
-        )
-}
-
-/// A deterministic, varied state (not a special configuration).
-fn state(n: usize, scale: f64, seed: f64) -> Vec<f64> {
-    (0..n)
-        .map(|i| scale * ((i as f64 + 1.0) * 1.7 + seed).sin())
-        .collect()
-}
 
 /// `x(t) = ½at²` sampled at three points: the not-a-knot spline is that
 /// parabola exactly.

@@ -6,34 +6,17 @@
 
 mod common;
 
-use common::Lcg;
+use common::{Lcg, soft_material as material, soft_rod as rod};
 use nalgebra::DVector;
 use softrod_dynamics::{
     Attachment, BodyLoad, BodySpec, Data, DynamicsError, Joint, Model, ModelBuilder, RodSpec,
-    RodSpecBuilder, StaticsOptions, energies, forward_dynamics, forward_dynamics_cholesky, frames,
+    StaticsOptions, energies, forward_dynamics, forward_dynamics_cholesky, frames,
     inverse_dynamics, mass_matrix, statics,
 };
 use softrod_lie::{Mat3, Pose, Vec3};
-use softrod_mechanics::{LoadFrame, Material, PointLoad};
+use softrod_mechanics::{LoadFrame, PointLoad};
 
 const G: f64 = 9.81;
-
-fn material(young: f64, density: f64) -> Material {
-    Material::builder()
-        .density(density)
-        .young(young)
-        .poisson(0.5)
-        .build()
-        .unwrap()
-}
-
-fn rod(name: &str, length: f64, pieces: usize) -> RodSpecBuilder {
-    RodSpec::builder(length)
-        .name(name)
-        .pieces(pieces)
-        .circle(0.01)
-        .material(material(1e6, 1000.0))
-}
 
 /// Complete elliptic integral of the first kind `K(k)` by the
 /// arithmetic–geometric mean (exact to round-off).

@@ -4,7 +4,7 @@
 #![allow(dead_code)]
 
 use nalgebra::{DMatrix, DVector, Matrix6xX};
-use softrod_dynamics::{Model, RodSpec};
+use softrod_dynamics::{Model, RodSpec, RodSpecBuilder};
 use softrod_kinematics::{Basis, PieceSpec, Rod, Strain};
 use softrod_lie::{Pose, Vec3, Vec6, exp_twist};
 use softrod_mechanics::{
@@ -298,4 +298,33 @@ pub fn richardson_jacobians(
 /// Largest entry error relative to the largest entry of the reference `b`.
 pub fn rel(a: &DMatrix<f64>, b: &DMatrix<f64>) -> f64 {
     (a - b).amax() / b.amax().max(1e-300)
+}
+
+/// An incompressible soft material (ν = 0.5) of Young's modulus `young`
+/// \[Pa\] and `density` \[kg/m³\].
+pub fn soft_material(young: f64, density: f64) -> Material {
+    Material::builder()
+        .density(density)
+        .young(young)
+        .poisson(0.5)
+        .build()
+        .unwrap()
+}
+
+/// The robots' test rod: `pieces` equal pieces over `length` \[m\], all
+/// six strains, a 1 cm circle, E = 1 MPa, ρ = 1000 kg/m³.
+pub fn soft_rod(name: &str, length: f64, pieces: usize) -> RodSpecBuilder {
+    RodSpec::builder(length)
+        .name(name)
+        .pieces(pieces)
+        .circle(0.01)
+        .material(soft_material(1e6, 1000.0))
+}
+
+/// A deterministic, varied vector (no special configuration):
+/// `scale · sin(1.7 (i + 1) + seed)`.
+pub fn wavy(n: usize, scale: f64, seed: f64) -> Vec<f64> {
+    (0..n)
+        .map(|i| scale * ((i as f64 + 1.0) * 1.7 + seed).sin())
+        .collect()
 }
