@@ -354,9 +354,9 @@ pub enum DynamicsError {
     ClosureNotHeld {
         /// The closure's name.
         closure: String,
-        /// Its residual norm `max(‖d‖, ℓ‖r‖)` [m].
+        /// Its residual norm `max(‖d‖, ℓ‖r‖)` \[m\].
         residual: f64,
-        /// The tolerance `1e-9 ℓ` [m].
+        /// The tolerance `1e-9 ℓ` \[m\].
         tolerance: f64,
     },
 }
