@@ -7,6 +7,7 @@ mod closures;
 mod common;
 mod inspect;
 mod linearize;
+mod npz;
 mod outputs;
 mod plots;
 mod report;
@@ -72,7 +73,8 @@ enum Command {
         tolerances, duration, output_every). Writes DIR/trajectory.csv (streamed row by row), \
         DIR/shape.csv, DIR/summary.json (also on failure) and SVG plots: tip_trajectory.svg, \
         energy.svg, shapes.svg, strains.svg, actuators.svg (with cables), and the 3-D view \
-        DIR/view.html (with view.json, see `softrod view`).\n\nExample:\n  softrod run examples/cantilever_gravity.toml --out /tmp/cantilever"
+        DIR/view.html (with view.json, see `softrod view`). With --npz also DIR/trajectory.npz \
+        (NumPy arrays of the same rows, with the column names).\n\nExample:\n  softrod run examples/cantilever_gravity.toml --out /tmp/cantilever"
     )]
     Run {
         /// The scene file (TOML).
@@ -84,6 +86,12 @@ enum Command {
         /// (each at the nearest output time; default six spread over the run).
         #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
         snapshots: Option<Vec<f64>>,
+        /// Also write DIR/trajectory.npz: the trajectory as NumPy arrays (`t`, `q`, `qdot`,
+        /// `tip`, `energy`, with cables `tension`/`power`, with prescribed joints
+        /// `prescribed`/`prescribed_force`) and the column names `q_names` (`prescribed_names`),
+        /// for `numpy.load`; see docs/scene-format-extensions.md.
+        #[arg(long)]
+        npz: bool,
     },
     /// Natural frequencies of the model linearized about its static equilibrium.
     #[command(
@@ -167,7 +175,8 @@ fn main() -> ExitCode {
             scene,
             out,
             snapshots,
-        } => run::run(&scene, out, snapshots, quiet),
+            npz,
+        } => run::run(&scene, out, snapshots, quiet, npz),
         Command::Modes {
             scene,
             json,

@@ -164,8 +164,10 @@ pub fn regenerate_view(dir: &Path) -> Result<ViewStats, CliError> {
 
 /// The files `softrod run` writes (besides `strains_R.svg`): removed at the
 /// start of a run, so that a directory never mixes two runs' outputs.
-pub const RUN_OUTPUTS: [&str; 13] = [
+pub const RUN_OUTPUTS: [&str; 15] = [
     "trajectory.csv",
+    "trajectory.npz",
+    "trajectory.npz.tmp",
     "shape.csv",
     "bodies.csv",
     "summary.json",
