@@ -188,7 +188,6 @@ impl Streamer {
         snapshot_at: Vec<usize>,
         summary: Summary,
         bar: Option<ProgressBar>,
-        npz: bool,
     ) -> Result<Self, CliError> {
         let n = model.n_dof();
         let mut header: Vec<String> = TRAJECTORY_HEADER.iter().map(|h| h.to_string()).collect();
@@ -245,7 +244,7 @@ impl Streamer {
             viz_poses,
             row: Vec::with_capacity(header.len()),
             values: Vec::with_capacity(header.len()),
-            npz_rows: npz.then(Vec::new),
+            npz_rows: None,
             n,
             last_snapshot: None,
             series,
@@ -258,6 +257,12 @@ impl Streamer {
             closure_residual_max: 0.0,
             closure_fail: crate::closures::RUN_FAIL_RELATIVE * crate::closures::length_scale(model),
         })
+    }
+
+    /// Keeps the rows for `trajectory.npz` (`--npz`).
+    pub fn keep_rows_for_npz(mut self, on: bool) -> Self {
+        self.npz_rows = on.then(Vec::new);
+        self
     }
 
     pub fn rows_written(&self) -> usize {
@@ -422,8 +427,7 @@ impl Streamer {
         self.values.push(e.total());
         self.values.extend(q);
         self.values.extend(qd);
-        self.values
-            .extend([e.kinetic, e.elastic, e.gravitational]);
+        self.values.extend([e.kinetic, e.elastic, e.gravitational]);
         self.values.extend(&tensions);
         self.values.extend(&power);
         if model.n_prescribed() > 0 {
@@ -755,8 +759,8 @@ pub fn run(
         snapshot_at,
         summary,
         bar,
-        npz_out,
-    )?;
+    )?
+    .keep_rows_for_npz(npz_out);
     signals::install();
     let start = Instant::now();
     // Rows are the integrator's dense output at the output times, streamed

@@ -130,7 +130,12 @@ fn read_npz(path: &Path) -> BTreeMap<String, Npy> {
 fn columns(header: &[String], rows: &[Vec<f64>], names: &[String]) -> Vec<f64> {
     let idx: Vec<usize> = names
         .iter()
-        .map(|n| header.iter().position(|h| h == n).unwrap_or_else(|| panic!("{n}")))
+        .map(|n| {
+            header
+                .iter()
+                .position(|h| h == n)
+                .unwrap_or_else(|| panic!("{n}"))
+        })
         .collect();
     rows.iter()
         .flat_map(|r| idx.iter().map(move |&i| r[i]))
@@ -203,8 +208,7 @@ fn compare(out: &Path) -> BTreeMap<String, Npy> {
     if np > 0 {
         check("prescribed", names("prescribed", np));
         check("prescribed_force", names("prescribed_force", np));
-        let pn: Vec<String> =
-            serde_json::from_value(summary["prescribed_names"].clone()).unwrap();
+        let pn: Vec<String> = serde_json::from_value(summary["prescribed_names"].clone()).unwrap();
         assert_eq!(a["prescribed_names"].strings(), pn);
         expected.extend(["prescribed", "prescribed_force", "prescribed_names"]);
     }

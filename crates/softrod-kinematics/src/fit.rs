@@ -181,7 +181,7 @@ mod tests {
             })
             .collect();
         let r = rod(4, Basis::select(&[Strain::Ky, Strain::Kz]).unwrap());
-        let fit = fit_centerline(&r, &pts, &vec![0.0; 8]).unwrap();
+        let fit = fit_centerline(&r, &pts, &[0.0; 8]).unwrap();
         assert!(fit.max < 1e-12, "{fit:?}");
         for p in 0..4 {
             assert!((fit.q[2 * p] - 1.0 / radius).abs() < 1e-10, "{:?}", fit.q);

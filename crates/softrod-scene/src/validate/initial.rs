@@ -162,8 +162,8 @@ impl Ctx<'_> {
                     if !(0.0..=length).contains(&s) {
                         return Err(self.r.out_of_range(
                             &sp,
-                            &s,
-                            &format!("in [0, {length}] (the rod's length)"),
+                            s,
+                            format!("in [0, {length}] (the rod's length)"),
                         ));
                     }
                     if let Some(&(prev, _)) = points.last()
