@@ -66,6 +66,9 @@ enum Command {
         /// Also write the equilibrium's shape plot, DIR/statics_shape.svg.
         #[arg(long)]
         out: Option<PathBuf>,
+        /// With --out, also write DIR/statics_shape.png (same size; text in a system font).
+        #[arg(long, requires = "out")]
+        png: bool,
     },
     /// Integrate the dynamics; write trajectory.csv, shape.csv, summary.json and SVG plots.
     #[command(
@@ -92,6 +95,9 @@ enum Command {
         /// for `numpy.load`; see docs/scene-format-extensions.md.
         #[arg(long)]
         npz: bool,
+        /// Also write a PNG beside each SVG figure (same size; text in a system font).
+        #[arg(long)]
+        png: bool,
     },
     /// Natural frequencies of the model linearized about its static equilibrium.
     #[command(
@@ -170,13 +176,19 @@ fn main() -> ExitCode {
     let quiet = cli.quiet;
     let result = match cli.command {
         Command::Check { scene } => inspect::check(&scene),
-        Command::Statics { scene, json, out } => inspect::statics(&scene, json, out),
+        Command::Statics {
+            scene,
+            json,
+            out,
+            png,
+        } => inspect::statics(&scene, json, out, png),
         Command::Run {
             scene,
             out,
             snapshots,
             npz,
-        } => run::run(&scene, out, snapshots, quiet, npz),
+            png,
+        } => run::run(&scene, out, snapshots, quiet, npz, png),
         Command::Modes {
             scene,
             json,

@@ -689,6 +689,7 @@ pub fn run(
     snapshots: Option<Vec<f64>>,
     quiet: bool,
     npz_out: bool,
+    png: bool,
 ) -> Result<(), CliError> {
     let mut l = load(path)?;
     let dir = out_dir(path, out);
@@ -846,8 +847,15 @@ pub fn run(
     // show where it went wrong).
     let title = scene_title(path);
     let model = l.sim.model();
-    let plot_result =
-        plots::run_figures(&dir, streamer.finish_series(), model, &title).and_then(|_| {
+    let plot_result = plots::run_figures(&dir, streamer.finish_series(), model, &title)
+        .and_then(|names| {
+            if png {
+                plots::rasterize(&dir, &names, quiet)
+            } else {
+                Ok(())
+            }
+        })
+        .and_then(|()| {
             if streamer.rows_written() > 0 {
                 outputs::write_view(&dir, model, &title).map(|_| ())
             } else {
