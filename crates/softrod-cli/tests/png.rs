@@ -86,7 +86,7 @@ fn rod_vertices(svg: &str) -> Vec<(f64, f64)> {
 
 /// Checks `NAME.png` against `NAME.svg` in `dir`; returns how many rod
 /// vertices were checked.
-fn check_png(dir: &Path, name: &str) -> usize {
+fn check_png(dir: &Path, name: &str, text: bool) -> usize {
     let svg = std::fs::read_to_string(dir.join(format!("{name}.svg"))).unwrap();
     let img = Image::read(&dir.join(format!("{name}.png")));
     assert_eq!((img.width, img.height), svg_size(&svg), "{name}: size");
@@ -108,7 +108,9 @@ fn check_png(dir: &Path, name: &str) -> usize {
         .flat_map(|y| (0..img.width).map(move |x| (x, y)))
         .filter(|&(x, y)| img.px(x, y)[..3].iter().all(|&c| c < 80))
         .count();
-    assert!(dark > 100, "{name}: {dark} dark pixels in the title band");
+    if text {
+        assert!(dark > 100, "{name}: {dark} dark pixels in the title band");
+    }
     verts.len()
 }
 
@@ -126,10 +128,14 @@ fn run_png_figures_match_their_svgs() {
         scene.to_str().unwrap(),
         "--out",
         out.to_str().unwrap(),
-        "--quiet",
         "--png",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
+    // A machine without any font gets PNGs without text, and is told so.
+    let text = !stderr(&o).contains("no font found");
+    if !text {
+        eprintln!("no system font: the text of the PNGs is not checked");
+    }
     let mut svgs: Vec<String> = std::fs::read_dir(&out)
         .unwrap()
         .filter_map(|e| {
@@ -139,7 +145,7 @@ fn run_png_figures_match_their_svgs() {
         .collect();
     svgs.sort();
     assert!(svgs.len() >= 4, "{svgs:?}");
-    let rods: usize = svgs.iter().map(|n| check_png(&out, n)).sum();
+    let rods: usize = svgs.iter().map(|n| check_png(&out, n, text)).sum();
     assert!(rods > 20, "rod vertices checked: {rods}");
 
     // Without --png the PNGs of the previous run go, like the SVGs.
@@ -161,5 +167,6 @@ fn statics_png_matches_its_svg() {
         "--png",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    assert!(check_png(&out, "statics_shape") > 10);
+    let text = !stderr(&o).contains("no font found");
+    assert!(check_png(&out, "statics_shape", text) > 10);
 }
