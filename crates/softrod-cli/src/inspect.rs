@@ -115,7 +115,7 @@ fn centrelines(model: &Model, q: &[f64]) -> Result<Vec<Vec<[f64; 3]>>, CliError>
     poser.centrelines(model, &sampling)
 }
 
-pub fn statics(path: &Path, json: bool, out: Option<PathBuf>) -> Result<(), CliError> {
+pub fn statics(path: &Path, json: bool, out: Option<PathBuf>, png: bool) -> Result<(), CliError> {
     let mut l = load(path)?;
     let res = l.sim.statics()?;
     if res.q.iter().any(|v| !v.is_finite()) || !res.residual.is_finite() {
@@ -143,6 +143,9 @@ pub fn statics(path: &Path, json: bool, out: Option<PathBuf>) -> Result<(), CliE
         let c = centrelines(model, res.q.as_slice())?;
         let bodies: Vec<[f64; 3]> = poser.bodies().iter().map(position).collect();
         let name = plots::statics_figure(dir, model, &c, &bodies, &scene_title(path))?;
+        if png {
+            plots::rasterize(dir, std::slice::from_ref(&name), json)?;
+        }
         if !json {
             println!("wrote {}", dir.join(name).display());
         }

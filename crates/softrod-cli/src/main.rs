@@ -9,6 +9,7 @@ mod closures;
 mod common;
 mod inspect;
 mod linearize;
+mod npz;
 mod outputs;
 mod plots;
 mod report;
@@ -67,6 +68,9 @@ enum Command {
         /// Also write the equilibrium's shape plot, DIR/statics_shape.svg.
         #[arg(long)]
         out: Option<PathBuf>,
+        /// With --out, also write DIR/statics_shape.png (same size; text in a system font).
+        #[arg(long, requires = "out")]
+        png: bool,
     },
     /// Integrate the dynamics; write trajectory.csv, shape.csv, summary.json and SVG plots.
     #[command(
@@ -74,7 +78,8 @@ enum Command {
         tolerances, duration, output_every). Writes DIR/trajectory.csv (streamed row by row), \
         DIR/shape.csv, DIR/summary.json (also on failure) and SVG plots: tip_trajectory.svg, \
         energy.svg, shapes.svg, strains.svg, actuators.svg (with cables), and the 3-D view \
-        DIR/view.html (with view.json, see `softrod view`).\n\nExample:\n  softrod run examples/cantilever_gravity.toml --out /tmp/cantilever"
+        DIR/view.html (with view.json, see `softrod view`). With --npz also DIR/trajectory.npz \
+        (NumPy arrays of the same rows, with the column names).\n\nExample:\n  softrod run examples/cantilever_gravity.toml --out /tmp/cantilever"
     )]
     Run {
         /// The scene file (TOML).
@@ -86,6 +91,15 @@ enum Command {
         /// (each at the nearest output time; default six spread over the run).
         #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
         snapshots: Option<Vec<f64>>,
+        /// Also write DIR/trajectory.npz: the trajectory as NumPy arrays (`t`, `q`, `qdot`,
+        /// `tip`, `energy`, with cables `tension`/`power`, with prescribed joints
+        /// `prescribed`/`prescribed_force`) and the column names `q_names` (`prescribed_names`),
+        /// for `numpy.load`; see docs/scene-format-extensions.md.
+        #[arg(long)]
+        npz: bool,
+        /// Also write a PNG beside each SVG figure (same size; text in a system font).
+        #[arg(long)]
+        png: bool,
     },
     /// Natural frequencies of the model linearized about its static equilibrium.
     #[command(
@@ -164,12 +178,19 @@ fn main() -> ExitCode {
     let quiet = cli.quiet;
     let result = match cli.command {
         Command::Check { scene } => inspect::check(&scene),
-        Command::Statics { scene, json, out } => inspect::statics(&scene, json, out),
+        Command::Statics {
+            scene,
+            json,
+            out,
+            png,
+        } => inspect::statics(&scene, json, out, png),
         Command::Run {
             scene,
             out,
             snapshots,
-        } => run::run(&scene, out, snapshots, quiet),
+            npz,
+            png,
+        } => run::run(&scene, out, snapshots, quiet, npz, png),
         Command::Modes {
             scene,
             json,

@@ -164,8 +164,10 @@ pub fn regenerate_view(dir: &Path) -> Result<ViewStats, CliError> {
 
 /// The files `softrod run` writes (besides `strains_R.svg`): removed at the
 /// start of a run, so that a directory never mixes two runs' outputs.
-pub const RUN_OUTPUTS: [&str; 13] = [
+pub const RUN_OUTPUTS: [&str; 21] = [
     "trajectory.csv",
+    "trajectory.npz",
+    "trajectory.npz.tmp",
     "shape.csv",
     "bodies.csv",
     "summary.json",
@@ -178,6 +180,12 @@ pub const RUN_OUTPUTS: [&str; 13] = [
     "strains.svg",
     "actuators.svg",
     "shape.svg",
+    "tip_trajectory.png",
+    "energy.png",
+    "shapes.png",
+    "strains.png",
+    "actuators.png",
+    "shape.png",
 ];
 
 /// Whether `name` is a file `softrod run` writes.
@@ -185,7 +193,7 @@ fn is_run_output(name: &str) -> bool {
     RUN_OUTPUTS.contains(&name)
         || name
             .strip_prefix("strains_")
-            .and_then(|r| r.strip_suffix(".svg"))
+            .and_then(|r| r.strip_suffix(".svg").or_else(|| r.strip_suffix(".png")))
             .is_some_and(|r| !r.is_empty() && r.bytes().all(|b| b.is_ascii_digit()))
 }
 

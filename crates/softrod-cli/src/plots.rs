@@ -98,6 +98,17 @@ fn write(
     })
 }
 
+/// With `--png`: a PNG beside each SVG figure `names` (in `dir`), same
+/// size; warns (unless `quiet`) when no font was found for the text.
+pub fn rasterize(dir: &Path, names: &[String], quiet: bool) -> Result<(), CliError> {
+    let paths: Vec<std::path::PathBuf> = names.iter().map(|n| dir.join(n)).collect();
+    let done = softrod_viz::png::svg_to_png_all(&paths).map_err(|e| failed(format!("PNG: {e}")))?;
+    if !quiet && done.iter().any(|r| !r.text_drawn) {
+        eprintln!("softrod: warning: no font found on this system: the PNG figures have no text");
+    }
+    Ok(())
+}
+
 /// Writes every figure of a run: `tip_trajectory.svg`, `energy.svg`,
 /// `shapes.svg`, `strains.svg` (`strains_R.svg` for rod R ≥ 1) and, with
 /// cables, `actuators.svg`. Returns the names written (nothing without rows).

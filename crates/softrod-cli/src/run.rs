@@ -17,7 +17,7 @@ use softrod_viz::run_dir::{BODIES_HEADER, SHAPE_HEADER};
 use crate::common::{CliError, Poser, failed, load, out_dir, position, quaternion};
 use crate::outputs::{self, RodSampling, csv_line, default_points_per_piece, num};
 use crate::plots::{self, Series, Snapshot};
-use crate::signals;
+use crate::{npz, signals};
 
 /// The contract's first columns of `trajectory.csv` (the `q` columns follow).
 pub const TRAJECTORY_HEADER: [&str; 9] = [
@@ -82,6 +82,11 @@ impl OutFile {
     }
 }
 
+/// The NumPy archive of the trajectory (`--npz`), and its temporary name.
+pub const NPZ: &str = "trajectory.npz";
+/// See [`NPZ`].
+pub const NPZ_TMP: &str = "trajectory.npz.tmp";
+
 /// Longest wall time between two writes of the running summary, s.
 pub const SUMMARY_EVERY: f64 = 0.5;
 
@@ -121,6 +126,11 @@ pub struct Streamer {
     /// closures), and the residual that stops the run.
     pub closure_residual_max: f64,
     closure_fail: f64,
+    /// With `--npz`: every written row's numbers, in `trajectory.csv`'s
+    /// column order (kept for `trajectory.npz`, written at the end).
+    npz_rows: Option<Vec<f64>>,
+    /// The current row's numbers (allocated once).
+    values: Vec<f64>,
 }
 
 /// The output rows nearest the times `chosen` (s, each finite and within
@@ -233,6 +243,8 @@ impl Streamer {
             poses,
             viz_poses,
             row: Vec::with_capacity(header.len()),
+            values: Vec::with_capacity(header.len()),
+            npz_rows: None,
             n,
             last_snapshot: None,
             series,
@@ -245,6 +257,12 @@ impl Streamer {
             closure_residual_max: 0.0,
             closure_fail: crate::closures::RUN_FAIL_RELATIVE * crate::closures::length_scale(model),
         })
+    }
+
+    /// Keeps the rows for `trajectory.npz` (`--npz`).
+    pub fn keep_rows_for_npz(mut self, on: bool) -> Self {
+        self.npz_rows = on.then(Vec::new);
+        self
     }
 
     pub fn rows_written(&self) -> usize {
@@ -265,6 +283,68 @@ impl Streamer {
             }
         }
         &self.series
+    }
+
+    /// Writes `DIR/trajectory.npz` from the rows written (the same rows and
+    /// numbers as `trajectory.csv`), atomically: `trajectory.npz.tmp`
+    /// renamed over it, or nothing (the temporary file removed) on an error.
+    /// Does nothing without `--npz`.
+    pub fn write_npz(
+        &self,
+        dir: &Path,
+        model: &Model,
+        q_names: &[String],
+        prescribed_names: &[String],
+    ) -> Result<(), String> {
+        let Some(rows) = &self.npz_rows else {
+            return Ok(());
+        };
+        let (n, nc, np) = (self.n, model.n_cables(), model.n_prescribed());
+        let width = TRAJECTORY_HEADER.len() + 2 * n + 3 + 2 * nc + 2 * np;
+        let m = rows.len() / width;
+        debug_assert_eq!(rows.len(), m * width);
+        // Columns `cols` of every row, as one C-order (m, cols.len()) block.
+        let take = |cols: &[usize]| -> Vec<f64> {
+            rows.chunks_exact(width)
+                .flat_map(|r| cols.iter().map(move |&c| r[c]))
+                .collect()
+        };
+        let range = |from: usize, len: usize| (from..from + len).collect::<Vec<_>>();
+        let q0 = TRAJECTORY_HEADER.len();
+        let e0 = q0 + 2 * n;
+        let c0 = e0 + 3;
+        let p0 = c0 + 2 * nc;
+        let mut a = npz::Archive::new();
+        a.add_f64("t", &[m], &take(&[0]));
+        a.add_f64("q", &[m, n], &take(&range(q0, n)));
+        a.add_f64("qdot", &[m, n], &take(&range(q0 + n, n)));
+        a.add_f64("tip", &[m, 7], &take(&range(1, 7)));
+        a.add_f64("energy", &[m, 4], &take(&[8, e0, e0 + 1, e0 + 2]));
+        if nc > 0 {
+            a.add_f64("tension", &[m, nc], &take(&range(c0, nc)));
+            a.add_f64("power", &[m, nc], &take(&range(c0 + nc, nc)));
+        }
+        if np > 0 {
+            a.add_f64("prescribed", &[m, np], &take(&range(p0, np)));
+            a.add_f64("prescribed_force", &[m, np], &take(&range(p0 + np, np)));
+        }
+        a.add_strings("q_names", q_names);
+        if np > 0 {
+            a.add_strings("prescribed_names", prescribed_names);
+        }
+        let path = dir.join(NPZ);
+        let tmp = dir.join(NPZ_TMP);
+        let written = File::create(&tmp).and_then(|f| {
+            let mut w = std::io::BufWriter::new(f);
+            a.write_to(&mut w)?;
+            w.into_inner().map_err(|e| e.into_error())?.sync_all()?;
+            std::fs::rename(&tmp, &path)
+        });
+        written.map_err(|e| {
+            let _ = std::fs::remove_file(&tmp);
+            let _ = std::fs::remove_file(&path);
+            format!("writing {NPZ}: {e}; it was removed (trajectory.csv is complete)")
+        })
     }
 
     fn write_row(&mut self, s: Sample<'_>) -> Result<(), String> {
@@ -340,16 +420,16 @@ impl Streamer {
                 }
             }
         }
-        self.row.clear();
-        self.row.push(num(t));
-        self.row.extend(p.iter().chain(&qt).map(|v| num(*v)));
-        self.row.push(num(e.total()));
-        self.row.extend(q.iter().map(|v| num(*v)));
-        self.row.extend(qd.iter().map(|v| num(*v)));
-        self.row
-            .extend([e.kinetic, e.elastic, e.gravitational].map(num));
-        self.row.extend(tensions.iter().map(|v| num(*v)));
-        self.row.extend(power.iter().map(|v| num(*v)));
+        // The row's numbers, in the column order of `trajectory.csv`.
+        self.values.clear();
+        self.values.push(t);
+        self.values.extend(p.iter().chain(&qt));
+        self.values.push(e.total());
+        self.values.extend(q);
+        self.values.extend(qd);
+        self.values.extend([e.kinetic, e.elastic, e.gravitational]);
+        self.values.extend(&tensions);
+        self.values.extend(&power);
         if model.n_prescribed() > 0 {
             // The drive's force comes with the accelerations at this state.
             forward_dynamics(model, s.data, t, q, qd, None)
@@ -360,8 +440,10 @@ impl Streamer {
                     "non-finite prescribed_force{i} at t = {t:e}; output stopped"
                 ));
             }
-            self.row.extend(pq.iter().chain(pf.iter()).map(|v| num(*v)));
+            self.values.extend(pq.iter().chain(pf.iter()));
         }
+        self.row.clear();
+        self.row.extend(self.values.iter().map(|v| num(*v)));
         self.traj_text = csv_line(&self.row);
         self.shape_text.clear();
         let ts = num(t);
@@ -417,6 +499,10 @@ impl Streamer {
             f.commit(self.bodies_text.len());
         }
         self.traj.commit(self.traj_text.len());
+        if let Some(rows) = &mut self.npz_rows {
+            // `+ 0.0` turns −0 into 0, as the CSV writes it.
+            rows.extend(self.values.iter().map(|v| v + 0.0));
+        }
         self.series.t.push(t);
         for (r, tips) in self.series.tips.iter_mut().enumerate() {
             tips.push(position(self.poser.tip(r)));
@@ -602,6 +688,8 @@ pub fn run(
     out: Option<PathBuf>,
     snapshots: Option<Vec<f64>>,
     quiet: bool,
+    npz_out: bool,
+    png: bool,
 ) -> Result<(), CliError> {
     let mut l = load(path)?;
     let dir = out_dir(path, out);
@@ -610,6 +698,12 @@ pub fn run(
     let every = l.sim.settings().output_spacing(duration);
     outputs::check_disk_space(&dir, l.sim.model(), duration, every)?;
     let times = output_times(duration, every);
+    if npz_out {
+        let m = l.sim.model();
+        let width =
+            TRAJECTORY_HEADER.len() + 2 * m.n_dof() + 3 + 2 * m.n_cables() + 2 * m.n_prescribed();
+        npz::check_size(times.len() as u64, width).map_err(CliError::Input)?;
+    }
     let snapshot_at = chosen_rows(&times, snapshots.as_deref())?;
     outputs::prepare_out_dir(&dir)?;
     let stale = outputs::clear_stale(&dir)?;
@@ -666,7 +760,8 @@ pub fn run(
         snapshot_at,
         summary,
         bar,
-    )?;
+    )?
+    .keep_rows_for_npz(npz_out);
     signals::install();
     let start = Instant::now();
     // Rows are the integrator's dense output at the output times, streamed
@@ -680,7 +775,7 @@ pub fn run(
         b.finish_and_clear();
     }
     let wall = start.elapsed().as_secs_f64();
-    let (status, stats, t_final) = match (&result, &streamer.error) {
+    let (mut status, stats, t_final) = match (&result, &streamer.error) {
         (_, None) if streamer.interrupted.is_some() => (
             format!(
                 "error: interrupted by {} at t = {} ({} of {} output rows written)",
@@ -733,13 +828,34 @@ pub fn run(
             );
         }
     }
+    // The archive holds the rows the CSV holds, also after a failure; if it
+    // cannot be written it is removed, and the run says so.
+    if let Err(e) = streamer.write_npz(
+        &dir,
+        l.sim.model(),
+        &l.sim.q_names(),
+        &l.sim.prescribed_names(),
+    ) {
+        status = if status == "ok" {
+            format!("error: {e}")
+        } else {
+            format!("{status}; {e}")
+        };
+    }
     summary_final.write(&stats, wall, t_final, &status, streamer.rows_written())?;
     // Plots and view of whatever was computed (also after a failure: they
     // show where it went wrong).
     let title = scene_title(path);
     let model = l.sim.model();
-    let plot_result =
-        plots::run_figures(&dir, streamer.finish_series(), model, &title).and_then(|_| {
+    let plot_result = plots::run_figures(&dir, streamer.finish_series(), model, &title)
+        .and_then(|names| {
+            if png {
+                plots::rasterize(&dir, &names, quiet)
+            } else {
+                Ok(())
+            }
+        })
+        .and_then(|()| {
             if streamer.rows_written() > 0 {
                 outputs::write_view(&dir, model, &title).map(|_| ())
             } else {

@@ -29,6 +29,7 @@ pub mod demo;
 pub mod error;
 pub mod html;
 pub mod plot;
+pub mod png;
 pub mod run_dir;
 
 pub use data::{BodyShape, BodyTrack, CableTrack, Pose, RodTrack, ViewData};
