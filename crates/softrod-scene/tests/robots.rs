@@ -436,3 +436,26 @@ material = { density = 1000.0, young = 1.0e6, poisson = 0.5 }
         assert!(e.to_string().contains(says), "{line}: {e}");
     }
 }
+
+#[test]
+fn a_sampled_drive_that_stops_before_the_run_warns() {
+    let text = |times: &str, values: &str| {
+        format!(
+            "[[rod]]\nname = \"arm\"\nlength = 0.2\npieces = 2\n\
+             joint = {{ type = \"prismatic\", axis = [0, 0, 1], prescribed = {{ times = {times}, values = {values} }} }}\n\
+             section = {{ shape = \"circle\", radius = 0.01 }}\n\
+             material = {{ density = 1000.0, young = 1.0e6, poisson = 0.5 }}\n\
+             [run]\nduration = 2.0\n"
+        )
+    };
+    // A ramp still rising at t = 1 s: it stops abruptly, a warning.
+    let (_, w) = Scene::from_str(&text("[0, 1]", "[0, 0.1]"), "w.toml").unwrap();
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert_eq!(w[0].path, "rod[0].joint.prescribed.times");
+    assert!(w[0].message.contains("stops abruptly"), "{w:?}");
+    // At rest at its end, or lasting the whole run: no warning.
+    let (_, w) = Scene::from_str(&text("[0, 0.5, 1]", "[0.1, 0.1, 0.1]"), "w.toml").unwrap();
+    assert!(w.is_empty(), "{w:?}");
+    let (_, w) = Scene::from_str(&text("[0, 1, 2]", "[0, 0.1, 0.1]"), "w.toml").unwrap();
+    assert!(w.is_empty(), "{w:?}");
+}

@@ -23,6 +23,7 @@ use serde::Deserialize;
 
 use crate::raw::RawScene;
 use crate::reporter::Reporter;
+use crate::robot::Robot;
 use crate::scene::{Origins, Scene};
 
 type Result<T> = std::result::Result<T, SceneError>;
@@ -66,6 +67,49 @@ struct Ctx<'a> {
 }
 
 impl Ctx<'_> {
+    /// A sampled drive that ends before the run does and is still moving
+    /// there stops abruptly (it holds its end value): warn.
+    fn warn_drives_that_stop(&mut self, robot: &Robot, run: &crate::run::Run) {
+        let joints = robot
+            .rod_attachments
+            .iter()
+            .enumerate()
+            .map(|(i, a)| (format!("rod[{i}]"), a))
+            .chain(
+                robot
+                    .body_attachments
+                    .iter()
+                    .enumerate()
+                    .map(|(j, a)| (format!("body[{j}]"), a)),
+            );
+        let mut found = Vec::new();
+        for (owner, a) in joints {
+            let Some(p) = &a.joint.prescribed else {
+                continue;
+            };
+            for (c, curve) in p.curves.iter().enumerate() {
+                if let softrod_dynamics::Curve::Spline(sp) = curve {
+                    let (_, end) = sp.span();
+                    let (_, rate, _) = sp.eval(end);
+                    if end < run.duration && rate.abs() > 1e-12 {
+                        found.push((
+                            format!("{owner}.joint.prescribed.times"),
+                            format!(
+                                "coordinate {c} still moves at its last time {end} s (rate {rate:e}) \
+                                 and then holds still: the drive stops abruptly before \
+                                 run.duration = {} s",
+                                run.duration
+                            ),
+                        ));
+                    }
+                }
+            }
+        }
+        for (path, message) in found {
+            self.warn(&path, message);
+        }
+    }
+
     fn warn(&mut self, path: &str, message: String) {
         let at = self.r.at(path);
         self.warnings.push(Warning {
@@ -138,6 +182,7 @@ impl Ctx<'_> {
             origins.loads[i].push(j);
         }
         let initial = self.initial(raw.initial, &rods, &robot)?;
+        self.warn_drives_that_stop(&robot, &run);
         let reference = raw
             .reference
             .map(|r| self.reference(r, &rods, &run))
