@@ -581,6 +581,43 @@ pub(crate) fn assemble(
     }
 }
 
+/// The constraint rows' columns of the prescribed coordinates (D59), `J_p`
+/// (m×n_p, velocity rows), after an outward pass at `(q, qd)`: the
+/// prescribed joints' spatial columns on each frame's path to the root.
+pub(crate) fn prescribed_columns(
+    model: &Model,
+    tree: &Tree,
+    data: &Data,
+    q: &[f64],
+    qd: Option<&[f64]>,
+    jac_p: &mut DMatrix<f64>,
+) {
+    jac_p.fill(0.0);
+    for rc in &model.closures {
+        let fa = frame_state(model, tree, data, &rc.a, q, qd);
+        let fb = frame_state(model, tree, data, &rc.b, q, qd);
+        let rows = closure_rows(rc, &fa, &fb, false);
+        let m = rc.spec.kind.n_constraints();
+        for (fs, sign) in [(&fa, 1.0), (&fb, -1.0)] {
+            let mut c = fs.from;
+            let mut anc = fs.ancestors;
+            while let Some(j) = anc {
+                let nj = &tree.nodes[j];
+                if let (Some((o, kp)), Some(cc)) = (nj.prescribed, c) {
+                    let blk = rows.c * crate::tree_algorithms::parent_column(tree, data, cc);
+                    for r in 0..m {
+                        for col in 0..kp {
+                            jac_p[(rc.row + r, o + col)] += sign * blk[(r, col)];
+                        }
+                    }
+                }
+                c = Some(j);
+                anc = nj.parent;
+            }
+        }
+    }
+}
+
 /// The model's length scale for residual norms: its longest rod \[m\].
 pub(crate) fn length_scale(model: &Model) -> f64 {
     model

@@ -33,11 +33,17 @@ pub(crate) struct ClosureWork {
     pub perm: Vec<usize>,
     /// Numerical rank of `A` at the last evaluation.
     pub rank: usize,
+    /// With prescribed joints (D59): the constraint rows' columns of the
+    /// prescribed coordinates `J_p` (m×n_p), and a copy of `q̈` (n).
+    pub jac_p: DMatrix<f64>,
+    pub qdd: DVector<f64>,
 }
 
 impl ClosureWork {
-    pub(crate) fn new(n: usize, m: usize) -> Self {
+    pub(crate) fn new(n: usize, m: usize, n_p: usize) -> Self {
         Self {
+            jac_p: DMatrix::zeros(m, n_p),
+            qdd: DVector::zeros(if n_p > 0 { n } else { 0 }),
             phi: DVector::zeros(m),
             jac: DMatrix::zeros(m, n),
             jdot_qd: DVector::zeros(m),
@@ -235,6 +241,14 @@ fn forward_inner(
     w.rhs.gemv(-1.0, &w.jac, &data.qdd, 0.0);
     let qdv = nalgebra::DVectorView::from_slice(qd, qd.len());
     w.rhs.gemv(-2.0 * rate, &w.jac, &qdv, 1.0);
+    let driven = model.n_prescribed() > 0;
+    if driven {
+        // φ̇ = J q̇ + J_p q̇_p: the drive moves the frames too (D62 of the
+        // path, D59). J̇q̇ above is the frames' acceleration at q̈ = 0, which
+        // already holds the drive's acceleration.
+        crate::closure::prescribed_columns(model, tree, data, q, Some(qd), &mut w.jac_p);
+        w.rhs.gemv(-2.0 * rate, &w.jac_p, &data.prescribed_qd, 1.0);
+    }
     w.rhs -= &w.jdot_qd;
     w.rhs.axpy(-rate * rate, &w.phi, 1.0);
     w.rank = pivoted_cholesky(&mut w.a, &mut w.perm);
@@ -264,6 +278,23 @@ fn forward_inner(
         w.lambda[w.perm[i]] = x[i];
     }
     data.qdd.gemv(1.0, &w.y, &w.lambda, 1.0);
+    if driven {
+        // The drive's force at the constrained motion: what the open tree
+        // needs there, less the closures' share `J_pᵀλ` (D60).
+        w.qdd.copy_from(&data.qdd);
+        crate::tree_algorithms::inverse_dynamics(
+            model,
+            tree,
+            data,
+            t,
+            q,
+            Some(qd),
+            Some(w.qdd.as_slice()),
+        );
+        data.prescribed_force
+            .gemv_tr(-1.0, &w.jac_p, &w.lambda, 1.0);
+        data.qdd.copy_from(&w.qdd);
+    }
     Ok(())
 }
 

@@ -141,9 +141,9 @@ impl Data {
             prescribed_time: f64::NAN,
             prescribed_force: DVector::zeros(model.n_prescribed()),
             prescribed_at_rest: false,
-            closure: model
-                .has_closures()
-                .then(|| crate::constrained::ClosureWork::new(n, model.n_constraints())),
+            closure: model.has_closures().then(|| {
+                crate::constrained::ClosureWork::new(n, model.n_constraints(), model.n_prescribed())
+            }),
         };
         model.set_time(&mut data, 0.0);
         data

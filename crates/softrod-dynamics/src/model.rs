@@ -401,14 +401,6 @@ impl Model {
         if closures.is_empty() {
             return Ok(self);
         }
-        // The constrained solve works in the free coordinates only: the
-        // constraint's motion through a drive (J_p q̇_p) and the drive's share
-        // of the constraint forces (J_pᵀλ) are not carried yet.
-        if self.n_prescribed > 0 {
-            return Err(DynamicsError::UnsupportedClosed {
-                what: "a prescribed joint",
-            });
-        }
         if self.tree.is_none() {
             self.tree = Some(Tree::build(&self)?);
         }
