@@ -552,6 +552,20 @@ impl Simulation {
         self.sim.q_names()
     }
 
+    /// The loop closures' residuals at `q` [m] (docs/theory.md D66), a dict
+    /// from closure name to `max(|d|, L|r|)`; empty without closures.
+    fn closure_residuals(
+        &mut self,
+        q: &Bound<'_, PyAny>,
+    ) -> PyResult<std::collections::BTreeMap<String, f64>> {
+        guard(|| {
+            let n = self.n();
+            let q = vector(q, "q", n)?;
+            let r = self.sim.closure_residuals(q.slice()).map_err(to_py)?;
+            Ok(r.into_iter().collect())
+        })
+    }
+
     /// The names of the prescribed joint coordinates (D59), in the order
     /// of `prescribed_forces`; empty without prescribed joints.
     #[getter]
@@ -711,6 +725,24 @@ impl Simulation {
             let mut out = vec![0.0; 16];
             pose_into(&g, &mut out);
             array_out(py, out, &[4, 4])
+        })
+    }
+
+    /// World poses (n_bodies, 4, 4) of the rigid bodies' frames for `q`, in
+    /// the scene's order (D51); shape (0, 4, 4) without bodies.
+    fn body_poses<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        guard(|| {
+            let q = vector(q, "q", self.n())?;
+            let poses = self.sim.body_poses(q.slice()).map_err(to_py)?;
+            let mut out = vec![0.0; 16 * poses.len()];
+            for (g, o) in poses.iter().zip(out.chunks_mut(16)) {
+                pose_into(g, o);
+            }
+            array_out(py, out, &[poses.len(), 4, 4])
         })
     }
 

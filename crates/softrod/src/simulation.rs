@@ -518,6 +518,19 @@ impl Simulation {
         Ok(s.data.prescribed_force.clone())
     }
 
+    /// The closures' names and residuals at `q` (one per `[[closure]]`, in
+    /// order): `max(‖d‖, ℓ‖r‖)` \[m\], the misfit of the held frames
+    /// (docs/theory.md D66); empty without closures.
+    pub fn closure_residuals(&mut self, q: &[f64]) -> Result<Vec<(String, f64)>> {
+        self.check("q", q)?;
+        let s = &mut self.system;
+        if !s.model.has_closures() {
+            return Ok(Vec::new());
+        }
+        let r = softrod_dynamics::closure_residuals(&s.model, &mut s.data, q)?;
+        Ok(s.model.closures().map(|c| c.name.clone()).zip(r).collect())
+    }
+
     /// Inverse dynamics: the actuator force `τ_act` that gives `q̈` at
     /// `(t, q, q̇)` (D17–D18).
     pub fn inverse_dynamics(
