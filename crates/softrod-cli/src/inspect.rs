@@ -257,7 +257,13 @@ fn mode_curves(
 
 type ModeCurves = (Vec<Vec<[f64; 3]>>, Vec<(f64, Vec<Vec<[f64; 3]>>)>);
 
-pub fn modes(path: &Path, json: bool, count: usize, out: Option<PathBuf>) -> Result<(), CliError> {
+pub fn modes(
+    path: &Path,
+    json: bool,
+    count: usize,
+    out: Option<PathBuf>,
+    png: bool,
+) -> Result<(), CliError> {
     let mut l = load(path)?;
     let analysis = l.sim.modes()?;
     let m = &analysis.modes;
@@ -271,6 +277,9 @@ pub fn modes(path: &Path, json: bool, count: usize, out: Option<PathBuf>) -> Res
         let (eq, curves) = mode_curves(model, &q_eq, m, count.min(MODE_PLOTS))?;
         if !curves.is_empty() {
             let name = plots::modes_figure(dir, model, &eq, curves, &scene_title(path))?;
+            if png {
+                plots::rasterize(dir, std::slice::from_ref(&name), json)?;
+            }
             if !json {
                 println!("wrote {}", dir.join(name).display());
             }

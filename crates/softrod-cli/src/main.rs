@@ -119,6 +119,9 @@ enum Command {
         /// Also write the mode shapes (the lowest, up to 6), DIR/modes.svg.
         #[arg(long)]
         out: Option<PathBuf>,
+        /// With --out, also write DIR/modes.png (same size; text in a system font).
+        #[arg(long, requires = "out")]
+        png: bool,
     },
     /// Rebuild DIR/view.html, the animated 3-D view, from a run directory's files.
     #[command(
@@ -196,7 +199,8 @@ fn main() -> ExitCode {
             json,
             count,
             out,
-        } => inspect::modes(&scene, json, count, out),
+            png,
+        } => inspect::modes(&scene, json, count, out, png),
         Command::View { dir } => run::view(&dir, quiet),
         Command::Linearize { scene, json } => linearize::linearize(&scene, json),
         Command::Report { scene, out, quick } => {

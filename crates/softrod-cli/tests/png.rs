@@ -170,3 +170,20 @@ fn statics_png_matches_its_svg() {
     let text = !stderr(&o).contains("no font found");
     assert!(check_png(&out, "statics_shape", text) > 10);
 }
+
+#[test]
+fn modes_png_matches_its_svg() {
+    let dir = tmp("modes");
+    let out = dir.join("out");
+    let scene = examples().join("cantilever_gravity.toml");
+    let o = run(&[
+        "modes",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--png",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = !stderr(&o).contains("no font found");
+    assert!(check_png(&out, "modes", text) > 10);
+}
