@@ -154,13 +154,13 @@ fn run_png_figures_match_their_svgs() {
     assert!(!out.join("shapes.png").exists());
 }
 
-#[test]
-fn statics_png_matches_its_svg() {
-    let dir = tmp("statics");
+/// `softrod COMMAND cantilever --out DIR --png`: its figure `NAME` as PNG.
+fn command_png_matches_its_svg(command: &str, name: &str) {
+    let dir = tmp(command);
     let out = dir.join("out");
     let scene = examples().join("cantilever_gravity.toml");
     let o = run(&[
-        "statics",
+        command,
         scene.to_str().unwrap(),
         "--out",
         out.to_str().unwrap(),
@@ -168,22 +168,15 @@ fn statics_png_matches_its_svg() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let text = !stderr(&o).contains("no font found");
-    assert!(check_png(&out, "statics_shape", text) > 10);
+    assert!(check_png(&out, name, text) > 10);
+}
+
+#[test]
+fn statics_png_matches_its_svg() {
+    command_png_matches_its_svg("statics", "statics_shape");
 }
 
 #[test]
 fn modes_png_matches_its_svg() {
-    let dir = tmp("modes");
-    let out = dir.join("out");
-    let scene = examples().join("cantilever_gravity.toml");
-    let o = run(&[
-        "modes",
-        scene.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--png",
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let text = !stderr(&o).contains("no font found");
-    assert!(check_png(&out, "modes", text) > 10);
+    command_png_matches_its_svg("modes", "modes");
 }

@@ -328,7 +328,7 @@ mod tests {
         let values = [0.0, 0.3, -0.2, 0.1, 0.05];
         let s = Spline::new(&times, &values).unwrap();
         for (i, &tk) in times.iter().enumerate() {
-            assert!((s.eval(tk).0 - values[i]).abs() < 1e-14 || i == 0 || i == 4);
+            assert!((s.eval(tk).0 - values[i]).abs() < 1e-14, "knot {i}");
         }
         for &tk in &times[1..4] {
             let (l, r) = (s.eval(tk - 1e-9), s.eval(tk + 1e-9));

@@ -1,8 +1,8 @@
 //! The tree of a model with joints, rigid bodies or parents
-//! (docs/theory.md §11, D50–D58): a list of *nodes* in topological order
+//! (docs/theory.md §11, D50–D62): a list of *nodes* in topological order
 //! (every parent before its children), each a rod piece, a joint's virtual
-//! piece or a rigid body, hanging from its parent's tip frame through a
-//! constant offset pose.
+//! piece or a rigid body, hanging from its parent's tip frame (or, D62, a
+//! point inside the parent piece) through a constant offset pose.
 
 use crate::error::DynamicsError;
 use crate::model::{ElementKind, Model};

@@ -398,20 +398,7 @@ fn long_run_keeps_the_residual_bounded_and_conserves_energy() {
     let mut max_de: f64 = 0.0;
     let mut max_ke: f64 = 0.0;
     for _ in 0..(t_end / dt) as usize {
-        let mut acc = |q: &DVector<f64>, v: &DVector<f64>| {
-            forward_dynamics(&model, &mut data, 0.0, q.as_slice(), v.as_slice(), None)
-                .unwrap()
-                .clone()
-        };
-        let a1 = acc(&q, &v);
-        let (q2, v2) = (&q + &v * (dt / 2.0), &v + &a1 * (dt / 2.0));
-        let a2 = acc(&q2, &v2);
-        let (q3, v3) = (&q + &v2 * (dt / 2.0), &v + &a2 * (dt / 2.0));
-        let a3 = acc(&q3, &v3);
-        let (q4, v4) = (&q + &v3 * dt, &v + &a3 * dt);
-        let a4 = acc(&q4, &v4);
-        q += (&v + &v2 * 2.0 + &v3 * 2.0 + &v4) * (dt / 6.0);
-        v += (&a1 + &a2 * 2.0 + &a3 * 2.0 + &a4) * (dt / 6.0);
+        common::rk4_step(&model, &mut data, 0.0, &mut q, &mut v, dt);
         let (_, rank) = closure_multipliers(&data).unwrap();
         assert_eq!(rank, 1, "the in-plane row only");
         let res = closure_residuals(&model, &mut data, q.as_slice()).unwrap()[0];

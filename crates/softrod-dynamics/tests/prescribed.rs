@@ -221,21 +221,7 @@ fn work_balance(viscosity: f64) {
     let mut t = 0.0;
     let mut scale: f64 = 0.0;
     for _ in 0..steps {
-        // RK4 with the time-dependent forward dynamics.
-        let mut acc = |t: f64, q: &DVector<f64>, v: &DVector<f64>| {
-            forward_dynamics(&driven, &mut data, t, q.as_slice(), v.as_slice(), None)
-                .unwrap()
-                .clone()
-        };
-        let a1 = acc(t, &q, &v);
-        let (q2, v2) = (&q + &v * (dt / 2.0), &v + &a1 * (dt / 2.0));
-        let a2 = acc(t + dt / 2.0, &q2, &v2);
-        let (q3, v3) = (&q + &v2 * (dt / 2.0), &v + &a2 * (dt / 2.0));
-        let a3 = acc(t + dt / 2.0, &q3, &v3);
-        let (q4, v4) = (&q + &v3 * dt, &v + &a3 * dt);
-        let a4 = acc(t + dt, &q4, &v4);
-        q += (&v + &v2 * 2.0 + &v3 * 2.0 + &v4) * (dt / 6.0);
-        v += (&a1 + &a2 * 2.0 + &a3 * 2.0 + &a4) * (dt / 6.0);
+        common::rk4_step(&driven, &mut data, t, &mut q, &mut v, dt);
         t += dt;
         let p = power(&mut data, t, &q, &v);
         work += 0.5 * dt * (p + p_prev);
@@ -433,15 +419,7 @@ fn a_closed_chain_with_a_drive_gains_the_drive_s_work() {
     let (mut work, mut scale, mut t) = (0.0, 0.0_f64, 0.0);
     let mut p_prev = acc(&mut data, 0.0, &q, &v).1;
     for _ in 0..steps {
-        let (a1, _) = acc(&mut data, t, &q, &v);
-        let (q2, v2) = (&q + &v * (dt / 2.0), &v + &a1 * (dt / 2.0));
-        let (a2, _) = acc(&mut data, t + dt / 2.0, &q2, &v2);
-        let (q3, v3) = (&q + &v2 * (dt / 2.0), &v + &a2 * (dt / 2.0));
-        let (a3, _) = acc(&mut data, t + dt / 2.0, &q3, &v3);
-        let (q4, v4) = (&q + &v3 * dt, &v + &a3 * dt);
-        let (a4, _) = acc(&mut data, t + dt, &q4, &v4);
-        q += (&v + &v2 * 2.0 + &v3 * 2.0 + &v4) * (dt / 6.0);
-        v += (&a1 + &a2 * 2.0 + &a3 * 2.0 + &a4) * (dt / 6.0);
+        common::rk4_step(&model, &mut data, t, &mut q, &mut v, dt);
         t += dt;
         let p = acc(&mut data, t, &q, &v).1;
         work += 0.5 * dt * (p + p_prev);

@@ -32,20 +32,7 @@ fn elliptic_k(k: f64) -> f64 {
 
 /// One classical RK4 step of `(q, q̇)` with the O(N) forward dynamics.
 fn rk4(model: &Model, data: &mut Data, q: &mut DVector<f64>, v: &mut DVector<f64>, dt: f64) {
-    let mut acc = |q: &DVector<f64>, v: &DVector<f64>| {
-        forward_dynamics(model, data, 0.0, q.as_slice(), v.as_slice(), None)
-            .unwrap()
-            .clone()
-    };
-    let a1 = acc(q, v);
-    let (q2, v2) = (&*q + &*v * (dt / 2.0), &*v + &a1 * (dt / 2.0));
-    let a2 = acc(&q2, &v2);
-    let (q3, v3) = (&*q + &v2 * (dt / 2.0), &*v + &a2 * (dt / 2.0));
-    let a3 = acc(&q3, &v3);
-    let (q4, v4) = (&*q + &v3 * dt, &*v + &a3 * dt);
-    let a4 = acc(&q4, &v4);
-    *q += (&*v + &v2 * 2.0 + &v3 * 2.0 + &v4) * (dt / 6.0);
-    *v += (&a1 + &a2 * 2.0 + &a3 * 2.0 + &a4) * (dt / 6.0);
+    common::rk4_step(model, data, 0.0, q, v, dt);
 }
 
 /// A rigid compound pendulum: a body hanging from a revolute joint about

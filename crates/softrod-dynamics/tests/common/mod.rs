@@ -4,7 +4,7 @@
 #![allow(dead_code)]
 
 use nalgebra::{DMatrix, DVector, Matrix6xX};
-use softrod_dynamics::{Model, RodSpec, RodSpecBuilder};
+use softrod_dynamics::{Data, Model, RodSpec, RodSpecBuilder, forward_dynamics};
 use softrod_kinematics::{Basis, PieceSpec, Rod, Strain};
 use softrod_lie::{Pose, Vec3, Vec6, exp_twist};
 use softrod_mechanics::{
@@ -327,4 +327,30 @@ pub fn wavy(n: usize, scale: f64, seed: f64) -> Vec<f64> {
     (0..n)
         .map(|i| scale * ((i as f64 + 1.0) * 1.7 + seed).sin())
         .collect()
+}
+
+/// One classical RK4 step of `(q, q̇)` from time `t` with the O(N) forward
+/// dynamics (time-dependent: cables, prescribed joints).
+pub fn rk4_step(
+    model: &Model,
+    data: &mut Data,
+    t: f64,
+    q: &mut DVector<f64>,
+    v: &mut DVector<f64>,
+    dt: f64,
+) {
+    let mut acc = |t: f64, q: &DVector<f64>, v: &DVector<f64>| {
+        forward_dynamics(model, data, t, q.as_slice(), v.as_slice(), None)
+            .unwrap()
+            .clone()
+    };
+    let a1 = acc(t, q, v);
+    let (q2, v2) = (&*q + &*v * (dt / 2.0), &*v + &a1 * (dt / 2.0));
+    let a2 = acc(t + dt / 2.0, &q2, &v2);
+    let (q3, v3) = (&*q + &v2 * (dt / 2.0), &*v + &a2 * (dt / 2.0));
+    let a3 = acc(t + dt / 2.0, &q3, &v3);
+    let (q4, v4) = (&*q + &v3 * dt, &*v + &a3 * dt);
+    let a4 = acc(t + dt, &q4, &v4);
+    *q += (&*v + &v2 * 2.0 + &v3 * 2.0 + &v4) * (dt / 6.0);
+    *v += (&a1 + &a2 * 2.0 + &a3 * 2.0 + &a4) * (dt / 6.0);
 }
