@@ -93,23 +93,30 @@ fn bench_dynamics(c: &mut Criterion) {
     g.finish();
 
     // The planar rod (strains ky, qx, qz on every piece) beside the 3-D one
-    // of the same size: the cost per evaluation of a planar scene.
-    let mut g = c.benchmark_group("forward_dynamics_planar");
-    for n in [8usize, 10] {
-        let m = model_with(
-            n,
-            Basis::select(&[Strain::Ky, Strain::Qx, Strain::Qz]).unwrap(),
-        );
-        let mut data = Data::new(&m);
-        let (q, qd) = planar_state(m.n_dof(), 42);
-        g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
-            b.iter(|| {
-                forward_dynamics(&m, &mut data, 0.0, black_box(&q), black_box(&qd), None).unwrap()
-                    [0]
-            })
-        });
+    // of the same size: the cost per evaluation of a planar scene, on the
+    // planar path (docs/theory.md §12) and, for the A/B, on the general one.
+    for (group, on) in [
+        ("forward_dynamics_planar", true),
+        ("forward_dynamics_planar_general_path", false),
+    ] {
+        let mut g = c.benchmark_group(group);
+        for n in [8usize, 10, 100] {
+            let m = model_with(
+                n,
+                Basis::select(&[Strain::Ky, Strain::Qx, Strain::Qz]).unwrap(),
+            )
+            .with_planar_path(on);
+            let mut data = Data::new(&m);
+            let (q, qd) = planar_state(m.n_dof(), 42);
+            g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+                b.iter(|| {
+                    forward_dynamics(&m, &mut data, 0.0, black_box(&q), black_box(&qd), None)
+                        .unwrap()[0]
+                })
+            });
+        }
+        g.finish();
     }
-    g.finish();
 
     let mut g = c.benchmark_group("inverse_dynamics");
     for n in [1usize, 4, 10, 40, 100, 1000] {

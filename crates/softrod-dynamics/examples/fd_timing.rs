@@ -4,7 +4,8 @@
 //! `id`, `mm`, `shifted` or `did` for forward, inverse dynamics, the mass
 //! matrix, one factor + solve of `M + aK + bD` or the analytic pair
 //! `∂τ/∂q, ∂τ/∂q̇`; `BASIS=planar` selects the strains
-//! `ky, qx, qz` on every piece instead of all six):
+//! `ky, qx, qz` on every piece instead of all six, and `PLANAR_PATH=off`
+//! runs such a rod on the general se(3) path):
 //! `N_PIECES=10 N_ITER=2000 cargo run --release -p softrod-dynamics --example fd_timing`.
 use softrod_dynamics::{
     Data, IdDerivatives, Model, RodSpec, ShiftedSolver, forward_dynamics, inverse_dynamics,
@@ -47,7 +48,8 @@ fn main() {
         Some(Vec3::new(0.0, 0.0, -9.81)),
         4,
     )
-    .unwrap();
+    .unwrap()
+    .with_planar_path(std::env::var("PLANAR_PATH").as_deref() != Ok("off"));
     let mut data = Data::new(&model);
     let (q, qd): (Vec<f64>, Vec<f64>) = if std::env::var("STATE").as_deref() == Ok("bench") {
         let mut st: u64 = 7;

@@ -138,6 +138,10 @@ pub(crate) fn inverse_dynamics_impl<'a>(
 /// (D17–D18): `W_n = 𝓟_n + A_ℓᵀ W_{n+1}`, `τ_n = B_nᵀ(𝓹_n + T₋(ℓ)ᵀ W_{n+1}) − τ̃_n`.
 pub(crate) fn inward_inverse(model: &Model, data: &mut Data) {
     for (r, rm) in model.rods().iter().enumerate() {
+        if let (true, Some(pr)) = (model.uses_planar_path(r), &rm.planar) {
+            crate::planar::inward_inverse(rm, pr, data, r);
+            continue;
+        }
         let mut wv = Vec6::zeros();
         for (n, piece) in rm.spec.rod.pieces().iter().enumerate().rev() {
             let w = &data.pieces[r][n];
@@ -195,6 +199,10 @@ pub(crate) fn forward_dynamics_impl<'a>(
     strain_forces(model, data, t, q, Some(qd), tau_act);
     let scale = data.load_scale;
     for (r, rm) in model.rods().iter().enumerate() {
+        if model.uses_planar_path(r) {
+            crate::planar::forward_rod(model, data, r, q, qd)?;
+            continue;
+        }
         let pieces = rm.spec.rod.pieces();
         let mut ma_next = Sym6::default();
         let mut pa_next = Vec6::zeros();

@@ -56,6 +56,9 @@ impl PieceWork {
 #[derive(Clone, Debug)]
 pub struct Data {
     pub(crate) pieces: Vec<Vec<PieceWork>>,
+    /// Per-piece work of the planar path, for planar rods (empty for the
+    /// others).
+    pub(crate) planar: Vec<Vec<crate::planar::PlanarWork>>,
     /// Generalized force from the last [`crate::inverse_dynamics`] (n_dof).
     pub tau: DVector<f64>,
     /// Generalized acceleration from the last forward dynamics (n_dof).
@@ -118,6 +121,18 @@ impl Data {
                     (0..r.spec.rod.n_pieces())
                         .map(|_| PieceWork::new())
                         .collect()
+                })
+                .collect(),
+            planar: model
+                .rods()
+                .iter()
+                .map(|r| {
+                    let n = if r.is_planar() {
+                        r.spec.rod.n_pieces()
+                    } else {
+                        0
+                    };
+                    (0..n).map(|_| crate::planar::PlanarWork::new()).collect()
                 })
                 .collect(),
             tau: DVector::zeros(n),

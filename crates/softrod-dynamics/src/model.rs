@@ -208,6 +208,9 @@ pub struct RodModel {
     /// Index of the rod's first cable among the model's cables (the order
     /// of the inputs `u`).
     pub cable_offset: usize,
+    /// The rod's planar description when it qualifies for the se(2) path
+    /// of the forward dynamics (docs/theory.md §12, D71).
+    pub(crate) planar: Option<crate::planar::PlanarRod>,
 }
 
 impl RodModel {
@@ -219,6 +222,16 @@ impl RodModel {
     /// Range of this rod's coordinates in the model's `q`.
     pub fn dofs(&self) -> std::ops::Range<usize> {
         self.dof_offset..self.dof_offset + self.n_dof()
+    }
+
+    /// Whether the rod is planar (D71): every piece selects strains among
+    /// `κ_a, q_b, q_c` for one bending axis `a` (`(a, b, c)` cyclic, e.g.
+    /// `ky, qz, qx`) and its rest strain has no other component. The
+    /// forward dynamics of such a rod, clamped alone (no joints, bodies or
+    /// parents), runs on 3-vectors and 3×3 blocks (docs/theory.md §12)
+    /// unless [`Model::with_planar_path`] turned that off.
+    pub fn is_planar(&self) -> bool {
+        self.planar.is_some()
     }
 }
 
@@ -245,6 +258,9 @@ pub struct Model {
     pub(crate) closures: Vec<crate::closure::ResolvedClosure>,
     /// Baumgarte rate `α = β` of the constrained dynamics \[1/s\] (D68).
     pub(crate) baumgarte: f64,
+    /// Whether the forward dynamics takes the planar path for planar rods
+    /// (default on).
+    pub(crate) planar_path: bool,
 }
 
 impl Model {
@@ -375,6 +391,7 @@ impl Model {
             tree: None,
             closures: Vec::new(),
             baumgarte: 0.0,
+            planar_path: true,
         };
         if articulated {
             model.tree = Some(Tree::build(&model)?);
@@ -483,6 +500,22 @@ impl Model {
     /// attachment and the range of its joint's coordinates in `q`.
     pub fn elements(&self) -> &[ElementInfo] {
         &self.elements
+    }
+
+    /// The same model with the planar path of the forward dynamics on
+    /// (the default) or off: off, planar rods take the general se(3) path
+    /// — the cross-check of docs/validation.md and the baseline of the
+    /// planar benchmarks. Results agree to rounding.
+    pub fn with_planar_path(mut self, on: bool) -> Self {
+        self.planar_path = on;
+        self
+    }
+
+    /// Whether [`crate::forward_dynamics`] runs rod `rod` on the planar
+    /// path (D71–D75): a planar rod ([`RodModel::is_planar`]) of a model
+    /// without joints, bodies or parents, the path on.
+    pub fn uses_planar_path(&self, rod: usize) -> bool {
+        self.planar_path && self.tree.is_none() && self.rods.get(rod).is_some_and(|r| r.is_planar())
     }
 
     /// Whether the model has joints, bodies or parents (the tree path of
@@ -604,12 +637,14 @@ fn build_rod(
         .distributed_loads
         .iter()
         .any(|d| d.frame == LoadFrame::World);
+    let planar = crate::planar::PlanarRod::detect(&spec, &pieces);
     Ok(RodModel {
         spec,
         dof_offset,
         pieces,
         needs_world_pose_at_points: needs_world,
         cable_offset,
+        planar,
     })
 }
 

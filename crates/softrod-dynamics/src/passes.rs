@@ -325,6 +325,14 @@ pub(crate) fn outward_inl(
     let scale = data.load_scale;
     let only_gravity = data.only_gravity;
     for (r, rm) in model.rods.iter().enumerate() {
+        // Planar rods run on 3-vectors and 3×3 blocks (crate::planar): the
+        // inverse sweep here, the forward dynamics' in its own rod loop.
+        if pass != Pass::Composite && model.uses_planar_path(r) {
+            if let (Pass::Inverse, Some(pr)) = (pass, &rm.planar) {
+                crate::planar::outward(model, rm, pr, data, r, q, qd, qdd, true);
+            }
+            continue;
+        }
         let rod = &rm.spec.rod;
         let range = rm.dofs();
         let qr = &q[range.clone()];
