@@ -94,7 +94,7 @@ fn bench_dynamics(c: &mut Criterion) {
 
     // The planar rod (strains ky, qx, qz on every piece) beside the 3-D one
     // of the same size: the cost per evaluation of a planar scene, on the
-    // planar path (docs/theory.md §12) and, for the A/B, on the general one.
+    // planar path (docs/theory.md §13) and, for the A/B, on the general one.
     for (group, on) in [
         ("forward_dynamics_planar", true),
         ("forward_dynamics_planar_general_path", false),
@@ -111,6 +111,29 @@ fn bench_dynamics(c: &mut Criterion) {
             g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
                 b.iter(|| {
                     forward_dynamics(&m, &mut data, 0.0, black_box(&q), black_box(&qd), None)
+                        .unwrap()[0]
+                })
+            });
+        }
+        g.finish();
+    }
+    for (group, on) in [
+        ("inverse_dynamics_planar", true),
+        ("inverse_dynamics_planar_general_path", false),
+    ] {
+        let mut g = c.benchmark_group(group);
+        for n in [10usize, 100] {
+            let m = model_with(
+                n,
+                Basis::select(&[Strain::Ky, Strain::Qx, Strain::Qz]).unwrap(),
+            )
+            .with_planar_path(on);
+            let mut data = Data::new(&m);
+            let (q, qd) = planar_state(m.n_dof(), 42);
+            let qdd = vec![0.5; m.n_dof()];
+            g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+                b.iter(|| {
+                    inverse_dynamics(&m, &mut data, 0.0, black_box(&q), black_box(&qd), &qdd)
                         .unwrap()[0]
                 })
             });

@@ -50,7 +50,7 @@
 //! axis, a rest strain in that plane; [`RodModel::is_planar`]) run the
 //! forward and inverse dynamics on se(2): 3-vectors and 3×3 blocks instead
 //! of 6 and 6×6, a third of the cost, equal to the general path to
-//! rounding (docs/theory.md §12, D71–D75; [`Model::with_planar_path`]
+//! rounding (docs/theory.md §13, D71–D75; [`Model::with_planar_path`]
 //! turns it off).
 //!
 //! Units SI; twists and wrenches angular first; body frame (see `softrod-lie`).

@@ -209,7 +209,7 @@ pub struct RodModel {
     /// of the inputs `u`).
     pub cable_offset: usize,
     /// The rod's planar description when it qualifies for the se(2) path
-    /// of the forward dynamics (docs/theory.md §12, D71).
+    /// of the forward and inverse dynamics (docs/theory.md §13, D71).
     pub(crate) planar: Option<crate::planar::PlanarRod>,
 }
 
@@ -228,7 +228,7 @@ impl RodModel {
     /// `κ_a, q_b, q_c` for one bending axis `a` (`(a, b, c)` cyclic, e.g.
     /// `ky, qz, qx`) and its rest strain has no other component. The
     /// forward dynamics of such a rod, clamped alone (no joints, bodies or
-    /// parents), runs on 3-vectors and 3×3 blocks (docs/theory.md §12)
+    /// parents), runs on 3-vectors and 3×3 blocks (docs/theory.md §13)
     /// unless [`Model::with_planar_path`] turned that off.
     pub fn is_planar(&self) -> bool {
         self.planar.is_some()

@@ -1,5 +1,5 @@
 //! The planar (se(2)) path of the O(N) forward and the inverse dynamics
-//! (docs/theory.md §12, D71–D75).
+//! (docs/theory.md §13, D71–D75).
 //!
 //! A rod whose every piece selects strains among `(κ_a, q_b, q_c)` — the
 //! bending about one body axis `a` and the two strains in the plane
@@ -556,6 +556,7 @@ pub(crate) fn outward(
 /// [`outward`]: `W_n = 𝓟_n + Ad⁻ᵀ W_{n+1}`,
 /// `τ_n = Bᵀ(𝓹_n + T₋(ℓ)ᵀW_{n+1})` into `data.tau` (the strain-space forces
 /// are subtracted by the caller).
+#[inline(always)]
 pub(crate) fn inward_inverse(rm: &RodModel, pr: &PlanarRod, data: &mut Data, r: usize) {
     let mut wv = Vec3::zeros();
     for (n, (piece, pp)) in rm
@@ -604,6 +605,8 @@ fn cholesky(m: &mut Mat3, k: usize) -> bool {
 /// Forward dynamics of one planar rod (D75): pass 1 ([`outward`]), the
 /// articulated inward pass (D24–D26) and the outward pass (D27) on 3×3
 /// blocks. `data.strain_force` must hold the rod's strain-space forces.
+/// Inlined into the forward dynamics' baseline and AVX2 copies.
+#[inline(always)]
 pub(crate) fn forward_rod(
     model: &Model,
     data: &mut Data,

@@ -1,6 +1,6 @@
 //! The planar (se(2)) path of the forward and inverse dynamics (and of the
 //! bias and gravity forces built on the latter) against the general se(3)
-//! path on the same model (docs/theory.md §12): every force term, the
+//! path on the same model (docs/theory.md §13): every force term, the
 //! three bending planes, strain subsets, tapered sections, straight and
 //! wound-up states, and hundreds of pieces.
 
