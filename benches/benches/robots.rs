@@ -3,7 +3,9 @@
 //! on a revolute joint (the tree recursion, dense 6×6 per node), on a
 //! prescribed prismatic base (D59), and with its tip welded to the world
 //! (a closed chain, D63–D69: dense mass matrix and its Cholesky factor per
-//! evaluation). Compare with `forward_dynamics/N` of the `dynamics` benches.
+//! evaluation); the O(N) shifted factorization and solve on the tree.
+//! Compare with `forward_dynamics/N` and `shifted_factor_solve/N` of the
+//! `dynamics` benches.
 //!
 //! Regenerate (numbers in docs/performance.md, section "Articulated models"):
 //! `cargo bench -p softrod-benches --bench robots -- --warm-up-time 1 --measurement-time 2`
@@ -11,7 +13,7 @@
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use softrod_dynamics::{
     Attachment, Closure, ClosureFrame, ClosureKind, Curve, Data, Element, Joint, Model, Prescribed,
-    RodSpec, forward_dynamics,
+    RodSpec, ShiftedSolver, forward_dynamics,
 };
 use softrod_kinematics::{Basis, Rod, straight};
 use softrod_lie::{Pose, Vec3};
@@ -111,6 +113,24 @@ fn bench_robots(c: &mut Criterion) {
         },
         &sizes,
     );
+    // One factorization and solve of M + aK + bD on the tree (the implicit
+    // integrators' Newton matrix), integrator-sized shifts.
+    let mut g = c.benchmark_group("shifted_factor_solve_tree");
+    for n in [10usize, 40, 160] {
+        let m = on(n, Joint::revolute([0.0, 1.0, 0.0]));
+        let mut solver = ShiftedSolver::new(&m);
+        let (q, r) = state(m.n_dof());
+        let mut x = r.clone();
+        g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+            b.iter(|| {
+                solver.factor(&m, black_box(&q), 1e-6, 1e-3).unwrap();
+                x.copy_from_slice(&r);
+                solver.solve(&m, &mut x).unwrap();
+                x[0]
+            })
+        });
+    }
+    g.finish();
 }
 
 criterion_group!(benches, bench_robots);

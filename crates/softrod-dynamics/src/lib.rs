@@ -22,7 +22,7 @@
 //! | [`forward_dynamics_derivatives`] | `∂q̈/∂q`, `∂q̈/∂q̇`, `∂q̈/∂u` | (D48) |
 //! | [`linearize`] | `(A, B)` of `ẋ = f(x, u)`, `x = (q, q̇)` | (D49) |
 //! | [`dynamics_jacobians`] | `∂q̈/∂q`, `∂q̈/∂q̇` (allocating) | (D48) |
-//! | [`ShiftedSolver`] | `(M + aK + bD)⁻¹ x`, O(N) | §6 with armature `aK_n + bD_n` |
+//! | [`ShiftedSolver`] | `(M + aK + bD)⁻¹ x`, O(N), chains and trees | §6 with armature `aK_n + bD_n` |
 //!
 //! Robots: rods and rigid bodies ([`BodySpec`]) hang from parents (the world,
 //! a rod's piece boundary, a body) through joints ([`Joint`]: fixed,
@@ -31,9 +31,10 @@
 //! [`Model::with_elements`]. A joint is a massless unit PCS piece whose
 //! basis is its motion subspace (docs/theory.md §11, D50–D58); inverse and
 //! forward dynamics, the mass matrix, energies, statics and modes run on the
-//! tree. Models without bodies, parents or joints keep the chain path
-//! unchanged; the analytic derivatives, [`ShiftedSolver`] and
-//! [`coriolis_matrix`] return [`DynamicsError::Unsupported`] for the others.
+//! tree, and so does the O(N) [`ShiftedSolver`] (not on closed chains).
+//! Models without bodies, parents or joints keep the chain path
+//! unchanged; the analytic derivatives and [`coriolis_matrix`] return
+//! [`DynamicsError::Unsupported`] for the others.
 //!
 //! Closed chains: [`Closure`]s (weld, ball, slider between rod points at any
 //! `s`, body frames and the world; [`ModelBuilder::closure`],

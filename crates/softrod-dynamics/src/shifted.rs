@@ -8,7 +8,10 @@
 //! those blocks: adding the armature to `D̂_n` (D24) makes the inward pass
 //! (D24–D25) an `LDLᵀ`-like factorization of `S` and the bias-free
 //! inward/outward sweeps (D26–D27) a solve, both O(N) — no `n_dof × n_dof`
-//! matrix is formed (docs/theory-derivatives.md §6).
+//! matrix is formed (docs/theory-derivatives.md §6). Models with joints,
+//! bodies or parents run the same recursion on their tree (D56): a joint's
+//! spring and damper constants are its armature (D53); closed chains are
+//! not covered (their Newton matrix carries the constraints).
 
 use crate::algorithms::check_vec;
 use crate::blocks::{Blk6, Sym6, ad_inv_tr_vec, ad_inv_vec};
@@ -45,20 +48,29 @@ pub struct ShiftedSolver {
     data: Data,
     factored: bool,
     n_dof: usize,
+    /// Per-node scratch of the tree solve (empty for chain models); a
+    /// `RefCell` so that [`Self::solve`] keeps `&self`.
+    tree_scratch: std::cell::RefCell<Vec<crate::tree_algorithms::SolveNode>>,
 }
 
 impl ShiftedSolver {
     /// Allocates the per-piece buffers for `model`.
     pub fn new(model: &Model) -> Self {
+        let nodes = model.tree.as_ref().map_or(0, |t| t.nodes.len());
         Self {
             data: Data::new(model),
             factored: false,
             n_dof: model.n_dof(),
+            tree_scratch: std::cell::RefCell::new(vec![Default::default(); nodes]),
         }
     }
 
     fn check_model(&self, model: &Model) -> Result<(), DynamicsError> {
-        if model.n_dof() != self.n_dof || model.rods().len() != self.data.pieces.len() {
+        let nodes = model.tree.as_ref().map_or(0, |t| t.nodes.len());
+        if model.n_dof() != self.n_dof
+            || model.rods().len() != self.data.pieces.len()
+            || nodes != self.tree_scratch.borrow().len()
+        {
             return Err(DynamicsError::WorkspaceMismatch {
                 what: "ShiftedSolver",
                 built: self.n_dof,
@@ -76,11 +88,29 @@ impl ShiftedSolver {
     /// [`crate::stiffness_matrix`], [`crate::damping_matrix`] (units of `a`:
     /// s², of `b`: s, for `S` in kg-like units of `M`).
     ///
-    /// Fails on a negative or non-finite shift, a bad `q`, or a `D̂_n` that is
-    /// not positive definite (then no factorization is kept).
+    /// Fails on a negative or non-finite shift, a bad `q`, a `D̂_n` that is
+    /// not positive definite (then no factorization is kept), and on a model
+    /// with closures ([`DynamicsError::UnsupportedClosed`]). Prescribed
+    /// joints stand at their values of the last [`Self::factor_at`] (time 0
+    /// before any).
     pub fn factor(
         &mut self,
         model: &Model,
+        q: &[f64],
+        a: f64,
+        b: f64,
+    ) -> Result<(), DynamicsError> {
+        let t = self.data.prescribed_time;
+        self.factor_at(model, if t.is_finite() { t } else { 0.0 }, q, a, b)
+    }
+
+    /// [`Self::factor`] with the prescribed joints (D59) at time `t` \[s\]
+    /// (the mass matrix depends on where they hold the model); the same as
+    /// `factor` for models without them.
+    pub fn factor_at(
+        &mut self,
+        model: &Model,
+        t: f64,
         q: &[f64],
         a: f64,
         b: f64,
@@ -93,8 +123,17 @@ impl ShiftedSolver {
             }
         }
         check_vec(model, "q", q)?;
-        model.require_chain("ShiftedSolver")?;
-        shifted_factor(model, &mut self.data, q, a, b)?;
+        if model.has_closures() {
+            return Err(DynamicsError::UnsupportedClosed {
+                what: "ShiftedSolver",
+            });
+        }
+        if let Some(tree) = &model.tree {
+            model.set_time(&mut self.data, t);
+            crate::tree_algorithms::shifted_factor(model, tree, &mut self.data, q, a, b)?;
+        } else {
+            shifted_factor(model, &mut self.data, q, a, b)?;
+        }
         self.factored = true;
         Ok(())
     }
@@ -114,7 +153,15 @@ impl ShiftedSolver {
             });
         }
         check_vec(model, "x", x)?;
-        shifted_solve(model, &self.data, x);
+        match &model.tree {
+            Some(tree) => crate::tree_algorithms::shifted_solve(
+                tree,
+                &self.data,
+                &mut self.tree_scratch.borrow_mut(),
+                x,
+            ),
+            None => shifted_solve(model, &self.data, x),
+        }
         if let Some((i, v)) = x.iter().enumerate().find(|(_, v)| !v.is_finite()) {
             return Err(DynamicsError::NotFinite {
                 what: format!("shifted solve x[{i}]"),

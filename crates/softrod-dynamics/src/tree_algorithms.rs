@@ -565,6 +565,143 @@ pub(crate) fn forward_dynamics(
     Ok(())
 }
 
+/// Per-node scratch of the tree's shifted solve: what the children hand
+/// to the node (at its tip, or inside it at `x`, D62) and the outward
+/// motion.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct SolveNode {
+    f_tip: Vec6,
+    p_big: Vec6,
+    p_small: Vec6,
+    u: Vec6,
+    etadot_base: Vec6,
+    etadot_tip: Vec6,
+    qn: Vec6,
+}
+
+/// The factorization of `S = M(q) + a·K + b·D` on the tree
+/// (docs/theory-derivatives.md §6 on the recursion of D56): the
+/// articulated inward pass of [`forward_dynamics`] without biases, with the
+/// armature `a·K_n + b·D_n` of each node added to its `D̂` — a piece's
+/// `K_n`, `D_n` (D13), a joint's spring and damper constants (D53), nothing
+/// for bodies and prescribed joints. Leaves `Û`, `D̂⁻¹` per node in `data`;
+/// prescribed joints at `data.prescribed_q` (their last [`Model::set_time`]).
+pub(crate) fn shifted_factor(
+    model: &Model,
+    tree: &Tree,
+    data: &mut Data,
+    q: &[f64],
+    a: f64,
+    b: f64,
+) -> Result<(), DynamicsError> {
+    outward(model, tree, data, q, None, None, TreePass::Composite);
+    for w in &mut data.nodes {
+        w.m_tip = Mat6::zeros();
+    }
+    for (i, node) in tree.nodes.iter().enumerate().rev() {
+        let k = node.k;
+        let w = &mut data.nodes[i];
+        let am = w.tip.ad_inv().to_mat6();
+        let ma = w.m_tip;
+        let mas = ma * w.s_tip;
+        let uhat = w.ut + am.transpose() * mas;
+        let mut dhat = w.dt + w.s_tip.transpose() * mas;
+        match node.kind {
+            NodeKind::Piece { rod, piece } => {
+                let pd = &model.rods[rod].pieces[piece];
+                if a != 0.0 {
+                    dhat += pd.stiffness6 * a;
+                }
+                if b != 0.0 && pd.has_damping {
+                    dhat += pd.damping6 * b;
+                }
+            }
+            NodeKind::Joint { element } => {
+                let joint = &model.elements[element].attachment.joint;
+                for c in 0..k {
+                    let (kc, dc, _) = joint.coefficients(c);
+                    dhat[(c, c)] += a * kc + b * dc;
+                }
+            }
+            NodeKind::Body { .. } => {}
+        }
+        let dinv = if k > 0 {
+            inverse_k(&dhat, k).ok_or_else(|| DynamicsError::SingularNode {
+                node: tree.describe(model, i),
+                what: "shifted articulated block D̂ + aK + bD",
+            })?
+        } else {
+            Mat6::zeros()
+        };
+        let ud = uhat * dinv;
+        let mb = w.mt + am.transpose() * ma * am - ud * uhat.transpose();
+        w.uhat = uhat;
+        w.dinv = dinv;
+        if let Some(p) = node.parent {
+            let x = node.offset.ad_inv().to_mat6();
+            let mx = x.transpose() * mb * x;
+            if node.attach.is_some() {
+                let (ax, sx) = (w.attach_a, w.attach_s);
+                let pw = &mut data.nodes[p];
+                pw.mt += ax.transpose() * mx * ax;
+                pw.ut += ax.transpose() * mx * sx;
+                pw.dt += sx.transpose() * mx * sx;
+            } else {
+                data.nodes[p].m_tip += mx;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// `x ← S⁻¹x` with the factorization of [`shifted_factor`] in `data`: the
+/// bias-free inward (D26) and outward (D27) sweeps of the tree, the
+/// children's wrenches summed at each tip or at their point inside the
+/// parent piece (D62). O(N).
+pub(crate) fn shifted_solve(tree: &Tree, data: &Data, scratch: &mut [SolveNode], x: &mut [f64]) {
+    scratch.fill(SolveNode::default());
+    for (i, node) in tree.nodes.iter().enumerate().rev() {
+        let k = node.k;
+        let w = &data.nodes[i];
+        let sc = scratch[i];
+        let y = sc.f_tip;
+        let xs = local(x, node.dof, k);
+        let u = xs - sc.p_small - w.s_tip.tr_mul(&y);
+        let u = Vec6::from_fn(|r, _| if r < k { u[r] } else { 0.0 });
+        let pb = sc.p_big + w.tip.ad_inv().tr_mul_vec(&y) + w.uhat * (w.dinv * u);
+        scratch[i].u = u;
+        if let Some(p) = node.parent {
+            let px = node.offset.ad_inv().tr_mul_vec(&pb);
+            if node.attach.is_some() {
+                let sp = &mut scratch[p];
+                sp.p_big += w.attach_a.transpose() * px;
+                sp.p_small += w.attach_s.transpose() * px;
+            } else {
+                scratch[p].f_tip += px;
+            }
+        }
+    }
+    for (i, node) in tree.nodes.iter().enumerate() {
+        let w = &data.nodes[i];
+        let etadot_p = match node.parent {
+            Some(p) if node.attach.is_some() => {
+                w.attach_a * scratch[p].etadot_base + w.attach_s * scratch[p].qn
+            }
+            Some(p) => scratch[p].etadot_tip,
+            None => Vec6::zeros(),
+        };
+        let etadot_b = node.offset.ad_inv().mul_vec(&etadot_p);
+        let qn = w.dinv * (scratch[i].u - w.uhat.tr_mul(&etadot_b));
+        for c in 0..node.k {
+            x[node.dof + c] = qn[c];
+        }
+        let sc = &mut scratch[i];
+        sc.etadot_base = etadot_b;
+        sc.qn = qn;
+        sc.etadot_tip = w.tip.ad_inv().mul_vec(&etadot_b) + w.s_tip * qn;
+    }
+}
+
 /// Mass matrix on the tree by the composite recursion (D20, D57): for node
 /// `i`, `M_ii = 𝓓 + S(ℓ)ᵀ𝓜ᶜS(ℓ)` and, for every ancestor `j` with
 /// coordinates, `M_ji = (Ad_{g_j(ℓ)}S_j(ℓ))ᵀ Ad*_{g_i(0)⁻¹}F_i` with

@@ -161,3 +161,16 @@ fn closure_jacobian_through_an_inside_attachment_is_the_derivative() {
         assert!(e < 1e-7, "column {c}: {e}");
     }
 }
+
+/// The shifted solve through children inside pieces (D62) against the
+/// dense Cholesky of `M + aK + bD`.
+#[test]
+fn shifted_solve_through_inside_attachments_equals_the_dense_solve() {
+    let model = tree();
+    let q = common::wavy(model.n_dof(), 0.5, 0.2);
+    let (backward, forward) = common::shifted_against_dense(&model, &q, 8);
+    assert!(
+        backward < 1e-15 && forward < 50.0,
+        "{backward:e}, {forward}"
+    );
+}

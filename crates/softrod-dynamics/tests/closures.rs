@@ -12,9 +12,9 @@ use common::{soft_material as material, soft_rod as rod};
 use nalgebra::DVector;
 use softrod_dynamics::{
     Attachment, BodySpec, Closure, ClosureFrame, ClosureKind, Data, DynamicsError, Joint, Model,
-    ModelBuilder, RodSpec, StaticsOptions, check_closures, closure_multipliers, closure_residuals,
-    closure_statics, constraint_jacobian, constraint_rank, constraint_residual, energies,
-    forward_dynamics, inverse_dynamics, modes,
+    ModelBuilder, RodSpec, ShiftedSolver, StaticsOptions, check_closures, closure_multipliers,
+    closure_residuals, closure_statics, constraint_jacobian, constraint_rank, constraint_residual,
+    energies, forward_dynamics, inverse_dynamics, modes,
 };
 use softrod_kinematics::Strain;
 use softrod_lie::{Mat3, Pose, Vec3};
@@ -573,4 +573,15 @@ fn a_weld_to_a_floating_rod_is_the_rigid_attachment() {
         "q̈ differ by {err:e} of {:e}",
         a_tree.amax()
     );
+}
+
+/// The O(N) shifted solve does not cover closed chains (their Newton
+/// matrix carries the constraints): a clear error, not a wrong answer.
+#[test]
+fn shifted_solver_refuses_closed_chains() {
+    let model = beam(4, ClosureKind::Weld, None, true);
+    let q = vec![0.0; model.n_dof()];
+    let mut solver = ShiftedSolver::new(&model);
+    let e = solver.factor(&model, &q, 1.0, 0.0).unwrap_err();
+    assert!(matches!(e, DynamicsError::UnsupportedClosed { .. }), "{e}");
 }

@@ -438,3 +438,42 @@ fn a_closed_chain_with_a_drive_gains_the_drive_s_work() {
         e1 - e0
     );
 }
+
+/// The shifted solve with a prescribed revolute joint holds the model where
+/// the drive stands at the time given to `factor_at` (the mass matrix
+/// depends on it): against the dense `M + aK + bD` at that time.
+#[test]
+fn shifted_solve_follows_the_prescribed_joint() {
+    use softrod_dynamics::{ShiftedSolver, damping_matrix, stiffness_matrix};
+    // The drive sits between two rods, so where it stands changes M (a
+    // drive at the root would only turn the whole model rigidly).
+    let motion = Prescribed::samples(&[0.0, 1.0, 2.0], &[vec![0.0], vec![1.2], vec![0.4]]).unwrap();
+    let model = Model::builder()
+        .rod(rod("upper", 0.2, 2))
+        .rod_on(
+            rod("lower", 0.2, 2),
+            Attachment::to(
+                "upper",
+                Joint::revolute([0.0, 1.0, 0.0]).with_prescribed(motion),
+            ),
+        )
+        .gravity([0.0, 0.0, -G])
+        .build()
+        .unwrap();
+    let q = state(model.n_dof(), 0.3, 0.4);
+    let r = DVector::from_vec(state(model.n_dof(), 1.0, 1.1));
+    let mut solver = ShiftedSolver::new(&model);
+    let mut data = Data::new(&model);
+    for t in [0.0, 0.7, 1.5] {
+        model.set_time(&mut data, t);
+        let s = mass_matrix(&model, &mut data, &q).unwrap().clone()
+            + stiffness_matrix(&model) * 1e-4
+            + damping_matrix(&model) * 1e-2;
+        solver.factor_at(&model, t, &q, 1e-4, 1e-2).unwrap();
+        let mut x = r.as_slice().to_vec();
+        solver.solve(&model, &mut x).unwrap();
+        let reference = s.cholesky().unwrap().solve(&r);
+        let e = (DVector::from_vec(x) - &reference).amax() / reference.amax();
+        assert!(e < 1e-11, "t = {t}: {e:e}");
+    }
+}

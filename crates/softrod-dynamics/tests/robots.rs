@@ -569,9 +569,6 @@ fn analytic_derivatives_refuse_articulated_models() {
     let mut data = Data::new(&model);
     let e = softrod_dynamics::dynamics_jacobians(&model, &mut data, 0.0, &q, &q, None).unwrap_err();
     assert!(matches!(e, DynamicsError::Unsupported { .. }), "{e}");
-    let mut solver = softrod_dynamics::ShiftedSolver::new(&model);
-    let e = solver.factor(&model, &q, 1.0, 0.0).unwrap_err();
-    assert!(matches!(e, DynamicsError::Unsupported { .. }), "{e}");
 }
 
 /// A Y of three rods: a trunk clamped to the world, two branches on
@@ -647,4 +644,27 @@ fn y_tree_forward_equals_cholesky_and_branches_do_not_couple() {
     let outboard = m.view((12, spur.start), (12, spur.len())).amax();
     assert_eq!(outboard, 0.0);
     assert!(m.view((0, spur.start), (12, spur.len())).amax() > 0.0);
+}
+
+/// The O(N) shifted solve `(M + aK + bD)⁻¹` on the tree (every joint type
+/// with springs and dampers as armature, bodies, branches, children at
+/// boundaries and bases) against the dense Cholesky of the same matrix.
+#[test]
+fn shifted_solve_on_the_tree_equals_the_dense_solve() {
+    for tree in [false, true] {
+        let model = robot(true, true, tree, false);
+        let q = common::wavy(model.n_dof(), 0.4, 0.3);
+        let (backward, forward) = common::shifted_against_dense(&model, &q, 5);
+        assert!(
+            backward < 1e-15 && forward < 50.0,
+            "tree {tree}: {backward:e}, {forward}"
+        );
+    }
+    let model = y_tree();
+    let q = common::wavy(model.n_dof(), 0.4, 0.9);
+    let (backward, forward) = common::shifted_against_dense(&model, &q, 6);
+    assert!(
+        backward < 1e-15 && forward < 50.0,
+        "y tree: {backward:e}, {forward}"
+    );
 }

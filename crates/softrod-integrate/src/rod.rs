@@ -256,19 +256,21 @@ impl SecondOrderSystem for RodSystem {
     }
 
     /// `M(q) + aK + bD` by the O(N) articulated recursion
-    /// (`softrod_dynamics::ShiftedSolver`).
+    /// (`softrod_dynamics::ShiftedSolver`, on the tree for models with
+    /// joints and bodies, prescribed joints where they stand at `t`).
     fn factor_shifted_mass(
         &mut self,
-        _t: f64,
+        t: f64,
         q: &DVector<f64>,
         a: f64,
         b: f64,
     ) -> Result<bool, DynamicsError> {
-        if self.model.is_articulated() {
-            // The O(N) shifted solve covers chains only: dense matrices.
+        if self.model.has_closures() {
+            // The constrained Newton matrix is not a shifted mass matrix:
+            // dense matrices.
             return Ok(false);
         }
-        self.shifted.factor(&self.model, q.as_slice(), a, b)?;
+        self.shifted.factor_at(&self.model, t, q.as_slice(), a, b)?;
         Ok(true)
     }
 
