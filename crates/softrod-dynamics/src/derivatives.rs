@@ -69,7 +69,7 @@ impl FdDerivatives {
 /// factorization.
 fn solve_columns(
     model: &Model,
-    solver: &ShiftedSolver,
+    solver: &mut ShiftedSolver,
     x: &mut DMatrix<f64>,
 ) -> Result<(), DynamicsError> {
     let n = x.nrows();
@@ -120,13 +120,13 @@ pub fn forward_dynamics_derivatives<'a>(
     work.solver.factor(model, q, 0.0, 0.0)?;
     work.dqdd_dq.copy_from(&work.id.dtau_dq);
     work.dqdd_dq.neg_mut();
-    solve_columns(model, &work.solver, &mut work.dqdd_dq)?;
+    solve_columns(model, &mut work.solver, &mut work.dqdd_dq)?;
     work.dqdd_dqd.copy_from(&work.id.dtau_dqd);
     work.dqdd_dqd.neg_mut();
-    solve_columns(model, &work.solver, &mut work.dqdd_dqd)?;
+    solve_columns(model, &mut work.solver, &mut work.dqdd_dqd)?;
     fill_actuation(model, q, data.load_scale, &mut work.actuation)?;
     work.dqdd_du.copy_from(&work.actuation);
-    solve_columns(model, &work.solver, &mut work.dqdd_du)?;
+    solve_columns(model, &mut work.solver, &mut work.dqdd_du)?;
     Ok(work)
 }
 

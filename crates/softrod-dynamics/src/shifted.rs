@@ -48,9 +48,8 @@ pub struct ShiftedSolver {
     data: Data,
     factored: bool,
     n_dof: usize,
-    /// Per-node scratch of the tree solve (empty for chain models); a
-    /// `RefCell` so that [`Self::solve`] keeps `&self`.
-    tree_scratch: std::cell::RefCell<Vec<crate::tree_algorithms::SolveNode>>,
+    /// Per-node scratch of the tree solve (empty for chain models).
+    tree_scratch: Vec<crate::tree_algorithms::SolveNode>,
 }
 
 impl ShiftedSolver {
@@ -61,7 +60,7 @@ impl ShiftedSolver {
             data: Data::new(model),
             factored: false,
             n_dof: model.n_dof(),
-            tree_scratch: std::cell::RefCell::new(vec![Default::default(); nodes]),
+            tree_scratch: vec![Default::default(); nodes],
         }
     }
 
@@ -69,7 +68,7 @@ impl ShiftedSolver {
         let nodes = model.tree.as_ref().map_or(0, |t| t.nodes.len());
         if model.n_dof() != self.n_dof
             || model.rods().len() != self.data.pieces.len()
-            || nodes != self.tree_scratch.borrow().len()
+            || nodes != self.tree_scratch.len()
         {
             return Err(DynamicsError::WorkspaceMismatch {
                 what: "ShiftedSolver",
@@ -145,7 +144,7 @@ impl ShiftedSolver {
     ///
     /// Fails before a successful [`Self::factor`], on a wrong length or
     /// non-finite entries of `x`, and if the result is not finite.
-    pub fn solve(&self, model: &Model, x: &mut [f64]) -> Result<(), DynamicsError> {
+    pub fn solve(&mut self, model: &Model, x: &mut [f64]) -> Result<(), DynamicsError> {
         self.check_model(model)?;
         if !self.factored {
             return Err(DynamicsError::NotFactored {
@@ -154,12 +153,9 @@ impl ShiftedSolver {
         }
         check_vec(model, "x", x)?;
         match &model.tree {
-            Some(tree) => crate::tree_algorithms::shifted_solve(
-                tree,
-                &self.data,
-                &mut self.tree_scratch.borrow_mut(),
-                x,
-            ),
+            Some(tree) => {
+                crate::tree_algorithms::shifted_solve(tree, &self.data, &mut self.tree_scratch, x)
+            }
             None => shifted_solve(model, &self.data, x),
         }
         if let Some((i, v)) = x.iter().enumerate().find(|(_, v)| !v.is_finite()) {
