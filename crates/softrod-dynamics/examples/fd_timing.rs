@@ -5,7 +5,8 @@
 //! matrix, one factor + solve of `M + aK + bD` or the analytic pair
 //! `∂τ/∂q, ∂τ/∂q̇`; `BASIS=planar` selects the strains
 //! `ky, qx, qz` on every piece instead of all six, and `PLANAR_PATH=off`
-//! runs such a rod on the general se(3) path):
+//! runs such a rod on the general se(3) path; `JOINT=revolute` hangs the
+//! rod from a revolute joint, the tree path):
 //! `N_PIECES=10 N_ITER=2000 cargo run --release -p softrod-dynamics --example fd_timing`.
 use softrod_dynamics::{
     Data, IdDerivatives, Model, RodSpec, ShiftedSolver, forward_dynamics, inverse_dynamics,
@@ -43,13 +44,20 @@ fn main() {
         .build()
         .unwrap();
     let body = RodBody::new(Section::Circle { radius: 0.01 }, material, 0.5).unwrap();
-    let model = Model::new(
-        vec![RodSpec::new("arm", rod, body)],
-        Some(Vec3::new(0.0, 0.0, -9.81)),
-        4,
-    )
-    .unwrap()
-    .with_planar_path(std::env::var("PLANAR_PATH").as_deref() != Ok("off"));
+    // JOINT=revolute: the same rod on a revolute joint (the tree path).
+    let elements = vec![softrod_dynamics::Element::Rod(
+        RodSpec::new("arm", rod, body),
+        if std::env::var("JOINT").as_deref() == Ok("revolute") {
+            softrod_dynamics::Attachment::world_joint(softrod_dynamics::Joint::revolute([
+                0.0, 1.0, 0.0,
+            ]))
+        } else {
+            softrod_dynamics::Attachment::world()
+        },
+    )];
+    let model = Model::with_elements(elements, Some(Vec3::new(0.0, 0.0, -9.81)), 4)
+        .unwrap()
+        .with_planar_path(std::env::var("PLANAR_PATH").as_deref() != Ok("off"));
     let mut data = Data::new(&model);
     let (q, qd): (Vec<f64>, Vec<f64>) = if std::env::var("STATE").as_deref() == Ok("bench") {
         let mut st: u64 = 7;

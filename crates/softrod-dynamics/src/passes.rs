@@ -96,6 +96,56 @@ fn diag_mul(d: &Vec6, v: &Vec6) -> Vec6 {
     d.component_mul(v)
 }
 
+/// Running sums of `𝓜ᵗ = Σ w Aᵀ𝓜A` over a piece's points: the
+/// spatial-inertia form for isotropic linear inertia, a block sandwich for
+/// the others.
+#[derive(Default)]
+pub(crate) struct PointInertia {
+    sp: SpatialSums,
+    mt: Mat6,
+    sandwiched: bool,
+}
+
+impl PointInertia {
+    /// Adds `Aᵀ diag(mw) A`, `A = Ad⁻¹_g` (the weight already in `mw`).
+    #[inline(always)]
+    pub(crate) fn add(&mut self, gl: &Pose, mw: &Vec6) {
+        // With an isotropic linear inertia m·I and A = Ad⁻¹ of (R, p) this
+        // is the classic spatial inertia [[R J Rᵀ − m p̃², m p̃], [−m p̃, m I]];
+        // accumulate its parts.
+        if mw[3] == mw[4] && mw[3] == mw[5] {
+            let sp = &mut self.sp;
+            let r = &gl.rotation;
+            let pt = &gl.translation;
+            for i in 0..3 {
+                let ri = r.column(i);
+                sp.rot += ri * ri.transpose() * mw[i];
+            }
+            sp.mass += mw[3];
+            sp.mp += pt * mw[3];
+            sp.mpp += pt * pt.transpose() * mw[3];
+            sp.mp2 += pt.norm_squared() * mw[3];
+        } else {
+            let a = gl.ad_inv();
+            let dw = softrod_lie::angular(mw);
+            let dv = softrod_lie::linear(mw);
+            let m_a = scaled_blocks(&dw, &dv, &a);
+            add_sandwich(&mut self.mt, &a, &m_a);
+            self.sandwiched = true;
+        }
+    }
+
+    /// The sum `𝓜ᵗ`.
+    #[inline(always)]
+    pub(crate) fn finish(&self) -> Sym6 {
+        if self.sandwiched {
+            Sym6::from_mat6(&self.mt) + self.sp.to_sym6()
+        } else {
+            self.sp.to_sym6()
+        }
+    }
+}
+
 /// Running sums of the spatial-inertia form of `∫Aᵀ𝓜A` (isotropic `ρA`).
 #[derive(Default)]
 struct SpatialSums {
@@ -134,7 +184,7 @@ impl SpatialSums {
 /// `RR' = m T_aᵀ` and `RQ = m(T_bᵀ − p̃T_aᵀ)` need no product, `𝓤₂₂ = (Σ m T_a)ᵀ`,
 /// `𝓤₂₁ = (Σ m T_b)ᵀ − 𝓤₁₂` are formed once per piece.
 #[derive(Default)]
-struct FullSums {
+pub(crate) struct FullSums {
     u11: softrod_lie::Mat3,
     u12: softrod_lie::Mat3,
     u21: softrod_lie::Mat3,
@@ -149,12 +199,22 @@ struct FullSums {
 }
 
 impl FullSums {
+    /// Empty sums for a piece whose points all have an isotropic linear
+    /// inertia `m·I` (`isotropic`) or not.
+    #[inline(always)]
+    pub(crate) fn new(isotropic: bool) -> Self {
+        Self {
+            isotropic,
+            ..Self::default()
+        }
+    }
+
     /// Adds one point, `A = Ad⁻¹_g` given by `g = (R, p)`: with
     /// `Aᵀ = [[R, p̃R], [0, R]]` the U blocks are `RP + p̃(RQ)`, `p̃(RR')`,
     /// `RQ`, `RR'`: three products and two cross-product sweeps, and no
     /// `Ad⁻¹` block built.
     #[inline(always)]
-    fn add(&mut self, g: &Pose, t: &AdOp, mw: &Vec6) {
+    pub(crate) fn add(&mut self, g: &Pose, t: &AdOp, mw: &Vec6) {
         let (p, r, q) = scaled_blocks(&softrod_lie::angular(mw), &softrod_lie::linear(mw), t);
         // Taᵀ J Ta + Tbᵀ m Tb and Taᵀ m Ta are symmetric.
         self.d11 += tr_mul_sym2(&t.a, &p, &t.b, &q);
@@ -181,7 +241,12 @@ impl FullSums {
     }
 
     /// Projects on the basis: `ut = 𝓤ᶠB` (6×k), `dt = Bᵀ𝓓ᶠB` (k×k, full).
-    fn project(&mut self, basis: &softrod_kinematics::Basis, ut: &mut Mat6, dt: &mut Mat6) {
+    pub(crate) fn project(
+        &mut self,
+        basis: &softrod_kinematics::Basis,
+        ut: &mut Mat6,
+        dt: &mut Mat6,
+    ) {
         if self.isotropic {
             self.u22 = self.ta_m.transpose();
             self.u21 = self.tb_m.transpose() - self.u12;
@@ -361,8 +426,6 @@ pub(crate) fn outward_inl(
             }
             let (mut pb_m, mut pb_n) = (softrod_lie::Vec3::zeros(), softrod_lie::Vec3::zeros());
             let (mut ps_m, mut ps_n) = (softrod_lie::Vec3::zeros(), softrod_lie::Vec3::zeros());
-            let mut mt = Mat6::zeros();
-            let mut sandwiched = false;
             let full = piece.basis.dof() >= 4;
             // The column-by-column sums (k < 4) accumulate in place; the
             // block sums overwrite both in `project`.
@@ -370,14 +433,12 @@ pub(crate) fn outward_inl(
                 w.ut.fill(0.0);
                 w.dt.fill(0.0);
             }
-            let mut sp = SpatialSums::default();
-            let mut fs = FullSums {
-                isotropic: pd
-                    .points
+            let mut sp = PointInertia::default();
+            let mut fs = FullSums::new(
+                pd.points
                     .iter()
                     .all(|p| p.inertia[3] == p.inertia[4] && p.inertia[3] == p.inertia[5]),
-                ..FullSums::default()
-            };
+            );
             let mut scols = [Vec6::zeros(); 6];
             // Everything x-independent of the local maps, once per piece.
             let maps = PieceMaps::new(&xi, has_vel.then_some(&dxi));
@@ -439,28 +500,7 @@ pub(crate) fn outward_inl(
                             }
                         }
                     }
-                    // 𝓜ᵗ += w Aᵀ𝓜A: with an isotropic linear inertia m·I and
-                    // A = Ad⁻¹ of (R, p) this is the classic spatial inertia
-                    // [[R J Rᵀ − m p̃², m p̃], [−m p̃, m I]]; accumulate its parts.
-                    if mw[3] == mw[4] && mw[3] == mw[5] {
-                        let r = &gl.rotation;
-                        let pt = &gl.translation;
-                        for i in 0..3 {
-                            let ri = r.column(i);
-                            sp.rot += ri * ri.transpose() * mw[i];
-                        }
-                        sp.mass += mw[3];
-                        sp.mp += pt * mw[3];
-                        sp.mpp += pt * pt.transpose() * mw[3];
-                        sp.mp2 += pt.norm_squared() * mw[3];
-                    } else {
-                        let a = gl.ad_inv();
-                        let dw = softrod_lie::angular(&mw);
-                        let dv = softrod_lie::linear(&mw);
-                        let m_a = scaled_blocks(&dw, &dv, &a);
-                        add_sandwich(&mut mt, &a, &m_a);
-                        sandwiched = true;
-                    }
+                    sp.add(&gl, &mw);
                 }
             }
             let mut p_big = softrod_lie::join(&pb_m, &pb_n);
@@ -511,11 +551,7 @@ pub(crate) fn outward_inl(
                         }
                     }
                 }
-                w.mt = if sandwiched {
-                    Sym6::from_mat6(&mt) + sp.to_sym6()
-                } else {
-                    sp.to_sym6()
-                };
+                w.mt = sp.finish();
                 w.p_small = Vec6::zeros();
                 piece
                     .basis

@@ -9,7 +9,7 @@ use crate::data::Data;
 use crate::energy::Energies;
 use crate::error::DynamicsError;
 use crate::model::Model;
-use crate::passes::external_density;
+use crate::passes::{FullSums, PointInertia, external_density};
 use crate::tree::{NodeKind, Tree};
 use softrod_lie::{Mat6, PieceMaps, Pose, Vec6, ad_vec, coad_vec};
 use softrod_mechanics::elastic_energy;
@@ -288,6 +288,14 @@ pub(crate) fn outward(
             let pd = &rm.pieces[piece];
             let has_ext =
                 !only_gravity && (rm.spec.drag.is_some() || !rm.spec.distributed_loads.is_empty());
+            // The chain path's block sums (crate::passes): 𝓤ᶠ, 𝓓ᶠ on the full
+            // T₋ projected once per piece, 𝓜ᵗ in spatial-inertia form.
+            let mut fs = FullSums::new(
+                pd.points
+                    .iter()
+                    .all(|p| p.inertia[3] == p.inertia[4] && p.inertia[3] == p.inertia[5]),
+            );
+            let mut pi = PointInertia::default();
             for qp in &pd.points {
                 let (gl, tm, dbias) = maps.eval(qp.x);
                 let a = gl.ad_inv();
@@ -319,15 +327,14 @@ pub(crate) fn outward(
                     ps6 += tm.tr_mul_vec(&fw);
                 }
                 if pass != TreePass::Inverse {
-                    let am = a.to_mat6();
-                    let s = tm.to_mat6() * node.bpad;
-                    let mw = Mat6::from_diagonal(&(m * qp.w));
-                    let mwa = mw * am;
-                    let mws = mw * s;
-                    w.mt += am.transpose() * mwa;
-                    w.ut += am.transpose() * mws;
-                    w.dt += s.transpose() * mws;
+                    let mw = m * qp.w;
+                    fs.add(&gl, &tm, &mw);
+                    pi.add(&gl, &mw);
                 }
+            }
+            if pass != TreePass::Inverse {
+                fs.project(&rm.spec.rod.pieces()[piece].basis, &mut w.ut, &mut w.dt);
+                w.mt = pi.finish().dense();
             }
             if pass != TreePass::Composite && !only_gravity {
                 for pl in &pd.loads {
