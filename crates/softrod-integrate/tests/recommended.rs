@@ -180,7 +180,7 @@ fn steel_wire_agrees_with_radau_iia() {
     };
     let (_, rs) = from_rest(&model, &reference, &times);
     let rt = tips(&model, &rs);
-    for rtol in [1e-3, 1e-5, 1e-7] {
+    for rtol in RTOLS {
         let (_, sol) = from_rest(&model, &Recommended::tolerance(rtol), &times);
         let err = max_dist(&tips(&model, &sol), &rt);
         println!(

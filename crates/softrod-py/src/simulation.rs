@@ -54,7 +54,8 @@ pub fn rod_index(model: &Model, rod: &Bound<'_, PyAny>) -> PyResult<usize> {
 /// or "generalized-alpha" (implicit, fixed `dt`; with `error_control` the
 /// step adapts to `rtol`/`atol`; with `linearly_implicit` one Newton
 /// iteration per step, the fast IMEX scheme). `rtol`, `atol`: tolerances
-/// of the adaptive methods. `dt` [s]: step of the fixed-step methods, first
+/// of the adaptive methods; setting `rtol` alone also lowers `atol` to it
+/// if `atol` was larger, so that the error tracks `rtol`. `dt` [s]: step of the fixed-step methods, first
 /// step of the adaptive ones. `output_every` [s]: spacing of the samples
 /// (None: a thousandth of the duration). Defaults: `softrod.Settings()`,
 /// the recommended setting of docs/defaults.md.
@@ -84,7 +85,7 @@ pub(crate) fn overrides(
         s.integrator = integrator(i)?;
     }
     if let Some(v) = rtol {
-        s.rtol = v;
+        *s = s.clone().with_rtol(v);
     }
     if let Some(v) = atol {
         s.atol = v;

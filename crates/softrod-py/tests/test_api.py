@@ -159,6 +159,9 @@ def test_settings_are_validated_and_apply():
     with pytest.raises(softrod.InputError, match="run.rtol"):
         softrod.Settings(rtol=float("nan"))
     assert softrod.Settings(integrator="radau5").integrator == "radau5"
+    # rtol alone lowers a larger atol to it (the error then tracks rtol).
+    assert (softrod.Settings(rtol=1e-8).atol, softrod.Settings(rtol=1e-2).atol) == (1e-8, 1e-6)
+    assert softrod.Settings(rtol=1e-8, atol=1e-5).atol == 1e-5
     sim = softrod.Simulation(rods=[rod(pieces=2)])
     sim.settings = s
     assert sim.settings.integrator == "rk4"

@@ -122,6 +122,24 @@ fn output_every_defaults_to_a_thousandth_of_the_duration() {
 }
 
 #[test]
+fn atol_follows_a_tighter_rtol_unless_it_is_set() {
+    // (rtol line, atol line) → (rtol, atol).
+    let cases = [
+        ("", "", 1e-3, 1e-6),
+        ("rtol = 1e-8\n", "", 1e-8, 1e-8),
+        ("rtol = 1e-6\n", "", 1e-6, 1e-6),
+        // A looser rtol keeps the default atol.
+        ("rtol = 1e-2\n", "", 1e-2, 1e-6),
+        ("rtol = 1e-8\n", "atol = 1e-5\n", 1e-8, 1e-5),
+        ("", "atol = 1e-12\n", 1e-3, 1e-12),
+    ];
+    for (rtol, atol, want_r, want_a) in cases {
+        let (s, _) = parse(&(minimal("") + "[run]\n" + rtol + atol));
+        assert_eq!((s.run.rtol, s.run.atol), (want_r, want_a), "{rtol}{atol}");
+    }
+}
+
+#[test]
 fn integers_are_accepted_where_numbers_are_expected() {
     let (s, _) = parse(
         "[[rod]]\nname = \"r\"\nlength = 1\npieces = 1\n\

@@ -79,6 +79,15 @@ impl Settings {
         }
     }
 
+    /// These settings with the relative tolerance `rtol` and an absolute
+    /// tolerance no looser than it (`atol ← min(atol, rtol)`, the rule of
+    /// [`Run::default_atol`]): what a user who sets only `rtol` means.
+    pub fn with_rtol(mut self, rtol: f64) -> Self {
+        self.rtol = rtol;
+        self.atol = self.atol.min(rtol);
+        self
+    }
+
     /// These settings with another integrator.
     pub fn with_integrator(mut self, integrator: Integrator) -> Self {
         self.integrator = integrator;
@@ -263,6 +272,32 @@ mod tests {
         .unwrap();
         assert_eq!(o.iteration, Iteration::LinearlyImplicit);
         assert_eq!(o.step, StepControl::Fixed(1e-3));
+    }
+
+    /// `with_rtol` tightens `atol` to `rtol`, never loosens it.
+    #[test]
+    fn with_rtol_lowers_a_larger_atol_only() {
+        let s = Settings::default().with_rtol(1e-8);
+        assert_eq!((s.rtol, s.atol), (1e-8, 1e-8));
+        let s = Settings::default().with_rtol(1e-2);
+        assert_eq!((s.rtol, s.atol), (1e-2, Run::DEFAULT_ATOL));
+        let s = Settings::tolerances(1e-6, 1e-12).with_rtol(1e-4);
+        assert_eq!((s.rtol, s.atol), (1e-4, 1e-12));
+    }
+
+    /// The scene's rule for an omitted `atol` and the integrate layer's
+    /// recommended one are the same rule (two crates that cannot see each
+    /// other hold it).
+    #[test]
+    fn scene_and_recommended_atol_agree() {
+        for rtol in [1e-1, 1e-3, 3e-5, 1e-6, 1e-7, 1e-10] {
+            assert_eq!(
+                Run::default_atol(rtol),
+                softrod_integrate::Recommended::atol(rtol),
+                "rtol {rtol}"
+            );
+        }
+        assert_eq!(Run::default_atol(Run::DEFAULT_RTOL), Run::DEFAULT_ATOL);
     }
 
     /// A duration that would need more steps than a machine can count is

@@ -37,7 +37,7 @@ impl Ctx<'_> {
             })?,
         };
         let rtol = self.positive("run.rtol", r.rtol.unwrap_or(d.rtol))?;
-        let atol = self.positive("run.atol", r.atol.unwrap_or(d.atol))?;
+        let atol = self.positive("run.atol", r.atol.unwrap_or(Run::default_atol(rtol)))?;
         let dt = self.positive("run.dt", r.dt.unwrap_or(d.dt))?;
         let output_every = self.positive(
             "run.output_every",
