@@ -1,9 +1,9 @@
 //! Criterion benches of the tree path (docs/theory.md §11): the rod of the
 //! `dynamics` benches (all six strains, 4 Gauss points, gravity, damping)
-//! on a revolute joint (the tree recursion, dense 6×6 per node), on a
-//! prescribed prismatic base (D59), and with its tip welded to the world
-//! (a closed chain, D63–D69: dense mass matrix and its Cholesky factor per
-//! evaluation); the O(N) shifted factorization and solve on the tree.
+//! on a revolute joint (the tree recursion), on a prescribed prismatic base
+//! (D59), and with its tip welded to the world (a closed chain, D63–D69:
+//! the tree's forward dynamics plus one O(N) solve with `M` per constraint
+//! row); the O(N) shifted factorization and solve on the tree.
 //! Compare with `forward_dynamics/N` and `shifted_factor_solve/N` of the
 //! `dynamics` benches.
 //!

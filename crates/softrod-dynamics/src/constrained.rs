@@ -11,7 +11,7 @@ use crate::model::Model;
 use crate::modes::Modes;
 use crate::statics::{StaticsOptions, StaticsResult};
 use crate::tree::Tree;
-use crate::tree_algorithms::{TreePass, outward};
+use crate::tree_algorithms::{SolveNode, TreePass, outward};
 use nalgebra::{DMatrix, DVector};
 
 /// Buffers of the constrained forward dynamics (allocated once, in
@@ -22,9 +22,9 @@ pub(crate) struct ClosureWork {
     pub phi: DVector<f64>,
     pub jac: DMatrix<f64>,
     pub jdot_qd: DVector<f64>,
-    /// Cholesky factor of `M` (n×n, lower), `Y = M⁻¹Jᵀ` (n×m),
+    /// Per-node scratch of the O(N) solves with `M`, `Y = M⁻¹Jᵀ` (n×m),
     /// `A = J M⁻¹ Jᵀ` (m×m, factored in place), right side and multipliers.
-    pub l: DMatrix<f64>,
+    pub solve: Vec<SolveNode>,
     pub y: DMatrix<f64>,
     pub a: DMatrix<f64>,
     pub rhs: DVector<f64>,
@@ -40,14 +40,14 @@ pub(crate) struct ClosureWork {
 }
 
 impl ClosureWork {
-    pub(crate) fn new(n: usize, m: usize, n_p: usize) -> Self {
+    pub(crate) fn new(n: usize, m: usize, n_p: usize, nodes: usize) -> Self {
         Self {
+            solve: vec![SolveNode::default(); nodes],
             jac_p: DMatrix::zeros(m, n_p),
             qdd: DVector::zeros(if n_p > 0 { n } else { 0 }),
             phi: DVector::zeros(m),
             jac: DMatrix::zeros(m, n),
             jdot_qd: DVector::zeros(m),
-            l: DMatrix::zeros(n, n),
             y: DMatrix::zeros(n, m),
             a: DMatrix::zeros(m, m),
             rhs: DVector::zeros(m),
@@ -56,51 +56,6 @@ impl ClosureWork {
             perm: (0..m).collect(),
             rank: m,
         }
-    }
-}
-
-/// Dense in-place Cholesky `M = LLᵀ` into `l` (lower triangle; no
-/// allocation). `false` if `M` is not positive definite.
-fn cholesky_into(m: &DMatrix<f64>, l: &mut DMatrix<f64>) -> bool {
-    let n = m.nrows();
-    l.copy_from(m);
-    for j in 0..n {
-        let mut d = l[(j, j)];
-        for k in 0..j {
-            d -= l[(j, k)] * l[(j, k)];
-        }
-        if d.is_nan() || d <= 0.0 {
-            return false;
-        }
-        let d = d.sqrt();
-        l[(j, j)] = d;
-        for i in j + 1..n {
-            let mut s = l[(i, j)];
-            for k in 0..j {
-                s -= l[(i, k)] * l[(j, k)];
-            }
-            l[(i, j)] = s / d;
-        }
-    }
-    true
-}
-
-/// Solves `LLᵀ x = b` in place (`x` holds `b` on entry).
-fn chol_solve(l: &DMatrix<f64>, x: &mut [f64]) {
-    let n = x.len();
-    for i in 0..n {
-        let mut s = x[i];
-        for k in 0..i {
-            s -= l[(i, k)] * x[k];
-        }
-        x[i] = s / l[(i, i)];
-    }
-    for i in (0..n).rev() {
-        let mut s = x[i];
-        for k in i + 1..n {
-            s -= l[(k, i)] * x[k];
-        }
-        x[i] = s / l[(i, i)];
     }
 }
 
@@ -206,12 +161,6 @@ fn forward_inner(
     tau_act: Option<&[f64]>,
 ) -> Result<(), DynamicsError> {
     let m = model.n_constraints();
-    crate::tree_algorithms::mass_matrix(model, tree, data, q);
-    if !cholesky_into(&data.mass, &mut w.l) {
-        return Err(DynamicsError::NotPositiveDefinite {
-            what: "mass matrix",
-        });
-    }
     // Articulated outward pass: velocities and the velocity-product
     // accelerations (q̈ = 0, no gravity) that J̇q̇ needs.
     outward(model, tree, data, q, Some(qd), None, TreePass::Articulated);
@@ -227,13 +176,16 @@ fn forward_inner(
         &mut w.jdot_qd,
     );
     crate::tree_algorithms::forward_dynamics(model, tree, data, t, q, qd, tau_act)?;
-    // Y = M⁻¹Jᵀ column by column.
+    // Y = M⁻¹Jᵀ column by column: the articulated inward pass of the
+    // forward dynamics just left the factorization of M in `data` (the
+    // shifted solve's with a = b = 0), so each column is one O(N)
+    // bias-free sweep, not a dense Cholesky of M.
     for c in 0..m {
         for i in 0..q.len() {
             w.y[(i, c)] = w.jac[(c, i)];
         }
         let mut col = w.y.column_mut(c);
-        chol_solve(&w.l, col.as_mut_slice());
+        crate::tree_algorithms::shifted_solve(tree, data, &mut w.solve, col.as_mut_slice());
     }
     w.a.gemm(1.0, &w.jac, &w.y, 0.0);
     let rate = model.baumgarte;

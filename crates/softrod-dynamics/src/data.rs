@@ -157,7 +157,12 @@ impl Data {
             prescribed_force: DVector::zeros(model.n_prescribed()),
             prescribed_at_rest: false,
             closure: model.has_closures().then(|| {
-                crate::constrained::ClosureWork::new(n, model.n_constraints(), model.n_prescribed())
+                crate::constrained::ClosureWork::new(
+                    n,
+                    model.n_constraints(),
+                    model.n_prescribed(),
+                    model.tree.as_ref().map_or(0, |t| t.nodes.len()),
+                )
             }),
         };
         model.set_time(&mut data, 0.0);

@@ -719,12 +719,9 @@ impl Simulation {
         // The output times are kept (8 bytes each).
         self.check_samples(duration, 8)?;
         let (method, _) = self.settings.method_and_options(duration)?;
-        // Closed models' forward dynamics hold M and its Cholesky factor
-        // (docs/theory.md D67).
-        let closures = if self.model().has_closures() { 2 } else { 0 };
         self.check_dense(
             &format!("the {} integrator", self.settings.integrator.name()),
-            dense_matrices_of(method) + closures,
+            dense_matrices_of(method),
         )
     }
 
@@ -805,12 +802,9 @@ impl Simulation {
         watch: bool,
     ) -> Result<RunSummary> {
         let (method, mut opts) = self.settings.method_and_options(t1 - t0)?;
-        // Closed models' forward dynamics hold M and its Cholesky factor
-        // (docs/theory.md D67).
-        let closures = if self.model().has_closures() { 2 } else { 0 };
         self.check_dense(
             &format!("the {} integrator", self.settings.integrator.name()),
-            dense_matrices_of(method) + closures,
+            dense_matrices_of(method),
         )?;
         opts.t_eval = Some(times);
         self.system.jacobian = self.settings.stiff_jacobian();
