@@ -455,16 +455,63 @@ fn statics_flags_an_unstable_equilibrium() {
 #[test]
 fn linearize_agrees_with_modes() {
     let p = examples().join("cantilever_gravity.toml");
-    let o = run(&["linearize", p.to_str().unwrap(), "--json"]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let v: serde_json::Value = stdout_json(&o);
-    assert_eq!(v["equilibrium"], "statics");
+    let v = linearize_json(&p);
     let state = v["state"].as_array().unwrap();
     assert_eq!(state.len(), 48);
     assert_eq!(state[0], "q:cantilever.p0.ky");
     assert_eq!(state[24 + 2], "qdot:cantilever.p0.qz");
     assert!(v["inputs"].as_array().unwrap().is_empty());
+    frequencies_agree(&p, &v, 6);
+}
+
+/// The same on a robot (the analytic derivatives on the tree,
+/// docs/theory-derivatives.md §7): a rod with a body at its tip, a second
+/// rod on a sprung revolute joint from that body, a payload with an offset
+/// centre of mass, undamped, under gravity; its joint coordinate is named.
+#[test]
+fn linearize_agrees_with_modes_on_a_robot() {
+    let dir = tmp("linearize_robot");
+    let p = dir.join("robot.toml");
+    std::fs::write(
+        &p,
+        "[world]\ngravity = [0.0, 0.0, -9.81]\n\
+         [[rod]]\nname = \"upper\"\nlength = 0.25\npieces = 3\nstrains = [\"ky\", \"kz\", \"qx\"]\n\
+         section = { shape = \"circle\", radius = 0.01 }\n\
+         material = { density = 1100.0, young = 2.0e6, poisson = 0.5 }\n\
+         [[body]]\nname = \"connector\"\nparent = \"upper\"\nmass = 0.01\n\
+         inertia = [1e-6, 1e-6, 1e-6]\ncenter_of_mass = [0.005, 0.0, 0.0]\n\
+         [[rod]]\nname = \"lower\"\nparent = \"connector\"\nbase = { position = [0.01, 0.0, 0.0] }\n\
+         joint = { type = \"revolute\", axis = [0, 1, 0], stiffness = 0.2 }\n\
+         length = 0.2\npieces = 2\nstrains = \"all\"\n\
+         section = { shape = \"circle\", radius = 0.008 }\n\
+         material = { density = 1100.0, young = 2.0e6, poisson = 0.5 }\n\
+         [[body]]\nname = \"gripper\"\nparent = \"lower\"\nmass = 0.02\n\
+         inertia = [4e-6, 4e-6, 4e-6]\ncenter_of_mass = [0.01, 0.0, 0.002]\n",
+    )
+    .unwrap();
+    let v = linearize_json(&p);
+    let state = v["state"].as_array().unwrap();
+    assert_eq!(state.len(), 2 * (9 + 1 + 12));
+    assert!(
+        state.iter().any(|s| s == "q:lower.joint.theta"),
+        "{state:?}"
+    );
+    frequencies_agree(&p, &v, 6);
+}
+
+/// `softrod linearize SCENE --json`, checked to succeed, about the statics.
+fn linearize_json(p: &std::path::Path) -> serde_json::Value {
+    let o = run(&["linearize", p.to_str().unwrap(), "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = stdout_json(&o);
+    assert_eq!(v["equilibrium"], "statics");
     assert!(v["xdot_residual"].as_f64().unwrap() < 1e-6);
+    v
+}
+
+/// The lowest `count` eigenfrequencies of the undamped `A` against `softrod
+/// modes` to 1e-6.
+fn frequencies_agree(p: &std::path::Path, v: &serde_json::Value, count: usize) {
     let a_rows = v["A"].as_array().unwrap();
     let n = a_rows.len();
     let a = nalgebra::DMatrix::from_fn(n, n, |i, j| a_rows[i][j].as_f64().unwrap());
@@ -478,11 +525,18 @@ fn linearize_agrees_with_modes() {
         })
         .collect();
     omega.sort_by(f64::total_cmp);
-    let o = run(&["modes", p.to_str().unwrap(), "--json", "--count", "6"]);
+    let count_arg = count.to_string();
+    let o = run(&[
+        "modes",
+        p.to_str().unwrap(),
+        "--json",
+        "--count",
+        &count_arg,
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let m: serde_json::Value = stdout_json(&o);
     let f = m["frequencies_hz"].as_array().unwrap();
-    assert_eq!(f.len(), 6);
+    assert_eq!(f.len(), count);
     for (k, fk) in f.iter().enumerate() {
         let w = 2.0 * std::f64::consts::PI * fk.as_f64().unwrap();
         assert!(

@@ -108,6 +108,11 @@ pub fn forward_dynamics_derivatives<'a>(
             got: model.n_dof(),
         });
     }
+    if model.has_closures() {
+        return Err(DynamicsError::UnsupportedClosed {
+            what: "forward_dynamics_derivatives",
+        });
+    }
     forward_dynamics(model, data, t, q, qd, tau_act)?;
     work.qdd.copy_from(&data.qdd);
     work.id.load_scale = data.load_scale;
@@ -117,7 +122,7 @@ pub fn forward_dynamics_derivatives<'a>(
         (Some(u), t) => *t = Some(DVector::from_column_slice(u)),
     }
     inverse_dynamics_derivatives(model, &mut work.id, t, q, qd, work.qdd.as_slice())?;
-    work.solver.factor(model, q, 0.0, 0.0)?;
+    work.solver.factor_at(model, t, q, 0.0, 0.0)?;
     work.dqdd_dq.copy_from(&work.id.dtau_dq);
     work.dqdd_dq.neg_mut();
     solve_columns(model, &mut work.solver, &mut work.dqdd_dq)?;
@@ -234,7 +239,6 @@ pub fn dynamics_jacobians(
 ) -> Result<DynamicsJacobians, DynamicsError> {
     check_vec(model, "q", q)?;
     check_vec(model, "qdot", qd)?;
-    model.require_chain("dynamics_jacobians")?;
     let mut work = FdDerivatives::new(model);
     forward_dynamics_derivatives(model, data, &mut work, t, q, qd, tau_act)?;
     Ok(DynamicsJacobians {

@@ -8,7 +8,7 @@
 use crate::algorithms::check_vec;
 use crate::data::cable_tension;
 use crate::error::DynamicsError;
-use crate::model::{Model, RodModel};
+use crate::model::{Model, PieceData, RodModel};
 use crate::passes::gravity_base_acceleration;
 use crate::piece_derivs::{Coefficients, PieceDerivMaps, lambda, tangent_transpose_form};
 use nalgebra::{DMatrix, DVector};
@@ -21,55 +21,56 @@ use softrod_mechanics::LoadFrame;
 /// Per-piece buffers of the derivative sweeps (all fixed-size; `k_n`-sized
 /// quantities in the leading columns / rows of 6×6).
 #[derive(Clone, Debug)]
-struct PieceWork {
+pub(crate) struct PieceWork {
     /// World poses of the piece base `G_{n−1}` and tip `G_n`; local tip pose.
-    base_world: Pose,
-    tip_world: Pose,
-    tip: Pose,
+    pub(crate) base_world: Pose,
+    pub(crate) tip_world: Pose,
+    pub(crate) tip: Pose,
     /// `T₋(ℓ)`, `η(ℓ)` and the tip linearizations `H_η`, `H_η̇`, `H_v̇` (D39–D41).
-    tm_tip: Mat6,
-    eta_tip: Vec6,
-    h_eta: Mat6,
-    h_etad: Mat6,
-    h_vd: Mat6,
-    co_tip: Coefficients,
+    pub(crate) tm_tip: Mat6,
+    pub(crate) eta_tip: Vec6,
+    pub(crate) etad_tip: Vec6,
+    pub(crate) h_eta: Mat6,
+    pub(crate) h_etad: Mat6,
+    pub(crate) h_vd: Mat6,
+    pub(crate) co_tip: Coefficients,
     /// Own-point sums (frame `L_{n−1}`): `𝓜ᵗ`, `𝓑ᵗ`, `𝒴ᵗ` (D43) and the
     /// receivers `Σ w T₋ᵀ X A` for `X = 𝓜, 𝓑̄, 𝒴` (D45).
-    mt: Mat6,
-    bt: Mat6,
-    yt: Mat6,
-    rm: Mat6,
-    rb: Mat6,
-    ry: Mat6,
+    pub(crate) mt: Mat6,
+    pub(crate) bt: Mat6,
+    pub(crate) yt: Mat6,
+    pub(crate) rm: Mat6,
+    pub(crate) rb: Mat6,
+    pub(crate) ry: Mat6,
     /// `Σ w T₋ᵀ f`, `Σ w Aᵀ f` (D17–D18 sums).
-    tsum: Vec6,
-    wsum: Vec6,
+    pub(crate) tsum: Vec6,
+    pub(crate) wsum: Vec6,
     /// Own-point derivative sums, columns = strain perturbation `ζ` (D42).
-    dq_diag: Mat6,
-    dv_diag: Mat6,
-    dq_w: Mat6,
-    dv_w: Mat6,
+    pub(crate) dq_diag: Mat6,
+    pub(crate) dv_diag: Mat6,
+    pub(crate) dq_w: Mat6,
+    pub(crate) dv_w: Mat6,
     /// `φ_i`, `χ_i` of (D36).
-    phi: [Vec6; 4],
-    chi: [Vec6; 4],
+    pub(crate) phi: [Vec6; 4],
+    pub(crate) chi: [Vec6; 4],
     /// `P^i = ad_ξ^i` and `k̄ = (k; 0)` for 𝒬 (D36).
-    powers: [Mat6; 4],
-    kbar: Vec6,
+    pub(crate) powers: [Mat6; 4],
+    pub(crate) kbar: Vec6,
     /// Pairing quantities in the world frame (D46), `k` columns (or rows).
-    s_world: Mat6,
-    dwq_world: Mat6,
-    dwv_world: Mat6,
-    src_wq: Mat6,
-    src_uq: Mat6,
-    src_wv: Mat6,
-    src_uv: Mat6,
-    rcv_m: Mat6,
-    rcv_b: Mat6,
-    rcv_y: Mat6,
+    pub(crate) s_world: Mat6,
+    pub(crate) dwq_world: Mat6,
+    pub(crate) dwv_world: Mat6,
+    pub(crate) src_wq: Mat6,
+    pub(crate) src_uq: Mat6,
+    pub(crate) src_wv: Mat6,
+    pub(crate) src_uv: Mat6,
+    pub(crate) rcv_m: Mat6,
+    pub(crate) rcv_b: Mat6,
+    pub(crate) rcv_y: Mat6,
 }
 
 impl PieceWork {
-    fn new() -> Self {
+    pub(crate) fn new() -> Self {
         let z = Mat6::zeros();
         Self {
             base_world: Pose::identity(),
@@ -77,6 +78,7 @@ impl PieceWork {
             tip: Pose::identity(),
             tm_tip: z,
             eta_tip: Vec6::zeros(),
+            etad_tip: Vec6::zeros(),
             h_eta: z,
             h_etad: z,
             h_vd: z,
@@ -114,7 +116,23 @@ impl PieceWork {
         }
     }
 
-    fn reset_sums(&mut self) {
+    /// The tip of the piece (or joint) from its linearization at `x = ℓ`
+    /// (`base_world` already set).
+    pub(crate) fn set_tip(&mut self, g: Pose, p: &PointLin, dm: &PieceDerivMaps) {
+        self.tip = g;
+        self.tm_tip = p.t.to_mat6();
+        self.eta_tip = p.eta;
+        self.etad_tip = p.etad;
+        self.h_eta = p.h_eta;
+        self.h_etad = p.h_etad;
+        self.h_vd = p.h_vd;
+        self.co_tip = p.co;
+        self.powers = dm.p;
+        self.kbar = dm.kbar();
+        self.tip_world = self.base_world.compose(&g);
+    }
+
+    pub(crate) fn reset_sums(&mut self) {
         let z = Mat6::zeros();
         self.mt = z;
         self.bt = z;
@@ -155,6 +173,8 @@ pub struct IdDerivatives {
     /// [`crate::forward_dynamics_derivatives`]).
     pub tensions: Option<DVector<f64>>,
     n_dof: usize,
+    /// The per-node buffers of an articulated model (D76–D80).
+    tree: Option<Box<crate::tree_derivatives::TreeWork>>,
 }
 
 impl IdDerivatives {
@@ -177,13 +197,17 @@ impl IdDerivatives {
             load_scale: 1.0,
             tensions: None,
             n_dof: n,
+            tree: model
+                .tree
+                .as_ref()
+                .map(|t| Box::new(crate::tree_derivatives::TreeWork::new(model, t))),
         }
     }
 }
 
 /// `B` as a zero-padded 6×6 (columns past `k` are zero).
 #[inline(always)]
-fn basis6(basis: &Basis) -> Mat6 {
+pub(crate) fn basis6(basis: &Basis) -> Mat6 {
     let mut b = Mat6::zeros();
     for c in 0..basis.dof() {
         b.set_column(c, &basis.column(c));
@@ -196,7 +220,7 @@ fn basis6(basis: &Basis) -> Mat6 {
 /// of the section it acts on (D38): the net force density `−F` changes by
 /// `(ω × m; ω × f) = Y Δ`, `Y = [[−m̃, 0], [−f̃, 0]]`.
 #[inline(always)]
-fn dead_load_map(w: &Vec6) -> Mat6 {
+pub(crate) fn dead_load_map(w: &Vec6) -> Mat6 {
     let mut y = Mat6::zeros();
     y.fixed_view_mut::<3, 3>(0, 0)
         .copy_from(&(-skew(&angular(w))));
@@ -207,7 +231,7 @@ fn dead_load_map(w: &Vec6) -> Mat6 {
 
 /// `diag(d) X`.
 #[inline(always)]
-fn diag_mul(d: &Vec6, x: &Mat6) -> Mat6 {
+pub(crate) fn diag_mul(d: &Vec6, x: &Mat6) -> Mat6 {
     Mat6::from_fn(|i, j| d[i] * x[(i, j)])
 }
 
@@ -237,20 +261,21 @@ fn op_tr_mul(op: &AdOp, x: &Mat6) -> Mat6 {
 }
 
 /// One evaluation point of a piece, linearized (D39–D41).
-struct PointLin {
-    a: AdOp,
-    t: AdOp,
-    eta: Vec6,
-    etad: Vec6,
-    h_eta: Mat6,
-    h_etad: Mat6,
-    h_vd: Mat6,
-    co: Coefficients,
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PointLin {
+    pub a: AdOp,
+    pub t: AdOp,
+    pub eta: Vec6,
+    pub etad: Vec6,
+    pub h_eta: Mat6,
+    pub h_etad: Mat6,
+    pub h_vd: Mat6,
+    pub co: Coefficients,
 }
 
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn linearize_point(
+pub(crate) fn linearize_point(
     maps: &PieceMaps,
     dm: &PieceDerivMaps,
     x: f64,
@@ -304,7 +329,7 @@ fn linearize_point(
 /// `λT ∫ H P Hᵀ/|v| ds` (its strain derivative), `H = [d̃; I]`,
 /// `P = I − t̂t̂ᵀ`.
 #[inline(always)]
-fn cable_terms(
+pub(crate) fn cable_terms(
     model: &Model,
     rm: &RodModel,
     piece: &Piece,
@@ -377,7 +402,11 @@ pub(crate) fn id_derivatives_impl<'a>(
     qd: &[f64],
     qdd: &[f64],
 ) -> Result<&'a IdDerivatives, DynamicsError> {
-    if work.n_dof != model.n_dof() || work.pieces.len() != model.rods().len() {
+    let nodes = model.tree.as_ref().map(|t| t.nodes.len());
+    if work.n_dof != model.n_dof()
+        || work.pieces.len() != model.rods().len()
+        || work.tree.as_ref().map(|t| t.n_nodes()) != nodes
+    {
         return Err(DynamicsError::WorkspaceMismatch {
             what: "IdDerivatives",
             built: work.n_dof,
@@ -387,16 +416,25 @@ pub(crate) fn id_derivatives_impl<'a>(
     check_vec(model, "q", q)?;
     check_vec(model, "qdot", qd)?;
     check_vec(model, "qddot", qdd)?;
-    model.require_chain("inverse_dynamics_derivatives")?;
-    let scale = work.load_scale;
-    if model.rods().len() > 1 {
-        work.dtau_dq.fill(0.0);
-        work.dtau_dqd.fill(0.0);
+    if model.has_closures() {
+        return Err(DynamicsError::UnsupportedClosed {
+            what: "inverse_dynamics_derivatives",
+        });
     }
-    for (r, rm) in model.rods().iter().enumerate() {
-        outward(model, rm, &mut work.pieces[r], q, qd, qdd, scale);
-        inward(model, rm, work, r, t, q, qd, scale);
-        pairs(rm, work, r);
+    if let (Some(tree), Some(mut tw)) = (&model.tree, work.tree.take()) {
+        crate::tree_derivatives::tree_id_derivatives(model, tree, work, &mut tw, t, q, qd, qdd);
+        work.tree = Some(tw);
+    } else {
+        let scale = work.load_scale;
+        if model.rods().len() > 1 {
+            work.dtau_dq.fill(0.0);
+            work.dtau_dqd.fill(0.0);
+        }
+        for (r, rm) in model.rods().iter().enumerate() {
+            outward(model, rm, &mut work.pieces[r], q, qd, qdd, scale);
+            inward(model, rm, work, r, t, q, qd, scale);
+            pairs(rm, work, r);
+        }
     }
     for (what, m) in [("dtau/dq", &work.dtau_dq), ("dtau/dqdot", &work.dtau_dqd)] {
         // One vectorizable pass (x·0 is NaN exactly for non-finite x), the
@@ -418,6 +456,131 @@ pub(crate) fn id_derivatives_impl<'a>(
     Ok(work)
 }
 
+/// The drag coefficients of a rod as the diagonal `C` of (D38).
+pub(crate) fn drag_diagonal(rm: &RodModel) -> Option<Vec6> {
+    rm.spec.drag.map(|d| {
+        Vec6::new(
+            d.rotational,
+            d.rotational,
+            d.rotational,
+            d.translational,
+            d.translational,
+            d.translational,
+        )
+    })
+}
+
+/// The own evaluation points and point loads of one piece (D38–D43): every
+/// Gauss point linearized in the piece's strain and rate (D39–D41), its
+/// force density and linearization summed into the diagonal and
+/// transmitted-wrench sums (D42), the composites' own parts and the
+/// receivers (D43, D45); point loads likewise, with weight 1. `pose` is the
+/// world pose of the piece's base frame, `(η₀, η̇′₀)` its motion (gravity
+/// in `η̇′₀`).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn own_points(
+    rm: &RodModel,
+    pd: &PieceData,
+    maps: &PieceMaps,
+    dm: &PieceDerivMaps,
+    pose: &Pose,
+    motion: (&Vec6, &Vec6),
+    rates: (&Vec6, &Vec6),
+    drag: Option<&Vec6>,
+    scale: f64,
+    w: &mut PieceWork,
+) {
+    let (eta0, etad0) = motion;
+    let (xid, xidd) = rates;
+    for qp in &pd.points {
+        let (g, p) = linearize_point(maps, dm, qp.x, eta0, etad0, xid, xidd);
+        let m = &qp.inertia;
+        let me = m.component_mul(&p.eta);
+        let mut f = m.component_mul(&p.etad) + coad_vec(&p.eta, &me);
+        // (D38): b = Λ(𝓜η) + ad*_η 𝓜 + C, the velocity part of δf.
+        let mut b = lambda(&me) + scale_columns(&coad(&p.eta), m);
+        if let Some(c) = drag {
+            f += c.component_mul(&p.eta);
+            b += Mat6::from_diagonal(c);
+        }
+        let mut y = Mat6::zeros();
+        let mut has_y = false;
+        if !rm.spec.distributed_loads.is_empty() {
+            let world = pose.compose(&g);
+            for dl in &rm.spec.distributed_loads {
+                let load = dl.wrench_density(&world) * scale;
+                f -= load;
+                if dl.frame == LoadFrame::World {
+                    y += dead_load_map(&load);
+                    has_y = true;
+                }
+            }
+        }
+        let wt = qp.w;
+        let df_q = (diag_mul(m, &p.h_etad)
+            + b * p.h_eta
+            + if has_y {
+                mul_op(&y, &p.t)
+            } else {
+                Mat6::zeros()
+            })
+            * wt;
+        let df_v = (diag_mul(m, &p.h_vd) + mul_op(&b, &p.t)) * wt;
+        let fw = f * wt;
+        w.dq_diag += op_tr_mul(&p.t, &df_q);
+        w.dv_diag += op_tr_mul(&p.t, &df_v);
+        w.dq_w += op_tr_mul(&p.a, &(mul_op(&lambda(&fw), &p.t) + df_q));
+        w.dv_w += op_tr_mul(&p.a, &df_v);
+        w.tsum += p.t.tr_mul_vec(&fw);
+        w.wsum += p.a.tr_mul_vec(&fw);
+        for i in 0..4 {
+            w.phi[i] += f * (wt * p.co.d[i]);
+            w.chi[i] += f * (wt * p.co.c[i]);
+        }
+        // (D43): B̄ = b − 𝓜 ad_η.
+        let bbar = b - diag_mul(m, &ad(&p.eta));
+        let pa = p.a.to_mat6();
+        let ma = diag_mul(&(m * wt), &pa);
+        let ba = mul_op(&(bbar * wt), &p.a);
+        w.mt += op_tr_mul(&p.a, &ma);
+        w.bt += op_tr_mul(&p.a, &ba);
+        w.rm += op_tr_mul(&p.t, &ma);
+        w.rb += op_tr_mul(&p.t, &ba);
+        if has_y {
+            let ya = mul_op(&(y * wt), &p.a);
+            w.yt += op_tr_mul(&p.a, &ya);
+            w.ry += op_tr_mul(&p.t, &ya);
+        }
+    }
+    for pl in &pd.loads {
+        let load = &rm.spec.point_loads[pl.index];
+        let (g, tm) = maps.exp_and_tangent_minus(pl.x);
+        let a = g.ad_inv().to_mat6();
+        let t = tm.to_mat6();
+        let co = Coefficients::at(pl.x, dm.theta);
+        let fp = -(load.wrench(&pose.compose(&g)) * scale);
+        let (at, tt) = (a.transpose(), t.transpose());
+        let mut dq = lambda(&fp) * t;
+        if load.frame == LoadFrame::World {
+            let y = dead_load_map(&-fp);
+            let yt_ = y * t;
+            w.dq_diag += tt * yt_;
+            dq += yt_;
+            let ya = y * a;
+            w.yt += at * ya;
+            w.ry += tt * ya;
+        }
+        w.dq_w += at * dq;
+        w.tsum += tt * fp;
+        w.wsum += at * fp;
+        for i in 0..4 {
+            w.phi[i] += fp * co.d[i];
+            w.chi[i] += fp * co.c[i];
+        }
+    }
+}
+
 /// The outward sweep (D39–D43): velocities, accelerations, force
 /// densities and their linearizations at every point; own-point sums.
 #[inline(always)]
@@ -437,16 +600,7 @@ fn outward(
     let mut pose = *rod.base();
     let mut eta0 = Vec6::zeros();
     let mut etad0 = gravity_base_acceleration(model, rm, scale);
-    let drag = rm.spec.drag.map(|d| {
-        Vec6::new(
-            d.rotational,
-            d.rotational,
-            d.rotational,
-            d.translational,
-            d.translational,
-            d.translational,
-        )
-    });
+    let drag = drag_diagonal(rm);
     for ((piece, pd), w) in rod.pieces().iter().zip(&rm.pieces).zip(works.iter_mut()) {
         let xi = piece.strain(qr);
         let xid = piece.strain_rate(qdr);
@@ -455,106 +609,172 @@ fn outward(
         let dm = PieceDerivMaps::new(&xi, &xid, &xidd);
         w.reset_sums();
         w.base_world = pose;
-        for qp in &pd.points {
-            let (g, p) = linearize_point(&maps, &dm, qp.x, &eta0, &etad0, &xid, &xidd);
-            let m = &qp.inertia;
-            let me = m.component_mul(&p.eta);
-            let mut f = m.component_mul(&p.etad) + coad_vec(&p.eta, &me);
-            // (D38): b = Λ(𝓜η) + ad*_η 𝓜 + C, the velocity part of δf.
-            let mut b = lambda(&me) + scale_columns(&coad(&p.eta), m);
-            if let Some(c) = &drag {
-                f += c.component_mul(&p.eta);
-                b += Mat6::from_diagonal(c);
-            }
-            let mut y = Mat6::zeros();
-            let mut has_y = false;
-            if !rm.spec.distributed_loads.is_empty() {
-                let world = pose.compose(&g);
-                for dl in &rm.spec.distributed_loads {
-                    let load = dl.wrench_density(&world) * scale;
-                    f -= load;
-                    if dl.frame == LoadFrame::World {
-                        y += dead_load_map(&load);
-                        has_y = true;
-                    }
-                }
-            }
-            let wt = qp.w;
-            let df_q = (diag_mul(m, &p.h_etad)
-                + b * p.h_eta
-                + if has_y {
-                    mul_op(&y, &p.t)
-                } else {
-                    Mat6::zeros()
-                })
-                * wt;
-            let df_v = (diag_mul(m, &p.h_vd) + mul_op(&b, &p.t)) * wt;
-            let fw = f * wt;
-            w.dq_diag += op_tr_mul(&p.t, &df_q);
-            w.dv_diag += op_tr_mul(&p.t, &df_v);
-            w.dq_w += op_tr_mul(&p.a, &(mul_op(&lambda(&fw), &p.t) + df_q));
-            w.dv_w += op_tr_mul(&p.a, &df_v);
-            w.tsum += p.t.tr_mul_vec(&fw);
-            w.wsum += p.a.tr_mul_vec(&fw);
-            for i in 0..4 {
-                w.phi[i] += f * (wt * p.co.d[i]);
-                w.chi[i] += f * (wt * p.co.c[i]);
-            }
-            // (D43): B̄ = b − 𝓜 ad_η.
-            let bbar = b - diag_mul(m, &ad(&p.eta));
-            let pa = p.a.to_mat6();
-            let ma = diag_mul(&(m * wt), &pa);
-            let ba = mul_op(&(bbar * wt), &p.a);
-            w.mt += op_tr_mul(&p.a, &ma);
-            w.bt += op_tr_mul(&p.a, &ba);
-            w.rm += op_tr_mul(&p.t, &ma);
-            w.rb += op_tr_mul(&p.t, &ba);
-            if has_y {
-                let ya = mul_op(&(y * wt), &p.a);
-                w.yt += op_tr_mul(&p.a, &ya);
-                w.ry += op_tr_mul(&p.t, &ya);
-            }
-        }
-        for pl in &pd.loads {
-            let load = &rm.spec.point_loads[pl.index];
-            let (g, tm) = maps.exp_and_tangent_minus(pl.x);
-            let a = g.ad_inv().to_mat6();
-            let t = tm.to_mat6();
-            let co = Coefficients::at(pl.x, dm.theta);
-            let fp = -(load.wrench(&pose.compose(&g)) * scale);
-            let (at, tt) = (a.transpose(), t.transpose());
-            let mut dq = lambda(&fp) * t;
-            if load.frame == LoadFrame::World {
-                let y = dead_load_map(&-fp);
-                let yt_ = y * t;
-                w.dq_diag += tt * yt_;
-                dq += yt_;
-                let ya = y * a;
-                w.yt += at * ya;
-                w.ry += tt * ya;
-            }
-            w.dq_w += at * dq;
-            w.tsum += tt * fp;
-            w.wsum += at * fp;
-            for i in 0..4 {
-                w.phi[i] += fp * co.d[i];
-                w.chi[i] += fp * co.c[i];
-            }
-        }
+        own_points(
+            rm,
+            pd,
+            &maps,
+            &dm,
+            &pose,
+            (&eta0, &etad0),
+            (&xid, &xidd),
+            drag.as_ref(),
+            scale,
+            w,
+        );
         let (g, p) = linearize_point(&maps, &dm, piece.length, &eta0, &etad0, &xid, &xidd);
-        w.tip = g;
-        w.tm_tip = p.t.to_mat6();
-        w.eta_tip = p.eta;
-        w.h_eta = p.h_eta;
-        w.h_etad = p.h_etad;
-        w.h_vd = p.h_vd;
-        w.co_tip = p.co;
-        w.powers = dm.p;
-        w.kbar = dm.kbar();
+        w.set_tip(g, &p, &dm);
         eta0 = p.eta;
         etad0 = p.etad;
-        pose = pose.compose(&g);
-        w.tip_world = pose;
+        pose = w.tip_world;
+    }
+}
+
+/// What a subtree hands to the frame it hangs from (D43): the composite
+/// inertia, velocity-product and dead-load operators `𝓜ᶜ`, `𝓑ᶜ`, `𝒴ᶜ` and
+/// the transmitted wrench `W`, all in that frame's axes.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Subtree {
+    pub m: Mat6,
+    pub b: Mat6,
+    pub y: Mat6,
+    pub w: Vec6,
+}
+
+impl Subtree {
+    pub(crate) fn zero() -> Self {
+        Self {
+            m: Mat6::zeros(),
+            b: Mat6::zeros(),
+            y: Mat6::zeros(),
+            w: Vec6::zeros(),
+        }
+    }
+
+    /// The same subtree in the axes of a frame from which twists reach
+    /// this one's by `η = a η′` (a rigid map): `aᵀ X a`, `aᵀ W`.
+    pub(crate) fn through(&self, a: &Mat6, dead: bool) -> Self {
+        let at = a.transpose();
+        Self {
+            m: at * self.m * a,
+            b: at * self.b * a,
+            y: if dead { at * self.y * a } else { Mat6::zeros() },
+            w: at * self.w,
+        }
+    }
+
+    pub(crate) fn add(&mut self, o: &Self) {
+        self.m += o.m;
+        self.b += o.b;
+        self.y += o.y;
+        self.w += o.w;
+    }
+}
+
+/// One piece of the inward sweep (D43–D46) given what its subtree hands to
+/// its tip frame (`tip`): writes the piece's world-frame pairing quantities
+/// into `w` and returns its diagonal blocks in strain space (6×6, before
+/// `Bᵀ · B` and the strain-space terms of (D47)), the wrench it projects on
+/// its coordinates (`τ_n = Bᵀ(·)` before those terms) and what it hands to
+/// its base frame.
+#[inline(always)]
+pub(crate) fn close_piece(
+    w: &mut PieceWork,
+    tip: &Subtree,
+    bm: &Mat6,
+    dead: bool,
+) -> (Mat6, Mat6, Vec6, Subtree) {
+    let (mc, bc, yc, wn) = (&tip.m, &tip.b, &tip.y, &tip.w);
+    let al = w.tip.ad_inv().to_mat6();
+    let tl = w.tm_tip;
+    let adeta = ad(&w.eta_tip);
+    // (D43): the subtree's wrench at L_n changes by
+    // 𝓜ᶜ w̄ + 𝓑ᶜ u + 𝒴ᶜ Δ, with u = δη(ℓ), w̄ = δη̇′(ℓ) + ad_η(ℓ) δη(ℓ).
+    let wq = w.h_etad + adeta * w.h_eta;
+    let uq = w.h_eta;
+    let mut dwn_q = mc * wq + bc * uq;
+    if dead {
+        dwn_q += yc * tl;
+    }
+    let wv = w.h_vd + adeta * tl;
+    let dwn_v = mc * wv + bc * tl;
+    let (mut phi, mut chi) = (w.phi, w.chi);
+    for i in 0..4 {
+        phi[i] += wn * w.co_tip.d[i];
+        chi[i] += wn * w.co_tip.c[i];
+    }
+    let qform = tangent_transpose_form(&w.powers, &w.kbar, &phi, &chi);
+    let tlt = tl.transpose();
+    let diag_q = w.dq_diag + tlt * dwn_q + qform;
+    let diag_v = w.dv_diag + tlt * dwn_v;
+    let alt = al.transpose();
+    let dw_q = w.dq_w + alt * (lambda(wn) * tl + dwn_q);
+    let dw_v = w.dv_w + alt * dwn_v;
+    // World-frame pairing quantities (D46).
+    let to_world_tip = w.tip_world.ad().to_mat6();
+    let base_inv = w.base_world.ad_inv().to_mat6();
+    w.s_world = to_world_tip * tl * bm;
+    w.src_wq = to_world_tip * wq * bm;
+    w.src_uq = to_world_tip * uq * bm;
+    w.src_wv = to_world_tip * wv * bm;
+    w.src_uv = w.s_world;
+    w.dwq_world = base_inv.transpose() * dw_q * bm;
+    w.dwv_world = base_inv.transpose() * dw_v * bm;
+    let bt_ = bm.transpose();
+    w.rcv_m = bt_ * (w.rm + tlt * mc * al) * base_inv;
+    w.rcv_b = bt_ * (w.rb + tlt * bc * al) * base_inv;
+    if dead {
+        w.rcv_y = bt_ * (w.ry + tlt * yc * al) * base_inv;
+    }
+    // Composites carried to L_{n−1} (D43), and τ_n's wrench (D18).
+    let base = Subtree {
+        m: w.mt + alt * mc * al,
+        b: w.bt + alt * bc * al,
+        y: if dead {
+            w.yt + alt * yc * al
+        } else {
+            Mat6::zeros()
+        },
+        w: w.wsum + alt * wn,
+    };
+    (diag_q, diag_v, w.tsum + tlt * wn, base)
+}
+
+/// Writes a piece's `τ_n` and its diagonal blocks, adding the strain-space
+/// terms (D13, D15, D47): `K_n q_n + D_n q̇_n`, the elastic offset and the
+/// cables' force and strain Hessian. `diag_q`, `diag_v`, `wrench` are
+/// [`close_piece`]'s.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(crate) fn write_piece(
+    model: &Model,
+    rm: &RodModel,
+    n: usize,
+    work: &mut IdDerivatives,
+    t: f64,
+    (q, qd): (&[f64], &[f64]),
+    scale: f64,
+    (diag_q, diag_v, wrench): (&Mat6, &Mat6, &Vec6),
+) {
+    let piece = &rm.spec.rod.pieces()[n];
+    let pd = &rm.pieces[n];
+    let k = piece.basis.dof();
+    let o = rm.dof_offset + piece.dof_offset;
+    let bm = basis6(&piece.basis);
+    let xi = piece.strain(&q[rm.dofs()]);
+    let (cable_force, cable_hess) =
+        cable_terms(model, rm, piece, &xi, t, scale, work.tensions.as_ref());
+    let bt_ = bm.transpose();
+    let dq6 = bt_ * (diag_q + cable_hess) * bm;
+    let dv6 = bt_ * diag_v * bm;
+    let inert = wrench + cable_force;
+    for i in 0..k {
+        let mut tau = piece.basis.column(i).dot(&inert) + pd.offset6[i];
+        for j in 0..k {
+            tau += pd.stiffness[(i, j)] * q[o + j] + pd.damping[(i, j)] * qd[o + j];
+            work.dtau_dq[(o + i, o + j)] = dq6[(i, j)] + pd.stiffness[(i, j)];
+            work.dtau_dqd[(o + i, o + j)] = dv6[(i, j)] + pd.damping[(i, j)];
+        }
+        work.tau[o + i] = tau;
     }
 }
 
@@ -571,89 +791,29 @@ fn inward(
     qd: &[f64],
     scale: f64,
 ) {
-    let rod = &rm.spec.rod;
-    let mut mc = Mat6::zeros();
-    let mut bc = Mat6::zeros();
-    let mut yc = Mat6::zeros();
     // Dead loads only: the 𝒴 composites and receivers are zero otherwise.
     let dead = has_dead_loads(rm);
-    let mut wn = Vec6::zeros();
-    for (n, (piece, pd)) in rod.pieces().iter().zip(&rm.pieces).enumerate().rev() {
-        let w = &mut work.pieces[r][n];
-        let k = piece.basis.dof();
-        let o = rm.dof_offset + piece.dof_offset;
+    let mut sub = Subtree::zero();
+    for (n, piece) in rm.spec.rod.pieces().iter().enumerate().rev() {
         let bm = basis6(&piece.basis);
-        let al = w.tip.ad_inv().to_mat6();
-        let tl = w.tm_tip;
-        let adeta = ad(&w.eta_tip);
-        // (D43): the subtree's wrench at L_n changes by
-        // 𝓜ᶜ w̄ + 𝓑ᶜ u + 𝒴ᶜ Δ, with u = δη(ℓ), w̄ = δη̇′(ℓ) + ad_η(ℓ) δη(ℓ).
-        let wq = w.h_etad + adeta * w.h_eta;
-        let uq = w.h_eta;
-        let mut dwn_q = mc * wq + bc * uq;
-        if dead {
-            dwn_q += yc * tl;
-        }
-        let wv = w.h_vd + adeta * tl;
-        let dwn_v = mc * wv + bc * tl;
-        let (mut phi, mut chi) = (w.phi, w.chi);
-        for i in 0..4 {
-            phi[i] += wn * w.co_tip.d[i];
-            chi[i] += wn * w.co_tip.c[i];
-        }
-        let qform = tangent_transpose_form(&w.powers, &w.kbar, &phi, &chi);
-        let tlt = tl.transpose();
-        let diag_q = w.dq_diag + tlt * dwn_q + qform;
-        let diag_v = w.dv_diag + tlt * dwn_v;
-        let alt = al.transpose();
-        let dw_q = w.dq_w + alt * (lambda(&wn) * tl + dwn_q);
-        let dw_v = w.dv_w + alt * dwn_v;
-        // World-frame pairing quantities (D46).
-        let to_world_tip = w.tip_world.ad().to_mat6();
-        let base_inv = w.base_world.ad_inv().to_mat6();
-        w.s_world = to_world_tip * tl * bm;
-        w.src_wq = to_world_tip * wq * bm;
-        w.src_uq = to_world_tip * uq * bm;
-        w.src_wv = to_world_tip * wv * bm;
-        w.src_uv = w.s_world;
-        w.dwq_world = base_inv.transpose() * dw_q * bm;
-        w.dwv_world = base_inv.transpose() * dw_v * bm;
-        let bt_ = bm.transpose();
-        w.rcv_m = bt_ * (w.rm + tlt * mc * al) * base_inv;
-        w.rcv_b = bt_ * (w.rb + tlt * bc * al) * base_inv;
-        if dead {
-            w.rcv_y = bt_ * (w.ry + tlt * yc * al) * base_inv;
-        }
-        // Composites carried to L_{n−1} (D43).
-        mc = w.mt + alt * mc * al;
-        bc = w.bt + alt * bc * al;
-        if dead {
-            yc = w.yt + alt * yc * al;
-        }
-        // τ_n (D18) and the strain-space terms (D13, D15, D47).
-        let xi = piece.strain(&q[rm.dofs()]);
-        let (cable_force, cable_hess) =
-            cable_terms(model, rm, piece, &xi, t, scale, work.tensions.as_ref());
-        let tau6 = w.tsum + tlt * wn;
-        wn = w.wsum + alt * wn;
-        let dq6 = bt_ * (diag_q + cable_hess) * bm;
-        let dv6 = bt_ * diag_v * bm;
-        let inert = tau6 + cable_force;
-        for i in 0..k {
-            let mut tau = piece.basis.column(i).dot(&inert) + pd.offset6[i];
-            for j in 0..k {
-                tau += pd.stiffness[(i, j)] * q[o + j] + pd.damping[(i, j)] * qd[o + j];
-                work.dtau_dq[(o + i, o + j)] = dq6[(i, j)] + pd.stiffness[(i, j)];
-                work.dtau_dqd[(o + i, o + j)] = dv6[(i, j)] + pd.damping[(i, j)];
-            }
-            work.tau[o + i] = tau;
-        }
+        let (diag_q, diag_v, wrench, base) = close_piece(&mut work.pieces[r][n], &sub, &bm, dead);
+        sub = base;
+        write_piece(
+            model,
+            rm,
+            n,
+            work,
+            t,
+            (q, qd),
+            scale,
+            (&diag_q, &diag_v, &wrench),
+        );
     }
 }
 
 /// Whether a rod carries dead (world-frame) point or distributed loads, the
 /// only terms with a nonzero `Y` (D38).
-fn has_dead_loads(rm: &RodModel) -> bool {
+pub(crate) fn has_dead_loads(rm: &RodModel) -> bool {
     rm.spec
         .point_loads
         .iter()

@@ -31,10 +31,11 @@
 //! [`Model::with_elements`]. A joint is a massless unit PCS piece whose
 //! basis is its motion subspace (docs/theory.md §11, D50–D58); inverse and
 //! forward dynamics, the mass matrix, energies, statics and modes run on the
-//! tree, and so does the O(N) [`ShiftedSolver`] (not on closed chains).
+//! tree, and so do the O(N) [`ShiftedSolver`] and the analytic derivatives
+//! (docs/theory-derivatives.md §7, D76–D80; neither on closed chains).
 //! Models without bodies, parents or joints keep the chain path
-//! unchanged; the analytic derivatives and [`coriolis_matrix`] return
-//! [`DynamicsError::Unsupported`] for the others.
+//! unchanged; [`coriolis_matrix`] returns [`DynamicsError::Unsupported`]
+//! for the others.
 //!
 //! Closed chains: [`Closure`]s (weld, ball, slider between rod points at any
 //! `s`, body frames and the world; [`ModelBuilder::closure`],
@@ -81,6 +82,7 @@ mod simd;
 mod statics;
 mod tree;
 mod tree_algorithms;
+mod tree_derivatives;
 
 pub use algorithms::{
     bias_force, forward_dynamics, forward_dynamics_cholesky, inverse_dynamics, mass_matrix,

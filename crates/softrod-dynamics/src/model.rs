@@ -472,18 +472,24 @@ impl Model {
         if self.n_prescribed == 0 {
             return;
         }
+        self.prescribed_values(
+            t,
+            data.prescribed_q.as_mut_slice(),
+            data.prescribed_qd.as_mut_slice(),
+            data.prescribed_qdd.as_mut_slice(),
+        );
+        data.prescribed_time = t;
+    }
+
+    /// The prescribed joints' values, rates and accelerations at `t` (D59;
+    /// each of length [`Model::n_prescribed`]).
+    pub(crate) fn prescribed_values(&self, t: f64, q: &mut [f64], qd: &mut [f64], qdd: &mut [f64]) {
         for e in &self.elements {
             if let Some(p) = &e.attachment.joint.prescribed {
                 let r = e.prescribed_dofs.clone();
-                p.eval_into(
-                    t,
-                    &mut data.prescribed_q.as_mut_slice()[r.clone()],
-                    &mut data.prescribed_qd.as_mut_slice()[r.clone()],
-                    &mut data.prescribed_qdd.as_mut_slice()[r],
-                );
+                p.eval_into(t, &mut q[r.clone()], &mut qd[r.clone()], &mut qdd[r]);
             }
         }
-        data.prescribed_time = t;
     }
 
     /// The rods.

@@ -133,7 +133,7 @@ pub(crate) enum TreePass {
 /// The acceleration standing for gravity, world axes: the world frame is
 /// accelerated by `−g` (docs/theory.md §4), so every node, body and point sees
 /// gravity without a per-point wrench.
-fn world_acceleration(model: &Model, scale: f64) -> Vec6 {
+pub(crate) fn world_acceleration(model: &Model, scale: f64) -> Vec6 {
     match model.gravity {
         Some(g) => {
             let a = -g * scale;
@@ -145,7 +145,7 @@ fn world_acceleration(model: &Model, scale: f64) -> Vec6 {
 
 /// `q_n` (or a rate) of a node, zero-padded to 6.
 #[inline]
-fn local(v: &[f64], dof: usize, k: usize) -> Vec6 {
+pub(crate) fn local(v: &[f64], dof: usize, k: usize) -> Vec6 {
     Vec6::from_fn(|i, _| if i < k { v[dof + i] } else { 0.0 })
 }
 

@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::{Lcg, soft_material as material, soft_rod as rod};
+use common::{Lcg, robot, soft_material as material, soft_rod as rod};
 use nalgebra::DVector;
 use softrod_dynamics::{
     Attachment, BodyLoad, BodySpec, Data, DynamicsError, Joint, Model, ModelBuilder, RodSpec,
@@ -300,84 +300,6 @@ fn free_floating_rod_conserves_momentum_and_falls_at_g() {
     assert!((qdd - expected).amax() < 1e-10);
 }
 
-/// Every joint type, bodies on rods, rods on bodies, a child at a piece
-/// boundary and at a rod's base, springs and dampers, body loads. With
-/// `tree`, a second branch at the first rod's tip (M2).
-fn robot(gravity: bool, damping: bool, tree: bool, loads: bool) -> Model {
-    let spring = |j: Joint, k: usize| {
-        if damping {
-            j.with_stiffness(&vec![0.3; k])
-                .with_damping(&vec![0.01; k])
-                .with_rest(&vec![0.1; k])
-        } else {
-            j.with_stiffness(&vec![0.3; k]).with_rest(&vec![0.1; k])
-        }
-    };
-    let mut hand = BodySpec::new(
-        "hand",
-        0.03,
-        Mat3::new(2e-5, 1e-6, 0.0, 1e-6, 3e-5, 2e-6, 0.0, 2e-6, 2.5e-5),
-    );
-    hand.center_of_mass = Vec3::new(0.01, -0.005, 0.002);
-    hand.base = Pose::new(
-        *nalgebra::Rotation3::from_euler_angles(0.1, -0.2, 0.3).matrix(),
-        Vec3::new(0.01, 0.0, 0.0),
-    );
-    if loads {
-        hand.loads.push(BodyLoad {
-            force: Vec3::new(0.01, 0.0, -0.02),
-            moment: Vec3::new(0.0, 0.001, 0.0),
-            frame: LoadFrame::Body,
-        });
-    }
-    let mut slider = BodySpec::principal("slider", 0.02, [1e-5, 2e-5, 1.5e-5]);
-    slider.center_of_mass = Vec3::new(0.0, 0.01, 0.0);
-    let mut b = Model::builder()
-        .rod_on(
-            rod("upper", 0.3, 2),
-            Attachment::world_joint(spring(Joint::revolute([0.0, 1.0, 0.2]), 1)),
-        )
-        .body(hand, Attachment::to("upper", spring(Joint::spherical(), 3)))
-        .rod_on(
-            rod("finger", 0.2, 2).strains([
-                softrod_kinematics::Strain::Ky,
-                softrod_kinematics::Strain::Kz,
-                softrod_kinematics::Strain::Qx,
-            ]),
-            Attachment::to(
-                "hand",
-                spring(Joint::universal([0.0, 1.0, 0.0], [0.0, 0.0, 1.0]), 2),
-            ),
-        )
-        .body(
-            slider,
-            Attachment::to("finger", spring(Joint::prismatic([1.0, 0.0, 0.0]), 1)).at(0.1),
-        )
-        .rod_on(
-            rod("drone", 0.25, 2).base(Pose::new(Mat3::identity(), Vec3::new(0.0, 0.3, 0.0))),
-            Attachment::world_joint(spring(Joint::free(), 6)),
-        );
-    if tree {
-        b = b
-            .rod_on(
-                rod("branch", 0.2, 2),
-                Attachment::to("upper", Joint::revolute([0.0, 0.0, 1.0])).at(0.15),
-            )
-            .rod_on(
-                rod("root_twin", 0.15, 1),
-                Attachment::to("upper", Joint::fixed()).at(0.0),
-            )
-            .body(
-                BodySpec::principal("weight", 0.01, [1e-6, 1e-6, 1e-6]),
-                Attachment::to("hand", Joint::fixed()),
-            );
-    }
-    if gravity {
-        b = b.gravity([0.3, -1.0, -G]);
-    }
-    b.build().unwrap()
-}
-
 fn rel(a: &DVector<f64>, b: &DVector<f64>) -> f64 {
     (a - b).amax() / b.amax().max(1.0)
 }
@@ -555,20 +477,6 @@ fn bad_robots_are_errors_naming_what() {
         Attachment::world_joint(Joint::spherical().with_stiffness(&[1.0])),
     ));
     assert!(matches!(e, DynamicsError::InvalidJoint { .. }), "{e}");
-}
-
-#[test]
-fn analytic_derivatives_refuse_articulated_models() {
-    let model = robot(true, true, true, false);
-    let n = model.n_dof();
-    let q = vec![0.0; n];
-    let mut work = softrod_dynamics::IdDerivatives::new(&model);
-    let e = softrod_dynamics::inverse_dynamics_derivatives(&model, &mut work, 0.0, &q, &q, &q)
-        .unwrap_err();
-    assert!(matches!(e, DynamicsError::Unsupported { .. }), "{e}");
-    let mut data = Data::new(&model);
-    let e = softrod_dynamics::dynamics_jacobians(&model, &mut data, 0.0, &q, &q, None).unwrap_err();
-    assert!(matches!(e, DynamicsError::Unsupported { .. }), "{e}");
 }
 
 /// A Y of three rods: a trunk clamped to the world, two branches on

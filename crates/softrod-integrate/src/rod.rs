@@ -154,10 +154,10 @@ impl SecondOrderSystem for RodSystem {
         dqdd_dq: &mut DMatrix<f64>,
         dqdd_dqd: &mut DMatrix<f64>,
     ) -> Result<(), DynamicsError> {
-        if self.model.is_articulated() {
-            // The analytic derivatives do not cover joints and bodies yet
-            // (docs/theory.md §11): forward finite differences of the O(N)
-            // forward dynamics, as the trait's default.
+        if self.model.has_closures() {
+            // No analytic derivatives of the constrained dynamics (the
+            // force a closed loop needs is not unique, docs/theory.md D67):
+            // forward finite differences of its q̈, as the trait's default.
             let n = q.len();
             let mut a0 = DVector::zeros(n);
             let mut scratch = (DVector::zeros(n), DVector::zeros(n));
@@ -278,14 +278,17 @@ impl SecondOrderSystem for RodSystem {
         self.shifted.solve(&self.model, x.as_mut_slice())
     }
 
-    /// Time enters only through cable tension tables.
+    /// Time enters through prescribed joints (D59) and cable tension
+    /// tables (unless `data` overrides the tensions).
     fn is_autonomous(&self) -> bool {
-        !self.model.rods().iter().any(|r| {
-            r.spec
-                .cables
-                .iter()
-                .any(|c| matches!(c.tension, Tension::Table { .. }))
-        })
+        self.model.n_prescribed() == 0
+            && (self.data.cable_tensions().is_some()
+                || !self.model.rods().iter().any(|r| {
+                    r.spec
+                        .cables
+                        .iter()
+                        .any(|c| matches!(c.tension, Tension::Table { .. }))
+                }))
     }
 }
 

@@ -1,93 +1,59 @@
 //! Cable-tension inputs `u` and the integration paths that use them: the
 //! step API and simulation with a controller in the loop.
 //!
-//! The dynamics layer has no tension override yet, so it is built here on
-//! the lower crates: [`CableInputs`] holds a copy of the model *without* its
-//! cables (their scheduled tensions removed) and the cables themselves; the
-//! input `u` (one tension per cable, in model order: rod by rod, in the
-//! order given) enters as the actuator force `τ_act = A(q) u`, with
-//! `A(q) = −∂ℓ/∂q` the actuation matrix (D15) evaluated at the current `q`
-//! in every right-hand side (so the force follows the rod within a step; it
-//! is `u` that is held, not `τ`).
+//! [`CableInputs`] holds a copy of the model (joints, bodies and closures
+//! included) whose `Data` evaluates the cables at the tensions `u` (one per
+//! cable, in model order: rod by rod, in the order given) instead of their
+//! schedules (`Data::set_cable_tensions`): the cables then act as
+//! `A(q) u`, with `A(q) = −∂ℓ/∂q` the actuation matrix (D15) evaluated at the
+//! current `q` in every right-hand side (so the force follows the rod within
+//! a step; it is `u` that is held, not `τ`), and the exact Jacobians include
+//! `∂(A(q)u)/∂q`.
 
 use nalgebra::DVector;
 use softrod::Settings;
-use softrod::dynamics::{DynamicsError, Model, RodSpec, energies, forward_dynamics};
+use softrod::dynamics::{DynamicsError, Model, energies, forward_dynamics};
 use softrod::integrate::{
     Control, Hooks, IntegrateError, Options, RodSystem, SecondOrderSystem, Status, StepControl,
     integrate_second_order,
 };
 use softrod::kinematics::RodKinematics;
-use softrod::mechanics::Cable;
 use softrod::{RunStatus, RunSummary, Trajectory, output_times};
 
-/// A model's cables as inputs: the cable-free model and `A(q) u`.
+/// A model's cables as inputs `u`.
 #[derive(Clone, Debug)]
 pub struct CableInputs {
-    /// The model with every cable removed, and its buffers; its `tau` is
-    /// rewritten as `A(q) u (+ τ_extra)` before each evaluation.
+    /// The model and its buffers; its `Data` evaluates the cables at `u`
+    /// and its `tau` is `τ_extra` (re-synchronized before each evaluation).
     pub sys: RodSystem,
-    /// `(rod index, first coordinate, cable)` in model order.
-    cables: Vec<(usize, usize, Cable)>,
     /// The tensions `u` [N] (n_cables).
     pub u: Vec<f64>,
-    /// An extra actuator force added to `A(q) u` (n_dof), if any.
+    /// An actuator force besides the cables (n_dof), if any.
     pub tau_extra: Option<DVector<f64>>,
-    /// One rod's column of `A(q)` (length of the largest rod's `q`).
-    scratch: Vec<f64>,
 }
 
 impl CableInputs {
-    /// The inputs of `model` (any number of cables, zero included).
+    /// The inputs of `model` (any number of cables, zero included), all at
+    /// zero tension.
     pub fn new(model: &Model) -> Result<Self, DynamicsError> {
-        let mut cables = Vec::new();
-        let mut specs: Vec<RodSpec> = Vec::with_capacity(model.rods().len());
-        for (r, rm) in model.rods().iter().enumerate() {
-            let mut spec = rm.spec.clone();
-            for c in spec.cables.drain(..) {
-                cables.push((r, rm.dof_offset, c));
-            }
-            specs.push(spec);
-        }
-        let free = Model::new(specs, model.gravity, model.quadrature.len())?;
-        let n = free.n_dof();
-        let mut sys = RodSystem::new(free);
-        sys.tau = Some(DVector::zeros(n));
-        let widest = model.rods().iter().map(|r| r.n_dof()).max().unwrap_or(0);
         Ok(Self {
-            sys,
-            u: vec![0.0; cables.len()],
-            cables,
+            sys: RodSystem::new(model.clone()),
+            u: vec![0.0; model.n_cables()],
             tau_extra: None,
-            scratch: vec![0.0; widest],
         })
     }
 
-    /// Writes `τ_act = A(q) u + τ_extra` into the system's `tau`, one
-    /// column of `A` at a time through the preallocated `scratch`.
-    fn update_tau(&mut self, q: &[f64]) {
-        let model = &self.sys.model;
-        let tau = self.sys.tau.as_mut().expect("set in new");
-        match &self.tau_extra {
-            Some(t) => tau.copy_from(t),
-            None => tau.fill(0.0),
+    /// Hands `u` and `τ_extra` to the system (`u` was checked on entry:
+    /// non-negative and finite, one per cable).
+    pub fn sync(&mut self) -> Result<(), DynamicsError> {
+        let s = &mut self.sys;
+        s.data.set_cable_tensions(&s.model, Some(&self.u))?;
+        match (&self.tau_extra, &mut s.tau) {
+            (None, tau) => *tau = None,
+            (Some(t), Some(tau)) => tau.copy_from(t),
+            (Some(t), tau) => *tau = Some(t.clone()),
         }
-        for ((r, off, cable), &u) in self.cables.iter().zip(&self.u) {
-            if u == 0.0 {
-                continue;
-            }
-            let rod = &model.rods()[*r].spec.rod;
-            let k = rod.n_dof();
-            let col = &mut self.scratch[..k];
-            col.fill(0.0);
-            cable.add_force_per_tension(rod, &q[*off..*off + k], &model.quadrature, col);
-            for (t, c) in tau.as_mut_slice()[*off..*off + k]
-                .iter_mut()
-                .zip(col.iter())
-            {
-                *t += u * c;
-            }
-        }
+        Ok(())
     }
 
     /// Forward dynamics `q̈` under the inputs.
@@ -97,7 +63,7 @@ impl CableInputs {
         q: &[f64],
         qd: &[f64],
     ) -> Result<&DVector<f64>, DynamicsError> {
-        self.update_tau(q);
+        self.sync()?;
         let s = &mut self.sys;
         forward_dynamics(
             &s.model,
@@ -124,15 +90,12 @@ impl SecondOrderSystem for CableInputs {
         qd: &DVector<f64>,
         qdd: &mut DVector<f64>,
     ) -> Result<(), DynamicsError> {
-        self.update_tau(q.as_slice());
+        self.sync()?;
         self.sys.accel(t, q, qd, qdd)
     }
 
-    /// The cable-free system's Jacobians with `τ_act` frozen at its last
-    /// value: `∂(A(q)u)/∂q` is left out, which the stiff methods tolerate
-    /// (Rosenbrock–W keeps its order with any Jacobian; generalized-α's
-    /// Newton converges to the same step), as they tolerate the elastic-only
-    /// Jacobian the facade gives them.
+    /// The system's exact Jacobians at the held `u` (`∂(A(q)u)/∂q`
+    /// included).
     fn jacobians(
         &mut self,
         t: f64,
@@ -141,7 +104,7 @@ impl SecondOrderSystem for CableInputs {
         dqdd_dq: &mut nalgebra::DMatrix<f64>,
         dqdd_dqd: &mut nalgebra::DMatrix<f64>,
     ) -> Result<(), DynamicsError> {
-        self.update_tau(q.as_slice());
+        self.sync()?;
         self.sys.jacobians(t, q, qd, dqdd_dq, dqdd_dqd)
     }
 
@@ -164,20 +127,19 @@ impl SecondOrderSystem for CableInputs {
         qdd: &DVector<f64>,
         r: &mut DVector<f64>,
     ) -> Result<bool, DynamicsError> {
-        self.update_tau(q.as_slice());
+        self.sync()?;
         self.sys.force_residual(t, q, qd, qdd, r)
     }
 
-    /// `u` is piecewise constant (a change is signalled to the integrator),
-    /// so time enters only as it does in the cable-free model.
+    /// `u` is piecewise constant (a change is signalled to the integrator)
+    /// and replaces the tension schedules, so time enters only through
+    /// prescribed joints.
     fn is_autonomous(&self) -> bool {
         self.sys.is_autonomous()
     }
 }
 
-/// Keeps the samples of a run, as the facade's `Simulation::simulate` does
-/// (energies of the cable-free model equal those of the full one: cables
-/// store no energy).
+/// Keeps the samples of a run, as the facade's `Simulation::simulate` does.
 pub struct Recorder {
     pub traj: Trajectory,
     kin: Vec<RodKinematics>,

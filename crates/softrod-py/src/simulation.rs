@@ -842,8 +842,10 @@ impl Simulation {
             );
             if let Some(u) = u {
                 let u = self.tensions(u)?;
-                let a = actuation_matrix(self.sim.model(), q.slice()).map_err(dynamics)?;
                 let inputs = self.inputs()?;
+                inputs.u = u;
+                inputs.tau_extra = None;
+                inputs.sync().map_err(dynamics)?;
                 let s = &mut inputs.sys;
                 let tau = softrod::dynamics::inverse_dynamics(
                     &s.model,
@@ -854,7 +856,6 @@ impl Simulation {
                     qdd.slice(),
                 )
                 .map_err(dynamics)?;
-                let tau = tau - a * DVector::from_column_slice(&u);
                 return Ok(vec_out(py, tau.as_slice()));
             }
             let tau = self

@@ -270,8 +270,9 @@ def test_linearize_is_the_derivative_of_the_dynamics():
     # |qdd| is ~1e8 here (O(0.3) shear strains of a stiff section): steps
     # are chosen against round-off. qdd is quadratic in qdot at fixed q
     # (Coriolis, centrifugal, damping), so central differences in qdot are
-    # exact for any step.
-    h, hv = 1e-4, 0.1
+    # exact for any step, and a unit step keeps the round-off of qdd
+    # (~4e-15 of it) below 1e-6 of the derivative (0.1 left it at 1.4e-6).
+    h, hv = 1e-4, 1.0
     fd_q = np.column_stack([(f(q + h * e, qd, u) - f(q - h * e, qd, u)) / (2 * h)
                             for e in np.eye(n)])
     fd_v = np.column_stack([(f(q, qd + hv * e, u) - f(q, qd - hv * e, u)) / (2 * hv)
@@ -289,6 +290,32 @@ def test_linearize_is_the_derivative_of_the_dynamics():
     a1, _ = sim.linearize(0.0, q, qd, u=[1.5, 0.7])
     np.testing.assert_allclose(a0, a1, rtol=1e-12, atol=1e-12 * np.abs(a0).max())
 
+
+def test_linearize_a_robot_is_the_derivative_of_the_dynamics():
+    """The same on examples/arm_with_payload.toml: two rods, a revolute
+    joint with spring and damper, two bodies, a cable on the upper rod (the
+    analytic derivatives on the tree, docs/theory-derivatives.md §7)."""
+    from conftest import EXAMPLES
+
+    sim = softrod.Simulation.from_toml(EXAMPLES / "arm_with_payload.toml")
+    n = sim.n_dof
+    assert "lower.joint.theta" in sim.q_names
+    q, qd = smooth_state(n)
+    u = np.array([3.0])
+    a, b = sim.linearize(0.1, q, qd, u=u)
+
+    def f(qq, vv, uu):
+        return sim.forward_dynamics(0.1, qq, vv, u=uu)
+
+    h, hv, hu = 1e-5, 1.0, 0.5
+    fd_q = np.column_stack([(f(q + h * e, qd, u) - f(q - h * e, qd, u)) / (2 * h)
+                            for e in np.eye(n)])
+    fd_v = np.column_stack([(f(q, qd + hv * e, u) - f(q, qd - hv * e, u)) / (2 * hv)
+                            for e in np.eye(n)])
+    fd_u = (f(q, qd, u + hu) - f(q, qd, u - hu)) / (2 * hu)
+    for got, want in [(a[n:, :n], fd_q), (a[n:, n:], fd_v), (b[n:, 0], fd_u)]:
+        scale = np.abs(want).max()
+        assert np.abs(got - want).max() < 1e-6 * scale
 
 
 def test_prescribed_force_drives_the_free_joint_along_the_curve(tmp_path):

@@ -4,9 +4,11 @@
 #![allow(dead_code)]
 
 use nalgebra::{DMatrix, DVector, Matrix6xX};
-use softrod_dynamics::{Data, Model, RodSpec, RodSpecBuilder, forward_dynamics};
+use softrod_dynamics::{
+    Attachment, BodyLoad, BodySpec, Data, Joint, Model, RodSpec, RodSpecBuilder, forward_dynamics,
+};
 use softrod_kinematics::{Basis, PieceSpec, Rod, Strain};
-use softrod_lie::{Pose, Vec3, Vec6, exp_twist};
+use softrod_lie::{Mat3, Pose, Vec3, Vec6, exp_twist};
 use softrod_mechanics::{
     Cable, DistributedLoad, Drag, LoadFrame, Material, PointLoad, RodBody, Routing, Section,
     Tension,
@@ -391,4 +393,78 @@ pub fn shifted_against_dense(model: &Model, q: &[f64], seed: u64) -> (f64, f64) 
         forward = forward.max((&x - &reference).amax() / reference.amax() / (f64::EPSILON * cond));
     }
     (backward, forward)
+}
+
+/// Every joint type, bodies on rods, rods on bodies, a child at a piece
+/// boundary and at a rod's base, springs and dampers, body loads. With
+/// `tree`, a second branch at the first rod's tip (M2).
+pub fn robot(gravity: bool, damping: bool, tree: bool, loads: bool) -> Model {
+    let spring = |j: Joint, k: usize| {
+        if damping {
+            j.with_stiffness(&vec![0.3; k])
+                .with_damping(&vec![0.01; k])
+                .with_rest(&vec![0.1; k])
+        } else {
+            j.with_stiffness(&vec![0.3; k]).with_rest(&vec![0.1; k])
+        }
+    };
+    let mut hand = BodySpec::new(
+        "hand",
+        0.03,
+        Mat3::new(2e-5, 1e-6, 0.0, 1e-6, 3e-5, 2e-6, 0.0, 2e-6, 2.5e-5),
+    );
+    hand.center_of_mass = Vec3::new(0.01, -0.005, 0.002);
+    hand.base = Pose::new(
+        *nalgebra::Rotation3::from_euler_angles(0.1, -0.2, 0.3).matrix(),
+        Vec3::new(0.01, 0.0, 0.0),
+    );
+    if loads {
+        hand.loads.push(BodyLoad {
+            force: Vec3::new(0.01, 0.0, -0.02),
+            moment: Vec3::new(0.0, 0.001, 0.0),
+            frame: LoadFrame::Body,
+        });
+    }
+    let mut slider = BodySpec::principal("slider", 0.02, [1e-5, 2e-5, 1.5e-5]);
+    slider.center_of_mass = Vec3::new(0.0, 0.01, 0.0);
+    let mut b = Model::builder()
+        .rod_on(
+            soft_rod("upper", 0.3, 2),
+            Attachment::world_joint(spring(Joint::revolute([0.0, 1.0, 0.2]), 1)),
+        )
+        .body(hand, Attachment::to("upper", spring(Joint::spherical(), 3)))
+        .rod_on(
+            soft_rod("finger", 0.2, 2).strains([Strain::Ky, Strain::Kz, Strain::Qx]),
+            Attachment::to(
+                "hand",
+                spring(Joint::universal([0.0, 1.0, 0.0], [0.0, 0.0, 1.0]), 2),
+            ),
+        )
+        .body(
+            slider,
+            Attachment::to("finger", spring(Joint::prismatic([1.0, 0.0, 0.0]), 1)).at(0.1),
+        )
+        .rod_on(
+            soft_rod("drone", 0.25, 2).base(Pose::new(Mat3::identity(), Vec3::new(0.0, 0.3, 0.0))),
+            Attachment::world_joint(spring(Joint::free(), 6)),
+        );
+    if tree {
+        b = b
+            .rod_on(
+                soft_rod("branch", 0.2, 2),
+                Attachment::to("upper", Joint::revolute([0.0, 0.0, 1.0])).at(0.15),
+            )
+            .rod_on(
+                soft_rod("root_twin", 0.15, 1),
+                Attachment::to("upper", Joint::fixed()).at(0.0),
+            )
+            .body(
+                BodySpec::principal("weight", 0.01, [1e-6, 1e-6, 1e-6]),
+                Attachment::to("hand", Joint::fixed()),
+            );
+    }
+    if gravity {
+        b = b.gravity([0.3, -1.0, -9.81]);
+    }
+    b.build().unwrap()
 }

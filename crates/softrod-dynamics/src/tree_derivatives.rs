@@ -1,0 +1,442 @@
+//! Analytic `∂τ/∂q`, `∂τ/∂q̇` of the inverse dynamics on the tree of an
+//! articulated model (docs/theory-derivatives.md §7, (D76)–(D80)): the
+//! chain's sweeps (D37)–(D47) node by node. A joint is a piece without
+//! points (D50), a body a single rigid inertia without coordinates (D52), a
+//! prescribed joint a piece whose strain is given (D59); what a node's
+//! subtree hands to the frame it hangs from is summed at its parent's tip,
+//! or enters the parent piece like a point load at `x` (D62); the blocks of
+//! two nodes on one path to the root are pairings of world-frame quantities
+//! taken where that path leaves the proximal node, and nodes on different
+//! branches do not couple.
+
+use crate::id_derivatives::{
+    IdDerivatives, PieceWork, PointLin, Subtree, basis6, close_piece, dead_load_map, drag_diagonal,
+    has_dead_loads, linearize_point, own_points, write_piece,
+};
+use crate::model::Model;
+use crate::piece_derivs::{PieceDerivMaps, lambda as lambda_of};
+use crate::tree::{NodeKind, Tree};
+use crate::tree_algorithms::{local, world_acceleration};
+use nalgebra::DVector;
+use softrod_lie::{Mat6, PieceMaps, Pose, Vec6, ad, coad, coad_vec};
+use softrod_mechanics::LoadFrame;
+
+/// The world-frame quantities of a node's coordinates at the frame a
+/// distal branch leaves it from (D46, D80): the columns `Ad_G S` of that
+/// frame and the sources `Ad_G w̄`, `Ad_G u` per unit strain (coordinates)
+/// and `Ad_G w̄` per unit rate (6×k each).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Exit {
+    s: Mat6,
+    wq: Mat6,
+    uq: Mat6,
+    wv: Mat6,
+}
+
+impl Exit {
+    fn zero() -> Self {
+        Self {
+            s: Mat6::zeros(),
+            wq: Mat6::zeros(),
+            uq: Mat6::zeros(),
+            wv: Mat6::zeros(),
+        }
+    }
+}
+
+/// Per-node buffers of the tree derivatives (allocated once).
+#[derive(Clone, Debug)]
+pub(crate) struct TreeWork {
+    nodes: Vec<PieceWork>,
+    /// For a node hanging inside its parent piece (D62): the parent's
+    /// section there, linearized in the parent's strain (its local pose and
+    /// (D39)–(D41)), and the parent's exit quantities at it.
+    at: Vec<Option<(Pose, PointLin)>>,
+    exit: Vec<Exit>,
+    /// What the children at a node's tip hand to it, and what the node
+    /// hands to its own base frame (D43, D77).
+    tip: Vec<Subtree>,
+    base: Vec<Subtree>,
+    /// The prescribed joints' values, rates and accelerations at `t`.
+    pq: DVector<f64>,
+    pqd: DVector<f64>,
+    pqdd: DVector<f64>,
+    /// Any dead (world-frame) load in the model: the `𝒴` terms.
+    dead: bool,
+}
+
+impl TreeWork {
+    pub(crate) fn new(model: &Model, tree: &Tree) -> Self {
+        let n = tree.nodes.len();
+        let np = model.n_prescribed();
+        let dead = model.rods().iter().any(has_dead_loads)
+            || model
+                .bodies()
+                .iter()
+                .any(|b| b.spec.loads.iter().any(|l| l.frame == LoadFrame::World));
+        Self {
+            nodes: (0..n).map(|_| PieceWork::new()).collect(),
+            at: vec![None; n],
+            exit: vec![Exit::zero(); n],
+            tip: vec![Subtree::zero(); n],
+            base: vec![Subtree::zero(); n],
+            pq: DVector::zeros(np),
+            pqd: DVector::zeros(np),
+            pqdd: DVector::zeros(np),
+            dead,
+        }
+    }
+
+    pub(crate) fn n_nodes(&self) -> usize {
+        self.nodes.len()
+    }
+}
+
+/// `∂τ/∂q`, `∂τ/∂q̇` and `τ` of an articulated model without closures into
+/// `work` (arguments checked by the caller). Kept out of line: inlined into
+/// the chain path's caller it would change that path's inlining (measured
+/// +4 % instructions on the chain).
+#[allow(clippy::too_many_arguments)]
+#[inline(never)]
+pub(crate) fn tree_id_derivatives(
+    model: &Model,
+    tree: &Tree,
+    work: &mut IdDerivatives,
+    tw: &mut TreeWork,
+    t: f64,
+    q: &[f64],
+    qd: &[f64],
+    qdd: &[f64],
+) {
+    let scale = work.load_scale;
+    model.prescribed_values(
+        t,
+        tw.pq.as_mut_slice(),
+        tw.pqd.as_mut_slice(),
+        tw.pqdd.as_mut_slice(),
+    );
+    // Nodes on different branches do not couple: those blocks stay zero.
+    work.dtau_dq.fill(0.0);
+    work.dtau_dqd.fill(0.0);
+    outward(model, tree, tw, (q, qd, qdd), scale);
+    inward(model, tree, work, tw, t, (q, qd), scale);
+    pairs(tree, work, tw);
+}
+
+/// The outward sweep (D76): each node's base motion from its parent's tip
+/// (or section, D62), then its own points (pieces), its body sums (bodies)
+/// and its tip, as in the chain's (D39)–(D43).
+fn outward(
+    model: &Model,
+    tree: &Tree,
+    tw: &mut TreeWork,
+    (q, qd, qdd): (&[f64], &[f64], &[f64]),
+    scale: f64,
+) {
+    let a_world = world_acceleration(model, scale);
+    for (i, node) in tree.nodes.iter().enumerate() {
+        let (parent_pose, eta_p, etad_p) = match (node.parent, &tw.at[i]) {
+            (None, _) => (Pose::identity(), Vec6::zeros(), a_world),
+            (Some(p), Some((g, lin))) => (tw.nodes[p].base_world.compose(g), lin.eta, lin.etad),
+            (Some(p), None) => {
+                let w = &tw.nodes[p];
+                (w.tip_world, w.eta_tip, w.etad_tip)
+            }
+        };
+        let x = node.offset.ad_inv();
+        let (eta_b, etad_b) = (x.mul_vec(&eta_p), x.mul_vec(&etad_p));
+        let base_world = parent_pose.compose(&node.offset);
+        let w = &mut tw.nodes[i];
+        w.reset_sums();
+        w.base_world = base_world;
+        let (xi, xid, xidd, length) = match node.kind {
+            NodeKind::Body { body } => {
+                body_sums(model, body, &eta_b, &etad_b, scale, w);
+                continue;
+            }
+            NodeKind::Joint { .. } => {
+                let b = &node.bpad;
+                let (v, vd, vdd, o, k) = match node.prescribed {
+                    Some((o, kp)) => (
+                        tw.pq.as_slice(),
+                        tw.pqd.as_slice(),
+                        tw.pqdd.as_slice(),
+                        o,
+                        kp,
+                    ),
+                    None => (q, qd, qdd, node.dof, node.k),
+                };
+                (
+                    b * local(v, o, k),
+                    b * local(vd, o, k),
+                    b * local(vdd, o, k),
+                    1.0,
+                )
+            }
+            NodeKind::Piece { rod, piece } => {
+                let rm = &model.rods()[rod];
+                let pc = &rm.spec.rod.pieces()[piece];
+                let r = rm.dofs();
+                (
+                    pc.strain(&q[r.clone()]),
+                    pc.strain_rate(&qd[r.clone()]),
+                    pc.strain_rate(&qdd[r]),
+                    pc.length,
+                )
+            }
+        };
+        let maps = PieceMaps::new(&xi, Some(&xid));
+        let dm = PieceDerivMaps::new(&xi, &xid, &xidd);
+        if let NodeKind::Piece { rod, piece } = node.kind {
+            let rm = &model.rods()[rod];
+            own_points(
+                rm,
+                &rm.pieces[piece],
+                &maps,
+                &dm,
+                &base_world,
+                (&eta_b, &etad_b),
+                (&xid, &xidd),
+                drag_diagonal(rm).as_ref(),
+                scale,
+                w,
+            );
+        }
+        let (g, p) = linearize_point(&maps, &dm, length, &eta_b, &etad_b, &xid, &xidd);
+        w.set_tip(g, &p, &dm);
+        for &c in &tree.inner_children[i] {
+            let x = tree.nodes[c].attach.unwrap_or(length);
+            tw.at[c] = Some(linearize_point(&maps, &dm, x, &eta_b, &etad_b, &xid, &xidd));
+        }
+    }
+}
+
+/// A rigid body's own sums (D52, D77): its screw inertia `𝓜` at the body
+/// frame, the net wrench `f = 𝓜η̇′ + ad*_η𝓜η − 𝓕_ext` and its
+/// linearization `B̄ = Λ(𝓜η) + ad*_η𝓜 − 𝓜 ad_η` (D38, D43 with a full
+/// `𝓜`), `𝒴` of its dead loads. Its tip is its frame.
+fn body_sums(model: &Model, body: usize, eta: &Vec6, etad: &Vec6, scale: f64, w: &mut PieceWork) {
+    let bm = &model.bodies()[body];
+    let m = &bm.inertia;
+    let me = m * eta;
+    let mut f = m * etad + coad_vec(eta, &me);
+    for l in &bm.spec.loads {
+        let load = l.wrench(&w.base_world) * scale;
+        f -= load;
+        if l.frame == LoadFrame::World {
+            w.yt += dead_load_map(&load);
+        }
+    }
+    w.mt = *m;
+    w.bt = lambda_of(&me) + coad(eta) * m - m * ad(eta);
+    w.wsum = f;
+    w.tip = Pose::identity();
+    w.tip_world = w.base_world;
+    w.eta_tip = *eta;
+    w.etad_tip = *etad;
+}
+
+/// A subtree hanging inside a piece at `x` (D62, D78), `sub` in the axes
+/// of that section: it enters the piece's sums like a point load that
+/// carries the subtree's response `δW = 𝓜ᶜw̄(x) + 𝓑ᶜu(x) + 𝒴ᶜΔ(x)` (D42–D45
+/// at `x`). Returns the piece's exit quantities at `x` (D80).
+fn add_inner(
+    w: &mut PieceWork,
+    g: &Pose,
+    lin: &PointLin,
+    sub: &Subtree,
+    bm: &Mat6,
+    dead: bool,
+) -> Exit {
+    let a = lin.a.to_mat6();
+    let t = lin.t.to_mat6();
+    let adeta = ad(&lin.eta);
+    let wq = lin.h_etad + adeta * lin.h_eta;
+    let uq = lin.h_eta;
+    let mut dwq = sub.m * wq + sub.b * uq;
+    if dead {
+        dwq += sub.y * t;
+    }
+    let wv = lin.h_vd + adeta * t;
+    let dwv = sub.m * wv + sub.b * t;
+    let (at, tt) = (a.transpose(), t.transpose());
+    w.dq_diag += tt * dwq;
+    w.dv_diag += tt * dwv;
+    w.dq_w += at * (lambda_of(&sub.w) * t + dwq);
+    w.dv_w += at * dwv;
+    w.tsum += tt * sub.w;
+    w.wsum += at * sub.w;
+    for i in 0..4 {
+        w.phi[i] += sub.w * lin.co.d[i];
+        w.chi[i] += sub.w * lin.co.c[i];
+    }
+    let (ma, ba) = (sub.m * a, sub.b * a);
+    w.mt += at * ma;
+    w.bt += at * ba;
+    w.rm += tt * ma;
+    w.rb += tt * ba;
+    if dead {
+        let ya = sub.y * a;
+        w.yt += at * ya;
+        w.ry += tt * ya;
+    }
+    let to_world = w.base_world.compose(g).ad().to_mat6();
+    Exit {
+        s: to_world * t * bm,
+        wq: to_world * wq * bm,
+        uq: to_world * uq * bm,
+        wv: to_world * wv * bm,
+    }
+}
+
+/// The inward sweep (D77–D79): children before parents; each node closes
+/// with what its tip children handed it and its inside children added to
+/// its sums, writes its `τ` and diagonal blocks, and hands its subtree to
+/// its parent.
+fn inward(
+    model: &Model,
+    tree: &Tree,
+    work: &mut IdDerivatives,
+    tw: &mut TreeWork,
+    t: f64,
+    (q, qd): (&[f64], &[f64]),
+    scale: f64,
+) {
+    let dead = tw.dead;
+    for s in tw.tip.iter_mut() {
+        *s = Subtree::zero();
+    }
+    for (i, node) in tree.nodes.iter().enumerate().rev() {
+        for &c in &tree.inner_children[i] {
+            let xc = tree.nodes[c].offset.ad_inv().to_mat6();
+            let sub = tw.base[c].through(&xc, dead);
+            let Some((g, lin)) = &tw.at[c] else {
+                unreachable!("the outward sweep linearized every inside attachment")
+            };
+            tw.exit[c] = add_inner(&mut tw.nodes[i], g, lin, &sub, &node.bpad, dead);
+        }
+        let base = match node.kind {
+            NodeKind::Body { .. } => {
+                let (w, tip) = (&tw.nodes[i], &tw.tip[i]);
+                Subtree {
+                    m: w.mt + tip.m,
+                    b: w.bt + tip.b,
+                    y: w.yt + tip.y,
+                    w: w.wsum + tip.w,
+                }
+            }
+            NodeKind::Piece { rod, piece } => {
+                let rm = &model.rods()[rod];
+                let bm = basis6(&rm.spec.rod.pieces()[piece].basis);
+                let (dq, dv, wrench, base) = close_piece(&mut tw.nodes[i], &tw.tip[i], &bm, dead);
+                write_piece(
+                    model,
+                    rm,
+                    piece,
+                    work,
+                    t,
+                    (q, qd),
+                    scale,
+                    (&dq, &dv, &wrench),
+                );
+                base
+            }
+            NodeKind::Joint { element } => {
+                let (dq, dv, wrench, base) =
+                    close_piece(&mut tw.nodes[i], &tw.tip[i], &node.bpad, dead);
+                if node.k > 0 {
+                    write_joint(model, element, node, work, (q, qd), (&dq, &dv, &wrench));
+                }
+                base
+            }
+        };
+        tw.base[i] = base;
+        if let (Some(p), None) = (node.parent, node.attach) {
+            let x = node.offset.ad_inv().to_mat6();
+            let carried = base.through(&x, dead);
+            tw.tip[p].add(&carried);
+        }
+    }
+}
+
+/// A joint's `τ` and diagonal blocks: the projection of its transmitted
+/// wrench plus its spring and damper (D53) on the diagonal.
+fn write_joint(
+    model: &Model,
+    element: usize,
+    node: &crate::tree::Node,
+    work: &mut IdDerivatives,
+    (q, qd): (&[f64], &[f64]),
+    (diag_q, diag_v, wrench): (&Mat6, &Mat6, &Vec6),
+) {
+    let info = &model.elements()[element];
+    let joint = &info.attachment.joint;
+    let first = node.dof - info.joint_dofs.start;
+    let b = &node.bpad;
+    let (dq6, dv6) = (b.transpose() * diag_q * b, b.transpose() * diag_v * b);
+    let o = node.dof;
+    for i in 0..node.k {
+        let (kc, dc, rest) = joint.coefficients(first + i);
+        work.tau[o + i] = b.column(i).dot(wrench) + kc * (q[o + i] - rest) + dc * qd[o + i];
+        for j in 0..node.k {
+            let (ks, ds) = if i == j { (kc, dc) } else { (0.0, 0.0) };
+            work.dtau_dq[(o + i, o + j)] = dq6[(i, j)] + ks;
+            work.dtau_dqd[(o + i, o + j)] = dv6[(i, j)] + ds;
+        }
+    }
+}
+
+/// The off-diagonal blocks (D80): for every node `i` with coordinates and
+/// every ancestor `j` with coordinates, the exit of `j` its path leaves by
+/// (the tip, or the section of an inside attachment) gives
+/// `∂τ_i/∂q_j = ℛ_i [w̄, u, Δ]_exit` (the distal block, D45) and
+/// `∂τ_j/∂q_i = S_exitᵀ δW_i` (the proximal block, D46), both in the world
+/// frame.
+fn pairs(tree: &Tree, work: &mut IdDerivatives, tw: &TreeWork) {
+    let dead = tw.dead;
+    for (i, node) in tree.nodes.iter().enumerate() {
+        let ki = node.k;
+        if ki == 0 {
+            continue;
+        }
+        let wi = &tw.nodes[i];
+        let mut cur = i;
+        while let Some(p) = tree.nodes[cur].parent {
+            let pn = &tree.nodes[p];
+            if pn.k > 0 {
+                let ex = if tree.nodes[cur].attach.is_some() {
+                    tw.exit[cur]
+                } else {
+                    let wp = &tw.nodes[p];
+                    Exit {
+                        s: wp.s_world,
+                        wq: wp.src_wq,
+                        uq: wp.src_uq,
+                        wv: wp.src_wv,
+                    }
+                };
+                let mut dq = wi.rcv_m * ex.wq + wi.rcv_b * ex.uq;
+                if dead {
+                    dq += wi.rcv_y * ex.s;
+                }
+                let dv = wi.rcv_m * ex.wv + wi.rcv_b * ex.s;
+                let st = ex.s.transpose();
+                let (pq, pv) = (st * wi.dwq_world, st * wi.dwv_world);
+                let kp = pn.k;
+                for r in 0..ki {
+                    for c in 0..kp {
+                        work.dtau_dq[(node.dof + r, pn.dof + c)] = dq[(r, c)];
+                        work.dtau_dqd[(node.dof + r, pn.dof + c)] = dv[(r, c)];
+                    }
+                }
+                for r in 0..kp {
+                    for c in 0..ki {
+                        work.dtau_dq[(pn.dof + r, node.dof + c)] = pq[(r, c)];
+                        work.dtau_dqd[(pn.dof + r, node.dof + c)] = pv[(r, c)];
+                    }
+                }
+            }
+            cur = p;
+        }
+    }
+}
