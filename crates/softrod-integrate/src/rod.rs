@@ -361,4 +361,59 @@ mod tests {
             worst / scale
         );
     }
+
+    /// Time enters through a prescribed joint and a tension table, not
+    /// through a table that the data's tensions override.
+    #[test]
+    fn autonomy_follows_prescribed_joints_and_tension_tables() {
+        use softrod_dynamics::{Attachment, Curve, Joint, Prescribed};
+        use softrod_mechanics::{Cable, Routing};
+        let spec = |table: bool| {
+            let rod = Rod::uniform(
+                0.2,
+                2,
+                Basis::all(),
+                softrod_kinematics::straight(),
+                Pose::identity(),
+            )
+            .unwrap();
+            let mat = Material::with_poisson(1000.0, 1e5, 0.5, 0.0).unwrap();
+            let body = RodBody::new(Section::Circle { radius: 0.01 }, mat, 0.2).unwrap();
+            let mut spec = RodSpec::new("r", rod, body);
+            if table {
+                spec.cables.push(Cable::new(
+                    Routing::Offset { y: 0.005, z: 0.0 },
+                    Tension::Table {
+                        times: vec![0.0, 1.0],
+                        values: vec![0.0, 1.0],
+                    },
+                ));
+            }
+            spec
+        };
+        let clamped = Model::new(vec![spec(false)], None, 4).unwrap();
+        assert!(RodSystem::new(clamped).is_autonomous());
+        let driven = Model::builder()
+            .rod_on(
+                spec(false),
+                Attachment::world_joint(Joint::prismatic([0.0, 0.0, 1.0]).with_prescribed(
+                    Prescribed::new(vec![Curve::Sine {
+                        amplitude: 0.01,
+                        frequency: 1.0,
+                        phase: 0.0,
+                        offset: 0.0,
+                    }]),
+                )),
+            )
+            .build()
+            .unwrap();
+        assert!(!RodSystem::new(driven).is_autonomous());
+        let tabled = Model::new(vec![spec(true)], None, 4).unwrap();
+        let mut sys = RodSystem::new(tabled);
+        assert!(!sys.is_autonomous());
+        sys.data
+            .set_cable_tensions(&sys.model, Some(&[0.5]))
+            .unwrap();
+        assert!(sys.is_autonomous());
+    }
 }
