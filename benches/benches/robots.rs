@@ -3,7 +3,8 @@
 //! on a revolute joint (the tree recursion), on a prescribed prismatic base
 //! (D59), and with its tip welded to the world (a closed chain, D63–D69:
 //! the tree's forward dynamics plus one O(N) solve with `M` per constraint
-//! row); the O(N) shifted factorization and solve on the tree.
+//! row); the O(N) shifted factorization and solve on the tree; the analytic
+//! derivatives on the tree.
 //! Compare with `forward_dynamics/N` and `shifted_factor_solve/N` of the
 //! `dynamics` benches.
 //!
@@ -12,8 +13,8 @@
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use softrod_dynamics::{
-    Attachment, Closure, ClosureFrame, ClosureKind, Curve, Data, Element, Joint, Model, Prescribed,
-    RodSpec, ShiftedSolver, forward_dynamics,
+    Attachment, Closure, ClosureFrame, ClosureKind, Curve, Data, Element, IdDerivatives, Joint,
+    Model, Prescribed, RodSpec, ShiftedSolver, forward_dynamics, inverse_dynamics_derivatives,
 };
 use softrod_kinematics::{Basis, Rod, straight};
 use softrod_lie::{Pose, Vec3};
@@ -127,6 +128,23 @@ fn bench_robots(c: &mut Criterion) {
                 x.copy_from_slice(&r);
                 solver.solve(&m, &mut x).unwrap();
                 x[0]
+            })
+        });
+    }
+    g.finish();
+    // The analytic pair ∂τ/∂q, ∂τ/∂q̇ on the tree (D76–D80); compare with
+    // `id_derivatives/N` of the dynamics benches (the clamped rod).
+    let mut g = c.benchmark_group("id_derivatives_tree");
+    for n in [10usize, 40] {
+        let m = on(n, Joint::revolute([0.0, 1.0, 0.0]));
+        let mut work = IdDerivatives::new(&m);
+        let (q, qd) = state(m.n_dof());
+        let qdd = vec![0.5; m.n_dof()];
+        g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+            b.iter(|| {
+                inverse_dynamics_derivatives(&m, &mut work, 0.1, black_box(&q), &qd, &qdd)
+                    .unwrap()
+                    .dtau_dq[(0, 0)]
             })
         });
     }
