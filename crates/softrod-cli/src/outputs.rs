@@ -248,14 +248,14 @@ where
     String::from_utf8(w.into_inner().unwrap_or_default()).unwrap_or_default()
 }
 
-/// A number as CSV text: the shortest decimal that reads back to the same
-/// `f64` (`0.1`, `1e-7`, `1.0`), `0` for both zeros (no `-0`).
-pub fn num(v: f64) -> String {
-    if v == 0.0 {
-        "0".into()
-    } else {
-        format!("{v:?}")
-    }
+pub use softrod_viz::run_dir::{num, push_csv_row};
+
+/// A text field as CSV (quoted when it needs to be), for the prefix of
+/// [`push_csv_row`].
+pub fn csv_field(text: &str) -> String {
+    let mut line = csv_line([text]);
+    line.pop();
+    line
 }
 
 /// Bytes free for an unprivileged writer on the file system holding `dir`
@@ -394,5 +394,30 @@ mod tests {
         }
         assert_eq!(num(-0.0), "0");
         assert_eq!(num(1e-300), "1e-300");
+    }
+
+    /// Rows written in place read back, by the csv crate, as the quoted
+    /// name and the exact numbers.
+    #[test]
+    fn rows_written_in_place_read_back() {
+        let name = "arm, \"left\"";
+        let prefix = format!("{},{},", num(0.25), csv_field(name));
+        let values = [0.1, -0.0, 1e-300, -2.5e17, 1.0 / 3.0, f64::MIN_POSITIVE];
+        let mut text = String::new();
+        push_csv_row(&mut text, &prefix, values);
+        push_csv_row(&mut text, "", [7.0]);
+        let mut r = csv::ReaderBuilder::new()
+            .has_headers(false)
+            .flexible(true)
+            .from_reader(text.as_bytes());
+        let rows: Vec<csv::StringRecord> = r.records().map(|x| x.unwrap()).collect();
+        assert_eq!(rows.len(), 2);
+        assert_eq!(&rows[0][1], name);
+        assert_eq!(rows[0][0].parse::<f64>().unwrap(), 0.25);
+        for (i, v) in values.iter().enumerate() {
+            assert_eq!(rows[0][2 + i].parse::<f64>().unwrap(), *v);
+        }
+        assert_eq!(&rows[0][3], "0");
+        assert_eq!(&rows[1][0], "7.0");
     }
 }

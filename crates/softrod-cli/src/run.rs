@@ -15,7 +15,9 @@ use softrod_viz::Pose as VizPose;
 use softrod_viz::run_dir::{BODIES_HEADER, SHAPE_HEADER};
 
 use crate::common::{CliError, Poser, failed, load, out_dir, position, quaternion};
-use crate::outputs::{self, RodSampling, csv_line, default_points_per_piece, num};
+use crate::outputs::{
+    self, RodSampling, csv_field, csv_line, default_points_per_piece, num, push_csv_row,
+};
 use crate::plots::{self, Series, Snapshot};
 use crate::{npz, signals};
 
@@ -112,7 +114,11 @@ pub struct Streamer {
     /// Per rod, the sampled poses of the current row (allocated once).
     poses: Vec<Vec<Pose>>,
     viz_poses: Vec<Vec<VizPose>>,
-    row: Vec<String>,
+    /// The rods' and bodies' names as CSV fields, and the current row's
+    /// leading fields (allocated once).
+    rod_fields: Vec<String>,
+    body_fields: Vec<String>,
+    prefix: String,
     n: usize,
     /// The last row's snapshot, kept so the figures end where the run did.
     last_snapshot: Option<Snapshot>,
@@ -242,7 +248,17 @@ impl Streamer {
             sampling,
             poses,
             viz_poses,
-            row: Vec::with_capacity(header.len()),
+            rod_fields: model
+                .rods()
+                .iter()
+                .map(|r| csv_field(&r.spec.name))
+                .collect(),
+            body_fields: model
+                .bodies()
+                .iter()
+                .map(|b| csv_field(&b.spec.name))
+                .collect(),
+            prefix: String::new(),
             values: Vec::with_capacity(header.len()),
             npz_rows: None,
             n,
@@ -442,35 +458,38 @@ impl Streamer {
             }
             self.values.extend(pq.iter().chain(pf.iter()));
         }
-        self.row.clear();
-        self.row.extend(self.values.iter().map(|v| num(*v)));
-        self.traj_text = csv_line(&self.row);
+        self.traj_text.clear();
+        push_csv_row(&mut self.traj_text, "", self.values.iter().copied());
         self.shape_text.clear();
         let ts = num(t);
-        for (r, rm) in model.rods().iter().enumerate() {
+        for (r, name) in self.rod_fields.iter().enumerate() {
+            self.prefix.clear();
+            self.prefix.push_str(&ts);
+            self.prefix.push(',');
+            self.prefix.push_str(name);
+            self.prefix.push(',');
             for (sv, p) in self.sampling[r].s.iter().zip(&self.viz_poses[r]) {
                 let [x, y, z] = p.position;
                 let [qw, qx, qy, qz] = p.rotation;
-                let fields = [*sv, x, y, z, qw, qx, qy, qz].map(num);
-                self.shape_text.push_str(&csv_line(
-                    [ts.as_str(), rm.spec.name.as_str()]
-                        .into_iter()
-                        .chain(fields.iter().map(String::as_str)),
-                ));
+                push_csv_row(
+                    &mut self.shape_text,
+                    &self.prefix,
+                    [*sv, x, y, z, qw, qx, qy, qz],
+                );
             }
         }
         self.bodies_text.clear();
-        for (b, g) in model.bodies().iter().zip(self.poser.bodies()) {
-            let fields: Vec<String> = position(g)
-                .into_iter()
-                .chain(quaternion(g))
-                .map(num)
-                .collect();
-            self.bodies_text.push_str(&csv_line(
-                [ts.as_str(), b.spec.name.as_str()]
-                    .into_iter()
-                    .chain(fields.iter().map(String::as_str)),
-            ));
+        for (name, g) in self.body_fields.iter().zip(self.poser.bodies()) {
+            self.prefix.clear();
+            self.prefix.push_str(&ts);
+            self.prefix.push(',');
+            self.prefix.push_str(name);
+            self.prefix.push(',');
+            push_csv_row(
+                &mut self.bodies_text,
+                &self.prefix,
+                position(g).into_iter().chain(quaternion(g)),
+            );
         }
         // Every file gets this time's rows, or none does.
         let bodies_text = &self.bodies_text;

@@ -59,10 +59,40 @@ pub struct ShapeCsvWriter<W: Write> {
     w: csv::Writer<W>,
 }
 
-/// Shortest round-trip decimal (`{:?}` of f64: `0.1`, `1e-7`, `1.0`), read
-/// back exactly by Rust, Python and numpy.
-fn num(v: f64) -> String {
-    format!("{v:?}")
+/// Appends `v` as CSV text: the shortest decimal that reads back to the
+/// same `f64` (`0.1`, `1e-7`, `1.0`; Ryū, Adams 2018), read back exactly by
+/// Rust, Python and numpy; `0` for both zeros (no `-0`). Written in place:
+/// a run prints millions of numbers, and `format!` plus `core::fmt` cost
+/// several times the printing itself.
+pub fn push_num(out: &mut String, v: f64) {
+    if v == 0.0 {
+        out.push('0');
+    } else {
+        out.push_str(ryu::Buffer::new().format(v));
+    }
+}
+
+/// [`push_num`] into a new string.
+pub fn num(v: f64) -> String {
+    let mut s = String::new();
+    push_num(&mut s, v);
+    s
+}
+
+/// Appends one CSV line: `prefix` (leading fields already in CSV form, each
+/// followed by a comma; or empty), then `values` as [`push_num`] numbers
+/// separated by commas, then `\n`. Numbers never need quoting.
+pub fn push_csv_row(out: &mut String, prefix: &str, values: impl IntoIterator<Item = f64>) {
+    out.push_str(prefix);
+    let mut first = true;
+    for v in values {
+        if !first {
+            out.push(',');
+        }
+        first = false;
+        push_num(out, v);
+    }
+    out.push('\n');
 }
 
 impl<W: Write> ShapeCsvWriter<W> {
