@@ -7,27 +7,20 @@
 
 mod common;
 
-use common::{Lcg, Shape, Terms, bases, model, rel, richardson_jacobians, state, two_rods};
+use common::{Lcg, Shape, Terms, bases, model, rel, state, two_rods};
 use nalgebra::DMatrix;
 use softrod_dynamics::*;
 use softrod_kinematics::Basis;
 
-/// Fourth-order central differences (Richardson on steps h and h/2) of
-/// `inverse_dynamics`. In `q`: step `h = 1e-3·max(1, |q_j|)`, truncation
-/// O(h⁴) ≈ 1e-12 of the derivative scale, round-off ~ε‖τ‖/h. In `q̇`: `τ`
-/// is exactly quadratic in `q̇` (η is linear in it, η̇ and the gyroscopic
-/// force quadratic, drag linear), so central differences are exact for
-/// any step and the only error is round-off: a large step `h = 0.5·max(1,
-/// |q̇_j|)` keeps it at ~ε‖τ‖ (a small one would amplify the elastic part
-/// of τ, ~1e4 × the velocity derivatives, by 1/h).
-fn fd(m: &Model, t: f64, q: &[f64], qd: &[f64], qdd: &[f64]) -> (DMatrix<f64>, DMatrix<f64>) {
-    let mut data = Data::new(m);
-    richardson_jacobians(q, qd, |q, qd| {
-        inverse_dynamics(m, &mut data, t, q, qd, qdd)
-            .unwrap()
-            .clone()
-    })
-}
+/// Fourth-order central differences of `inverse_dynamics`
+/// ([`common::id_differences`]). In `q`: step `h = 1e-3·max(1, |q_j|)`,
+/// truncation O(h⁴) ≈ 1e-12 of the derivative scale, round-off ~ε‖τ‖/h. In
+/// `q̇`: `τ` is exactly quadratic in `q̇` (η is linear in it, η̇ and the
+/// gyroscopic force quadratic, drag linear), so central differences are
+/// exact for any step and the only error is round-off: a large step
+/// `h = 0.5·max(1, |q̇_j|)` keeps it at ~ε‖τ‖ (a small one would amplify the
+/// elastic part of τ, ~1e4 × the velocity derivatives, by 1/h).
+use common::id_differences as fd;
 
 /// Analytic vs differences, relative to the largest entry of what is
 /// compared. The differences are good to ~ε‖τ‖/h ≈ 1e-13‖τ‖ (see [`fd`]);

@@ -7,10 +7,10 @@
 
 mod common;
 
+use common::id_differences as fd;
 use common::{
     Lcg, Shape, Terms, bases, rel, richardson_jacobians, robot, rod_spec, state, tilted_base,
 };
-use nalgebra::DMatrix;
 use softrod_dynamics::*;
 use softrod_kinematics::Basis;
 use softrod_lie::{Mat3, Pose, Vec3};
@@ -107,16 +107,6 @@ fn loaded_tree(terms: Terms) -> Model {
         4,
     )
     .unwrap()
-}
-
-/// Central differences of the tree's inverse dynamics.
-fn fd(m: &Model, t: f64, q: &[f64], qd: &[f64], qdd: &[f64]) -> (DMatrix<f64>, DMatrix<f64>) {
-    let mut data = Data::new(m);
-    richardson_jacobians(q, qd, |q, qd| {
-        inverse_dynamics(m, &mut data, t, q, qd, qdd)
-            .unwrap()
-            .clone()
-    })
 }
 
 /// The analytic pair against differences, `K` and `D` removed; `work.tau`

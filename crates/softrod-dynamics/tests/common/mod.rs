@@ -297,6 +297,24 @@ pub fn richardson_jacobians(
     (dq, dqd)
 }
 
+/// [`richardson_jacobians`] of the production `inverse_dynamics` at fixed
+/// `q̈` (τ is exactly quadratic in `q̇`: the large `q̇` step only meets
+/// round-off, see there).
+pub fn id_differences(
+    m: &Model,
+    t: f64,
+    q: &[f64],
+    qd: &[f64],
+    qdd: &[f64],
+) -> (DMatrix<f64>, DMatrix<f64>) {
+    let mut data = Data::new(m);
+    richardson_jacobians(q, qd, |q, qd| {
+        softrod_dynamics::inverse_dynamics(m, &mut data, t, q, qd, qdd)
+            .unwrap()
+            .clone()
+    })
+}
+
 /// Largest entry error relative to the largest entry of the reference `b`.
 pub fn rel(a: &DMatrix<f64>, b: &DMatrix<f64>) -> f64 {
     (a - b).amax() / b.amax().max(1e-300)
