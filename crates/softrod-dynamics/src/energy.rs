@@ -4,7 +4,9 @@ use crate::algorithms::check_vec;
 use crate::data::Data;
 use crate::error::DynamicsError;
 use crate::model::Model;
-use softrod_lie::{Vec6, exp_and_tangent_minus, exp_twist};
+use nalgebra::Matrix6xX;
+use softrod_kinematics::{Frame, RodKinematics};
+use softrod_lie::{Mat6, Pose, Vec6, exp_and_tangent_minus, exp_twist};
 use softrod_mechanics::elastic_energy;
 
 /// Mechanical energies of the model at `(q, q̇)` \[J\].
@@ -90,4 +92,57 @@ pub fn frames(model: &Model, data: &mut Data, q: &[f64]) -> Result<(), DynamicsE
         crate::tree_algorithms::frames(model, tree, data, q);
     }
     Ok(())
+}
+
+/// The world pose `g(s)` of the section at `s` \[m\] of rod `rod` (index in
+/// [`Model::rods`]) and its spatial Jacobian `J` (6 × n_dof, angular rows
+/// first): `J q̇` is the section's world twist `Ad_g η` (angular velocity in
+/// world axes, velocity of the world point at the world origin; D11). Every
+/// coordinate that moves the section has its column: the rod's pieces up to
+/// `s`, and on an articulated model its joint's and every ancestor's, each
+/// taken where the path leaves it (D57, D62). Prescribed joints (D59) stand
+/// at their last [`Model::set_time`]. Allocates `J`.
+pub fn section_jacobian(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    rod: usize,
+    s: f64,
+) -> Result<(Pose, Matrix6xX<f64>), DynamicsError> {
+    check_vec(model, "q", q)?;
+    let count = model.rods().len();
+    let rm = model
+        .rods()
+        .get(rod)
+        .ok_or(DynamicsError::RodIndex { index: rod, count })?;
+    let kin_err = |source| DynamicsError::Kinematics { rod, source };
+    let r = &rm.spec.rod;
+    let n = model.n_dof();
+    let mut jac = Matrix6xX::zeros(n);
+    let Some(tree) = &model.tree else {
+        let mut kin = RodKinematics::new(r);
+        kin.update(r, &q[rm.dofs()], None, None).map_err(kin_err)?;
+        let g = kin.pose_at(r, s).map_err(kin_err)?;
+        let mut local = Matrix6xX::zeros(rm.n_dof());
+        kin.jacobian_at(r, s, Frame::Spatial, &mut local)
+            .map_err(kin_err)?;
+        jac.columns_mut(rm.dof_offset, rm.n_dof()).copy_from(&local);
+        return Ok((g, jac));
+    };
+    let (piece, x) = r.locate(s).map_err(kin_err)?;
+    crate::tree_algorithms::frames(model, tree, data, q);
+    let frame = crate::closure::ResolvedFrame {
+        target: crate::closure::Target::Rod {
+            rod,
+            piece,
+            x,
+            node: tree.rod_nodes[rod][piece],
+        },
+        offset: Pose::identity(),
+    };
+    let fs = crate::closure::frame_state(model, tree, data, &frame, q, None);
+    let mut dense = nalgebra::DMatrix::zeros(6, n);
+    crate::closure::add_frame_columns(tree, data, &fs, &Mat6::identity(), 6, 0, 1.0, &mut dense);
+    jac.copy_from(&dense);
+    Ok((fs.pose, jac))
 }

@@ -163,6 +163,14 @@ pub enum DynamicsError {
         #[source]
         source: KinematicsError,
     },
+    /// A rod index past the model's rods.
+    #[error("rod index {index} is out of range (the model has {count} rods)")]
+    RodIndex {
+        /// The index given.
+        index: usize,
+        /// The number of rods.
+        count: usize,
+    },
     /// A vector argument has the wrong length.
     #[error("{what} has {got} entries, the model has {expected} coordinates")]
     SizeMismatch {

@@ -22,6 +22,7 @@
 //! | [`forward_dynamics_derivatives`] | `∂q̈/∂q`, `∂q̈/∂q̇`, `∂q̈/∂u` | (D48) |
 //! | [`linearize`] | `(A, B)` of `ẋ = f(x, u)`, `x = (q, q̇)` | (D49) |
 //! | [`dynamics_jacobians`] | `∂q̈/∂q`, `∂q̈/∂q̇` (allocating) | (D48) |
+//! | [`section_jacobian`] | world pose and spatial Jacobian of a rod section, through joints and parents | (D11), (D57), (D62) |
 //! | [`ShiftedSolver`] | `(M + aK + bD)⁻¹ x`, O(N), chains and trees | §6 with armature `aK_n + bD_n` |
 //!
 //! Robots: rods and rigid bodies ([`BodySpec`]) hang from parents (the world,
@@ -100,7 +101,7 @@ pub use derivatives::{
     DynamicsJacobians, FdDerivatives, Linearization, dynamics_jacobians,
     forward_dynamics_derivatives, linearize,
 };
-pub use energy::{Energies, energies, frames};
+pub use energy::{Energies, energies, frames, section_jacobian};
 pub use error::{DynamicsError, RodId};
 pub use id_derivatives::{IdDerivatives, inverse_dynamics_derivatives};
 pub use joint::{Attachment, BodyLoad, BodySpec, Joint, JointKind};

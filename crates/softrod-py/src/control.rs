@@ -12,7 +12,7 @@
 
 use nalgebra::DVector;
 use softrod::Settings;
-use softrod::dynamics::{DynamicsError, Model, energies, forward_dynamics};
+use softrod::dynamics::{DynamicsError, Model, energies, forward_dynamics, frames};
 use softrod::integrate::{
     Control, Hooks, IntegrateError, Options, RodSystem, SecondOrderSystem, Status, StepControl,
     integrate_second_order,
@@ -171,10 +171,18 @@ impl Recorder {
         sys.model.set_time(&mut sys.data, t);
         let e = energies(&sys.model, &mut sys.data, q, qd).map_err(|e| e.to_string())?;
         let mut tips = Vec::with_capacity(self.kin.len());
-        for (k, r) in self.kin.iter_mut().zip(sys.model.rods()) {
+        let articulated = sys.model.is_articulated();
+        if articulated {
+            frames(&sys.model, &mut sys.data, q).map_err(|e| e.to_string())?;
+        }
+        for (i, (k, r)) in self.kin.iter_mut().zip(sys.model.rods()).enumerate() {
             k.update(&r.spec.rod, &q[r.dofs()], None, None)
                 .map_err(|e| e.to_string())?;
-            tips.push(*k.tip_pose());
+            tips.push(if articulated {
+                sys.data.rod_to_world(&sys.model, i).compose(k.tip_pose())
+            } else {
+                *k.tip_pose()
+            });
         }
         let tr = &mut self.traj;
         tr.t.push(t);

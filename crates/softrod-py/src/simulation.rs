@@ -12,6 +12,7 @@ use softrod::dynamics::{
 };
 use softrod::integrate::RodSystem;
 use softrod::kinematics::{Frame, RodKinematics};
+use softrod::lie::Pose;
 use softrod::scene::Integrator;
 use softrod::{Equilibrium, Settings as RustSettings};
 
@@ -408,7 +409,7 @@ impl Simulation {
         f: &dyn Fn(
             &RodKinematics,
             &softrod::kinematics::Rod,
-            usize,
+            (usize, &Pose, &[f64]),
             f64,
             &mut [f64],
         ) -> PyResult<()>,
@@ -416,6 +417,10 @@ impl Simulation {
         let q = vector(q, "q", self.n())?;
         let i = rod_index(self.sim.model(), rod)?;
         let rm = &self.sim.model().rods()[i];
+        let to_world = self
+            .sim
+            .rod_to_world(&rm.spec.name, q.slice())
+            .map_err(to_py)?;
         let mut kin = RodKinematics::new(&rm.spec.rod);
         kin.update(&rm.spec.rod, &q.slice()[rm.dofs()], None, None)
             .map_err(|e| input(e.to_string()))?;
@@ -435,7 +440,13 @@ impl Simulation {
         };
         let mut out = vec![0.0; size * points.len()];
         for (k, &x) in points.iter().enumerate() {
-            f(&kin, &rm.spec.rod, i, x, &mut out[k * size..(k + 1) * size])?;
+            f(
+                &kin,
+                &rm.spec.rod,
+                (i, &to_world, q.slice()),
+                x,
+                &mut out[k * size..(k + 1) * size],
+            )?;
         }
         let mut shape = Vec::with_capacity(item.len() + 1);
         if !scalar {
@@ -702,13 +713,20 @@ impl Simulation {
         q: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         guard(|| {
-            self.along(py, rod, s, q, &[4, 4], &|kin, r, _, x, out| {
-                let g = kin
-                    .pose_at(r, x)
-                    .map_err(|e| input(format!("s = {x}: {e}")))?;
-                pose_into(&g, out);
-                Ok(())
-            })
+            self.along(
+                py,
+                rod,
+                s,
+                q,
+                &[4, 4],
+                &|kin, r, (_, to_world, _), x, out| {
+                    let g = kin
+                        .pose_at(r, x)
+                        .map_err(|e| input(format!("s = {x}: {e}")))?;
+                    pose_into(&to_world.compose(&g), out);
+                    Ok(())
+                },
+            )
         })
     }
 
@@ -764,8 +782,21 @@ impl Simulation {
             let f = self::frame(frame)?;
             let n = self.n();
             let model = self.sim.model();
-            self.along(py, rod, s, q, &[6, n], &|kin, r, i, x, out| {
+            self.along(py, rod, s, q, &[6, n], &|kin, r, (i, _, qs), x, out| {
                 let rm = &model.rods()[i];
+                if model.is_articulated() {
+                    // Joints and ancestors move the section too.
+                    let j = self
+                        .sim
+                        .jacobian(&rm.spec.name, x, qs, f)
+                        .map_err(|e| input(format!("s = {x}: {e}")))?;
+                    for row in 0..6 {
+                        for c in 0..n {
+                            out[row * n + c] = j[(row, c)];
+                        }
+                    }
+                    return Ok(());
+                }
                 let mut local = Matrix6xX::zeros(rm.n_dof());
                 kin.jacobian_at(r, x, f, &mut local)
                     .map_err(|e| input(format!("s = {x}: {e}")))?;

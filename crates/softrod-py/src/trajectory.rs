@@ -3,8 +3,9 @@
 use numpy::{PyArray1, PyArray2, PyArrayDyn, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use softrod::dynamics::Model;
+use softrod::dynamics::{Data, Model, frames};
 use softrod::kinematics::RodKinematics;
+use softrod::lie::Pose;
 use softrod::{RunStatus, Trajectory as RustTrajectory};
 
 use crate::convert::{array, array_out, vec_out, vector};
@@ -248,11 +249,23 @@ impl Trajectory {
         let mut kin = RodKinematics::new(&rm.spec.rod);
         kin.update(&rm.spec.rod, &row[rm.dofs()], None, None)
             .map_err(|e| input(e.to_string()))?;
+        // A rod on a joint or a parent: its kinematic poses start at its
+        // own base, carried to the world through the tree at that sample's
+        // time (prescribed joints move with it).
+        let to_world = if self.model.is_articulated() {
+            let mut data = Data::new(&self.model);
+            let t = self.t.bind(py).readonly();
+            self.model.set_time(&mut data, t.as_slice()?[k as usize]);
+            frames(&self.model, &mut data, &row).map_err(|e| input(e.to_string()))?;
+            data.rod_to_world(&self.model, r)
+        } else {
+            Pose::identity()
+        };
         let mut out = Vec::new();
         match s {
             None => {
                 for g in kin.boundary_poses() {
-                    out.extend_from_slice(g.translation.as_slice());
+                    out.extend_from_slice(to_world.transform_point(&g.translation).as_slice());
                 }
             }
             Some(s) => {
@@ -264,7 +277,7 @@ impl Trajectory {
                     let g = kin
                         .pose_at(&rm.spec.rod, x)
                         .map_err(|e| input(format!("s = {x}: {e}")))?;
-                    out.extend_from_slice(g.translation.as_slice());
+                    out.extend_from_slice(to_world.transform_point(&g.translation).as_slice());
                 }
             }
         }

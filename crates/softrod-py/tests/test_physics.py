@@ -318,6 +318,58 @@ def test_linearize_a_robot_is_the_derivative_of_the_dynamics():
         assert np.abs(got - want).max() < 1e-6 * scale
 
 
+def test_pose_and_jacobian_of_a_robot_go_through_the_joints():
+    """On examples/arm_with_payload.toml the lower rod hangs from a body on
+    the upper rod through a revolute joint: pose(s) is the world pose (its
+    tip equals tip_pose) and jacobian(s, frame="world") is the derivative of
+    that pose (omega from dR R^T, v = dp - omega x p), with the upper rod's
+    and the joint's columns."""
+    from conftest import EXAMPLES
+
+    sim = softrod.Simulation.from_toml(EXAMPLES / "arm_with_payload.toml")
+    n = sim.n_dof
+    q, _ = smooth_state(n)
+    np.testing.assert_allclose(sim.pose("lower", 0.2, q), sim.tip_pose("lower", q),
+                               rtol=0, atol=1e-14)
+    s = np.array([0.0, 0.07, 0.2])
+    js = sim.jacobian("lower", s, q, frame="world")
+    assert js.shape == (3, 6, n)
+    h = 1e-6
+    for k, x in enumerate(s):
+        g = sim.pose("lower", x, q)
+        for c in range(n):
+            e = np.eye(n)[c]
+            gp, gm = sim.pose("lower", x, q + h * e), sim.pose("lower", x, q - h * e)
+            w = (gp[:3, :3] - gm[:3, :3]) / (2 * h) @ g[:3, :3].T
+            omega = np.array([w[2, 1], w[0, 2], w[1, 0]])
+            v = (gp[:3, 3] - gm[:3, 3]) / (2 * h) - np.cross(omega, g[:3, 3])
+            np.testing.assert_allclose(js[k, :, c], np.concatenate([omega, v]),
+                                       rtol=0, atol=1e-8)
+    joint = sim.q_names.index("lower.joint.theta")
+    assert np.abs(js[:, :, joint]).max() > 0.1
+    assert np.abs(js[:, :, :12]).max() > 0.01  # the upper rod moves it too
+
+
+def test_robot_trajectories_are_in_the_world_frame():
+    """A run of examples/arm_with_payload.toml, scheduled and with a
+    controller: the recorded tips and Trajectory.shape are world positions
+    (through the joint and the bodies), equal to tip_pose of the same q."""
+    from conftest import EXAMPLES
+
+    sim = softrod.Simulation.from_toml(EXAMPLES / "arm_with_payload.toml")
+    for traj in [sim.simulate(0.05, output_every=0.025),
+                 sim.simulate(0.05, output_every=0.025,
+                              controller=lambda t, q, qd: [2.0])]:
+        for i in range(len(traj.t)):
+            q = traj.q[i]
+            want = sim.tip_pose("lower", q)[:3, 3]
+            np.testing.assert_allclose(traj.tip_positions[i, 1], want, rtol=0, atol=1e-13)
+            np.testing.assert_allclose(traj.shape(i, rod="lower")[-1], want,
+                                       rtol=0, atol=1e-13)
+            np.testing.assert_allclose(traj.shape(i, rod="lower", s=[0.2])[0], want,
+                                       rtol=0, atol=1e-13)
+
+
 def test_prescribed_force_drives_the_free_joint_along_the_curve(tmp_path):
     """A tentacle on a sideways-shaken base (examples/oscillating_base.toml):
     the drive is not a coordinate; the force it reports, applied to the same

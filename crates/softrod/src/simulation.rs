@@ -444,6 +444,16 @@ impl Simulation {
         s.model.set_time(&mut s.data, t);
     }
 
+    /// The map from rod `rod`'s kinematic poses (`softrod_kinematics`, which
+    /// start at its `Rod::base`) to the world at `q`: the identity for a
+    /// rod clamped to the world, else through its joint and parents (D51;
+    /// prescribed joints at the time of [`Self::set_time`]).
+    pub fn rod_to_world(&self, rod: &str, q: &[f64]) -> Result<Pose> {
+        self.check("q", q)?;
+        let i = self.rod_index(rod)?;
+        self.to_world(i, q)
+    }
+
     /// World pose of rod `rod` at abscissa `s` \[m\] for coordinates `q` (D7).
     pub fn pose(&self, rod: &str, s: f64, q: &[f64]) -> Result<Pose> {
         let (i, k) = self.kinematics(rod, q)?;
@@ -472,13 +482,34 @@ impl Simulation {
     }
 
     /// Geometric Jacobian `J(s)` (6 × n_dof) of rod `rod` at `s` in `frame`:
-    /// the twist of the section is `J q̇` (D11). Columns of other rods are 0.
+    /// the twist of the section is `J q̇` (D11). On a model of clamped rods
+    /// the columns of other rods are 0; on an articulated one every
+    /// coordinate that moves the section has its column — its joint's and
+    /// its ancestors' too (`softrod_dynamics::section_jacobian`; prescribed
+    /// joints at the time of [`Self::set_time`]).
     pub fn jacobian(&self, rod: &str, s: f64, q: &[f64], frame: Frame) -> Result<Matrix6xX<f64>> {
-        if self.model().is_articulated() {
-            return Err(softrod_dynamics::DynamicsError::Unsupported {
-                what: "Simulation::jacobian",
-            }
-            .into());
+        let model = self.model();
+        if model.is_articulated() {
+            self.check("q", q)?;
+            let i = self.rod_index(rod)?;
+            let mut data = Data::new(model);
+            model.set_time(&mut data, self.system.data.prescribed_time);
+            let (g, spatial) = softrod_dynamics::section_jacobian(model, &mut data, q, i, s)?;
+            return Ok(match frame {
+                Frame::Spatial => spatial,
+                Frame::Body => g.ad_inv().to_mat6() * spatial,
+                Frame::Mixed => {
+                    // (R ω, R v) of the body twist.
+                    let mut mixed = g.ad_inv().to_mat6() * spatial;
+                    for c in 0..mixed.ncols() {
+                        let w = g.rotation * mixed.fixed_view::<3, 1>(0, c);
+                        let v = g.rotation * mixed.fixed_view::<3, 1>(3, c);
+                        mixed.fixed_view_mut::<3, 1>(0, c).copy_from(&w);
+                        mixed.fixed_view_mut::<3, 1>(3, c).copy_from(&v);
+                    }
+                    mixed
+                }
+            });
         }
         let (i, k) = self.kinematics(rod, q)?;
         let r = &self.model().rods()[i];

@@ -66,3 +66,52 @@ fn poses_go_through_the_joints() {
         assert!((p[k] - want[k]).abs() < 1e-14, "{p:?} vs {want:?}");
     }
 }
+
+/// `jacobian` on a robot has the joints' columns and agrees with central
+/// differences of `pose` in every frame: body `vee(g⁻¹∂g)`, mixed
+/// `(∂R Rᵀ, ∂p)` (world axes at the section), spatial `Ad_g` of the body
+/// one.
+#[test]
+fn jacobian_has_the_joints_columns_in_every_frame() {
+    use softrod::kinematics::Frame;
+    let (sim, _, _) = Simulation::from_toml(SCENE, "robot.toml").unwrap();
+    let q = [0.3, 0.4, -0.2, 0.02, 0.5];
+    let at = 0.06;
+    let g0 = sim.pose("finger", at, &q).unwrap();
+    let (body, mixed, spatial) = (
+        sim.jacobian("finger", at, &q, Frame::Body).unwrap(),
+        sim.jacobian("finger", at, &q, Frame::Mixed).unwrap(),
+        sim.jacobian("finger", at, &q, Frame::Spatial).unwrap(),
+    );
+    let h = 1e-6;
+    for c in 0..q.len() {
+        let (mut qp, mut qm) = (q, q);
+        qp[c] += h;
+        qm[c] -= h;
+        let (gp, gm) = (
+            sim.pose("finger", at, &qp).unwrap(),
+            sim.pose("finger", at, &qm).unwrap(),
+        );
+        let dr = (gp.rotation - gm.rotation) / (2.0 * h);
+        let dp = (gp.translation - gm.translation) / (2.0 * h);
+        let (wb, ww) = (g0.rotation.transpose() * dr, dr * g0.rotation.transpose());
+        let vb = g0.rotation.transpose() * dp;
+        let want_body = [wb[(2, 1)], wb[(0, 2)], wb[(1, 0)], vb[0], vb[1], vb[2]];
+        let want_mixed = [ww[(2, 1)], ww[(0, 2)], ww[(1, 0)], dp[0], dp[1], dp[2]];
+        for r in 0..6 {
+            // Central differences on O(0.5 m) poses: ~1e-10.
+            assert!((body[(r, c)] - want_body[r]).abs() < 1e-8, "body [{r},{c}]");
+            assert!(
+                (mixed[(r, c)] - want_mixed[r]).abs() < 1e-8,
+                "mixed [{r},{c}]"
+            );
+        }
+    }
+    // Every coordinate moves the finger's section: the arm's joint and
+    // strain, the finger's joint and strain.
+    for c in 0..q.len() {
+        assert!(body.column(c).amax() > 1e-3, "column {c}");
+    }
+    let ad = g0.ad().to_mat6();
+    assert!((ad * &body - &spatial).amax() < 1e-14);
+}
