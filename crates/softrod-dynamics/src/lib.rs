@@ -112,7 +112,7 @@ pub use model::{BodyModel, Element, ElementInfo, ElementKind, Model, RodModel, R
 pub use modes::{Modes, modes};
 pub use prescribed::{Curve, Prescribed, Spline};
 pub use shifted::ShiftedSolver;
-pub use statics::{StaticsOptions, StaticsResult, statics};
+pub use statics::{StaticsOptions, StaticsResult, static_force, statics};
 
 /// The README's examples, compiled and run as doctests.
 #[doc = include_str!("../README.md")]

@@ -85,6 +85,28 @@ pub fn statics(
     out
 }
 
+/// The static force `τ_s(q) = b(q, 0)` at time `t` (the bias of
+/// [`crate::bias_force`] at rest): elasticity with its stress-free offset,
+/// gravity, loads, cables at their tensions at `t`, joint springs, with
+/// prescribed joints (D59) held at rest at their values at `t`. What
+/// [`statics`] drives to zero (with loop closures, less their forces
+/// `Jᵀλ`): `q` is an equilibrium of the open model exactly when it
+/// vanishes. Result in `data.tau`.
+pub fn static_force<'a>(
+    model: &Model,
+    data: &'a mut Data,
+    t: f64,
+    q: &[f64],
+) -> Result<&'a DVector<f64>, DynamicsError> {
+    check_vec(model, "q", q)?;
+    let zero = vec![0.0; model.n_dof()];
+    let at_rest = std::mem::replace(&mut data.prescribed_at_rest, true);
+    let out = crate::algorithms::bias_force(model, data, t, q, &zero).map(|_| ());
+    data.prescribed_at_rest = at_rest;
+    out?;
+    Ok(&data.tau)
+}
+
 struct Newton<'a> {
     model: &'a Model,
     k: DMatrix<f64>,

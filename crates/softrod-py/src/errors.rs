@@ -16,6 +16,7 @@ pyo3::import_exception!(softrod._errors, InputError);
 pyo3::import_exception!(softrod._errors, SceneError);
 pyo3::import_exception!(softrod._errors, SimulationError);
 pyo3::import_exception!(softrod._errors, InternalError);
+pyo3::import_exception!(softrod._errors, NotSupportedError);
 
 /// A `softrod.InputError` (a `ValueError`) with `message`.
 pub fn input(message: impl Into<String>) -> PyErr {
@@ -50,7 +51,8 @@ pub fn simulation(message: String, time: Option<f64>) -> PyErr {
 }
 
 /// The Python exception for a facade error: bad input (scene, settings,
-/// sizes, invalid model) is a `ValueError` subclass, a failed evaluation or
+/// sizes, invalid model) is a `ValueError` subclass, a method that does not
+/// cover the model a `NotImplementedError` subclass, a failed evaluation or
 /// run a `RuntimeError` subclass; the message is the Rust one.
 pub fn to_py(e: Error) -> PyErr {
     let message = e.to_string();
@@ -60,6 +62,9 @@ pub fn to_py(e: Error) -> PyErr {
         Error::Output { t, .. } | Error::EnergyBalance { t, .. } | Error::Stretch { t, .. } => {
             simulation(message, Some(*t))
         }
+        Error::Dynamics(
+            DynamicsError::Unsupported { .. } | DynamicsError::UnsupportedClosed { .. },
+        ) => NotSupportedError::new_err(message),
         _ if e.is_input() => input(message),
         Error::Kinematics(_) | Error::UnknownRod(_) => input(message),
         _ => simulation(message, None),

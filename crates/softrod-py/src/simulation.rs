@@ -7,8 +7,7 @@ use numpy::{PyArray1, PyArray2, PyArrayDyn, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyList, PyString};
 use softrod::dynamics::{
-    Data, Model, actuation_matrix, bias_force, coriolis_matrix, damping_matrix,
-    generalized_gravity, stiffness_matrix,
+    Model, actuation_matrix, coriolis_matrix, damping_matrix, stiffness_matrix,
 };
 use softrod::integrate::RodSystem;
 use softrod::kinematics::{Frame, RodKinematics};
@@ -199,7 +198,8 @@ impl Settings {
 /// Kinetic, elastic and gravitational energy [J] at one state.
 #[pyclass(frozen, module = "softrod", get_all)]
 pub struct Energies {
-    /// ½ q̇ᵀ M q̇.
+    /// ½ q̇ᵀ M q̇; with prescribed joints it includes their motion (then
+    /// it is the kinetic energy of the whole model, not ½ q̇ᵀ M q̇).
     kinetic: f64,
     /// ½ Σ ∫ (ξ − ξ*)ᵀ Γ (ξ − ξ*) ds.
     elastic: f64,
@@ -315,9 +315,13 @@ fn modes_py(py: Python<'_>, m: &softrod::dynamics::Modes, eq: &'static str, q: &
 /// Build one from a scene (`Simulation.from_toml(path_or_text)`) or from
 /// rods (`Simulation(rods=[softrod.Rod(...)], gravity=[0, 0, -9.81])`).
 ///
-/// Conventions: SI units; `q` are the strain coordinates (rods in order,
-/// pieces base to tip, selected strains in the canonical order kx, ky, kz,
-/// qx, qy, qz), `qdot`, `qddot` their rates; poses are world-frame 4×4
+/// Conventions: SI units; `q` are the generalized coordinates in the order
+/// of `q_names`: each element's joint coordinates, then a rod's strain
+/// coordinates (pieces base to tip, selected strains in the canonical order
+/// kx, ky, kz, qx, qy, qz), elements in the scene's order; `qdot`, `qddot`
+/// their rates; prescribed joints are not coordinates, they move with the
+/// time `t` of the call, or `time` (`set_time`) for the evaluations that
+/// take none; poses are world-frame 4×4
 /// homogeneous transforms `[[R, p], [0, 1]]`; twists are 6-vectors, angular
 /// part first. Vectors and matrices are float64 numpy arrays; inputs of the
 /// wrong shape raise `softrod.InputError` (a `ValueError`) naming the
@@ -332,9 +336,7 @@ pub struct Simulation {
     warnings: Vec<String>,
     /// The scene's `[run] duration` [s] (None when built in Python).
     duration: Option<f64>,
-    /// Buffers for the lower-crate evaluations the facade does not offer.
-    data: Data,
-    /// The cable-free model for inputs `u`, built on first use.
+    /// The model with tension inputs `u`, built on first use.
     inputs: Option<Box<CableInputs>>,
     /// The full model as an integrable system, for `step` without `u`.
     stepper: Option<Box<RodSystem>>,
@@ -346,7 +348,6 @@ impl Clone for Simulation {
             sim: self.sim.clone(),
             warnings: self.warnings.clone(),
             duration: self.duration,
-            data: self.data.clone(),
             inputs: self.inputs.clone(),
             stepper: self.stepper.clone(),
         }
@@ -359,12 +360,10 @@ impl Simulation {
         warnings: Vec<String>,
         duration: Option<f64>,
     ) -> Self {
-        let data = Data::new(sim.model());
         Self {
             sim,
             warnings,
             duration,
-            data,
             inputs: None,
             stepper: None,
         }
@@ -585,6 +584,35 @@ impl Simulation {
         self.sim.prescribed_names()
     }
 
+    /// The rigid bodies' names, in the order of `body_poses`.
+    #[getter]
+    fn body_names(&self) -> Vec<String> {
+        self.sim
+            .model()
+            .bodies()
+            .iter()
+            .map(|b| b.spec.name.clone())
+            .collect()
+    }
+
+    /// The time [s] of the prescribed joints (D59) for the evaluations
+    /// that take none: `pose`, `tip_pose`, `jacobian`, `body_poses`,
+    /// `mass_matrix`, `energies`, `gravity_force`, `closure_residuals`. 0
+    /// until `set_time` moves it; the calls that take a `t` do not.
+    #[getter]
+    fn time(&self) -> f64 {
+        self.sim.time()
+    }
+
+    /// Sets `time` [s] (see there); irrelevant without prescribed joints.
+    fn set_time(&mut self, t: f64) -> PyResult<()> {
+        if !t.is_finite() {
+            return Err(input(format!("t must be finite, got {t}")));
+        }
+        self.sim.set_time(t);
+        Ok(())
+    }
+
     /// The generalized forces [N·m or N] the prescribed joints' drives
     /// apply at `(t, q, qdot)` (D60), in the order of `prescribed_names`.
     #[pyo3(signature = (t, q, qdot))]
@@ -767,8 +795,10 @@ impl Simulation {
 
     /// Geometric Jacobian J(s) (6, n_dof) of rod `rod` at `s` for `q`: the
     /// twist of the section is J q̇, angular part first (D11). `frame`:
-    /// "body" (the section's own frame) or "world" (spatial twist). Columns
-    /// of other rods are zero. For a 1-D array `s`: (len(s), 6, n_dof).
+    /// "body" (the section's own frame) or "world" (spatial twist). Every
+    /// coordinate that moves the section has its column: the rod's pieces
+    /// up to `s` and, on a robot, its joint's and its parents'; the others
+    /// are zero. For a 1-D array `s`: (len(s), 6, n_dof).
     #[pyo3(signature = (rod, s, q, frame = "body"))]
     fn jacobian<'py>(
         &self,
@@ -911,7 +941,8 @@ impl Simulation {
     }
 
     /// The bias b(t, q, q̇) = C q̇ + G + K(q) + D q̇ − τ_cables − Q_ext
-    /// (n_dof,): the equations of motion read M q̈ + b = τ_act (D21–D22).
+    /// (n_dof,): the equations of motion read M q̈ + b = τ_act (D21–D22);
+    /// with loop closures M q̈ + b = τ_act + Jᵀλ (b is the open tree's).
     fn bias_force<'py>(
         &mut self,
         py: Python<'py>,
@@ -922,8 +953,10 @@ impl Simulation {
         guard(|| {
             let n = self.n();
             let (q, qd) = (vector(q, "q", n)?, vector(qdot, "qdot", n)?);
-            let b = bias_force(self.sim.model(), &mut self.data, t, q.slice(), qd.slice())
-                .map_err(dynamics)?;
+            let b = self
+                .sim
+                .bias_force(t, q.slice(), qd.slice())
+                .map_err(to_py)?;
             Ok(vec_out(py, b.as_slice()))
         })
     }
@@ -968,8 +1001,7 @@ impl Simulation {
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         guard(|| {
             let q = vector(q, "q", self.n())?;
-            let g = generalized_gravity(self.sim.model(), &mut self.data, q.slice())
-                .map_err(dynamics)?;
+            let g = self.sim.gravity_force(q.slice()).map_err(to_py)?;
             Ok(vec_out(py, g.as_slice()))
         })
     }

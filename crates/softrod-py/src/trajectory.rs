@@ -22,7 +22,8 @@ fn frozen<'py, T>(a: Bound<'py, T>) -> PyResult<Bound<'py, T>> {
 /// numpy arrays (index 0 is `t = 0`).
 ///
 /// - `t` (n_samples,) [s]
-/// - `q`, `qdot` (n_samples, n_dof): strain coordinates and their rates
+/// - `q`, `qdot` (n_samples, n_dof): coordinates (see `Simulation.q_names`)
+///   and their rates
 /// - `tip_position` (n_samples, 3) [m], `tip_rotation` (n_samples, 3, 3):
 ///   the tip pose of the first rod in the world frame; `tip_positions`
 ///   (n_samples, n_rods, 3), `tip_rotations` (n_samples, n_rods, 3, 3) for
@@ -42,6 +43,8 @@ pub struct Trajectory {
     status: &'static str,
     t_final: f64,
     stats: softrod::integrate::Stats,
+    energy: Option<softrod::EnergyBalance>,
+    warnings: Vec<String>,
     n: usize,
     model: Model,
 }
@@ -94,6 +97,8 @@ impl Trajectory {
             },
             t_final: tr.summary.t_final,
             stats: tr.summary.stats,
+            energy: tr.summary.energy,
+            warnings: tr.summary.warnings.clone(),
             n: m,
             model: model.clone(),
         })
@@ -218,6 +223,40 @@ impl Trajectory {
         d.set_item("lu_solves", s.lu_solves)?;
         d.set_item("newton_iterations", s.newton_iterations)?;
         Ok(d)
+    }
+
+    /// The energy balance the run was watched by (the `energy_*` fields of
+    /// summary.json): `initial` E(0), `change` E(t_end) − E(0), `work` of
+    /// the non-conservative forces, the largest balance `error`
+    /// |E(t) − E(0) − W(t)| over the accepted steps and its time `t_worst`,
+    /// `relative` = error / `scale` (the energy scale at the end), the
+    /// trapezoidal work's uncertainty `quadrature` [J], and whether the
+    /// model is `non_conservative`. None for runs that are not watched
+    /// (the step API, controller runs).
+    #[getter]
+    fn energy_balance<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        let Some(e) = &self.energy else {
+            return Ok(None);
+        };
+        let d = PyDict::new(py);
+        d.set_item("initial", e.initial)?;
+        d.set_item("change", e.change)?;
+        d.set_item("work", e.work)?;
+        d.set_item("error", e.error)?;
+        d.set_item("relative", e.relative)?;
+        d.set_item("scale", e.scale)?;
+        d.set_item("t_worst", e.t_worst)?;
+        d.set_item("quadrature", e.quadrature)?;
+        d.set_item("non_conservative", e.non_conservative)?;
+        Ok(Some(d))
+    }
+
+    /// What the run's watch found suspicious but not wrong (an energy drift
+    /// beyond a tenth of the tolerance, strains beyond the model's
+    /// validity), as summary.json's `warnings`.
+    #[getter]
+    fn warnings(&self) -> Vec<String> {
+        self.warnings.clone()
     }
 
     /// Positions [m, world frame] along rod `rod` (name or index) at sample

@@ -232,3 +232,29 @@ def test_duration_defaults_to_the_scenes():
         built.simulate()
     # Python-built simulations sample every thousandth of the run.
     assert len(built.simulate(0.01)) == 1001
+
+
+def test_robot_clock_names_and_unsupported_methods():
+    """Prescribed joints stand at `time` for the evaluations that take no
+    t, whatever ran before; bodies are named in body_poses' order; what a
+    robot is not covered by raises NotSupportedError (a NotImplementedError)."""
+    sim = softrod.Simulation.from_toml(EXAMPLES / "oscillating_base.toml")
+    q = np.zeros(sim.n_dof)
+    tip0 = sim.tip_pose(0, q)
+    sim.forward_dynamics(0.125, q, q)
+    sim.simulate(0.02)
+    np.testing.assert_array_equal(sim.tip_pose(0, q), tip0)
+    assert sim.time == 0.0
+    sim.set_time(0.125)
+    assert sim.time == 0.125
+    # The base is at its crest, 0.01 m along x.
+    assert sim.tip_pose(0, q)[0, 3] - tip0[0, 3] == pytest.approx(0.01, abs=1e-15)
+    with pytest.raises(softrod.InputError):
+        sim.set_time(float("nan"))
+    arm = softrod.Simulation.from_toml(EXAMPLES / "arm_with_payload.toml")
+    assert arm.body_names == ["connector", "gripper"]
+    assert arm.body_poses(np.zeros(arm.n_dof)).shape == (2, 4, 4)
+    with pytest.raises(softrod.NotSupportedError, match="coriolis_matrix"):
+        arm.coriolis_matrix(np.zeros(arm.n_dof), np.zeros(arm.n_dof))
+    with pytest.raises(NotImplementedError):
+        arm.coriolis_force(np.zeros(arm.n_dof), np.zeros(arm.n_dof))

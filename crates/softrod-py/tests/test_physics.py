@@ -136,6 +136,14 @@ def test_undamped_release_conserves_energy():
     assert tr.kinetic.max() > 1e-4  # it moved: energy was exchanged
     e = sim.energies(tr.q[-1], tr.qdot[-1])
     assert e.total == pytest.approx(tr.energy[-1], rel=1e-14)
+    # The run's watch saw the same states: its change is the samples' (the
+    # last sample is the end of the run), no work, no warnings.
+    b = tr.energy_balance
+    assert b["change"] == pytest.approx(tr.energy[-1] - tr.energy[0], abs=1e-15)
+    assert b["initial"] == pytest.approx(tr.energy[0], rel=1e-14)
+    assert b["work"] == 0.0 and not b["non_conservative"]
+    assert b["error"] < energy_tol and b["relative"] == pytest.approx(b["error"] / b["scale"])
+    assert tr.warnings == []
 
 
 def test_forward_and_inverse_dynamics_are_inverse():

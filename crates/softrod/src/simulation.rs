@@ -38,6 +38,9 @@ pub struct Simulation {
     q0: DVector<f64>,
     qd0: DVector<f64>,
     limits: Limits,
+    /// The time \[s\] of the prescribed joints for the evaluations that take
+    /// none ([`Self::set_time`]); the calls that take a `t` do not move it.
+    time: f64,
 }
 
 /// Which equilibrium [`Simulation::modes`] linearized about.
@@ -223,6 +226,7 @@ impl Simulation {
             q0: DVector::zeros(n),
             qd0: DVector::zeros(n),
             limits: Limits::of_machine(),
+            time: 0.0,
         }
     }
 
@@ -429,19 +433,32 @@ impl Simulation {
             return Ok(Pose::identity());
         }
         let mut data = Data::new(model);
-        model.set_time(&mut data, self.system.data.prescribed_time);
+        model.set_time(&mut data, self.time);
         softrod_dynamics::frames(model, &mut data, q)?;
         Ok(data.rod_to_world(model, i))
     }
 
     /// Sets the time \[s\] of the prescribed joints' motion (D59) for the
     /// evaluations that take none: [`Self::pose`], [`Self::tip_pose`],
-    /// [`Self::body_poses`], [`Self::mass_matrix`], [`Self::energies`]. Forward
-    /// and inverse dynamics set it themselves; it starts at 0. A no-op
-    /// without prescribed joints.
+    /// [`Self::rod_to_world`], [`Self::jacobian`], [`Self::body_poses`],
+    /// [`Self::mass_matrix`], [`Self::energies`], [`Self::gravity_force`],
+    /// [`Self::closure_residuals`]. It starts at 0, and only this call moves
+    /// it: the evaluations that take a `t` (dynamics, runs) leave it alone.
+    /// Irrelevant without prescribed joints.
     pub fn set_time(&mut self, t: f64) {
+        self.time = t;
+    }
+
+    /// The time of [`Self::set_time`] \[s\].
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// The system's buffers with the prescribed joints at [`Self::time`].
+    fn at_time(&mut self) -> (&Model, &mut Data) {
         let s = &mut self.system;
-        s.model.set_time(&mut s.data, t);
+        s.model.set_time(&mut s.data, self.time);
+        (&s.model, &mut s.data)
     }
 
     /// The map from rod `rod`'s kinematic poses (`softrod_kinematics`, which
@@ -476,7 +493,7 @@ impl Simulation {
             return Ok(Vec::new());
         }
         let mut data = Data::new(model);
-        model.set_time(&mut data, self.system.data.prescribed_time);
+        model.set_time(&mut data, self.time);
         softrod_dynamics::frames(model, &mut data, q)?;
         Ok(data.body_poses)
     }
@@ -493,7 +510,7 @@ impl Simulation {
             self.check("q", q)?;
             let i = self.rod_index(rod)?;
             let mut data = Data::new(model);
-            model.set_time(&mut data, self.system.data.prescribed_time);
+            model.set_time(&mut data, self.time);
             let (g, spatial) = softrod_dynamics::section_jacobian(model, &mut data, q, i, s)?;
             return Ok(match frame {
                 Frame::Spatial => spatial,
@@ -554,12 +571,12 @@ impl Simulation {
     /// (docs/theory.md D66); empty without closures.
     pub fn closure_residuals(&mut self, q: &[f64]) -> Result<Vec<(String, f64)>> {
         self.check("q", q)?;
-        let s = &mut self.system;
-        if !s.model.has_closures() {
+        let (model, data) = self.at_time();
+        if !model.has_closures() {
             return Ok(Vec::new());
         }
-        let r = softrod_dynamics::closure_residuals(&s.model, &mut s.data, q)?;
-        Ok(s.model.closures().map(|c| c.name.clone()).zip(r).collect())
+        let r = softrod_dynamics::closure_residuals(model, data, q)?;
+        Ok(model.closures().map(|c| c.name.clone()).zip(r).collect())
     }
 
     /// Inverse dynamics: the actuator force `τ_act` that gives `q̈` at
@@ -577,14 +594,16 @@ impl Simulation {
 
     /// Mass matrix `M(q)` (n_dof × n_dof, symmetric positive definite; D19–D20).
     pub fn mass_matrix(&mut self, q: &[f64]) -> Result<DMatrix<f64>> {
-        let s = &mut self.system;
-        Ok(mass_matrix(&s.model, &mut s.data, q)?.clone())
+        let (model, data) = self.at_time();
+        Ok(mass_matrix(model, data, q)?.clone())
     }
 
-    /// Kinetic, elastic and gravitational energy at `(q, q̇)` \[J\].
+    /// Kinetic, elastic and gravitational energy at `(q, q̇)` \[J\]; with
+    /// prescribed joints the kinetic energy includes their motion at
+    /// [`Self::time`] (it is not `½q̇ᵀMq̇` then).
     pub fn energies(&mut self, q: &[f64], qd: &[f64]) -> Result<Energies> {
-        let s = &mut self.system;
-        Ok(energies(&s.model, &mut s.data, q, qd)?)
+        let (model, data) = self.at_time();
+        Ok(energies(model, data, q, qd)?)
     }
 
     /// Bias force `b(q, q̇) = C q̇ + G + τ_e + D q̇ − τ_c − Q_ext` at time `t`
@@ -602,8 +621,8 @@ impl Simulation {
 
     /// Generalized gravity `G(q) = ∂V_g/∂q` (n_dof, D22).
     pub fn gravity_force(&mut self, q: &[f64]) -> Result<DVector<f64>> {
-        let s = &mut self.system;
-        Ok(generalized_gravity(&s.model, &mut s.data, q)?)
+        let (model, data) = self.at_time();
+        Ok(generalized_gravity(model, data, q)?)
     }
 
     /// Stiffness matrix `K` (n_dof × n_dof, block-diagonal per piece, D13).
@@ -650,16 +669,16 @@ impl Simulation {
         Ok(linearize(&s.model, &mut s.data, &mut work, t, q, qd, None)?)
     }
 
-    /// Whether the model has static loads (gravity, point or distributed
-    /// loads, cables): then its equilibrium differs from the rest shape.
+    /// Whether the rest shape `q = 0` is not an equilibrium at `t = 0`: the
+    /// static force there ([`softrod_dynamics::static_force`]: gravity,
+    /// loads on rods and bodies, cables, stress-free strains other than the
+    /// rest strain, joint springs off their rest) is not zero.
     pub fn has_static_loads(&self) -> bool {
         let m = self.model();
-        m.gravity.is_some()
-            || m.rods().iter().any(|r| {
-                !r.spec.cables.is_empty()
-                    || !r.spec.point_loads.is_empty()
-                    || !r.spec.distributed_loads.is_empty()
-            })
+        let mut data = Data::new(m);
+        let z = vec![0.0; m.n_dof()];
+        softrod_dynamics::static_force(m, &mut data, 0.0, &z)
+            .map_or(true, |f| f.iter().any(|v| *v != 0.0))
     }
 
     /// Static equilibrium under every static term at `t = 0`, from the

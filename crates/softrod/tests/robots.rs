@@ -115,3 +115,86 @@ fn jacobian_has_the_joints_columns_in_every_frame() {
     let ad = g0.ad().to_mat6();
     assert!((ad * &body - &spatial).amax() < 1e-14);
 }
+
+/// The evaluations that take no time see the prescribed joints at
+/// `set_time`'s time, whatever ran before: examples/oscillating_base.toml
+/// shakes the base by `0.01 sin(2π·2t)` m along the world x (the joint's z
+/// turned by the base rotation).
+#[test]
+fn evaluations_without_a_time_use_set_time_only() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../examples/oscillating_base.toml"
+    );
+    let (mut sim, _, _) = Simulation::from_scene_file(path).unwrap();
+    let n = sim.n_dof();
+    let (q, qd) = (vec![0.0; n], vec![0.0; n]);
+    let tip = |sim: &Simulation| sim.tip_pose("tentacle", &q).unwrap().translation;
+    let base_x = |t: f64| 0.01 * (2.0 * std::f64::consts::PI * 2.0 * t).sin();
+    let at_zero = tip(&sim);
+    let m0 = sim.mass_matrix(&q).unwrap();
+    let e0 = sim.energies(&q, &qd).unwrap();
+    // Calls with their own time, and a run, leave the clock alone.
+    sim.forward_dynamics(0.125, &q, &qd, None).unwrap();
+    sim.inverse_dynamics(0.3, &q, &qd, &qd).unwrap();
+    sim.simulate(0.02).unwrap();
+    assert_eq!(tip(&sim), at_zero);
+    assert_eq!(sim.mass_matrix(&q).unwrap(), m0);
+    assert_eq!(sim.energies(&q, &qd).unwrap(), e0);
+    // set_time moves it: the tip follows the base.
+    sim.set_time(0.125);
+    assert_eq!(sim.time(), 0.125);
+    let moved = tip(&sim);
+    assert!(
+        ((moved - at_zero)[0] - base_x(0.125)).abs() < 1e-15,
+        "{moved:?}"
+    );
+    assert!(base_x(0.125) > 0.009);
+    // The kinetic energy at q̇ = 0 is the drive's: ½ m v² of the rod.
+    let e = sim.energies(&q, &qd).unwrap();
+    assert!(
+        e.kinetic < e0.kinetic,
+        "the base is at its crest at t = 1/8 s"
+    );
+}
+
+/// `has_static_loads` sees every static force: a body load and a sprung
+/// joint off its rest move the equilibrium from `q = 0`, and `modes` then
+/// linearizes about the statics, where the static force vanishes.
+#[test]
+fn static_loads_include_body_loads_and_sprung_joints() {
+    let arm = "[[rod]]\nname = \"arm\"\nlength = 0.3\npieces = 3\nstrains = [\"ky\", \"kz\", \"qx\"]\n\
+               section = { shape = \"circle\", radius = 0.01 }\n\
+               material = { density = 1000.0, young = 1.0e6, poisson = 0.5 }\n";
+    let body =
+        "[[body]]\nname = \"m\"\nparent = \"arm\"\nmass = 0.05\ninertia = [1e-5, 1e-5, 1e-5]\n";
+    let sprung = arm.replace(
+        "strains",
+        "joint = { type = \"spherical\", stiffness = 0.05, rest = [0.0, 0.8, 0.0] }\nstrains",
+    );
+    for (text, loaded) in [
+        (format!("{arm}{body}"), false),
+        (
+            format!("{arm}{body}[[load]]\nbody = \"m\"\nforce = [0.0, 0.0, -0.5]\n"),
+            true,
+        ),
+        (format!("{sprung}{body}"), true),
+    ] {
+        let (mut sim, _, _) = Simulation::from_toml(&text, "robot.toml").unwrap();
+        assert_eq!(sim.has_static_loads(), loaded, "{text}");
+        let analysis = sim.modes().unwrap();
+        let q = match &analysis.equilibrium {
+            softrod::Equilibrium::Rest => {
+                assert!(!loaded);
+                nalgebra::DVector::zeros(sim.n_dof())
+            }
+            softrod::Equilibrium::Statics(q) => {
+                assert!(loaded);
+                q.clone()
+            }
+        };
+        let z = vec![0.0; sim.n_dof()];
+        let f = sim.bias_force(0.0, q.as_slice(), &z).unwrap();
+        assert!(f.amax() < 1e-9, "not an equilibrium: {f}");
+    }
+}

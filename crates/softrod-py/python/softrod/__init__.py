@@ -13,8 +13,9 @@ model, from Python.
 
 Or from a scene file: ``softrod.Simulation.from_toml("examples/cantilever_gravity.toml")``.
 
-Units are SI. ``q`` are strain coordinates (rods in order, pieces base to
-tip, the selected strains in the order kx, ky, kz, qx, qy, qz); arrays are
+Units are SI. ``q`` are the generalized coordinates in the order of
+``Simulation.q_names``: joint coordinates and strain coordinates (pieces
+base to tip, the selected strains in the order kx, ky, kz, qx, qy, qz); arrays are
 float64 numpy arrays; poses are 4x4 homogeneous transforms in the world
 frame; twists and wrenches are 6-vectors, angular part first. The
 equations are in docs/theory.md of the repository.
@@ -25,6 +26,7 @@ from __future__ import annotations
 from softrod._errors import (
     InputError,
     InternalError,
+    NotSupportedError,
     SceneError,
     SimulationError,
     SoftrodError,
@@ -67,6 +69,7 @@ __all__ = [
     "InternalError",
     "Material",
     "Modes",
+    "NotSupportedError",
     "PointLoad",
     "Rectangle",
     "Rod",

@@ -30,9 +30,23 @@ class SimulationError(SoftrodError, RuntimeError):
     time: float | None = None
 
 
+class NotSupportedError(SoftrodError, NotImplementedError):
+    """The method does not cover a part of this model yet: the Coriolis
+    matrix of a model with joints or bodies, inverse dynamics, derivatives
+    and linearization of a model with loop closures. The message names
+    the method."""
+
+
 class InternalError(SoftrodError, RuntimeError):
     """A bug inside softrod (a Rust panic, caught at the boundary instead of
     aborting the interpreter). Please report it with the message."""
 
 
-__all__ = ["InputError", "InternalError", "SceneError", "SimulationError", "SoftrodError"]
+__all__ = [
+    "InputError",
+    "InternalError",
+    "NotSupportedError",
+    "SceneError",
+    "SimulationError",
+    "SoftrodError",
+]
