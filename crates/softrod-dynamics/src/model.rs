@@ -564,6 +564,12 @@ impl Model {
         if !self.bodies.is_empty() {
             t.push("rigid bodies".into());
         }
+        if self.bodies.iter().any(|b| !b.spec.loads.is_empty()) {
+            t.push("body loads".into());
+        }
+        if self.n_prescribed > 0 {
+            t.push("prescribed joints".into());
+        }
         if !self.closures.is_empty() {
             t.push("closures".into());
         }
