@@ -175,6 +175,9 @@ pub struct IdDerivatives {
     n_dof: usize,
     /// The per-node buffers of an articulated model (D76–D80).
     tree: Option<Box<crate::tree_derivatives::TreeWork>>,
+    /// Prescribed joints (D59) held at rest at their values at `t` (the
+    /// statics' linearization), instead of moving as prescribed.
+    pub(crate) prescribed_at_rest: bool,
 }
 
 impl IdDerivatives {
@@ -201,6 +204,7 @@ impl IdDerivatives {
                 .tree
                 .as_ref()
                 .map(|t| Box::new(crate::tree_derivatives::TreeWork::new(model, t))),
+            prescribed_at_rest: false,
         }
     }
 }

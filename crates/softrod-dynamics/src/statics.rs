@@ -3,6 +3,7 @@
 use crate::algorithms::{check_vec, inverse_dynamics};
 use crate::data::Data;
 use crate::error::DynamicsError;
+use crate::id_derivatives::{IdDerivatives, inverse_dynamics_derivatives};
 use crate::matrices::stiffness_matrix;
 use crate::model::Model;
 use nalgebra::{DMatrix, DVector};
@@ -113,6 +114,8 @@ struct Newton<'a> {
     zero: Vec<f64>,
     time: f64,
     iterations: usize,
+    /// The analytic `∂τ/∂q` (D37–D47, D76–D80) at `q̇ = q̈ = 0`.
+    derivatives: IdDerivatives,
 }
 
 impl Newton<'_> {
@@ -128,22 +131,26 @@ impl Newton<'_> {
         .clone())
     }
 
-    fn jacobian(&self, data: &mut Data, q: &DVector<f64>) -> Result<DMatrix<f64>, DynamicsError> {
-        let n = q.len();
-        let mut jac = self.k.clone();
-        let mut qp = q.clone();
-        for j in 0..n {
-            let h = 6e-6 * q[j].abs().max(1.0);
-            qp[j] = q[j] + h;
-            let plus = self.residual(data, &qp)?;
-            qp[j] = q[j] - h;
-            let minus = self.residual(data, &qp)?;
-            qp[j] = q[j];
-            for i in 0..n {
-                jac[(i, j)] += (plus[i] - minus[i]) / (2.0 * h) - self.k[(i, j)];
-            }
+    /// `∂τ/∂q` of the residual, analytic (the derivatives of the inverse
+    /// dynamics at rest, loads and tensions as `data` has them).
+    fn jacobian(&mut self, data: &Data, q: &DVector<f64>) -> Result<DMatrix<f64>, DynamicsError> {
+        let w = &mut self.derivatives;
+        w.load_scale = data.load_scale;
+        w.prescribed_at_rest = true;
+        match (data.cable_tensions(), &mut w.tensions) {
+            (None, t) => *t = None,
+            (Some(u), Some(t)) => t.as_mut_slice().copy_from_slice(u),
+            (Some(u), t) => *t = Some(DVector::from_column_slice(u)),
         }
-        Ok(jac)
+        inverse_dynamics_derivatives(
+            self.model,
+            w,
+            self.time,
+            q.as_slice(),
+            &self.zero,
+            &self.zero,
+        )?;
+        Ok(w.dtau_dq.clone())
     }
 
     /// Newton from `q` at the current load scale: `Ok(Ok(residual))` when
@@ -214,6 +221,7 @@ fn statics_inner(
         zero: vec![0.0; n],
         time: options.time,
         iterations: 0,
+        derivatives: IdDerivatives::new(model),
     };
     let start = DVector::from_column_slice(q0);
     data.load_scale = 1.0;

@@ -115,6 +115,10 @@ pub(crate) fn tree_id_derivatives(
         tw.pqd.as_mut_slice(),
         tw.pqdd.as_mut_slice(),
     );
+    if work.prescribed_at_rest {
+        tw.pqd.fill(0.0);
+        tw.pqdd.fill(0.0);
+    }
     // Nodes on different branches do not couple: those blocks stay zero.
     work.dtau_dq.fill(0.0);
     work.dtau_dqd.fill(0.0);
