@@ -444,3 +444,73 @@ fn pairs(tree: &Tree, work: &mut IdDerivatives, tw: &TreeWork) {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::{
+        Attachment, Curve, Data, IdDerivatives, Joint, Model, Prescribed, RodSpec,
+        inverse_dynamics_derivatives, static_force,
+    };
+    use softrod_mechanics::{Material, RodBody, Section};
+
+    /// With the prescribed joints held at rest (what statics linearizes),
+    /// `∂τ/∂q` is the derivative of `static_force`, not of the inverse
+    /// dynamics with the drive moving (which differs by the drive's
+    /// velocity and acceleration terms).
+    #[test]
+    fn prescribed_at_rest_differentiates_the_static_force() {
+        let rod = softrod_kinematics::Rod::uniform(
+            0.3,
+            3,
+            softrod_kinematics::Basis::all(),
+            softrod_kinematics::straight(),
+            softrod_lie::Pose::identity(),
+        )
+        .unwrap();
+        let material = Material::with_poisson(1000.0, 1e6, 0.5, 0.0).unwrap();
+        let body = RodBody::new(Section::Circle { radius: 0.01 }, material, 0.3).unwrap();
+        let drive =
+            Joint::revolute([0.0, 1.0, 0.0]).with_prescribed(Prescribed::new(vec![Curve::Sine {
+                amplitude: 0.8,
+                frequency: 2.0,
+                phase: 0.3,
+                offset: 0.1,
+            }]));
+        let m = Model::with_elements(
+            vec![crate::Element::Rod(
+                RodSpec::new("arm", rod, body),
+                Attachment::world_joint(drive),
+            )],
+            Some(softrod_lie::Vec3::new(0.0, 0.0, -9.81)),
+            4,
+        )
+        .unwrap();
+        let n = m.n_dof();
+        let q: Vec<f64> = (0..n).map(|i| 0.2 * (1.3 * i as f64).sin()).collect();
+        let z = vec![0.0; n];
+        let t = 0.17;
+        let mut work = IdDerivatives::new(&m);
+        work.prescribed_at_rest = true;
+        inverse_dynamics_derivatives(&m, &mut work, t, &q, &z, &z).unwrap();
+        let at_rest = work.dtau_dq.clone();
+        work.prescribed_at_rest = false;
+        inverse_dynamics_derivatives(&m, &mut work, t, &q, &z, &z).unwrap();
+        let moving = work.dtau_dq.clone();
+        let mut data = Data::new(&m);
+        let h = 1e-6;
+        let mut worst: f64 = 0.0;
+        for j in 0..n {
+            let (mut qp, mut qm) = (q.clone(), q.clone());
+            qp[j] += h;
+            qm[j] -= h;
+            let fp = static_force(&m, &mut data, t, &qp).unwrap().clone();
+            let fm = static_force(&m, &mut data, t, &qm).unwrap().clone();
+            let col = (fp - fm) / (2.0 * h);
+            worst = worst.max((at_rest.column(j) - col).amax());
+        }
+        let scale = at_rest.amax();
+        assert!(worst < 1e-7 * scale, "{worst:e} of {scale:e}");
+        // The moving drive changes it by more than the differences' error.
+        assert!((&moving - &at_rest).amax() > 1e-4 * scale);
+    }
+}
