@@ -12,13 +12,12 @@
 
 use nalgebra::DVector;
 use softrod::Settings;
-use softrod::dynamics::{DynamicsError, Model, energies, forward_dynamics, frames};
+use softrod::dynamics::{DynamicsError, Model, forward_dynamics};
 use softrod::integrate::{
     Control, Hooks, IntegrateError, Options, RodSystem, SecondOrderSystem, Status, StepControl,
     integrate_second_order,
 };
-use softrod::kinematics::RodKinematics;
-use softrod::{RunStatus, RunSummary, Trajectory, output_times};
+use softrod::{RunStatus, Trajectory, TrajectoryRecorder, output_times};
 
 /// A model's cables as inputs `u`.
 #[derive(Clone, Debug)]
@@ -139,28 +138,16 @@ impl SecondOrderSystem for CableInputs {
     }
 }
 
-/// Keeps the samples of a run, as the facade's `Simulation::simulate` does.
+/// Keeps the samples of a run: the facade's recorder, fed from the
+/// integrator's output hook with the prescribed joints set to each time.
 pub struct Recorder {
-    pub traj: Trajectory,
-    kin: Vec<RodKinematics>,
+    inner: TrajectoryRecorder,
 }
 
 impl Recorder {
     pub fn new(model: &Model) -> Self {
         Self {
-            traj: Trajectory {
-                t: Vec::new(),
-                q: Vec::new(),
-                qd: Vec::new(),
-                tips: Vec::new(),
-                energies: Vec::new(),
-                summary: RunSummary::default(),
-            },
-            kin: model
-                .rods()
-                .iter()
-                .map(|r| RodKinematics::new(&r.spec.rod))
-                .collect(),
+            inner: TrajectoryRecorder::new(model),
         }
     }
 
@@ -169,29 +156,7 @@ impl Recorder {
         let n = sys.model.n_dof();
         let (q, qd) = y.as_slice().split_at(n);
         sys.model.set_time(&mut sys.data, t);
-        let e = energies(&sys.model, &mut sys.data, q, qd).map_err(|e| e.to_string())?;
-        let mut tips = Vec::with_capacity(self.kin.len());
-        let articulated = sys.model.is_articulated();
-        if articulated {
-            frames(&sys.model, &mut sys.data, q).map_err(|e| e.to_string())?;
-        }
-        for (i, (k, r)) in self.kin.iter_mut().zip(sys.model.rods()).enumerate() {
-            k.update(&r.spec.rod, &q[r.dofs()], None, None)
-                .map_err(|e| e.to_string())?;
-            tips.push(if articulated {
-                sys.data.rod_to_world(&sys.model, i).compose(k.tip_pose())
-            } else {
-                *k.tip_pose()
-            });
-        }
-        let tr = &mut self.traj;
-        tr.t.push(t);
-        tr.q.push(DVector::from_column_slice(q));
-        tr.qd.push(DVector::from_column_slice(qd));
-        tr.tips.push(tips);
-        tr.energies.push(e);
-        tr.summary.samples += 1;
-        Ok(())
+        self.inner.record(&sys.model, &mut sys.data, t, q, qd)
     }
 }
 
@@ -330,14 +295,15 @@ pub fn simulate_controlled(
         add_stats(&mut stats, &sol.stats);
         q.copy_from(&sol.y_final.rows(0, n));
         qd.copy_from(&sol.y_final.rows(n, n));
-        rec.traj.summary.t_final = sol.t_final;
+        rec.inner.trajectory_mut().summary.t_final = sol.t_final;
         if sol.status != Status::Completed {
-            rec.traj.summary.status = RunStatus::Stopped;
+            rec.inner.trajectory_mut().summary.status = RunStatus::Stopped;
             break;
         }
     }
-    rec.traj.summary.stats = stats;
-    Ok(rec.traj)
+    let mut traj = rec.inner.into_trajectory();
+    traj.summary.stats = stats;
+    Ok(traj)
 }
 
 fn add_stats(acc: &mut softrod::integrate::Stats, s: &softrod::integrate::Stats) {

@@ -80,7 +80,7 @@ pub use limits::{
 pub use settings::{GENERALIZED_ALPHA_RHO_INF, Settings, output_times};
 pub use simulation::{
     Equilibrium, Flow, ModalAnalysis, Observer, RunStatus, RunSummary, Sample, Simulation,
-    Trajectory,
+    Trajectory, TrajectoryRecorder,
 };
 
 pub use watch::EnergyBalance;

@@ -182,35 +182,85 @@ impl Trajectory {
     }
 }
 
-/// The observer behind [`Simulation::simulate`]: keeps every sample.
-struct Keep {
+/// Keeps every sample of a run as a [`Trajectory`]: the state, the
+/// energies and every rod's tip pose in the world frame (through joints and
+/// parents on articulated models). The observer behind
+/// [`Simulation::simulate`]; front ends that drive the integrator
+/// themselves (a controller in the loop) record with [`Self::record`].
+pub struct TrajectoryRecorder {
     traj: Trajectory,
     kin: Vec<RodKinematics>,
 }
 
-impl Observer for Keep {
-    fn sample(&mut self, s: Sample<'_>) -> Result<Flow, String> {
-        let e = energies(s.model, s.data, s.q, s.qd).map_err(|e| e.to_string())?;
-        let mut tips = Vec::with_capacity(self.kin.len());
-        let articulated = s.model.is_articulated();
-        if articulated {
-            softrod_dynamics::frames(s.model, s.data, s.q).map_err(|e| e.to_string())?;
+impl TrajectoryRecorder {
+    /// An empty record for runs of `model`.
+    pub fn new(model: &Model) -> Self {
+        Self {
+            traj: Trajectory {
+                t: Vec::new(),
+                q: Vec::new(),
+                qd: Vec::new(),
+                tips: Vec::new(),
+                energies: Vec::new(),
+                summary: RunSummary::default(),
+            },
+            kin: model
+                .rods()
+                .iter()
+                .map(|r| RodKinematics::new(&r.spec.rod))
+                .collect(),
         }
-        for (i, (k, r)) in self.kin.iter_mut().zip(s.model.rods()).enumerate() {
-            k.update(&r.spec.rod, &s.q[r.dofs()], None, None)
+    }
+
+    /// Records the state `(q, q̇)` at `t`; `data` must have the prescribed
+    /// joints at `t` ([`Model::set_time`]).
+    pub fn record(
+        &mut self,
+        model: &Model,
+        data: &mut Data,
+        t: f64,
+        q: &[f64],
+        qd: &[f64],
+    ) -> std::result::Result<(), String> {
+        let e = energies(model, data, q, qd).map_err(|e| e.to_string())?;
+        let mut tips = Vec::with_capacity(self.kin.len());
+        let articulated = model.is_articulated();
+        if articulated {
+            softrod_dynamics::frames(model, data, q).map_err(|e| e.to_string())?;
+        }
+        for (i, (k, r)) in self.kin.iter_mut().zip(model.rods()).enumerate() {
+            k.update(&r.spec.rod, &q[r.dofs()], None, None)
                 .map_err(|e| e.to_string())?;
             tips.push(if articulated {
-                s.data.rod_to_world(s.model, i).compose(k.tip_pose())
+                data.rod_to_world(model, i).compose(k.tip_pose())
             } else {
                 *k.tip_pose()
             });
         }
-        let t = &mut self.traj;
-        t.t.push(s.t);
-        t.q.push(DVector::from_column_slice(s.q));
-        t.qd.push(DVector::from_column_slice(s.qd));
-        t.tips.push(tips);
-        t.energies.push(e);
+        let tr = &mut self.traj;
+        tr.t.push(t);
+        tr.q.push(DVector::from_column_slice(q));
+        tr.qd.push(DVector::from_column_slice(qd));
+        tr.tips.push(tips);
+        tr.energies.push(e);
+        tr.summary.samples += 1;
+        Ok(())
+    }
+
+    /// The record so far (its summary is the caller's to fill).
+    pub fn trajectory_mut(&mut self) -> &mut Trajectory {
+        &mut self.traj
+    }
+
+    /// The record.
+    pub fn into_trajectory(self) -> Trajectory {
+        self.traj
+    }
+}
+
+impl Observer for TrajectoryRecorder {
+    fn sample(&mut self, s: Sample<'_>) -> std::result::Result<Flow, String> {
+        self.record(s.model, s.data, s.t, s.q, s.qd)?;
         Ok(Flow::Continue)
     }
 }
@@ -732,25 +782,11 @@ impl Simulation {
         if duration.is_finite() && duration > 0.0 {
             self.check_samples(duration, per_sample as u64)?;
         }
-        let mut keep = Keep {
-            traj: Trajectory {
-                t: Vec::new(),
-                q: Vec::new(),
-                qd: Vec::new(),
-                tips: Vec::new(),
-                energies: Vec::new(),
-                summary: RunSummary::default(),
-            },
-            kin: self
-                .model()
-                .rods()
-                .iter()
-                .map(|r| RodKinematics::new(&r.spec.rod))
-                .collect(),
-        };
+        let mut keep = TrajectoryRecorder::new(self.model());
         let summary = self.simulate_with(duration, &mut keep)?;
-        keep.traj.summary = summary;
-        Ok(keep.traj)
+        let mut traj = keep.into_trajectory();
+        traj.summary = summary;
+        Ok(traj)
     }
 
     /// The checks a run of `duration` seconds passes before it starts: the
