@@ -745,8 +745,8 @@ pub(crate) fn close_piece(
 
 /// Writes a piece's `τ_n` and its diagonal blocks, adding the strain-space
 /// terms (D13, D15, D47): `K_n q_n + D_n q̇_n`, the elastic offset and the
-/// cables' force and strain Hessian. `diag_q`, `diag_v`, `wrench` are
-/// [`close_piece`]'s.
+/// cables' force and strain Hessian. `bm`: the piece's basis
+/// ([`basis6`]); `diag_q`, `diag_v`, `wrench` are [`close_piece`]'s.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(crate) fn write_piece(
@@ -757,13 +757,13 @@ pub(crate) fn write_piece(
     t: f64,
     (q, qd): (&[f64], &[f64]),
     scale: f64,
+    bm: &Mat6,
     (diag_q, diag_v, wrench): (&Mat6, &Mat6, &Vec6),
 ) {
     let piece = &rm.spec.rod.pieces()[n];
     let pd = &rm.pieces[n];
     let k = piece.basis.dof();
     let o = rm.dof_offset + piece.dof_offset;
-    let bm = basis6(&piece.basis);
     let xi = piece.strain(&q[rm.dofs()]);
     let (cable_force, cable_hess) =
         cable_terms(model, rm, piece, &xi, t, scale, work.tensions.as_ref());
@@ -810,6 +810,7 @@ fn inward(
             t,
             (q, qd),
             scale,
+            &bm,
             (&diag_q, &diag_v, &wrench),
         );
     }

@@ -341,6 +341,7 @@ fn inward(
                     t,
                     (q, qd),
                     scale,
+                    &bm,
                     (&dq, &dv, &wrench),
                 );
                 base
