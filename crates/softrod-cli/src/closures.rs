@@ -1,21 +1,10 @@
-//! What `check`, `statics --json` and `run` say about loop closures
+//! What `check` and `statics --json` say about loop closures
 //! (scene-format.md, "Bodies, joints, bases and closures";
 //! docs/scene-format-extensions.md).
 
-use softrod::dynamics::{
-    ClosureFrame, Data, Model, closure_residuals, constraint_rank, max_closure_residual,
-};
+use softrod::dynamics::{ClosureFrame, Data, Model, closure_residuals, constraint_rank};
 
 use crate::common::{CliError, failed};
-
-/// `run` stops with an error when the largest closure residual exceeds this
-/// fraction of the model's length scale (its longest rod): the loop has
-/// come apart and the results mean nothing.
-pub const RUN_FAIL_RELATIVE: f64 = 1e-3;
-/// `run` warns when the largest closure residual exceeds this fraction of
-/// the length scale (the Baumgarte stabilization normally holds it far
-/// below; a tighter `rtol` reduces it).
-pub const RUN_WARN_RELATIVE: f64 = 1e-6;
 
 fn frame_text(f: &ClosureFrame, m: &Model) -> String {
     let is_rod = m.rods().iter().any(|r| r.spec.name == f.element);
@@ -41,14 +30,6 @@ fn frame_text(f: &ClosureFrame, m: &Model) -> String {
         format!(" offset by [{}, {}, {}] m", p[0], p[1], p[2])
     };
     format!("{what}{at}{offset}")
-}
-
-/// The length scale of the model's residuals: its longest rod \[m\].
-pub fn length_scale(m: &Model) -> f64 {
-    m.rods()
-        .iter()
-        .map(|r| r.spec.rod.length())
-        .fold(0.0, f64::max)
 }
 
 /// `check`: one line per closure, then the constraint count, the rank of
@@ -100,12 +81,4 @@ pub fn add_statics_json(m: &Model, q: &[f64], v: &mut serde_json::Value) -> Resu
         .collect();
     v["closures"] = serde_json::json!(list);
     Ok(())
-}
-
-/// `run`: the largest closure residual at `q` \[m\] (0 without closures).
-pub fn residual(m: &Model, data: &mut Data, q: &[f64]) -> Result<f64, String> {
-    if !m.has_closures() {
-        return Ok(0.0);
-    }
-    max_closure_residual(m, data, q).map_err(|e| e.to_string())
 }

@@ -6,9 +6,9 @@ use softrod::Equilibrium;
 use softrod::dynamics::Model;
 
 use crate::common::{
-    CliError, Loaded, Poser, failed, load, load_silent, pose_json, position, warning_text,
+    CliError, Loaded, centrelines, failed, load, load_silent, pose_json, position, sampled_poses,
+    warning_text,
 };
-use crate::outputs::{RodSampling, default_points_per_piece};
 use crate::plots;
 use crate::run::scene_title;
 
@@ -104,15 +104,8 @@ fn make_dir(dir: &Path) -> Result<(), CliError> {
 }
 
 /// Sampled centrelines of every rod at `q` (the default sampling of `run`).
-fn centrelines(model: &Model, q: &[f64]) -> Result<Vec<Vec<[f64; 3]>>, CliError> {
-    let mut poser = Poser::new(model);
-    poser.update(model, 0.0, q)?;
-    let sampling: Vec<RodSampling> = model
-        .rods()
-        .iter()
-        .map(|r| RodSampling::new(&r.spec.rod, default_points_per_piece(r.spec.rod.n_pieces())))
-        .collect();
-    poser.centrelines(model, &sampling)
+fn centrelines_at(model: &Model, q: &[f64]) -> Result<Vec<Vec<[f64; 3]>>, CliError> {
+    Ok(centrelines(&sampled_poses(model, 0.0, q)?))
 }
 
 pub fn statics(path: &Path, json: bool, out: Option<PathBuf>, png: bool) -> Result<(), CliError> {
@@ -129,8 +122,7 @@ pub fn statics(path: &Path, json: bool, out: Option<PathBuf>, png: bool) -> Resu
         .and_then(Result::ok)
         .map(|m| (m.omega.iter().all(|w| *w > 0.0), m.omega.min()));
     let model = l.sim.model();
-    let mut poser = Poser::new(model);
-    poser.update(model, 0.0, res.q.as_slice())?;
+    let poser = sampled_poses(model, 0.0, res.q.as_slice())?;
     if let Some((false, w)) = stable {
         eprintln!(
             "warning: this equilibrium is unstable (lowest linearized ω² = {:.3e} rad²/s²); \
@@ -140,7 +132,7 @@ pub fn statics(path: &Path, json: bool, out: Option<PathBuf>, png: bool) -> Resu
     }
     if let Some(dir) = &out {
         make_dir(dir)?;
-        let c = centrelines(model, res.q.as_slice())?;
+        let c = centrelines(&poser);
         let bodies: Vec<[f64; 3]> = poser.bodies().iter().map(position).collect();
         let name = plots::statics_figure(dir, model, &c, &bodies, &scene_title(path))?;
         if png {
@@ -217,7 +209,7 @@ fn mode_curves(
     modes: &softrod::dynamics::Modes,
     count: usize,
 ) -> Result<ModeCurves, CliError> {
-    let eq = centrelines(model, q_eq)?;
+    let eq = centrelines_at(model, q_eq)?;
     let length = model
         .rods()
         .iter()
@@ -233,7 +225,7 @@ fn mode_curves(
         let v = modes.shapes.column(k);
         let at = |a: f64| -> Result<Vec<Vec<[f64; 3]>>, CliError> {
             let q: Vec<f64> = q_eq.iter().zip(v.iter()).map(|(q, v)| q + a * v).collect();
-            centrelines(model, &q)
+            centrelines_at(model, &q)
         };
         // Scale from a small probe: the displacement is linear in the
         // amplitude there, so one probe sets the amplitude.

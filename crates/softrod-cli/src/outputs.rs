@@ -1,60 +1,16 @@
-//! What a run directory holds besides the numbers: where the rods are
-//! sampled along `s`, the view description (`view.json`) and the 3-D view.
+//! What a run directory holds besides the numbers: the view description
+//! (`view.json`), the 3-D view, the run's file names, CSV fields and the
+//! disk-space check.
 
 use std::path::{Path, PathBuf};
 
 use softrod::dynamics::Model;
-use softrod::kinematics::Rod;
 use softrod::mechanics::{Routing, Section};
 use softrod_viz::BodyShape;
 use softrod_viz::run_dir::{CableSpec, RadiusProfile, RodSpec, VIEW_JSON, ViewSpec};
 use softrod_viz::{ViewOptions, ViewStats};
 
 use crate::common::{CliError, failed};
-
-/// Points per piece when `[run] shape_points_per_piece` is not given: a rod
-/// gets about [`SMOOTH_SAMPLES_PER_ROD`] samples, at least one per piece
-/// (the piece boundaries, the contract's N+1 frames) and at most
-/// [`MAX_DEFAULT_POINTS_PER_PIECE`] (a piece is one exact arc: 16 chords of a
-/// quarter turn deviate from it by 0.1 % of the radius).
-pub fn default_points_per_piece(pieces: usize) -> usize {
-    SMOOTH_SAMPLES_PER_ROD
-        .div_ceil(pieces.max(1))
-        .clamp(1, MAX_DEFAULT_POINTS_PER_PIECE)
-}
-
-/// See [`default_points_per_piece`].
-pub const SMOOTH_SAMPLES_PER_ROD: usize = 64;
-/// See [`default_points_per_piece`].
-pub const MAX_DEFAULT_POINTS_PER_PIECE: usize = 16;
-
-/// Where one rod is sampled: `m` points per piece at the local fractions
-/// `0, 1/m, …, (m−1)/m` of each piece, then the tip; `s` strictly
-/// increasing from 0 to L and containing every piece boundary.
-pub struct RodSampling {
-    /// Fractions within a piece, `[0, 1)`.
-    pub fractions: Vec<f64>,
-    /// Material abscissae, m (`n_pieces · m + 1`).
-    pub s: Vec<f64>,
-}
-
-impl RodSampling {
-    pub fn new(rod: &Rod, per_piece: usize) -> Self {
-        let m = per_piece.max(1);
-        let fractions: Vec<f64> = (0..m).map(|j| j as f64 / m as f64).collect();
-        let mut s = Vec::with_capacity(rod.n_pieces() * m + 1);
-        let mut start = 0.0;
-        for p in rod.pieces() {
-            let len = p.end() - start;
-            // j = 0 is exactly the boundary (start), so boundaries keep the
-            // values `shape.csv` always had.
-            s.extend(fractions.iter().map(|f| start + f * len));
-            start = p.end();
-        }
-        s.push(rod.length());
-        Self { fractions, s }
-    }
-}
 
 /// Outer radius profile of a section over a rod of length `length` (the
 /// circumscribed radius of a rectangle), as `view.json` takes it.
@@ -292,7 +248,7 @@ pub fn check_disk_space(
     duration: f64,
     every: f64,
 ) -> Result<(), CliError> {
-    let rows = softrod::output_sample_count(duration, every).unwrap_or(u64::MAX);
+    let rows = softrod::limits::output_sample_count(duration, every).unwrap_or(u64::MAX);
     let need = rows.saturating_mul(output_bytes_per_row(model));
     if let Some(free) = free_disk_bytes(dir) {
         if need > free {
@@ -322,37 +278,6 @@ fn human(bytes: u64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use softrod::kinematics::Basis;
-    use softrod::lie::Pose;
-
-    #[test]
-    fn sampling_holds_every_boundary_and_increases() {
-        let rod = Rod::with_lengths(
-            &[0.1, 0.15, 0.25],
-            Basis::all(),
-            softrod::kinematics::straight(),
-            Pose::identity(),
-        )
-        .unwrap();
-        let s = RodSampling::new(&rod, 4);
-        assert_eq!(s.s.len(), 3 * 4 + 1);
-        assert!(s.s.windows(2).all(|w| w[1] > w[0]));
-        for (k, b) in [0.0, 0.1, 0.25, 0.5].iter().enumerate() {
-            assert_eq!(s.s[4 * k], *b, "boundary {k}");
-        }
-        assert!((s.s[1] - 0.025).abs() < 1e-15);
-        let one = RodSampling::new(&rod, 1);
-        assert_eq!(one.s, vec![0.0, 0.1, 0.25, 0.5]);
-    }
-
-    #[test]
-    fn default_points_give_a_smooth_rod_and_never_fewer_than_the_boundaries() {
-        assert_eq!(default_points_per_piece(4), 16);
-        assert_eq!(default_points_per_piece(8), 8);
-        assert_eq!(default_points_per_piece(1), 16);
-        assert_eq!(default_points_per_piece(100), 1);
-        assert_eq!(default_points_per_piece(0), 16);
-    }
 
     #[test]
     fn csv_lines_quote_what_needs_it_and_read_back() {

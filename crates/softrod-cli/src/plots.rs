@@ -6,6 +6,7 @@
 use std::path::Path;
 
 use softrod::dynamics::{Energies, Model};
+use softrod::record::{Record, position};
 use softrod_viz::plot::{
     self, ActuatorSeries, BodyMark, EnergySeries, Figure, Mode, ModeShapes, NamedSeries, RodCurve,
     ShapeSnapshot, StrainComponent, StrainProfiles,
@@ -44,6 +45,54 @@ pub struct Series {
     pub power: Vec<Vec<f64>>,
     /// Shape snapshots, in time order.
     pub snapshots: Vec<Snapshot>,
+}
+
+impl Snapshot {
+    /// The snapshot of a record: the sampled centrelines, the strains and
+    /// the bodies' origins.
+    pub fn of(rec: &Record) -> Self {
+        let p = &rec.poses;
+        Self {
+            t: rec.t,
+            centrelines: (0..p.n_rods())
+                .map(|r| p.samples(r).iter().map(position).collect())
+                .collect(),
+            strains: (0..p.n_rods())
+                .map(|r| {
+                    p.strains(r)
+                        .iter()
+                        .map(|x| [x[0], x[1], x[2], x[3], x[4], x[5]])
+                        .collect()
+                })
+                .collect(),
+            bodies: p.bodies().iter().map(position).collect(),
+        }
+    }
+}
+
+impl Series {
+    /// Empty series of `rods` rods and `cables` cables.
+    pub fn new(rods: usize, cables: usize) -> Self {
+        Self {
+            tips: vec![Vec::new(); rods],
+            tensions: vec![Vec::new(); cables],
+            power: vec![Vec::new(); cables],
+            ..Self::default()
+        }
+    }
+
+    /// Appends a record's time, tips, energies, tensions and powers.
+    pub fn push(&mut self, rec: &Record) {
+        self.t.push(rec.t);
+        for (r, tips) in self.tips.iter_mut().enumerate() {
+            tips.push(position(rec.poses.tip(r)));
+        }
+        self.energies.push(rec.energies);
+        for (c, (&tn, &pw)) in rec.tensions.iter().zip(&rec.cable_power).enumerate() {
+            self.tensions[c].push(tn);
+            self.power[c].push(pw);
+        }
+    }
 }
 
 /// File name of the strain figure of rod `r`.

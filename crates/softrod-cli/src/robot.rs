@@ -1,9 +1,10 @@
 //! What `check` and `statics --json` say about joints and bodies
 //! (scene-format.md, "Bodies, joints, bases and closures").
 
+use softrod::record::WorldPoses;
 use softrod_dynamics::{ElementKind, Model};
 
-use crate::common::{Poser, pose_json};
+use crate::common::pose_json;
 
 /// `check`: one line per joint with coordinates and per body.
 pub fn print_elements(m: &Model) {
@@ -56,7 +57,7 @@ pub fn print_elements(m: &Model) {
 /// `statics --json`: `"bodies": [{name, position, rotation}]` and
 /// `"joints": [{element, type, values}]` (`"prescribed": true` on a
 /// prescribed joint, its values those at t = 0).
-pub fn add_statics_json(m: &Model, poser: &Poser, q: &[f64], v: &mut serde_json::Value) {
+pub fn add_statics_json(m: &Model, poser: &WorldPoses, q: &[f64], v: &mut serde_json::Value) {
     if !m.is_articulated() {
         return;
     }

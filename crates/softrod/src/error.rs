@@ -27,8 +27,8 @@ pub enum Error {
     #[error(transparent)]
     Kinematics(#[from] KinematicsError),
     /// The time integration failed (time, step size and the check that
-    /// fired are in the source).
-    #[error("simulation failed: {0}")]
+    /// fired are in the source; [`report`] prints them).
+    #[error("simulation failed")]
     Integration(#[source] Box<IntegrateError>),
     /// A run setting is invalid.
     #[error("run.{key}: {message}")]
@@ -38,10 +38,10 @@ pub enum Error {
         /// What is wrong.
         message: String,
     },
-    /// The task would need more memory than the machine has: refused before
+    /// The task would need more memory than its budget: refused before
     /// allocating (see [`Limits`](crate::Limits)).
     #[error(
-        "{key}: {what} need about {} but {} of memory is available",
+        "{key}: {what} need about {} but the memory budget is {}",
         human_bytes(*estimate),
         human_bytes(*limit)
     )]
@@ -157,6 +157,40 @@ impl Error {
             | Error::Stretch { .. } => false,
         }
     }
+}
+
+impl Error {
+    /// The error and its causes, each once: see [`report`].
+    pub fn report(&self) -> String {
+        report(self)
+    }
+}
+
+/// An error and its causes, each stated once, as one line for a person:
+/// `what failed: why: why that happened`.
+///
+/// softrod's errors follow one rule so that this walk repeats nothing: a
+/// variant either states its cause in its own message or returns it as
+/// [`std::error::Error::source`], never both (`#[error(transparent)]`
+/// wrappers hand both to the inner error). A scene error
+/// ([`SceneError`]) states its cause in the scene's terms (key path,
+/// value, allowed range) and keeps the library's error as its source for
+/// programs to inspect, so the walk ends there.
+pub fn report(e: &(dyn std::error::Error + 'static)) -> String {
+    let mut text = e.to_string();
+    let mut cur = e;
+    while !states_its_cause(cur) {
+        let Some(next) = cur.source() else { break };
+        text.push_str(": ");
+        text.push_str(&next.to_string());
+        cur = next;
+    }
+    text
+}
+
+/// Whether `e`'s message already states its causes (see [`report`]).
+fn states_its_cause(e: &(dyn std::error::Error + 'static)) -> bool {
+    e.is::<SceneError>() || matches!(e.downcast_ref::<Error>(), Some(Error::Scene(_)))
 }
 
 /// `Result` with the facade's [`Error`].

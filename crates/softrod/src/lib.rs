@@ -67,20 +67,18 @@
 #![forbid(unsafe_code)]
 
 mod error;
-mod limits;
+pub mod limits;
+pub mod record;
 mod settings;
 mod simulation;
 mod watch;
 
-pub use error::{Error, Result};
-pub use limits::{
-    DEFAULT_MEMORY, Limits, MODES_DENSE_MATRICES, STATICS_DENSE_MATRICES, dense_bytes,
-    dense_matrices_of, output_sample_count,
-};
+pub use error::{Error, Result, report};
+pub use limits::Limits;
+pub use record::{Trajectory, TrajectoryRecorder};
 pub use settings::{GENERALIZED_ALPHA_RHO_INF, Settings, output_times};
 pub use simulation::{
-    Equilibrium, Flow, ModalAnalysis, Observer, RunStatus, RunSummary, Sample, Simulation,
-    Trajectory, TrajectoryRecorder,
+    Equilibrium, Flow, ModalAnalysis, Observer, RodId, RunStatus, RunSummary, Sample, Simulation,
 };
 
 pub use watch::EnergyBalance;

@@ -1,7 +1,11 @@
 //! What a task will allocate, estimated before anything big is allocated,
-//! against what the machine has: a scene that cannot fit is refused with an
-//! input error naming the key and the estimate ([`Error::TooLarge`]), never
-//! aborted by the allocator.
+//! against a memory budget ([`Limits`], 4 GiB unless set): a scene that
+//! cannot fit is refused with an input error naming the key and the
+//! estimate ([`Error::TooLarge`](crate::Error::TooLarge)), never aborted by
+//! the allocator. The budget is a setting, not a reading of the machine's
+//! free memory, so that what is refused does not depend on the machine's
+//! load; a program that wants the machine's figure sets
+//! [`Limits::of_machine`] itself.
 //!
 //! The estimates count what grows faster than the rod: dense
 //! `n_dof × n_dof` matrices (8 bytes per entry) and the output samples. The
@@ -12,20 +16,31 @@ use softrod_integrate::Method;
 
 use crate::error::Error;
 
-/// What the machine grants a task.
+/// The budget a task is checked against before it allocates
+/// ([`Simulation::set_limits`](crate::Simulation::set_limits)).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Limits {
     /// Memory a task may allocate \[bytes\].
     pub memory: u64,
 }
 
-/// The memory assumed when the machine does not say (no `/proc/meminfo`):
-/// 4 GiB, what a small laptop or CI runner has free.
+/// The default memory budget: 4 GiB, what a small laptop or CI runner has
+/// free.
 pub const DEFAULT_MEMORY: u64 = 4 << 30;
 
-impl Limits {
-    /// The machine's: `MemAvailable` of `/proc/meminfo` (Linux), else
+impl Default for Limits {
     /// [`DEFAULT_MEMORY`].
+    fn default() -> Self {
+        Self {
+            memory: DEFAULT_MEMORY,
+        }
+    }
+}
+
+impl Limits {
+    /// What the machine has free now: `MemAvailable` of `/proc/meminfo`
+    /// (Linux), else [`DEFAULT_MEMORY`]. It changes with the machine's
+    /// load; no part of softrod uses it unless asked.
     pub fn of_machine() -> Self {
         Self {
             memory: available_memory().unwrap_or(DEFAULT_MEMORY),
@@ -78,7 +93,7 @@ pub fn dense_bytes(count: u64, n: usize) -> u64 {
 }
 
 /// `bytes` as a short human number (`2.9 TB`).
-pub fn human_bytes(bytes: u64) -> String {
+pub(crate) fn human_bytes(bytes: u64) -> String {
     let b = bytes as f64;
     for (unit, scale) in [("TB", 1e12), ("GB", 1e9), ("MB", 1e6), ("kB", 1e3)] {
         if b >= scale {

@@ -2,7 +2,8 @@
 //! before it allocates, with an input error naming the key and the
 //! estimate; nothing aborts.
 
-use softrod::{Error, Flow, Limits, Observer, Sample, Settings, Simulation, dense_bytes};
+use softrod::limits::dense_bytes;
+use softrod::{Error, Flow, Limits, Observer, Sample, Settings, Simulation};
 use softrod_scene::Integrator;
 
 fn scene(pieces: usize, integrator: &str) -> String {

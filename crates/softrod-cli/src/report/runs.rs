@@ -8,7 +8,9 @@ use softrod_integrate::{
 };
 use softrod_scene::{Built, Integrator, Scene};
 
-use crate::common::{CliError, Poser, failed};
+use softrod::record::WorldPoses;
+
+use crate::common::{CliError, failed};
 
 /// One run's result.
 pub(super) struct Outcome {
@@ -84,7 +86,7 @@ pub(super) fn simulate_once(
         ));
     }
     let n = sys.model.n_dof();
-    let mut poser = Poser::new(&sys.model);
+    let mut poser = WorldPoses::new(&sys.model);
     let mut tips = Vec::with_capacity(sol.y.len());
     for (t, y) in sol.t.iter().zip(&sol.y) {
         poser

@@ -13,7 +13,9 @@ use super::chart::work_precision_svg;
 use super::runs::{Outcome, build_variant, dist, median, pieces};
 use super::table::{CSV_HEADER, Row, csv_rows, mark_pareto, md_table, sci};
 use super::{ReportOptions, command, write};
-use crate::common::{CliError, Poser, failed};
+use softrod::record::WorldPoses;
+
+use crate::common::{CliError, failed};
 
 pub(super) fn statics_report(
     scene: &Scene,
@@ -45,7 +47,7 @@ pub(super) fn statics_report(
             result = Some(r);
         }
         let r = result.expect("one repeat");
-        let mut poser = Poser::new(&built.model);
+        let mut poser = WorldPoses::new(&built.model);
         poser
             .update(&built.model, 0.0, r.q.as_slice())
             .map_err(|e| e.to_string())?;

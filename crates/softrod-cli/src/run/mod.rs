@@ -1,0 +1,259 @@
+//! `softrod run`: integrate, stream the trajectory, write shape, summary,
+//! plots. What each row holds is recorded by the facade
+//! (`softrod::record`); this module formats and writes it:
+//! [`rows`] the CSV files and the NumPy archive, [`summary`] summary.json,
+//! [`stream`] the observer that ties them to the run.
+
+mod rows;
+mod stream;
+mod summary;
+
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use indicatif::{ProgressBar, ProgressStyle};
+use softrod::integrate::Stats;
+use softrod::record::{
+    CLOSURE_WARN_RELATIVE, Columns, RodSampling, closure_length_scale, default_points_per_piece,
+};
+use softrod::{Error, output_times};
+
+use crate::common::{CliError, failed, load, out_dir};
+use crate::{npz, outputs, plots, signals};
+use rows::RowWriter;
+use stream::{Streamer, chosen_rows};
+use summary::Summary;
+
+/// The scene's file stem: the title of figures and view.
+pub fn scene_title(path: &Path) -> String {
+    path.file_stem()
+        .map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned())
+}
+
+pub fn run(
+    path: &Path,
+    out: Option<PathBuf>,
+    snapshots: Option<Vec<f64>>,
+    quiet: bool,
+    npz_out: bool,
+    png: bool,
+) -> Result<(), CliError> {
+    let mut l = load(path)?;
+    let dir = out_dir(path, out);
+    let scene = &l.scene;
+    let duration = scene.run.duration;
+    let every = l.sim.settings().output_spacing(duration);
+    outputs::check_disk_space(&dir, l.sim.model(), duration, every)?;
+    let times = output_times(duration, every);
+    if npz_out {
+        let width = Columns::of(l.sim.model()).width();
+        npz::check_size(times.len() as u64, width).map_err(CliError::Input)?;
+    }
+    let snapshot_at = chosen_rows(&times, snapshots.as_deref())?;
+    outputs::prepare_out_dir(&dir)?;
+    let stale = outputs::clear_stale(&dir)?;
+    if !quiet && !stale.is_empty() {
+        eprintln!(
+            "softrod: removed the previous run's outputs from {}: {}",
+            dir.display(),
+            stale.join(", ")
+        );
+    }
+    // Written first so that a run that never gets to its first row leaves
+    // a summary that says so.
+    let summary = Summary::new(
+        &dir,
+        scene,
+        (l.sim.q_names(), l.sim.prescribed_names()),
+        times.len(),
+    );
+    summary
+        .write(&Stats::default(), 0.0, 0.0, "running", 0)
+        .map_err(|e| CliError::Input(e.to_string()))?;
+    let bar = (!quiet && std::io::stderr().is_terminal()).then(|| {
+        let b = ProgressBar::new(1000);
+        if let Ok(style) = ProgressStyle::with_template(
+            "{bar:40} {percent:>3}% t = {msg} s  [{elapsed_precise} < {eta}]",
+        ) {
+            b.set_style(style);
+        }
+        b
+    });
+    let sampling: Vec<RodSampling> = l
+        .sim
+        .model()
+        .rods()
+        .iter()
+        .map(|r| {
+            let rod = &r.spec.rod;
+            let per_piece = scene
+                .run
+                .shape_points_per_piece
+                .unwrap_or_else(|| default_points_per_piece(rod.n_pieces()));
+            RodSampling::new(rod, per_piece)
+        })
+        .collect();
+    let mut summary_final = Summary::new(
+        &dir,
+        scene,
+        (l.sim.q_names(), l.sim.prescribed_names()),
+        times.len(),
+    );
+    let rows = RowWriter::create(&dir, l.sim.model(), npz_out)?;
+    let mut streamer = Streamer::new(
+        l.sim.model(),
+        &times,
+        sampling,
+        rows,
+        snapshot_at,
+        summary,
+        bar,
+    );
+    signals::install();
+    let start = Instant::now();
+    // Rows are the integrator's dense output at the output times, streamed
+    // to the observer as the run proceeds; nothing is kept in between.
+    let result = match l.sim.simulate_with(duration, &mut streamer) {
+        // Refused before it started (too large for the machine): bad input.
+        Err(e) if e.is_input() => return Err(e.into()),
+        r => r,
+    };
+    if let Some(b) = &streamer.bar {
+        b.finish_and_clear();
+    }
+    let wall = start.elapsed().as_secs_f64();
+    let (mut status, stats, t_final) = match (&result, &streamer.error) {
+        (_, None) if streamer.interrupted.is_some() => (
+            format!(
+                "error: interrupted by {} at t = {} ({} of {} output rows written)",
+                streamer.interrupted.unwrap_or("a signal"),
+                streamer.last_t,
+                streamer.rows_written(),
+                streamer.rows_expected()
+            ),
+            result.as_ref().map_or(streamer.last_stats, |s| s.stats),
+            streamer.last_t,
+        ),
+        (_, Some(e)) => (format!("error: {e}"), streamer.last_stats, streamer.last_t),
+        (Err(e), None) => (
+            format!("error: {}", e.report()),
+            streamer.last_stats,
+            streamer.last_t,
+        ),
+        (Ok(sum), None) => {
+            if streamer.rows_written() < streamer.rows_expected() {
+                streamer.error = Some(format!(
+                    "integration ended at t = {} before the last output time",
+                    sum.t_final
+                ));
+            }
+            match &streamer.error {
+                Some(e) => (format!("error: {e}"), sum.stats, sum.t_final),
+                None => ("ok".to_string(), sum.stats, sum.t_final),
+            }
+        }
+    };
+    let watch = match &result {
+        Ok(sum) => sum.energy.as_ref().map(|b| (b, sum.warnings.as_slice())),
+        Err(Error::EnergyBalance { balance, .. }) => Some((&**balance, &[][..])),
+        Err(_) => None,
+    };
+    if let Some((b, warnings)) = watch {
+        summary_final.add_watch(b, warnings);
+        if !quiet {
+            for w in warnings {
+                eprintln!("softrod: warning: {w}");
+            }
+        }
+    }
+    if l.sim.model().has_closures() {
+        let r = streamer.closure_residual_max();
+        summary_final.add_closures(r);
+        let warn = CLOSURE_WARN_RELATIVE * closure_length_scale(l.sim.model());
+        if !quiet && r > warn {
+            eprintln!(
+                "softrod: warning: the largest closure residual {r:.3e} m exceeds {warn:.3e} m \
+                 ({CLOSURE_WARN_RELATIVE:e} of the longest rod): tighten rtol/atol or dt"
+            );
+        }
+    }
+    // The archive holds the rows the CSV holds, also after a failure; if it
+    // cannot be written it is removed, and the run says so.
+    if let Err(e) = streamer
+        .rows()
+        .write_npz(&dir, &l.sim.q_names(), &l.sim.prescribed_names())
+    {
+        status = if status == "ok" {
+            format!("error: {e}")
+        } else {
+            format!("{status}; {e}")
+        };
+    }
+    summary_final.write(&stats, wall, t_final, &status, streamer.rows_written())?;
+    // Plots and view of whatever was computed (also after a failure: they
+    // show where it went wrong).
+    let title = scene_title(path);
+    let model = l.sim.model();
+    let plot_result = plots::run_figures(&dir, streamer.finish_series(), model, &title)
+        .and_then(|names| {
+            if png {
+                plots::rasterize(&dir, &names, quiet)
+            } else {
+                Ok(())
+            }
+        })
+        .and_then(|()| {
+            if streamer.rows_written() > 0 {
+                outputs::write_view(&dir, model, &title).map(|_| ())
+            } else {
+                Ok(())
+            }
+        });
+    if status != "ok" {
+        return Err(failed(format!(
+            "simulation failed: {} (outputs up to t = {} in {})",
+            status.trim_start_matches("error: "),
+            streamer.series.t.last().copied().unwrap_or(0.0),
+            dir.display()
+        )));
+    }
+    plot_result?;
+    if !quiet {
+        eprintln!(
+            "softrod: {} s simulated in {:.3} s wall: {} steps ({} rejected), {} rhs evaluations; wrote {}",
+            t_final,
+            wall,
+            stats.steps,
+            stats.rejected_steps,
+            stats.rhs_evaluations,
+            dir.display()
+        );
+    }
+    Ok(())
+}
+
+/// `softrod view DIR`: rebuilds `DIR/view.html` and prints its path.
+pub fn view(dir: &Path, quiet: bool) -> Result<(), CliError> {
+    if !dir.join(softrod_viz::run_dir::SHAPE_CSV).is_file() {
+        return Err(CliError::Input(format!(
+            "{}: not a run directory (no {}; write one with `softrod run SCENE --out DIR`)",
+            dir.display(),
+            softrod_viz::run_dir::SHAPE_CSV
+        )));
+    }
+    let stats = softrod_viz::run_dir::write_view(dir, &softrod_viz::ViewOptions::default())
+        .map_err(|e| CliError::Input(format!("{}: {e}", dir.display())))?
+        .1;
+    let page = dir.join(softrod_viz::run_dir::VIEW_HTML);
+    println!("{}", page.display());
+    if !quiet {
+        eprintln!(
+            "softrod: {} frames of {} output times, {} bytes; open it in a browser",
+            stats.frames.len(),
+            stats.source_frames,
+            stats.bytes
+        );
+    }
+    Ok(())
+}

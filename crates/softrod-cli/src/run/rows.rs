@@ -1,0 +1,248 @@
+//! The rows of a run's files: `trajectory.csv`, `shape.csv` and
+//! `bodies.csv` written as each record arrives, and `trajectory.npz` from
+//! the same numbers at the end. Only formatting: every number comes from
+//! the facade's [`Record`], every column name from its [`Columns`].
+
+use std::fs::File;
+use std::io::Write;
+use std::path::Path;
+
+use softrod::dynamics::Model;
+use softrod::record::{Columns, Record, position, quaternion};
+use softrod_viz::run_dir::{BODIES_HEADER, SHAPE_HEADER};
+
+use crate::common::{CliError, failed};
+use crate::npz;
+use crate::outputs::{csv_field, csv_line, num, push_csv_row};
+
+/// The NumPy archive of the trajectory (`--npz`), and its temporary name.
+pub const NPZ: &str = "trajectory.npz";
+/// See [`NPZ`].
+pub const NPZ_TMP: &str = "trajectory.npz.tmp";
+
+/// An output file written row by row, unbuffered (each row is one write),
+/// that knows how many bytes hold whole rows: after a failed write (a full
+/// disk) it is cut back there, so it never ends in half a row.
+struct OutFile {
+    name: &'static str,
+    file: File,
+    committed: u64,
+}
+
+impl OutFile {
+    fn create(dir: &Path, name: &'static str, header: &str) -> Result<Self, CliError> {
+        let path = dir.join(name);
+        let mut file = File::create(&path)
+            .map_err(|e| CliError::Input(format!("cannot create {}: {e}", path.display())))?;
+        file.write_all(header.as_bytes())
+            .map_err(|e| failed(format!("writing {}: {e}", path.display())))?;
+        Ok(Self {
+            name,
+            file,
+            committed: header.len() as u64,
+        })
+    }
+
+    fn append(&mut self, text: &str) -> Result<(), String> {
+        self.file
+            .write_all(text.as_bytes())
+            .map_err(|e| format!("writing {}: {e}", self.name))
+    }
+
+    /// Cuts the file back to its whole rows.
+    fn rollback(&mut self) -> bool {
+        self.file.set_len(self.committed).is_ok()
+    }
+
+    fn commit(&mut self, bytes: usize) {
+        self.committed += bytes as u64;
+    }
+}
+
+/// Writes each record's rows to the run's CSV files (every file gets a
+/// time's rows, or none does) and keeps them for `trajectory.npz`.
+pub struct RowWriter {
+    columns: Columns,
+    traj: OutFile,
+    shape: OutFile,
+    /// `bodies.csv` (t, body, pose), for a model with rigid bodies.
+    bodies: Option<OutFile>,
+    traj_text: String,
+    shape_text: String,
+    bodies_text: String,
+    /// The rods' and bodies' names as CSV fields, and the current row's
+    /// leading fields (allocated once).
+    rod_fields: Vec<String>,
+    body_fields: Vec<String>,
+    prefix: String,
+    /// The current row's numbers (allocated once).
+    values: Vec<f64>,
+    /// With `--npz`: every written row's numbers, in `trajectory.csv`'s
+    /// column order (kept for `trajectory.npz`, written at the end).
+    npz_rows: Option<Vec<f64>>,
+}
+
+impl RowWriter {
+    /// Creates the files in `dir` with their headers.
+    pub fn create(dir: &Path, model: &Model, npz: bool) -> Result<Self, CliError> {
+        let columns = Columns::of(model);
+        let traj = OutFile::create(dir, "trajectory.csv", &csv_line(columns.names()))?;
+        let shape = OutFile::create(dir, "shape.csv", &csv_line(SHAPE_HEADER))?;
+        let bodies = if model.bodies().is_empty() {
+            None
+        } else {
+            Some(OutFile::create(
+                dir,
+                "bodies.csv",
+                &csv_line(BODIES_HEADER),
+            )?)
+        };
+        Ok(Self {
+            columns,
+            traj,
+            shape,
+            bodies,
+            traj_text: String::new(),
+            shape_text: String::new(),
+            bodies_text: String::new(),
+            rod_fields: model
+                .rods()
+                .iter()
+                .map(|r| csv_field(&r.spec.name))
+                .collect(),
+            body_fields: model
+                .bodies()
+                .iter()
+                .map(|b| csv_field(&b.spec.name))
+                .collect(),
+            prefix: String::new(),
+            values: Vec::with_capacity(columns.width()),
+            npz_rows: npz.then(Vec::new),
+        })
+    }
+
+    /// Appends `rec`'s rows to every file; on a failed write, cuts every
+    /// file back to its previous whole rows.
+    pub fn write(&mut self, rec: &Record) -> Result<(), String> {
+        let t = rec.t;
+        self.values.clear();
+        self.columns.push_row(rec.row(), &mut self.values);
+        self.traj_text.clear();
+        push_csv_row(&mut self.traj_text, "", self.values.iter().copied());
+        self.shape_text.clear();
+        let ts = num(t);
+        for (r, name) in self.rod_fields.iter().enumerate() {
+            self.prefix.clear();
+            self.prefix.push_str(&ts);
+            self.prefix.push(',');
+            self.prefix.push_str(name);
+            self.prefix.push(',');
+            let s = &rec.poses.sampling(r).s;
+            for (sv, g) in s.iter().zip(rec.poses.samples(r)) {
+                let [x, y, z] = position(g);
+                let [qw, qx, qy, qz] = quaternion(g);
+                push_csv_row(
+                    &mut self.shape_text,
+                    &self.prefix,
+                    [*sv, x, y, z, qw, qx, qy, qz],
+                );
+            }
+        }
+        self.bodies_text.clear();
+        for (name, g) in self.body_fields.iter().zip(rec.poses.bodies()) {
+            self.prefix.clear();
+            self.prefix.push_str(&ts);
+            self.prefix.push(',');
+            self.prefix.push_str(name);
+            self.prefix.push(',');
+            push_csv_row(
+                &mut self.bodies_text,
+                &self.prefix,
+                position(g).into_iter().chain(quaternion(g)),
+            );
+        }
+        // Every file gets this time's rows, or none does.
+        let bodies_text = &self.bodies_text;
+        let written = self
+            .shape
+            .append(&self.shape_text)
+            .and_then(|()| match &mut self.bodies {
+                Some(f) => f.append(bodies_text),
+                None => Ok(()),
+            })
+            .and_then(|()| self.traj.append(&self.traj_text));
+        if let Err(e) = written {
+            let bodies_cut = self.bodies.as_mut().is_none_or(OutFile::rollback);
+            let cut = self.shape.rollback() & self.traj.rollback() & bodies_cut;
+            return Err(format!(
+                "{e} at t = {t:e}; {}",
+                if cut {
+                    "the partial row was removed: the files hold whole rows up to the previous time"
+                } else {
+                    "the partial row could not be removed either"
+                }
+            ));
+        }
+        self.shape.commit(self.shape_text.len());
+        if let Some(f) = &mut self.bodies {
+            f.commit(self.bodies_text.len());
+        }
+        self.traj.commit(self.traj_text.len());
+        if let Some(rows) = &mut self.npz_rows {
+            // `+ 0.0` turns −0 into 0, as the CSV writes it.
+            rows.extend(self.values.iter().map(|v| v + 0.0));
+        }
+        Ok(())
+    }
+
+    /// Writes `DIR/trajectory.npz` from the rows written (the same rows and
+    /// numbers as `trajectory.csv`, one array per column group of
+    /// [`Columns::groups`]), atomically: `trajectory.npz.tmp` renamed over
+    /// it, or nothing (the temporary file removed) on an error. Does
+    /// nothing without `--npz`.
+    pub fn write_npz(
+        &self,
+        dir: &Path,
+        q_names: &[String],
+        prescribed_names: &[String],
+    ) -> Result<(), String> {
+        let Some(rows) = &self.npz_rows else {
+            return Ok(());
+        };
+        let width = self.columns.width();
+        let m = rows.len() / width;
+        debug_assert_eq!(rows.len(), m * width);
+        // Columns `cols` of every row, as one C-order (m, cols.len()) block.
+        let take = |cols: &[usize]| -> Vec<f64> {
+            rows.chunks_exact(width)
+                .flat_map(|r| cols.iter().map(move |&c| r[c]))
+                .collect()
+        };
+        let mut a = npz::Archive::new();
+        for g in self.columns.groups() {
+            let shape = if g.vector {
+                vec![m, g.columns.len()]
+            } else {
+                vec![m]
+            };
+            a.add_f64(g.name, &shape, &take(&g.columns));
+        }
+        a.add_strings("q_names", q_names);
+        if self.columns.n_prescribed > 0 {
+            a.add_strings("prescribed_names", prescribed_names);
+        }
+        let path = dir.join(NPZ);
+        let tmp = dir.join(NPZ_TMP);
+        let written = File::create(&tmp).and_then(|f| {
+            let mut w = std::io::BufWriter::new(f);
+            a.write_to(&mut w)?;
+            w.into_inner().map_err(|e| e.into_error())?.sync_all()?;
+            std::fs::rename(&tmp, &path)
+        });
+        written.map_err(|e| {
+            let _ = std::fs::remove_file(&tmp);
+            let _ = std::fs::remove_file(&path);
+            format!("writing {NPZ}: {e}; it was removed (trajectory.csv is complete)")
+        })
+    }
+}

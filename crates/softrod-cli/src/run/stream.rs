@@ -1,0 +1,213 @@
+//! The observer of `softrod run`: each sample recorded by the facade's
+//! [`Recorder`], written as rows, kept for the figures; the progress bar,
+//! the running summary and the signals that stop a run.
+
+use std::time::Instant;
+
+use indicatif::ProgressBar;
+use softrod::dynamics::Model;
+use softrod::integrate::Stats;
+use softrod::record::{Recorder, RodSampling};
+use softrod::{Flow, Observer, Sample};
+
+use super::rows::RowWriter;
+use super::summary::Summary;
+use crate::common::CliError;
+use crate::plots::{Series, Snapshot};
+use crate::signals;
+
+/// Longest wall time between two writes of the running summary, s.
+pub const SUMMARY_EVERY: f64 = 0.5;
+
+/// Records, writes and keeps output rows as the integration produces them.
+pub struct Streamer {
+    recorder: Recorder,
+    rows: RowWriter,
+    summary: Summary,
+    start: Instant,
+    summary_written: Option<Instant>,
+    /// The signal that ended the run, if one did.
+    pub interrupted: Option<&'static str>,
+    expected: usize,
+    next: usize,
+    snapshot_at: Vec<usize>,
+    /// The last row's snapshot, kept so the figures end where the run did.
+    last_snapshot: Option<Snapshot>,
+    pub series: Series,
+    pub error: Option<String>,
+    pub last_stats: Stats,
+    pub last_t: f64,
+    pub bar: Option<ProgressBar>,
+    duration: f64,
+}
+
+/// The output rows nearest the times `chosen` (s, each finite and within
+/// `[0, duration]`; exit 2 otherwise), or six spread evenly when none are.
+pub fn chosen_rows(times: &[f64], chosen: Option<&[f64]>) -> Result<Vec<usize>, CliError> {
+    let Some(chosen) = chosen else {
+        return Ok(snapshot_rows(times.len()));
+    };
+    let end = times.last().copied().unwrap_or(0.0);
+    let mut rows = Vec::with_capacity(chosen.len());
+    for &t in chosen {
+        if !(t.is_finite() && (0.0..=end).contains(&t)) {
+            return Err(CliError::Input(format!(
+                "--snapshots: {t} is not a time of the run (0 to {end} s)"
+            )));
+        }
+        let k = times.partition_point(|x| *x < t);
+        let nearest = if k == 0 {
+            0
+        } else if k == times.len() || t - times[k - 1] <= times[k] - t {
+            k - 1
+        } else {
+            k
+        };
+        rows.push(nearest);
+    }
+    rows.sort_unstable();
+    rows.dedup();
+    Ok(rows)
+}
+
+/// Rows (indices into the output times) whose shapes and strains are drawn
+/// by default: six spread evenly, first and last included.
+fn snapshot_rows(m: usize) -> Vec<usize> {
+    let snaps = 6.min(m);
+    let mut v: Vec<usize> = (0..snaps)
+        .map(|k| {
+            if snaps == 1 {
+                0
+            } else {
+                k * (m - 1) / (snaps - 1)
+            }
+        })
+        .collect();
+    v.dedup();
+    v
+}
+
+impl Streamer {
+    /// A streamer of `model`'s run at `times`, its rods sampled at
+    /// `sampling`, its rows written by `rows`, shapes drawn at the rows
+    /// `snapshot_at`.
+    pub fn new(
+        model: &Model,
+        times: &[f64],
+        sampling: Vec<RodSampling>,
+        rows: RowWriter,
+        snapshot_at: Vec<usize>,
+        summary: Summary,
+        bar: Option<ProgressBar>,
+    ) -> Self {
+        Self {
+            recorder: Recorder::with_sampling(model, sampling),
+            rows,
+            summary,
+            start: Instant::now(),
+            summary_written: None,
+            interrupted: None,
+            next: 0,
+            snapshot_at,
+            last_snapshot: None,
+            series: Series::new(model.rods().len(), model.n_cables()),
+            error: None,
+            last_stats: Stats::default(),
+            last_t: 0.0,
+            duration: times.last().copied().unwrap_or(0.0),
+            expected: times.len(),
+            bar,
+        }
+    }
+
+    pub fn rows_written(&self) -> usize {
+        self.next
+    }
+
+    pub fn rows_expected(&self) -> usize {
+        self.expected
+    }
+
+    /// The largest closure residual over the rows written \[m\] (0 without
+    /// closures).
+    pub fn closure_residual_max(&self) -> f64 {
+        self.recorder.closure_residual_max()
+    }
+
+    /// The file writer (for `trajectory.npz` at the end).
+    pub fn rows(&self) -> &RowWriter {
+        &self.rows
+    }
+
+    /// The series for the figures; a run that stopped early gets its last
+    /// row as the final snapshot, so it is drawn up to where it stopped.
+    pub fn finish_series(&mut self) -> &Series {
+        let stopped_early = self.next < self.expected;
+        if let Some(last) = self.last_snapshot.take().filter(|_| stopped_early) {
+            if self.series.snapshots.last().is_none_or(|s| s.t < last.t) {
+                self.series.snapshots.push(last);
+            }
+        }
+        &self.series
+    }
+
+    fn write_row(&mut self, s: Sample<'_>) -> Result<(), String> {
+        let rec = self
+            .recorder
+            .record(s.model, s.data, s.t, s.q, s.qd)
+            .map_err(|e| softrod::report(&e))?;
+        self.rows.write(rec)?;
+        self.series.push(rec);
+        let snapshot = Snapshot::of(rec);
+        if self.snapshot_at.contains(&self.next) {
+            self.series.snapshots.push(snapshot);
+            self.last_snapshot = None;
+        } else {
+            self.last_snapshot = Some(snapshot);
+        }
+        Ok(())
+    }
+}
+
+impl Observer for Streamer {
+    /// One output row: the integrator's dense output at the next output time.
+    fn sample(&mut self, s: Sample<'_>) -> Result<Flow, String> {
+        let t = s.t;
+        if let Err(e) = self.write_row(s) {
+            self.error = Some(e.clone());
+            return Err(e);
+        }
+        self.next += 1;
+        self.last_t = t;
+        // Keep summary.json current, so a run killed with SIGKILL still
+        // says how far it got (its status stays "running").
+        if self
+            .summary_written
+            .is_none_or(|w| w.elapsed().as_secs_f64() >= SUMMARY_EVERY)
+        {
+            let wall = self.start.elapsed().as_secs_f64();
+            if let Err(e) = self
+                .summary
+                .write(&self.last_stats, wall, t, "running", self.next)
+            {
+                let e = e.to_string();
+                self.error = Some(e.clone());
+                return Err(e);
+            }
+            self.summary_written = Some(Instant::now());
+        }
+        if let Some(sig) = signals::received() {
+            self.interrupted = Some(sig);
+            return Ok(Flow::Stop);
+        }
+        Ok(Flow::Continue)
+    }
+
+    fn step(&mut self, t: f64, stats: &Stats) {
+        self.last_stats = *stats;
+        if let Some(b) = &self.bar {
+            b.set_position((t / self.duration * 1000.0) as u64);
+            b.set_message(format!("{t:.4}"));
+        }
+    }
+}

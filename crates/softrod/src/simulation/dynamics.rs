@@ -1,0 +1,128 @@
+//! Evaluations of the equations of motion `M(q) q̈ + b(t, q, q̇) = τ`
+//! (D17–D27) and of their terms, with the simulation's buffers.
+
+use nalgebra::{DMatrix, DVector};
+use softrod_dynamics::{
+    Energies, FdDerivatives, Linearization, actuation_matrix, bias_force, coriolis_matrix,
+    damping_matrix, energies, forward_dynamics, generalized_gravity, inverse_dynamics, linearize,
+    mass_matrix, stiffness_matrix,
+};
+
+use super::Simulation;
+use crate::error::Result;
+
+impl Simulation {
+    /// Forward dynamics `q̈(t, q, q̇)` under actuator force `tau` (n_dof,
+    /// `None`: 0) by the O(N) articulated recursion (D23–D27).
+    pub fn forward_dynamics(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        qd: &[f64],
+        tau: Option<&[f64]>,
+    ) -> Result<DVector<f64>> {
+        let s = &mut self.system;
+        Ok(forward_dynamics(&s.model, &mut s.data, t, q, qd, tau)?.clone())
+    }
+
+    /// The generalized forces the prescribed joints' drives apply (D60;
+    /// N·m or N, in the order of [`Self::prescribed_names`]) at
+    /// `(t, q, q̇)` under actuator force `tau`, from the forward dynamics;
+    /// empty without prescribed joints.
+    pub fn prescribed_forces(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        qd: &[f64],
+        tau: Option<&[f64]>,
+    ) -> Result<DVector<f64>> {
+        let s = &mut self.system;
+        forward_dynamics(&s.model, &mut s.data, t, q, qd, tau)?;
+        Ok(s.data.prescribed_force.clone())
+    }
+
+    /// The closures' names and residuals at `q` (one per `[[closure]]`, in
+    /// order): `max(‖d‖, ℓ‖r‖)` \[m\], the misfit of the held frames
+    /// (docs/theory.md D66); empty without closures.
+    pub fn closure_residuals(&mut self, q: &[f64]) -> Result<Vec<(String, f64)>> {
+        self.check("q", q)?;
+        let (model, data) = self.at_time();
+        if !model.has_closures() {
+            return Ok(Vec::new());
+        }
+        let r = softrod_dynamics::closure_residuals(model, data, q)?;
+        Ok(model.closures().map(|c| c.name.clone()).zip(r).collect())
+    }
+
+    /// Inverse dynamics: the actuator force `τ_act` that gives `q̈` at
+    /// `(t, q, q̇)` (D17–D18).
+    pub fn inverse_dynamics(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        qd: &[f64],
+        qdd: &[f64],
+    ) -> Result<DVector<f64>> {
+        let s = &mut self.system;
+        Ok(inverse_dynamics(&s.model, &mut s.data, t, q, qd, qdd)?.clone())
+    }
+
+    /// Mass matrix `M(q)` (n_dof × n_dof, symmetric positive definite; D19–D20).
+    pub fn mass_matrix(&mut self, q: &[f64]) -> Result<DMatrix<f64>> {
+        let (model, data) = self.at_time();
+        Ok(mass_matrix(model, data, q)?.clone())
+    }
+
+    /// Kinetic, elastic and gravitational energy at `(q, q̇)` \[J\]; with
+    /// prescribed joints the kinetic energy includes their motion at
+    /// [`Self::time`] (it is not `½q̇ᵀMq̇` then).
+    pub fn energies(&mut self, q: &[f64], qd: &[f64]) -> Result<Energies> {
+        let (model, data) = self.at_time();
+        Ok(energies(model, data, q, qd)?)
+    }
+
+    /// Bias force `b(q, q̇) = C q̇ + G + τ_e + D q̇ − τ_c − Q_ext` at time `t`
+    /// (n_dof): `M q̈ + b = τ_act` (D21–D22).
+    pub fn bias_force(&mut self, t: f64, q: &[f64], qd: &[f64]) -> Result<DVector<f64>> {
+        let s = &mut self.system;
+        Ok(bias_force(&s.model, &mut s.data, t, q, qd)?.clone())
+    }
+
+    /// Coriolis matrix `C(q, q̇)` (n_dof × n_dof, D21), with `Ṁ − 2C`
+    /// skew-symmetric.
+    pub fn coriolis_matrix(&self, q: &[f64], qd: &[f64]) -> Result<DMatrix<f64>> {
+        Ok(coriolis_matrix(self.model(), q, qd)?)
+    }
+
+    /// Generalized gravity `G(q) = ∂V_g/∂q` (n_dof, D22).
+    pub fn gravity_force(&mut self, q: &[f64]) -> Result<DVector<f64>> {
+        let (model, data) = self.at_time();
+        Ok(generalized_gravity(model, data, q)?)
+    }
+
+    /// Stiffness matrix `K` (n_dof × n_dof, block-diagonal per piece, D13).
+    pub fn stiffness_matrix(&self) -> DMatrix<f64> {
+        stiffness_matrix(self.model())
+    }
+
+    /// Damping matrix `D` (n_dof × n_dof, block-diagonal per piece, D13).
+    pub fn damping_matrix(&self) -> DMatrix<f64> {
+        damping_matrix(self.model())
+    }
+
+    /// Actuation matrix `∂τ_c/∂u` at `q` (n_dof × n_cables): the
+    /// generalized force of each cable per newton of tension (D15).
+    pub fn actuation_matrix(&self, q: &[f64]) -> Result<DMatrix<f64>> {
+        Ok(actuation_matrix(self.model(), q)?)
+    }
+
+    /// Linearization `ẋ ≈ f(x₀, u₀) + A (x − x₀) + B (u − u₀)` of the
+    /// dynamics about `(q, q̇)` at `t`, `x = (q, q̇)` (2·n_dof), `u` the cable
+    /// tensions (the inputs, or the schedules at `t`), from the analytic
+    /// derivatives (D30–D49): what LQR, MPC and trajectory optimization need.
+    pub fn linearize(&mut self, t: f64, q: &[f64], qd: &[f64]) -> Result<Linearization> {
+        let s = &mut self.system;
+        let mut work = FdDerivatives::new(&s.model);
+        Ok(linearize(&s.model, &mut s.data, &mut work, t, q, qd, None)?)
+    }
+}

@@ -1,0 +1,279 @@
+//! [`Simulation`]: a model, its initial state and its run settings, with
+//! everything a user does with them, one concern per file: construction,
+//! names and state here; [`kinematics`] (world poses, Jacobians),
+//! [`dynamics`] (evaluations of the equations of motion), [`analysis`]
+//! (statics, modes), [`checks`] (what a task is refused for before it
+//! allocates) and [`run`] (time integration with an [`Observer`]).
+//!
+//! Time: a `Simulation` keeps a clock ([`Simulation::set_time`], 0 at
+//! first) for the prescribed joints (D59) of the evaluations that are
+//! functions of the configuration (poses, Jacobians, mass matrix, energies,
+//! gravity, closure residuals); the equations of motion take their time as
+//! the first argument, `f(t, q, q̇)` (forward and inverse dynamics, bias
+//! force, drive forces, linearization, a step) and leave the clock alone.
+
+mod analysis;
+mod checks;
+mod dynamics;
+mod kinematics;
+mod run;
+
+pub use analysis::{Equilibrium, ModalAnalysis};
+pub use kinematics::RodId;
+pub use run::{Flow, Observer, RunStatus, RunSummary, Sample};
+
+use std::path::Path;
+
+use nalgebra::DVector;
+use softrod_dynamics::{Data, ElementKind, Model};
+use softrod_integrate::RodSystem;
+use softrod_kinematics::Strain;
+use softrod_scene::{Scene, Warning};
+
+use crate::error::{Error, Result};
+use crate::limits::Limits;
+use crate::record::{Trajectory, TrajectoryRecorder};
+use crate::settings::Settings;
+
+/// A model with its initial state and run settings: the front door of
+/// softrod. Every evaluation reuses buffers held inside, so a `Simulation`
+/// is `&mut` for calls and [`Clone`] for parallel runs.
+///
+/// Coordinates: `q` (strain coordinates, `n_dof`), `q̇`, `q̈` in the
+/// model's order (rods in order, pieces base to tip, selected strains in
+/// canonical order); SI units; poses in the world frame.
+#[derive(Clone, Debug)]
+pub struct Simulation {
+    system: RodSystem,
+    settings: Settings,
+    q0: DVector<f64>,
+    qd0: DVector<f64>,
+    limits: Limits,
+    /// The time \[s\] of the prescribed joints for the evaluations that take
+    /// none ([`Self::set_time`]); the calls that take a `t` do not move it.
+    time: f64,
+}
+
+impl Simulation {
+    /// A simulation of `model` from its rest shape, at rest, with the
+    /// recommended settings.
+    pub fn new(model: Model) -> Self {
+        let n = model.n_dof();
+        Self {
+            system: RodSystem::new(model),
+            settings: Settings::default(),
+            q0: DVector::zeros(n),
+            qd0: DVector::zeros(n),
+            limits: Limits::default(),
+            time: 0.0,
+        }
+    }
+
+    /// The simulation a validated scene describes: its model, `[initial]`
+    /// state and `[run]` settings.
+    pub fn from_scene(scene: &Scene) -> Result<Self> {
+        let built = scene.build()?;
+        let settings = Settings::from_run(&scene.run);
+        settings.validate()?;
+        let mut sim = Self::new(built.model);
+        sim.settings = settings;
+        sim.q0 = built.q0;
+        sim.qd0 = built.qd0;
+        Ok(sim)
+    }
+
+    /// Reads, validates and builds the scene file at `path`; returns the
+    /// simulation and the scene's warnings (suspicious but legal input).
+    pub fn from_scene_file(path: impl AsRef<Path>) -> Result<(Self, Scene, Vec<Warning>)> {
+        let (scene, warnings) = Scene::from_path(path.as_ref())?;
+        Ok((Self::from_scene(&scene)?, scene, warnings))
+    }
+
+    /// As [`Simulation::from_scene_file`] for scene text; `name` stands for
+    /// the file in messages.
+    pub fn from_toml(text: &str, name: &str) -> Result<(Self, Scene, Vec<Warning>)> {
+        let (scene, warnings) = Scene::from_str(text, name)?;
+        Ok((Self::from_scene(&scene)?, scene, warnings))
+    }
+
+    /// The model.
+    pub fn model(&self) -> &Model {
+        &self.system.model
+    }
+
+    /// A name for every coordinate of `q`, in its order: `"ROD.pN.STRAIN"`
+    /// (`"arm.p0.ky"`: rod `arm`, piece 0 from the base, bending about local
+    /// y), the strain as the scene's `strains` names it; a piece with a
+    /// general basis matrix names its columns `b0`, `b1`, …. A joint's
+    /// coordinates come first in its element's: `"ELEMENT.joint.C"` with `C`
+    /// `theta` (revolute), `d` (prismatic), `theta0`, `theta1` (universal),
+    /// `rx`, `ry`, `rz` (spherical; free adds `x`, `y`, `z`). The same names
+    /// serve `q̇` (and the `q`/`qdot` columns of `trajectory.csv`).
+    pub fn q_names(&self) -> Vec<String> {
+        let model = self.model();
+        let mut names = Vec::with_capacity(model.n_dof());
+        for e in model.elements() {
+            if !e.joint_dofs.is_empty() {
+                names.extend(joint_names(e));
+            }
+            if let ElementKind::Rod(r) = e.kind {
+                let rm = &model.rods()[r];
+                for (n, piece) in rm.spec.rod.pieces().iter().enumerate() {
+                    match piece.basis.selection() {
+                        Some(sel) => {
+                            names.extend(sel.iter().map(|&i| {
+                                format!("{}.p{n}.{}", rm.spec.name, Strain::ALL[i].name())
+                            }))
+                        }
+                        None => names.extend(
+                            (0..piece.basis.dof()).map(|j| format!("{}.p{n}.b{j}", rm.spec.name)),
+                        ),
+                    }
+                }
+            }
+        }
+        names
+    }
+
+    /// A name for every prescribed joint coordinate (D59), in the order of
+    /// [`Data::prescribed_q`] and [`Data::prescribed_force`]: as in
+    /// [`Self::q_names`], `"ELEMENT.joint.C"`.
+    pub fn prescribed_names(&self) -> Vec<String> {
+        self.model()
+            .elements()
+            .iter()
+            .filter(|e| !e.prescribed_dofs.is_empty())
+            .flat_map(joint_names)
+            .collect()
+    }
+
+    /// Number of generalized coordinates.
+    pub fn n_dof(&self) -> usize {
+        self.system.model.n_dof()
+    }
+
+    /// The run settings.
+    pub fn settings(&self) -> &Settings {
+        &self.settings
+    }
+
+    /// Replaces the run settings (checked).
+    pub fn set_settings(&mut self, settings: Settings) -> Result<()> {
+        settings.validate()?;
+        self.settings = settings;
+        Ok(())
+    }
+
+    /// The memory limit the tasks are checked against before they allocate
+    /// (default: [`Limits::default`], a fixed documented budget: what the
+    /// checks refuse does not depend on the machine's load).
+    pub fn limits(&self) -> &Limits {
+        &self.limits
+    }
+
+    /// Replaces the memory limit.
+    pub fn set_limits(&mut self, limits: Limits) {
+        self.limits = limits;
+    }
+
+    /// Initial coordinates and velocities.
+    pub fn initial_state(&self) -> (&DVector<f64>, &DVector<f64>) {
+        (&self.q0, &self.qd0)
+    }
+
+    /// Sets the initial state (each of length `n_dof`, finite).
+    pub fn set_initial_state(&mut self, q: &[f64], qd: &[f64]) -> Result<()> {
+        self.check("q", q)?;
+        self.check("qdot", qd)?;
+        self.q0 = DVector::from_column_slice(q);
+        self.qd0 = DVector::from_column_slice(qd);
+        Ok(())
+    }
+
+    fn check(&self, what: &'static str, v: &[f64]) -> Result<()> {
+        let n = self.n_dof();
+        if v.len() != n {
+            return Err(Error::SizeMismatch {
+                what,
+                got: v.len(),
+                expected: n,
+            });
+        }
+        Ok(())
+    }
+
+    /// Sets the time \[s\] of the prescribed joints' motion (D59) for the
+    /// evaluations that take none: [`Self::pose`], [`Self::tip_pose`],
+    /// [`Self::rod_to_world`], [`Self::jacobian`], [`Self::body_poses`],
+    /// [`Self::mass_matrix`], [`Self::energies`], [`Self::gravity_force`],
+    /// [`Self::closure_residuals`]. It starts at 0, and only this call moves
+    /// it: the evaluations that take a `t` (dynamics, runs) leave it alone.
+    /// Irrelevant without prescribed joints.
+    pub fn set_time(&mut self, t: f64) {
+        self.time = t;
+    }
+
+    /// The time of [`Self::set_time`] \[s\].
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// The system's buffers with the prescribed joints at [`Self::time`].
+    fn at_time(&mut self) -> (&Model, &mut Data) {
+        let s = &mut self.system;
+        s.model.set_time(&mut s.data, self.time);
+        (&s.model, &mut s.data)
+    }
+
+    /// Number of cables: the length of the inputs `u`.
+    pub fn n_cables(&self) -> usize {
+        self.model().n_cables()
+    }
+
+    /// Sets cable-tension inputs `u` (one per cable in model order, \[N\],
+    /// ≥ 0) that replace the cables' schedules in every evaluation and run
+    /// of this simulation; `None` restores the schedules.
+    pub fn set_cable_tensions(&mut self, u: Option<&[f64]>) -> Result<()> {
+        let s = &mut self.system;
+        Ok(s.data.set_cable_tensions(&s.model, u)?)
+    }
+
+    /// The inputs set by [`Simulation::set_cable_tensions`], if any.
+    pub fn cable_tensions(&self) -> Option<&[f64]> {
+        self.system.data.cable_tensions()
+    }
+
+    /// Integrates `duration` seconds from the initial state with the run
+    /// settings and keeps the samples (every `output_every`).
+    pub fn simulate(&mut self, duration: f64) -> Result<Trajectory> {
+        let per_sample = Trajectory::bytes_per_sample(
+            &crate::record::Columns::of(self.model()),
+            self.model().rods().len(),
+        );
+        if duration.is_finite() && duration > 0.0 {
+            self.check_samples(duration, per_sample)?;
+        }
+        let mut keep = TrajectoryRecorder::new(self.model());
+        let summary = self.simulate_with(duration, &mut keep)?;
+        let mut traj = keep.into_trajectory();
+        traj.summary = summary;
+        Ok(traj)
+    }
+}
+
+/// The names of a joint's coordinates (see [`Simulation::q_names`]).
+fn joint_names(e: &softrod_dynamics::ElementInfo) -> Vec<String> {
+    use softrod_dynamics::JointKind;
+    let parts: &[&str] = match e.attachment.joint.kind {
+        JointKind::Fixed => &[],
+        JointKind::Revolute { .. } => &["theta"],
+        JointKind::Prismatic { .. } => &["d"],
+        JointKind::Universal { .. } => &["theta0", "theta1"],
+        JointKind::Spherical => &["rx", "ry", "rz"],
+        JointKind::Free => &["rx", "ry", "rz", "x", "y", "z"],
+    };
+    parts
+        .iter()
+        .map(|c| format!("{}.joint.{c}", e.name))
+        .collect()
+}

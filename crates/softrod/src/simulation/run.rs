@@ -1,0 +1,286 @@
+//! Time integration: the observer a run hands its samples to, and the
+//! integration behind [`Simulation::simulate_with`] and
+//! [`Simulation::step`].
+
+use std::cell::RefCell;
+
+use nalgebra::DVector;
+use softrod_dynamics::{Data, Model};
+use softrod_integrate::{Control, Hooks, RodSystem, Stats, integrate_second_order};
+
+use super::Simulation;
+use crate::error::{Error, Result};
+use crate::limits::dense_matrices_of;
+use crate::settings::output_times;
+use crate::watch::{EnergyBalance, Watch};
+
+/// What an [`Observer`] sees at each output time.
+pub struct Sample<'a> {
+    /// Time \[s\].
+    pub t: f64,
+    /// Coordinates (n_dof).
+    pub q: &'a [f64],
+    /// Velocities (n_dof).
+    pub qd: &'a [f64],
+    /// The model, for derived quantities.
+    pub model: &'a Model,
+    /// Its buffers, for evaluations at this sample (energies, …).
+    pub data: &'a mut Data,
+}
+
+/// Whether a run goes on after a sample.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Flow {
+    /// Go on.
+    Continue,
+    /// End the run here ([`RunStatus::Stopped`]).
+    Stop,
+}
+
+/// Receives a run's samples as the integration produces them (streaming:
+/// nothing is kept unless the observer keeps it).
+pub trait Observer {
+    /// Called at `t = 0` and at every output time, in order. An error ends
+    /// the run with [`Error::Output`].
+    fn sample(&mut self, sample: Sample<'_>) -> Result<Flow, String>;
+
+    /// Called after each accepted step (e.g. for a progress bar).
+    fn step(&mut self, _t: f64, _stats: &Stats) {}
+
+    /// A controller in the loop: called after each accepted step with the
+    /// state there; write new cable tensions into `u` (one per cable, model
+    /// order, \[N\], ≥ 0; it holds the current ones) and return `true` to
+    /// apply them from this time on (zero-order hold; the integrator then
+    /// discards its cached derivatives, which costs one extra evaluation of
+    /// the dynamics per change). The default never changes them.
+    fn inputs(&mut self, _t: f64, _q: &[f64], _qd: &[f64], _u: &mut [f64]) -> bool {
+        false
+    }
+}
+
+/// How a run ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RunStatus {
+    /// The full duration was simulated.
+    Completed,
+    /// The observer stopped it.
+    Stopped,
+}
+
+/// Summary of a run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RunSummary {
+    /// How it ended.
+    pub status: RunStatus,
+    /// Time reached \[s\].
+    pub t_final: f64,
+    /// The integrator's work counters.
+    pub stats: Stats,
+    /// Samples delivered to the observer.
+    pub samples: usize,
+    /// The energy balance measured along the run ([`EnergyBalance`];
+    /// `None` for [`Simulation::step`], which does not watch).
+    pub energy: Option<EnergyBalance>,
+    /// What the watch found suspicious but not wrong: an energy drift
+    /// beyond a tenth of `energy_tolerance`, strains or curvatures beyond
+    /// the model's validity.
+    pub warnings: Vec<String>,
+}
+
+impl Default for RunSummary {
+    fn default() -> Self {
+        Self {
+            status: RunStatus::Completed,
+            t_final: 0.0,
+            stats: Stats::default(),
+            samples: 0,
+            energy: None,
+            warnings: Vec::new(),
+        }
+    }
+}
+
+impl Simulation {
+    /// Integrates `duration` seconds from the initial state, handing each
+    /// sample to `observer` as it is produced (the integrator's dense output
+    /// at the output times; nothing is kept here).
+    pub fn simulate_with(
+        &mut self,
+        duration: f64,
+        observer: &mut dyn Observer,
+    ) -> Result<RunSummary> {
+        self.check_run(duration)?;
+        let times = output_times(duration, self.settings.output_spacing(duration));
+        let (q0, qd0) = (self.q0.clone(), self.qd0.clone());
+        self.integrate_span(0.0, duration, times, &q0, &qd0, observer, true)
+    }
+
+    /// One step of `dt` seconds from `(t, q, q̇)` with the run settings'
+    /// integrator and the current inputs ([`Simulation::set_cable_tensions`]):
+    /// the state at `t + dt`. For reinforcement-learning and MPC loops that
+    /// set `u` between steps. Each call starts the integrator afresh (an
+    /// adaptive method takes as many internal steps as its tolerance needs;
+    /// a stiff one evaluates its Jacobian once per call).
+    pub fn step(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        qd: &[f64],
+        dt: f64,
+    ) -> Result<(DVector<f64>, DVector<f64>)> {
+        self.check("q", q)?;
+        self.check("qdot", qd)?;
+        if !(dt.is_finite() && dt > 0.0 && (t + dt) > t) {
+            return Err(Error::InvalidSetting {
+                key: "dt",
+                message: format!("a step must be positive and finite, got {dt} at t = {t}"),
+            });
+        }
+        struct Last(Option<(DVector<f64>, DVector<f64>)>);
+        impl Observer for Last {
+            fn sample(&mut self, s: Sample<'_>) -> Result<Flow, String> {
+                self.0 = Some((
+                    DVector::from_column_slice(s.q),
+                    DVector::from_column_slice(s.qd),
+                ));
+                Ok(Flow::Continue)
+            }
+        }
+        let mut last = Last(None);
+        let (q0, qd0) = (
+            DVector::from_column_slice(q),
+            DVector::from_column_slice(qd),
+        );
+        self.integrate_span(t, t + dt, vec![t, t + dt], &q0, &qd0, &mut last, false)?;
+        last.0.ok_or(Error::Output {
+            t: t + dt,
+            message: "the step produced no state".into(),
+        })
+    }
+
+    /// The integration from `t0` to `t1` with samples at `times`; `watch`:
+    /// check the energy balance and the strains at every accepted step.
+    #[allow(clippy::too_many_arguments)]
+    fn integrate_span(
+        &mut self,
+        t0: f64,
+        t1: f64,
+        times: Vec<f64>,
+        q0: &DVector<f64>,
+        qd0: &DVector<f64>,
+        observer: &mut dyn Observer,
+        watch: bool,
+    ) -> Result<RunSummary> {
+        let (method, mut opts) = self.settings.method_and_options(t1 - t0)?;
+        self.check_dense(
+            &format!("the {} integrator", self.settings.integrator.name()),
+            dense_matrices_of(method),
+        )?;
+        opts.t_eval = Some(times);
+        self.system.jacobian = self.settings.stiff_jacobian();
+        let n = self.n_dof();
+        let saved_inputs = self.system.data.cable_tensions().map(<[f64]>::to_vec);
+        let mut u = saved_inputs
+            .clone()
+            .unwrap_or_else(|| vec![0.0; self.n_cables()]);
+        let failure: RefCell<Option<(f64, String)>> = RefCell::new(None);
+        let violation: RefCell<Option<Error>> = RefCell::new(None);
+        let watch = if watch && self.settings.energy_tolerance.is_finite() {
+            let s = &self.system;
+            let mut w = Watch::new(&s.model, &s.data, self.settings.energy_tolerance)?;
+            w.start(&s.model, &s.data, t0, q0.as_slice(), qd0.as_slice())?;
+            Some(RefCell::new(w))
+        } else {
+            None
+        };
+        let samples = RefCell::new(0usize);
+        let observer = RefCell::new(observer);
+        let hooks = Hooks::new()
+            .stream_outputs(|t, y, sys: &mut RodSystem| {
+                let (q, qd) = y.as_slice().split_at(n);
+                // Prescribed joints (D59) at the sample's time.
+                sys.model.set_time(&mut sys.data, t);
+                let sample = Sample {
+                    t,
+                    q,
+                    qd,
+                    model: &sys.model,
+                    data: &mut sys.data,
+                };
+                match observer.borrow_mut().sample(sample) {
+                    Ok(flow) => {
+                        *samples.borrow_mut() += 1;
+                        match flow {
+                            Flow::Continue => Control::Continue,
+                            Flow::Stop => Control::Stop,
+                        }
+                    }
+                    Err(message) => {
+                        *failure.borrow_mut() = Some((t, message));
+                        Control::Stop
+                    }
+                }
+            })
+            .on_step(|info, sys: &mut RodSystem| {
+                let mut obs = observer.borrow_mut();
+                obs.step(info.t, info.stats);
+                let (q, qd) = info.y.as_slice().split_at(n);
+                if let Some(w) = &watch {
+                    if let Err(e) = w.borrow_mut().step(&sys.model, &sys.data, info.t, q, qd) {
+                        *violation.borrow_mut() = Some(e);
+                        return Control::Stop;
+                    }
+                }
+                if !u.is_empty() && obs.inputs(info.t, q, qd, &mut u) {
+                    if let Err(e) = sys.data.set_cable_tensions(&sys.model, Some(&u)) {
+                        *failure.borrow_mut() = Some((info.t, format!("controller: {e}")));
+                        return Control::Stop;
+                    }
+                    if let Some(w) = &watch {
+                        let r = w
+                            .borrow_mut()
+                            .inputs_changed(&sys.model, &sys.data, info.t, q, qd);
+                        if let Err(e) = r {
+                            *violation.borrow_mut() = Some(e);
+                            return Control::Stop;
+                        }
+                    }
+                    return Control::SystemChanged;
+                }
+                Control::Continue
+            });
+        let result =
+            integrate_second_order(&mut self.system, method, t0, t1, q0, qd0, &opts, hooks);
+        let s = &mut self.system;
+        s.data
+            .set_cable_tensions(&s.model, saved_inputs.as_deref())
+            .expect("restoring inputs that were valid");
+        if let Some((t, message)) = failure.into_inner() {
+            return Err(Error::Output { t, message });
+        }
+        if let Some(e) = violation.into_inner() {
+            return Err(e);
+        }
+        let sol = result?;
+        let status = if sol.status == softrod_integrate::Status::Completed {
+            RunStatus::Completed
+        } else {
+            RunStatus::Stopped
+        };
+        let (energy, warnings): (Option<EnergyBalance>, Vec<String>) = match watch {
+            Some(w) => {
+                let (b, warn) = w.into_inner().finish();
+                (Some(b), warn)
+            }
+            None => (None, Vec::new()),
+        };
+        Ok(RunSummary {
+            status,
+            t_final: sol.t_final,
+            stats: sol.stats,
+            samples: samples.into_inner(),
+            energy,
+            warnings,
+        })
+    }
+}
