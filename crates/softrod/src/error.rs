@@ -105,6 +105,10 @@ pub enum Error {
     /// No rod of that name or index.
     #[error("no rod {0}")]
     UnknownRod(String),
+    /// A configuration of a work–precision study could not be built or
+    /// its reference could not be run (see [`study`](crate::study)).
+    #[error("{0}")]
+    Study(String),
     /// An observer ended the run with an error at time `t`.
     #[error("output at t = {t:e} s failed: {message}")]
     Output {
@@ -153,6 +157,7 @@ impl Error {
             }
             Error::Integration(_)
             | Error::Output { .. }
+            | Error::Study(_)
             | Error::EnergyBalance { .. }
             | Error::Stretch { .. } => false,
         }

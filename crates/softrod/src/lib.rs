@@ -71,6 +71,7 @@ pub mod limits;
 pub mod record;
 mod settings;
 mod simulation;
+pub mod study;
 mod watch;
 
 pub use error::{Error, Result, report};

@@ -1,55 +1,8 @@
-//! The rows of a study and their tables: Pareto marks, Markdown, CSV.
+//! The rows of a study as tables: Markdown and CSV.
 
 use std::fmt::Write as _;
 
-use super::runs::Outcome;
-
-/// A row of a study.
-pub(super) struct Row {
-    pub(super) study: &'static str,
-    pub(super) integrator: String,
-    pub(super) setting: String,
-    pub(super) pieces: usize,
-    pub(super) quadrature: usize,
-    pub(super) result: Result<Outcome, String>,
-    pub(super) err_final: f64,
-    pub(super) err_max: f64,
-    pub(super) err_analytic: Option<f64>,
-    pub(super) pareto: bool,
-}
-
-impl Row {
-    fn name(&self) -> String {
-        format!(
-            "{} {} | pieces {} | quadrature {}",
-            self.integrator, self.setting, self.pieces, self.quadrature
-        )
-    }
-}
-
-/// Marks the rows on the wall–error Pareto front (no other row is both
-/// faster and more accurate), by `err_max`.
-pub(super) fn mark_pareto(rows: &mut [Row]) {
-    let mut idx: Vec<usize> = (0..rows.len())
-        .filter(|&i| rows[i].result.is_ok() && rows[i].err_max.is_finite())
-        .collect();
-    idx.sort_by(|&a, &b| {
-        let (wa, wb) = (wall(&rows[a]), wall(&rows[b]));
-        wa.total_cmp(&wb)
-            .then(rows[a].err_max.total_cmp(&rows[b].err_max))
-    });
-    let mut best = f64::INFINITY;
-    for i in idx {
-        if rows[i].err_max < best {
-            best = rows[i].err_max;
-            rows[i].pareto = true;
-        }
-    }
-}
-
-pub(super) fn wall(r: &Row) -> f64 {
-    r.result.as_ref().map_or(f64::NAN, |o| o.wall)
-}
+use softrod::study::Row;
 
 pub(super) fn sci(v: f64) -> String {
     if v.is_finite() {
@@ -109,10 +62,18 @@ pub(super) fn md_table(rows: &[Row], analytic: bool) -> String {
     md
 }
 
+/// The row's configuration as one text (the CSV's first column).
+fn name(r: &Row) -> String {
+    format!(
+        "{} {} | pieces {} | quadrature {}",
+        r.integrator, r.setting, r.pieces, r.quadrature
+    )
+}
+
 pub(super) fn csv_rows(csv: &mut String, rows: &[Row]) {
     for r in rows {
         let mut f: Vec<String> = vec![
-            r.name(),
+            name(r),
             r.study.to_string(),
             r.integrator.to_string(),
             r.setting.to_string(),

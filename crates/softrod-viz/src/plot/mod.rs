@@ -1,4 +1,5 @@
-//! SVG figures for publication, with plotters.
+//! SVG figures for publication, with plotters (and the work–precision
+//! chart of `softrod report`).
 //!
 //! Common to all: axis labels carry units (`x [mm]`, `E [mJ]`, `k_y [1/m]`),
 //! the unit prefix chosen so tick numbers stay short; fonts of 15–22 px on
@@ -16,12 +17,14 @@ mod common;
 mod geometry;
 mod series;
 mod strains;
+mod work_precision;
 
 pub use geometry::{
     BodyMark, Mode, ModeShapes, RodCurve, ShapeSnapshot, modes, shapes, tip_trajectory,
 };
 pub use series::{ActuatorSeries, EnergySeries, NamedSeries, actuators, energy};
 pub use strains::{StrainComponent, StrainProfiles, strains};
+pub use work_precision::{WorkPrecisionPoint, work_precision};
 
 use std::path::Path;
 

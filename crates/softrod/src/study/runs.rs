@@ -4,42 +4,34 @@
 use std::time::Instant;
 
 use softrod_integrate::{
-    Control, Hooks, Method, Options, RodSystem, Stats, Status, integrate_second_order,
+    Control, Hooks, Method, Options, RodSystem, Status, integrate_second_order,
 };
 use softrod_scene::{Built, Integrator, Scene};
 
-use softrod::record::WorldPoses;
+use super::Outcome;
+use crate::error::{Error, Result};
+use crate::record::WorldPoses;
 
-use crate::common::{CliError, failed};
-
-/// One run's result.
-pub(super) struct Outcome {
-    /// Tip of the first rod at the comparison times.
-    pub(super) tips: Vec<[f64; 3]>,
-    pub(super) stats: Stats,
-    /// Median wall seconds over the repeats.
-    pub(super) wall: f64,
-}
-
-/// A tight integrator setting and its description.
-#[derive(Clone)]
-pub(super) struct Tight {
-    pub(super) method: Method,
-    pub(super) opts: Options,
-    pub(super) text: String,
-}
-
-pub(super) fn dist(p: &[f64; 3], q: &[f64; 3]) -> f64 {
+/// Euclidean distance \[m\].
+pub fn dist(p: &[f64; 3], q: &[f64; 3]) -> f64 {
     ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
 }
 
-pub(super) fn max_dist(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
+/// Largest distance between corresponding points \[m\].
+pub fn max_dist(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
     a.iter().zip(b).map(|(p, q)| dist(p, q)).fold(0.0, f64::max)
 }
 
 pub(super) fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     v[v.len() / 2]
+}
+
+/// The first rod's tip at `q` \[m\], prescribed joints at `t`.
+pub(super) fn tip(poses: &mut WorldPoses, built: &Built, t: f64, q: &[f64]) -> Result<[f64; 3]> {
+    poses.update(&built.model, t, q)?;
+    let p = poses.tip(0).translation;
+    Ok([p[0], p[1], p[2]])
 }
 
 /// One integration, stopped (as a failure) when it exceeds `budget` wall s.
@@ -49,7 +41,7 @@ pub(super) fn simulate_once(
     opts: &Options,
     times: &[f64],
     budget: f64,
-) -> Result<Outcome, String> {
+) -> std::result::Result<Outcome, String> {
     let mut sys = RodSystem::new(built.model.clone());
     // Each method with the Jacobian `softrod run` gives it.
     let integrator = match method {
@@ -57,7 +49,7 @@ pub(super) fn simulate_once(
         Method::Radau5 => Integrator::Radau5,
         _ => Integrator::Rosenbrock,
     };
-    sys.jacobian = softrod::Settings::default()
+    sys.jacobian = crate::Settings::default()
         .with_integrator(integrator)
         .stiff_jacobian();
     let t1 = *times.last().expect("times");
@@ -77,7 +69,7 @@ pub(super) fn simulate_once(
     let sol = integrate_second_order(
         &mut sys, method, 0.0, t1, &built.q0, &built.qd0, &opts, hooks,
     )
-    .map_err(|e| e.to_string())?;
+    .map_err(|e| crate::error::report(&e))?;
     let wall = start.elapsed().as_secs_f64();
     if sol.status == Status::Stopped {
         return Err(format!(
@@ -86,14 +78,10 @@ pub(super) fn simulate_once(
         ));
     }
     let n = sys.model.n_dof();
-    let mut poser = WorldPoses::new(&sys.model);
+    let mut poses = WorldPoses::new(&sys.model);
     let mut tips = Vec::with_capacity(sol.y.len());
     for (t, y) in sol.t.iter().zip(&sol.y) {
-        poser
-            .update(&sys.model, *t, &y.as_slice()[..n])
-            .map_err(|e| e.to_string())?;
-        let p = poser.tip(0).translation;
-        tips.push([p[0], p[1], p[2]]);
+        tips.push(tip(&mut poses, built, *t, &y.as_slice()[..n]).map_err(|e| e.report())?);
     }
     if tips.len() != times.len() {
         return Err(format!(
@@ -116,7 +104,7 @@ pub(super) fn simulate(
     times: &[f64],
     budget: f64,
     repeats: usize,
-) -> Result<Outcome, String> {
+) -> std::result::Result<Outcome, String> {
     let first = simulate_once(built, method, opts, times, budget)?;
     let mut walls = vec![first.wall];
     for _ in 1..repeats {
@@ -130,7 +118,7 @@ pub(super) fn simulate(
 
 /// The scene with every piece cut in `k` equal parts (same strains,
 /// `[initial]` values repeated) and `quadrature` Gauss points per piece.
-pub(super) fn variant(scene: &Scene, k: usize, quadrature: usize) -> Result<Scene, CliError> {
+pub fn variant(scene: &Scene, k: usize, quadrature: usize) -> Result<Scene> {
     let mut s = scene.clone();
     s.run.quadrature = quadrature;
     if k == 1 {
@@ -140,7 +128,7 @@ pub(super) fn variant(scene: &Scene, k: usize, quadrature: usize) -> Result<Scen
         r.rod = r
             .rod
             .subdivided(k)
-            .map_err(|e| failed(format!("pieces x{k}: {e}")))?;
+            .map_err(|e| Error::Study(format!("pieces x{k}: {e}")))?;
     }
     let dup = |v: &Vec<f64>| -> Vec<f64> {
         let mut out = Vec::with_capacity(k * v.len());
@@ -161,12 +149,16 @@ pub(super) fn variant(scene: &Scene, k: usize, quadrature: usize) -> Result<Scen
     Ok(s)
 }
 
-pub(super) fn build_variant(scene: &Scene, k: usize, quadrature: usize) -> Result<Built, CliError> {
-    variant(scene, k, quadrature)?
-        .build()
-        .map_err(|e| failed(format!("pieces x{k}, quadrature {quadrature}: {e}")))
+pub(super) fn build_variant(scene: &Scene, k: usize, quadrature: usize) -> Result<Built> {
+    variant(scene, k, quadrature)?.build().map_err(|e| {
+        Error::Study(format!(
+            "pieces x{k}, quadrature {quadrature}: {}",
+            crate::error::report(&e)
+        ))
+    })
 }
 
+/// Pieces over all rods of `scene`.
 pub(super) fn pieces(scene: &Scene) -> usize {
     scene.rods.iter().map(|r| r.rod.n_pieces()).sum()
 }
