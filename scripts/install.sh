@@ -3,7 +3,7 @@
 #
 #   bash scripts/install.sh [VENV]          release build, installed as a wheel (users)
 #   bash scripts/install.sh --dev [VENV]    dev-profile editable build with the test
-#                                           tools (what scripts/test.sh uses)
+#                                           tools and test hooks (what scripts/test.sh uses)
 #
 # VENV defaults to .venv/ in the repository. Needs the Rust toolchain and
 # Python >= 3.10 with pip (PYTHON selects the interpreter, default python3);
@@ -30,8 +30,10 @@ if [[ $dev == 1 ]]; then
     "${pip[@]}" install -r "$pkg/requirements-dev.txt"
     # Editable install of a dev-profile build in the workspace's target/:
     # the numeric crates cargo test just built are reused, only PyO3 and the
-    # bindings compile.
-    VIRTUAL_ENV="$venv" "$venv/bin/maturin" develop --manifest-path "$pkg/Cargo.toml"
+    # bindings compile. The test hooks (`_panic`, …) the tests call are in
+    # this build only, never in the release wheel.
+    VIRTUAL_ENV="$venv" "$venv/bin/maturin" develop --manifest-path "$pkg/Cargo.toml" \
+        --features test-hooks
 else
     "${pip[@]}" install -r "$pkg/requirements-build.txt"
     wheels="$(mktemp -d)"

@@ -35,7 +35,7 @@ def main() -> None:
     parser.add_argument("--out", type=Path, default=REPO / "out" / "python")
     args = parser.parse_args()
 
-    sim = softrod.Simulation.from_toml(args.scene)
+    sim = softrod.Simulation.from_file(args.scene)
     for warning in sim.warnings:
         print("warning:", warning)
     duration = sim.duration  # the scene's [run] duration

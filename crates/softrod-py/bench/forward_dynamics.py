@@ -2,8 +2,9 @@
 
     python crates/softrod-py/bench/forward_dynamics.py [--rounds 7] [--calls 20000]
 
-Run it in an environment with a *release* build of softrod
-(`bash scripts/install.sh VENV`); soromox (PyPI, with JAX) is timed beside
+Run it in an environment with a *release* build of softrod that has the
+test hooks (`maturin develop --release --features test-hooks
+--manifest-path crates/softrod-py/Cargo.toml` in the environment); soromox (PyPI, with JAX) is timed beside
 it on the planar scene when it imports. Numbers go in docs/performance.md,
 section "Python".
 

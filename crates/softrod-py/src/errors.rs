@@ -53,9 +53,10 @@ pub fn simulation(message: String, time: Option<f64>) -> PyErr {
 /// The Python exception for a facade error: bad input (scene, settings,
 /// sizes, invalid model) is a `ValueError` subclass, a method that does not
 /// cover the model a `NotImplementedError` subclass, a failed evaluation or
-/// run a `RuntimeError` subclass; the message is the Rust one.
+/// run a `RuntimeError` subclass; the message is the Rust one with each of
+/// its causes once ([`softrod::report`]).
 pub fn to_py(e: Error) -> PyErr {
-    let message = e.to_string();
+    let message = e.report();
     match &e {
         Error::Scene(_) => SceneError::new_err(message),
         Error::Integration(inner) => simulation(message, failure_time(inner)),

@@ -14,32 +14,38 @@ use pyo3::prelude::*;
 mod control;
 mod convert;
 mod errors;
+#[cfg(feature = "test-hooks")]
+mod hooks;
 mod many;
 mod model;
+mod results;
+mod settings;
 mod simulation;
 mod trajectory;
 
-use crate::simulation::overrides;
+use crate::settings::overrides;
 
 /// Runs independent simulations in parallel and returns their
 /// trajectories, in order.
 ///
 /// `sims`: a list of `softrod.Simulation` (each run from its own initial
 /// state with its own settings), or one Simulation with a batch of initial
-/// states `q0` and/or `qdot0` of shape (runs, n_dof). `duration` [s];
+/// states `q0` and/or `qdot0` of shape (runs, n_dof). `duration` [s]: as
+/// for `Simulation.simulate`, each simulation's scene `[run] duration`
+/// when not given (a simulation built in Python has none and needs it);
 /// `threads`: the pool size (default: the machine's cores). Keywords
 /// `output_every`, `integrator`, `rtol`, `atol`, `dt` override every run's
 /// settings. The GIL is released for the whole batch; the simulations are
 /// copied, so the originals are not touched. The first run that fails
 /// raises its exception, with a note naming the run.
 #[pyfunction]
-#[pyo3(signature = (sims, duration, *, threads = None, q0 = None, qdot0 = None,
+#[pyo3(signature = (sims, duration = None, *, threads = None, q0 = None, qdot0 = None,
                     output_every = None, integrator = None, rtol = None, atol = None, dt = None))]
 #[allow(clippy::too_many_arguments)]
 fn simulate_many(
     py: Python<'_>,
     sims: &Bound<'_, PyAny>,
-    duration: f64,
+    duration: Option<f64>,
     threads: Option<usize>,
     q0: Option<&Bound<'_, PyAny>>,
     qdot0: Option<&Bound<'_, PyAny>>,
@@ -55,62 +61,15 @@ fn simulate_many(
     Ok(many::run_many(py, sims, duration, threads, q0, qdot0, &set)?.0)
 }
 
-/// `simulate_many` that also returns each run's (start, end, thread) —
-/// seconds since the batch started and the pool thread's index — for the
-/// tests of the parallel speed-up.
-#[pyfunction]
-#[pyo3(signature = (sims, duration, *, threads = None))]
-fn _simulate_many_timed(
-    py: Python<'_>,
-    sims: &Bound<'_, PyAny>,
-    duration: f64,
-    threads: Option<usize>,
-) -> PyResult<(Vec<trajectory::Trajectory>, Vec<many::Timing>)> {
-    many::run_many(py, sims, duration, threads, None, None, &|_| Ok(()))
-}
-
-/// Seconds per call of the facade's `forward_dynamics` at `(q, qdot)`,
-/// `tau = 0`, timed over `calls` calls in a Rust loop: the Rust side of the
-/// Python call-overhead bench (crates/softrod-py/bench/forward_dynamics.py).
-#[pyfunction]
-fn _time_forward_dynamics(
-    sim: &mut simulation::Simulation,
-    q: Vec<f64>,
-    qdot: Vec<f64>,
-    calls: usize,
-) -> PyResult<f64> {
-    let start = std::time::Instant::now();
-    for _ in 0..calls {
-        let qdd = sim
-            .sim
-            .forward_dynamics(0.0, &q, &qdot, None)
-            .map_err(errors::to_py)?;
-        std::hint::black_box(qdd);
-    }
-    Ok(start.elapsed().as_secs_f64() / calls.max(1) as f64)
-}
-
-/// Panics inside Rust, to test that a panic reaches Python as
-/// `softrod.InternalError` (a `RuntimeError`) and not as an abort.
-#[pyfunction]
-fn _panic(py: Python<'_>, message: String, release_gil: bool) -> PyResult<()> {
-    let f = move || -> PyResult<()> { panic!("{message}") };
-    if release_gil {
-        errors::guard_detached(py, f)
-    } else {
-        errors::guard(f)
-    }
-}
-
 /// The compiled part of the `softrod` package.
 #[pymodule]
 fn _softrod(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_class::<simulation::Simulation>()?;
-    m.add_class::<simulation::Settings>()?;
-    m.add_class::<simulation::Energies>()?;
-    m.add_class::<simulation::Statics>()?;
-    m.add_class::<simulation::Modes>()?;
+    m.add_class::<settings::Settings>()?;
+    m.add_class::<results::Energies>()?;
+    m.add_class::<results::Statics>()?;
+    m.add_class::<results::Modes>()?;
     m.add_class::<trajectory::Trajectory>()?;
     m.add_class::<trajectory::State>()?;
     m.add_class::<model::Section>()?;
@@ -123,8 +82,7 @@ fn _softrod(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<model::PointLoad>()?;
     m.add_class::<model::Rod>()?;
     m.add_function(wrap_pyfunction!(simulate_many, m)?)?;
-    m.add_function(wrap_pyfunction!(_simulate_many_timed, m)?)?;
-    m.add_function(wrap_pyfunction!(_panic, m)?)?;
-    m.add_function(wrap_pyfunction!(_time_forward_dynamics, m)?)?;
+    #[cfg(feature = "test-hooks")]
+    hooks::register(m)?;
     Ok(())
 }

@@ -44,20 +44,39 @@ fn batch<'py>(
     ))
 }
 
+/// The run's duration: `given`, else the simulation's scene `[run]
+/// duration` (the rule of `Simulation.simulate`).
+fn duration_of(given: Option<f64>, sim: &Simulation, which: &str) -> PyResult<f64> {
+    let d = given.or(sim.duration).ok_or_else(|| {
+        input(format!(
+            "simulate_many needs a duration ({which} has no scene [run] duration)"
+        ))
+    })?;
+    if !(d.is_finite() && d > 0.0) {
+        return Err(to_py(softrod::Error::InvalidSetting {
+            key: "duration",
+            message: format!("must be positive and finite, got {d}"),
+        }));
+    }
+    Ok(d)
+}
+
 /// Runs every job, returning the trajectories in order (the first error,
 /// with its run index, if any fails) and each run's timing.
 pub fn run_many(
     py: Python<'_>,
     sims: &Bound<'_, PyAny>,
-    duration: f64,
+    duration: Option<f64>,
     threads: Option<usize>,
     q0: Option<&Bound<'_, PyAny>>,
     qdot0: Option<&Bound<'_, PyAny>>,
     settings: &dyn Fn(&mut softrod::Settings) -> PyResult<()>,
 ) -> PyResult<(Vec<Trajectory>, Vec<Timing>)> {
     let mut jobs: Vec<softrod::Simulation> = Vec::new();
+    let mut durations: Vec<f64> = Vec::new();
     if let Ok(one) = sims.cast::<Simulation>() {
         let base = one.borrow();
+        let d = duration_of(duration, &base, "the simulation")?;
         let n = base.sim.n_dof();
         let qs = batch(q0, "q0", None, n)?;
         let runs = qs.as_ref().map(|v| v.len());
@@ -73,6 +92,7 @@ pub fn run_many(
             s.set_initial_state(q.as_slice(), qd.as_slice())
                 .map_err(to_py)?;
             jobs.push(s);
+            durations.push(d);
         }
     } else {
         if q0.is_some() || qdot0.is_some() {
@@ -87,19 +107,15 @@ pub fn run_many(
             let s = s
                 .cast::<Simulation>()
                 .map_err(|_| input(format!("sims[{i}] is not a softrod.Simulation")))?;
-            jobs.push(s.borrow().sim.clone());
+            let s = s.borrow();
+            durations.push(duration_of(duration, &s, &format!("sims[{i}]"))?);
+            jobs.push(s.sim.clone());
         }
     }
     for s in jobs.iter_mut() {
         let mut st = s.settings().clone();
         settings(&mut st)?;
         s.set_settings(st).map_err(to_py)?;
-    }
-    if !(duration.is_finite() && duration > 0.0) {
-        return Err(to_py(softrod::Error::InvalidSetting {
-            key: "duration",
-            message: format!("must be positive and finite, got {duration}"),
-        }));
     }
     if let Some(t) = threads {
         if t == 0 {
@@ -117,7 +133,8 @@ pub fn run_many(
             let start = Instant::now();
             Ok(pool.install(|| {
                 jobs.par_iter_mut()
-                    .map(|sim| {
+                    .zip(&durations)
+                    .map(|(sim, &duration)| {
                         let t0 = start.elapsed().as_secs_f64();
                         let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
                             sim.simulate(duration)

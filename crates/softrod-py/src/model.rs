@@ -650,3 +650,37 @@ pub fn build_model(
     Model::new(specs, gravity.map(Vector3::from), quadrature)
         .map_err(|e| input(format!("Simulation: {e}")))
 }
+
+/// The facade's simulation of Python-built `rods` (see
+/// `softrod.Simulation(rods, gravity, quadrature=)`), sampling every
+/// thousandth of a run.
+pub fn simulation_of(
+    rods: &Bound<'_, PyList>,
+    gravity: Option<&Bound<'_, PyAny>>,
+    quadrature: usize,
+) -> PyResult<softrod::Simulation> {
+    let mut refs = Vec::with_capacity(rods.len());
+    for (i, r) in rods.iter().enumerate() {
+        let r = r
+            .cast_into::<Rod>()
+            .map_err(|_| input(format!("Simulation(rods[{i}]) is not a softrod.Rod")))?;
+        refs.push(r.borrow());
+    }
+    let g = match gravity {
+        Some(g) => Some(crate::convert::vec3(g, "gravity")?),
+        None => None,
+    };
+    if quadrature == 0 {
+        return Err(input("quadrature must be at least 1 Gauss point per piece"));
+    }
+    let model = build_model(&refs, g, quadrature)?;
+    let mut sim = softrod::Simulation::new(model);
+    // Samples every thousandth of the run, whatever its length (a scene's
+    // [run] default is a fixed spacing).
+    sim.set_settings(softrod::Settings {
+        output_every: None,
+        ..sim.settings().clone()
+    })
+    .map_err(crate::errors::to_py)?;
+    Ok(sim)
+}

@@ -3,9 +3,8 @@
 use numpy::{PyArray1, PyArray2, PyArrayDyn, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use softrod::dynamics::{Data, Model, frames};
-use softrod::kinematics::RodKinematics;
-use softrod::lie::Pose;
+use softrod::dynamics::Model;
+use softrod::record::{Columns, WorldPoses};
 use softrod::{RunStatus, Trajectory as RustTrajectory};
 
 use crate::convert::{array, array_out, vec_out, vector};
@@ -29,6 +28,12 @@ fn frozen<'py, T>(a: Bound<'py, T>) -> PyResult<Bound<'py, T>> {
 ///   (n_samples, n_rods, 3), `tip_rotations` (n_samples, n_rods, 3, 3) for
 ///   every rod
 /// - `kinetic`, `elastic`, `gravitational`, `energy` (n_samples,) [J]
+/// - `tension`, `power` (n_samples, n_cables) [N, W]: each cable's tension
+///   and the power it puts into the rods
+/// - `prescribed`, `prescribed_force` (n_samples, n_prescribed): the
+///   prescribed joints' coordinates and their drives' forces (D59–D60)
+/// - `columns`, `table` (n_samples, len(columns)): every number as
+///   `softrod run` writes `trajectory.csv`, in its column order
 /// - `shape(i, rod, s)`: positions along a rod at sample `i`
 #[pyclass(frozen, module = "softrod")]
 pub struct Trajectory {
@@ -40,6 +45,12 @@ pub struct Trajectory {
     kinetic: Py<PyArray1<f64>>,
     elastic: Py<PyArray1<f64>>,
     gravitational: Py<PyArray1<f64>>,
+    tension: Py<PyArray2<f64>>,
+    power: Py<PyArray2<f64>>,
+    prescribed: Py<PyArray2<f64>>,
+    prescribed_force: Py<PyArray2<f64>>,
+    columns: Vec<String>,
+    table: Py<PyArray2<f64>>,
     status: &'static str,
     t_final: f64,
     stats: softrod::integrate::Stats,
@@ -49,16 +60,26 @@ pub struct Trajectory {
     model: Model,
 }
 
-fn rows<'py>(
+fn rows<'py, R: AsRef<[f64]>>(
     py: Python<'py>,
-    v: &[nalgebra::DVector<f64>],
+    v: &[R],
     n: usize,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let mut data = Vec::with_capacity(v.len() * n);
     for r in v {
-        data.extend_from_slice(r.as_slice());
+        data.extend_from_slice(r.as_ref());
     }
     PyArray1::from_vec(py, data).reshape([v.len(), n])
+}
+
+/// The rows of `trajectory.csv` (see `softrod::record::Columns`).
+fn table<'py>(py: Python<'py>, tr: &RustTrajectory) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let c: &Columns = &tr.columns;
+    let mut data = Vec::with_capacity(tr.len() * c.width());
+    for i in 0..tr.len() {
+        c.push_row(tr.row(i), &mut data);
+    }
+    PyArray1::from_vec(py, data).reshape([tr.len(), c.width()])
 }
 
 impl Trajectory {
@@ -85,12 +106,19 @@ impl Trajectory {
         Ok(Self {
             t: frozen(vec_out(py, &tr.t))?.unbind(),
             q: frozen(rows(py, &tr.q, n)?)?.unbind(),
-            qdot: frozen(rows(py, &tr.qd, n)?)?.unbind(),
+            qdot: frozen(rows(py, &tr.qdot, n)?)?.unbind(),
             tip_positions: frozen(array_out(py, tp, &[m, nr, 3])?)?.unbind(),
             tip_rotations: frozen(array_out(py, tr9, &[m, nr, 3, 3])?)?.unbind(),
             kinetic: frozen(PyArray1::from_vec(py, e(|e| e.kinetic)))?.unbind(),
             elastic: frozen(PyArray1::from_vec(py, e(|e| e.elastic)))?.unbind(),
             gravitational: frozen(PyArray1::from_vec(py, e(|e| e.gravitational)))?.unbind(),
+            tension: frozen(rows(py, &tr.tensions, tr.columns.n_cables)?)?.unbind(),
+            power: frozen(rows(py, &tr.cable_power, tr.columns.n_cables)?)?.unbind(),
+            prescribed: frozen(rows(py, &tr.prescribed_q, tr.columns.n_prescribed)?)?.unbind(),
+            prescribed_force: frozen(rows(py, &tr.prescribed_force, tr.columns.n_prescribed)?)?
+                .unbind(),
+            columns: tr.columns.names(),
+            table: frozen(table(py, &tr)?)?.unbind(),
             status: match tr.summary.status {
                 RunStatus::Completed => "completed",
                 RunStatus::Stopped => "stopped",
@@ -197,6 +225,47 @@ impl Trajectory {
         Ok(PyArray1::from_vec(py, total))
     }
 
+    /// Each cable's tension (n_samples, n_cables) [N]: the input or the
+    /// schedule in effect.
+    #[getter]
+    fn tension<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        self.tension.bind(py).clone()
+    }
+
+    /// The power each cable puts into the rods (n_samples, n_cables) [W]
+    /// (D15).
+    #[getter]
+    fn power<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        self.power.bind(py).clone()
+    }
+
+    /// The prescribed joint coordinates (n_samples, n_prescribed) [rad or
+    /// m], in the order of `Simulation.prescribed_names` (D59).
+    #[getter]
+    fn prescribed<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        self.prescribed.bind(py).clone()
+    }
+
+    /// The generalized force each prescribed drive applies (n_samples,
+    /// n_prescribed) [N·m or N] (D60).
+    #[getter]
+    fn prescribed_force<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        self.prescribed_force.bind(py).clone()
+    }
+
+    /// The names of `table`'s columns: those of `trajectory.csv`.
+    #[getter]
+    fn columns(&self) -> Vec<String> {
+        self.columns.clone()
+    }
+
+    /// Every number of the run as `softrod run` writes `trajectory.csv`
+    /// (n_samples, len(columns)), in its column order.
+    #[getter]
+    fn table<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        self.table.bind(py).clone()
+    }
+
     /// "completed", or "stopped" (a controller or callback ended the run).
     #[getter]
     fn status(&self) -> &'static str {
@@ -283,28 +352,19 @@ impl Trajectory {
             Some(r) => self.rod_index(r)?,
             None => 0,
         };
-        let rm = &self.model.rods()[r];
         let row: Vec<f64> = q.row(k as usize).iter().copied().collect();
-        let mut kin = RodKinematics::new(&rm.spec.rod);
-        kin.update(&rm.spec.rod, &row[rm.dofs()], None, None)
-            .map_err(|e| input(e.to_string()))?;
-        // A rod on a joint or a parent: its kinematic poses start at its
-        // own base, carried to the world through the tree at that sample's
-        // time (prescribed joints move with it).
-        let to_world = if self.model.is_articulated() {
-            let mut data = Data::new(&self.model);
-            let t = self.t.bind(py).readonly();
-            self.model.set_time(&mut data, t.as_slice()?[k as usize]);
-            frames(&self.model, &mut data, &row).map_err(|e| input(e.to_string()))?;
-            data.rod_to_world(&self.model, r)
-        } else {
-            Pose::identity()
-        };
+        // The world poses at that sample's time (prescribed joints move
+        // with it).
+        let t = self.t.bind(py).readonly();
+        let mut poses = WorldPoses::new(&self.model);
+        poses
+            .update(&self.model, t.as_slice()?[k as usize], &row)
+            .map_err(|e| input(e.report()))?;
         let mut out = Vec::new();
         match s {
             None => {
-                for g in kin.boundary_poses() {
-                    out.extend_from_slice(to_world.transform_point(&g.translation).as_slice());
+                for g in poses.boundaries(r) {
+                    out.extend_from_slice(g.translation.as_slice());
                 }
             }
             Some(s) => {
@@ -313,10 +373,10 @@ impl Trajectory {
                     return Err(input(format!("s must be 1-D, got shape {:?}", a.shape())));
                 }
                 for &x in a.slice() {
-                    let g = kin
-                        .pose_at(&rm.spec.rod, x)
-                        .map_err(|e| input(format!("s = {x}: {e}")))?;
-                    out.extend_from_slice(to_world.transform_point(&g.translation).as_slice());
+                    let g = poses
+                        .pose_at(&self.model, r, x)
+                        .map_err(|e| input(format!("s = {x}: {}", e.report())))?;
+                    out.extend_from_slice(g.translation.as_slice());
                 }
             }
         }

@@ -20,20 +20,24 @@ def test_rods_built_in_python_match_the_scene():
     assert py.n_dof == toml.n_dof == 30
     assert py.rod_names == toml.rod_names == ["arm"]
     q, qd = smooth_state(30)
-    np.testing.assert_array_equal(py.mass_matrix(q), toml.mass_matrix(q))
+    np.testing.assert_array_equal(py.mass_matrix(0.0, q), toml.mass_matrix(0.0, q))
     np.testing.assert_array_equal(py.forward_dynamics(0.0, q, qd),
                                   toml.forward_dynamics(0.0, q, qd))
     assert py.terms == toml.terms == ["inertia", "elasticity", "gravity"]
 
 
-def test_from_toml_reads_paths_and_text():
+def test_from_file_reads_paths_and_from_toml_text():
     path = EXAMPLES / "cantilever_gravity.toml"
-    a = softrod.Simulation.from_toml(path)
-    b = softrod.Simulation.from_toml(str(path))
+    a = softrod.Simulation.from_file(path)
+    b = softrod.Simulation.from_file(str(path))
     c = softrod.Simulation.from_toml(path.read_text())
     assert a.n_dof == b.n_dof == c.n_dof > 0
     # The scene's [run] settings come along.
     assert a.settings.integrator == c.settings.integrator
+    # A path given as text is not guessed at: the error says what to call.
+    for wrong in (path, str(path)):
+        with pytest.raises(softrod.InputError, match=r"Simulation\.from_file"):
+            softrod.Simulation.from_toml(wrong)
 
 
 def test_shapes_and_dtypes_of_every_output():
@@ -43,11 +47,11 @@ def test_shapes_and_dtypes_of_every_output():
     for out, shape in [
         (sim.forward_dynamics(0.0, q, qd), (n,)),
         (sim.inverse_dynamics(0.0, q, qd, qd), (n,)),
-        (sim.mass_matrix(q), (n, n)),
+        (sim.mass_matrix(0.0, q), (n, n)),
         (sim.bias_force(0.0, q, qd), (n,)),
         (sim.coriolis_matrix(q, qd), (n, n)),
         (sim.coriolis_force(q, qd), (n,)),
-        (sim.gravity_force(q), (n,)),
+        (sim.gravity_force(0.0, q), (n,)),
         (sim.stiffness_matrix(), (n, n)),
         (sim.damping_matrix(), (n, n)),
         (sim.actuation_matrix(q), (n, 0)),
@@ -83,23 +87,23 @@ def test_inputs_of_any_array_like_are_accepted():
     """Lists, integer arrays and strided views convert; a float64
     C-contiguous array is read in place."""
     sim = softrod.Simulation(rods=[rod(pieces=2, strains=["ky"])])
-    ref = sim.mass_matrix(np.array([0.5, 1.0]))
-    np.testing.assert_array_equal(sim.mass_matrix([0.5, 1]), ref)
-    np.testing.assert_array_equal(sim.mass_matrix(np.array([0.5, 1.0, 7.0])[:2]), ref)
-    np.testing.assert_array_equal(sim.mass_matrix(np.array([[0.5, 9], [1.0, 9]])[:, 0]), ref)
-    np.testing.assert_array_equal(sim.mass_matrix(np.array([1, 2]) / np.array([2, 2])), ref)
+    ref = sim.mass_matrix(0.0, np.array([0.5, 1.0]))
+    np.testing.assert_array_equal(sim.mass_matrix(0.0, [0.5, 1]), ref)
+    np.testing.assert_array_equal(sim.mass_matrix(0.0, np.array([0.5, 1.0, 7.0])[:2]), ref)
+    np.testing.assert_array_equal(sim.mass_matrix(0.0, np.array([[0.5, 9], [1.0, 9]])[:, 0]), ref)
+    np.testing.assert_array_equal(sim.mass_matrix(0.0, np.array([1, 2]) / np.array([2, 2])), ref)
 
 
 @pytest.mark.parametrize("call, message", [
-    (lambda s, q: s.mass_matrix(q[:3]), "q must have shape (60,), got (3,)"),
+    (lambda s, q: s.mass_matrix(0.0, q[:3]), "q must have shape (60,), got (3,)"),
     (lambda s, q: s.forward_dynamics(0.0, q, q[:-1]), "qdot must have shape (60,), got (59,)"),
     (lambda s, q: s.forward_dynamics(0.0, q, q, np.zeros((60, 1))),
      "tau must have shape (60,), got (60, 1)"),
     (lambda s, q: s.inverse_dynamics(0.0, q, q, q[:5]), "qddot must have shape (60,), got (5,)"),
-    (lambda s, q: s.energies(q, np.zeros(61)), "qdot must have shape (60,), got (61,)"),
+    (lambda s, q: s.energies(0.0, q, np.zeros(61)), "qdot must have shape (60,), got (61,)"),
     (lambda s, q: s.set_initial_state(q, q[:2]), "qdot must have shape (60,), got (2,)"),
     (lambda s, q: s.forward_dynamics(0.0, q, q, u=[1.0]), "u must have shape (0,)"),
-    (lambda s, q: s.mass_matrix("abc"), "q: not an array of numbers"),
+    (lambda s, q: s.mass_matrix(0.0, "abc"), "q: not an array of numbers"),
     (lambda s, q: s.pose(0, 0.6, q), "s = 0.6"),
     (lambda s, q: s.pose("nope", 0.1, q), 'no rod "nope"'),
     (lambda s, q: s.pose(3, 0.1, q), "rod index 3 out of range"),
@@ -148,7 +152,7 @@ def test_scene_errors_name_the_key_path():
     with pytest.raises(softrod.InputError, match="run.integrator"):
         softrod.Simulation.from_toml(scene_text(extra='[run]\nintegrator = "radau"\n'))
     with pytest.raises(softrod.SceneError):
-        softrod.Simulation.from_toml(EXAMPLES / "no_such_scene.toml")
+        softrod.Simulation.from_file(EXAMPLES / "no_such_scene.toml")
 
 
 def test_settings_are_validated_and_apply():
@@ -217,7 +221,8 @@ def test_help_is_useful():
     assert "controller" in doc and "zero-order hold" in doc and "output_every" in doc
     for obj in [softrod.Simulation, softrod.Rod, softrod.Material, softrod.Cable,
                 softrod.Trajectory, softrod.simulate_many, softrod.Simulation.forward_dynamics,
-                softrod.Simulation.step, softrod.Simulation.from_toml]:
+                softrod.Simulation.step, softrod.Simulation.from_toml,
+                softrod.Simulation.from_file]:
         assert obj.__doc__ and len(obj.__doc__) > 60, obj
 
 
@@ -232,26 +237,37 @@ def test_duration_defaults_to_the_scenes():
         built.simulate()
     # Python-built simulations sample every thousandth of the run.
     assert len(built.simulate(0.01)) == 1001
+    # simulate_many follows the same rule, run by run.
+    assert softrod.simulate_many([sim, sim.copy()])[1].t[-1] == 0.02
+    with pytest.raises(softrod.InputError, match=r"needs a duration \(sims\[1\]"):
+        softrod.simulate_many([sim, built])
+    assert softrod.simulate_many([sim, built], 0.01)[1].t[-1] == 0.01
 
 
-def test_robot_clock_names_and_unsupported_methods():
-    """Prescribed joints stand at `time` for the evaluations that take no
-    t, whatever ran before; bodies are named in body_poses' order; what a
-    robot is not covered by raises NotSupportedError (a NotImplementedError)."""
-    sim = softrod.Simulation.from_toml(EXAMPLES / "oscillating_base.toml")
+def test_robot_time_names_and_unsupported_methods():
+    """Prescribed joints stand where the call's `t` puts them (the keyword
+    `t`, default 0, of the kinematic queries), whatever ran before; bodies
+    are named in body_poses' order; what a robot is not covered by raises
+    NotSupportedError (a NotImplementedError)."""
+    sim = softrod.Simulation.from_file(EXAMPLES / "oscillating_base.toml")
     q = np.zeros(sim.n_dof)
     tip0 = sim.tip_pose(0, q)
     sim.forward_dynamics(0.125, q, q)
     sim.simulate(0.02)
     np.testing.assert_array_equal(sim.tip_pose(0, q), tip0)
-    assert sim.time == 0.0
-    sim.set_time(0.125)
-    assert sim.time == 0.125
+    np.testing.assert_array_equal(sim.tip_pose(0, q, t=0.0), tip0)
     # The base is at its crest, 0.01 m along x.
-    assert sim.tip_pose(0, q)[0, 3] - tip0[0, 3] == pytest.approx(0.01, abs=1e-15)
+    assert sim.tip_pose(0, q, t=0.125)[0, 3] - tip0[0, 3] == pytest.approx(0.01, abs=1e-15)
+    np.testing.assert_array_equal(sim.pose(0, sim.rod_lengths[0], q, t=0.125),
+                                  sim.tip_pose(0, q, t=0.125))
+    # Dynamics calls take the time first: at qdot = 0 the kinetic energy is
+    # the drive's, largest at t = 0 (the base at full speed) and zero at
+    # the crest, t = 1/8 s.
+    assert sim.energies(0.0, q, q).kinetic > 0.0
+    assert sim.energies(0.125, q, q).kinetic < 1e-12 * sim.energies(0.0, q, q).kinetic
     with pytest.raises(softrod.InputError):
-        sim.set_time(float("nan"))
-    arm = softrod.Simulation.from_toml(EXAMPLES / "arm_with_payload.toml")
+        sim.tip_pose(0, q, t=float("nan"))
+    arm = softrod.Simulation.from_file(EXAMPLES / "arm_with_payload.toml")
     assert arm.body_names == ["connector", "gripper"]
     assert arm.body_poses(np.zeros(arm.n_dof)).shape == (2, 4, 4)
     with pytest.raises(softrod.NotSupportedError, match="coriolis_matrix"):

@@ -13,7 +13,7 @@ from conftest import EXAMPLES, scene_text
 
 
 def sim_names(scene):
-    return softrod.Simulation.from_toml(scene).q_names
+    return softrod.Simulation.from_file(scene).q_names
 
 
 def test_run_matches_the_cli_trajectory(tmp_path, softrod_bin):
@@ -29,7 +29,7 @@ def test_run_matches_the_cli_trajectory(tmp_path, softrod_bin):
     subprocess.run([str(softrod_bin), "run", str(scene), "--out", str(out)], check=True,
                    capture_output=True)
     csv = np.loadtxt(out / "trajectory.csv", delimiter=",", skiprows=1, ndmin=2)
-    traj = softrod.Simulation.from_toml(scene).simulate(0.05)
+    traj = softrod.Simulation.from_file(scene).simulate(0.05)
     # The CLI prints f64 with Rust's shortest round-trip formatting, which
     # numpy parses back exactly; the integration is the same code on the
     # same input, so equality is exact.
@@ -49,6 +49,6 @@ def test_statics_matches_the_cli(softrod_bin):
     r = subprocess.run([str(softrod_bin), "statics", str(scene), "--json"], check=True,
                        capture_output=True, text=True)
     cli = json.loads(r.stdout)
-    eq = softrod.Simulation.from_toml(scene).statics()
+    eq = softrod.Simulation.from_file(scene).statics()
     np.testing.assert_array_equal(np.array(cli["q"]), eq.q)
     assert cli["iterations"] == eq.iterations

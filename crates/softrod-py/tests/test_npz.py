@@ -12,6 +12,7 @@ import subprocess
 import numpy as np
 import pytest
 
+import softrod
 from conftest import EXAMPLES
 
 
@@ -89,3 +90,35 @@ def test_npz_loads_with_numpy_and_equals_the_csv(tmp_path, softrod_bin, example,
         expected |= {"prescribed", "prescribed_force", "prescribed_names"}
     assert set(a) == expected
     assert tension or pres, "each scene exercises an optional pair"
+
+
+@pytest.mark.parametrize(
+    "example, run_table",
+    [
+        ("cable_planar_arm.toml",
+         '[run]\nduration = 0.1\nintegrator = "dopri5"\nrtol = 1e-5\natol = 1e-8\noutput_every = 0.01'),
+        ("oscillating_base.toml", "[run]\nduration = 0.1\noutput_every = 0.01"),
+        ("parallel_robot.toml", "[run]\nduration = 0.02\noutput_every = 0.005"),
+    ],
+)
+def test_python_trajectory_table_is_the_csv(tmp_path, softrod_bin, example, run_table):
+    """The Python trajectory's `table` and `columns` are trajectory.csv's
+    numbers and header (one definition of the columns, one recorder): the
+    same run, bit for bit, also the cable powers and drive forces."""
+    scene = with_run(example, run_table, tmp_path / example)
+    out = tmp_path / "out"
+    subprocess.run([str(softrod_bin), "run", str(scene), "--out", str(out), "--quiet"],
+                   check=True, capture_output=True)
+    header, data = read_csv(out / "trajectory.csv")
+    traj = softrod.Simulation.from_file(scene).simulate()
+    assert traj.columns == header
+    np.testing.assert_array_equal(traj.table, data)
+    tension = numbered(header, "tension")
+    if tension:
+        np.testing.assert_array_equal(traj.tension, cols(header, data, tension))
+        np.testing.assert_array_equal(traj.power, cols(header, data, numbered(header, "power")))
+    pres = numbered(header, "prescribed")
+    if pres:
+        np.testing.assert_array_equal(traj.prescribed, cols(header, data, pres))
+        np.testing.assert_array_equal(
+            traj.prescribed_force, cols(header, data, numbered(header, "prescribed_force")))

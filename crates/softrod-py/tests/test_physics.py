@@ -121,7 +121,7 @@ def test_modes_are_euler_bernoulli_frequencies():
         assert abs(err / (ritz[k] / 400) - 1) < ritz_rel_tol
     np.testing.assert_allclose(m.frequencies_hz, m.omega / (2 * math.pi), rtol=1e-15)
     # Mode shapes are M-orthonormal.
-    mm = sim.mass_matrix(np.zeros(sim.n_dof))
+    mm = sim.mass_matrix(0.0, np.zeros(sim.n_dof))
     v = m.shapes
     assert np.abs(v.T @ mm @ v - np.eye(v.shape[1])).max() < 1e-9
 
@@ -134,7 +134,7 @@ def test_undamped_release_conserves_energy():
     tr = sim.simulate(0.05, integrator="dopri5", rtol=1e-9, atol=1e-12, output_every=0.005)
     assert np.abs(tr.energy - tr.energy[0]).max() < energy_tol
     assert tr.kinetic.max() > 1e-4  # it moved: energy was exchanged
-    e = sim.energies(tr.q[-1], tr.qdot[-1])
+    e = sim.energies(0.0, tr.q[-1], tr.qdot[-1])
     assert e.total == pytest.approx(tr.energy[-1], rel=1e-14)
     # The run's watch saw the same states: its change is the samples' (the
     # last sample is the end of the run), no work, no warnings.
@@ -160,7 +160,7 @@ def test_forward_and_inverse_dynamics_are_inverse():
     back = sim.inverse_dynamics(0.0, q, qd, qdd)
     scale = np.abs(sim.bias_force(0.0, q, qd)).max()
     assert np.abs(back - tau).max() < rel_tol * scale
-    lhs = sim.mass_matrix(q) @ qdd + sim.bias_force(0.0, q, qd)
+    lhs = sim.mass_matrix(0.0, q) @ qdd + sim.bias_force(0.0, q, qd)
     assert np.abs(lhs - tau).max() < rel_tol * scale
 
 
@@ -201,7 +201,7 @@ def test_matrices_against_energies_and_bias():
     for c in range(n):
         dq = np.zeros(n)
         dq[c] = h
-        ep, em = sim.energies(q + dq, z), sim.energies(q - dq, z)
+        ep, em = sim.energies(0.0, q + dq, z), sim.energies(0.0, q - dq, z)
         grad_e[c] = (ep.elastic - em.elastic) / (2 * h)
         grad_g[c] = (ep.gravitational - em.gravitational) / (2 * h)
     k = sim.stiffness_matrix()
@@ -209,11 +209,11 @@ def test_matrices_against_energies_and_bias():
     # round-off per derivative, O(h^2) truncation smaller.
     fd_tol = 1e-6
     assert np.abs(k @ q - grad_e).max() < fd_tol * np.abs(k @ q).max()
-    assert np.abs(sim.gravity_force(q) - grad_g).max() < fd_tol * np.abs(grad_g).max()
+    assert np.abs(sim.gravity_force(0.0, q) - grad_g).max() < fd_tol * np.abs(grad_g).max()
     b0, b1 = sim.bias_force(0.0, q, z), sim.bias_force(0.0, q, qd)
     cq = sim.coriolis_force(q, qd)
     assert np.abs(cq - (b1 - b0)).max() < 1e-9 * np.abs(cq).max()
-    mdot = (sim.mass_matrix(q + h * qd) - sim.mass_matrix(q - h * qd)) / (2 * h)
+    mdot = (sim.mass_matrix(0.0, q + h * qd) - sim.mass_matrix(0.0, q - h * qd)) / (2 * h)
     s = mdot - 2 * sim.coriolis_matrix(q, qd)
     assert np.abs(s + s.T).max() < 1e-6 * np.abs(mdot).max()
     assert np.abs(sim.damping_matrix()).max() == 0.0
@@ -305,7 +305,7 @@ def test_linearize_a_robot_is_the_derivative_of_the_dynamics():
     analytic derivatives on the tree, docs/theory-derivatives.md §7)."""
     from conftest import EXAMPLES
 
-    sim = softrod.Simulation.from_toml(EXAMPLES / "arm_with_payload.toml")
+    sim = softrod.Simulation.from_file(EXAMPLES / "arm_with_payload.toml")
     n = sim.n_dof
     assert "lower.joint.theta" in sim.q_names
     q, qd = smooth_state(n)
@@ -334,7 +334,7 @@ def test_pose_and_jacobian_of_a_robot_go_through_the_joints():
     and the joint's columns."""
     from conftest import EXAMPLES
 
-    sim = softrod.Simulation.from_toml(EXAMPLES / "arm_with_payload.toml")
+    sim = softrod.Simulation.from_file(EXAMPLES / "arm_with_payload.toml")
     n = sim.n_dof
     q, _ = smooth_state(n)
     np.testing.assert_allclose(sim.pose("lower", 0.2, q), sim.tip_pose("lower", q),
@@ -364,7 +364,7 @@ def test_robot_trajectories_are_in_the_world_frame():
     (through the joint and the bodies), equal to tip_pose of the same q."""
     from conftest import EXAMPLES
 
-    sim = softrod.Simulation.from_toml(EXAMPLES / "arm_with_payload.toml")
+    sim = softrod.Simulation.from_file(EXAMPLES / "arm_with_payload.toml")
     for traj in [sim.simulate(0.05, output_every=0.025),
                  sim.simulate(0.05, output_every=0.025,
                               controller=lambda t, q, qd: [2.0])]:
@@ -387,7 +387,7 @@ def test_prescribed_force_drives_the_free_joint_along_the_curve(tmp_path):
     from conftest import EXAMPLES
 
     path = EXAMPLES / "oscillating_base.toml"
-    sim = softrod.Simulation.from_toml(path)
+    sim = softrod.Simulation.from_file(path)
     assert sim.prescribed_names == ["tentacle.joint.d"]
     assert "tentacle.joint.d" not in sim.q_names
     text = path.read_text()
@@ -395,7 +395,7 @@ def test_prescribed_force_drives_the_free_joint_along_the_curve(tmp_path):
     assert drive in text
     free_path = tmp_path / "free.toml"
     free_path.write_text(text.replace(drive, ""))
-    free = softrod.Simulation.from_toml(free_path)
+    free = softrod.Simulation.from_file(free_path)
     assert free.q_names[0] == "tentacle.joint.d"
     n = sim.n_dof
     assert free.n_dof == n + 1
@@ -423,7 +423,7 @@ def test_closure_residual_is_the_distance_between_the_held_points():
     rod's tip pose and the platform's pose; a short run keeps it small."""
     from conftest import EXAMPLES
 
-    sim = softrod.Simulation.from_toml(EXAMPLES / "parallel_robot.toml")
+    sim = softrod.Simulation.from_file(EXAMPLES / "parallel_robot.toml")
     n = sim.n_dof
     res = sim.closure_residuals(np.zeros(n))
     assert set(res) == {"leg2 weld", "leg3 ball"}

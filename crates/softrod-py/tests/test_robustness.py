@@ -19,7 +19,7 @@ def test_a_panic_is_a_runtime_error(release_gil):
     assert isinstance(e.value, RuntimeError)
     # The interpreter and the package go on working.
     sim = softrod.Simulation(rods=[rod(pieces=2)])
-    assert sim.mass_matrix(np.zeros(sim.n_dof)).shape == (12, 12)
+    assert sim.mass_matrix(0.0, np.zeros(sim.n_dof)).shape == (12, 12)
 
 
 def test_non_finite_input_is_reported_not_propagated():
@@ -65,8 +65,8 @@ def test_no_call_leaks_memory_over_10000_repetitions():
         lambda: sim.forward_dynamics(0.0, q, qd),
         lambda: sim.forward_dynamics(0.0, q, qd, u=[0.5]),
         lambda: sim.inverse_dynamics(0.0, q, qd, qd),
-        lambda: sim.mass_matrix(q),
-        lambda: sim.energies(q, qd),
+        lambda: sim.mass_matrix(0.0, q),
+        lambda: sim.energies(0.0, q, qd),
         lambda: sim.pose(0, [0.1, 0.3], q),
         lambda: sim.jacobian(0, 0.3, q),
         lambda: sim.step(st, 1e-4, [0.2]),
@@ -74,7 +74,7 @@ def test_no_call_leaks_memory_over_10000_repetitions():
 
     def failing():
         try:
-            sim.mass_matrix(q[:3])
+            sim.mass_matrix(0.0, q[:3])
         except softrod.InputError:
             pass
 

@@ -11,13 +11,18 @@ model, from Python.
 >>> traj.tip_position.shape
 (11, 3)
 
-Or from a scene file: ``softrod.Simulation.from_toml("examples/cantilever_gravity.toml")``.
+Or from a scene file: ``softrod.Simulation.from_file("examples/cantilever_gravity.toml")``
+(``Simulation.from_toml(text)`` for scene text).
 
 Units are SI. ``q`` are the generalized coordinates in the order of
 ``Simulation.q_names``: joint coordinates and strain coordinates (pieces
 base to tip, the selected strains in the order kx, ky, kz, qx, qy, qz); arrays are
 float64 numpy arrays; poses are 4x4 homogeneous transforms in the world
-frame; twists and wrenches are 6-vectors, angular part first. The
+frame; twists and wrenches are 6-vectors, angular part first. Time is an
+argument, never hidden state: the dynamics calls take it first,
+``f(t, q, qdot)``, the kinematic queries as the keyword ``t`` (default 0;
+only prescribed joints move with it). Durations default to the scene's
+``[run] duration`` in ``simulate`` and ``simulate_many`` alike. The
 equations are in docs/theory.md of the repository.
 """
 

@@ -255,6 +255,24 @@ class Trajectory:
     def energy(self) -> _F64:
         """(n_samples,) [J], kinetic + elastic + gravitational"""
     @property
+    def tension(self) -> _F64:
+        """(n_samples, n_cables) [N]"""
+    @property
+    def power(self) -> _F64:
+        """(n_samples, n_cables) [W]"""
+    @property
+    def prescribed(self) -> _F64:
+        """(n_samples, n_prescribed) [rad or m]"""
+    @property
+    def prescribed_force(self) -> _F64:
+        """(n_samples, n_prescribed) [N m or N]"""
+    @property
+    def columns(self) -> list[str]:
+        """trajectory.csv's header"""
+    @property
+    def table(self) -> _F64:
+        """(n_samples, len(columns)): trajectory.csv's numbers"""
+    @property
     def status(self) -> Literal["completed", "stopped"]: ...
     @property
     def t_final(self) -> float: ...
@@ -276,7 +294,10 @@ class Simulation:
         cls, rods: list[Rod], gravity: ArrayLike | None = None, *, quadrature: int = 4
     ) -> Simulation: ...
     @classmethod
-    def from_toml(cls, scene: str | os.PathLike[str]) -> Simulation: ...
+    def from_toml(cls, text: str, *, name: str = "<string>") -> Simulation:
+        """The scene text `text` (TOML); for a file call from_file."""
+    @classmethod
+    def from_file(cls, path: str | os.PathLike[str]) -> Simulation: ...
     @property
     def n_dof(self) -> int: ...
     @property
@@ -294,12 +315,8 @@ class Simulation:
     def prescribed_names(self) -> list[str]: ...
     @property
     def body_names(self) -> list[str]: ...
-    @property
-    def time(self) -> float:
-        """[s] of the prescribed joints for the evaluations that take no t"""
-    def set_time(self, t: float) -> None: ...
     def prescribed_forces(self, t: float, q: ArrayLike, qdot: ArrayLike) -> _F64: ...
-    def closure_residuals(self, q: ArrayLike) -> dict[str, float]: ...
+    def closure_residuals(self, q: ArrayLike, *, t: float = 0.0) -> dict[str, float]: ...
     @property
     def rod_dofs(self) -> list[tuple[str, int, int]]: ...
     @property
@@ -317,13 +334,16 @@ class Simulation:
     def initial_state(self) -> tuple[_F64, _F64]: ...
     def set_initial_state(self, q: ArrayLike, qdot: ArrayLike) -> None: ...
     def initial(self) -> State: ...
-    def pose(self, rod: _RodRef, s: float | ArrayLike, q: ArrayLike) -> _F64:
+    def pose(self, rod: _RodRef, s: float | ArrayLike, q: ArrayLike, *, t: float = 0.0) -> _F64:
         """(4, 4), or (len(s), 4, 4)"""
-    def tip_pose(self, rod: _RodRef, q: ArrayLike) -> _F64:
+    def tip_pose(self, rod: _RodRef, q: ArrayLike, *, t: float = 0.0) -> _F64:
         """(4, 4)"""
-    def body_poses(self, q: ArrayLike) -> _F64:
+    def body_poses(self, q: ArrayLike, *, t: float = 0.0) -> _F64:
         """(n_bodies, 4, 4)"""
-    def jacobian(self, rod: _RodRef, s: float | ArrayLike, q: ArrayLike, frame: _Frame = "body") -> _F64:
+    def jacobian(
+        self, rod: _RodRef, s: float | ArrayLike, q: ArrayLike, frame: _Frame = "body", *,
+        t: float = 0.0,
+    ) -> _F64:
         """(6, n_dof), or (len(s), 6, n_dof)"""
     def forward_dynamics(
         self, t: float, q: ArrayLike, qdot: ArrayLike, tau: ArrayLike | None = None, *,
@@ -335,12 +355,12 @@ class Simulation:
         u: ArrayLike | None = None,
     ) -> _F64:
         """(n_dof,)"""
-    def mass_matrix(self, q: ArrayLike) -> _F64:
+    def mass_matrix(self, t: float, q: ArrayLike) -> _F64:
         """(n_dof, n_dof)"""
     def bias_force(self, t: float, q: ArrayLike, qdot: ArrayLike) -> _F64: ...
     def coriolis_matrix(self, q: ArrayLike, qdot: ArrayLike) -> _F64: ...
     def coriolis_force(self, q: ArrayLike, qdot: ArrayLike) -> _F64: ...
-    def gravity_force(self, q: ArrayLike) -> _F64: ...
+    def gravity_force(self, t: float, q: ArrayLike) -> _F64: ...
     def stiffness_matrix(self) -> _F64: ...
     def damping_matrix(self) -> _F64: ...
     def actuation_matrix(self, q: ArrayLike) -> _F64:
@@ -348,7 +368,7 @@ class Simulation:
     def linearize(self, t: float, q: ArrayLike, qdot: ArrayLike, *,
                   u: ArrayLike | None = None) -> tuple[_F64, _F64]:
         """(A (2 n_dof, 2 n_dof), B (2 n_dof, n_cables)) of x' = f(x, u), x = (q, qdot)."""
-    def energies(self, q: ArrayLike, qdot: ArrayLike) -> Energies: ...
+    def energies(self, t: float, q: ArrayLike, qdot: ArrayLike) -> Energies: ...
     def statics(self) -> Statics: ...
     def modes(self) -> Modes: ...
     def modes_about(self, q: ArrayLike) -> Modes: ...
@@ -375,20 +395,15 @@ class Simulation:
 
 @overload
 def simulate_many(
-    sims: list[Simulation], duration: float, *, threads: int | None = None,
+    sims: list[Simulation], duration: float | None = None, *, threads: int | None = None,
     q0: None = None, qdot0: None = None, output_every: float | None = None,
     integrator: _IntegratorName | None = None, rtol: float | None = None,
     atol: float | None = None, dt: float | None = None,
 ) -> list[Trajectory]: ...
 @overload
 def simulate_many(
-    sims: Simulation, duration: float, *, threads: int | None = None,
+    sims: Simulation, duration: float | None = None, *, threads: int | None = None,
     q0: ArrayLike | None = None, qdot0: ArrayLike | None = None,
     output_every: float | None = None, integrator: _IntegratorName | None = None,
     rtol: float | None = None, atol: float | None = None, dt: float | None = None,
 ) -> list[Trajectory]: ...
-def _simulate_many_timed(
-    sims: list[Simulation], duration: float, *, threads: int | None = None
-) -> tuple[list[Trajectory], list[tuple[float, float, int]]]: ...
-def _panic(message: str, release_gil: bool) -> None: ...
-def _time_forward_dynamics(sim: Simulation, q: Sequence[float], qdot: Sequence[float], calls: int) -> float: ...

@@ -49,7 +49,7 @@ pub struct Row<'a> {
     /// Coordinates (n_dof).
     pub q: &'a [f64],
     /// Velocities (n_dof).
-    pub qd: &'a [f64],
+    pub qdot: &'a [f64],
     /// Cable tensions \[N\] (n_cables).
     pub tensions: &'a [f64],
     /// Power of each cable \[W\] (n_cables).
@@ -121,7 +121,7 @@ impl Columns {
         out.extend(quaternion(row.tip));
         out.push(row.energies.total());
         out.extend(row.q);
-        out.extend(row.qd);
+        out.extend(row.qdot);
         let e = row.energies;
         out.extend([e.kinetic, e.elastic, e.gravitational]);
         out.extend(row.tensions);

@@ -69,7 +69,7 @@ pub struct Record {
     /// Coordinates (n_dof).
     pub q: Vec<f64>,
     /// Velocities (n_dof).
-    pub qd: Vec<f64>,
+    pub qdot: Vec<f64>,
     /// Kinetic, elastic and gravitational energy \[J\] (with prescribed
     /// joints the kinetic energy includes their motion).
     pub energies: Energies,
@@ -99,7 +99,7 @@ impl Record {
             tip: self.poses.tip(0),
             energies: &self.energies,
             q: &self.q,
-            qd: &self.qd,
+            qdot: &self.qdot,
             tensions: &self.tensions,
             cable_power: &self.cable_power,
             prescribed_q: &self.prescribed_q,
@@ -211,7 +211,7 @@ impl Recorder {
             record: Record {
                 t: 0.0,
                 q: vec![0.0; n],
-                qd: vec![0.0; n],
+                qdot: vec![0.0; n],
                 energies: Energies::default(),
                 tensions: Vec::with_capacity(nc),
                 cable_power: Vec::with_capacity(nc),
@@ -234,7 +234,7 @@ impl Recorder {
         data: &mut Data,
         t: f64,
         q: &[f64],
-        qd: &[f64],
+        qdot: &[f64],
     ) -> Result<&Record, RecordError> {
         let non_finite = |v: &[f64]| v.iter().position(|x| !x.is_finite());
         if let Some(i) = non_finite(q) {
@@ -243,7 +243,7 @@ impl Recorder {
                 t,
             });
         }
-        if let Some(i) = non_finite(qd) {
+        if let Some(i) = non_finite(qdot) {
             return Err(RecordError::NonFinite {
                 what: format!("qdot{i}"),
                 t,
@@ -252,8 +252,8 @@ impl Recorder {
         let r = &mut self.record;
         r.t = t;
         r.q.copy_from_slice(q);
-        r.qd.copy_from_slice(qd);
-        r.energies = energies(model, data, q, qd)
+        r.qdot.copy_from_slice(qdot);
+        r.energies = energies(model, data, q, qdot)
             .map_err(|e| RecordError::evaluation("energy", t)(e.into()))?;
         if model.has_closures() {
             let res = max_closure_residual(model, data, q)
@@ -304,7 +304,7 @@ impl Recorder {
         if model.n_cables() > 0 {
             let b = actuation_matrix(model, q)
                 .map_err(|e| RecordError::evaluation("cables", t)(e.into()))?;
-            let qdv = DVectorView::from_slice(qd, qd.len());
+            let qdv = DVectorView::from_slice(qdot, qdot.len());
             let inputs = data.cable_tensions();
             for rm in model.rods() {
                 for (c, cable) in rm.spec.cables.iter().enumerate() {
@@ -317,7 +317,7 @@ impl Recorder {
         }
         if model.n_prescribed() > 0 {
             // The drive's force comes with the accelerations at this state.
-            forward_dynamics(model, data, t, q, qd, None)
+            forward_dynamics(model, data, t, q, qdot, None)
                 .map_err(|e| RecordError::evaluation("prescribed joint forces", t)(e.into()))?;
             if let Some(i) = non_finite(data.prescribed_force.as_slice()) {
                 return Err(RecordError::NonFinite {

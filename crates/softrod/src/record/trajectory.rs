@@ -16,7 +16,7 @@ pub struct Trajectory {
     /// Coordinates at each time.
     pub q: Vec<DVector<f64>>,
     /// Velocities at each time.
-    pub qd: Vec<DVector<f64>>,
+    pub qdot: Vec<DVector<f64>>,
     /// Tip pose of every rod (world frame) at each time: `tips[i][rod]`.
     pub tips: Vec<Vec<Pose>>,
     /// Energies at each time.
@@ -43,7 +43,7 @@ impl Trajectory {
         Self {
             t: Vec::new(),
             q: Vec::new(),
-            qd: Vec::new(),
+            qdot: Vec::new(),
             tips: Vec::new(),
             energies: Vec::new(),
             tensions: Vec::new(),
@@ -80,7 +80,7 @@ impl Trajectory {
             tip: &self.tips[i][0],
             energies: &self.energies[i],
             q: self.q[i].as_slice(),
-            qd: self.qd[i].as_slice(),
+            qdot: self.qdot[i].as_slice(),
             tensions: &self.tensions[i],
             cable_power: &self.cable_power[i],
             prescribed_q: &self.prescribed_q[i],
@@ -130,16 +130,16 @@ impl TrajectoryRecorder {
         data: &mut Data,
         t: f64,
         q: &[f64],
-        qd: &[f64],
+        qdot: &[f64],
     ) -> std::result::Result<(), String> {
         let r = self
             .recorder
-            .record(model, data, t, q, qd)
+            .record(model, data, t, q, qdot)
             .map_err(|e| crate::error::report(&e))?;
         let tr = &mut self.traj;
         tr.t.push(t);
         tr.q.push(DVector::from_column_slice(q));
-        tr.qd.push(DVector::from_column_slice(qd));
+        tr.qdot.push(DVector::from_column_slice(qdot));
         tr.tips
             .push((0..r.poses.n_rods()).map(|i| *r.poses.tip(i)).collect());
         tr.energies.push(r.energies);

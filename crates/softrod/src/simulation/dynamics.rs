@@ -18,11 +18,11 @@ impl Simulation {
         &mut self,
         t: f64,
         q: &[f64],
-        qd: &[f64],
+        qdot: &[f64],
         tau: Option<&[f64]>,
     ) -> Result<DVector<f64>> {
         let s = &mut self.system;
-        Ok(forward_dynamics(&s.model, &mut s.data, t, q, qd, tau)?.clone())
+        Ok(forward_dynamics(&s.model, &mut s.data, t, q, qdot, tau)?.clone())
     }
 
     /// The generalized forces the prescribed joints' drives apply (D60;
@@ -33,11 +33,11 @@ impl Simulation {
         &mut self,
         t: f64,
         q: &[f64],
-        qd: &[f64],
+        qdot: &[f64],
         tau: Option<&[f64]>,
     ) -> Result<DVector<f64>> {
         let s = &mut self.system;
-        forward_dynamics(&s.model, &mut s.data, t, q, qd, tau)?;
+        forward_dynamics(&s.model, &mut s.data, t, q, qdot, tau)?;
         Ok(s.data.prescribed_force.clone())
     }
 
@@ -60,11 +60,11 @@ impl Simulation {
         &mut self,
         t: f64,
         q: &[f64],
-        qd: &[f64],
-        qdd: &[f64],
+        qdot: &[f64],
+        qddot: &[f64],
     ) -> Result<DVector<f64>> {
         let s = &mut self.system;
-        Ok(inverse_dynamics(&s.model, &mut s.data, t, q, qd, qdd)?.clone())
+        Ok(inverse_dynamics(&s.model, &mut s.data, t, q, qdot, qddot)?.clone())
     }
 
     /// Mass matrix `M(q)` (n_dof × n_dof, symmetric positive definite; D19–D20).
@@ -76,22 +76,22 @@ impl Simulation {
     /// Kinetic, elastic and gravitational energy at `(q, q̇)` \[J\]; with
     /// prescribed joints the kinetic energy includes their motion at
     /// [`Self::time`] (it is not `½q̇ᵀMq̇` then).
-    pub fn energies(&mut self, q: &[f64], qd: &[f64]) -> Result<Energies> {
+    pub fn energies(&mut self, q: &[f64], qdot: &[f64]) -> Result<Energies> {
         let (model, data) = self.at_time();
-        Ok(energies(model, data, q, qd)?)
+        Ok(energies(model, data, q, qdot)?)
     }
 
     /// Bias force `b(q, q̇) = C q̇ + G + τ_e + D q̇ − τ_c − Q_ext` at time `t`
     /// (n_dof): `M q̈ + b = τ_act` (D21–D22).
-    pub fn bias_force(&mut self, t: f64, q: &[f64], qd: &[f64]) -> Result<DVector<f64>> {
+    pub fn bias_force(&mut self, t: f64, q: &[f64], qdot: &[f64]) -> Result<DVector<f64>> {
         let s = &mut self.system;
-        Ok(bias_force(&s.model, &mut s.data, t, q, qd)?.clone())
+        Ok(bias_force(&s.model, &mut s.data, t, q, qdot)?.clone())
     }
 
     /// Coriolis matrix `C(q, q̇)` (n_dof × n_dof, D21), with `Ṁ − 2C`
     /// skew-symmetric.
-    pub fn coriolis_matrix(&self, q: &[f64], qd: &[f64]) -> Result<DMatrix<f64>> {
-        Ok(coriolis_matrix(self.model(), q, qd)?)
+    pub fn coriolis_matrix(&self, q: &[f64], qdot: &[f64]) -> Result<DMatrix<f64>> {
+        Ok(coriolis_matrix(self.model(), q, qdot)?)
     }
 
     /// Generalized gravity `G(q) = ∂V_g/∂q` (n_dof, D22).
@@ -120,9 +120,9 @@ impl Simulation {
     /// dynamics about `(q, q̇)` at `t`, `x = (q, q̇)` (2·n_dof), `u` the cable
     /// tensions (the inputs, or the schedules at `t`), from the analytic
     /// derivatives (D30–D49): what LQR, MPC and trajectory optimization need.
-    pub fn linearize(&mut self, t: f64, q: &[f64], qd: &[f64]) -> Result<Linearization> {
+    pub fn linearize(&mut self, t: f64, q: &[f64], qdot: &[f64]) -> Result<Linearization> {
         let s = &mut self.system;
         let mut work = FdDerivatives::new(&s.model);
-        Ok(linearize(&s.model, &mut s.data, &mut work, t, q, qd, None)?)
+        Ok(linearize(&s.model, &mut s.data, &mut work, t, q, qdot, None)?)
     }
 }

@@ -182,11 +182,11 @@ impl Simulation {
     }
 
     /// Sets the initial state (each of length `n_dof`, finite).
-    pub fn set_initial_state(&mut self, q: &[f64], qd: &[f64]) -> Result<()> {
+    pub fn set_initial_state(&mut self, q: &[f64], qdot: &[f64]) -> Result<()> {
         self.check("q", q)?;
-        self.check("qdot", qd)?;
+        self.check("qdot", qdot)?;
         self.q0 = DVector::from_column_slice(q);
-        self.qd0 = DVector::from_column_slice(qd);
+        self.qd0 = DVector::from_column_slice(qdot);
         Ok(())
     }
 

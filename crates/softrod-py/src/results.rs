@@ -1,0 +1,132 @@
+//! The results of an evaluation or analysis: `softrod.Energies`,
+//! `softrod.Statics`, `softrod.Modes`.
+
+use numpy::{PyArray1, PyArray2, PyArrayMethods};
+use pyo3::prelude::*;
+
+use crate::convert::{mat_out, vec_out};
+
+/// Kinetic, elastic and gravitational energy [J] at one state.
+#[pyclass(frozen, module = "softrod", get_all)]
+pub struct Energies {
+    /// ½ q̇ᵀ M q̇; with prescribed joints it includes their motion (then
+    /// it is the kinetic energy of the whole model, not ½ q̇ᵀ M q̇).
+    kinetic: f64,
+    /// ½ Σ ∫ (ξ − ξ*)ᵀ Γ (ξ − ξ*) ds.
+    elastic: f64,
+    /// −∫ ρA g·p ds (0 without gravity).
+    gravitational: f64,
+    /// The sum.
+    total: f64,
+}
+
+impl From<&softrod::dynamics::Energies> for Energies {
+    fn from(e: &softrod::dynamics::Energies) -> Self {
+        Self {
+            kinetic: e.kinetic,
+            elastic: e.elastic,
+            gravitational: e.gravitational,
+            total: e.total(),
+        }
+    }
+}
+
+#[pymethods]
+impl Energies {
+    fn __repr__(&self) -> String {
+        format!(
+            "Energies(kinetic={:?}, elastic={:?}, gravitational={:?}, total={:?})",
+            self.kinetic, self.elastic, self.gravitational, self.total
+        )
+    }
+}
+
+/// A static equilibrium: `q` (n_dof,), Newton `iterations`, final
+/// `residual` (max-abs generalized force [N or N·m]) and the number of
+/// `load_steps` of the load continuation.
+#[pyclass(frozen, module = "softrod")]
+pub struct Statics {
+    pub(crate) q: Py<PyArray1<f64>>,
+    #[pyo3(get)]
+    pub(crate) iterations: usize,
+    #[pyo3(get)]
+    pub(crate) residual: f64,
+    #[pyo3(get)]
+    pub(crate) load_steps: usize,
+}
+
+#[pymethods]
+impl Statics {
+    /// Equilibrium coordinates (n_dof,).
+    #[getter]
+    fn q<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.q.bind(py).clone()
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Statics(iterations={}, residual={:e}, load_steps={})",
+            self.iterations, self.residual, self.load_steps
+        )
+    }
+}
+
+/// Undamped natural modes, lowest first: `omega` [rad/s] (an unstable
+/// equilibrium shows negative values), `frequencies_hz`, `shapes` (n_dof,
+/// n_modes), M-orthonormal columns, the `equilibrium` they are about
+/// ("rest" or "statics") and its coordinates `q_equilibrium`, and the
+/// `asymmetry` of the tangent stiffness (non-zero with follower loads or
+/// cables; its symmetric part is used).
+#[pyclass(frozen, module = "softrod")]
+pub struct Modes {
+    omega: Py<PyArray1<f64>>,
+    shapes: Py<PyArray2<f64>>,
+    q_equilibrium: Py<PyArray1<f64>>,
+    #[pyo3(get)]
+    equilibrium: &'static str,
+    #[pyo3(get)]
+    asymmetry: f64,
+}
+
+#[pymethods]
+impl Modes {
+    /// Angular frequencies (n_modes,) [rad/s].
+    #[getter]
+    fn omega<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.omega.bind(py).clone()
+    }
+
+    /// Frequencies ω/2π (n_modes,) [Hz].
+    #[getter]
+    fn frequencies_hz<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let w = self.omega.bind(py).readonly();
+        let f: Vec<f64> = w
+            .as_slice()?
+            .iter()
+            .map(|w| w / (2.0 * std::f64::consts::PI))
+            .collect();
+        Ok(PyArray1::from_vec(py, f))
+    }
+
+    /// Mode shapes (n_dof, n_modes), one per column.
+    #[getter]
+    fn shapes<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        self.shapes.bind(py).clone()
+    }
+
+    /// The equilibrium the model was linearized about (n_dof,).
+    #[getter]
+    fn q_equilibrium<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.q_equilibrium.bind(py).clone()
+    }
+}
+
+pub(crate) fn modes_py(py: Python<'_>, m: &softrod::dynamics::Modes, eq: &'static str, q: &[f64]) -> Modes {
+    Modes {
+        omega: vec_out(py, m.omega.as_slice()).unbind(),
+        shapes: mat_out(py, &m.shapes).unbind(),
+        q_equilibrium: vec_out(py, q).unbind(),
+        equilibrium: eq,
+        asymmetry: m.asymmetry,
+    }
+}

@@ -1,0 +1,800 @@
+//! `softrod.Simulation`: the facade's `Simulation` with numpy in and out.
+//!
+//! This file is the class's Python surface (signatures and docstrings);
+//! the longer bodies live by concern beside it: [`kinematics`] (poses and
+//! Jacobians along a rod), [`dynamics`] (evaluations with tension inputs),
+//! [`run`] (simulation, steps).
+//!
+//! Time: Python has no clock. Every evaluation whose result can depend on
+//! time (through prescribed joints or tension schedules) takes it as an
+//! argument: the dynamics calls first, `f(t, q, qdot)` (forward and
+//! inverse dynamics, bias, mass matrix, energies, gravity, drive forces,
+//! linearization), the kinematic queries (poses, Jacobians, closure
+//! residuals) as the keyword `t` (default 0), which only prescribed joints
+//! read. Functions of the configuration alone (actuation, stiffness,
+//! damping, Coriolis) take none.
+
+mod dynamics;
+mod kinematics;
+mod run;
+
+use nalgebra::{DMatrix, DVector};
+use numpy::{PyArray1, PyArray2, PyArrayDyn};
+use pyo3::prelude::*;
+use pyo3::types::{PyList, PyString};
+use softrod::Equilibrium;
+use softrod::dynamics::{
+    Model, actuation_matrix, coriolis_matrix, damping_matrix, stiffness_matrix,
+};
+use softrod::integrate::RodSystem;
+
+use crate::control::{CableInputs, check_tensions};
+use crate::convert::{mat_out, vec_out, vector};
+use crate::errors::{dynamics, guard, guard_detached, input, to_py};
+use crate::model::simulation_of;
+use crate::results::{Energies, Modes, Statics, modes_py};
+use crate::settings::Settings;
+use crate::trajectory::{State, Trajectory};
+
+/// The index of rod `rod` (a name or an index) in `model`.
+pub fn rod_index(model: &Model, rod: &Bound<'_, PyAny>) -> PyResult<usize> {
+    let n = model.rods().len();
+    if let Ok(name) = rod.cast::<PyString>() {
+        let name = name.to_str()?;
+        return model
+            .rods()
+            .iter()
+            .position(|r| r.spec.name == name)
+            .ok_or_else(|| {
+                let names: Vec<&str> = model.rods().iter().map(|r| r.spec.name.as_str()).collect();
+                input(format!("no rod {name:?} (rods: {names:?})"))
+            });
+    }
+    let i: isize = rod
+        .extract()
+        .map_err(|_| input("rod must be a rod name or an index"))?;
+    let k = if i < 0 { i + n as isize } else { i };
+    if !(0..n as isize).contains(&k) {
+        return Err(input(format!("rod index {i} out of range for {n} rods")));
+    }
+    Ok(k as usize)
+}
+
+/// A model with its initial state and run settings: the front door of
+/// softrod from Python.
+///
+/// Build one from a scene file (`Simulation.from_file(path)`), scene text
+/// (`Simulation.from_toml(text)`) or rods
+/// (`Simulation(rods=[softrod.Rod(...)], gravity=[0, 0, -9.81])`).
+///
+/// Conventions: SI units; `q` are the generalized coordinates in the order
+/// of `q_names`: each element's joint coordinates, then a rod's strain
+/// coordinates (pieces base to tip, selected strains in the canonical order
+/// kx, ky, kz, qx, qy, qz), elements in the scene's order; `qdot`, `qddot`
+/// their rates; a rod is named by its name or its index; prescribed joints
+/// are not coordinates, they move with the time `t` each call takes (first
+/// in the dynamics calls, `f(t, q, qdot)`; the keyword `t`, default 0, of
+/// the kinematic queries); poses are world-frame 4×4
+/// homogeneous transforms `[[R, p], [0, 1]]`; twists are 6-vectors, angular
+/// part first. Vectors and matrices are float64 numpy arrays; inputs of the
+/// wrong shape raise `softrod.InputError` (a `ValueError`) naming the
+/// argument and both shapes. Evaluations (dynamics, kinematics) take a few
+/// microseconds and keep the GIL; `simulate`, `step`, `statics` and
+/// `modes` release it. A Simulation is used by one thread at a time (a
+/// second concurrent call raises RuntimeError "Already borrowed"):
+/// `copy()` it for others, or use `softrod.simulate_many`.
+#[pyclass(module = "softrod")]
+pub struct Simulation {
+    pub(crate) sim: softrod::Simulation,
+    warnings: Vec<String>,
+    /// The scene's `[run] duration` [s] (None when built in Python).
+    pub(crate) duration: Option<f64>,
+    /// The model with tension inputs `u`, built on first use.
+    inputs: Option<Box<CableInputs>>,
+    /// The full model as an integrable system, for `step` without `u`.
+    stepper: Option<Box<RodSystem>>,
+}
+
+impl Clone for Simulation {
+    fn clone(&self) -> Self {
+        Self {
+            sim: self.sim.clone(),
+            warnings: self.warnings.clone(),
+            duration: self.duration,
+            inputs: self.inputs.clone(),
+            stepper: self.stepper.clone(),
+        }
+    }
+}
+
+impl Simulation {
+    pub(crate) fn wrap(
+        sim: softrod::Simulation,
+        warnings: Vec<String>,
+        duration: Option<f64>,
+    ) -> Self {
+        Self {
+            sim,
+            warnings,
+            duration,
+            inputs: None,
+            stepper: None,
+        }
+    }
+
+    /// The wrapper of a loaded scene (`from_toml`, `from_file`).
+    fn from_loaded(
+        loaded: softrod::Result<(softrod::Simulation, softrod::scene::Scene, Vec<softrod::scene::Warning>)>,
+    ) -> PyResult<Self> {
+        let (sim, scene, warnings) = loaded.map_err(to_py)?;
+        Ok(Self::wrap(
+            sim,
+            warnings.iter().map(|w| w.to_string()).collect(),
+            Some(scene.run.duration),
+        ))
+    }
+
+    fn n(&self) -> usize {
+        self.sim.n_dof()
+    }
+
+    fn inputs(&mut self) -> PyResult<&mut CableInputs> {
+        if self.inputs.is_none() {
+            self.inputs = Some(Box::new(
+                CableInputs::new(self.sim.model()).map_err(dynamics)?,
+            ));
+        }
+        Ok(self.inputs.as_mut().expect("just set"))
+    }
+
+    /// `u` checked against the model's cables.
+    fn tensions(&mut self, u: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
+        let nc = self.sim.model().n_cables();
+        let a = vector(u, "u", nc)?;
+        check_tensions(nc, "u", a.slice()).map_err(input)?;
+        Ok(a.slice().to_vec())
+    }
+}
+
+#[pymethods]
+impl Simulation {
+    /// A simulation of `rods` (softrod.Rod, named rod0, rod1, … where they
+    /// have no name) under `gravity` [m/s², world frame], with `quadrature`
+    /// Gauss points per piece (4: the scene default), from the rest shape at
+    /// rest, with the recommended settings.
+    #[new]
+    #[pyo3(signature = (rods, gravity = None, *, quadrature = 4))]
+    fn new(
+        rods: &Bound<'_, PyList>,
+        gravity: Option<&Bound<'_, PyAny>>,
+        quadrature: usize,
+    ) -> PyResult<Self> {
+        guard(|| Ok(Self::wrap(simulation_of(rods, gravity, quadrature)?, Vec::new(), None)))
+    }
+
+    /// The simulation the TOML scene text `text` describes
+    /// (docs/scene-format.md): its model, `[initial]` state and `[run]`
+    /// settings; `name` stands for the file in messages. Invalid scenes
+    /// raise `softrod.SceneError` naming the file, line, column and key
+    /// path; warnings are in `.warnings`. For a scene file, call
+    /// `Simulation.from_file(path)`.
+    #[classmethod]
+    #[pyo3(signature = (text, *, name = "<string>"))]
+    fn from_toml(
+        _cls: &Bound<'_, pyo3::types::PyType>,
+        text: &Bound<'_, PyAny>,
+        name: &str,
+    ) -> PyResult<Self> {
+        guard(|| {
+            let Ok(text) = text.cast::<PyString>() else {
+                return Err(input(
+                    "Simulation.from_toml takes the scene text (a str); for a scene file call \
+                     Simulation.from_file(path)",
+                ));
+            };
+            let text = text.to_str()?;
+            if !text.contains('\n') && !text.contains('=') {
+                return Err(input(format!(
+                    "Simulation.from_toml takes the scene text, and {text:?} looks like a file \
+                     path: call Simulation.from_file({text:?})"
+                )));
+            }
+            Self::from_loaded(softrod::Simulation::from_toml(text, name))
+        })
+    }
+
+    /// The simulation the TOML scene file at `path` (str or os.PathLike)
+    /// describes; as `from_toml` otherwise.
+    #[classmethod]
+    fn from_file(
+        _cls: &Bound<'_, pyo3::types::PyType>,
+        path: std::path::PathBuf,
+    ) -> PyResult<Self> {
+        guard(|| Self::from_loaded(softrod::Simulation::from_scene_file(&path)))
+    }
+
+    /// Number of generalized coordinates.
+    #[getter]
+    fn n_dof(&self) -> usize {
+        self.n()
+    }
+
+    /// Number of cables (the length of a tension input `u`).
+    #[getter]
+    fn n_cables(&self) -> usize {
+        self.sim.model().n_cables()
+    }
+
+    /// A name for every generalized coordinate, in the order of `q`:
+    /// `"<rod>.p<piece>.<strain>"` (e.g. `"arm.p0.ky"`), a joint's
+    /// coordinates `"<element>.joint.<c>"` first in its element's.
+    #[getter]
+    fn q_names(&self) -> Vec<String> {
+        self.sim.q_names()
+    }
+
+    /// The loop closures' residuals at `q` [m] (docs/theory.md D66), a dict
+    /// from closure name to `max(|d|, L|r|)`, prescribed joints at time `t`
+    /// [s]; empty without closures.
+    #[pyo3(signature = (q, *, t = 0.0))]
+    fn closure_residuals(
+        &mut self,
+        q: &Bound<'_, PyAny>,
+        t: f64,
+    ) -> PyResult<std::collections::BTreeMap<String, f64>> {
+        guard(|| {
+            kinematics::check_time(t)?;
+            let q = vector(q, "q", self.n())?;
+            self.sim.set_time(t);
+            let r = self.sim.closure_residuals(q.slice()).map_err(to_py)?;
+            Ok(r.into_iter().collect())
+        })
+    }
+
+    /// The names of the prescribed joint coordinates (D59), in the order
+    /// of `prescribed_forces`; empty without prescribed joints.
+    #[getter]
+    fn prescribed_names(&self) -> Vec<String> {
+        self.sim.prescribed_names()
+    }
+
+    /// The rigid bodies' names, in the order of `body_poses`.
+    #[getter]
+    fn body_names(&self) -> Vec<String> {
+        self.sim
+            .model()
+            .bodies()
+            .iter()
+            .map(|b| b.spec.name.clone())
+            .collect()
+    }
+
+
+
+    /// The generalized forces [N·m or N] the prescribed joints' drives
+    /// apply at `(t, q, qdot)` (D60), in the order of `prescribed_names`.
+    #[pyo3(signature = (t, q, qdot))]
+    fn prescribed_forces<'py>(
+        &mut self,
+        py: Python<'py>,
+        t: f64,
+        q: &Bound<'py, PyAny>,
+        qdot: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        guard(|| {
+            let n = self.n();
+            let (q, qd) = (vector(q, "q", n)?, vector(qdot, "qdot", n)?);
+            let f = self
+                .sim
+                .prescribed_forces(t, q.slice(), qd.slice(), None)
+                .map_err(to_py)?;
+            Ok(vec_out(py, f.as_slice()))
+        })
+    }
+
+    /// The scene's `[run] duration` [s], the default of `simulate`; None
+    /// for a simulation built in Python.
+    #[getter]
+    fn duration(&self) -> Option<f64> {
+        self.duration
+    }
+
+    /// Rod lengths L [m], in model order.
+    #[getter]
+    fn rod_lengths(&self) -> Vec<f64> {
+        self.sim
+            .model()
+            .rods()
+            .iter()
+            .map(|r| r.spec.rod.length())
+            .collect()
+    }
+
+    /// Rod names, in model order.
+    #[getter]
+    fn rod_names(&self) -> Vec<String> {
+        self.sim
+            .model()
+            .rods()
+            .iter()
+            .map(|r| r.spec.name.clone())
+            .collect()
+    }
+
+    /// The coordinates of each rod: {name: (first index, count)}.
+    #[getter]
+    fn rod_dofs(&self) -> Vec<(String, usize, usize)> {
+        self.sim
+            .model()
+            .rods()
+            .iter()
+            .map(|r| (r.spec.name.clone(), r.dof_offset, r.n_dof()))
+            .collect()
+    }
+
+    /// Names of the force terms present ("inertia", "elasticity", "gravity", …).
+    #[getter]
+    fn terms(&self) -> Vec<String> {
+        self.sim.model().terms()
+    }
+
+    /// The scene's warnings (suspicious but legal input).
+    #[getter]
+    fn warnings(&self) -> Vec<String> {
+        self.warnings.clone()
+    }
+
+    /// World gravity [m/s²] (zeros when absent).
+    #[getter]
+    fn gravity<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        let g = self.sim.model().gravity.unwrap_or_default();
+        vec_out(py, g.as_slice())
+    }
+
+    /// The run settings (a copy; assign a `softrod.Settings` to change them).
+    #[getter]
+    fn get_settings(&self) -> Settings {
+        Settings {
+            inner: self.sim.settings().clone(),
+        }
+    }
+
+    #[setter]
+    fn set_settings(&mut self, settings: Settings) -> PyResult<()> {
+        self.sim.set_settings(settings.inner).map_err(to_py)
+    }
+
+    /// Initial coordinates and velocities `(q, qdot)`.
+    fn initial_state<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>) {
+        let (q, qd) = self.sim.initial_state();
+        (vec_out(py, q.as_slice()), vec_out(py, qd.as_slice()))
+    }
+
+    /// Sets the initial state (each (n_dof,)).
+    fn set_initial_state(&mut self, q: &Bound<'_, PyAny>, qdot: &Bound<'_, PyAny>) -> PyResult<()> {
+        let n = self.n();
+        let (q, qd) = (vector(q, "q", n)?, vector(qdot, "qdot", n)?);
+        self.sim
+            .set_initial_state(q.slice(), qd.slice())
+            .map_err(to_py)
+    }
+
+    /// The initial state as a `softrod.State` at t = 0, to start the step API.
+    fn initial(&self, py: Python<'_>) -> PyResult<State> {
+        let (q, qd) = self.sim.initial_state();
+        State::from_slices(py, 0.0, q.as_slice(), qd.as_slice())
+    }
+
+    /// World pose of rod `rod` (name or index) at abscissa `s` [m] for
+    /// coordinates `q` (D7), prescribed joints at time `t` [s]: a 4×4
+    /// homogeneous transform, or (len(s), 4, 4) for a 1-D array of
+    /// abscissae (one kinematic sweep for all).
+    #[pyo3(signature = (rod, s, q, *, t = 0.0))]
+    fn pose<'py>(
+        &mut self,
+        py: Python<'py>,
+        rod: &Bound<'py, PyAny>,
+        s: &Bound<'py, PyAny>,
+        q: &Bound<'py, PyAny>,
+        t: f64,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        guard(|| self.pose_py(py, t, rod, s, q))
+    }
+
+    /// Tip pose of rod `rod` for `q` (4×4, world frame), prescribed joints
+    /// at time `t` [s].
+    #[pyo3(signature = (rod, q, *, t = 0.0))]
+    fn tip_pose<'py>(
+        &mut self,
+        py: Python<'py>,
+        rod: &Bound<'py, PyAny>,
+        q: &Bound<'py, PyAny>,
+        t: f64,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        guard(|| {
+            let i = rod_index(self.sim.model(), rod)?;
+            let poses = self.world_poses(t, q)?;
+            let mut out = vec![0.0; 16];
+            crate::convert::pose_into(poses.tip(i), &mut out);
+            crate::convert::array_out(py, out, &[4, 4])
+        })
+    }
+
+    /// World poses (n_bodies, 4, 4) of the rigid bodies' frames for `q`, in
+    /// the scene's order (D51), prescribed joints at time `t` [s]; shape
+    /// (0, 4, 4) without bodies.
+    #[pyo3(signature = (q, *, t = 0.0))]
+    fn body_poses<'py>(
+        &mut self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+        t: f64,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        guard(|| {
+            let poses = self.world_poses(t, q)?;
+            let bodies = poses.bodies();
+            let mut out = vec![0.0; 16 * bodies.len()];
+            for (g, o) in bodies.iter().zip(out.chunks_mut(16)) {
+                crate::convert::pose_into(g, o);
+            }
+            crate::convert::array_out(py, out, &[bodies.len(), 4, 4])
+        })
+    }
+
+    /// Geometric Jacobian J(s) (6, n_dof) of rod `rod` at `s` for `q`: the
+    /// twist of the section is J q̇, angular part first (D11). `frame`:
+    /// "body" (the section's own frame) or "world" (spatial twist). Every
+    /// coordinate that moves the section has its column: the rod's pieces
+    /// up to `s` and, on a robot, its joint's and its parents'; the others
+    /// are zero. For a 1-D array `s`: (len(s), 6, n_dof). Prescribed joints
+    /// at time `t` [s].
+    #[pyo3(signature = (rod, s, q, frame = "body", *, t = 0.0))]
+    fn jacobian<'py>(
+        &mut self,
+        py: Python<'py>,
+        rod: &Bound<'py, PyAny>,
+        s: &Bound<'py, PyAny>,
+        q: &Bound<'py, PyAny>,
+        frame: &str,
+        t: f64,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        guard(|| self.jacobian_py(py, t, rod, s, q, frame))
+    }
+
+    /// Forward dynamics q̈ (n_dof,) at time `t` [s], coordinates `q`,
+    /// velocities `qdot`, under the actuator generalized force `tau` (n_dof,
+    /// default 0), by the O(N) articulated recursion (D23–D27). `u`
+    /// (n_cables,) [N]: cable tensions replacing the scheduled ones (then
+    /// the cables act as `A(q) u`, see `actuation_matrix`).
+    #[pyo3(signature = (t, q, qdot, tau = None, *, u = None))]
+    fn forward_dynamics<'py>(
+        &mut self,
+        py: Python<'py>,
+        t: f64,
+        q: &Bound<'py, PyAny>,
+        qdot: &Bound<'py, PyAny>,
+        tau: Option<&Bound<'py, PyAny>>,
+        u: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        self.forward_dynamics_impl(py, t, q, qdot, tau, u)
+    }
+
+    /// Inverse dynamics: the actuator force τ_act (n_dof,) that gives
+    /// `qddot` at `(t, q, qdot)` (D17–D18), with the scheduled cable
+    /// tensions, or with tensions `u` when given (then τ_act is what is
+    /// needed besides `A(q) u`).
+    #[pyo3(signature = (t, q, qdot, qddot, *, u = None))]
+    fn inverse_dynamics<'py>(
+        &mut self,
+        py: Python<'py>,
+        t: f64,
+        q: &Bound<'py, PyAny>,
+        qdot: &Bound<'py, PyAny>,
+        qddot: &Bound<'py, PyAny>,
+        u: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        self.inverse_dynamics_impl(py, t, q, qdot, qddot, u)
+    }
+
+    /// Mass matrix M(t, q) (n_dof, n_dof), symmetric positive definite
+    /// (D19–D20); `t` [s] moves the prescribed joints.
+    fn mass_matrix<'py>(
+        &mut self,
+        py: Python<'py>,
+        t: f64,
+        q: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        guard(|| {
+            kinematics::check_time(t)?;
+            let q = vector(q, "q", self.n())?;
+            self.sim.set_time(t);
+            let m = self.sim.mass_matrix(q.slice()).map_err(to_py)?;
+            Ok(mat_out(py, &m))
+        })
+    }
+
+    /// The bias b(t, q, q̇) = C q̇ + G + K(q) + D q̇ − τ_cables − Q_ext
+    /// (n_dof,): the equations of motion read M q̈ + b = τ_act (D21–D22);
+    /// with loop closures M q̈ + b = τ_act + Jᵀλ (b is the open tree's).
+    fn bias_force<'py>(
+        &mut self,
+        py: Python<'py>,
+        t: f64,
+        q: &Bound<'py, PyAny>,
+        qdot: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        guard(|| {
+            let n = self.n();
+            let (q, qd) = (vector(q, "q", n)?, vector(qdot, "qdot", n)?);
+            let b = self
+                .sim
+                .bias_force(t, q.slice(), qd.slice())
+                .map_err(to_py)?;
+            Ok(vec_out(py, b.as_slice()))
+        })
+    }
+
+    /// Coriolis/centrifugal matrix C(q, q̇) (n_dof, n_dof) with Ṁ − 2C
+    /// skew-symmetric (D21); O(N·n_dof²), for analysis and control.
+    fn coriolis_matrix<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+        qdot: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        guard(|| {
+            let n = self.n();
+            let (q, qd) = (vector(q, "q", n)?, vector(qdot, "qdot", n)?);
+            let c = coriolis_matrix(self.sim.model(), q.slice(), qd.slice()).map_err(dynamics)?;
+            Ok(mat_out(py, &c))
+        })
+    }
+
+    /// The Coriolis/centrifugal force C(q, q̇) q̇ (n_dof,).
+    fn coriolis_force<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+        qdot: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        guard(|| {
+            let n = self.n();
+            let (q, qd) = (vector(q, "q", n)?, vector(qdot, "qdot", n)?);
+            let c = coriolis_matrix(self.sim.model(), q.slice(), qd.slice()).map_err(dynamics)?;
+            let f = c * DVector::from_column_slice(qd.slice());
+            Ok(vec_out(py, f.as_slice()))
+        })
+    }
+
+    /// Generalized gravity G(t, q) = ∂V_g/∂q (n_dof,) (D22); zero without
+    /// gravity.
+    fn gravity_force<'py>(
+        &mut self,
+        py: Python<'py>,
+        t: f64,
+        q: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        guard(|| {
+            kinematics::check_time(t)?;
+            let q = vector(q, "q", self.n())?;
+            self.sim.set_time(t);
+            let g = self.sim.gravity_force(q.slice()).map_err(to_py)?;
+            Ok(vec_out(py, g.as_slice()))
+        })
+    }
+
+    /// Generalized stiffness K = diag(K_n) (n_dof, n_dof), constant (D13).
+    fn stiffness_matrix<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        mat_out(py, &stiffness_matrix(self.sim.model()))
+    }
+
+    /// Generalized damping D = diag(D_n) (n_dof, n_dof), constant (D13).
+    fn damping_matrix<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        mat_out(py, &damping_matrix(self.sim.model()))
+    }
+
+    /// Actuation matrix A(q) (n_dof, n_cables): column c is the generalized
+    /// force of cable c per newton of tension, −∂ℓ_c/∂q (D15).
+    fn actuation_matrix<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        guard(|| {
+            let q = vector(q, "q", self.n())?;
+            let a: DMatrix<f64> =
+                actuation_matrix(self.sim.model(), q.slice()).map_err(dynamics)?;
+            Ok(mat_out(py, &a))
+        })
+    }
+
+    /// Linearization of `x' = f(x, u)`, `x = (q, qdot)`, about `(t, q, qdot)`
+    /// and the cable tensions `u` (n_cables,) [N] (default: the scheduled
+    /// tensions at `t`), from the analytic derivatives of the dynamics
+    /// (theory-derivatives.md): returns `(A, B)`, `A = df/dx`
+    /// (2 n_dof, 2 n_dof) = `[[0, I], [dqdd/dq, dqdd/dqdot]]`,
+    /// `B = df/du` (2 n_dof, n_cables) [per N]. Rows and columns of `A`
+    /// are `q` then `qdot` in the order of `q_names`. What LQR, MPC and
+    /// trajectory optimization need; about a static equilibrium use
+    /// `statics().q` and zero velocities.
+    #[pyo3(signature = (t, q, qdot, *, u = None))]
+    #[allow(clippy::type_complexity)]
+    fn linearize<'py>(
+        &mut self,
+        py: Python<'py>,
+        t: f64,
+        q: &Bound<'py, PyAny>,
+        qdot: &Bound<'py, PyAny>,
+        u: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>)> {
+        self.linearize_impl(py, t, q, qdot, u)
+    }
+
+    /// Kinetic, elastic and gravitational energy at `(t, q, qdot)` [J];
+    /// with prescribed joints the kinetic energy includes their motion at
+    /// `t`.
+    fn energies(
+        &mut self,
+        t: f64,
+        q: &Bound<'_, PyAny>,
+        qdot: &Bound<'_, PyAny>,
+    ) -> PyResult<Energies> {
+        guard(|| {
+            kinematics::check_time(t)?;
+            let n = self.n();
+            let (q, qd) = (vector(q, "q", n)?, vector(qdot, "qdot", n)?);
+            self.sim.set_time(t);
+            let e = self.sim.energies(q.slice(), qd.slice()).map_err(to_py)?;
+            Ok(Energies::from(&e))
+        })
+    }
+
+    /// Whether the model has static loads (gravity, loads, cables): then its
+    /// equilibrium differs from the rest shape.
+    #[getter]
+    fn has_static_loads(&self) -> bool {
+        self.sim.has_static_loads()
+    }
+
+    /// Static equilibrium under every static term at t = 0, from the initial
+    /// q (Newton with line search and load continuation). Raises
+    /// `softrod.SimulationError` when it does not converge. Releases the GIL.
+    fn statics(&mut self, py: Python<'_>) -> PyResult<Statics> {
+        let sim = &mut self.sim;
+        let r = guard_detached(py, || sim.statics().map_err(to_py))?;
+        Ok(Statics {
+            q: vec_out(py, r.q.as_slice()).unbind(),
+            iterations: r.iterations,
+            residual: r.residual,
+            load_steps: r.load_steps,
+        })
+    }
+
+    /// Undamped natural modes about the static equilibrium (the rest shape
+    /// when the model has no static loads). Releases the GIL.
+    fn modes(&mut self, py: Python<'_>) -> PyResult<Modes> {
+        let sim = &mut self.sim;
+        let m = guard_detached(py, || sim.modes().map_err(to_py))?;
+        let (eq, q) = match &m.equilibrium {
+            Equilibrium::Rest => ("rest", vec![0.0; self.n()]),
+            Equilibrium::Statics(q) => ("statics", q.as_slice().to_vec()),
+        };
+        Ok(modes_py(py, &m.modes, eq, &q))
+    }
+
+    /// Undamped natural modes of the model linearized about `q` (which
+    /// should be an equilibrium). Releases the GIL.
+    fn modes_about(&mut self, py: Python<'_>, q: &Bound<'_, PyAny>) -> PyResult<Modes> {
+        let qv = vector(q, "q", self.n())?.slice().to_vec();
+        let sim = &mut self.sim;
+        let m = guard_detached(py, || sim.modes_about(&qv).map_err(to_py))?;
+        Ok(modes_py(py, &m, "given", &qv))
+    }
+
+    /// Integrates `duration` seconds (default: the scene's `[run]
+    /// duration`) and returns a `softrod.Trajectory`.
+    ///
+    /// Keywords override the run settings for this call only:
+    /// `integrator`, `rtol`, `atol`, `dt`, `output_every`, `error_control`,
+    /// `linearly_implicit` (see `softrod.Settings`); `q0`, `qdot0`
+    /// (n_dof,) override the initial state.
+    ///
+    /// Without `controller` this is the facade's `Simulation::simulate`,
+    /// the same integration as `softrod run` (same samples, same bits), with
+    /// the GIL released throughout.
+    ///
+    /// `controller(t, q, qdot) -> u`: cable tensions (n_cables,) [N, ≥ 0]
+    /// that replace the scheduled ones, held constant between calls (a
+    /// zero-order hold): it is called at t = 0 and then after every
+    /// accepted integrator step (`control_every=None`), or every
+    /// `control_every` seconds (the run is then integrated in segments of
+    /// that length, so the hold is exact whatever the integrator does).
+    /// Each call re-takes the GIL and costs the Python function plus
+    /// about 2–3 µs of crossing (docs/performance.md, "Python"); with
+    /// `control_every=None` it runs once per integrator step, so a stiff
+    /// adaptive run of 1 s with ~500 steps pays it ~500 times. An exception
+    /// raised by the controller ends the run and propagates.
+    #[pyo3(signature = (duration = None, *, output_every = None, integrator = None, rtol = None,
+                        atol = None, dt = None, error_control = None, linearly_implicit = None,
+                        q0 = None, qdot0 = None, controller = None, control_every = None))]
+    #[allow(clippy::too_many_arguments)]
+    fn simulate(
+        &mut self,
+        py: Python<'_>,
+        duration: Option<f64>,
+        output_every: Option<f64>,
+        integrator: Option<&str>,
+        rtol: Option<f64>,
+        atol: Option<f64>,
+        dt: Option<f64>,
+        error_control: Option<bool>,
+        linearly_implicit: Option<bool>,
+        q0: Option<&Bound<'_, PyAny>>,
+        qdot0: Option<&Bound<'_, PyAny>>,
+        controller: Option<Py<PyAny>>,
+        control_every: Option<f64>,
+    ) -> PyResult<Trajectory> {
+        let mut settings = self.sim.settings().clone();
+        crate::settings::overrides(
+            &mut settings,
+            integrator,
+            rtol,
+            atol,
+            dt,
+            output_every,
+            error_control,
+            linearly_implicit,
+        )?;
+        let start = run::RunStart {
+            q0,
+            qdot0,
+            controller,
+            control_every,
+        };
+        self.simulate_impl(py, duration, settings, start)
+    }
+
+    /// One step of `dt` seconds from `state` (a `softrod.State`), with the
+    /// run settings' integrator, returning the state at `state.t + dt`.
+    /// `u` (n_cables,) [N]: cable tensions held over the step (replacing
+    /// the scheduled ones); None: the scheduled tensions. For RL and MPC
+    /// loops: `state = sim.step(state, 1e-3, u)`. Each call starts the
+    /// integrator afresh (first step `settings.dt`, capped at `dt`), so a
+    /// loop of steps equals `simulate(controller=…, control_every=dt)`.
+    /// Releases the GIL.
+    #[pyo3(signature = (state, dt, u = None))]
+    fn step(
+        &mut self,
+        py: Python<'_>,
+        state: PyRef<'_, State>,
+        dt: f64,
+        u: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<State> {
+        self.step_impl(py, state, dt, u)
+    }
+
+    /// An independent copy (its own buffers), e.g. for another thread.
+    fn copy(&self) -> Self {
+        self.clone()
+    }
+
+    fn __copy__(&self) -> Self {
+        self.clone()
+    }
+
+    fn __deepcopy__(&self, _memo: &Bound<'_, PyAny>) -> Self {
+        self.clone()
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Simulation(rods={:?}, n_dof={}, terms={:?})",
+            self.rod_names(),
+            self.n(),
+            self.terms()
+        )
+    }
+}
