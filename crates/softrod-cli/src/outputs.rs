@@ -103,7 +103,7 @@ fn equivalent_box(mass: f64, inertia: &nalgebra::Matrix3<f64>) -> [f64; 3] {
 pub fn write_view(dir: &Path, model: &Model, title: &str) -> Result<ViewStats, CliError> {
     view_spec(model, title)
         .write(&dir.join(VIEW_JSON))
-        .map_err(failed)?;
+        .map_err(|e| failed(softrod::report(&e)))?;
     regenerate_view(dir)
 }
 
@@ -114,7 +114,7 @@ pub fn regenerate_view(dir: &Path) -> Result<ViewStats, CliError> {
         .map_err(|e| {
             // Never leave a truncated page (a full disk) behind.
             let _ = std::fs::remove_file(dir.join(softrod_viz::run_dir::VIEW_HTML));
-            failed(format!("3-D view: {e}"))
+            failed(format!("3-D view: {}", softrod::report(&e)))
         })
 }
 

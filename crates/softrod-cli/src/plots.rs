@@ -143,7 +143,7 @@ fn write(
     fig.and_then(|f| f.write(&path)).map_err(|e| {
         // Never leave a truncated figure (a full disk) behind.
         let _ = std::fs::remove_file(&path);
-        failed(format!("plot {name}: {e}"))
+        failed(format!("plot {name}: {}", softrod::report(&e)))
     })
 }
 

@@ -121,7 +121,12 @@ impl Modes {
     }
 }
 
-pub(crate) fn modes_py(py: Python<'_>, m: &softrod::dynamics::Modes, eq: &'static str, q: &[f64]) -> Modes {
+pub(crate) fn modes_py(
+    py: Python<'_>,
+    m: &softrod::dynamics::Modes,
+    eq: &'static str,
+    q: &[f64],
+) -> Modes {
     Modes {
         omega: vec_out(py, m.omega.as_slice()).unbind(),
         shapes: mat_out(py, &m.shapes).unbind(),

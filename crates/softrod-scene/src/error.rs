@@ -63,12 +63,16 @@ pub type Cause = Box<dyn std::error::Error + Send + Sync + 'static>;
 /// Every variant (except [`SceneError::Io`]) carries the file name given for
 /// messages, the key path (empty for the document itself) and, where known,
 /// the [`Location`] of the offending key or value. Values the library layers
-/// rejected keep their error as [`std::error::Error::source`] (a [`Cause`]).
+/// rejected keep their error as [`std::error::Error::source`] (a [`Cause`])
+/// for programs to inspect; the message already states that cause in the
+/// scene's terms (key, value, allowed range), so a reporter that walks the
+/// sources (`softrod::report`) stops at a scene error. The one exception is
+/// [`SceneError::Io`], whose message leaves the I/O error to its source.
 #[non_exhaustive]
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
-    /// The file could not be read.
-    #[error("{file}: cannot read scene file: {source}")]
+    /// The file could not be read (why: the source).
+    #[error("{file}: cannot read scene file")]
     Io {
         /// The file, as given for messages.
         file: String,

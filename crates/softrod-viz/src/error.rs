@@ -56,8 +56,8 @@ pub enum VizError {
         /// The budget.
         max_bytes: usize,
     },
-    /// A file could not be read or written.
-    #[error("{}: {source}", path.display())]
+    /// A file could not be read or written (why: the source).
+    #[error("{}", path.display())]
     Io {
         /// The file.
         path: PathBuf,
@@ -75,8 +75,8 @@ pub enum VizError {
         /// What is wrong.
         problem: String,
     },
-    /// `view.json` is malformed.
-    #[error("{}: {source}", path.display())]
+    /// `view.json` is malformed (how: the source).
+    #[error("{}", path.display())]
     Json {
         /// The file.
         path: PathBuf,

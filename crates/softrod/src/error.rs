@@ -193,9 +193,14 @@ pub fn report(e: &(dyn std::error::Error + 'static)) -> String {
     text
 }
 
-/// Whether `e`'s message already states its causes (see [`report`]).
+/// Whether `e`'s message already states its causes (see [`report`]): a
+/// scene error other than an unreadable file.
 fn states_its_cause(e: &(dyn std::error::Error + 'static)) -> bool {
-    e.is::<SceneError>() || matches!(e.downcast_ref::<Error>(), Some(Error::Scene(_)))
+    let scene = match e.downcast_ref::<Error>() {
+        Some(Error::Scene(s)) => Some(&**s),
+        _ => e.downcast_ref::<SceneError>(),
+    };
+    scene.is_some_and(|s| !matches!(s, SceneError::Io { .. }))
 }
 
 /// `Result` with the facade's [`Error`].

@@ -56,8 +56,37 @@
 //! [`Settings::energy_tolerance`] (default 0.1 of the energy in play) and
 //! warning beyond a tenth of it; a positive stretch ([`Error::Stretch`]);
 //! strains inside the model's validity (warnings). Before anything big is
-//! allocated, tasks are checked against the machine's memory ([`Limits`],
-//! [`Error::TooLarge`]).
+//! allocated, tasks are checked against a memory budget ([`Limits`], 4 GiB
+//! unless set with [`Simulation::set_limits`]; [`Error::TooLarge`]), a
+//! setting rather than a reading of the machine's load.
+//!
+//! Conventions shared with the Python package:
+//!
+//! - **Time.** A [`Simulation`] keeps a clock for the prescribed joints
+//!   (D59): [`Simulation::set_time`] sets it, and the evaluations that are
+//!   functions of the configuration (poses, Jacobians, mass matrix,
+//!   energies, gravity, closure residuals) read it; the equations of motion
+//!   take their time first, `f(t, q, q̇)` (forward and inverse dynamics,
+//!   bias force, drive forces, linearization, a step), and leave the clock
+//!   alone. (Python has no clock: its kinematic queries take the keyword
+//!   `t` instead.)
+//! - **Durations.** [`Simulation::simulate`] and
+//!   [`Simulation::simulate_with`] take the duration explicitly; a scene's
+//!   `[run] duration` is in [`Settings::duration`], which front ends use
+//!   when the user names none (the CLI, Python's `simulate` and
+//!   `simulate_many` alike).
+//! - **Names.** Velocities are `qdot` (`q̇`), as in the scene format and
+//!   `trajectory.csv`; a rod is named by its name or its index
+//!   ([`RodId`]).
+//! - **Errors.** Each variant states its cause or returns it as its source,
+//!   never both; [`report`] prints an error with each cause once.
+//!
+//! Where things are: [`simulation`](Simulation) (the front door, one
+//! concern per file), [`record`] (what a run records at each output time
+//! — a new output quantity or `trajectory.csv` column goes into
+//! [`record::Record`] and [`record::Columns`]), [`study`] (work–precision
+//! studies behind `softrod report`), [`limits`] (memory estimates),
+//! [`Settings`] and the energy watch ([`EnergyBalance`]).
 //!
 //! Units are SI; twists and wrenches are 6-vectors, angular part first;
 //! velocities and forces are in the body frame of the section, poses in the

@@ -1,7 +1,7 @@
 //! What a task will allocate, estimated before anything big is allocated,
 //! against a memory budget ([`Limits`], 4 GiB unless set): a scene that
 //! cannot fit is refused with an input error naming the key and the
-//! estimate ([`Error::TooLarge`](crate::Error::TooLarge)), never aborted by
+//! estimate ([`Error::TooLarge`]), never aborted by
 //! the allocator. The budget is a setting, not a reading of the machine's
 //! free memory, so that what is refused does not depend on the machine's
 //! load; a program that wants the machine's figure sets

@@ -49,7 +49,7 @@ pub(super) fn chart(
         .collect();
     work_precision(title, &points)
         .and_then(|f| f.write(path))
-        .map_err(|e| failed(format!("plot {}: {e}", path.display())))
+        .map_err(|e| failed(format!("plot {}: {}", path.display(), softrod::report(&e))))
 }
 
 pub fn report(path: &Path, out: Option<PathBuf>, o: ReportOptions) -> Result<(), CliError> {

@@ -243,7 +243,7 @@ pub fn view(dir: &Path, quiet: bool) -> Result<(), CliError> {
         )));
     }
     let stats = softrod_viz::run_dir::write_view(dir, &softrod_viz::ViewOptions::default())
-        .map_err(|e| CliError::Input(format!("{}: {e}", dir.display())))?
+        .map_err(|e| CliError::Input(format!("{}: {}", dir.display(), softrod::report(&e))))?
         .1;
     let page = dir.join(softrod_viz::run_dir::VIEW_HTML);
     println!("{}", page.display());

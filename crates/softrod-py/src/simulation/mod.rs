@@ -124,7 +124,11 @@ impl Simulation {
 
     /// The wrapper of a loaded scene (`from_toml`, `from_file`).
     fn from_loaded(
-        loaded: softrod::Result<(softrod::Simulation, softrod::scene::Scene, Vec<softrod::scene::Warning>)>,
+        loaded: softrod::Result<(
+            softrod::Simulation,
+            softrod::scene::Scene,
+            Vec<softrod::scene::Warning>,
+        )>,
     ) -> PyResult<Self> {
         let (sim, scene, warnings) = loaded.map_err(to_py)?;
         Ok(Self::wrap(
@@ -169,7 +173,13 @@ impl Simulation {
         gravity: Option<&Bound<'_, PyAny>>,
         quadrature: usize,
     ) -> PyResult<Self> {
-        guard(|| Ok(Self::wrap(simulation_of(rods, gravity, quadrature)?, Vec::new(), None)))
+        guard(|| {
+            Ok(Self::wrap(
+                simulation_of(rods, gravity, quadrature)?,
+                Vec::new(),
+                None,
+            ))
+        })
     }
 
     /// The simulation the TOML scene text `text` describes
@@ -268,8 +278,6 @@ impl Simulation {
             .map(|b| b.spec.name.clone())
             .collect()
     }
-
-
 
     /// The generalized forces [N·m or N] the prescribed joints' drives
     /// apply at `(t, q, qdot)` (D60), in the order of `prescribed_names`.

@@ -123,6 +123,14 @@ impl Simulation {
     pub fn linearize(&mut self, t: f64, q: &[f64], qdot: &[f64]) -> Result<Linearization> {
         let s = &mut self.system;
         let mut work = FdDerivatives::new(&s.model);
-        Ok(linearize(&s.model, &mut s.data, &mut work, t, q, qdot, None)?)
+        Ok(linearize(
+            &s.model,
+            &mut s.data,
+            &mut work,
+            t,
+            q,
+            qdot,
+            None,
+        )?)
     }
 }
