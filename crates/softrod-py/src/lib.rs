@@ -7,6 +7,20 @@
 //! `scripts/test.sh` for the tests); the Python sources, type stubs and
 //! tests are beside this crate (`python/softrod/`, `tests/`). Units SI;
 //! equations cite the labels of docs/theory.md.
+//!
+//! The rules the Python API keeps (and the facade's crate docs state for
+//! Rust): time is an argument, never hidden state — the dynamics calls take
+//! it first, `f(t, q, qdot)`, the kinematic queries as the keyword `t`
+//! (default 0); durations default to the scene's `[run] duration` in
+//! `simulate` and `simulate_many` alike; velocities are `qdot`; a rod is
+//! named by its name or its index; an error's message states each of its
+//! causes once (`softrod::report`). What a run records comes from the
+//! facade's recorder (`softrod::record`), so a `Trajectory`'s `table` is
+//! `trajectory.csv`'s rows.
+//!
+//! The test hooks the Python suite calls (`_panic`, `_simulate_many_timed`,
+//! `_time_forward_dynamics`) are compiled only with the `test-hooks`
+//! feature (the dev install's), never into the release wheel.
 #![warn(missing_docs)]
 
 use pyo3::prelude::*;
