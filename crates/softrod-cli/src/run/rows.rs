@@ -60,7 +60,9 @@ impl OutFile {
 }
 
 /// Writes each record's rows to the run's CSV files (every file gets a
-/// time's rows, or none does) and keeps them for `trajectory.npz`.
+/// time's rows, or none does) and keeps them for `trajectory.npz`. A new
+/// per-time file (e.g. `contacts.csv`, from the record's contact forces)
+/// is one more [`OutFile`] here, written and rolled back with the others.
 pub struct RowWriter {
     columns: Columns,
     traj: OutFile,

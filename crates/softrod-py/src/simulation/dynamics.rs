@@ -1,9 +1,11 @@
-//! The dynamics calls that take cable tensions `u` besides the schedules:
-//! evaluated on the model with tension inputs (`crate::control`).
+//! Dynamics evaluations with longer bodies: those that take cable tensions
+//! `u` besides the schedules (evaluated on the model with tension inputs,
+//! `crate::control`), and the Coriolis force.
 
 use nalgebra::DVector;
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
+use softrod::dynamics::coriolis_matrix;
 
 use super::Simulation;
 use crate::convert::{mat_out, vec_out, vector};
@@ -116,6 +118,21 @@ impl Simulation {
             }
             let lin = lin.map_err(to_py)?;
             Ok((mat_out(py, &lin.a), mat_out(py, &lin.b)))
+        })
+    }
+
+    pub(super) fn coriolis_force_impl<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+        qdot: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        guard(|| {
+            let n = self.n();
+            let (q, qd) = (vector(q, "q", n)?, vector(qdot, "qdot", n)?);
+            let c = coriolis_matrix(self.sim.model(), q.slice(), qd.slice()).map_err(dynamics)?;
+            let f = c * DVector::from_column_slice(qd.slice());
+            Ok(vec_out(py, f.as_slice()))
         })
     }
 }

@@ -3,7 +3,7 @@
 //! This file is the class's Python surface (signatures and docstrings);
 //! the longer bodies live by concern beside it: [`kinematics`] (poses and
 //! Jacobians along a rod), [`dynamics`] (evaluations with tension inputs),
-//! [`run`] (simulation, steps).
+//! [`analysis`] (statics, modes), [`run`] (simulation, steps).
 //!
 //! Time: Python has no clock. Every evaluation whose result can depend on
 //! time (through prescribed joints or tension schedules) takes it as an
@@ -14,15 +14,15 @@
 //! read. Functions of the configuration alone (actuation, stiffness,
 //! damping, Coriolis) take none.
 
+mod analysis;
 mod dynamics;
 mod kinematics;
 mod run;
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DMatrix;
 use numpy::{PyArray1, PyArray2, PyArrayDyn};
 use pyo3::prelude::*;
 use pyo3::types::{PyList, PyString};
-use softrod::Equilibrium;
 use softrod::dynamics::{
     Model, actuation_matrix, coriolis_matrix, damping_matrix, stiffness_matrix,
 };
@@ -30,9 +30,9 @@ use softrod::integrate::RodSystem;
 
 use crate::control::{CableInputs, check_tensions};
 use crate::convert::{mat_out, vec_out, vector};
-use crate::errors::{dynamics, guard, guard_detached, input, to_py};
+use crate::errors::{dynamics, guard, input, to_py};
 use crate::model::simulation_of;
-use crate::results::{Energies, Modes, Statics, modes_py};
+use crate::results::{Energies, Modes, Statics};
 use crate::settings::Settings;
 use crate::trajectory::{State, Trajectory};
 
@@ -568,13 +568,7 @@ impl Simulation {
         q: &Bound<'py, PyAny>,
         qdot: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        guard(|| {
-            let n = self.n();
-            let (q, qd) = (vector(q, "q", n)?, vector(qdot, "qdot", n)?);
-            let c = coriolis_matrix(self.sim.model(), q.slice(), qd.slice()).map_err(dynamics)?;
-            let f = c * DVector::from_column_slice(qd.slice());
-            Ok(vec_out(py, f.as_slice()))
-        })
+        self.coriolis_force_impl(py, q, qdot)
     }
 
     /// Generalized gravity G(t, q) = ∂V_g/∂q (n_dof,) (D22); zero without
@@ -671,35 +665,19 @@ impl Simulation {
     /// q (Newton with line search and load continuation). Raises
     /// `softrod.SimulationError` when it does not converge. Releases the GIL.
     fn statics(&mut self, py: Python<'_>) -> PyResult<Statics> {
-        let sim = &mut self.sim;
-        let r = guard_detached(py, || sim.statics().map_err(to_py))?;
-        Ok(Statics {
-            q: vec_out(py, r.q.as_slice()).unbind(),
-            iterations: r.iterations,
-            residual: r.residual,
-            load_steps: r.load_steps,
-        })
+        self.statics_impl(py)
     }
 
     /// Undamped natural modes about the static equilibrium (the rest shape
     /// when the model has no static loads). Releases the GIL.
     fn modes(&mut self, py: Python<'_>) -> PyResult<Modes> {
-        let sim = &mut self.sim;
-        let m = guard_detached(py, || sim.modes().map_err(to_py))?;
-        let (eq, q) = match &m.equilibrium {
-            Equilibrium::Rest => ("rest", vec![0.0; self.n()]),
-            Equilibrium::Statics(q) => ("statics", q.as_slice().to_vec()),
-        };
-        Ok(modes_py(py, &m.modes, eq, &q))
+        self.modes_impl(py)
     }
 
     /// Undamped natural modes of the model linearized about `q` (which
     /// should be an equilibrium). Releases the GIL.
     fn modes_about(&mut self, py: Python<'_>, q: &Bound<'_, PyAny>) -> PyResult<Modes> {
-        let qv = vector(q, "q", self.n())?.slice().to_vec();
-        let sim = &mut self.sim;
-        let m = guard_detached(py, || sim.modes_about(&qv).map_err(to_py))?;
-        Ok(modes_py(py, &m, "given", &qv))
+        self.modes_about_impl(py, q)
     }
 
     /// Integrates `duration` seconds (default: the scene's `[run]
