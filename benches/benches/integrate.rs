@@ -33,7 +33,7 @@ fn moving_state(model: &Model) -> (DVector<f64>, DVector<f64>) {
     let z = DVector::zeros(n);
     let sol = integrate_second_order(
         &mut sys,
-        r.method,
+        r.integrator,
         0.0,
         5e-3,
         &z,
@@ -74,7 +74,7 @@ fn bench_step(c: &mut Criterion) {
                 b.iter(|| {
                     integrate_second_order(
                         &mut sys,
-                        s.method,
+                        s.integrator,
                         0.0,
                         STEPS as f64 * H,
                         &q0,
@@ -113,7 +113,7 @@ fn bench_release(c: &mut Criterion) {
             b.iter(|| {
                 integrate_second_order(
                     &mut sys,
-                    r.method,
+                    r.integrator,
                     0.0,
                     t1,
                     &z,

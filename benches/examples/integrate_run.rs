@@ -12,7 +12,7 @@
 use nalgebra::{DMatrix, DVector};
 use softrod_dynamics::{Model, RodSpec};
 use softrod_integrate::{
-    Hooks, Iteration, Method, Options, RodJacobian, RodSystem, SecondOrderSystem,
+    Hooks, Integrator, Iteration, Options, RodJacobian, RodSystem, SecondOrderSystem,
     integrate_second_order,
 };
 use softrod_kinematics::{Basis, Rod, RodKinematics, straight};
@@ -141,9 +141,10 @@ fn main() {
             },
             t_eval: Some(times.clone()),
             max_steps: 10_000_000,
+            rho_inf: 1.0,
             ..Options::fixed(5e-5)
         };
-        let ga = Method::GeneralizedAlpha { rho_inf: 1.0 };
+        let ga = Integrator::GeneralizedAlpha;
         let mut sys = RodSystem::new(m.clone());
         sys.jacobian = RodJacobian::ElasticOnly;
         let t0 = Instant::now();
@@ -196,15 +197,14 @@ fn main() {
         let opts = Options {
             t_eval: Some(times.clone()),
             max_steps: 10_000_000,
+            rho_inf: env("RHO", 0.8),
             ..if controlled {
                 Options::linearly_implicit_tol(dt, dt * 1e-2)
             } else {
                 Options::linearly_implicit(dt)
             }
         };
-        let method = Method::GeneralizedAlpha {
-            rho_inf: env("RHO", 0.8),
-        };
+        let method = Integrator::GeneralizedAlpha;
         let sol = if accel_form {
             let mut sys = NoResidual(sys);
             integrate_second_order(&mut sys, method, 0.0, 1.0, &z, &z, &opts, Hooks::new())

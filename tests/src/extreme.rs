@@ -10,7 +10,7 @@ use softrod_dynamics::{
     Data, DynamicsError, Model, StaticsOptions, StaticsResult, energies, inverse_dynamics, statics,
 };
 use softrod_integrate::{
-    Hooks, IntegrateError, Method, Options, RodSystem, Solution, integrate_second_order,
+    Hooks, IntegrateError, Integrator, Options, RodSystem, Solution, integrate_second_order,
 };
 use softrod_kinematics::RodKinematics;
 use softrod_lie::Pose;
@@ -110,7 +110,7 @@ pub fn integrate(
     built: &Built,
     q0: &DVector<f64>,
     qd0: &DVector<f64>,
-    method: Method,
+    method: Integrator,
     opts: Options,
     t1: f64,
     n_out: usize,
@@ -195,7 +195,7 @@ pub fn max_dist(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
 pub fn explicit_ok_or_clear_error(
     what: &str,
     built: &Built,
-    method: Method,
+    method: Integrator,
     opts: Options,
     t1: f64,
     n_out: usize,

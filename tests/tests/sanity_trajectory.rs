@@ -8,7 +8,7 @@
 
 use nalgebra::DVector;
 use softrod_dynamics::{Model, RodSpec, energies};
-use softrod_integrate::{Hooks, Method, Options, RodSystem, integrate_second_order};
+use softrod_integrate::{Hooks, Integrator, Options, RodSystem, integrate_second_order};
 use softrod_kinematics::{Basis, Rod, RodKinematics, Strain, straight};
 use softrod_lie::{Pose, Vec3};
 use softrod_mechanics::{Material, RodBody, Section};
@@ -58,7 +58,7 @@ fn sanity_trajectory_matches_the_verified_prototype() {
     let zero = DVector::zeros(n);
     let sol = integrate_second_order(
         &mut sys,
-        Method::Dopri5,
+        Integrator::Dopri5,
         0.0,
         1.0,
         &zero,

@@ -8,7 +8,7 @@ use nalgebra::DVector;
 
 use crate::error::{IntegrateError, first_non_finite};
 use crate::hooks::{Control, Direction, Hooks, StepInfo};
-use crate::method::Method;
+use crate::integrator::Integrator;
 use crate::methods::{Dopri5, Esdirk, GeneralizedAlpha, Radau5, Rk4, Rosw34};
 use crate::options::Options;
 use crate::problem::{FirstOrderProblem, Problem, SecondOrderProblem};
@@ -19,10 +19,9 @@ use crate::system::{OdeSystem, SecondOrderSystem};
 /// Integrates a first-order system `y' = f(t, y)` from `t0` to `t1 ≥ t0`.
 ///
 /// * `sys`: the system, dim `n`.
-/// * `method`: [`Method::Rk4`], [`Method::Dopri5`] or [`Method::Rosw34`]
-///   ([`Method::GeneralizedAlpha`] and [`Method::Esdirk46`] need a
-///   [`SecondOrderSystem`]: use
-///   [`integrate_second_order`]).
+/// * `integrator`: one without [`Integrator::needs_second_order`]
+///   ([`Integrator::GeneralizedAlpha`] and [`Integrator::Esdirk`] need a
+///   [`SecondOrderSystem`]: use [`integrate_second_order`]).
 /// * `y0`: initial state, dim `n`.
 /// * `opts`: tolerances, steps, output times ([`Options`]).
 /// * `hooks`: per-step callback, events, monitors ([`Hooks::new()`] for none).
@@ -33,7 +32,7 @@ use crate::system::{OdeSystem, SecondOrderSystem};
 /// bits (no threads, no hashing, fixed operation order).
 pub fn integrate<S: OdeSystem>(
     sys: &mut S,
-    method: Method,
+    integrator: Integrator,
     t0: f64,
     t1: f64,
     y0: &DVector<f64>,
@@ -46,21 +45,21 @@ pub fn integrate<S: OdeSystem>(
             what: format!("y0 has dimension {} but the system has {n}", y0.len()),
         });
     }
-    opts.validate(method)?;
+    opts.validate(integrator)?;
     let mut p = FirstOrderProblem::new(sys);
-    match method {
-        Method::Rk4 => drive(&mut p, &mut Rk4::new(n), t0, t1, y0, opts, hooks),
-        Method::Dopri5 => drive(&mut p, &mut Dopri5::new(n), t0, t1, y0, opts, hooks),
-        Method::Rosw34 => drive(&mut p, &mut Rosw34::new(n), t0, t1, y0, opts, hooks),
-        Method::Radau5 => drive(&mut p, &mut Radau5::new(n, None), t0, t1, y0, opts, hooks),
-        Method::GeneralizedAlpha { .. } | Method::Esdirk46 => Err(IntegrateError::InvalidInput {
-            what: format!("{method:?} needs a SecondOrderSystem: use integrate_second_order"),
+    match integrator {
+        Integrator::Rk4 => drive(&mut p, &mut Rk4::new(n), t0, t1, y0, opts, hooks),
+        Integrator::Dopri5 => drive(&mut p, &mut Dopri5::new(n), t0, t1, y0, opts, hooks),
+        Integrator::Rosenbrock => drive(&mut p, &mut Rosw34::new(n), t0, t1, y0, opts, hooks),
+        Integrator::Radau5 => drive(&mut p, &mut Radau5::new(n, None), t0, t1, y0, opts, hooks),
+        Integrator::GeneralizedAlpha | Integrator::Esdirk => Err(IntegrateError::InvalidInput {
+            what: format!("{integrator} needs a SecondOrderSystem: use integrate_second_order"),
         }),
     }
 }
 
 /// Integrates a second-order system `q̈ = a(t, q, q̇)` from `t0` to `t1 ≥ t0`
-/// with any [`Method`]; the first-order methods run on `y = (q, q̇)` (their
+/// with any [`Integrator`]; the first-order methods run on `y = (q, q̇)` (their
 /// linear solves use an `n×n` Schur complement, not the `2n×2n` matrix).
 ///
 /// * `q0`, `qd0`: initial positions and velocities, dim `n` each.
@@ -70,7 +69,7 @@ pub fn integrate<S: OdeSystem>(
 #[allow(clippy::too_many_arguments)]
 pub fn integrate_second_order<S: SecondOrderSystem>(
     sys: &mut S,
-    method: Method,
+    integrator: Integrator,
     t0: f64,
     t1: f64,
     q0: &DVector<f64>,
@@ -88,17 +87,17 @@ pub fn integrate_second_order<S: SecondOrderSystem>(
             ),
         });
     }
-    opts.validate(method)?;
+    opts.validate(integrator)?;
     let mut y0 = DVector::zeros(2 * n);
     y0.rows_mut(0, n).copy_from(q0);
     y0.rows_mut(n, n).copy_from(qd0);
     let mut p = SecondOrderProblem::new(sys);
     let m = 2 * n;
-    match method {
-        Method::Rk4 => drive(&mut p, &mut Rk4::new(m), t0, t1, &y0, opts, hooks),
-        Method::Dopri5 => drive(&mut p, &mut Dopri5::new(m), t0, t1, &y0, opts, hooks),
-        Method::Rosw34 => drive(&mut p, &mut Rosw34::new(m), t0, t1, &y0, opts, hooks),
-        Method::Radau5 => drive(
+    match integrator {
+        Integrator::Rk4 => drive(&mut p, &mut Rk4::new(m), t0, t1, &y0, opts, hooks),
+        Integrator::Dopri5 => drive(&mut p, &mut Dopri5::new(m), t0, t1, &y0, opts, hooks),
+        Integrator::Rosenbrock => drive(&mut p, &mut Rosw34::new(m), t0, t1, &y0, opts, hooks),
+        Integrator::Radau5 => drive(
             &mut p,
             &mut Radau5::new(m, Some(n)),
             t0,
@@ -107,10 +106,10 @@ pub fn integrate_second_order<S: SecondOrderSystem>(
             opts,
             hooks,
         ),
-        Method::Esdirk46 => drive(&mut p, &mut Esdirk::new(n), t0, t1, &y0, opts, hooks),
-        Method::GeneralizedAlpha { rho_inf } => drive(
+        Integrator::Esdirk => drive(&mut p, &mut Esdirk::new(n), t0, t1, &y0, opts, hooks),
+        Integrator::GeneralizedAlpha => drive(
             &mut p,
-            &mut GeneralizedAlpha::new(n, rho_inf),
+            &mut GeneralizedAlpha::new(n, opts.rho_inf),
             t0,
             t1,
             &y0,

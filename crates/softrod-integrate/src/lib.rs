@@ -14,12 +14,12 @@
 //!
 //! | method | kind | order | steps | for |
 //! |---|---|---|---|---|
-//! | [`Method::Esdirk46`] | ESDIRK4(3)6L\[2\]SA, L-stable, Newton on `M + h²γ²K + hγD` (O(N)), exact-Jacobian fallback | 4 | adaptive or fixed | stiff rods, any size: **recommended** |
-//! | [`Method::Radau5`] | Radau IIA, RADAU5's design, exact dense Jacobian | 5 | adaptive or fixed | small stiff systems, tight tolerances |
-//! | [`Method::Rosw34`] | Rosenbrock–W ROS34PW2, L-stable, no Newton | 3 | adaptive or fixed | stiff, loose tolerances |
-//! | [`Method::GeneralizedAlpha`] | Chung–Hulbert / Arnold–Brüls, `ρ∞` dissipation | 2 | fixed, or adaptive | large fixed steps (linearly implicit: [`Iteration::LinearlyImplicit`]) |
-//! | [`Method::Dopri5`] | explicit RK 5(4), dense order 4 | 5 | adaptive or fixed | non-stiff, references |
-//! | [`Method::Rk4`] | explicit RK | 4 | fixed | non-stiff, reference runs |
+//! | [`Integrator::Esdirk`] | ESDIRK4(3)6L\[2\]SA, L-stable, Newton on `M + h²γ²K + hγD` (O(N)), exact-Jacobian fallback | 4 | adaptive or fixed | stiff rods, any size: **recommended** |
+//! | [`Integrator::Radau5`] | Radau IIA, RADAU5's design, exact dense Jacobian | 5 | adaptive or fixed | small stiff systems, tight tolerances |
+//! | [`Integrator::Rosenbrock`] | Rosenbrock–W ROS34PW2, L-stable, no Newton | 3 | adaptive or fixed | stiff, loose tolerances |
+//! | [`Integrator::GeneralizedAlpha`] | Chung–Hulbert / Arnold–Brüls, `ρ∞` dissipation | 2 | fixed, or adaptive | large fixed steps (linearly implicit: [`Iteration::LinearlyImplicit`]) |
+//! | [`Integrator::Dopri5`] | explicit RK 5(4), dense order 4 | 5 | adaptive or fixed | non-stiff, references |
+//! | [`Integrator::Rk4`] | explicit RK | 4 | fixed | non-stiff, reference runs |
 //!
 //! `ESDIRK46` and generalized-α need a [`SecondOrderSystem`]; the others
 //! run on first-order systems too (on `y = (q, q̇)` for a second-order one,
@@ -47,7 +47,7 @@
 //! counts as the position error it makes over the step. The first-order
 //! norm would make the controller resolve every high mode whose *velocity*
 //! amplitude exceeds the tolerance although its displacement is far below
-//! it (see [`Method::Esdirk46`]); with the position norm the tip error of
+//! it (see [`Integrator::Esdirk`]); with the position norm the tip error of
 //! the rod scenes tracks `rtol`.
 //!
 //! # One interface
@@ -64,7 +64,7 @@
 //!
 //! ```
 //! use nalgebra::{DMatrix, DVector};
-//! use softrod_integrate::{integrate_second_order, Hooks, Method, Options, SecondOrderSystem};
+//! use softrod_integrate::{integrate_second_order, Hooks, Integrator, Options, SecondOrderSystem};
 //!
 //! /// q̈ = −ω² q.
 //! struct Oscillator { w2: f64 }
@@ -79,7 +79,7 @@
 //! }
 //!
 //! let opts = Options::tol(1e-8, 1e-10).with_t_eval(vec![0.5, 1.0]);
-//! for method in [Method::Dopri5, Method::Esdirk46, Method::Radau5] {
+//! for method in [Integrator::Dopri5, Integrator::Esdirk, Integrator::Radau5] {
 //!     let sol = integrate_second_order(&mut Oscillator { w2: 4.0 }, method, 0.0, 1.0,
 //!         &DVector::from_element(1, 1.0), &DVector::zeros(1), &opts, Hooks::new()).unwrap();
 //!     assert!((sol.y[1][0] - (2.0f64).cos()).abs() < 1e-6, "{method:?}");
@@ -94,7 +94,7 @@
 // steppers; the driver.
 mod error;
 mod hooks;
-mod method;
+mod integrator;
 mod options;
 mod solution;
 
@@ -117,7 +117,7 @@ pub use error::{IntegrateError, SystemError};
 pub use hooks::{
     Control, Direction, Event, Hooks, Monitor, OutputCallback, ScalarFn, StepCallback, StepInfo,
 };
-pub use method::Method;
+pub use integrator::{Integrator, UnknownIntegrator};
 pub use methods::generalized_alpha_parameters;
 pub use options::{Iteration, Options, StepControl};
 pub use recommended::Recommended;

@@ -9,27 +9,37 @@ use common::{Linear, VanDerPol, dist, dv};
 use nalgebra::{DMatrix, DVector};
 use proptest::prelude::*;
 use softrod_integrate::{
-    Control, Direction, Event, Hooks, IntegrateError, Iteration, Method, Options,
+    Control, Direction, Event, Hooks, IntegrateError, Integrator, Iteration, Options,
     SecondOrderSystem, Status, StepInfo, integrate, integrate_second_order,
 };
 
-const ALL: [Method; 5] = [
-    Method::Rk4,
-    Method::Dopri5,
-    Method::Rosw34,
-    Method::GeneralizedAlpha { rho_inf: 0.8 },
-    Method::Esdirk46,
+const ALL: [Integrator; 5] = [
+    Integrator::Rk4,
+    Integrator::Dopri5,
+    Integrator::Rosenbrock,
+    Integrator::GeneralizedAlpha,
+    Integrator::Esdirk,
 ];
 
-/// Options per method: fixed methods get a step, adaptive ones tolerances.
-fn opts_for(method: Method, dt: f64, tol: f64) -> Options {
+/// Options per method: fixed methods get a step, adaptive ones tolerances;
+/// generalized-α runs with `ρ∞ = 0.8`.
+fn opts_for(method: Integrator, dt: f64, tol: f64) -> Options {
     match method {
-        Method::Rk4 | Method::GeneralizedAlpha { .. } => Options::fixed(dt),
+        Integrator::Rk4 => Options::fixed(dt),
+        Integrator::GeneralizedAlpha => Options {
+            rho_inf: 0.8,
+            ..Options::fixed(dt)
+        },
         _ => Options::tol(tol, tol),
     }
 }
 
-fn run(method: Method, sys: &mut Linear, t1: f64, opts: &Options) -> softrod_integrate::Solution {
+fn run(
+    method: Integrator,
+    sys: &mut Linear,
+    t1: f64,
+    opts: &Options,
+) -> softrod_integrate::Solution {
     integrate_second_order(
         sys,
         method,
@@ -48,12 +58,16 @@ fn dense_output_at_requested_times_does_not_force_steps() {
     let sys = Linear::damped();
     let t_eval: Vec<f64> = (0..=400).map(|i| i as f64 * 0.01).collect();
     for (method, dt, tol) in [
-        (Method::Rk4, 0.05, 0.0),
-        (Method::Dopri5, 0.0, 1e-10),
-        (Method::Rosw34, 0.0, 1e-6),
-        (Method::GeneralizedAlpha { rho_inf: 1.0 }, 0.02, 0.0),
+        (Integrator::Rk4, 0.05, 0.0),
+        (Integrator::Dopri5, 0.0, 1e-10),
+        (Integrator::Rosenbrock, 0.0, 1e-6),
+        (Integrator::GeneralizedAlpha, 0.02, 0.0),
     ] {
-        let opts = opts_for(method, dt, tol).with_t_eval(t_eval.clone());
+        // Generalized-α with ρ∞ = 1.
+        let opts = Options {
+            rho_inf: 1.0,
+            ..opts_for(method, dt, tol).with_t_eval(t_eval.clone())
+        };
         let sol = run(method, &mut sys.clone(), 4.0, &opts);
         assert_eq!(sol.t, t_eval);
         let err = sol
@@ -75,9 +89,9 @@ fn dense_output_at_requested_times_does_not_force_steps() {
         // Dense output is as accurate as the steps (bounds from the methods'
         // global errors at these settings).
         let bound = match method {
-            Method::Rk4 => 1e-5,
-            Method::Dopri5 => 1e-8,
-            Method::Rosw34 => 1e-4,
+            Integrator::Rk4 => 1e-5,
+            Integrator::Dopri5 => 1e-8,
+            Integrator::Rosenbrock => 1e-4,
             _ => 1e-3, // second order, h = 0.02
         };
         assert!(err < bound, "{method:?}: dense error {err}");
@@ -98,8 +112,11 @@ fn terminal_and_recorded_events_are_located_on_the_dense_output() {
     let pi = std::f64::consts::PI;
     for method in ALL {
         let opts = match method {
-            Method::Rk4 => Options::fixed(1e-3),
-            Method::GeneralizedAlpha { .. } => Options::fixed(1e-4),
+            Integrator::Rk4 => Options::fixed(1e-3),
+            Integrator::GeneralizedAlpha => Options {
+                rho_inf: 0.8,
+                ..Options::fixed(1e-4)
+            },
             _ => Options::tol(1e-10, 1e-10),
         };
         let hooks = Hooks::new()
@@ -121,7 +138,7 @@ fn terminal_and_recorded_events_are_located_on_the_dense_output() {
         assert_eq!(sol.status, Status::Event { index: 1 });
         assert_eq!(sol.events.len(), 2, "{:?}", sol.events);
         let tol = match method {
-            Method::GeneralizedAlpha { .. } => 1e-6,
+            Integrator::GeneralizedAlpha => 1e-6,
             _ => 1e-8,
         };
         assert_eq!(sol.events[0].index, 0);
@@ -190,7 +207,7 @@ fn a_control_law_changing_the_system_equals_a_restart() {
     let mut sys = Linear::undamped();
     let full = integrate_second_order(
         &mut sys,
-        Method::Rk4,
+        Integrator::Rk4,
         0.0,
         2.0,
         &Linear::q0(),
@@ -200,13 +217,13 @@ fn a_control_law_changing_the_system_equals_a_restart() {
     )
     .unwrap();
     assert!((1.0..1.02).contains(&t_switch));
-    let first = run(Method::Rk4, &mut Linear::undamped(), t_switch, &opts);
+    let first = run(Integrator::Rk4, &mut Linear::undamped(), t_switch, &opts);
     let mut stiffer = Linear::undamped();
     stiffer.k *= 2.0;
     let y = &first.y_final;
     let second = integrate_second_order(
         &mut stiffer,
-        Method::Rk4,
+        Integrator::Rk4,
         t_switch,
         2.0,
         &y.rows(0, 2).into_owned(),
@@ -253,7 +270,10 @@ impl SecondOrderSystem for Breaks {
     }
 }
 
-fn run_breaks(method: Method, fail: bool) -> Result<softrod_integrate::Solution, IntegrateError> {
+fn run_breaks(
+    method: Integrator,
+    fail: bool,
+) -> Result<softrod_integrate::Solution, IntegrateError> {
     integrate_second_order(
         &mut Breaks { t_bad: 1.0, fail },
         method,
@@ -272,16 +292,16 @@ fn nan_in_the_model_is_an_error_with_context_never_a_nan_trajectory() {
         let err = run_breaks(method, false).unwrap_err();
         println!("{method:?}: {err}");
         match (method, &err) {
-            (Method::Rk4, IntegrateError::NonFinite { t, .. }) => assert!(*t > 1.0),
+            (Integrator::Rk4, IntegrateError::NonFinite { t, .. }) => assert!(*t > 1.0),
             (
-                Method::Dopri5 | Method::Rosw34 | Method::Esdirk46,
+                Integrator::Dopri5 | Integrator::Rosenbrock | Integrator::Esdirk,
                 IntegrateError::StepSizeUnderflow { t, reason, .. },
             ) => {
                 assert!((*t - 1.0).abs() < 1e-6, "stopped at {t}");
                 assert!(reason.contains("non-finite"), "{reason}");
             }
             (
-                Method::GeneralizedAlpha { .. },
+                Integrator::GeneralizedAlpha,
                 IntegrateError::NewtonNonConvergence { t, what, .. },
             ) => {
                 assert!((*t - 1.0).abs() < 1e-6, "stopped at {t}");
@@ -347,7 +367,7 @@ fn blow_up_beyond_a_user_bound_is_an_error() {
 }
 
 fn run_m(
-    method: Method,
+    method: Integrator,
     sys: &mut Linear,
     t1: f64,
     opts: &Options,
@@ -368,15 +388,16 @@ fn run_m(
 #[test]
 fn invalid_input_is_rejected() {
     let mut s = Linear::undamped();
-    let cases: Vec<(Method, Options, f64)> = vec![
-        (Method::Rk4, Options::default(), 1.0), // adaptive: no error estimate
-        (Method::Rk4, Options::fixed(0.0), 1.0),
-        (Method::Dopri5, Options::fixed(f64::NAN), 1.0),
-        (Method::Dopri5, Options::default().with_h0(-1.0), 1.0),
-        (Method::Rosw34, Options::linearly_implicit(0.1), 1.0), // gen-α only
+    let cases: Vec<(Integrator, Options, f64)> = vec![
+        (Integrator::Rk4, Options::default(), 1.0), // adaptive: no error estimate
+        (Integrator::Rk4, Options::fixed(0.0), 1.0),
+        (Integrator::Dopri5, Options::fixed(f64::NAN), 1.0),
+        (Integrator::Dopri5, Options::default().with_h0(-1.0), 1.0),
+        (Integrator::Rosenbrock, Options::linearly_implicit(0.1), 1.0), // gen-α only
         (
-            Method::GeneralizedAlpha { rho_inf: 0.8 },
+            Integrator::GeneralizedAlpha,
             Options {
+                rho_inf: 0.8,
                 iteration: Iteration::Newton {
                     tol: 1e-2,
                     max_iter: 0,
@@ -386,8 +407,9 @@ fn invalid_input_is_rejected() {
             1.0,
         ),
         (
-            Method::GeneralizedAlpha { rho_inf: 0.8 },
+            Integrator::GeneralizedAlpha,
             Options {
+                rho_inf: 0.8,
                 iteration: Iteration::Newton {
                     tol: f64::NAN,
                     max_iter: 4,
@@ -397,19 +419,22 @@ fn invalid_input_is_rejected() {
             1.0,
         ),
         (
-            Method::GeneralizedAlpha { rho_inf: 1.5 },
-            Options::fixed(0.1),
+            Integrator::GeneralizedAlpha,
+            Options {
+                rho_inf: 1.5,
+                ..Options::fixed(0.1)
+            },
             1.0,
         ),
-        (Method::Dopri5, Options::default(), -1.0), // t1 < t0
-        (Method::Dopri5, Options::tol(0.0, 0.0), 1.0),
+        (Integrator::Dopri5, Options::default(), -1.0), // t1 < t0
+        (Integrator::Dopri5, Options::tol(0.0, 0.0), 1.0),
         (
-            Method::Dopri5,
+            Integrator::Dopri5,
             Options::default().with_t_eval(vec![0.5, 0.2]),
             1.0,
         ),
         (
-            Method::Dopri5,
+            Integrator::Dopri5,
             Options::default().with_t_eval(vec![2.0]),
             1.0,
         ),
@@ -435,11 +460,14 @@ fn invalid_input_is_rejected() {
     // Generalized-α on a first-order system.
     let r = integrate(
         &mut VanDerPol { mu: 1.0 },
-        Method::GeneralizedAlpha { rho_inf: 0.5 },
+        Integrator::GeneralizedAlpha,
         0.0,
         1.0,
         &dv(&[2.0, 0.0]),
-        &Options::fixed(0.1),
+        &Options {
+            rho_inf: 0.5,
+            ..Options::fixed(0.1)
+        },
         Hooks::new(),
     );
     assert!(matches!(r, Err(IntegrateError::InvalidInput { .. })));
@@ -456,7 +484,7 @@ fn same_input_same_bits() {
     let vdp = |_: ()| {
         integrate(
             &mut VanDerPol { mu: 10.0 },
-            Method::Rosw34,
+            Integrator::Rosenbrock,
             0.0,
             30.0,
             &dv(&[2.0, 0.0]),
@@ -478,20 +506,20 @@ fn statistics_count_the_work() {
         assert_eq!(sol.stats.rhs_evaluations, s.calls, "{method:?}");
         let st = sol.stats;
         match method {
-            Method::Rk4 => assert_eq!(st.rhs_evaluations, 4 * st.steps + 1),
-            Method::Dopri5 => {
+            Integrator::Rk4 => assert_eq!(st.rhs_evaluations, 4 * st.steps + 1),
+            Integrator::Dopri5 => {
                 // FSAL: 6 per attempted step, + initial f + starting-step guess.
                 assert_eq!(st.rhs_evaluations, 6 * (st.steps + st.rejected_steps) + 2)
             }
-            Method::Rosw34 => {
+            Integrator::Rosenbrock => {
                 assert!(st.factorizations >= 1 && st.jacobian_evaluations >= 1);
                 assert_eq!(st.lu_solves, 4 * (st.steps + st.rejected_steps));
             }
-            Method::GeneralizedAlpha { .. } => {
+            Integrator::GeneralizedAlpha => {
                 assert_eq!(st.lu_solves, st.newton_iterations);
                 assert_eq!(st.rhs_evaluations, st.newton_iterations + 1);
             }
-            Method::Esdirk46 => {
+            Integrator::Esdirk => {
                 // One residual per Newton iteration, the initial
                 // acceleration and the starting-step guess; one solve per
                 // iteration and per error estimate (accepted or rejected by
@@ -512,10 +540,10 @@ fn first_and_second_order_interfaces_agree() {
     // product A·y and the split accel sum in a different order).
     let sys = Linear::damped();
     let opts = Options::tol(1e-8, 1e-8);
-    let a = run(Method::Dopri5, &mut sys.clone(), 3.0, &opts);
+    let a = run(Integrator::Dopri5, &mut sys.clone(), 3.0, &opts);
     let b = integrate(
         &mut common::LinearFirstOrder(sys.a()),
-        Method::Dopri5,
+        Integrator::Dopri5,
         0.0,
         3.0,
         &Linear::y0(),
@@ -546,7 +574,7 @@ proptest! {
     /// `y' = −λ y` and never leave [0, y0] (L-stability for ROS34PW2).
     #[test]
     fn decay_is_accurate_and_monotone(lambda in 0.1f64..1e4, t1 in 0.1f64..10.0) {
-        for method in [Method::Dopri5, Method::Rosw34] {
+        for method in [Integrator::Dopri5, Integrator::Rosenbrock] {
             let sol = integrate(&mut Decay(lambda), method, 0.0, t1, &dv(&[1.0]),
                 &Options { max_steps: 1_000_000, ..Options::tol(1e-8, 1e-10) }, Hooks::new()).unwrap();
             let exact = (-lambda * t1).exp();

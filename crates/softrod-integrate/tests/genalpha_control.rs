@@ -6,7 +6,9 @@
 mod common;
 
 use common::{Linear, dist};
-use softrod_integrate::{Control, Hooks, Method, Options, Solution, Stats, integrate_second_order};
+use softrod_integrate::{
+    Control, Hooks, Integrator, Options, Solution, Stats, integrate_second_order,
+};
 
 const T1: f64 = 4.0;
 
@@ -23,12 +25,15 @@ fn run(sys: &Linear, rho_inf: f64, opts: &Options) -> (Solution, usize, f64) {
     });
     let sol = integrate_second_order(
         &mut s,
-        Method::GeneralizedAlpha { rho_inf },
+        Integrator::GeneralizedAlpha,
         0.0,
         T1,
         &Linear::q0(),
         &Linear::qd0(),
-        opts,
+        &Options {
+            rho_inf,
+            ..opts.clone()
+        },
         hooks,
     )
     .unwrap();

@@ -7,7 +7,7 @@
 use nalgebra::DVector;
 use softrod_dynamics::{Data, Model, RodSpec, energies, modes};
 use softrod_integrate::{
-    Hooks, IntegrateError, Iteration, Method, Options, RodJacobian, RodSystem, Solution,
+    Hooks, IntegrateError, Integrator, Iteration, Options, RodJacobian, RodSystem, Solution,
     integrate_second_order,
 };
 use softrod_kinematics::{Basis, Rod, straight};
@@ -49,7 +49,7 @@ fn steel_wire(pieces: usize) -> Model {
 fn run(
     model: &Model,
     jacobian: RodJacobian,
-    method: Method,
+    method: Integrator,
     t1: f64,
     opts: &Options,
 ) -> Result<(RodSystem, Solution), IntegrateError> {
@@ -100,9 +100,9 @@ fn undamped_release_conserves_energy_to_tolerance() {
     let model = cantilever(0.5, 0.01, 1000.0, 1e6, 0.5, 2);
     let rtol = 1e-8;
     for (method, jac) in [
-        (Method::Dopri5, RodJacobian::Exact),
-        (Method::Rosw34, RodJacobian::Exact),
-        (Method::Rosw34, RodJacobian::ElasticOnly),
+        (Integrator::Dopri5, RodJacobian::Exact),
+        (Integrator::Rosenbrock, RodJacobian::Exact),
+        (Integrator::Rosenbrock, RodJacobian::ElasticOnly),
     ] {
         let opts = Options {
             max_steps: 1_000_000,
@@ -151,9 +151,12 @@ fn generalized_alpha_energy_bounded_without_dissipation_decreasing_with() {
     let (mut sys, sol) = run(
         &model,
         RodJacobian::ElasticOnly,
-        Method::GeneralizedAlpha { rho_inf: 1.0 },
+        Integrator::GeneralizedAlpha,
         t1,
-        &opts,
+        &Options {
+            rho_inf: 1.0,
+            ..opts.clone()
+        },
     )
     .unwrap();
     let (e, scale) = energy_series(&mut sys, &sol);
@@ -179,9 +182,12 @@ fn generalized_alpha_energy_bounded_without_dissipation_decreasing_with() {
     let (mut sys, sol) = run(
         &model,
         RodJacobian::ElasticOnly,
-        Method::GeneralizedAlpha { rho_inf: 0.5 },
+        Integrator::GeneralizedAlpha,
         t1,
-        &opts,
+        &Options {
+            rho_inf: 0.5,
+            ..opts.clone()
+        },
     )
     .unwrap();
     let (e, scale) = energy_series(&mut sys, &sol);
@@ -229,16 +235,30 @@ fn steel_wire_stable_far_above_explicit_limit() {
     let t1 = 0.2;
     let dt = 100.0 * limit;
     for (method, opts, jac) in [
-        (Method::Rosw34, Options::fixed(dt), RodJacobian::Exact),
-        (Method::Rosw34, Options::fixed(dt), RodJacobian::ElasticOnly),
         (
-            Method::GeneralizedAlpha { rho_inf: 1.0 },
+            Integrator::Rosenbrock,
             Options::fixed(dt),
             RodJacobian::Exact,
         ),
         (
-            Method::GeneralizedAlpha { rho_inf: 0.8 },
-            Options::linearly_implicit(dt),
+            Integrator::Rosenbrock,
+            Options::fixed(dt),
+            RodJacobian::ElasticOnly,
+        ),
+        (
+            Integrator::GeneralizedAlpha,
+            Options {
+                rho_inf: 1.0,
+                ..Options::fixed(dt)
+            },
+            RodJacobian::Exact,
+        ),
+        (
+            Integrator::GeneralizedAlpha,
+            Options {
+                rho_inf: 0.8,
+                ..Options::linearly_implicit(dt)
+            },
             RodJacobian::ElasticOnly,
         ),
     ] {
@@ -274,7 +294,7 @@ fn steel_wire_stable_far_above_explicit_limit() {
     let (mut sys, sol) = run(
         &model,
         RodJacobian::ElasticOnly,
-        Method::Rosw34,
+        Integrator::Rosenbrock,
         t1,
         &Options::tol(1e-3, 1e-6),
     )
@@ -294,7 +314,7 @@ fn steel_wire_stable_far_above_explicit_limit() {
     let res = run(
         &model,
         RodJacobian::Exact,
-        Method::Rk4,
+        Integrator::Rk4,
         t1,
         &Options::fixed(3.0 * limit),
     );
@@ -316,23 +336,29 @@ fn reruns_are_bit_identical() {
     let te: Vec<f64> = (0..=20).map(|k| 0.005 * k as f64).collect();
     let cases = [
         (
-            Method::Rosw34,
+            Integrator::Rosenbrock,
             Options::tol(1e-4, 1e-7).with_t_eval(te.clone()),
             RodJacobian::Exact,
         ),
         (
-            Method::Dopri5,
+            Integrator::Dopri5,
             Options::tol(1e-6, 1e-9).with_t_eval(te.clone()),
             RodJacobian::Exact,
         ),
         (
-            Method::GeneralizedAlpha { rho_inf: 0.8 },
-            Options::linearly_implicit(1e-3).with_t_eval(te.clone()),
+            Integrator::GeneralizedAlpha,
+            Options {
+                rho_inf: 0.8,
+                ..Options::linearly_implicit(1e-3).with_t_eval(te.clone())
+            },
             RodJacobian::ElasticOnly,
         ),
         (
-            Method::GeneralizedAlpha { rho_inf: 0.0 },
-            Options::linearly_implicit_tol(1e-2, 1e-4).with_t_eval(te.clone()),
+            Integrator::GeneralizedAlpha,
+            Options {
+                rho_inf: 0.0,
+                ..Options::linearly_implicit_tol(1e-2, 1e-4).with_t_eval(te.clone())
+            },
             RodJacobian::ElasticOnly,
         ),
     ];
@@ -437,10 +463,11 @@ fn mass_matrix_form_matches_dense_inverse_mass_stiffness() {
     let n = model.n_dof();
     let z = DVector::zeros(n);
     let cases = [
-        (Method::Rosw34, Options::fixed(1e-3), 1e-10),
+        (Integrator::Rosenbrock, Options::fixed(1e-3), 1e-10),
         (
-            Method::GeneralizedAlpha { rho_inf: 0.8 },
+            Integrator::GeneralizedAlpha,
             Options {
+                rho_inf: 0.8,
                 rtol: 1e-12,
                 atol: 1e-14,
                 iteration: Iteration::Newton {

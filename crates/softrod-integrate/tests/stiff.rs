@@ -7,7 +7,7 @@ mod common;
 use common::{Linear, Robertson, VanDerPol, dist, dv};
 use nalgebra::DMatrix;
 use softrod_integrate::{
-    Hooks, IntegrateError, Method, Options, integrate, integrate_second_order,
+    Hooks, IntegrateError, Integrator, Options, integrate, integrate_second_order,
 };
 
 /// Van der Pol, μ = 1000, over [0, 3000]: almost two relaxation periods
@@ -31,7 +31,7 @@ fn van_der_pol_mu_1000_rosw_within_budget_dopri5_not() {
     let y0 = dv(&[2.0, 0.0]);
     let sol = integrate(
         &mut VanDerPol { mu: 1000.0 },
-        Method::Rosw34,
+        Integrator::Rosenbrock,
         0.0,
         VDP_T1,
         &y0,
@@ -51,7 +51,7 @@ fn van_der_pol_mu_1000_rosw_within_budget_dopri5_not() {
     // compare away from a jump: at t1 the solution is on a slow branch).
     let fine = integrate(
         &mut VanDerPol { mu: 1000.0 },
-        Method::Rosw34,
+        Integrator::Rosenbrock,
         0.0,
         VDP_T1,
         &y0,
@@ -73,7 +73,7 @@ fn van_der_pol_mu_1000_rosw_within_budget_dopri5_not() {
     // The explicit method runs out of the same budget.
     let err = integrate(
         &mut VanDerPol { mu: 1000.0 },
-        Method::Dopri5,
+        Integrator::Dopri5,
         0.0,
         VDP_T1,
         &y0,
@@ -104,7 +104,7 @@ fn robertson_to_t_40_matches_the_reference() {
     };
     let sol = integrate(
         &mut Robertson,
-        Method::Rosw34,
+        Integrator::Rosenbrock,
         0.0,
         40.0,
         &dv(&[1.0, 0.0, 0.0]),
@@ -142,12 +142,13 @@ fn generalized_alpha_takes_large_steps_and_damps_the_stiff_mode() {
         let mut sys = stiff_pair();
         let sol = integrate_second_order(
             &mut sys,
-            Method::GeneralizedAlpha { rho_inf: rho },
+            Integrator::GeneralizedAlpha,
             0.0,
             t1,
             &q0,
             &qd0,
             &Options {
+                rho_inf: rho,
                 // Never refresh a Jacobian that works (it is constant here).
                 jacobian_max_age: usize::MAX,
                 ..Options::fixed(0.05)
@@ -192,7 +193,7 @@ fn rosw34_on_the_stiff_pair_is_not_limited_by_the_stiff_mode() {
     let mut sys = stiff_pair();
     let sol = integrate_second_order(
         &mut sys,
-        Method::Rosw34,
+        Integrator::Rosenbrock,
         0.0,
         10.0,
         &dv(&[1.0, 0.0]),

@@ -106,6 +106,12 @@ fn _panic(py: Python<'_>, message: String, release_gil: bool) -> PyResult<()> {
 #[pymodule]
 fn _softrod(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    // The one list of integrators (softrod-integrate's), by scene name.
+    let integrators = softrod::Integrator::ALL.map(softrod::Integrator::name);
+    m.add(
+        "INTEGRATORS",
+        pyo3::types::PyTuple::new(m.py(), integrators)?,
+    )?;
     m.add_class::<simulation::Simulation>()?;
     m.add_class::<simulation::Settings>()?;
     m.add_class::<simulation::Energies>()?;

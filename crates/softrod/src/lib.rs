@@ -82,6 +82,7 @@ pub use simulation::{
     Equilibrium, Flow, ModalAnalysis, Observer, RunStatus, RunSummary, Sample, Simulation,
     Trajectory, TrajectoryRecorder,
 };
+pub use softrod_integrate::Integrator;
 
 pub use watch::EnergyBalance;
 
@@ -98,8 +99,8 @@ pub mod prelude {
     pub use softrod_dynamics::{
         Attachment, BodySpec, Joint, JointKind, Model, RodSpec, RodSpec as Rod,
     };
+    pub use softrod_integrate::Integrator;
     pub use softrod_kinematics::{Basis, Frame, Rod as RodGeometry, Strain};
     pub use softrod_lie::{Pose, Vec3, Vec6};
     pub use softrod_mechanics::{Cable, Material, PointLoad, RodBody, Section, Tension};
-    pub use softrod_scene::Integrator;
 }

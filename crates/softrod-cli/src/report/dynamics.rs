@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use softrod::GENERALIZED_ALPHA_RHO_INF;
-use softrod_integrate::{Method, Options};
+use softrod_integrate::{Integrator, Options};
 use softrod_scene::{Built, Scene};
 
 use super::chart::work_precision_svg;
@@ -17,7 +17,7 @@ use crate::common::{CliError, failed};
 
 /// One temporal-study configuration: integrator name, setting text,
 /// method and options.
-type Config = (&'static str, String, Method, Options);
+type Config = (&'static str, String, Integrator, Options);
 
 /// The analytic reference of a scene: tip (m), time (s), note.
 type Analytic = ([f64; 3], f64, Option<String>);
@@ -158,7 +158,7 @@ fn temporal_configs(d: f64) -> Vec<Config> {
         configs.push((
             "dopri5",
             format!("rtol {rtol:e}"),
-            Method::Dopri5,
+            Integrator::Dopri5,
             Options::tol(rtol, rtol * 1e-3),
         ));
     }
@@ -166,7 +166,7 @@ fn temporal_configs(d: f64) -> Vec<Config> {
         configs.push((
             "rosenbrock",
             format!("rtol {rtol:e}"),
-            Method::Rosw34,
+            Integrator::Rosenbrock,
             Options::tol(rtol, rtol * 1e-3),
         ));
     }
@@ -174,7 +174,7 @@ fn temporal_configs(d: f64) -> Vec<Config> {
         configs.push((
             "esdirk",
             format!("rtol {rtol:e}"),
-            Method::Esdirk46,
+            Integrator::Esdirk,
             Options::tol(rtol, rtol * 1e-3),
         ));
     }
@@ -183,10 +183,11 @@ fn temporal_configs(d: f64) -> Vec<Config> {
         configs.push((
             "generalized-alpha",
             format!("dt {dt:.3e}"),
-            Method::GeneralizedAlpha {
+            Integrator::GeneralizedAlpha,
+            Options {
                 rho_inf: GENERALIZED_ALPHA_RHO_INF,
+                ..Options::fixed(dt)
             },
-            Options::fixed(dt),
         ));
     }
     configs
@@ -238,12 +239,12 @@ fn temporal_reference(
     // budget (non-stiff scenes), else rosenbrock at rtol 1e-8.
     let tights = [
         Tight {
-            method: Method::Dopri5,
+            method: Integrator::Dopri5,
             opts: Options::tol(1e-9, 1e-12),
             text: "dopri5, rtol 1e-9, atol 1e-12".into(),
         },
         Tight {
-            method: Method::Rosw34,
+            method: Integrator::Rosenbrock,
             opts: Options::tol(1e-8, 1e-11),
             text: "rosenbrock (ROS34PW2), rtol 1e-8, atol 1e-11".into(),
         },
@@ -297,10 +298,11 @@ fn spatial_study(ctx: &Ctx<'_>) -> Result<Spatial, CliError> {
     // steps as it does for error-controlled methods. Its own temporal error is
     // measured below against the temporal reference.
     let sp_dt = d / 4000.0;
-    let sp_method = Method::GeneralizedAlpha {
+    let sp_method = Integrator::GeneralizedAlpha;
+    let sp_opts = Options {
         rho_inf: GENERALIZED_ALPHA_RHO_INF,
+        ..Options::fixed(sp_dt)
     };
-    let sp_opts = Options::fixed(sp_dt);
     let sp_setting = format!("dt {sp_dt:.3e}");
     let mut spatial = Vec::new();
     for k in [1usize, 2, 4] {

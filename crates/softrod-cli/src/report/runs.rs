@@ -4,9 +4,9 @@
 use std::time::Instant;
 
 use softrod_integrate::{
-    Control, Hooks, Method, Options, RodSystem, Stats, Status, integrate_second_order,
+    Control, Hooks, Integrator, Options, RodSystem, Stats, Status, integrate_second_order,
 };
-use softrod_scene::{Built, Integrator, Scene};
+use softrod_scene::{Built, Scene};
 
 use crate::common::{CliError, Poser, failed};
 
@@ -22,7 +22,7 @@ pub(super) struct Outcome {
 /// A tight integrator setting and its description.
 #[derive(Clone)]
 pub(super) struct Tight {
-    pub(super) method: Method,
+    pub(super) method: Integrator,
     pub(super) opts: Options,
     pub(super) text: String,
 }
@@ -43,20 +43,15 @@ pub(super) fn median(mut v: Vec<f64>) -> f64 {
 /// One integration, stopped (as a failure) when it exceeds `budget` wall s.
 pub(super) fn simulate_once(
     built: &Built,
-    method: Method,
+    method: Integrator,
     opts: &Options,
     times: &[f64],
     budget: f64,
 ) -> Result<Outcome, String> {
     let mut sys = RodSystem::new(built.model.clone());
     // Each method with the Jacobian `softrod run` gives it.
-    let integrator = match method {
-        Method::Esdirk46 => Integrator::Esdirk,
-        Method::Radau5 => Integrator::Radau5,
-        _ => Integrator::Rosenbrock,
-    };
     sys.jacobian = softrod::Settings::default()
-        .with_integrator(integrator)
+        .with_integrator(method)
         .stiff_jacobian();
     let t1 = *times.last().expect("times");
     let opts = Options {
@@ -109,7 +104,7 @@ pub(super) fn simulate_once(
 /// `repeats` integrations; the median wall time (a failure is not repeated).
 pub(super) fn simulate(
     built: &Built,
-    method: Method,
+    method: Integrator,
     opts: &Options,
     times: &[f64],
     budget: f64,

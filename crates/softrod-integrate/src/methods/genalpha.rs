@@ -179,7 +179,7 @@ impl GeneralizedAlpha {
         Ok(())
     }
 
-    /// One error-controlled step (see [`Method::GeneralizedAlpha`](crate::Method::GeneralizedAlpha)).
+    /// One error-controlled step (see [`Integrator::GeneralizedAlpha`](crate::Integrator::GeneralizedAlpha)).
     fn step_controlled<S: SecondOrderSystem>(
         &mut self,
         p: &mut SecondOrderProblem<'_, S>,

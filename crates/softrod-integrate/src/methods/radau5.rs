@@ -16,7 +16,7 @@
 //!   components do not force small steps), recomputed once from
 //!   `f(yₙ + err)` after a rejection or on the first step; for a
 //!   second-order problem measured in positions, `‖(e_q, h·e_v)‖` (see
-//!   [`Method::Esdirk46`](crate::Method::Esdirk46));
+//!   [`Integrator::Esdirk`](crate::Integrator::Esdirk));
 //! * the internal tolerances `rtol' = 0.1·rtol^(2/3)`, `atol' = rtol'·atol/rtol`
 //!   (so that the global error is of the order of `rtol`);
 //! * Gustafsson's predictive step-size controller, safety scaled by the
