@@ -252,7 +252,7 @@ fn drive<P: Problem, St: Stepper<P>>(
     validate(t0, t1, y0, opts)?;
     let n = y0.len();
     let mut stats = Stats::default();
-    st.init(p, t0, y0, t1, opts, &mut stats)?;
+    st.init(p, t0, y0, opts, &mut stats)?;
 
     let mut out = Outputs {
         ts: Vec::new(),
