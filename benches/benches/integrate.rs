@@ -21,7 +21,7 @@ use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_m
 use nalgebra::DVector;
 use softrod_benches::rod_scenes::{planar_release, release_3d, steel_wire};
 use softrod_dynamics::Model;
-use softrod_integrate::{Hooks, Options, Recommended, RodSystem, integrate_second_order};
+use softrod_integrate::{NoHooks, Options, Recommended, RodSystem, integrate_second_order};
 
 /// The state after 5 ms of the release (the rod moving, the fast modes
 /// rung up), by the recommended setting at rtol 1e-6.
@@ -34,12 +34,11 @@ fn moving_state(model: &Model) -> (DVector<f64>, DVector<f64>) {
     let sol = integrate_second_order(
         &mut sys,
         r.integrator,
-        0.0,
-        5e-3,
+        (0.0, 5e-3),
         &z,
         &z,
         &r.options,
-        Hooks::new(),
+        &mut NoHooks,
     )
     .unwrap();
     let y = sol.y_final;
@@ -75,12 +74,11 @@ fn bench_step(c: &mut Criterion) {
                     integrate_second_order(
                         &mut sys,
                         s.integrator,
-                        0.0,
-                        STEPS as f64 * H,
+                        (0.0, STEPS as f64 * H),
                         &q0,
                         &v0,
                         &s.options,
-                        Hooks::new(),
+                        &mut NoHooks,
                     )
                     .unwrap()
                 })
@@ -114,12 +112,11 @@ fn bench_release(c: &mut Criterion) {
                 integrate_second_order(
                     &mut sys,
                     r.integrator,
-                    0.0,
-                    t1,
+                    (0.0, t1),
                     &z,
                     &z,
                     &r.options,
-                    Hooks::new(),
+                    &mut NoHooks,
                 )
                 .unwrap()
             })

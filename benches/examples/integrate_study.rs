@@ -31,7 +31,7 @@ use softrod_benches::rod_scenes::{
 };
 use softrod_dynamics::Model;
 use softrod_integrate::{
-    Control, Hooks, Integrator, Options, Recommended, RodJacobian, RodSystem, Stats, Status,
+    Callbacks, Control, Integrator, Options, Recommended, RodJacobian, RodSystem, Stats, Status,
     integrate_second_order,
 };
 
@@ -85,7 +85,7 @@ fn measure(case: &Case, setting: &Recommended, reps: usize, budget: f64) -> Resu
         let mut sys = RodSystem::new(case.model.clone());
         setting.configure(&mut sys);
         let start = Instant::now();
-        let hooks = Hooks::new().on_step(move |_, _: &mut RodSystem| {
+        let mut hooks = Callbacks::new().on_step(move |_, _: &mut RodSystem| {
             if start.elapsed().as_secs_f64() > budget {
                 Control::Stop
             } else {
@@ -95,12 +95,11 @@ fn measure(case: &Case, setting: &Recommended, reps: usize, budget: f64) -> Resu
         let sol = integrate_second_order(
             &mut sys,
             setting.integrator,
-            0.0,
-            case.t1,
+            (0.0, case.t1),
             &case.q0,
             &case.qd0,
             &opts,
-            hooks,
+            &mut hooks,
         )
         .map_err(|e| e.to_string())?;
         let wall = start.elapsed().as_secs_f64();

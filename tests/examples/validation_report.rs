@@ -17,7 +17,7 @@ use std::time::Instant;
 
 use nalgebra::DVector;
 use softrod_dynamics::{Data, Model, StaticsOptions, energies, statics};
-use softrod_integrate::{Hooks, Integrator, Options, RodSystem, integrate_second_order};
+use softrod_integrate::{Integrator, NoHooks, Options, RodSystem, integrate_second_order};
 use softrod_kinematics::RodKinematics;
 use softrod_lie::Pose;
 use softrod_scene::{Built, Scene};
@@ -251,12 +251,11 @@ fn sanity_release(rounds: usize) {
             let sol = integrate_second_order(
                 &mut sys,
                 *method,
-                0.0,
-                1.0,
+                (0.0, 1.0),
                 &b.q0,
                 &b.qd0,
                 &opts,
-                Hooks::new(),
+                &mut NoHooks,
             );
             walls[k].push(start.elapsed().as_secs_f64());
             last.push((sys, sol));

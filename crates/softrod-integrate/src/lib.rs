@@ -53,18 +53,20 @@
 //! # One interface
 //!
 //! [`integrate`] (first-order) and [`integrate_second_order`] take the system,
-//! the method, `t0`, `t1`, the initial state, [`Options`] and [`Hooks`]
-//! (per-step callback that may change the system or stop, an output callback
-//! that streams the dense output at `t_eval` as the run proceeds, events,
-//! monitors). [`Options::validate`] checks a method with its options without
-//! running. Output at [`Options::t_eval`] is produced by dense output, never
+//! the [`Integrator`], the time span `(t0, t1)`, the initial state,
+//! [`Options`] and one [`Hooks`] object: the outputs streamed from the dense
+//! output at `t_eval` as the run proceeds, each accepted step (where a
+//! controller may change the system or stop the run), a check of each
+//! accepted state, and event functions ([`NoHooks`] for none, [`Callbacks`]
+//! for one-off closures). [`Options::validate`] checks an integrator with
+//! its options without running. Output at [`Options::t_eval`] is produced by dense output, never
 //! by forcing steps. Failures are [`IntegrateError`]s with the time, step size
 //! and check; no NaN or Inf is ever written to a [`Solution`]. Runs are
 //! deterministic: same input, same bits.
 //!
 //! ```
 //! use nalgebra::{DMatrix, DVector};
-//! use softrod_integrate::{integrate_second_order, Hooks, Integrator, Options, SecondOrderSystem};
+//! use softrod_integrate::{integrate_second_order, Integrator, NoHooks, Options, SecondOrderSystem};
 //!
 //! /// q̈ = −ω² q.
 //! struct Oscillator { w2: f64 }
@@ -80,8 +82,8 @@
 //!
 //! let opts = Options::tol(1e-8, 1e-10).with_t_eval(vec![0.5, 1.0]);
 //! for method in [Integrator::Dopri5, Integrator::Esdirk, Integrator::Radau5] {
-//!     let sol = integrate_second_order(&mut Oscillator { w2: 4.0 }, method, 0.0, 1.0,
-//!         &DVector::from_element(1, 1.0), &DVector::zeros(1), &opts, Hooks::new()).unwrap();
+//!     let sol = integrate_second_order(&mut Oscillator { w2: 4.0 }, method, (0.0, 1.0),
+//!         &DVector::from_element(1, 1.0), &DVector::zeros(1), &opts, &mut NoHooks).unwrap();
 //!     assert!((sol.y[1][0] - (2.0f64).cos()).abs() < 1e-6, "{method:?}");
 //! }
 //! ```
@@ -89,7 +91,7 @@
 #![warn(missing_docs)]
 
 // Floors, bottom up (each imports only from below): errors and the plain
-// data (options, method, hooks, solution); the user traits and the
+// data (options, integrators, hooks, solution); the user traits and the
 // adaptors the methods run on; the step control shared by all methods; the
 // steppers; the driver.
 mod error;
@@ -115,7 +117,7 @@ mod recommended;
 pub use driver::{integrate, integrate_second_order};
 pub use error::{IntegrateError, SystemError};
 pub use hooks::{
-    Control, Direction, Event, Hooks, Monitor, OutputCallback, ScalarFn, StepCallback, StepInfo,
+    Callbacks, Control, Direction, Event, EventKind, Exceeded, Hooks, NoHooks, ScalarFn, StepInfo,
 };
 pub use integrator::{Integrator, UnknownIntegrator};
 pub use methods::generalized_alpha_parameters;

@@ -317,7 +317,7 @@ impl SecondOrderSystem for RodSystem {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{Hooks, Integrator, Options, integrate_second_order};
+    use crate::{Integrator, NoHooks, Options, integrate_second_order};
     use softrod_dynamics::{RodSpec, energies};
     use softrod_kinematics::{Basis, Rod};
     use softrod_lie::{Pose, Vec3};
@@ -354,12 +354,11 @@ mod tests {
         let sol = integrate_second_order(
             &mut sys,
             Integrator::Dopri5,
-            0.0,
-            0.05,
+            (0.0, 0.05),
             &q0,
             &v0,
             &opts,
-            Hooks::new(),
+            &mut NoHooks,
         )
         .unwrap();
         let mut scale = e0.abs();

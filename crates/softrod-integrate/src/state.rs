@@ -52,12 +52,8 @@ impl StepState {
     /// and derivatives.
     pub(crate) fn hermite_dense(&self, t: f64, out: &mut DVector<f64>) {
         hermite(
-            self.t_prev,
-            &self.y_prev,
-            &self.f_prev,
-            self.t,
-            &self.y,
-            &self.f,
+            (self.t_prev, &self.y_prev, &self.f_prev),
+            (self.t, &self.y, &self.f),
             t,
             out,
         );
@@ -198,16 +194,14 @@ impl StepState {
     }
 }
 
-/// Cubic Hermite interpolation on `[ta, tb]` from values and derivatives
-/// (Hairer–Nørsett–Wanner, *ODEs I*, eq. II.6.7).
-#[allow(clippy::too_many_arguments)]
+/// A point of a trajectory: time, value and derivative.
+type Node<'a> = (f64, &'a DVector<f64>, &'a DVector<f64>);
+
+/// Cubic Hermite interpolation at `t` on `[ta, tb]` from the values and
+/// derivatives at both ends (Hairer–Nørsett–Wanner, *ODEs I*, eq. II.6.7).
 pub(crate) fn hermite(
-    ta: f64,
-    ya: &DVector<f64>,
-    fa: &DVector<f64>,
-    tb: f64,
-    yb: &DVector<f64>,
-    fb: &DVector<f64>,
+    (ta, ya, fa): Node<'_>,
+    (tb, yb, fb): Node<'_>,
     t: f64,
     out: &mut DVector<f64>,
 ) {
@@ -254,7 +248,12 @@ mod tests {
         let y = |t: f64| DVector::from_element(1, t * t * t - 2.0 * t);
         let f = |t: f64| DVector::from_element(1, 3.0 * t * t - 2.0);
         let mut out = DVector::zeros(1);
-        hermite(0.5, &y(0.5), &f(0.5), 1.5, &y(1.5), &f(1.5), 0.8, &mut out);
+        hermite(
+            (0.5, &y(0.5), &f(0.5)),
+            (1.5, &y(1.5), &f(1.5)),
+            0.8,
+            &mut out,
+        );
         assert!((out[0] - y(0.8)[0]).abs() < 1e-14);
     }
 }

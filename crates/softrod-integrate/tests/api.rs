@@ -9,8 +9,8 @@ use common::{Linear, VanDerPol, dist, dv};
 use nalgebra::{DMatrix, DVector};
 use proptest::prelude::*;
 use softrod_integrate::{
-    Control, Direction, Event, Hooks, IntegrateError, Integrator, Iteration, Options,
-    SecondOrderSystem, Status, StepInfo, integrate, integrate_second_order,
+    Callbacks, Control, Direction, Event, Hooks, IntegrateError, Integrator, Iteration, NoHooks,
+    Options, SecondOrderSystem, Status, StepInfo, integrate, integrate_second_order,
 };
 
 const ALL: [Integrator; 5] = [
@@ -43,12 +43,11 @@ fn run(
     integrate_second_order(
         sys,
         method,
-        0.0,
-        t1,
+        (0.0, t1),
         &Linear::q0(),
         &Linear::qd0(),
         opts,
-        Hooks::new(),
+        &mut NoHooks,
     )
     .unwrap()
 }
@@ -119,7 +118,7 @@ fn terminal_and_recorded_events_are_located_on_the_dense_output() {
             },
             _ => Options::tol(1e-10, 1e-10),
         };
-        let hooks = Hooks::new()
+        let mut hooks = Callbacks::new()
             // Recorded: q₁ crosses zero downwards at π/4.
             .event(Event::record(|_t, y: &DVector<f64>| y[0]).direction(Direction::Falling))
             // Terminal: q₁ crosses zero upwards at 3π/4.
@@ -127,12 +126,11 @@ fn terminal_and_recorded_events_are_located_on_the_dense_output() {
         let sol = integrate_second_order(
             &mut decoupled(),
             method,
-            0.0,
-            10.0,
+            (0.0, 10.0),
             &dv(&[1.0, 0.0]),
             &dv(&[0.0, 0.0]),
             &opts,
-            hooks,
+            &mut hooks,
         )
         .unwrap();
         assert_eq!(sol.status, Status::Event { index: 1 });
@@ -157,34 +155,60 @@ fn terminal_and_recorded_events_are_located_on_the_dense_output() {
     }
 }
 
+/// Records every step `(t, steps so far)`; stops after the 5th.
+#[derive(Default)]
+struct StopAfterFive {
+    seen: Vec<(f64, usize)>,
+}
+
+impl Hooks<Linear> for StopAfterFive {
+    fn step(&mut self, info: &StepInfo<'_>, _: &mut Linear) -> Control {
+        self.seen.push((info.t, info.stats.steps));
+        if info.stats.steps == 5 {
+            Control::Stop
+        } else {
+            Control::Continue
+        }
+    }
+}
+
 #[test]
 fn callback_can_stop_and_sees_every_step() {
     for method in ALL {
-        let mut seen = Vec::new();
-        let hooks = Hooks::new().on_step(|info: &StepInfo, _s: &mut Linear| {
-            seen.push((info.t, info.stats.steps));
-            if info.stats.steps == 5 {
-                Control::Stop
-            } else {
-                Control::Continue
-            }
-        });
+        let mut hooks = StopAfterFive::default();
         let sol = integrate_second_order(
             &mut Linear::undamped(),
             method,
-            0.0,
-            100.0,
+            (0.0, 100.0),
             &Linear::q0(),
             &Linear::qd0(),
             &opts_for(method, 0.01, 1e-6),
-            hooks,
+            &mut hooks,
         )
         .unwrap();
         assert_eq!(sol.status, Status::Stopped);
         assert_eq!(sol.stats.steps, 5);
+        let seen = hooks.seen;
         assert_eq!(seen.len(), 5);
         assert_eq!(sol.t_final, seen[4].0);
         assert_eq!(*sol.t.last().unwrap(), sol.t_final);
+    }
+}
+
+/// A control law: at the first step with `t ≥ 1` it doubles `K`.
+struct Stiffen {
+    t_switch: f64,
+}
+
+impl Hooks<Linear> for Stiffen {
+    fn step(&mut self, info: &StepInfo<'_>, s: &mut Linear) -> Control {
+        if info.t >= 1.0 && self.t_switch.is_nan() {
+            self.t_switch = info.t;
+            s.k *= 2.0;
+            Control::SystemChanged
+        } else {
+            Control::Continue
+        }
     }
 }
 
@@ -194,28 +218,19 @@ fn a_control_law_changing_the_system_equals_a_restart() {
     // change); the result must equal stopping there and restarting with the
     // new system — bit for bit with fixed-step RK4.
     let opts = Options::fixed(0.01);
-    let mut t_switch = f64::NAN;
-    let hooks = Hooks::new().on_step(|info: &StepInfo, s: &mut Linear| {
-        if info.t >= 1.0 && t_switch.is_nan() {
-            t_switch = info.t;
-            s.k *= 2.0;
-            Control::SystemChanged
-        } else {
-            Control::Continue
-        }
-    });
+    let mut hooks = Stiffen { t_switch: f64::NAN };
     let mut sys = Linear::undamped();
     let full = integrate_second_order(
         &mut sys,
         Integrator::Rk4,
-        0.0,
-        2.0,
+        (0.0, 2.0),
         &Linear::q0(),
         &Linear::qd0(),
         &opts,
-        hooks,
+        &mut hooks,
     )
     .unwrap();
+    let t_switch = hooks.t_switch;
     assert!((1.0..1.02).contains(&t_switch));
     let first = run(Integrator::Rk4, &mut Linear::undamped(), t_switch, &opts);
     let mut stiffer = Linear::undamped();
@@ -224,12 +239,11 @@ fn a_control_law_changing_the_system_equals_a_restart() {
     let second = integrate_second_order(
         &mut stiffer,
         Integrator::Rk4,
-        t_switch,
-        2.0,
+        (t_switch, 2.0),
         &y.rows(0, 2).into_owned(),
         &y.rows(2, 2).into_owned(),
         &opts,
-        Hooks::new(),
+        &mut NoHooks,
     )
     .unwrap();
     assert_eq!(full.y_final, second.y_final);
@@ -277,12 +291,11 @@ fn run_breaks(
     integrate_second_order(
         &mut Breaks { t_bad: 1.0, fail },
         method,
-        0.0,
-        2.0,
+        (0.0, 2.0),
         &dv(&[1.0]),
         &dv(&[0.0]),
         &opts_for(method, 0.1, 1e-6),
-        Hooks::new(),
+        &mut NoHooks,
     )
 }
 
@@ -338,7 +351,7 @@ fn blow_up_beyond_a_user_bound_is_an_error() {
             max_norm: 1e3,
             ..opts_for(method, 0.01, 1e-6)
         };
-        let err = run_m(method, &mut unstable(), 20.0, &opts, Hooks::new()).unwrap_err();
+        let err = run_m(method, &mut unstable(), 20.0, &opts, &mut NoHooks).unwrap_err();
         match err {
             IntegrateError::BoundExceeded {
                 t, value, bound, ..
@@ -350,13 +363,13 @@ fn blow_up_beyond_a_user_bound_is_an_error() {
         }
         // An energy monitor.
         let energy = |_t: f64, y: &DVector<f64>| 0.5 * y.rows(2, 2).norm_squared();
-        let hooks = Hooks::new().monitor("kinetic energy", 50.0, energy);
+        let mut hooks = Callbacks::new().monitor("kinetic energy", 50.0, energy);
         match run_m(
             method,
             &mut unstable(),
             20.0,
             &opts_for(method, 0.01, 1e-6),
-            hooks,
+            &mut hooks,
         )
         .unwrap_err()
         {
@@ -371,13 +384,12 @@ fn run_m(
     sys: &mut Linear,
     t1: f64,
     opts: &Options,
-    hooks: Hooks<'_, Linear>,
+    hooks: &mut dyn Hooks<Linear>,
 ) -> Result<softrod_integrate::Solution, IntegrateError> {
     integrate_second_order(
         sys,
         method,
-        0.0,
-        t1,
+        (0.0, t1),
         &Linear::q0(),
         &Linear::qd0(),
         opts,
@@ -452,7 +464,7 @@ fn invalid_input_is_rejected() {
                 "{m:?} {o:?}"
             );
         }
-        match run_m(m, &mut s, t1, &o, Hooks::new()) {
+        match run_m(m, &mut s, t1, &o, &mut NoHooks) {
             Err(IntegrateError::InvalidInput { what }) => println!("{m:?}: {what}"),
             r => panic!("{m:?}: expected InvalidInput, got {r:?}"),
         }
@@ -461,14 +473,13 @@ fn invalid_input_is_rejected() {
     let r = integrate(
         &mut VanDerPol { mu: 1.0 },
         Integrator::GeneralizedAlpha,
-        0.0,
-        1.0,
+        (0.0, 1.0),
         &dv(&[2.0, 0.0]),
         &Options {
             rho_inf: 0.5,
             ..Options::fixed(0.1)
         },
-        Hooks::new(),
+        &mut NoHooks,
     );
     assert!(matches!(r, Err(IntegrateError::InvalidInput { .. })));
 }
@@ -485,11 +496,10 @@ fn same_input_same_bits() {
         integrate(
             &mut VanDerPol { mu: 10.0 },
             Integrator::Rosenbrock,
-            0.0,
-            30.0,
+            (0.0, 30.0),
             &dv(&[2.0, 0.0]),
             &Options::tol(1e-6, 1e-6),
-            Hooks::new(),
+            &mut NoHooks,
         )
         .unwrap()
     };
@@ -544,11 +554,10 @@ fn first_and_second_order_interfaces_agree() {
     let b = integrate(
         &mut common::LinearFirstOrder(sys.a()),
         Integrator::Dopri5,
-        0.0,
-        3.0,
+        (0.0, 3.0),
         &Linear::y0(),
         &opts,
-        Hooks::new(),
+        &mut NoHooks,
     )
     .unwrap();
     assert_eq!(a.stats.steps, b.stats.steps);
@@ -575,8 +584,8 @@ proptest! {
     #[test]
     fn decay_is_accurate_and_monotone(lambda in 0.1f64..1e4, t1 in 0.1f64..10.0) {
         for method in [Integrator::Dopri5, Integrator::Rosenbrock] {
-            let sol = integrate(&mut Decay(lambda), method, 0.0, t1, &dv(&[1.0]),
-                &Options { max_steps: 1_000_000, ..Options::tol(1e-8, 1e-10) }, Hooks::new()).unwrap();
+            let sol = integrate(&mut Decay(lambda), method, (0.0, t1), &dv(&[1.0]),
+                &Options { max_steps: 1_000_000, ..Options::tol(1e-8, 1e-10) }, &mut NoHooks).unwrap();
             let exact = (-lambda * t1).exp();
             prop_assert!((sol.y_final[0] - exact).abs() < 1e-6, "{:?}: {} vs {}", method, sol.y_final[0], exact);
             prop_assert!(sol.y.iter().all(|y| y[0] <= 1.0 + 1e-12 && y[0] >= -1e-6));
@@ -584,9 +593,28 @@ proptest! {
     }
 }
 
-/// The output callback sees exactly the stored outputs, in order, as the run
-/// proceeds (before the step's `on_step`); `stream_outputs` stores none;
-/// `Stop` from it ends the run at that output time.
+/// Logs outputs (`'o'`) and steps (`'s'`) in the order they come, keeping
+/// no outputs in the solution.
+#[derive(Default)]
+struct Log(Vec<(char, f64, DVector<f64>)>);
+
+impl Hooks<Linear> for Log {
+    fn keep_outputs(&self) -> bool {
+        false
+    }
+    fn output(&mut self, t: f64, y: &DVector<f64>, _: &mut Linear) -> Control {
+        self.0.push(('o', t, y.clone()));
+        Control::Continue
+    }
+    fn step(&mut self, info: &StepInfo<'_>, _: &mut Linear) -> Control {
+        self.0.push(('s', info.t, info.y.clone()));
+        Control::Continue
+    }
+}
+
+/// The output hook sees exactly the stored outputs, in order, as the run
+/// proceeds (before the step's hook); with `keep_outputs` false none is
+/// stored; `Stop` from it ends the run at that output time.
 #[test]
 fn output_callback_streams_dense_output_and_can_stop() {
     let te: Vec<f64> = (0..=40).map(|k| 0.25 * k as f64).collect();
@@ -594,30 +622,20 @@ fn output_callback_streams_dense_output_and_can_stop() {
         let opts = opts_for(method, 0.01, 1e-8).with_t_eval(te.clone());
         let reference = run(method, &mut Linear::undamped(), 10.0, &opts);
 
-        let log = std::cell::RefCell::new(Vec::new());
-        let hooks = Hooks::new()
-            .stream_outputs(|t, y: &DVector<f64>, _: &mut Linear| {
-                log.borrow_mut().push(('o', t, y.clone()));
-                Control::Continue
-            })
-            .on_step(|info: &StepInfo, _: &mut Linear| {
-                log.borrow_mut().push(('s', info.t, info.y.clone()));
-                Control::Continue
-            });
+        let mut hooks = Log::default();
         let sol = integrate_second_order(
             &mut Linear::undamped(),
             method,
-            0.0,
-            10.0,
+            (0.0, 10.0),
             &Linear::q0(),
             &Linear::qd0(),
             &opts,
-            hooks,
+            &mut hooks,
         )
         .unwrap();
         assert!(sol.t.is_empty() && sol.y.is_empty());
         assert_eq!(sol.y_final, reference.y_final);
-        let log = log.into_inner();
+        let log = hooks.0;
         let outs: Vec<_> = log.iter().filter(|e| e.0 == 'o').collect();
         assert_eq!(outs.len(), te.len());
         for (o, (t, y)) in outs.iter().zip(reference.t.iter().zip(&reference.y)) {
@@ -640,7 +658,7 @@ fn output_callback_streams_dense_output_and_can_stop() {
 
         // Stop at the 5th output (t = 1).
         let mut count = 0;
-        let hooks = Hooks::new().on_output(|_, _, _: &mut Linear| {
+        let mut hooks = Callbacks::new().on_output(|_, _, _: &mut Linear| {
             count += 1;
             if count == 5 {
                 Control::Stop
@@ -651,12 +669,11 @@ fn output_callback_streams_dense_output_and_can_stop() {
         let sol = integrate_second_order(
             &mut Linear::undamped(),
             method,
-            0.0,
-            10.0,
+            (0.0, 10.0),
             &Linear::q0(),
             &Linear::qd0(),
             &opts,
-            hooks,
+            &mut hooks,
         )
         .unwrap();
         assert_eq!(sol.status, Status::Stopped);

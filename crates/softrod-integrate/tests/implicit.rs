@@ -11,7 +11,7 @@ use std::convert::Infallible;
 use common::{VanDerPol, dv};
 use nalgebra::{DMatrix, DVector};
 use softrod_integrate::{
-    Hooks, Integrator, Options, SecondOrderSystem, integrate, integrate_second_order,
+    Integrator, NoHooks, Options, SecondOrderSystem, integrate, integrate_second_order,
 };
 
 /// `M q̈ = −K q − (D + C(t)) q̇` with constant SPD `M`, `K`, `D` and a damping
@@ -176,7 +176,7 @@ fn run(sys: &mut Structured, method: Integrator, opts: &Options) -> softrod_inte
     let y = y0();
     let q0 = y.rows(0, 3).into_owned();
     let v0 = y.rows(3, 3).into_owned();
-    integrate_second_order(sys, method, 0.0, 2.0, &q0, &v0, opts, Hooks::new()).unwrap()
+    integrate_second_order(sys, method, (0.0, 2.0), &q0, &v0, opts, &mut NoHooks).unwrap()
 }
 
 /// Largest position error at t = 2 against the exact solution.
@@ -346,11 +346,10 @@ fn van_der_pol_mu_1000_with_radau5_and_esdirk_within_budget() {
         integrate(
             &mut VanDerPol { mu: 1000.0 },
             Integrator::Radau5,
-            0.0,
-            VDP_T1,
+            (0.0, VDP_T1),
             &y0,
             &opts(tol),
-            Hooks::new(),
+            &mut NoHooks,
         )
         .unwrap()
     };
@@ -359,12 +358,11 @@ fn van_der_pol_mu_1000_with_radau5_and_esdirk_within_budget() {
     let esd = integrate_second_order(
         &mut VdpSecond { mu: 1000.0 },
         Integrator::Esdirk,
-        0.0,
-        VDP_T1,
+        (0.0, VDP_T1),
         &dv(&[2.0]),
         &dv(&[0.0]),
         &opts(1e-6),
-        Hooks::new(),
+        &mut NoHooks,
     )
     .unwrap();
     println!(

@@ -7,7 +7,7 @@ mod common;
 
 use common::{Forced, Linear, LinearFirstOrder, dist, dv};
 use softrod_integrate::{
-    Hooks, Integrator, Options, StepControl, integrate, integrate_second_order,
+    Integrator, NoHooks, Options, StepControl, integrate, integrate_second_order,
 };
 
 const T1: f64 = 4.0;
@@ -23,12 +23,11 @@ fn fixed_error(sys: &Linear, method: Integrator, base: &Options, h: f64) -> f64 
     let sol = integrate_second_order(
         &mut s,
         method,
-        0.0,
-        T1,
+        (0.0, T1),
         &Linear::q0(),
         &Linear::qd0(),
         &opts,
-        Hooks::new(),
+        &mut NoHooks,
     )
     .unwrap();
     assert_eq!(sol.t_final, T1);
@@ -100,11 +99,10 @@ fn radau5_first_order_form_is_fifth_order() {
         let sol = integrate(
             &mut s,
             Integrator::Radau5,
-            0.0,
-            T1,
+            (0.0, T1),
             &Linear::y0(),
             &Options::fixed(h),
-            Hooks::new(),
+            &mut NoHooks,
         )
         .unwrap();
         dist(&sol.y_final, &lin.exact(T1, &Linear::y0()))
@@ -124,12 +122,11 @@ fn esdirk46_is_fourth_order_on_a_non_autonomous_problem() {
         let sol = integrate_second_order(
             &mut s,
             Integrator::Esdirk,
-            0.0,
-            T1,
+            (0.0, T1),
             &dv(&[0.0]),
             &dv(&[0.0]),
             &Options::fixed(h),
-            Hooks::new(),
+            &mut NoHooks,
         )
         .unwrap();
         let (q, v) = sys.exact(T1);
@@ -149,12 +146,11 @@ fn rosw34_is_third_order_on_a_non_autonomous_problem() {
         let sol = integrate_second_order(
             &mut s,
             Integrator::Rosenbrock,
-            0.0,
-            T1,
+            (0.0, T1),
             &dv(&[0.0]),
             &dv(&[0.0]),
             &opts,
-            Hooks::new(),
+            &mut NoHooks,
         )
         .unwrap();
         let (q, v) = s.exact(T1);
@@ -189,11 +185,10 @@ fn first_order_path_with_finite_difference_jacobian_matches() {
         let sol = integrate(
             &mut s,
             Integrator::Rosenbrock,
-            0.0,
-            T1,
+            (0.0, T1),
             &Linear::y0(),
             &opts,
-            Hooks::new(),
+            &mut NoHooks,
         )
         .unwrap();
         dist(&sol.y_final, &sys.exact(T1, &Linear::y0()))
@@ -216,12 +211,11 @@ fn adaptive_slope(method: Integrator, tol_a: f64, tol_b: f64) -> f64 {
         let sol = integrate_second_order(
             &mut s,
             method,
-            0.0,
-            T1,
+            (0.0, T1),
             &Linear::q0(),
             &Linear::qd0(),
             &Options::tol(tol, tol),
-            Hooks::new(),
+            &mut NoHooks,
         )
         .unwrap();
         (

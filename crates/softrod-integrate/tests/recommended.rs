@@ -11,7 +11,7 @@ use std::path::Path;
 use nalgebra::DVector;
 use softrod_dynamics::{Model, RodSpec, energies};
 use softrod_integrate::{
-    Hooks, Integrator, Options, Recommended, RodSystem, Solution, Status, integrate_second_order,
+    Integrator, NoHooks, Options, Recommended, RodSystem, Solution, Status, integrate_second_order,
 };
 use softrod_kinematics::{Basis, Rod, RodKinematics, Strain, straight};
 use softrod_lie::{Pose, Vec3};
@@ -56,12 +56,11 @@ fn run(
     let sol = integrate_second_order(
         &mut sys,
         setting.integrator,
-        0.0,
-        t1,
+        (0.0, t1),
         q0,
         qd0,
         &opts,
-        Hooks::new(),
+        &mut NoHooks,
     )
     .unwrap_or_else(|e| {
         panic!(

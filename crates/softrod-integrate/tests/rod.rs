@@ -7,8 +7,8 @@
 use nalgebra::DVector;
 use softrod_dynamics::{Data, Model, RodSpec, energies, modes};
 use softrod_integrate::{
-    Hooks, IntegrateError, Integrator, Iteration, Options, RodJacobian, RodSystem, Solution,
-    integrate_second_order,
+    Callbacks, IntegrateError, Integrator, Iteration, NoHooks, Options, RodJacobian, RodSystem,
+    Solution, integrate_second_order,
 };
 use softrod_kinematics::{Basis, Rod, straight};
 use softrod_lie::{Pose, Vec3};
@@ -56,7 +56,7 @@ fn run(
     let mut sys = RodSystem::new(model.clone());
     sys.jacobian = jacobian;
     let z = DVector::zeros(model.n_dof());
-    let sol = integrate_second_order(&mut sys, method, 0.0, t1, &z, &z, opts, Hooks::new())?;
+    let sol = integrate_second_order(&mut sys, method, (0.0, t1), &z, &z, opts, &mut NoHooks)?;
     Ok((sys, sol))
 }
 
@@ -368,12 +368,20 @@ fn reruns_are_bit_identical() {
             sys.jacobian = jac;
             let z = DVector::zeros(model.n_dof());
             let mut streamed: Vec<(f64, DVector<f64>)> = Vec::new();
-            let hooks = Hooks::new().on_output(|t, y, _: &mut RodSystem| {
+            let record = |t, y: &DVector<f64>, _: &mut RodSystem| {
                 streamed.push((t, y.clone()));
                 softrod_integrate::Control::Continue
-            });
-            let sol =
-                integrate_second_order(&mut sys, method, 0.0, 0.1, &z, &z, &opts, hooks).unwrap();
+            };
+            let sol = integrate_second_order(
+                &mut sys,
+                method,
+                (0.0, 0.1),
+                &z,
+                &z,
+                &opts,
+                &mut Callbacks::new().on_output(record),
+            )
+            .unwrap();
             (sol, streamed)
         };
         let (a, sa) = go();
@@ -486,12 +494,12 @@ fn mass_matrix_form_matches_dense_inverse_mass_stiffness() {
         };
         let mut fast = RodSystem::new(model.clone());
         fast.jacobian = RodJacobian::ElasticOnly;
-        let a = integrate_second_order(&mut fast, method, 0.0, 0.1, &z, &z, &opts, Hooks::new())
+        let a = integrate_second_order(&mut fast, method, (0.0, 0.1), &z, &z, &opts, &mut NoHooks)
             .unwrap();
         let mut slow = RodSystem::new(model.clone());
         slow.jacobian = RodJacobian::ElasticOnly;
         let mut slow = DenseW(slow);
-        let b = integrate_second_order(&mut slow, method, 0.0, 0.1, &z, &z, &opts, Hooks::new())
+        let b = integrate_second_order(&mut slow, method, (0.0, 0.1), &z, &z, &opts, &mut NoHooks)
             .unwrap();
         assert_eq!(a.stats.steps, b.stats.steps, "{method:?}");
         let (ya, yb) = (&a.y[0], &b.y[0]);

@@ -7,7 +7,7 @@ mod common;
 use common::{Linear, Robertson, VanDerPol, dist, dv};
 use nalgebra::DMatrix;
 use softrod_integrate::{
-    Hooks, IntegrateError, Integrator, Options, integrate, integrate_second_order,
+    IntegrateError, Integrator, NoHooks, Options, integrate, integrate_second_order,
 };
 
 /// Van der Pol, μ = 1000, over [0, 3000]: almost two relaxation periods
@@ -32,11 +32,10 @@ fn van_der_pol_mu_1000_rosw_within_budget_dopri5_not() {
     let sol = integrate(
         &mut VanDerPol { mu: 1000.0 },
         Integrator::Rosenbrock,
-        0.0,
-        VDP_T1,
+        (0.0, VDP_T1),
         &y0,
         &vdp_opts(1e-6),
-        Hooks::new(),
+        &mut NoHooks,
     )
     .unwrap();
     println!("rosw34 VdP μ=1000 tol 1e-6: {:?}", sol.stats);
@@ -52,14 +51,13 @@ fn van_der_pol_mu_1000_rosw_within_budget_dopri5_not() {
     let fine = integrate(
         &mut VanDerPol { mu: 1000.0 },
         Integrator::Rosenbrock,
-        0.0,
-        VDP_T1,
+        (0.0, VDP_T1),
         &y0,
         &Options {
             max_steps: 100_000,
             ..Options::tol(1e-8, 1e-8)
         },
-        Hooks::new(),
+        &mut NoHooks,
     )
     .unwrap();
     println!("rosw34 VdP μ=1000 tol 1e-8: {:?}", fine.stats);
@@ -74,11 +72,10 @@ fn van_der_pol_mu_1000_rosw_within_budget_dopri5_not() {
     let err = integrate(
         &mut VanDerPol { mu: 1000.0 },
         Integrator::Dopri5,
-        0.0,
-        VDP_T1,
+        (0.0, VDP_T1),
         &y0,
         &vdp_opts(1e-6),
-        Hooks::new(),
+        &mut NoHooks,
     )
     .unwrap_err();
     println!("dopri5: {err}");
@@ -105,11 +102,10 @@ fn robertson_to_t_40_matches_the_reference() {
     let sol = integrate(
         &mut Robertson,
         Integrator::Rosenbrock,
-        0.0,
-        40.0,
+        (0.0, 40.0),
         &dv(&[1.0, 0.0, 0.0]),
         &opts,
-        Hooks::new(),
+        &mut NoHooks,
     )
     .unwrap();
     println!("Robertson: {:?}, y = {}", sol.stats, sol.y_final);
@@ -143,8 +139,7 @@ fn generalized_alpha_takes_large_steps_and_damps_the_stiff_mode() {
         let sol = integrate_second_order(
             &mut sys,
             Integrator::GeneralizedAlpha,
-            0.0,
-            t1,
+            (0.0, t1),
             &q0,
             &qd0,
             &Options {
@@ -153,7 +148,7 @@ fn generalized_alpha_takes_large_steps_and_damps_the_stiff_mode() {
                 jacobian_max_age: usize::MAX,
                 ..Options::fixed(0.05)
             },
-            Hooks::new(),
+            &mut NoHooks,
         )
         .unwrap();
         println!("rho_inf {rho}: {:?}", sol.stats);
@@ -194,12 +189,11 @@ fn rosw34_on_the_stiff_pair_is_not_limited_by_the_stiff_mode() {
     let sol = integrate_second_order(
         &mut sys,
         Integrator::Rosenbrock,
-        0.0,
-        10.0,
+        (0.0, 10.0),
         &dv(&[1.0, 0.0]),
         &dv(&[0.0, 0.0]),
         &Options::tol(1e-6, 1e-8),
-        Hooks::new(),
+        &mut NoHooks,
     )
     .unwrap();
     println!("rosw34 stiff pair: {:?}", sol.stats);

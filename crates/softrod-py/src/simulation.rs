@@ -15,7 +15,9 @@ use softrod::lie::Pose;
 use softrod::scene::Integrator;
 use softrod::{Equilibrium, Settings as RustSettings};
 
-use crate::control::{CableInputs, ControlError, check_tensions, simulate_controlled, step};
+use crate::control::{
+    CableInputs, ControlError, ControlledRun, check_tensions, simulate_controlled, step,
+};
 use crate::convert::{array, array_out, mat_out, pose_into, vec_out, vector};
 use crate::errors::{dynamics, guard, guard_detached, input, integrate, simulation, to_py};
 use crate::model::{Rod, build_model};
@@ -1251,15 +1253,13 @@ impl Simulation {
                     };
                 let r = py.detach(|| {
                     guard(|| {
-                        Ok(simulate_controlled(
-                            inputs,
-                            &settings,
+                        let run = ControlledRun {
                             duration,
-                            &q_start,
-                            &qd_start,
+                            q0: &q_start,
+                            qd0: &qd_start,
                             control_every,
-                            &mut controller,
-                        ))
+                        };
+                        Ok(simulate_controlled(inputs, &settings, run, &mut controller))
                     })
                 })?;
                 match r {

@@ -4,7 +4,7 @@
 use std::time::Instant;
 
 use softrod_integrate::{
-    Control, Hooks, Integrator, Options, RodSystem, Stats, Status, integrate_second_order,
+    Callbacks, Control, Integrator, Options, RodSystem, Stats, Status, integrate_second_order,
 };
 use softrod_scene::{Built, Scene};
 
@@ -60,7 +60,7 @@ pub(super) fn simulate_once(
         ..opts.clone()
     };
     let start = Instant::now();
-    let hooks = Hooks::new().on_step(move |_, _: &mut RodSystem| {
+    let mut hooks = Callbacks::new().on_step(move |_, _: &mut RodSystem| {
         if start.elapsed().as_secs_f64() > budget {
             Control::Stop
         } else {
@@ -68,7 +68,13 @@ pub(super) fn simulate_once(
         }
     });
     let sol = integrate_second_order(
-        &mut sys, method, 0.0, t1, &built.q0, &built.qd0, &opts, hooks,
+        &mut sys,
+        method,
+        (0.0, t1),
+        &built.q0,
+        &built.qd0,
+        &opts,
+        &mut hooks,
     )
     .map_err(|e| e.to_string())?;
     let wall = start.elapsed().as_secs_f64();
