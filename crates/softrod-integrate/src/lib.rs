@@ -6,13 +6,16 @@
 //! ODE theory applies; shear and extension make the system stiff
 //! (`EA/EI ~ 1/r²`).
 //!
-//! # Which method
+//! # Which integrator
 //!
-//! [`Recommended::tolerance`] gives the method and options for a relative
-//! tolerance, [`Recommended::fixed_step`] for a fixed step; both say why,
-//! and docs/performance.md ("softrod-integrate") has the measurements.
+//! [`Integrator`] is the one list of methods, under the names the scene
+//! format (`run.integrator`), the facade and Python use.
+//! [`Recommended::tolerance`] gives the integrator and options for a
+//! relative tolerance, [`Recommended::fixed_step`] for a fixed step; both
+//! say why, and docs/performance.md ("softrod-integrate") has the
+//! measurements.
 //!
-//! | method | kind | order | steps | for |
+//! | integrator | kind | order | steps | for |
 //! |---|---|---|---|---|
 //! | [`Integrator::Esdirk`] | ESDIRK4(3)6L\[2\]SA, L-stable, Newton on `M + h²γ²K + hγD` (O(N)), exact-Jacobian fallback | 4 | adaptive or fixed | stiff rods, any size: **recommended** |
 //! | [`Integrator::Radau5`] | Radau IIA, RADAU5's design, exact dense Jacobian | 5 | adaptive or fixed | small stiff systems, tight tolerances |
@@ -21,7 +24,7 @@
 //! | [`Integrator::Dopri5`] | explicit RK 5(4), dense order 4 | 5 | adaptive or fixed | non-stiff, references |
 //! | [`Integrator::Rk4`] | explicit RK | 4 | fixed | non-stiff, reference runs |
 //!
-//! `ESDIRK46` and generalized-α need a [`SecondOrderSystem`]; the others
+//! ESDIRK and generalized-α need a [`SecondOrderSystem`]; the others
 //! run on first-order systems too (on `y = (q, q̇)` for a second-order one,
 //! with `n×n` Schur complements instead of `2n×2n` matrices).
 //!
@@ -87,13 +90,43 @@
 //!     assert!((sol.y[1][0] - (2.0f64).cos()).abs() < 1e-6, "{method:?}");
 //! }
 //! ```
+//!
+//! # Where things are, and adding an integrator
+//!
+//! The modules are floors, each importing only from those below it: the
+//! plain data (`integrator`: the list; `options`, `hooks`, `solution`,
+//! `error`); the user traits and the adaptors the methods run on (`system`,
+//! `rod`: the one adaptor that knows rods, `problem`: first- and
+//! second-order problems with their iteration matrices, `linalg`); the step
+//! control every method shares (`control`: error norm, step clipping,
+//! checks; `state`: the step state, its start and first step, dense
+//! output; `stepper`: the `Stepper` trait a method implements); the
+//! methods, one file each in `methods/`; the `driver` (one loop for every
+//! method: outputs, events, checks, hooks) and `recommended`.
+//!
+//! A new integrator takes four steps:
+//! 1. **the list**: a variant of [`Integrator`] with its scene name,
+//!    description, order and kind (the compiler then points at every
+//!    `match` that must place it: the driver, `Options::validate`,
+//!    [`RodJacobian::recommended`], the facade's memory estimate);
+//! 2. **the method**: `methods/<name>.rs`, a type implementing `Stepper`
+//!    for the problems it supports: its `restart` (its own state and first
+//!    evaluation; the start and the first step are shared), one accepted
+//!    `step`, `system_changed`, and a dense output if the cubic Hermite of
+//!    the step state is not enough;
+//! 3. **the driver**: its arm in [`integrate`] and/or
+//!    [`integrate_second_order`];
+//! 4. **tests**: its order on the linear oscillators (`tests/order.rs`),
+//!    its place in the common-interface tests (`tests/api.rs`: dense
+//!    output, events, hooks, failures), and for a stiff method the stiff
+//!    and rod tests (`tests/stiff.rs`, `tests/rod.rs`). Python's
+//!    `softrod.INTEGRATORS` follows the list by itself; the stub's
+//!    `_IntegratorName` must be extended (a Python test checks it).
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
-// Floors, bottom up (each imports only from below): errors and the plain
-// data (options, integrators, hooks, solution); the user traits and the
-// adaptors the methods run on; the step control shared by all methods; the
-// steppers; the driver.
+// Floors, bottom up (each imports only from below); see "Where things are"
+// in the crate documentation.
 mod error;
 mod hooks;
 mod integrator;

@@ -86,8 +86,8 @@ pub struct Options {
     /// Rosenbrock–W and generalized-α: re-evaluate the Jacobian at the latest
     /// after this many accepted steps (it is also re-evaluated after every
     /// rejected step / Newton failure that used an older one). 1: every step.
-    /// Default 20: on Van der Pol (μ = 1000) it saves ~90 % of the Jacobians
-    /// for ~4 % more steps than 1.
+    /// Default 20: on a stiff problem it saves most Jacobian evaluations for
+    /// a few percent more steps than 1 (docs/performance.md).
     pub jacobian_max_age: usize,
     /// Largest step (default `∞`).
     pub h_max: f64,
