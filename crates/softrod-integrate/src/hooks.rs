@@ -186,9 +186,10 @@ pub trait Hooks<S> {
         Ok(())
     }
 
-    /// The event functions, one [`EventKind`] each (default none); their
-    /// indices are those of [`EventRecord::index`](crate::EventRecord::index)
-    /// and [`Status::Event`](crate::Status::Event).
+    /// The event functions, one [`EventKind`] each (default none), read
+    /// once when the run starts; their indices are those of
+    /// [`EventRecord::index`](crate::EventRecord::index) and
+    /// [`Status::Event`](crate::Status::Event).
     fn events(&self) -> &[EventKind] {
         &[]
     }
