@@ -21,7 +21,7 @@ use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_m
 use nalgebra::DVector;
 use softrod_benches::rod_scenes::{planar_release, release_3d, steel_wire};
 use softrod_dynamics::Model;
-use softrod_integrate::{Hooks, Options, Recommended, RodSystem, integrate_second_order};
+use softrod_integrate::{NoHooks, Options, Recommended, RodSystem, integrate_second_order};
 
 /// The state after 5 ms of the release (the rod moving, the fast modes
 /// rung up), by the recommended setting at rtol 1e-6.
@@ -33,13 +33,12 @@ fn moving_state(model: &Model) -> (DVector<f64>, DVector<f64>) {
     let z = DVector::zeros(n);
     let sol = integrate_second_order(
         &mut sys,
-        r.method,
-        0.0,
-        5e-3,
+        r.integrator,
+        (0.0, 5e-3),
         &z,
         &z,
         &r.options,
-        Hooks::new(),
+        &mut NoHooks,
     )
     .unwrap();
     let y = sol.y_final;
@@ -74,13 +73,12 @@ fn bench_step(c: &mut Criterion) {
                 b.iter(|| {
                     integrate_second_order(
                         &mut sys,
-                        s.method,
-                        0.0,
-                        STEPS as f64 * H,
+                        s.integrator,
+                        (0.0, STEPS as f64 * H),
                         &q0,
                         &v0,
                         &s.options,
-                        Hooks::new(),
+                        &mut NoHooks,
                     )
                     .unwrap()
                 })
@@ -113,13 +111,12 @@ fn bench_release(c: &mut Criterion) {
             b.iter(|| {
                 integrate_second_order(
                     &mut sys,
-                    r.method,
-                    0.0,
-                    t1,
+                    r.integrator,
+                    (0.0, t1),
                     &z,
                     &z,
                     &r.options,
-                    Hooks::new(),
+                    &mut NoHooks,
                 )
                 .unwrap()
             })

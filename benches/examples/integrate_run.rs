@@ -12,7 +12,7 @@
 use nalgebra::{DMatrix, DVector};
 use softrod_dynamics::{Model, RodSpec};
 use softrod_integrate::{
-    Hooks, Iteration, Method, Options, RodJacobian, RodSystem, SecondOrderSystem,
+    Integrator, Iteration, NoHooks, Options, RodJacobian, RodSystem, SecondOrderSystem,
     integrate_second_order,
 };
 use softrod_kinematics::{Basis, Rod, RodKinematics, straight};
@@ -141,14 +141,15 @@ fn main() {
             },
             t_eval: Some(times.clone()),
             max_steps: 10_000_000,
+            rho_inf: 1.0,
             ..Options::fixed(5e-5)
         };
-        let ga = Method::GeneralizedAlpha { rho_inf: 1.0 };
+        let ga = Integrator::GeneralizedAlpha;
         let mut sys = RodSystem::new(m.clone());
         sys.jacobian = RodJacobian::ElasticOnly;
         let t0 = Instant::now();
         let a =
-            integrate_second_order(&mut sys, ga, 0.0, 1.0, &z, &z, &opts, Hooks::new()).unwrap();
+            integrate_second_order(&mut sys, ga, (0.0, 1.0), &z, &z, &opts, &mut NoHooks).unwrap();
         let ta: Vec<_> = a.y.iter().map(|y| tip(&m, y)).collect();
         println!(
             "ref (force residual): {ta:?} {:?} {:.1} s",
@@ -157,8 +158,8 @@ fn main() {
         );
         let mut dense = Dense(sys.clone());
         let t0 = Instant::now();
-        let b =
-            integrate_second_order(&mut dense, ga, 0.0, 1.0, &z, &z, &opts, Hooks::new()).unwrap();
+        let b = integrate_second_order(&mut dense, ga, (0.0, 1.0), &z, &z, &opts, &mut NoHooks)
+            .unwrap();
         let tb: Vec<_> = b.y.iter().map(|y| tip(&m, y)).collect();
         println!(
             "ref (accel, dense M⁻¹K): {:?} {:?} {:.1} s; refs differ by {:.2e} m (max over t)",
@@ -196,20 +197,19 @@ fn main() {
         let opts = Options {
             t_eval: Some(times.clone()),
             max_steps: 10_000_000,
+            rho_inf: env("RHO", 0.8),
             ..if controlled {
                 Options::linearly_implicit_tol(dt, dt * 1e-2)
             } else {
                 Options::linearly_implicit(dt)
             }
         };
-        let method = Method::GeneralizedAlpha {
-            rho_inf: env("RHO", 0.8),
-        };
+        let method = Integrator::GeneralizedAlpha;
         let sol = if accel_form {
             let mut sys = NoResidual(sys);
-            integrate_second_order(&mut sys, method, 0.0, 1.0, &z, &z, &opts, Hooks::new())
+            integrate_second_order(&mut sys, method, (0.0, 1.0), &z, &z, &opts, &mut NoHooks)
         } else {
-            integrate_second_order(&mut sys, method, 0.0, 1.0, &z, &z, &opts, Hooks::new())
+            integrate_second_order(&mut sys, method, (0.0, 1.0), &z, &z, &opts, &mut NoHooks)
         }
         .unwrap();
         let wall = t0.elapsed().as_secs_f64();

@@ -31,7 +31,7 @@ use softrod_benches::rod_scenes::{
 };
 use softrod_dynamics::Model;
 use softrod_integrate::{
-    Control, Hooks, Method, Options, Recommended, RodJacobian, RodSystem, Stats, Status,
+    Callbacks, Control, Integrator, Options, Recommended, RodJacobian, RodSystem, Stats, Status,
     integrate_second_order,
 };
 
@@ -85,7 +85,7 @@ fn measure(case: &Case, setting: &Recommended, reps: usize, budget: f64) -> Resu
         let mut sys = RodSystem::new(case.model.clone());
         setting.configure(&mut sys);
         let start = Instant::now();
-        let hooks = Hooks::new().on_step(move |_, _: &mut RodSystem| {
+        let mut hooks = Callbacks::new().on_step(move |_, _: &mut RodSystem| {
             if start.elapsed().as_secs_f64() > budget {
                 Control::Stop
             } else {
@@ -94,13 +94,12 @@ fn measure(case: &Case, setting: &Recommended, reps: usize, budget: f64) -> Resu
         });
         let sol = integrate_second_order(
             &mut sys,
-            setting.method,
-            0.0,
-            case.t1,
+            setting.integrator,
+            (0.0, case.t1),
             &case.q0,
             &case.qd0,
             &opts,
-            hooks,
+            &mut hooks,
         )
         .map_err(|e| e.to_string())?;
         let wall = start.elapsed().as_secs_f64();
@@ -125,9 +124,9 @@ fn measure(case: &Case, setting: &Recommended, reps: usize, budget: f64) -> Resu
     Ok(best.unwrap())
 }
 
-fn setting(method: Method, options: Options, jacobian: RodJacobian) -> Recommended {
+fn setting(method: Integrator, options: Options, jacobian: RodJacobian) -> Recommended {
     Recommended {
-        method,
+        integrator: method,
         options,
         jacobian,
     }
@@ -153,13 +152,13 @@ fn reference(case: &Case, radau: bool) -> Vec<[f64; 3]> {
     }
     let s = if radau {
         setting(
-            Method::Radau5,
+            Integrator::Radau5,
             Options::tol(1e-13, 1e-13),
             RodJacobian::Exact,
         )
     } else {
         setting(
-            Method::Dopri5,
+            Integrator::Dopri5,
             Options::tol(1e-10, 1e-12),
             RodJacobian::Exact,
         )
@@ -218,7 +217,7 @@ fn study_methods(reps: usize) {
             "\n### {} release, target {target:e} m: the loosest setting of each method that meets it\n\n{HEADER}",
             case.name
         );
-        let tol = |m: Method, j: RodJacobian, r: f64, a: f64| setting(m, Options::tol(r, a), j);
+        let tol = |m: Integrator, j: RodJacobian, r: f64, a: f64| setting(m, Options::tol(r, a), j);
         let e = RodJacobian::Exact;
         let el = RodJacobian::ElasticOnly;
         let rtols = [
@@ -237,7 +236,12 @@ fn study_methods(reps: usize) {
                 "Radau IIA 5, exact J",
                 rtols
                     .iter()
-                    .map(|&r| (format!("rtol = atol = {r:e}"), tol(Method::Radau5, e, r, r)))
+                    .map(|&r| {
+                        (
+                            format!("rtol = atol = {r:e}"),
+                            tol(Integrator::Radau5, e, r, r),
+                        )
+                    })
                     .collect(),
             ),
             (
@@ -247,7 +251,7 @@ fn study_methods(reps: usize) {
                     .map(|&r| {
                         (
                             format!("rtol {r:e}, atol {:e}", r * 1e-2),
-                            tol(Method::Rosw34, el, r, r * 1e-2),
+                            tol(Integrator::Rosenbrock, el, r, r * 1e-2),
                         )
                     })
                     .collect(),
@@ -259,7 +263,7 @@ fn study_methods(reps: usize) {
                     .map(|&r| {
                         (
                             format!("rtol {r:e}, atol {:e}", r * 1e-3),
-                            tol(Method::Dopri5, e, r, r * 1e-3),
+                            tol(Integrator::Dopri5, e, r, r * 1e-3),
                         )
                     })
                     .collect(),
@@ -329,7 +333,7 @@ fn study_wire(reps: usize) {
     let coarse = measure(
         &case,
         &setting(
-            Method::Radau5,
+            Integrator::Radau5,
             Options::tol(1e-11, 1e-11),
             RodJacobian::Exact,
         ),

@@ -17,7 +17,7 @@ use std::time::Instant;
 
 use nalgebra::DVector;
 use softrod_dynamics::{Data, Model, StaticsOptions, energies, statics};
-use softrod_integrate::{Hooks, Method, Options, RodSystem, integrate_second_order};
+use softrod_integrate::{Integrator, NoHooks, Options, RodSystem, integrate_second_order};
 use softrod_kinematics::RodKinematics;
 use softrod_lie::Pose;
 use softrod_scene::{Built, Scene};
@@ -183,48 +183,54 @@ fn sanity_release(rounds: usize) {
     println!("|---|---|---|---|---|---|---|---|---|");
     let n = b.model.n_dof();
     let times: Vec<f64> = (0..=200).map(|k| k as f64 / 200.0).collect();
-    let runs: [(&str, &str, Method, Options); 7] = [
+    let runs: [(&str, &str, Integrator, Options); 7] = [
         (
             "dopri5",
             "rtol 1e-11",
-            Method::Dopri5,
+            Integrator::Dopri5,
             Options::tol(1e-11, 1e-13),
         ),
         (
             "dopri5",
             "rtol 1e-6",
-            Method::Dopri5,
+            Integrator::Dopri5,
             Options::tol(1e-6, 1e-9),
         ),
         (
             "rosenbrock",
             "rtol 1e-6",
-            Method::Rosw34,
+            Integrator::Rosenbrock,
             Options::tol(1e-6, 1e-9),
         ),
         (
             "esdirk",
             "rtol 1e-6",
-            Method::Esdirk46,
+            Integrator::Esdirk,
             Options::tol(1e-6, 1e-9),
         ),
         (
             "esdirk (the default)",
             "rtol 1e-3",
-            Method::Esdirk46,
+            Integrator::Esdirk,
             Options::tol(1e-3, 1e-6),
         ),
         (
             "generalized-alpha ρ∞=0.9",
             "dt 1e-4",
-            Method::GeneralizedAlpha { rho_inf: 0.9 },
-            Options::fixed(1e-4),
+            Integrator::GeneralizedAlpha,
+            Options {
+                rho_inf: 0.9,
+                ..Options::fixed(1e-4)
+            },
         ),
         (
             "generalized-alpha ρ∞=1",
             "dt 1e-4",
-            Method::GeneralizedAlpha { rho_inf: 1.0 },
-            Options::fixed(1e-4),
+            Integrator::GeneralizedAlpha,
+            Options {
+                rho_inf: 1.0,
+                ..Options::fixed(1e-4)
+            },
         ),
     ];
     // Every round runs every integrator once (interleaved, so a slow spell
@@ -245,12 +251,11 @@ fn sanity_release(rounds: usize) {
             let sol = integrate_second_order(
                 &mut sys,
                 *method,
-                0.0,
-                1.0,
+                (0.0, 1.0),
                 &b.q0,
                 &b.qd0,
                 &opts,
-                Hooks::new(),
+                &mut NoHooks,
             );
             walls[k].push(start.elapsed().as_secs_f64());
             last.push((sys, sol));

@@ -10,7 +10,7 @@ use softrod_dynamics::{
     Data, DynamicsError, Model, StaticsOptions, StaticsResult, energies, inverse_dynamics, statics,
 };
 use softrod_integrate::{
-    Hooks, IntegrateError, Method, Options, RodSystem, Solution, integrate_second_order,
+    IntegrateError, Integrator, NoHooks, Options, RodSystem, Solution, integrate_second_order,
 };
 use softrod_kinematics::RodKinematics;
 use softrod_lie::Pose;
@@ -110,7 +110,7 @@ pub fn integrate(
     built: &Built,
     q0: &DVector<f64>,
     qd0: &DVector<f64>,
-    method: Method,
+    method: Integrator,
     opts: Options,
     t1: f64,
     n_out: usize,
@@ -120,7 +120,7 @@ pub fn integrate(
     let times: Vec<f64> = (0..=n_out).map(|k| t1 * k as f64 / n_out as f64).collect();
     let opts = opts.with_t_eval(times);
     let start = Instant::now();
-    let sol = integrate_second_order(&mut sys, method, 0.0, t1, q0, qd0, &opts, Hooks::new())?;
+    let sol = integrate_second_order(&mut sys, method, (0.0, t1), q0, qd0, &opts, &mut NoHooks)?;
     let wall = start.elapsed().as_secs_f64();
     let n = sys.model.n_dof();
     let mut energy = Vec::new();
@@ -195,7 +195,7 @@ pub fn max_dist(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
 pub fn explicit_ok_or_clear_error(
     what: &str,
     built: &Built,
-    method: Method,
+    method: Integrator,
     opts: Options,
     t1: f64,
     n_out: usize,

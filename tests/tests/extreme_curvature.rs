@@ -7,7 +7,7 @@
 //!
 //! - statics converges (residual checked here, independently of the solver's
 //!   own test) or fails with `DynamicsError::StaticsFailed`;
-//! - the stiff integrators (`Rosw34`, `GeneralizedAlpha`) are stable at steps
+//! - the stiff integrators (`Rosenbrock`, `GeneralizedAlpha`) are stable at steps
 //!   far beyond the explicit stability limit;
 //! - energy is conserved without damping and does not increase with it;
 //! - no NaN anywhere (states, energies, tips);
@@ -24,7 +24,7 @@ use std::f64::consts::PI;
 
 use nalgebra::DVector;
 use softrod_dynamics::{Data, StaticsOptions, forward_dynamics, forward_dynamics_cholesky};
-use softrod_integrate::{Method, Options};
+use softrod_integrate::{Integrator, Options};
 use softrod_tests::extreme::*;
 
 /// θ ~ 1e-9: the series branches of exp/T. The tip of a bent rod (exact
@@ -104,7 +104,7 @@ fn near_straight_rod() {
             &built,
             &q0,
             &qd0,
-            Method::Rosw34,
+            Integrator::Rosenbrock,
             Options::tol(1e-8, 1e-20 * scale),
             0.02,
             20,
@@ -185,7 +185,7 @@ fn three_full_turns() {
         &built,
         &q0,
         &qd0,
-        Method::Rosw34,
+        Integrator::Rosenbrock,
         Options::tol(1e-7, 1e-10),
         0.05,
         25,

@@ -10,7 +10,7 @@
 
 use std::f64::consts::PI;
 
-use softrod_integrate::{Method, Options};
+use softrod_integrate::{Integrator, Options};
 use softrod_kinematics::{GaussLegendre, RodKinematics};
 use softrod_tests::extreme::*;
 
@@ -119,7 +119,7 @@ fn cable_curls_past_full_circle() {
             &built,
             &built.q0,
             &built.qd0,
-            Method::Rosw34,
+            Integrator::Rosenbrock,
             Options::tol(1e-7, 1e-10),
             t1,
             30,
@@ -204,7 +204,7 @@ fn large_follower_load() {
         &damped,
         &damped.q0,
         &damped.qd0,
-        Method::Rosw34,
+        Integrator::Rosenbrock,
         Options::tol(1e-6, 1e-9),
         0.3,
         30,
@@ -220,7 +220,7 @@ fn large_follower_load() {
     explicit_ok_or_clear_error(
         "follower",
         &damped,
-        Method::Dopri5,
+        Integrator::Dopri5,
         Options {
             max_steps: 20_000,
             ..Options::tol(1e-6, 1e-9)

@@ -13,7 +13,7 @@ use std::f64::consts::PI;
 
 use nalgebra::DVector;
 use softrod_dynamics::{Data, modes};
-use softrod_integrate::{Method, Options};
+use softrod_integrate::{Integrator, Options};
 use softrod_tests::extreme::*;
 
 /// E = 1e4 Pa (gel): under gravity the rod hangs almost vertically and
@@ -76,7 +76,7 @@ fn very_soft_material() {
         &built,
         &built.q0,
         &built.qd0,
-        Method::Rosw34,
+        Integrator::Rosenbrock,
         Options::tol(1e-8, 1e-11),
         t1,
         20,
@@ -95,7 +95,7 @@ fn very_soft_material() {
         &damped_b,
         &damped_b.q0,
         &damped_b.qd0,
-        Method::Rosw34,
+        Integrator::Rosenbrock,
         Options::tol(1e-8, 1e-11),
         t1,
         20,
@@ -112,7 +112,7 @@ fn very_soft_material() {
     let ok = explicit_ok_or_clear_error(
         "very soft",
         &built,
-        Method::Dopri5,
+        Integrator::Dopri5,
         Options::tol(1e-8, 1e-11),
         t1,
         20,
@@ -171,8 +171,11 @@ fn very_stiff_material() {
             &built,
             &built.q0,
             &built.qd0,
-            Method::GeneralizedAlpha { rho_inf: 1.0 },
-            Options::fixed(dt),
+            Integrator::GeneralizedAlpha,
+            Options {
+                rho_inf: 1.0,
+                ..Options::fixed(dt)
+            },
             t1,
             25,
             0.0,
@@ -201,7 +204,7 @@ fn very_stiff_material() {
         &damped_b,
         &damped_b.q0,
         &damped_b.qd0,
-        Method::Rosw34,
+        Integrator::Rosenbrock,
         Options::tol(1e-5, 1e-8),
         t1,
         25,
@@ -228,7 +231,7 @@ fn very_stiff_material() {
         &built,
         &built.q0,
         &built.qd0,
-        Method::Rk4,
+        Integrator::Rk4,
         Options::fixed(10.0 * h_explicit),
         t1,
         25,
@@ -252,7 +255,7 @@ fn very_stiff_material() {
     explicit_ok_or_clear_error(
         "very stiff",
         &damped_b,
-        Method::Dopri5,
+        Integrator::Dopri5,
         opts,
         t1,
         25,

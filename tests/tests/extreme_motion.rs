@@ -7,7 +7,7 @@
 //! `examples/extreme/`. Every test prints its measured numbers
 //! (`cargo test -p softrod-tests --test extreme_motion -- --nocapture`).
 
-use softrod_integrate::{Method, Options};
+use softrod_integrate::{Integrator, Options};
 use softrod_tests::extreme::*;
 
 /// A fast whirl: a bent rod (κ_z = 10 1/m) given a large bending rate
@@ -55,7 +55,7 @@ fn fast_whirl() {
         &built,
         &built.q0,
         &built.qd0,
-        Method::Rosw34,
+        Integrator::Rosenbrock,
         Options::tol(1e-6, 1e-9),
         t1,
         20,
@@ -77,7 +77,7 @@ fn fast_whirl() {
     let ok = explicit_ok_or_clear_error(
         "whirl",
         &built,
-        Method::Dopri5,
+        Integrator::Dopri5,
         Options::tol(1e-6, 1e-9),
         t1,
         20,
@@ -98,8 +98,11 @@ fn fast_whirl() {
             &built,
             &built.q0,
             &built.qd0,
-            Method::GeneralizedAlpha { rho_inf: 0.9 },
-            Options::fixed(dt),
+            Integrator::GeneralizedAlpha,
+            Options {
+                rho_inf: 0.9,
+                ..Options::fixed(dt)
+            },
             t1,
             20,
             0.0,
@@ -122,7 +125,7 @@ fn fast_whirl() {
         &damped_b,
         &damped_b.q0,
         &damped_b.qd0,
-        Method::Rosw34,
+        Integrator::Rosenbrock,
         Options::tol(1e-6, 1e-9),
         t1,
         20,

@@ -12,7 +12,7 @@ use std::f64::consts::PI;
 use std::time::Instant;
 
 use softrod_dynamics::{Data, StaticsOptions, forward_dynamics, forward_dynamics_cholesky};
-use softrod_integrate::{Method, Options};
+use softrod_integrate::{Integrator, Options};
 use softrod_tests::extreme::*;
 use softrod_tests::simpson;
 
@@ -93,7 +93,7 @@ fn tapered_rod() {
         &built,
         &built.q0,
         &built.qd0,
-        Method::Rosw34,
+        Integrator::Rosenbrock,
         Options::tol(1e-7, 1e-10),
         0.03,
         20,
@@ -192,8 +192,11 @@ fn two_hundred_pieces() {
         &built,
         &built.q0,
         &built.qd0,
-        Method::GeneralizedAlpha { rho_inf: 0.9 },
-        Options::fixed(2e-3),
+        Integrator::GeneralizedAlpha,
+        Options {
+            rho_inf: 0.9,
+            ..Options::fixed(2e-3)
+        },
         0.02,
         10,
         0.0,

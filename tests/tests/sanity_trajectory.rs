@@ -8,7 +8,7 @@
 
 use nalgebra::DVector;
 use softrod_dynamics::{Model, RodSpec, energies};
-use softrod_integrate::{Hooks, Method, Options, RodSystem, integrate_second_order};
+use softrod_integrate::{Integrator, NoHooks, Options, RodSystem, integrate_second_order};
 use softrod_kinematics::{Basis, Rod, RodKinematics, Strain, straight};
 use softrod_lie::{Pose, Vec3};
 use softrod_mechanics::{Material, RodBody, Section};
@@ -58,13 +58,12 @@ fn sanity_trajectory_matches_the_verified_prototype() {
     let zero = DVector::zeros(n);
     let sol = integrate_second_order(
         &mut sys,
-        Method::Dopri5,
-        0.0,
-        1.0,
+        Integrator::Dopri5,
+        (0.0, 1.0),
         &zero,
         &zero,
         &opts,
-        Hooks::new(),
+        &mut NoHooks,
     )
     .expect("integration succeeds");
     let rod = &sys.model.rods()[0].spec.rod;

@@ -1,6 +1,6 @@
 //! Step control shared by every method, one floor below the steppers: the
-//! error norm, landing on the end time, the starting step, the underflow
-//! check and the checks of trial states.
+//! error norm, landing on the end time, the underflow check and the checks
+//! of trial states.
 
 // Negated comparisons are deliberate: a NaN must fail every check.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -9,8 +9,6 @@ use nalgebra::DVector;
 
 use crate::error::{IntegrateError, first_non_finite};
 use crate::options::Options;
-use crate::problem::{Problem, sys_err};
-use crate::solution::Stats;
 
 /// Weighted RMS norm of `e` with weights `atol + rtol·max(|ya|, |yb|)`
 /// (Hairer–Wanner's error norm).
@@ -44,45 +42,6 @@ pub(crate) fn clip_step(t: f64, h: f64, t_end: f64) -> (f64, bool) {
     } else {
         (h, false)
     }
-}
-
-/// Starting step of an adaptive method of order `order` (Hairer–Nørsett–
-/// Wanner, *ODEs I*, §II.4, "Starting step size"); one right-hand side.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn initial_step<P: Problem>(
-    p: &mut P,
-    t0: f64,
-    y0: &DVector<f64>,
-    f0: &DVector<f64>,
-    order: i32,
-    opts: &Options,
-    stats: &mut Stats,
-    scratch: (&mut DVector<f64>, &mut DVector<f64>),
-) -> Result<f64, IntegrateError> {
-    let (y1, f1) = scratch;
-    let zero = y0;
-    let d0 = wrms(y0, zero, zero, opts);
-    let d1 = wrms(f0, zero, zero, opts);
-    let mut h0 = if d0 < 1e-10 || d1 < 1e-10 {
-        1e-6
-    } else {
-        0.01 * d0 / d1
-    };
-    h0 = h0.min(opts.h_max);
-    y1.copy_from(y0);
-    y1.axpy(h0, f0, 1.0);
-    p.rhs(t0 + h0, y1, f1).map_err(sys_err(t0, h0, "rhs"))?;
-    stats.rhs_evaluations += 1;
-    f1.axpy(-1.0, f0, 1.0);
-    let d2 = wrms(f1, zero, zero, opts) / h0;
-    let dm = d1.max(d2);
-    let h1 = if !(dm > 1e-15) {
-        (h0 * 1e-3).max(1e-6)
-    } else {
-        (0.01 / dm).powf(1.0 / (order as f64 + 1.0))
-    };
-    let h = (100.0 * h0).min(h1).min(opts.h_max);
-    Ok(if h.is_finite() { h } else { 1e-6 })
 }
 
 /// Checks the step size against `h_min` and the resolution of `t`.

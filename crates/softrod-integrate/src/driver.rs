@@ -7,8 +7,8 @@
 use nalgebra::DVector;
 
 use crate::error::{IntegrateError, first_non_finite};
-use crate::hooks::{Control, Direction, Hooks, StepInfo};
-use crate::method::Method;
+use crate::hooks::{Control, Direction, EventKind, Hooks, StepInfo};
+use crate::integrator::Integrator;
 use crate::methods::{Dopri5, Esdirk, GeneralizedAlpha, Radau5, Rk4, Rosw34};
 use crate::options::Options;
 use crate::problem::{FirstOrderProblem, Problem, SecondOrderProblem};
@@ -16,16 +16,17 @@ use crate::solution::{EventRecord, Solution, Stats, Status};
 use crate::stepper::Stepper;
 use crate::system::{OdeSystem, SecondOrderSystem};
 
-/// Integrates a first-order system `y' = f(t, y)` from `t0` to `t1 ≥ t0`.
+/// Integrates a first-order system `y' = f(t, y)` over `t_span = (t0, t1)`,
+/// `t1 ≥ t0`.
 ///
 /// * `sys`: the system, dim `n`.
-/// * `method`: [`Method::Rk4`], [`Method::Dopri5`] or [`Method::Rosw34`]
-///   ([`Method::GeneralizedAlpha`] and [`Method::Esdirk46`] need a
-///   [`SecondOrderSystem`]: use
-///   [`integrate_second_order`]).
+/// * `integrator`: one without [`Integrator::needs_second_order`]
+///   ([`Integrator::GeneralizedAlpha`] and [`Integrator::Esdirk`] need a
+///   [`SecondOrderSystem`]: use [`integrate_second_order`]).
 /// * `y0`: initial state, dim `n`.
 /// * `opts`: tolerances, steps, output times ([`Options`]).
-/// * `hooks`: per-step callback, events, monitors ([`Hooks::new()`] for none).
+/// * `hooks`: outputs as they are produced, accepted steps, checks and
+///   events ([`Hooks`]; [`NoHooks`](crate::NoHooks) for none).
 ///
 /// Returns the [`Solution`] (outputs, events, final state, [`Stats`]) or an
 /// [`IntegrateError`] with the time, step size and the failed check. No
@@ -33,12 +34,11 @@ use crate::system::{OdeSystem, SecondOrderSystem};
 /// bits (no threads, no hashing, fixed operation order).
 pub fn integrate<S: OdeSystem>(
     sys: &mut S,
-    method: Method,
-    t0: f64,
-    t1: f64,
+    integrator: Integrator,
+    t_span: (f64, f64),
     y0: &DVector<f64>,
     opts: &Options,
-    hooks: Hooks<'_, S>,
+    hooks: &mut dyn Hooks<S>,
 ) -> Result<Solution, IntegrateError> {
     let n = sys.dim();
     if y0.len() != n {
@@ -46,37 +46,41 @@ pub fn integrate<S: OdeSystem>(
             what: format!("y0 has dimension {} but the system has {n}", y0.len()),
         });
     }
-    opts.validate(method)?;
+    opts.validate(integrator)?;
     let mut p = FirstOrderProblem::new(sys);
-    match method {
-        Method::Rk4 => drive(&mut p, &mut Rk4::new(n), t0, t1, y0, opts, hooks),
-        Method::Dopri5 => drive(&mut p, &mut Dopri5::new(n), t0, t1, y0, opts, hooks),
-        Method::Rosw34 => drive(&mut p, &mut Rosw34::new(n), t0, t1, y0, opts, hooks),
-        Method::Radau5 => drive(&mut p, &mut Radau5::new(n, None), t0, t1, y0, opts, hooks),
-        Method::GeneralizedAlpha { .. } | Method::Esdirk46 => Err(IntegrateError::InvalidInput {
-            what: format!("{method:?} needs a SecondOrderSystem: use integrate_second_order"),
+    let run = Run {
+        t_span,
+        y0,
+        opts,
+        hooks,
+    };
+    match integrator {
+        Integrator::Rk4 => drive(&mut p, &mut Rk4::new(n), run),
+        Integrator::Dopri5 => drive(&mut p, &mut Dopri5::new(n), run),
+        Integrator::Rosenbrock => drive(&mut p, &mut Rosw34::new(n), run),
+        Integrator::Radau5 => drive(&mut p, &mut Radau5::new(n, None), run),
+        Integrator::GeneralizedAlpha | Integrator::Esdirk => Err(IntegrateError::InvalidInput {
+            what: format!("{integrator} needs a SecondOrderSystem: use integrate_second_order"),
         }),
     }
 }
 
-/// Integrates a second-order system `q̈ = a(t, q, q̇)` from `t0` to `t1 ≥ t0`
-/// with any [`Method`]; the first-order methods run on `y = (q, q̇)` (their
+/// Integrates a second-order system `q̈ = a(t, q, q̇)` over
+/// `t_span = (t0, t1)`, `t1 ≥ t0`, with any [`Integrator`]; the first-order methods run on `y = (q, q̇)` (their
 /// linear solves use an `n×n` Schur complement, not the `2n×2n` matrix).
 ///
 /// * `q0`, `qd0`: initial positions and velocities, dim `n` each.
 ///
-/// Outputs, events, monitors and callback states are in first-order form
+/// Outputs, events and the states the hooks see are in first-order form
 /// `y = (q, q̇)` (dim `2n`). Otherwise as [`integrate`].
-#[allow(clippy::too_many_arguments)]
 pub fn integrate_second_order<S: SecondOrderSystem>(
     sys: &mut S,
-    method: Method,
-    t0: f64,
-    t1: f64,
+    integrator: Integrator,
+    t_span: (f64, f64),
     q0: &DVector<f64>,
     qd0: &DVector<f64>,
     opts: &Options,
-    hooks: Hooks<'_, S>,
+    hooks: &mut dyn Hooks<S>,
 ) -> Result<Solution, IntegrateError> {
     let n = sys.dim();
     if q0.len() != n || qd0.len() != n {
@@ -88,35 +92,27 @@ pub fn integrate_second_order<S: SecondOrderSystem>(
             ),
         });
     }
-    opts.validate(method)?;
+    opts.validate(integrator)?;
     let mut y0 = DVector::zeros(2 * n);
     y0.rows_mut(0, n).copy_from(q0);
     y0.rows_mut(n, n).copy_from(qd0);
     let mut p = SecondOrderProblem::new(sys);
     let m = 2 * n;
-    match method {
-        Method::Rk4 => drive(&mut p, &mut Rk4::new(m), t0, t1, &y0, opts, hooks),
-        Method::Dopri5 => drive(&mut p, &mut Dopri5::new(m), t0, t1, &y0, opts, hooks),
-        Method::Rosw34 => drive(&mut p, &mut Rosw34::new(m), t0, t1, &y0, opts, hooks),
-        Method::Radau5 => drive(
-            &mut p,
-            &mut Radau5::new(m, Some(n)),
-            t0,
-            t1,
-            &y0,
-            opts,
-            hooks,
-        ),
-        Method::Esdirk46 => drive(&mut p, &mut Esdirk::new(n), t0, t1, &y0, opts, hooks),
-        Method::GeneralizedAlpha { rho_inf } => drive(
-            &mut p,
-            &mut GeneralizedAlpha::new(n, rho_inf),
-            t0,
-            t1,
-            &y0,
-            opts,
-            hooks,
-        ),
+    let run = Run {
+        t_span,
+        y0: &y0,
+        opts,
+        hooks,
+    };
+    match integrator {
+        Integrator::Rk4 => drive(&mut p, &mut Rk4::new(m), run),
+        Integrator::Dopri5 => drive(&mut p, &mut Dopri5::new(m), run),
+        Integrator::Rosenbrock => drive(&mut p, &mut Rosw34::new(m), run),
+        Integrator::Radau5 => drive(&mut p, &mut Radau5::new(m, Some(n)), run),
+        Integrator::Esdirk => drive(&mut p, &mut Esdirk::new(n), run),
+        Integrator::GeneralizedAlpha => {
+            drive(&mut p, &mut GeneralizedAlpha::new(n, opts.rho_inf), run)
+        }
     }
 }
 
@@ -154,8 +150,17 @@ fn eval<P: Problem, St: Stepper<P>>(st: &St, t: f64, out: &mut DVector<f64>) {
     }
 }
 
+/// What a run is asked to do: the span, the initial state (first-order
+/// form), the options and the hooks.
+struct Run<'r, S> {
+    t_span: (f64, f64),
+    y0: &'r DVector<f64>,
+    opts: &'r Options,
+    hooks: &'r mut dyn Hooks<S>,
+}
+
 /// The outputs of a run: stored (unless the hooks say not to) and handed to
-/// the output callback.
+/// the output hook.
 struct Outputs {
     ts: Vec<f64>,
     ys: Vec<DVector<f64>>,
@@ -164,10 +169,10 @@ struct Outputs {
 
 impl Outputs {
     /// Records the output `(t, y)`; returns `(stop, system_changed)` from the
-    /// output callback.
+    /// output hook.
     fn emit<P: Problem>(
         &mut self,
-        hooks: &mut Hooks<'_, P::User>,
+        hooks: &mut dyn Hooks<P::User>,
         p: &mut P,
         t: f64,
         y: &DVector<f64>,
@@ -176,10 +181,10 @@ impl Outputs {
             self.ts.push(t);
             self.ys.push(y.clone());
         }
-        match hooks.on_output.as_mut().map(|f| f(t, y, p.user())) {
-            Some(Control::Stop) => (true, false),
-            Some(Control::SystemChanged) => (false, true),
-            _ => (false, false),
+        match hooks.output(t, y, p.user()) {
+            Control::Stop => (true, false),
+            Control::SystemChanged => (false, true),
+            Control::Continue => (false, false),
         }
     }
 }
@@ -244,21 +249,23 @@ fn locate<P: Problem, St: Stepper<P>>(
 fn drive<P: Problem, St: Stepper<P>>(
     p: &mut P,
     st: &mut St,
-    t0: f64,
-    t1: f64,
-    y0: &DVector<f64>,
-    opts: &Options,
-    mut hooks: Hooks<'_, P::User>,
+    run: Run<'_, P::User>,
 ) -> Result<Solution, IntegrateError> {
+    let Run {
+        t_span: (t0, t1),
+        y0,
+        opts,
+        hooks,
+    } = run;
     validate(t0, t1, y0, opts)?;
     let n = y0.len();
     let mut stats = Stats::default();
-    st.init(p, t0, y0, t1, opts, &mut stats)?;
+    st.init(p, t0, y0, opts, &mut stats)?;
 
     let mut out = Outputs {
         ts: Vec::new(),
         ys: Vec::new(),
-        keep: hooks.keep_outputs,
+        keep: hooks.keep_outputs(),
     };
     let mut next_out = 0usize;
     let te: &[f64] = opts.t_eval.as_deref().unwrap_or(&[]);
@@ -266,12 +273,12 @@ fn drive<P: Problem, St: Stepper<P>>(
     let mut changed_at_t0 = false;
     match &opts.t_eval {
         None => {
-            (early_stop, changed_at_t0) = out.emit(&mut hooks, p, t0, y0);
+            (early_stop, changed_at_t0) = out.emit(hooks, p, t0, y0);
         }
         Some(te) => {
             while next_out < te.len() && te[next_out] == t0 {
                 next_out += 1;
-                let (stop, ch) = out.emit(&mut hooks, p, t0, y0);
+                let (stop, ch) = out.emit(hooks, p, t0, y0);
                 changed_at_t0 |= ch;
                 if stop {
                     early_stop = true;
@@ -283,7 +290,9 @@ fn drive<P: Problem, St: Stepper<P>>(
     if changed_at_t0 && !early_stop {
         st.system_changed(p, &mut stats)?;
     }
-    let mut g_prev: Vec<f64> = hooks.events.iter_mut().map(|e| (e.g)(t0, y0)).collect();
+    // The event functions' kinds, read once for the run.
+    let kinds: Vec<EventKind> = hooks.events().to_vec();
+    let mut g_prev: Vec<f64> = (0..kinds.len()).map(|i| hooks.event(i, t0, y0)).collect();
     let mut events = Vec::new();
     let mut scratch = DVector::zeros(n);
     let mut status = Status::Completed;
@@ -322,17 +331,14 @@ fn drive<P: Problem, St: Stepper<P>>(
                 bound: opts.max_norm,
             });
         }
-        for m in hooks.monitors.iter_mut() {
-            let v = (m.f)(t, st.y());
-            if !(v.abs() <= m.bound) {
-                return Err(IntegrateError::BoundExceeded {
-                    t,
-                    h,
-                    what: m.name,
-                    value: v,
-                    bound: m.bound,
-                });
-            }
+        if let Err(e) = hooks.check(t, st.y()) {
+            return Err(IntegrateError::BoundExceeded {
+                t,
+                h,
+                what: e.what,
+                value: e.value,
+                bound: e.bound,
+            });
         }
 
         // Events in (t_prev, t].
@@ -340,12 +346,13 @@ fn drive<P: Problem, St: Stepper<P>>(
         let mut t_stop = f64::INFINITY;
         let mut stop_index = None;
         let first_new_event = events.len();
-        for (i, e) in hooks.events.iter_mut().enumerate() {
-            let gb = (e.g)(t, st.y());
+        for (i, kind) in kinds.iter().enumerate() {
+            let gb = hooks.event(i, t, st.y());
             let ga = g_prev[i];
             g_prev[i] = gb;
-            if crossed(ga, gb, e.direction) {
-                let te = locate(st, &mut *e.g, (t_prev, ga), (t, gb), &mut scratch);
+            if crossed(ga, gb, kind.direction) {
+                let g = &mut |t, y: &DVector<f64>| hooks.event(i, t, y);
+                let te = locate(st, g, (t_prev, ga), (t, gb), &mut scratch);
                 let mut ye = DVector::zeros(n);
                 eval(st, te, &mut ye);
                 events.push(EventRecord {
@@ -353,7 +360,7 @@ fn drive<P: Problem, St: Stepper<P>>(
                     t: te,
                     y: ye,
                 });
-                if e.terminal && te < t_stop {
+                if kind.terminal && te < t_stop {
                     t_stop = te;
                     stop_index = Some(i);
                 }
@@ -373,7 +380,7 @@ fn drive<P: Problem, St: Stepper<P>>(
                 let to = te[next_out];
                 eval(st, to, &mut yo);
                 next_out += 1;
-                let (stop, ch) = out.emit(&mut hooks, p, to, &yo);
+                let (stop, ch) = out.emit(hooks, p, to, &yo);
                 changed |= ch;
                 if stop {
                     stopped_at = Some(to);
@@ -391,7 +398,7 @@ fn drive<P: Problem, St: Stepper<P>>(
         if let Some(index) = stop_index {
             eval(st, t_stop, &mut y_final);
             t_final = t_stop;
-            if opts.t_eval.is_none() && out.emit(&mut hooks, p, t_stop, &y_final).0 {
+            if opts.t_eval.is_none() && out.emit(hooks, p, t_stop, &y_final).0 {
                 status = Status::Stopped;
                 break;
             }
@@ -401,7 +408,7 @@ fn drive<P: Problem, St: Stepper<P>>(
         t_final = t;
         y_final.copy_from(st.y());
         if opts.t_eval.is_none() {
-            let (stop, ch) = out.emit(&mut hooks, p, t, st.y());
+            let (stop, ch) = out.emit(hooks, p, t, st.y());
             changed |= ch;
             if stop {
                 status = Status::Stopped;
@@ -409,27 +416,24 @@ fn drive<P: Problem, St: Stepper<P>>(
             }
         }
 
-        if let Some(cb) = hooks.on_step.as_mut() {
-            let info = StepInfo {
-                t,
-                h,
-                y: st.y(),
-                stats: &stats,
-            };
-            match cb(&info, p.user()) {
-                Control::Continue => {}
-                Control::Stop => {
-                    status = Status::Stopped;
-                    break;
-                }
-                Control::SystemChanged => changed = true,
+        let info = StepInfo {
+            t,
+            h,
+            y: st.y(),
+            stats: &stats,
+        };
+        match hooks.step(&info, p.user()) {
+            Control::Continue => {}
+            Control::Stop => {
+                status = Status::Stopped;
+                break;
             }
+            Control::SystemChanged => changed = true,
         }
         if changed {
             st.system_changed(p, &mut stats)?;
-            let (t, y) = (st.t(), st.y().clone());
-            for (i, e) in hooks.events.iter_mut().enumerate() {
-                g_prev[i] = (e.g)(t, &y);
+            for (i, g) in g_prev.iter_mut().enumerate() {
+                *g = hooks.event(i, st.t(), st.y());
             }
         }
     }

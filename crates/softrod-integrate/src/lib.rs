@@ -6,22 +6,25 @@
 //! ODE theory applies; shear and extension make the system stiff
 //! (`EA/EI ~ 1/r²`).
 //!
-//! # Which method
+//! # Which integrator
 //!
-//! [`Recommended::tolerance`] gives the method and options for a relative
-//! tolerance, [`Recommended::fixed_step`] for a fixed step; both say why,
-//! and docs/performance.md ("softrod-integrate") has the measurements.
+//! [`Integrator`] is the one list of methods, under the names the scene
+//! format (`run.integrator`), the facade and Python use.
+//! [`Recommended::tolerance`] gives the integrator and options for a
+//! relative tolerance, [`Recommended::fixed_step`] for a fixed step; both
+//! say why, and docs/performance.md ("softrod-integrate") has the
+//! measurements.
 //!
-//! | method | kind | order | steps | for |
+//! | integrator | kind | order | steps | for |
 //! |---|---|---|---|---|
-//! | [`Method::Esdirk46`] | ESDIRK4(3)6L\[2\]SA, L-stable, Newton on `M + h²γ²K + hγD` (O(N)), exact-Jacobian fallback | 4 | adaptive or fixed | stiff rods, any size: **recommended** |
-//! | [`Method::Radau5`] | Radau IIA, RADAU5's design, exact dense Jacobian | 5 | adaptive or fixed | small stiff systems, tight tolerances |
-//! | [`Method::Rosw34`] | Rosenbrock–W ROS34PW2, L-stable, no Newton | 3 | adaptive or fixed | stiff, loose tolerances |
-//! | [`Method::GeneralizedAlpha`] | Chung–Hulbert / Arnold–Brüls, `ρ∞` dissipation | 2 | fixed, or adaptive | large fixed steps (linearly implicit: [`Iteration::LinearlyImplicit`]) |
-//! | [`Method::Dopri5`] | explicit RK 5(4), dense order 4 | 5 | adaptive or fixed | non-stiff, references |
-//! | [`Method::Rk4`] | explicit RK | 4 | fixed | non-stiff, reference runs |
+//! | [`Integrator::Esdirk`] | ESDIRK4(3)6L\[2\]SA, L-stable, Newton on `M + h²γ²K + hγD` (O(N)), exact-Jacobian fallback | 4 | adaptive or fixed | stiff rods, any size: **recommended** |
+//! | [`Integrator::Radau5`] | Radau IIA, RADAU5's design, exact dense Jacobian | 5 | adaptive or fixed | small stiff systems, tight tolerances |
+//! | [`Integrator::Rosenbrock`] | Rosenbrock–W ROS34PW2, L-stable, no Newton | 3 | adaptive or fixed | stiff, loose tolerances |
+//! | [`Integrator::GeneralizedAlpha`] | Chung–Hulbert / Arnold–Brüls, `ρ∞` dissipation | 2 | fixed, or adaptive | large fixed steps (linearly implicit: [`Iteration::LinearlyImplicit`]) |
+//! | [`Integrator::Dopri5`] | explicit RK 5(4), dense order 4 | 5 | adaptive or fixed | non-stiff, references |
+//! | [`Integrator::Rk4`] | explicit RK | 4 | fixed | non-stiff, reference runs |
 //!
-//! `ESDIRK46` and generalized-α need a [`SecondOrderSystem`]; the others
+//! ESDIRK and generalized-α need a [`SecondOrderSystem`]; the others
 //! run on first-order systems too (on `y = (q, q̇)` for a second-order one,
 //! with `n×n` Schur complements instead of `2n×2n` matrices).
 //!
@@ -47,24 +50,26 @@
 //! counts as the position error it makes over the step. The first-order
 //! norm would make the controller resolve every high mode whose *velocity*
 //! amplitude exceeds the tolerance although its displacement is far below
-//! it (see [`Method::Esdirk46`]); with the position norm the tip error of
+//! it (see [`Integrator::Esdirk`]); with the position norm the tip error of
 //! the rod scenes tracks `rtol`.
 //!
 //! # One interface
 //!
 //! [`integrate`] (first-order) and [`integrate_second_order`] take the system,
-//! the method, `t0`, `t1`, the initial state, [`Options`] and [`Hooks`]
-//! (per-step callback that may change the system or stop, an output callback
-//! that streams the dense output at `t_eval` as the run proceeds, events,
-//! monitors). [`Options::validate`] checks a method with its options without
-//! running. Output at [`Options::t_eval`] is produced by dense output, never
+//! the [`Integrator`], the time span `(t0, t1)`, the initial state,
+//! [`Options`] and one [`Hooks`] object: the outputs streamed from the dense
+//! output at `t_eval` as the run proceeds, each accepted step (where a
+//! controller may change the system or stop the run), a check of each
+//! accepted state, and event functions ([`NoHooks`] for none, [`Callbacks`]
+//! for one-off closures). [`Options::validate`] checks an integrator with
+//! its options without running. Output at [`Options::t_eval`] is produced by dense output, never
 //! by forcing steps. Failures are [`IntegrateError`]s with the time, step size
 //! and check; no NaN or Inf is ever written to a [`Solution`]. Runs are
 //! deterministic: same input, same bits.
 //!
 //! ```
 //! use nalgebra::{DMatrix, DVector};
-//! use softrod_integrate::{integrate_second_order, Hooks, Method, Options, SecondOrderSystem};
+//! use softrod_integrate::{integrate_second_order, Integrator, NoHooks, Options, SecondOrderSystem};
 //!
 //! /// q̈ = −ω² q.
 //! struct Oscillator { w2: f64 }
@@ -79,22 +84,52 @@
 //! }
 //!
 //! let opts = Options::tol(1e-8, 1e-10).with_t_eval(vec![0.5, 1.0]);
-//! for method in [Method::Dopri5, Method::Esdirk46, Method::Radau5] {
-//!     let sol = integrate_second_order(&mut Oscillator { w2: 4.0 }, method, 0.0, 1.0,
-//!         &DVector::from_element(1, 1.0), &DVector::zeros(1), &opts, Hooks::new()).unwrap();
+//! for method in [Integrator::Dopri5, Integrator::Esdirk, Integrator::Radau5] {
+//!     let sol = integrate_second_order(&mut Oscillator { w2: 4.0 }, method, (0.0, 1.0),
+//!         &DVector::from_element(1, 1.0), &DVector::zeros(1), &opts, &mut NoHooks).unwrap();
 //!     assert!((sol.y[1][0] - (2.0f64).cos()).abs() < 1e-6, "{method:?}");
 //! }
 //! ```
+//!
+//! # Where things are, and adding an integrator
+//!
+//! The modules are floors, each importing only from those below it: the
+//! plain data (`integrator`: the list; `options`, `hooks`, `solution`,
+//! `error`); the user traits and the adaptors the methods run on (`system`,
+//! `rod`: the one adaptor that knows rods, `problem`: first- and
+//! second-order problems with their iteration matrices, `linalg`); the step
+//! control every method shares (`control`: error norm, step clipping,
+//! checks; `state`: the step state, its start and first step, dense
+//! output; `stepper`: the `Stepper` trait a method implements); the
+//! methods, one file each in `methods/`; the `driver` (one loop for every
+//! method: outputs, events, checks, hooks) and `recommended`.
+//!
+//! A new integrator takes four steps:
+//! 1. **the list**: a variant of [`Integrator`] with its scene name,
+//!    description, order and kind (the compiler then points at every
+//!    `match` that must place it: the driver, `Options::validate`,
+//!    [`RodJacobian::recommended`], the facade's memory estimate);
+//! 2. **the method**: `methods/<name>.rs`, a type implementing `Stepper`
+//!    for the problems it supports: its `restart` (its own state and first
+//!    evaluation; the start and the first step are shared), one accepted
+//!    `step`, `system_changed`, and a dense output if the cubic Hermite of
+//!    the step state is not enough;
+//! 3. **the driver**: its arm in [`integrate`] and/or
+//!    [`integrate_second_order`];
+//! 4. **tests**: its order on the linear oscillators (`tests/order.rs`),
+//!    its place in the common-interface tests (`tests/api.rs`: dense
+//!    output, events, hooks, failures), and for a stiff method the stiff
+//!    and rod tests (`tests/stiff.rs`, `tests/rod.rs`). Python's
+//!    `softrod.INTEGRATORS` follows the list by itself; the stub's
+//!    `_IntegratorName` must be extended (a Python test checks it).
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
-// Floors, bottom up (each imports only from below): errors and the plain
-// data (options, method, hooks, solution); the user traits and the
-// adaptors the methods run on; the step control shared by all methods; the
-// steppers; the driver.
+// Floors, bottom up (each imports only from below); see "Where things are"
+// in the crate documentation.
 mod error;
 mod hooks;
-mod method;
+mod integrator;
 mod options;
 mod solution;
 
@@ -115,9 +150,9 @@ mod recommended;
 pub use driver::{integrate, integrate_second_order};
 pub use error::{IntegrateError, SystemError};
 pub use hooks::{
-    Control, Direction, Event, Hooks, Monitor, OutputCallback, ScalarFn, StepCallback, StepInfo,
+    Callbacks, Control, Direction, Event, EventKind, Exceeded, Hooks, NoHooks, ScalarFn, StepInfo,
 };
-pub use method::Method;
+pub use integrator::{Integrator, UnknownIntegrator};
 pub use methods::generalized_alpha_parameters;
 pub use options::{Iteration, Options, StepControl};
 pub use recommended::Recommended;

@@ -5,14 +5,14 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use crate::error::IntegrateError;
-use crate::method::Method;
+use crate::integrator::Integrator;
 
 /// How the step size is chosen.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum StepControl {
     /// Fixed step `dt` (s): every step is accepted (the last one is shortened
     /// to land on `t1`). For convergence studies and fixed-rate control loops,
-    /// and the only mode of [`Method::Rk4`](crate::Method::Rk4). A step whose
+    /// and the only mode of [`Integrator::Rk4`](crate::Integrator::Rk4). A step whose
     /// trial state is not finite is an error; generalized-α halves a step
     /// whose Newton iteration fails and regrows it by doubling up to `dt`.
     Fixed(f64),
@@ -86,8 +86,8 @@ pub struct Options {
     /// Rosenbrock–W and generalized-α: re-evaluate the Jacobian at the latest
     /// after this many accepted steps (it is also re-evaluated after every
     /// rejected step / Newton failure that used an older one). 1: every step.
-    /// Default 20: on Van der Pol (μ = 1000) it saves ~90 % of the Jacobians
-    /// for ~4 % more steps than 1.
+    /// Default 20: on a stiff problem it saves most Jacobian evaluations for
+    /// a few percent more steps than 1 (docs/performance.md).
     pub jacobian_max_age: usize,
     /// Largest step (default `∞`).
     pub h_max: f64,
@@ -103,6 +103,10 @@ pub struct Options {
     /// Bound on the max-norm of the state; exceeding it is an error
     /// (default `∞`).
     pub max_norm: f64,
+    /// Generalized-α only: the spectral radius at infinite frequency
+    /// `ρ∞ ∈ [0, 1]` ([`Integrator::GeneralizedAlpha`]; default
+    /// [`Options::DEFAULT_RHO_INF`]).
+    pub rho_inf: f64,
 }
 
 impl Default for Options {
@@ -118,11 +122,20 @@ impl Default for Options {
             max_steps: 100_000,
             t_eval: None,
             max_norm: f64::INFINITY,
+            rho_inf: Self::DEFAULT_RHO_INF,
         }
     }
 }
 
 impl Options {
+    /// The default `ρ∞` of generalized-α, 0.9: it damps the unresolved
+    /// shear/extension modes of a rod a little (the explicit remainder of
+    /// the linearly implicit scheme needs some dissipation: `ρ∞ = 1` blows
+    /// up on the release) while leaving resolved bending modes almost
+    /// undamped (period error and damping of a mode with `ω·dt ≪ 1` are
+    /// second order either way).
+    pub const DEFAULT_RHO_INF: f64 = 0.9;
+
     /// Fixed step `dt` ([`StepControl::Fixed`]); the Newton weights of the
     /// implicit methods are the default `rtol`, `atol`.
     pub fn fixed(dt: f64) -> Self {
@@ -152,7 +165,7 @@ impl Options {
 
     /// Linearly implicit generalized-α ([`Iteration::LinearlyImplicit`])
     /// with error control to `rtol`, `atol` (see
-    /// [`Method::GeneralizedAlpha`](crate::Method::GeneralizedAlpha)), first
+    /// [`Integrator::GeneralizedAlpha`]), first
     /// step by Hairer's heuristic.
     pub fn linearly_implicit_tol(rtol: f64, atol: f64) -> Self {
         Self {
@@ -203,7 +216,7 @@ impl Options {
 }
 
 impl Options {
-    /// Checks that `method` can run with these options — the checks that do
+    /// Checks that `integrator` can run with these options — the checks that do
     /// not depend on the problem, its time span or its initial state (those
     /// come when the run starts). A front end calls this to reject a setting
     /// before running it; [`integrate`](crate::integrate) and
@@ -214,10 +227,10 @@ impl Options {
     /// tolerances or both zero; a fixed step or first step that is not
     /// positive and finite; `h_min`, `h_max` out of order; unsorted `t_eval`;
     /// a Newton `tol` that is not positive or `max_iter = 0`;
-    /// [`Method::Rk4`] with adaptive steps (it has no error estimate);
+    /// [`Integrator::Rk4`] with adaptive steps (it has no error estimate);
     /// [`Iteration::LinearlyImplicit`] with a method other than
     /// generalized-α; `rho_inf` outside `[0, 1]`.
-    pub fn validate(&self, method: Method) -> Result<(), IntegrateError> {
+    pub fn validate(&self, integrator: Integrator) -> Result<(), IntegrateError> {
         let bad = |what: String| Err(IntegrateError::InvalidInput { what });
         if !(self.rtol >= 0.0 && self.atol >= 0.0 && self.rtol + self.atol > 0.0) {
             return bad(format!(
@@ -252,22 +265,20 @@ impl Options {
                 "Newton tol = {tol} must be > 0 and max_iter = {max_iter} >= 1"
             ));
         }
-        match method {
-            Method::Rk4 if self.is_adaptive() => {
-                return bad(
-                    "RK4 has no error estimate: it needs a fixed step (StepControl::Fixed)".into(),
-                );
-            }
-            Method::GeneralizedAlpha { rho_inf } if !(0.0..=1.0).contains(&rho_inf) => {
-                return bad(format!("rho_inf = {rho_inf} is not in [0, 1]"));
-            }
-            Method::GeneralizedAlpha { .. } => {}
-            _ if self.iteration == Iteration::LinearlyImplicit => {
-                return bad(format!(
-                    "Iteration::LinearlyImplicit applies to generalized-α only, not {method:?}"
-                ));
-            }
-            _ => {}
+        if !(0.0..=1.0).contains(&self.rho_inf) {
+            return bad(format!("rho_inf = {} is not in [0, 1]", self.rho_inf));
+        }
+        if self.is_adaptive() && !integrator.has_error_estimate() {
+            return bad(format!(
+                "{integrator} has no error estimate: it needs a fixed step (StepControl::Fixed)"
+            ));
+        }
+        if self.iteration == Iteration::LinearlyImplicit
+            && integrator != Integrator::GeneralizedAlpha
+        {
+            return bad(format!(
+                "Iteration::LinearlyImplicit applies to generalized-alpha only, not {integrator}"
+            ));
         }
         Ok(())
     }

@@ -2,7 +2,7 @@
 //! (docs/performance.md, section "softrod-integrate"), so that front ends take
 //! them from the library.
 
-use crate::method::Method;
+use crate::integrator::Integrator;
 use crate::options::{Iteration, Options};
 use crate::rod::{RodJacobian, RodSystem};
 
@@ -17,8 +17,8 @@ use crate::rod::{RodJacobian, RodSystem};
 /// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct Recommended {
-    /// The method.
-    pub method: Method,
+    /// The integrator.
+    pub integrator: Integrator,
     /// Its options (no output times: set [`Options::t_eval`]).
     pub options: Options,
     /// What [`RodSystem::jacobian`] should be.
@@ -42,54 +42,49 @@ impl Recommended {
     }
 
     /// Adaptive steps to the relative tolerance `rtol`:
-    /// [`Method::Esdirk46`] with `atol =` [`Recommended::atol`]`(rtol)`,
+    /// [`Integrator::Esdirk`] with `atol =` [`Recommended::atol`]`(rtol)`,
     /// Newton tolerance `1e-2` of the error weights, the exact Jacobian.
     ///
-    /// Why (measured, docs/performance.md): on the undamped release of the
-    /// soft cantilever (docs/theory.md §8(h); planar with 8 pieces, 3-D
-    /// with 32) the largest tip error over the second falls with every
-    /// tighter `rtol` and stays within 0.06–8× `rtol` in metres from
-    /// `rtol = 1e-3` to `1e-8` (below `rtol` at loose tolerances, where
-    /// `atol` dominates; above it at tight ones, where the global error of
-    /// a local-error controller grows like `rtol^{p/(p+1)}`); it reaches 1e-5 m on the planar scene and
-    /// 1e-4 m on the 32-piece one faster than every other method here, and
-    /// it is the only adaptive implicit method whose Newton matrix
-    /// `M + h²γ²K + hγD` is solved in O(N) with no `n×n` matrix (0.01 s of
-    /// 500 pieces in well under a second). [`Method::Radau5`] is faster on
-    /// small models (up to ~50 coordinates: order 5, three stages) and at
-    /// tight tolerances there, but its complex Newton shift needs dense
-    /// `n×n` factorizations; [`Method::Rosw34`] and [`Method::Dopri5`]
-    /// resolve the undamped high-frequency modes the release excites and
-    /// take 10–100× longer at equal tip error.
+    /// Why: on the rod scenes its tip error tracks `rtol` and it reaches a
+    /// given tip error faster than the other methods, being the only
+    /// adaptive implicit method whose Newton matrix `M + h²γ²K + hγD` is
+    /// solved in O(N) with no `n×n` matrix (measurements: docs/performance.md,
+    /// "softrod-integrate"). [`Integrator::Radau5`] can be faster on small
+    /// models at tight tolerances (order 5), but its complex Newton shift
+    /// needs dense `n×n` factorizations; [`Integrator::Rosenbrock`] and
+    /// [`Integrator::Dopri5`] resolve the undamped high-frequency modes the
+    /// release excites.
     pub fn tolerance(rtol: f64) -> Self {
         Self {
-            method: Method::Esdirk46,
+            integrator: Integrator::Esdirk,
             options: Options {
                 max_steps: Self::MAX_STEPS,
                 iteration: Iteration::NEWTON,
                 ..Options::tol(rtol, Self::atol(rtol))
             },
-            jacobian: RodJacobian::Exact,
+            jacobian: RodJacobian::recommended(Integrator::Esdirk),
         }
     }
 
     /// Fixed steps `dt`: the linearly implicit generalized-α
-    /// ([`Iteration::LinearlyImplicit`]) with `ρ∞ = 0.9` and the elastic
+    /// ([`Iteration::LinearlyImplicit`]) with `ρ∞ = 0.9`
+    /// ([`Options::DEFAULT_RHO_INF`]) and the elastic
     /// Jacobian ([`RodJacobian::ElasticOnly`], O(N) per step): one
     /// inverse dynamics and one structured solve per step, no error control
     /// (check a run by halving `dt`). `ρ∞ = 0.9` damps the unresolved
     /// shear/extension modes a little (the explicit remainder needs some
     /// dissipation: `ρ∞ = 1` blows up on the release) while leaving resolved
-    /// bending modes almost undamped. Measured: `dt = 1e-3` keeps the tip of
-    /// the 32-piece 3-D release within ~1.5e-4 m over the second in ~70 ms.
+    /// bending modes almost undamped (its accuracy at a given `dt`:
+    /// docs/performance.md, "softrod-integrate").
     pub fn fixed_step(dt: f64) -> Self {
         Self {
-            method: Method::GeneralizedAlpha { rho_inf: 0.9 },
+            integrator: Integrator::GeneralizedAlpha,
             options: Options {
                 max_steps: Self::MAX_STEPS,
+                rho_inf: Options::DEFAULT_RHO_INF,
                 ..Options::linearly_implicit(dt)
             },
-            jacobian: RodJacobian::ElasticOnly,
+            jacobian: RodJacobian::recommended(Integrator::GeneralizedAlpha),
         }
     }
 

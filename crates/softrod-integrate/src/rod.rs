@@ -13,6 +13,7 @@ use softrod_dynamics::{
 };
 use softrod_mechanics::Tension;
 
+use crate::integrator::Integrator;
 use crate::system::SecondOrderSystem;
 
 /// A rod model ready for integration: `q̈ = FD(t, q, q̇, τ)`.
@@ -56,10 +57,31 @@ pub enum RodJacobian {
     /// linearly implicit IMEX splitting: stiff elastic/viscous part implicit,
     /// the rest explicit. Generalized-α still converges to the same step
     /// solution (its simplified Newton just takes an iteration more when the
-    /// geometric part matters). [`Method::Esdirk46`](crate::Method::Esdirk46)
+    /// geometric part matters). [`Integrator::Esdirk`](crate::Integrator::Esdirk)
     /// does not look at it: it iterates on the shifted mass matrix and falls
     /// back to the exact [`SecondOrderSystem::jacobians`].
     ElasticOnly,
+}
+
+impl RodJacobian {
+    /// The Jacobian `integrator` gets on a rod. ESDIRK and Radau IIA
+    /// iterate Newton to convergence and get the exact one (from the
+    /// analytic derivatives, docs/theory-derivatives.md): with only `−M⁻¹K`,
+    /// `−M⁻¹D` their Newton iterations stall on fast 3-D motion, where
+    /// gyroscopic and geometric-stiffness terms matter. Rosenbrock–W and
+    /// generalized-α get [`RodJacobian::ElasticOnly`] (O(N), no `n×n`
+    /// matrix): Rosenbrock–W keeps its order with any Jacobian and
+    /// refreshes to the exact one itself when its steps collapse. The
+    /// explicit methods use none (`ElasticOnly`, never evaluated).
+    pub fn recommended(integrator: Integrator) -> Self {
+        match integrator {
+            Integrator::Esdirk | Integrator::Radau5 => RodJacobian::Exact,
+            Integrator::Rk4
+            | Integrator::Dopri5
+            | Integrator::Rosenbrock
+            | Integrator::GeneralizedAlpha => RodJacobian::ElasticOnly,
+        }
+    }
 }
 
 impl RodSystem {
@@ -295,7 +317,7 @@ impl SecondOrderSystem for RodSystem {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{Hooks, Method, Options, integrate_second_order};
+    use crate::{Integrator, NoHooks, Options, integrate_second_order};
     use softrod_dynamics::{RodSpec, energies};
     use softrod_kinematics::{Basis, Rod};
     use softrod_lie::{Pose, Vec3};
@@ -331,13 +353,12 @@ mod tests {
         let opts = Options::tol(1e-11, 1e-13);
         let sol = integrate_second_order(
             &mut sys,
-            Method::Dopri5,
-            0.0,
-            0.05,
+            Integrator::Dopri5,
+            (0.0, 0.05),
             &q0,
             &v0,
             &opts,
-            Hooks::new(),
+            &mut NoHooks,
         )
         .unwrap();
         let mut scale = e0.abs();

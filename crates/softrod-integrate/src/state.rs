@@ -3,7 +3,7 @@
 
 use nalgebra::DVector;
 
-use crate::control::{check_finite, initial_step};
+use crate::control::{check_finite, wrms};
 use crate::error::IntegrateError;
 use crate::options::{Options, StepControl};
 use crate::problem::{Problem, sys_err};
@@ -11,11 +11,14 @@ use crate::solution::Stats;
 
 /// Time, state and derivative at the end (`t`, `y`, `f`) and the start
 /// (`t_prev`, `y_prev`, `f_prev`) of the last accepted step of size `h`
-/// (first-order form, `f = y'`).
+/// (first-order form, `f = y'`), and the step to try next.
 pub(crate) struct StepState {
     pub(crate) t: f64,
     pub(crate) t_prev: f64,
     pub(crate) h: f64,
+    /// The step the method tries next (its controller's proposal; the
+    /// current step of a fixed-step run).
+    pub(crate) h_next: f64,
     pub(crate) y: DVector<f64>,
     pub(crate) f: DVector<f64>,
     pub(crate) y_prev: DVector<f64>,
@@ -30,6 +33,7 @@ impl StepState {
             t: 0.0,
             t_prev: 0.0,
             h: 0.0,
+            h_next: 0.0,
             y: z.clone(),
             f: z.clone(),
             y_prev: z.clone(),
@@ -48,12 +52,8 @@ impl StepState {
     /// and derivatives.
     pub(crate) fn hermite_dense(&self, t: f64, out: &mut DVector<f64>) {
         hermite(
-            self.t_prev,
-            &self.y_prev,
-            &self.f_prev,
-            self.t,
-            &self.y,
-            &self.f,
+            (self.t_prev, &self.y_prev, &self.f_prev),
+            (self.t, &self.y, &self.f),
             t,
             out,
         );
@@ -88,20 +88,17 @@ impl StepState {
 
     /// The first step of a method of order `order` from the start
     /// `(t, y, f)`: the fixed `dt` or the given `h0` (at most `h_max`), else
-    /// [`initial_step`] (one right-hand side, in `scratch`).
+    /// [`initial_step`] (one right-hand side).
     pub(crate) fn first_step<P: Problem>(
         &self,
         p: &mut P,
         order: i32,
         opts: &Options,
         stats: &mut Stats,
-        scratch: (&mut DVector<f64>, &mut DVector<f64>),
     ) -> Result<f64, IntegrateError> {
         match opts.step {
             StepControl::Fixed(h) | StepControl::Adaptive { h0: Some(h) } => Ok(h.min(opts.h_max)),
-            StepControl::Adaptive { h0: None } => {
-                initial_step(p, self.t, &self.y, &self.f, order, opts, stats, scratch)
-            }
+            StepControl::Adaptive { h0: None } => initial_step(p, self, order, opts, stats),
         }
     }
 
@@ -119,6 +116,46 @@ impl StepState {
         std::mem::swap(&mut self.y, ynew);
         self.advance(t_new, h, stats);
     }
+}
+
+/// Starting step of an adaptive method of order `order` from the start
+/// `(t, y, f)` of `s` (Hairer–Nørsett–Wanner, *ODEs I*, §II.4, "Starting
+/// step size"); one right-hand side, into scratch allocated here (once per
+/// run).
+// Negated comparison: a NaN derivative norm takes the fallback step.
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
+fn initial_step<P: Problem>(
+    p: &mut P,
+    s: &StepState,
+    order: i32,
+    opts: &Options,
+    stats: &mut Stats,
+) -> Result<f64, IntegrateError> {
+    let (t0, y0, f0) = (s.t, &s.y, &s.f);
+    let (y1, f1) = (&mut y0.clone(), &mut DVector::zeros(y0.len()));
+    let zero = y0;
+    let d0 = wrms(y0, zero, zero, opts);
+    let d1 = wrms(f0, zero, zero, opts);
+    let mut h0 = if d0 < 1e-10 || d1 < 1e-10 {
+        1e-6
+    } else {
+        0.01 * d0 / d1
+    };
+    h0 = h0.min(opts.h_max);
+    y1.copy_from(y0);
+    y1.axpy(h0, f0, 1.0);
+    p.rhs(t0 + h0, y1, f1).map_err(sys_err(t0, h0, "rhs"))?;
+    stats.rhs_evaluations += 1;
+    f1.axpy(-1.0, f0, 1.0);
+    let d2 = wrms(f1, zero, zero, opts) / h0;
+    let dm = d1.max(d2);
+    let h1 = if !(dm > 1e-15) {
+        (h0 * 1e-3).max(1e-6)
+    } else {
+        (0.01 / dm).powf(1.0 / (order as f64 + 1.0))
+    };
+    let h = (100.0 * h0).min(h1).min(opts.h_max);
+    Ok(if h.is_finite() { h } else { 1e-6 })
 }
 
 impl StepState {
@@ -157,16 +194,14 @@ impl StepState {
     }
 }
 
-/// Cubic Hermite interpolation on `[ta, tb]` from values and derivatives
-/// (Hairer–Nørsett–Wanner, *ODEs I*, eq. II.6.7).
-#[allow(clippy::too_many_arguments)]
+/// A point of a trajectory: time, value and derivative.
+type Node<'a> = (f64, &'a DVector<f64>, &'a DVector<f64>);
+
+/// Cubic Hermite interpolation at `t` on `[ta, tb]` from the values and
+/// derivatives at both ends (Hairer–Nørsett–Wanner, *ODEs I*, eq. II.6.7).
 pub(crate) fn hermite(
-    ta: f64,
-    ya: &DVector<f64>,
-    fa: &DVector<f64>,
-    tb: f64,
-    yb: &DVector<f64>,
-    fb: &DVector<f64>,
+    (ta, ya, fa): Node<'_>,
+    (tb, yb, fb): Node<'_>,
     t: f64,
     out: &mut DVector<f64>,
 ) {
@@ -213,7 +248,12 @@ mod tests {
         let y = |t: f64| DVector::from_element(1, t * t * t - 2.0 * t);
         let f = |t: f64| DVector::from_element(1, 3.0 * t * t - 2.0);
         let mut out = DVector::zeros(1);
-        hermite(0.5, &y(0.5), &f(0.5), 1.5, &y(1.5), &f(1.5), 0.8, &mut out);
+        hermite(
+            (0.5, &y(0.5), &f(0.5)),
+            (1.5, &y(1.5), &f(1.5)),
+            0.8,
+            &mut out,
+        );
         assert!((out[0] - y(0.8)[0]).abs() < 1e-14);
     }
 }

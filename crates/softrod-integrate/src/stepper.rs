@@ -11,16 +11,35 @@ use crate::state::StepState;
 
 /// One method's state between steps.
 pub(crate) trait Stepper<P: Problem> {
-    /// Sets the initial state (and evaluates what the first step needs).
+    /// The order `p` the starting-step heuristic assumes (the first step
+    /// aims at a local error `~ h^(p+1)` of the tolerance).
+    const START_ORDER: i32;
+    /// Resets the method's own state for a run from the step state's
+    /// `(t, y)` (just set by [`init`](Self::init)) and evaluates what its
+    /// first step needs, the derivative `f` at least.
+    fn restart(
+        &mut self,
+        p: &mut P,
+        opts: &Options,
+        stats: &mut Stats,
+    ) -> Result<(), IntegrateError>;
+    /// Starts a run at `(t0, y0)`, the same for every method: the step
+    /// state, the method's [`restart`](Self::restart), then the first step
+    /// ([`StepState::first_step`]).
     fn init(
         &mut self,
         p: &mut P,
         t0: f64,
         y0: &DVector<f64>,
-        t1: f64,
         opts: &Options,
         stats: &mut Stats,
-    ) -> Result<(), IntegrateError>;
+    ) -> Result<(), IntegrateError> {
+        self.state_mut().start(t0, y0);
+        self.restart(p, opts, stats)?;
+        let h = self.state().first_step(p, Self::START_ORDER, opts, stats)?;
+        self.state_mut().h_next = h;
+        Ok(())
+    }
     /// Takes one accepted step, never beyond `t_end` (landing on it exactly
     /// when it is reached).
     fn step(
@@ -32,6 +51,8 @@ pub(crate) trait Stepper<P: Problem> {
     ) -> Result<(), IntegrateError>;
     /// The shared time/state/derivative bookkeeping.
     fn state(&self) -> &StepState;
+    /// The same, to write.
+    fn state_mut(&mut self) -> &mut StepState;
     /// Current time.
     fn t(&self) -> f64 {
         self.state().t

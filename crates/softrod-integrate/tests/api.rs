@@ -9,36 +9,45 @@ use common::{Linear, VanDerPol, dist, dv};
 use nalgebra::{DMatrix, DVector};
 use proptest::prelude::*;
 use softrod_integrate::{
-    Control, Direction, Event, Hooks, IntegrateError, Iteration, Method, Options,
-    SecondOrderSystem, Status, StepInfo, integrate, integrate_second_order,
+    Callbacks, Control, Direction, Event, Hooks, IntegrateError, Integrator, Iteration, NoHooks,
+    Options, SecondOrderSystem, Status, StepInfo, integrate, integrate_second_order,
 };
 
-const ALL: [Method; 5] = [
-    Method::Rk4,
-    Method::Dopri5,
-    Method::Rosw34,
-    Method::GeneralizedAlpha { rho_inf: 0.8 },
-    Method::Esdirk46,
+const ALL: [Integrator; 5] = [
+    Integrator::Rk4,
+    Integrator::Dopri5,
+    Integrator::Rosenbrock,
+    Integrator::GeneralizedAlpha,
+    Integrator::Esdirk,
 ];
 
-/// Options per method: fixed methods get a step, adaptive ones tolerances.
-fn opts_for(method: Method, dt: f64, tol: f64) -> Options {
+/// Options per method: fixed methods get a step, adaptive ones tolerances;
+/// generalized-α runs with `ρ∞ = 0.8`.
+fn opts_for(method: Integrator, dt: f64, tol: f64) -> Options {
     match method {
-        Method::Rk4 | Method::GeneralizedAlpha { .. } => Options::fixed(dt),
+        Integrator::Rk4 => Options::fixed(dt),
+        Integrator::GeneralizedAlpha => Options {
+            rho_inf: 0.8,
+            ..Options::fixed(dt)
+        },
         _ => Options::tol(tol, tol),
     }
 }
 
-fn run(method: Method, sys: &mut Linear, t1: f64, opts: &Options) -> softrod_integrate::Solution {
+fn run(
+    method: Integrator,
+    sys: &mut Linear,
+    t1: f64,
+    opts: &Options,
+) -> softrod_integrate::Solution {
     integrate_second_order(
         sys,
         method,
-        0.0,
-        t1,
+        (0.0, t1),
         &Linear::q0(),
         &Linear::qd0(),
         opts,
-        Hooks::new(),
+        &mut NoHooks,
     )
     .unwrap()
 }
@@ -48,12 +57,16 @@ fn dense_output_at_requested_times_does_not_force_steps() {
     let sys = Linear::damped();
     let t_eval: Vec<f64> = (0..=400).map(|i| i as f64 * 0.01).collect();
     for (method, dt, tol) in [
-        (Method::Rk4, 0.05, 0.0),
-        (Method::Dopri5, 0.0, 1e-10),
-        (Method::Rosw34, 0.0, 1e-6),
-        (Method::GeneralizedAlpha { rho_inf: 1.0 }, 0.02, 0.0),
+        (Integrator::Rk4, 0.05, 0.0),
+        (Integrator::Dopri5, 0.0, 1e-10),
+        (Integrator::Rosenbrock, 0.0, 1e-6),
+        (Integrator::GeneralizedAlpha, 0.02, 0.0),
     ] {
-        let opts = opts_for(method, dt, tol).with_t_eval(t_eval.clone());
+        // Generalized-α with ρ∞ = 1.
+        let opts = Options {
+            rho_inf: 1.0,
+            ..opts_for(method, dt, tol).with_t_eval(t_eval.clone())
+        };
         let sol = run(method, &mut sys.clone(), 4.0, &opts);
         assert_eq!(sol.t, t_eval);
         let err = sol
@@ -75,9 +88,9 @@ fn dense_output_at_requested_times_does_not_force_steps() {
         // Dense output is as accurate as the steps (bounds from the methods'
         // global errors at these settings).
         let bound = match method {
-            Method::Rk4 => 1e-5,
-            Method::Dopri5 => 1e-8,
-            Method::Rosw34 => 1e-4,
+            Integrator::Rk4 => 1e-5,
+            Integrator::Dopri5 => 1e-8,
+            Integrator::Rosenbrock => 1e-4,
             _ => 1e-3, // second order, h = 0.02
         };
         assert!(err < bound, "{method:?}: dense error {err}");
@@ -98,11 +111,14 @@ fn terminal_and_recorded_events_are_located_on_the_dense_output() {
     let pi = std::f64::consts::PI;
     for method in ALL {
         let opts = match method {
-            Method::Rk4 => Options::fixed(1e-3),
-            Method::GeneralizedAlpha { .. } => Options::fixed(1e-4),
+            Integrator::Rk4 => Options::fixed(1e-3),
+            Integrator::GeneralizedAlpha => Options {
+                rho_inf: 0.8,
+                ..Options::fixed(1e-4)
+            },
             _ => Options::tol(1e-10, 1e-10),
         };
-        let hooks = Hooks::new()
+        let mut hooks = Callbacks::new()
             // Recorded: q₁ crosses zero downwards at π/4.
             .event(Event::record(|_t, y: &DVector<f64>| y[0]).direction(Direction::Falling))
             // Terminal: q₁ crosses zero upwards at 3π/4.
@@ -110,18 +126,17 @@ fn terminal_and_recorded_events_are_located_on_the_dense_output() {
         let sol = integrate_second_order(
             &mut decoupled(),
             method,
-            0.0,
-            10.0,
+            (0.0, 10.0),
             &dv(&[1.0, 0.0]),
             &dv(&[0.0, 0.0]),
             &opts,
-            hooks,
+            &mut hooks,
         )
         .unwrap();
         assert_eq!(sol.status, Status::Event { index: 1 });
         assert_eq!(sol.events.len(), 2, "{:?}", sol.events);
         let tol = match method {
-            Method::GeneralizedAlpha { .. } => 1e-6,
+            Integrator::GeneralizedAlpha => 1e-6,
             _ => 1e-8,
         };
         assert_eq!(sol.events[0].index, 0);
@@ -140,34 +155,60 @@ fn terminal_and_recorded_events_are_located_on_the_dense_output() {
     }
 }
 
+/// Records every step `(t, steps so far)`; stops after the 5th.
+#[derive(Default)]
+struct StopAfterFive {
+    seen: Vec<(f64, usize)>,
+}
+
+impl Hooks<Linear> for StopAfterFive {
+    fn step(&mut self, info: &StepInfo<'_>, _: &mut Linear) -> Control {
+        self.seen.push((info.t, info.stats.steps));
+        if info.stats.steps == 5 {
+            Control::Stop
+        } else {
+            Control::Continue
+        }
+    }
+}
+
 #[test]
 fn callback_can_stop_and_sees_every_step() {
     for method in ALL {
-        let mut seen = Vec::new();
-        let hooks = Hooks::new().on_step(|info: &StepInfo, _s: &mut Linear| {
-            seen.push((info.t, info.stats.steps));
-            if info.stats.steps == 5 {
-                Control::Stop
-            } else {
-                Control::Continue
-            }
-        });
+        let mut hooks = StopAfterFive::default();
         let sol = integrate_second_order(
             &mut Linear::undamped(),
             method,
-            0.0,
-            100.0,
+            (0.0, 100.0),
             &Linear::q0(),
             &Linear::qd0(),
             &opts_for(method, 0.01, 1e-6),
-            hooks,
+            &mut hooks,
         )
         .unwrap();
         assert_eq!(sol.status, Status::Stopped);
         assert_eq!(sol.stats.steps, 5);
+        let seen = hooks.seen;
         assert_eq!(seen.len(), 5);
         assert_eq!(sol.t_final, seen[4].0);
         assert_eq!(*sol.t.last().unwrap(), sol.t_final);
+    }
+}
+
+/// A control law: at the first step with `t ≥ 1` it doubles `K`.
+struct Stiffen {
+    t_switch: f64,
+}
+
+impl Hooks<Linear> for Stiffen {
+    fn step(&mut self, info: &StepInfo<'_>, s: &mut Linear) -> Control {
+        if info.t >= 1.0 && self.t_switch.is_nan() {
+            self.t_switch = info.t;
+            s.k *= 2.0;
+            Control::SystemChanged
+        } else {
+            Control::Continue
+        }
     }
 }
 
@@ -177,42 +218,32 @@ fn a_control_law_changing_the_system_equals_a_restart() {
     // change); the result must equal stopping there and restarting with the
     // new system — bit for bit with fixed-step RK4.
     let opts = Options::fixed(0.01);
-    let mut t_switch = f64::NAN;
-    let hooks = Hooks::new().on_step(|info: &StepInfo, s: &mut Linear| {
-        if info.t >= 1.0 && t_switch.is_nan() {
-            t_switch = info.t;
-            s.k *= 2.0;
-            Control::SystemChanged
-        } else {
-            Control::Continue
-        }
-    });
+    let mut hooks = Stiffen { t_switch: f64::NAN };
     let mut sys = Linear::undamped();
     let full = integrate_second_order(
         &mut sys,
-        Method::Rk4,
-        0.0,
-        2.0,
+        Integrator::Rk4,
+        (0.0, 2.0),
         &Linear::q0(),
         &Linear::qd0(),
         &opts,
-        hooks,
+        &mut hooks,
     )
     .unwrap();
+    let t_switch = hooks.t_switch;
     assert!((1.0..1.02).contains(&t_switch));
-    let first = run(Method::Rk4, &mut Linear::undamped(), t_switch, &opts);
+    let first = run(Integrator::Rk4, &mut Linear::undamped(), t_switch, &opts);
     let mut stiffer = Linear::undamped();
     stiffer.k *= 2.0;
     let y = &first.y_final;
     let second = integrate_second_order(
         &mut stiffer,
-        Method::Rk4,
-        t_switch,
-        2.0,
+        Integrator::Rk4,
+        (t_switch, 2.0),
         &y.rows(0, 2).into_owned(),
         &y.rows(2, 2).into_owned(),
         &opts,
-        Hooks::new(),
+        &mut NoHooks,
     )
     .unwrap();
     assert_eq!(full.y_final, second.y_final);
@@ -253,16 +284,18 @@ impl SecondOrderSystem for Breaks {
     }
 }
 
-fn run_breaks(method: Method, fail: bool) -> Result<softrod_integrate::Solution, IntegrateError> {
+fn run_breaks(
+    method: Integrator,
+    fail: bool,
+) -> Result<softrod_integrate::Solution, IntegrateError> {
     integrate_second_order(
         &mut Breaks { t_bad: 1.0, fail },
         method,
-        0.0,
-        2.0,
+        (0.0, 2.0),
         &dv(&[1.0]),
         &dv(&[0.0]),
         &opts_for(method, 0.1, 1e-6),
-        Hooks::new(),
+        &mut NoHooks,
     )
 }
 
@@ -272,16 +305,16 @@ fn nan_in_the_model_is_an_error_with_context_never_a_nan_trajectory() {
         let err = run_breaks(method, false).unwrap_err();
         println!("{method:?}: {err}");
         match (method, &err) {
-            (Method::Rk4, IntegrateError::NonFinite { t, .. }) => assert!(*t > 1.0),
+            (Integrator::Rk4, IntegrateError::NonFinite { t, .. }) => assert!(*t > 1.0),
             (
-                Method::Dopri5 | Method::Rosw34 | Method::Esdirk46,
+                Integrator::Dopri5 | Integrator::Rosenbrock | Integrator::Esdirk,
                 IntegrateError::StepSizeUnderflow { t, reason, .. },
             ) => {
                 assert!((*t - 1.0).abs() < 1e-6, "stopped at {t}");
                 assert!(reason.contains("non-finite"), "{reason}");
             }
             (
-                Method::GeneralizedAlpha { .. },
+                Integrator::GeneralizedAlpha,
                 IntegrateError::NewtonNonConvergence { t, what, .. },
             ) => {
                 assert!((*t - 1.0).abs() < 1e-6, "stopped at {t}");
@@ -318,7 +351,7 @@ fn blow_up_beyond_a_user_bound_is_an_error() {
             max_norm: 1e3,
             ..opts_for(method, 0.01, 1e-6)
         };
-        let err = run_m(method, &mut unstable(), 20.0, &opts, Hooks::new()).unwrap_err();
+        let err = run_m(method, &mut unstable(), 20.0, &opts, &mut NoHooks).unwrap_err();
         match err {
             IntegrateError::BoundExceeded {
                 t, value, bound, ..
@@ -330,13 +363,13 @@ fn blow_up_beyond_a_user_bound_is_an_error() {
         }
         // An energy monitor.
         let energy = |_t: f64, y: &DVector<f64>| 0.5 * y.rows(2, 2).norm_squared();
-        let hooks = Hooks::new().monitor("kinetic energy", 50.0, energy);
+        let mut hooks = Callbacks::new().monitor("kinetic energy", 50.0, energy);
         match run_m(
             method,
             &mut unstable(),
             20.0,
             &opts_for(method, 0.01, 1e-6),
-            hooks,
+            &mut hooks,
         )
         .unwrap_err()
         {
@@ -347,17 +380,16 @@ fn blow_up_beyond_a_user_bound_is_an_error() {
 }
 
 fn run_m(
-    method: Method,
+    method: Integrator,
     sys: &mut Linear,
     t1: f64,
     opts: &Options,
-    hooks: Hooks<'_, Linear>,
+    hooks: &mut dyn Hooks<Linear>,
 ) -> Result<softrod_integrate::Solution, IntegrateError> {
     integrate_second_order(
         sys,
         method,
-        0.0,
-        t1,
+        (0.0, t1),
         &Linear::q0(),
         &Linear::qd0(),
         opts,
@@ -368,15 +400,16 @@ fn run_m(
 #[test]
 fn invalid_input_is_rejected() {
     let mut s = Linear::undamped();
-    let cases: Vec<(Method, Options, f64)> = vec![
-        (Method::Rk4, Options::default(), 1.0), // adaptive: no error estimate
-        (Method::Rk4, Options::fixed(0.0), 1.0),
-        (Method::Dopri5, Options::fixed(f64::NAN), 1.0),
-        (Method::Dopri5, Options::default().with_h0(-1.0), 1.0),
-        (Method::Rosw34, Options::linearly_implicit(0.1), 1.0), // gen-α only
+    let cases: Vec<(Integrator, Options, f64)> = vec![
+        (Integrator::Rk4, Options::default(), 1.0), // adaptive: no error estimate
+        (Integrator::Rk4, Options::fixed(0.0), 1.0),
+        (Integrator::Dopri5, Options::fixed(f64::NAN), 1.0),
+        (Integrator::Dopri5, Options::default().with_h0(-1.0), 1.0),
+        (Integrator::Rosenbrock, Options::linearly_implicit(0.1), 1.0), // gen-α only
         (
-            Method::GeneralizedAlpha { rho_inf: 0.8 },
+            Integrator::GeneralizedAlpha,
             Options {
+                rho_inf: 0.8,
                 iteration: Iteration::Newton {
                     tol: 1e-2,
                     max_iter: 0,
@@ -386,8 +419,9 @@ fn invalid_input_is_rejected() {
             1.0,
         ),
         (
-            Method::GeneralizedAlpha { rho_inf: 0.8 },
+            Integrator::GeneralizedAlpha,
             Options {
+                rho_inf: 0.8,
                 iteration: Iteration::Newton {
                     tol: f64::NAN,
                     max_iter: 4,
@@ -397,19 +431,22 @@ fn invalid_input_is_rejected() {
             1.0,
         ),
         (
-            Method::GeneralizedAlpha { rho_inf: 1.5 },
-            Options::fixed(0.1),
+            Integrator::GeneralizedAlpha,
+            Options {
+                rho_inf: 1.5,
+                ..Options::fixed(0.1)
+            },
             1.0,
         ),
-        (Method::Dopri5, Options::default(), -1.0), // t1 < t0
-        (Method::Dopri5, Options::tol(0.0, 0.0), 1.0),
+        (Integrator::Dopri5, Options::default(), -1.0), // t1 < t0
+        (Integrator::Dopri5, Options::tol(0.0, 0.0), 1.0),
         (
-            Method::Dopri5,
+            Integrator::Dopri5,
             Options::default().with_t_eval(vec![0.5, 0.2]),
             1.0,
         ),
         (
-            Method::Dopri5,
+            Integrator::Dopri5,
             Options::default().with_t_eval(vec![2.0]),
             1.0,
         ),
@@ -427,7 +464,7 @@ fn invalid_input_is_rejected() {
                 "{m:?} {o:?}"
             );
         }
-        match run_m(m, &mut s, t1, &o, Hooks::new()) {
+        match run_m(m, &mut s, t1, &o, &mut NoHooks) {
             Err(IntegrateError::InvalidInput { what }) => println!("{m:?}: {what}"),
             r => panic!("{m:?}: expected InvalidInput, got {r:?}"),
         }
@@ -435,12 +472,14 @@ fn invalid_input_is_rejected() {
     // Generalized-α on a first-order system.
     let r = integrate(
         &mut VanDerPol { mu: 1.0 },
-        Method::GeneralizedAlpha { rho_inf: 0.5 },
-        0.0,
-        1.0,
+        Integrator::GeneralizedAlpha,
+        (0.0, 1.0),
         &dv(&[2.0, 0.0]),
-        &Options::fixed(0.1),
-        Hooks::new(),
+        &Options {
+            rho_inf: 0.5,
+            ..Options::fixed(0.1)
+        },
+        &mut NoHooks,
     );
     assert!(matches!(r, Err(IntegrateError::InvalidInput { .. })));
 }
@@ -456,12 +495,11 @@ fn same_input_same_bits() {
     let vdp = |_: ()| {
         integrate(
             &mut VanDerPol { mu: 10.0 },
-            Method::Rosw34,
-            0.0,
-            30.0,
+            Integrator::Rosenbrock,
+            (0.0, 30.0),
             &dv(&[2.0, 0.0]),
             &Options::tol(1e-6, 1e-6),
-            Hooks::new(),
+            &mut NoHooks,
         )
         .unwrap()
     };
@@ -478,20 +516,20 @@ fn statistics_count_the_work() {
         assert_eq!(sol.stats.rhs_evaluations, s.calls, "{method:?}");
         let st = sol.stats;
         match method {
-            Method::Rk4 => assert_eq!(st.rhs_evaluations, 4 * st.steps + 1),
-            Method::Dopri5 => {
+            Integrator::Rk4 => assert_eq!(st.rhs_evaluations, 4 * st.steps + 1),
+            Integrator::Dopri5 => {
                 // FSAL: 6 per attempted step, + initial f + starting-step guess.
                 assert_eq!(st.rhs_evaluations, 6 * (st.steps + st.rejected_steps) + 2)
             }
-            Method::Rosw34 => {
+            Integrator::Rosenbrock => {
                 assert!(st.factorizations >= 1 && st.jacobian_evaluations >= 1);
                 assert_eq!(st.lu_solves, 4 * (st.steps + st.rejected_steps));
             }
-            Method::GeneralizedAlpha { .. } => {
+            Integrator::GeneralizedAlpha => {
                 assert_eq!(st.lu_solves, st.newton_iterations);
                 assert_eq!(st.rhs_evaluations, st.newton_iterations + 1);
             }
-            Method::Esdirk46 => {
+            Integrator::Esdirk => {
                 // One residual per Newton iteration, the initial
                 // acceleration and the starting-step guess; one solve per
                 // iteration and per error estimate (accepted or rejected by
@@ -512,15 +550,14 @@ fn first_and_second_order_interfaces_agree() {
     // product A·y and the split accel sum in a different order).
     let sys = Linear::damped();
     let opts = Options::tol(1e-8, 1e-8);
-    let a = run(Method::Dopri5, &mut sys.clone(), 3.0, &opts);
+    let a = run(Integrator::Dopri5, &mut sys.clone(), 3.0, &opts);
     let b = integrate(
         &mut common::LinearFirstOrder(sys.a()),
-        Method::Dopri5,
-        0.0,
-        3.0,
+        Integrator::Dopri5,
+        (0.0, 3.0),
         &Linear::y0(),
         &opts,
-        Hooks::new(),
+        &mut NoHooks,
     )
     .unwrap();
     assert_eq!(a.stats.steps, b.stats.steps);
@@ -546,9 +583,9 @@ proptest! {
     /// `y' = −λ y` and never leave [0, y0] (L-stability for ROS34PW2).
     #[test]
     fn decay_is_accurate_and_monotone(lambda in 0.1f64..1e4, t1 in 0.1f64..10.0) {
-        for method in [Method::Dopri5, Method::Rosw34] {
-            let sol = integrate(&mut Decay(lambda), method, 0.0, t1, &dv(&[1.0]),
-                &Options { max_steps: 1_000_000, ..Options::tol(1e-8, 1e-10) }, Hooks::new()).unwrap();
+        for method in [Integrator::Dopri5, Integrator::Rosenbrock] {
+            let sol = integrate(&mut Decay(lambda), method, (0.0, t1), &dv(&[1.0]),
+                &Options { max_steps: 1_000_000, ..Options::tol(1e-8, 1e-10) }, &mut NoHooks).unwrap();
             let exact = (-lambda * t1).exp();
             prop_assert!((sol.y_final[0] - exact).abs() < 1e-6, "{:?}: {} vs {}", method, sol.y_final[0], exact);
             prop_assert!(sol.y.iter().all(|y| y[0] <= 1.0 + 1e-12 && y[0] >= -1e-6));
@@ -556,9 +593,28 @@ proptest! {
     }
 }
 
-/// The output callback sees exactly the stored outputs, in order, as the run
-/// proceeds (before the step's `on_step`); `stream_outputs` stores none;
-/// `Stop` from it ends the run at that output time.
+/// Logs outputs (`'o'`) and steps (`'s'`) in the order they come, keeping
+/// no outputs in the solution.
+#[derive(Default)]
+struct Log(Vec<(char, f64, DVector<f64>)>);
+
+impl Hooks<Linear> for Log {
+    fn keep_outputs(&self) -> bool {
+        false
+    }
+    fn output(&mut self, t: f64, y: &DVector<f64>, _: &mut Linear) -> Control {
+        self.0.push(('o', t, y.clone()));
+        Control::Continue
+    }
+    fn step(&mut self, info: &StepInfo<'_>, _: &mut Linear) -> Control {
+        self.0.push(('s', info.t, info.y.clone()));
+        Control::Continue
+    }
+}
+
+/// The output hook sees exactly the stored outputs, in order, as the run
+/// proceeds (before the step's hook); with `keep_outputs` false none is
+/// stored; `Stop` from it ends the run at that output time.
 #[test]
 fn output_callback_streams_dense_output_and_can_stop() {
     let te: Vec<f64> = (0..=40).map(|k| 0.25 * k as f64).collect();
@@ -566,30 +622,20 @@ fn output_callback_streams_dense_output_and_can_stop() {
         let opts = opts_for(method, 0.01, 1e-8).with_t_eval(te.clone());
         let reference = run(method, &mut Linear::undamped(), 10.0, &opts);
 
-        let log = std::cell::RefCell::new(Vec::new());
-        let hooks = Hooks::new()
-            .stream_outputs(|t, y: &DVector<f64>, _: &mut Linear| {
-                log.borrow_mut().push(('o', t, y.clone()));
-                Control::Continue
-            })
-            .on_step(|info: &StepInfo, _: &mut Linear| {
-                log.borrow_mut().push(('s', info.t, info.y.clone()));
-                Control::Continue
-            });
+        let mut hooks = Log::default();
         let sol = integrate_second_order(
             &mut Linear::undamped(),
             method,
-            0.0,
-            10.0,
+            (0.0, 10.0),
             &Linear::q0(),
             &Linear::qd0(),
             &opts,
-            hooks,
+            &mut hooks,
         )
         .unwrap();
         assert!(sol.t.is_empty() && sol.y.is_empty());
         assert_eq!(sol.y_final, reference.y_final);
-        let log = log.into_inner();
+        let log = hooks.0;
         let outs: Vec<_> = log.iter().filter(|e| e.0 == 'o').collect();
         assert_eq!(outs.len(), te.len());
         for (o, (t, y)) in outs.iter().zip(reference.t.iter().zip(&reference.y)) {
@@ -612,7 +658,7 @@ fn output_callback_streams_dense_output_and_can_stop() {
 
         // Stop at the 5th output (t = 1).
         let mut count = 0;
-        let hooks = Hooks::new().on_output(|_, _, _: &mut Linear| {
+        let mut hooks = Callbacks::new().on_output(|_, _, _: &mut Linear| {
             count += 1;
             if count == 5 {
                 Control::Stop
@@ -623,12 +669,11 @@ fn output_callback_streams_dense_output_and_can_stop() {
         let sol = integrate_second_order(
             &mut Linear::undamped(),
             method,
-            0.0,
-            10.0,
+            (0.0, 10.0),
             &Linear::q0(),
             &Linear::qd0(),
             &opts,
-            hooks,
+            &mut hooks,
         )
         .unwrap();
         assert_eq!(sol.status, Status::Stopped);

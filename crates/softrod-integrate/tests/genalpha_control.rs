@@ -6,33 +6,43 @@
 mod common;
 
 use common::{Linear, dist};
-use softrod_integrate::{Control, Hooks, Method, Options, Solution, Stats, integrate_second_order};
+use softrod_integrate::{
+    Control, Hooks, Integrator, Options, Solution, Stats, StepInfo, integrate_second_order,
+};
 
 const T1: f64 = 4.0;
+
+/// Keeps the size of the first accepted step.
+struct FirstStep(f64);
+
+impl Hooks<Linear> for FirstStep {
+    fn step(&mut self, info: &StepInfo<'_>, _: &mut Linear) -> Control {
+        if self.0.is_nan() {
+            self.0 = info.h;
+        }
+        Control::Continue
+    }
+}
 
 /// Runs generalized-α to `T1`; returns the solution, the number of `accel`
 /// calls the system saw and the size of the first accepted step.
 fn run(sys: &Linear, rho_inf: f64, opts: &Options) -> (Solution, usize, f64) {
     let mut s = sys.clone();
-    let mut first_h = f64::NAN;
-    let hooks = Hooks::new().on_step(|info, _: &mut Linear| {
-        if first_h.is_nan() {
-            first_h = info.h;
-        }
-        Control::Continue
-    });
+    let mut hooks = FirstStep(f64::NAN);
     let sol = integrate_second_order(
         &mut s,
-        Method::GeneralizedAlpha { rho_inf },
-        0.0,
-        T1,
+        Integrator::GeneralizedAlpha,
+        (0.0, T1),
         &Linear::q0(),
         &Linear::qd0(),
-        opts,
-        hooks,
+        &Options {
+            rho_inf,
+            ..opts.clone()
+        },
+        &mut hooks,
     )
     .unwrap();
-    (sol, s.calls, first_h)
+    (sol, s.calls, hooks.0)
 }
 
 /// Position error and full-state error at `T1` against the exact solution.

@@ -11,7 +11,7 @@ use std::convert::Infallible;
 use common::{VanDerPol, dv};
 use nalgebra::{DMatrix, DVector};
 use softrod_integrate::{
-    Hooks, Method, Options, SecondOrderSystem, integrate, integrate_second_order,
+    Integrator, NoHooks, Options, SecondOrderSystem, integrate, integrate_second_order,
 };
 
 /// `M q̈ = −K q − (D + C(t)) q̇` with constant SPD `M`, `K`, `D` and a damping
@@ -172,11 +172,11 @@ fn y0() -> DVector<f64> {
     dv(&[0.3, -0.2, 0.01, 0.0, 1.0, -0.5])
 }
 
-fn run(sys: &mut Structured, method: Method, opts: &Options) -> softrod_integrate::Solution {
+fn run(sys: &mut Structured, method: Integrator, opts: &Options) -> softrod_integrate::Solution {
     let y = y0();
     let q0 = y.rows(0, 3).into_owned();
     let v0 = y.rows(3, 3).into_owned();
-    integrate_second_order(sys, method, 0.0, 2.0, &q0, &v0, opts, Hooks::new()).unwrap()
+    integrate_second_order(sys, method, (0.0, 2.0), &q0, &v0, opts, &mut NoHooks).unwrap()
 }
 
 /// Largest position error at t = 2 against the exact solution.
@@ -197,7 +197,7 @@ const CONVERGENCE: f64 = 30.0;
 fn assert_converges(
     label: &str,
     mut make: impl FnMut() -> Structured,
-    method: Method,
+    method: Integrator,
 ) -> Vec<Structured> {
     let mut systems = Vec::new();
     let mut errs = Vec::new();
@@ -227,7 +227,7 @@ fn structured_solve_needs_no_dense_matrix() {
             s.dense_allowed = false;
             s
         },
-        Method::Esdirk46,
+        Integrator::Esdirk,
     );
     assert!(systems.iter().all(|s| s.jacobian_calls == 0));
 }
@@ -241,7 +241,7 @@ fn poor_structured_matrix_falls_back_to_the_exact_jacobian() {
     let systems = assert_converges(
         "structured, C = 1e4",
         || Structured::new(1e4),
-        Method::Esdirk46,
+        Integrator::Esdirk,
     );
     assert!(systems.iter().all(|s| s.jacobian_calls > 0));
 }
@@ -256,7 +256,7 @@ fn esdirk_converges_through_the_dense_path() {
             s.structured = false;
             s
         },
-        Method::Esdirk46,
+        Integrator::Esdirk,
     );
     assert!(systems.iter().all(|s| s.jacobian_calls > 0));
 }
@@ -276,11 +276,11 @@ fn rosenbrock_w_refreshes_a_failing_cheap_jacobian_to_the_exact_one() {
         s.mass_form = true;
         s
     };
-    let reference = run(&mut make(), Method::Radau5, &Options::tol(1e-11, 1e-11));
+    let reference = run(&mut make(), Integrator::Radau5, &Options::tol(1e-11, 1e-11));
     let mut errs = Vec::new();
     for tol in [1e-5, 1e-8] {
         let mut sys = make();
-        let sol = run(&mut sys, Method::Rosw34, &Options::tol(tol, tol));
+        let sol = run(&mut sys, Integrator::Rosenbrock, &Options::tol(tol, tol));
         let e = (sol.y_final.rows(0, 3) - reference.y_final.rows(0, 3)).amax();
         println!(
             "rosw34, cheap W without C(t), tol {tol:e}: q error {e:.2e}, {} exact Jacobians, {:?}",
@@ -345,12 +345,11 @@ fn van_der_pol_mu_1000_with_radau5_and_esdirk_within_budget() {
     let radau = |tol: f64| {
         integrate(
             &mut VanDerPol { mu: 1000.0 },
-            Method::Radau5,
-            0.0,
-            VDP_T1,
+            Integrator::Radau5,
+            (0.0, VDP_T1),
             &y0,
             &opts(tol),
-            Hooks::new(),
+            &mut NoHooks,
         )
         .unwrap()
     };
@@ -358,13 +357,12 @@ fn van_der_pol_mu_1000_with_radau5_and_esdirk_within_budget() {
     let r9 = radau(1e-9);
     let esd = integrate_second_order(
         &mut VdpSecond { mu: 1000.0 },
-        Method::Esdirk46,
-        0.0,
-        VDP_T1,
+        Integrator::Esdirk,
+        (0.0, VDP_T1),
         &dv(&[2.0]),
         &dv(&[0.0]),
         &opts(1e-6),
-        Hooks::new(),
+        &mut NoHooks,
     )
     .unwrap();
     println!(

@@ -6,32 +6,42 @@
 mod common;
 
 use common::{Forced, Linear, LinearFirstOrder, dist, dv};
-use softrod_integrate::{Hooks, Method, Options, integrate, integrate_second_order};
+use softrod_integrate::{
+    Integrator, NoHooks, Options, StepControl, integrate, integrate_second_order,
+};
 
 const T1: f64 = 4.0;
 
-/// Error at `T1` with fixed step `h` (adaptive methods too).
-fn fixed_error(sys: &Linear, method: Method, h: f64) -> f64 {
+/// Error at `T1` with fixed step `h` (adaptive methods too), the other
+/// options from `base`.
+fn fixed_error(sys: &Linear, method: Integrator, base: &Options, h: f64) -> f64 {
     let mut s = sys.clone();
-    let opts = Options::fixed(h);
+    let opts = Options {
+        step: StepControl::Fixed(h),
+        ..base.clone()
+    };
     let sol = integrate_second_order(
         &mut s,
         method,
-        0.0,
-        T1,
+        (0.0, T1),
         &Linear::q0(),
         &Linear::qd0(),
         &opts,
-        Hooks::new(),
+        &mut NoHooks,
     )
     .unwrap();
     assert_eq!(sol.t_final, T1);
     dist(&sol.y_final, &sys.exact(T1, &Linear::y0()))
 }
 
-fn observed_order(sys: &Linear, method: Method, h: f64) -> f64 {
-    let e1 = fixed_error(sys, method, h);
-    let e2 = fixed_error(sys, method, h / 2.0);
+fn observed_order(sys: &Linear, method: Integrator, h: f64) -> f64 {
+    observed_order_with(sys, method, &Options::default(), h)
+}
+
+/// [`observed_order`] with the other options from `base`.
+fn observed_order_with(sys: &Linear, method: Integrator, base: &Options, h: f64) -> f64 {
+    let e1 = fixed_error(sys, method, base, h);
+    let e2 = fixed_error(sys, method, base, h / 2.0);
     let p = (e1 / e2).log2();
     println!("{method:?}: h = {h}: e = {e1:.3e}, h/2: e = {e2:.3e}, observed order {p:.3}");
     p
@@ -47,28 +57,28 @@ fn assert_order(p: f64, nominal: f64) {
 #[test]
 fn rk4_is_fourth_order() {
     for sys in [Linear::undamped(), Linear::damped()] {
-        assert_order(observed_order(&sys, Method::Rk4, 0.05), 4.0);
+        assert_order(observed_order(&sys, Integrator::Rk4, 0.05), 4.0);
     }
 }
 
 #[test]
 fn dopri5_is_fifth_order() {
     for sys in [Linear::undamped(), Linear::damped()] {
-        assert_order(observed_order(&sys, Method::Dopri5, 0.1), 5.0);
+        assert_order(observed_order(&sys, Integrator::Dopri5, 0.1), 5.0);
     }
 }
 
 #[test]
 fn rosw34_is_third_order() {
     for sys in [Linear::undamped(), Linear::damped()] {
-        assert_order(observed_order(&sys, Method::Rosw34, 0.1), 3.0);
+        assert_order(observed_order(&sys, Integrator::Rosenbrock, 0.1), 3.0);
     }
 }
 
 #[test]
 fn esdirk46_is_fourth_order() {
     for sys in [Linear::undamped(), Linear::damped()] {
-        assert_order(observed_order(&sys, Method::Esdirk46, 0.1), 4.0);
+        assert_order(observed_order(&sys, Integrator::Esdirk, 0.1), 4.0);
     }
 }
 
@@ -77,7 +87,7 @@ fn radau5_is_fifth_order() {
     // Classical order 5 on linear problems (stage order 3 limits it only on
     // very stiff nonlinear ones).
     for sys in [Linear::undamped(), Linear::damped()] {
-        assert_order(observed_order(&sys, Method::Radau5, 0.2), 5.0);
+        assert_order(observed_order(&sys, Integrator::Radau5, 0.2), 5.0);
     }
 }
 
@@ -88,12 +98,11 @@ fn radau5_first_order_form_is_fifth_order() {
         let mut s = LinearFirstOrder(lin.a());
         let sol = integrate(
             &mut s,
-            Method::Radau5,
-            0.0,
-            T1,
+            Integrator::Radau5,
+            (0.0, T1),
             &Linear::y0(),
             &Options::fixed(h),
-            Hooks::new(),
+            &mut NoHooks,
         )
         .unwrap();
         dist(&sol.y_final, &lin.exact(T1, &Linear::y0()))
@@ -112,13 +121,12 @@ fn esdirk46_is_fourth_order_on_a_non_autonomous_problem() {
         let mut s = Forced { w: 2.0, big_w: 1.3 };
         let sol = integrate_second_order(
             &mut s,
-            Method::Esdirk46,
-            0.0,
-            T1,
+            Integrator::Esdirk,
+            (0.0, T1),
             &dv(&[0.0]),
             &dv(&[0.0]),
             &Options::fixed(h),
-            Hooks::new(),
+            &mut NoHooks,
         )
         .unwrap();
         let (q, v) = sys.exact(T1);
@@ -137,13 +145,12 @@ fn rosw34_is_third_order_on_a_non_autonomous_problem() {
         let opts = Options::fixed(h);
         let sol = integrate_second_order(
             &mut s,
-            Method::Rosw34,
-            0.0,
-            T1,
+            Integrator::Rosenbrock,
+            (0.0, T1),
             &dv(&[0.0]),
             &dv(&[0.0]),
             &opts,
-            Hooks::new(),
+            &mut NoHooks,
         )
         .unwrap();
         let (q, v) = s.exact(T1);
@@ -158,7 +165,11 @@ fn rosw34_is_third_order_on_a_non_autonomous_problem() {
 fn generalized_alpha_is_second_order_for_all_rho() {
     for rho in [0.0, 0.5, 0.8, 1.0] {
         for sys in [Linear::undamped(), Linear::damped()] {
-            let p = observed_order(&sys, Method::GeneralizedAlpha { rho_inf: rho }, 0.02);
+            let opts = Options {
+                rho_inf: rho,
+                ..Options::default()
+            };
+            let p = observed_order_with(&sys, Integrator::GeneralizedAlpha, &opts, 0.02);
             assert_order(p, 2.0);
         }
     }
@@ -173,12 +184,11 @@ fn first_order_path_with_finite_difference_jacobian_matches() {
         let opts = Options::fixed(h);
         let sol = integrate(
             &mut s,
-            Method::Rosw34,
-            0.0,
-            T1,
+            Integrator::Rosenbrock,
+            (0.0, T1),
             &Linear::y0(),
             &opts,
-            Hooks::new(),
+            &mut NoHooks,
         )
         .unwrap();
         dist(&sol.y_final, &sys.exact(T1, &Linear::y0()))
@@ -186,24 +196,26 @@ fn first_order_path_with_finite_difference_jacobian_matches() {
     let p = (run(0.1) / run(0.05)).log2();
     assert_order(p, 3.0);
     // And agrees with the Schur-complement path of the second-order adaptor.
-    assert!((run(0.1) - fixed_error(&sys, Method::Rosw34, 0.1)).abs() < 1e-9);
+    assert!(
+        (run(0.1) - fixed_error(&sys, Integrator::Rosenbrock, &Options::default(), 0.1)).abs()
+            < 1e-9
+    );
 }
 
 /// Adaptive runs: error ∝ N^(−p) where N is the number of steps; the slope
 /// between two tolerances three decades apart recovers the order.
-fn adaptive_slope(method: Method, tol_a: f64, tol_b: f64) -> f64 {
+fn adaptive_slope(method: Integrator, tol_a: f64, tol_b: f64) -> f64 {
     let sys = Linear::damped();
     let run = |tol: f64| {
         let mut s = sys.clone();
         let sol = integrate_second_order(
             &mut s,
             method,
-            0.0,
-            T1,
+            (0.0, T1),
             &Linear::q0(),
             &Linear::qd0(),
             &Options::tol(tol, tol),
-            Hooks::new(),
+            &mut NoHooks,
         )
         .unwrap();
         (
@@ -223,12 +235,12 @@ fn adaptive_slope(method: Method, tol_a: f64, tol_b: f64) -> f64 {
 #[test]
 fn adaptive_methods_show_their_order_in_error_versus_steps() {
     // Slack: the controller's step-size sequence is not exactly uniform.
-    let p = adaptive_slope(Method::Dopri5, 1e-5, 1e-9);
+    let p = adaptive_slope(Integrator::Dopri5, 1e-5, 1e-9);
     assert!((4.3..=5.8).contains(&p), "dopri5 slope {p}");
-    let p = adaptive_slope(Method::Rosw34, 1e-4, 1e-7);
+    let p = adaptive_slope(Integrator::Rosenbrock, 1e-4, 1e-7);
     assert!((2.5..=3.6).contains(&p), "rosw34 slope {p}");
-    let p = adaptive_slope(Method::Esdirk46, 1e-4, 1e-8);
+    let p = adaptive_slope(Integrator::Esdirk, 1e-4, 1e-8);
     assert!((3.4..=4.6).contains(&p), "esdirk46 slope {p}");
-    let p = adaptive_slope(Method::Radau5, 1e-4, 1e-8);
+    let p = adaptive_slope(Integrator::Radau5, 1e-4, 1e-8);
     assert!((4.3..=5.8).contains(&p), "radau5 slope {p}");
 }

@@ -11,7 +11,7 @@ use std::path::Path;
 use nalgebra::DVector;
 use softrod_dynamics::{Model, RodSpec, energies};
 use softrod_integrate::{
-    Hooks, Method, Options, Recommended, RodSystem, Solution, Status, integrate_second_order,
+    Integrator, NoHooks, Options, Recommended, RodSystem, Solution, Status, integrate_second_order,
 };
 use softrod_kinematics::{Basis, Rod, RodKinematics, Strain, straight};
 use softrod_lie::{Pose, Vec3};
@@ -55,15 +55,19 @@ fn run(
     let t1 = *times.last().unwrap();
     let sol = integrate_second_order(
         &mut sys,
-        setting.method,
-        0.0,
-        t1,
+        setting.integrator,
+        (0.0, t1),
         q0,
         qd0,
         &opts,
-        Hooks::new(),
+        &mut NoHooks,
     )
-    .unwrap_or_else(|e| panic!("{:?} rtol {}: {e}", setting.method, setting.options.rtol));
+    .unwrap_or_else(|e| {
+        panic!(
+            "{:?} rtol {}: {e}",
+            setting.integrator, setting.options.rtol
+        )
+    });
     assert_eq!(sol.status, Status::Completed);
     (sys, sol)
 }
@@ -146,7 +150,7 @@ fn three_d_release_tracks_rtol_against_dopri5() {
     let model = cantilever(SOFT, 8, Basis::all(), 4);
     let times = linspace(0.1, 50);
     let reference = Recommended {
-        method: Method::Dopri5,
+        integrator: Integrator::Dopri5,
         options: Options {
             max_steps: 10_000_000,
             ..Options::tol(1e-10, 1e-12)
@@ -171,7 +175,7 @@ fn steel_wire_agrees_with_radau_iia() {
     let model = cantilever(STEEL, 10, Basis::all(), 4);
     let times = linspace(0.05, 25);
     let reference = Recommended {
-        method: Method::Radau5,
+        integrator: Integrator::Radau5,
         options: Options {
             max_steps: 10_000_000,
             ..Options::tol(1e-10, 1e-10)
@@ -252,7 +256,7 @@ fn shipped_examples_run_and_agree_with_radau_iia() {
         let t1 = scene.run.duration.min(0.1);
         let times = linspace(t1, 20);
         let reference = Recommended {
-            method: Method::Radau5,
+            integrator: Integrator::Radau5,
             options: Options {
                 max_steps: 10_000_000,
                 ..Options::tol(1e-10, 1e-10)

@@ -7,8 +7,8 @@
 use nalgebra::DVector;
 use softrod_dynamics::{Data, Model, RodSpec, energies, modes};
 use softrod_integrate::{
-    Hooks, IntegrateError, Iteration, Method, Options, RodJacobian, RodSystem, Solution,
-    integrate_second_order,
+    Callbacks, IntegrateError, Integrator, Iteration, NoHooks, Options, RodJacobian, RodSystem,
+    Solution, integrate_second_order,
 };
 use softrod_kinematics::{Basis, Rod, straight};
 use softrod_lie::{Pose, Vec3};
@@ -49,14 +49,14 @@ fn steel_wire(pieces: usize) -> Model {
 fn run(
     model: &Model,
     jacobian: RodJacobian,
-    method: Method,
+    method: Integrator,
     t1: f64,
     opts: &Options,
 ) -> Result<(RodSystem, Solution), IntegrateError> {
     let mut sys = RodSystem::new(model.clone());
     sys.jacobian = jacobian;
     let z = DVector::zeros(model.n_dof());
-    let sol = integrate_second_order(&mut sys, method, 0.0, t1, &z, &z, opts, Hooks::new())?;
+    let sol = integrate_second_order(&mut sys, method, (0.0, t1), &z, &z, opts, &mut NoHooks)?;
     Ok((sys, sol))
 }
 
@@ -100,9 +100,9 @@ fn undamped_release_conserves_energy_to_tolerance() {
     let model = cantilever(0.5, 0.01, 1000.0, 1e6, 0.5, 2);
     let rtol = 1e-8;
     for (method, jac) in [
-        (Method::Dopri5, RodJacobian::Exact),
-        (Method::Rosw34, RodJacobian::Exact),
-        (Method::Rosw34, RodJacobian::ElasticOnly),
+        (Integrator::Dopri5, RodJacobian::Exact),
+        (Integrator::Rosenbrock, RodJacobian::Exact),
+        (Integrator::Rosenbrock, RodJacobian::ElasticOnly),
     ] {
         let opts = Options {
             max_steps: 1_000_000,
@@ -151,9 +151,12 @@ fn generalized_alpha_energy_bounded_without_dissipation_decreasing_with() {
     let (mut sys, sol) = run(
         &model,
         RodJacobian::ElasticOnly,
-        Method::GeneralizedAlpha { rho_inf: 1.0 },
+        Integrator::GeneralizedAlpha,
         t1,
-        &opts,
+        &Options {
+            rho_inf: 1.0,
+            ..opts.clone()
+        },
     )
     .unwrap();
     let (e, scale) = energy_series(&mut sys, &sol);
@@ -179,9 +182,12 @@ fn generalized_alpha_energy_bounded_without_dissipation_decreasing_with() {
     let (mut sys, sol) = run(
         &model,
         RodJacobian::ElasticOnly,
-        Method::GeneralizedAlpha { rho_inf: 0.5 },
+        Integrator::GeneralizedAlpha,
         t1,
-        &opts,
+        &Options {
+            rho_inf: 0.5,
+            ..opts.clone()
+        },
     )
     .unwrap();
     let (e, scale) = energy_series(&mut sys, &sol);
@@ -229,16 +235,30 @@ fn steel_wire_stable_far_above_explicit_limit() {
     let t1 = 0.2;
     let dt = 100.0 * limit;
     for (method, opts, jac) in [
-        (Method::Rosw34, Options::fixed(dt), RodJacobian::Exact),
-        (Method::Rosw34, Options::fixed(dt), RodJacobian::ElasticOnly),
         (
-            Method::GeneralizedAlpha { rho_inf: 1.0 },
+            Integrator::Rosenbrock,
             Options::fixed(dt),
             RodJacobian::Exact,
         ),
         (
-            Method::GeneralizedAlpha { rho_inf: 0.8 },
-            Options::linearly_implicit(dt),
+            Integrator::Rosenbrock,
+            Options::fixed(dt),
+            RodJacobian::ElasticOnly,
+        ),
+        (
+            Integrator::GeneralizedAlpha,
+            Options {
+                rho_inf: 1.0,
+                ..Options::fixed(dt)
+            },
+            RodJacobian::Exact,
+        ),
+        (
+            Integrator::GeneralizedAlpha,
+            Options {
+                rho_inf: 0.8,
+                ..Options::linearly_implicit(dt)
+            },
             RodJacobian::ElasticOnly,
         ),
     ] {
@@ -274,7 +294,7 @@ fn steel_wire_stable_far_above_explicit_limit() {
     let (mut sys, sol) = run(
         &model,
         RodJacobian::ElasticOnly,
-        Method::Rosw34,
+        Integrator::Rosenbrock,
         t1,
         &Options::tol(1e-3, 1e-6),
     )
@@ -294,7 +314,7 @@ fn steel_wire_stable_far_above_explicit_limit() {
     let res = run(
         &model,
         RodJacobian::Exact,
-        Method::Rk4,
+        Integrator::Rk4,
         t1,
         &Options::fixed(3.0 * limit),
     );
@@ -316,23 +336,29 @@ fn reruns_are_bit_identical() {
     let te: Vec<f64> = (0..=20).map(|k| 0.005 * k as f64).collect();
     let cases = [
         (
-            Method::Rosw34,
+            Integrator::Rosenbrock,
             Options::tol(1e-4, 1e-7).with_t_eval(te.clone()),
             RodJacobian::Exact,
         ),
         (
-            Method::Dopri5,
+            Integrator::Dopri5,
             Options::tol(1e-6, 1e-9).with_t_eval(te.clone()),
             RodJacobian::Exact,
         ),
         (
-            Method::GeneralizedAlpha { rho_inf: 0.8 },
-            Options::linearly_implicit(1e-3).with_t_eval(te.clone()),
+            Integrator::GeneralizedAlpha,
+            Options {
+                rho_inf: 0.8,
+                ..Options::linearly_implicit(1e-3).with_t_eval(te.clone())
+            },
             RodJacobian::ElasticOnly,
         ),
         (
-            Method::GeneralizedAlpha { rho_inf: 0.0 },
-            Options::linearly_implicit_tol(1e-2, 1e-4).with_t_eval(te.clone()),
+            Integrator::GeneralizedAlpha,
+            Options {
+                rho_inf: 0.0,
+                ..Options::linearly_implicit_tol(1e-2, 1e-4).with_t_eval(te.clone())
+            },
             RodJacobian::ElasticOnly,
         ),
     ];
@@ -342,12 +368,20 @@ fn reruns_are_bit_identical() {
             sys.jacobian = jac;
             let z = DVector::zeros(model.n_dof());
             let mut streamed: Vec<(f64, DVector<f64>)> = Vec::new();
-            let hooks = Hooks::new().on_output(|t, y, _: &mut RodSystem| {
+            let record = |t, y: &DVector<f64>, _: &mut RodSystem| {
                 streamed.push((t, y.clone()));
                 softrod_integrate::Control::Continue
-            });
-            let sol =
-                integrate_second_order(&mut sys, method, 0.0, 0.1, &z, &z, &opts, hooks).unwrap();
+            };
+            let sol = integrate_second_order(
+                &mut sys,
+                method,
+                (0.0, 0.1),
+                &z,
+                &z,
+                &opts,
+                &mut Callbacks::new().on_output(record),
+            )
+            .unwrap();
             (sol, streamed)
         };
         let (a, sa) = go();
@@ -437,10 +471,11 @@ fn mass_matrix_form_matches_dense_inverse_mass_stiffness() {
     let n = model.n_dof();
     let z = DVector::zeros(n);
     let cases = [
-        (Method::Rosw34, Options::fixed(1e-3), 1e-10),
+        (Integrator::Rosenbrock, Options::fixed(1e-3), 1e-10),
         (
-            Method::GeneralizedAlpha { rho_inf: 0.8 },
+            Integrator::GeneralizedAlpha,
             Options {
+                rho_inf: 0.8,
                 rtol: 1e-12,
                 atol: 1e-14,
                 iteration: Iteration::Newton {
@@ -459,12 +494,12 @@ fn mass_matrix_form_matches_dense_inverse_mass_stiffness() {
         };
         let mut fast = RodSystem::new(model.clone());
         fast.jacobian = RodJacobian::ElasticOnly;
-        let a = integrate_second_order(&mut fast, method, 0.0, 0.1, &z, &z, &opts, Hooks::new())
+        let a = integrate_second_order(&mut fast, method, (0.0, 0.1), &z, &z, &opts, &mut NoHooks)
             .unwrap();
         let mut slow = RodSystem::new(model.clone());
         slow.jacobian = RodJacobian::ElasticOnly;
         let mut slow = DenseW(slow);
-        let b = integrate_second_order(&mut slow, method, 0.0, 0.1, &z, &z, &opts, Hooks::new())
+        let b = integrate_second_order(&mut slow, method, (0.0, 0.1), &z, &z, &opts, &mut NoHooks)
             .unwrap();
         assert_eq!(a.stats.steps, b.stats.steps, "{method:?}");
         let (ya, yb) = (&a.y[0], &b.y[0]);

@@ -7,7 +7,7 @@ mod common;
 use common::{Linear, Robertson, VanDerPol, dist, dv};
 use nalgebra::DMatrix;
 use softrod_integrate::{
-    Hooks, IntegrateError, Method, Options, integrate, integrate_second_order,
+    IntegrateError, Integrator, NoHooks, Options, integrate, integrate_second_order,
 };
 
 /// Van der Pol, μ = 1000, over [0, 3000]: almost two relaxation periods
@@ -31,12 +31,11 @@ fn van_der_pol_mu_1000_rosw_within_budget_dopri5_not() {
     let y0 = dv(&[2.0, 0.0]);
     let sol = integrate(
         &mut VanDerPol { mu: 1000.0 },
-        Method::Rosw34,
-        0.0,
-        VDP_T1,
+        Integrator::Rosenbrock,
+        (0.0, VDP_T1),
         &y0,
         &vdp_opts(1e-6),
-        Hooks::new(),
+        &mut NoHooks,
     )
     .unwrap();
     println!("rosw34 VdP μ=1000 tol 1e-6: {:?}", sol.stats);
@@ -51,15 +50,14 @@ fn van_der_pol_mu_1000_rosw_within_budget_dopri5_not() {
     // compare away from a jump: at t1 the solution is on a slow branch).
     let fine = integrate(
         &mut VanDerPol { mu: 1000.0 },
-        Method::Rosw34,
-        0.0,
-        VDP_T1,
+        Integrator::Rosenbrock,
+        (0.0, VDP_T1),
         &y0,
         &Options {
             max_steps: 100_000,
             ..Options::tol(1e-8, 1e-8)
         },
-        Hooks::new(),
+        &mut NoHooks,
     )
     .unwrap();
     println!("rosw34 VdP μ=1000 tol 1e-8: {:?}", fine.stats);
@@ -73,12 +71,11 @@ fn van_der_pol_mu_1000_rosw_within_budget_dopri5_not() {
     // The explicit method runs out of the same budget.
     let err = integrate(
         &mut VanDerPol { mu: 1000.0 },
-        Method::Dopri5,
-        0.0,
-        VDP_T1,
+        Integrator::Dopri5,
+        (0.0, VDP_T1),
         &y0,
         &vdp_opts(1e-6),
-        Hooks::new(),
+        &mut NoHooks,
     )
     .unwrap_err();
     println!("dopri5: {err}");
@@ -104,12 +101,11 @@ fn robertson_to_t_40_matches_the_reference() {
     };
     let sol = integrate(
         &mut Robertson,
-        Method::Rosw34,
-        0.0,
-        40.0,
+        Integrator::Rosenbrock,
+        (0.0, 40.0),
         &dv(&[1.0, 0.0, 0.0]),
         &opts,
-        Hooks::new(),
+        &mut NoHooks,
     )
     .unwrap();
     println!("Robertson: {:?}, y = {}", sol.stats, sol.y_final);
@@ -142,17 +138,17 @@ fn generalized_alpha_takes_large_steps_and_damps_the_stiff_mode() {
         let mut sys = stiff_pair();
         let sol = integrate_second_order(
             &mut sys,
-            Method::GeneralizedAlpha { rho_inf: rho },
-            0.0,
-            t1,
+            Integrator::GeneralizedAlpha,
+            (0.0, t1),
             &q0,
             &qd0,
             &Options {
+                rho_inf: rho,
                 // Never refresh a Jacobian that works (it is constant here).
                 jacobian_max_age: usize::MAX,
                 ..Options::fixed(0.05)
             },
-            Hooks::new(),
+            &mut NoHooks,
         )
         .unwrap();
         println!("rho_inf {rho}: {:?}", sol.stats);
@@ -192,13 +188,12 @@ fn rosw34_on_the_stiff_pair_is_not_limited_by_the_stiff_mode() {
     let mut sys = stiff_pair();
     let sol = integrate_second_order(
         &mut sys,
-        Method::Rosw34,
-        0.0,
-        10.0,
+        Integrator::Rosenbrock,
+        (0.0, 10.0),
         &dv(&[1.0, 0.0]),
         &dv(&[0.0, 0.0]),
         &Options::tol(1e-6, 1e-8),
-        Hooks::new(),
+        &mut NoHooks,
     )
     .unwrap();
     println!("rosw34 stiff pair: {:?}", sol.stats);

@@ -14,8 +14,8 @@ use nalgebra::DVector;
 use softrod::Settings;
 use softrod::dynamics::{DynamicsError, Model, forward_dynamics};
 use softrod::integrate::{
-    Control, Hooks, IntegrateError, Options, RodSystem, SecondOrderSystem, Status, StepControl,
-    integrate_second_order,
+    Control, Hooks, IntegrateError, NoHooks, Options, RodSystem, SecondOrderSystem, Status,
+    StepControl, StepInfo, integrate_second_order,
 };
 use softrod::{RunStatus, Trajectory, TrajectoryRecorder, output_times};
 
@@ -195,22 +195,38 @@ pub enum ControlError {
 pub type ControllerFn<'a> =
     dyn FnMut(f64, &[f64], &[f64], &mut Vec<f64>) -> Result<(), pyo3::PyErr> + 'a;
 
-/// Integrates `duration` seconds from `(q0, q̇0)` with `u` from `controller`
-/// held constant between updates (zero-order hold): at `t = 0`, then after
-/// every accepted integrator step (`control_every = None`) or every
-/// `control_every` seconds (the run is integrated in segments of that
-/// length, restarting the integrator at each, so the hold is exact whatever
-/// the integrator's steps).
-#[allow(clippy::too_many_arguments)]
+/// What a controlled run integrates: `duration` seconds from `(q0, q̇0)`,
+/// with the controller sampled after every accepted integrator step
+/// (`control_every = None`) or every `control_every` seconds.
+pub struct ControlledRun<'a> {
+    /// Simulated time \[s\].
+    pub duration: f64,
+    /// Initial coordinates (n_dof).
+    pub q0: &'a DVector<f64>,
+    /// Initial velocities (n_dof).
+    pub qd0: &'a DVector<f64>,
+    /// The control period \[s\], or `None` for every accepted step.
+    pub control_every: Option<f64>,
+}
+
+/// Integrates `run` with `u` from `controller` held constant between
+/// updates (zero-order hold): at `t = 0`, then after every accepted
+/// integrator step (`control_every = None`) or every `control_every`
+/// seconds (the run is integrated in segments of that length, restarting
+/// the integrator at each, so the hold is exact whatever the integrator's
+/// steps).
 pub fn simulate_controlled(
     inputs: &mut CableInputs,
     settings: &Settings,
-    duration: f64,
-    q0: &DVector<f64>,
-    qd0: &DVector<f64>,
-    control_every: Option<f64>,
+    run: ControlledRun<'_>,
     controller: &mut ControllerFn<'_>,
 ) -> Result<Trajectory, ControlError> {
+    let ControlledRun {
+        duration,
+        q0,
+        qd0,
+        control_every,
+    } = run;
     let (method, base_opts) =
         settings
             .method_and_options(duration)
@@ -257,38 +273,18 @@ pub fn simulate_controlled(
                 h0: Some(h.min(t1 - t0)),
             };
         }
-        let failure: std::cell::RefCell<Option<ControlError>> = std::cell::RefCell::new(None);
-        let rec_cell = std::cell::RefCell::new(&mut rec);
-        let ctl = std::cell::RefCell::new(&mut *controller);
-        let mut hooks = Hooks::new().stream_outputs(|t, y, sys: &mut CableInputs| {
-            match rec_cell.borrow_mut().record(&mut sys.sys, t, y) {
-                Ok(()) => Control::Continue,
-                Err(message) => {
-                    *failure.borrow_mut() = Some(ControlError::Output { t, message });
-                    Control::Stop
-                }
-            }
-        });
-        if per_step {
-            hooks = hooks.on_step(|info, sys: &mut CableInputs| {
-                let (q, qd) = info.y.as_slice().split_at(n);
-                let mut u = std::mem::take(&mut sys.u);
-                let r = {
-                    let mut c = ctl.borrow_mut();
-                    (*c)(info.t, q, qd, &mut u)
-                };
-                sys.u = u;
-                match r {
-                    Ok(()) => Control::SystemChanged,
-                    Err(e) => {
-                        *failure.borrow_mut() = Some(ControlError::Controller(e));
-                        Control::Stop
-                    }
-                }
-            });
-        }
-        let result = integrate_second_order(inputs, method, t0, t1, &q, &qd, &opts, hooks);
-        if let Some(f) = failure.into_inner() {
+        let mut hooks = ControlHooks {
+            n,
+            rec: &mut rec,
+            controller: if per_step {
+                Some(&mut *controller)
+            } else {
+                None
+            },
+            failure: None,
+        };
+        let result = integrate_second_order(inputs, method, (t0, t1), &q, &qd, &opts, &mut hooks);
+        if let Some(f) = hooks.failure {
             return Err(f);
         }
         let sol = result.map_err(ControlError::Integrate)?;
@@ -304,6 +300,52 @@ pub fn simulate_controlled(
     let mut traj = rec.inner.into_trajectory();
     traj.summary.stats = stats;
     Ok(traj)
+}
+
+/// The integrator's hooks of a controlled segment, as one object: the
+/// record of the samples, the controller after every accepted step (when it
+/// runs per step) and what went wrong (the integrator only hears `Stop`).
+struct ControlHooks<'r, 'c> {
+    /// Coordinates (`y = (q, q̇)` has `2n`).
+    n: usize,
+    rec: &'r mut Recorder,
+    /// The controller, when it runs after every accepted step.
+    controller: Option<&'r mut ControllerFn<'c>>,
+    failure: Option<ControlError>,
+}
+
+impl Hooks<CableInputs> for ControlHooks<'_, '_> {
+    fn keep_outputs(&self) -> bool {
+        false
+    }
+
+    fn output(&mut self, t: f64, y: &DVector<f64>, sys: &mut CableInputs) -> Control {
+        match self.rec.record(&mut sys.sys, t, y) {
+            Ok(()) => Control::Continue,
+            Err(message) => {
+                self.failure = Some(ControlError::Output { t, message });
+                Control::Stop
+            }
+        }
+    }
+
+    /// `u` from the controller at the step's end, held from there on.
+    fn step(&mut self, info: &StepInfo<'_>, sys: &mut CableInputs) -> Control {
+        let Some(controller) = self.controller.as_mut() else {
+            return Control::Continue;
+        };
+        let (q, qd) = info.y.as_slice().split_at(self.n);
+        let mut u = std::mem::take(&mut sys.u);
+        let r = controller(info.t, q, qd, &mut u);
+        sys.u = u;
+        match r {
+            Ok(()) => Control::SystemChanged,
+            Err(e) => {
+                self.failure = Some(ControlError::Controller(e));
+                Control::Stop
+            }
+        }
+    }
 }
 
 fn add_stats(acc: &mut softrod::integrate::Stats, s: &softrod::integrate::Stats) {
@@ -336,7 +378,7 @@ pub fn step<S: SecondOrderSystem>(
     let (method, mut opts) = settings.method_and_options(dt)?;
     opts.t_eval = Some(Vec::new());
     let n = sys.dim();
-    let sol = integrate_second_order(sys, method, t, t + dt, q, qd, &opts, Hooks::new())?;
+    let sol = integrate_second_order(sys, method, (t, t + dt), q, qd, &opts, &mut NoHooks)?;
     Ok((
         sol.y_final.rows(0, n).into_owned(),
         sol.y_final.rows(n, n).into_owned(),

@@ -79,6 +79,12 @@ fn simulate_many(
 #[pymodule]
 fn _softrod(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    // The one list of integrators (softrod-integrate's), by scene name.
+    let integrators = softrod::Integrator::ALL.map(softrod::Integrator::name);
+    m.add(
+        "INTEGRATORS",
+        pyo3::types::PyTuple::new(m.py(), integrators)?,
+    )?;
     m.add_class::<simulation::Simulation>()?;
     m.add_class::<settings::Settings>()?;
     m.add_class::<results::Energies>()?;

@@ -10,6 +10,8 @@
 //! library's builders, which check every value once. This crate keeps only
 //! what is a scene's: the [`World`], the [`Initial`] state, the [`Run`]
 //! settings, the [`Reference`] answer, the source file and the [`Warning`]s.
+//! The integrators `run.integrator` names are softrod-integrate's
+//! [`Integrator`] list, re-exported here.
 //!
 //! Errors are one [`SceneError`] naming the file, the key path
 //! (`rod[0].material.young`), the line and column where known, and what is

@@ -1,9 +1,7 @@
 //! Run settings (`[run]`): mode, integrator, tolerances, steps, output.
 
-use std::fmt;
-use std::str::FromStr;
-
-use serde::Serialize;
+use serde::{Serialize, Serializer};
+pub use softrod_integrate::{Integrator, UnknownIntegrator};
 
 /// What `run.mode` asks for. Commands ignore it when they imply a mode
 /// (`softrod statics` always computes the equilibrium).
@@ -27,102 +25,6 @@ impl Mode {
     }
 }
 
-/// Time integrator named by `run.integrator`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
-pub enum Integrator {
-    /// Classical 4th-order Runge–Kutta, fixed step `dt` (`"rk4"`).
-    #[serde(rename = "rk4")]
-    Rk4,
-    /// Dormand–Prince 5(4), adaptive explicit (`"dopri5"`).
-    #[serde(rename = "dopri5")]
-    Dopri5,
-    /// Linearly-implicit Rosenbrock method, adaptive, for stiff problems (`"rosenbrock"`).
-    #[serde(rename = "rosenbrock")]
-    Rosenbrock,
-    /// Generalized-α (Chung–Hulbert), implicit second-order method with
-    /// controllable numerical damping (`"generalized-alpha"`).
-    #[serde(rename = "generalized-alpha")]
-    GeneralizedAlpha,
-    /// ESDIRK4(3)6L\[2\]SA, adaptive, stiffly accurate, Newton on the exact
-    /// Jacobian with the O(N) structured solve (`"esdirk"`).
-    #[serde(rename = "esdirk")]
-    Esdirk,
-    /// Radau IIA of order 5 (three stages), adaptive, Newton on the exact
-    /// Jacobian (`"radau5"`).
-    #[serde(rename = "radau5")]
-    Radau5,
-}
-
-impl Integrator {
-    /// Every integrator, in the order error messages list them.
-    pub const ALL: [Integrator; 6] = [
-        Integrator::Rk4,
-        Integrator::Dopri5,
-        Integrator::Rosenbrock,
-        Integrator::GeneralizedAlpha,
-        Integrator::Esdirk,
-        Integrator::Radau5,
-    ];
-
-    /// Default when the scene names none: the stiff, error-controlled
-    /// ESDIRK with Newton on the exact Jacobian. It finishes at every
-    /// tolerance from 1e-2 to 1e-10 on the 3-D and planar releases and the
-    /// steel wire, where the Rosenbrock–W method on the elastic-only
-    /// Jacobian stalled at tight tolerances (docs/performance.md,
-    /// "Integrators"); generalized-α is cheaper per step but has no error
-    /// control, dopri5 is stability-limited on stiff rods.
-    pub const DEFAULT: Integrator = Integrator::Esdirk;
-
-    /// The name used in scene files.
-    pub fn name(self) -> &'static str {
-        match self {
-            Integrator::Rk4 => "rk4",
-            Integrator::Dopri5 => "dopri5",
-            Integrator::Rosenbrock => "rosenbrock",
-            Integrator::GeneralizedAlpha => "generalized-alpha",
-            Integrator::Esdirk => "esdirk",
-            Integrator::Radau5 => "radau5",
-        }
-    }
-
-    /// Whether the method adapts its step to `rtol`/`atol` (otherwise it steps with `dt`).
-    pub fn is_adaptive(self) -> bool {
-        !matches!(self, Integrator::Rk4 | Integrator::GeneralizedAlpha)
-    }
-
-    /// Whether the method is implicit or linearly implicit (suited to stiff problems).
-    pub fn is_implicit(self) -> bool {
-        !matches!(self, Integrator::Rk4 | Integrator::Dopri5)
-    }
-}
-
-impl fmt::Display for Integrator {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-/// Error of [`Integrator::from_str`]: the name is not one of [`Integrator::ALL`].
-#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error(
-    "unknown integrator {name:?} (valid: rk4, dopri5, rosenbrock, generalized-alpha, esdirk, radau5)"
-)]
-pub struct UnknownIntegrator {
-    /// The name given.
-    pub name: String,
-}
-
-impl FromStr for Integrator {
-    type Err = UnknownIntegrator;
-
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        Integrator::ALL
-            .into_iter()
-            .find(|i| i.name() == s)
-            .ok_or_else(|| UnknownIntegrator { name: s.to_owned() })
-    }
-}
-
 /// Run settings (`[run]`), all defaults filled.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Run {
@@ -131,6 +33,7 @@ pub struct Run {
     /// Simulated time, s, > 0 (default [`Run::DEFAULT_DURATION`]).
     pub duration: f64,
     /// Time integrator (default [`Integrator::DEFAULT`]).
+    #[serde(serialize_with = "integrator_name")]
     pub integrator: Integrator,
     /// Relative tolerance of adaptive methods, > 0 (default [`Run::DEFAULT_RTOL`]).
     pub rtol: f64,
@@ -220,4 +123,9 @@ impl Default for Run {
             shape_points_per_piece: None,
         }
     }
+}
+
+/// Serializes an integrator as its scene name.
+fn integrator_name<S: Serializer>(i: &Integrator, s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_str(i.name())
 }

@@ -110,6 +110,7 @@ pub use settings::{GENERALIZED_ALPHA_RHO_INF, Settings, output_times};
 pub use simulation::{
     Equilibrium, Flow, ModalAnalysis, Observer, RodId, RunStatus, RunSummary, Sample, Simulation,
 };
+pub use softrod_integrate::Integrator;
 
 pub use watch::EnergyBalance;
 
@@ -126,8 +127,8 @@ pub mod prelude {
     pub use softrod_dynamics::{
         Attachment, BodySpec, Joint, JointKind, Model, RodSpec, RodSpec as Rod,
     };
+    pub use softrod_integrate::Integrator;
     pub use softrod_kinematics::{Basis, Frame, Rod as RodGeometry, Strain};
     pub use softrod_lie::{Pose, Vec3, Vec6};
     pub use softrod_mechanics::{Cable, Material, PointLoad, RodBody, Section, Tension};
-    pub use softrod_scene::Integrator;
 }

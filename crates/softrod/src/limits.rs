@@ -12,7 +12,7 @@
 //! per-piece and per-quadrature-point buffers are linear in the rod and are
 //! allocated when the model is built.
 
-use softrod_integrate::Method;
+use softrod_integrate::Integrator;
 
 use crate::error::Error;
 
@@ -57,20 +57,19 @@ fn available_memory() -> Option<u64> {
 }
 
 /// How many dense `n × n` matrices of `f64` a time integration of a
-/// [`RodSystem`](softrod_integrate::RodSystem) with `method` may allocate
+/// [`RodSystem`](softrod_integrate::RodSystem) with `integrator` may allocate
 /// (lazily, but a run must not abort when it does). The explicit methods
 /// and generalized-α (structured O(N) solve of `M + aK + bD` only) allocate
 /// none; ESDIRK falls back to the dense exact Jacobian when its structured
 /// Newton iteration fails: `∂a/∂q`, `∂a/∂q̇`, their LU, and the exact
 /// Jacobian's workspace (counted as two); ROS34PW2 holds `M`, `K`, `D` and
 /// its LU besides (8); Radau IIA adds a complex LU (two real matrices, 10).
-/// Unknown methods are counted as Radau IIA.
-pub fn dense_matrices_of(method: Method) -> u64 {
-    match method {
-        Method::Rk4 | Method::Dopri5 | Method::GeneralizedAlpha { .. } => 0,
-        Method::Esdirk46 => 5,
-        Method::Rosw34 => 8,
-        _ => 10,
+pub fn dense_matrices_of(integrator: Integrator) -> u64 {
+    match integrator {
+        Integrator::Rk4 | Integrator::Dopri5 | Integrator::GeneralizedAlpha => 0,
+        Integrator::Esdirk => 5,
+        Integrator::Rosenbrock => 8,
+        Integrator::Radau5 => 10,
     }
 }
 

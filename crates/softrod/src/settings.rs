@@ -2,16 +2,14 @@
 //! spacing — with the recommended defaults, which live here (not in a
 //! front end) so that every user of the library gets the same ones.
 
-use softrod_integrate::{Iteration, Method, Options, RodJacobian, StepControl};
-use softrod_scene::{Integrator, Run};
+use softrod_integrate::{Integrator, Iteration, Options, Recommended, RodJacobian, StepControl};
+use softrod_scene::Run;
 
 use crate::error::Error;
 
-/// High-frequency spectral radius of generalized-α as softrod uses it: 0.9
-/// damps the unresolved shear/extension modes a little while keeping the
-/// resolved bending modes almost undamped (period error and damping of a
-/// mode with ω·dt ≪ 1 are second order either way).
-pub const GENERALIZED_ALPHA_RHO_INF: f64 = 0.9;
+/// High-frequency spectral radius of generalized-α as softrod uses it:
+/// [`Options::DEFAULT_RHO_INF`] (0.9, which says why).
+pub const GENERALIZED_ALPHA_RHO_INF: f64 = Options::DEFAULT_RHO_INF;
 
 /// How [`Simulation::simulate`](crate::Simulation::simulate) integrates.
 ///
@@ -20,7 +18,7 @@ pub const GENERALIZED_ALPHA_RHO_INF: f64 = 0.9;
 /// (docs/defaults.md).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Settings {
-    /// The integrator.
+    /// The integrator (any of [`Integrator::ALL`]).
     pub integrator: Integrator,
     /// Relative tolerance of the adaptive methods.
     pub rtol: f64,
@@ -100,20 +98,10 @@ impl Settings {
         self
     }
 
-    /// The Jacobian the implicit methods get. ESDIRK and Radau IIA iterate
-    /// Newton to convergence and get the exact one (from the analytic
-    /// derivatives, theory-derivatives.md): with only `−M⁻¹K`, `−M⁻¹D`
-    /// their Newton iterations stall on fast 3-D motion, where gyroscopic
-    /// and geometric-stiffness terms matter. Rosenbrock–W and
-    /// generalized-α get the elastic-only Jacobian
-    /// (`RodJacobian::ElasticOnly`, O(N), no `n×n` matrix): Rosenbrock–W
-    /// keeps its order with any Jacobian and refreshes to the exact one
-    /// itself when its steps collapse.
+    /// The Jacobian the implicit methods get:
+    /// [`RodJacobian::recommended`] for the integrator (which says why).
     pub fn stiff_jacobian(&self) -> RodJacobian {
-        match self.integrator {
-            Integrator::Esdirk | Integrator::Radau5 => RodJacobian::Exact,
-            _ => RodJacobian::ElasticOnly,
-        }
+        RodJacobian::recommended(self.integrator)
     }
 
     /// Checks the values (positive and finite).
@@ -148,29 +136,16 @@ impl Settings {
         Ok(())
     }
 
-    /// The integrator method and options for a run of `duration` seconds
-    /// (the step budget depends on it).
-    pub fn method_and_options(&self, duration: f64) -> Result<(Method, Options), Error> {
+    /// The integrator and its options for a run of `duration` seconds (the
+    /// step budget depends on it).
+    pub fn method_and_options(&self, duration: f64) -> Result<(Integrator, Options), Error> {
         self.validate()?;
         let fixed_steps = (duration / self.dt).ceil();
-        let method = match self.integrator {
-            Integrator::Rk4 => Method::Rk4,
-            Integrator::GeneralizedAlpha => Method::GeneralizedAlpha {
-                rho_inf: GENERALIZED_ALPHA_RHO_INF,
-            },
-            Integrator::Dopri5 => Method::Dopri5,
-            Integrator::Rosenbrock => Method::Rosw34,
-            Integrator::Esdirk => Method::Esdirk46,
-            Integrator::Radau5 => Method::Radau5,
-        };
         // Generalized-α steps with the fixed dt unless error control is on;
         // rk4 always does; the other methods are adaptive with dt as their
         // first step.
-        let adaptive = match self.integrator {
-            Integrator::Rk4 => false,
-            Integrator::GeneralizedAlpha => self.error_control,
-            _ => true,
-        };
+        let adaptive = self.integrator.is_adaptive()
+            || (self.integrator == Integrator::GeneralizedAlpha && self.error_control);
         let mut opts = Options {
             rtol: self.rtol,
             atol: self.atol,
@@ -189,7 +164,7 @@ impl Settings {
             opts.iteration = Iteration::LinearlyImplicit;
         }
         if adaptive {
-            opts.max_steps = 50_000_000;
+            opts.max_steps = Recommended::MAX_STEPS;
         } else {
             if fixed_steps.is_nan() || fixed_steps >= 1e12 {
                 return Err(Error::InvalidSetting {
@@ -202,7 +177,7 @@ impl Settings {
             }
             opts.max_steps = 2 * fixed_steps as usize + 100;
         }
-        Ok((method, opts))
+        Ok((self.integrator, opts))
     }
 
     /// The output spacing for a run of `duration` seconds.

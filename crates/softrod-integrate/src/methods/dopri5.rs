@@ -68,7 +68,6 @@ const FAC_MAX: f64 = 5.0; // largest h_new / h
 pub(crate) struct Dopri5 {
     /// `f` is the first stage `k1` (FSAL: the last stage of the step before).
     s: StepState,
-    h_next: f64,
     err_prev: f64,
     /// Stages `k2..k7`: `k[0]` is `k2`, …, `k[5]` is `k7`.
     k: [DVector<f64>; 6],
@@ -83,7 +82,6 @@ impl Dopri5 {
         let z = DVector::zeros(n);
         Self {
             s: StepState::new(n),
-            h_next: 0.0,
             err_prev: 1e-4,
             k: std::array::from_fn(|_| z.clone()),
             ynew: z.clone(),
@@ -154,22 +152,16 @@ impl Dopri5 {
 }
 
 impl<P: Problem> Stepper<P> for Dopri5 {
-    fn init(
+    const START_ORDER: i32 = 5;
+
+    fn restart(
         &mut self,
         p: &mut P,
-        t0: f64,
-        y0: &DVector<f64>,
-        _t1: f64,
-        opts: &Options,
+        _opts: &Options,
         stats: &mut Stats,
     ) -> Result<(), IntegrateError> {
-        self.s.start(t0, y0);
         self.err_prev = 1e-4;
-        self.s.refresh_derivative(p, stats)?;
-        self.h_next = self
-            .s
-            .first_step(p, 5, opts, stats, (&mut self.ynew, &mut self.ytmp))?;
-        Ok(())
+        self.s.refresh_derivative(p, stats)
     }
 
     fn step(
@@ -179,7 +171,7 @@ impl<P: Problem> Stepper<P> for Dopri5 {
         opts: &Options,
         stats: &mut Stats,
     ) -> Result<(), IntegrateError> {
-        let mut h = self.h_next.min(opts.h_max);
+        let mut h = self.s.h_next.min(opts.h_max);
         let mut rejected_before = false;
         loop {
             let (hh, last) = clip_step(self.s.t, h, t_end);
@@ -192,7 +184,7 @@ impl<P: Problem> Stepper<P> for Dopri5 {
                     return Err(non_finite_trial(&self.ynew, t_new, h));
                 }
                 self.accept(h, t_new, stats);
-                self.h_next = dt;
+                self.s.h_next = dt;
                 return Ok(());
             }
             if err <= 1.0 {
@@ -206,7 +198,7 @@ impl<P: Problem> Stepper<P> for Dopri5 {
                 }
                 self.err_prev = err.max(1e-4);
                 self.accept(h, t_new, stats);
-                self.h_next = h_new.min(opts.h_max);
+                self.s.h_next = h_new.min(opts.h_max);
                 return Ok(());
             }
             stats.rejected_steps += 1;
@@ -223,6 +215,9 @@ impl<P: Problem> Stepper<P> for Dopri5 {
 
     fn state(&self) -> &StepState {
         &self.s
+    }
+    fn state_mut(&mut self) -> &mut StepState {
+        &mut self.s
     }
     fn dense(&self, t: f64, out: &mut DVector<f64>) {
         let th = (t - self.s.t_prev) / self.s.h;

@@ -49,9 +49,9 @@
 
 use nalgebra::DVector;
 
-use crate::control::{check_finite, check_underflow, clip_step, initial_step};
+use crate::control::{check_finite, check_underflow, clip_step};
 use crate::error::{IntegrateError, first_non_finite};
-use crate::options::{Iteration, Options, StepControl};
+use crate::options::{Iteration, Options};
 use crate::problem::{JacKind, Problem, SecondOrderProblem, sys_err};
 use crate::solution::Stats;
 use crate::state::StepState;
@@ -155,7 +155,6 @@ pub(crate) struct Esdirk {
     /// The error estimate.
     eq: DVector<f64>,
     ev: DVector<f64>,
-    h_next: f64,
     /// Last accepted step and error (predictive controller).
     h_acc: f64,
     err_acc: f64,
@@ -191,7 +190,6 @@ impl Esdirk {
             g: z.clone(),
             eq: z.clone(),
             ev: z,
-            h_next: 0.0,
             h_acc: 0.0,
             err_acc: 1e-2,
             accepted: 0,
@@ -412,38 +410,19 @@ impl Esdirk {
 }
 
 impl<Sys: SecondOrderSystem> Stepper<SecondOrderProblem<'_, Sys>> for Esdirk {
-    fn init(
+    const START_ORDER: i32 = 3;
+
+    fn restart(
         &mut self,
         p: &mut SecondOrderProblem<'_, Sys>,
-        t0: f64,
-        y0: &DVector<f64>,
-        _t1: f64,
-        opts: &Options,
+        _opts: &Options,
         stats: &mut Stats,
     ) -> Result<(), IntegrateError> {
         let n = self.n;
-        self.s.start(t0, y0);
-        self.q.copy_from(&y0.rows(0, n));
-        self.v.copy_from(&y0.rows(n, n));
+        self.q.copy_from(&self.s.y.rows(0, n));
+        self.v.copy_from(&self.s.y.rows(n, n));
         self.system_changed(p, stats)?;
         self.accepted = 0;
-        self.h_next = match opts.step {
-            StepControl::Fixed(h) | StepControl::Adaptive { h0: Some(h) } => h.min(opts.h_max),
-            StepControl::Adaptive { h0: None } => {
-                // Once per run: scratch of the first-order dimension.
-                let mut scratch = (DVector::zeros(2 * n), DVector::zeros(2 * n));
-                initial_step(
-                    p,
-                    t0,
-                    &self.s.y,
-                    &self.s.f,
-                    3,
-                    opts,
-                    stats,
-                    (&mut scratch.0, &mut scratch.1),
-                )?
-            }
-        };
         Ok(())
     }
 
@@ -455,7 +434,7 @@ impl<Sys: SecondOrderSystem> Stepper<SecondOrderProblem<'_, Sys>> for Esdirk {
         stats: &mut Stats,
     ) -> Result<(), IntegrateError> {
         let fixed = opts.fixed_dt();
-        let mut h = self.h_next.min(opts.h_max);
+        let mut h = self.s.h_next.min(opts.h_max);
         let mut rejected_before = false;
         let mut reason = "step size";
         loop {
@@ -537,7 +516,7 @@ impl<Sys: SecondOrderSystem> Stepper<SecondOrderProblem<'_, Sys>> for Esdirk {
                         }
                     }
                 };
-                self.h_next = h_new.min(opts.h_max);
+                self.s.h_next = h_new.min(opts.h_max);
                 // The matrices for the next step.
                 self.jac_fresh = false;
                 let keep = match self.matrix {
@@ -573,6 +552,9 @@ impl<Sys: SecondOrderSystem> Stepper<SecondOrderProblem<'_, Sys>> for Esdirk {
 
     fn state(&self) -> &StepState {
         &self.s
+    }
+    fn state_mut(&mut self) -> &mut StepState {
+        &mut self.s
     }
 
     fn dense(&self, t: f64, out: &mut DVector<f64>) {

@@ -27,7 +27,7 @@
 
 use nalgebra::DVector;
 
-use crate::control::{check_finite, check_underflow, clip_step, initial_step};
+use crate::control::{check_finite, check_underflow, clip_step};
 use crate::error::{IntegrateError, first_non_finite};
 use crate::options::{Iteration, Options, StepControl};
 use crate::problem::{Problem, SecondOrderProblem, sys_err};
@@ -55,7 +55,6 @@ pub(crate) struct GeneralizedAlpha {
     /// First-order views `y = (q, q̇)`, `f = (q̇, q̈)` for the driver and the
     /// dense output.
     s: StepState,
-    h_try: f64,
     q: DVector<f64>,
     v: DVector<f64>,
     acc: DVector<f64>,
@@ -98,7 +97,6 @@ impl GeneralizedAlpha {
             beta,
             gamma,
             s: StepState::new(2 * n),
-            h_try: 0.0,
             q: z.clone(),
             v: z.clone(),
             acc: z.clone(),
@@ -179,7 +177,7 @@ impl GeneralizedAlpha {
         Ok(())
     }
 
-    /// One error-controlled step (see [`Method::GeneralizedAlpha`](crate::Method::GeneralizedAlpha)).
+    /// One error-controlled step (see [`Integrator::GeneralizedAlpha`](crate::Integrator::GeneralizedAlpha)).
     fn step_controlled<S: SecondOrderSystem>(
         &mut self,
         p: &mut SecondOrderProblem<'_, S>,
@@ -187,7 +185,7 @@ impl GeneralizedAlpha {
         opts: &Options,
         stats: &mut Stats,
     ) -> Result<(), IntegrateError> {
-        let mut h = self.h_try.min(opts.h_max);
+        let mut h = self.s.h_next.min(opts.h_max);
         let mut rejected_before = false;
         let mut reason = "step size";
         loop {
@@ -241,7 +239,7 @@ impl GeneralizedAlpha {
                     // against RADAU5's [1, 1.2] took 45 % fewer
                     // factorizations and 8 % fewer steps on the 20-piece
                     // rod (rtol 1e-2, ρ∞ 0), 23 % less wall.
-                    self.h_try = if (KEEP_MIN..=KEEP_MAX).contains(&fac) {
+                    self.s.h_next = if (KEEP_MIN..=KEEP_MAX).contains(&fac) {
                         h
                     } else {
                         h * fac
@@ -364,39 +362,20 @@ impl GeneralizedAlpha {
 }
 
 impl<S: SecondOrderSystem> Stepper<SecondOrderProblem<'_, S>> for GeneralizedAlpha {
-    fn init(
+    const START_ORDER: i32 = 2;
+
+    fn restart(
         &mut self,
         p: &mut SecondOrderProblem<'_, S>,
-        t0: f64,
-        y0: &DVector<f64>,
-        _t1: f64,
-        opts: &Options,
+        _opts: &Options,
         stats: &mut Stats,
     ) -> Result<(), IntegrateError> {
         let n = p.n();
-        self.s.start(t0, y0);
-        self.q.copy_from(&y0.rows(0, n));
-        self.v.copy_from(&y0.rows(n, n));
+        self.q.copy_from(&self.s.y.rows(0, n));
+        self.v.copy_from(&self.s.y.rows(n, n));
         self.system_changed(p, stats)?;
         self.acc.copy_from(&self.qdd);
         self.err_prev = 1.0;
-        self.h_try = match opts.step {
-            StepControl::Fixed(h) | StepControl::Adaptive { h0: Some(h) } => h.min(opts.h_max),
-            // Once per run: scratch of the first-order dimension.
-            StepControl::Adaptive { h0: None } => {
-                let mut scratch = (DVector::zeros(2 * n), DVector::zeros(2 * n));
-                initial_step(
-                    p,
-                    t0,
-                    &self.s.y,
-                    &self.s.f,
-                    2,
-                    opts,
-                    stats,
-                    (&mut scratch.0, &mut scratch.1),
-                )?
-            }
-        };
         Ok(())
     }
 
@@ -411,7 +390,7 @@ impl<S: SecondOrderSystem> Stepper<SecondOrderProblem<'_, S>> for GeneralizedAlp
             StepControl::Adaptive { .. } => return self.step_controlled(p, t_end, opts, stats),
             StepControl::Fixed(dt) => dt.min(opts.h_max),
         };
-        let mut h = self.h_try.min(dt);
+        let mut h = self.s.h_next.min(dt);
         loop {
             let t = self.s.t;
             let (hh, last) = clip_step(t, h, t_end);
@@ -455,7 +434,7 @@ impl<S: SecondOrderSystem> Stepper<SecondOrderProblem<'_, S>> for GeneralizedAlp
                 Ok(()) => {
                     self.accept(t_new, h, stats);
                     if !last {
-                        self.h_try = (2.0 * h).min(dt);
+                        self.s.h_next = (2.0 * h).min(dt);
                     }
                     return Ok(());
                 }
@@ -481,6 +460,9 @@ impl<S: SecondOrderSystem> Stepper<SecondOrderProblem<'_, S>> for GeneralizedAlp
 
     fn state(&self) -> &StepState {
         &self.s
+    }
+    fn state_mut(&mut self) -> &mut StepState {
+        &mut self.s
     }
     fn system_changed(
         &mut self,

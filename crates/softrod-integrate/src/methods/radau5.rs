@@ -16,7 +16,7 @@
 //!   components do not force small steps), recomputed once from
 //!   `f(yₙ + err)` after a rejection or on the first step; for a
 //!   second-order problem measured in positions, `‖(e_q, h·e_v)‖` (see
-//!   [`Method::Esdirk46`](crate::Method::Esdirk46));
+//!   [`Integrator::Esdirk`](crate::Integrator::Esdirk));
 //! * the internal tolerances `rtol' = 0.1·rtol^(2/3)`, `atol' = rtol'·atol/rtol`
 //!   (so that the global error is of the order of `rtol`);
 //! * Gustafsson's predictive step-size controller, safety scaled by the
@@ -36,9 +36,9 @@
 
 use nalgebra::DVector;
 
-use crate::control::{check_underflow, clip_step, initial_step};
+use crate::control::{check_underflow, clip_step};
 use crate::error::{IntegrateError, first_non_finite};
-use crate::options::{Iteration, Options, StepControl};
+use crate::options::{Iteration, Options};
 use crate::problem::{Problem, sys_err};
 use crate::solution::Stats;
 use crate::state::StepState;
@@ -121,7 +121,6 @@ pub(crate) struct Radau5 {
     err: DVector<f64>,
     err2: DVector<f64>,
     scal: DVector<f64>,
-    h_next: f64,
     h_old: f64,
     h_acc: f64,
     err_acc: f64,
@@ -148,7 +147,6 @@ impl Radau5 {
             err: z.clone(),
             err2: z.clone(),
             scal: z,
-            h_next: 0.0,
             h_old: 0.0,
             h_acc: 0.0,
             err_acc: 1e-2,
@@ -394,37 +392,18 @@ impl Radau5 {
 }
 
 impl<P: Problem> Stepper<P> for Radau5 {
-    fn init(
+    const START_ORDER: i32 = 5;
+
+    fn restart(
         &mut self,
         p: &mut P,
-        t0: f64,
-        y0: &DVector<f64>,
-        _t1: f64,
         opts: &Options,
         stats: &mut Stats,
     ) -> Result<(), IntegrateError> {
-        self.s.start(t0, y0);
         self.system_changed(p, stats)?;
         self.accepted = 0;
         self.faccon = 1.0;
         self.set_scal(opts);
-        let m = y0.len();
-        self.h_next = match opts.step {
-            StepControl::Fixed(h) | StepControl::Adaptive { h0: Some(h) } => h.min(opts.h_max),
-            StepControl::Adaptive { h0: None } => {
-                let mut scratch = (DVector::zeros(m), DVector::zeros(m));
-                initial_step(
-                    p,
-                    t0,
-                    &self.s.y,
-                    &self.s.f,
-                    5,
-                    opts,
-                    stats,
-                    (&mut scratch.0, &mut scratch.1),
-                )?
-            }
-        };
         Ok(())
     }
 
@@ -437,7 +416,7 @@ impl<P: Problem> Stepper<P> for Radau5 {
     ) -> Result<(), IntegrateError> {
         let fixed = opts.fixed_dt();
         let nit = opts.iteration.max_iter();
-        let mut h = self.h_next.min(opts.h_max);
+        let mut h = self.s.h_next.min(opts.h_max);
         let mut rejected = false;
         let mut reason = "step size";
         let (u1, al, be) = self.eig;
@@ -538,9 +517,9 @@ impl<P: Problem> Stepper<P> for Radau5 {
                 self.jac_fresh = false;
                 let qt = h_new / h;
                 if self.theta <= THETA_KEEP && (KEEP_MIN..=KEEP_MAX).contains(&qt) {
-                    self.h_next = h;
+                    self.s.h_next = h;
                 } else {
-                    self.h_next = h_new;
+                    self.s.h_next = h_new;
                 }
                 if self.theta > THETA_KEEP {
                     self.jac_valid = false;
@@ -567,6 +546,9 @@ impl<P: Problem> Stepper<P> for Radau5 {
 
     fn state(&self) -> &StepState {
         &self.s
+    }
+    fn state_mut(&mut self) -> &mut StepState {
+        &mut self.s
     }
 
     fn dense(&self, t: f64, out: &mut DVector<f64>) {

@@ -38,16 +38,15 @@ impl Rk4 {
 }
 
 impl<P: Problem> Stepper<P> for Rk4 {
-    fn init(
+    /// Unused: RK4 has fixed steps only (the first is `dt`).
+    const START_ORDER: i32 = 4;
+
+    fn restart(
         &mut self,
         p: &mut P,
-        t0: f64,
-        y0: &DVector<f64>,
-        _t1: f64,
         _opts: &Options,
         stats: &mut Stats,
     ) -> Result<(), IntegrateError> {
-        self.s.start(t0, y0);
         self.s.refresh_derivative(p, stats)
     }
 
@@ -96,6 +95,9 @@ impl<P: Problem> Stepper<P> for Rk4 {
 
     fn state(&self) -> &StepState {
         &self.s
+    }
+    fn state_mut(&mut self) -> &mut StepState {
+        &mut self.s
     }
     fn system_changed(&mut self, p: &mut P, stats: &mut Stats) -> Result<(), IntegrateError> {
         self.s.refresh_derivative(p, stats)

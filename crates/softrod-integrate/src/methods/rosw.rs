@@ -139,7 +139,6 @@ impl Tableau {
 pub(crate) struct Rosw34 {
     tab: Tableau,
     s: StepState,
-    h_next: f64,
     ft: DVector<f64>,
     ft_valid: bool,
     u: [DVector<f64>; S],
@@ -303,7 +302,6 @@ impl Rosw34 {
         Self {
             tab: Tableau::new(),
             s: StepState::new(n),
-            h_next: 0.0,
             ft: z.clone(),
             ft_valid: false,
             u: std::array::from_fn(|_| z.clone()),
@@ -413,21 +411,15 @@ impl Rosw34 {
 }
 
 impl<P: Problem> Stepper<P> for Rosw34 {
-    fn init(
+    const START_ORDER: i32 = 3;
+
+    fn restart(
         &mut self,
         p: &mut P,
-        t0: f64,
-        y0: &DVector<f64>,
-        _t1: f64,
-        opts: &Options,
+        _opts: &Options,
         stats: &mut Stats,
     ) -> Result<(), IntegrateError> {
-        self.s.start(t0, y0);
-        self.system_changed(p, stats)?;
-        self.h_next = self
-            .s
-            .first_step(p, 3, opts, stats, (&mut self.ynew, &mut self.ytmp))?;
-        Ok(())
+        self.system_changed(p, stats)
     }
 
     fn step(
@@ -437,7 +429,7 @@ impl<P: Problem> Stepper<P> for Rosw34 {
         opts: &Options,
         stats: &mut Stats,
     ) -> Result<(), IntegrateError> {
-        let mut h = self.h_next.min(opts.h_max);
+        let mut h = self.s.h_next.min(opts.h_max);
         let adaptive = opts.is_adaptive();
         let mut rejected_before = false;
         // ∂f/∂t at (t, y), once per step.
@@ -531,7 +523,7 @@ impl<P: Problem> Stepper<P> for Rosw34 {
                     // A drift seen at the end of a block.
                     self.jac_age = usize::MAX;
                 }
-                self.h_next = if adaptive {
+                self.s.h_next = if adaptive {
                     let fac = (SAFETY * err.max(1e-300).powf(-1.0 / 3.0)).clamp(FAC_MIN, FAC_MAX);
                     let fac = if rejected_before { fac.min(1.0) } else { fac };
                     // Keep h (and the LU) for small increases.
@@ -573,6 +565,9 @@ impl<P: Problem> Stepper<P> for Rosw34 {
 
     fn state(&self) -> &StepState {
         &self.s
+    }
+    fn state_mut(&mut self) -> &mut StepState {
+        &mut self.s
     }
     fn system_changed(&mut self, p: &mut P, stats: &mut Stats) -> Result<(), IntegrateError> {
         p.system_changed();

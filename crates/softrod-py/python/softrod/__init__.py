@@ -53,12 +53,10 @@ from softrod._softrod import (
     TaperedCircle,
     Trajectory,
     Tube,
+    INTEGRATORS,
     __version__,
     simulate_many,
 )
-
-#: The integrator names ``Settings(integrator=...)`` and ``simulate`` accept.
-INTEGRATORS = ("esdirk", "radau5", "rosenbrock", "dopri5", "rk4", "generalized-alpha")
 
 #: The strain names of ``Rod(strains=...)``, in coordinate order: torsion,
 #: two bendings, stretch, two shears (body frame, local x along the rod).

@@ -18,10 +18,14 @@ from numpy.typing import ArrayLike, NDArray
 _F64 = NDArray[np.float64]
 _RodRef = str | int
 _Frame = Literal["body", "world"]
-_IntegratorName = Literal["esdirk", "radau5", "rosenbrock", "dopri5", "rk4", "generalized-alpha"]
+# The integrator names, in the order of softrod.INTEGRATORS (Rust's
+# Integrator::ALL); tests/test_integrators.py checks that they agree.
+_IntegratorName = Literal["rk4", "dopri5", "rosenbrock", "generalized-alpha", "esdirk", "radau5"]
 _Controller = Callable[[float, _F64, _F64], ArrayLike]
 
 __version__: str
+#: The integrator names ``Settings(integrator=...)`` and ``simulate`` accept.
+INTEGRATORS: tuple[_IntegratorName, ...]
 
 class Section:
     """A cross-section; construct a Circle, Tube, Rectangle or TaperedCircle."""

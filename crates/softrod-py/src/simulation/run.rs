@@ -6,7 +6,7 @@ use pyo3::prelude::*;
 use softrod::integrate::RodSystem;
 
 use super::Simulation;
-use crate::control::{ControlError, check_tensions, simulate_controlled, step};
+use crate::control::{ControlError, ControlledRun, check_tensions, simulate_controlled, step};
 use crate::convert::{vec_out, vector};
 use crate::errors::{guard, guard_detached, input, integrate, simulation, to_py};
 use crate::trajectory::{State, Trajectory};
@@ -106,15 +106,13 @@ impl Simulation {
                     };
                 let r = py.detach(|| {
                     guard(|| {
-                        Ok(simulate_controlled(
-                            inputs,
-                            &settings,
+                        let run = ControlledRun {
                             duration,
-                            &q_start,
-                            &qd_start,
+                            q0: &q_start,
+                            qd0: &qd_start,
                             control_every,
-                            &mut controller,
-                        ))
+                        };
+                        Ok(simulate_controlled(inputs, &settings, run, &mut controller))
                     })
                 })?;
                 match r {

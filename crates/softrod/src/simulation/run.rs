@@ -2,11 +2,10 @@
 //! integration behind [`Simulation::simulate_with`] and
 //! [`Simulation::step`].
 
-use std::cell::RefCell;
 
 use nalgebra::DVector;
 use softrod_dynamics::{Data, Model};
-use softrod_integrate::{Control, Hooks, RodSystem, Stats, integrate_second_order};
+use softrod_integrate::{Control, Hooks, RodSystem, Stats, StepInfo, integrate_second_order};
 
 use super::Simulation;
 use crate::error::{Error, Result};
@@ -112,7 +111,7 @@ impl Simulation {
         self.check_run(duration)?;
         let times = output_times(duration, self.settings.output_spacing(duration));
         let (q0, qd0) = (self.q0.clone(), self.qd0.clone());
-        self.integrate_span(0.0, duration, times, &q0, &qd0, observer, true)
+        self.integrate_span((0.0, duration), times, &q0, &qd0, observer, true)
     }
 
     /// One step of `dt` seconds from `(t, q, q̇)` with the run settings'
@@ -151,26 +150,25 @@ impl Simulation {
             DVector::from_column_slice(q),
             DVector::from_column_slice(qd),
         );
-        self.integrate_span(t, t + dt, vec![t, t + dt], &q0, &qd0, &mut last, false)?;
+        self.integrate_span((t, t + dt), vec![t, t + dt], &q0, &qd0, &mut last, false)?;
         last.0.ok_or(Error::Output {
             t: t + dt,
             message: "the step produced no state".into(),
         })
     }
 
-    /// The integration from `t0` to `t1` with samples at `times`; `watch`:
+    /// The integration over `t_span` with samples at `times`; `watch`:
     /// check the energy balance and the strains at every accepted step.
-    #[allow(clippy::too_many_arguments)]
     fn integrate_span(
         &mut self,
-        t0: f64,
-        t1: f64,
+        t_span: (f64, f64),
         times: Vec<f64>,
         q0: &DVector<f64>,
         qd0: &DVector<f64>,
         observer: &mut dyn Observer,
         watch: bool,
     ) -> Result<RunSummary> {
+        let (t0, t1) = t_span;
         let (method, mut opts) = self.settings.method_and_options(t1 - t0)?;
         self.check_dense(
             &format!("the {} integrator", self.settings.integrator.name()),
@@ -178,87 +176,36 @@ impl Simulation {
         )?;
         opts.t_eval = Some(times);
         self.system.jacobian = self.settings.stiff_jacobian();
-        let n = self.n_dof();
         let saved_inputs = self.system.data.cable_tensions().map(<[f64]>::to_vec);
-        let mut u = saved_inputs
-            .clone()
-            .unwrap_or_else(|| vec![0.0; self.n_cables()]);
-        let failure: RefCell<Option<(f64, String)>> = RefCell::new(None);
-        let violation: RefCell<Option<Error>> = RefCell::new(None);
         let watch = if watch && self.settings.energy_tolerance.is_finite() {
             let s = &self.system;
             let mut w = Watch::new(&s.model, &s.data, self.settings.energy_tolerance)?;
             w.start(&s.model, &s.data, t0, q0.as_slice(), qd0.as_slice())?;
-            Some(RefCell::new(w))
+            Some(w)
         } else {
             None
         };
-        let samples = RefCell::new(0usize);
-        let observer = RefCell::new(observer);
-        let hooks = Hooks::new()
-            .stream_outputs(|t, y, sys: &mut RodSystem| {
-                let (q, qd) = y.as_slice().split_at(n);
-                // Prescribed joints (D59) at the sample's time.
-                sys.model.set_time(&mut sys.data, t);
-                let sample = Sample {
-                    t,
-                    q,
-                    qd,
-                    model: &sys.model,
-                    data: &mut sys.data,
-                };
-                match observer.borrow_mut().sample(sample) {
-                    Ok(flow) => {
-                        *samples.borrow_mut() += 1;
-                        match flow {
-                            Flow::Continue => Control::Continue,
-                            Flow::Stop => Control::Stop,
-                        }
-                    }
-                    Err(message) => {
-                        *failure.borrow_mut() = Some((t, message));
-                        Control::Stop
-                    }
-                }
-            })
-            .on_step(|info, sys: &mut RodSystem| {
-                let mut obs = observer.borrow_mut();
-                obs.step(info.t, info.stats);
-                let (q, qd) = info.y.as_slice().split_at(n);
-                if let Some(w) = &watch {
-                    if let Err(e) = w.borrow_mut().step(&sys.model, &sys.data, info.t, q, qd) {
-                        *violation.borrow_mut() = Some(e);
-                        return Control::Stop;
-                    }
-                }
-                if !u.is_empty() && obs.inputs(info.t, q, qd, &mut u) {
-                    if let Err(e) = sys.data.set_cable_tensions(&sys.model, Some(&u)) {
-                        *failure.borrow_mut() = Some((info.t, format!("controller: {e}")));
-                        return Control::Stop;
-                    }
-                    if let Some(w) = &watch {
-                        let r = w
-                            .borrow_mut()
-                            .inputs_changed(&sys.model, &sys.data, info.t, q, qd);
-                        if let Err(e) = r {
-                            *violation.borrow_mut() = Some(e);
-                            return Control::Stop;
-                        }
-                    }
-                    return Control::SystemChanged;
-                }
-                Control::Continue
-            });
+        let mut hooks = RunHooks {
+            n: self.n_dof(),
+            u: saved_inputs
+                .clone()
+                .unwrap_or_else(|| vec![0.0; self.n_cables()]),
+            observer,
+            watch,
+            samples: 0,
+            failure: None,
+            violation: None,
+        };
         let result =
-            integrate_second_order(&mut self.system, method, t0, t1, q0, qd0, &opts, hooks);
+            integrate_second_order(&mut self.system, method, t_span, q0, qd0, &opts, &mut hooks);
         let s = &mut self.system;
         s.data
             .set_cable_tensions(&s.model, saved_inputs.as_deref())
             .expect("restoring inputs that were valid");
-        if let Some((t, message)) = failure.into_inner() {
+        if let Some((t, message)) = hooks.failure {
             return Err(Error::Output { t, message });
         }
-        if let Some(e) = violation.into_inner() {
+        if let Some(e) = hooks.violation {
             return Err(e);
         }
         let sol = result?;
@@ -267,9 +214,9 @@ impl Simulation {
         } else {
             RunStatus::Stopped
         };
-        let (energy, warnings): (Option<EnergyBalance>, Vec<String>) = match watch {
+        let (energy, warnings): (Option<EnergyBalance>, Vec<String>) = match hooks.watch {
             Some(w) => {
-                let (b, warn) = w.into_inner().finish();
+                let (b, warn) = w.finish();
                 (Some(b), warn)
             }
             None => (None, Vec::new()),
@@ -278,9 +225,84 @@ impl Simulation {
             status,
             t_final: sol.t_final,
             stats: sol.stats,
-            samples: samples.into_inner(),
+            samples: hooks.samples,
             energy,
             warnings,
         })
+    }
+}
+
+/// The integrator's hooks of a facade run, as one object: the observer
+/// (samples, steps, a controller's inputs), the watch of the energy balance
+/// and strains, and what went wrong (the integrator only hears `Stop`).
+struct RunHooks<'o> {
+    /// Coordinates per rod system (`y = (q, q̇)` has `2n`).
+    n: usize,
+    /// The cable tensions the controller writes (one per cable).
+    u: Vec<f64>,
+    observer: &'o mut dyn Observer,
+    watch: Option<Watch>,
+    /// Samples delivered to the observer.
+    samples: usize,
+    /// An observer or controller failure, at its time.
+    failure: Option<(f64, String)>,
+    /// A watch violation (energy balance, strain validity).
+    violation: Option<Error>,
+}
+
+impl Hooks<RodSystem> for RunHooks<'_> {
+    fn keep_outputs(&self) -> bool {
+        false
+    }
+
+    fn output(&mut self, t: f64, y: &DVector<f64>, sys: &mut RodSystem) -> Control {
+        let (q, qd) = y.as_slice().split_at(self.n);
+        // Prescribed joints (D59) at the sample's time.
+        sys.model.set_time(&mut sys.data, t);
+        let sample = Sample {
+            t,
+            q,
+            qd,
+            model: &sys.model,
+            data: &mut sys.data,
+        };
+        match self.observer.sample(sample) {
+            Ok(flow) => {
+                self.samples += 1;
+                match flow {
+                    Flow::Continue => Control::Continue,
+                    Flow::Stop => Control::Stop,
+                }
+            }
+            Err(message) => {
+                self.failure = Some((t, message));
+                Control::Stop
+            }
+        }
+    }
+
+    fn step(&mut self, info: &StepInfo<'_>, sys: &mut RodSystem) -> Control {
+        self.observer.step(info.t, info.stats);
+        let (q, qd) = info.y.as_slice().split_at(self.n);
+        if let Some(w) = &mut self.watch {
+            if let Err(e) = w.step(&sys.model, &sys.data, info.t, q, qd) {
+                self.violation = Some(e);
+                return Control::Stop;
+            }
+        }
+        if !self.u.is_empty() && self.observer.inputs(info.t, q, qd, &mut self.u) {
+            if let Err(e) = sys.data.set_cable_tensions(&sys.model, Some(&self.u)) {
+                self.failure = Some((info.t, format!("controller: {e}")));
+                return Control::Stop;
+            }
+            if let Some(w) = &mut self.watch {
+                if let Err(e) = w.inputs_changed(&sys.model, &sys.data, info.t, q, qd) {
+                    self.violation = Some(e);
+                    return Control::Stop;
+                }
+            }
+            return Control::SystemChanged;
+        }
+        Control::Continue
     }
 }

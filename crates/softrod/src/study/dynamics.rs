@@ -2,7 +2,7 @@
 //! against a tight reference run) and the spatial study (pieces and
 //! quadrature against a Richardson-extrapolated reference).
 
-use softrod_integrate::{Method, Options};
+use softrod_integrate::{Integrator, Options};
 use softrod_scene::{Built, Scene};
 
 use super::runs::{build_variant, dist, max_dist, pieces, simulate};
@@ -12,7 +12,7 @@ use crate::error::{Error, Result};
 
 /// One temporal-study configuration: integrator name, setting text,
 /// method and options.
-type Config = (&'static str, String, Method, Options);
+type Config = (&'static str, String, Integrator, Options);
 
 /// The analytic reference of a scene: tip \[m\], time \[s\], note.
 pub type Analytic = ([f64; 3], f64, Option<String>);
@@ -21,7 +21,7 @@ pub type Analytic = ([f64; 3], f64, Option<String>);
 #[derive(Clone, Debug)]
 pub struct Tight {
     /// The method.
-    pub method: Method,
+    pub method: Integrator,
     /// Its options.
     pub opts: Options,
     /// What it is, for a person.
@@ -197,7 +197,7 @@ fn temporal_configs(d: f64) -> Vec<Config> {
         configs.push((
             "dopri5",
             format!("rtol {rtol:e}"),
-            Method::Dopri5,
+            Integrator::Dopri5,
             Options::tol(rtol, rtol * 1e-3),
         ));
     }
@@ -205,7 +205,7 @@ fn temporal_configs(d: f64) -> Vec<Config> {
         configs.push((
             "rosenbrock",
             format!("rtol {rtol:e}"),
-            Method::Rosw34,
+            Integrator::Rosenbrock,
             Options::tol(rtol, rtol * 1e-3),
         ));
     }
@@ -213,7 +213,7 @@ fn temporal_configs(d: f64) -> Vec<Config> {
         configs.push((
             "esdirk",
             format!("rtol {rtol:e}"),
-            Method::Esdirk46,
+            Integrator::Esdirk,
             Options::tol(rtol, rtol * 1e-3),
         ));
     }
@@ -222,10 +222,11 @@ fn temporal_configs(d: f64) -> Vec<Config> {
         configs.push((
             "generalized-alpha",
             format!("dt {dt:.3e}"),
-            Method::GeneralizedAlpha {
+            Integrator::GeneralizedAlpha,
+            Options {
                 rho_inf: GENERALIZED_ALPHA_RHO_INF,
+                ..Options::fixed(dt)
             },
-            Options::fixed(dt),
         ));
     }
     configs
@@ -277,12 +278,12 @@ fn temporal_reference(
     // budget (non-stiff scenes), else rosenbrock at rtol 1e-8.
     let tights = [
         Tight {
-            method: Method::Dopri5,
+            method: Integrator::Dopri5,
             opts: Options::tol(1e-9, 1e-12),
             text: "dopri5, rtol 1e-9, atol 1e-12".into(),
         },
         Tight {
-            method: Method::Rosw34,
+            method: Integrator::Rosenbrock,
             opts: Options::tol(1e-8, 1e-11),
             text: "rosenbrock (ROS34PW2), rtol 1e-8, atol 1e-11".into(),
         },
@@ -336,10 +337,11 @@ fn spatial_study(ctx: &Ctx<'_>) -> Result<Spatial> {
     // steps as it does for error-controlled methods. Its own temporal error is
     // measured below against the temporal reference.
     let sp_dt = d / 4000.0;
-    let sp_method = Method::GeneralizedAlpha {
+    let sp_method = Integrator::GeneralizedAlpha;
+    let sp_opts = Options {
         rho_inf: GENERALIZED_ALPHA_RHO_INF,
+        ..Options::fixed(sp_dt)
     };
-    let sp_opts = Options::fixed(sp_dt);
     let sp_setting = format!("dt {sp_dt:.3e}");
     let mut spatial = Vec::new();
     for k in [1usize, 2, 4] {

@@ -4,9 +4,9 @@
 use std::time::Instant;
 
 use softrod_integrate::{
-    Control, Hooks, Method, Options, RodSystem, Status, integrate_second_order,
+    Callbacks, Control, Integrator, Options, RodSystem, Status, integrate_second_order,
 };
-use softrod_scene::{Built, Integrator, Scene};
+use softrod_scene::{Built, Scene};
 
 use super::Outcome;
 use crate::error::{Error, Result};
@@ -37,20 +37,15 @@ pub(super) fn tip(poses: &mut WorldPoses, built: &Built, t: f64, q: &[f64]) -> R
 /// One integration, stopped (as a failure) when it exceeds `budget` wall s.
 pub(super) fn simulate_once(
     built: &Built,
-    method: Method,
+    method: Integrator,
     opts: &Options,
     times: &[f64],
     budget: f64,
 ) -> std::result::Result<Outcome, String> {
     let mut sys = RodSystem::new(built.model.clone());
     // Each method with the Jacobian `softrod run` gives it.
-    let integrator = match method {
-        Method::Esdirk46 => Integrator::Esdirk,
-        Method::Radau5 => Integrator::Radau5,
-        _ => Integrator::Rosenbrock,
-    };
     sys.jacobian = crate::Settings::default()
-        .with_integrator(integrator)
+        .with_integrator(method)
         .stiff_jacobian();
     let t1 = *times.last().expect("times");
     let opts = Options {
@@ -59,7 +54,7 @@ pub(super) fn simulate_once(
         ..opts.clone()
     };
     let start = Instant::now();
-    let hooks = Hooks::new().on_step(move |_, _: &mut RodSystem| {
+    let mut hooks = Callbacks::new().on_step(move |_, _: &mut RodSystem| {
         if start.elapsed().as_secs_f64() > budget {
             Control::Stop
         } else {
@@ -67,7 +62,13 @@ pub(super) fn simulate_once(
         }
     });
     let sol = integrate_second_order(
-        &mut sys, method, 0.0, t1, &built.q0, &built.qd0, &opts, hooks,
+        &mut sys,
+        method,
+        (0.0, t1),
+        &built.q0,
+        &built.qd0,
+        &opts,
+        &mut hooks,
     )
     .map_err(|e| crate::error::report(&e))?;
     let wall = start.elapsed().as_secs_f64();
@@ -99,7 +100,7 @@ pub(super) fn simulate_once(
 /// `repeats` integrations; the median wall time (a failure is not repeated).
 pub(super) fn simulate(
     built: &Built,
-    method: Method,
+    method: Integrator,
     opts: &Options,
     times: &[f64],
     budget: f64,
