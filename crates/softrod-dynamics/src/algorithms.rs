@@ -5,6 +5,7 @@ use crate::blocks::{Blk6, Sym6, ad_inv_tr_vec, ad_inv_vec};
 use crate::chol::{backward_sub, cholesky_k, forward_sub, right_solve_lt};
 use crate::data::{Data, cable_tension};
 use crate::error::DynamicsError;
+use crate::forces::Forces;
 use crate::model::Model;
 use crate::passes::{Pass, gravity_base_acceleration, outward, outward_inl, project_add_blocks};
 use nalgebra::DVector;
@@ -29,11 +30,13 @@ pub(crate) fn check_vec(model: &Model, what: &'static str, v: &[f64]) -> Result<
 }
 
 /// Strain-space generalized forces into `data.strain_force`:
-/// `τ_act + λ τ_c(q, t) − τ_e(q) − D q̇` ((D13), (D15); `λ` = `data.load_scale`).
+/// `τ_act + λ τ_c(q, t) − τ_e(q) − D q̇` ((D13), (D15); `λ` =
+/// `forces.load_scale`; only `τ_act` for gravity alone).
 #[inline(always)]
 pub(crate) fn strain_forces(
     model: &Model,
     data: &mut Data,
+    forces: Forces,
     t: f64,
     q: &[f64],
     qd: Option<&[f64]>,
@@ -44,7 +47,7 @@ pub(crate) fn strain_forces(
         Some(ta) => sf.as_mut_slice().copy_from_slice(ta),
         None => sf.fill(0.0),
     }
-    if data.only_gravity {
+    if forces.gravity_only {
         return;
     }
     for rm in model.rods() {
@@ -75,7 +78,7 @@ pub(crate) fn strain_forces(
         if !rm.spec.cables.is_empty() {
             let range = rm.dofs();
             for (c, cable) in rm.spec.cables.iter().enumerate() {
-                let tension = cable_tension(data.tensions.as_ref(), rm, c, t) * data.load_scale;
+                let tension = cable_tension(data.tensions.as_ref(), rm, c, t) * forces.load_scale;
                 if tension == 0.0 {
                     continue;
                 }
@@ -103,12 +106,12 @@ crate::simd::dispatch! {
     /// tips; inward pass (D17) for the transmitted wrenches `W_n`; projection
     /// (D18) on each piece's `S_n`. Gravity enters as a base acceleration. O(N).
     /// `q`, `q̇`, `q̈`: dim `n_dof`. Result in `data.tau`.
-    pub fn inverse_dynamics<'a>(model: &Model, data: &'a mut Data, t: f64, q: &[f64], qd: &[f64], qdd: &[f64]) -> Result<&'a DVector<f64>, DynamicsError>
+    pub fn inverse_dynamics_with<'a>(model: &Model, data: &'a mut Data, forces: Forces, t: f64, q: &[f64], qd: &[f64], qdd: &[f64]) -> Result<&'a DVector<f64>, DynamicsError>
     => inverse_dynamics_impl, inverse_dynamics_avx2
 }
 
-#[inline(always)]
-pub(crate) fn inverse_dynamics_impl<'a>(
+/// [`inverse_dynamics_with`] of every force of the model ([`Forces::ALL`]).
+pub fn inverse_dynamics<'a>(
     model: &Model,
     data: &'a mut Data,
     t: f64,
@@ -116,6 +119,20 @@ pub(crate) fn inverse_dynamics_impl<'a>(
     qd: &[f64],
     qdd: &[f64],
 ) -> Result<&'a DVector<f64>, DynamicsError> {
+    inverse_dynamics_with(model, data, Forces::ALL, t, q, qd, qdd)
+}
+
+#[inline(always)]
+pub(crate) fn inverse_dynamics_impl<'a>(
+    model: &Model,
+    data: &'a mut Data,
+    forces: Forces,
+    t: f64,
+    q: &[f64],
+    qd: &[f64],
+    qdd: &[f64],
+) -> Result<&'a DVector<f64>, DynamicsError> {
+    forces.check()?;
     check_vec(model, "q", q)?;
     check_vec(model, "qdot", qd)?;
     check_vec(model, "qddot", qdd)?;
@@ -126,11 +143,20 @@ pub(crate) fn inverse_dynamics_impl<'a>(
     }
     if let Some(tree) = &model.tree {
         model.set_time(data, t);
-        crate::tree_algorithms::inverse_dynamics(model, tree, data, t, q, Some(qd), Some(qdd));
+        crate::tree_algorithms::inverse_dynamics(
+            model,
+            tree,
+            data,
+            forces,
+            t,
+            q,
+            Some(qd),
+            Some(qdd),
+        );
         return Ok(&data.tau);
     }
-    outward_inl(model, data, q, Some(qd), Some(qdd), Pass::Inverse);
-    strain_forces(model, data, t, q, Some(qd), None);
+    outward_inl(model, data, q, Some(qd), Some(qdd), Pass::Inverse, forces);
+    strain_forces(model, data, forces, t, q, Some(qd), None);
     inward_inverse(model, data);
     Ok(&data.tau)
 }
@@ -168,12 +194,13 @@ crate::simd::dispatch! {
     /// O(N·n_g). Result in `data.qdd`.
     ///
     /// Fails if `D̂_n` is not positive definite (a degenerate basis or inertia).
-    pub fn forward_dynamics<'a>(model: &Model, data: &'a mut Data, t: f64, q: &[f64], qd: &[f64], tau_act: Option<&[f64]>) -> Result<&'a DVector<f64>, DynamicsError>
+    /// `forces` says which forces act ([`forward_dynamics`]: all of them).
+    pub fn forward_dynamics_with<'a>(model: &Model, data: &'a mut Data, forces: Forces, t: f64, q: &[f64], qd: &[f64], tau_act: Option<&[f64]>) -> Result<&'a DVector<f64>, DynamicsError>
     => forward_dynamics_impl, forward_dynamics_avx2
 }
 
-#[inline(always)]
-pub(crate) fn forward_dynamics_impl<'a>(
+/// [`forward_dynamics_with`] of every force of the model ([`Forces::ALL`]).
+pub fn forward_dynamics<'a>(
     model: &Model,
     data: &'a mut Data,
     t: f64,
@@ -181,6 +208,20 @@ pub(crate) fn forward_dynamics_impl<'a>(
     qd: &[f64],
     tau_act: Option<&[f64]>,
 ) -> Result<&'a DVector<f64>, DynamicsError> {
+    forward_dynamics_with(model, data, Forces::ALL, t, q, qd, tau_act)
+}
+
+#[inline(always)]
+pub(crate) fn forward_dynamics_impl<'a>(
+    model: &Model,
+    data: &'a mut Data,
+    forces: Forces,
+    t: f64,
+    q: &[f64],
+    qd: &[f64],
+    tau_act: Option<&[f64]>,
+) -> Result<&'a DVector<f64>, DynamicsError> {
+    forces.check()?;
     check_vec(model, "q", q)?;
     check_vec(model, "qdot", qd)?;
     if let Some(ta) = tau_act {
@@ -189,18 +230,18 @@ pub(crate) fn forward_dynamics_impl<'a>(
     if let Some(tree) = &model.tree {
         model.set_time(data, t);
         if model.has_closures() {
-            crate::constrained::forward_dynamics(model, tree, data, t, q, qd, tau_act)?;
+            crate::constrained::forward_dynamics(model, tree, data, forces, t, q, qd, tau_act)?;
         } else {
-            crate::tree_algorithms::forward_dynamics(model, tree, data, t, q, qd, tau_act)?;
+            crate::tree_algorithms::forward_dynamics(model, tree, data, forces, t, q, qd, tau_act)?;
         }
         return check_qdd(data, t);
     }
-    outward_inl(model, data, q, Some(qd), None, Pass::Articulated);
-    strain_forces(model, data, t, q, Some(qd), tau_act);
-    let scale = data.load_scale;
+    outward_inl(model, data, q, Some(qd), None, Pass::Articulated, forces);
+    strain_forces(model, data, forces, t, q, Some(qd), tau_act);
+    let scale = forces.load_scale;
     for (r, rm) in model.rods().iter().enumerate() {
         if model.uses_planar_path(r) {
-            crate::planar::forward_rod(model, data, r, q, qd)?;
+            crate::planar::forward_rod(model, data, r, q, qd, forces)?;
             continue;
         }
         let pieces = rm.spec.rod.pieces();
@@ -315,7 +356,7 @@ pub(crate) fn mass_matrix_impl<'a>(
         crate::tree_algorithms::mass_matrix(model, tree, data, q);
         return Ok(&data.mass);
     }
-    outward_inl(model, data, q, None, None, Pass::Composite);
+    outward_inl(model, data, q, None, None, Pass::Composite, Forces::ALL);
     let n = model.n_dof();
     if data.mass.nrows() != n {
         data.mass = nalgebra::DMatrix::zeros(n, n);
@@ -444,17 +485,29 @@ pub fn bias_force<'a>(
     q: &[f64],
     qd: &[f64],
 ) -> Result<&'a DVector<f64>, DynamicsError> {
+    bias_force_with(model, data, Forces::ALL, t, q, qd)
+}
+
+/// [`bias_force`] under `forces`.
+pub(crate) fn bias_force_with<'a>(
+    model: &Model,
+    data: &'a mut Data,
+    forces: Forces,
+    t: f64,
+    q: &[f64],
+    qd: &[f64],
+) -> Result<&'a DVector<f64>, DynamicsError> {
     check_vec(model, "q", q)?;
     check_vec(model, "qdot", qd)?;
     if let Some(tree) = &model.tree {
         // With prescribed joints (D59) `b` includes their acceleration's
         // effect: only the free coordinates' `M q̈` is left out.
         model.set_time(data, t);
-        crate::tree_algorithms::inverse_dynamics(model, tree, data, t, q, Some(qd), None);
+        crate::tree_algorithms::inverse_dynamics(model, tree, data, forces, t, q, Some(qd), None);
         return Ok(&data.tau);
     }
-    outward(model, data, q, Some(qd), None, Pass::Inverse);
-    strain_forces(model, data, t, q, Some(qd), None);
+    outward(model, data, q, Some(qd), None, Pass::Inverse, forces);
+    strain_forces(model, data, forces, t, q, Some(qd), None);
     inward_inverse(model, data);
     Ok(&data.tau)
 }

@@ -732,7 +732,16 @@ pub(crate) fn residual_and_jacobian(
     let Some(tree) = &model.tree else {
         return Ok((phi, jac));
     };
-    outward(model, tree, data, q, None, None, TreePass::Composite);
+    outward(
+        model,
+        tree,
+        data,
+        q,
+        None,
+        None,
+        TreePass::Composite,
+        crate::forces::Forces::ALL,
+    );
     assemble(
         model, tree, data, q, None, exact, &mut phi, &mut jac, &mut jd,
     );
@@ -850,6 +859,7 @@ mod jdot_tests {
                     Some(&qd),
                     None,
                     TreePass::Articulated,
+                    crate::forces::Forces::ALL,
                 );
                 assemble(
                     &m,
@@ -867,7 +877,16 @@ mod jdot_tests {
                     let mut phi = DVector::zeros(nc);
                     let mut jac = DMatrix::zeros(nc, n);
                     let mut jd = DVector::zeros(nc);
-                    outward(&m, tree, data, &qt, None, None, TreePass::Composite);
+                    outward(
+                        &m,
+                        tree,
+                        data,
+                        &qt,
+                        None,
+                        None,
+                        TreePass::Composite,
+                        crate::forces::Forces::ALL,
+                    );
                     assemble(
                         &m, tree, data, &qt, None, false, &mut phi, &mut jac, &mut jd,
                     );

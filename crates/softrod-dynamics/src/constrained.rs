@@ -6,6 +6,7 @@
 use crate::closure::{assemble, closure_norm, length_scale};
 use crate::data::Data;
 use crate::error::DynamicsError;
+use crate::forces::Forces;
 use crate::matrices::stiffness_matrix;
 use crate::model::Model;
 use crate::modes::Modes;
@@ -134,6 +135,7 @@ pub(crate) fn forward_dynamics(
     model: &Model,
     tree: &Tree,
     data: &mut Data,
+    forces: Forces,
     t: f64,
     q: &[f64],
     qd: &[f64],
@@ -143,7 +145,7 @@ pub(crate) fn forward_dynamics(
     let Some(mut w) = data.closure.take() else {
         unreachable!("check_workspace found the closure buffers")
     };
-    let out = forward_inner(model, tree, data, &mut w, t, q, qd, tau_act);
+    let out = forward_inner(model, tree, data, &mut w, forces, t, q, qd, tau_act);
     data.closure = Some(w);
     out
 }
@@ -155,6 +157,7 @@ fn forward_inner(
     tree: &Tree,
     data: &mut Data,
     w: &mut ClosureWork,
+    forces: Forces,
     t: f64,
     q: &[f64],
     qd: &[f64],
@@ -163,7 +166,16 @@ fn forward_inner(
     let m = model.n_constraints();
     // Articulated outward pass: velocities and the velocity-product
     // accelerations (q̈ = 0, no gravity) that J̇q̇ needs.
-    outward(model, tree, data, q, Some(qd), None, TreePass::Articulated);
+    outward(
+        model,
+        tree,
+        data,
+        q,
+        Some(qd),
+        None,
+        TreePass::Articulated,
+        forces,
+    );
     assemble(
         model,
         tree,
@@ -175,7 +187,7 @@ fn forward_inner(
         &mut w.jac,
         &mut w.jdot_qd,
     );
-    crate::tree_algorithms::forward_dynamics(model, tree, data, t, q, qd, tau_act)?;
+    crate::tree_algorithms::forward_dynamics(model, tree, data, forces, t, q, qd, tau_act)?;
     // Y = M⁻¹Jᵀ column by column: the articulated inward pass of the
     // forward dynamics just left the factorization of M in `data` (the
     // shifted solve's with a = b = 0), so each column is one O(N)
@@ -238,6 +250,7 @@ fn forward_inner(
             model,
             tree,
             data,
+            forces,
             t,
             q,
             Some(qd),
@@ -250,87 +263,105 @@ fn forward_inner(
     Ok(())
 }
 
-/// `τ(q) = ID(q, 0, 0)` of the tree, ignoring the closures.
-fn static_force(model: &Model, tree: &Tree, data: &mut Data, t: f64, q: &[f64]) -> DVector<f64> {
-    let zero = vec![0.0; q.len()];
-    crate::tree_algorithms::inverse_dynamics(model, tree, data, t, q, Some(&zero), Some(&zero));
-    data.tau.clone()
-}
-
-/// `φ(q)` and the constraint Jacobian: exact `∂φ/∂q` or velocity rows.
-fn phi_jac(
-    model: &Model,
-    tree: &Tree,
-    data: &mut Data,
-    q: &[f64],
-    exact: bool,
-) -> (DVector<f64>, DMatrix<f64>) {
-    let m = model.n_constraints();
-    let mut phi = DVector::zeros(m);
-    let mut jac = DMatrix::zeros(m, q.len());
-    let mut jd = DVector::zeros(m);
-    outward(model, tree, data, q, None, None, TreePass::Composite);
-    assemble(
-        model, tree, data, q, None, exact, &mut phi, &mut jac, &mut jd,
-    );
-    (phi, jac)
-}
-
-/// Top residual `τ(q) − J_vᵀλ` (velocity rows: `J_vᵀλ` is the generalized
-/// force of the constraint wrenches `λ`).
-fn force_residual(
-    model: &Model,
-    tree: &Tree,
-    data: &mut Data,
+/// What the constrained Newton (D69) evaluates, at one load scale: the
+/// open tree's static force under `forces` and the closures' rows.
+#[derive(Clone, Copy)]
+struct Closed<'a> {
+    model: &'a Model,
+    tree: &'a Tree,
+    /// Time of the cable tensions and of the prescribed joints' values \[s\].
     t: f64,
-    q: &[f64],
-    lambda: &DVector<f64>,
-) -> DVector<f64> {
-    let tau = static_force(model, tree, data, t, q);
-    let (_, jv) = phi_jac(model, tree, data, q, false);
-    tau - jv.transpose() * lambda
+    /// The forces of the static evaluations (drives at rest).
+    forces: Forces,
 }
 
-/// `∂(τ − J_vᵀλ)/∂q`: `K` exact plus central differences of the rest.
-fn tangent(
-    model: &Model,
-    tree: &Tree,
-    data: &mut Data,
-    t: f64,
-    q: &DVector<f64>,
-    lambda: &DVector<f64>,
-    k: &DMatrix<f64>,
-) -> DMatrix<f64> {
-    let n = q.len();
-    let mut jac = k.clone();
-    let mut qp = q.clone();
-    for j in 0..n {
-        let h = 6e-6 * q[j].abs().max(1.0);
-        qp[j] = q[j] + h;
-        let plus = force_residual(model, tree, data, t, qp.as_slice(), lambda);
-        qp[j] = q[j] - h;
-        let minus = force_residual(model, tree, data, t, qp.as_slice(), lambda);
-        qp[j] = q[j];
-        for i in 0..n {
-            jac[(i, j)] += (plus[i] - minus[i]) / (2.0 * h) - k[(i, j)];
-        }
+impl Closed<'_> {
+    /// `τ(q) = ID(q, 0, 0)` of the tree under `forces`, ignoring the closures.
+    fn static_force(&self, data: &mut Data, q: &[f64]) -> DVector<f64> {
+        let zero = vec![0.0; q.len()];
+        crate::tree_algorithms::inverse_dynamics(
+            self.model,
+            self.tree,
+            data,
+            self.forces,
+            self.t,
+            q,
+            Some(&zero),
+            Some(&zero),
+        );
+        data.tau.clone()
     }
-    jac
-}
 
-/// Least-squares multipliers `λ = argmin ‖τ − J_vᵀλ‖` at `q`.
-fn multipliers(model: &Model, tree: &Tree, data: &mut Data, t: f64, q: &[f64]) -> DVector<f64> {
-    let tau = static_force(model, tree, data, t, q);
-    let (_, jv) = phi_jac(model, tree, data, q, false);
-    let jt = jv.transpose();
-    jt.svd(true, true)
-        .solve(&tau, 1e-12)
-        .unwrap_or_else(|_| DVector::zeros(model.n_constraints()))
+    /// `φ(q)` and the constraint Jacobian: exact `∂φ/∂q` or velocity rows.
+    fn phi_jac(&self, data: &mut Data, q: &[f64], exact: bool) -> (DVector<f64>, DMatrix<f64>) {
+        let m = self.model.n_constraints();
+        let mut phi = DVector::zeros(m);
+        let mut jac = DMatrix::zeros(m, q.len());
+        let mut jd = DVector::zeros(m);
+        outward(
+            self.model,
+            self.tree,
+            data,
+            q,
+            None,
+            None,
+            TreePass::Composite,
+            Forces::ALL,
+        );
+        assemble(
+            self.model, self.tree, data, q, None, exact, &mut phi, &mut jac, &mut jd,
+        );
+        (phi, jac)
+    }
+
+    /// Top residual `τ(q) − J_vᵀλ` (velocity rows: `J_vᵀλ` is the
+    /// generalized force of the constraint wrenches `λ`).
+    fn force_residual(&self, data: &mut Data, q: &[f64], lambda: &DVector<f64>) -> DVector<f64> {
+        let tau = self.static_force(data, q);
+        let (_, jv) = self.phi_jac(data, q, false);
+        tau - jv.transpose() * lambda
+    }
+
+    /// `∂(τ − J_vᵀλ)/∂q`: `K` exact plus central differences of the rest.
+    fn tangent(
+        &self,
+        data: &mut Data,
+        q: &DVector<f64>,
+        lambda: &DVector<f64>,
+        k: &DMatrix<f64>,
+    ) -> DMatrix<f64> {
+        let n = q.len();
+        let mut jac = k.clone();
+        let mut qp = q.clone();
+        for j in 0..n {
+            let h = 6e-6 * q[j].abs().max(1.0);
+            qp[j] = q[j] + h;
+            let plus = self.force_residual(data, qp.as_slice(), lambda);
+            qp[j] = q[j] - h;
+            let minus = self.force_residual(data, qp.as_slice(), lambda);
+            qp[j] = q[j];
+            for i in 0..n {
+                jac[(i, j)] += (plus[i] - minus[i]) / (2.0 * h) - k[(i, j)];
+            }
+        }
+        jac
+    }
+
+    /// Least-squares multipliers `λ = argmin ‖τ − J_vᵀλ‖` at `q`.
+    fn multipliers(&self, data: &mut Data, q: &[f64]) -> DVector<f64> {
+        let tau = self.static_force(data, q);
+        let (_, jv) = self.phi_jac(data, q, false);
+        let jt = jv.transpose();
+        jt.svd(true, true)
+            .solve(&tau, 1e-12)
+            .unwrap_or_else(|_| DVector::zeros(self.model.n_constraints()))
+    }
 }
 
 /// Constrained statics (D69): Newton on `F(q, λ) = [τ(q) − J_vᵀλ; φ(q)] = 0`
 /// with the KKT matrix `[[∂F₁/∂q, −J_vᵀ], [J, 0]]`, a backtracking line
-/// search on the scaled `‖F‖` and load continuation as [`crate::statics`].
+/// search on the scaled `‖F‖` and load continuation as [`crate::statics`]
+/// (the loads scaled by `λ_s` of [`Forces::at_rest`], drives at rest).
 pub(crate) fn statics(
     model: &Model,
     tree: &Tree,
@@ -341,32 +372,38 @@ pub(crate) fn statics(
     let n = model.n_dof();
     let m = model.n_constraints();
     let k = stiffness_matrix(model);
-    let t = options.time;
     let ell = length_scale(model).max(f64::MIN_POSITIVE);
     let phi_tol = Model::CLOSURE_TOLERANCE * ell * 1e-2;
-    data.load_scale = 1.0;
+    let at = |scale: f64| Closed {
+        model,
+        tree,
+        t: options.time,
+        forces: Forces::at_rest(scale),
+    };
+    let full = at(1.0);
     let mut q = DVector::from_column_slice(q0);
-    let r_full = static_force(model, tree, data, t, q0).amax();
+    let r_full = full.static_force(data, q0).amax();
     let f_ref = r_full.max(f64::MIN_POSITIVE);
     let mut iterations = 0;
     // Scaled merit: forces relative to f_ref, residuals relative to ℓ.
     let merit = |r: &DVector<f64>, p: &DVector<f64>| (r.amax() / f_ref).max(p.amax() / ell);
-    let solve = |data: &mut Data,
+    let solve = |cx: Closed,
+                 data: &mut Data,
                  q: &mut DVector<f64>,
                  lam: &mut DVector<f64>,
                  iterations: &mut usize|
      -> Result<Result<f64, f64>, DynamicsError> {
-        let mut r = force_residual(model, tree, data, t, q.as_slice(), lam);
-        let (mut p, _) = phi_jac(model, tree, data, q.as_slice(), true);
+        let mut r = cx.force_residual(data, q.as_slice(), lam);
+        let (mut p, _) = cx.phi_jac(data, q.as_slice(), true);
         for _ in 0..options.max_iterations {
             let tol = options.tolerance * f_ref.max((&k * &*q).amax());
             if r.amax() <= tol && p.amax() <= phi_tol {
                 return Ok(Ok(r.amax()));
             }
             *iterations += 1;
-            let kt = tangent(model, tree, data, t, q, lam, &k);
-            let (_, jv) = phi_jac(model, tree, data, q.as_slice(), false);
-            let (_, je) = phi_jac(model, tree, data, q.as_slice(), true);
+            let kt = cx.tangent(data, q, lam, &k);
+            let (_, jv) = cx.phi_jac(data, q.as_slice(), false);
+            let (_, je) = cx.phi_jac(data, q.as_slice(), true);
             let mut kkt = DMatrix::zeros(n + m, n + m);
             kkt.view_mut((0, 0), (n, n)).copy_from(&kt);
             kkt.view_mut((0, n), (n, m)).copy_from(&(-jv.transpose()));
@@ -385,8 +422,8 @@ pub(crate) fn statics(
             loop {
                 let qt = &*q + dz.rows(0, n) * alpha;
                 let lt = &*lam + dz.rows(n, m) * alpha;
-                let rt = force_residual(model, tree, data, t, qt.as_slice(), &lt);
-                let (pt, _) = phi_jac(model, tree, data, qt.as_slice(), true);
+                let rt = cx.force_residual(data, qt.as_slice(), &lt);
+                let (pt, _) = cx.phi_jac(data, qt.as_slice(), true);
                 let ok = rt.iter().chain(pt.iter()).all(|v| v.is_finite());
                 if ok && (merit(&rt, &pt) < (1.0 - 1e-4 * alpha) * f0 || merit(&rt, &pt) <= 1e-14) {
                     *q = qt;
@@ -413,9 +450,9 @@ pub(crate) fn statics(
             Err(r.amax())
         })
     };
-    let mut lam = multipliers(model, tree, data, t, q0);
+    let mut lam = full.multipliers(data, q0);
     let start = (q.clone(), lam.clone());
-    if let Ok(res) = solve(data, &mut q, &mut lam, &mut iterations)? {
+    if let Ok(res) = solve(full, data, &mut q, &mut lam, &mut iterations)? {
         return Ok((
             StaticsResult {
                 q,
@@ -428,9 +465,8 @@ pub(crate) fn statics(
     }
     // Load continuation from the unloaded state.
     let (mut q_prev, mut l_prev) = start;
-    data.load_scale = 0.0;
     l_prev.fill(0.0);
-    if solve(data, &mut q_prev, &mut l_prev, &mut iterations)?.is_err() {
+    if solve(at(0.0), data, &mut q_prev, &mut l_prev, &mut iterations)?.is_err() {
         return Err(DynamicsError::StaticsFailed {
             reason: "no constrained equilibrium even without loads (do the closures hold, \
                      are they redundant?)"
@@ -452,9 +488,8 @@ pub(crate) fn statics(
         }
         steps += 1;
         let target = (lam_s + step).min(1.0);
-        data.load_scale = target;
         let (mut qt, mut lt) = (q_prev.clone(), l_prev.clone());
-        match solve(data, &mut qt, &mut lt, &mut iterations)? {
+        match solve(at(target), data, &mut qt, &mut lt, &mut iterations)? {
             Ok(res) => {
                 lam_s = target;
                 q_prev = qt;
@@ -478,7 +513,8 @@ pub(crate) fn statics(
 
 /// Modes of the constrained system (D69) about `q_eq`: `K_eff` and `M`
 /// restricted to an orthonormal basis `Z` of the null space of `J(q_eq)`
-/// (from its SVD, rank at `1e-10` of the largest singular value).
+/// (from its SVD, rank at `1e-10` of the largest singular value); the
+/// prescribed joints held at rest at their values at `time`.
 pub(crate) fn modes(
     model: &Model,
     tree: &Tree,
@@ -488,12 +524,18 @@ pub(crate) fn modes(
 ) -> Result<Modes, DynamicsError> {
     let n = model.n_dof();
     let k = stiffness_matrix(model);
-    let lam = multipliers(model, tree, data, time, q_eq);
+    let cx = Closed {
+        model,
+        tree,
+        t: time,
+        forces: Forces::at_rest(1.0),
+    };
+    let lam = cx.multipliers(data, q_eq);
     let q = DVector::from_column_slice(q_eq);
-    let keff = tangent(model, tree, data, time, &q, &lam, &k);
+    let keff = cx.tangent(data, &q, &lam, &k);
     let asym = (&keff - keff.transpose()).norm() / keff.norm().max(f64::MIN_POSITIVE);
     let ksym = (&keff + keff.transpose()) * 0.5;
-    let (_, je) = phi_jac(model, tree, data, q_eq, true);
+    let (_, je) = cx.phi_jac(data, q_eq, true);
     let z = null_space(&je, n);
     crate::tree_algorithms::mass_matrix(model, tree, data, q_eq);
     let mr = z.transpose() * &data.mass * &z;
@@ -604,10 +646,7 @@ pub fn closure_statics(
         return Ok((r, DVector::zeros(0)));
     };
     crate::closure::check_workspace(model, data)?;
-    let saved = data.load_scale;
-    let out = statics(model, tree, data, q0, options);
-    data.load_scale = saved;
-    out
+    statics(model, tree, data, q0, options)
 }
 
 #[cfg(test)]

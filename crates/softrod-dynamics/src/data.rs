@@ -71,12 +71,6 @@ pub struct Data {
     pub(crate) strain_force: DVector<f64>,
     /// Cable force per unit tension scratch (n_dof).
     pub(crate) cable_scratch: DVector<f64>,
-    /// Factor multiplying every external load and cable tension (gravity,
-    /// point and distributed loads, cables); 1 by default. Statics ramps it
-    /// for load continuation.
-    pub load_scale: f64,
-    /// When set, the sweeps include gravity only (for [`crate::generalized_gravity`]).
-    pub(crate) only_gravity: bool,
     /// Cable tensions that replace the cables' schedules (the inputs `u`,
     /// one per cable in model order), set by [`Data::set_cable_tensions`].
     pub(crate) tensions: Option<DVector<f64>>,
@@ -102,9 +96,6 @@ pub struct Data {
     /// to follow its motion, from the last forward or inverse dynamics
     /// (D59).
     pub prescribed_force: DVector<f64>,
-    /// When set, prescribed joints hold their values at rest (no rate, no
-    /// acceleration): statics and modes about an equilibrium.
-    pub(crate) prescribed_at_rest: bool,
     /// Buffers of the constrained dynamics of a model with closures.
     pub(crate) closure: Option<crate::constrained::ClosureWork>,
 }
@@ -140,8 +131,6 @@ impl Data {
             mass: DMatrix::zeros(0, 0),
             strain_force: DVector::zeros(n),
             cable_scratch: DVector::zeros(n),
-            load_scale: 1.0,
-            only_gravity: false,
             tensions: None,
             nodes: model.tree.as_ref().map_or(Vec::new(), |t| {
                 (0..t.nodes.len())
@@ -155,7 +144,6 @@ impl Data {
             prescribed_qdd: DVector::zeros(model.n_prescribed()),
             prescribed_time: f64::NAN,
             prescribed_force: DVector::zeros(model.n_prescribed()),
-            prescribed_at_rest: false,
             closure: model.has_closures().then(|| {
                 crate::constrained::ClosureWork::new(
                     n,
@@ -173,7 +161,7 @@ impl Data {
     /// rods in order, each rod's cables in order) that every evaluation
     /// with this `Data` uses instead of the cables' tension schedules — the
     /// inputs of a controller (D15: `τ_c = Σ_c u_c ∂ℓ_c/∂q`, still scaled by
-    /// [`Data::load_scale`]). `None` goes back to the schedules.
+    /// [`crate::Forces::load_scale`]). `None` goes back to the schedules.
     ///
     /// Errors: a length other than [`Model::n_cables`], or a tension that
     /// is negative or not finite (a cable can only pull).

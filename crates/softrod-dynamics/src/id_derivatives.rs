@@ -8,6 +8,7 @@
 use crate::algorithms::check_vec;
 use crate::data::cable_tension;
 use crate::error::DynamicsError;
+use crate::forces::Forces;
 use crate::model::{Model, PieceData, RodModel};
 use crate::passes::gravity_base_acceleration;
 use crate::piece_derivs::{Coefficients, PieceDerivMaps, lambda, tangent_transpose_form};
@@ -165,9 +166,6 @@ pub struct IdDerivatives {
     /// `τ = ID(q, q̇, q̈)` itself (n_dof), as [`crate::inverse_dynamics`]
     /// returns it (to round-off).
     pub tau: DVector<f64>,
-    /// Factor on every external load and cable tension, as
-    /// [`crate::Data::load_scale`]; 1 by default.
-    pub load_scale: f64,
     /// Cable tensions replacing the schedules, as
     /// [`crate::Data::set_cable_tensions`] (copied from the `Data` by
     /// [`crate::forward_dynamics_derivatives`]).
@@ -175,9 +173,6 @@ pub struct IdDerivatives {
     n_dof: usize,
     /// The per-node buffers of an articulated model (D76–D80).
     tree: Option<Box<crate::tree_derivatives::TreeWork>>,
-    /// Prescribed joints (D59) held at rest at their values at `t` (the
-    /// statics' linearization), instead of moving as prescribed.
-    pub(crate) prescribed_at_rest: bool,
 }
 
 impl IdDerivatives {
@@ -197,14 +192,12 @@ impl IdDerivatives {
             dtau_dq: DMatrix::zeros(n, n),
             dtau_dqd: DMatrix::zeros(n, n),
             tau: DVector::zeros(n),
-            load_scale: 1.0,
             tensions: None,
             n_dof: n,
             tree: model
                 .tree
                 .as_ref()
                 .map(|t| Box::new(crate::tree_derivatives::TreeWork::new(model, t))),
-            prescribed_at_rest: false,
         }
     }
 }
@@ -392,15 +385,31 @@ crate::simd::dispatch! {
     ///
     /// `q`, `q̇`, `q̈`: dim `n_dof`. Results in `work.dtau_dq`, `work.dtau_dqd`
     /// (n_dof × n_dof, row = component of `τ`, column = coordinate) and
-    /// `work.tau`. Loads and cable tensions are scaled by `work.load_scale`.
-    pub fn inverse_dynamics_derivatives<'a>(model: &Model, work: &'a mut IdDerivatives, t: f64, q: &[f64], qd: &[f64], qdd: &[f64]) -> Result<&'a IdDerivatives, DynamicsError>
+    /// `work.tau`, of the inverse dynamics under `forces` (loads and cable
+    /// tensions scaled by [`Forces::load_scale`]; prescribed joints moving or
+    /// at rest).
+    pub fn inverse_dynamics_derivatives_with<'a>(model: &Model, work: &'a mut IdDerivatives, forces: Forces, t: f64, q: &[f64], qd: &[f64], qdd: &[f64]) -> Result<&'a IdDerivatives, DynamicsError>
     => id_derivatives_impl, id_derivatives_avx2
+}
+
+/// [`inverse_dynamics_derivatives_with`] of every force of the model
+/// ([`Forces::ALL`]).
+pub fn inverse_dynamics_derivatives<'a>(
+    model: &Model,
+    work: &'a mut IdDerivatives,
+    t: f64,
+    q: &[f64],
+    qd: &[f64],
+    qdd: &[f64],
+) -> Result<&'a IdDerivatives, DynamicsError> {
+    inverse_dynamics_derivatives_with(model, work, Forces::ALL, t, q, qd, qdd)
 }
 
 #[inline(always)]
 pub(crate) fn id_derivatives_impl<'a>(
     model: &Model,
     work: &'a mut IdDerivatives,
+    forces: Forces,
     t: f64,
     q: &[f64],
     qd: &[f64],
@@ -417,6 +426,9 @@ pub(crate) fn id_derivatives_impl<'a>(
             got: model.n_dof(),
         });
     }
+    forces.check()?;
+    // Gravity alone is no public pass; its derivatives are not taken.
+    debug_assert!(!forces.gravity_only, "derivatives of gravity alone");
     check_vec(model, "q", q)?;
     check_vec(model, "qdot", qd)?;
     check_vec(model, "qddot", qdd)?;
@@ -426,10 +438,12 @@ pub(crate) fn id_derivatives_impl<'a>(
         });
     }
     if let (Some(tree), Some(mut tw)) = (&model.tree, work.tree.take()) {
-        crate::tree_derivatives::tree_id_derivatives(model, tree, work, &mut tw, t, q, qd, qdd);
+        crate::tree_derivatives::tree_id_derivatives(
+            model, tree, work, &mut tw, forces, t, q, qd, qdd,
+        );
         work.tree = Some(tw);
     } else {
-        let scale = work.load_scale;
+        let scale = forces.load_scale;
         if model.rods().len() > 1 {
             work.dtau_dq.fill(0.0);
             work.dtau_dqd.fill(0.0);

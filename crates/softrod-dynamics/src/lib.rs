@@ -69,6 +69,7 @@ mod data;
 mod derivatives;
 mod energy;
 mod error;
+mod forces;
 mod id_derivatives;
 mod joint;
 mod matrices;
@@ -86,7 +87,8 @@ mod tree_algorithms;
 mod tree_derivatives;
 
 pub use algorithms::{
-    bias_force, forward_dynamics, forward_dynamics_cholesky, inverse_dynamics, mass_matrix,
+    bias_force, forward_dynamics, forward_dynamics_cholesky, forward_dynamics_with,
+    inverse_dynamics, inverse_dynamics_with, mass_matrix,
 };
 pub use builder::{IntoRodSpec, ModelBuilder, RodSpecBuilder};
 pub use closure::{
@@ -98,12 +100,15 @@ pub use constrained::{
 };
 pub use data::Data;
 pub use derivatives::{
-    DynamicsJacobians, FdDerivatives, Linearization, dynamics_jacobians,
+    DynamicsJacobians, FdDerivatives, Linearization, dynamics_jacobians, dynamics_jacobians_with,
     forward_dynamics_derivatives, linearize,
 };
 pub use energy::{Energies, energies, frames, section_jacobian};
 pub use error::{DynamicsError, RodId};
-pub use id_derivatives::{IdDerivatives, inverse_dynamics_derivatives};
+pub use forces::{Drives, Forces};
+pub use id_derivatives::{
+    IdDerivatives, inverse_dynamics_derivatives, inverse_dynamics_derivatives_with,
+};
 pub use joint::{Attachment, BodyLoad, BodySpec, Joint, JointKind};
 pub use matrices::{
     actuation_matrix, coriolis_matrix, damping_matrix, generalized_gravity, stiffness_matrix,

@@ -3,6 +3,7 @@
 use crate::algorithms::{check_vec, inward_inverse, strain_forces};
 use crate::data::Data;
 use crate::error::DynamicsError;
+use crate::forces::Forces;
 use crate::model::Model;
 use crate::passes::{Pass, outward};
 use nalgebra::{DMatrix, DVector, Matrix6xX};
@@ -19,17 +20,23 @@ pub fn generalized_gravity(
 ) -> Result<DVector<f64>, DynamicsError> {
     check_vec(model, "q", q)?;
     let zero = vec![0.0; model.n_dof()];
-    data.only_gravity = true;
-    let scale = std::mem::replace(&mut data.load_scale, 1.0);
+    let forces = Forces::GRAVITY;
     if let Some(tree) = &model.tree {
-        crate::tree_algorithms::inverse_dynamics(model, tree, data, 0.0, q, None, Some(&zero));
+        crate::tree_algorithms::inverse_dynamics(
+            model,
+            tree,
+            data,
+            forces,
+            0.0,
+            q,
+            None,
+            Some(&zero),
+        );
     } else {
-        outward(model, data, q, None, Some(&zero), Pass::Inverse);
-        strain_forces(model, data, 0.0, q, None, None);
+        outward(model, data, q, None, Some(&zero), Pass::Inverse, forces);
+        strain_forces(model, data, forces, 0.0, q, None, None);
         inward_inverse(model, data);
     }
-    data.only_gravity = false;
-    data.load_scale = scale;
     Ok(data.tau.clone())
 }
 

@@ -2,6 +2,7 @@
 
 use crate::blocks::{Sym6, ad_inv_vec, cross_cols, tr_mul_sym, tr_mul_sym2};
 use crate::data::Data;
+use crate::forces::Forces;
 use crate::model::{Model, RodModel};
 use softrod_lie::{AdOp, Mat6, PieceMaps, Pose, Vec6, ad_vec, coad_vec};
 
@@ -362,9 +363,9 @@ fn s_columns(tm: &AdOp, basis: &softrod_kinematics::Basis, out: &mut [Vec6; 6]) 
 }
 
 /// One outward sweep over every rod (D7–D10 at the evaluation points),
-/// accumulating per piece what `pass` needs. `q`, `qd`, `qdd` are the
-/// model's full vectors; `qd = None` means at rest, `qdd` only for
-/// [`Pass::Inverse`].
+/// accumulating per piece what `pass` needs under `forces`. `q`, `qd`,
+/// `qdd` are the model's full vectors; `qd = None` means at rest, `qdd`
+/// only for [`Pass::Inverse`].
 pub(crate) fn outward(
     model: &Model,
     data: &mut Data,
@@ -372,8 +373,9 @@ pub(crate) fn outward(
     qd: Option<&[f64]>,
     qdd: Option<&[f64]>,
     pass: Pass,
+    forces: Forces,
 ) {
-    outward_inl(model, data, q, qd, qdd, pass);
+    outward_inl(model, data, q, qd, qdd, pass, forces);
 }
 
 /// [`outward`] inlined into its caller: the hot algorithms inline it into
@@ -386,15 +388,16 @@ pub(crate) fn outward_inl(
     qd: Option<&[f64]>,
     qdd: Option<&[f64]>,
     pass: Pass,
+    forces: Forces,
 ) {
-    let scale = data.load_scale;
-    let only_gravity = data.only_gravity;
+    let scale = forces.load_scale;
+    let only_gravity = forces.gravity_only;
     for (r, rm) in model.rods.iter().enumerate() {
         // Planar rods run on 3-vectors and 3×3 blocks (crate::planar): the
         // inverse sweep here, the forward dynamics' in its own rod loop.
         if pass != Pass::Composite && model.uses_planar_path(r) {
             if let (Pass::Inverse, Some(pr)) = (pass, &rm.planar) {
-                crate::planar::outward(model, rm, pr, data, r, q, qd, qdd, true);
+                crate::planar::outward(model, rm, pr, data, r, q, qd, qdd, true, forces);
             }
             continue;
         }

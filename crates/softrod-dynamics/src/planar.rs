@@ -19,6 +19,7 @@
 
 use crate::data::Data;
 use crate::error::DynamicsError;
+use crate::forces::Forces;
 use crate::model::{Model, PieceData, RodModel, RodSpec};
 use crate::passes::{external_density, gravity_base_acceleration};
 use nalgebra::Vector2;
@@ -438,7 +439,8 @@ fn scale_rows(d: &Vec3, m: &Mat3) -> Mat3 {
 /// forward dynamics (`inverse = false`): the per-piece integrals
 /// `𝓤ᶠ, 𝓓ᶠ, 𝓜ᵗ` and bias sums of pass 1 (D20, D23). For the inverse
 /// dynamics: the wrench sums of (D17) with `f = 𝓜η̇ + ad*_η𝓜η − 𝓕_ext`,
-/// gravity as the base acceleration. Both: tip maps and accelerations.
+/// gravity as the base acceleration. Both: tip maps and accelerations,
+/// the external terms as `forces` asks.
 /// `q`, `qd` (`None`: at rest), `qdd` (`None`: zero): the model's full
 /// vectors.
 #[allow(clippy::too_many_arguments)]
@@ -453,9 +455,10 @@ pub(crate) fn outward(
     qd: Option<&[f64]>,
     qdd: Option<&[f64]>,
     inverse: bool,
+    forces: Forces,
 ) {
-    let scale = data.load_scale;
-    let only_gravity = data.only_gravity;
+    let scale = forces.load_scale;
+    let only_gravity = forces.gravity_only;
     let rod = &rm.spec.rod;
     let base = rod.base();
     let range = rm.dofs();
@@ -613,10 +616,11 @@ pub(crate) fn forward_rod(
     r: usize,
     q: &[f64],
     qd: &[f64],
+    forces: Forces,
 ) -> Result<(), DynamicsError> {
     let rm = &model.rods()[r];
     let pr = rm.planar.as_ref().expect("planar rod");
-    outward(model, rm, pr, data, r, q, Some(qd), None, false);
+    outward(model, rm, pr, data, r, q, Some(qd), None, false, forces);
     let pieces = &pr.pieces;
     let mut ma_next = Mat3::zeros();
     let mut pa_next = Vec3::zeros();
@@ -673,8 +677,7 @@ pub(crate) fn forward_rod(
         w.dt = hat_d;
         w.u = u;
     }
-    let scale = data.load_scale;
-    let mut etadot = pr.gather(&gravity_base_acceleration(model, rm, scale));
+    let mut etadot = pr.gather(&gravity_base_acceleration(model, rm, forces.load_scale));
     for (n, pp) in pieces.iter().enumerate() {
         let k = pp.k;
         let o = rm.dof_offset + rm.spec.rod.pieces()[n].dof_offset;

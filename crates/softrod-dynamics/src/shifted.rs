@@ -183,7 +183,15 @@ pub(crate) fn shifted_factor_impl<'a>(
     a: f64,
     b: f64,
 ) -> Result<&'a Data, DynamicsError> {
-    outward_inl(model, data, q, None, None, Pass::Composite);
+    outward_inl(
+        model,
+        data,
+        q,
+        None,
+        None,
+        Pass::Composite,
+        crate::forces::Forces::ALL,
+    );
     for (r, rm) in model.rods().iter().enumerate() {
         let pieces = rm.spec.rod.pieces();
         let mut ma_next = Sym6::default();

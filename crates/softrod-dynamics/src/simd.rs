@@ -141,28 +141,53 @@ mod tests {
         let (mut d1, mut d2) = (Data::new(&model), Data::new(&model));
         let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
 
-        let a = inverse_dynamics_impl(&model, &mut d1, 0.3, &q, &qd, &qdd)
+        let a = inverse_dynamics_impl(&model, &mut d1, crate::Forces::ALL, 0.3, &q, &qd, &qdd)
             .unwrap()
             .clone();
         // SAFETY: AVX2 detected above.
-        let b = unsafe { inverse_dynamics_avx2(&model, &mut d2, 0.3, &q, &qd, &qdd) }.unwrap();
+        let b = unsafe {
+            inverse_dynamics_avx2(&model, &mut d2, crate::Forces::ALL, 0.3, &q, &qd, &qdd)
+        }
+        .unwrap();
         assert!(a.iter().all(|x| x.is_finite()) && a.amax() > 0.0);
         assert_eq!(bits(a.as_slice()), bits(b.as_slice()), "inverse dynamics");
 
-        let a = forward_dynamics_impl(&model, &mut d1, 0.3, &q, &qd, None)
+        let a = forward_dynamics_impl(&model, &mut d1, crate::Forces::ALL, 0.3, &q, &qd, None)
             .unwrap()
             .clone();
         // SAFETY: as above.
-        let b = unsafe { forward_dynamics_avx2(&model, &mut d2, 0.3, &q, &qd, None) }.unwrap();
+        let b = unsafe {
+            forward_dynamics_avx2(&model, &mut d2, crate::Forces::ALL, 0.3, &q, &qd, None)
+        }
+        .unwrap();
         assert!(a.iter().all(|x| x.is_finite()) && a.amax() > 0.0);
         assert_eq!(bits(a.as_slice()), bits(b.as_slice()), "forward dynamics");
 
         let mut w1 = crate::IdDerivatives::new(&model);
         let mut w2 = crate::IdDerivatives::new(&model);
-        crate::id_derivatives::id_derivatives_impl(&model, &mut w1, 0.3, &q, &qd, &qdd).unwrap();
+        crate::id_derivatives::id_derivatives_impl(
+            &model,
+            &mut w1,
+            crate::Forces::ALL,
+            0.3,
+            &q,
+            &qd,
+            &qdd,
+        )
+        .unwrap();
         // SAFETY: as above.
-        unsafe { crate::id_derivatives::id_derivatives_avx2(&model, &mut w2, 0.3, &q, &qd, &qdd) }
-            .unwrap();
+        unsafe {
+            crate::id_derivatives::id_derivatives_avx2(
+                &model,
+                &mut w2,
+                crate::Forces::ALL,
+                0.3,
+                &q,
+                &qd,
+                &qdd,
+            )
+        }
+        .unwrap();
         assert!(w1.dtau_dq.amax() > 0.0);
         assert_eq!(
             bits(w1.dtau_dq.as_slice()),

@@ -8,6 +8,7 @@ use crate::algorithms::strain_forces;
 use crate::data::Data;
 use crate::energy::Energies;
 use crate::error::DynamicsError;
+use crate::forces::Forces;
 use crate::model::Model;
 use crate::passes::{FullSums, PointInertia, external_density};
 use crate::tree::{NodeKind, Tree};
@@ -154,8 +155,8 @@ pub(crate) fn local(v: &[f64], dof: usize, k: usize) -> Vec6 {
 ///
 /// Prescribed joints (D59) take their coordinates from
 /// `data.prescribed_q`, their rates when `qd` is given and their
-/// accelerations in the dynamics passes (neither for gravity alone nor at
-/// rest, `Data::prescribed_at_rest`); the
+/// accelerations in the dynamics passes (neither when `forces` holds them
+/// at rest, nor for gravity alone); the
 /// prescribed acceleration is folded into the node's tip acceleration
 /// `acc_tip`, so the recursions treat the node as one without coordinates.
 ///
@@ -170,12 +171,13 @@ pub(crate) fn outward(
     qd: Option<&[f64]>,
     qdd: Option<&[f64]>,
     pass: TreePass,
+    forces: Forces,
 ) -> f64 {
-    let scale = data.load_scale;
-    let only_gravity = data.only_gravity;
+    let scale = forces.load_scale;
+    let only_gravity = forces.gravity_only;
     let want_kinetic = pass == TreePass::Inverse && qd.is_some() && qdd.is_none();
     let mut kinetic = 0.0;
-    let moving = !only_gravity && !data.prescribed_at_rest;
+    let moving = forces.drives_move();
     let drive_rates = qd.is_some() && moving;
     let drive_acc = moving && pass != TreePass::Composite;
     let a_world = if pass == TreePass::Inverse {
@@ -394,8 +396,8 @@ pub(crate) fn outward(
 
 /// `τ ← τ − k(q − q_rest) − d q̇` of every joint (D53), into the strain
 /// forces (skipped for gravity only).
-fn joint_forces(model: &Model, data: &mut Data, q: &[f64], qd: Option<&[f64]>) {
-    if data.only_gravity {
+fn joint_forces(model: &Model, data: &mut Data, forces: Forces, q: &[f64], qd: Option<&[f64]>) {
+    if forces.gravity_only {
         return;
     }
     for e in &model.elements {
@@ -417,14 +419,15 @@ pub(crate) fn inverse_dynamics(
     model: &Model,
     tree: &Tree,
     data: &mut Data,
+    forces: Forces,
     t: f64,
     q: &[f64],
     qd: Option<&[f64]>,
     qdd: Option<&[f64]>,
 ) {
-    outward(model, tree, data, q, qd, qdd, TreePass::Inverse);
-    strain_forces(model, data, t, q, qd, None);
-    joint_forces(model, data, q, qd);
+    outward(model, tree, data, q, qd, qdd, TreePass::Inverse, forces);
+    strain_forces(model, data, forces, t, q, qd, None);
+    joint_forces(model, data, forces, q, qd);
     for w in &mut data.nodes {
         w.f_tip = Vec6::zeros();
     }
@@ -481,14 +484,24 @@ pub(crate) fn forward_dynamics(
     model: &Model,
     tree: &Tree,
     data: &mut Data,
+    forces: Forces,
     t: f64,
     q: &[f64],
     qd: &[f64],
     tau_act: Option<&[f64]>,
 ) -> Result<(), DynamicsError> {
-    outward(model, tree, data, q, Some(qd), None, TreePass::Articulated);
-    strain_forces(model, data, t, q, Some(qd), tau_act);
-    joint_forces(model, data, q, Some(qd));
+    outward(
+        model,
+        tree,
+        data,
+        q,
+        Some(qd),
+        None,
+        TreePass::Articulated,
+        forces,
+    );
+    strain_forces(model, data, forces, t, q, Some(qd), tau_act);
+    joint_forces(model, data, forces, q, Some(qd));
     for w in &mut data.nodes {
         w.m_tip = Mat6::zeros();
         w.f_tip = Vec6::zeros();
@@ -541,7 +554,7 @@ pub(crate) fn forward_dynamics(
             }
         }
     }
-    let a_world = world_acceleration(model, data.load_scale);
+    let a_world = world_acceleration(model, forces.load_scale);
     for (i, node) in tree.nodes.iter().enumerate() {
         let etadot_p = match node.parent {
             Some(p) if node.attach.is_some() => {
@@ -601,7 +614,16 @@ pub(crate) fn shifted_factor(
     a: f64,
     b: f64,
 ) -> Result<(), DynamicsError> {
-    outward(model, tree, data, q, None, None, TreePass::Composite);
+    outward(
+        model,
+        tree,
+        data,
+        q,
+        None,
+        None,
+        TreePass::Composite,
+        Forces::ALL,
+    );
     for w in &mut data.nodes {
         w.m_tip = Mat6::zeros();
     }
@@ -715,7 +737,16 @@ pub(crate) fn shifted_solve(tree: &Tree, data: &Data, scratch: &mut [SolveNode],
 /// `F_i = 𝓤 + A_ℓᵀ𝓜ᶜS(ℓ)` — the motion of an ancestor moves `i`'s base
 /// rigidly. Nodes off each other's paths to the root do not couple.
 pub(crate) fn mass_matrix(model: &Model, tree: &Tree, data: &mut Data, q: &[f64]) {
-    outward(model, tree, data, q, None, None, TreePass::Composite);
+    outward(
+        model,
+        tree,
+        data,
+        q,
+        None,
+        None,
+        TreePass::Composite,
+        Forces::ALL,
+    );
     let n = model.n_dof();
     if data.mass.nrows() != n {
         data.mass = nalgebra::DMatrix::zeros(n, n);
@@ -792,7 +823,16 @@ pub(crate) fn energies(
     // Kinetic energy point by point (D59: it includes the prescribed
     // joints' motion, which `½q̇ᵀMq̇` would miss); the poses of this pass
     // serve the gravitational energy below.
-    let kinetic = outward(model, tree, data, q, Some(qd), None, TreePass::Inverse);
+    let kinetic = outward(
+        model,
+        tree,
+        data,
+        q,
+        Some(qd),
+        None,
+        TreePass::Inverse,
+        Forces::ALL,
+    );
     let mut e = Energies {
         kinetic,
         ..Energies::default()
@@ -840,7 +880,16 @@ pub(crate) fn energies(
 /// World poses of every rod's base frame and every body's frame into
 /// `data.rod_bases`, `data.body_poses` (D51).
 pub(crate) fn frames(model: &Model, tree: &Tree, data: &mut Data, q: &[f64]) {
-    outward(model, tree, data, q, None, None, TreePass::Inverse);
+    outward(
+        model,
+        tree,
+        data,
+        q,
+        None,
+        None,
+        TreePass::Inverse,
+        Forces::ALL,
+    );
     for (r, nodes) in tree.rod_nodes.iter().enumerate() {
         data.rod_bases[r] = data.nodes[nodes[0]].base_world;
     }

@@ -103,19 +103,20 @@ pub(crate) fn tree_id_derivatives(
     tree: &Tree,
     work: &mut IdDerivatives,
     tw: &mut TreeWork,
+    forces: crate::forces::Forces,
     t: f64,
     q: &[f64],
     qd: &[f64],
     qdd: &[f64],
 ) {
-    let scale = work.load_scale;
+    let scale = forces.load_scale;
     model.prescribed_values(
         t,
         tw.pq.as_mut_slice(),
         tw.pqd.as_mut_slice(),
         tw.pqdd.as_mut_slice(),
     );
-    if work.prescribed_at_rest {
+    if !forces.drives_move() {
         tw.pqd.fill(0.0);
         tw.pqdd.fill(0.0);
     }
@@ -449,8 +450,8 @@ fn pairs(tree: &Tree, work: &mut IdDerivatives, tw: &TreeWork) {
 #[cfg(test)]
 mod tests {
     use crate::{
-        Attachment, Curve, Data, IdDerivatives, Joint, Model, Prescribed, RodSpec,
-        inverse_dynamics_derivatives, static_force,
+        Attachment, Curve, Data, Drives, Forces, IdDerivatives, Joint, Model, Prescribed, RodSpec,
+        inverse_dynamics_derivatives_with, static_force,
     };
     use softrod_mechanics::{Material, RodBody, Section};
 
@@ -491,11 +492,10 @@ mod tests {
         let z = vec![0.0; n];
         let t = 0.17;
         let mut work = IdDerivatives::new(&m);
-        work.prescribed_at_rest = true;
-        inverse_dynamics_derivatives(&m, &mut work, t, &q, &z, &z).unwrap();
+        let rest = Forces::ALL.with_drives(Drives::AtRest);
+        inverse_dynamics_derivatives_with(&m, &mut work, rest, t, &q, &z, &z).unwrap();
         let at_rest = work.dtau_dq.clone();
-        work.prescribed_at_rest = false;
-        inverse_dynamics_derivatives(&m, &mut work, t, &q, &z, &z).unwrap();
+        inverse_dynamics_derivatives_with(&m, &mut work, Forces::ALL, t, &q, &z, &z).unwrap();
         let moving = work.dtau_dq.clone();
         let mut data = Data::new(&m);
         let h = 1e-6;

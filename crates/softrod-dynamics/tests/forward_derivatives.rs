@@ -139,11 +139,11 @@ fn jacobians_follow_the_load_scale() {
     let m = soft(Shape::new(3, bases()), Terms::ALL);
     let (q, qd, _) = state(&mut rng, m.n_dof(), 0.8, 2.0, 0.0);
     let mut data = Data::new(&m);
-    data.load_scale = 0.4;
-    let j = dynamics_jacobians(&m, &mut data, 0.3, &q, &qd, None).unwrap();
+    let forces = Forces::ALL.with_load_scale(0.4);
+    let j = dynamics_jacobians_with(&m, &mut data, forces, 0.3, &q, &qd, None).unwrap();
     // Differences of the forward dynamics at the same load scale.
     let (dq, _) = richardson_jacobians(&q, &qd, |a, b| {
-        forward_dynamics(&m, &mut data, 0.3, a, b, None)
+        forward_dynamics_with(&m, &mut data, forces, 0.3, a, b, None)
             .unwrap()
             .clone()
     });
