@@ -240,13 +240,19 @@ impl RodModel {
 ///
 /// Generalized coordinates are the concatenation of the rods' `q`
 /// (`n_dof = Σ_rods Σ_n k_n`).
+///
+/// Nothing of a built model changes: its parts are read through
+/// accessors, and a variant is a new model ([`Model::with_gravity`],
+/// [`Model::with_quadrature`], [`Model::with_closures`],
+/// [`Model::with_planar_path`]) — what was precomputed from them stays
+/// consistent.
 #[derive(Clone, Debug)]
 pub struct Model {
     pub(crate) rods: Vec<RodModel>,
     /// World gravity `g_w` [m/s²], `None` if absent.
-    pub gravity: Option<Vec3>,
+    pub(crate) gravity: Option<Vec3>,
     /// Gauss points per piece.
-    pub quadrature: GaussLegendre,
+    pub(crate) quadrature: GaussLegendre,
     n_dof: usize,
     n_prescribed: usize,
     pub(crate) bodies: Vec<BodyModel>,
@@ -324,12 +330,7 @@ impl Model {
         if quadrature == 0 {
             return Err(DynamicsError::NoQuadraturePoints);
         }
-        if let Some(g) = gravity {
-            if let Some((component, &value)) = g.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-                return Err(DynamicsError::GravityNotFinite { component, value });
-            }
-        }
-        let gravity = gravity.filter(|g| g.norm() > 0.0);
+        let gravity = checked_gravity(gravity)?;
         let gl = GaussLegendre::new(quadrature);
         let mut rods = Vec::new();
         let mut bodies = Vec::new();
@@ -497,6 +498,40 @@ impl Model {
         &self.rods
     }
 
+    /// World gravity `g_w` \[m/s²\], `None` if absent (or given as zero).
+    pub fn gravity(&self) -> Option<Vec3> {
+        self.gravity
+    }
+
+    /// The Gauss–Legendre rule on each piece ([`GaussLegendre::len`] points).
+    pub fn quadrature(&self) -> &GaussLegendre {
+        &self.quadrature
+    }
+
+    /// The same model under another world gravity `g_w` \[m/s²\] (`None`
+    /// or zero: none). Errors: a component that is not finite.
+    pub fn with_gravity(mut self, gravity: Option<Vec3>) -> Result<Self, DynamicsError> {
+        self.gravity = checked_gravity(gravity)?;
+        Ok(self)
+    }
+
+    /// The same model with `points` Gauss–Legendre points per piece (≥ 1):
+    /// every rod's quadrature points, their inertia, the placement of its
+    /// point loads and its `K_n`, `D_n` are computed again.
+    pub fn with_quadrature(mut self, points: usize) -> Result<Self, DynamicsError> {
+        if points == 0 {
+            return Err(DynamicsError::NoQuadraturePoints);
+        }
+        let gl = GaussLegendre::new(points);
+        self.rods = std::mem::take(&mut self.rods)
+            .into_iter()
+            .enumerate()
+            .map(|(i, r)| build_rod(r.spec, i, r.dof_offset, r.cable_offset, &gl))
+            .collect::<Result<_, _>>()?;
+        self.quadrature = gl;
+        Ok(self)
+    }
+
     /// The rigid bodies, in the order given.
     pub fn bodies(&self) -> &[BodyModel] {
         &self.bodies
@@ -589,6 +624,16 @@ impl Model {
     pub fn n_cables(&self) -> usize {
         self.rods.iter().map(|r| r.spec.cables.len()).sum()
     }
+}
+
+/// Gravity as the model keeps it: every component finite, zero as `None`.
+fn checked_gravity(gravity: Option<Vec3>) -> Result<Option<Vec3>, DynamicsError> {
+    if let Some(g) = gravity {
+        if let Some((component, &value)) = g.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(DynamicsError::GravityNotFinite { component, value });
+        }
+    }
+    Ok(gravity.filter(|g| g.norm() > 0.0))
 }
 
 /// Checks one rod and precomputes its pieces (`K_n`, `D_n`, quadrature

@@ -92,7 +92,7 @@ fn input_matrix_equals_the_response_to_each_tension() {
         let t0 = spec.cables[c].tension_at(0.3);
         assert_eq!(lin.u[c], t0);
         spec.cables[c].tension = Tension::Constant(t0 + 1.0);
-        let m2 = Model::new(vec![spec], m.gravity, 4).unwrap();
+        let m2 = Model::new(vec![spec], m.gravity(), 4).unwrap();
         let mut d2 = Data::new(&m2);
         let plus = forward_dynamics(&m2, &mut d2, 0.3, &q, &qd, None)
             .unwrap()
