@@ -37,9 +37,9 @@ pub fn failed(e: impl std::fmt::Display) -> CliError {
 impl From<Error> for CliError {
     fn from(e: Error) -> Self {
         if e.is_input() {
-            CliError::Input(e.to_string())
+            CliError::Input(e.with_causes())
         } else {
-            CliError::Failed(e.to_string())
+            CliError::Failed(e.with_causes())
         }
     }
 }

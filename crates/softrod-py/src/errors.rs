@@ -55,7 +55,7 @@ pub fn simulation(message: String, time: Option<f64>) -> PyErr {
 /// cover the model a `NotImplementedError` subclass, a failed evaluation or
 /// run a `RuntimeError` subclass; the message is the Rust one.
 pub fn to_py(e: Error) -> PyErr {
-    let message = e.to_string();
+    let message = e.with_causes();
     match &e {
         Error::Scene(_) => SceneError::new_err(message),
         Error::Integration(inner) => simulation(message, failure_time(inner)),

@@ -128,6 +128,27 @@ impl From<IntegrateError> for Error {
 }
 
 impl Error {
+    /// The message followed by each cause of its chain
+    /// ([`std::error::Error::source`]), `": "`-separated, the text a front
+    /// end prints. An error whose cause is its source does not repeat it
+    /// (the dynamics errors name the rod and what is invalid; the
+    /// mechanics or kinematics error says why); a cause whose text the
+    /// message already shows — layers that print their cause themselves —
+    /// is not repeated either.
+    pub fn with_causes(&self) -> String {
+        let mut out = self.to_string();
+        let mut cause = std::error::Error::source(self);
+        while let Some(c) = cause {
+            let text = c.to_string();
+            if !out.contains(&text) {
+                out.push_str(": ");
+                out.push_str(&text);
+            }
+            cause = c.source();
+        }
+        out
+    }
+
     /// Whether this is bad input (a scene, setting or argument the caller
     /// can fix) rather than a failed simulation.
     pub fn is_input(&self) -> bool {
@@ -161,3 +182,41 @@ impl Error {
 
 /// `Result` with the facade's [`Error`].
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The chain printed once each: a dynamics error names the rod and
+    /// what is invalid, its source says why; an error that already prints
+    /// its cause does not get it twice.
+    #[test]
+    fn with_causes_shows_each_cause_once() {
+        let e = Error::Dynamics(DynamicsError::RodBody {
+            rod: softrod_dynamics::RodId {
+                index: Some(0),
+                name: "arm".into(),
+            },
+            source: MechanicsError::NotPositive {
+                quantity: softrod_mechanics::Quantity::RodLength,
+                value: -0.5,
+            },
+        });
+        assert_eq!(
+            e.with_causes(),
+            "rod 0 ('arm'): invalid body: rod length [m] must be positive and finite, got -0.5"
+        );
+        let e = Error::Integration(Box::new(IntegrateError::System {
+            t: 0.5,
+            h: 1e-3,
+            what: "rhs",
+            source: Box::new(DynamicsError::NotFinite {
+                what: "qddot[3]".into(),
+                value: f64::NAN,
+            }),
+        }));
+        let text = e.with_causes();
+        assert_eq!(text.matches("qddot[3] is not finite").count(), 1, "{text}");
+        assert_eq!(text, e.to_string());
+    }
+}
