@@ -1,13 +1,14 @@
 //! Inverse dynamics, O(N) forward dynamics, the mass matrix and the
 //! Cholesky forward dynamics.
 
-use crate::blocks::{Blk6, Sym6, ad_inv_tr_vec, ad_inv_vec};
-use crate::chol::{backward_sub, cholesky_k, forward_sub, right_solve_lt};
+use crate::kernels::blocks::{Blk6, Sym6, ad_inv_tr_vec, ad_inv_vec};
+use crate::kernels::chol::{backward_sub, cholesky_k, forward_sub, right_solve_lt};
 use crate::data::{Data, cable_tension};
 use crate::error::DynamicsError;
 use crate::forces::Forces;
 use crate::model::Model;
-use crate::passes::{Pass, gravity_base_acceleration, outward, outward_inl, project_add_blocks};
+use crate::kernels::inertia::project_add_blocks;
+use crate::passes::{Pass, gravity_base_acceleration, outward, outward_inl};
 use nalgebra::DVector;
 use softrod_lie::{Mat6, Vec6};
 
@@ -96,7 +97,7 @@ pub(crate) fn strain_forces(
     }
 }
 
-crate::simd::dispatch! {
+crate::kernels::simd::dispatch! {
     /// Inverse dynamics by recursive Newton–Euler for PCS (docs/theory.md §4):
     /// the actuator force `τ_act` (n_dof) that produces `q̈` at `(q, q̇, t)`,
     ///
@@ -183,7 +184,7 @@ pub(crate) fn inward_inverse(model: &Model, data: &mut Data) {
     data.tau -= &data.strain_force;
 }
 
-crate::simd::dispatch! {
+crate::kernels::simd::dispatch! {
     /// Forward dynamics by the O(N) articulated recursion (docs/theory.md
     /// §6, (D23)–(D27); §9 lists what it corrects in the model document): `q̈` (n_dof) at `(q, q̇, t)` under actuator
     /// force `τ_act` (n_dof, `None` = 0) and every term of the model.
@@ -331,7 +332,7 @@ fn check_qdd(data: &Data, t: f64) -> Result<&DVector<f64>, DynamicsError> {
     Ok(&data.qdd)
 }
 
-crate::simd::dispatch! {
+crate::kernels::simd::dispatch! {
     /// Mass matrix `M(q) = ∫ Jᵀ𝓜J ds` (D19) by the composite recursion (D20):
     /// `𝓜ᶜ_n = 𝓜ᵗ_n + A_ℓᵀ𝓜ᶜ_{n+1}A_ℓ`, `M_mm = 𝓓_m + S_ℓᵀ𝓜ᶜ_{m+1}S_ℓ`, and
     /// the off-diagonal blocks `M_nm = S_n(ℓ)ᵀ A…ᵀ F_m` (n < m) of

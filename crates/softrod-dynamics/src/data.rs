@@ -1,6 +1,6 @@
 //! Reusable buffers: everything one evaluation needs, allocated once.
 
-use crate::blocks::Sym6;
+use crate::kernels::blocks::Sym6;
 use crate::error::DynamicsError;
 use crate::model::{Model, RodModel};
 use nalgebra::{DMatrix, DVector};

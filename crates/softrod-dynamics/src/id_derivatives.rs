@@ -11,7 +11,7 @@ use crate::error::DynamicsError;
 use crate::forces::Forces;
 use crate::model::{Model, PieceData, RodModel};
 use crate::passes::gravity_base_acceleration;
-use crate::piece_derivs::{Coefficients, PieceDerivMaps, lambda, tangent_transpose_form};
+use crate::kernels::piece_derivs::{Coefficients, PieceDerivMaps, lambda, tangent_transpose_form};
 use nalgebra::{DMatrix, DVector};
 use softrod_kinematics::{Basis, Piece};
 use softrod_lie::{
@@ -368,7 +368,7 @@ pub(crate) fn cable_terms(
     (force, hess)
 }
 
-crate::simd::dispatch! {
+crate::kernels::simd::dispatch! {
     /// Analytic `∂τ/∂q` and `∂τ/∂q̇` of the inverse dynamics
     /// `τ = ID(q, q̇, q̈)` at time `t` (docs/theory-derivatives.md, (D37)–(D47)),
     /// with every term of the model: inertia, Coriolis and centrifugal forces,

@@ -60,9 +60,7 @@
 #![warn(missing_docs)]
 
 mod algorithms;
-mod blocks;
 mod builder;
-mod chol;
 mod closure;
 mod constrained;
 mod data;
@@ -72,15 +70,14 @@ mod error;
 mod forces;
 mod id_derivatives;
 mod joint;
+mod kernels;
 mod matrices;
 mod model;
 mod modes;
 mod passes;
-mod piece_derivs;
 mod planar;
 mod prescribed;
 mod shifted;
-mod simd;
 mod statics;
 mod tree;
 mod tree_algorithms;

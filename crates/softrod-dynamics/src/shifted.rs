@@ -14,12 +14,13 @@
 //! not covered (their Newton matrix carries the constraints).
 
 use crate::algorithms::check_vec;
-use crate::blocks::{Blk6, Sym6, ad_inv_tr_vec, ad_inv_vec};
-use crate::chol::{backward_sub, cholesky_k, forward_sub, right_solve_lt};
+use crate::kernels::blocks::{Blk6, Sym6, ad_inv_tr_vec, ad_inv_vec};
+use crate::kernels::chol::{backward_sub, cholesky_k, forward_sub, right_solve_lt};
 use crate::data::Data;
 use crate::error::DynamicsError;
 use crate::model::Model;
-use crate::passes::{Pass, outward_inl, project_add_blocks};
+use crate::kernels::inertia::project_add_blocks;
+use crate::passes::{Pass, outward_inl};
 use softrod_lie::Vec6;
 
 /// Factorization of `S = M(q) + a·K + b·D` by the articulated recursion,
@@ -168,7 +169,7 @@ impl ShiftedSolver {
     }
 }
 
-crate::simd::dispatch! {
+crate::kernels::simd::dispatch! {
     /// The factorization of [`ShiftedSolver::factor`] into `data` (arguments
     /// checked by the caller).
     pub fn shifted_factor<'a>(model: &Model, data: &'a mut Data, q: &[f64], a: f64, b: f64) -> Result<&'a Data, DynamicsError>

@@ -14,7 +14,7 @@ use crate::id_derivatives::{
     has_dead_loads, linearize_point, own_points, write_piece,
 };
 use crate::model::Model;
-use crate::piece_derivs::{PieceDerivMaps, lambda as lambda_of};
+use crate::kernels::piece_derivs::{PieceDerivMaps, lambda as lambda_of};
 use crate::tree::{NodeKind, Tree};
 use crate::tree_algorithms::{local, world_acceleration};
 use nalgebra::DVector;

@@ -41,7 +41,7 @@ macro_rules! dispatch {
         $(#[$meta])*
         pub fn $name<$lt>($($arg: $ty),*) -> $ret {
             #[cfg(target_arch = "x86_64")]
-            if crate::simd::avx2() {
+            if crate::kernels::simd::avx2() {
                 // SAFETY: the CPU supports AVX2 (checked at run time).
                 return unsafe { $avx($($arg),*) };
             }
