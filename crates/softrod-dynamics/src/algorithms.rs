@@ -1,13 +1,13 @@
 //! Inverse dynamics, O(N) forward dynamics, the mass matrix and the
 //! Cholesky forward dynamics.
 
-use crate::kernels::blocks::{Blk6, Sym6, ad_inv_tr_vec, ad_inv_vec};
-use crate::kernels::chol::{backward_sub, cholesky_k, forward_sub, right_solve_lt};
-use crate::data::{Data, cable_tension};
 use crate::error::DynamicsError;
 use crate::forces::Forces;
-use crate::model::Model;
+use crate::kernels::blocks::{Blk6, Sym6, ad_inv_tr_vec, ad_inv_vec};
+use crate::kernels::chol::{backward_sub, cholesky_k, forward_sub, right_solve_lt};
 use crate::kernels::inertia::project_add_blocks;
+use crate::model::Model;
+use crate::model::data::{Data, cable_tension};
 use crate::passes::{Pass, gravity_base_acceleration, outward, outward_inl};
 use nalgebra::DVector;
 use softrod_lie::{Mat6, Vec6};

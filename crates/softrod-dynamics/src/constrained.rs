@@ -4,61 +4,16 @@
 //! `[τ(q) − Jᵀλ; φ(q)] = 0`; modes on the null space of `J`.
 
 use crate::closure::{assemble, closure_norm, length_scale};
-use crate::data::Data;
 use crate::error::DynamicsError;
 use crate::forces::Forces;
 use crate::matrices::stiffness_matrix;
 use crate::model::Model;
+use crate::model::data::{ClosureWork, Data};
+use crate::model::tree::Tree;
 use crate::modes::Modes;
 use crate::statics::{StaticsOptions, StaticsResult};
-use crate::tree::Tree;
-use crate::tree_algorithms::{SolveNode, TreePass, outward};
+use crate::tree_algorithms::{TreePass, outward};
 use nalgebra::{DMatrix, DVector};
-
-/// Buffers of the constrained forward dynamics (allocated once, in
-/// [`Data::new`], for a model with closures).
-#[derive(Clone, Debug)]
-pub(crate) struct ClosureWork {
-    /// `φ` (m), velocity rows `J` (m×n), `J̇q̇` (m).
-    pub phi: DVector<f64>,
-    pub jac: DMatrix<f64>,
-    pub jdot_qd: DVector<f64>,
-    /// Per-node scratch of the O(N) solves with `M`, `Y = M⁻¹Jᵀ` (n×m),
-    /// `A = J M⁻¹ Jᵀ` (m×m, factored in place), right side and multipliers.
-    pub solve: Vec<SolveNode>,
-    pub y: DMatrix<f64>,
-    pub a: DMatrix<f64>,
-    pub rhs: DVector<f64>,
-    pub lambda: DVector<f64>,
-    pub scratch: DVector<f64>,
-    pub perm: Vec<usize>,
-    /// Numerical rank of `A` at the last evaluation.
-    pub rank: usize,
-    /// With prescribed joints (D59): the constraint rows' columns of the
-    /// prescribed coordinates `J_p` (m×n_p), and a copy of `q̈` (n).
-    pub jac_p: DMatrix<f64>,
-    pub qdd: DVector<f64>,
-}
-
-impl ClosureWork {
-    pub(crate) fn new(n: usize, m: usize, n_p: usize, nodes: usize) -> Self {
-        Self {
-            solve: vec![SolveNode::default(); nodes],
-            jac_p: DMatrix::zeros(m, n_p),
-            qdd: DVector::zeros(if n_p > 0 { n } else { 0 }),
-            phi: DVector::zeros(m),
-            jac: DMatrix::zeros(m, n),
-            jdot_qd: DVector::zeros(m),
-            y: DMatrix::zeros(n, m),
-            a: DMatrix::zeros(m, m),
-            rhs: DVector::zeros(m),
-            lambda: DVector::zeros(m),
-            scratch: DVector::zeros(m.max(n)),
-            perm: (0..m).collect(),
-            rank: m,
-        }
-    }
-}
 
 /// Relative pivot threshold of the pivoted Cholesky of `J M⁻¹ Jᵀ` (D68):
 /// a pivot below `1e-10 ×` the largest diagonal is a redundant constraint.
@@ -101,31 +56,6 @@ fn pivoted_cholesky(a: &mut DMatrix<f64>, perm: &mut [usize]) -> usize {
         }
     }
     m
-}
-
-/// `β / ω₁` of [`baumgarte_rate`] (D68).
-pub(crate) const BAUMGARTE_FACTOR: f64 = 10.0;
-
-/// The Baumgarte rate `α = β = ω_c` \[1/s\] (D68): the first cantilever
-/// bending frequency `1.8751² √(EI/(ρA L⁴))` of the stiffest rod (largest
-/// over the rods, at each rod's base section).
-pub(crate) fn baumgarte_rate(model: &Model) -> f64 {
-    let mut w: f64 = 0.0;
-    for rm in &model.rods {
-        let l = rm.spec.rod.length();
-        let k = rm.spec.body.stiffness(0.0);
-        let m = rm.spec.body.screw_inertia(0.0);
-        let ei = k[1].min(k[2]);
-        let rho_a = m[3];
-        if ei > 0.0 && rho_a > 0.0 && l > 0.0 {
-            w = w.max(
-                BAUMGARTE_FACTOR
-                    * 1.875_104_068_711_961_f64.powi(2)
-                    * (ei / (rho_a * l.powi(4))).sqrt(),
-            );
-        }
-    }
-    w
 }
 
 /// Constrained forward dynamics (D67–D68), after the free `q̈` is in

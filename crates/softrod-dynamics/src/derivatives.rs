@@ -3,11 +3,11 @@
 //! (docs/theory-derivatives.md §5, (D48)–(D49)).
 
 use crate::algorithms::{check_vec, forward_dynamics_with};
-use crate::data::Data;
 use crate::error::DynamicsError;
 use crate::forces::Forces;
 use crate::id_derivatives::{IdDerivatives, inverse_dynamics_derivatives_with};
 use crate::model::Model;
+use crate::model::data::Data;
 use crate::shifted::ShiftedSolver;
 use nalgebra::{DMatrix, DVector};
 

@@ -1,9 +1,9 @@
 //! Energies (docs/theory.md §7).
 
 use crate::algorithms::check_vec;
-use crate::data::Data;
 use crate::error::DynamicsError;
 use crate::model::Model;
+use crate::model::data::Data;
 use nalgebra::Matrix6xX;
 use softrod_kinematics::{Frame, RodKinematics};
 use softrod_lie::{Mat6, Pose, Vec6, exp_and_tangent_minus, exp_twist};
@@ -131,8 +131,8 @@ pub fn section_jacobian(
     };
     let (piece, x) = r.locate(s).map_err(kin_err)?;
     crate::tree_algorithms::frames(model, tree, data, q);
-    let frame = crate::closure::ResolvedFrame {
-        target: crate::closure::Target::Rod {
+    let frame = crate::model::closure::ResolvedFrame {
+        target: crate::model::closure::Target::Rod {
             rod,
             piece,
             x,

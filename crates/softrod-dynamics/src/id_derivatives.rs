@@ -6,12 +6,13 @@
 //! derivatives of its maps (D30)–(D36).
 
 use crate::algorithms::check_vec;
-use crate::data::cable_tension;
 use crate::error::DynamicsError;
 use crate::forces::Forces;
-use crate::model::{Model, PieceData, RodModel};
-use crate::passes::gravity_base_acceleration;
 use crate::kernels::piece_derivs::{Coefficients, PieceDerivMaps, lambda, tangent_transpose_form};
+use crate::model::data::cable_tension;
+use crate::model::rod::PieceData;
+use crate::model::{Model, RodModel};
+use crate::passes::gravity_base_acceleration;
 use nalgebra::{DMatrix, DVector};
 use softrod_kinematics::{Basis, Piece};
 use softrod_lie::{

@@ -60,26 +60,21 @@
 #![warn(missing_docs)]
 
 mod algorithms;
-mod builder;
 mod closure;
 mod constrained;
-mod data;
 mod derivatives;
 mod energy;
 mod error;
 mod forces;
 mod id_derivatives;
-mod joint;
 mod kernels;
 mod matrices;
 mod model;
 mod modes;
 mod passes;
 mod planar;
-mod prescribed;
 mod shifted;
 mod statics;
-mod tree;
 mod tree_algorithms;
 mod tree_derivatives;
 
@@ -87,15 +82,10 @@ pub use algorithms::{
     bias_force, forward_dynamics, forward_dynamics_cholesky, forward_dynamics_with,
     inverse_dynamics, inverse_dynamics_with, mass_matrix,
 };
-pub use builder::{IntoRodSpec, ModelBuilder, RodSpecBuilder};
-pub use closure::{
-    Closure, ClosureFrame, ClosureKind, check_closures, closure_residuals, constraint_jacobian,
-    constraint_residual,
-};
+pub use closure::{check_closures, closure_residuals, constraint_jacobian, constraint_residual};
 pub use constrained::{
     closure_multipliers, closure_statics, constraint_rank, max_closure_residual,
 };
-pub use data::Data;
 pub use derivatives::{
     DynamicsJacobians, FdDerivatives, Linearization, dynamics_jacobians, dynamics_jacobians_with,
     forward_dynamics_derivatives, linearize,
@@ -106,13 +96,16 @@ pub use forces::{Drives, Forces};
 pub use id_derivatives::{
     IdDerivatives, inverse_dynamics_derivatives, inverse_dynamics_derivatives_with,
 };
-pub use joint::{Attachment, BodyLoad, BodySpec, Joint, JointKind};
 pub use matrices::{
     actuation_matrix, coriolis_matrix, damping_matrix, generalized_gravity, stiffness_matrix,
 };
+pub use model::Data;
+pub use model::{Attachment, BodyLoad, BodySpec, Joint, JointKind};
 pub use model::{BodyModel, Element, ElementInfo, ElementKind, Model, RodModel, RodSpec};
+pub use model::{Closure, ClosureFrame, ClosureKind};
+pub use model::{Curve, Prescribed, Spline};
+pub use model::{IntoRodSpec, ModelBuilder, RodSpecBuilder};
 pub use modes::{Modes, modes};
-pub use prescribed::{Curve, Prescribed, Spline};
 pub use shifted::ShiftedSolver;
 pub use statics::{StaticsOptions, StaticsResult, static_force, statics};
 

@@ -1,10 +1,10 @@
 //! The matrices of the Lagrangian form, (C10) and (D19)–(D22), on request.
 
 use crate::algorithms::{check_vec, inward_inverse, strain_forces};
-use crate::data::Data;
 use crate::error::DynamicsError;
 use crate::forces::Forces;
 use crate::model::Model;
+use crate::model::data::Data;
 use crate::passes::{Pass, outward};
 use nalgebra::{DMatrix, DVector, Matrix6xX};
 use softrod_kinematics::{Frame, RodKinematics};
@@ -68,7 +68,7 @@ fn joint_diag(model: &Model, m: &mut DMatrix<f64>, which: usize) {
 
 fn block_diag(
     model: &Model,
-    f: impl Fn(&crate::model::PieceData) -> &DMatrix<f64>,
+    f: impl Fn(&crate::model::rod::PieceData) -> &DMatrix<f64>,
 ) -> DMatrix<f64> {
     let n = model.n_dof();
     let mut m = DMatrix::zeros(n, n);

@@ -1,11 +1,11 @@
 //! Linearized natural modes about an equilibrium.
 
 use crate::algorithms::{check_vec, inverse_dynamics_with, mass_matrix};
-use crate::data::Data;
 use crate::error::DynamicsError;
 use crate::forces::Forces;
 use crate::matrices::stiffness_matrix;
 use crate::model::Model;
+use crate::model::data::Data;
 use nalgebra::{DMatrix, DVector};
 
 /// Natural frequencies and mode shapes, lowest first.

@@ -1,9 +1,9 @@
 //! The outward sweep shared by every algorithm of the chain path.
 
+use crate::forces::Forces;
 use crate::kernels::blocks::ad_inv_vec;
 use crate::kernels::inertia::{FullSums, PointInertia, diag_mul, s_columns};
-use crate::data::Data;
-use crate::forces::Forces;
+use crate::model::data::Data;
 use crate::model::{Model, RodModel};
 use softrod_lie::{Mat6, PieceMaps, Pose, Vec6, ad_vec, coad_vec};
 

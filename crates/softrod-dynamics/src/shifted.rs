@@ -14,12 +14,12 @@
 //! not covered (their Newton matrix carries the constraints).
 
 use crate::algorithms::check_vec;
+use crate::error::DynamicsError;
 use crate::kernels::blocks::{Blk6, Sym6, ad_inv_tr_vec, ad_inv_vec};
 use crate::kernels::chol::{backward_sub, cholesky_k, forward_sub, right_solve_lt};
-use crate::data::Data;
-use crate::error::DynamicsError;
-use crate::model::Model;
 use crate::kernels::inertia::project_add_blocks;
+use crate::model::Model;
+use crate::model::data::Data;
 use crate::passes::{Pass, outward_inl};
 use softrod_lie::Vec6;
 
@@ -50,7 +50,7 @@ pub struct ShiftedSolver {
     factored: bool,
     n_dof: usize,
     /// Per-node scratch of the tree solve (empty for chain models).
-    tree_scratch: Vec<crate::tree_algorithms::SolveNode>,
+    tree_scratch: Vec<crate::model::data::SolveNode>,
 }
 
 impl ShiftedSolver {

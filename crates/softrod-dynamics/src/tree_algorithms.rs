@@ -5,93 +5,16 @@
 //! the chain path of joint-free models is untouched.
 
 use crate::algorithms::strain_forces;
-use crate::data::Data;
 use crate::energy::Energies;
 use crate::error::DynamicsError;
 use crate::forces::Forces;
-use crate::model::Model;
 use crate::kernels::inertia::{FullSums, PointInertia};
+use crate::model::Model;
+use crate::model::data::{Data, SolveNode};
+use crate::model::tree::{NodeKind, Tree};
 use crate::passes::external_density;
-use crate::tree::{NodeKind, Tree};
 use softrod_lie::{Mat6, PieceMaps, Pose, Vec6, ad_vec, coad_vec};
 use softrod_mechanics::elastic_energy;
-
-/// Per-node work space (all fixed-size).
-#[derive(Clone, Debug)]
-pub(crate) struct NodeWork {
-    /// World pose of the node's base frame.
-    pub base_world: Pose,
-    /// Local tip pose `g(ℓ)`, `S(ℓ) = T₋(ℓ)B` (6×k padded), the tip's
-    /// velocity-product acceleration.
-    pub tip: Pose,
-    pub s_tip: Mat6,
-    pub acc_tip: Vec6,
-    /// Velocity and acceleration of the tip frame (tip axes).
-    pub eta_tip: Vec6,
-    pub etadot_tip: Vec6,
-    /// (D20) `𝓜ᵗ = Σ wAᵀ𝓜A`, `𝓤 = Σ wAᵀ𝓜S`, `𝓓 = Σ wSᵀ𝓜S` of the node's
-    /// own mass; (D23/D17) bias sums `𝓟ᵗ` (6) and `𝓹 = Bᵀ Σ T₋ᵀ f` (k).
-    pub mt: Mat6,
-    pub ut: Mat6,
-    pub dt: Mat6,
-    pub p_big: Vec6,
-    pub p_small: Vec6,
-    /// What the children hand to the tip (tip axes): articulated or
-    /// composite inertia, and bias or transmitted wrench.
-    pub m_tip: Mat6,
-    pub f_tip: Vec6,
-    /// Forward dynamics: `Û`, `D̂⁻¹` (k×k padded), `u` (k).
-    pub uhat: Mat6,
-    pub dinv: Mat6,
-    pub u: Vec6,
-    /// Mass matrix: `Ad_{g_world(ℓ)} S(ℓ)` (world twists per unit rate).
-    pub s_world: Mat6,
-    /// A node hanging inside its parent piece at `x` (D62): the parent's
-    /// `g(x)`, `Ad⁻¹_{g(x)}`, `S(x) = T₋(x)B` (6×k padded), the
-    /// velocity-product acceleration there and the motion of that frame
-    /// (its axes), all written by the parent's outward step.
-    pub attach_pose: Pose,
-    pub attach_a: Mat6,
-    pub attach_s: Mat6,
-    pub attach_acc: Vec6,
-    pub attach_eta: Vec6,
-    pub attach_etadot: Vec6,
-    /// Forward dynamics pass 3: the base acceleration and `q̈_n` (padded).
-    pub etadot_base: Vec6,
-    pub qn: Vec6,
-}
-
-impl NodeWork {
-    pub(crate) fn new() -> Self {
-        Self {
-            base_world: Pose::identity(),
-            tip: Pose::identity(),
-            s_tip: Mat6::zeros(),
-            acc_tip: Vec6::zeros(),
-            eta_tip: Vec6::zeros(),
-            etadot_tip: Vec6::zeros(),
-            mt: Mat6::zeros(),
-            ut: Mat6::zeros(),
-            dt: Mat6::zeros(),
-            p_big: Vec6::zeros(),
-            p_small: Vec6::zeros(),
-            m_tip: Mat6::zeros(),
-            f_tip: Vec6::zeros(),
-            uhat: Mat6::zeros(),
-            dinv: Mat6::zeros(),
-            u: Vec6::zeros(),
-            s_world: Mat6::zeros(),
-            attach_pose: Pose::identity(),
-            attach_a: Mat6::identity(),
-            attach_s: Mat6::zeros(),
-            attach_acc: Vec6::zeros(),
-            attach_eta: Vec6::zeros(),
-            attach_etadot: Vec6::zeros(),
-            etadot_base: Vec6::zeros(),
-            qn: Vec6::zeros(),
-        }
-    }
-}
 
 /// The motion `(η, η̇)` of the frame node `c` hangs from (its parent's tip,
 /// or the point inside the parent piece, D62), in that frame's axes.
@@ -584,20 +507,6 @@ pub(crate) fn forward_dynamics(
         }
     }
     Ok(())
-}
-
-/// Per-node scratch of the tree's shifted solve: what the children hand
-/// to the node (at its tip, or inside it at `x`, D62) and the outward
-/// motion.
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct SolveNode {
-    f_tip: Vec6,
-    p_big: Vec6,
-    p_small: Vec6,
-    u: Vec6,
-    etadot_base: Vec6,
-    etadot_tip: Vec6,
-    qn: Vec6,
 }
 
 /// The factorization of `S = M(q) + a·K + b·D` on the tree

@@ -13,9 +13,9 @@ use crate::id_derivatives::{
     IdDerivatives, PieceWork, PointLin, Subtree, basis6, close_piece, dead_load_map, drag_diagonal,
     has_dead_loads, linearize_point, own_points, write_piece,
 };
-use crate::model::Model;
 use crate::kernels::piece_derivs::{PieceDerivMaps, lambda as lambda_of};
-use crate::tree::{NodeKind, Tree};
+use crate::model::Model;
+use crate::model::tree::{NodeKind, Tree};
 use crate::tree_algorithms::{local, world_acceleration};
 use nalgebra::DVector;
 use softrod_lie::{Mat6, PieceMaps, Pose, Vec6, ad, coad, coad_vec};
@@ -370,7 +370,7 @@ fn inward(
 fn write_joint(
     model: &Model,
     element: usize,
-    node: &crate::tree::Node,
+    node: &crate::model::tree::Node,
     work: &mut IdDerivatives,
     (q, qd): (&[f64], &[f64]),
     (diag_q, diag_v, wrench): (&Mat6, &Mat6, &Vec6),

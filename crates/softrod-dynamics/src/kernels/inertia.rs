@@ -51,7 +51,6 @@ fn add_sandwich(
     v += br;
 }
 
-
 /// Elementwise product with a diagonal given as a vector.
 #[inline(always)]
 pub(crate) fn diag_mul(d: &Vec6, v: &Vec6) -> Vec6 {
@@ -299,7 +298,11 @@ pub(crate) fn project_add(
 /// The columns of `S = T₋ B` (6×k) into `out`; returns `k`. Selection bases
 /// gather columns of `T₋ = [[A, 0], [B, A]]` instead of multiplying.
 #[inline(always)]
-pub(crate) fn s_columns(tm: &AdOp, basis: &softrod_kinematics::Basis, out: &mut [Vec6; 6]) -> usize {
+pub(crate) fn s_columns(
+    tm: &AdOp,
+    basis: &softrod_kinematics::Basis,
+    out: &mut [Vec6; 6],
+) -> usize {
     let k = basis.dof();
     match basis.selection() {
         Some(sel) => {
@@ -322,4 +325,3 @@ pub(crate) fn s_columns(tm: &AdOp, basis: &softrod_kinematics::Basis, out: &mut 
     }
     k
 }
-

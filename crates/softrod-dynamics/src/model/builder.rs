@@ -3,7 +3,7 @@
 //! constructors, then [`RodSpec::validate`]).
 
 use crate::error::{DynamicsError, RodId};
-use crate::joint::{Attachment, BodySpec};
+use crate::model::joint::{Attachment, BodySpec};
 use crate::model::{Element, Model, RodSpec};
 use softrod_kinematics::{Basis, Rod, Strain, straight};
 use softrod_lie::{Pose, Vec3, Vec6};
