@@ -3,12 +3,14 @@
 
 use crate::error::DynamicsError;
 use crate::forces::Forces;
+use crate::forces::external::gravity_base_acceleration;
+use crate::forces::strain::strain_forces;
 use crate::kernels::blocks::{Blk6, Sym6, ad_inv_tr_vec, ad_inv_vec};
 use crate::kernels::chol::{backward_sub, cholesky_k, forward_sub, right_solve_lt};
 use crate::kernels::inertia::project_add_blocks;
 use crate::model::Model;
-use crate::model::data::{Data, cable_tension};
-use crate::passes::{Pass, gravity_base_acceleration, outward, outward_inl};
+use crate::model::data::Data;
+use crate::passes::{Pass, outward, outward_inl};
 use nalgebra::DVector;
 use softrod_lie::{Mat6, Vec6};
 
@@ -28,73 +30,6 @@ pub(crate) fn check_vec(model: &Model, what: &'static str, v: &[f64]) -> Result<
         });
     }
     Ok(())
-}
-
-/// Strain-space generalized forces into `data.strain_force`:
-/// `τ_act + λ τ_c(q, t) − τ_e(q) − D q̇` ((D13), (D15); `λ` =
-/// `forces.load_scale`; only `τ_act` for gravity alone).
-#[inline(always)]
-pub(crate) fn strain_forces(
-    model: &Model,
-    data: &mut Data,
-    forces: Forces,
-    t: f64,
-    q: &[f64],
-    qd: Option<&[f64]>,
-    tau_act: Option<&[f64]>,
-) {
-    let sf = &mut data.strain_force;
-    match tau_act {
-        Some(ta) => sf.as_mut_slice().copy_from_slice(ta),
-        None => sf.fill(0.0),
-    }
-    if forces.gravity_only {
-        return;
-    }
-    for rm in model.rods() {
-        let rod = &rm.spec.rod;
-        let off = rm.dof_offset;
-        for (piece, pd) in rod.pieces().iter().zip(&rm.pieces) {
-            let k = piece.basis.dof();
-            let o = off + piece.dof_offset;
-            // Zero padding keeps `K_n q_n` exact: the pad adds exact zeros.
-            let pad = |v: &[f64]| Vec6::from_fn(|i, _| if i < k { v[i] } else { 0.0 });
-            let mut e = match &pd.diagonal {
-                Some((kd, _)) => kd.component_mul(&pad(&q[o..o + k])),
-                None => pd.stiffness6 * pad(&q[o..o + k]),
-            };
-            if pd.has_offset {
-                e += pd.offset6;
-            }
-            if let (true, Some(v)) = (pd.has_damping, qd) {
-                e += match &pd.diagonal {
-                    Some((_, dd)) => dd.component_mul(&pad(&v[o..o + k])),
-                    None => pd.damping6 * pad(&v[o..o + k]),
-                };
-            }
-            for (s, ei) in sf.as_mut_slice()[o..o + k].iter_mut().zip(e.iter()) {
-                *s -= ei;
-            }
-        }
-        if !rm.spec.cables.is_empty() {
-            let range = rm.dofs();
-            for (c, cable) in rm.spec.cables.iter().enumerate() {
-                let tension = cable_tension(data.tensions.as_ref(), rm, c, t) * forces.load_scale;
-                if tension == 0.0 {
-                    continue;
-                }
-                let scratch = &mut data.cable_scratch.as_mut_slice()[range.clone()];
-                scratch.fill(0.0);
-                cable.add_force_per_tension(rod, &q[range.clone()], &model.quadrature, scratch);
-                for (s, c) in sf.as_mut_slice()[range.clone()]
-                    .iter_mut()
-                    .zip(scratch.iter())
-                {
-                    *s += tension * c;
-                }
-            }
-        }
-    }
 }
 
 crate::kernels::simd::dispatch! {

@@ -8,16 +8,14 @@
 use crate::algorithms::check_vec;
 use crate::error::DynamicsError;
 use crate::forces::Forces;
+use crate::forces::external::gravity_base_acceleration;
+use crate::forces::linearized::{cable_terms, dead_load_map, drag_diagonal, has_dead_loads};
 use crate::kernels::piece_derivs::{Coefficients, PieceDerivMaps, lambda, tangent_transpose_form};
-use crate::model::data::cable_tension;
 use crate::model::rod::PieceData;
 use crate::model::{Model, RodModel};
-use crate::passes::gravity_base_acceleration;
 use nalgebra::{DMatrix, DVector};
-use softrod_kinematics::{Basis, Piece};
-use softrod_lie::{
-    AdOp, Mat3, Mat6, PieceMaps, Pose, Vec6, ad, ad_vec, angular, coad, coad_vec, linear, skew,
-};
+use softrod_kinematics::Basis;
+use softrod_lie::{AdOp, Mat6, PieceMaps, Pose, Vec6, ad, ad_vec, coad, coad_vec};
 use softrod_mechanics::LoadFrame;
 
 /// Per-piece buffers of the derivative sweeps (all fixed-size; `k_n`-sized
@@ -213,20 +211,6 @@ pub(crate) fn basis6(basis: &Basis) -> Mat6 {
     b
 }
 
-/// The body-frame linearization `Y` of a dead (world-fixed) wrench `(m, f)`
-/// (body components) with respect to a body-frame perturbation `Δ = (ω, v)`
-/// of the section it acts on (D38): the net force density `−F` changes by
-/// `(ω × m; ω × f) = Y Δ`, `Y = [[−m̃, 0], [−f̃, 0]]`.
-#[inline(always)]
-pub(crate) fn dead_load_map(w: &Vec6) -> Mat6 {
-    let mut y = Mat6::zeros();
-    y.fixed_view_mut::<3, 3>(0, 0)
-        .copy_from(&(-skew(&angular(w))));
-    y.fixed_view_mut::<3, 3>(3, 0)
-        .copy_from(&(-skew(&linear(w))));
-    y
-}
-
 /// `diag(d) X`.
 #[inline(always)]
 pub(crate) fn diag_mul(d: &Vec6, x: &Mat6) -> Mat6 {
@@ -320,53 +304,6 @@ pub(crate) fn linearize_point(
             co,
         },
     )
-}
-
-/// Cable terms of one piece (D47): the sum over cables of `λT ∫ w ds` with
-/// `w = (d × t̂; t̂)` (the part `+λT ∫ w` of `τ = … − τ_c`), and of
-/// `λT ∫ H P Hᵀ/|v| ds` (its strain derivative), `H = [d̃; I]`,
-/// `P = I − t̂t̂ᵀ`.
-#[inline(always)]
-pub(crate) fn cable_terms(
-    model: &Model,
-    rm: &RodModel,
-    piece: &Piece,
-    xi: &Vec6,
-    t: f64,
-    scale: f64,
-    tensions: Option<&DVector<f64>>,
-) -> (Vec6, Mat6) {
-    let mut force = Vec6::zeros();
-    let mut hess = Mat6::zeros();
-    let (k, qv) = (angular(xi), linear(xi));
-    for (c, cable) in rm.spec.cables.iter().enumerate() {
-        let tension = cable_tension(tensions, rm, c, t) * scale;
-        if tension == 0.0 {
-            continue;
-        }
-        cable.for_each_node(piece, &model.quadrature, |s, w| {
-            let (d, dp) = cable.offset(s);
-            let v = qv + k.cross(&d) + dp;
-            let nv = v.norm();
-            if nv == 0.0 {
-                return;
-            }
-            let th = v / nv;
-            force += softrod_lie::join(&d.cross(&th), &th) * (w * tension);
-            let p = (Mat3::identity() - th * th.transpose()) * (w * tension / nv);
-            let dt = skew(&d);
-            // H P Hᵀ = [[d̃Pd̃ᵀ, d̃P], [Pd̃ᵀ, P]].
-            let dp_ = dt * p;
-            let mut h = Mat6::zeros();
-            h.fixed_view_mut::<3, 3>(0, 0)
-                .copy_from(&(dp_ * dt.transpose()));
-            h.fixed_view_mut::<3, 3>(0, 3).copy_from(&dp_);
-            h.fixed_view_mut::<3, 3>(3, 0).copy_from(&dp_.transpose());
-            h.fixed_view_mut::<3, 3>(3, 3).copy_from(&p);
-            hess += h;
-        });
-    }
-    (force, hess)
 }
 
 crate::kernels::simd::dispatch! {
@@ -473,20 +410,6 @@ pub(crate) fn id_derivatives_impl<'a>(
         }
     }
     Ok(work)
-}
-
-/// The drag coefficients of a rod as the diagonal `C` of (D38).
-pub(crate) fn drag_diagonal(rm: &RodModel) -> Option<Vec6> {
-    rm.spec.drag.map(|d| {
-        Vec6::new(
-            d.rotational,
-            d.rotational,
-            d.rotational,
-            d.translational,
-            d.translational,
-            d.translational,
-        )
-    })
 }
 
 /// The own evaluation points and point loads of one piece (D38–D43): every
@@ -829,20 +752,6 @@ fn inward(
             (&diag_q, &diag_v, &wrench),
         );
     }
-}
-
-/// Whether a rod carries dead (world-frame) point or distributed loads, the
-/// only terms with a nonzero `Y` (D38).
-pub(crate) fn has_dead_loads(rm: &RodModel) -> bool {
-    rm.spec
-        .point_loads
-        .iter()
-        .any(|l| l.frame == LoadFrame::World)
-        || rm
-            .spec
-            .distributed_loads
-            .iter()
-            .any(|l| l.frame == LoadFrame::World)
 }
 
 /// The off-diagonal blocks (D45–D46): `i < j` pairs the world tip column

@@ -1,8 +1,9 @@
 //! The matrices of the Lagrangian form, (C10) and (D19)–(D22), on request.
 
-use crate::algorithms::{check_vec, inward_inverse, strain_forces};
+use crate::algorithms::{check_vec, inward_inverse};
 use crate::error::DynamicsError;
 use crate::forces::Forces;
+use crate::forces::strain::strain_forces;
 use crate::model::Model;
 use crate::model::data::Data;
 use crate::passes::{Pass, outward};

@@ -1,10 +1,11 @@
 //! The outward sweep shared by every algorithm of the chain path.
 
 use crate::forces::Forces;
+use crate::forces::external::{external_density, gravity_base_acceleration};
 use crate::kernels::blocks::ad_inv_vec;
 use crate::kernels::inertia::{FullSums, PointInertia, diag_mul, s_columns};
+use crate::model::Model;
 use crate::model::data::Data;
-use crate::model::{Model, RodModel};
 use softrod_lie::{Mat6, PieceMaps, Pose, Vec6, ad_vec, coad_vec};
 
 /// What the outward sweep accumulates per piece.
@@ -16,35 +17,6 @@ pub(crate) enum Pass {
     Articulated,
     /// (D20) integrals only (mass matrix).
     Composite,
-}
-
-/// Base acceleration that stands for gravity (docs/theory.md §4): the rod is
-/// accelerated upward by `−g` in every section, `η̇(L₀) = −Ad⁻¹_{g_r}𝒢 =
-/// (0; −R_rᵀ g_w)`, so no gravity wrench is computed per point.
-#[inline]
-pub(crate) fn gravity_base_acceleration(model: &Model, rm: &RodModel, scale: f64) -> Vec6 {
-    match model.gravity {
-        Some(g) => {
-            let r = rm.spec.rod.base().rotation;
-            let a = -(r.tr_mul(&g)) * scale;
-            Vec6::new(0.0, 0.0, 0.0, a[0], a[1], a[2])
-        }
-        None => Vec6::zeros(),
-    }
-}
-
-/// External distributed wrench density at a point (body frame, applied):
-/// drag on the body velocity plus distributed loads.
-#[inline]
-pub(crate) fn external_density(rm: &RodModel, scale: f64, world: &Pose, eta: &Vec6) -> Vec6 {
-    let mut f = Vec6::zeros();
-    if let Some(d) = &rm.spec.drag {
-        f += d.wrench_density(eta);
-    }
-    for dl in &rm.spec.distributed_loads {
-        f += dl.wrench_density(world) * scale;
-    }
-    f
 }
 
 /// One outward sweep over every rod (D7–D10 at the evaluation points),

@@ -19,11 +19,11 @@
 
 use crate::error::DynamicsError;
 use crate::forces::Forces;
+use crate::forces::external::{external_density, gravity_base_acceleration};
 use crate::kernels::planar::{Pose2, ad2, cholesky, coad2, maps, scale_rows};
 use crate::model::data::Data;
 use crate::model::planar::PlanarRod;
 use crate::model::{Model, RodModel};
-use crate::passes::{external_density, gravity_base_acceleration};
 use softrod_lie::{Mat3, Pose, Vec3};
 
 /// The outward sweep of the planar rod `r` (D7–D10 in `P`). For the

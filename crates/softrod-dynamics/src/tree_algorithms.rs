@@ -4,15 +4,15 @@
 //! single rigid inertias. Dense 6×6 arithmetic per node (no block tricks):
 //! the chain path of joint-free models is untouched.
 
-use crate::algorithms::strain_forces;
 use crate::energy::Energies;
 use crate::error::DynamicsError;
 use crate::forces::Forces;
+use crate::forces::external::{external_density, world_acceleration};
+use crate::forces::strain::{joint_forces, strain_forces};
 use crate::kernels::inertia::{FullSums, PointInertia};
 use crate::model::Model;
 use crate::model::data::{Data, SolveNode};
 use crate::model::tree::{NodeKind, Tree};
-use crate::passes::external_density;
 use softrod_lie::{Mat6, PieceMaps, Pose, Vec6, ad_vec, coad_vec};
 use softrod_mechanics::elastic_energy;
 
@@ -53,19 +53,6 @@ pub(crate) enum TreePass {
     Articulated,
     /// Mass matrix: inertia sums only, at rest.
     Composite,
-}
-
-/// The acceleration standing for gravity, world axes: the world frame is
-/// accelerated by `−g` (docs/theory.md §4), so every node, body and point sees
-/// gravity without a per-point wrench.
-pub(crate) fn world_acceleration(model: &Model, scale: f64) -> Vec6 {
-    match model.gravity {
-        Some(g) => {
-            let a = -g * scale;
-            Vec6::new(0.0, 0.0, 0.0, a[0], a[1], a[2])
-        }
-        None => Vec6::zeros(),
-    }
 }
 
 /// `q_n` (or a rate) of a node, zero-padded to 6.
@@ -316,25 +303,6 @@ pub(crate) fn outward(
         }
     }
     kinetic
-}
-
-/// `τ ← τ − k(q − q_rest) − d q̇` of every joint (D53), into the strain
-/// forces (skipped for gravity only).
-fn joint_forces(model: &Model, data: &mut Data, forces: Forces, q: &[f64], qd: Option<&[f64]>) {
-    if forces.gravity_only {
-        return;
-    }
-    for e in &model.elements {
-        let j = &e.attachment.joint;
-        if j.stiffness.is_empty() && j.damping.is_empty() {
-            continue;
-        }
-        for (i, o) in e.joint_dofs.clone().enumerate() {
-            let (k, d, rest) = j.coefficients(i);
-            let v = qd.map_or(0.0, |v| v[o]);
-            data.strain_force[o] -= k * (q[o] - rest) + d * v;
-        }
-    }
 }
 
 /// Inverse dynamics on the tree (D17–D18 with children summed at the tip,

@@ -9,14 +9,16 @@
 //! taken where that path leaves the proximal node, and nodes on different
 //! branches do not couple.
 
+use crate::forces::external::world_acceleration;
+use crate::forces::linearized::{dead_load_map, drag_diagonal, has_dead_loads};
 use crate::id_derivatives::{
-    IdDerivatives, PieceWork, PointLin, Subtree, basis6, close_piece, dead_load_map, drag_diagonal,
-    has_dead_loads, linearize_point, own_points, write_piece,
+    IdDerivatives, PieceWork, PointLin, Subtree, basis6, close_piece, linearize_point, own_points,
+    write_piece,
 };
 use crate::kernels::piece_derivs::{PieceDerivMaps, lambda as lambda_of};
 use crate::model::Model;
 use crate::model::tree::{NodeKind, Tree};
-use crate::tree_algorithms::{local, world_acceleration};
+use crate::tree_algorithms::local;
 use nalgebra::DVector;
 use softrod_lie::{Mat6, PieceMaps, Pose, Vec6, ad, coad, coad_vec};
 use softrod_mechanics::LoadFrame;

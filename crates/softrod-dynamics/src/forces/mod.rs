@@ -1,4 +1,28 @@
-//! Which forces an evaluation includes: the argument every sweep is given.
+//! Floor 2, the forces: every force term of the equations of motion — its
+//! value where the sweeps need it and its linearization for the derivative
+//! sweeps — and [`Forces`], the argument that says which of them an
+//! evaluation includes.
+//!
+//! - [`external`]: gravity as a base acceleration, the distributed wrench
+//!   density (drag, distributed loads) at an evaluation point;
+//! - [`strain`]: elasticity, damping, cables, joint springs, actuation — the
+//!   forces that act in strain space;
+//! - [`linearized`]: their derivatives (dead loads, drag, cable Hessian).
+//!
+//! A new force term goes here: its description on the rod or body in
+//! `crate::model`, its value in [`external`] (a wrench density or a point
+//! wrench on a section) or [`strain`] (a generalized force), its
+//! linearization in [`linearized`], and a field of [`Forces`] if an
+//! evaluation can leave it out or scale it. The sweeps of
+//! `crate::algorithms` and `crate::derivatives` call it where they call the
+//! present terms (point loads: `PieceData::loads` at their abscissae). A
+//! per-evaluation list — contact forces at material points, world-frame
+//! wrenches at `(rod, s)` that change every evaluation — is a field of
+//! [`Forces`] borrowing the caller's list, applied like the point loads.
+
+pub(crate) mod external;
+pub(crate) mod linearized;
+pub(crate) mod strain;
 
 use crate::error::DynamicsError;
 
