@@ -2,13 +2,13 @@
 //! `ẋ = f(x, u)`, from the analytic inverse-dynamics derivatives
 //! (docs/theory-derivatives.md §5, (D48)–(D49)).
 
-use crate::algorithms::{check_vec, forward_dynamics_with};
+use crate::algorithms::shifted::ShiftedSolver;
+use crate::algorithms::{check_forward_inputs, check_qdd, check_vec, forward_dynamics_open};
 use crate::error::DynamicsError;
 use crate::forces::Forces;
 use crate::id_derivatives::{IdDerivatives, inverse_dynamics_derivatives_with};
 use crate::model::Model;
 use crate::model::data::Data;
-use crate::shifted::ShiftedSolver;
 use nalgebra::{DMatrix, DVector};
 
 /// `∂q̈/∂q` and `∂q̈/∂q̇` (n_dof × n_dof each), the Jacobians the stiff
@@ -129,8 +129,9 @@ fn fd_derivatives<'a>(
             what: "forward_dynamics_derivatives",
         });
     }
-    forward_dynamics_with(model, data, forces, t, q, qd, tau_act)?;
-    work.qdd.copy_from(&data.qdd);
+    check_forward_inputs(model, forces, q, qd, tau_act)?;
+    forward_dynamics_open(model, data, forces, t, q, qd, tau_act)?;
+    work.qdd.copy_from(check_qdd(data, t)?);
     match (data.cable_tensions(), &mut work.id.tensions) {
         (None, t) => *t = None,
         (Some(u), Some(t)) => t.as_mut_slice().copy_from_slice(u),

@@ -1,12 +1,16 @@
 //! Energies (docs/theory.md §7).
 
-use crate::algorithms::check_vec;
+use crate::algorithms::frames::{RowBlock, add_frame_columns};
+use crate::algorithms::tree::outward;
+use crate::algorithms::{Motion, Pass, check_vec};
 use crate::error::DynamicsError;
+use crate::forces::Forces;
 use crate::model::Model;
 use crate::model::data::Data;
+use crate::model::tree::{NodeKind, Tree};
 use nalgebra::Matrix6xX;
 use softrod_kinematics::{Frame, RodKinematics};
-use softrod_lie::{Mat6, Pose, Vec6, exp_and_tangent_minus, exp_twist};
+use softrod_lie::{Mat6, PieceMaps, Pose, Vec6, exp_and_tangent_minus, exp_twist};
 use softrod_mechanics::elastic_energy;
 
 /// Mechanical energies of the model at `(q, q̇)` \[J\].
@@ -42,7 +46,7 @@ pub fn energies(
     check_vec(model, "q", q)?;
     check_vec(model, "qdot", qd)?;
     if let Some(tree) = &model.tree {
-        return Ok(crate::tree_algorithms::energies(model, tree, _data, q, qd));
+        return Ok(tree_energies(model, tree, _data, q, qd));
     }
     let mut e = Energies::default();
     for rm in model.rods() {
@@ -89,7 +93,7 @@ pub fn energies(
 pub fn frames(model: &Model, data: &mut Data, q: &[f64]) -> Result<(), DynamicsError> {
     check_vec(model, "q", q)?;
     if let Some(tree) = &model.tree {
-        crate::tree_algorithms::frames(model, tree, data, q);
+        crate::algorithms::frames::frames(model, tree, data, q);
     }
     Ok(())
 }
@@ -130,7 +134,7 @@ pub fn section_jacobian(
         return Ok((g, jac));
     };
     let (piece, x) = r.locate(s).map_err(kin_err)?;
-    crate::tree_algorithms::frames(model, tree, data, q);
+    crate::algorithms::frames::frames(model, tree, data, q);
     let frame = crate::model::closure::ResolvedFrame {
         target: crate::model::closure::Target::Rod {
             rod,
@@ -140,9 +144,74 @@ pub fn section_jacobian(
         },
         offset: Pose::identity(),
     };
-    let fs = crate::closure::frame_state(model, tree, data, &frame, q, None);
+    let fs = crate::algorithms::frames::frame_state(model, tree, data, &frame, q, None);
     let mut dense = nalgebra::DMatrix::zeros(6, n);
-    crate::closure::add_frame_columns(tree, data, &fs, &Mat6::identity(), 6, 0, 1.0, &mut dense);
+    let identity = Mat6::identity();
+    let block = RowBlock {
+        c: &identity,
+        m: 6,
+        row: 0,
+        sign: 1.0,
+    };
+    add_frame_columns(tree, data, &fs, block, &mut dense);
     jac.copy_from(&dense);
     Ok((fs.pose, jac))
+}
+
+/// Energies on the tree: kinetic `½q̇ᵀMq̇`, elastic (rods and joint
+/// springs), gravitational (rod points and bodies' centres of mass).
+fn tree_energies(model: &Model, tree: &Tree, data: &mut Data, q: &[f64], qd: &[f64]) -> Energies {
+    // Kinetic energy point by point (D59: it includes the prescribed
+    // joints' motion, which `½q̇ᵀMq̇` would miss); the poses of this pass
+    // serve the gravitational energy below.
+    let kinetic = outward(
+        model,
+        tree,
+        data,
+        Motion::new(q, Some(qd), None),
+        Pass::Inverse,
+        Forces::ALL,
+    );
+    let mut e = Energies {
+        kinetic,
+        ..Energies::default()
+    };
+    for rm in model.rods() {
+        e.elastic += elastic_energy(
+            &rm.spec.rod,
+            &rm.spec.body,
+            rm.spec.stress_free.as_deref(),
+            &q[rm.dofs()],
+            &model.quadrature,
+        );
+    }
+    for el in &model.elements {
+        for (i, o) in el.joint_dofs.clone().enumerate() {
+            let (k, _, rest) = el.attachment.joint.coefficients(i);
+            e.elastic += 0.5 * k * (q[o] - rest).powi(2);
+        }
+    }
+    if let Some(g) = model.gravity {
+        for (i, node) in tree.nodes.iter().enumerate() {
+            let base = &data.nodes[i].base_world;
+            match node.kind {
+                NodeKind::Piece { rod, piece } => {
+                    let rm = &model.rods[rod];
+                    let pc = &rm.spec.rod.pieces()[piece];
+                    let maps = PieceMaps::new(&pc.strain(&q[rm.dofs()]), None);
+                    for qp in &rm.pieces[piece].points {
+                        let p = base.transform_point(&maps.exp(qp.x).translation);
+                        e.gravitational -= qp.w * qp.mass_per_length * g.dot(&p);
+                    }
+                }
+                NodeKind::Body { body } => {
+                    let b = &model.bodies[body].spec;
+                    let p = base.transform_point(&b.center_of_mass);
+                    e.gravitational -= b.mass * g.dot(&p);
+                }
+                NodeKind::Joint { .. } => {}
+            }
+        }
+    }
+    e
 }

@@ -60,9 +60,10 @@
 #![warn(missing_docs)]
 
 mod algorithms;
-mod closure;
 mod constrained;
+mod constraints;
 mod derivatives;
+mod dispatch;
 mod energy;
 mod error;
 mod forces;
@@ -71,25 +72,23 @@ mod kernels;
 mod matrices;
 mod model;
 mod modes;
-mod passes;
-mod planar;
-mod shifted;
 mod statics;
-mod tree_algorithms;
 mod tree_derivatives;
 
+pub use algorithms::shifted::ShiftedSolver;
 pub use algorithms::{
-    bias_force, forward_dynamics, forward_dynamics_cholesky, forward_dynamics_with,
-    inverse_dynamics, inverse_dynamics_with, mass_matrix,
+    bias_force, forward_dynamics_cholesky, inverse_dynamics, inverse_dynamics_with, mass_matrix,
 };
-pub use closure::{check_closures, closure_residuals, constraint_jacobian, constraint_residual};
-pub use constrained::{
-    closure_multipliers, closure_statics, constraint_rank, max_closure_residual,
+pub use constrained::closure_statics;
+pub use constraints::{
+    check_closures, closure_multipliers, closure_residuals, constraint_jacobian, constraint_rank,
+    constraint_residual, max_closure_residual,
 };
 pub use derivatives::{
     DynamicsJacobians, FdDerivatives, Linearization, dynamics_jacobians, dynamics_jacobians_with,
     forward_dynamics_derivatives, linearize,
 };
+pub use dispatch::{forward_dynamics, forward_dynamics_with};
 pub use energy::{Energies, energies, frames, section_jacobian};
 pub use error::{DynamicsError, RodId};
 pub use forces::{Drives, Forces};
@@ -106,7 +105,6 @@ pub use model::{Closure, ClosureFrame, ClosureKind};
 pub use model::{Curve, Prescribed, Spline};
 pub use model::{IntoRodSpec, ModelBuilder, RodSpecBuilder};
 pub use modes::{Modes, modes};
-pub use shifted::ShiftedSolver;
 pub use statics::{StaticsOptions, StaticsResult, static_force, statics};
 
 /// The README's examples, compiled and run as doctests.

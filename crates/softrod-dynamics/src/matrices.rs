@@ -1,12 +1,10 @@
 //! The matrices of the Lagrangian form, (C10) and (D19)–(D22), on request.
 
-use crate::algorithms::{check_vec, inward_inverse};
+use crate::algorithms::{Motion, chain, check_vec, tree};
 use crate::error::DynamicsError;
 use crate::forces::Forces;
-use crate::forces::strain::strain_forces;
 use crate::model::Model;
 use crate::model::data::Data;
-use crate::passes::{Pass, outward};
 use nalgebra::{DMatrix, DVector, Matrix6xX};
 use softrod_kinematics::{Frame, RodKinematics};
 use softrod_lie::coad_vec;
@@ -21,22 +19,12 @@ pub fn generalized_gravity(
 ) -> Result<DVector<f64>, DynamicsError> {
     check_vec(model, "q", q)?;
     let zero = vec![0.0; model.n_dof()];
-    let forces = Forces::GRAVITY;
-    if let Some(tree) = &model.tree {
-        crate::tree_algorithms::inverse_dynamics(
-            model,
-            tree,
-            data,
-            forces,
-            0.0,
-            q,
-            None,
-            Some(&zero),
-        );
-    } else {
-        outward(model, data, q, None, Some(&zero), Pass::Inverse, forces);
-        strain_forces(model, data, forces, 0.0, q, None, None);
-        inward_inverse(model, data);
+    // At rest, gravity alone; prescribed joints where the last evaluation
+    // left them (no time is set).
+    let motion = Motion::new(q, None, Some(&zero));
+    match &model.tree {
+        Some(tr) => tree::inverse_dynamics(model, tr, data, Forces::GRAVITY, 0.0, motion),
+        None => chain::inverse_dynamics_general(model, data, Forces::GRAVITY, 0.0, motion),
     }
     Ok(data.tau.clone())
 }

@@ -74,7 +74,7 @@ pub fn statics(
     // (`Forces::at_rest` in every evaluation).
     if let (true, Some(tree)) = (model.has_closures(), &model.tree) {
         // Closed chains: Newton on [τ − Jᵀλ; φ] (docs/theory.md D69).
-        crate::closure::check_workspace(model, data)?;
+        crate::constraints::queries::check_workspace(model, data)?;
         return crate::constrained::statics(model, tree, data, q0, options).map(|(r, _)| r);
     }
     statics_inner(model, data, q0, options)

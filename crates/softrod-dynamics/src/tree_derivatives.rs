@@ -9,6 +9,7 @@
 //! taken where that path leaves the proximal node, and nodes on different
 //! branches do not couple.
 
+use crate::algorithms::tree::local;
 use crate::forces::external::world_acceleration;
 use crate::forces::linearized::{dead_load_map, drag_diagonal, has_dead_loads};
 use crate::id_derivatives::{
@@ -18,7 +19,6 @@ use crate::id_derivatives::{
 use crate::kernels::piece_derivs::{PieceDerivMaps, lambda as lambda_of};
 use crate::model::Model;
 use crate::model::tree::{NodeKind, Tree};
-use crate::tree_algorithms::local;
 use nalgebra::DVector;
 use softrod_lie::{Mat6, PieceMaps, Pose, Vec6, ad, coad, coad_vec};
 use softrod_mechanics::LoadFrame;

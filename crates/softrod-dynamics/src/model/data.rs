@@ -353,14 +353,33 @@ pub(crate) struct SolveNode {
     pub(crate) qn: Vec6,
 }
 
+/// The stacked rows of a model's closures at one state (D63–D65): the
+/// residual `φ` (m), the Jacobian `J` (m×n; exact `∂φ/∂q` or the velocity
+/// rows) and the velocity product `J̇q̇` (m).
+#[derive(Clone, Debug)]
+pub(crate) struct ConstraintRows {
+    pub phi: DVector<f64>,
+    pub jac: DMatrix<f64>,
+    pub jdot_qd: DVector<f64>,
+}
+
+impl ConstraintRows {
+    /// Zero rows for `m` constraints on `n` coordinates.
+    pub(crate) fn new(m: usize, n: usize) -> Self {
+        Self {
+            phi: DVector::zeros(m),
+            jac: DMatrix::zeros(m, n),
+            jdot_qd: DVector::zeros(m),
+        }
+    }
+}
+
 /// Buffers of the constrained forward dynamics (allocated once, in
 /// [`Data::new`], for a model with closures).
 #[derive(Clone, Debug)]
 pub(crate) struct ClosureWork {
-    /// `φ` (m), velocity rows `J` (m×n), `J̇q̇` (m).
-    pub phi: DVector<f64>,
-    pub jac: DMatrix<f64>,
-    pub jdot_qd: DVector<f64>,
+    /// `φ`, the velocity rows `J` and `J̇q̇` of the last evaluation.
+    pub rows: ConstraintRows,
     /// Per-node scratch of the O(N) solves with `M`, `Y = M⁻¹Jᵀ` (n×m),
     /// `A = J M⁻¹ Jᵀ` (m×m, factored in place), right side and multipliers.
     pub solve: Vec<SolveNode>,
@@ -384,9 +403,7 @@ impl ClosureWork {
             solve: vec![SolveNode::default(); nodes],
             jac_p: DMatrix::zeros(m, n_p),
             qdd: DVector::zeros(if n_p > 0 { n } else { 0 }),
-            phi: DVector::zeros(m),
-            jac: DMatrix::zeros(m, n),
-            jdot_qd: DVector::zeros(m),
+            rows: ConstraintRows::new(m, n),
             y: DMatrix::zeros(n, m),
             a: DMatrix::zeros(m, m),
             rhs: DVector::zeros(m),

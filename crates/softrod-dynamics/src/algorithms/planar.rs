@@ -1,5 +1,6 @@
 //! The planar (se(2)) path of the O(N) forward and the inverse dynamics
-//! (docs/theory.md §13, D71–D75).
+//! (docs/theory.md §13, D71–D75): the sweeps; their arithmetic is in
+//! `crate::kernels::planar`.
 //!
 //! A rod whose every piece selects strains among `(κ_a, q_b, q_c)` — the
 //! bending about one body axis `a` and the two strains in the plane
@@ -17,6 +18,7 @@
 //! dropped by the projection on `P`, exactly as the general path drops
 //! them in `Sᵀ`.
 
+use super::Motion;
 use crate::error::DynamicsError;
 use crate::forces::Forces;
 use crate::forces::external::{external_density, gravity_base_acceleration};
@@ -31,23 +33,22 @@ use softrod_lie::{Mat3, Pose, Vec3};
 /// `𝓤ᶠ, 𝓓ᶠ, 𝓜ᵗ` and bias sums of pass 1 (D20, D23). For the inverse
 /// dynamics: the wrench sums of (D17) with `f = 𝓜η̇ + ad*_η𝓜η − 𝓕_ext`,
 /// gravity as the base acceleration. Both: tip maps and accelerations,
-/// the external terms as `forces` asks.
-/// `q`, `qd` (`None`: at rest), `qdd` (`None`: zero): the model's full
-/// vectors.
-#[allow(clippy::too_many_arguments)]
+/// the external terms as `forces` asks, at the model's full `motion`.
+/// Rod `r` must be planar ([`Model::uses_planar_path`]).
 #[inline(always)]
 pub(crate) fn outward(
     model: &Model,
-    rm: &RodModel,
-    pr: &PlanarRod,
     data: &mut Data,
     r: usize,
-    q: &[f64],
-    qd: Option<&[f64]>,
-    qdd: Option<&[f64]>,
+    motion: Motion,
     inverse: bool,
     forces: Forces,
 ) {
+    let rm = &model.rods[r];
+    let Some(pr) = &rm.planar else {
+        unreachable!("the planar path runs planar rods only")
+    };
+    let Motion { q, qd, qdd } = motion;
     let scale = forces.load_scale;
     let only_gravity = forces.gravity_only;
     let rod = &rm.spec.rod;
@@ -187,7 +188,14 @@ pub(crate) fn forward_rod(
 ) -> Result<(), DynamicsError> {
     let rm = &model.rods()[r];
     let pr = rm.planar.as_ref().expect("planar rod");
-    outward(model, rm, pr, data, r, q, Some(qd), None, false, forces);
+    outward(
+        model,
+        data,
+        r,
+        Motion::new(q, Some(qd), None),
+        false,
+        forces,
+    );
     let pieces = &pr.pieces;
     let mut ma_next = Mat3::zeros();
     let mut pa_next = Vec3::zeros();
