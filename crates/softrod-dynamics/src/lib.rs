@@ -67,13 +67,11 @@ mod dispatch;
 mod energy;
 mod error;
 mod forces;
-mod id_derivatives;
 mod kernels;
 mod matrices;
 mod model;
 mod modes;
 mod statics;
-mod tree_derivatives;
 
 pub use algorithms::shifted::ShiftedSolver;
 pub use algorithms::{
@@ -85,16 +83,14 @@ pub use constraints::{
     constraint_residual, max_closure_residual,
 };
 pub use derivatives::{
-    DynamicsJacobians, FdDerivatives, Linearization, dynamics_jacobians, dynamics_jacobians_with,
-    forward_dynamics_derivatives, linearize,
+    DynamicsJacobians, FdDerivatives, IdDerivatives, Linearization, dynamics_jacobians,
+    dynamics_jacobians_with, forward_dynamics_derivatives, inverse_dynamics_derivatives,
+    inverse_dynamics_derivatives_with, linearize,
 };
 pub use dispatch::{forward_dynamics, forward_dynamics_with};
 pub use energy::{Energies, energies, frames, section_jacobian};
 pub use error::{DynamicsError, RodId};
 pub use forces::{Drives, Forces};
-pub use id_derivatives::{
-    IdDerivatives, inverse_dynamics_derivatives, inverse_dynamics_derivatives_with,
-};
 pub use matrices::{
     actuation_matrix, coriolis_matrix, damping_matrix, generalized_gravity, stiffness_matrix,
 };

@@ -1,9 +1,9 @@
 //! Static equilibrium by Newton's method with line search and load continuation.
 
 use crate::algorithms::{check_vec, inverse_dynamics_with};
+use crate::derivatives::{IdDerivatives, inverse_dynamics_derivatives_with};
 use crate::error::DynamicsError;
 use crate::forces::{Drives, Forces};
-use crate::id_derivatives::{IdDerivatives, inverse_dynamics_derivatives_with};
 use crate::matrices::stiffness_matrix;
 use crate::model::Model;
 use crate::model::data::Data;

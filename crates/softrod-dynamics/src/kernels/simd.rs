@@ -162,7 +162,7 @@ mod tests {
 
         let mut w1 = crate::IdDerivatives::new(&model);
         let mut w2 = crate::IdDerivatives::new(&model);
-        crate::id_derivatives::id_derivatives_impl(
+        crate::derivatives::id_derivatives_impl(
             &model,
             &mut w1,
             crate::Forces::ALL,
@@ -174,7 +174,7 @@ mod tests {
         .unwrap();
         // SAFETY: as above.
         unsafe {
-            crate::id_derivatives::id_derivatives_avx2(
+            crate::derivatives::id_derivatives_avx2(
                 &model,
                 &mut w2,
                 crate::Forces::ALL,

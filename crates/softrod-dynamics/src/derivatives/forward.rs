@@ -2,11 +2,11 @@
 //! `ẋ = f(x, u)`, from the analytic inverse-dynamics derivatives
 //! (docs/theory-derivatives.md §5, (D48)–(D49)).
 
+use super::{IdDerivatives, inverse_dynamics_derivatives_with};
 use crate::algorithms::shifted::ShiftedSolver;
 use crate::algorithms::{check_forward_inputs, check_qdd, check_vec, forward_dynamics_open};
 use crate::error::DynamicsError;
 use crate::forces::Forces;
-use crate::id_derivatives::{IdDerivatives, inverse_dynamics_derivatives_with};
 use crate::model::Model;
 use crate::model::data::Data;
 use nalgebra::{DMatrix, DVector};

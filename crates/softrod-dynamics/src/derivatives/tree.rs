@@ -9,13 +9,12 @@
 //! taken where that path leaves the proximal node, and nodes on different
 //! branches do not couple.
 
+use super::piece::{PieceWork, Subtree, close_piece, write_piece};
+use super::point::{PieceLin, PointLin, basis6, linearize_point, own_points};
+use super::{At, IdDerivatives};
 use crate::algorithms::tree::local;
 use crate::forces::external::world_acceleration;
 use crate::forces::linearized::{dead_load_map, drag_diagonal, has_dead_loads};
-use crate::id_derivatives::{
-    IdDerivatives, PieceWork, PointLin, Subtree, basis6, close_piece, linearize_point, own_points,
-    write_piece,
-};
 use crate::kernels::piece_derivs::{PieceDerivMaps, lambda as lambda_of};
 use crate::model::Model;
 use crate::model::tree::{NodeKind, Tree};
@@ -98,20 +97,15 @@ impl TreeWork {
 /// `work` (arguments checked by the caller). Kept out of line: inlined into
 /// the chain path's caller it would change that path's inlining (measured
 /// +4 % instructions on the chain).
-#[allow(clippy::too_many_arguments)]
 #[inline(never)]
 pub(crate) fn tree_id_derivatives(
     model: &Model,
     tree: &Tree,
     work: &mut IdDerivatives,
     tw: &mut TreeWork,
-    forces: crate::forces::Forces,
-    t: f64,
-    q: &[f64],
-    qd: &[f64],
-    qdd: &[f64],
+    at: &At,
 ) {
-    let scale = forces.load_scale;
+    let (t, forces) = (at.t, at.forces);
     model.prescribed_values(
         t,
         tw.pq.as_mut_slice(),
@@ -125,21 +119,17 @@ pub(crate) fn tree_id_derivatives(
     // Nodes on different branches do not couple: those blocks stay zero.
     work.dtau_dq.fill(0.0);
     work.dtau_dqd.fill(0.0);
-    outward(model, tree, tw, (q, qd, qdd), scale);
-    inward(model, tree, work, tw, t, (q, qd), scale);
+    outward(model, tree, tw, at);
+    inward(model, tree, work, tw, at);
     pairs(tree, work, tw);
 }
 
 /// The outward sweep (D76): each node's base motion from its parent's tip
 /// (or section, D62), then its own points (pieces), its body sums (bodies)
 /// and its tip, as in the chain's (D39)–(D43).
-fn outward(
-    model: &Model,
-    tree: &Tree,
-    tw: &mut TreeWork,
-    (q, qd, qdd): (&[f64], &[f64], &[f64]),
-    scale: f64,
-) {
+fn outward(model: &Model, tree: &Tree, tw: &mut TreeWork, at: &At) {
+    let (q, qd, qdd) = (at.q, at.qd, at.qdd);
+    let scale = at.forces.load_scale;
     let a_world = world_acceleration(model, scale);
     for (i, node) in tree.nodes.iter().enumerate() {
         let (parent_pose, eta_p, etad_p) = match (node.parent, &tw.at[i]) {
@@ -194,26 +184,32 @@ fn outward(
         };
         let maps = PieceMaps::new(&xi, Some(&xid));
         let dm = PieceDerivMaps::new(&xi, &xid, &xidd);
+        let pc = PieceLin {
+            maps: &maps,
+            dm: &dm,
+            eta0: &eta_b,
+            etad0: &etad_b,
+            xid: &xid,
+            xidd: &xidd,
+        };
         if let NodeKind::Piece { rod, piece } = node.kind {
             let rm = &model.rods()[rod];
+            let drag = drag_diagonal(rm);
             own_points(
                 rm,
                 &rm.pieces[piece],
-                &maps,
-                &dm,
+                &pc,
                 &base_world,
-                (&eta_b, &etad_b),
-                (&xid, &xidd),
-                drag_diagonal(rm).as_ref(),
+                drag.as_ref(),
                 scale,
                 w,
             );
         }
-        let (g, p) = linearize_point(&maps, &dm, length, &eta_b, &etad_b, &xid, &xidd);
+        let (g, p) = linearize_point(&pc, length);
         w.set_tip(g, &p, &dm);
         for &c in &tree.inner_children[i] {
             let x = tree.nodes[c].attach.unwrap_or(length);
-            tw.at[c] = Some(linearize_point(&maps, &dm, x, &eta_b, &etad_b, &xid, &xidd));
+            tw.at[c] = Some(linearize_point(&pc, x));
         }
     }
 }
@@ -300,15 +296,8 @@ fn add_inner(
 /// with what its tip children handed it and its inside children added to
 /// its sums, writes its `τ` and diagonal blocks, and hands its subtree to
 /// its parent.
-fn inward(
-    model: &Model,
-    tree: &Tree,
-    work: &mut IdDerivatives,
-    tw: &mut TreeWork,
-    t: f64,
-    (q, qd): (&[f64], &[f64]),
-    scale: f64,
-) {
+fn inward(model: &Model, tree: &Tree, work: &mut IdDerivatives, tw: &mut TreeWork, at: &At) {
+    let (q, qd) = (at.q, at.qd);
     let dead = tw.dead;
     for s in tw.tip.iter_mut() {
         *s = Subtree::zero();
@@ -336,17 +325,7 @@ fn inward(
                 let rm = &model.rods()[rod];
                 let bm = basis6(&rm.spec.rod.pieces()[piece].basis);
                 let (dq, dv, wrench, base) = close_piece(&mut tw.nodes[i], &tw.tip[i], &bm, dead);
-                write_piece(
-                    model,
-                    rm,
-                    piece,
-                    work,
-                    t,
-                    (q, qd),
-                    scale,
-                    &bm,
-                    (&dq, &dv, &wrench),
-                );
+                write_piece(model, rm, piece, work, at, &bm, (&dq, &dv, &wrench));
                 base
             }
             NodeKind::Joint { element } => {
