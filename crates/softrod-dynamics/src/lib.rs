@@ -60,24 +60,24 @@
 #![warn(missing_docs)]
 
 mod algorithms;
-mod constrained;
+mod analysis;
 mod constraints;
 mod derivatives;
 mod dispatch;
-mod energy;
 mod error;
 mod forces;
 mod kernels;
-mod matrices;
 mod model;
-mod modes;
-mod statics;
 
 pub use algorithms::shifted::ShiftedSolver;
 pub use algorithms::{
     bias_force, forward_dynamics_cholesky, inverse_dynamics, inverse_dynamics_with, mass_matrix,
 };
-pub use constrained::closure_statics;
+pub use analysis::{
+    Energies, Modes, StaticsOptions, StaticsResult, actuation_matrix, closure_statics,
+    coriolis_matrix, damping_matrix, energies, frames, generalized_gravity, modes,
+    section_jacobian, static_force, statics, stiffness_matrix,
+};
 pub use constraints::{
     check_closures, closure_multipliers, closure_residuals, constraint_jacobian, constraint_rank,
     constraint_residual, max_closure_residual,
@@ -88,20 +88,14 @@ pub use derivatives::{
     inverse_dynamics_derivatives_with, linearize,
 };
 pub use dispatch::{forward_dynamics, forward_dynamics_with};
-pub use energy::{Energies, energies, frames, section_jacobian};
 pub use error::{DynamicsError, RodId};
 pub use forces::{Drives, Forces};
-pub use matrices::{
-    actuation_matrix, coriolis_matrix, damping_matrix, generalized_gravity, stiffness_matrix,
-};
 pub use model::Data;
 pub use model::{Attachment, BodyLoad, BodySpec, Joint, JointKind};
 pub use model::{BodyModel, Element, ElementInfo, ElementKind, Model, RodModel, RodSpec};
 pub use model::{Closure, ClosureFrame, ClosureKind};
 pub use model::{Curve, Prescribed, Spline};
 pub use model::{IntoRodSpec, ModelBuilder, RodSpecBuilder};
-pub use modes::{Modes, modes};
-pub use statics::{StaticsOptions, StaticsResult, static_force, statics};
 
 /// The README's examples, compiled and run as doctests.
 #[doc = include_str!("../README.md")]

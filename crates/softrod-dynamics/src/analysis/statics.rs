@@ -1,10 +1,10 @@
 //! Static equilibrium by Newton's method with line search and load continuation.
 
+use super::matrices::stiffness_matrix;
 use crate::algorithms::{check_vec, inverse_dynamics_with};
 use crate::derivatives::{IdDerivatives, inverse_dynamics_derivatives_with};
 use crate::error::DynamicsError;
 use crate::forces::{Drives, Forces};
-use crate::matrices::stiffness_matrix;
 use crate::model::Model;
 use crate::model::data::Data;
 use nalgebra::{DMatrix, DVector};
@@ -75,7 +75,7 @@ pub fn statics(
     if let (true, Some(tree)) = (model.has_closures(), &model.tree) {
         // Closed chains: Newton on [τ − Jᵀλ; φ] (docs/theory.md D69).
         crate::constraints::queries::check_workspace(model, data)?;
-        return crate::constrained::statics(model, tree, data, q0, options).map(|(r, _)| r);
+        return super::closed::statics(model, tree, data, q0, options).map(|(r, _)| r);
     }
     statics_inner(model, data, q0, options)
 }

@@ -1,6 +1,5 @@
 //! Energies (docs/theory.md §7).
 
-use crate::algorithms::frames::{RowBlock, add_frame_columns};
 use crate::algorithms::tree::outward;
 use crate::algorithms::{Motion, Pass, check_vec};
 use crate::error::DynamicsError;
@@ -8,9 +7,7 @@ use crate::forces::Forces;
 use crate::model::Model;
 use crate::model::data::Data;
 use crate::model::tree::{NodeKind, Tree};
-use nalgebra::Matrix6xX;
-use softrod_kinematics::{Frame, RodKinematics};
-use softrod_lie::{Mat6, PieceMaps, Pose, Vec6, exp_and_tangent_minus, exp_twist};
+use softrod_lie::{PieceMaps, Vec6, exp_and_tangent_minus, exp_twist};
 use softrod_mechanics::elastic_energy;
 
 /// Mechanical energies of the model at `(q, q̇)` \[J\].
@@ -81,81 +78,6 @@ pub fn energies(
         }
     }
     Ok(e)
-}
-
-/// World poses of every rod's base frame (`data.rod_bases`, one per rod)
-/// and every rigid body's frame (`data.body_poses`) at `q` (dim n_dof).
-/// A rod's shape in the world is `rod_bases[r] · Rod::base()⁻¹ · g_local(s)`
-/// for the poses of `softrod_kinematics` (which start from `Rod::base()`);
-/// for a model without joints or parents `rod_bases[r] = Rod::base()`.
-/// Prescribed joints (D59) take their values of the last
-/// [`Model::set_time`] or dynamics evaluation.
-pub fn frames(model: &Model, data: &mut Data, q: &[f64]) -> Result<(), DynamicsError> {
-    check_vec(model, "q", q)?;
-    if let Some(tree) = &model.tree {
-        crate::algorithms::frames::frames(model, tree, data, q);
-    }
-    Ok(())
-}
-
-/// The world pose `g(s)` of the section at `s` \[m\] of rod `rod` (index in
-/// [`Model::rods`]) and its spatial Jacobian `J` (6 × n_dof, angular rows
-/// first): `J q̇` is the section's world twist `Ad_g η` (angular velocity in
-/// world axes, velocity of the world point at the world origin; D11). Every
-/// coordinate that moves the section has its column: the rod's pieces up to
-/// `s`, and on an articulated model its joint's and every ancestor's, each
-/// taken where the path leaves it (D57, D62). Prescribed joints (D59) stand
-/// at their last [`Model::set_time`]. Allocates `J`.
-pub fn section_jacobian(
-    model: &Model,
-    data: &mut Data,
-    q: &[f64],
-    rod: usize,
-    s: f64,
-) -> Result<(Pose, Matrix6xX<f64>), DynamicsError> {
-    check_vec(model, "q", q)?;
-    let count = model.rods().len();
-    let rm = model
-        .rods()
-        .get(rod)
-        .ok_or(DynamicsError::RodIndex { index: rod, count })?;
-    let kin_err = |source| DynamicsError::Kinematics { rod, source };
-    let r = &rm.spec.rod;
-    let n = model.n_dof();
-    let mut jac = Matrix6xX::zeros(n);
-    let Some(tree) = &model.tree else {
-        let mut kin = RodKinematics::new(r);
-        kin.update(r, &q[rm.dofs()], None, None).map_err(kin_err)?;
-        let g = kin.pose_at(r, s).map_err(kin_err)?;
-        let mut local = Matrix6xX::zeros(rm.n_dof());
-        kin.jacobian_at(r, s, Frame::Spatial, &mut local)
-            .map_err(kin_err)?;
-        jac.columns_mut(rm.dof_offset, rm.n_dof()).copy_from(&local);
-        return Ok((g, jac));
-    };
-    let (piece, x) = r.locate(s).map_err(kin_err)?;
-    crate::algorithms::frames::frames(model, tree, data, q);
-    let frame = crate::model::closure::ResolvedFrame {
-        target: crate::model::closure::Target::Rod {
-            rod,
-            piece,
-            x,
-            node: tree.rod_nodes[rod][piece],
-        },
-        offset: Pose::identity(),
-    };
-    let fs = crate::algorithms::frames::frame_state(model, tree, data, &frame, q, None);
-    let mut dense = nalgebra::DMatrix::zeros(6, n);
-    let identity = Mat6::identity();
-    let block = RowBlock {
-        c: &identity,
-        m: 6,
-        row: 0,
-        sign: 1.0,
-    };
-    add_frame_columns(tree, data, &fs, block, &mut dense);
-    jac.copy_from(&dense);
-    Ok((fs.pose, jac))
 }
 
 /// Energies on the tree: kinetic `½q̇ᵀMq̇`, elastic (rods and joint

@@ -1,20 +1,19 @@
-//! Dynamics, statics and modes of a model with loop closures
-//! (docs/theory.md §11, D67–D69): Lagrange multipliers on top of the tree
-//! dynamics, Baumgarte-stabilized; the constrained equilibrium by Newton on
-//! `[τ(q) − Jᵀλ; φ(q)] = 0`; modes on the null space of `J`.
+//! Statics and modes of a model with loop closures (docs/theory.md §11,
+//! D69): the constrained equilibrium by Newton on `[τ(q) − Jᵀλ; φ(q)] = 0`,
+//! modes on the null space of `J`.
 
+use super::matrices::stiffness_matrix;
+use super::modes::Modes;
+use super::statics::{StaticsOptions, StaticsResult};
 use crate::algorithms::tree::{self, outward};
 use crate::algorithms::{Motion, Pass};
 use crate::constraints::queries::{check_workspace, length_scale};
 use crate::constraints::rows::assemble;
 use crate::error::DynamicsError;
 use crate::forces::Forces;
-use crate::matrices::stiffness_matrix;
 use crate::model::Model;
 use crate::model::data::{ConstraintRows, Data};
 use crate::model::tree::Tree;
-use crate::modes::Modes;
-use crate::statics::{StaticsOptions, StaticsResult};
 use nalgebra::{DMatrix, DVector};
 
 /// What the constrained Newton (D69) evaluates, at one load scale: the
@@ -347,7 +346,7 @@ pub fn closure_statics(
 ) -> Result<(StaticsResult, DVector<f64>), DynamicsError> {
     crate::algorithms::check_vec(model, "q0", q0)?;
     let Some(tree) = model.tree.as_ref().filter(|_| model.has_closures()) else {
-        let r = crate::statics(model, data, q0, options)?;
+        let r = super::statics::statics(model, data, q0, options)?;
         return Ok((r, DVector::zeros(0)));
     };
     check_workspace(model, data)?;

@@ -1,9 +1,9 @@
 //! Linearized natural modes about an equilibrium.
 
+use super::matrices::stiffness_matrix;
 use crate::algorithms::{check_vec, inverse_dynamics_with, mass_matrix};
 use crate::error::DynamicsError;
 use crate::forces::Forces;
-use crate::matrices::stiffness_matrix;
 use crate::model::Model;
 use crate::model::data::Data;
 use nalgebra::{DMatrix, DVector};
@@ -49,7 +49,7 @@ pub fn modes(
     if let (true, Some(tree)) = (model.has_closures(), &model.tree) {
         // Closed chains: K and M on the null space of J (docs/theory.md D69).
         crate::constraints::queries::check_workspace(model, data)?;
-        return crate::constrained::modes(model, tree, data, q_eq, time);
+        return super::closed::modes(model, tree, data, q_eq, time);
     }
     let n = model.n_dof();
     let k = stiffness_matrix(model);
