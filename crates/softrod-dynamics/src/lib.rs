@@ -56,8 +56,42 @@
 //! rounding (docs/theory.md §13, D71–D75; [`Model::with_planar_path`]
 //! turns it off).
 //!
+//! Which forces an evaluation includes is an argument, [`Forces`]: every
+//! term at full scale with the prescribed joints moving ([`Forces::ALL`],
+//! what the functions without `_with` use), the loads scaled
+//! ([`Forces::with_load_scale`], statics' continuation), the drives held at
+//! rest ([`Drives::AtRest`], statics and modes). Nothing of an evaluation's
+//! mode is kept in [`Data`]; what `Data` keeps between calls is the clock
+//! of the prescribed joints ([`Model::set_time`], set by every function
+//! that takes `t`) and the cable inputs ([`Data::set_cable_tensions`]).
+//!
 //! Units SI; twists and wrenches angular first; body frame (see `softrod-lie`).
+//!
+//! # Where things live
+//!
+//! Floors, bottom to top: `kernels/` → `model/` → `forces/` →
+//! `algorithms/` → `derivatives/` → `constraints/` → `analysis/` →
+//! `dispatch.rs`.
+//!
+//! A module names only its own folder, the floors below it and `error.rs`
+//! (tests/layout.rs checks it, and that no source file passes 800 lines):
+//!
+//! | floor | holds | a new … goes here |
+//! |---|---|---|
+//! | `kernels/` | arithmetic on one piece or point, no model: 3×3-block 6×6 products, the small Cholesky of a piece, inertia sums over a piece's points, strain derivatives of the piece maps (D30–D36), the planar se(2) maps, the AVX2 copies' dispatch | faster per-piece math |
+//! | `model/` | [`Model`] and its builders, [`RodSpec`]/[`RodModel`], joints and bodies, prescribed curves, the tree of nodes, closures as the model holds them, planar detection, and [`Data`] with every algorithm's work space | **joint type** (`model/joint.rs`: its motion subspace as virtual pieces, D50), element, or the description of a load |
+//! | `forces/` | [`Forces`]; each force term's value — gravity as base acceleration, drag and distributed loads per point, elasticity, damping, cables, joint springs in strain space — and its linearization | **force term**: value in `external.rs` or `strain.rs`, linearization in `linearized.rs`, a field of [`Forces`] if an evaluation may leave it out (contact forces at material points: a per-evaluation list there, applied like point loads) |
+//! | `algorithms/` | the O(N) recursions on open models, each on the chain (`chain.rs`, AVX2 copies), the planar chain (`planar.rs`) and the tree (`tree.rs`, `frames.rs`): inverse dynamics, articulated forward dynamics, mass matrix, shifted solve; the public [`inverse_dynamics`], [`mass_matrix`], [`bias_force`] | **algorithm** on the equations of motion (an integrator's evaluation), with a chain and a tree form |
+//! | `derivatives/` | `∂τ/∂q`, `∂τ/∂q̇` on chain and tree (point linearization, piece closing), forward-dynamics derivatives, [`linearize`] | **derivative** |
+//! | `constraints/` | loop closures: `φ`, `J`, `J̇q̇`, their queries, the constrained forward dynamics | kind of closure (with `model/closure.rs`) |
+//! | `analysis/` | energies, frames and section Jacobians, `K`, `D`, `G`, `C`, actuation, [`statics`] and [`modes`], open and closed | analysis built on the above |
+//! | `dispatch.rs` | the public [`forward_dynamics`]: the open recursion, or the constrained solve on a closed chain | — |
+//!
+//! A lone rod is the simplest tree, but the tree recursion (dense 6×6 per
+//! node) costs 1.5× the chain's at N = 10, so models without joints,
+//! bodies or parents keep the chain path (docs/performance.md).
 #![warn(missing_docs)]
+#![deny(unsafe_code)]
 
 mod algorithms;
 mod analysis;

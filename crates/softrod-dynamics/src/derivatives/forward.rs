@@ -85,7 +85,7 @@ fn solve_columns(
 /// `t`, from `ID(q, q̇, FD(q, q̇, …)) = τ_act` (D48):
 ///
 /// - `∂q̈/∂q = −M⁻¹ ∂τ/∂q`, `∂q̈/∂q̇ = −M⁻¹ ∂τ/∂q̇` (the ID derivatives taken
-///   at `q̈ = FD(q, q̇)`, [`inverse_dynamics_derivatives`]);
+///   at `q̈ = FD(q, q̇)`, [`crate::inverse_dynamics_derivatives`]);
 /// - `∂q̈/∂u = M⁻¹ A(q)` for the cable tensions `u` (the generalized force
 ///   is linear in them, (D15)).
 ///

@@ -264,7 +264,7 @@ impl Model {
     /// time ([`crate::mass_matrix`], [`crate::energies`], [`crate::frames`])
     /// see the configuration at `t`. Forward and inverse dynamics do this
     /// themselves. A no-op without prescribed joints.
-    pub fn set_time(&self, data: &mut crate::Data, t: f64) {
+    pub fn set_time(&self, data: &mut Data, t: f64) {
         if self.n_prescribed == 0 {
             return;
         }

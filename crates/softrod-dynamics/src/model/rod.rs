@@ -15,7 +15,7 @@ use softrod_mechanics::{
 /// present are evaluated (an empty `cables` list costs nothing).
 ///
 /// Build one with [`RodSpec::builder`] (the length given once), or from its
-/// parts with [`RodSpec::new`]. The fields are public; [`Model::new`]
+/// parts with [`RodSpec::new`]. The fields are public; [`crate::Model::new`]
 /// checks them ([`RodSpec::validate`]) when the rod enters a model.
 ///
 /// ```
@@ -193,7 +193,7 @@ pub(crate) struct PieceData {
     pub offset6: Vec6,
 }
 
-/// A rod inside a [`Model`], with precomputed piece data.
+/// A rod inside a [`crate::Model`], with precomputed piece data.
 #[derive(Clone, Debug)]
 pub struct RodModel {
     /// The description it was built from.
@@ -228,7 +228,7 @@ impl RodModel {
     /// `ky, qz, qx`) and its rest strain has no other component. The
     /// forward dynamics of such a rod, clamped alone (no joints, bodies or
     /// parents), runs on 3-vectors and 3×3 blocks (docs/theory.md §13)
-    /// unless [`Model::with_planar_path`] turned that off.
+    /// unless [`crate::Model::with_planar_path`] turned that off.
     pub fn is_planar(&self) -> bool {
         self.planar.is_some()
     }
