@@ -136,7 +136,7 @@ pub fn integrate(
         if cable_tension != 0.0 {
             let rm = &sys.model.rods()[0];
             for c in &rm.spec.cables {
-                total += cable_tension * c.length(&rm.spec.rod, q, &sys.model.quadrature);
+                total += cable_tension * c.length(&rm.spec.rod, q, sys.model.quadrature());
             }
         }
         assert!(total.is_finite(), "non-finite energy");

@@ -34,7 +34,7 @@ pub fn radius_profile(section: &Section, length: f64) -> RadiusProfile {
 /// cable paths as `(s, y, z)` in the rod's frame.
 pub fn view_spec(model: &Model, title: &str) -> ViewSpec {
     let mut spec = ViewSpec::new(title);
-    if let Some(g) = model.gravity.filter(|g| g.norm() > 0.0) {
+    if let Some(g) = model.gravity().filter(|g| g.norm() > 0.0) {
         let u = -g / g.norm();
         // `+ 0.0` turns −0 into 0 in the file.
         spec.up = [u[0] + 0.0, u[1] + 0.0, u[2] + 0.0];

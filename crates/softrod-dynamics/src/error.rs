@@ -30,6 +30,9 @@ impl fmt::Display for RodId {
 /// Model-building variants name the rod ([`RodId`]) and chain the lower
 /// layer's error as [`std::error::Error::source`], so a caller (a scene
 /// loader) can map it back to its input by matching, not by reading text.
+/// A variant with a source does not repeat it in its message: whoever
+/// prints an error walks the chain (`softrod::report`) and
+/// shows each cause once.
 #[non_exhaustive]
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum DynamicsError {
@@ -49,7 +52,7 @@ pub enum DynamicsError {
     },
     /// The kinematic description of a rod (length, pieces, strains, rest
     /// strain, base pose) is invalid.
-    #[error("{rod}: {source}")]
+    #[error("{rod}: invalid kinematic description")]
     RodGeometry {
         /// Which rod.
         rod: RodId,
@@ -59,7 +62,7 @@ pub enum DynamicsError {
     },
     /// The body of a rod (length, section) is invalid, or does not match
     /// the kinematic rod's length.
-    #[error("{rod}: {source}")]
+    #[error("{rod}: invalid body")]
     RodBody {
         /// Which rod.
         rod: RodId,
@@ -113,7 +116,7 @@ pub enum DynamicsError {
         value: f64,
     },
     /// A cable of a rod is invalid on that rod.
-    #[error("{rod}, cable {cable}: {source}")]
+    #[error("{rod}, cable {cable}: invalid cable")]
     Cable {
         /// Which rod.
         rod: RodId,
@@ -124,7 +127,7 @@ pub enum DynamicsError {
         source: MechanicsError,
     },
     /// A point load of a rod is invalid on that rod.
-    #[error("{rod}, point load {load}: {source}")]
+    #[error("{rod}, point load {load}: invalid point load")]
     PointLoad {
         /// Which rod.
         rod: RodId,
@@ -135,7 +138,7 @@ pub enum DynamicsError {
         source: MechanicsError,
     },
     /// A distributed load of a rod is invalid.
-    #[error("{rod}, distributed load {load}: {source}")]
+    #[error("{rod}, distributed load {load}: invalid distributed load")]
     DistributedLoad {
         /// Which rod.
         rod: RodId,
@@ -146,7 +149,7 @@ pub enum DynamicsError {
         source: MechanicsError,
     },
     /// The drag of a rod is invalid.
-    #[error("{rod}, drag: {source}")]
+    #[error("{rod}: invalid drag")]
     Drag {
         /// Which rod.
         rod: RodId,
@@ -155,7 +158,7 @@ pub enum DynamicsError {
         source: MechanicsError,
     },
     /// A kinematic query of an evaluation failed.
-    #[error("kinematics of rod {rod}: {source}")]
+    #[error("kinematics of rod {rod} failed")]
     Kinematics {
         /// Rod index in the model.
         rod: usize,

@@ -56,63 +56,80 @@
 //! rounding (docs/theory.md §13, D71–D75; [`Model::with_planar_path`]
 //! turns it off).
 //!
+//! Which forces an evaluation includes is an argument, [`Forces`]: every
+//! term at full scale with the prescribed joints moving ([`Forces::ALL`],
+//! what the functions without `_with` use), the loads scaled
+//! ([`Forces::with_load_scale`], statics' continuation), the drives held at
+//! rest ([`Drives::AtRest`], statics and modes). Nothing of an evaluation's
+//! mode is kept in [`Data`]; what `Data` keeps between calls is the clock
+//! of the prescribed joints ([`Model::set_time`], set by every function
+//! that takes `t`) and the cable inputs ([`Data::set_cable_tensions`]).
+//!
 //! Units SI; twists and wrenches angular first; body frame (see `softrod-lie`).
+//!
+//! # Where things live
+//!
+//! Floors, bottom to top: `kernels/` → `model/` → `forces/` →
+//! `algorithms/` → `derivatives/` → `constraints/` → `analysis/` →
+//! `dispatch.rs`.
+//!
+//! A module names only its own folder, the floors below it and `error.rs`
+//! (tests/layout.rs checks it, and that no source file passes 800 lines):
+//!
+//! | floor | holds | a new … goes here |
+//! |---|---|---|
+//! | `kernels/` | arithmetic on one piece or point, no model: 3×3-block 6×6 products, the small Cholesky of a piece, inertia sums over a piece's points, strain derivatives of the piece maps (D30–D36), the planar se(2) maps, the AVX2 copies' dispatch | faster per-piece math |
+//! | `model/` | [`Model`] and its builders, [`RodSpec`]/[`RodModel`], joints and bodies, prescribed curves, the tree of nodes, closures as the model holds them, planar detection, and [`Data`] with every algorithm's work space | **joint type** (`model/joint.rs`: its motion subspace as virtual pieces, D50), element, or the description of a load |
+//! | `forces/` | [`Forces`]; each force term's value — gravity as base acceleration, drag and distributed loads per point, elasticity, damping, cables, joint springs in strain space — and its linearization | **force term**: value in `external.rs` or `strain.rs`, linearization in `linearized.rs`, a field of [`Forces`] if an evaluation may leave it out (contact forces at material points: a per-evaluation list there, applied like point loads) |
+//! | `algorithms/` | the O(N) recursions on open models, each on the chain (`chain.rs`, AVX2 copies), the planar chain (`planar.rs`) and the tree (`tree.rs`, `frames.rs`): inverse dynamics, articulated forward dynamics, mass matrix, shifted solve; the public [`inverse_dynamics`], [`mass_matrix`], [`bias_force`] | **algorithm** on the equations of motion (an integrator's evaluation), with a chain and a tree form |
+//! | `derivatives/` | `∂τ/∂q`, `∂τ/∂q̇` on chain and tree (point linearization, piece closing), forward-dynamics derivatives, [`linearize`] | **derivative** |
+//! | `constraints/` | loop closures: `φ`, `J`, `J̇q̇`, their queries, the constrained forward dynamics | kind of closure (with `model/closure.rs`) |
+//! | `analysis/` | energies, frames and section Jacobians, `K`, `D`, `G`, `C`, actuation, [`statics`] and [`modes`], open and closed | analysis built on the above |
+//! | `dispatch.rs` | the public [`forward_dynamics`]: the open recursion, or the constrained solve on a closed chain | — |
+//!
+//! A lone rod is the simplest tree, but the tree recursion (dense 6×6 per
+//! node) costs 1.5× the chain's at N = 10, so models without joints,
+//! bodies or parents keep the chain path (docs/performance.md).
 #![warn(missing_docs)]
+#![deny(unsafe_code)]
 
 mod algorithms;
-mod blocks;
-mod builder;
-mod chol;
-mod closure;
-mod constrained;
-mod data;
+mod analysis;
+mod constraints;
 mod derivatives;
-mod energy;
+mod dispatch;
 mod error;
-mod id_derivatives;
-mod joint;
-mod matrices;
+mod forces;
+mod kernels;
 mod model;
-mod modes;
-mod passes;
-mod piece_derivs;
-mod planar;
-mod prescribed;
-mod shifted;
-mod simd;
-mod statics;
-mod tree;
-mod tree_algorithms;
-mod tree_derivatives;
 
+pub use algorithms::shifted::ShiftedSolver;
 pub use algorithms::{
-    bias_force, forward_dynamics, forward_dynamics_cholesky, inverse_dynamics, mass_matrix,
+    bias_force, forward_dynamics_cholesky, inverse_dynamics, inverse_dynamics_with, mass_matrix,
 };
-pub use builder::{IntoRodSpec, ModelBuilder, RodSpecBuilder};
-pub use closure::{
-    Closure, ClosureFrame, ClosureKind, check_closures, closure_residuals, constraint_jacobian,
-    constraint_residual,
+pub use analysis::{
+    Energies, Modes, StaticsOptions, StaticsResult, actuation_matrix, closure_statics,
+    coriolis_matrix, damping_matrix, energies, frames, generalized_gravity, modes,
+    section_jacobian, static_force, statics, stiffness_matrix,
 };
-pub use constrained::{
-    closure_multipliers, closure_statics, constraint_rank, max_closure_residual,
+pub use constraints::{
+    check_closures, closure_multipliers, closure_residuals, constraint_jacobian, constraint_rank,
+    constraint_residual, max_closure_residual,
 };
-pub use data::Data;
 pub use derivatives::{
-    DynamicsJacobians, FdDerivatives, Linearization, dynamics_jacobians,
-    forward_dynamics_derivatives, linearize,
+    DynamicsJacobians, FdDerivatives, IdDerivatives, Linearization, dynamics_jacobians,
+    dynamics_jacobians_with, forward_dynamics_derivatives, inverse_dynamics_derivatives,
+    inverse_dynamics_derivatives_with, linearize,
 };
-pub use energy::{Energies, energies, frames, section_jacobian};
+pub use dispatch::{forward_dynamics, forward_dynamics_with};
 pub use error::{DynamicsError, RodId};
-pub use id_derivatives::{IdDerivatives, inverse_dynamics_derivatives};
-pub use joint::{Attachment, BodyLoad, BodySpec, Joint, JointKind};
-pub use matrices::{
-    actuation_matrix, coriolis_matrix, damping_matrix, generalized_gravity, stiffness_matrix,
-};
+pub use forces::{Drives, Forces};
+pub use model::Data;
+pub use model::{Attachment, BodyLoad, BodySpec, Joint, JointKind};
 pub use model::{BodyModel, Element, ElementInfo, ElementKind, Model, RodModel, RodSpec};
-pub use modes::{Modes, modes};
-pub use prescribed::{Curve, Prescribed, Spline};
-pub use shifted::ShiftedSolver;
-pub use statics::{StaticsOptions, StaticsResult, static_force, statics};
+pub use model::{Closure, ClosureFrame, ClosureKind};
+pub use model::{Curve, Prescribed, Spline};
+pub use model::{IntoRodSpec, ModelBuilder, RodSpecBuilder};
 
 /// The README's examples, compiled and run as doctests.
 #[doc = include_str!("../README.md")]

@@ -103,8 +103,8 @@ fn builder_defaults() {
     assert!(spec.stress_free.is_none() && spec.drag.is_none());
     assert!(spec.cables.is_empty() && spec.point_loads.is_empty());
     let m = Model::builder().rod(spec).build().unwrap();
-    assert!(m.gravity.is_none());
-    assert_eq!(m.quadrature.len(), Model::DEFAULT_QUADRATURE);
+    assert!(m.gravity().is_none());
+    assert_eq!(m.quadrature().len(), Model::DEFAULT_QUADRATURE);
     // A uniform stress-free strain fills every piece.
     let curled = Vec6::new(0.0, 2.0, 0.0, 1.0, 0.0, 0.0);
     let spec = RodSpec::builder(0.3)
@@ -274,5 +274,60 @@ fn model_errors_carry_the_rod_index() {
             .gravity([0.0, f64::NAN, -9.81])
             .build(),
         Err(DynamicsError::GravityNotFinite { component: 1, .. })
+    ));
+}
+
+/// A variant of a built model (`with_gravity`, `with_quadrature`) is the
+/// model built with those settings in the first place, bit for bit; bad
+/// settings are errors.
+#[test]
+fn model_variants_equal_models_built_with_those_settings() {
+    let g = Vec3::new(0.3, -1.0, -9.81);
+    let rod = || {
+        RodSpec::builder(0.4)
+            .pieces(4)
+            .circle(0.01)
+            .material(silicone())
+            .point_load(tip_load())
+            .cable(cable())
+    };
+    let plain = Model::builder().rod(rod()).quadrature(3).build().unwrap();
+    let built = Model::builder()
+        .rod(rod())
+        .gravity(g)
+        .quadrature(5)
+        .build()
+        .unwrap();
+    let variant = plain
+        .clone()
+        .with_gravity(Some(g))
+        .unwrap()
+        .with_quadrature(5)
+        .unwrap();
+    assert_eq!(variant.gravity(), Some(g));
+    assert_eq!(variant.quadrature().len(), 5);
+    let n = built.n_dof();
+    let q: Vec<f64> = (0..n).map(|i| 0.3 * (1.7 * i as f64).sin()).collect();
+    let qd: Vec<f64> = (0..n).map(|i| 0.5 * (2.3 * i as f64).cos()).collect();
+    let qdd: Vec<f64> = (0..n).map(|i| (0.9 * i as f64).sin()).collect();
+    let tau = |m: &Model| {
+        inverse_dynamics(m, &mut Data::new(m), 0.2, &q, &qd, &qdd)
+            .unwrap()
+            .clone()
+    };
+    assert_eq!(tau(&variant), tau(&built));
+    assert_ne!(tau(&plain), tau(&built));
+    // Zero gravity is none, as when building.
+    let none = built.clone().with_gravity(Some(Vec3::zeros())).unwrap();
+    assert!(none.gravity().is_none());
+    assert!(matches!(
+        built
+            .clone()
+            .with_gravity(Some(Vec3::new(0.0, f64::NAN, 0.0))),
+        Err(DynamicsError::GravityNotFinite { component: 1, .. })
+    ));
+    assert!(matches!(
+        built.with_quadrature(0),
+        Err(DynamicsError::NoQuadraturePoints)
     ));
 }

@@ -355,7 +355,7 @@ fn propped_cantilever_tip_reaction_is_3wl_over_8() {
     let q0 = vec![0.0; model.n_dof()];
     let (st, lambda) = closure_statics(&model, &mut data, &q0, &StaticsOptions::default()).unwrap();
     let w = RHO * std::f64::consts::PI * R * R * G;
-    // Rows: the normals z (= x × y) and −y of the axis x (closure.rs).
+    // Rows: the normals z (= x × y) and −y of the axis x (model/closure.rs).
     let reaction = lambda[0];
     let exact = 3.0 * w * L / 8.0;
     assert!(

@@ -183,7 +183,7 @@ fn mass_matrix_is_spd_and_equals_jacobian_integral() {
         let mut j = Matrix6xX::zeros(rod.n_dof());
         let mut reference = DMatrix::zeros(rod.n_dof(), rod.n_dof());
         for piece in rod.pieces() {
-            for (x, w) in m.quadrature.on_interval(piece.length) {
+            for (x, w) in m.quadrature().on_interval(piece.length) {
                 let s = piece.start + x;
                 kin.jacobian_at(rod, s, Frame::Body, &mut j).unwrap();
                 let md = DMatrix::from_diagonal(&DVector::from_column_slice(
@@ -320,9 +320,9 @@ fn gravity_and_point_loads_match_jacobian_projections() {
     let (q, _) = state(&mut rng, m.n_dof());
     let g = generalized_gravity(&m, &mut data, &q).unwrap();
     let rm = &m.rods()[0];
-    let grav = m.gravity.unwrap();
+    let grav = m.gravity().unwrap();
     let reference =
-        -generalized_gravity_by_jacobian(&rm.spec.rod, &rm.spec.body, &grav, &q, &m.quadrature);
+        -generalized_gravity_by_jacobian(&rm.spec.rod, &rm.spec.body, &grav, &q, m.quadrature());
     assert!(
         rel_err(&g, &reference) < 1e-12,
         "{:e}",
@@ -353,7 +353,7 @@ fn gravity_and_point_loads_match_jacobian_projections() {
     }
     for d in &rw.spec.distributed_loads {
         loads +=
-            line_load_force_by_jacobian(&rw.spec.rod, &q, None, &with.quadrature, |_, pose, _| {
+            line_load_force_by_jacobian(&rw.spec.rod, &q, None, with.quadrature(), |_, pose, _| {
                 d.wrench_density(pose)
             });
     }
@@ -583,8 +583,10 @@ fn statics_defaults_reach_round_off_and_failures_carry_the_residual() {
     };
     let heavy = model(6, false, CONSERVATIVE);
     let mut d2 = Data::new(&heavy);
-    let mut m2 = heavy.clone();
-    m2.gravity = Some(Vec3::new(0.0, 0.0, -2000.0));
+    let m2 = heavy
+        .clone()
+        .with_gravity(Some(Vec3::new(0.0, 0.0, -2000.0)))
+        .unwrap();
     match statics(&m2, &mut d2, &vec![0.0; heavy.n_dof()], &opts) {
         Err(DynamicsError::StaticsFailed { residual, .. }) => {
             assert!(

@@ -92,7 +92,7 @@ fn input_matrix_equals_the_response_to_each_tension() {
         let t0 = spec.cables[c].tension_at(0.3);
         assert_eq!(lin.u[c], t0);
         spec.cables[c].tension = Tension::Constant(t0 + 1.0);
-        let m2 = Model::new(vec![spec], m.gravity, 4).unwrap();
+        let m2 = Model::new(vec![spec], m.gravity(), 4).unwrap();
         let mut d2 = Data::new(&m2);
         let plus = forward_dynamics(&m2, &mut d2, 0.3, &q, &qd, None)
             .unwrap()
@@ -139,11 +139,11 @@ fn jacobians_follow_the_load_scale() {
     let m = soft(Shape::new(3, bases()), Terms::ALL);
     let (q, qd, _) = state(&mut rng, m.n_dof(), 0.8, 2.0, 0.0);
     let mut data = Data::new(&m);
-    data.load_scale = 0.4;
-    let j = dynamics_jacobians(&m, &mut data, 0.3, &q, &qd, None).unwrap();
+    let forces = Forces::ALL.with_load_scale(0.4);
+    let j = dynamics_jacobians_with(&m, &mut data, forces, 0.3, &q, &qd, None).unwrap();
     // Differences of the forward dynamics at the same load scale.
     let (dq, _) = richardson_jacobians(&q, &qd, |a, b| {
-        forward_dynamics(&m, &mut data, 0.3, a, b, None)
+        forward_dynamics_with(&m, &mut data, forces, 0.3, a, b, None)
             .unwrap()
             .clone()
     });

@@ -54,7 +54,7 @@ fn compare(model: &Model, q: &[f64], qd: &[f64]) -> f64 {
         bias_force(model, &mut d1, t, q, qd).unwrap().clone(),
         bias_force(&general, &mut d2, t, q, qd).unwrap().clone(),
     );
-    let grav = if model.gravity.is_some() {
+    let grav = if model.gravity().is_some() {
         rel(
             generalized_gravity(model, &mut d1, q).unwrap(),
             generalized_gravity(&general, &mut d2, q).unwrap(),

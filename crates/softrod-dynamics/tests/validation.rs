@@ -11,7 +11,9 @@
 
 use nalgebra::DVector;
 use softrod_dynamics::{Data, StaticsResult};
-use softrod_dynamics::{DynamicsError, Model, RodSpec, StaticsOptions, modes, statics};
+use softrod_dynamics::{
+    DynamicsError, Model, RodSpec, StaticsOptions, inverse_dynamics, modes, statics,
+};
 use softrod_kinematics::{Basis, Rod, RodKinematics, Strain, straight};
 use softrod_lie::{Pose, Vec3};
 use softrod_mechanics::{LoadFrame, Material, PointLoad, RodBody, Section};
@@ -564,6 +566,11 @@ fn statics_failure_is_an_error_with_context() {
         }
         other => panic!("expected StaticsFailed, got {other:?}"),
     }
-    // The load scale is restored for later evaluations.
-    assert_eq!(data.load_scale, 1.0);
+    // Later evaluations see the full load: the continuation leaves nothing
+    // behind in `data` (its load scale is an argument, not state).
+    let fresh = inverse_dynamics(&model, &mut Data::new(&model), 0.0, &q0, &q0, &q0)
+        .unwrap()
+        .clone();
+    let after = inverse_dynamics(&model, &mut data, 0.0, &q0, &q0, &q0).unwrap();
+    assert_eq!(after, &fresh);
 }

@@ -96,7 +96,7 @@ pub enum IntegrateError {
         bound: f64,
     },
     /// The user's system returned an error.
-    #[error("system error in {what} at t = {t:e} (h = {h:e}): {source}")]
+    #[error("system error in {what} at t = {t:e} (h = {h:e})")]
     System {
         /// Time of the evaluation.
         t: f64,

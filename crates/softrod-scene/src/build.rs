@@ -187,7 +187,7 @@ material = { density = 1000.0, young = 1.0e6, poisson = 0.5 }
         let b = scene.build().unwrap();
         assert_eq!(b.model.n_dof(), 12);
         assert_eq!(b.model.terms(), vec!["inertia", "elasticity"]);
-        assert!(b.model.gravity.is_none());
+        assert!(b.model.gravity().is_none());
         assert_eq!(b.q0.len(), 12);
     }
 

@@ -205,3 +205,40 @@ fn states_its_cause(e: &(dyn std::error::Error + 'static)) -> bool {
 
 /// `Result` with the facade's [`Error`].
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The chain printed once each: a dynamics error names the rod and
+    /// what is invalid, its source says why; an error that already prints
+    /// its cause does not get it twice.
+    #[test]
+    fn report_shows_each_cause_once() {
+        let e = Error::Dynamics(DynamicsError::RodBody {
+            rod: softrod_dynamics::RodId {
+                index: Some(0),
+                name: "arm".into(),
+            },
+            source: MechanicsError::NotPositive {
+                quantity: softrod_mechanics::Quantity::RodLength,
+                value: -0.5,
+            },
+        });
+        assert_eq!(
+            e.report(),
+            "rod 0 ('arm'): invalid body: rod length [m] must be positive and finite, got -0.5"
+        );
+        let e = Error::Integration(Box::new(IntegrateError::System {
+            t: 0.5,
+            h: 1e-3,
+            what: "rhs",
+            source: Box::new(DynamicsError::NotFinite {
+                what: "qddot[3]".into(),
+                value: f64::NAN,
+            }),
+        }));
+        let text = e.report();
+        assert_eq!(text.matches("qddot[3] is not finite").count(), 1, "{text}");
+    }
+}

@@ -143,8 +143,8 @@ fn conservative_model(model: &Model) -> Result<Option<Model>, Error> {
             .collect::<Result<_, Error>>()?;
         return Ok(Some(Model::new(
             specs,
-            model.gravity,
-            model.quadrature.len(),
+            model.gravity(),
+            model.quadrature().len(),
         )?));
     }
     let elements = model
@@ -164,7 +164,7 @@ fn conservative_model(model: &Model) -> Result<Option<Model>, Error> {
         })
         .collect::<Result<Vec<_>, Error>>()?;
     Ok(Some(
-        Model::with_elements(elements, model.gravity, model.quadrature.len())?
+        Model::with_elements(elements, model.gravity(), model.quadrature().len())?
             .with_closures(model.closures().cloned().collect())?,
     ))
 }

@@ -355,7 +355,7 @@ impl Simulation {
     /// World gravity [m/s²] (zeros when absent).
     #[getter]
     fn gravity<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        let g = self.sim.model().gravity.unwrap_or_default();
+        let g = self.sim.model().gravity().unwrap_or_default();
         vec_out(py, g.as_slice())
     }
 

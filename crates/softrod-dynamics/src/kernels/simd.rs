@@ -1,14 +1,15 @@
 //! Run-time choice of an AVX2 build of the hot algorithms.
 //!
 //! The crate is compiled for the baseline target (x86-64 SSE2 by default),
-//! so the same binary runs everywhere. [`forward_dynamics`],
-//! [`inverse_dynamics`], [`mass_matrix`], the shifted factorization and the
-//! outward sweep of the inverse-dynamics derivatives are each compiled twice — as is,
+//! so the same binary runs everywhere. The chain path's
+//! [`forward_dynamics`], [`inverse_dynamics`], [`mass_matrix`], the shifted
+//! factorization and the inverse-dynamics derivatives (its outward sweep
+//! inlined) are each compiled twice — as is,
 //! and with AVX2 enabled (wider vectors, three-operand encodings) — and the
 //! AVX2 copy runs when the CPU has it. FMA is deliberately not enabled and
 //! Rust never contracts `a * b + c` on its own, so both copies perform the
 //! same IEEE operations in the same order: their results are bit-identical
-//! (tested in `algorithms.rs`). Measured on the 2-core development VM:
+//! (tested below). Measured on the 2-core development VM:
 //! ~10 % less time per call (docs/performance.md).
 //!
 //! The copies exist with the cargo feature `avx2` (on by default; the
@@ -29,19 +30,22 @@ pub(crate) fn avx2() -> bool {
     *FLAG.get_or_init(|| cfg!(feature = "avx2") && std::arch::is_x86_feature_detected!("avx2"))
 }
 
-/// Defines `pub fn $name` that dispatches to an AVX2 or a baseline copy of
-/// `$imp` (an `#[inline(always)]` function with the same signature, whose
-/// callees that matter are inlined into it too).
+/// Defines `fn $name` (with the visibility given) that dispatches to an
+/// AVX2 or a baseline copy of `$imp` (an `#[inline(always)]` function with
+/// the same signature, whose callees that matter are inlined into it too),
+/// and the AVX2 copy `$avx`. The one `unsafe` call of the crate is here:
+/// the AVX2 copy, after the run-time check of the CPU.
 macro_rules! dispatch {
     (
         $(#[$meta:meta])*
-        pub fn $name:ident<$lt:lifetime>($($arg:ident: $ty:ty),* $(,)?) -> $ret:ty
+        $vis:vis fn $name:ident $(<$lt:lifetime>)? ($($arg:ident: $ty:ty),* $(,)?) $(-> $ret:ty)?
         => $imp:ident, $avx:ident
     ) => {
         $(#[$meta])*
-        pub fn $name<$lt>($($arg: $ty),*) -> $ret {
+        #[allow(unsafe_code)]
+        $vis fn $name $(<$lt>)? ($($arg: $ty),*) $(-> $ret)? {
             #[cfg(target_arch = "x86_64")]
-            if crate::simd::avx2() {
+            if crate::kernels::simd::avx2() {
                 // SAFETY: the CPU supports AVX2 (checked at run time).
                 return unsafe { $avx($($arg),*) };
             }
@@ -51,7 +55,7 @@ macro_rules! dispatch {
         /// The AVX2 copy of the same code (bit-identical results).
         #[cfg(target_arch = "x86_64")]
         #[target_feature(enable = "avx2")]
-        pub(crate) fn $avx<$lt>($($arg: $ty),*) -> $ret {
+        pub(crate) fn $avx $(<$lt>)? ($($arg: $ty),*) $(-> $ret)? {
             $imp($($arg),*)
         }
     };
@@ -61,7 +65,7 @@ pub(crate) use dispatch;
 
 #[cfg(all(test, target_arch = "x86_64"))]
 mod tests {
-    use crate::algorithms::{
+    use crate::algorithms::chain::{
         forward_dynamics_avx2, forward_dynamics_impl, inverse_dynamics_avx2, inverse_dynamics_impl,
         mass_matrix_avx2, mass_matrix_impl,
     };
@@ -141,28 +145,46 @@ mod tests {
         let (mut d1, mut d2) = (Data::new(&model), Data::new(&model));
         let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
 
-        let a = inverse_dynamics_impl(&model, &mut d1, 0.3, &q, &qd, &qdd)
-            .unwrap()
-            .clone();
+        inverse_dynamics_impl(&model, &mut d1, crate::Forces::ALL, 0.3, &q, &qd, &qdd);
         // SAFETY: AVX2 detected above.
-        let b = unsafe { inverse_dynamics_avx2(&model, &mut d2, 0.3, &q, &qd, &qdd) }.unwrap();
+        unsafe { inverse_dynamics_avx2(&model, &mut d2, crate::Forces::ALL, 0.3, &q, &qd, &qdd) };
+        let (a, b) = (&d1.tau, &d2.tau);
         assert!(a.iter().all(|x| x.is_finite()) && a.amax() > 0.0);
         assert_eq!(bits(a.as_slice()), bits(b.as_slice()), "inverse dynamics");
 
-        let a = forward_dynamics_impl(&model, &mut d1, 0.3, &q, &qd, None)
-            .unwrap()
-            .clone();
+        forward_dynamics_impl(&model, &mut d1, crate::Forces::ALL, 0.3, &q, &qd, None).unwrap();
         // SAFETY: as above.
-        let b = unsafe { forward_dynamics_avx2(&model, &mut d2, 0.3, &q, &qd, None) }.unwrap();
+        unsafe { forward_dynamics_avx2(&model, &mut d2, crate::Forces::ALL, 0.3, &q, &qd, None) }
+            .unwrap();
+        let (a, b) = (&d1.qdd, &d2.qdd);
         assert!(a.iter().all(|x| x.is_finite()) && a.amax() > 0.0);
         assert_eq!(bits(a.as_slice()), bits(b.as_slice()), "forward dynamics");
 
         let mut w1 = crate::IdDerivatives::new(&model);
         let mut w2 = crate::IdDerivatives::new(&model);
-        crate::id_derivatives::id_derivatives_impl(&model, &mut w1, 0.3, &q, &qd, &qdd).unwrap();
+        crate::derivatives::id_derivatives_impl(
+            &model,
+            &mut w1,
+            crate::Forces::ALL,
+            0.3,
+            &q,
+            &qd,
+            &qdd,
+        )
+        .unwrap();
         // SAFETY: as above.
-        unsafe { crate::id_derivatives::id_derivatives_avx2(&model, &mut w2, 0.3, &q, &qd, &qdd) }
-            .unwrap();
+        unsafe {
+            crate::derivatives::id_derivatives_avx2(
+                &model,
+                &mut w2,
+                crate::Forces::ALL,
+                0.3,
+                &q,
+                &qd,
+                &qdd,
+            )
+        }
+        .unwrap();
         assert!(w1.dtau_dq.amax() > 0.0);
         assert_eq!(
             bits(w1.dtau_dq.as_slice()),
@@ -175,9 +197,10 @@ mod tests {
             "dτ/dq̇"
         );
 
-        crate::shifted::shifted_factor_impl(&model, &mut d1, &q, 1e-4, 1e-2).unwrap();
+        crate::algorithms::shifted::shifted_factor_impl(&model, &mut d1, &q, 1e-4, 1e-2).unwrap();
         // SAFETY: as above.
-        unsafe { crate::shifted::shifted_factor_avx2(&model, &mut d2, &q, 1e-4, 1e-2) }.unwrap();
+        unsafe { crate::algorithms::shifted::shifted_factor_avx2(&model, &mut d2, &q, 1e-4, 1e-2) }
+            .unwrap();
         for (p1, p2) in d1.pieces[0].iter().zip(&d2.pieces[0]) {
             assert_eq!(
                 bits(p1.dt.as_slice()),
@@ -191,9 +214,10 @@ mod tests {
             );
         }
 
-        let a = mass_matrix_impl(&model, &mut d1, &q).unwrap().clone();
+        mass_matrix_impl(&model, &mut d1, &q);
         // SAFETY: as above.
-        let b = unsafe { mass_matrix_avx2(&model, &mut d2, &q) }.unwrap();
+        unsafe { mass_matrix_avx2(&model, &mut d2, &q) };
+        let (a, b) = (&d1.mass, &d2.mass);
         assert_eq!(bits(a.as_slice()), bits(b.as_slice()), "mass matrix");
     }
 }

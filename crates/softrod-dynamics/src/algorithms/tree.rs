@@ -4,144 +4,17 @@
 //! single rigid inertias. Dense 6×6 arithmetic per node (no block tricks):
 //! the chain path of joint-free models is untouched.
 
-use crate::algorithms::strain_forces;
-use crate::data::Data;
-use crate::energy::Energies;
+use super::frames::parent_column;
+use super::{Motion, Pass};
 use crate::error::DynamicsError;
+use crate::forces::Forces;
+use crate::forces::external::{external_density, world_acceleration};
+use crate::forces::strain::{joint_forces, strain_forces};
+use crate::kernels::inertia::{FullSums, PointInertia};
 use crate::model::Model;
-use crate::passes::{FullSums, PointInertia, external_density};
-use crate::tree::{NodeKind, Tree};
+use crate::model::data::Data;
+use crate::model::tree::{NodeKind, Tree};
 use softrod_lie::{Mat6, PieceMaps, Pose, Vec6, ad_vec, coad_vec};
-use softrod_mechanics::elastic_energy;
-
-/// Per-node work space (all fixed-size).
-#[derive(Clone, Debug)]
-pub(crate) struct NodeWork {
-    /// World pose of the node's base frame.
-    pub base_world: Pose,
-    /// Local tip pose `g(ℓ)`, `S(ℓ) = T₋(ℓ)B` (6×k padded), the tip's
-    /// velocity-product acceleration.
-    pub tip: Pose,
-    pub s_tip: Mat6,
-    pub acc_tip: Vec6,
-    /// Velocity and acceleration of the tip frame (tip axes).
-    pub eta_tip: Vec6,
-    pub etadot_tip: Vec6,
-    /// (D20) `𝓜ᵗ = Σ wAᵀ𝓜A`, `𝓤 = Σ wAᵀ𝓜S`, `𝓓 = Σ wSᵀ𝓜S` of the node's
-    /// own mass; (D23/D17) bias sums `𝓟ᵗ` (6) and `𝓹 = Bᵀ Σ T₋ᵀ f` (k).
-    pub mt: Mat6,
-    pub ut: Mat6,
-    pub dt: Mat6,
-    pub p_big: Vec6,
-    pub p_small: Vec6,
-    /// What the children hand to the tip (tip axes): articulated or
-    /// composite inertia, and bias or transmitted wrench.
-    pub m_tip: Mat6,
-    pub f_tip: Vec6,
-    /// Forward dynamics: `Û`, `D̂⁻¹` (k×k padded), `u` (k).
-    pub uhat: Mat6,
-    pub dinv: Mat6,
-    pub u: Vec6,
-    /// Mass matrix: `Ad_{g_world(ℓ)} S(ℓ)` (world twists per unit rate).
-    pub s_world: Mat6,
-    /// A node hanging inside its parent piece at `x` (D62): the parent's
-    /// `g(x)`, `Ad⁻¹_{g(x)}`, `S(x) = T₋(x)B` (6×k padded), the
-    /// velocity-product acceleration there and the motion of that frame
-    /// (its axes), all written by the parent's outward step.
-    pub attach_pose: Pose,
-    pub attach_a: Mat6,
-    pub attach_s: Mat6,
-    pub attach_acc: Vec6,
-    pub attach_eta: Vec6,
-    pub attach_etadot: Vec6,
-    /// Forward dynamics pass 3: the base acceleration and `q̈_n` (padded).
-    pub etadot_base: Vec6,
-    pub qn: Vec6,
-}
-
-impl NodeWork {
-    pub(crate) fn new() -> Self {
-        Self {
-            base_world: Pose::identity(),
-            tip: Pose::identity(),
-            s_tip: Mat6::zeros(),
-            acc_tip: Vec6::zeros(),
-            eta_tip: Vec6::zeros(),
-            etadot_tip: Vec6::zeros(),
-            mt: Mat6::zeros(),
-            ut: Mat6::zeros(),
-            dt: Mat6::zeros(),
-            p_big: Vec6::zeros(),
-            p_small: Vec6::zeros(),
-            m_tip: Mat6::zeros(),
-            f_tip: Vec6::zeros(),
-            uhat: Mat6::zeros(),
-            dinv: Mat6::zeros(),
-            u: Vec6::zeros(),
-            s_world: Mat6::zeros(),
-            attach_pose: Pose::identity(),
-            attach_a: Mat6::identity(),
-            attach_s: Mat6::zeros(),
-            attach_acc: Vec6::zeros(),
-            attach_eta: Vec6::zeros(),
-            attach_etadot: Vec6::zeros(),
-            etadot_base: Vec6::zeros(),
-            qn: Vec6::zeros(),
-        }
-    }
-}
-
-/// The motion `(η, η̇)` of the frame node `c` hangs from (its parent's tip,
-/// or the point inside the parent piece, D62), in that frame's axes.
-pub(crate) fn parent_motion(tree: &Tree, data: &Data, c: usize) -> (Vec6, Vec6) {
-    match tree.nodes[c].parent {
-        None => (Vec6::zeros(), Vec6::zeros()),
-        Some(_) if tree.nodes[c].attach.is_some() => {
-            (data.nodes[c].attach_eta, data.nodes[c].attach_etadot)
-        }
-        Some(p) => (data.nodes[p].eta_tip, data.nodes[p].etadot_tip),
-    }
-}
-
-/// The spatial columns of node `c`'s parent's coordinates at the frame `c`
-/// hangs from, `Ad_{g_world} S` (6×k padded; D57, D62): what moves `c` and
-/// everything beyond it per unit rate of the parent's coordinates.
-pub(crate) fn parent_column(tree: &Tree, data: &Data, c: usize) -> Mat6 {
-    let Some(p) = tree.nodes[c].parent else {
-        return Mat6::zeros();
-    };
-    let wp = &data.nodes[p];
-    if tree.nodes[c].attach.is_some() {
-        let wc = &data.nodes[c];
-        wp.base_world.compose(&wc.attach_pose).ad().to_mat6() * wc.attach_s
-    } else {
-        wp.base_world.compose(&wp.tip).ad().to_mat6() * wp.s_tip
-    }
-}
-
-/// What the outward sweep accumulates.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum TreePass {
-    /// Inverse dynamics: `f = 𝓜η̇ + ad*_η𝓜η − 𝓕_ext` with `q̈` given.
-    Inverse,
-    /// Forward dynamics: inertia sums and `h = 𝓜a + ad*_η𝓜η − 𝓕_ext`.
-    Articulated,
-    /// Mass matrix: inertia sums only, at rest.
-    Composite,
-}
-
-/// The acceleration standing for gravity, world axes: the world frame is
-/// accelerated by `−g` (docs/theory.md §4), so every node, body and point sees
-/// gravity without a per-point wrench.
-pub(crate) fn world_acceleration(model: &Model, scale: f64) -> Vec6 {
-    match model.gravity {
-        Some(g) => {
-            let a = -g * scale;
-            Vec6::new(0.0, 0.0, 0.0, a[0], a[1], a[2])
-        }
-        None => Vec6::zeros(),
-    }
-}
 
 /// `q_n` (or a rate) of a node, zero-padded to 6.
 #[inline]
@@ -154,8 +27,8 @@ pub(crate) fn local(v: &[f64], dof: usize, k: usize) -> Vec6 {
 ///
 /// Prescribed joints (D59) take their coordinates from
 /// `data.prescribed_q`, their rates when `qd` is given and their
-/// accelerations in the dynamics passes (neither for gravity alone nor at
-/// rest, `Data::prescribed_at_rest`); the
+/// accelerations in the dynamics passes (neither when `forces` holds them
+/// at rest, nor for gravity alone); the
 /// prescribed acceleration is folded into the node's tip acceleration
 /// `acc_tip`, so the recursions treat the node as one without coordinates.
 ///
@@ -166,19 +39,19 @@ pub(crate) fn outward(
     model: &Model,
     tree: &Tree,
     data: &mut Data,
-    q: &[f64],
-    qd: Option<&[f64]>,
-    qdd: Option<&[f64]>,
-    pass: TreePass,
+    motion: Motion,
+    pass: Pass,
+    forces: Forces,
 ) -> f64 {
-    let scale = data.load_scale;
-    let only_gravity = data.only_gravity;
-    let want_kinetic = pass == TreePass::Inverse && qd.is_some() && qdd.is_none();
+    let Motion { q, qd, qdd } = motion;
+    let scale = forces.load_scale;
+    let only_gravity = forces.gravity_only;
+    let want_kinetic = pass == Pass::Inverse && qd.is_some() && qdd.is_none();
     let mut kinetic = 0.0;
-    let moving = !only_gravity && !data.prescribed_at_rest;
+    let moving = forces.drives_move();
     let drive_rates = qd.is_some() && moving;
-    let drive_acc = moving && pass != TreePass::Composite;
-    let a_world = if pass == TreePass::Inverse {
+    let drive_acc = moving && pass != Pass::Composite;
+    let a_world = if pass == Pass::Inverse {
         world_acceleration(model, scale)
     } else {
         Vec6::zeros()
@@ -221,10 +94,10 @@ pub(crate) fn outward(
                 let bm = &model.bodies[body];
                 let m = &bm.inertia;
                 let mut f = coad_vec(&eta_b, &(m * eta_b));
-                if pass == TreePass::Inverse {
+                if pass == Pass::Inverse {
                     f += m * etadot_b;
                 }
-                if !only_gravity && pass != TreePass::Composite {
+                if !only_gravity && pass != Pass::Composite {
                     for l in &bm.spec.loads {
                         f -= l.wrench(&base_world) * scale;
                     }
@@ -239,7 +112,7 @@ pub(crate) fn outward(
                 w.acc_tip = Vec6::zeros();
                 w.eta_tip = eta_b;
                 w.etadot_tip = etadot_b;
-                if pass == TreePass::Composite {
+                if pass == Pass::Composite {
                     w.s_world = Mat6::zeros();
                 }
                 continue;
@@ -288,7 +161,7 @@ pub(crate) fn outward(
             let pd = &rm.pieces[piece];
             let has_ext =
                 !only_gravity && (rm.spec.drag.is_some() || !rm.spec.distributed_loads.is_empty());
-            // The chain path's block sums (crate::passes): 𝓤ᶠ, 𝓓ᶠ on the full
+            // The chain path's block sums (crate::kernels::inertia): 𝓤ᶠ, 𝓓ᶠ on the full
             // T₋ projected once per piece, 𝓜ᵗ in spatial-inertia form.
             let mut fs = FullSums::new(
                 pd.points
@@ -300,7 +173,7 @@ pub(crate) fn outward(
                 let (gl, tm, dbias) = maps.eval(qp.x);
                 let a = gl.ad_inv();
                 let m = &qp.inertia;
-                if pass != TreePass::Composite {
+                if pass != Pass::Composite {
                     let carried = a.mul_vec(&eta_b);
                     let sv = tm.mul_vec(&dxi);
                     let eta = carried + sv;
@@ -313,7 +186,7 @@ pub(crate) fn outward(
                         kinetic += 0.5 * qp.w * eta.dot(&m.component_mul(&eta));
                     }
                     let mut f = coad_vec(&eta, &m.component_mul(&eta));
-                    f += if pass == TreePass::Inverse {
+                    f += if pass == Pass::Inverse {
                         let etadot = a.mul_vec(&etadot_b) + tm.mul_vec(&ddxi) + bias;
                         m.component_mul(&etadot)
                     } else {
@@ -326,17 +199,17 @@ pub(crate) fn outward(
                     w.p_big += a.tr_mul_vec(&fw);
                     ps6 += tm.tr_mul_vec(&fw);
                 }
-                if pass != TreePass::Inverse {
+                if pass != Pass::Inverse {
                     let mw = m * qp.w;
                     fs.add(&gl, &tm, &mw);
                     pi.add(&gl, &mw);
                 }
             }
-            if pass != TreePass::Inverse {
+            if pass != Pass::Inverse {
                 fs.project(&rm.spec.rod.pieces()[piece].basis, &mut w.ut, &mut w.dt);
                 w.mt = pi.finish().dense();
             }
-            if pass != TreePass::Composite && !only_gravity {
+            if pass != Pass::Composite && !only_gravity {
                 for pl in &pd.loads {
                     let load = &rm.spec.point_loads[pl.index];
                     let (gl, tm) = maps.exp_and_tangent_minus(pl.x);
@@ -385,30 +258,11 @@ pub(crate) fn outward(
         w.acc_tip = acc;
         w.eta_tip = carried + sv;
         w.etadot_tip = a.mul_vec(&etadot_b) + tm.mul_vec(&ddxi) + acc;
-        if pass == TreePass::Composite {
+        if pass == Pass::Composite {
             w.s_world = base_world.compose(&gl).ad().to_mat6() * w.s_tip;
         }
     }
     kinetic
-}
-
-/// `τ ← τ − k(q − q_rest) − d q̇` of every joint (D53), into the strain
-/// forces (skipped for gravity only).
-fn joint_forces(model: &Model, data: &mut Data, q: &[f64], qd: Option<&[f64]>) {
-    if data.only_gravity {
-        return;
-    }
-    for e in &model.elements {
-        let j = &e.attachment.joint;
-        if j.stiffness.is_empty() && j.damping.is_empty() {
-            continue;
-        }
-        for (i, o) in e.joint_dofs.clone().enumerate() {
-            let (k, d, rest) = j.coefficients(i);
-            let v = qd.map_or(0.0, |v| v[o]);
-            data.strain_force[o] -= k * (q[o] - rest) + d * v;
-        }
-    }
 }
 
 /// Inverse dynamics on the tree (D17–D18 with children summed at the tip,
@@ -417,14 +271,14 @@ pub(crate) fn inverse_dynamics(
     model: &Model,
     tree: &Tree,
     data: &mut Data,
+    forces: Forces,
     t: f64,
-    q: &[f64],
-    qd: Option<&[f64]>,
-    qdd: Option<&[f64]>,
+    motion: Motion,
 ) {
-    outward(model, tree, data, q, qd, qdd, TreePass::Inverse);
-    strain_forces(model, data, t, q, qd, None);
-    joint_forces(model, data, q, qd);
+    let Motion { q, qd, .. } = motion;
+    outward(model, tree, data, motion, Pass::Inverse, forces);
+    strain_forces(model, data, forces, t, q, qd, None);
+    joint_forces(model, data, forces, q, qd);
     for w in &mut data.nodes {
         w.f_tip = Vec6::zeros();
     }
@@ -458,7 +312,7 @@ pub(crate) fn inverse_dynamics(
 
 /// `D̂⁻¹` of a `k×k` block padded to 6×6 (zeros outside), or `None` if not
 /// positive definite.
-fn inverse_k(d: &Mat6, k: usize) -> Option<Mat6> {
+pub(crate) fn inverse_k(d: &Mat6, k: usize) -> Option<Mat6> {
     let padded = Mat6::from_fn(|i, j| {
         if i < k && j < k {
             0.5 * (d[(i, j)] + d[(j, i)])
@@ -481,14 +335,15 @@ pub(crate) fn forward_dynamics(
     model: &Model,
     tree: &Tree,
     data: &mut Data,
+    forces: Forces,
     t: f64,
-    q: &[f64],
-    qd: &[f64],
+    motion: Motion,
     tau_act: Option<&[f64]>,
 ) -> Result<(), DynamicsError> {
-    outward(model, tree, data, q, Some(qd), None, TreePass::Articulated);
-    strain_forces(model, data, t, q, Some(qd), tau_act);
-    joint_forces(model, data, q, Some(qd));
+    let Motion { q, qd, .. } = motion;
+    outward(model, tree, data, motion, Pass::Articulated, forces);
+    strain_forces(model, data, forces, t, q, qd, tau_act);
+    joint_forces(model, data, forces, q, qd);
     for w in &mut data.nodes {
         w.m_tip = Mat6::zeros();
         w.f_tip = Vec6::zeros();
@@ -541,7 +396,7 @@ pub(crate) fn forward_dynamics(
             }
         }
     }
-    let a_world = world_acceleration(model, data.load_scale);
+    let a_world = world_acceleration(model, forces.load_scale);
     for (i, node) in tree.nodes.iter().enumerate() {
         let etadot_p = match node.parent {
             Some(p) if node.attach.is_some() => {
@@ -572,150 +427,20 @@ pub(crate) fn forward_dynamics(
     Ok(())
 }
 
-/// Per-node scratch of the tree's shifted solve: what the children hand
-/// to the node (at its tip, or inside it at `x`, D62) and the outward
-/// motion.
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct SolveNode {
-    f_tip: Vec6,
-    p_big: Vec6,
-    p_small: Vec6,
-    u: Vec6,
-    etadot_base: Vec6,
-    etadot_tip: Vec6,
-    qn: Vec6,
-}
-
-/// The factorization of `S = M(q) + a·K + b·D` on the tree
-/// (docs/theory-derivatives.md §6 on the recursion of D56): the
-/// articulated inward pass of [`forward_dynamics`] without biases, with the
-/// armature `a·K_n + b·D_n` of each node added to its `D̂` — a piece's
-/// `K_n`, `D_n` (D13), a joint's spring and damper constants (D53), nothing
-/// for bodies and prescribed joints. Leaves `Û`, `D̂⁻¹` per node in `data`;
-/// prescribed joints at `data.prescribed_q` (their last [`Model::set_time`]).
-pub(crate) fn shifted_factor(
-    model: &Model,
-    tree: &Tree,
-    data: &mut Data,
-    q: &[f64],
-    a: f64,
-    b: f64,
-) -> Result<(), DynamicsError> {
-    outward(model, tree, data, q, None, None, TreePass::Composite);
-    for w in &mut data.nodes {
-        w.m_tip = Mat6::zeros();
-    }
-    for (i, node) in tree.nodes.iter().enumerate().rev() {
-        let k = node.k;
-        let w = &mut data.nodes[i];
-        let am = w.tip.ad_inv().to_mat6();
-        let ma = w.m_tip;
-        let mas = ma * w.s_tip;
-        let uhat = w.ut + am.transpose() * mas;
-        let mut dhat = w.dt + w.s_tip.transpose() * mas;
-        match node.kind {
-            NodeKind::Piece { rod, piece } => {
-                let pd = &model.rods[rod].pieces[piece];
-                if a != 0.0 {
-                    dhat += pd.stiffness6 * a;
-                }
-                if b != 0.0 && pd.has_damping {
-                    dhat += pd.damping6 * b;
-                }
-            }
-            NodeKind::Joint { element } => {
-                let joint = &model.elements[element].attachment.joint;
-                for c in 0..k {
-                    let (kc, dc, _) = joint.coefficients(c);
-                    dhat[(c, c)] += a * kc + b * dc;
-                }
-            }
-            NodeKind::Body { .. } => {}
-        }
-        let dinv = if k > 0 {
-            inverse_k(&dhat, k).ok_or_else(|| DynamicsError::SingularNode {
-                node: tree.describe(model, i),
-                what: "shifted articulated block D̂ + aK + bD",
-            })?
-        } else {
-            Mat6::zeros()
-        };
-        let ud = uhat * dinv;
-        let mb = w.mt + am.transpose() * ma * am - ud * uhat.transpose();
-        w.uhat = uhat;
-        w.dinv = dinv;
-        if let Some(p) = node.parent {
-            let x = node.offset.ad_inv().to_mat6();
-            let mx = x.transpose() * mb * x;
-            if node.attach.is_some() {
-                let (ax, sx) = (w.attach_a, w.attach_s);
-                let pw = &mut data.nodes[p];
-                pw.mt += ax.transpose() * mx * ax;
-                pw.ut += ax.transpose() * mx * sx;
-                pw.dt += sx.transpose() * mx * sx;
-            } else {
-                data.nodes[p].m_tip += mx;
-            }
-        }
-    }
-    Ok(())
-}
-
-/// `x ← S⁻¹x` with the factorization of [`shifted_factor`] in `data`: the
-/// bias-free inward (D26) and outward (D27) sweeps of the tree, the
-/// children's wrenches summed at each tip or at their point inside the
-/// parent piece (D62). O(N).
-pub(crate) fn shifted_solve(tree: &Tree, data: &Data, scratch: &mut [SolveNode], x: &mut [f64]) {
-    scratch.fill(SolveNode::default());
-    for (i, node) in tree.nodes.iter().enumerate().rev() {
-        let k = node.k;
-        let w = &data.nodes[i];
-        let sc = scratch[i];
-        let y = sc.f_tip;
-        let xs = local(x, node.dof, k);
-        let u = xs - sc.p_small - w.s_tip.tr_mul(&y);
-        let u = Vec6::from_fn(|r, _| if r < k { u[r] } else { 0.0 });
-        let pb = sc.p_big + w.tip.ad_inv().tr_mul_vec(&y) + w.uhat * (w.dinv * u);
-        scratch[i].u = u;
-        if let Some(p) = node.parent {
-            let px = node.offset.ad_inv().tr_mul_vec(&pb);
-            if node.attach.is_some() {
-                let sp = &mut scratch[p];
-                sp.p_big += w.attach_a.transpose() * px;
-                sp.p_small += w.attach_s.transpose() * px;
-            } else {
-                scratch[p].f_tip += px;
-            }
-        }
-    }
-    for (i, node) in tree.nodes.iter().enumerate() {
-        let w = &data.nodes[i];
-        let etadot_p = match node.parent {
-            Some(p) if node.attach.is_some() => {
-                w.attach_a * scratch[p].etadot_base + w.attach_s * scratch[p].qn
-            }
-            Some(p) => scratch[p].etadot_tip,
-            None => Vec6::zeros(),
-        };
-        let etadot_b = node.offset.ad_inv().mul_vec(&etadot_p);
-        let qn = w.dinv * (scratch[i].u - w.uhat.tr_mul(&etadot_b));
-        for c in 0..node.k {
-            x[node.dof + c] = qn[c];
-        }
-        let sc = &mut scratch[i];
-        sc.etadot_base = etadot_b;
-        sc.qn = qn;
-        sc.etadot_tip = w.tip.ad_inv().mul_vec(&etadot_b) + w.s_tip * qn;
-    }
-}
-
 /// Mass matrix on the tree by the composite recursion (D20, D57): for node
 /// `i`, `M_ii = 𝓓 + S(ℓ)ᵀ𝓜ᶜS(ℓ)` and, for every ancestor `j` with
 /// coordinates, `M_ji = (Ad_{g_j(ℓ)}S_j(ℓ))ᵀ Ad*_{g_i(0)⁻¹}F_i` with
 /// `F_i = 𝓤 + A_ℓᵀ𝓜ᶜS(ℓ)` — the motion of an ancestor moves `i`'s base
 /// rigidly. Nodes off each other's paths to the root do not couple.
 pub(crate) fn mass_matrix(model: &Model, tree: &Tree, data: &mut Data, q: &[f64]) {
-    outward(model, tree, data, q, None, None, TreePass::Composite);
+    outward(
+        model,
+        tree,
+        data,
+        Motion::at_rest(q),
+        Pass::Composite,
+        Forces::ALL,
+    );
     let n = model.n_dof();
     if data.mass.nrows() != n {
         data.mass = nalgebra::DMatrix::zeros(n, n);
@@ -777,74 +502,5 @@ pub(crate) fn mass_matrix(model: &Model, tree: &Tree, data: &mut Data, q: &[f64]
                 data.nodes[p].m_tip += mx;
             }
         }
-    }
-}
-
-/// Energies on the tree: kinetic `½q̇ᵀMq̇`, elastic (rods and joint
-/// springs), gravitational (rod points and bodies' centres of mass).
-pub(crate) fn energies(
-    model: &Model,
-    tree: &Tree,
-    data: &mut Data,
-    q: &[f64],
-    qd: &[f64],
-) -> Energies {
-    // Kinetic energy point by point (D59: it includes the prescribed
-    // joints' motion, which `½q̇ᵀMq̇` would miss); the poses of this pass
-    // serve the gravitational energy below.
-    let kinetic = outward(model, tree, data, q, Some(qd), None, TreePass::Inverse);
-    let mut e = Energies {
-        kinetic,
-        ..Energies::default()
-    };
-    for rm in model.rods() {
-        e.elastic += elastic_energy(
-            &rm.spec.rod,
-            &rm.spec.body,
-            rm.spec.stress_free.as_deref(),
-            &q[rm.dofs()],
-            &model.quadrature,
-        );
-    }
-    for el in &model.elements {
-        for (i, o) in el.joint_dofs.clone().enumerate() {
-            let (k, _, rest) = el.attachment.joint.coefficients(i);
-            e.elastic += 0.5 * k * (q[o] - rest).powi(2);
-        }
-    }
-    if let Some(g) = model.gravity {
-        for (i, node) in tree.nodes.iter().enumerate() {
-            let base = &data.nodes[i].base_world;
-            match node.kind {
-                NodeKind::Piece { rod, piece } => {
-                    let rm = &model.rods[rod];
-                    let pc = &rm.spec.rod.pieces()[piece];
-                    let maps = PieceMaps::new(&pc.strain(&q[rm.dofs()]), None);
-                    for qp in &rm.pieces[piece].points {
-                        let p = base.transform_point(&maps.exp(qp.x).translation);
-                        e.gravitational -= qp.w * qp.mass_per_length * g.dot(&p);
-                    }
-                }
-                NodeKind::Body { body } => {
-                    let b = &model.bodies[body].spec;
-                    let p = base.transform_point(&b.center_of_mass);
-                    e.gravitational -= b.mass * g.dot(&p);
-                }
-                NodeKind::Joint { .. } => {}
-            }
-        }
-    }
-    e
-}
-
-/// World poses of every rod's base frame and every body's frame into
-/// `data.rod_bases`, `data.body_poses` (D51).
-pub(crate) fn frames(model: &Model, tree: &Tree, data: &mut Data, q: &[f64]) {
-    outward(model, tree, data, q, None, None, TreePass::Inverse);
-    for (r, nodes) in tree.rod_nodes.iter().enumerate() {
-        data.rod_bases[r] = data.nodes[nodes[0]].base_world;
-    }
-    for (b, &i) in tree.body_nodes.iter().enumerate() {
-        data.body_poses[b] = data.nodes[i].base_world;
     }
 }

@@ -9,14 +9,15 @@
 //! taken where that path leaves the proximal node, and nodes on different
 //! branches do not couple.
 
-use crate::id_derivatives::{
-    IdDerivatives, PieceWork, PointLin, Subtree, basis6, close_piece, dead_load_map, drag_diagonal,
-    has_dead_loads, linearize_point, own_points, write_piece,
-};
+use super::piece::{PieceWork, Subtree, close_piece, write_piece};
+use super::point::{PieceLin, PointLin, basis6, linearize_point, own_points};
+use super::{At, IdDerivatives};
+use crate::algorithms::tree::local;
+use crate::forces::external::world_acceleration;
+use crate::forces::linearized::{dead_load_map, drag_diagonal, has_dead_loads};
+use crate::kernels::piece_derivs::{PieceDerivMaps, lambda as lambda_of};
 use crate::model::Model;
-use crate::piece_derivs::{PieceDerivMaps, lambda as lambda_of};
-use crate::tree::{NodeKind, Tree};
-use crate::tree_algorithms::{local, world_acceleration};
+use crate::model::tree::{NodeKind, Tree};
 use nalgebra::DVector;
 use softrod_lie::{Mat6, PieceMaps, Pose, Vec6, ad, coad, coad_vec};
 use softrod_mechanics::LoadFrame;
@@ -96,47 +97,39 @@ impl TreeWork {
 /// `work` (arguments checked by the caller). Kept out of line: inlined into
 /// the chain path's caller it would change that path's inlining (measured
 /// +4 % instructions on the chain).
-#[allow(clippy::too_many_arguments)]
 #[inline(never)]
 pub(crate) fn tree_id_derivatives(
     model: &Model,
     tree: &Tree,
     work: &mut IdDerivatives,
     tw: &mut TreeWork,
-    t: f64,
-    q: &[f64],
-    qd: &[f64],
-    qdd: &[f64],
+    at: &At,
 ) {
-    let scale = work.load_scale;
+    let (t, forces) = (at.t, at.forces);
     model.prescribed_values(
         t,
         tw.pq.as_mut_slice(),
         tw.pqd.as_mut_slice(),
         tw.pqdd.as_mut_slice(),
     );
-    if work.prescribed_at_rest {
+    if !forces.drives_move() {
         tw.pqd.fill(0.0);
         tw.pqdd.fill(0.0);
     }
     // Nodes on different branches do not couple: those blocks stay zero.
     work.dtau_dq.fill(0.0);
     work.dtau_dqd.fill(0.0);
-    outward(model, tree, tw, (q, qd, qdd), scale);
-    inward(model, tree, work, tw, t, (q, qd), scale);
+    outward(model, tree, tw, at);
+    inward(model, tree, work, tw, at);
     pairs(tree, work, tw);
 }
 
 /// The outward sweep (D76): each node's base motion from its parent's tip
 /// (or section, D62), then its own points (pieces), its body sums (bodies)
 /// and its tip, as in the chain's (D39)–(D43).
-fn outward(
-    model: &Model,
-    tree: &Tree,
-    tw: &mut TreeWork,
-    (q, qd, qdd): (&[f64], &[f64], &[f64]),
-    scale: f64,
-) {
+fn outward(model: &Model, tree: &Tree, tw: &mut TreeWork, at: &At) {
+    let (q, qd, qdd) = (at.q, at.qd, at.qdd);
+    let scale = at.forces.load_scale;
     let a_world = world_acceleration(model, scale);
     for (i, node) in tree.nodes.iter().enumerate() {
         let (parent_pose, eta_p, etad_p) = match (node.parent, &tw.at[i]) {
@@ -191,26 +184,32 @@ fn outward(
         };
         let maps = PieceMaps::new(&xi, Some(&xid));
         let dm = PieceDerivMaps::new(&xi, &xid, &xidd);
+        let pc = PieceLin {
+            maps: &maps,
+            dm: &dm,
+            eta0: &eta_b,
+            etad0: &etad_b,
+            xid: &xid,
+            xidd: &xidd,
+        };
         if let NodeKind::Piece { rod, piece } = node.kind {
             let rm = &model.rods()[rod];
+            let drag = drag_diagonal(rm);
             own_points(
                 rm,
                 &rm.pieces[piece],
-                &maps,
-                &dm,
+                &pc,
                 &base_world,
-                (&eta_b, &etad_b),
-                (&xid, &xidd),
-                drag_diagonal(rm).as_ref(),
+                drag.as_ref(),
                 scale,
                 w,
             );
         }
-        let (g, p) = linearize_point(&maps, &dm, length, &eta_b, &etad_b, &xid, &xidd);
+        let (g, p) = linearize_point(&pc, length);
         w.set_tip(g, &p, &dm);
         for &c in &tree.inner_children[i] {
             let x = tree.nodes[c].attach.unwrap_or(length);
-            tw.at[c] = Some(linearize_point(&maps, &dm, x, &eta_b, &etad_b, &xid, &xidd));
+            tw.at[c] = Some(linearize_point(&pc, x));
         }
     }
 }
@@ -297,15 +296,8 @@ fn add_inner(
 /// with what its tip children handed it and its inside children added to
 /// its sums, writes its `τ` and diagonal blocks, and hands its subtree to
 /// its parent.
-fn inward(
-    model: &Model,
-    tree: &Tree,
-    work: &mut IdDerivatives,
-    tw: &mut TreeWork,
-    t: f64,
-    (q, qd): (&[f64], &[f64]),
-    scale: f64,
-) {
+fn inward(model: &Model, tree: &Tree, work: &mut IdDerivatives, tw: &mut TreeWork, at: &At) {
+    let (q, qd) = (at.q, at.qd);
     let dead = tw.dead;
     for s in tw.tip.iter_mut() {
         *s = Subtree::zero();
@@ -333,17 +325,7 @@ fn inward(
                 let rm = &model.rods()[rod];
                 let bm = basis6(&rm.spec.rod.pieces()[piece].basis);
                 let (dq, dv, wrench, base) = close_piece(&mut tw.nodes[i], &tw.tip[i], &bm, dead);
-                write_piece(
-                    model,
-                    rm,
-                    piece,
-                    work,
-                    t,
-                    (q, qd),
-                    scale,
-                    &bm,
-                    (&dq, &dv, &wrench),
-                );
+                write_piece(model, rm, piece, work, at, &bm, (&dq, &dv, &wrench));
                 base
             }
             NodeKind::Joint { element } => {
@@ -369,7 +351,7 @@ fn inward(
 fn write_joint(
     model: &Model,
     element: usize,
-    node: &crate::tree::Node,
+    node: &crate::model::tree::Node,
     work: &mut IdDerivatives,
     (q, qd): (&[f64], &[f64]),
     (diag_q, diag_v, wrench): (&Mat6, &Mat6, &Vec6),
@@ -449,8 +431,8 @@ fn pairs(tree: &Tree, work: &mut IdDerivatives, tw: &TreeWork) {
 #[cfg(test)]
 mod tests {
     use crate::{
-        Attachment, Curve, Data, IdDerivatives, Joint, Model, Prescribed, RodSpec,
-        inverse_dynamics_derivatives, static_force,
+        Attachment, Curve, Data, Drives, Forces, IdDerivatives, Joint, Model, Prescribed, RodSpec,
+        inverse_dynamics_derivatives_with, static_force,
     };
     use softrod_mechanics::{Material, RodBody, Section};
 
@@ -491,11 +473,10 @@ mod tests {
         let z = vec![0.0; n];
         let t = 0.17;
         let mut work = IdDerivatives::new(&m);
-        work.prescribed_at_rest = true;
-        inverse_dynamics_derivatives(&m, &mut work, t, &q, &z, &z).unwrap();
+        let rest = Forces::ALL.with_drives(Drives::AtRest);
+        inverse_dynamics_derivatives_with(&m, &mut work, rest, t, &q, &z, &z).unwrap();
         let at_rest = work.dtau_dq.clone();
-        work.prescribed_at_rest = false;
-        inverse_dynamics_derivatives(&m, &mut work, t, &q, &z, &z).unwrap();
+        inverse_dynamics_derivatives_with(&m, &mut work, Forces::ALL, t, &q, &z, &z).unwrap();
         let moving = work.dtau_dq.clone();
         let mut data = Data::new(&m);
         let h = 1e-6;

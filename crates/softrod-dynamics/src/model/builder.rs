@@ -3,7 +3,8 @@
 //! constructors, then [`RodSpec::validate`]).
 
 use crate::error::{DynamicsError, RodId};
-use crate::joint::{Attachment, BodySpec};
+use crate::model::closure::Closure;
+use crate::model::joint::{Attachment, BodySpec};
 use crate::model::{Element, Model, RodSpec};
 use softrod_kinematics::{Basis, Rod, Strain, straight};
 use softrod_lie::{Pose, Vec3, Vec6};
@@ -296,7 +297,7 @@ pub struct ModelBuilder {
     order: Vec<Item>,
     gravity: Option<Vec3>,
     quadrature: Option<usize>,
-    closures: Vec<crate::Closure>,
+    closures: Vec<Closure>,
 }
 
 impl ModelBuilder {
@@ -335,7 +336,7 @@ impl ModelBuilder {
     }
 
     /// Adds a loop closure (docs/theory.md D63; see [`Model::with_closures`]).
-    pub fn closure(mut self, closure: crate::Closure) -> Self {
+    pub fn closure(mut self, closure: Closure) -> Self {
         self.closures.push(closure);
         self
     }

@@ -11,7 +11,7 @@
 //! motion subspace `T₋(1)B` and velocity-product acceleration exactly.
 
 use crate::error::DynamicsError;
-use crate::prescribed::Prescribed;
+use crate::model::prescribed::Prescribed;
 use nalgebra::Matrix6xX;
 use softrod_lie::{Mat3, Mat6, Pose, Vec3, Wrench, join, skew};
 use softrod_mechanics::LoadFrame;

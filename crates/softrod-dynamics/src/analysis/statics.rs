@@ -1,11 +1,12 @@
 //! Static equilibrium by Newton's method with line search and load continuation.
 
-use crate::algorithms::{check_vec, inverse_dynamics};
-use crate::data::Data;
+use super::matrices::stiffness_matrix;
+use crate::algorithms::{check_vec, inverse_dynamics_with};
+use crate::derivatives::{IdDerivatives, inverse_dynamics_derivatives_with};
 use crate::error::DynamicsError;
-use crate::id_derivatives::{IdDerivatives, inverse_dynamics_derivatives};
-use crate::matrices::stiffness_matrix;
+use crate::forces::{Drives, Forces};
 use crate::model::Model;
+use crate::model::data::Data;
 use nalgebra::{DMatrix, DVector};
 
 /// Settings of [`statics`].
@@ -69,21 +70,14 @@ pub fn statics(
     options: &StaticsOptions,
 ) -> Result<StaticsResult, DynamicsError> {
     check_vec(model, "q0", q0)?;
-    let saved = data.load_scale;
-    // Prescribed joints (D59) hold their values at `options.time`, at rest.
-    let at_rest = std::mem::replace(&mut data.prescribed_at_rest, true);
+    // Prescribed joints (D59) hold their values at `options.time`, at rest
+    // (`Forces::at_rest` in every evaluation).
     if let (true, Some(tree)) = (model.has_closures(), &model.tree) {
         // Closed chains: Newton on [τ − Jᵀλ; φ] (docs/theory.md D69).
-        crate::closure::check_workspace(model, data)?;
-        let out = crate::constrained::statics(model, tree, data, q0, options).map(|(r, _)| r);
-        data.load_scale = saved;
-        data.prescribed_at_rest = at_rest;
-        return out;
+        crate::constraints::queries::check_workspace(model, data)?;
+        return super::closed::statics(model, tree, data, q0, options).map(|(r, _)| r);
     }
-    let out = statics_inner(model, data, q0, options);
-    data.load_scale = saved;
-    data.prescribed_at_rest = at_rest;
-    out
+    statics_inner(model, data, q0, options)
 }
 
 /// The static force `τ_s(q) = b(q, 0)` at time `t` (the bias of
@@ -101,11 +95,14 @@ pub fn static_force<'a>(
 ) -> Result<&'a DVector<f64>, DynamicsError> {
     check_vec(model, "q", q)?;
     let zero = vec![0.0; model.n_dof()];
-    let at_rest = std::mem::replace(&mut data.prescribed_at_rest, true);
-    let out = crate::algorithms::bias_force(model, data, t, q, &zero).map(|_| ());
-    data.prescribed_at_rest = at_rest;
-    out?;
-    Ok(&data.tau)
+    crate::algorithms::bias_force_with(
+        model,
+        data,
+        Forces::ALL.with_drives(Drives::AtRest),
+        t,
+        q,
+        &zero,
+    )
 }
 
 struct Newton<'a> {
@@ -119,10 +116,17 @@ struct Newton<'a> {
 }
 
 impl Newton<'_> {
-    fn residual(&self, data: &mut Data, q: &DVector<f64>) -> Result<DVector<f64>, DynamicsError> {
-        Ok(inverse_dynamics(
+    /// `τ(q) = ID(q, 0, 0)` under `forces`.
+    fn residual(
+        &self,
+        data: &mut Data,
+        forces: Forces,
+        q: &DVector<f64>,
+    ) -> Result<DVector<f64>, DynamicsError> {
+        Ok(inverse_dynamics_with(
             self.model,
             data,
+            forces,
             self.time,
             q.as_slice(),
             &self.zero,
@@ -132,19 +136,23 @@ impl Newton<'_> {
     }
 
     /// `∂τ/∂q` of the residual, analytic (the derivatives of the inverse
-    /// dynamics at rest, loads and tensions as `data` has them).
-    fn jacobian(&mut self, data: &Data, q: &DVector<f64>) -> Result<DMatrix<f64>, DynamicsError> {
+    /// dynamics at rest under `forces`, the tensions `data` has).
+    fn jacobian(
+        &mut self,
+        data: &Data,
+        forces: Forces,
+        q: &DVector<f64>,
+    ) -> Result<DMatrix<f64>, DynamicsError> {
         let w = &mut self.derivatives;
-        w.load_scale = data.load_scale;
-        w.prescribed_at_rest = true;
         match (data.cable_tensions(), &mut w.tensions) {
             (None, t) => *t = None,
             (Some(u), Some(t)) => t.as_mut_slice().copy_from_slice(u),
             (Some(u), t) => *t = Some(DVector::from_column_slice(u)),
         }
-        inverse_dynamics_derivatives(
+        inverse_dynamics_derivatives_with(
             self.model,
             w,
+            forces,
             self.time,
             q.as_slice(),
             &self.zero,
@@ -153,17 +161,18 @@ impl Newton<'_> {
         Ok(w.dtau_dq.clone())
     }
 
-    /// Newton from `q` at the current load scale: `Ok(Ok(residual))` when
-    /// converged (q updated), `Ok(Err(residual))` with the last residual
-    /// when it failed (q unspecified).
+    /// Newton from `q` under `forces` (one load scale of the continuation):
+    /// `Ok(Ok(residual))` when converged (q updated), `Ok(Err(residual))`
+    /// with the last residual when it failed (q unspecified).
     fn solve(
         &mut self,
         data: &mut Data,
+        forces: Forces,
         q: &mut DVector<f64>,
         tol_ref: f64,
         options: &StaticsOptions,
     ) -> Result<Result<f64, f64>, DynamicsError> {
-        let mut r = self.residual(data, q)?;
+        let mut r = self.residual(data, forces, q)?;
         for _ in 0..options.max_iterations {
             let rn = r.amax();
             let kq = (&self.k * &*q).amax();
@@ -172,7 +181,7 @@ impl Newton<'_> {
                 return Ok(Ok(rn));
             }
             self.iterations += 1;
-            let jac = self.jacobian(data, q)?;
+            let jac = self.jacobian(data, forces, q)?;
             let Some(dq) = jac.lu().solve(&(-&r)) else {
                 return Ok(Err(rn));
             };
@@ -182,7 +191,7 @@ impl Newton<'_> {
             let mut alpha = 1.0;
             loop {
                 let trial = &*q + &dq * alpha;
-                let rt = match self.residual(data, &trial) {
+                let rt = match self.residual(data, forces, &trial) {
                     Ok(v) => v,
                     Err(DynamicsError::NotFinite { .. }) => {
                         DVector::from_element(r.len(), f64::INFINITY)
@@ -224,12 +233,11 @@ fn statics_inner(
         derivatives: IdDerivatives::new(model),
     };
     let start = DVector::from_column_slice(q0);
-    data.load_scale = 1.0;
-    let r_full = newton.residual(data, &start)?.amax();
+    let r_full = newton.residual(data, Forces::at_rest(1.0), &start)?.amax();
     // Reference force: the full-load imbalance at the start.
     let tol_ref = r_full.max(f64::MIN_POSITIVE);
     let mut q = start.clone();
-    if let Ok(res) = newton.solve(data, &mut q, tol_ref, options)? {
+    if let Ok(res) = newton.solve(data, Forces::at_rest(1.0), &mut q, tol_ref, options)? {
         return Ok(StaticsResult {
             q,
             iterations: newton.iterations,
@@ -240,13 +248,16 @@ fn statics_inner(
     // Continuation from the unloaded state.
     let mut lam = 0.0;
     let mut q_prev = start.clone();
-    data.load_scale = 0.0;
-    if newton.solve(data, &mut q_prev, tol_ref, options)?.is_err() {
+    let unloaded = Forces::at_rest(0.0);
+    if newton
+        .solve(data, unloaded, &mut q_prev, tol_ref, options)?
+        .is_err()
+    {
         return Err(DynamicsError::StaticsFailed {
             reason: "no equilibrium even without loads (check the stress-free strain)".into(),
             load_fraction: 0.0,
             iterations: newton.iterations,
-            residual: newton.residual(data, &q_prev)?.amax(),
+            residual: newton.residual(data, unloaded, &q_prev)?.amax(),
         });
     }
     let mut step = 0.25;
@@ -256,7 +267,6 @@ fn statics_inner(
     let mut failed_res = f64::NAN;
     while lam < 1.0 {
         if steps >= options.max_load_steps || step < 1e-5 {
-            data.load_scale = lam;
             return Err(DynamicsError::StaticsFailed {
                 reason: if step < 1e-5 {
                     "load step fell below 1e-5 (a limit point or instability?)".into()
@@ -274,9 +284,8 @@ fn statics_inner(
         }
         steps += 1;
         let target = (lam + step).min(1.0);
-        data.load_scale = target;
         let mut trial = q_prev.clone();
-        match newton.solve(data, &mut trial, tol_ref, options)? {
+        match newton.solve(data, Forces::at_rest(target), &mut trial, tol_ref, options)? {
             Ok(res) => {
                 lam = target;
                 q_prev = trial;

@@ -1,10 +1,10 @@
 //! The matrices of the Lagrangian form, (C10) and (D19)–(D22), on request.
 
-use crate::algorithms::{check_vec, inward_inverse, strain_forces};
-use crate::data::Data;
+use crate::algorithms::{Motion, chain, check_vec, tree};
 use crate::error::DynamicsError;
+use crate::forces::Forces;
 use crate::model::Model;
-use crate::passes::{Pass, outward};
+use crate::model::data::Data;
 use nalgebra::{DMatrix, DVector, Matrix6xX};
 use softrod_kinematics::{Frame, RodKinematics};
 use softrod_lie::coad_vec;
@@ -19,17 +19,13 @@ pub fn generalized_gravity(
 ) -> Result<DVector<f64>, DynamicsError> {
     check_vec(model, "q", q)?;
     let zero = vec![0.0; model.n_dof()];
-    data.only_gravity = true;
-    let scale = std::mem::replace(&mut data.load_scale, 1.0);
-    if let Some(tree) = &model.tree {
-        crate::tree_algorithms::inverse_dynamics(model, tree, data, 0.0, q, None, Some(&zero));
-    } else {
-        outward(model, data, q, None, Some(&zero), Pass::Inverse);
-        strain_forces(model, data, 0.0, q, None, None);
-        inward_inverse(model, data);
+    // At rest, gravity alone; prescribed joints where the last evaluation
+    // left them (no time is set).
+    let motion = Motion::new(q, None, Some(&zero));
+    match &model.tree {
+        Some(tr) => tree::inverse_dynamics(model, tr, data, Forces::GRAVITY, 0.0, motion),
+        None => chain::inverse_dynamics_general(model, data, Forces::GRAVITY, 0.0, motion),
     }
-    data.only_gravity = false;
-    data.load_scale = scale;
     Ok(data.tau.clone())
 }
 
@@ -61,7 +57,7 @@ fn joint_diag(model: &Model, m: &mut DMatrix<f64>, which: usize) {
 
 fn block_diag(
     model: &Model,
-    f: impl Fn(&crate::model::PieceData) -> &DMatrix<f64>,
+    f: impl Fn(&crate::model::rod::PieceData) -> &DMatrix<f64>,
 ) -> DMatrix<f64> {
     let n = model.n_dof();
     let mut m = DMatrix::zeros(n, n);

@@ -1,10 +1,13 @@
-//! Reusable buffers: everything one evaluation needs, allocated once.
+//! Reusable buffers: everything one evaluation needs, allocated once —
+//! [`Data`] and the per-piece, per-node and closure work spaces of the
+//! algorithms (each field says which algorithm writes it).
 
-use crate::blocks::Sym6;
 use crate::error::DynamicsError;
+use crate::kernels::blocks::Sym6;
+use crate::kernels::planar::Pose2;
 use crate::model::{Model, RodModel};
 use nalgebra::{DMatrix, DVector};
-use softrod_lie::{AdOp, Mat6, Pose, Vec6};
+use softrod_lie::{AdOp, Mat3, Mat6, Pose, Vec3, Vec6};
 
 /// Per-piece work space of the recursions (all fixed-size; `k_n`-sized
 /// quantities live in the top-left of 6×6 / the head of 6-vectors).
@@ -58,7 +61,7 @@ pub struct Data {
     pub(crate) pieces: Vec<Vec<PieceWork>>,
     /// Per-piece work of the planar path, for planar rods (empty for the
     /// others).
-    pub(crate) planar: Vec<Vec<crate::planar::PlanarWork>>,
+    pub(crate) planar: Vec<Vec<PlanarWork>>,
     /// Generalized force from the last [`crate::inverse_dynamics`] (n_dof).
     pub tau: DVector<f64>,
     /// Generalized acceleration from the last forward dynamics (n_dof).
@@ -71,17 +74,11 @@ pub struct Data {
     pub(crate) strain_force: DVector<f64>,
     /// Cable force per unit tension scratch (n_dof).
     pub(crate) cable_scratch: DVector<f64>,
-    /// Factor multiplying every external load and cable tension (gravity,
-    /// point and distributed loads, cables); 1 by default. Statics ramps it
-    /// for load continuation.
-    pub load_scale: f64,
-    /// When set, the sweeps include gravity only (for [`crate::generalized_gravity`]).
-    pub(crate) only_gravity: bool,
     /// Cable tensions that replace the cables' schedules (the inputs `u`,
     /// one per cable in model order), set by [`Data::set_cable_tensions`].
     pub(crate) tensions: Option<DVector<f64>>,
     /// Per-node work space of an articulated model (empty otherwise).
-    pub(crate) nodes: Vec<crate::tree_algorithms::NodeWork>,
+    pub(crate) nodes: Vec<NodeWork>,
     /// World pose of every rod's base frame, from the last [`crate::frames`]
     /// (one per rod).
     pub rod_bases: Vec<Pose>,
@@ -102,11 +99,8 @@ pub struct Data {
     /// to follow its motion, from the last forward or inverse dynamics
     /// (D59).
     pub prescribed_force: DVector<f64>,
-    /// When set, prescribed joints hold their values at rest (no rate, no
-    /// acceleration): statics and modes about an equilibrium.
-    pub(crate) prescribed_at_rest: bool,
     /// Buffers of the constrained dynamics of a model with closures.
-    pub(crate) closure: Option<crate::constrained::ClosureWork>,
+    pub(crate) closure: Option<ClosureWork>,
 }
 
 impl Data {
@@ -132,7 +126,7 @@ impl Data {
                     } else {
                         0
                     };
-                    (0..n).map(|_| crate::planar::PlanarWork::new()).collect()
+                    (0..n).map(|_| PlanarWork::new()).collect()
                 })
                 .collect(),
             tau: DVector::zeros(n),
@@ -140,13 +134,9 @@ impl Data {
             mass: DMatrix::zeros(0, 0),
             strain_force: DVector::zeros(n),
             cable_scratch: DVector::zeros(n),
-            load_scale: 1.0,
-            only_gravity: false,
             tensions: None,
             nodes: model.tree.as_ref().map_or(Vec::new(), |t| {
-                (0..t.nodes.len())
-                    .map(|_| crate::tree_algorithms::NodeWork::new())
-                    .collect()
+                (0..t.nodes.len()).map(|_| NodeWork::new()).collect()
             }),
             rod_bases: model.rods().iter().map(|r| *r.spec.rod.base()).collect(),
             body_poses: vec![Pose::identity(); model.bodies().len()],
@@ -155,9 +145,8 @@ impl Data {
             prescribed_qdd: DVector::zeros(model.n_prescribed()),
             prescribed_time: f64::NAN,
             prescribed_force: DVector::zeros(model.n_prescribed()),
-            prescribed_at_rest: false,
             closure: model.has_closures().then(|| {
-                crate::constrained::ClosureWork::new(
+                ClosureWork::new(
                     n,
                     model.n_constraints(),
                     model.n_prescribed(),
@@ -173,7 +162,7 @@ impl Data {
     /// rods in order, each rod's cables in order) that every evaluation
     /// with this `Data` uses instead of the cables' tension schedules — the
     /// inputs of a controller (D15: `τ_c = Σ_c u_c ∂ℓ_c/∂q`, still scaled by
-    /// [`Data::load_scale`]). `None` goes back to the schedules.
+    /// [`crate::Forces::load_scale`]). `None` goes back to the schedules.
     ///
     /// Errors: a length other than [`Model::n_cables`], or a tension that
     /// is negative or not finite (a cable can only pull).
@@ -237,5 +226,191 @@ pub(crate) fn cable_tension(u: Option<&DVector<f64>>, rm: &RodModel, c: usize, t
     match u {
         Some(u) => u[rm.cable_offset + c],
         None => rm.spec.cables[c].tension_at(t),
+    }
+}
+
+/// Per-node work space (all fixed-size).
+#[derive(Clone, Debug)]
+pub(crate) struct NodeWork {
+    /// World pose of the node's base frame.
+    pub base_world: Pose,
+    /// Local tip pose `g(ℓ)`, `S(ℓ) = T₋(ℓ)B` (6×k padded), the tip's
+    /// velocity-product acceleration.
+    pub tip: Pose,
+    pub s_tip: Mat6,
+    pub acc_tip: Vec6,
+    /// Velocity and acceleration of the tip frame (tip axes).
+    pub eta_tip: Vec6,
+    pub etadot_tip: Vec6,
+    /// (D20) `𝓜ᵗ = Σ wAᵀ𝓜A`, `𝓤 = Σ wAᵀ𝓜S`, `𝓓 = Σ wSᵀ𝓜S` of the node's
+    /// own mass; (D23/D17) bias sums `𝓟ᵗ` (6) and `𝓹 = Bᵀ Σ T₋ᵀ f` (k).
+    pub mt: Mat6,
+    pub ut: Mat6,
+    pub dt: Mat6,
+    pub p_big: Vec6,
+    pub p_small: Vec6,
+    /// What the children hand to the tip (tip axes): articulated or
+    /// composite inertia, and bias or transmitted wrench.
+    pub m_tip: Mat6,
+    pub f_tip: Vec6,
+    /// Forward dynamics: `Û`, `D̂⁻¹` (k×k padded), `u` (k).
+    pub uhat: Mat6,
+    pub dinv: Mat6,
+    pub u: Vec6,
+    /// Mass matrix: `Ad_{g_world(ℓ)} S(ℓ)` (world twists per unit rate).
+    pub s_world: Mat6,
+    /// A node hanging inside its parent piece at `x` (D62): the parent's
+    /// `g(x)`, `Ad⁻¹_{g(x)}`, `S(x) = T₋(x)B` (6×k padded), the
+    /// velocity-product acceleration there and the motion of that frame
+    /// (its axes), all written by the parent's outward step.
+    pub attach_pose: Pose,
+    pub attach_a: Mat6,
+    pub attach_s: Mat6,
+    pub attach_acc: Vec6,
+    pub attach_eta: Vec6,
+    pub attach_etadot: Vec6,
+    /// Forward dynamics pass 3: the base acceleration and `q̈_n` (padded).
+    pub etadot_base: Vec6,
+    pub qn: Vec6,
+}
+
+impl NodeWork {
+    pub(crate) fn new() -> Self {
+        Self {
+            base_world: Pose::identity(),
+            tip: Pose::identity(),
+            s_tip: Mat6::zeros(),
+            acc_tip: Vec6::zeros(),
+            eta_tip: Vec6::zeros(),
+            etadot_tip: Vec6::zeros(),
+            mt: Mat6::zeros(),
+            ut: Mat6::zeros(),
+            dt: Mat6::zeros(),
+            p_big: Vec6::zeros(),
+            p_small: Vec6::zeros(),
+            m_tip: Mat6::zeros(),
+            f_tip: Vec6::zeros(),
+            uhat: Mat6::zeros(),
+            dinv: Mat6::zeros(),
+            u: Vec6::zeros(),
+            s_world: Mat6::zeros(),
+            attach_pose: Pose::identity(),
+            attach_a: Mat6::identity(),
+            attach_s: Mat6::zeros(),
+            attach_acc: Vec6::zeros(),
+            attach_eta: Vec6::zeros(),
+            attach_etadot: Vec6::zeros(),
+            etadot_base: Vec6::zeros(),
+            qn: Vec6::zeros(),
+        }
+    }
+}
+
+/// Per-piece work of the planar path (the 3×3 counterparts of
+/// `PieceWork`'s forward-dynamics fields).
+#[derive(Clone, Debug)]
+pub(crate) struct PlanarWork {
+    pub(crate) tip: Pose2,
+    pub(crate) tm_tip: Mat3,
+    pub(crate) acc_tip: Vec3,
+    pub(crate) p_big: Vec3,
+    pub(crate) p_small: Vec3,
+    /// `𝓤ᶠ = ∫Aᵀ𝓜T₋` (3×3), then `W = ÛL⁻ᵀ` in its first `k` columns.
+    pub(crate) ut: Mat3,
+    /// `𝓓ᶠ = ∫T₋ᵀ𝓜T₋` (3×3), then the factor `L` of `D̂` (k×k).
+    pub(crate) dt: Mat3,
+    pub(crate) mt: Mat3,
+    pub(crate) u: Vec3,
+}
+
+impl PlanarWork {
+    pub(crate) fn new() -> Self {
+        Self {
+            tip: Pose2::IDENTITY,
+            tm_tip: Mat3::zeros(),
+            acc_tip: Vec3::zeros(),
+            p_big: Vec3::zeros(),
+            p_small: Vec3::zeros(),
+            ut: Mat3::zeros(),
+            dt: Mat3::zeros(),
+            mt: Mat3::zeros(),
+            u: Vec3::zeros(),
+        }
+    }
+}
+
+/// Per-node scratch of the tree's shifted solve: what the children hand
+/// to the node (at its tip, or inside it at `x`, D62) and the outward
+/// motion.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct SolveNode {
+    pub(crate) f_tip: Vec6,
+    pub(crate) p_big: Vec6,
+    pub(crate) p_small: Vec6,
+    pub(crate) u: Vec6,
+    pub(crate) etadot_base: Vec6,
+    pub(crate) etadot_tip: Vec6,
+    pub(crate) qn: Vec6,
+}
+
+/// The stacked rows of a model's closures at one state (D63–D65): the
+/// residual `φ` (m), the Jacobian `J` (m×n; exact `∂φ/∂q` or the velocity
+/// rows) and the velocity product `J̇q̇` (m).
+#[derive(Clone, Debug)]
+pub(crate) struct ConstraintRows {
+    pub phi: DVector<f64>,
+    pub jac: DMatrix<f64>,
+    pub jdot_qd: DVector<f64>,
+}
+
+impl ConstraintRows {
+    /// Zero rows for `m` constraints on `n` coordinates.
+    pub(crate) fn new(m: usize, n: usize) -> Self {
+        Self {
+            phi: DVector::zeros(m),
+            jac: DMatrix::zeros(m, n),
+            jdot_qd: DVector::zeros(m),
+        }
+    }
+}
+
+/// Buffers of the constrained forward dynamics (allocated once, in
+/// [`Data::new`], for a model with closures).
+#[derive(Clone, Debug)]
+pub(crate) struct ClosureWork {
+    /// `φ`, the velocity rows `J` and `J̇q̇` of the last evaluation.
+    pub rows: ConstraintRows,
+    /// Per-node scratch of the O(N) solves with `M`, `Y = M⁻¹Jᵀ` (n×m),
+    /// `A = J M⁻¹ Jᵀ` (m×m, factored in place), right side and multipliers.
+    pub solve: Vec<SolveNode>,
+    pub y: DMatrix<f64>,
+    pub a: DMatrix<f64>,
+    pub rhs: DVector<f64>,
+    pub lambda: DVector<f64>,
+    pub scratch: DVector<f64>,
+    pub perm: Vec<usize>,
+    /// Numerical rank of `A` at the last evaluation.
+    pub rank: usize,
+    /// With prescribed joints (D59): the constraint rows' columns of the
+    /// prescribed coordinates `J_p` (m×n_p), and a copy of `q̈` (n).
+    pub jac_p: DMatrix<f64>,
+    pub qdd: DVector<f64>,
+}
+
+impl ClosureWork {
+    pub(crate) fn new(n: usize, m: usize, n_p: usize, nodes: usize) -> Self {
+        Self {
+            solve: vec![SolveNode::default(); nodes],
+            jac_p: DMatrix::zeros(m, n_p),
+            qdd: DVector::zeros(if n_p > 0 { n } else { 0 }),
+            rows: ConstraintRows::new(m, n),
+            y: DMatrix::zeros(n, m),
+            a: DMatrix::zeros(m, m),
+            rhs: DVector::zeros(m),
+            lambda: DVector::zeros(m),
+            scratch: DVector::zeros(m.max(n)),
+            perm: (0..m).collect(),
+            rank: m,
+        }
     }
 }

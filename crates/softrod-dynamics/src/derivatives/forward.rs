@@ -2,12 +2,13 @@
 //! `ẋ = f(x, u)`, from the analytic inverse-dynamics derivatives
 //! (docs/theory-derivatives.md §5, (D48)–(D49)).
 
-use crate::algorithms::{check_vec, forward_dynamics};
-use crate::data::Data;
+use super::{IdDerivatives, inverse_dynamics_derivatives_with};
+use crate::algorithms::shifted::ShiftedSolver;
+use crate::algorithms::{check_forward_inputs, check_qdd, check_vec, forward_dynamics_open};
 use crate::error::DynamicsError;
-use crate::id_derivatives::{IdDerivatives, inverse_dynamics_derivatives};
+use crate::forces::Forces;
 use crate::model::Model;
-use crate::shifted::ShiftedSolver;
+use crate::model::data::Data;
 use nalgebra::{DMatrix, DVector};
 
 /// `∂q̈/∂q` and `∂q̈/∂q̇` (n_dof × n_dof each), the Jacobians the stiff
@@ -41,8 +42,9 @@ pub struct FdDerivatives {
     /// [`crate::actuation_matrix`]) [per N].
     pub dqdd_du: DMatrix<f64>,
     /// The generalized force per unit tension of each cable, scaled by the
-    /// load factor: `λ A(q)` (n_dof × n_u), `A` of [`crate::actuation_matrix`];
-    /// `∂τ/∂u = −λ A(q)` for the inverse dynamics.
+    /// load factor `λ` of the evaluation's [`Forces`]: `λ A(q)` (n_dof ×
+    /// n_u), `A` of [`crate::actuation_matrix`]; `∂τ/∂u = −λ A(q)` for the
+    /// inverse dynamics.
     pub actuation: DMatrix<f64>,
     /// `q̈` at the point of evaluation (n_dof).
     pub qdd: DVector<f64>,
@@ -83,9 +85,9 @@ fn solve_columns(
 /// `t`, from `ID(q, q̇, FD(q, q̇, …)) = τ_act` (D48):
 ///
 /// - `∂q̈/∂q = −M⁻¹ ∂τ/∂q`, `∂q̈/∂q̇ = −M⁻¹ ∂τ/∂q̇` (the ID derivatives taken
-///   at `q̈ = FD(q, q̇)`, [`inverse_dynamics_derivatives`]);
-/// - `∂q̈/∂u = M⁻¹ λA(q)` for the cable tensions `u` (the generalized force
-///   is linear in them, (D15)), `λ` = `data.load_scale`.
+///   at `q̈ = FD(q, q̇)`, [`crate::inverse_dynamics_derivatives`]);
+/// - `∂q̈/∂u = M⁻¹ A(q)` for the cable tensions `u` (the generalized force
+///   is linear in them, (D15)).
 ///
 /// `M⁻¹` is applied column by column with the O(N) articulated solve
 /// ([`ShiftedSolver`] with `a = b = 0`), so no `n_dof × n_dof` factor is
@@ -101,6 +103,20 @@ pub fn forward_dynamics_derivatives<'a>(
     qd: &[f64],
     tau_act: Option<&[f64]>,
 ) -> Result<&'a FdDerivatives, DynamicsError> {
+    fd_derivatives(model, data, work, Forces::ALL, t, (q, qd), tau_act)
+}
+
+/// [`forward_dynamics_derivatives`] under `forces` (`∂q̈/∂u = M⁻¹ λA(q)`,
+/// `λ` = [`Forces::load_scale`]); `(q, q̇)` as a pair.
+fn fd_derivatives<'a>(
+    model: &Model,
+    data: &mut Data,
+    work: &'a mut FdDerivatives,
+    forces: Forces,
+    t: f64,
+    (q, qd): (&[f64], &[f64]),
+    tau_act: Option<&[f64]>,
+) -> Result<&'a FdDerivatives, DynamicsError> {
     if work.qdd.len() != model.n_dof() || work.actuation.ncols() != model.n_cables() {
         return Err(DynamicsError::WorkspaceMismatch {
             what: "FdDerivatives",
@@ -113,15 +129,15 @@ pub fn forward_dynamics_derivatives<'a>(
             what: "forward_dynamics_derivatives",
         });
     }
-    forward_dynamics(model, data, t, q, qd, tau_act)?;
-    work.qdd.copy_from(&data.qdd);
-    work.id.load_scale = data.load_scale;
+    check_forward_inputs(model, forces, q, qd, tau_act)?;
+    forward_dynamics_open(model, data, forces, t, q, qd, tau_act)?;
+    work.qdd.copy_from(check_qdd(data, t)?);
     match (data.cable_tensions(), &mut work.id.tensions) {
         (None, t) => *t = None,
         (Some(u), Some(t)) => t.as_mut_slice().copy_from_slice(u),
         (Some(u), t) => *t = Some(DVector::from_column_slice(u)),
     }
-    inverse_dynamics_derivatives(model, &mut work.id, t, q, qd, work.qdd.as_slice())?;
+    inverse_dynamics_derivatives_with(model, &mut work.id, forces, t, q, qd, work.qdd.as_slice())?;
     work.solver.factor_at(model, t, q, 0.0, 0.0)?;
     work.dqdd_dq.copy_from(&work.id.dtau_dq);
     work.dqdd_dq.neg_mut();
@@ -129,7 +145,7 @@ pub fn forward_dynamics_derivatives<'a>(
     work.dqdd_dqd.copy_from(&work.id.dtau_dqd);
     work.dqdd_dqd.neg_mut();
     solve_columns(model, &mut work.solver, &mut work.dqdd_dqd)?;
-    fill_actuation(model, q, data.load_scale, &mut work.actuation)?;
+    fill_actuation(model, q, forces.load_scale, &mut work.actuation)?;
     work.dqdd_du.copy_from(&work.actuation);
     solve_columns(model, &mut work.solver, &mut work.dqdd_du)?;
     Ok(work)
@@ -177,15 +193,14 @@ pub struct Linearization {
     pub b: DMatrix<f64>,
     /// `f(x₀, u₀) = (q̇, q̈)` at the point (2n): zero at an equilibrium.
     pub xdot: DVector<f64>,
-    /// The operating inputs `u₀`: each cable's tension at `t` times the load
-    /// factor \[N\].
+    /// The operating inputs `u₀`: each cable's tension at `t` \[N\].
     pub u: DVector<f64>,
 }
 
 /// Linearizes `ẋ = f(x, u)`, `x = (q, q̇)`, about `(q, q̇)` at time `t`
 /// under `τ_act` (`None` = 0), with `u` the cable tensions (their operating
 /// values are the tension schedules at `t`, or the inputs set by
-/// [`Data::set_cable_tensions`], times `data.load_scale`):
+/// [`Data::set_cable_tensions`]):
 /// `ẋ ≈ f(x₀, u₀) + A (x − x₀) + B (u − u₀)` with `A`, `B` of
 /// [`Linearization`], from [`forward_dynamics_derivatives`]. What
 /// model-based control (LQR, MPC, trajectory optimization) needs. Allocates
@@ -213,9 +228,10 @@ pub fn linearize(
     xdot.rows_mut(n, n).copy_from(&work.qdd);
     let u = DVector::from_iterator(
         nu,
-        model.rods().iter().flat_map(|r| {
-            (0..r.spec.cables.len()).map(|c| data.tension(r, c, t) * data.load_scale)
-        }),
+        model
+            .rods()
+            .iter()
+            .flat_map(|r| (0..r.spec.cables.len()).map(|c| data.tension(r, c, t))),
     );
     Ok(Linearization { a, b, xdot, u })
 }
@@ -224,7 +240,6 @@ pub fn linearize(
 /// `∂q̈/∂q = −M⁻¹ ∂ID/∂q|_{q̈}` and `∂q̈/∂q̇ = −M⁻¹ ∂ID/∂q̇|_{q̈}` with the
 /// analytic inverse-dynamics derivatives (every term: the elastic `K`,
 /// viscous `D`, geometric, gyroscopic and centrifugal parts alike; D48).
-/// Loads and tensions scaled by `data.load_scale`.
 ///
 /// Allocates its outputs and a workspace per call; for repeated
 /// evaluations use [`forward_dynamics_derivatives`] with one
@@ -237,10 +252,25 @@ pub fn dynamics_jacobians(
     qd: &[f64],
     tau_act: Option<&[f64]>,
 ) -> Result<DynamicsJacobians, DynamicsError> {
+    dynamics_jacobians_with(model, data, Forces::ALL, t, q, qd, tau_act)
+}
+
+/// [`dynamics_jacobians`] of the forward dynamics under `forces` (loads
+/// and tensions scaled by [`Forces::load_scale`], drives moving or at
+/// rest).
+pub fn dynamics_jacobians_with(
+    model: &Model,
+    data: &mut Data,
+    forces: Forces,
+    t: f64,
+    q: &[f64],
+    qd: &[f64],
+    tau_act: Option<&[f64]>,
+) -> Result<DynamicsJacobians, DynamicsError> {
     check_vec(model, "q", q)?;
     check_vec(model, "qdot", qd)?;
     let mut work = FdDerivatives::new(model);
-    forward_dynamics_derivatives(model, data, &mut work, t, q, qd, tau_act)?;
+    fd_derivatives(model, data, &mut work, forces, t, (q, qd), tau_act)?;
     Ok(DynamicsJacobians {
         dqdd_dq: work.dqdd_dq,
         dqdd_dqd: work.dqdd_dqd,

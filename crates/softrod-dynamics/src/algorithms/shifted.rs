@@ -13,14 +13,19 @@
 //! spring and damper constants are its armature (D53); closed chains are
 //! not covered (their Newton matrix carries the constraints).
 
-use crate::algorithms::check_vec;
-use crate::blocks::{Blk6, Sym6, ad_inv_tr_vec, ad_inv_vec};
-use crate::chol::{backward_sub, cholesky_k, forward_sub, right_solve_lt};
-use crate::data::Data;
+use super::chain::outward_inl;
+use super::tree::{inverse_k, local, outward};
+use super::{Motion, Pass, check_vec};
 use crate::error::DynamicsError;
+use crate::forces::Forces;
+use crate::kernels::blocks::{Blk6, Sym6, ad_inv_tr_vec, ad_inv_vec};
+use crate::kernels::chol::{backward_sub, cholesky_k, forward_sub, right_solve_lt};
+use crate::kernels::inertia::project_add_blocks;
 use crate::model::Model;
-use crate::passes::{Pass, outward_inl, project_add_blocks};
-use softrod_lie::Vec6;
+use crate::model::data::Data;
+use crate::model::data::SolveNode;
+use crate::model::tree::{NodeKind, Tree};
+use softrod_lie::{Mat6, Vec6};
 
 /// Factorization of `S = M(q) + a·K + b·D` by the articulated recursion,
 /// with every buffer allocated once in [`ShiftedSolver::new`].
@@ -49,7 +54,7 @@ pub struct ShiftedSolver {
     factored: bool,
     n_dof: usize,
     /// Per-node scratch of the tree solve (empty for chain models).
-    tree_scratch: Vec<crate::tree_algorithms::SolveNode>,
+    tree_scratch: Vec<crate::model::data::SolveNode>,
 }
 
 impl ShiftedSolver {
@@ -129,7 +134,7 @@ impl ShiftedSolver {
         }
         if let Some(tree) = &model.tree {
             model.set_time(&mut self.data, t);
-            crate::tree_algorithms::shifted_factor(model, tree, &mut self.data, q, a, b)?;
+            tree_factor(model, tree, &mut self.data, q, a, b)?;
         } else {
             shifted_factor(model, &mut self.data, q, a, b)?;
         }
@@ -153,9 +158,7 @@ impl ShiftedSolver {
         }
         check_vec(model, "x", x)?;
         match &model.tree {
-            Some(tree) => {
-                crate::tree_algorithms::shifted_solve(tree, &self.data, &mut self.tree_scratch, x)
-            }
+            Some(tree) => tree_solve(tree, &self.data, &mut self.tree_scratch, x),
             None => shifted_solve(model, &self.data, x),
         }
         if let Some((i, v)) = x.iter().enumerate().find(|(_, v)| !v.is_finite()) {
@@ -168,7 +171,7 @@ impl ShiftedSolver {
     }
 }
 
-crate::simd::dispatch! {
+crate::kernels::simd::dispatch! {
     /// The factorization of [`ShiftedSolver::factor`] into `data` (arguments
     /// checked by the caller).
     pub fn shifted_factor<'a>(model: &Model, data: &'a mut Data, q: &[f64], a: f64, b: f64) -> Result<&'a Data, DynamicsError>
@@ -183,7 +186,13 @@ pub(crate) fn shifted_factor_impl<'a>(
     a: f64,
     b: f64,
 ) -> Result<&'a Data, DynamicsError> {
-    outward_inl(model, data, q, None, None, Pass::Composite);
+    outward_inl(
+        model,
+        data,
+        Motion::at_rest(q),
+        Pass::Composite,
+        Forces::ALL,
+    );
     for (r, rm) in model.rods().iter().enumerate() {
         let pieces = rm.spec.rod.pieces();
         let mut ma_next = Sym6::default();
@@ -268,5 +277,135 @@ fn shifted_solve(model: &Model, data: &Data, x: &mut [f64]) {
             let sq = w.tm_tip.mul_vec(&piece.basis.apply(&qn.as_slice()[..k]));
             etadot = ad_inv_vec(&w.tip, &etadot) + sq;
         }
+    }
+}
+
+/// The factorization of `S = M(q) + a·K + b·D` on the tree
+/// (docs/theory-derivatives.md §6 on the recursion of D56): the
+/// articulated inward pass of [`super::tree::forward_dynamics`] without biases, with the
+/// armature `a·K_n + b·D_n` of each node added to its `D̂` — a piece's
+/// `K_n`, `D_n` (D13), a joint's spring and damper constants (D53), nothing
+/// for bodies and prescribed joints. Leaves `Û`, `D̂⁻¹` per node in `data`;
+/// prescribed joints at `data.prescribed_q` (their last [`Model::set_time`]).
+pub(crate) fn tree_factor(
+    model: &Model,
+    tree: &Tree,
+    data: &mut Data,
+    q: &[f64],
+    a: f64,
+    b: f64,
+) -> Result<(), DynamicsError> {
+    outward(
+        model,
+        tree,
+        data,
+        Motion::at_rest(q),
+        Pass::Composite,
+        Forces::ALL,
+    );
+    for w in &mut data.nodes {
+        w.m_tip = Mat6::zeros();
+    }
+    for (i, node) in tree.nodes.iter().enumerate().rev() {
+        let k = node.k;
+        let w = &mut data.nodes[i];
+        let am = w.tip.ad_inv().to_mat6();
+        let ma = w.m_tip;
+        let mas = ma * w.s_tip;
+        let uhat = w.ut + am.transpose() * mas;
+        let mut dhat = w.dt + w.s_tip.transpose() * mas;
+        match node.kind {
+            NodeKind::Piece { rod, piece } => {
+                let pd = &model.rods[rod].pieces[piece];
+                if a != 0.0 {
+                    dhat += pd.stiffness6 * a;
+                }
+                if b != 0.0 && pd.has_damping {
+                    dhat += pd.damping6 * b;
+                }
+            }
+            NodeKind::Joint { element } => {
+                let joint = &model.elements[element].attachment.joint;
+                for c in 0..k {
+                    let (kc, dc, _) = joint.coefficients(c);
+                    dhat[(c, c)] += a * kc + b * dc;
+                }
+            }
+            NodeKind::Body { .. } => {}
+        }
+        let dinv = if k > 0 {
+            inverse_k(&dhat, k).ok_or_else(|| DynamicsError::SingularNode {
+                node: tree.describe(model, i),
+                what: "shifted articulated block D̂ + aK + bD",
+            })?
+        } else {
+            Mat6::zeros()
+        };
+        let ud = uhat * dinv;
+        let mb = w.mt + am.transpose() * ma * am - ud * uhat.transpose();
+        w.uhat = uhat;
+        w.dinv = dinv;
+        if let Some(p) = node.parent {
+            let x = node.offset.ad_inv().to_mat6();
+            let mx = x.transpose() * mb * x;
+            if node.attach.is_some() {
+                let (ax, sx) = (w.attach_a, w.attach_s);
+                let pw = &mut data.nodes[p];
+                pw.mt += ax.transpose() * mx * ax;
+                pw.ut += ax.transpose() * mx * sx;
+                pw.dt += sx.transpose() * mx * sx;
+            } else {
+                data.nodes[p].m_tip += mx;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// `x ← S⁻¹x` with the factorization of [`tree_factor`] in `data`: the
+/// bias-free inward (D26) and outward (D27) sweeps of the tree, the
+/// children's wrenches summed at each tip or at their point inside the
+/// parent piece (D62). O(N).
+pub(crate) fn tree_solve(tree: &Tree, data: &Data, scratch: &mut [SolveNode], x: &mut [f64]) {
+    scratch.fill(SolveNode::default());
+    for (i, node) in tree.nodes.iter().enumerate().rev() {
+        let k = node.k;
+        let w = &data.nodes[i];
+        let sc = scratch[i];
+        let y = sc.f_tip;
+        let xs = local(x, node.dof, k);
+        let u = xs - sc.p_small - w.s_tip.tr_mul(&y);
+        let u = Vec6::from_fn(|r, _| if r < k { u[r] } else { 0.0 });
+        let pb = sc.p_big + w.tip.ad_inv().tr_mul_vec(&y) + w.uhat * (w.dinv * u);
+        scratch[i].u = u;
+        if let Some(p) = node.parent {
+            let px = node.offset.ad_inv().tr_mul_vec(&pb);
+            if node.attach.is_some() {
+                let sp = &mut scratch[p];
+                sp.p_big += w.attach_a.transpose() * px;
+                sp.p_small += w.attach_s.transpose() * px;
+            } else {
+                scratch[p].f_tip += px;
+            }
+        }
+    }
+    for (i, node) in tree.nodes.iter().enumerate() {
+        let w = &data.nodes[i];
+        let etadot_p = match node.parent {
+            Some(p) if node.attach.is_some() => {
+                w.attach_a * scratch[p].etadot_base + w.attach_s * scratch[p].qn
+            }
+            Some(p) => scratch[p].etadot_tip,
+            None => Vec6::zeros(),
+        };
+        let etadot_b = node.offset.ad_inv().mul_vec(&etadot_p);
+        let qn = w.dinv * (scratch[i].u - w.uhat.tr_mul(&etadot_b));
+        for c in 0..node.k {
+            x[node.dof + c] = qn[c];
+        }
+        let sc = &mut scratch[i];
+        sc.etadot_base = etadot_b;
+        sc.qn = qn;
+        sc.etadot_tip = w.tip.ad_inv().mul_vec(&etadot_b) + w.s_tip * qn;
     }
 }

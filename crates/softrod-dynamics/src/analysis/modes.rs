@@ -1,10 +1,11 @@
 //! Linearized natural modes about an equilibrium.
 
-use crate::algorithms::{check_vec, inverse_dynamics, mass_matrix};
-use crate::data::Data;
+use super::matrices::stiffness_matrix;
+use crate::algorithms::{check_vec, inverse_dynamics_with, mass_matrix};
 use crate::error::DynamicsError;
-use crate::matrices::stiffness_matrix;
+use crate::forces::Forces;
 use crate::model::Model;
+use crate::model::data::Data;
 use nalgebra::{DMatrix, DVector};
 
 /// Natural frequencies and mode shapes, lowest first.
@@ -44,35 +45,24 @@ pub fn modes(
     q_eq: &[f64],
     time: f64,
 ) -> Result<Modes, DynamicsError> {
-    let at_rest = std::mem::replace(&mut data.prescribed_at_rest, true);
-    let out = modes_inner(model, data, q_eq, time);
-    data.prescribed_at_rest = at_rest;
-    out
-}
-
-fn modes_inner(
-    model: &Model,
-    data: &mut Data,
-    q_eq: &[f64],
-    time: f64,
-) -> Result<Modes, DynamicsError> {
     check_vec(model, "q", q_eq)?;
     if let (true, Some(tree)) = (model.has_closures(), &model.tree) {
         // Closed chains: K and M on the null space of J (docs/theory.md D69).
-        crate::closure::check_workspace(model, data)?;
-        return crate::constrained::modes(model, tree, data, q_eq, time);
+        crate::constraints::queries::check_workspace(model, data)?;
+        return super::closed::modes(model, tree, data, q_eq, time);
     }
     let n = model.n_dof();
     let k = stiffness_matrix(model);
     let zero = vec![0.0; n];
+    let at_rest = Forces::at_rest(1.0);
     let mut keff = k.clone();
     let mut qp = q_eq.to_vec();
     for j in 0..n {
         let h = 6e-6 * q_eq[j].abs().max(1.0);
         qp[j] = q_eq[j] + h;
-        let plus = inverse_dynamics(model, data, time, &qp, &zero, &zero)?.clone();
+        let plus = inverse_dynamics_with(model, data, at_rest, time, &qp, &zero, &zero)?.clone();
         qp[j] = q_eq[j] - h;
-        let minus = inverse_dynamics(model, data, time, &qp, &zero, &zero)?.clone();
+        let minus = inverse_dynamics_with(model, data, at_rest, time, &qp, &zero, &zero)?.clone();
         qp[j] = q_eq[j];
         for i in 0..n {
             keff[(i, j)] += (plus[i] - minus[i]) / (2.0 * h) - k[(i, j)];

@@ -1,0 +1,139 @@
+//! Energies (docs/theory.md §7).
+
+use crate::algorithms::tree::outward;
+use crate::algorithms::{Motion, Pass, check_vec};
+use crate::error::DynamicsError;
+use crate::forces::Forces;
+use crate::model::Model;
+use crate::model::data::Data;
+use crate::model::tree::{NodeKind, Tree};
+use softrod_lie::{PieceMaps, Vec6, exp_and_tangent_minus, exp_twist};
+use softrod_mechanics::elastic_energy;
+
+/// Mechanical energies of the model at `(q, q̇)` \[J\].
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Energies {
+    /// `½ q̇ᵀ M q̇ = ½ ∫ ηᵀ𝓜η ds` (same quadrature as `M`).
+    pub kinetic: f64,
+    /// `½ Σ_n ∫ (ξ_n − ξ*_n)ᵀ Γ (ξ_n − ξ*_n) ds`.
+    pub elastic: f64,
+    /// `−∫ ρA g_w·p(s) ds` (zero without gravity).
+    pub gravitational: f64,
+}
+
+impl Energies {
+    /// `kinetic + elastic + gravitational`: conserved without damping,
+    /// drag, actuation and non-conservative loads.
+    pub fn total(&self) -> f64 {
+        self.kinetic + self.elastic + self.gravitational
+    }
+}
+
+/// Kinetic, elastic and gravitational energy at `(q, q̇)` (dim n_dof each).
+/// Uses the model's quadrature; O(N). `data` is not modified except as scratch.
+/// With prescribed joints (D59) the configuration and the kinetic energy
+/// include their motion at the time of the last [`Model::set_time`] or
+/// dynamics evaluation.
+pub fn energies(
+    model: &Model,
+    _data: &mut Data,
+    q: &[f64],
+    qd: &[f64],
+) -> Result<Energies, DynamicsError> {
+    check_vec(model, "q", q)?;
+    check_vec(model, "qdot", qd)?;
+    if let Some(tree) = &model.tree {
+        return Ok(tree_energies(model, tree, _data, q, qd));
+    }
+    let mut e = Energies::default();
+    for rm in model.rods() {
+        let rod = &rm.spec.rod;
+        let range = rm.dofs();
+        let qr = &q[range.clone()];
+        let qdr = &qd[range];
+        e.elastic += elastic_energy(
+            rod,
+            &rm.spec.body,
+            rm.spec.stress_free.as_deref(),
+            qr,
+            &model.quadrature,
+        );
+        let mut pose = *rod.base();
+        let mut eta0 = Vec6::zeros();
+        for (piece, pd) in rod.pieces().iter().zip(&rm.pieces) {
+            let xi = piece.strain(qr);
+            let dxi = piece.strain_rate(qdr);
+            for qp in &pd.points {
+                let (gl, tm) = exp_and_tangent_minus(qp.x, &xi);
+                let eta = gl.ad_inv().mul_vec(&eta0) + tm.mul_vec(&dxi);
+                e.kinetic += 0.5 * qp.w * eta.dot(&qp.inertia.component_mul(&eta));
+                if let Some(g) = model.gravity {
+                    let p = pose.transform_point(&gl.translation);
+                    e.gravitational -= qp.w * qp.mass_per_length * g.dot(&p);
+                }
+            }
+            let (gl, tm) = exp_and_tangent_minus(piece.length, &xi);
+            eta0 = gl.ad_inv().mul_vec(&eta0) + tm.mul_vec(&dxi);
+            pose = pose.compose(&exp_twist(piece.length, &xi));
+        }
+    }
+    Ok(e)
+}
+
+/// Energies on the tree: kinetic `½q̇ᵀMq̇`, elastic (rods and joint
+/// springs), gravitational (rod points and bodies' centres of mass).
+fn tree_energies(model: &Model, tree: &Tree, data: &mut Data, q: &[f64], qd: &[f64]) -> Energies {
+    // Kinetic energy point by point (D59: it includes the prescribed
+    // joints' motion, which `½q̇ᵀMq̇` would miss); the poses of this pass
+    // serve the gravitational energy below.
+    let kinetic = outward(
+        model,
+        tree,
+        data,
+        Motion::new(q, Some(qd), None),
+        Pass::Inverse,
+        Forces::ALL,
+    );
+    let mut e = Energies {
+        kinetic,
+        ..Energies::default()
+    };
+    for rm in model.rods() {
+        e.elastic += elastic_energy(
+            &rm.spec.rod,
+            &rm.spec.body,
+            rm.spec.stress_free.as_deref(),
+            &q[rm.dofs()],
+            &model.quadrature,
+        );
+    }
+    for el in &model.elements {
+        for (i, o) in el.joint_dofs.clone().enumerate() {
+            let (k, _, rest) = el.attachment.joint.coefficients(i);
+            e.elastic += 0.5 * k * (q[o] - rest).powi(2);
+        }
+    }
+    if let Some(g) = model.gravity {
+        for (i, node) in tree.nodes.iter().enumerate() {
+            let base = &data.nodes[i].base_world;
+            match node.kind {
+                NodeKind::Piece { rod, piece } => {
+                    let rm = &model.rods[rod];
+                    let pc = &rm.spec.rod.pieces()[piece];
+                    let maps = PieceMaps::new(&pc.strain(&q[rm.dofs()]), None);
+                    for qp in &rm.pieces[piece].points {
+                        let p = base.transform_point(&maps.exp(qp.x).translation);
+                        e.gravitational -= qp.w * qp.mass_per_length * g.dot(&p);
+                    }
+                }
+                NodeKind::Body { body } => {
+                    let b = &model.bodies[body].spec;
+                    let p = base.transform_point(&b.center_of_mass);
+                    e.gravitational -= b.mass * g.dot(&p);
+                }
+                NodeKind::Joint { .. } => {}
+            }
+        }
+    }
+    e
+}

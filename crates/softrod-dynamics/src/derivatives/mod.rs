@@ -1,0 +1,203 @@
+//! Floor 4, the derivatives: analytic `∂τ/∂q`, `∂τ/∂q̇` of the inverse
+//! dynamics `τ = ID(q, q̇, q̈)` (docs/theory-derivatives.md §2–§4,
+//! (D37)–(D47)) by one outward and one inward sweep plus a pairing of
+//! per-piece quantities — the structure of the RNEA derivatives of rigid
+//! chains, with each piece's own points differentiated through the strain
+//! derivatives of its maps (D30)–(D36) — on a chain ([`chain`]) or a tree
+//! ([`tree`], D76–D80); and what is built on them ([`forward`]): the
+//! derivatives of the forward dynamics (D48) and the linearization of
+//! `ẋ = f(x, u)` (D49).
+//!
+//! [`point`] linearizes one evaluation point, [`piece`] closes one piece.
+//! A new force term adds its linearization (`crate::forces::linearized`)
+//! where [`point::own_points`] and [`piece::write_piece`] add the present
+//! ones; a new derivative of the equations of motion goes here.
+
+pub(crate) mod chain;
+pub(crate) mod forward;
+pub(crate) mod piece;
+pub(crate) mod point;
+pub(crate) mod tree;
+
+pub use forward::{
+    DynamicsJacobians, FdDerivatives, Linearization, dynamics_jacobians, dynamics_jacobians_with,
+    forward_dynamics_derivatives, linearize,
+};
+
+use crate::algorithms::check_vec;
+use crate::error::DynamicsError;
+use crate::forces::Forces;
+use crate::model::Model;
+use nalgebra::{DMatrix, DVector};
+use piece::PieceWork;
+
+/// Where the derivatives are taken: the time \[s\], the motion `(q, q̇, q̈)`
+/// (dim n_dof each) and the forces of the evaluation.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct At<'a> {
+    pub t: f64,
+    pub q: &'a [f64],
+    pub qd: &'a [f64],
+    pub qdd: &'a [f64],
+    pub forces: Forces,
+}
+
+/// Workspace and results of [`inverse_dynamics_derivatives`]
+/// (Pinocchio-style: allocated once for a model by [`IdDerivatives::new`],
+/// every evaluation writes into it and allocates nothing).
+#[derive(Clone, Debug)]
+pub struct IdDerivatives {
+    pub(crate) pieces: Vec<Vec<PieceWork>>,
+    /// `∂τ/∂q` (n_dof × n_dof): row `i`, column `j` is `∂τ_i/∂q_j` at fixed
+    /// `q̇, q̈` [N·m or N per coordinate unit].
+    pub dtau_dq: DMatrix<f64>,
+    /// `∂τ/∂q̇` (n_dof × n_dof) at fixed `q, q̈`.
+    pub dtau_dqd: DMatrix<f64>,
+    /// `τ = ID(q, q̇, q̈)` itself (n_dof), as [`crate::inverse_dynamics`]
+    /// returns it (to round-off).
+    pub tau: DVector<f64>,
+    /// Cable tensions replacing the schedules, as
+    /// [`crate::Data::set_cable_tensions`] (copied from the `Data` by
+    /// [`crate::forward_dynamics_derivatives`]).
+    pub tensions: Option<DVector<f64>>,
+    n_dof: usize,
+    /// The per-node buffers of an articulated model (D76–D80).
+    tree: Option<Box<tree::TreeWork>>,
+}
+
+impl IdDerivatives {
+    /// Allocates the buffers and the two `n_dof × n_dof` results for `model`.
+    pub fn new(model: &Model) -> Self {
+        let n = model.n_dof();
+        Self {
+            pieces: model
+                .rods()
+                .iter()
+                .map(|r| {
+                    (0..r.spec.rod.n_pieces())
+                        .map(|_| PieceWork::new())
+                        .collect()
+                })
+                .collect(),
+            dtau_dq: DMatrix::zeros(n, n),
+            dtau_dqd: DMatrix::zeros(n, n),
+            tau: DVector::zeros(n),
+            tensions: None,
+            n_dof: n,
+            tree: model
+                .tree
+                .as_ref()
+                .map(|t| Box::new(tree::TreeWork::new(model, t))),
+        }
+    }
+}
+
+crate::kernels::simd::dispatch! {
+    /// Analytic `∂τ/∂q` and `∂τ/∂q̇` of the inverse dynamics
+    /// `τ = ID(q, q̇, q̈)` at time `t` (docs/theory-derivatives.md, (D37)–(D47)),
+    /// with every term of the model: inertia, Coriolis and centrifugal forces,
+    /// gravity, elasticity and Kelvin–Voigt damping, cables, dead and follower
+    /// point loads, distributed loads, drag. `∂τ/∂q̈ = M(q)`
+    /// ([`crate::mass_matrix`]).
+    ///
+    /// One outward sweep linearizes every evaluation point in its own piece's
+    /// strain (D39–D42); one inward sweep carries the composite inertia,
+    /// velocity-product and dead-load operators (D43) and forms each piece's
+    /// diagonal block and the change of its transmitted wrench (D44); the
+    /// off-diagonal blocks are pairings of per-piece world-frame quantities
+    /// (D45–D46). Cost O(N·n_dof) (the result is dense), no allocation.
+    ///
+    /// `q`, `q̇`, `q̈`: dim `n_dof`. Results in `work.dtau_dq`, `work.dtau_dqd`
+    /// (n_dof × n_dof, row = component of `τ`, column = coordinate) and
+    /// `work.tau`, of the inverse dynamics under `forces` (loads and cable
+    /// tensions scaled by [`Forces::load_scale`]; prescribed joints moving or
+    /// at rest).
+    pub fn inverse_dynamics_derivatives_with<'a>(model: &Model, work: &'a mut IdDerivatives, forces: Forces, t: f64, q: &[f64], qd: &[f64], qdd: &[f64]) -> Result<&'a IdDerivatives, DynamicsError>
+    => id_derivatives_impl, id_derivatives_avx2
+}
+
+/// [`inverse_dynamics_derivatives_with`] of every force of the model
+/// ([`Forces::ALL`]).
+pub fn inverse_dynamics_derivatives<'a>(
+    model: &Model,
+    work: &'a mut IdDerivatives,
+    t: f64,
+    q: &[f64],
+    qd: &[f64],
+    qdd: &[f64],
+) -> Result<&'a IdDerivatives, DynamicsError> {
+    inverse_dynamics_derivatives_with(model, work, Forces::ALL, t, q, qd, qdd)
+}
+
+#[inline(always)]
+pub(crate) fn id_derivatives_impl<'a>(
+    model: &Model,
+    work: &'a mut IdDerivatives,
+    forces: Forces,
+    t: f64,
+    q: &[f64],
+    qd: &[f64],
+    qdd: &[f64],
+) -> Result<&'a IdDerivatives, DynamicsError> {
+    let nodes = model.tree.as_ref().map(|t| t.nodes.len());
+    if work.n_dof != model.n_dof()
+        || work.pieces.len() != model.rods().len()
+        || work.tree.as_ref().map(|t| t.n_nodes()) != nodes
+    {
+        return Err(DynamicsError::WorkspaceMismatch {
+            what: "IdDerivatives",
+            built: work.n_dof,
+            got: model.n_dof(),
+        });
+    }
+    forces.check()?;
+    // Gravity alone is no public pass; its derivatives are not taken.
+    debug_assert!(!forces.gravity_only, "derivatives of gravity alone");
+    check_vec(model, "q", q)?;
+    check_vec(model, "qdot", qd)?;
+    check_vec(model, "qddot", qdd)?;
+    if model.has_closures() {
+        return Err(DynamicsError::UnsupportedClosed {
+            what: "inverse_dynamics_derivatives",
+        });
+    }
+    let at = At {
+        t,
+        q,
+        qd,
+        qdd,
+        forces,
+    };
+    if let (Some(tr), Some(mut tw)) = (&model.tree, work.tree.take()) {
+        tree::tree_id_derivatives(model, tr, work, &mut tw, &at);
+        work.tree = Some(tw);
+    } else {
+        if model.rods().len() > 1 {
+            work.dtau_dq.fill(0.0);
+            work.dtau_dqd.fill(0.0);
+        }
+        for (r, rm) in model.rods().iter().enumerate() {
+            chain::outward(model, rm, &mut work.pieces[r], &at);
+            chain::inward(model, rm, work, r, &at);
+            chain::pairs(rm, work, r);
+        }
+    }
+    for (what, m) in [("dtau/dq", &work.dtau_dq), ("dtau/dqdot", &work.dtau_dqd)] {
+        // One vectorizable pass (x·0 is NaN exactly for non-finite x), the
+        // index search only on failure.
+        let probe: f64 = m.as_slice().iter().map(|v| v * 0.0).sum();
+        if probe.is_nan() {
+            if let Some((i, v)) = m.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+                return Err(DynamicsError::NotFinite {
+                    what: format!(
+                        "{what} entry ({}, {}) at t = {t}",
+                        i % m.nrows(),
+                        i / m.nrows()
+                    ),
+                    value: *v,
+                });
+            }
+        }
+    }
+    Ok(work)
+}

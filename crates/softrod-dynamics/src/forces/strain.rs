@@ -1,0 +1,100 @@
+//! The forces that act in strain space (D13, D15, D53): elasticity with its
+//! stress-free offset, Kelvin–Voigt damping, cables, joint springs and
+//! dampers, and the actuator force, summed into `Data::strain_force`.
+
+use crate::forces::Forces;
+use crate::model::Model;
+use crate::model::data::{Data, cable_tension};
+use softrod_lie::Vec6;
+
+/// Strain-space generalized forces into `data.strain_force`:
+/// `τ_act + λ τ_c(q, t) − τ_e(q) − D q̇` ((D13), (D15); `λ` =
+/// `forces.load_scale`; only `τ_act` for gravity alone).
+#[inline(always)]
+pub(crate) fn strain_forces(
+    model: &Model,
+    data: &mut Data,
+    forces: Forces,
+    t: f64,
+    q: &[f64],
+    qd: Option<&[f64]>,
+    tau_act: Option<&[f64]>,
+) {
+    let sf = &mut data.strain_force;
+    match tau_act {
+        Some(ta) => sf.as_mut_slice().copy_from_slice(ta),
+        None => sf.fill(0.0),
+    }
+    if forces.gravity_only {
+        return;
+    }
+    for rm in model.rods() {
+        let rod = &rm.spec.rod;
+        let off = rm.dof_offset;
+        for (piece, pd) in rod.pieces().iter().zip(&rm.pieces) {
+            let k = piece.basis.dof();
+            let o = off + piece.dof_offset;
+            // Zero padding keeps `K_n q_n` exact: the pad adds exact zeros.
+            let pad = |v: &[f64]| Vec6::from_fn(|i, _| if i < k { v[i] } else { 0.0 });
+            let mut e = match &pd.diagonal {
+                Some((kd, _)) => kd.component_mul(&pad(&q[o..o + k])),
+                None => pd.stiffness6 * pad(&q[o..o + k]),
+            };
+            if pd.has_offset {
+                e += pd.offset6;
+            }
+            if let (true, Some(v)) = (pd.has_damping, qd) {
+                e += match &pd.diagonal {
+                    Some((_, dd)) => dd.component_mul(&pad(&v[o..o + k])),
+                    None => pd.damping6 * pad(&v[o..o + k]),
+                };
+            }
+            for (s, ei) in sf.as_mut_slice()[o..o + k].iter_mut().zip(e.iter()) {
+                *s -= ei;
+            }
+        }
+        if !rm.spec.cables.is_empty() {
+            let range = rm.dofs();
+            for (c, cable) in rm.spec.cables.iter().enumerate() {
+                let tension = cable_tension(data.tensions.as_ref(), rm, c, t) * forces.load_scale;
+                if tension == 0.0 {
+                    continue;
+                }
+                let scratch = &mut data.cable_scratch.as_mut_slice()[range.clone()];
+                scratch.fill(0.0);
+                cable.add_force_per_tension(rod, &q[range.clone()], &model.quadrature, scratch);
+                for (s, c) in sf.as_mut_slice()[range.clone()]
+                    .iter_mut()
+                    .zip(scratch.iter())
+                {
+                    *s += tension * c;
+                }
+            }
+        }
+    }
+}
+
+/// `τ ← τ − k(q − q_rest) − d q̇` of every joint (D53), into the strain
+/// forces (skipped for gravity only).
+pub(crate) fn joint_forces(
+    model: &Model,
+    data: &mut Data,
+    forces: Forces,
+    q: &[f64],
+    qd: Option<&[f64]>,
+) {
+    if forces.gravity_only {
+        return;
+    }
+    for e in &model.elements {
+        let j = &e.attachment.joint;
+        if j.stiffness.is_empty() && j.damping.is_empty() {
+            continue;
+        }
+        for (i, o) in e.joint_dofs.clone().enumerate() {
+            let (k, d, rest) = j.coefficients(i);
+            let v = qd.map_or(0.0, |v| v[o]);
+            data.strain_force[o] -= k * (q[o] - rest) + d * v;
+        }
+    }
+}
