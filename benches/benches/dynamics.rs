@@ -7,12 +7,12 @@
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use softrod_dynamics::{
-    Data, FdDerivatives, IdDerivatives, Model, RodSpec, ShiftedSolver, forward_dynamics,
+    Data, FdDerivatives, IdDerivatives, Model, Rod, ShiftedSolver, forward_dynamics,
     forward_dynamics_derivatives, inverse_dynamics, inverse_dynamics_derivatives, mass_matrix,
 };
-use softrod_kinematics::{Basis, Rod, Strain, straight};
+use softrod_kinematics::{Basis, RodGeometry, Strain, straight};
 use softrod_lie::{Pose, Vec3};
-use softrod_mechanics::{Material, RodBody, Section};
+use softrod_mechanics::{Material, RodProperties, Section};
 use std::hint::black_box;
 
 /// SplitMix64 in [−1, 1), seeded: reproducible states across runs.
@@ -39,7 +39,7 @@ fn model(n: usize) -> Model {
 /// [`model`] with the given basis on every piece.
 fn model_with(n: usize, basis: Basis) -> Model {
     let length = 0.5;
-    let rod = Rod::uniform(length, n, basis, straight(), Pose::identity()).unwrap();
+    let rod = RodGeometry::uniform(length, n, basis, straight(), Pose::identity()).unwrap();
     let material = Material::builder()
         .density(1000.0)
         .young(1e7)
@@ -47,8 +47,8 @@ fn model_with(n: usize, basis: Basis) -> Model {
         .viscosity(1.0)
         .build()
         .unwrap();
-    let body = RodBody::new(Section::Circle { radius: 0.01 }, material, length).unwrap();
-    let spec = RodSpec::new("bench", rod, body);
+    let body = RodProperties::new(Section::Circle { radius: 0.01 }, material, length).unwrap();
+    let spec = Rod::new("bench", rod, body);
     let m = Model::new(vec![spec], Some(Vec3::new(0.0, 0.0, -9.81)), 4).unwrap();
     assert!(m.terms().iter().any(|t| t == "damping"));
     m

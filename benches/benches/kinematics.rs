@@ -14,15 +14,16 @@
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use nalgebra::Matrix6xX;
-use softrod_kinematics::{Basis, Frame, GaussLegendre, Rod, RodKinematics, straight};
+use softrod_kinematics::{Basis, Frame, GaussLegendre, RodGeometry, RodKinematics, straight};
 use softrod_lie::Pose;
 use std::hint::black_box;
 
 /// A 1 m rod of `n` pieces with all six strains, and a fixed, reproducible
 /// configuration: a curled shape (total bending of a few radians, some
 /// torsion, a little shear and extension) so every piece does real work.
-fn setup(n: usize) -> (Rod, Vec<f64>) {
-    let rod = Rod::uniform(1.0, n, Basis::all(), straight(), Pose::identity()).expect("rod");
+fn setup(n: usize) -> (RodGeometry, Vec<f64>) {
+    let rod =
+        RodGeometry::uniform(1.0, n, Basis::all(), straight(), Pose::identity()).expect("rod");
     let q: Vec<f64> = (0..rod.n_dof())
         .map(|i| {
             let p = (i / 6) as f64;

@@ -14,17 +14,17 @@
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use softrod_dynamics::{
     Attachment, Closure, ClosureFrame, ClosureKind, Curve, Data, Element, IdDerivatives, Joint,
-    Model, Prescribed, RodSpec, ShiftedSolver, forward_dynamics, inverse_dynamics_derivatives,
+    Model, Prescribed, Rod, ShiftedSolver, forward_dynamics, inverse_dynamics_derivatives,
 };
-use softrod_kinematics::{Basis, Rod, straight};
+use softrod_kinematics::{Basis, RodGeometry, straight};
 use softrod_lie::{Pose, Vec3};
-use softrod_mechanics::{Material, RodBody, Section};
+use softrod_mechanics::{Material, RodProperties, Section};
 use std::hint::black_box;
 
 const LENGTH: f64 = 0.5;
 
-fn spec(n: usize) -> RodSpec {
-    let rod = Rod::uniform(LENGTH, n, Basis::all(), straight(), Pose::identity()).unwrap();
+fn spec(n: usize) -> Rod {
+    let rod = RodGeometry::uniform(LENGTH, n, Basis::all(), straight(), Pose::identity()).unwrap();
     let material = Material::builder()
         .density(1000.0)
         .young(1e7)
@@ -32,8 +32,8 @@ fn spec(n: usize) -> RodSpec {
         .viscosity(1.0)
         .build()
         .unwrap();
-    let body = RodBody::new(Section::Circle { radius: 0.01 }, material, LENGTH).unwrap();
-    RodSpec::new("bench", rod, body)
+    let body = RodProperties::new(Section::Circle { radius: 0.01 }, material, LENGTH).unwrap();
+    Rod::new("bench", rod, body)
 }
 
 fn on(n: usize, joint: Joint) -> Model {

@@ -10,14 +10,14 @@
 //! (a wrapper that hides the mass-matrix form) — and prints the tip errors.
 
 use nalgebra::{DMatrix, DVector};
-use softrod_dynamics::{Model, RodSpec};
+use softrod_dynamics::{Model, Rod};
 use softrod_integrate::{
     Integrator, Iteration, NoHooks, Options, RodJacobian, RodSystem, SecondOrderSystem,
     integrate_second_order,
 };
-use softrod_kinematics::{Basis, Rod, RodKinematics, straight};
+use softrod_kinematics::{Basis, RodGeometry, RodKinematics, straight};
 use softrod_lie::{Pose, Vec3};
-use softrod_mechanics::{Material, RodBody, Section};
+use softrod_mechanics::{Material, RodProperties, Section};
 use std::time::Instant;
 
 fn env<T: std::str::FromStr>(k: &str, d: T) -> T {
@@ -95,7 +95,7 @@ impl SecondOrderSystem for NoResidual {
 }
 
 fn tip(m: &Model, y: &DVector<f64>) -> [f64; 3] {
-    let rod = &m.rods()[0].spec.rod;
+    let rod = &m.rods()[0].spec.geometry;
     let mut k = RodKinematics::new(rod);
     k.update(rod, &y.as_slice()[..m.n_dof()], None, None)
         .unwrap();
@@ -118,11 +118,12 @@ fn main() {
     let reps: usize = env("REPS", 1);
     let accel_form = std::env::var("VARIANT").is_ok_and(|v| v == "accel");
     let l = 0.5;
-    let rod = Rod::uniform(l, n_pieces, Basis::all(), straight(), Pose::identity()).unwrap();
+    let rod =
+        RodGeometry::uniform(l, n_pieces, Basis::all(), straight(), Pose::identity()).unwrap();
     let mat = Material::with_poisson(1000.0, 1e7, 0.5, 0.0).unwrap();
-    let body = RodBody::new(Section::Circle { radius: 0.01 }, mat, l).unwrap();
+    let body = RodProperties::new(Section::Circle { radius: 0.01 }, mat, l).unwrap();
     let m = Model::new(
-        vec![RodSpec::new("cantilever", rod, body)],
+        vec![Rod::new("cantilever", rod, body)],
         Some(Vec3::new(0.0, 0.0, -9.81)),
         4,
     )

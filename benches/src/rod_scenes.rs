@@ -5,10 +5,10 @@
 use std::path::PathBuf;
 
 use nalgebra::DVector;
-use softrod_dynamics::{Model, RodSpec};
-use softrod_kinematics::{Basis, Rod, RodKinematics, Strain, straight};
+use softrod_dynamics::{Model, Rod};
+use softrod_kinematics::{Basis, RodGeometry, RodKinematics, Strain, straight};
 use softrod_lie::{Pose, Vec3};
-use softrod_mechanics::{Material, RodBody, Section};
+use softrod_mechanics::{Material, RodProperties, Section};
 
 #[allow(clippy::too_many_arguments)]
 fn cantilever(
@@ -21,11 +21,11 @@ fn cantilever(
     basis: Basis,
     gauss: usize,
 ) -> Model {
-    let rod = Rod::uniform(length, pieces, basis, straight(), Pose::identity()).unwrap();
+    let rod = RodGeometry::uniform(length, pieces, basis, straight(), Pose::identity()).unwrap();
     let mat = Material::with_poisson(density, young, poisson, 0.0).unwrap();
-    let body = RodBody::new(Section::Circle { radius }, mat, length).unwrap();
+    let body = RodProperties::new(Section::Circle { radius }, mat, length).unwrap();
     Model::new(
-        vec![RodSpec::new("rod", rod, body)],
+        vec![Rod::new("rod", rod, body)],
         Some(Vec3::new(0.0, 0.0, -9.81)),
         gauss,
     )
@@ -55,14 +55,14 @@ pub fn steel_wire(pieces: usize) -> Model {
 /// Tip positions (first rod) of first-order states `(q, q̇)`.
 pub struct TipProbe {
     kin: RodKinematics,
-    rod: Rod,
+    rod: RodGeometry,
     n: usize,
 }
 
 impl TipProbe {
     /// For the first rod of `model`.
     pub fn new(model: &Model) -> Self {
-        let rod = model.rods()[0].spec.rod.clone();
+        let rod = model.rods()[0].spec.geometry.clone();
         Self {
             kin: RodKinematics::new(&rod),
             rod,

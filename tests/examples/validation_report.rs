@@ -36,7 +36,7 @@ fn scene(gravity: bool, length: f64, pieces: usize, rod: &str, extra: &str) -> S
 }
 
 fn tip(model: &Model, q: &[f64]) -> Pose {
-    let rod = &model.rods()[0].spec.rod;
+    let rod = &model.rods()[0].spec.geometry;
     let mut kin = RodKinematics::new(rod);
     kin.update(rod, &q[..rod.n_dof()], None, None).unwrap();
     *kin.tip_pose()

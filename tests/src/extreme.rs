@@ -35,7 +35,7 @@ pub fn scene(gravity: bool, length: f64, pieces: usize, rod: &str, extra: &str) 
 
 /// Tip pose of the first rod at `q` (its own coordinates first in `q`).
 pub fn tip(model: &Model, q: &[f64]) -> Pose {
-    let rod = &model.rods()[0].spec.rod;
+    let rod = &model.rods()[0].spec.geometry;
     let mut kin = RodKinematics::new(rod);
     kin.update(rod, &q[..rod.n_dof()], None, None).unwrap();
     *kin.tip_pose()
@@ -136,7 +136,7 @@ pub fn integrate(
         if cable_tension != 0.0 {
             let rm = &sys.model.rods()[0];
             for c in &rm.spec.cables {
-                total += cable_tension * c.length(&rm.spec.rod, q, sys.model.quadrature());
+                total += cable_tension * c.length(&rm.spec.geometry, q, sys.model.quadrature());
             }
         }
         assert!(total.is_finite(), "non-finite energy");

@@ -170,7 +170,7 @@ fn large_follower_load() {
     let model = &built.model;
     let res = statics_or_clear_error("follower", model, &vec![0.0; model.n_dof()])
         .expect("follower statics converges");
-    let rodk = &model.rods()[0].spec.rod;
+    let rodk = &model.rods()[0].spec.geometry;
     let mut kin = RodKinematics::new(rodk);
     kin.update(rodk, res.q.as_slice(), None, None).unwrap();
     let tipp = *kin.tip_pose();

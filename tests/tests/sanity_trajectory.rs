@@ -7,14 +7,14 @@
 //! positions from the verified prototype (DOP853, rtol 1e-12).
 
 use nalgebra::DVector;
-use softrod_dynamics::{Model, RodSpec, energies};
+use softrod_dynamics::{Model, Rod, energies};
 use softrod_integrate::{Integrator, NoHooks, Options, RodSystem, integrate_second_order};
-use softrod_kinematics::{Basis, Rod, RodKinematics, Strain, straight};
+use softrod_kinematics::{Basis, RodGeometry, RodKinematics, Strain, straight};
 use softrod_lie::{Pose, Vec3};
-use softrod_mechanics::{Material, RodBody, Section};
+use softrod_mechanics::{Material, RodProperties, Section};
 
 fn sanity_model() -> Model {
-    let rod = Rod::uniform(
+    let rod = RodGeometry::uniform(
         0.5,
         8,
         Basis::select(&[Strain::Ky, Strain::Qx, Strain::Qz]).unwrap(),
@@ -22,14 +22,14 @@ fn sanity_model() -> Model {
         Pose::identity(),
     )
     .unwrap();
-    let body = RodBody::new(
+    let body = RodProperties::new(
         Section::Circle { radius: 0.01 },
         Material::with_poisson(1000.0, 1e7, 0.5, 0.0).unwrap(),
         0.5,
     )
     .unwrap();
     Model::new(
-        vec![RodSpec::new("arm", rod, body)],
+        vec![Rod::new("arm", rod, body)],
         Some(Vec3::new(0.0, 0.0, -9.81)),
         5,
     )
@@ -66,7 +66,7 @@ fn sanity_trajectory_matches_the_verified_prototype() {
         &mut NoHooks,
     )
     .expect("integration succeeds");
-    let rod = &sys.model.rods()[0].spec.rod;
+    let rod = &sys.model.rods()[0].spec.geometry;
     let mut kin = RodKinematics::new(rod);
     let mut e0 = None;
     for (i, (t, x, z)) in REFERENCE.iter().enumerate() {

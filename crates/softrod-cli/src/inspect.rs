@@ -31,9 +31,9 @@ pub fn check(path: &Path) -> Result<(), CliError> {
         println!(
             "rod '{}': length {} m, {} pieces, strains [{}], {} DoF (q[{}..{}])",
             r.name,
-            r.body.length(),
-            r.rod.n_pieces(),
-            r.rod.pieces()[0].basis,
+            r.properties.length(),
+            r.geometry.n_pieces(),
+            r.geometry.pieces()[0].basis,
             rm.n_dof(),
             rm.dofs().start,
             rm.dofs().end
@@ -54,7 +54,7 @@ pub fn check(path: &Path) -> Result<(), CliError> {
                 .rods()
                 .iter()
                 .find(|r| r.spec.name == f.rod)
-                .map_or(0.0, |r| r.spec.rod.length());
+                .map_or(0.0, |r| r.spec.geometry.length());
             if f.max > 0.01 * length {
                 println!(
                     "  warning: the rod cannot pass within 1% of its length of these points \
@@ -213,7 +213,7 @@ fn mode_curves(
     let length = model
         .rods()
         .iter()
-        .map(|r| r.spec.rod.length())
+        .map(|r| r.spec.geometry.length())
         .fold(0.0, f64::max);
     let freq = modes.frequencies_hz();
     let mut out = Vec::new();

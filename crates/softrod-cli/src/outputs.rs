@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use softrod::dynamics::Model;
 use softrod::mechanics::{Routing, Section};
 use softrod_viz::BodyShape;
-use softrod_viz::run_dir::{CableSpec, RadiusProfile, RodSpec, VIEW_JSON, ViewSpec};
+use softrod_viz::run_dir::{CableSpec, RadiusProfile, Rod, VIEW_JSON, ViewSpec};
 use softrod_viz::{ViewOptions, ViewStats};
 
 use crate::common::{CliError, failed};
@@ -41,10 +41,10 @@ pub fn view_spec(model: &Model, title: &str) -> ViewSpec {
     }
     let mut cable_no = 0;
     for rm in model.rods() {
-        let length = rm.spec.rod.length();
-        spec.rods.push(RodSpec {
+        let length = rm.spec.geometry.length();
+        spec.rods.push(Rod {
             name: rm.spec.name.clone(),
-            radius: radius_profile(rm.spec.body.section(), length),
+            radius: radius_profile(rm.spec.properties.section(), length),
         });
         for c in &rm.spec.cables {
             let (from, to) = c.bounds(length);
@@ -235,7 +235,11 @@ pub fn free_disk_bytes(dir: &Path) -> Option<u64> {
 /// rows of every rod's piece boundaries (≥ 60 bytes each).
 pub fn output_bytes_per_row(model: &Model) -> u64 {
     let numbers = 9 + 2 * model.n_dof() + 3 + 2 * model.n_cables();
-    let shape_rows: usize = model.rods().iter().map(|r| r.spec.rod.n_pieces() + 1).sum();
+    let shape_rows: usize = model
+        .rods()
+        .iter()
+        .map(|r| r.spec.geometry.n_pieces() + 1)
+        .sum();
     8 * numbers as u64 + 60 * shape_rows as u64
 }
 

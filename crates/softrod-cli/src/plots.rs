@@ -106,7 +106,7 @@ pub fn strains_file(r: usize) -> String {
 
 /// The components a rod's basis selects (all six for a general basis).
 fn components(model: &Model, r: usize) -> Vec<StrainComponent> {
-    let rod = &model.rods()[r].spec.rod;
+    let rod = &model.rods()[r].spec.geometry;
     match rod.pieces()[0].basis.selection() {
         Some(sel) => sel.iter().map(|&i| StrainComponent::ALL[i]).collect(),
         None => StrainComponent::ALL.to_vec(),
@@ -115,7 +115,7 @@ fn components(model: &Model, r: usize) -> Vec<StrainComponent> {
 
 /// Piece boundaries `0, L_1, …, L` of rod `r`, m.
 fn bounds(model: &Model, r: usize) -> Vec<f64> {
-    let rod = &model.rods()[r].spec.rod;
+    let rod = &model.rods()[r].spec.geometry;
     std::iter::once(0.0)
         .chain(rod.pieces().iter().map(|p| p.end()))
         .collect()

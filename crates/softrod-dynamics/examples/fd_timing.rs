@@ -9,12 +9,12 @@
 //! rod from a revolute joint, the tree path):
 //! `N_PIECES=10 N_ITER=2000 cargo run --release -p softrod-dynamics --example fd_timing`.
 use softrod_dynamics::{
-    Data, IdDerivatives, Model, RodSpec, ShiftedSolver, forward_dynamics, inverse_dynamics,
+    Data, IdDerivatives, Model, Rod, ShiftedSolver, forward_dynamics, inverse_dynamics,
     inverse_dynamics_derivatives, mass_matrix,
 };
-use softrod_kinematics::{Basis, Rod, Strain, straight};
+use softrod_kinematics::{Basis, RodGeometry, Strain, straight};
 use softrod_lie::{Pose, Vec3};
-use softrod_mechanics::{Material, RodBody, Section};
+use softrod_mechanics::{Material, RodProperties, Section};
 
 fn env(name: &str, default: usize) -> usize {
     std::env::var(name)
@@ -35,7 +35,7 @@ fn main() {
     // Position of each coordinate's strain in (kx, ky, kz, qx, qy, qz), so
     // the planar state draws curvatures and stretches as the full one does.
     let component = |i: usize| if planar { [1, 3, 5][i % 3] } else { i % 6 };
-    let rod = Rod::uniform(0.5, n, basis, straight(), Pose::identity()).unwrap();
+    let rod = RodGeometry::uniform(0.5, n, basis, straight(), Pose::identity()).unwrap();
     let material = Material::builder()
         .density(1000.0)
         .young(1e7)
@@ -43,10 +43,10 @@ fn main() {
         .viscosity(1.0)
         .build()
         .unwrap();
-    let body = RodBody::new(Section::Circle { radius: 0.01 }, material, 0.5).unwrap();
+    let body = RodProperties::new(Section::Circle { radius: 0.01 }, material, 0.5).unwrap();
     // JOINT=revolute: the same rod on a revolute joint (the tree path).
     let elements = vec![softrod_dynamics::Element::Rod(
-        RodSpec::new("arm", rod, body),
+        Rod::new("arm", rod, body),
         if std::env::var("JOINT").as_deref() == Ok("revolute") {
             softrod_dynamics::Attachment::world_joint(softrod_dynamics::Joint::revolute([
                 0.0, 1.0, 0.0,

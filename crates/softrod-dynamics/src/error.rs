@@ -5,12 +5,12 @@ use softrod_mechanics::MechanicsError;
 use std::fmt;
 
 /// A rod as errors name it: its index in the model (`None` before it is in
-/// one, e.g. from [`crate::RodSpecBuilder::build`]) and its name.
+/// one, e.g. from [`crate::RodBuilder::build`]) and its name.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct RodId {
     /// Position in the model's rods (0-based), when known.
     pub index: Option<usize>,
-    /// [`crate::RodSpec::name`] (may be empty).
+    /// [`crate::Rod::name`] (may be empty).
     pub name: String,
 }
 
@@ -63,27 +63,27 @@ pub enum DynamicsError {
     /// The body of a rod (length, section) is invalid, or does not match
     /// the kinematic rod's length.
     #[error("{rod}: invalid body")]
-    RodBody {
+    RodProperties {
         /// Which rod.
         rod: RodId,
         /// What the mechanics layer rejected.
         #[source]
         source: MechanicsError,
     },
-    /// [`crate::RodSpecBuilder::build`] without a section.
+    /// [`crate::RodBuilder::build`] without a section.
     #[error("{rod}: no section given")]
     MissingSection {
         /// Which rod.
         rod: RodId,
     },
-    /// [`crate::RodSpecBuilder::build`] without a material.
+    /// [`crate::RodBuilder::build`] without a material.
     #[error("{rod}: no material given")]
     MissingMaterial {
         /// Which rod.
         rod: RodId,
     },
     /// Piece lengths that do not sum to the rod length (to
-    /// `softrod_mechanics::RodBody::LENGTH_RTOL`).
+    /// `softrod_mechanics::RodProperties::LENGTH_RTOL`).
     #[error("{rod}: piece lengths sum to {sum} m but the rod length is {length} m")]
     PieceLengthSum {
         /// Which rod.
@@ -120,7 +120,7 @@ pub enum DynamicsError {
     Cable {
         /// Which rod.
         rod: RodId,
-        /// Index in [`crate::RodSpec::cables`].
+        /// Index in [`crate::Rod::cables`].
         cable: usize,
         /// What the mechanics layer rejected.
         #[source]
@@ -131,7 +131,7 @@ pub enum DynamicsError {
     PointLoad {
         /// Which rod.
         rod: RodId,
-        /// Index in [`crate::RodSpec::point_loads`].
+        /// Index in [`crate::Rod::point_loads`].
         load: usize,
         /// What the mechanics layer rejected.
         #[source]
@@ -142,7 +142,7 @@ pub enum DynamicsError {
     DistributedLoad {
         /// Which rod.
         rod: RodId,
-        /// Index in [`crate::RodSpec::distributed_loads`].
+        /// Index in [`crate::Rod::distributed_loads`].
         load: usize,
         /// What the mechanics layer rejected.
         #[source]
@@ -378,7 +378,7 @@ macro_rules! rod_of {
     ($e:expr) => {
         match $e {
             DynamicsError::RodGeometry { rod, .. }
-            | DynamicsError::RodBody { rod, .. }
+            | DynamicsError::RodProperties { rod, .. }
             | DynamicsError::MissingSection { rod }
             | DynamicsError::MissingMaterial { rod }
             | DynamicsError::PieceLengthSum { rod, .. }

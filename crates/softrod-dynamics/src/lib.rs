@@ -4,7 +4,7 @@
 //!
 //! A [`Model`] (rods, their bodies and force terms, gravity, quadrature) is
 //! immutable, built with [`Model::builder`] from rods built with
-//! [`RodSpec::builder`]; a [`Data`] holds every buffer an evaluation needs. Algorithms
+//! [`Rod::builder`]; a [`Data`] holds every buffer an evaluation needs. Algorithms
 //! are free functions that write into `data` and return a reference to the
 //! result:
 //!
@@ -79,7 +79,7 @@
 //! | floor | holds | a new … goes here |
 //! |---|---|---|
 //! | `kernels/` | arithmetic on one piece or point, no model: 3×3-block 6×6 products, the small Cholesky of a piece, inertia sums over a piece's points, strain derivatives of the piece maps (D30–D36), the planar se(2) maps, the AVX2 copies' dispatch | faster per-piece math |
-//! | `model/` | [`Model`] and its builders, [`RodSpec`]/[`RodModel`], joints and bodies, prescribed curves, the tree of nodes, closures as the model holds them, planar detection, and [`Data`] with every algorithm's work space | **joint type** (`model/joint.rs`: its motion subspace as virtual pieces, D50), element, or the description of a load |
+//! | `model/` | [`Model`] and its builders, [`Rod`]/[`RodModel`], joints and bodies, prescribed curves, the tree of nodes, closures as the model holds them, planar detection, and [`Data`] with every algorithm's work space | **joint type** (`model/joint.rs`: its motion subspace as virtual pieces, D50), element, or the description of a load |
 //! | `forces/` | [`Forces`]; each force term's value — gravity as base acceleration, drag and distributed loads per point, elasticity, damping, cables, joint springs in strain space — and its linearization | **force term**: value in `external.rs` or `strain.rs`, linearization in `linearized.rs`, a field of [`Forces`] if an evaluation may leave it out (contact forces at material points: a per-evaluation list there, applied like point loads) |
 //! | `algorithms/` | the O(N) recursions on open models, each on the chain (`chain.rs`, AVX2 copies), the planar chain (`planar.rs`) and the tree (`tree.rs`, `frames.rs`): inverse dynamics, articulated forward dynamics, mass matrix, shifted solve; the public [`inverse_dynamics`], [`mass_matrix`], [`bias_force`] | **algorithm** on the equations of motion (an integrator's evaluation), with a chain and a tree form |
 //! | `derivatives/` | `∂τ/∂q`, `∂τ/∂q̇` on chain and tree (point linearization, piece closing), forward-dynamics derivatives, [`linearize`] | **derivative** |
@@ -126,10 +126,10 @@ pub use error::{DynamicsError, RodId};
 pub use forces::{Drives, Forces};
 pub use model::Data;
 pub use model::{Attachment, BodyLoad, BodySpec, Joint, JointKind};
-pub use model::{BodyModel, Element, ElementInfo, ElementKind, Model, RodModel, RodSpec};
+pub use model::{BodyModel, Element, ElementInfo, ElementKind, Model, Rod, RodModel};
 pub use model::{Closure, ClosureFrame, ClosureKind};
 pub use model::{Curve, Prescribed, Spline};
-pub use model::{IntoRodSpec, ModelBuilder, RodSpecBuilder};
+pub use model::{IntoRod, ModelBuilder, RodBuilder};
 
 /// The README's examples, compiled and run as doctests.
 #[doc = include_str!("../README.md")]

@@ -5,11 +5,11 @@
 use std::error::Error;
 
 use softrod_dynamics::*;
-use softrod_kinematics::{Basis, KinematicsError, Rod, Strain, straight};
+use softrod_kinematics::{Basis, KinematicsError, RodGeometry, Strain, straight};
 use softrod_lie::{Pose, Vec3, Vec6, exp_twist};
 use softrod_mechanics::{
-    Cable, LoadFrame, Material, MechanicsError, PointLoad, Quantity, RodBody, Routing, Section,
-    Tension,
+    Cable, LoadFrame, Material, MechanicsError, PointLoad, Quantity, RodProperties, Routing,
+    Section, Tension,
 };
 
 fn silicone() -> Material {
@@ -37,9 +37,10 @@ fn cable() -> Cable {
 
 /// The same rod, by hand from its parts.
 fn by_hand(base: Pose, strains: &[Strain]) -> Model {
-    let rod = Rod::uniform(0.4, 5, Basis::select(strains).unwrap(), straight(), base).unwrap();
-    let body = RodBody::new(Section::Circle { radius: 0.012 }, silicone(), 0.4).unwrap();
-    let mut spec = RodSpec::new("arm", rod, body);
+    let rod =
+        RodGeometry::uniform(0.4, 5, Basis::select(strains).unwrap(), straight(), base).unwrap();
+    let body = RodProperties::new(Section::Circle { radius: 0.012 }, silicone(), 0.4).unwrap();
+    let mut spec = Rod::new("arm", rod, body);
     spec.point_loads.push(tip_load());
     spec.cables.push(cable().between(0.0, 0.4));
     Model::new(vec![spec], Some(Vec3::new(0.0, 0.0, -9.81)), 5).unwrap()
@@ -51,7 +52,7 @@ fn builder_matches_the_parts_put_together_by_hand() {
     let strains = [Strain::Ky, Strain::Kz, Strain::Qx, Strain::Qz];
     let built = Model::builder()
         .rod(
-            RodSpec::builder(0.4)
+            Rod::builder(0.4)
                 .name("arm")
                 .pieces(5)
                 .strains(strains)
@@ -89,17 +90,17 @@ fn builder_matches_the_parts_put_together_by_hand() {
 
 #[test]
 fn builder_defaults() {
-    let spec = RodSpec::builder(0.3)
+    let spec = Rod::builder(0.3)
         .circle(0.01)
         .material(silicone())
         .build()
         .unwrap();
     assert_eq!(spec.name, "");
-    assert_eq!(spec.rod.n_pieces(), 1);
-    assert!(spec.rod.uniform_basis().unwrap().is_identity());
-    assert_eq!(spec.rod.pieces()[0].rest_strain, straight());
-    assert_eq!(*spec.rod.base(), Pose::identity());
-    assert_eq!(spec.body.length(), 0.3);
+    assert_eq!(spec.geometry.n_pieces(), 1);
+    assert!(spec.geometry.uniform_basis().unwrap().is_identity());
+    assert_eq!(spec.geometry.pieces()[0].rest_strain, straight());
+    assert_eq!(*spec.geometry.base(), Pose::identity());
+    assert_eq!(spec.properties.length(), 0.3);
     assert!(spec.stress_free.is_none() && spec.drag.is_none());
     assert!(spec.cables.is_empty() && spec.point_loads.is_empty());
     let m = Model::builder().rod(spec).build().unwrap();
@@ -107,7 +108,7 @@ fn builder_defaults() {
     assert_eq!(m.quadrature().len(), Model::DEFAULT_QUADRATURE);
     // A uniform stress-free strain fills every piece.
     let curled = Vec6::new(0.0, 2.0, 0.0, 1.0, 0.0, 0.0);
-    let spec = RodSpec::builder(0.3)
+    let spec = Rod::builder(0.3)
         .pieces(3)
         .circle(0.01)
         .material(silicone())
@@ -117,8 +118,8 @@ fn builder_defaults() {
     assert_eq!(spec.stress_free, Some(vec![curled; 3]));
 }
 
-fn rod(length: f64) -> RodSpecBuilder {
-    RodSpec::builder(length)
+fn rod(length: f64) -> RodBuilder {
+    Rod::builder(length)
         .name("arm")
         .circle(0.01)
         .material(silicone())
@@ -130,9 +131,9 @@ fn builder_errors_name_the_rod_and_chain_the_cause() {
         index: None,
         name: "arm".into(),
     };
-    let e = RodSpec::builder(0.5).name("arm").build().unwrap_err();
+    let e = Rod::builder(0.5).name("arm").build().unwrap_err();
     assert_eq!(e, DynamicsError::MissingSection { rod: arm.clone() });
-    let e = RodSpec::builder(0.5)
+    let e = Rod::builder(0.5)
         .name("arm")
         .circle(0.01)
         .build()
@@ -143,7 +144,7 @@ fn builder_errors_name_the_rod_and_chain_the_cause() {
         let e = b.build().unwrap_err();
         assert_eq!(
             e,
-            DynamicsError::RodBody {
+            DynamicsError::RodProperties {
                 rod: arm.clone(),
                 source: MechanicsError::NotPositive {
                     quantity: Quantity::RodLength,
@@ -284,7 +285,7 @@ fn model_errors_carry_the_rod_index() {
 fn model_variants_equal_models_built_with_those_settings() {
     let g = Vec3::new(0.3, -1.0, -9.81);
     let rod = || {
-        RodSpec::builder(0.4)
+        Rod::builder(0.4)
             .pieces(4)
             .circle(0.01)
             .material(silicone())

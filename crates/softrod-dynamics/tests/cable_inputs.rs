@@ -17,7 +17,7 @@ fn model(tensions: [Tension; 3]) -> Model {
         .unwrap();
     let [a, b, c] = tensions;
     let arm = |name: &str| {
-        RodSpec::builder(0.3)
+        Rod::builder(0.3)
             .name(name)
             .pieces(3)
             .circle(0.01)

@@ -12,7 +12,7 @@ use common::{soft_material as material, soft_rod as rod};
 use nalgebra::DVector;
 use softrod_dynamics::{
     Attachment, BodySpec, Closure, ClosureFrame, ClosureKind, Data, DynamicsError, Joint, Model,
-    ModelBuilder, RodSpec, ShiftedSolver, StaticsOptions, bias_force, check_closures,
+    ModelBuilder, Rod, ShiftedSolver, StaticsOptions, bias_force, check_closures,
     closure_multipliers, closure_residuals, closure_statics, constraint_jacobian, constraint_rank,
     constraint_residual, energies, forward_dynamics, inverse_dynamics, mass_matrix, modes,
 };
@@ -239,7 +239,7 @@ const L: f64 = 1.0;
 /// s = L/2 is a piece boundary; its tip held by `kind` to the world at
 /// (L, 0, 0).
 fn beam(pieces: usize, kind: ClosureKind, load: Option<f64>, gravity: bool) -> Model {
-    let mut spec = RodSpec::builder(L)
+    let mut spec = Rod::builder(L)
         .name("beam")
         .pieces(pieces)
         .strains([Strain::Kx, Strain::Ky, Strain::Kz, Strain::Qx])
@@ -270,7 +270,7 @@ fn ei() -> f64 {
 }
 
 fn z_at(model: &Model, q: &[f64], s: f64) -> f64 {
-    let rod = &model.rods()[0].spec.rod;
+    let rod = &model.rods()[0].spec.geometry;
     let mut kin = softrod_kinematics::RodKinematics::new(rod);
     kin.update(rod, &q[model.rods()[0].dofs()], None, None)
         .unwrap();
@@ -374,7 +374,7 @@ fn propped_cantilever_tip_reaction_is_3wl_over_8() {
 fn swinging_loop() -> Model {
     Model::builder()
         .rod_on(
-            RodSpec::builder(0.3)
+            Rod::builder(0.3)
                 .name("arm")
                 .pieces(4)
                 .strains([Strain::Ky])

@@ -6,13 +6,13 @@
 
 use nalgebra::{DMatrix, DVector, Matrix6xX};
 use softrod_dynamics::*;
-use softrod_kinematics::{Basis, Frame, PieceSpec, Rod, RodKinematics, Strain, straight};
+use softrod_kinematics::{Basis, Frame, PieceSpec, RodGeometry, RodKinematics, Strain, straight};
 use softrod_lie::{Pose, Vec3, Vec6, exp_twist};
 use softrod_mechanics::reference::{
     generalized_gravity_by_jacobian, line_load_force_by_jacobian, point_load_force_by_jacobian,
 };
 use softrod_mechanics::{
-    Cable, DistributedLoad, Drag, LoadFrame, Material, PointLoad, RodBody, Routing, Section,
+    Cable, DistributedLoad, Drag, LoadFrame, Material, PointLoad, RodProperties, Routing, Section,
     Tension,
 };
 
@@ -94,9 +94,9 @@ fn model(n: usize, mixed: bool, terms: Terms) -> Model {
         })
         .collect();
     let base = exp_twist(1.0, &Vec6::new(0.2, -0.4, 0.1, 0.0, 0.05, 0.1));
-    let rod = Rod::from_pieces(specs, base).unwrap();
+    let rod = RodGeometry::from_pieces(specs, base).unwrap();
     let viscosity = if terms.damping { 30.0 } else { 0.0 };
-    let body = RodBody::new(
+    let body = RodProperties::new(
         Section::Circle { radius: 0.012 },
         Material::builder()
             .density(1100.0)
@@ -108,7 +108,7 @@ fn model(n: usize, mixed: bool, terms: Terms) -> Model {
         length,
     )
     .unwrap();
-    let mut spec = RodSpec::new("arm", rod, body);
+    let mut spec = Rod::new("arm", rod, body);
     if terms.loads {
         spec.point_loads = vec![
             PointLoad {
@@ -177,7 +177,7 @@ fn mass_matrix_is_spd_and_equals_jacobian_integral() {
         assert!(mass.clone().cholesky().is_some(), "not positive definite");
         // Independent: M = Σ_g w Jᵀ 𝓜 J with J from the kinematics layer.
         let rm = &m.rods()[0];
-        let rod = &rm.spec.rod;
+        let rod = &rm.spec.geometry;
         let mut kin = RodKinematics::new(rod);
         kin.update(rod, &q, None, None).unwrap();
         let mut j = Matrix6xX::zeros(rod.n_dof());
@@ -187,7 +187,7 @@ fn mass_matrix_is_spd_and_equals_jacobian_integral() {
                 let s = piece.start + x;
                 kin.jacobian_at(rod, s, Frame::Body, &mut j).unwrap();
                 let md = DMatrix::from_diagonal(&DVector::from_column_slice(
-                    rm.spec.body.screw_inertia(s).as_slice(),
+                    rm.spec.properties.screw_inertia(s).as_slice(),
                 ));
                 let jd = DMatrix::from_column_slice(6, rod.n_dof(), j.as_slice());
                 reference += jd.transpose() * md * jd * w;
@@ -321,8 +321,13 @@ fn gravity_and_point_loads_match_jacobian_projections() {
     let g = generalized_gravity(&m, &mut data, &q).unwrap();
     let rm = &m.rods()[0];
     let grav = m.gravity().unwrap();
-    let reference =
-        -generalized_gravity_by_jacobian(&rm.spec.rod, &rm.spec.body, &grav, &q, m.quadrature());
+    let reference = -generalized_gravity_by_jacobian(
+        &rm.spec.geometry,
+        &rm.spec.properties,
+        &grav,
+        &q,
+        m.quadrature(),
+    );
     assert!(
         rel_err(&g, &reference) < 1e-12,
         "{:e}",
@@ -349,13 +354,16 @@ fn gravity_and_point_loads_match_jacobian_projections() {
     let mut loads = DVector::zeros(m.n_dof());
     let rw = &with.rods()[0];
     for l in &rw.spec.point_loads {
-        loads += point_load_force_by_jacobian(&rw.spec.rod, l, &q);
+        loads += point_load_force_by_jacobian(&rw.spec.geometry, l, &q);
     }
     for d in &rw.spec.distributed_loads {
-        loads +=
-            line_load_force_by_jacobian(&rw.spec.rod, &q, None, with.quadrature(), |_, pose, _| {
-                d.wrench_density(pose)
-            });
+        loads += line_load_force_by_jacobian(
+            &rw.spec.geometry,
+            &q,
+            None,
+            with.quadrature(),
+            |_, pose, _| d.wrench_density(pose),
+        );
     }
     let diff = &a - &b;
     let e = rel_err(&diff, &(-loads));
@@ -543,7 +551,7 @@ fn statics_defaults_reach_round_off_and_failures_carry_the_residual() {
     // at rest. The default tolerance must land at round-off, not one Newton
     // step early.
     let length = 0.3;
-    let rod = Rod::uniform(length, 1, Basis::all(), straight(), Pose::identity()).unwrap();
+    let rod = RodGeometry::uniform(length, 1, Basis::all(), straight(), Pose::identity()).unwrap();
     let material = Material::builder()
         .density(1000.0)
         .young(5e6)
@@ -551,10 +559,10 @@ fn statics_defaults_reach_round_off_and_failures_carry_the_residual() {
         .viscosity(0.0)
         .build()
         .unwrap();
-    let body = RodBody::new(Section::Circle { radius: 0.01 }, material, length).unwrap();
+    let body = RodProperties::new(Section::Circle { radius: 0.01 }, material, length).unwrap();
     let ei = material.young() * std::f64::consts::PI * 0.01f64.powi(4) / 4.0;
     let kappa = 2.0 * std::f64::consts::PI / length; // a full circle
-    let mut spec = RodSpec::new("arm", rod, body);
+    let mut spec = Rod::new("arm", rod, body);
     spec.point_loads = vec![PointLoad {
         s: length,
         force: Vec3::zeros(),

@@ -9,7 +9,7 @@ mod common;
 use common::{Lcg, robot, soft_material as material, soft_rod as rod};
 use nalgebra::DVector;
 use softrod_dynamics::{
-    Attachment, BodyLoad, BodySpec, Data, DynamicsError, Joint, Model, ModelBuilder, RodSpec,
+    Attachment, BodyLoad, BodySpec, Data, DynamicsError, Joint, Model, ModelBuilder, Rod,
     StaticsOptions, energies, forward_dynamics, forward_dynamics_cholesky, frames,
     inverse_dynamics, mass_matrix, statics,
 };
@@ -132,7 +132,7 @@ fn pendulum_large_amplitude_half_period_and_energy() {
 /// A cantilever along x with a payload of mass `m` at its tip under gravity
 /// −z, or the same rod with a dead tip load `m g` instead.
 fn cantilever(pieces: usize, payload: Option<f64>, tip_load: f64) -> Model {
-    let spec = RodSpec::builder(0.5)
+    let spec = Rod::builder(0.5)
         .name("beam")
         .pieces(pieces)
         .circle(0.005)
@@ -158,7 +158,7 @@ fn cantilever(pieces: usize, payload: Option<f64>, tip_load: f64) -> Model {
 }
 
 fn tip_z(model: &Model, q: &[f64]) -> f64 {
-    let rod = &model.rods()[0].spec.rod;
+    let rod = &model.rods()[0].spec.geometry;
     let mut kin = softrod_kinematics::RodKinematics::new(rod);
     kin.update(rod, &q[model.rods()[0].dofs()], None, None)
         .unwrap();

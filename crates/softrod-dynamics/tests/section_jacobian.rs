@@ -21,10 +21,11 @@ fn world_pose(model: &Model, q: &[f64], r: usize, s: f64) -> Pose {
     model.set_time(&mut data, 0.3);
     frames(model, &mut data, q).unwrap();
     let rm = &model.rods()[r];
-    let mut kin = RodKinematics::new(&rm.spec.rod);
-    kin.update(&rm.spec.rod, &q[rm.dofs()], None, None).unwrap();
+    let mut kin = RodKinematics::new(&rm.spec.geometry);
+    kin.update(&rm.spec.geometry, &q[rm.dofs()], None, None)
+        .unwrap();
     data.rod_to_world(model, r)
-        .compose(&kin.pose_at(&rm.spec.rod, s).unwrap())
+        .compose(&kin.pose_at(&rm.spec.geometry, s).unwrap())
 }
 
 /// Column `j` of the spatial Jacobian from central differences of the
@@ -86,7 +87,7 @@ fn clamped_rod_and_robots() {
     let m = robot(true, true, true, true);
     let q = rng.vec(m.n_dof(), 0.4);
     for (r, rm) in m.rods().iter().enumerate() {
-        let l = rm.spec.rod.length();
+        let l = rm.spec.geometry.length();
         for s in [0.0, 0.37 * l, l] {
             check(
                 &m,
@@ -128,7 +129,7 @@ fn inside_attachments_and_a_prescribed_joint() {
         .unwrap();
     let q = Lcg(8).vec(m.n_dof(), 0.4);
     for (r, rm) in m.rods().iter().enumerate() {
-        let l = rm.spec.rod.length();
+        let l = rm.spec.geometry.length();
         for s in [0.0, 0.55 * l, l] {
             check(&m, &q, r, s, &format!("rod {}, s = {s}", rm.spec.name));
         }

@@ -12,11 +12,11 @@
 use nalgebra::DVector;
 use softrod_dynamics::{Data, StaticsResult};
 use softrod_dynamics::{
-    DynamicsError, Model, RodSpec, StaticsOptions, inverse_dynamics, modes, statics,
+    DynamicsError, Model, Rod, StaticsOptions, inverse_dynamics, modes, statics,
 };
-use softrod_kinematics::{Basis, Rod, RodKinematics, Strain, straight};
+use softrod_kinematics::{Basis, RodGeometry, RodKinematics, Strain, straight};
 use softrod_lie::{Pose, Vec3};
-use softrod_mechanics::{LoadFrame, Material, PointLoad, RodBody, Section};
+use softrod_mechanics::{LoadFrame, Material, PointLoad, RodProperties, Section};
 use std::f64::consts::PI;
 use std::fmt::Write as _;
 
@@ -48,9 +48,9 @@ fn area(r: f64) -> f64 {
 /// A straight cantilever clamped at the identity, `n` equal pieces with
 /// `basis`, radius `r`, tip loads `loads`, no gravity, 4 Gauss points.
 fn cantilever(n: usize, basis: Basis, r: f64, loads: Vec<PointLoad>) -> Model {
-    let rod = Rod::uniform(L, n, basis, straight(), Pose::identity()).unwrap();
-    let body = RodBody::new(Section::Circle { radius: r }, material(), L).unwrap();
-    let mut spec = RodSpec::new("cantilever", rod, body);
+    let rod = RodGeometry::uniform(L, n, basis, straight(), Pose::identity()).unwrap();
+    let body = RodProperties::new(Section::Circle { radius: r }, material(), L).unwrap();
+    let mut spec = Rod::new("cantilever", rod, body);
     spec.point_loads = loads;
     Model::new(vec![spec], None, 4).unwrap()
 }
@@ -71,7 +71,7 @@ fn solve(model: &Model, options: &StaticsOptions) -> StaticsResult {
 }
 
 fn tip_pose(model: &Model, q: &DVector<f64>) -> Pose {
-    let rod = &model.rods()[0].spec.rod;
+    let rod = &model.rods()[0].spec.geometry;
     let mut kin = RodKinematics::new(rod);
     kin.update(rod, q.as_slice(), None, None).unwrap();
     *kin.tip_pose()

@@ -318,15 +318,15 @@ impl SecondOrderSystem for RodSystem {
 mod tests {
     use super::*;
     use crate::{Integrator, NoHooks, Options, integrate_second_order};
-    use softrod_dynamics::{RodSpec, energies};
-    use softrod_kinematics::{Basis, Rod};
+    use softrod_dynamics::{Rod, energies};
+    use softrod_kinematics::{Basis, RodGeometry};
     use softrod_lie::{Pose, Vec3};
-    use softrod_mechanics::{Material, RodBody, Section};
+    use softrod_mechanics::{Material, RodProperties, Section};
 
     #[test]
     fn released_rod_conserves_energy_with_dopri5() {
         let l = 0.2;
-        let rod = Rod::uniform(
+        let rod = RodGeometry::uniform(
             l,
             1,
             Basis::all(),
@@ -335,9 +335,9 @@ mod tests {
         )
         .unwrap();
         let mat = Material::with_poisson(1000.0, 1e5, 0.5, 0.0).unwrap();
-        let body = RodBody::new(Section::Circle { radius: 0.01 }, mat, l).unwrap();
+        let body = RodProperties::new(Section::Circle { radius: 0.01 }, mat, l).unwrap();
         let model = Model::new(
-            vec![RodSpec::new("r", rod, body)],
+            vec![Rod::new("r", rod, body)],
             Some(Vec3::new(0.0, 0.0, -9.81)),
             4,
         )
@@ -390,7 +390,7 @@ mod tests {
         use softrod_dynamics::{Attachment, Curve, Joint, Prescribed};
         use softrod_mechanics::{Cable, Routing};
         let spec = |table: bool| {
-            let rod = Rod::uniform(
+            let rod = RodGeometry::uniform(
                 0.2,
                 2,
                 Basis::all(),
@@ -399,8 +399,8 @@ mod tests {
             )
             .unwrap();
             let mat = Material::with_poisson(1000.0, 1e5, 0.5, 0.0).unwrap();
-            let body = RodBody::new(Section::Circle { radius: 0.01 }, mat, 0.2).unwrap();
-            let mut spec = RodSpec::new("r", rod, body);
+            let body = RodProperties::new(Section::Circle { radius: 0.01 }, mat, 0.2).unwrap();
+            let mut spec = Rod::new("r", rod, body);
             if table {
                 spec.cables.push(Cable::new(
                     Routing::Offset { y: 0.005, z: 0.0 },

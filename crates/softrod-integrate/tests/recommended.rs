@@ -9,13 +9,13 @@
 use std::path::Path;
 
 use nalgebra::DVector;
-use softrod_dynamics::{Model, RodSpec, energies};
+use softrod_dynamics::{Model, Rod, energies};
 use softrod_integrate::{
     Integrator, NoHooks, Options, Recommended, RodSystem, Solution, Status, integrate_second_order,
 };
-use softrod_kinematics::{Basis, Rod, RodKinematics, Strain, straight};
+use softrod_kinematics::{Basis, RodGeometry, RodKinematics, Strain, straight};
 use softrod_lie::{Pose, Vec3};
-use softrod_mechanics::{Material, RodBody, Section};
+use softrod_mechanics::{Material, RodProperties, Section};
 
 const RTOLS: [f64; 6] = [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8];
 
@@ -25,11 +25,11 @@ fn cantilever(
     basis: Basis,
     gauss: usize,
 ) -> Model {
-    let rod = Rod::uniform(length, pieces, basis, straight(), Pose::identity()).unwrap();
+    let rod = RodGeometry::uniform(length, pieces, basis, straight(), Pose::identity()).unwrap();
     let mat = Material::with_poisson(density, young, poisson, 0.0).unwrap();
-    let body = RodBody::new(Section::Circle { radius }, mat, length).unwrap();
+    let body = RodProperties::new(Section::Circle { radius }, mat, length).unwrap();
     Model::new(
-        vec![RodSpec::new("rod", rod, body)],
+        vec![Rod::new("rod", rod, body)],
         Some(Vec3::new(0.0, 0.0, -9.81)),
         gauss,
     )
@@ -79,7 +79,7 @@ fn from_rest(model: &Model, setting: &Recommended, times: &[f64]) -> (RodSystem,
 
 /// Tip positions (first rod) of the outputs.
 fn tips(model: &Model, sol: &Solution) -> Vec<[f64; 3]> {
-    let rod = &model.rods()[0].spec.rod;
+    let rod = &model.rods()[0].spec.geometry;
     // The first rod's own coordinates (scenes with joints put them first).
     let dofs = model.rods()[0].dofs();
     let mut kin = RodKinematics::new(rod);

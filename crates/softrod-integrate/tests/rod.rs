@@ -5,14 +5,14 @@
 //! (IMEX) generalized-α, and bit-identical reruns.
 
 use nalgebra::DVector;
-use softrod_dynamics::{Data, Model, RodSpec, energies, modes};
+use softrod_dynamics::{Data, Model, Rod, energies, modes};
 use softrod_integrate::{
     Callbacks, IntegrateError, Integrator, Iteration, NoHooks, Options, RodJacobian, RodSystem,
     Solution, integrate_second_order,
 };
-use softrod_kinematics::{Basis, Rod, straight};
+use softrod_kinematics::{Basis, RodGeometry, straight};
 use softrod_lie::{Pose, Vec3};
-use softrod_mechanics::{Material, RodBody, Section};
+use softrod_mechanics::{Material, RodProperties, Section};
 
 /// A horizontal cantilever (along x, clamped at the origin, gravity −z),
 /// undamped, all six strains on `pieces` equal pieces, 4 Gauss points.
@@ -24,11 +24,12 @@ fn cantilever(
     poisson: f64,
     pieces: usize,
 ) -> Model {
-    let rod = Rod::uniform(length, pieces, Basis::all(), straight(), Pose::identity()).unwrap();
+    let rod =
+        RodGeometry::uniform(length, pieces, Basis::all(), straight(), Pose::identity()).unwrap();
     let mat = Material::with_poisson(density, young, poisson, 0.0).unwrap();
-    let body = RodBody::new(Section::Circle { radius }, mat, length).unwrap();
+    let body = RodProperties::new(Section::Circle { radius }, mat, length).unwrap();
     Model::new(
-        vec![RodSpec::new("rod", rod, body)],
+        vec![Rod::new("rod", rod, body)],
         Some(Vec3::new(0.0, 0.0, -9.81)),
         4,
     )
@@ -447,11 +448,11 @@ impl softrod_integrate::SecondOrderSystem for DenseW {
 
 /// A damped 4-piece soft cantilever (so the `D` terms count).
 fn damped_soft() -> Model {
-    let rod = Rod::uniform(0.5, 4, Basis::all(), straight(), Pose::identity()).unwrap();
+    let rod = RodGeometry::uniform(0.5, 4, Basis::all(), straight(), Pose::identity()).unwrap();
     let mat = Material::with_poisson(1000.0, 1e7, 0.5, 50.0).unwrap();
-    let body = RodBody::new(Section::Circle { radius: 0.01 }, mat, 0.5).unwrap();
+    let body = RodProperties::new(Section::Circle { radius: 0.01 }, mat, 0.5).unwrap();
     Model::new(
-        vec![RodSpec::new("rod", rod, body)],
+        vec![Rod::new("rod", rod, body)],
         Some(Vec3::new(0.0, 0.0, -9.81)),
         4,
     )

@@ -6,7 +6,7 @@
 //! `callgrind_annotate --inclusive=yes` shows its count per call):
 //! `BENCH=tip N_PIECES=10 N_ITER=2000 cargo run --release -p softrod-kinematics --example kin_timing`.
 use nalgebra::Matrix6xX;
-use softrod_kinematics::{Basis, Frame, GaussLegendre, Rod, RodKinematics, straight};
+use softrod_kinematics::{Basis, Frame, GaussLegendre, RodGeometry, RodKinematics, straight};
 use softrod_lie::Pose;
 use std::hint::black_box;
 
@@ -18,8 +18,9 @@ fn env(name: &str, default: usize) -> usize {
 }
 
 /// The bench's rod and configuration (`setup` in benches/benches/kinematics.rs).
-fn setup(n: usize) -> (Rod, Vec<f64>) {
-    let rod = Rod::uniform(1.0, n, Basis::all(), straight(), Pose::identity()).expect("rod");
+fn setup(n: usize) -> (RodGeometry, Vec<f64>) {
+    let rod =
+        RodGeometry::uniform(1.0, n, Basis::all(), straight(), Pose::identity()).expect("rod");
     let q: Vec<f64> = (0..rod.n_dof())
         .map(|i| {
             let p = (i / 6) as f64;
@@ -36,7 +37,12 @@ fn setup(n: usize) -> (Rod, Vec<f64>) {
 }
 
 #[inline(never)]
-fn tip_iteration(rod: &Rod, q: &[f64], kin: &mut RodKinematics, jac: &mut Matrix6xX<f64>) -> f64 {
+fn tip_iteration(
+    rod: &RodGeometry,
+    q: &[f64],
+    kin: &mut RodKinematics,
+    jac: &mut Matrix6xX<f64>,
+) -> f64 {
     kin.update(rod, black_box(q), None, None).expect("update");
     let tip = *kin.tip_pose();
     kin.jacobian_at(rod, rod.length(), Frame::Body, jac)
@@ -47,7 +53,7 @@ fn tip_iteration(rod: &Rod, q: &[f64], kin: &mut RodKinematics, jac: &mut Matrix
 
 #[inline(never)]
 fn gauss_iteration(
-    rod: &Rod,
+    rod: &RodGeometry,
     q: &[f64],
     kin: &mut RodKinematics,
     nodes: &[f64],

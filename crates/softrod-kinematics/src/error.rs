@@ -7,7 +7,7 @@ use std::fmt;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum LengthOf {
     /// The whole rod `L`.
-    Rod,
+    RodGeometry,
     /// Piece `n` (0-based, base to tip).
     Piece(usize),
 }
@@ -15,7 +15,7 @@ pub enum LengthOf {
 impl fmt::Display for LengthOf {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            LengthOf::Rod => f.write_str("rod length"),
+            LengthOf::RodGeometry => f.write_str("rod length"),
             LengthOf::Piece(n) => write!(f, "piece {n} length"),
         }
     }
@@ -39,12 +39,12 @@ pub enum KinematicsError {
     /// The rod has no pieces.
     #[error("a rod needs at least one piece")]
     NoPieces,
-    /// More pieces than [`crate::Rod::MAX_PIECES`] (a typo rather than a model).
+    /// More pieces than [`crate::RodGeometry::MAX_PIECES`] (a typo rather than a model).
     #[error("{pieces} pieces is more than the maximum of {max}")]
     TooManyPieces {
         /// Pieces asked for.
         pieces: usize,
-        /// [`crate::Rod::MAX_PIECES`].
+        /// [`crate::RodGeometry::MAX_PIECES`].
         max: usize,
     },
     /// A strain basis with no column or more than six.
@@ -91,7 +91,7 @@ pub enum KinematicsError {
         value: f64,
     },
     /// The base rotation is not orthonormal with determinant +1 (to
-    /// [`crate::Rod::ROTATION_TOL`]).
+    /// [`crate::RodGeometry::ROTATION_TOL`]).
     #[error(
         "base rotation is not a rotation matrix: must be orthonormal with determinant +1 within \
          {tolerance:e} (max |R Rᵀ − I| = {deviation:.3e}, det R = {determinant})"

@@ -13,7 +13,7 @@
 //! (quadratic convergence on a zero residual).
 
 use crate::error::KinematicsError;
-use crate::rod::Rod;
+use crate::rod::RodGeometry;
 use crate::state::{Frame, RodKinematics};
 use nalgebra::{DMatrix, DVector, Matrix6xX};
 use softrod_lie::Vec3;
@@ -39,7 +39,7 @@ pub struct CenterlineFit {
 /// Errors: no target, a target off the rod or not finite, `q0` of the
 /// wrong size.
 pub fn fit_centerline(
-    rod: &Rod,
+    rod: &RodGeometry,
     targets: &[(f64, Vec3)],
     q0: &[f64],
 ) -> Result<CenterlineFit, KinematicsError> {
@@ -160,8 +160,8 @@ mod tests {
     use crate::{Basis, Strain};
     use softrod_lie::Pose;
 
-    fn rod(pieces: usize, basis: Basis) -> Rod {
-        Rod::uniform(0.5, pieces, basis, crate::straight(), Pose::identity()).unwrap()
+    fn rod(pieces: usize, basis: Basis) -> RodGeometry {
+        RodGeometry::uniform(0.5, pieces, basis, crate::straight(), Pose::identity()).unwrap()
     }
 
     #[test]
@@ -257,7 +257,7 @@ mod tests {
             .collect();
         let length = pts.last().unwrap().0;
         let fit = |pieces: usize| {
-            let r = Rod::uniform(
+            let r = RodGeometry::uniform(
                 length,
                 pieces,
                 Basis::select(&[Strain::Ky]).unwrap(),

@@ -1,7 +1,7 @@
 //! Piecewise-constant-strain (PCS) Cosserat rod kinematics: the second layer
 //! of softrod.
 //!
-//! A [`Rod`] is cut into pieces of constant strain `ξ_n = B_n q_n + ξ̄_n`
+//! A [`RodGeometry`] is cut into pieces of constant strain `ξ_n = B_n q_n + ξ̄_n`
 //! (docs/theory.md §0.6, (C9)); [`RodKinematics`] evaluates, in one O(N) sweep from the
 //! clamped base to the tip, everything about where the rod is and how it
 //! moves: poses `g(s)` (D7), velocities `η(s) = J(s) q̇` (D8), accelerations `η̇ = J q̈ + J̇ q̇` ((D10)), the geometric Jacobian
@@ -25,7 +25,7 @@ pub use basis::Basis;
 pub use error::{KinematicsError, LengthOf};
 pub use fit::{CenterlineFit, fit_centerline};
 pub use quadrature::GaussLegendre;
-pub use rod::{Piece, PieceSpec, Rod, straight};
+pub use rod::{Piece, PieceSpec, RodGeometry, straight};
 pub use state::{Frame, RodKinematics};
 pub use strain::Strain;
 

@@ -53,7 +53,7 @@ impl Piece {
     }
 }
 
-/// Description of one piece for [`Rod::from_pieces`].
+/// Description of one piece for [`RodGeometry::from_pieces`].
 #[derive(Clone, Debug)]
 pub struct PieceSpec {
     /// Length \[m\].
@@ -73,14 +73,14 @@ pub fn straight() -> Vec6 {
 ///
 /// Generalized coordinates `q = (q_1, …, q_N)`, `n_dof = Σ k_n`.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Rod {
+pub struct RodGeometry {
     pieces: Vec<Piece>,
     base: Pose,
     length: f64,
     n_dof: usize,
 }
 
-impl Rod {
+impl RodGeometry {
     /// Upper bound on the number of pieces: far beyond any useful
     /// discretization, low enough that a typo (`10000000000` pieces) is an
     /// error instead of an attempt to allocate terabytes.
@@ -108,7 +108,7 @@ impl Rod {
                 max: Self::MAX_PIECES,
             });
         }
-        check_length(LengthOf::Rod, length)?;
+        check_length(LengthOf::RodGeometry, length)?;
         let lengths = vec![length / n as f64; n];
         Self::with_lengths(&lengths, basis, rest_strain, base)
     }
@@ -323,11 +323,13 @@ fn check_base(base: &Pose) -> Result<(), KinematicsError> {
     let r = &base.rotation;
     let deviation = (r * r.transpose() - softrod_lie::Mat3::identity()).amax();
     let determinant = r.determinant();
-    if deviation > Rod::ROTATION_TOL || (determinant - 1.0).abs() > Rod::ROTATION_TOL {
+    if deviation > RodGeometry::ROTATION_TOL
+        || (determinant - 1.0).abs() > RodGeometry::ROTATION_TOL
+    {
         return Err(KinematicsError::BaseNotRotation {
             deviation,
             determinant,
-            tolerance: Rod::ROTATION_TOL,
+            tolerance: RodGeometry::ROTATION_TOL,
         });
     }
     Ok(())

@@ -2,7 +2,7 @@
 
 use crate::basis::Basis;
 use crate::error::KinematicsError;
-use crate::rod::{Piece, Rod};
+use crate::rod::{Piece, RodGeometry};
 use nalgebra::{DVectorView, Matrix6xX};
 use softrod_lie::{
     AdOp, Mat3, Pose, Vec3, Vec6, ad_vec, d_tangent_minus, d_tangent_minus_self,
@@ -65,7 +65,7 @@ pub struct RodKinematics {
 impl RodKinematics {
     /// Allocates the buffers for `rod` (state: the rest configuration, at rest,
     /// after the first [`update`](Self::update)).
-    pub fn new(rod: &Rod) -> Self {
+    pub fn new(rod: &RodGeometry) -> Self {
         let n = rod.n_pieces();
         Self {
             n_dof: rod.n_dof(),
@@ -93,7 +93,7 @@ impl RodKinematics {
     /// `η̇(L_n) = A_ℓ η̇(L_{n−1}) + S_ℓ q̈_n + ad_{A_ℓ η(L_{n−1})} S_ℓ q̇_n + Ṡ_ℓ q̇_n`.
     pub fn update(
         &mut self,
-        rod: &Rod,
+        rod: &RodGeometry,
         q: &[f64],
         qd: Option<&[f64]>,
         qdd: Option<&[f64]>,
@@ -190,13 +190,18 @@ impl RodKinematics {
     }
 
     /// World pose `g(s)` at any abscissa (D7).
-    pub fn pose_at(&self, rod: &Rod, s: f64) -> Result<Pose, KinematicsError> {
+    pub fn pose_at(&self, rod: &RodGeometry, s: f64) -> Result<Pose, KinematicsError> {
         let (n, x) = rod.locate(s)?;
         Ok(self.local(n, x).0)
     }
 
     /// World poses at several abscissae (any order); `out.len() == s.len()`.
-    pub fn poses_at(&self, rod: &Rod, s: &[f64], out: &mut [Pose]) -> Result<(), KinematicsError> {
+    pub fn poses_at(
+        &self,
+        rod: &RodGeometry,
+        s: &[f64],
+        out: &mut [Pose],
+    ) -> Result<(), KinematicsError> {
         if out.len() != s.len() {
             return Err(KinematicsError::SizeMismatch {
                 what: "output poses",
@@ -217,7 +222,7 @@ impl RodKinematics {
     /// evaluating it at quadrature points.
     pub fn poses_along(
         &self,
-        rod: &Rod,
+        rod: &RodGeometry,
         fractions: &[f64],
         out: &mut [Pose],
     ) -> Result<(), KinematicsError> {
@@ -300,7 +305,12 @@ impl RodKinematics {
     }
 
     /// Velocity `η(s)` (D8) in the requested frame.
-    pub fn velocity_at(&self, rod: &Rod, s: f64, frame: Frame) -> Result<Vec6, KinematicsError> {
+    pub fn velocity_at(
+        &self,
+        rod: &RodGeometry,
+        s: f64,
+        frame: Frame,
+    ) -> Result<Vec6, KinematicsError> {
         let (n, x) = rod.locate(s)?;
         let (g, a, tm) = self.local(n, x);
         let eta = a.mul_vec(&self.tip_vel[n]) + tm.mul_vec(&self.strain_rate[n]);
@@ -314,7 +324,7 @@ impl RodKinematics {
     /// for those).
     pub fn acceleration_at(
         &self,
-        rod: &Rod,
+        rod: &RodGeometry,
         s: f64,
         frame: Frame,
     ) -> Result<Vec6, KinematicsError> {
@@ -335,7 +345,7 @@ impl RodKinematics {
     /// computed tip-side first so each earlier block costs one `AdOp` product.
     pub fn jacobian_at(
         &self,
-        rod: &Rod,
+        rod: &RodGeometry,
         s: f64,
         frame: Frame,
         out: &mut Matrix6xX<f64>,
@@ -393,7 +403,7 @@ impl RodKinematics {
     /// recursion (D12); block `n` is `Ṡ_n(x) = D_ξT₋(x)[B_n q̇_n] B_n` (D9).
     pub fn jacobian_dot_at(
         &self,
-        rod: &Rod,
+        rod: &RodGeometry,
         s: f64,
         frame: Frame,
         out: &mut Matrix6xX<f64>,

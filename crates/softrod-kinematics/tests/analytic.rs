@@ -5,7 +5,7 @@ mod common;
 
 use common::*;
 use nalgebra::{Matrix3, Vector3, Vector6};
-use softrod_kinematics::{Basis, Rod, RodKinematics, Strain, straight};
+use softrod_kinematics::{Basis, RodGeometry, RodKinematics, Strain, straight};
 use softrod_lie::{Pose, Vec6};
 
 /// Worst error of `pose` against `(r, p)`: rotation in max-abs entries,
@@ -61,7 +61,7 @@ fn helix(k: &Vector3<f64>, q: &Vector3<f64>, s: f64) -> (Matrix3<f64>, Vector3<f
 }
 
 fn check_rod(
-    rod: &Rod,
+    rod: &RodGeometry,
     q: &[f64],
     base: &Pose,
     exact: impl Fn(f64) -> (Matrix3<f64>, Vector3<f64>),
@@ -101,7 +101,7 @@ fn check_rod(
 fn single_piece_arc_is_a_circle() {
     let mut worst = 0.0f64;
     let l = 0.7;
-    let all = Rod::uniform(l, 1, Basis::all(), straight(), Pose::identity()).unwrap();
+    let all = RodGeometry::uniform(l, 1, Basis::all(), straight(), Pose::identity()).unwrap();
     // Curvatures from nearly straight (series side of the switch) to many turns.
     for kappa in [1e-3, 0.5, 2.0, 3.5, 5.0, 10.0, 40.0, -7.0] {
         for e in [1.0, 1.2, 0.8] {
@@ -129,7 +129,7 @@ fn single_piece_arc_is_a_circle() {
             ));
         }
         // Reduced basis [ky] (qx fixed at its rest value 1).
-        let ky = Rod::uniform(
+        let ky = RodGeometry::uniform(
             l,
             1,
             Basis::select(&[Strain::Ky]).unwrap(),
@@ -164,7 +164,7 @@ fn multi_piece_arc_with_base_pose() {
             let raw: Vec<f64> = (0..n).map(|_| rng.range(0.5, 1.5)).collect();
             let sum: f64 = raw.iter().sum();
             let lengths: Vec<f64> = raw.iter().map(|x| x * l / sum).collect();
-            let rod = Rod::with_lengths(&lengths, Basis::all(), straight(), base).unwrap();
+            let rod = RodGeometry::with_lengths(&lengths, Basis::all(), straight(), base).unwrap();
             let mut q = Vec::new();
             for _ in 0..n {
                 q.extend([0.0, kappa, 0.0, e - 1.0, 0.0, 0.0]);
@@ -180,9 +180,13 @@ fn multi_piece_arc_with_base_pose() {
             ));
             // Same arc with a precurved rest strain and the basis [qx] only.
             let rest = Vec6::new(0.0, 0.0, kappa, 1.0, 0.0, 0.0);
-            let rod =
-                Rod::with_lengths(&lengths, Basis::select(&[Strain::Qx]).unwrap(), rest, base)
-                    .unwrap();
+            let rod = RodGeometry::with_lengths(
+                &lengths,
+                Basis::select(&[Strain::Qx]).unwrap(),
+                rest,
+                base,
+            )
+            .unwrap();
             let q = vec![e - 1.0; n];
             worst = worst.max(check_rod(
                 &rod,
@@ -228,7 +232,7 @@ fn torsion_and_bending_is_a_helix() {
                 )
             };
             let xi = Vector6::new(k[0], k[1], k[2], qv[0], qv[1], qv[2]);
-            let rod = Rod::uniform(l, n, Basis::all(), straight(), base).unwrap();
+            let rod = RodGeometry::uniform(l, n, Basis::all(), straight(), base).unwrap();
             let qn = xi - straight();
             let q: Vec<f64> = (0..n).flat_map(|_| qn.iter().copied()).collect();
             worst = worst.max(check_rod(
@@ -274,7 +278,7 @@ fn zero_curvature_is_a_straight_line() {
                 rng.range(-2.0, 2.0),
                 rng.range(-2.0, 2.0),
             );
-            let rod = Rod::uniform(l, n, Basis::all(), straight(), base).unwrap();
+            let rod = RodGeometry::uniform(l, n, Basis::all(), straight(), base).unwrap();
             let qn = [0.0, 0.0, 0.0, qv[0] - 1.0, qv[1], qv[2]];
             let q: Vec<f64> = (0..n).flat_map(|_| qn).collect();
             worst = worst.max(check_rod(
@@ -287,7 +291,7 @@ fn zero_curvature_is_a_straight_line() {
                 &format!("straight N = {n}, q = {qv:?}"),
             ));
             // Reduced shear/extension basis.
-            let rod = Rod::uniform(
+            let rod = RodGeometry::uniform(
                 l,
                 n,
                 Basis::select(&[Strain::Qx, Strain::Qy, Strain::Qz]).unwrap(),
@@ -315,7 +319,7 @@ fn zero_curvature_is_a_straight_line() {
 fn rest_configuration_is_the_base_x_axis() {
     let mut rng = Rng::new(14);
     let base = random_pose(&mut rng);
-    let rod = Rod::uniform(0.9, 6, Basis::kirchhoff(), straight(), base).unwrap();
+    let rod = RodGeometry::uniform(0.9, 6, Basis::kirchhoff(), straight(), base).unwrap();
     let mut kin = RodKinematics::new(&rod);
     kin.update(&rod, rod.rest_q().as_slice(), None, None)
         .unwrap();
@@ -330,7 +334,8 @@ fn rest_configuration_is_the_base_x_axis() {
 #[test]
 fn poses_at_and_pose_in_piece_agree_with_pose_at() {
     let mut rng = Rng::new(15);
-    let rod = Rod::uniform(1.3, 5, Basis::all(), straight(), random_pose(&mut rng)).unwrap();
+    let rod =
+        RodGeometry::uniform(1.3, 5, Basis::all(), straight(), random_pose(&mut rng)).unwrap();
     let q = rng.vec(rod.n_dof(), -2.0, 2.0);
     let mut kin = RodKinematics::new(&rod);
     kin.update(&rod, &q, None, None).unwrap();

@@ -5,7 +5,7 @@ mod common;
 
 use common::*;
 use nalgebra::{DMatrix, DVector, Matrix6xX, Vector6};
-use softrod_kinematics::{Basis, Frame, PieceSpec, Rod, RodKinematics, Strain, straight};
+use softrod_kinematics::{Basis, Frame, PieceSpec, RodGeometry, RodKinematics, Strain, straight};
 use softrod_lie::Pose;
 
 fn pose_diff(a: &Pose, b: &Pose) -> f64 {
@@ -16,7 +16,7 @@ fn pose_diff(a: &Pose, b: &Pose) -> f64 {
 
 #[test]
 fn locate_semantics() {
-    let rod = Rod::with_lengths(
+    let rod = RodGeometry::with_lengths(
         &[0.25, 0.5, 0.25],
         Basis::all(),
         straight(),
@@ -49,7 +49,7 @@ fn pose_velocity_jacobian_continuous_across_boundaries() {
             } else {
                 Basis::select(&[Strain::Ky, Strain::Qx, Strain::Qz]).unwrap()
             };
-            let rod = Rod::with_lengths(&lengths, basis, straight(), base).unwrap();
+            let rod = RodGeometry::with_lengths(&lengths, basis, straight(), base).unwrap();
             let nd = rod.n_dof();
             let q = rng.vec(nd, -3.0, 3.0);
             let qd = rng.vec(nd, -1.0, 1.0);
@@ -152,7 +152,7 @@ fn reduced_bases_equal_full_basis_with_fixed_strains() {
                 let base = random_pose(&mut rng);
                 let lengths: Vec<f64> = (0..n).map(|_| rng.range(0.1, 0.3)).collect();
                 let mk = |basis: Basis| {
-                    Rod::from_pieces(
+                    RodGeometry::from_pieces(
                         lengths
                             .iter()
                             .map(|&length| PieceSpec {
@@ -228,9 +228,9 @@ fn reduced_bases_equal_full_basis_with_fixed_strains() {
 
 #[test]
 fn poses_along_equals_pose_at() {
-    use softrod_kinematics::{Basis, GaussLegendre, Rod, RodKinematics, straight};
+    use softrod_kinematics::{Basis, GaussLegendre, RodGeometry, RodKinematics, straight};
     use softrod_lie::{Pose, Vec6};
-    let rod = Rod::uniform(0.7, 5, Basis::all(), straight(), Pose::identity()).unwrap();
+    let rod = RodGeometry::uniform(0.7, 5, Basis::all(), straight(), Pose::identity()).unwrap();
     let q: Vec<f64> = (0..rod.n_dof())
         .map(|i| 0.3 * ((i * 5 % 7) as f64 - 3.0))
         .collect();

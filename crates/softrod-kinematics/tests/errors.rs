@@ -3,7 +3,8 @@
 
 use nalgebra::Matrix6xX;
 use softrod_kinematics::{
-    Basis, Frame, KinematicsError, LengthOf, PieceSpec, Rod, RodKinematics, Strain, straight,
+    Basis, Frame, KinematicsError, LengthOf, PieceSpec, RodGeometry, RodKinematics, Strain,
+    straight,
 };
 use softrod_lie::{Pose, Vec6};
 
@@ -14,18 +15,19 @@ fn id() -> Pose {
 #[test]
 fn bad_lengths() {
     for l in [0.0, -1.0, -0.0, f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
-        let e = Rod::uniform(l, 3, Basis::all(), straight(), id()).unwrap_err();
+        let e = RodGeometry::uniform(l, 3, Basis::all(), straight(), id()).unwrap_err();
         assert!(
             matches!(
                 e,
                 KinematicsError::BadLength {
-                    what: LengthOf::Rod,
+                    what: LengthOf::RodGeometry,
                     ..
                 }
             ),
             "uniform({l}): {e:?}"
         );
-        let e = Rod::with_lengths(&[0.2, l, 0.3], Basis::all(), straight(), id()).unwrap_err();
+        let e =
+            RodGeometry::with_lengths(&[0.2, l, 0.3], Basis::all(), straight(), id()).unwrap_err();
         match e {
             KinematicsError::BadLength { what, value } => {
                 assert_eq!(what, LengthOf::Piece(1), "names piece 1: {what}");
@@ -39,15 +41,15 @@ fn bad_lengths() {
 #[test]
 fn no_pieces() {
     assert_eq!(
-        Rod::uniform(1.0, 0, Basis::all(), straight(), id()).unwrap_err(),
+        RodGeometry::uniform(1.0, 0, Basis::all(), straight(), id()).unwrap_err(),
         KinematicsError::NoPieces
     );
     assert_eq!(
-        Rod::with_lengths(&[], Basis::all(), straight(), id()).unwrap_err(),
+        RodGeometry::with_lengths(&[], Basis::all(), straight(), id()).unwrap_err(),
         KinematicsError::NoPieces
     );
     assert_eq!(
-        Rod::from_pieces(vec![], id()).unwrap_err(),
+        RodGeometry::from_pieces(vec![], id()).unwrap_err(),
         KinematicsError::NoPieces
     );
 }
@@ -139,7 +141,7 @@ fn bad_bases() {
 fn non_finite_rod_data() {
     let mut rest = straight();
     rest[1] = f64::NAN;
-    let e = Rod::uniform(1.0, 2, Basis::all(), rest, id()).unwrap_err();
+    let e = RodGeometry::uniform(1.0, 2, Basis::all(), rest, id()).unwrap_err();
     assert!(
         matches!(
             e,
@@ -153,9 +155,9 @@ fn non_finite_rod_data() {
     );
     let mut base = id();
     base.translation[2] = f64::INFINITY;
-    let e = Rod::uniform(1.0, 2, Basis::all(), straight(), base).unwrap_err();
+    let e = RodGeometry::uniform(1.0, 2, Basis::all(), straight(), base).unwrap_err();
     assert!(matches!(e, KinematicsError::BaseNotFinite { .. }), "{e:?}");
-    let e = Rod::from_pieces(
+    let e = RodGeometry::from_pieces(
         vec![PieceSpec {
             length: 1.0,
             basis: Basis::kirchhoff(),
@@ -170,8 +172,8 @@ fn non_finite_rod_data() {
     );
 }
 
-fn rod() -> Rod {
-    Rod::uniform(
+fn rod() -> RodGeometry {
+    RodGeometry::uniform(
         0.8,
         3,
         Basis::select(&[Strain::Ky, Strain::Qx]).unwrap(),
@@ -281,7 +283,7 @@ fn abscissa_outside_the_rod() {
 
 #[test]
 fn errors_display() {
-    let e = Rod::uniform(-2.0, 1, Basis::all(), straight(), id()).unwrap_err();
+    let e = RodGeometry::uniform(-2.0, 1, Basis::all(), straight(), id()).unwrap_err();
     assert!(e.to_string().contains("-2"), "{e}");
     let e = Basis::select(&[Strain::Kz, Strain::Kz]).unwrap_err();
     assert!(e.to_string().contains("kz"), "{e}");
@@ -291,7 +293,7 @@ fn errors_display() {
 fn base_must_be_a_rotation() {
     let mut scaled = id();
     scaled.rotation[(1, 1)] = 2.0;
-    match Rod::uniform(1.0, 2, Basis::all(), straight(), scaled).unwrap_err() {
+    match RodGeometry::uniform(1.0, 2, Basis::all(), straight(), scaled).unwrap_err() {
         KinematicsError::BaseNotRotation {
             deviation,
             determinant,
@@ -304,7 +306,7 @@ fn base_must_be_a_rotation() {
     }
     let mut reflection = id();
     reflection.rotation[(2, 2)] = -1.0;
-    let e = Rod::uniform(1.0, 2, Basis::all(), straight(), reflection).unwrap_err();
+    let e = RodGeometry::uniform(1.0, 2, Basis::all(), straight(), reflection).unwrap_err();
     assert!(e.to_string().contains("det R = -1"), "{e}");
     // Seven significant digits of cos/sin 30° pass.
     let mut rounded = id();
@@ -312,17 +314,17 @@ fn base_must_be_a_rotation() {
     rounded.rotation[(1, 1)] = 0.8660254;
     rounded.rotation[(0, 1)] = -0.5;
     rounded.rotation[(1, 0)] = 0.5;
-    Rod::uniform(1.0, 2, Basis::all(), straight(), rounded).unwrap();
+    RodGeometry::uniform(1.0, 2, Basis::all(), straight(), rounded).unwrap();
 }
 
 #[test]
 fn too_many_pieces() {
-    let n = Rod::MAX_PIECES + 1;
+    let n = RodGeometry::MAX_PIECES + 1;
     assert_eq!(
-        Rod::uniform(1.0, n, Basis::all(), straight(), id()).unwrap_err(),
+        RodGeometry::uniform(1.0, n, Basis::all(), straight(), id()).unwrap_err(),
         KinematicsError::TooManyPieces {
             pieces: n,
-            max: Rod::MAX_PIECES
+            max: RodGeometry::MAX_PIECES
         }
     );
 }

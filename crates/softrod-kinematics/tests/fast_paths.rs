@@ -11,7 +11,7 @@ mod common;
 
 use common::*;
 use nalgebra::{Matrix6, Matrix6xX};
-use softrod_kinematics::{Basis, Frame, GaussLegendre, PieceSpec, Rod, RodKinematics};
+use softrod_kinematics::{Basis, Frame, GaussLegendre, PieceSpec, RodGeometry, RodKinematics};
 use softrod_lie::{Pose, Vec6};
 
 /// A strain with curvature of magnitude `theta` in a random direction.
@@ -64,8 +64,10 @@ fn identity_basis_matches_general_basis() {
         let len = rng.range(0.05, 0.5);
         let base = random_pose(&mut rng);
         let xis = strains(&mut rng, n, len, trial);
-        let full = Rod::uniform(len * n as f64, n, Basis::all(), Vec6::zeros(), base).unwrap();
-        let general = Rod::uniform(len * n as f64, n, two.clone(), Vec6::zeros(), base).unwrap();
+        let full =
+            RodGeometry::uniform(len * n as f64, n, Basis::all(), Vec6::zeros(), base).unwrap();
+        let general =
+            RodGeometry::uniform(len * n as f64, n, two.clone(), Vec6::zeros(), base).unwrap();
         let q: Vec<f64> = xis.iter().flat_map(|x| x.iter().copied()).collect();
         let qd = rng.vec(6 * n, -1.0, 1.0);
         let half = |v: &[f64]| v.iter().map(|x| 0.5 * x).collect::<Vec<_>>();
@@ -111,10 +113,10 @@ fn selection_bases_match_full_basis_columns() {
                 })
                 .collect::<Vec<_>>()
         };
-        let full = Rod::from_pieces(specs(Basis::all(), &|_| Vec6::zeros()), base).unwrap();
+        let full = RodGeometry::from_pieces(specs(Basis::all(), &|_| Vec6::zeros()), base).unwrap();
         let red_basis = Basis::from_indices(sel).unwrap();
         let hold = |x: &Vec6| Vec6::from_fn(|i, _| if sel.contains(&i) { 0.0 } else { x[i] });
-        let red = Rod::from_pieces(specs(red_basis, &hold), base).unwrap();
+        let red = RodGeometry::from_pieces(specs(red_basis, &hold), base).unwrap();
         let q: Vec<f64> = xis.iter().flat_map(|x| x.iter().copied()).collect();
         let qr: Vec<f64> = xis.iter().flat_map(|x| sel.iter().map(|&i| x[i])).collect();
         let qd = rng.vec(6 * n, -1.0, 1.0);
@@ -171,7 +173,8 @@ fn poses_along_matches_pose_at() {
         let len = rng.range(0.05, 0.5);
         let base = random_pose(&mut rng);
         let xis = strains(&mut rng, n, len, trial);
-        let rod = Rod::uniform(len * n as f64, n, Basis::all(), Vec6::zeros(), base).unwrap();
+        let rod =
+            RodGeometry::uniform(len * n as f64, n, Basis::all(), Vec6::zeros(), base).unwrap();
         let q: Vec<f64> = xis.iter().flat_map(|x| x.iter().copied()).collect();
         let mut kin = RodKinematics::new(&rod);
         kin.update(&rod, &q, None, None).unwrap();
@@ -191,7 +194,7 @@ fn poses_along_matches_pose_at() {
         }
     }
     // No fractions: nothing to write, no panic.
-    let rod = Rod::uniform(1.0, 3, Basis::all(), Vec6::zeros(), Pose::identity()).unwrap();
+    let rod = RodGeometry::uniform(1.0, 3, Basis::all(), Vec6::zeros(), Pose::identity()).unwrap();
     let kin = RodKinematics::new(&rod);
     kin.poses_along(&rod, &[], &mut []).unwrap();
 }

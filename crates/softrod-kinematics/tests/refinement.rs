@@ -1,7 +1,7 @@
-//! Refining a rod (`Rod::subdivided`) keeps its geometry: a piece of
+//! Refining a rod (`RodGeometry::subdivided`) keeps its geometry: a piece of
 //! constant strain cut in parts with the same strain is the same curve.
 
-use softrod_kinematics::{Basis, PieceSpec, Rod, RodKinematics, Strain, straight};
+use softrod_kinematics::{Basis, PieceSpec, RodGeometry, RodKinematics, Strain, straight};
 use softrod_lie::{Pose, Vec6};
 
 /// Round-off of composing up to 12 exponentials instead of 4.
@@ -10,7 +10,7 @@ const POSE_TOL: f64 = 1e-13;
 #[test]
 fn subdivided_rod_has_the_same_shape() {
     let ky = Basis::select(&[Strain::Ky, Strain::Qx]).unwrap();
-    let rod = Rod::from_pieces(
+    let rod = RodGeometry::from_pieces(
         vec![
             PieceSpec {
                 length: 0.1,
@@ -50,6 +50,6 @@ fn subdivided_rod_has_the_same_shape() {
         assert!((a.translation - b.translation).amax() < POSE_TOL, "s = {s}");
         assert!((a.rotation - b.rotation).amax() < POSE_TOL, "s = {s}");
     }
-    let uniform = Rod::uniform(0.4, 4, ky.clone(), straight(), Pose::identity()).unwrap();
+    let uniform = RodGeometry::uniform(0.4, 4, ky.clone(), straight(), Pose::identity()).unwrap();
     assert_eq!(uniform.uniform_basis(), Some(&ky));
 }

@@ -10,7 +10,7 @@ mod common;
 
 use common::*;
 use nalgebra::{DVector, Matrix4, Matrix6xX, Vector3, Vector6};
-use softrod_kinematics::{Frame, Rod, RodKinematics};
+use softrod_kinematics::{Frame, RodGeometry, RodKinematics};
 
 const HT: f64 = 1e-3;
 
@@ -24,7 +24,7 @@ where
 
 struct Case {
     r: RefRod,
-    rod: Rod,
+    rod: RodGeometry,
     q0: Vec<f64>,
     v: Vec<f64>,
     a: Vec<f64>,

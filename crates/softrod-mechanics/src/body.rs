@@ -3,23 +3,23 @@
 use crate::error::{MechanicsError, Quantity, positive};
 use crate::material::Material;
 use crate::section::{Section, SectionProperties};
-use softrod_kinematics::Rod;
+use softrod_kinematics::RodGeometry;
 use softrod_lie::Vec6;
 
 /// Section + material + length of one rod: everything that turns strains and
 /// velocities into internal wrenches and inertia ((C5), (C7)).
 ///
-/// Valid by construction ([`RodBody::new`]). All per-`s` queries take the
+/// Valid by construction ([`RodProperties::new`]). All per-`s` queries take the
 /// material abscissa `s ∈ [0, L]` \[m\] (clamped); only a tapered section
 /// depends on it.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct RodBody {
+pub struct RodProperties {
     section: Section,
     material: Material,
     length: f64,
 }
 
-impl RodBody {
+impl RodProperties {
     /// Relative tolerance of [`Self::check_rod`]: the body and the kinematic
     /// rod describe the same length when they agree to 1e-9 (a rod of `n`
     /// equal pieces sums to its length within `n` ulps; a million pieces
@@ -58,7 +58,7 @@ impl RodBody {
     }
 
     /// Checks that `rod` has this body's length (to [`Self::LENGTH_RTOL`] relative).
-    pub fn check_rod(&self, rod: &Rod) -> Result<(), MechanicsError> {
+    pub fn check_rod(&self, rod: &RodGeometry) -> Result<(), MechanicsError> {
         if (rod.length() - self.length).abs() > Self::LENGTH_RTOL * self.length.max(rod.length()) {
             return Err(MechanicsError::LengthMismatch {
                 body: self.length,

@@ -8,7 +8,7 @@
 //! `τ_c,n = −T ∫_{piece n ∩ [from, to]} B_nᵀ (d × t̂; t̂) ds` (D15).
 
 use crate::error::{MechanicsError, Quantity, finite, non_negative};
-use softrod_kinematics::{GaussLegendre, Piece, Rod};
+use softrod_kinematics::{GaussLegendre, Piece, RodGeometry};
 use softrod_lie::{Vec3, Vec6, Wrench, angular, join, linear};
 
 /// Path of a cable in the cross-section, as a function of the abscissa `s`.
@@ -255,7 +255,7 @@ impl Cable {
     /// Cable length `ℓ_c = ∫_from^to |q + k × d + d′| ds` \[m\] at coordinates `q`,
     /// with the Gauss rule on each sub-interval of `piece ∩ [from, to]` split
     /// at the routing knots.
-    pub fn length(&self, rod: &Rod, q: &[f64], quadrature: &GaussLegendre) -> f64 {
+    pub fn length(&self, rod: &RodGeometry, q: &[f64], quadrature: &GaussLegendre) -> f64 {
         let mut total = 0.0;
         for p in rod.pieces() {
             let xi = p.strain(q);
@@ -275,7 +275,7 @@ impl Cable {
     /// [`Self::tension_at`] for the force [N·m or N per coordinate unit].
     pub fn add_force_per_tension(
         &self,
-        rod: &Rod,
+        rod: &RodGeometry,
         q: &[f64],
         quadrature: &GaussLegendre,
         out: &mut [f64],

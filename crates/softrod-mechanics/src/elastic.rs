@@ -1,8 +1,8 @@
 //! Generalized elastic and viscous forces of PCS pieces (D13) and the elastic energy (§7).
 
-use crate::body::RodBody;
+use crate::body::RodProperties;
 use nalgebra::{DMatrix, DVector};
-use softrod_kinematics::{GaussLegendre, Piece, Rod};
+use softrod_kinematics::{GaussLegendre, Piece, RodGeometry};
 use softrod_lie::Vec6;
 
 /// Per-piece constant matrices of the elastic and viscous forces (D13):
@@ -39,7 +39,7 @@ impl PieceMatrices {
 /// (for the linear taper Γ is a degree-4 polynomial in s, exact from 3 points).
 pub fn integrated_constitutive(
     piece: &Piece,
-    body: &RodBody,
+    body: &RodProperties,
     quadrature: &GaussLegendre,
 ) -> (Vec6, Vec6) {
     if body.is_uniform() {
@@ -86,8 +86,8 @@ fn project_diag(piece: &Piece, d: &Vec6) -> DMatrix<f64> {
 /// # Panics
 /// If `stress_free` does not have one entry per piece.
 pub fn piece_matrices(
-    rod: &Rod,
-    body: &RodBody,
+    rod: &RodGeometry,
+    body: &RodProperties,
     stress_free: Option<&[Vec6]>,
     quadrature: &GaussLegendre,
 ) -> Vec<PieceMatrices> {
@@ -121,8 +121,8 @@ pub fn piece_matrices(
 /// # Panics
 /// If `stress_free` does not have one entry per piece.
 pub fn elastic_energy(
-    rod: &Rod,
-    body: &RodBody,
+    rod: &RodGeometry,
+    body: &RodProperties,
     stress_free: Option<&[Vec6]>,
     q: &[f64],
     quadrature: &GaussLegendre,

@@ -266,7 +266,7 @@ pub enum MechanicsError {
     /// The mechanical body and the kinematic rod disagree on the length.
     #[error("body length {body} m differs from the rod length {rod} m")]
     LengthMismatch {
-        /// Length of the [`crate::RodBody`] \[m\].
+        /// Length of the [`crate::RodProperties`] \[m\].
         body: f64,
         /// Length of the kinematic rod \[m\].
         rod: f64,

@@ -1,7 +1,7 @@
 //! Constitutive and actuation models of PCS Cosserat rods: the third layer of
 //! softrod.
 //!
-//! - [`Section`], [`Material`], [`RodBody`]: area and second moments, the
+//! - [`Section`], [`Material`], [`RodProperties`]: area and second moments, the
 //!   screw inertia `𝓜 = diag(ρJx, ρJy, ρJz, ρA, ρA, ρA)`, stiffness
 //!   `Γ = diag(GJx, EJy, EJz, EA, GA, GA)` and Kelvin–Voigt viscosity
 //!   `γ = diag(μJx, 3μJy, 3μJz, 3μA, μA, μA)` ((C5), (C7), bending `EJ`).
@@ -33,7 +33,7 @@ mod material;
 pub mod reference;
 mod section;
 
-pub use body::RodBody;
+pub use body::RodProperties;
 pub use cable::{Cable, Routing, Span, Tension};
 pub use elastic::{PieceMatrices, elastic_energy, integrated_constitutive, piece_matrices};
 pub use error::{MechanicsError, Quantity};

@@ -11,10 +11,10 @@
 //! On invalid input (wrong `q` length, non-finite values, abscissae outside
 //! the rod) — these are test helpers.
 
-use crate::body::RodBody;
+use crate::body::RodProperties;
 use crate::loads::{LoadFrame, PointLoad};
 use nalgebra::{DVector, Matrix6xX};
-use softrod_kinematics::{Frame, GaussLegendre, Rod, RodKinematics};
+use softrod_kinematics::{Frame, GaussLegendre, RodGeometry, RodKinematics};
 use softrod_lie::{Pose, Twist, Vec3, Wrench};
 
 /// Body wrench density of gravity (D14) `𝓕_g = 𝓜 Ad⁻¹_g 𝒢 = (0; ρA Rᵀ g_w)`
@@ -26,7 +26,7 @@ pub fn gravity_wrench_density(mass_per_length: f64, pose: &Pose, gravity: &Vec3)
     Wrench::new(0.0, 0.0, 0.0, f[0], f[1], f[2])
 }
 
-fn kinematics(rod: &Rod, q: &[f64], qd: Option<&[f64]>) -> RodKinematics {
+fn kinematics(rod: &RodGeometry, q: &[f64], qd: Option<&[f64]>) -> RodKinematics {
     let mut k = RodKinematics::new(rod);
     k.update(rod, q, qd, None)
         .expect("valid coordinates for the reference projection");
@@ -34,7 +34,7 @@ fn kinematics(rod: &Rod, q: &[f64], qd: Option<&[f64]>) -> RodKinematics {
 }
 
 /// `Σ_n Σ_g w_g f(s_g)` over the Gauss nodes of every piece.
-fn for_each_node(rod: &Rod, quadrature: &GaussLegendre, mut f: impl FnMut(f64, f64)) {
+fn for_each_node(rod: &RodGeometry, quadrature: &GaussLegendre, mut f: impl FnMut(f64, f64)) {
     for p in rod.pieces() {
         for (x, w) in quadrature.on_interval(p.length) {
             f(p.start + x, w);
@@ -44,7 +44,7 @@ fn for_each_node(rod: &Rod, quadrature: &GaussLegendre, mut f: impl FnMut(f64, f
 
 /// `∫ J(s)ᵀ 𝓕(s) ds` for a body wrench density given by `wrench(s, kin)`.
 fn project_density(
-    rod: &Rod,
+    rod: &RodGeometry,
     kin: &RodKinematics,
     quadrature: &GaussLegendre,
     mut wrench: impl FnMut(f64, &RodKinematics) -> Wrench,
@@ -66,8 +66,8 @@ fn project_density(
 /// for [`gravity_potential`] with the same rule. Units: N·m or N per
 /// coordinate unit.
 pub fn generalized_gravity_by_jacobian(
-    rod: &Rod,
-    body: &RodBody,
+    rod: &RodGeometry,
+    body: &RodProperties,
     gravity: &Vec3,
     q: &[f64],
     quadrature: &GaussLegendre,
@@ -82,7 +82,7 @@ pub fn generalized_gravity_by_jacobian(
 /// body wrench density is `density(s, g(s), η(s))` (world pose, body
 /// velocity).
 pub fn line_load_force_by_jacobian(
-    rod: &Rod,
+    rod: &RodGeometry,
     q: &[f64],
     qd: Option<&[f64]>,
     quadrature: &GaussLegendre,
@@ -102,8 +102,8 @@ pub fn line_load_force_by_jacobian(
 /// `p(s)` the world position of the section centre, by Gauss quadrature on
 /// each piece.
 pub fn gravity_potential(
-    rod: &Rod,
-    body: &RodBody,
+    rod: &RodGeometry,
+    body: &RodProperties,
     gravity: &Vec3,
     q: &[f64],
     quadrature: &GaussLegendre,
@@ -119,7 +119,11 @@ pub fn gravity_potential(
 
 /// Generalized force of a point load, `J(s̄)ᵀ 𝓕_p` (D14), with the body-frame
 /// Jacobian at `s̄ = load.s` and the applied wrench of [`PointLoad::wrench`].
-pub fn point_load_force_by_jacobian(rod: &Rod, load: &PointLoad, q: &[f64]) -> DVector<f64> {
+pub fn point_load_force_by_jacobian(
+    rod: &RodGeometry,
+    load: &PointLoad,
+    q: &[f64],
+) -> DVector<f64> {
     let kin = kinematics(rod, q, None);
     let mut j = Matrix6xX::zeros(rod.n_dof());
     kin.jacobian_at(rod, load.s, Frame::Body, &mut j)
@@ -135,7 +139,7 @@ pub fn point_load_force_by_jacobian(rod: &Rod, load: &PointLoad, q: &[f64]) -> D
 ///
 /// # Panics
 /// If the load is a follower load (`LoadFrame::Body`), which has no potential.
-pub fn dead_load_potential(rod: &Rod, load: &PointLoad, q: &[f64]) -> f64 {
+pub fn dead_load_potential(rod: &RodGeometry, load: &PointLoad, q: &[f64]) -> f64 {
     assert_eq!(
         load.frame,
         LoadFrame::World,

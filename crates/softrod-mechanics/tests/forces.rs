@@ -8,7 +8,7 @@ mod common;
 
 use common::*;
 use nalgebra::{DVector, Matrix6, Matrix6xX};
-use softrod_kinematics::{Basis, Frame, GaussLegendre, Rod, RodKinematics, straight};
+use softrod_kinematics::{Basis, Frame, GaussLegendre, RodGeometry, RodKinematics, straight};
 use softrod_lie::{Vec3, Vec6, Wrench, angular, coad_vec, join, linear};
 use softrod_mechanics::reference::*;
 use softrod_mechanics::*;
@@ -23,7 +23,7 @@ fn fmt(v: &[f64]) -> String {
         .join(", ")
 }
 
-fn random_q(rod: &Rod, rng: &mut Rng, scale: f64) -> Vec<f64> {
+fn random_q(rod: &RodGeometry, rng: &mut Rng, scale: f64) -> Vec<f64> {
     rng.vec(rod.n_dof(), scale)
 }
 
@@ -35,7 +35,7 @@ fn gravity_force_is_minus_gradient_of_potential() {
     for (body, gw) in [
         (taper_body(L), Vec3::new(1.0, -3.0, -9.0)),
         (
-            RodBody::new(Section::Circle { radius: 0.01 }, soft_material(), L).unwrap(),
+            RodProperties::new(Section::Circle { radius: 0.01 }, soft_material(), L).unwrap(),
             Vec3::new(0.0, 0.0, -9.81),
         ),
     ] {
@@ -86,7 +86,7 @@ fn dead_point_force_is_minus_gradient_of_potential() {
 fn follower_and_dead_loads_agree_in_the_reference_configuration() {
     // With q = 0 and an identity base the straight rod's frames are the world
     // axes, so a dead and a follower load give the same force.
-    let rod = Rod::uniform(L, 2, Basis::all(), straight(), identity_base()).unwrap();
+    let rod = RodGeometry::uniform(L, 2, Basis::all(), straight(), identity_base()).unwrap();
     let q = vec![0.0; rod.n_dof()];
     let dead = PointLoad {
         s: 0.4,
@@ -134,7 +134,7 @@ fn elastic_force_is_gradient_of_energy() {
     let mut worst: f64 = 0.0;
     for body in [
         taper_body(L),
-        RodBody::new(
+        RodProperties::new(
             Section::Rectangle {
                 width: 0.02,
                 height: 0.01,
@@ -183,7 +183,7 @@ fn elastic_force_is_gradient_of_energy() {
 #[test]
 fn uniform_piece_matrices_are_length_times_projection() {
     let rod = mixed_rod(L, identity_base());
-    let body = RodBody::new(
+    let body = RodProperties::new(
         Section::Tube {
             radius: 0.02,
             inner_radius: 0.012,
@@ -333,7 +333,7 @@ fn cable_force_is_minus_gradient_of_length() {
     let mut worst: f64 = 0.0;
     for rod in [
         mixed_rod(L, oblique_base()),
-        Rod::uniform(L, 4, Basis::all(), straight(), identity_base()).unwrap(),
+        RodGeometry::uniform(L, 4, Basis::all(), straight(), identity_base()).unwrap(),
     ] {
         let quad = gauss(4);
         let mut rng = Rng::new(29);
@@ -363,7 +363,7 @@ fn cable_force_is_minus_gradient_of_length() {
 #[test]
 fn cable_straight_rod_sign_check() {
     // (D15) sign check: straight rod, d = (0, d, 0): τ_kz = +T d ℓ, τ_qx = −T ℓ.
-    let rod = Rod::uniform(L, 1, Basis::all(), straight(), identity_base()).unwrap();
+    let rod = RodGeometry::uniform(L, 1, Basis::all(), straight(), identity_base()).unwrap();
     let c = Cable {
         routing: Routing::Offset { y: 0.01, z: 0.0 },
         tension: Tension::Constant(2.0),
@@ -537,8 +537,8 @@ fn cable_uniform_strain_equilibrium() {
             2.0,
         ),
     ] {
-        let body = RodBody::new(section, mat, len).unwrap();
-        let rod = Rod::uniform(len, 1, Basis::all(), rest, identity_base()).unwrap();
+        let body = RodProperties::new(section, mat, len).unwrap();
+        let rod = RodGeometry::uniform(len, 1, Basis::all(), rest, identity_base()).unwrap();
         let p = section.properties(0.0);
         // Γ from the textbook formulas, not from the crate.
         let gamma = Vec6::new(

@@ -131,7 +131,7 @@ fn body_diagonals_follow_the_model() {
         width: 0.02,
         height: 0.01,
     };
-    let b = RodBody::new(sec, m, 0.4).unwrap();
+    let b = RodProperties::new(sec, m, 0.4).unwrap();
     let p = sec.properties(0.0);
     let (rho, e, g, mu) = (1200.0, 2e6, 0.8e6, 50.0);
     let expect_m = Vec6::new(
@@ -244,7 +244,7 @@ fn invalid_descriptions_are_reported_with_their_values() {
             value: -1e6
         })
     );
-    let body = RodBody::new(Section::Circle { radius: 0.01 }, soft_material(), 1.0).unwrap();
+    let body = RodProperties::new(Section::Circle { radius: 0.01 }, soft_material(), 1.0).unwrap();
     let rod = mixed_rod(0.9, identity_base());
     assert!(matches!(
         body.check_rod(&rod),
@@ -409,7 +409,7 @@ fn load_wrenches_in_body_frame() {
     let g = Vec3::new(0.0, 0.0, -9.81);
     let w = gravity_wrench_density(0.3, &pose, &g);
     // 𝓜 Ad⁻¹_g 𝒢 with the dense operators.
-    let body = RodBody::new(Section::Circle { radius: 0.01 }, soft_material(), 1.0).unwrap();
+    let body = RodProperties::new(Section::Circle { radius: 0.01 }, soft_material(), 1.0).unwrap();
     let mpl = body.mass_per_length(0.0);
     let calg = Vec6::new(0.0, 0.0, 0.0, 0.0, 0.0, -9.81);
     let dense =

@@ -2,7 +2,7 @@
 //! each validated when it is constructed, and the model they make.
 //!
 //! Until the facade has builders these wrap the lower crates' constructors
-//! (`softrod_kinematics::Rod::with_lengths`, `softrod_mechanics::RodBody`,
+//! (`softrod_kinematics::RodGeometry::with_lengths`, `softrod_mechanics::RodProperties`,
 //! `softrod_dynamics::Model::new`) with the defaults of the scene format
 //! (docs/scene-format.md): strains in canonical order, straight rest shape,
 //! base at the origin, no viscosity, no drag.
@@ -10,8 +10,8 @@
 use nalgebra::{Matrix3, Vector3};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyString};
-use softrod::dynamics::{Model, RodSpec};
-use softrod::kinematics::{Basis, Rod as KinRod, Strain};
+use softrod::dynamics::{self as dynamics, Model};
+use softrod::kinematics::{Basis, RodGeometry, Strain};
 use softrod::lie::{Pose, Vec6};
 use softrod::mechanics as mech;
 
@@ -411,7 +411,7 @@ impl PointLoad {
 /// rotational [N·m·s]) linear drag per unit length.
 #[pyclass(frozen, module = "softrod")]
 pub struct Rod {
-    pub(crate) spec: RodSpec,
+    pub(crate) spec: dynamics::Rod,
     pub(crate) named: bool,
 }
 
@@ -507,11 +507,11 @@ impl Rod {
             Some(b) => pose_checked(b)?,
             None => Pose::identity(),
         };
-        let rod = KinRod::with_lengths(&lengths, basis, rest, base)
+        let rod = RodGeometry::with_lengths(&lengths, basis, rest, base)
             .map_err(|e| input(format!("Rod: {e}")))?;
-        let body = mech::RodBody::new(section.inner, material.inner, rod.length())
+        let body = mech::RodProperties::new(section.inner, material.inner, rod.length())
             .map_err(|e| input(format!("Rod: {e}")))?;
-        let mut spec = RodSpec::new(name.clone().unwrap_or_default(), rod, body);
+        let mut spec = dynamics::Rod::new(name.clone().unwrap_or_default(), rod, body);
         if let Some((translational, rotational)) = drag {
             let d = mech::Drag {
                 translational,
@@ -560,19 +560,19 @@ impl Rod {
     /// Unstretched length L [m].
     #[getter]
     fn length(&self) -> f64 {
-        self.spec.rod.length()
+        self.spec.geometry.length()
     }
 
     /// Number of pieces N.
     #[getter]
     fn n_pieces(&self) -> usize {
-        self.spec.rod.n_pieces()
+        self.spec.geometry.n_pieces()
     }
 
     /// Number of coordinates of this rod (pieces × selected strains).
     #[getter]
     fn n_dof(&self) -> usize {
-        self.spec.rod.n_dof()
+        self.spec.geometry.n_dof()
     }
 
     /// Number of cables.
@@ -585,9 +585,9 @@ impl Rod {
         format!(
             "Rod(name={:?}, length={:?}, pieces={}, n_dof={}, cables={}, loads={})",
             self.spec.name,
-            self.spec.rod.length(),
-            self.spec.rod.n_pieces(),
-            self.spec.rod.n_dof(),
+            self.spec.geometry.length(),
+            self.spec.geometry.n_pieces(),
+            self.spec.geometry.n_dof(),
             self.spec.cables.len(),
             self.spec.point_loads.len()
         )
@@ -636,7 +636,7 @@ pub fn build_model(
         if !r.named {
             spec.name = format!("rod{i}");
         }
-        if specs.iter().any(|s: &RodSpec| s.name == spec.name) {
+        if specs.iter().any(|s: &dynamics::Rod| s.name == spec.name) {
             return Err(input(format!(
                 "Simulation(rods): two rods are named {:?}",
                 spec.name

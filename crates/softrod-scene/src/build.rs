@@ -1,6 +1,6 @@
 //! Building the physics model from a validated [`Scene`].
 //!
-//! The scene's rods already are the library's `RodSpec`s holding only the
+//! The scene's rods already are the library's `Rod`s holding only the
 //! terms the scene has (a term a scene does not need costs nothing): no drag term when both coefficients are zero, no cables or loads
 //! unless the scene lists them, a strain basis with only the selected
 //! strains. Building adds gravity (only when non-zero) and the quadrature.
@@ -120,7 +120,7 @@ impl Scene {
                 .map(|(s, p)| (*s, to_local.transform_point(&Vec3::from(*p))))
                 .collect();
             let range = rm.dofs();
-            let fit = fit_centerline(&rm.spec.rod, &targets, &q0.as_slice()[range.clone()])
+            let fit = fit_centerline(&rm.spec.geometry, &targets, &q0.as_slice()[range.clone()])
                 .map_err(|e| r.invalid(&path, format!("fitting the strains: {e}")))?;
             q0.as_mut_slice()[range].copy_from_slice(&fit.q);
             fits[k] = Some(ShapeFit {

@@ -5,9 +5,9 @@
 //! matched by variant and [`Quantity`], never by its message text, and the
 //! library error is kept as the [`SceneError`]'s source.
 
-use softrod_dynamics::{DynamicsError, RodSpec};
-use softrod_kinematics::{KinematicsError, LengthOf, Rod, Strain};
-use softrod_mechanics::{MechanicsError, Quantity, RodBody};
+use softrod_dynamics::{DynamicsError, Rod};
+use softrod_kinematics::{KinematicsError, LengthOf, RodGeometry, Strain};
+use softrod_mechanics::{MechanicsError, Quantity, RodProperties};
 
 use crate::error::SceneError;
 use crate::locate::join;
@@ -193,7 +193,7 @@ pub(crate) fn mechanics(r: &Reporter, owner: &str, length: f64, e: MechanicsErro
 fn piece_sum_message(sum: f64, length: f64) -> String {
     format!(
         "piece_lengths sum to {sum} m but length = {length} m (must agree within {:e} relative)",
-        RodBody::LENGTH_RTOL
+        RodProperties::LENGTH_RTOL
     )
 }
 
@@ -215,7 +215,7 @@ pub(crate) fn kinematics(r: &Reporter, keys: &RodKeys, e: KinematicsError) -> Sc
     let p = |k: &str| format!("{}.{k}", keys.owner);
     let err = match &e {
         KinematicsError::BadLength {
-            what: LengthOf::Rod,
+            what: LengthOf::RodGeometry,
             value,
         } => r.out_of_range(&p("length"), value, "> 0"),
         KinematicsError::BadLength {
@@ -231,7 +231,7 @@ pub(crate) fn kinematics(r: &Reporter, keys: &RodKeys, e: KinematicsError) -> Sc
         KinematicsError::NoPieces => r.out_of_range(
             &p("pieces"),
             keys.pieces.unwrap_or(0),
-            format!("in [1, {}]", Rod::MAX_PIECES),
+            format!("in [1, {}]", RodGeometry::MAX_PIECES),
         ),
         KinematicsError::TooManyPieces { pieces, max } => {
             r.out_of_range(&p("pieces"), pieces, format!("in [1, {max}]"))
@@ -305,9 +305,10 @@ pub(crate) fn dynamics(r: &Reporter, rod: Option<RodContext>, e: DynamicsError) 
             };
             kinematics(r, cx.keys.unwrap_or(&fallback), source.clone())
         }
-        (DynamicsError::RodBody { source, .. } | DynamicsError::Drag { source, .. }, Some(_)) => {
-            mechanics(r, owner, length, source.clone())
-        }
+        (
+            DynamicsError::RodProperties { source, .. } | DynamicsError::Drag { source, .. },
+            Some(_),
+        ) => mechanics(r, owner, length, source.clone()),
         (DynamicsError::Cable { cable, source, .. }, Some(cx)) => {
             let owner = cx
                 .cables
@@ -340,13 +341,13 @@ pub(crate) fn dynamics(r: &Reporter, rod: Option<RodContext>, e: DynamicsError) 
 
 /// The [`RodContext`] of rod `index` of a validated scene.
 pub(crate) fn rod_context<'a>(
-    rods: &[RodSpec],
+    rods: &[Rod],
     origins: &'a Origins,
     index: usize,
 ) -> Option<RodContext<'a>> {
     Some(RodContext {
         owner: format!("rod[{index}]"),
-        length: rods.get(index)?.body.length(),
+        length: rods.get(index)?.properties.length(),
         keys: None,
         cables: origins.cables.get(index).map_or(&[], Vec::as_slice),
         loads: origins.loads.get(index).map_or(&[], Vec::as_slice),

@@ -4,7 +4,7 @@
 //!
 //! [`Scene::from_path`] / [`Scene::from_str`] read a scene into raw serde
 //! structs that deny unknown keys, then validate it straight into the
-//! library's own types: each rod is a `softrod_dynamics::RodSpec` (its
+//! library's own types: each rod is a `softrod_dynamics::Rod` (its
 //! `Section`, `Material`, strain basis, cables, point loads and drag are
 //! those of `softrod-mechanics` and `softrod-kinematics`), built by the
 //! library's builders, which check every value once. This crate keeps only
@@ -37,7 +37,7 @@
 //! let (scene, warnings) = Scene::from_str(text, "arm.toml").unwrap();
 //! assert!(warnings.is_empty());
 //! assert_eq!(scene.n_dof(), 8);
-//! assert_eq!(scene.rods[0].body.material().shear_modulus(), 1.0e6 / 3.0);
+//! assert_eq!(scene.rods[0].properties.material().shear_modulus(), 1.0e6 / 3.0);
 //! assert_eq!(scene.build().unwrap().model.n_dof(), 8);
 //!
 //! let err = Scene::from_str("[[rod]]\nname = \"arm\"\nlenght = 0.5\n", "bad.toml").unwrap_err();

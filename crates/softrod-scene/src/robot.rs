@@ -3,7 +3,7 @@
 //! [`Robot`] the model is built from.
 
 use serde::Deserialize;
-use softrod_dynamics::{Attachment, BodySpec, Closure, Element, ElementKind, RodSpec};
+use softrod_dynamics::{Attachment, BodySpec, Closure, Element, ElementKind, Rod};
 
 use crate::raw::RawBase;
 
@@ -63,7 +63,7 @@ impl Robot {
     }
 
     /// The elements in file order, for [`softrod_dynamics::Model::with_elements`].
-    pub fn elements(&self, rods: &[RodSpec]) -> Vec<Element> {
+    pub fn elements(&self, rods: &[Rod]) -> Vec<Element> {
         self.order
             .iter()
             .map(|k| match *k {
@@ -95,7 +95,7 @@ impl Robot {
 
     /// Index in `q` of the first strain coordinate of rod `i` (`rods`: the
     /// scene's rods).
-    pub fn rod_dof_offset(&self, rods: &[RodSpec], i: usize) -> usize {
+    pub fn rod_dof_offset(&self, rods: &[Rod], i: usize) -> usize {
         let mut off = 0;
         for k in &self.order {
             off += self.attachment(*k).joint.dof();
@@ -103,7 +103,7 @@ impl Robot {
                 return off;
             }
             if let ElementKind::Rod(r) = k {
-                off += rods[*r].rod.n_dof();
+                off += rods[*r].geometry.n_dof();
             }
         }
         off

@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use serde::Serialize;
-use softrod_dynamics::RodSpec;
+use softrod_dynamics::Rod;
 
 use crate::error::{SceneError, Warning};
 use crate::robot::Robot;
@@ -75,7 +75,7 @@ pub(crate) struct Origins {
 }
 
 /// A validated scene: SI units, every default filled in, the rods as the
-/// library's own [`RodSpec`]s (section, material, strains, cables, point
+/// library's own [`Rod`]s (section, material, strains, cables, point
 /// loads and drag inside them).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Scene {
@@ -85,7 +85,7 @@ pub struct Scene {
     pub world: World,
     /// Rods, at least one, with unique names, in file order; each holds the
     /// `[[cable]]` and `[[load]]` entries that name it, in file order.
-    pub rods: Vec<RodSpec>,
+    pub rods: Vec<Rod>,
     /// Bodies, parents and joints (empty for a scene without them).
     pub robot: Robot,
     /// Initial state (lengths checked against [`Scene::n_dof`]).
@@ -122,7 +122,7 @@ impl Scene {
     /// Total number of generalized coordinates: Σ over rods of pieces ×
     /// selected strains, plus the joints' coordinates.
     pub fn n_dof(&self) -> usize {
-        self.rods.iter().map(|r| r.rod.n_dof()).sum::<usize>() + self.robot.joint_dofs()
+        self.rods.iter().map(|r| r.geometry.n_dof()).sum::<usize>() + self.robot.joint_dofs()
     }
 
     /// Index in `q` of the first coordinate of rod `i` (`i = rods.len()` gives `n_dof()`).
@@ -131,7 +131,7 @@ impl Scene {
     /// If `i > rods.len()`.
     pub fn rod_dof_offset(&self, i: usize) -> usize {
         if self.robot.order.is_empty() || i == self.rods.len() {
-            let strains: usize = self.rods[..i].iter().map(|r| r.rod.n_dof()).sum();
+            let strains: usize = self.rods[..i].iter().map(|r| r.geometry.n_dof()).sum();
             return if i == self.rods.len() {
                 strains + self.robot.joint_dofs()
             } else {

@@ -637,7 +637,7 @@ fn library_errors_are_the_source() {
     assert!(
         matches!(
             cause,
-            DynamicsError::RodBody {
+            DynamicsError::RodProperties {
                 source: MechanicsError::NotPositive {
                     quantity: Quantity::Radius,
                     ..
@@ -668,7 +668,7 @@ fn poisson_one_half_is_valid() {
     let text = apply(&[("poisson = 0.5", "poisson = 0.5")]);
     let (scene, warnings) = Scene::from_str(&text, FILE).unwrap();
     assert!(warnings.is_empty());
-    let m = scene.rods[0].body.material();
+    let m = scene.rods[0].properties.material();
     assert_eq!(m.specified_poisson(), Some(0.5));
     assert_eq!(m.shear_modulus(), 1.0e6 / 3.0);
     // Just inside the open end is valid too.

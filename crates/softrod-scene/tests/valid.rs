@@ -34,14 +34,22 @@ fn contract_example_has_the_written_values() {
     assert_eq!(s.rods.len(), 1);
     let r = &s.rods[0];
     assert_eq!(r.name, "arm");
-    assert_eq!(r.body.length(), 0.5);
-    assert_eq!(r.rod.piece_lengths().collect::<Vec<_>>(), vec![0.125; 4]);
-    assert_eq!(r.rod.n_pieces(), 4);
-    assert_eq!(r.rod.uniform_basis(), Some(&Basis::all()));
-    assert!(r.rod.pieces().iter().all(|p| p.rest_strain == straight()));
-    assert_eq!(*r.rod.base(), Pose::identity());
-    assert_eq!(*r.body.section(), Section::Circle { radius: 0.01 });
-    let m = r.body.material();
+    assert_eq!(r.properties.length(), 0.5);
+    assert_eq!(
+        r.geometry.piece_lengths().collect::<Vec<_>>(),
+        vec![0.125; 4]
+    );
+    assert_eq!(r.geometry.n_pieces(), 4);
+    assert_eq!(r.geometry.uniform_basis(), Some(&Basis::all()));
+    assert!(
+        r.geometry
+            .pieces()
+            .iter()
+            .all(|p| p.rest_strain == straight())
+    );
+    assert_eq!(*r.geometry.base(), Pose::identity());
+    assert_eq!(*r.properties.section(), Section::Circle { radius: 0.01 });
+    let m = r.properties.material();
     assert_eq!(m.density(), 1000.0);
     assert_eq!(m.young(), 1.0e6);
     assert_eq!(m.specified_poisson(), Some(0.5));
@@ -57,7 +65,7 @@ fn contract_example_has_the_written_values() {
     assert_eq!(c.routing, Routing::Offset { y: 0.0, z: 0.008 });
     assert_eq!(c.tension, Tension::Constant(2.0));
     assert_eq!(c.span, Span::Whole);
-    assert_eq!(c.bounds(r.body.length()), (0.0, 0.5));
+    assert_eq!(c.bounds(r.properties.length()), (0.0, 0.5));
 
     assert_eq!(s.n_point_loads(), 1);
     let l = &s.rods[0].point_loads[0];
@@ -98,11 +106,16 @@ fn minimal_scene_gets_the_defaults() {
     assert_eq!(s.world.gravity, [0.0; 3]);
     assert!(!s.has_gravity());
     let r = &s.rods[0];
-    assert_eq!(r.rod.uniform_basis().unwrap().dof(), 6);
-    assert!(r.rod.pieces().iter().all(|p| p.rest_strain == straight()));
-    assert_eq!(*r.rod.base(), Pose::identity());
-    assert_eq!(r.body.material().viscosity(), 0.0);
-    assert_eq!(r.body.material().shear_modulus(), 2e6 / (2.0 * 1.45));
+    assert_eq!(r.geometry.uniform_basis().unwrap().dof(), 6);
+    assert!(
+        r.geometry
+            .pieces()
+            .iter()
+            .all(|p| p.rest_strain == straight())
+    );
+    assert_eq!(*r.geometry.base(), Pose::identity());
+    assert_eq!(r.properties.material().viscosity(), 0.0);
+    assert_eq!(r.properties.material().shear_modulus(), 2e6 / (2.0 * 1.45));
     assert!(s.n_cables() == 0 && s.n_point_loads() == 0);
     assert_eq!(s.initial.q, None);
     assert_eq!(s.run, Run::default());
@@ -146,15 +159,15 @@ fn integers_are_accepted_where_numbers_are_expected() {
          section = { shape = \"circle\", radius = 1 }\n\
          material = { density = 1000, young = 1000000, shear_modulus = 300000 }\n",
     );
-    assert_eq!(s.rods[0].body.length(), 1.0);
-    assert_eq!(s.rods[0].body.material().shear_modulus(), 3e5);
-    assert_eq!(s.rods[0].body.material().specified_poisson(), None);
+    assert_eq!(s.rods[0].properties.length(), 1.0);
+    assert_eq!(s.rods[0].properties.material().shear_modulus(), 3e5);
+    assert_eq!(s.rods[0].properties.material().specified_poisson(), None);
 }
 
 #[test]
 fn strain_subsets_are_stored_in_canonical_order() {
     let (s, warnings) = parse(&minimal("strains = [\"qx\", \"ky\"]"));
-    let sel = s.rods[0].rod.uniform_basis().unwrap();
+    let sel = s.rods[0].geometry.uniform_basis().unwrap();
     assert_eq!(sel.selection(), Some(&[1, 3][..]));
     assert_eq!(sel.strains(), Some(vec![Strain::Ky, Strain::Qx]));
     assert_eq!(s.n_dof(), 4);
@@ -166,7 +179,7 @@ fn strain_subsets_are_stored_in_canonical_order() {
     let (s, warnings) = parse(&minimal("strains = [\"ky\", \"qx\", \"qz\"]"));
     assert!(warnings.is_empty());
     assert_eq!(
-        s.rods[0].rod.uniform_basis().unwrap().strains(),
+        s.rods[0].geometry.uniform_basis().unwrap().strains(),
         Some(vec![Strain::Ky, Strain::Qx, Strain::Qz])
     );
     let names = Strain::ALL.map(Strain::name);
@@ -180,16 +193,16 @@ fn piece_lengths_within_relative_tolerance() {
     let text = text.replace("length = 0.4", "length = 0.5");
     let (s, _) = parse(&text);
     assert_eq!(
-        s.rods[0].rod.piece_lengths().collect::<Vec<_>>(),
+        s.rods[0].geometry.piece_lengths().collect::<Vec<_>>(),
         vec![0.1, 0.15, 0.25]
     );
-    assert_eq!(s.rods[0].rod.pieces()[2].start, 0.25);
+    assert_eq!(s.rods[0].geometry.pieces()[2].start, 0.25);
     // 1e-10 relative off passes, 1e-8 fails.
     assert!(Scene::from_str(&text.replace("0.25]", "0.25000000005]"), "t").is_ok());
     assert!(Scene::from_str(&text.replace("0.25]", "0.250000005]"), "t").is_err());
     // `pieces` may be given too when it agrees.
     let both = text.replace("piece_lengths", "pieces = 3\npiece_lengths");
-    assert_eq!(parse(&both).0.rods[0].rod.n_pieces(), 3);
+    assert_eq!(parse(&both).0.rods[0].geometry.n_pieces(), 3);
 }
 
 #[test]
@@ -219,7 +232,7 @@ fn section_shapes() {
     ];
     for (toml, want) in cases {
         let text = minimal("").replace("{ shape = \"circle\", radius = 0.01 }", toml);
-        assert_eq!(*parse(&text).0.rods[0].body.section(), want, "{toml}");
+        assert_eq!(*parse(&text).0.rods[0].properties.section(), want, "{toml}");
     }
     let tapered = Section::TaperedCircle {
         radius_base: 0.02,
@@ -240,8 +253,11 @@ fn base_pose_rotation_about_y() {
     let text =
         minimal("base = { position = [0, 0, 1], rotation = [[0, 0, 1], [0, 1, 0], [-1, 0, 0]] }");
     let (s, _) = parse(&text);
-    assert_eq!(s.rods[0].rod.base().translation, Vec3::new(0.0, 0.0, 1.0));
-    assert_eq!(s.rods[0].rod.base().rotation[(2, 0)], -1.0);
+    assert_eq!(
+        s.rods[0].geometry.base().translation,
+        Vec3::new(0.0, 0.0, 1.0)
+    );
+    assert_eq!(s.rods[0].geometry.base().rotation[(2, 0)], -1.0);
     // A rotation good to 1e-7 (rounded cos/sin of 30°) passes.
     let text =
         minimal("base = { rotation = [[0.8660254, -0.5, 0], [0.5, 0.8660254, 0], [0, 0, 1]] }");
@@ -433,13 +449,13 @@ fn example_cantilever_gravity() {
     assert!(w.is_empty(), "{w:?}");
     assert_eq!(s.world.gravity, [0.0, 0.0, -9.81]);
     let r = &s.rods[0];
-    assert_eq!((r.body.length(), r.rod.n_pieces()), (0.5, 8));
-    assert_eq!(*r.body.section(), Section::Circle { radius: 0.01 });
-    let m = r.body.material();
+    assert_eq!((r.properties.length(), r.geometry.n_pieces()), (0.5, 8));
+    assert_eq!(*r.properties.section(), Section::Circle { radius: 0.01 });
+    let m = r.properties.material();
     assert_eq!((m.density(), m.young()), (1000.0, 1e7));
     assert_eq!(m.specified_poisson(), Some(0.5));
     assert_eq!(
-        r.rod.uniform_basis().unwrap().strains(),
+        r.geometry.uniform_basis().unwrap().strains(),
         Some(vec![Strain::Ky, Strain::Qx, Strain::Qz])
     );
     assert_eq!(s.n_dof(), 24);
@@ -454,15 +470,18 @@ fn example_tip_load_statics_reference_is_timoshenko() {
     assert_eq!(s.run.mode, Mode::Statics);
     assert!(!s.has_gravity());
     let r = &s.rods[0];
-    let Section::Circle { radius } = *r.body.section() else {
+    let Section::Circle { radius } = *r.properties.section() else {
         panic!("circle expected")
     };
     let load = &r.point_loads[0];
-    assert_eq!((load.s, load.frame), (r.body.length(), LoadFrame::World));
+    assert_eq!(
+        (load.s, load.frame),
+        (r.properties.length(), LoadFrame::World)
+    );
     // Recompute the reference written in the file from the scene's own values.
     let p = -load.force[2];
-    let m = r.body.material();
-    let (l, e, g) = (r.body.length(), m.young(), m.shear_modulus());
+    let m = r.properties.material();
+    let (l, e, g) = (r.properties.length(), m.young(), m.shear_modulus());
     let i = std::f64::consts::PI * radius.powi(4) / 4.0;
     let a = std::f64::consts::PI * radius.powi(2);
     let bend = p * l.powi(3) / (3.0 * e * i);
@@ -478,7 +497,7 @@ fn example_tip_load_statics_reference_is_timoshenko() {
     // The tolerance is about 1% of the deflection and above the PCS
     // discretization error delta/(4 N^2).
     let tol = reference.tolerance.unwrap();
-    assert!(tol < 0.02 * delta && tol > delta / (4.0 * (r.rod.n_pieces() as f64).powi(2)));
+    assert!(tol < 0.02 * delta && tol > delta / (4.0 * (r.geometry.n_pieces() as f64).powi(2)));
 }
 
 #[test]
@@ -487,11 +506,11 @@ fn example_cable_planar_arm() {
     assert!(w.is_empty(), "{w:?}");
     let r = &s.rods[0];
     assert_eq!(
-        r.rod.uniform_basis().unwrap().strains(),
+        r.geometry.uniform_basis().unwrap().strains(),
         Some(vec![Strain::Ky, Strain::Qx, Strain::Qz])
     );
     // Hanging: the local x axis (first column of R) points down.
-    let x_axis = r.rod.base().rotation.column(0).into_owned();
+    let x_axis = r.geometry.base().rotation.column(0).into_owned();
     assert_eq!(x_axis, Vec3::new(0.0, 0.0, -1.0));
     let cables = &r.cables;
     assert_eq!(cables.len(), 2);
@@ -503,10 +522,13 @@ fn example_cable_planar_arm() {
     assert_eq!(cables[1].tension.at(1.0), 0.2);
     assert_eq!(cables[1].tension.at(3.0), 2.0);
     for c in cables {
-        assert_eq!(c.bounds(r.body.length()), (0.0, r.body.length()));
+        assert_eq!(
+            c.bounds(r.properties.length()),
+            (0.0, r.properties.length())
+        );
         assert!(c.tension.max() <= 2.0);
     }
-    assert!(r.body.material().viscosity() > 0.0);
+    assert!(r.properties.material().viscosity() > 0.0);
 }
 
 #[test]

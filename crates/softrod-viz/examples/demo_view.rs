@@ -4,7 +4,7 @@
 //! `target/viz-demo`), and prints what each kept and how long it took.
 use softrod_viz::demo::SwingingRods;
 use softrod_viz::run_dir::{
-    RadiusProfile, RodSpec, SHAPE_CSV, ShapeCsvWriter, VIEW_JSON, ViewSpec, write_view,
+    RadiusProfile, Rod, SHAPE_CSV, ShapeCsvWriter, VIEW_JSON, ViewSpec, write_view,
 };
 use softrod_viz::{ViewOptions, write_html};
 
@@ -101,7 +101,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let wrote = start.elapsed().as_secs_f64();
     let mut spec = ViewSpec::new("run directory demo");
     for r in &data.rods {
-        spec.rods.push(RodSpec {
+        spec.rods.push(Rod {
             name: r.name.clone(),
             radius: RadiusProfile {
                 s: vec![0.0, 0.5],

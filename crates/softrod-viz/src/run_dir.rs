@@ -452,7 +452,7 @@ impl RadiusProfile {
 /// A rod entry of `view.json`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct RodSpec {
+pub struct Rod {
     /// Name, as in `shape.csv`.
     pub name: String,
     /// Outer radius along the rod.
@@ -501,7 +501,7 @@ pub struct ViewSpec {
     /// Radii of the rods (rods of `shape.csv` missing here get
     /// [`DEFAULT_RADIUS_FRACTION`] of their length).
     #[serde(default)]
-    pub rods: Vec<RodSpec>,
+    pub rods: Vec<Rod>,
     /// Cables.
     #[serde(default)]
     pub cables: Vec<CableSpec>,

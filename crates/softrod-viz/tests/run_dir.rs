@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use softrod_viz::demo::SwingingRods;
 use softrod_viz::run_dir::{
-    BodiesCsvWriter, BodySpec, CableSpec, RadiusProfile, RodSpec, ShapeCsvWriter, ViewSpec,
+    BodiesCsvWriter, BodySpec, CableSpec, RadiusProfile, Rod, ShapeCsvWriter, ViewSpec,
     read_bodies_csv, read_shape_csv, view_from_dir, write_view,
 };
 use softrod_viz::{BodyShape, Pose, ViewOptions, VizError};
@@ -170,7 +170,7 @@ fn view_from_files_alone() {
         b.flush().unwrap();
     }
     let mut spec = ViewSpec::new("files only");
-    spec.rods.push(RodSpec {
+    spec.rods.push(Rod {
         name: rod.name.clone(),
         radius: RadiusProfile {
             s: vec![0.0, 0.5],

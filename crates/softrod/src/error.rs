@@ -215,7 +215,7 @@ mod tests {
     /// its cause does not get it twice.
     #[test]
     fn report_shows_each_cause_once() {
-        let e = Error::Dynamics(DynamicsError::RodBody {
+        let e = Error::Dynamics(DynamicsError::RodProperties {
             rod: softrod_dynamics::RodId {
                 index: Some(0),
                 name: "arm".into(),

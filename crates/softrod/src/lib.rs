@@ -124,11 +124,9 @@ pub use softrod_scene as scene;
 /// The names most programs need.
 pub mod prelude {
     pub use crate::{Error, Settings, Simulation, Trajectory};
-    pub use softrod_dynamics::{
-        Attachment, BodySpec, Joint, JointKind, Model, RodSpec, RodSpec as Rod,
-    };
+    pub use softrod_dynamics::{Attachment, BodySpec, Joint, JointKind, Model, Rod};
     pub use softrod_integrate::Integrator;
-    pub use softrod_kinematics::{Basis, Frame, Rod as RodGeometry, Strain};
+    pub use softrod_kinematics::{Basis, Frame, RodGeometry, Strain};
     pub use softrod_lie::{Pose, Vec3, Vec6};
-    pub use softrod_mechanics::{Cable, Material, PointLoad, RodBody, Section, Tension};
+    pub use softrod_mechanics::{Cable, Material, PointLoad, RodProperties, Section, Tension};
 }

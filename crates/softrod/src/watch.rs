@@ -34,10 +34,10 @@
 
 use nalgebra::DVector;
 use softrod_dynamics::{
-    Data, DynamicsError, Element, ElementKind, Energies, Model, RodSpec, bias_force, energies,
+    Data, DynamicsError, Element, ElementKind, Energies, Model, Rod, bias_force, energies,
     forward_dynamics,
 };
-use softrod_mechanics::{Material, RodBody};
+use softrod_mechanics::{Material, RodProperties};
 
 use crate::error::Error;
 
@@ -110,7 +110,7 @@ fn conservative_model(model: &Model) -> Result<Option<Model>, Error> {
             || !s.distributed_loads.is_empty()
             || s.drag
                 .is_some_and(|d| d.translational != 0.0 || d.rotational != 0.0)
-            || s.body.material().viscosity() != 0.0
+            || s.properties.material().viscosity() != 0.0
     }) || model.bodies().iter().any(|b| !b.spec.loads.is_empty())
         || model
             .elements()
@@ -119,24 +119,24 @@ fn conservative_model(model: &Model) -> Result<Option<Model>, Error> {
     if !has {
         return Ok(None);
     }
-    let conservative_rod = |spec: &RodSpec| -> Result<RodSpec, Error> {
+    let conservative_rod = |spec: &Rod| -> Result<Rod, Error> {
         let mut s = spec.clone();
         s.cables.clear();
         s.point_loads.clear();
         s.distributed_loads.clear();
         s.drag = None;
-        let m = s.body.material();
+        let m = s.properties.material();
         let elastic = Material::builder()
             .density(m.density())
             .young(m.young())
             .shear_modulus(m.shear_modulus())
             .viscosity(0.0)
             .build()?;
-        s.body = RodBody::new(*s.body.section(), elastic, s.body.length())?;
+        s.properties = RodProperties::new(*s.properties.section(), elastic, s.properties.length())?;
         Ok(s)
     };
     if !model.is_articulated() {
-        let specs: Vec<RodSpec> = model
+        let specs: Vec<Rod> = model
             .rods()
             .iter()
             .map(|r| conservative_rod(&r.spec))
@@ -349,7 +349,7 @@ impl Watch {
     /// range and curvature radii below the section's size warn once each.
     fn check_strains(&mut self, model: &Model, t: f64, q: &[f64]) -> Result<(), Error> {
         for r in model.rods() {
-            let rod = &r.spec.rod;
+            let rod = &r.spec.geometry;
             let qr = &q[r.dofs()];
             for (n, piece) in rod.pieces().iter().enumerate() {
                 let xi = rod.strain(n, qr);
@@ -376,7 +376,7 @@ impl Watch {
                     ));
                 }
                 let u = (piece.start + 0.5 * piece.length) / rod.length();
-                let half = r.spec.body.section().half_size(u);
+                let half = r.spec.properties.section().half_size(u);
                 let bend = xi[1].hypot(xi[2]);
                 if !self.warned_curvature && bend * half > 1.0 {
                     self.warned_curvature = true;

@@ -86,7 +86,7 @@ pub fn run(
         .rods()
         .iter()
         .map(|r| {
-            let rod = &r.spec.rod;
+            let rod = &r.spec.geometry;
             let per_piece = scene
                 .run
                 .shape_points_per_piece

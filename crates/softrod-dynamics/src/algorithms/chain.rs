@@ -62,7 +62,7 @@ pub(crate) fn outward_inl(
             }
             continue;
         }
-        let rod = &rm.spec.rod;
+        let rod = &rm.spec.geometry;
         let range = rm.dofs();
         let qr = &q[range.clone()];
         let qdr = qd.map(|v| &v[range.clone()]);
@@ -278,7 +278,7 @@ pub(crate) fn inward_inverse(model: &Model, data: &mut Data) {
             continue;
         }
         let mut wv = Vec6::zeros();
-        for (n, piece) in rm.spec.rod.pieces().iter().enumerate().rev() {
+        for (n, piece) in rm.spec.geometry.pieces().iter().enumerate().rev() {
             let w = &data.pieces[r][n];
             let v = w.p_small + w.tm_tip.tr_mul_vec(&wv);
             let o = rm.dof_offset + piece.dof_offset;
@@ -327,7 +327,7 @@ pub(crate) fn forward_dynamics_impl(
             planar::forward_rod(model, data, r, q, qd, forces)?;
             continue;
         }
-        let pieces = rm.spec.rod.pieces();
+        let pieces = rm.spec.geometry.pieces();
         let mut ma_next = Sym6::default();
         let mut pa_next = Vec6::zeros();
         for (n, piece) in pieces.iter().enumerate().rev() {
@@ -430,7 +430,7 @@ pub(crate) fn mass_matrix_impl(model: &Model, data: &mut Data, q: &[f64]) {
         data.mass.as_mut_slice().fill(0.0);
     }
     for (r, rm) in model.rods().iter().enumerate() {
-        let pieces = rm.spec.rod.pieces();
+        let pieces = rm.spec.geometry.pieces();
         let mut mc_next = Sym6::default();
         for m in (0..pieces.len()).rev() {
             let w = &data.pieces[r][m];

@@ -100,7 +100,7 @@ pub(crate) fn frame_state(
             let eta_b = xo.mul_vec(&eta_p);
             let etadot_b = xo.mul_vec(&etadot_p);
             let rm = &model.rods[rod];
-            let pc = &rm.spec.rod.pieces()[piece];
+            let pc = &rm.spec.geometry.pieces()[piece];
             let r = rm.dofs();
             let xi = pc.strain(&q[r.clone()]);
             let dxi = qd.map_or(Vec6::zeros(), |v| pc.strain_rate(&v[r]));

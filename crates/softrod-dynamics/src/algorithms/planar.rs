@@ -51,7 +51,7 @@ pub(crate) fn outward(
     let Motion { q, qd, qdd } = motion;
     let scale = forces.load_scale;
     let only_gravity = forces.gravity_only;
-    let rod = &rm.spec.rod;
+    let rod = &rm.spec.geometry;
     let base = rod.base();
     let range = rm.dofs();
     let qr = &q[range.clone()];
@@ -156,7 +156,7 @@ pub(crate) fn inward_inverse(rm: &RodModel, pr: &PlanarRod, data: &mut Data, r: 
     let mut wv = Vec3::zeros();
     for (n, (piece, pp)) in rm
         .spec
-        .rod
+        .geometry
         .pieces()
         .iter()
         .zip(&pr.pieces)
@@ -201,7 +201,7 @@ pub(crate) fn forward_rod(
     let mut pa_next = Vec3::zeros();
     for (n, pp) in pieces.iter().enumerate().rev() {
         let k = pp.k;
-        let o = rm.dof_offset + rm.spec.rod.pieces()[n].dof_offset;
+        let o = rm.dof_offset + rm.spec.geometry.pieces()[n].dof_offset;
         let w = &mut data.planar[r][n];
         let leaf = n + 1 == pieces.len();
         let (carried, y) = if leaf {
@@ -255,7 +255,7 @@ pub(crate) fn forward_rod(
     let mut etadot = pr.gather(&gravity_base_acceleration(model, rm, forces.load_scale));
     for (n, pp) in pieces.iter().enumerate() {
         let k = pp.k;
-        let o = rm.dof_offset + rm.spec.rod.pieces()[n].dof_offset;
+        let o = rm.dof_offset + rm.spec.geometry.pieces()[n].dof_offset;
         let w = &data.planar[r][n];
         let mut qn = w.u - w.ut.tr_mul(&etadot);
         for i in (0..k).rev() {

@@ -32,13 +32,13 @@ use softrod_lie::{Mat6, Vec6};
 ///
 /// ```
 /// # use softrod_dynamics::*;
-/// # use softrod_kinematics::{Basis, Rod, straight};
+/// # use softrod_kinematics::{Basis, RodGeometry, straight};
 /// # use softrod_lie::{Pose, Vec3};
-/// # use softrod_mechanics::{Material, RodBody, Section};
-/// let rod = Rod::uniform(0.5, 4, Basis::all(), straight(), Pose::identity()).unwrap();
+/// # use softrod_mechanics::{Material, RodProperties, Section};
+/// let rod = RodGeometry::uniform(0.5, 4, Basis::all(), straight(), Pose::identity()).unwrap();
 /// let material = Material::with_poisson(1000.0, 1e6, 0.5, 1.0).unwrap();
-/// let body = RodBody::new(Section::Circle { radius: 0.01 }, material, 0.5).unwrap();
-/// let model = Model::new(vec![RodSpec::new("arm", rod, body)], Some(Vec3::new(0.0, 0.0, -9.81)), 4).unwrap();
+/// let body = RodProperties::new(Section::Circle { radius: 0.01 }, material, 0.5).unwrap();
+/// let model = Model::new(vec![Rod::new("arm", rod, body)], Some(Vec3::new(0.0, 0.0, -9.81)), 4).unwrap();
 /// let q = vec![0.1; model.n_dof()];
 /// let mut solver = ShiftedSolver::new(&model);
 /// solver.factor(&model, &q, 1e-4, 1e-2).unwrap(); // S = M + 1e-4 K + 1e-2 D
@@ -194,7 +194,7 @@ pub(crate) fn shifted_factor_impl<'a>(
         Forces::ALL,
     );
     for (r, rm) in model.rods().iter().enumerate() {
-        let pieces = rm.spec.rod.pieces();
+        let pieces = rm.spec.geometry.pieces();
         let mut ma_next = Sym6::default();
         for (n, (piece, pd)) in pieces.iter().zip(&rm.pieces).enumerate().rev() {
             let k = piece.basis.dof();
@@ -245,7 +245,7 @@ pub(crate) fn shifted_factor_impl<'a>(
 /// The solve of [`ShiftedSolver::solve`] (arguments checked by the caller).
 fn shifted_solve(model: &Model, data: &Data, x: &mut [f64]) {
     for (r, rm) in model.rods().iter().enumerate() {
-        let pieces = rm.spec.rod.pieces();
+        let pieces = rm.spec.geometry.pieces();
         let mut pa = Vec6::zeros();
         for (n, piece) in pieces.iter().enumerate().rev() {
             let k = piece.basis.dof();

@@ -145,7 +145,7 @@ pub(crate) fn outward(
             }
             NodeKind::Piece { rod, piece } => {
                 let rm = &model.rods[rod];
-                let pc = &rm.spec.rod.pieces()[piece];
+                let pc = &rm.spec.geometry.pieces()[piece];
                 let r = rm.dofs();
                 (
                     pc.strain(&q[r.clone()]),
@@ -206,7 +206,11 @@ pub(crate) fn outward(
                 }
             }
             if pass != Pass::Inverse {
-                fs.project(&rm.spec.rod.pieces()[piece].basis, &mut w.ut, &mut w.dt);
+                fs.project(
+                    &rm.spec.geometry.pieces()[piece].basis,
+                    &mut w.ut,
+                    &mut w.dt,
+                );
                 w.mt = pi.finish().dense();
             }
             if pass != Pass::Composite && !only_gravity {

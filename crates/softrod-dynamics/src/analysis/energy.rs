@@ -47,13 +47,13 @@ pub fn energies(
     }
     let mut e = Energies::default();
     for rm in model.rods() {
-        let rod = &rm.spec.rod;
+        let rod = &rm.spec.geometry;
         let range = rm.dofs();
         let qr = &q[range.clone()];
         let qdr = &qd[range];
         e.elastic += elastic_energy(
             rod,
-            &rm.spec.body,
+            &rm.spec.properties,
             rm.spec.stress_free.as_deref(),
             qr,
             &model.quadrature,
@@ -100,8 +100,8 @@ fn tree_energies(model: &Model, tree: &Tree, data: &mut Data, q: &[f64], qd: &[f
     };
     for rm in model.rods() {
         e.elastic += elastic_energy(
-            &rm.spec.rod,
-            &rm.spec.body,
+            &rm.spec.geometry,
+            &rm.spec.properties,
             rm.spec.stress_free.as_deref(),
             &q[rm.dofs()],
             &model.quadrature,
@@ -119,7 +119,7 @@ fn tree_energies(model: &Model, tree: &Tree, data: &mut Data, q: &[f64], qd: &[f
             match node.kind {
                 NodeKind::Piece { rod, piece } => {
                     let rm = &model.rods[rod];
-                    let pc = &rm.spec.rod.pieces()[piece];
+                    let pc = &rm.spec.geometry.pieces()[piece];
                     let maps = PieceMaps::new(&pc.strain(&q[rm.dofs()]), None);
                     for qp in &rm.pieces[piece].points {
                         let p = base.transform_point(&maps.exp(qp.x).translation);

@@ -51,7 +51,7 @@ pub fn section_jacobian(
         .get(rod)
         .ok_or(DynamicsError::RodIndex { index: rod, count })?;
     let kin_err = |source| DynamicsError::Kinematics { rod, source };
-    let r = &rm.spec.rod;
+    let r = &rm.spec.geometry;
     let n = model.n_dof();
     let mut jac = Matrix6xX::zeros(n);
     let Some(tree) = &model.tree else {

@@ -62,7 +62,7 @@ fn block_diag(
     let n = model.n_dof();
     let mut m = DMatrix::zeros(n, n);
     for rm in model.rods() {
-        for (piece, pd) in rm.spec.rod.pieces().iter().zip(&rm.pieces) {
+        for (piece, pd) in rm.spec.geometry.pieces().iter().zip(&rm.pieces) {
             let o = rm.dof_offset + piece.dof_offset;
             let k = piece.basis.dof();
             m.view_mut((o, o), (k, k)).copy_from(f(pd));
@@ -82,7 +82,12 @@ pub fn actuation_matrix(model: &Model, q: &[f64]) -> Result<DMatrix<f64>, Dynami
         let range = rm.dofs();
         for cable in &rm.spec.cables {
             let mut v = vec![0.0; rm.n_dof()];
-            cable.add_force_per_tension(&rm.spec.rod, &q[range.clone()], &model.quadrature, &mut v);
+            cable.add_force_per_tension(
+                &rm.spec.geometry,
+                &q[range.clone()],
+                &model.quadrature,
+                &mut v,
+            );
             for (i, x) in v.iter().enumerate() {
                 a[(range.start + i, col)] = *x;
             }
@@ -115,7 +120,7 @@ pub fn coriolis_matrix(
     let mut c = DMatrix::zeros(n, n);
     for (r, rm) in model.rods().iter().enumerate() {
         let kinematics = |source| DynamicsError::Kinematics { rod: r, source };
-        let rod = &rm.spec.rod;
+        let rod = &rm.spec.geometry;
         let range = rm.dofs();
         let k = rod.n_dof();
         let mut kin = RodKinematics::new(rod);

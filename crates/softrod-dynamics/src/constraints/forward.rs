@@ -170,7 +170,7 @@ fn forward_inner(
 
 #[cfg(test)]
 mod tests {
-    use crate::{Attachment, Closure, ClosureFrame, ClosureKind, Data, Joint, RodSpec};
+    use crate::{Attachment, Closure, ClosureFrame, ClosureKind, Data, Joint, Rod};
     use nalgebra::DVector;
     use softrod_lie::{Pose, Vec3};
     use softrod_mechanics::Material;
@@ -183,13 +183,7 @@ mod tests {
             .poisson(0.5)
             .build()
             .unwrap();
-        let rod = |n: &str, l: f64| {
-            RodSpec::builder(l)
-                .name(n)
-                .pieces(2)
-                .circle(0.01)
-                .material(mat)
-        };
+        let rod = |n: &str, l: f64| Rod::builder(l).name(n).pieces(2).circle(0.01).material(mat);
         let model = crate::Model::builder()
             .rod_on(
                 rod("a", 0.3),

@@ -17,7 +17,7 @@ pub(crate) fn length_scale(model: &Model) -> f64 {
     model
         .rods
         .iter()
-        .map(|r| r.spec.rod.length())
+        .map(|r| r.spec.geometry.length())
         .fold(0.0, f64::max)
 }
 

@@ -251,7 +251,7 @@ mod jdot_tests {
     use crate::algorithms::{Motion, Pass};
     use crate::forces::Forces;
     use crate::model::closure::ClosureKind;
-    use crate::{Attachment, BodySpec, Closure, ClosureFrame, Joint, Model, RodSpec};
+    use crate::{Attachment, BodySpec, Closure, ClosureFrame, Joint, Model, Rod};
     use nalgebra::DVector;
     use softrod_lie::{Pose, Vec3};
     use softrod_mechanics::Material;
@@ -266,13 +266,7 @@ mod jdot_tests {
             .poisson(0.5)
             .build()
             .unwrap();
-        let rod = |n: &str, l: f64| {
-            RodSpec::builder(l)
-                .name(n)
-                .pieces(2)
-                .circle(0.01)
-                .material(mat)
-        };
+        let rod = |n: &str, l: f64| Rod::builder(l).name(n).pieces(2).circle(0.01).material(mat);
         let model = Model::builder()
             .rod_on(
                 rod("a", 0.3),

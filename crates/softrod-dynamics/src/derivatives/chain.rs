@@ -19,7 +19,7 @@ use softrod_lie::{PieceMaps, Vec6};
 pub(crate) fn outward(model: &Model, rm: &RodModel, works: &mut [PieceWork], at: &At) {
     let (q, qd, qdd) = (at.q, at.qd, at.qdd);
     let scale = at.forces.load_scale;
-    let rod = &rm.spec.rod;
+    let rod = &rm.spec.geometry;
     let range = rm.dofs();
     let (qr, qdr, qddr) = (&q[range.clone()], &qd[range.clone()], &qdd[range]);
     let mut pose = *rod.base();
@@ -57,7 +57,7 @@ pub(crate) fn inward(model: &Model, rm: &RodModel, work: &mut IdDerivatives, r: 
     // Dead loads only: the 𝒴 composites and receivers are zero otherwise.
     let dead = has_dead_loads(rm);
     let mut sub = Subtree::zero();
-    for (n, piece) in rm.spec.rod.pieces().iter().enumerate().rev() {
+    for (n, piece) in rm.spec.geometry.pieces().iter().enumerate().rev() {
         let bm = basis6(&piece.basis);
         let (diag_q, diag_v, wrench, base) = close_piece(&mut work.pieces[r][n], &sub, &bm, dead);
         sub = base;
@@ -69,7 +69,7 @@ pub(crate) fn inward(model: &Model, rm: &RodModel, work: &mut IdDerivatives, r: 
 /// `Ad_{G_i}S_i(ℓ)` with the change of the transmitted wrench of piece `j`;
 /// `i > j` pairs the receivers of piece `i` with the tip sources of `j`.
 pub(crate) fn pairs(rm: &RodModel, work: &mut IdDerivatives, r: usize) {
-    let pieces = rm.spec.rod.pieces();
+    let pieces = rm.spec.geometry.pieces();
     let dead = has_dead_loads(rm);
     let ws = &work.pieces[r];
     for (j, pj) in pieces.iter().enumerate() {

@@ -167,7 +167,7 @@ fn fill_actuation(
         for cable in &rm.spec.cables {
             let column = &mut out.as_mut_slice()[col * n..(col + 1) * n];
             cable.add_force_per_tension(
-                &rm.spec.rod,
+                &rm.spec.geometry,
                 &q[range.clone()],
                 &model.quadrature,
                 &mut column[range.clone()],

@@ -74,7 +74,7 @@ impl IdDerivatives {
                 .rods()
                 .iter()
                 .map(|r| {
-                    (0..r.spec.rod.n_pieces())
+                    (0..r.spec.geometry.n_pieces())
                         .map(|_| PieceWork::new())
                         .collect()
                 })

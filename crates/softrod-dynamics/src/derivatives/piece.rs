@@ -270,7 +270,7 @@ pub(crate) fn write_piece(
 ) {
     let At { t, q, qd, .. } = *at;
     let scale = at.forces.load_scale;
-    let piece = &rm.spec.rod.pieces()[n];
+    let piece = &rm.spec.geometry.pieces()[n];
     let pd = &rm.pieces[n];
     let k = piece.basis.dof();
     let o = rm.dof_offset + piece.dof_offset;

@@ -172,7 +172,7 @@ fn outward(model: &Model, tree: &Tree, tw: &mut TreeWork, at: &At) {
             }
             NodeKind::Piece { rod, piece } => {
                 let rm = &model.rods()[rod];
-                let pc = &rm.spec.rod.pieces()[piece];
+                let pc = &rm.spec.geometry.pieces()[piece];
                 let r = rm.dofs();
                 (
                     pc.strain(&q[r.clone()]),
@@ -323,7 +323,7 @@ fn inward(model: &Model, tree: &Tree, work: &mut IdDerivatives, tw: &mut TreeWor
             }
             NodeKind::Piece { rod, piece } => {
                 let rm = &model.rods()[rod];
-                let bm = basis6(&rm.spec.rod.pieces()[piece].basis);
+                let bm = basis6(&rm.spec.geometry.pieces()[piece].basis);
                 let (dq, dv, wrench, base) = close_piece(&mut tw.nodes[i], &tw.tip[i], &bm, dead);
                 write_piece(model, rm, piece, work, at, &bm, (&dq, &dv, &wrench));
                 base
@@ -431,10 +431,10 @@ fn pairs(tree: &Tree, work: &mut IdDerivatives, tw: &TreeWork) {
 #[cfg(test)]
 mod tests {
     use crate::{
-        Attachment, Curve, Data, Drives, Forces, IdDerivatives, Joint, Model, Prescribed, RodSpec,
+        Attachment, Curve, Data, Drives, Forces, IdDerivatives, Joint, Model, Prescribed, Rod,
         inverse_dynamics_derivatives_with, static_force,
     };
-    use softrod_mechanics::{Material, RodBody, Section};
+    use softrod_mechanics::{Material, RodProperties, Section};
 
     /// With the prescribed joints held at rest (what statics linearizes),
     /// `∂τ/∂q` is the derivative of `static_force`, not of the inverse
@@ -442,7 +442,7 @@ mod tests {
     /// velocity and acceleration terms).
     #[test]
     fn prescribed_at_rest_differentiates_the_static_force() {
-        let rod = softrod_kinematics::Rod::uniform(
+        let rod = softrod_kinematics::RodGeometry::uniform(
             0.3,
             3,
             softrod_kinematics::Basis::all(),
@@ -451,7 +451,7 @@ mod tests {
         )
         .unwrap();
         let material = Material::with_poisson(1000.0, 1e6, 0.5, 0.0).unwrap();
-        let body = RodBody::new(Section::Circle { radius: 0.01 }, material, 0.3).unwrap();
+        let body = RodProperties::new(Section::Circle { radius: 0.01 }, material, 0.3).unwrap();
         let drive =
             Joint::revolute([0.0, 1.0, 0.0]).with_prescribed(Prescribed::new(vec![Curve::Sine {
                 amplitude: 0.8,
@@ -461,7 +461,7 @@ mod tests {
             }]));
         let m = Model::with_elements(
             vec![crate::Element::Rod(
-                RodSpec::new("arm", rod, body),
+                Rod::new("arm", rod, body),
                 Attachment::world_joint(drive),
             )],
             Some(softrod_lie::Vec3::new(0.0, 0.0, -9.81)),

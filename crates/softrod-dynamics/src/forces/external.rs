@@ -12,7 +12,7 @@ use softrod_lie::{Pose, Vec6};
 pub(crate) fn gravity_base_acceleration(model: &Model, rm: &RodModel, scale: f64) -> Vec6 {
     match model.gravity {
         Some(g) => {
-            let r = rm.spec.rod.base().rotation;
+            let r = rm.spec.geometry.base().rotation;
             let a = -(r.tr_mul(&g)) * scale;
             Vec6::new(0.0, 0.0, 0.0, a[0], a[1], a[2])
         }

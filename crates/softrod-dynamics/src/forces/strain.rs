@@ -29,7 +29,7 @@ pub(crate) fn strain_forces(
         return;
     }
     for rm in model.rods() {
-        let rod = &rm.spec.rod;
+        let rod = &rm.spec.geometry;
         let off = rm.dof_offset;
         for (piece, pd) in rod.pieces().iter().zip(&rm.pieces) {
             let k = piece.basis.dof();

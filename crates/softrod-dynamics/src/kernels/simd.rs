@@ -69,12 +69,12 @@ mod tests {
         forward_dynamics_avx2, forward_dynamics_impl, inverse_dynamics_avx2, inverse_dynamics_impl,
         mass_matrix_avx2, mass_matrix_impl,
     };
-    use crate::{Data, Model, RodSpec};
+    use crate::{Data, Model, Rod};
     use nalgebra::Matrix6xX;
-    use softrod_kinematics::{Basis, PieceSpec, Rod, Strain};
+    use softrod_kinematics::{Basis, PieceSpec, RodGeometry, Strain};
     use softrod_lie::{Vec3, Vec6, exp_twist};
     use softrod_mechanics::{
-        DistributedLoad, Drag, LoadFrame, Material, PointLoad, RodBody, Section,
+        DistributedLoad, Drag, LoadFrame, Material, PointLoad, RodProperties, Section,
     };
 
     /// Mixed bases (identity, selections, Kirchhoff, a general 6×4), every
@@ -97,8 +97,8 @@ mod tests {
             })
             .collect();
         let base = exp_twist(1.0, &Vec6::new(0.2, -0.4, 0.1, 0.0, 0.05, 0.1));
-        let rod = Rod::from_pieces(specs, base).unwrap();
-        let body = RodBody::new(
+        let rod = RodGeometry::from_pieces(specs, base).unwrap();
+        let body = RodProperties::new(
             Section::Circle { radius: 0.012 },
             Material::builder()
                 .density(1100.0)
@@ -110,7 +110,7 @@ mod tests {
             0.9,
         )
         .unwrap();
-        let mut spec = RodSpec::new("arm", rod, body);
+        let mut spec = Rod::new("arm", rod, body);
         spec.point_loads = vec![PointLoad {
             s: 0.37,
             force: Vec3::new(-0.05, 0.1, 0.0),

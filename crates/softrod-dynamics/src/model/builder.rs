@@ -1,15 +1,15 @@
-//! Builders of [`RodSpec`] and [`Model`]: named arguments, the rod length
+//! Builders of [`Rod`] and [`Model`]: named arguments, the rod length
 //! given once, every value checked once where it enters (the lower layers'
-//! constructors, then [`RodSpec::validate`]).
+//! constructors, then [`Rod::validate`]).
 
 use crate::error::{DynamicsError, RodId};
 use crate::model::closure::Closure;
 use crate::model::joint::{Attachment, BodySpec};
-use crate::model::{Element, Model, RodSpec};
-use softrod_kinematics::{Basis, Rod, Strain, straight};
+use crate::model::{Element, Model, Rod};
+use softrod_kinematics::{Basis, RodGeometry, Strain, straight};
 use softrod_lie::{Pose, Vec3, Vec6};
 use softrod_mechanics::{
-    Cable, DistributedLoad, Drag, Material, MechanicsError, PointLoad, RodBody, Section,
+    Cable, DistributedLoad, Drag, Material, MechanicsError, PointLoad, RodProperties, Section,
 };
 
 /// How the rod is cut into pieces.
@@ -39,7 +39,7 @@ enum StressFree {
     PerPiece(Vec<Vec6>),
 }
 
-/// Builder of a [`RodSpec`] ([`RodSpec::builder`]): a rod of undeformed
+/// Builder of a [`Rod`] ([`Rod::builder`]): a rod of undeformed
 /// length `L` given once, clamped at its base.
 ///
 /// Defaults: one piece, all six strains, the straight unstretched rest
@@ -48,7 +48,7 @@ enum StressFree {
 /// and a material are required.
 #[derive(Clone, Debug)]
 #[must_use]
-pub struct RodSpecBuilder {
+pub struct RodBuilder {
     length: f64,
     name: String,
     pieces: Pieces,
@@ -64,7 +64,7 @@ pub struct RodSpecBuilder {
     distributed_loads: Vec<DistributedLoad>,
 }
 
-impl RodSpecBuilder {
+impl RodBuilder {
     /// A rod of undeformed length `length` \[m\] (> 0).
     pub fn new(length: f64) -> Self {
         Self {
@@ -90,14 +90,14 @@ impl RodSpecBuilder {
         self
     }
 
-    /// `n` equal pieces (1 to `Rod::MAX_PIECES`).
+    /// `n` equal pieces (1 to `RodGeometry::MAX_PIECES`).
     pub fn pieces(mut self, n: usize) -> Self {
         self.pieces = Pieces::Equal(n);
         self
     }
 
     /// Pieces of these lengths \[m\], base to tip; they must sum to the rod
-    /// length (to `RodBody::LENGTH_RTOL`).
+    /// length (to `RodProperties::LENGTH_RTOL`).
     pub fn piece_lengths(mut self, lengths: &[f64]) -> Self {
         self.pieces = Pieces::Lengths(lengths.to_vec());
         self
@@ -187,10 +187,10 @@ impl RodSpecBuilder {
     /// The rod, or the first thing wrong with it: the section and material
     /// present, the length and the section (mechanics), the pieces,
     /// strains, rest strain and base (kinematics), the piece lengths against
-    /// the length, then [`RodSpec::validate`].
+    /// the length, then [`Rod::validate`].
     /// Errors name the rod by its name (the index is set when it enters a
     /// model).
-    pub fn build(self) -> Result<RodSpec, DynamicsError> {
+    pub fn build(self) -> Result<Rod, DynamicsError> {
         let id = || RodId {
             index: None,
             name: self.name.clone(),
@@ -203,16 +203,18 @@ impl RodSpecBuilder {
             .ok_or_else(|| DynamicsError::MissingMaterial { rod: id() })?;
         // The body first: it owns the check of the length, whichever way
         // the pieces are given.
-        let body = RodBody::new(section, material, self.length)
-            .map_err(|source| DynamicsError::RodBody { rod: id(), source })?;
+        let body = RodProperties::new(section, material, self.length)
+            .map_err(|source| DynamicsError::RodProperties { rod: id(), source })?;
         let geometry = |source| DynamicsError::RodGeometry { rod: id(), source };
         let basis = match self.strains {
             Strains::Select(list) => Basis::select(&list).map_err(geometry)?,
             Strains::Basis(b) => b,
         };
         let rod = match &self.pieces {
-            Pieces::Equal(n) => Rod::uniform(self.length, *n, basis, self.rest_strain, self.base),
-            Pieces::Lengths(l) => Rod::with_lengths(l, basis, self.rest_strain, self.base),
+            Pieces::Equal(n) => {
+                RodGeometry::uniform(self.length, *n, basis, self.rest_strain, self.base)
+            }
+            Pieces::Lengths(l) => RodGeometry::with_lengths(l, basis, self.rest_strain, self.base),
         }
         .map_err(geometry)?;
         if let Err(MechanicsError::LengthMismatch { body, rod }) = body.check_rod(&rod) {
@@ -226,10 +228,10 @@ impl RodSpecBuilder {
             StressFree::Uniform(xi) => vec![xi; rod.n_pieces()],
             StressFree::PerPiece(v) => v,
         });
-        let spec = RodSpec {
+        let spec = Rod {
             name: self.name,
-            rod,
-            body,
+            geometry: rod,
+            properties: body,
             stress_free,
             point_loads: self.point_loads,
             distributed_loads: self.distributed_loads,
@@ -241,21 +243,21 @@ impl RodSpecBuilder {
     }
 }
 
-/// What [`ModelBuilder::rod`] takes: a finished [`RodSpec`] or its builder
+/// What [`ModelBuilder::rod`] takes: a finished [`Rod`] or its builder
 /// (built with the model, errors then carry the rod's index).
-pub trait IntoRodSpec {
+pub trait IntoRod {
     /// The rod description.
-    fn into_rod_spec(self) -> Result<RodSpec, DynamicsError>;
+    fn into_rod_spec(self) -> Result<Rod, DynamicsError>;
 }
 
-impl IntoRodSpec for RodSpec {
-    fn into_rod_spec(self) -> Result<RodSpec, DynamicsError> {
+impl IntoRod for Rod {
+    fn into_rod_spec(self) -> Result<Rod, DynamicsError> {
         Ok(self)
     }
 }
 
-impl IntoRodSpec for RodSpecBuilder {
-    fn into_rod_spec(self) -> Result<RodSpec, DynamicsError> {
+impl IntoRod for RodBuilder {
+    fn into_rod_spec(self) -> Result<Rod, DynamicsError> {
         self.build()
     }
 }
@@ -263,7 +265,7 @@ impl IntoRodSpec for RodSpecBuilder {
 /// An element of a [`ModelBuilder`] in order.
 #[derive(Debug)]
 enum Item {
-    Rod(usize, Attachment),
+    RodGeometry(usize, Attachment),
     Body(Box<BodySpec>, Attachment),
 }
 
@@ -272,7 +274,7 @@ enum Item {
 /// points per piece (default [`Model::DEFAULT_QUADRATURE`]).
 ///
 /// ```
-/// use softrod_dynamics::{Model, RodSpec};
+/// use softrod_dynamics::{Model, Rod};
 /// use softrod_mechanics::Material;
 ///
 /// let steel = Material::builder()
@@ -282,7 +284,7 @@ enum Item {
 ///     .build()
 ///     .unwrap();
 /// let model = Model::builder()
-///     .rod(RodSpec::builder(1.0).name("wire").pieces(10).circle(1e-3).material(steel))
+///     .rod(Rod::builder(1.0).name("wire").pieces(10).circle(1e-3).material(steel))
 ///     .gravity([0.0, 0.0, -9.81])
 ///     .build()
 ///     .unwrap();
@@ -291,7 +293,7 @@ enum Item {
 #[derive(Debug, Default)]
 #[must_use]
 pub struct ModelBuilder {
-    rods: Vec<Result<RodSpec, DynamicsError>>,
+    rods: Vec<Result<Rod, DynamicsError>>,
     /// Elements in order: rods by index into `rods` with their attachment,
     /// bodies with theirs.
     order: Vec<Item>,
@@ -301,16 +303,17 @@ pub struct ModelBuilder {
 }
 
 impl ModelBuilder {
-    /// Adds a rod (a [`RodSpec`] or a [`RodSpecBuilder`]).
-    pub fn rod(self, rod: impl IntoRodSpec) -> Self {
+    /// Adds a rod (a [`Rod`] or a [`RodBuilder`]).
+    pub fn rod(self, rod: impl IntoRod) -> Self {
         self.rod_on(rod, Attachment::world())
     }
 
     /// Adds a rod hanging from a parent through a joint (docs/theory.md
-    /// §11): its base pose ([`RodSpecBuilder::base`]) is then relative to
+    /// §11): its base pose ([`RodBuilder::base`]) is then relative to
     /// the attachment frame.
-    pub fn rod_on(mut self, rod: impl IntoRodSpec, attachment: Attachment) -> Self {
-        self.order.push(Item::Rod(self.rods.len(), attachment));
+    pub fn rod_on(mut self, rod: impl IntoRod, attachment: Attachment) -> Self {
+        self.order
+            .push(Item::RodGeometry(self.rods.len(), attachment));
         self.rods.push(rod.into_rod_spec());
         self
     }
@@ -322,7 +325,7 @@ impl ModelBuilder {
     }
 
     /// Adds several rods.
-    pub fn rods<R: IntoRodSpec>(mut self, rods: impl IntoIterator<Item = R>) -> Self {
+    pub fn rods<R: IntoRod>(mut self, rods: impl IntoIterator<Item = R>) -> Self {
         for r in rods {
             self = self.rod(r);
         }
@@ -360,7 +363,7 @@ impl ModelBuilder {
             .order
             .into_iter()
             .map(|item| match item {
-                Item::Rod(i, a) => Element::Rod(rods[i].take().expect("each rod once"), a),
+                Item::RodGeometry(i, a) => Element::Rod(rods[i].take().expect("each rod once"), a),
                 Item::Body(b, a) => Element::Body(*b, a),
             })
             .collect();

@@ -201,7 +201,7 @@ fn resolve_frame(
             node: tree.body_nodes[b],
         },
         ElementKind::Rod(r) => {
-            let rod = &model.rods[r].spec.rod;
+            let rod = &model.rods[r].spec.geometry;
             let len = rod.length();
             let s = f.at.unwrap_or(len);
             if !s.is_finite() || s < -1e-12 * len || s > len * (1.0 + 1e-12) {
@@ -286,9 +286,9 @@ pub(crate) const BAUMGARTE_FACTOR: f64 = 10.0;
 pub(crate) fn baumgarte_rate(model: &Model) -> f64 {
     let mut w: f64 = 0.0;
     for rm in &model.rods {
-        let l = rm.spec.rod.length();
-        let k = rm.spec.body.stiffness(0.0);
-        let m = rm.spec.body.screw_inertia(0.0);
+        let l = rm.spec.geometry.length();
+        let k = rm.spec.properties.stiffness(0.0);
+        let m = rm.spec.properties.screw_inertia(0.0);
         let ei = k[1].min(k[2]);
         let rho_a = m[3];
         if ei > 0.0 && rho_a > 0.0 && l > 0.0 {

@@ -112,7 +112,7 @@ impl Data {
                 .rods()
                 .iter()
                 .map(|r| {
-                    (0..r.spec.rod.n_pieces())
+                    (0..r.spec.geometry.n_pieces())
                         .map(|_| PieceWork::new())
                         .collect()
                 })
@@ -122,7 +122,7 @@ impl Data {
                 .iter()
                 .map(|r| {
                     let n = if r.is_planar() {
-                        r.spec.rod.n_pieces()
+                        r.spec.geometry.n_pieces()
                     } else {
                         0
                     };
@@ -138,7 +138,11 @@ impl Data {
             nodes: model.tree.as_ref().map_or(Vec::new(), |t| {
                 (0..t.nodes.len()).map(|_| NodeWork::new()).collect()
             }),
-            rod_bases: model.rods().iter().map(|r| *r.spec.rod.base()).collect(),
+            rod_bases: model
+                .rods()
+                .iter()
+                .map(|r| *r.spec.geometry.base())
+                .collect(),
             body_poses: vec![Pose::identity(); model.bodies().len()],
             prescribed_q: DVector::zeros(model.n_prescribed()),
             prescribed_qd: DVector::zeros(model.n_prescribed()),
@@ -203,7 +207,7 @@ impl Data {
     /// [`crate::frames`]: `rod_bases[r] · Rod::base()⁻¹` (D51); the identity
     /// for a rod clamped to the world.
     pub fn rod_to_world(&self, model: &Model, r: usize) -> Pose {
-        self.rod_bases[r].compose(&model.rods()[r].spec.rod.base().inverse())
+        self.rod_bases[r].compose(&model.rods()[r].spec.geometry.base().inverse())
     }
 
     /// The tensions set by [`Data::set_cable_tensions`], if any.

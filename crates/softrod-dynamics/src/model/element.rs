@@ -4,16 +4,16 @@
 #[cfg(doc)]
 use crate::model::Model;
 use crate::model::joint::{Attachment, BodySpec};
-use crate::model::rod::RodSpec;
+use crate::model::rod::Rod;
 use softrod_lie::Mat6;
 
 /// An element of a model given to [`Model::with_elements`]: a rod or a
 /// rigid body, with where it hangs.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Element {
-    /// A rod; its base pose ([`softrod_kinematics::Rod::base`]) is relative
+    /// A rod; its base pose ([`softrod_kinematics::RodGeometry::base`]) is relative
     /// to the attachment frame.
-    Rod(RodSpec, Attachment),
+    Rod(Rod, Attachment),
     /// A rigid body.
     Body(BodySpec, Attachment),
 }

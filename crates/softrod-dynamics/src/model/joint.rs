@@ -292,7 +292,7 @@ impl Joint {
 /// length `at` on a parent rod (default its tip; anywhere on it, D62,
 /// see [`crate::Model::with_elements`]), and the joint. The element's own
 /// base pose (relative to the attachment frame, at joint value 0) is the
-/// rod's [`softrod_kinematics::Rod::base`] or the body's [`BodySpec::base`].
+/// rod's [`softrod_kinematics::RodGeometry::base`] or the body's [`BodySpec::base`].
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Attachment {
     /// Name of the parent rod or body; `None` = the world.

@@ -1,6 +1,6 @@
 //! Floor 1, the model: the immutable description of what is simulated
 //! ([`Model`]: rods, bodies, joints, prescribed motions, closures, gravity,
-//! quadrature; built by [`ModelBuilder`] from [`RodSpec`]s) and [`Data`],
+//! quadrature; built by [`ModelBuilder`] from [`Rod`]s) and [`Data`],
 //! every buffer an evaluation needs. A new joint type goes in [`joint`]
 //! (its motion subspace as virtual pieces, D50); a new element or a new
 //! description of a load on a rod goes here too, its force in
@@ -16,13 +16,13 @@ pub(crate) mod prescribed;
 pub(crate) mod rod;
 pub(crate) mod tree;
 
-pub use builder::{IntoRodSpec, ModelBuilder, RodSpecBuilder};
+pub use builder::{IntoRod, ModelBuilder, RodBuilder};
 pub use closure::{Closure, ClosureFrame, ClosureKind};
 pub use data::Data;
 pub use element::{BodyModel, Element, ElementInfo, ElementKind};
 pub use joint::{Attachment, BodyLoad, BodySpec, Joint, JointKind};
 pub use prescribed::{Curve, Prescribed, Spline};
-pub use rod::{RodModel, RodSpec};
+pub use rod::{Rod, RodModel};
 
 use crate::error::DynamicsError;
 use rod::build_rod;
@@ -75,7 +75,7 @@ impl Model {
         ModelBuilder::default()
     }
 
-    /// Builds a model; checks every rod ([`RodSpec::validate`], errors name
+    /// Builds a model; checks every rod ([`Rod::validate`], errors name
     /// the rod by index and name) and precomputes `K_n`, `D_n` (D13), the
     /// quadrature points with their inertia, and the placement of point
     /// loads on pieces.
@@ -84,7 +84,7 @@ impl Model {
     /// gravity term); `quadrature` the number of Gauss–Legendre points per
     /// piece (≥ 1; see [`Self::DEFAULT_QUADRATURE`]).
     pub fn new(
-        rods: Vec<RodSpec>,
+        rods: Vec<Rod>,
         gravity: Option<Vec3>,
         quadrature: usize,
     ) -> Result<Self, DynamicsError> {

@@ -2,7 +2,7 @@
 //! their per-piece data in planar coordinates.
 
 use crate::kernels::planar::Pose2;
-use crate::model::rod::{PieceData, RodSpec};
+use crate::model::rod::{PieceData, Rod};
 use softrod_lie::{Mat3, Pose, Vec3, Vec6};
 
 /// A rod that takes the planar path: which strains span `P`, and the
@@ -30,12 +30,12 @@ impl PlanarRod {
     /// The planar description of a rod, if it has one (D71): bending axes
     /// are tried in the order y, z, x (a rod that qualifies for several,
     /// e.g. one selecting only the stretch `q_x`, takes the first).
-    pub(crate) fn detect(spec: &RodSpec, pieces: &[PieceData]) -> Option<Self> {
+    pub(crate) fn detect(spec: &Rod, pieces: &[PieceData]) -> Option<Self> {
         [1usize, 2, 0].into_iter().find_map(|a| {
             let (b, c) = ((a + 1) % 3, (a + 2) % 3);
             let idx = [a, 3 + b, 3 + c];
             let planar_pieces = spec
-                .rod
+                .geometry
                 .pieces()
                 .iter()
                 .zip(pieces)

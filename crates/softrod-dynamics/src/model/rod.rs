@@ -1,25 +1,25 @@
-//! A rod as described ([`RodSpec`]) and as built into a model
+//! A rod as described ([`Rod`]) and as built into a model
 //! ([`RodModel`]: its coordinates, cables and per-piece precomputed data).
 
 use crate::error::{DynamicsError, RodId};
-use crate::model::builder::RodSpecBuilder;
+use crate::model::builder::RodBuilder;
 use nalgebra::DMatrix;
-use softrod_kinematics::{GaussLegendre, Rod, Strain};
+use softrod_kinematics::{GaussLegendre, RodGeometry, Strain};
 use softrod_lie::{Mat6, Vec6};
 use softrod_mechanics::{
-    Cable, DistributedLoad, Drag, LoadFrame, PointLoad, RodBody, piece_matrices,
+    Cable, DistributedLoad, Drag, LoadFrame, PointLoad, RodProperties, piece_matrices,
 };
 
 /// Everything about one rod: its geometry and strain bases, its body
 /// (section + material), and the force terms acting on it. Only the terms
 /// present are evaluated (an empty `cables` list costs nothing).
 ///
-/// Build one with [`RodSpec::builder`] (the length given once), or from its
-/// parts with [`RodSpec::new`]. The fields are public; [`crate::Model::new`]
-/// checks them ([`RodSpec::validate`]) when the rod enters a model.
+/// Build one with [`Rod::builder`] (the length given once), or from its
+/// parts with [`Rod::new`]. The fields are public; [`crate::Model::new`]
+/// checks them ([`Rod::validate`]) when the rod enters a model.
 ///
 /// ```
-/// use softrod_dynamics::RodSpec;
+/// use softrod_dynamics::Rod;
 /// use softrod_kinematics::Strain;
 /// use softrod_mechanics::Material;
 ///
@@ -29,7 +29,7 @@ use softrod_mechanics::{
 ///     .poisson(0.5)
 ///     .build()
 ///     .unwrap();
-/// let arm = RodSpec::builder(0.5)
+/// let arm = Rod::builder(0.5)
 ///     .name("arm")
 ///     .pieces(8)
 ///     .strains([Strain::Ky, Strain::Qx, Strain::Qz])
@@ -37,17 +37,17 @@ use softrod_mechanics::{
 ///     .material(silicone)
 ///     .build()
 ///     .unwrap();
-/// assert_eq!(arm.rod.n_dof(), 24);
-/// assert!(RodSpec::builder(-0.5).circle(0.01).material(silicone).build().is_err());
+/// assert_eq!(arm.geometry.n_dof(), 24);
+/// assert!(Rod::builder(-0.5).circle(0.01).material(silicone).build().is_err());
 /// ```
 #[derive(Clone, Debug, PartialEq)]
-pub struct RodSpec {
+pub struct Rod {
     /// A name for messages and outputs.
     pub name: String,
     /// Pieces, bases, rest strain, base pose.
-    pub rod: Rod,
+    pub geometry: RodGeometry,
     /// Section and material.
-    pub body: RodBody,
+    pub properties: RodProperties,
     /// Stress-free strain `ξ*_n` per piece when it differs from the rest
     /// strain `ξ̄_n` (the strain at `q = 0`); `None`: `ξ* = ξ̄`.
     pub stress_free: Option<Vec<Vec6>>,
@@ -61,20 +61,20 @@ pub struct RodSpec {
     pub cables: Vec<Cable>,
 }
 
-impl RodSpec {
+impl Rod {
     /// A builder for a rod of undeformed length `length` \[m\] (see
-    /// [`RodSpecBuilder`]).
-    pub fn builder(length: f64) -> RodSpecBuilder {
-        RodSpecBuilder::new(length)
+    /// [`RodBuilder`]).
+    pub fn builder(length: f64) -> RodBuilder {
+        RodBuilder::new(length)
     }
 
     /// A rod with no loads, cables or drag, from its kinematic rod and body
     /// (which must have the same length).
-    pub fn new(name: impl Into<String>, rod: Rod, body: RodBody) -> Self {
+    pub fn new(name: impl Into<String>, rod: RodGeometry, body: RodProperties) -> Self {
         Self {
             name: name.into(),
-            rod,
-            body,
+            geometry: rod,
+            properties: body,
             stress_free: None,
             point_loads: Vec::new(),
             distributed_loads: Vec::new(),
@@ -100,16 +100,16 @@ impl RodSpec {
 
     pub(crate) fn check(&self, index: Option<usize>) -> Result<(), DynamicsError> {
         let rod = || self.id(index);
-        let length = self.rod.length();
-        self.body
-            .check_rod(&self.rod)
-            .map_err(|source| DynamicsError::RodBody { rod: rod(), source })?;
+        let length = self.geometry.length();
+        self.properties
+            .check_rod(&self.geometry)
+            .map_err(|source| DynamicsError::RodProperties { rod: rod(), source })?;
         if let Some(sf) = &self.stress_free {
-            if sf.len() != self.rod.n_pieces() {
+            if sf.len() != self.geometry.n_pieces() {
                 return Err(DynamicsError::StressFreeCount {
                     rod: rod(),
                     got: sf.len(),
-                    expected: self.rod.n_pieces(),
+                    expected: self.geometry.n_pieces(),
                 });
             }
             for (piece, xi) in sf.iter().enumerate() {
@@ -197,7 +197,7 @@ pub(crate) struct PieceData {
 #[derive(Clone, Debug)]
 pub struct RodModel {
     /// The description it was built from.
-    pub spec: RodSpec,
+    pub spec: Rod,
     /// Index of the rod's first coordinate in the model's `q`.
     pub dof_offset: usize,
     pub(crate) pieces: Vec<PieceData>,
@@ -215,7 +215,7 @@ pub struct RodModel {
 impl RodModel {
     /// Number of coordinates of this rod.
     pub fn n_dof(&self) -> usize {
-        self.spec.rod.n_dof()
+        self.spec.geometry.n_dof()
     }
 
     /// Range of this rod's coordinates in the model's `q`.
@@ -237,15 +237,15 @@ impl RodModel {
 /// Checks one rod and precomputes its pieces (`K_n`, `D_n`, quadrature
 /// points, placed point loads).
 pub(crate) fn build_rod(
-    spec: RodSpec,
+    spec: Rod,
     index: usize,
     dof_offset: usize,
     cable_offset: usize,
     gl: &GaussLegendre,
 ) -> Result<RodModel, DynamicsError> {
     spec.check(Some(index))?;
-    let rod = &spec.rod;
-    let mats = piece_matrices(rod, &spec.body, spec.stress_free.as_deref(), gl);
+    let rod = &spec.geometry;
+    let mats = piece_matrices(rod, &spec.properties, spec.stress_free.as_deref(), gl);
     let mut pieces = Vec::with_capacity(rod.n_pieces());
     for (n, (piece, m)) in rod.pieces().iter().zip(mats).enumerate() {
         let points = gl
@@ -255,8 +255,8 @@ pub(crate) fn build_rod(
                 QuadPoint {
                     x,
                     w,
-                    inertia: spec.body.screw_inertia(s),
-                    mass_per_length: spec.body.mass_per_length(s),
+                    inertia: spec.properties.screw_inertia(s),
+                    mass_per_length: spec.properties.mass_per_length(s),
                 }
             })
             .collect();

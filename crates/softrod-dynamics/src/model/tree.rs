@@ -133,7 +133,7 @@ impl Tree {
                 Some(p) => match els[p].kind {
                     ElementKind::Body(b) => (Some(tree.body_nodes[b]), Pose::identity()),
                     ElementKind::Rod(r) => {
-                        let rod = &model.rods[r].spec.rod;
+                        let rod = &model.rods[r].spec.geometry;
                         let len = rod.length();
                         let at = info.attachment.at.unwrap_or(len);
                         let tol = 1e-9 * len;
@@ -168,7 +168,7 @@ impl Tree {
                 },
             };
             let base = match info.kind {
-                ElementKind::Rod(r) => *model.rods[r].spec.rod.base(),
+                ElementKind::Rod(r) => *model.rods[r].spec.geometry.base(),
                 ElementKind::Body(b) => model.bodies[b].spec.base,
             };
             let mut cur = (node, attach.compose(&base));
@@ -196,7 +196,7 @@ impl Tree {
                 ElementKind::Rod(r) => {
                     rod_base[r] = cur;
                     let rm = &model.rods[r];
-                    for (pn, piece) in rm.spec.rod.pieces().iter().enumerate() {
+                    for (pn, piece) in rm.spec.geometry.pieces().iter().enumerate() {
                         let k = piece.basis.dof();
                         let bpad =
                             Mat6::from_fn(

@@ -5,12 +5,12 @@
 
 use nalgebra::{DMatrix, DVector, Matrix6xX};
 use softrod_dynamics::{
-    Attachment, BodyLoad, BodySpec, Data, Joint, Model, RodSpec, RodSpecBuilder, forward_dynamics,
+    Attachment, BodyLoad, BodySpec, Data, Joint, Model, Rod, RodBuilder, forward_dynamics,
 };
-use softrod_kinematics::{Basis, PieceSpec, Rod, Strain};
+use softrod_kinematics::{Basis, PieceSpec, RodGeometry, Strain};
 use softrod_lie::{Mat3, Pose, Vec3, Vec6, exp_twist};
 use softrod_mechanics::{
-    Cable, DistributedLoad, Drag, LoadFrame, Material, PointLoad, RodBody, Routing, Section,
+    Cable, DistributedLoad, Drag, LoadFrame, Material, PointLoad, RodProperties, Routing, Section,
     Tension,
 };
 
@@ -115,7 +115,7 @@ impl Shape {
 }
 
 /// One rod: precurved rest strain, tilted base, soft silicone-like material.
-pub fn rod_spec(name: &str, shape: &Shape, terms: Terms, base: Pose) -> RodSpec {
+pub fn rod_spec(name: &str, shape: &Shape, terms: Terms, base: Pose) -> Rod {
     let length = shape.length;
     let specs: Vec<PieceSpec> = (0..shape.pieces)
         .map(|i| PieceSpec {
@@ -124,7 +124,7 @@ pub fn rod_spec(name: &str, shape: &Shape, terms: Terms, base: Pose) -> RodSpec 
             rest_strain: shape.rest,
         })
         .collect();
-    let rod = Rod::from_pieces(specs, base).unwrap();
+    let rod = RodGeometry::from_pieces(specs, base).unwrap();
     let viscosity = if terms.damping { 30.0 } else { 0.0 };
     let section = if shape.tapered {
         Section::TaperedCircle {
@@ -134,13 +134,13 @@ pub fn rod_spec(name: &str, shape: &Shape, terms: Terms, base: Pose) -> RodSpec 
     } else {
         Section::Circle { radius: 0.012 }
     };
-    let body = RodBody::new(
+    let body = RodProperties::new(
         section,
         Material::with_poisson(1100.0, shape.young, 0.45, viscosity).unwrap(),
         length,
     )
     .unwrap();
-    let mut spec = RodSpec::new(name, rod, body);
+    let mut spec = Rod::new(name, rod, body);
     if terms.dead_point {
         spec.point_loads.push(PointLoad {
             s: length,
@@ -333,8 +333,8 @@ pub fn soft_material(young: f64, density: f64) -> Material {
 
 /// The robots' test rod: `pieces` equal pieces over `length` \[m\], all
 /// six strains, a 1 cm circle, E = 1 MPa, ρ = 1000 kg/m³.
-pub fn soft_rod(name: &str, length: f64, pieces: usize) -> RodSpecBuilder {
-    RodSpec::builder(length)
+pub fn soft_rod(name: &str, length: f64, pieces: usize) -> RodBuilder {
+    Rod::builder(length)
         .name(name)
         .pieces(pieces)
         .circle(0.01)

@@ -5,7 +5,7 @@
 #![allow(dead_code)]
 
 use nalgebra::{DMatrix, Matrix3, Matrix4, Matrix6, Matrix6xX, Vector3, Vector6};
-use softrod_kinematics::{Basis, Frame, PieceSpec, Rod, RodKinematics};
+use softrod_kinematics::{Basis, Frame, PieceSpec, RodGeometry, RodKinematics};
 use softrod_lie::Pose;
 
 /// SplitMix64: deterministic, dependency-free.
@@ -188,7 +188,7 @@ impl RefRod {
     }
 
     /// The softrod rod with the same description.
-    pub fn rod(&self) -> Rod {
+    pub fn rod(&self) -> RodGeometry {
         let specs = self
             .lengths
             .iter()
@@ -204,7 +204,7 @@ impl RefRod {
             self.base.fixed_view::<3, 3>(0, 0).into_owned(),
             self.base.fixed_view::<3, 1>(0, 3).into_owned(),
         );
-        Rod::from_pieces(specs, base).expect("valid rod")
+        RodGeometry::from_pieces(specs, base).expect("valid rod")
     }
 }
 
@@ -246,13 +246,13 @@ pub fn amax(m: &DMatrix<f64>) -> f64 {
     m.iter().fold(0.0f64, |a, v| a.max(v.abs()))
 }
 
-pub fn jac(kin: &RodKinematics, rod: &Rod, s: f64, frame: Frame) -> Matrix6xX<f64> {
+pub fn jac(kin: &RodKinematics, rod: &RodGeometry, s: f64, frame: Frame) -> Matrix6xX<f64> {
     let mut j = Matrix6xX::zeros(rod.n_dof());
     kin.jacobian_at(rod, s, frame, &mut j).expect("jacobian");
     j
 }
 
-pub fn jac_dot(kin: &RodKinematics, rod: &Rod, s: f64, frame: Frame) -> Matrix6xX<f64> {
+pub fn jac_dot(kin: &RodKinematics, rod: &RodGeometry, s: f64, frame: Frame) -> Matrix6xX<f64> {
     let mut j = Matrix6xX::zeros(rod.n_dof());
     kin.jacobian_dot_at(rod, s, frame, &mut j)
         .expect("jacobian_dot");

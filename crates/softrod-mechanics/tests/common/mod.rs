@@ -2,9 +2,9 @@
 #![allow(dead_code)]
 
 use nalgebra::{DVector, Matrix6xX};
-use softrod_kinematics::{Basis, GaussLegendre, PieceSpec, Rod, Strain, straight};
+use softrod_kinematics::{Basis, GaussLegendre, PieceSpec, RodGeometry, Strain, straight};
 use softrod_lie::{Mat3, Pose, Vec3, Vec6};
-use softrod_mechanics::{Material, PieceMatrices, RodBody, Section};
+use softrod_mechanics::{Material, PieceMatrices, RodProperties, Section};
 
 /// Small deterministic xorshift generator (no dependency needed).
 pub struct Rng(u64);
@@ -56,7 +56,7 @@ pub fn dense_basis() -> Basis {
 }
 
 /// A three-piece rod of unequal pieces with mixed bases and non-straight rest strains.
-pub fn mixed_rod(length: f64, base: Pose) -> Rod {
+pub fn mixed_rod(length: f64, base: Pose) -> RodGeometry {
     let specs = vec![
         PieceSpec {
             length: 0.3 * length,
@@ -74,7 +74,7 @@ pub fn mixed_rod(length: f64, base: Pose) -> Rod {
             rest_strain: Vec6::new(0.0, 1.0, 0.0, 0.98, 0.01, 0.0),
         },
     ];
-    Rod::from_pieces(specs, base).unwrap()
+    RodGeometry::from_pieces(specs, base).unwrap()
 }
 
 pub fn soft_material() -> Material {
@@ -87,8 +87,8 @@ pub fn soft_material() -> Material {
         .unwrap()
 }
 
-pub fn taper_body(length: f64) -> RodBody {
-    RodBody::new(
+pub fn taper_body(length: f64) -> RodProperties {
+    RodProperties::new(
         Section::TaperedCircle {
             radius_base: 0.02,
             radius_tip: 0.008,
@@ -126,7 +126,12 @@ pub fn gauss(n: usize) -> GaussLegendre {
 
 /// Adds the elastic force `τ_e,n = K_n q_n + e_n` (D13) of every piece into
 /// `out` (length n_dof).
-pub fn add_elastic_force(rod: &Rod, matrices: &[PieceMatrices], q: &[f64], out: &mut [f64]) {
+pub fn add_elastic_force(
+    rod: &RodGeometry,
+    matrices: &[PieceMatrices],
+    q: &[f64],
+    out: &mut [f64],
+) {
     for (p, m) in rod.pieces().iter().zip(matrices) {
         let r = p.dofs();
         let qn = &q[r.clone()];
@@ -141,7 +146,12 @@ pub fn add_elastic_force(rod: &Rod, matrices: &[PieceMatrices], q: &[f64], out: 
 }
 
 /// Adds the viscous force `τ_d,n = D_n q̇_n` (D13) of every piece into `out`.
-pub fn add_damping_force(rod: &Rod, matrices: &[PieceMatrices], qd: &[f64], out: &mut [f64]) {
+pub fn add_damping_force(
+    rod: &RodGeometry,
+    matrices: &[PieceMatrices],
+    qd: &[f64],
+    out: &mut [f64],
+) {
     for (p, m) in rod.pieces().iter().zip(matrices) {
         let r = p.dofs();
         let qn = &qd[r.clone()];

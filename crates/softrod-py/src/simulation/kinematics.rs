@@ -129,7 +129,7 @@ impl Simulation {
             let mut local = Matrix6xX::zeros(rm.n_dof());
             poses
                 .kinematics(i)
-                .jacobian_at(&rm.spec.rod, x, f, &mut local)
+                .jacobian_at(&rm.spec.geometry, x, f, &mut local)
                 .map_err(|e| input(format!("s = {x}: {e}")))?;
             for row in 0..6 {
                 for c in 0..rm.n_dof() {

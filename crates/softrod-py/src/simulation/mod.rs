@@ -314,7 +314,7 @@ impl Simulation {
             .model()
             .rods()
             .iter()
-            .map(|r| r.spec.rod.length())
+            .map(|r| r.spec.geometry.length())
             .collect()
     }
 

@@ -4,7 +4,7 @@
 
 use nalgebra::Matrix3;
 use softrod_dynamics::{
-    Attachment, BodyLoad, BodySpec, Curve, ElementKind, Joint, JointKind, Prescribed, RodSpec,
+    Attachment, BodyLoad, BodySpec, Curve, ElementKind, Joint, JointKind, Prescribed, Rod,
 };
 use softrod_lie::Vec3;
 use softrod_mechanics::LoadFrame;
@@ -34,7 +34,7 @@ impl Ctx<'_> {
         &mut self,
         links: Vec<RodLink>,
         raw_bodies: Vec<RawBody>,
-        rods: &[RodSpec],
+        rods: &[Rod],
     ) -> Result<Robot> {
         let mut robot = Robot::default();
         let mut parents: Vec<(String, Option<String>, Option<f64>)> = Vec::new();
@@ -119,7 +119,7 @@ impl Ctx<'_> {
             };
             parent_of[e] = Some(k);
             if k < n_rods {
-                let rod = &rods[k].rod;
+                let rod = &rods[k].geometry;
                 let len = rod.length();
                 if let Some(s) = *at {
                     if !(0.0..=len).contains(&s) {

@@ -1,7 +1,7 @@
 //! `[[cable]]`: the rod it runs on, its routing, span and tension, into the
 //! library's `Cable` (which checks them against the rod).
 
-use softrod_dynamics::RodSpec;
+use softrod_dynamics::Rod;
 use softrod_mechanics::{Cable, Routing, Span, Tension};
 
 use super::{Ctx, Result};
@@ -11,11 +11,11 @@ use crate::raw::RawCable;
 
 impl Ctx<'_> {
     /// `cable[j]`, added to the rod it names; returns that rod's index.
-    pub(super) fn cable(&mut self, j: usize, c: RawCable, rods: &mut [RodSpec]) -> Result<usize> {
+    pub(super) fn cable(&mut self, j: usize, c: RawCable, rods: &mut [Rod]) -> Result<usize> {
         let p = format!("cable[{j}]");
         let path = |k: &str| format!("{p}.{k}");
         let i = self.rod_ref(&path("rod"), &c.rod, rods)?;
-        let length = rods[i].body.length();
+        let length = rods[i].properties.length();
         let span = match (c.from, c.to) {
             (None, None) => Span::Whole,
             (from, to) => Span::Between {
@@ -40,7 +40,7 @@ impl Ctx<'_> {
             span,
         };
         cable
-            .validate(rods[i].rod.length())
+            .validate(rods[i].geometry.length())
             .map_err(|e| keys::mechanics(&self.r, &p, length, e))?;
         self.warn_routing(&p, &cable, &rods[i]);
         rods[i].cables.push(cable);
@@ -80,8 +80,8 @@ impl Ctx<'_> {
 
     /// Where the cable runs relative to the section: outside it (legal with
     /// spacer disks, but often a unit slip), or on the centerline.
-    fn warn_routing(&mut self, p: &str, cable: &Cable, rod: &RodSpec) {
-        let (section, length) = (rod.body.section(), rod.body.length());
+    fn warn_routing(&mut self, p: &str, cable: &Cable, rod: &Rod) {
+        let (section, length) = (rod.properties.section(), rod.properties.length());
         let (from, to) = cable.bounds(length);
         let mut probe = vec![from, to];
         let key = match &cable.routing {

@@ -3,7 +3,7 @@
 //! into the library's [`Closure`]s, every problem naming its key path.
 
 use serde::Deserialize;
-use softrod_dynamics::{Closure, ClosureFrame, ClosureKind, RodSpec};
+use softrod_dynamics::{Closure, ClosureFrame, ClosureKind, Rod};
 use softrod_lie::Vec3;
 
 use super::{Ctx, Result};
@@ -40,7 +40,7 @@ impl Ctx<'_> {
     pub(super) fn closures(
         &mut self,
         raw: Vec<RawClosure>,
-        rods: &[RodSpec],
+        rods: &[Rod],
         robot: &Robot,
     ) -> Result<Vec<Closure>> {
         let mut out: Vec<Closure> = Vec::with_capacity(raw.len());
@@ -107,7 +107,7 @@ impl Ctx<'_> {
         &mut self,
         p: &str,
         raw: Option<RawClosureFrame>,
-        rods: &[RodSpec],
+        rods: &[Rod],
         robot: &Robot,
     ) -> Result<ClosureFrame> {
         let f = raw.ok_or_else(|| {
@@ -134,7 +134,7 @@ impl Ctx<'_> {
         if let Some(s) = f.at {
             match rod {
                 Some(r) => {
-                    let len = r.rod.length();
+                    let len = r.geometry.length();
                     if !(0.0..=len).contains(&s) {
                         return Err(self.r.out_of_range(
                             &format!("{p}.at"),

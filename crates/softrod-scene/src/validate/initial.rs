@@ -4,7 +4,7 @@
 use std::f64::consts::PI;
 use std::path::Path;
 
-use softrod_dynamics::RodSpec;
+use softrod_dynamics::Rod;
 use softrod_kinematics::Strain;
 
 use super::{Ctx, Result};
@@ -16,22 +16,22 @@ impl Ctx<'_> {
     pub(super) fn initial(
         &mut self,
         raw: Option<RawInitial>,
-        rods: &[RodSpec],
+        rods: &[Rod],
         robot: &Robot,
     ) -> Result<Initial> {
         let Some(raw) = raw else {
             return Ok(Initial::default());
         };
         let joints = robot.joint_dofs();
-        let n_dof: usize = rods.iter().map(|r| r.rod.n_dof()).sum::<usize>() + joints;
+        let n_dof: usize = rods.iter().map(|r| r.geometry.n_dof()).sum::<usize>() + joints;
         let per_rod = rods
             .iter()
             .map(|r| {
                 format!(
                     "{}: {} pieces × {} strains",
                     r.name,
-                    r.rod.n_pieces(),
-                    r.rod.pieces()[0].basis.dof()
+                    r.geometry.n_pieces(),
+                    r.geometry.pieces()[0].basis.dof()
                 )
             })
             .chain((joints > 0).then(|| format!("joints: {joints}")))
@@ -105,7 +105,7 @@ impl Ctx<'_> {
     /// centreline, `[x, y, z]` rows equally spaced in arc length base to
     /// tip (at least two) or `[s, x, y, z]` rows with `s` strictly
     /// increasing in `[0, L]` (at least one).
-    fn shapes(&self, shapes: Vec<RawShape>, rods: &[RodSpec]) -> Result<Vec<InitialShape>> {
+    fn shapes(&self, shapes: Vec<RawShape>, rods: &[Rod]) -> Result<Vec<InitialShape>> {
         let mut out: Vec<InitialShape> = Vec::with_capacity(shapes.len());
         for (k, sh) in shapes.into_iter().enumerate() {
             let p = format!("initial.shape[{k}]");
@@ -123,7 +123,7 @@ impl Ctx<'_> {
                 ));
             }
             let cp = format!("{p}.centerline");
-            let length = rods[rod].rod.length();
+            let length = rods[rod].geometry.length();
             let width = sh.centerline.first().map_or(0, Vec::len);
             if width != 3 && width != 4 {
                 return Err(self.r.inconsistent(
@@ -182,10 +182,10 @@ impl Ctx<'_> {
     }
 
     /// Warns (once per rod) about initial strains far outside the small-strain range.
-    fn warn_large_strains(&mut self, q: &[f64], rods: &[RodSpec], robot: &Robot) {
+    fn warn_large_strains(&mut self, q: &[f64], rods: &[Rod], robot: &Robot) {
         for (i, rod) in rods.iter().enumerate() {
             let offset = robot.rod_dof_offset(rods, i);
-            if let Some((at, why)) = large_strain(&q[offset..offset + rod.rod.n_dof()], rod) {
+            if let Some((at, why)) = large_strain(&q[offset..offset + rod.geometry.n_dof()], rod) {
                 self.warn(
                     &format!("initial.q[{}]", offset + at),
                     format!("rod {:?}: {why}", rod.name),
@@ -261,8 +261,8 @@ fn trajectory_row(
 /// The first coordinate of `q` (the rod's own) that bends a piece by more
 /// than π, inverts it, or deviates from rest by more than 0.5 in a stretch or
 /// shear, with the reason.
-fn large_strain(q: &[f64], rod: &RodSpec) -> Option<(usize, String)> {
-    for (k, piece) in rod.rod.pieces().iter().enumerate() {
+fn large_strain(q: &[f64], rod: &Rod) -> Option<(usize, String)> {
+    for (k, piece) in rod.geometry.pieces().iter().enumerate() {
         let Some(sel) = piece.basis.selection() else {
             continue;
         };

@@ -1,7 +1,7 @@
 //! `[[load]]`: a point force and moment on a rod, into the library's
 //! `PointLoad` (which checks it against the rod).
 
-use softrod_dynamics::RodSpec;
+use softrod_dynamics::Rod;
 use softrod_lie::Vec3;
 use softrod_mechanics::{LoadFrame, PointLoad};
 
@@ -11,7 +11,7 @@ use crate::raw::RawLoad;
 
 impl Ctx<'_> {
     /// `load[j]`, added to the rod it names; returns that rod's index.
-    pub(super) fn load(&mut self, j: usize, l: RawLoad, rods: &mut [RodSpec]) -> Result<usize> {
+    pub(super) fn load(&mut self, j: usize, l: RawLoad, rods: &mut [Rod]) -> Result<usize> {
         let p = format!("load[{j}]");
         let rod = l
             .rod
@@ -20,7 +20,7 @@ impl Ctx<'_> {
         let s =
             l.s.ok_or_else(|| self.r.missing(&format!("{p}.s"), " (where along the rod)"))?;
         let i = self.rod_ref(&format!("{p}.rod"), rod, rods)?;
-        let length = rods[i].body.length();
+        let length = rods[i].properties.length();
         let frame = match l.frame.as_deref() {
             None => LoadFrame::World,
             Some(name) => name
@@ -35,7 +35,7 @@ impl Ctx<'_> {
             moment: Vec3::from(moment),
             frame,
         };
-        load.validate(rods[i].rod.length())
+        load.validate(rods[i].geometry.length())
             .map_err(|e| keys::mechanics(&self.r, &p, length, e))?;
         if force == [0.0; 3] && moment == [0.0; 3] {
             self.warn(

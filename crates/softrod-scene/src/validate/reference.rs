@@ -1,6 +1,6 @@
 //! `[world]` and `[reference]`.
 
-use softrod_dynamics::RodSpec;
+use softrod_dynamics::Rod;
 
 use super::{Ctx, Result};
 use crate::raw::{RawReference, RawWorld};
@@ -19,7 +19,7 @@ impl Ctx<'_> {
     pub(super) fn reference(
         &mut self,
         r: RawReference,
-        rods: &[RodSpec],
+        rods: &[Rod],
         run: &Run,
     ) -> Result<Reference> {
         let rod_index = match &r.rod {
@@ -62,7 +62,7 @@ impl Ctx<'_> {
     }
 
     /// Index of the rod called `name`, or an unknown-rod error at `path`.
-    pub(super) fn rod_ref(&self, path: &str, name: &str, rods: &[RodSpec]) -> Result<usize> {
+    pub(super) fn rod_ref(&self, path: &str, name: &str, rods: &[Rod]) -> Result<usize> {
         rods.iter().position(|r| r.name == name).ok_or_else(|| {
             self.r
                 .unknown_rod(path, name, rods.iter().map(|r| r.name.clone()).collect())

@@ -1,10 +1,10 @@
 //! `[[rod]]`: name, pieces, strains, rest strain, base; the rod itself is
-//! made by the library's builder (`RodSpec::builder`), which checks every
+//! made by the library's builder (`Rod::builder`), which checks every
 //! value.
 
 use nalgebra::Matrix3;
-use softrod_dynamics::RodSpec;
-use softrod_kinematics::{Rod, Strain};
+use softrod_dynamics::Rod;
+use softrod_kinematics::{RodGeometry, Strain};
 use softrod_lie::{Pose, Vec3, Vec6};
 
 use super::{Ctx, Result};
@@ -22,13 +22,13 @@ enum Pieces {
 
 impl Ctx<'_> {
     /// Every `[[rod]]`, at least one, names unique.
-    pub(super) fn rods(&mut self, raw: Vec<RawRod>) -> Result<Vec<RodSpec>> {
+    pub(super) fn rods(&mut self, raw: Vec<RawRod>) -> Result<Vec<Rod>> {
         if raw.is_empty() {
             return Err(self
                 .r
                 .missing("rod", " (a scene needs at least one [[rod]] table)"));
         }
-        let mut rods: Vec<RodSpec> = Vec::with_capacity(raw.len());
+        let mut rods: Vec<Rod> = Vec::with_capacity(raw.len());
         for (i, r) in raw.into_iter().enumerate() {
             let rod = self.rod(i, r)?;
             if let Some(j) = rods.iter().position(|o| o.name == rod.name) {
@@ -43,7 +43,7 @@ impl Ctx<'_> {
     }
 
     /// `rod[i]` without its cables and loads (they come from their own tables).
-    fn rod(&mut self, i: usize, r: RawRod) -> Result<RodSpec> {
+    fn rod(&mut self, i: usize, r: RawRod) -> Result<Rod> {
         let p = format!("rod[{i}]");
         if r.name.trim().is_empty() {
             return Err(self
@@ -58,7 +58,7 @@ impl Ctx<'_> {
         let strains = self.strains(&format!("{p}.strains"), r.strains.as_ref())?;
         let rest_strain = r.rest_strain.unwrap_or([0.0, 0.0, 0.0, 1.0, 0.0, 0.0]);
         self.check_rest_stretch(&p, rest_strain[3])?;
-        let mut b = RodSpec::builder(r.length)
+        let mut b = Rod::builder(r.length)
             .name(r.name)
             .section(section)
             .material(material)
@@ -107,7 +107,7 @@ impl Ctx<'_> {
             return Err(self.r.out_of_range(
                 &pieces_path,
                 n,
-                format!("in [1, {}]", Rod::MAX_PIECES),
+                format!("in [1, {}]", RodGeometry::MAX_PIECES),
             ));
         }
         match (pieces, lengths) {
@@ -219,10 +219,10 @@ impl Ctx<'_> {
 
     /// Slenderness: a piece shorter than the section is outside what a rod
     /// model describes well.
-    fn warn_short_pieces(&mut self, p: &str, given_lengths: bool, spec: &RodSpec) {
-        let (section, length) = (spec.body.section(), spec.body.length());
+    fn warn_short_pieces(&mut self, p: &str, given_lengths: bool, spec: &Rod) {
+        let (section, length) = (spec.properties.section(), spec.properties.length());
         let short: Vec<(usize, f64, f64)> = spec
-            .rod
+            .geometry
             .pieces()
             .iter()
             .enumerate()
@@ -245,7 +245,7 @@ impl Ctx<'_> {
                     "{} of {} pieces are shorter than the section radius (piece {k}: \
                      length {l} m < radius {radius} m); a rod model assumes slender pieces",
                     short.len(),
-                    spec.rod.n_pieces()
+                    spec.geometry.n_pieces()
                 ),
             );
         }

@@ -56,7 +56,7 @@ pub fn closure_length_scale(model: &Model) -> f64 {
     model
         .rods()
         .iter()
-        .map(|r| r.spec.rod.length())
+        .map(|r| r.spec.geometry.length())
         .fold(0.0, f64::max)
 }
 

@@ -3,14 +3,14 @@
 //! and the front ends read.
 //!
 //! A rod's kinematics (D7) give poses from its own base
-//! (`softrod_kinematics::Rod::base`); a rod on a joint or a parent is
+//! (`softrod_kinematics::RodGeometry::base`); a rod on a joint or a parent is
 //! carried into the world by the map `rod_to_world` of its element
 //! (`softrod_dynamics::frames`, D51; prescribed joints at the time given).
 //! A clamped rod's base is already in the world, and its map is the
 //! identity.
 
 use softrod_dynamics::{Data, Model};
-use softrod_kinematics::{Rod, RodKinematics};
+use softrod_kinematics::{RodGeometry, RodKinematics};
 use softrod_lie::{Pose, Vec6};
 
 use crate::error::{Error, Result};
@@ -46,7 +46,7 @@ pub const MAX_DEFAULT_POINTS_PER_PIECE: usize = 16;
 
 impl RodSampling {
     /// `per_piece` points per piece of `rod` (at least one).
-    pub fn new(rod: &Rod, per_piece: usize) -> Self {
+    pub fn new(rod: &RodGeometry, per_piece: usize) -> Self {
         let m = per_piece.max(1);
         let fractions: Vec<f64> = (0..m).map(|j| j as f64 / m as f64).collect();
         let mut s = Vec::with_capacity(rod.n_pieces() * m + 1);
@@ -69,7 +69,7 @@ impl RodSampling {
             .rods()
             .iter()
             .map(|r| {
-                let rod = &r.spec.rod;
+                let rod = &r.spec.geometry;
                 Self::new(
                     rod,
                     per_piece.unwrap_or_else(|| default_points_per_piece(rod.n_pieces())),
@@ -103,13 +103,13 @@ impl WorldPoses {
             kin: model
                 .rods()
                 .iter()
-                .map(|r| RodKinematics::new(&r.spec.rod))
+                .map(|r| RodKinematics::new(&r.spec.geometry))
                 .collect(),
             robot: model.is_articulated().then(|| {
                 let world = model
                     .rods()
                     .iter()
-                    .map(|r| vec![Pose::identity(); r.spec.rod.n_pieces() + 1])
+                    .map(|r| vec![Pose::identity(); r.spec.geometry.n_pieces() + 1])
                     .collect();
                 (Data::new(model), world)
             }),
@@ -144,7 +144,7 @@ impl WorldPoses {
             });
         }
         for (k, r) in self.kin.iter_mut().zip(model.rods()) {
-            k.update(&r.spec.rod, &q[r.dofs()], None, None)?;
+            k.update(&r.spec.geometry, &q[r.dofs()], None, None)?;
         }
         if let Some((data, world)) = &mut self.robot {
             model.set_time(data, t);
@@ -157,7 +157,7 @@ impl WorldPoses {
             }
         }
         for i in 0..self.samples.len() {
-            let rod = &model.rods()[i].spec.rod;
+            let rod = &model.rods()[i].spec.geometry;
             let out = &mut self.samples[i];
             let n = out.len() - 1;
             self.kin[i].poses_along(rod, &self.sampling[i].fractions, &mut out[..n])?;
@@ -228,7 +228,7 @@ impl WorldPoses {
 
     /// World pose of rod `rod` at abscissa `s` \[m\] (D7).
     pub fn pose_at(&self, model: &Model, rod: usize, s: f64) -> Result<Pose> {
-        let local = self.kin[rod].pose_at(&model.rods()[rod].spec.rod, s)?;
+        let local = self.kin[rod].pose_at(&model.rods()[rod].spec.geometry, s)?;
         Ok(self.rod_to_world(model, rod).compose(&local))
     }
 
@@ -262,7 +262,7 @@ mod tests {
 
     #[test]
     fn sampling_holds_every_boundary_and_increases() {
-        let rod = Rod::with_lengths(
+        let rod = RodGeometry::with_lengths(
             &[0.1, 0.15, 0.25],
             Basis::all(),
             softrod_kinematics::straight(),

@@ -29,7 +29,7 @@ impl Simulation {
             format!(
                 "{task}: {count} dense {n}×{n} matrices (n_dof = {n}; rod {:?} has {} pieces, {} DoF)",
                 r.spec.name,
-                r.spec.rod.n_pieces(),
+                r.spec.geometry.n_pieces(),
                 r.n_dof()
             ),
             estimate,

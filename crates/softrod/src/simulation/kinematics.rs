@@ -128,10 +128,10 @@ impl Simulation {
             });
         }
         let r = &model.rods()[i];
-        let mut k = RodKinematics::new(&r.spec.rod);
-        k.update(&r.spec.rod, &q[r.dofs()], None, None)?;
+        let mut k = RodKinematics::new(&r.spec.geometry);
+        k.update(&r.spec.geometry, &q[r.dofs()], None, None)?;
         let mut local = Matrix6xX::zeros(r.n_dof());
-        k.jacobian_at(&r.spec.rod, s, frame, &mut local)?;
+        k.jacobian_at(&r.spec.geometry, s, frame, &mut local)?;
         let mut j = Matrix6xX::zeros(self.n_dof());
         j.columns_mut(r.dof_offset, r.n_dof()).copy_from(&local);
         Ok(j)

@@ -118,7 +118,7 @@ impl Simulation {
             }
             if let ElementKind::Rod(r) = e.kind {
                 let rm = &model.rods()[r];
-                for (n, piece) in rm.spec.rod.pieces().iter().enumerate() {
+                for (n, piece) in rm.spec.geometry.pieces().iter().enumerate() {
                     match piece.basis.selection() {
                         Some(sel) => {
                             names.extend(sel.iter().map(|&i| {

@@ -2,7 +2,6 @@
 //! integration behind [`Simulation::simulate_with`] and
 //! [`Simulation::step`].
 
-
 use nalgebra::DVector;
 use softrod_dynamics::{Data, Model};
 use softrod_integrate::{Control, Hooks, RodSystem, Stats, StepInfo, integrate_second_order};

@@ -162,11 +162,11 @@ mod tests {
                     [initial]\nq = [1.0, 0.1, 2.0, 0.2]\n";
         let (s, _) = Scene::from_str(text, "t.toml").unwrap();
         let v = variant(&s, 4, 6).unwrap();
-        assert_eq!(v.rods[0].rod.n_pieces(), 8);
+        assert_eq!(v.rods[0].geometry.n_pieces(), 8);
         assert_eq!(v.run.quadrature, 6);
         assert!(
             v.rods[0]
-                .rod
+                .geometry
                 .piece_lengths()
                 .all(|l| (l - 0.05).abs() < 1e-15)
         );

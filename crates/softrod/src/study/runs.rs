@@ -126,8 +126,8 @@ pub fn variant(scene: &Scene, k: usize, quadrature: usize) -> Result<Scene> {
         return Ok(s);
     }
     for r in &mut s.rods {
-        r.rod = r
-            .rod
+        r.geometry = r
+            .geometry
             .subdivided(k)
             .map_err(|e| Error::Study(format!("pieces x{k}: {e}")))?;
     }
@@ -135,8 +135,8 @@ pub fn variant(scene: &Scene, k: usize, quadrature: usize) -> Result<Scene> {
         let mut out = Vec::with_capacity(k * v.len());
         let mut off = 0;
         for r in &scene.rods {
-            let c = r.rod.pieces()[0].basis.dof();
-            for _ in 0..r.rod.n_pieces() {
+            let c = r.geometry.pieces()[0].basis.dof();
+            for _ in 0..r.geometry.n_pieces() {
                 for _ in 0..k {
                     out.extend_from_slice(&v[off..off + c]);
                 }
@@ -161,5 +161,5 @@ pub(super) fn build_variant(scene: &Scene, k: usize, quadrature: usize) -> Resul
 
 /// Pieces over all rods of `scene`.
 pub(super) fn pieces(scene: &Scene) -> usize {
-    scene.rods.iter().map(|r| r.rod.n_pieces()).sum()
+    scene.rods.iter().map(|r| r.geometry.n_pieces()).sum()
 }
