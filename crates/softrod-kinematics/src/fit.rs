@@ -8,15 +8,42 @@
 //! say): each step is the least-norm solution of the linearized problem
 //! (singular values below 1e-10 of the largest dropped), so such
 //! coordinates stay near the starting guess (exactly at it when they are
-//! undetermined all along the way). Where the points lie on a shape
-//! the rod's pieces and basis can represent, the fit is exact to round-off
-//! (quadratic convergence on a zero residual).
+//! undetermined all along the way).
+//!
+//! **The starting point.** Gauss–Newton from a straight rod does not reach
+//! a coiled shape: each piece of a 20-turn coil turns by π, far outside
+//! the basin of the straight guess (it converged to a piece at stretch
+//! −3215). The global iteration therefore starts from a guess built piece
+//! by piece from the base ("marching"): with the frame `g_n` at piece
+//! `n`'s start already placed by the pieces before it, the piece's
+//! strain is fitted alone, in `g_n`'s axes, to the points on it and —
+//! with half the weight, and the same constant strain continued — those of
+//! the next piece (which fix what the piece's own points leave open: the
+//! direction it leaves in). That small problem (at most six unknowns) is
+//! solved by Gauss–Newton from several guesses, and the best kept:
+//! - the arc leaving tangent to the section's `x` axis through the
+//!   farthest point `p` (local axes, `p = (p_x, p_⊥)`): radius
+//!   `R = |p|²/(2|p_⊥|)`, turning `θ = 2 atan2(|p_⊥|, p_x) ∈ (0, 2π)`,
+//!   curvature `(κ_y, κ_z) = (x × p̂_⊥)/R`, stretch `Rθ/σ` for the
+//!   abscissa `σ` of `p` — exact for a circle, and for any piece of
+//!   planar constant curvature without shear, whatever it turns;
+//! - the same arc through the farthest point of the piece's own;
+//! - the previous piece's strain (a helix or a coil repeats it);
+//! - the starting guess `q0`.
+//!
+//! The components the arc does not set (torsion, shear) come from `q0`.
+//! Where the points lie on a shape the rod's pieces and basis can
+//! represent, the marched guess is that shape to round-off and the
+//! global iteration only confirms it. When the marched fit is not exact,
+//! the global iteration is also run from `q0` itself and the better of
+//! the two kept, so the marching never makes a fit worse.
 
 use crate::error::KinematicsError;
+use crate::rod::Piece;
 use crate::rod::RodGeometry;
 use crate::state::{Frame, RodKinematics};
 use nalgebra::{DMatrix, DVector, Matrix6xX};
-use softrod_lie::Vec3;
+use softrod_lie::{Pose, Vec3, Vec6, exp_twist, tangent_minus};
 
 /// The result of [`fit_centerline`].
 #[derive(Clone, Debug, PartialEq)]
@@ -73,12 +100,29 @@ pub fn fit_centerline(
             });
         }
     }
+    let scale = rod.length();
+    let exact = |f: &CenterlineFit| f.max <= 1e-10 * scale;
+    let marched = marching_guess(rod, targets, q0);
+    let fit = gauss_newton(rod, targets, &marched)?;
+    if exact(&fit) {
+        return Ok(fit);
+    }
+    let plain = gauss_newton(rod, targets, q0)?;
+    Ok(if plain.rms < fit.rms { plain } else { fit })
+}
+
+/// Gauss–Newton on all coordinates from `q_start` (module documentation).
+fn gauss_newton(
+    rod: &RodGeometry,
+    targets: &[(f64, Vec3)],
+    q_start: &[f64],
+) -> Result<CenterlineFit, KinematicsError> {
+    let n = rod.n_dof();
     let m = targets.len();
     let mut kin = RodKinematics::new(rod);
     let mut jac6 = Matrix6xX::zeros(n);
     let mut j = DMatrix::zeros(3 * m, n);
     let mut r = DVector::zeros(3 * m);
-    let q_start = DVector::from_column_slice(q0);
     // Residual r = p(s; q) − p and (when asked) its Jacobian.
     let mut eval = |q: &DVector<f64>,
                     r: &mut DVector<f64>,
@@ -102,13 +146,13 @@ pub fn fit_centerline(
         }
         Ok(r.norm_squared())
     };
-    let mut q = q_start.clone();
+    let mut q = DVector::from_column_slice(q_start);
     let mut cost = eval(&q, &mut r, Some(&mut j))?;
     let scale = rod.length();
     let mut iterations = 0;
     let mut rt = DVector::zeros(3 * m);
     for _ in 0..200 {
-        if cost.sqrt() <= 1e-14 * scale * (m as f64).sqrt() {
+        if !cost.is_finite() || cost.sqrt() <= 1e-14 * scale * (m as f64).sqrt() {
             break;
         }
         iterations += 1;
@@ -152,6 +196,220 @@ pub fn fit_centerline(
         max,
         iterations,
     })
+}
+
+/// A point of a one-piece problem: abscissa `σ` from the piece's start
+/// \[m\] (beyond its length: the same strain continued), position in the
+/// piece's start frame \[m\], weight.
+type LocalPoint = (f64, Vec3, f64);
+
+/// The marched starting guess (module documentation): piece by piece from
+/// the base, each fitted alone in the frame the pieces before it placed.
+fn marching_guess(rod: &RodGeometry, targets: &[(f64, Vec3)], q0: &[f64]) -> Vec<f64> {
+    let mut sorted: Vec<(f64, Vec3)> = targets.to_vec();
+    sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut q = q0.to_vec();
+    let mut g: Pose = *rod.base();
+    let mut prev: Option<Vec6> = None;
+    let pieces = rod.pieces();
+    let mut first = 0; // first target beyond the current piece's start
+    let mut local: Vec<LocalPoint> = Vec::new();
+    // A point within round-off of a boundary belongs to the piece that
+    // ends there (boundaries are sums of lengths; points are often
+    // `L·i/n`).
+    let tol = 1e-12 * rod.length();
+    for (n, piece) in pieces.iter().enumerate() {
+        let (a, b) = (piece.start + tol, piece.end() + tol);
+        while first < sorted.len() && sorted[first].0 <= a {
+            first += 1;
+        }
+        if first == sorted.len() {
+            break;
+        }
+        // The piece's own points, then the next piece's (half weight), or,
+        // when the piece has none, every point up to the end of the piece
+        // holding the next one.
+        let own_end = first + sorted[first..].partition_point(|t| t.0 <= b);
+        let ahead_to = if own_end > first {
+            pieces.get(n + 1).map_or(b, |p| p.end() + tol)
+        } else {
+            let s_next = sorted[first].0;
+            pieces
+                .iter()
+                .find(|p| p.end() + tol >= s_next)
+                .map_or(rod.length(), Piece::end)
+                + tol
+        };
+        let ahead_end = first + sorted[first..].partition_point(|t| t.0 <= ahead_to);
+        let inv = g.inverse();
+        local.clear();
+        for (s, p) in &sorted[first..ahead_end] {
+            local.push((s - piece.start, inv.transform_point(p), 1.0));
+        }
+        // Fitted to its own points (all of them when it has none); among
+        // the guesses' results the lowest cost there wins, and near-ties
+        // (several shapes through the own points) go to the one that
+        // continues best into the next piece.
+        let n_own = if own_end > first {
+            own_end - first
+        } else {
+            local.len()
+        };
+        let (own, ahead) = local.split_at(n_own);
+        let here = piece.strain(&q);
+        let mut guesses = vec![here];
+        if let Some(&(sig, p, _)) = local.last() {
+            guesses.push(arc_strain(&here, sig, &p));
+        }
+        if let Some(&(sig, p, _)) = own.last() {
+            guesses.push(arc_strain(&here, sig, &p));
+        }
+        if let Some(xi) = prev {
+            guesses.push(xi);
+        }
+        // Where the own points fix the piece up to discrete alternatives
+        // (an arc and the same arc with whole loops added, or run
+        // backwards), near-ties go to the least turning with a positive
+        // stretch; where they leave a continuum open (more unknowns than
+        // equations), to the best continuation into the next piece.
+        let open = piece.basis.dof() > 3 * own.len();
+        let tie = 1e-20 * piece.length * piece.length * own.len() as f64;
+        let mut best: Option<(f64, (bool, f64), Vec<f64>)> = None;
+        for xi in guesses {
+            let (c, cost) = local_fit(piece, own, coordinates_of(piece, &xi));
+            if !cost.is_finite() {
+                continue;
+            }
+            let fitted = piece.basis.apply(&c) + piece.rest_strain;
+            let secondary = if open {
+                local_cost(piece, ahead, &c)
+            } else {
+                piece.length * fitted.fixed_rows::<3>(0).norm() + (fitted[3] - 1.0).abs()
+            };
+            let key = (fitted[3] <= 0.0, secondary);
+            let better = match &best {
+                None => true,
+                Some((b, bk, _)) => {
+                    let t = tie.max(1e-9 * b);
+                    cost < *b - t
+                        || (cost <= *b + t && key.partial_cmp(bk) == Some(std::cmp::Ordering::Less))
+                }
+            };
+            if better {
+                best = Some((cost, key, c));
+            }
+        }
+        if let Some((_, _, c)) = best {
+            q[piece.dofs()].copy_from_slice(&c);
+        }
+        let xi = piece.strain(&q);
+        g = g.compose(&exp_twist(piece.length, &xi));
+        prev = Some(xi);
+    }
+    q
+}
+
+/// The strain of the arc that leaves the origin tangent to `x` and reaches
+/// `p` (local axes) at abscissa `σ` (module documentation); torsion and
+/// shear are `base`'s.
+fn arc_strain(base: &Vec6, sigma: f64, p: &Vec3) -> Vec6 {
+    let mut xi = *base;
+    let perp = Vec3::new(0.0, p.y, p.z);
+    let (d, c) = (perp.norm(), p.norm());
+    if sigma <= 0.0 || c == 0.0 {
+        return xi;
+    }
+    if d <= 1e-12 * c {
+        xi[1] = 0.0;
+        xi[2] = 0.0;
+        xi[3] = c / sigma;
+        return xi;
+    }
+    let radius = c * c / (2.0 * d);
+    let turn = 2.0 * d.atan2(p.x);
+    // dt/ds = κ × x must point to the centre, along p_⊥: κ = x × p̂_⊥ / R.
+    let k = Vec3::x().cross(&(perp / d)) / radius;
+    xi[1] = k.y;
+    xi[2] = k.z;
+    xi[3] = radius * turn / sigma;
+    xi
+}
+
+/// The piece coordinates whose strain `B q + ξ̄` is closest to `xi`.
+fn coordinates_of(piece: &Piece, xi: &Vec6) -> Vec<f64> {
+    let d = xi - piece.rest_strain;
+    if let Some(sel) = piece.basis.selection() {
+        return sel.iter().map(|&i| d[i]).collect();
+    }
+    let b = DMatrix::from_column_slice(6, piece.basis.dof(), piece.basis.matrix().as_slice());
+    b.svd(true, true)
+        .solve(&DVector::from_column_slice(d.as_slice()), 1e-12)
+        .map_or_else(|_| vec![0.0; piece.basis.dof()], |v| v.as_slice().to_vec())
+}
+
+/// `Σ w²|p(σ) − p|²` of one piece's coordinates `c` at local points.
+fn local_cost(piece: &Piece, pts: &[LocalPoint], c: &[f64]) -> f64 {
+    let xi = piece.basis.apply(c) + piece.rest_strain;
+    pts.iter()
+        .map(|(sig, p, w)| ((exp_twist(*sig, &xi).translation - p) * *w).norm_squared())
+        .sum()
+}
+
+/// Weighted least squares of one piece's coordinates to local points, by
+/// Gauss–Newton (least-norm steps, halving line search) from `start`;
+/// returns the coordinates and the cost `Σ w²|p(σ) − p|²`.
+fn local_fit(piece: &Piece, pts: &[LocalPoint], start: Vec<f64>) -> (Vec<f64>, f64) {
+    let k = piece.basis.dof();
+    let bm = piece.basis.matrix();
+    let strain = |c: &[f64]| piece.basis.apply(c) + piece.rest_strain;
+    let cost_of = |c: &[f64]| local_cost(piece, pts, c);
+    let mut c = start;
+    let mut cost = cost_of(&c);
+    let mut j = DMatrix::zeros(3 * pts.len(), k);
+    let mut r = DVector::zeros(3 * pts.len());
+    for _ in 0..100 {
+        if !cost.is_finite() || cost.sqrt() <= 1e-15 * (1.0 + piece.length) {
+            break;
+        }
+        let xi = strain(&c);
+        for (i, (sig, p, w)) in pts.iter().enumerate() {
+            let g = exp_twist(*sig, &xi);
+            // δp = R · lin(T₋(σ) δξ), δξ = B δc (D8).
+            let t = tangent_minus(*sig, &xi).to_mat6();
+            let lin = g.rotation * t.fixed_rows::<3>(3) * bm * *w;
+            j.fixed_rows_mut::<3>(3 * i).copy_from(&lin);
+            r.fixed_rows_mut::<3>(3 * i)
+                .copy_from(&((g.translation - p) * *w));
+        }
+        let svd = j.clone().svd(true, true);
+        let tol = 1e-10 * svd.singular_values.max();
+        let Ok(step) = svd.solve(&r, tol) else {
+            break;
+        };
+        let mut alpha = 1.0;
+        let mut accepted = false;
+        for _ in 0..30 {
+            let trial: Vec<f64> = c
+                .iter()
+                .zip(step.iter())
+                .map(|(a, d)| a - alpha * d)
+                .collect();
+            let tc = cost_of(&trial);
+            if tc.is_finite() && tc < cost {
+                c = trial;
+                cost = tc;
+                accepted = true;
+                break;
+            }
+            alpha *= 0.5;
+        }
+        if !accepted
+            || step.norm() * alpha <= 1e-15 * (1.0 + c.iter().map(|x| x * x).sum::<f64>().sqrt())
+        {
+            break;
+        }
+    }
+    (c, cost)
 }
 
 #[cfg(test)]

@@ -12,6 +12,10 @@
 //!   (gravity is a base acceleration of the dynamics layer).
 //! - [`Cable`]s (D15): routing, span, tension schedule, length and the
 //!   generalized force `τ_c = −T ∂ℓ_c/∂q`.
+//! - [`validity`]: what a rod model and a rigid body can describe (a
+//!   positive stretch, strains within the model's validity, curvature
+//!   radii above the section, physical inertias), the one set of rules
+//!   the scene check and a run's watch apply.
 //! - Errors: one [`MechanicsError`] naming the [`Quantity`] at fault and its value.
 //! - `reference` (feature `reference`, test support): slow Jacobian-based
 //!   projections and potentials, the independent checks for the layers above.
@@ -32,6 +36,7 @@ mod material;
 #[cfg(feature = "reference")]
 pub mod reference;
 mod section;
+pub mod validity;
 
 pub use body::RodProperties;
 pub use cable::{Cable, Routing, Span, Tension};

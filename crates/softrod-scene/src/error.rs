@@ -39,6 +39,16 @@ impl fmt::Display for Location {
 }
 
 /// `file:line:col` or `file` when the location is unknown.
+/// `valid: a, b` — or, when the scene defines none of what was named,
+/// says so instead of an empty list.
+fn choices(valid: &[String]) -> String {
+    if valid.is_empty() {
+        "the scene defines none".to_owned()
+    } else {
+        format!("valid: {}", valid.join(", "))
+    }
+}
+
 fn here(file: &str, at: &Option<Location>) -> String {
     match at {
         Some(at) => format!("{file}:{at}"),
@@ -203,7 +213,7 @@ pub enum SceneError {
     },
 
     /// A name from a fixed set is not in the set (integrator, strain, shape, mode, frame).
-    #[error("{}: {}: unknown value {value:?} (valid: {})", here(.file, .at), key(.path), valid.join(", "))]
+    #[error("{}: {}: unknown value {value:?} ({})", here(.file, .at), key(.path), choices(.valid))]
     UnknownName {
         /// The file, as given for messages.
         file: String,

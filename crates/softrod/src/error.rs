@@ -58,12 +58,12 @@ pub enum Error {
     /// The run broke the energy balance `dE/dt = P_nc` by more than
     /// `energy_tolerance` of its energy scale (see
     /// [`EnergyBalance`](crate::EnergyBalance)): the integrator is unstable
-    /// or far from resolving the motion; a smaller step or tolerance, or a
-    /// stiff method, is needed.
+    /// or far from resolving the motion, or a drive moved abruptly;
+    /// `advice` says which.
     #[error(
         "energy balance violated at t = {t:e} s: error {:.3e} J is {relative:.3e} of the energy \
          scale {:.3e} J, beyond energy_tolerance = {tolerance} (energy change {:.3e} J, work of \
-         the non-conservative forces {:.3e} J); reduce dt or the tolerances, or use a stiff integrator",
+         the non-conservative forces {:.3e} J); {advice}",
         balance.error, balance.scale, balance.change, balance.work
     )]
     EnergyBalance {
@@ -75,6 +75,9 @@ pub enum Error {
         tolerance: f64,
         /// The balance up to `t`.
         balance: Box<crate::EnergyBalance>,
+        /// What can help: a smaller step or tolerance, or a stiff method;
+        /// or, after a drive that starts or stops abruptly, a smoother drive.
+        advice: String,
     },
     /// A piece's stretch `ξ_x` reached zero or below: the rod folded onto
     /// itself, which no rod model describes.

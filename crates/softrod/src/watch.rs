@@ -29,14 +29,41 @@
 //! relative to the final scale (early in a run the scale is tiny and the
 //! ratio to it says little: measured up to 2e-2 in the first microseconds
 //! of correct runs).
-//! Errors below the round-off of the energies, `10³ ε (T + V_e + |V_g| +
-//! ∫|P_nc|)`, count as zero.
+//!
+//! **Closures.** The closure forces `Jᵀλ` do no work while a closure holds
+//! exactly (`J q̇ = 0`), but the Baumgarte stabilization (D68) lets `J q̇`
+//! follow the residual's noise, and against large forces (a weight, a
+//! load carried by a locked structure) that noise times `λ` is work the
+//! energies see. With closures the power therefore includes
+//! `P_c = q̇ᵀJᵀλ = q̇ᵀ(M q̈ + b)` at the constrained `q̈` (the open tree's
+//! inverse dynamics, plus the closures' share of the drives' forces, D60),
+//! reported as [`EnergyBalance::closure_work`] and part of `W`.
+//!
+//! **Round-off floor.** No energy is computed better than the round-off of
+//! the forces that act times the distances they act over: positions carry
+//! `ε L` of round-off, so the potential of a force `F` is known to `ε F L`.
+//! Errors below
+//!
+//! `floor = 10³ ε (T + V_e + |V_g| + |E(0)| + ∫|P| dτ + F L)`
+//!
+//! count as zero, where `F L` is the model's work scale: the sum over rods
+//! and bodies of the weight, point and distributed loads and largest cable
+//! tensions \[N\], times the sum of the rods' lengths \[m\], plus the loads'
+//! moments \[N m\] (one radian). A rod welded at both ends that cannot move
+//! has every energy at round-off (1.7e-23 J under its 0.4 N weight): far
+//! below its floor, 1.8e-14 J.
+//!
+//! **Advice.** The message of a failure says what can help: a drive
+//! (prescribed joint) that starts or stops with a nonzero rate before `t`
+//! is an impulse, which no step size resolves (give it a zero rate at its
+//! ends); otherwise a smaller step or tolerance, or a stiff integrator.
 
 use nalgebra::DVector;
 use softrod_dynamics::{
-    Data, DynamicsError, Element, ElementKind, Energies, Model, Rod, bias_force, energies,
-    forward_dynamics,
+    Curve, Data, DynamicsError, Element, ElementKind, Energies, Model, Rod, bias_force, energies,
+    forward_dynamics, inverse_dynamics,
 };
+use softrod_mechanics::validity::{StrainProblem, strain_validity};
 use softrod_mechanics::{Material, RodProperties};
 
 use crate::error::Error;
@@ -67,13 +94,13 @@ pub struct EnergyBalance {
     /// over the accepted steps (the distance to the one-sided rules; zero
     /// without non-conservative terms) \[J\].
     pub quadrature: f64,
+    /// The part of `work` done by the closure forces through the
+    /// stabilization, `∫ q̇ᵀJᵀλ dt` (zero without closures) \[J\].
+    pub closure_work: f64,
+    /// The round-off floor at the end: errors below it count as zero (see
+    /// the module documentation) \[J\].
+    pub floor: f64,
 }
-
-/// Stretch `ξ_x` beyond which (or `1/` below which) a run warns: extension
-/// or compression by half is far outside a linear-elastic rod.
-const STRETCH_WARN: f64 = 0.5;
-/// Shear `|(ξ_y, ξ_z)|` beyond which a run warns.
-const SHEAR_WARN: f64 = 0.5;
 
 pub(crate) struct Watch {
     tolerance: f64,
@@ -81,8 +108,20 @@ pub(crate) struct Watch {
     full: Data,
     /// The conservative model and its buffers (`None`: no non-conservative term).
     conservative: Option<(Model, Data)>,
+    /// The model without its closures and its buffers, for the closure
+    /// forces' power (`None`: no closures).
+    open: Option<(Model, Data)>,
+    /// The model's work scale `F L` of the round-off floor \[J\].
+    work_scale: f64,
+    closure_work: f64,
+    /// The closure part of the power at the last accepted step \[W\].
+    pc_prev: f64,
     e0: f64,
     vg0: f64,
+    /// The last accepted step whose balance was within a tenth of the
+    /// bound: a drive's jump after it may be what broke the balance.
+    t_fine: f64,
+    t_start: f64,
     t_prev: f64,
     p_prev: f64,
     work: f64,
@@ -169,6 +208,97 @@ fn conservative_model(model: &Model) -> Result<Option<Model>, Error> {
     ))
 }
 
+/// The model with the same elements and no closures (`None` without
+/// closures): its inverse dynamics at the constrained `q̈` is `Jᵀλ`.
+fn open_model(model: &Model) -> Result<Option<Model>, Error> {
+    if !model.has_closures() {
+        return Ok(None);
+    }
+    let elements = model
+        .elements()
+        .iter()
+        .map(|e| match e.kind {
+            ElementKind::Rod(i) => Element::Rod(model.rods()[i].spec.clone(), e.attachment.clone()),
+            ElementKind::Body(i) => {
+                Element::Body(model.bodies()[i].spec.clone(), e.attachment.clone())
+            }
+        })
+        .collect();
+    Ok(Some(Model::with_elements(
+        elements,
+        model.gravity(),
+        model.quadrature().len(),
+    )?))
+}
+
+/// The model's work scale `F L` \[J\] (module documentation, "Round-off
+/// floor"): weights, loads and the largest cable tensions (`tensions`, the
+/// inputs set by a controller, when larger) times the rods' total length,
+/// plus the loads' moments.
+fn work_scale(model: &Model, tensions: Option<&[f64]>) -> f64 {
+    let length: f64 = model.rods().iter().map(|r| r.spec.geometry.length()).sum();
+    let g = model.gravity().map_or(0.0, |g| g.norm());
+    let (mut force, mut moment) = (0.0, 0.0);
+    let mut k = 0;
+    for r in model.rods() {
+        let s = &r.spec;
+        let l = s.geometry.length();
+        force += g * s.properties.mass_per_length(0.5 * l) * l;
+        for p in &s.point_loads {
+            force += p.force.norm();
+            moment += p.moment.norm();
+        }
+        for d in &s.distributed_loads {
+            force += d.force.norm() * l;
+            moment += d.moment.norm() * l;
+        }
+        for c in &s.cables {
+            let set = tensions.and_then(|t| t.get(k)).copied().unwrap_or(0.0);
+            force += c.tension.max().max(set.abs());
+            k += 1;
+        }
+    }
+    for b in model.bodies() {
+        force += g * b.spec.mass;
+        for l in &b.spec.loads {
+            force += l.force.norm();
+            moment += l.moment.norm();
+        }
+    }
+    force * length + moment
+}
+
+/// What can help a run whose balance failed at `t`, having held within a
+/// tenth of the bound until `t_fine`: a drive that starts or stops moving
+/// abruptly in `[t_fine, t]` is an impulse no step size resolves; otherwise
+/// the step, the tolerances or the method. A drive moving at the run's
+/// start `t_start` does not jump there: the state starts with its rate.
+fn advice(model: &Model, t_start: f64, t_fine: f64, t: f64) -> String {
+    for e in model.elements() {
+        let Some(p) = &e.attachment.joint.prescribed else {
+            continue;
+        };
+        for (c, curve) in p.curves.iter().enumerate() {
+            let Curve::Spline(sp) = curve else {
+                continue;
+            };
+            let (start, end) = sp.span();
+            for (at, what) in [(start, "starts"), (end, "stops")] {
+                let (_, rate, _) = sp.eval(at);
+                if at > t_start && (t_fine..=t).contains(&at) && rate.abs() > 1e-12 {
+                    return format!(
+                        "the drive of {:?} (coordinate {c}) {what} abruptly at t = {at:e} s \
+                         (rate {rate:e}): an impulse, which no step size resolves; give the \
+                         drive a zero rate at its ends",
+                        e.name
+                    );
+                }
+            }
+        }
+    }
+    "reduce dt or the tolerances, or use a stiff integrator".to_owned()
+}
+
 impl Watch {
     /// A watch of runs of `model` (whose inputs are in `data`) with
     /// `tolerance` on the relative balance error.
@@ -177,12 +307,22 @@ impl Watch {
             let d = Data::new(&m);
             (m, d)
         });
+        let open = open_model(model)?.map(|m| {
+            let d = Data::new(&m);
+            (m, d)
+        });
         Ok(Self {
             tolerance,
             full: data.clone(),
             conservative,
+            open,
+            work_scale: work_scale(model, data.cable_tensions()),
+            closure_work: 0.0,
+            pc_prev: 0.0,
             e0: 0.0,
             vg0: 0.0,
+            t_fine: 0.0,
+            t_start: 0.0,
             t_prev: 0.0,
             p_prev: 0.0,
             work: 0.0,
@@ -199,8 +339,38 @@ impl Watch {
     fn sync_inputs(&mut self, model: &Model, data: &Data) -> Result<(), DynamicsError> {
         if self.full.cable_tensions() != data.cable_tensions() {
             self.full.set_cable_tensions(model, data.cable_tensions())?;
+            if let Some((om, od)) = &mut self.open {
+                od.set_cable_tensions(om, data.cable_tensions())?;
+            }
+            self.work_scale = self
+                .work_scale
+                .max(work_scale(model, data.cable_tensions()));
         }
         Ok(())
+    }
+
+    /// The power of the closure forces `P_c = q̇ᵀJᵀλ` \[W\] (zero without
+    /// closures): the open tree's inverse dynamics at the constrained `q̈`
+    /// is `Jᵀλ` on the free coordinates, and the drives' open forces less
+    /// their constrained ones are the closures' share `J_pᵀλ` (D60).
+    fn closure_power(
+        &mut self,
+        model: &Model,
+        t: f64,
+        q: &[f64],
+        qd: &[f64],
+    ) -> Result<f64, Error> {
+        let Some((om, od)) = &mut self.open else {
+            return Ok(0.0);
+        };
+        forward_dynamics(model, &mut self.full, t, q, qd, None)?;
+        let tau = inverse_dynamics(om, od, t, q, qd, self.full.qdd.as_slice())?;
+        let mut p = dot(qd, tau);
+        if model.n_prescribed() > 0 {
+            p += od.prescribed_qd.dot(&od.prescribed_force)
+                - self.full.prescribed_qd.dot(&self.full.prescribed_force);
+        }
+        Ok(p)
     }
 
     /// `P_nc = q̇ᵀ(b_c − b)` at `(t, q, q̇)` \[W\], plus, with prescribed
@@ -251,13 +421,18 @@ impl Watch {
         self.e0 = e.total();
         self.vg0 = e.gravitational;
         self.peak = e.kinetic + e.elastic;
+        self.t_fine = t;
+        self.t_start = t;
         self.t_prev = t;
-        self.p_prev = self.power(model, t, q, qd)?;
+        self.pc_prev = self.closure_power(model, t, q, qd)?;
+        self.p_prev = self.power(model, t, q, qd)? + self.pc_prev;
         self.balance = EnergyBalance {
             initial: self.e0,
             scale: self.peak,
             t_worst: t,
-            non_conservative: self.conservative.is_some() || model.n_prescribed() > 0,
+            non_conservative: self.conservative.is_some()
+                || model.n_prescribed() > 0
+                || self.open.is_some(),
             ..EnergyBalance::default()
         };
         self.check_strains(model, t, q)
@@ -274,7 +449,8 @@ impl Watch {
         qd: &[f64],
     ) -> Result<(), Error> {
         self.sync_inputs(model, data)?;
-        self.p_prev = self.power(model, t, q, qd)?;
+        self.pc_prev = self.closure_power(model, t, q, qd)?;
+        self.p_prev = self.power(model, t, q, qd)? + self.pc_prev;
         Ok(())
     }
 
@@ -292,9 +468,12 @@ impl Watch {
         // The balance first: after an unstable step it names the cause
         // better than the folded piece that follows from it.
         self.sync_inputs(model, data)?;
-        let p = self.power(model, t, q, qd)?;
+        let pc = self.closure_power(model, t, q, qd)?;
+        let p = self.power(model, t, q, qd)? + pc;
         let h = t - self.t_prev;
         self.work += 0.5 * h * (self.p_prev + p);
+        self.closure_work += 0.5 * h * (self.pc_prev + pc);
+        self.pc_prev = pc;
         self.abs_work += 0.5 * h * (self.p_prev.abs() + p.abs());
         self.quadrature += 0.5 * h * (p - self.p_prev).abs();
         self.t_prev = t;
@@ -308,7 +487,12 @@ impl Watch {
         let error = (change - self.work).abs();
         let roundoff = 1e3
             * f64::EPSILON
-            * (e.kinetic + e.elastic + e.gravitational.abs() + self.e0.abs() + self.abs_work);
+            * (e.kinetic
+                + e.elastic
+                + e.gravitational.abs()
+                + self.e0.abs()
+                + self.abs_work
+                + self.work_scale);
         // The failure test compares with the scale so far: a run that blows
         // up is stopped where it does.
         let error = if error <= roundoff { 0.0 } else { error };
@@ -328,6 +512,8 @@ impl Watch {
         b.work = self.work;
         b.scale = scale;
         b.quadrature = self.quadrature;
+        b.closure_work = self.closure_work;
+        b.floor = roundoff;
         if error > b.error || !error.is_finite() {
             b.error = error;
             b.t_worst = t;
@@ -340,52 +526,45 @@ impl Watch {
                 relative,
                 tolerance: self.tolerance,
                 balance: Box::new(*b),
+                advice: advice(model, self.t_start, self.t_fine, t),
             });
+        }
+        if relative <= 0.1 * self.tolerance {
+            self.t_fine = t;
         }
         self.check_strains(model, t, q)
     }
 
-    /// Stretch positive (else an error); strains far from the small-strain
-    /// range and curvature radii below the section's size warn once each.
+    /// The rules of `softrod_mechanics::validity` at `(t, q)`, the ones a
+    /// scene check applies to the initial state: a folded piece (stretch
+    /// not positive) is an error; strains beyond the model's validity and
+    /// curvature radii below the section's half size warn once each.
     fn check_strains(&mut self, model: &Model, t: f64, q: &[f64]) -> Result<(), Error> {
         for r in model.rods() {
-            let rod = &r.spec.geometry;
-            let qr = &q[r.dofs()];
-            for (n, piece) in rod.pieces().iter().enumerate() {
-                let xi = rod.strain(n, qr);
-                let stretch = xi[3];
-                if stretch.is_nan() || stretch <= 0.0 {
-                    return Err(Error::Stretch {
-                        t,
-                        rod: r.spec.name.clone(),
-                        piece: n,
-                        stretch,
-                    });
-                }
-                let shear = xi[4].hypot(xi[5]);
-                if !self.warned_strain
-                    && (!(1.0 - STRETCH_WARN..=1.0 + STRETCH_WARN).contains(&stretch)
-                        || shear > SHEAR_WARN)
+            let v = strain_validity(&r.spec.geometry, r.spec.properties.section(), &q[r.dofs()]);
+            if let Some(f) = v.folded {
+                let StrainProblem::Folded { stretch } = f.problem else {
+                    unreachable!("a folded finding")
+                };
+                return Err(Error::Stretch {
+                    t,
+                    rod: r.spec.name.clone(),
+                    piece: f.piece,
+                    stretch,
+                });
+            }
+            for (found, warned) in [
+                (v.strain, &mut self.warned_strain),
+                (v.curvature, &mut self.warned_curvature),
+            ] {
+                if let Some(f) = found
+                    && !*warned
                 {
-                    self.warned_strain = true;
+                    *warned = true;
                     self.warnings.push(format!(
-                        "strain beyond the model's validity at t = {t:e} s: rod {:?} piece {n} has \
-                         stretch {stretch:.3} and shear {shear:.3} (linear elasticity holds for \
-                         small strains; warned beyond stretch 1 ± {STRETCH_WARN}, shear {SHEAR_WARN})",
+                        "{} at t = {t:e} s: rod {:?} {f}",
+                        f.headline(),
                         r.spec.name
-                    ));
-                }
-                let u = (piece.start + 0.5 * piece.length) / rod.length();
-                let half = r.spec.properties.section().half_size(u);
-                let bend = xi[1].hypot(xi[2]);
-                if !self.warned_curvature && bend * half > 1.0 {
-                    self.warned_curvature = true;
-                    self.warnings.push(format!(
-                        "curvature beyond the model's validity at t = {t:e} s: rod {:?} piece {n} \
-                         bends with radius {:.3e} m, less than the section's half size {half:.3e} m \
-                         (the section would overlap itself)",
-                        r.spec.name,
-                        1.0 / bend
                     ));
                 }
             }

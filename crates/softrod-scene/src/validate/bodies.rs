@@ -174,6 +174,13 @@ impl Ctx<'_> {
         let Some(raw) = raw else {
             return Ok(Joint::fixed());
         };
+        // The type first: the other keys' messages name it ("a helical
+        // joint has no axis" would hide that no such joint exists).
+        if !JOINTS.contains(&raw.kind.as_str()) {
+            return Err(self
+                .r
+                .unknown_name(&format!("{p}.type"), &raw.kind, &JOINTS));
+        }
         let axis = |key: &str, a: Option<[f64; 3]>| -> Result<Vec3> {
             let a = a.ok_or_else(|| {
                 self.r
@@ -467,6 +474,8 @@ impl Ctx<'_> {
             };
             self.r.invalid(&key, &e).caused_by(Box::new(e.clone()))
         })?;
+        softrod_mechanics::validity::inertia_validity(&body.inertia)
+            .map_err(|e| self.r.invalid(&ip, format!("body {:?}: {e}", body.name)))?;
         Ok(body)
     }
 
@@ -488,6 +497,12 @@ impl Ctx<'_> {
             }
         }
         let Some(b) = robot.bodies.iter().position(|x| x.name == name) else {
+            if robot.bodies.is_empty() {
+                return Err(self.r.invalid(
+                    &format!("{p}.body"),
+                    format!("no body {name:?}: there are no bodies ([[body]] tables) in the scene"),
+                ));
+            }
             let valid: Vec<&str> = robot.bodies.iter().map(|x| x.name.as_str()).collect();
             return Err(self.r.unknown_name(&format!("{p}.body"), name, &valid));
         };

@@ -1,11 +1,10 @@
-//! `[initial]`: `q` and `qdot` of the right length; warnings about strains
-//! far outside the small-strain range.
+//! `[initial]`: `q` and `qdot` of the right length, shapes with distinct
+//! points (the strains they start from are checked with the rest of the
+//! initial state, `super::start`).
 
-use std::f64::consts::PI;
 use std::path::Path;
 
 use softrod_dynamics::Rod;
-use softrod_kinematics::Strain;
 
 use super::{Ctx, Result};
 use crate::raw::{RawInitial, RawShape};
@@ -85,9 +84,6 @@ impl Ctx<'_> {
                 ));
             }
         }
-        if let Some(q) = &raw.q {
-            self.warn_large_strains(q, rods, robot);
-        }
         let shape = match raw.shape {
             None => Vec::new(),
             // With `q` (or a trajectory row) as well, the shapes replace
@@ -150,7 +146,7 @@ impl Ctx<'_> {
                     "[x, y, z] rows need at least two points (base and tip)",
                 ));
             }
-            let mut points = Vec::with_capacity(n);
+            let mut points: Vec<(f64, [f64; 3])> = Vec::with_capacity(n);
             for (i, row) in sh.centerline.iter().enumerate() {
                 let (s, xyz) = if width == 4 {
                     (row[0], [row[1], row[2], row[3]])
@@ -174,24 +170,29 @@ impl Ctx<'_> {
                             .invalid(&sp, format!("s must increase strictly: {s} after {prev}")));
                     }
                 }
+                // Two points at one place would have the rod cover a
+                // positive arc length without moving: stretch zero there.
+                if let Some(&(_, prev)) = points.last() {
+                    let d = (0..3)
+                        .map(|c| (xyz[c] - prev[c]).powi(2))
+                        .sum::<f64>()
+                        .sqrt();
+                    if d <= 1e-12 * length {
+                        return Err(self.r.invalid(
+                            &format!("{cp}[{i}]"),
+                            format!(
+                                "repeats point {} {prev:?}: consecutive points must differ \
+                                 (the rod cannot cover arc length without moving)",
+                                i - 1
+                            ),
+                        ));
+                    }
+                }
                 points.push((s, xyz));
             }
             out.push(InitialShape { rod, points });
         }
         Ok(out)
-    }
-
-    /// Warns (once per rod) about initial strains far outside the small-strain range.
-    fn warn_large_strains(&mut self, q: &[f64], rods: &[Rod], robot: &Robot) {
-        for (i, rod) in rods.iter().enumerate() {
-            let offset = robot.rod_dof_offset(rods, i);
-            if let Some((at, why)) = large_strain(&q[offset..offset + rod.geometry.n_dof()], rod) {
-                self.warn(
-                    &format!("initial.q[{}]", offset + at),
-                    format!("rod {:?}: {why}", rod.name),
-                );
-            }
-        }
     }
 }
 
@@ -256,42 +257,4 @@ fn trajectory_row(
         None
     };
     Ok((q, qd))
-}
-
-/// The first coordinate of `q` (the rod's own) that bends a piece by more
-/// than π, inverts it, or deviates from rest by more than 0.5 in a stretch or
-/// shear, with the reason.
-fn large_strain(q: &[f64], rod: &Rod) -> Option<(usize, String)> {
-    for (k, piece) in rod.geometry.pieces().iter().enumerate() {
-        let Some(sel) = piece.basis.selection() else {
-            continue;
-        };
-        let l = piece.length;
-        for (c, &j) in sel.iter().enumerate() {
-            let at = piece.dof_offset + c;
-            let xi = piece.rest_strain[j] + q[at];
-            let name = Strain::ALL[j].name();
-            let why = if j < 3 && (xi * l).abs() > PI {
-                Some(format!(
-                    "{name} = {xi} 1/m turns piece {k} ({l} m) by {:.2} rad, more than π",
-                    (xi * l).abs()
-                ))
-            } else if j == 3 && xi <= 0.0 {
-                Some(format!(
-                    "stretch qx = {xi} ≤ 0 in piece {k}: the piece is inverted"
-                ))
-            } else if j >= 3 && q[at].abs() > 0.5 {
-                Some(format!(
-                    "{name} deviates from rest by {} in piece {k}: a very large strain",
-                    q[at]
-                ))
-            } else {
-                None
-            };
-            if let Some(why) = why {
-                return Some((at, why));
-            }
-        }
-    }
-    None
 }

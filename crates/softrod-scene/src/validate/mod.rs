@@ -14,6 +14,7 @@ mod loads;
 mod reference;
 mod rods;
 mod run;
+mod start;
 
 pub use run::MAX_QUADRATURE;
 
@@ -57,6 +58,7 @@ pub(crate) fn parse(text: &str, file: &str) -> Result<(Scene, Vec<Warning>)> {
         ));
     }
     let scene = cx.scene(raw)?;
+    cx.check_start(&scene)?;
     Ok((scene, cx.warnings))
 }
 

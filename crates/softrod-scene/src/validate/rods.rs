@@ -94,6 +94,7 @@ impl Ctx<'_> {
             keys::dynamics(&self.r, Some(cx), e)
         })?;
         self.warn_short_pieces(&p, given_lengths, &spec);
+        self.warn_rest_validity(i, &spec);
         Ok(spec)
     }
 
@@ -143,7 +144,11 @@ impl Ctx<'_> {
                         format!("a single strain is written as a list: strains = [{s:?}]"),
                     ));
                 }
-                return Err(self.r.unknown_name(p, s, &["all"]));
+                return Err(self.r.unknown_name(
+                    p,
+                    s,
+                    &["\"all\"", "or a list of kx, ky, kz, qx, qy, qz"],
+                ));
             }
             Some(toml::Value::Array(a)) => a,
             Some(other) => {
