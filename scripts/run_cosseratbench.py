@@ -65,8 +65,8 @@ EXPLAIN = {
 EXPLAIN_TIME = {
     "cantilever": (
         "the quasi-static rule takes Radau IIA, which factors its Newton matrix densely "
-        "(the rule is chosen for the closed chains, where the other implicit methods' "
-        "Newton iterations fail); an open rod has the O(n) solve of softrod's other "
+        "(the rule is chosen for the closed chains, where ESDIRK's Newton iterations "
+        "are rejected step after step); an open rod has the O(n) solve of softrod's other "
         "methods."
     ),
     "catenary": (
