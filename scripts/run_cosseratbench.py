@@ -339,6 +339,15 @@ def write_report(results: Path, report: Path, images: Path, names: list[str], *,
             if not variant["varied"]:
                 defaults[summary["solver"]] = summary
         section.append("")
+        ours_settings = (defaults.get("softrod") or {}).get("settings") or {}
+        if ours_settings:
+            keys = ("integrator", "dt", "rtol", "atol", "damping", "damping_rate",
+                    "simulations", "rod_contact")
+            said = ", ".join(f"{k} {fmt(ours_settings[k], 3) if isinstance(ours_settings[k], float) else ours_settings[k]}"
+                             for k in keys if k in ours_settings)
+            section += [f"softrod's numerics (its `settings`, default variant): {said}; the "
+                        f"largest distance of its fitted start from the scenario's: "
+                        f"{fmt(max(ours_settings.get('start_fit_error', [0.0])), 2)} m.", ""]
         image = images / f"{name}.png"
         default_runs = [s for v, s in found if not v["varied"]]
         if plot(name, variant0, default_runs, image):
