@@ -17,7 +17,7 @@ import numpy as np
 
 os.environ.setdefault("MPLBACKEND", "Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-from cosseratbench import registry, runs  # noqa: E402
+from cosseratbench import registry, runs, variations  # noqa: E402
 from cosseratbench.trajectory import Trajectory  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
@@ -121,7 +121,9 @@ def main() -> None:
             n = max(experiment.n_elements // QUICK_FRACTION, 4) if args.quick else None
             if args.quick and experiment.n_elements % 2 and n % 2 == 0:
                 n += 1  # keep an odd resolution odd (the crossing's contact node)
-            tasks = runs.plan([experiment], solvers, args.vary, n, results)
+            # Each name applies to the experiments that have it.
+            vary = [v for v in args.vary if v == "all" or v in variations.sweepable(experiment)]
+            tasks = runs.plan([experiment], solvers, vary, n, results)
             runs.execute(tasks, jobs=1)
     write_report(results, report, images, names, quick=args.quick)
     print(f"wrote {report.relative_to(REPO)}")
