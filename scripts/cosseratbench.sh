@@ -36,4 +36,9 @@ fi
 if [[ "${COSSERATBENCH_SKIP_BUILD:-0}" != 1 ]]; then
     bash scripts/install.sh "$venv"
 fi
-exec "$venv/bin/python" scripts/run_cosseratbench.py "$@"
+venv="$(cd "$venv" && pwd)"
+repo="$PWD"
+# MuJoCo writes MUJOCO_LOG.TXT where it runs: keep it out of the checkout.
+mkdir -p out/cosseratbench
+cd out/cosseratbench
+exec "$venv/bin/python" "$repo/scripts/run_cosseratbench.py" "$@"
