@@ -429,8 +429,7 @@ class SoftrodSolver:
                     p[k] = traj.shape(k, rod=r)
                     # d1 is the section's local z axis (see _start_frame); the
                     # poses of driven models depend on the time of their drives.
-                    sim.set_time(float(traj.t[k]))
-                    d[k] = sim.pose(r, mids, traj.q[k])[:, :3, 2]
+                    d[k] = sim.pose(r, mids, traj.q[k], t=float(traj.t[k]))[:, :3, 2]
                 positions[index], directors[index] = p, d
         times = np.linspace(0.0, duration, n_frames)
         return Trajectory(times, tuple(positions), tuple(directors))
