@@ -94,7 +94,7 @@ impl Simulation {
                 })?;
             let i = rod_index(&model, &rod)?;
             model = model
-                .with_point_loads(i, vec![load.inner.clone()])
+                .with_point_loads(i, vec![load.inner])
                 .map_err(|e| input(format!("loads[{k}]: {e}")))?;
             any = true;
         }
@@ -105,7 +105,7 @@ impl Simulation {
         let (q0, qd0) = self.sim.initial_state();
         sim.set_initial_state(q0.as_slice(), qd0.as_slice())
             .map_err(to_py)?;
-        sim.set_limits(self.sim.limits().clone());
+        sim.set_limits(*self.sim.limits());
         Ok(Some(sim))
     }
 
