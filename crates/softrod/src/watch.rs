@@ -377,10 +377,10 @@ impl Watch {
             std::mem::take(&mut self.q_mid),
             std::mem::take(&mut self.qd_mid),
         );
-        for i in 0..q.len() {
-            let (q0, q1, v0, v1) = (self.q_prev[i], q[i], self.qd_prev[i], qd[i]);
-            qm[i] = 0.5 * (q0 + q1) + 0.125 * h * (v0 - v1);
-            qdm[i] = 1.5 * (q1 - q0) / h - 0.25 * (v0 + v1);
+        let ends = self.q_prev.iter().zip(&self.qd_prev).zip(q.iter().zip(qd));
+        for ((m, dm), ((&q0, &v0), (&q1, &v1))) in qm.iter_mut().zip(qdm.iter_mut()).zip(ends) {
+            *m = 0.5 * (q0 + q1) + 0.125 * h * (v0 - v1);
+            *dm = 1.5 * (q1 - q0) / h - 0.25 * (v0 + v1);
         }
         let tm = t - 0.5 * h;
         let result = self.closure_power(model, tm, &qm, &qdm).and_then(|pc| {
