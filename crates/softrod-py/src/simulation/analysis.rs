@@ -64,11 +64,11 @@ impl Simulation {
             .map(|(b, g)| Ok((b.spec.name.clone(), pose(g)?)))
             .collect::<PyResult<Vec<_>>>()?;
         Ok(Statics {
-            q: vec_out(py, out.result.q.as_slice()).unbind(),
+            q: vec_out(py, &out.q).unbind(),
             converged: true,
-            iterations: out.result.iterations,
-            residual: out.result.residual,
-            load_steps: out.result.load_steps,
+            iterations: out.iterations,
+            residual: out.residual,
+            load_steps: out.load_steps,
             stable: out.stable,
             tip: pose(out.poses.tip(0))?,
             tips,
@@ -137,7 +137,10 @@ const STABILITY_CHECK_MAX_DOF: usize = 600;
 
 /// A solved equilibrium with what is reported beside it.
 struct Solved {
-    result: softrod::dynamics::StaticsResult,
+    q: Vec<f64>,
+    iterations: usize,
+    residual: f64,
+    load_steps: usize,
     stable: Option<bool>,
     poses: softrod::record::WorldPoses,
     closures: Vec<(String, f64)>,
@@ -170,6 +173,9 @@ fn solve(sim: &mut softrod::Simulation) -> PyResult<Solved> {
         poses: sim.world_poses(q).map_err(to_py)?,
         closures: sim.closure_residuals(q).map_err(to_py)?,
         warnings,
-        result,
+        q: q.to_vec(),
+        iterations: result.iterations,
+        residual: result.residual,
+        load_steps: result.load_steps,
     })
 }
