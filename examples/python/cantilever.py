@@ -14,16 +14,21 @@ energies, whose sum is conserved when the scene has no damping.
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")  # files only, no display needed
-import matplotlib.pyplot as plt
 import numpy as np
 
 import softrod
+
+try:
+    import matplotlib
+except ImportError:  # an extra: say so in one line instead of a traceback
+    sys.exit("cantilever.py draws with matplotlib, which is not installed: "
+             "pip install matplotlib (into the softrod environment, e.g. .venv/bin/pip)")
+matplotlib.use("Agg")  # files only, no display needed
+import matplotlib.pyplot as plt  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[2]
 

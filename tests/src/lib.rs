@@ -26,3 +26,10 @@ pub fn simpson(f: impl Fn(f64) -> f64, a: f64, b: f64, m: usize) -> f64 {
         * h
         / 3.0
 }
+
+/// The repository README's code: its Rust program compiled and run as a
+/// doctest exactly as pasted (`tests/tests/readme_blocks.rs` checks its
+/// TOML blocks, `crates/softrod-py/tests/test_readme.py` its Python).
+#[doc = include_str!("../../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;

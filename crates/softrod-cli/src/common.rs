@@ -1,12 +1,13 @@
 //! Shared pieces: errors with exit codes, scene loading, poses as JSON.
 
 use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
 
 use softrod::dynamics::Model;
 use softrod::lie::Pose;
 use softrod::record::{RodSampling, WorldPoses};
 use softrod::{Error, Simulation};
-use softrod_scene::{Scene, Warning};
+use softrod_scene::{Override, Scene, Warning};
 
 pub use softrod::record::position;
 
@@ -64,9 +65,21 @@ pub fn load(path: &Path) -> Result<Loaded, CliError> {
     Ok(l)
 }
 
+/// The `--set KEY=VALUE` settings of this invocation, applied to every
+/// scene it loads (set once by `main`, before any command runs; a process
+/// runs one command, so they are the command's arguments).
+static OVERRIDES: OnceLock<Vec<Override>> = OnceLock::new();
+
+/// Records the `--set` settings of the command line (once).
+pub fn set_overrides(overrides: Vec<Override>) {
+    let _ = OVERRIDES.set(overrides);
+}
+
 /// Loads a scene without printing its warnings.
 pub fn load_silent(path: &Path) -> Result<Loaded, CliError> {
-    let (sim, scene, warnings) = Simulation::from_scene_file(path)?;
+    let overrides = OVERRIDES.get().map_or(&[][..], Vec::as_slice);
+    let (scene, warnings) = Scene::from_path_with(path, overrides).map_err(Error::from)?;
+    let sim = Simulation::from_scene(&scene)?;
     Ok(Loaded {
         scene,
         warnings,

@@ -33,6 +33,7 @@ Example:
   softrod statics examples/tip_load_statics.toml --json # equilibrium as JSON
   softrod run     examples/cantilever_gravity.toml      # -> out/cantilever_gravity/
   softrod modes   examples/cantilever_gravity.toml      # natural frequencies
+  softrod run     examples/cantilever_gravity.toml --set run.integrator=radau5 --set run.duration=0.5
 
 Exit codes: 0 success, 1 simulation failure, 2 bad input.";
 
@@ -42,6 +43,12 @@ struct Cli {
     /// No progress bar and no informational messages on stderr.
     #[arg(long, short, global = true)]
     quiet: bool,
+    /// Override one scene setting without editing the file, e.g.
+    /// `--set run.integrator=esdirk --set cable[0].tension=2.0` (repeatable;
+    /// the value is TOML, a bare word a string). Applied before validation,
+    /// so it is checked as if written in the file, under the same key path.
+    #[arg(long = "set", global = true, value_name = "KEY=VALUE")]
+    set: Vec<softrod_scene::Override>,
     #[command(subcommand)]
     command: Command,
 }
@@ -179,6 +186,11 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let quiet = cli.quiet;
+    if !cli.set.is_empty() && matches!(cli.command, Command::View { .. }) {
+        eprintln!("softrod: --set applies to a scene; `softrod view` reads a run directory");
+        return ExitCode::from(2);
+    }
+    common::set_overrides(cli.set);
     let result = match cli.command {
         Command::Check { scene } => inspect::check(&scene),
         Command::Statics {

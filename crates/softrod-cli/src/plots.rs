@@ -1,6 +1,6 @@
 //! The figures of a run, drawn by `softrod-viz` (axis labels with units,
-//! equal aspect for geometry, three projections, rods told apart): what the
-//! run kept in memory ([`Series`]) turned into plain series. The
+//! equal aspect for geometry, three projections or the one plane of a
+//! planar scene, rods told apart): what the run kept in memory ([`Series`]) turned into plain series. The
 //! work-precision chart of `softrod report` is in `report.rs`.
 
 use std::path::Path;
@@ -266,8 +266,9 @@ pub fn run_figures(
     Ok(written)
 }
 
-/// `DIR/statics_shape.svg`: the equilibrium in three projections, the rigid
-/// bodies marked at `bodies` (their frame origins, model order, world m).
+/// `DIR/statics_shape.svg`: the equilibrium in three projections (one for a
+/// planar scene), the rigid bodies marked at `bodies` (their frame
+/// origins, model order, world m).
 pub fn statics_figure(
     dir: &Path,
     model: &Model,

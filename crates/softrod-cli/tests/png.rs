@@ -1,8 +1,8 @@
 //! `--png`: every SVG figure gets a PNG beside it, decoded here with the
-//! `png` crate: the SVG's size, the first series colour (the rods in shape
-//! figures) where the SVG draws it (≥ 90 % of the vertices of its polylines;
-//! later markers may cover a few), and dark text pixels in the title band (a
-//! font was found).
+//! `png` crate: the SVG's size, the first series colour (a rod in the tip
+//! and mode figures) where the SVG draws it (≥ 90 % of the points along its
+//! solid polylines; later markers may cover a few), and dark text pixels in
+//! the title band (a font was found).
 
 mod common;
 
@@ -65,21 +65,35 @@ fn svg_size(svg: &str) -> (usize, usize) {
     (attr("width"), attr("height"))
 }
 
-/// The vertices of the polylines drawn in the rod colour.
+/// Points along the solid polylines drawn in the rod colour: their
+/// vertices and, between them, a point every 4 px or less (the curves are
+/// decimated, so few vertices can stand for a long stretch; a dashed
+/// line's points may fall in its gaps and are left out).
 fn rod_vertices(svg: &str) -> Vec<(f64, f64)> {
     let stroke = format!("stroke=\"#{:02X}{:02X}{:02X}\"", ROD[0], ROD[1], ROD[2]);
     svg.split("<polyline")
         .skip(1)
-        .filter(|e| e[..e.find('>').unwrap()].contains(&stroke))
-        .flat_map(|e| {
-            let at = e.find("points=\"").unwrap() + 8;
-            let pts = &e[at..at + e[at..].find('"').unwrap()];
-            pts.split_whitespace()
+        .map(|e| &e[..e.find('>').unwrap()])
+        .filter(|tag| tag.contains(&stroke) && !tag.contains("stroke-dasharray"))
+        .flat_map(|tag| {
+            let at = tag.find("points=\"").unwrap() + 8;
+            let pts: Vec<(f64, f64)> = tag[at..at + tag[at..].find('"').unwrap()]
+                .split_whitespace()
                 .map(|p| {
                     let (x, y) = p.split_once(',').unwrap();
                     (x.parse().unwrap(), y.parse().unwrap())
                 })
-                .collect::<Vec<_>>()
+                .collect();
+            let mut along = pts[..1].to_vec();
+            for w in pts.windows(2) {
+                let ((x0, y0), (x1, y1)) = (w[0], w[1]);
+                let n = ((x1 - x0).hypot(y1 - y0) / 4.0).ceil().max(1.0) as usize;
+                along.extend((1..=n).map(|k| {
+                    let u = k as f64 / n as f64;
+                    (x0 + u * (x1 - x0), y0 + u * (y1 - y0))
+                }));
+            }
+            along
         })
         .collect()
 }

@@ -134,14 +134,20 @@ impl PanelAxes {
     }
 }
 
-/// The three projection panels of a shape figure (`x–z`, `y–z`, `x–y`
-/// titles; 430 px wide cells, the legend to their right).
+/// The projection panels of a shape figure (`x–z`, `y–z`, `x–y` titles in
+/// that order, or the one plane of a planar scene; 430 px wide cells, the
+/// legend to their right).
 fn panels(svg: &str) -> Vec<PanelAxes> {
     const CELL_W: f64 = 430.0;
     let texts = svg_texts(svg);
     let axis = |c: &str| "xyz".find(c).unwrap();
     let mut out = Vec::new();
-    for (k, plane) in ["x–z", "y–z", "x–y"].iter().enumerate() {
+    let planes: Vec<&str> = ["x–z", "y–z", "x–y"]
+        .into_iter()
+        .filter(|p| texts.iter().any(|t| t.text == format!("{p} projection")))
+        .collect();
+    assert!(planes.len() == 1 || planes.len() == 3, "{planes:?}");
+    for (k, plane) in planes.iter().enumerate() {
         let cell = (k as f64 * CELL_W, (k + 1) as f64 * CELL_W);
         let mine: Vec<_> = texts
             .iter()

@@ -159,3 +159,8 @@ pub use recommended::Recommended;
 pub use rod::{RodJacobian, RodSystem};
 pub use solution::{EventRecord, Solution, Stats, Status};
 pub use system::{OdeSystem, SecondOrderSystem, fd_jacobian};
+
+/// The README's examples, compiled and run as doctests.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;

@@ -1,8 +1,11 @@
 //! The results of an evaluation or analysis: `softrod.Energies`,
 //! `softrod.Statics`, `softrod.Modes`.
 
-use numpy::{PyArray1, PyArray2, PyArrayMethods};
+use std::collections::BTreeMap;
+
+use numpy::{PyArray1, PyArray2, PyArrayDyn, PyArrayMethods};
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 
 use crate::convert::{mat_out, vec_out};
 
@@ -41,18 +44,45 @@ impl Energies {
     }
 }
 
-/// A static equilibrium: `q` (n_dof,), Newton `iterations`, final
-/// `residual` (max-abs generalized force [N or N·m]) and the number of
-/// `load_steps` of the load continuation.
+/// A static equilibrium, with what `softrod statics --json` reports: `q`
+/// (n_dof,), `converged` (always True: a failure raises), Newton
+/// `iterations`, final `residual` (max-abs generalized force [N or N·m]),
+/// `load_steps` of the load continuation, `stable` (the lowest linearized
+/// mode is real; None when the model is too large to check), the first
+/// rod's `tip` pose (4, 4), every rod's tip pose `tips` and body pose
+/// `bodies` by name (4, 4) [m], loop-closure residuals `closures` by name
+/// [m] and `warnings`.
 #[pyclass(frozen, module = "softrod")]
 pub struct Statics {
     pub(crate) q: Py<PyArray1<f64>>,
+    #[pyo3(get)]
+    pub(crate) converged: bool,
     #[pyo3(get)]
     pub(crate) iterations: usize,
     #[pyo3(get)]
     pub(crate) residual: f64,
     #[pyo3(get)]
     pub(crate) load_steps: usize,
+    #[pyo3(get)]
+    pub(crate) stable: Option<bool>,
+    pub(crate) tip: Py<PyArrayDyn<f64>>,
+    pub(crate) tips: Vec<(String, Py<PyArrayDyn<f64>>)>,
+    pub(crate) bodies: Vec<(String, Py<PyArrayDyn<f64>>)>,
+    #[pyo3(get)]
+    pub(crate) closures: BTreeMap<String, f64>,
+    #[pyo3(get)]
+    pub(crate) warnings: Vec<String>,
+}
+
+fn named<'py>(
+    py: Python<'py>,
+    list: &[(String, Py<PyArrayDyn<f64>>)],
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    for (name, pose) in list {
+        d.set_item(name, pose.bind(py))?;
+    }
+    Ok(d)
 }
 
 #[pymethods]
@@ -63,11 +93,55 @@ impl Statics {
         self.q.bind(py).clone()
     }
 
-    fn __repr__(&self) -> String {
-        format!(
-            "Statics(iterations={}, residual={:e}, load_steps={})",
-            self.iterations, self.residual, self.load_steps
-        )
+    /// The first rod's tip pose (4, 4) at the equilibrium (world frame, m).
+    #[getter]
+    fn tip<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+        self.tip.bind(py).clone()
+    }
+
+    /// Every rod's tip pose (4, 4) by rod name.
+    #[getter]
+    fn tips<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        named(py, &self.tips)
+    }
+
+    /// Every rigid body's pose (4, 4) by body name (empty without bodies).
+    #[getter]
+    fn bodies<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        named(py, &self.bodies)
+    }
+
+    fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
+        let tip = self.tip.bind(py).readonly();
+        let g = tip.as_slice()?;
+        let stable = match self.stable {
+            Some(true) => "True",
+            Some(false) => "False",
+            None => "None",
+        };
+        let mut s = format!(
+            "Statics(converged={}, iterations={}, load_steps={}, residual={:.3e}, \
+             tip=[{:.6}, {:.6}, {:.6}] m, stable={stable}",
+            if self.converged { "True" } else { "False" },
+            self.iterations,
+            self.load_steps,
+            self.residual,
+            g[3],
+            g[7],
+            g[11],
+        );
+        if !self.closures.is_empty() {
+            let worst = self.closures.values().fold(0.0_f64, |a, b| a.max(*b));
+            s.push_str(&format!(
+                ", closures={} (worst {worst:.1e} m)",
+                self.closures.len()
+            ));
+        }
+        if !self.warnings.is_empty() {
+            s.push_str(&format!(", warnings={}", self.warnings.len()));
+        }
+        s.push(')');
+        Ok(s)
     }
 }
 
@@ -119,7 +193,29 @@ impl Modes {
     fn q_equilibrium<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         self.q_equilibrium.bind(py).clone()
     }
+
+    /// `Modes(24 about statics: 0.927, 5.81, 16.3, … Hz)`: the count, the
+    /// equilibrium and the lowest frequencies.
+    fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
+        let w = self.omega.bind(py).readonly();
+        let w = w.as_slice()?;
+        let shown: Vec<String> = w
+            .iter()
+            .take(REPR_MODES)
+            .map(|w| format!("{:.4}", w / (2.0 * std::f64::consts::PI)))
+            .collect();
+        let more = if w.len() > REPR_MODES { ", …" } else { "" };
+        Ok(format!(
+            "Modes({} about {}: {}{more} Hz)",
+            w.len(),
+            self.equilibrium,
+            shown.join(", ")
+        ))
+    }
 }
+
+/// Frequencies a `Modes` repr shows.
+const REPR_MODES: usize = 4;
 
 pub(crate) fn modes_py(
     py: Python<'_>,

@@ -299,6 +299,28 @@ impl SceneError {
         self
     }
 
+    /// The same error named `file` and without a location: an error about a
+    /// value given beside the file (`--set`).
+    pub(crate) fn relabelled(mut self, label: String) -> Self {
+        match &mut self {
+            SceneError::Io { file, .. } => *file = label,
+            SceneError::Syntax { file, at, .. }
+            | SceneError::Missing { file, at, .. }
+            | SceneError::WrongType { file, at, .. }
+            | SceneError::UnknownKey { file, at, .. }
+            | SceneError::NotFinite { file, at, .. }
+            | SceneError::OutOfRange { file, at, .. }
+            | SceneError::InconsistentLengths { file, at, .. }
+            | SceneError::UnknownRod { file, at, .. }
+            | SceneError::UnknownName { file, at, .. }
+            | SceneError::Invalid { file, at, .. } => {
+                *file = label;
+                *at = None;
+            }
+        }
+        self
+    }
+
     /// The file name given for messages.
     pub fn file(&self) -> &str {
         match self {

@@ -3,6 +3,8 @@
 
 use std::path::Path;
 
+use crate::overrides::Override;
+
 use serde::Serialize;
 use softrod_dynamics::Rod;
 
@@ -116,7 +118,33 @@ impl Scene {
     ///
     /// Returns the scene and the warnings about suspicious but legal input.
     pub fn from_str(text: &str, name: &str) -> Result<(Scene, Vec<Warning>), SceneError> {
-        crate::validate::parse(text, name)
+        crate::validate::parse(text, name, &[])
+    }
+
+    /// As [`Scene::from_str`] with `overrides` (`KEY=VALUE` settings such as
+    /// `run.integrator=esdirk`) applied in order to the parsed document
+    /// before validation: each is validated as if written in the file, under
+    /// the same key path, and errors and warnings about it name the
+    /// `--set` it came from instead of a line.
+    pub fn from_str_with(
+        text: &str,
+        name: &str,
+        overrides: &[Override],
+    ) -> Result<(Scene, Vec<Warning>), SceneError> {
+        crate::validate::parse(text, name, overrides)
+    }
+
+    /// As [`Scene::from_path`] with `overrides` ([`Scene::from_str_with`]).
+    pub fn from_path_with(
+        path: &Path,
+        overrides: &[Override],
+    ) -> Result<(Scene, Vec<Warning>), SceneError> {
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+            file: file.clone(),
+            source,
+        })?;
+        Scene::from_str_with(&text, &file, overrides)
     }
 
     /// Total number of generalized coordinates: Σ over rods of pieces ×

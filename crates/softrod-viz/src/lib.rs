@@ -35,3 +35,8 @@ pub mod run_dir;
 pub use data::{BodyShape, BodyTrack, CableTrack, Pose, RodTrack, ViewData};
 pub use error::VizError;
 pub use html::{ViewOptions, ViewStats, render_html, write_html};
+
+/// The README's examples, compiled and run as doctests.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;

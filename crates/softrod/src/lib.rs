@@ -130,3 +130,8 @@ pub mod prelude {
     pub use softrod_lie::{Pose, Vec3, Vec6};
     pub use softrod_mechanics::{Cable, Material, PointLoad, RodProperties, Section, Tension};
 }
+
+/// The README's examples, compiled and run as doctests.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;

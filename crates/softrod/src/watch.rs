@@ -14,18 +14,25 @@
 //! the *conservative* model — the same rods, inertia, stiffness and gravity,
 //! with no viscosity, drag, cables or loads — so every non-conservative term
 //! of the model is covered, whatever it is, and nothing is assumed about
-//! its form. `W(t) = ∫ P_nc dt` is integrated by the trapezoidal rule over
-//! the accepted steps (second order in the step; `P_nc ≡ 0` and `W = 0`
-//! exactly for a model without such terms). The balance error is
-//! `|E(t) − E(0) − W(t)|`.
+//! its form. `W(t) = ∫ P_nc dt` is integrated by Simpson's rule over each
+//! accepted step, the power at the step's midpoint taken at the state of
+//! the cubic Hermite interpolant through the step's ends `(q, q̇)` (`q` to
+//! O(h⁴), `q̇` to O(h³); fourth order in the step, `P_nc ≡ 0` and `W = 0`
+//! exactly for a model without such terms). The trapezoidal rule alone
+//! (second order) mistook its own error for a drift on the long steps an
+//! implicit integrator takes through a smooth, driven motion (a base
+//! shaken at 2 Hz, 28 ms steps: 1.1 % of the energy in play). The balance
+//! error is `|E(t) − E(0) − W(t)|`.
 //!
 //! **Energy scale.** The error is compared with the energy in play:
 //! `scale(t) = max_{τ ≤ t} [T(τ) + V_e(τ) + |V_g(τ) − V_g(0)|] + ∫₀ᵗ |P_nc| dτ`
 //! (the gravitational energy counts by its change: its zero is arbitrary).
 //! A run fails when `error(t) − U(t) > energy_tolerance · scale(t)` at an
-//! accepted step, `U = Σ ½h|ΔP_nc|` the trapezoidal work's uncertainty
-//! (zero for a model without non-conservative terms; a drift below it goes
-//! unseen); it warns when the largest error exceeds a tenth of the bound
+//! accepted step, `U = Σ |S − T|` the work's uncertainty, the distance of
+//! each step's Simpson work `S` from its trapezoidal one `T` (an estimate
+//! of the trapezoid's error, far above Simpson's; zero for a model without
+//! non-conservative terms; a drift below it goes unseen); it warns when
+//! the largest error exceeds a tenth of the bound
 //! relative to the final scale (early in a run the scale is tiny and the
 //! ratio to it says little: measured up to 2e-2 in the first microseconds
 //! of correct runs).
@@ -90,8 +97,9 @@ pub struct EnergyBalance {
     pub t_worst: f64,
     /// Whether the model has non-conservative terms (else `W ≡ 0`).
     pub non_conservative: bool,
-    /// The uncertainty of the trapezoidal work, `U = Σ ½h|P_k − P_{k−1}|`
-    /// over the accepted steps (the distance to the one-sided rules; zero
+    /// The uncertainty of the work, `U = Σ |S_k − T_k|` over the accepted
+    /// steps: the distance of each step's Simpson work from its trapezoidal
+    /// one (an estimate of the trapezoid's error, far above Simpson's; zero
     /// without non-conservative terms) \[J\].
     pub quadrature: f64,
     /// The part of `work` done by the closure forces through the
@@ -132,6 +140,12 @@ pub(crate) struct Watch {
     warnings: Vec<String>,
     warned_strain: bool,
     warned_curvature: bool,
+    /// The state at the last accepted step, and the midpoint of the step
+    /// that follows (buffers reused every step: no allocation per step).
+    q_prev: Vec<f64>,
+    qd_prev: Vec<f64>,
+    q_mid: Vec<f64>,
+    qd_mid: Vec<f64>,
 }
 
 fn dot(a: &[f64], b: &DVector<f64>) -> f64 {
@@ -333,7 +347,48 @@ impl Watch {
             warnings: Vec::new(),
             warned_strain: false,
             warned_curvature: false,
+            q_prev: vec![0.0; model.n_dof()],
+            qd_prev: vec![0.0; model.n_dof()],
+            q_mid: vec![0.0; model.n_dof()],
+            qd_mid: vec![0.0; model.n_dof()],
         })
+    }
+
+    /// Remembers `(q, q̇)` as the start of the next step.
+    fn keep_state(&mut self, q: &[f64], qd: &[f64]) {
+        self.q_prev.copy_from_slice(q);
+        self.qd_prev.copy_from_slice(qd);
+    }
+
+    /// The power (with the closures' part) at the middle of the step from
+    /// the last accepted state to `(t, q, q̇)` of length `h`, at the state
+    /// of the cubic Hermite interpolant through the step's ends:
+    /// `q_m = (q₀ + q₁)/2 + h (q̇₀ − q̇₁)/8`,
+    /// `q̇_m = 3 (q₁ − q₀)/(2h) − (q̇₀ + q̇₁)/4`. Returns `(P_m, P_c,m)`.
+    fn midpoint_power(
+        &mut self,
+        model: &Model,
+        t: f64,
+        h: f64,
+        q: &[f64],
+        qd: &[f64],
+    ) -> Result<(f64, f64), Error> {
+        let (mut qm, mut qdm) = (
+            std::mem::take(&mut self.q_mid),
+            std::mem::take(&mut self.qd_mid),
+        );
+        let ends = self.q_prev.iter().zip(&self.qd_prev).zip(q.iter().zip(qd));
+        for ((m, dm), ((&q0, &v0), (&q1, &v1))) in qm.iter_mut().zip(qdm.iter_mut()).zip(ends) {
+            *m = 0.5 * (q0 + q1) + 0.125 * h * (v0 - v1);
+            *dm = 1.5 * (q1 - q0) / h - 0.25 * (v0 + v1);
+        }
+        let tm = t - 0.5 * h;
+        let result = self.closure_power(model, tm, &qm, &qdm).and_then(|pc| {
+            let p = self.power(model, tm, &qm, &qdm)?;
+            Ok((p + pc, pc))
+        });
+        (self.q_mid, self.qd_mid) = (qm, qdm);
+        result
     }
 
     fn sync_inputs(&mut self, model: &Model, data: &Data) -> Result<(), DynamicsError> {
@@ -426,6 +481,7 @@ impl Watch {
         self.t_prev = t;
         self.pc_prev = self.closure_power(model, t, q, qd)?;
         self.p_prev = self.power(model, t, q, qd)? + self.pc_prev;
+        self.keep_state(q, qd);
         self.balance = EnergyBalance {
             initial: self.e0,
             scale: self.peak,
@@ -451,6 +507,7 @@ impl Watch {
         self.sync_inputs(model, data)?;
         self.pc_prev = self.closure_power(model, t, q, qd)?;
         self.p_prev = self.power(model, t, q, qd)? + self.pc_prev;
+        self.keep_state(q, qd);
         Ok(())
     }
 
@@ -471,13 +528,22 @@ impl Watch {
         let pc = self.closure_power(model, t, q, qd)?;
         let p = self.power(model, t, q, qd)? + pc;
         let h = t - self.t_prev;
-        self.work += 0.5 * h * (self.p_prev + p);
-        self.closure_work += 0.5 * h * (self.pc_prev + pc);
+        // Simpson's rule on the step (the trapezoid where it has no length).
+        let (pm, pcm) = if h > 0.0 {
+            self.midpoint_power(model, t, h, q, qd)?
+        } else {
+            (0.5 * (self.p_prev + p), 0.5 * (self.pc_prev + pc))
+        };
+        let simpson = h / 6.0 * (self.p_prev + 4.0 * pm + p);
+        let trapezoid = 0.5 * h * (self.p_prev + p);
+        self.work += simpson;
+        self.closure_work += h / 6.0 * (self.pc_prev + 4.0 * pcm + pc);
         self.pc_prev = pc;
-        self.abs_work += 0.5 * h * (self.p_prev.abs() + p.abs());
-        self.quadrature += 0.5 * h * (p - self.p_prev).abs();
+        self.abs_work += h / 6.0 * (self.p_prev.abs() + 4.0 * pm.abs() + p.abs());
+        self.quadrature += (simpson - trapezoid).abs();
         self.t_prev = t;
         self.p_prev = p;
+        self.keep_state(q, qd);
         let e = self.energies(model, t, q, qd)?;
         self.peak = self
             .peak

@@ -327,6 +327,29 @@ impl Model {
         Ok(self)
     }
 
+    /// The same model with `loads` added to rod `rod`'s point loads (after
+    /// its own): the rod's load placement on pieces and its planar path are
+    /// computed again, as [`Model::with_quadrature`] does. A load study
+    /// (`softrod.Simulation.statics(loads=…)`) without rebuilding the scene.
+    ///
+    /// Errors: a rod index past the rods, a load off the rod or not finite
+    /// ([`Rod::validate`]).
+    pub fn with_point_loads(
+        mut self,
+        rod: usize,
+        loads: Vec<softrod_mechanics::PointLoad>,
+    ) -> Result<Self, DynamicsError> {
+        let count = self.rods.len();
+        let r = self
+            .rods
+            .get(rod)
+            .ok_or(DynamicsError::RodIndex { index: rod, count })?;
+        let mut spec = r.spec.clone();
+        spec.point_loads.extend(loads);
+        self.rods[rod] = build_rod(spec, rod, r.dof_offset, r.cable_offset, &self.quadrature)?;
+        Ok(self)
+    }
+
     /// The rigid bodies, in the order given.
     pub fn bodies(&self) -> &[BodyModel] {
         &self.bodies

@@ -183,16 +183,37 @@ class Energies:
 
 @final
 class Statics:
-    """A static equilibrium."""
+    """A static equilibrium with what `softrod statics --json` reports."""
     @property
     def q(self) -> _F64:
         """(n_dof,)"""
     @property
+    def converged(self) -> bool:
+        """Always True: a solve that does not converge raises SimulationError."""
+    @property
     def iterations(self) -> int: ...
     @property
-    def residual(self) -> float: ...
+    def residual(self) -> float:
+        """max-abs generalized force left [N or N m]"""
     @property
     def load_steps(self) -> int: ...
+    @property
+    def stable(self) -> bool | None:
+        """The lowest linearized mode is real; None for models over 600 DoF."""
+    @property
+    def tip(self) -> _F64:
+        """The first rod's tip pose (4, 4), world frame [m]."""
+    @property
+    def tips(self) -> dict[str, _F64]:
+        """Every rod's tip pose (4, 4) by rod name."""
+    @property
+    def bodies(self) -> dict[str, _F64]:
+        """Every rigid body's pose (4, 4) by body name."""
+    @property
+    def closures(self) -> dict[str, float]:
+        """Loop-closure residuals [m] by closure name."""
+    @property
+    def warnings(self) -> list[str]: ...
 
 @final
 class Modes:
@@ -373,7 +394,11 @@ class Simulation:
                   u: ArrayLike | None = None) -> tuple[_F64, _F64]:
         """(A (2 n_dof, 2 n_dof), B (2 n_dof, n_cables)) of x' = f(x, u), x = (q, qdot)."""
     def energies(self, t: float, q: ArrayLike, qdot: ArrayLike) -> Energies: ...
-    def statics(self) -> Statics: ...
+    def statics(
+        self, *, tensions: ArrayLike | None = None,
+        loads: Sequence[tuple[_RodRef, PointLoad]] | None = None,
+    ) -> Statics:
+        """tensions (n_cables,) [N] replace the schedules, loads are added, for this solve."""
     def modes(self) -> Modes: ...
     def modes_about(self, q: ArrayLike) -> Modes: ...
     def simulate(

@@ -662,10 +662,23 @@ impl Simulation {
     }
 
     /// Static equilibrium under every static term at t = 0, from the initial
-    /// q (Newton with line search and load continuation). Raises
+    /// q (Newton with line search and load continuation), with what
+    /// `softrod statics --json` reports beside it (`softrod.Statics`: tip and
+    /// body poses, closure residuals, stability, warnings). Raises
     /// `softrod.SimulationError` when it does not converge. Releases the GIL.
-    fn statics(&mut self, py: Python<'_>) -> PyResult<Statics> {
-        self.statics_impl(py)
+    ///
+    /// For actuation and load studies without editing the scene:
+    /// `tensions` (n_cables,) [N, ≥ 0] replace the cables' schedules for
+    /// this solve; `loads`, a list of `(rod, softrod.PointLoad)` pairs (rod
+    /// a name or an index), are added to the model's loads for this solve.
+    #[pyo3(signature = (*, tensions=None, loads=None))]
+    fn statics(
+        &mut self,
+        py: Python<'_>,
+        tensions: Option<&Bound<'_, PyAny>>,
+        loads: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Statics> {
+        self.statics_impl(py, tensions, loads)
     }
 
     /// Undamped natural modes about the static equilibrium (the rest shape

@@ -20,6 +20,7 @@ pub use run::MAX_QUADRATURE;
 
 use crate::error::{Location, SceneError, Warning};
 use crate::locate::{MAX_MAGNITUDE, SpanMap, map_toml_error};
+use crate::overrides::{self, Override};
 use serde::Deserialize;
 
 use crate::raw::RawScene;
@@ -30,10 +31,32 @@ use crate::scene::{Origins, Scene};
 type Result<T> = std::result::Result<T, SceneError>;
 
 /// Parses and validates a scene; `file` names it in messages.
-pub(crate) fn parse(text: &str, file: &str) -> Result<(Scene, Vec<Warning>)> {
+pub(crate) fn parse(
+    text: &str,
+    file: &str,
+    overrides: &[Override],
+) -> Result<(Scene, Vec<Warning>)> {
     // Parsed once: the spanned document gives the key paths, then it is
     // deserialized (a 10⁷-value array is not parsed twice).
-    let doc = toml::de::DeTable::parse(text).map_err(|e| map_toml_error(&e, text, file, None))?;
+    let mut doc =
+        toml::de::DeTable::parse(text).map_err(|e| map_toml_error(&e, text, file, None))?;
+    // `--set` values enter the document before anything reads it: they are
+    // validated exactly as the file's, and messages about them say so.
+    let applied = overrides::apply(&mut doc, overrides, text.len(), file)?;
+    match parse_document(doc, text, file) {
+        Ok((scene, warnings)) => Ok((
+            scene,
+            warnings.into_iter().map(|w| applied.warning(w)).collect(),
+        )),
+        Err(e) => Err(applied.error(e)),
+    }
+}
+
+fn parse_document(
+    doc: toml::Spanned<toml::de::DeTable<'_>>,
+    text: &str,
+    file: &str,
+) -> Result<(Scene, Vec<Warning>)> {
     let spans = SpanMap::of(&doc);
     let raw = RawScene::deserialize(toml::de::Deserializer::from(doc))
         .map_err(|e| map_toml_error(&e, text, file, Some(&spans)))?;

@@ -39,29 +39,31 @@ pub(crate) fn color(i: usize) -> RGBColor {
     PALETTE[i % PALETTE.len()]
 }
 
-/// A sequential colour for `u ∈ [0, 1]` (early → late): the viridis
-/// ramp's stops from dark purple to green, stopping before its pale yellow
-/// end, which vanishes on white.
+/// A sequential colour for `u ∈ [0, 1]` (early → late): viridis, the
+/// perceptually uniform colormap of matplotlib (its tabulated colours at
+/// every tenth, interpolated), from dark purple through blue and green,
+/// stopping at 0.9 before its pale yellow end, which vanishes on white.
+/// Lightness rises monotonically, so the order of times reads in grey too.
 pub(crate) fn sequential(u: f64) -> RGBColor {
-    const STOPS: [(f64, f64, f64); 5] = [
+    const VIRIDIS: [(f64, f64, f64); 11] = [
         (68.0, 1.0, 84.0),
-        (59.0, 82.0, 139.0),
+        (72.0, 36.0, 117.0),
+        (65.0, 68.0, 135.0),
+        (53.0, 95.0, 141.0),
+        (42.0, 120.0, 142.0),
         (33.0, 145.0, 140.0),
-        (94.0, 201.0, 98.0),
-        (180.0, 222.0, 44.0),
+        (34.0, 168.0, 132.0),
+        (68.0, 191.0, 112.0),
+        (122.0, 209.0, 81.0),
+        (189.0, 223.0, 38.0),
+        (253.0, 231.0, 37.0),
     ];
-    let x = u.clamp(0.0, 1.0) * 0.92 * (STOPS.len() - 1) as f64;
-    let i = (x.floor() as usize).min(STOPS.len() - 2);
+    let x = u.clamp(0.0, 1.0) * 0.9 * (VIRIDIS.len() - 1) as f64;
+    let i = (x.floor() as usize).min(VIRIDIS.len() - 2);
     let f = x - i as f64;
-    let (a, b) = (STOPS[i], STOPS[i + 1]);
+    let (a, b) = (VIRIDIS[i], VIRIDIS[i + 1]);
     let mix = |p: f64, q: f64| (p + f * (q - p)).round() as u8;
     RGBColor(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
-}
-
-/// `c` mixed with white by `w ∈ [0, 1]`.
-pub(crate) fn lighten(c: RGBColor, w: f64) -> RGBColor {
-    let m = |v: u8| (f64::from(v) + w * (255.0 - f64::from(v))).round() as u8;
-    RGBColor(m(c.0), m(c.1), m(c.2))
 }
 
 /// The display unit of lengths for a span (m): numbers between ~0.1 and
@@ -456,17 +458,35 @@ pub(crate) fn draw_panel(
             ))
             .map_err(&err)?;
     }
+    // The curves keep sub-pixel precision: plotters places on whole pixels,
+    // so they are written as polylines of their own (at plotters' map, to
+    // the hundredth of a pixel, decimated to a tenth of one) where a
+    // placeholder stands in the document's order until [`finish_svg`].
+    let (x0, x1) = (f64::from(px_x.start), f64::from(px_x.end - 1));
+    let (y0, y1) = (f64::from(px_y.start), f64::from(px_y.end - 1));
+    let to_px = |(x, y): (f64, f64)| {
+        (
+            x0 + (x1 - x0) * (x - x_range.0) / (x_range.1 - x_range.0),
+            y1 - (y1 - y0) * (y - y_range.0) / (y_range.1 - y_range.0),
+        )
+    };
+    let mut polylines = String::new();
     for s in &spec.strokes {
-        let style = s.color.stroke_width(s.width);
-        if s.dashed {
-            chart
-                .draw_series(DashedLineSeries::new(s.points.iter().copied(), 7, 5, style))
-                .map_err(&err)?;
-        } else {
-            chart
-                .draw_series(LineSeries::new(s.points.iter().copied(), style))
-                .map_err(&err)?;
-        }
+        let px: Vec<(f64, f64)> = s.points.iter().map(|&p| to_px(p)).collect();
+        polylines.push_str(&polyline(&px, s.color, s.width, s.dashed));
+    }
+    if !polylines.is_empty() {
+        let k = PENDING.with(|p| {
+            let mut p = p.borrow_mut();
+            p.push(polylines);
+            p.len() - 1
+        });
+        body.draw(&Text::new(
+            format!("{PLACEHOLDER}{k}"),
+            (0, 0),
+            (FONT, TICK_PX).into_font(),
+        ))
+        .map_err(&err)?;
     }
     // Data units per pixel, to size marks in pixels whatever the ranges.
     let (ux, uy) = (
@@ -566,6 +586,113 @@ pub(crate) fn draw_panel(
     })
 }
 
+thread_local! {
+    /// The sub-pixel polylines of the panels drawn since the last
+    /// [`finish_svg`] on this thread, each standing in its SVG as the text
+    /// `PLACEHOLDER k` until then (plotters owns the document while it draws).
+    static PENDING: std::cell::RefCell<Vec<String>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+const PLACEHOLDER: &str = "softrod-subpixel-polylines-";
+
+/// Pixels a decimated curve may stray from the drawn one: a tenth of a
+/// pixel, invisible at any zoom that shows the figure's lines as lines.
+pub(crate) const DECIMATION_PX: f64 = 0.1;
+
+/// Replaces the placeholders [`draw_panel`] left in `svg` with their
+/// polylines (call once the backend has presented the document).
+pub(crate) fn finish_svg(svg: &mut String) {
+    let pending = PENDING.with(|p| std::mem::take(&mut *p.borrow_mut()));
+    for (k, lines) in pending.iter().enumerate() {
+        // plotters writes `<text …>\nTOKEN\n</text>`: the token, then only
+        // white space up to the closing tag (so `…-1` is not `…-12`).
+        let token = format!("{PLACEHOLDER}{k}");
+        let found = svg.match_indices(&token).find_map(|(at, _)| {
+            let rest = &svg[at + token.len()..];
+            let close = rest.len() - rest.trim_start().len();
+            rest[close..]
+                .starts_with("</text>")
+                .then(|| (at, at + token.len() + close + "</text>".len()))
+        });
+        let Some((at, end)) = found else {
+            continue; // from a figure that failed before presenting
+        };
+        let start = svg[..at].rfind("<text").unwrap_or(at);
+        svg.replace_range(start..end, lines);
+    }
+}
+
+/// An SVG polyline through pixel points, decimated (Ramer–Douglas–Peucker,
+/// [`DECIMATION_PX`]) and written to a hundredth of a pixel; empty for no
+/// points.
+pub(crate) fn polyline(px: &[(f64, f64)], color: RGBColor, width: u32, dashed: bool) -> String {
+    use std::fmt::Write;
+    if px.is_empty() {
+        return String::new();
+    }
+    let keep = decimate(px, DECIMATION_PX);
+    let mut points = String::with_capacity(14 * keep.len());
+    for (i, &(x, y)) in px.iter().enumerate() {
+        if keep[i] {
+            let _ = write!(points, "{x:.2},{y:.2} ");
+        }
+    }
+    let dash = if dashed {
+        " stroke-dasharray=\"7 5\""
+    } else {
+        ""
+    };
+    format!(
+        "<polyline fill=\"none\" opacity=\"1\" stroke=\"#{:02X}{:02X}{:02X}\" stroke-width=\"{width}\"{dash} stroke-linejoin=\"round\" points=\"{}\"/>\n",
+        color.0,
+        color.1,
+        color.2,
+        points.trim_end()
+    )
+}
+
+/// Which points of `p` to keep so that the polyline through them stays
+/// within `tol` of every dropped one (Ramer–Douglas–Peucker; the ends
+/// always kept). Iterative: long curves cannot overflow the stack.
+pub(crate) fn decimate(p: &[(f64, f64)], tol: f64) -> Vec<bool> {
+    let n = p.len();
+    let mut keep = vec![false; n];
+    if n == 0 {
+        return keep;
+    }
+    keep[0] = true;
+    keep[n - 1] = true;
+    let mut stack = vec![(0, n - 1)];
+    while let Some((a, b)) = stack.pop() {
+        if b <= a + 1 {
+            continue;
+        }
+        let (ax, ay) = p[a];
+        let (dx, dy) = (p[b].0 - ax, p[b].1 - ay);
+        let len2 = dx * dx + dy * dy;
+        let (mut worst, mut at) = (-1.0, a);
+        for (i, &(x, y)) in p.iter().enumerate().take(b).skip(a + 1) {
+            // Distance to the chord as a segment, not a line: a path that
+            // turns back along itself keeps its turning points.
+            let u = if len2 > 0.0 {
+                (((x - ax) * dx + (y - ay) * dy) / len2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let d = (x - ax - u * dx).hypot(y - ay - u * dy);
+            if d > worst {
+                (worst, at) = (d, i);
+            }
+        }
+        if worst > tol {
+            keep[at] = true;
+            stack.push((a, at));
+            stack.push((at, b));
+        }
+    }
+    keep
+}
+
 /// A tick number with `d` decimals, without "-0".
 pub(crate) fn format_tick(v: f64, d: usize) -> String {
     let s = format!("{v:.d$}");
@@ -614,5 +741,70 @@ pub(crate) fn significant(v: f64, sig: i32) -> String {
         s.trim_end_matches('0').trim_end_matches('.').to_string()
     } else {
         s
+    }
+}
+
+#[cfg(test)]
+mod subpixel_tests {
+    use super::*;
+
+    /// Distance from `q` to the polyline through `line`.
+    fn to_polyline(q: (f64, f64), line: &[(f64, f64)]) -> f64 {
+        line.windows(2)
+            .map(|w| {
+                let ((ax, ay), (bx, by)) = (w[0], w[1]);
+                let (dx, dy) = (bx - ax, by - ay);
+                let l2 = dx * dx + dy * dy;
+                let u = if l2 > 0.0 {
+                    (((q.0 - ax) * dx + (q.1 - ay) * dy) / l2).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
+                (q.0 - ax - u * dx).hypot(q.1 - ay - u * dy)
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    #[test]
+    fn decimation_keeps_every_point_within_tolerance() {
+        let p: Vec<(f64, f64)> = (0..5000)
+            .map(|i| {
+                let x = i as f64 * 0.13;
+                (x, 80.0 * (x / 37.0).sin() + 3.0 * (x / 3.1).cos())
+            })
+            .collect();
+        let keep = decimate(&p, DECIMATION_PX);
+        let kept: Vec<_> = p
+            .iter()
+            .zip(&keep)
+            .filter(|(_, k)| **k)
+            .map(|(q, _)| *q)
+            .collect();
+        assert!(kept.len() < p.len() / 3, "{} of {}", kept.len(), p.len());
+        for q in &p {
+            assert!(to_polyline(*q, &kept) <= DECIMATION_PX + 1e-12);
+        }
+        // Collinear points reduce to the ends; a path turning back along
+        // itself keeps its turning points.
+        let line: Vec<_> = (0..100).map(|i| (i as f64, 2.0 * i as f64)).collect();
+        assert_eq!(decimate(&line, 0.1).iter().filter(|k| **k).count(), 2);
+        let back = [(0.0, 0.0), (10.0, 0.0), (5.0, 0.0)];
+        assert_eq!(decimate(&back, 0.1), vec![true, true, true]);
+    }
+
+    #[test]
+    fn polylines_keep_hundredths_of_a_pixel() {
+        let s = polyline(
+            &[(1.234, 5.678), (9.999, 0.004)],
+            RGBColor(1, 2, 255),
+            2,
+            true,
+        );
+        assert!(s.contains("points=\"1.23,5.68 10.00,0.00\""), "{s}");
+        assert!(
+            s.contains("stroke=\"#0102FF\"") && s.contains("stroke-dasharray"),
+            "{s}"
+        );
+        assert!(polyline(&[], BLACK, 1, false).is_empty());
     }
 }

@@ -4,8 +4,8 @@ use plotters::prelude::*;
 
 use super::common::{
     Area, LEGEND_W, LegendEntry, Marker, PanelSpec, Stroke, Swatch, TITLE_H, bounds, check_finite,
-    check_len, color, draw_legend, draw_panel, equal_aspect_ranges, extent, length_unit, lighten,
-    plot_err, plot_size, sequential, significant, titled,
+    check_len, color, draw_legend, draw_panel, equal_aspect_ranges, extent, finish_svg,
+    length_unit, plot_err, plot_size, sequential, significant, titled,
 };
 use super::{Figure, PanelInfo};
 use crate::error::VizError;
@@ -210,11 +210,39 @@ fn geometry_figure(
         draw_legend(&legend_area, 40, legend, plot)?;
         root.present().map_err(plot_err(plot))?;
     }
+    finish_svg(&mut svg);
     Ok(Figure { svg, panels: infos })
 }
 
-fn three_projections(curves: Vec<Curve3>, markers: Vec<Marker3>) -> (Planes, PanelContents) {
-    let planes = PROJECTIONS
+/// A scene whose drawn points spread less than this fraction of their
+/// largest extent along one world axis is planar: far below a pixel of any
+/// panel, so the projection along that axis would show a line and the
+/// other two the same picture twice.
+const PLANAR_TOL: f64 = 1e-9;
+
+/// The panels of a geometry figure (and their column count): the three
+/// projections, or, when every point lies in a plane normal to a world axis,
+/// the one projection onto that plane (its vertical axis z when it has one).
+fn projections(curves: Vec<Curve3>, markers: Vec<Marker3>) -> (Planes, PanelContents, usize) {
+    let all = || {
+        curves
+            .iter()
+            .flat_map(|c| c.points.iter().copied())
+            .chain(markers.iter().map(Marker3::point))
+    };
+    let spread: Vec<f64> = (0..3).map(|j| extent(all().map(|p| p[j]))).collect();
+    let largest = spread.iter().copied().fold(0.0, f64::max);
+    let flat = (0..3).find(|&j| largest > 0.0 && spread[j] <= PLANAR_TOL * largest);
+    let chosen: Vec<(usize, usize)> = match flat {
+        Some(j) => PROJECTIONS
+            .iter()
+            .copied()
+            .filter(|&(a, b)| a != j && b != j)
+            .collect(),
+        None => PROJECTIONS.to_vec(),
+    };
+    let cols = chosen.len();
+    let planes = chosen
         .iter()
         .map(|(a, b)| (*a, *b, format!("{}–{} projection", AXES[*a], AXES[*b])))
         .collect();
@@ -224,14 +252,15 @@ fn three_projections(curves: Vec<Curve3>, markers: Vec<Marker3>) -> (Planes, Pan
         width: c.width,
         dashed: c.dashed,
     };
-    let per = (0..3)
+    let per = (0..cols)
         .map(|_| (curves.iter().map(copy).collect(), markers.to_vec()))
         .collect();
-    (planes, per)
+    (planes, per, cols)
 }
 
 /// The tip path of each rod over a run, in the x–z, y–z and x–y
-/// projections (equal aspect, one scale), start ● and end ■ marked, rods in
+/// projections (only the plane of a planar motion; equal aspect, one
+/// scale), start ● and end ■ marked, rods in
 /// the palette's colours. `tips[r].points` are the tip positions at the
 /// output times.
 pub fn tip_trajectory(title: &str, tips: &[RodCurve]) -> Result<Figure, VizError> {
@@ -266,16 +295,19 @@ pub fn tip_trajectory(title: &str, tips: &[RodCurve]) -> Result<Figure, VizError
         label: "end".into(),
         swatch: Swatch::Square(RGBColor(90, 90, 90)),
     });
-    let (planes, per) = three_projections(curves, markers);
-    geometry_figure(title, &planes, &per, 3, &legend, PLOT)
+    let (planes, per, cols) = projections(curves, markers);
+    geometry_figure(title, &planes, &per, cols, &legend, PLOT)
 }
 
 /// Rod shapes (centrelines, sampled within pieces) at one or more times, in
-/// the three projections (equal aspect, one scale). One rod: a colour per
-/// time (dark → light green = early → late) with the times in the legend.
-/// Several rods: a colour per rod, earlier snapshots lighter. Rigid bodies
-/// are outlined squares at their frame origins, in the same projections,
-/// named at the last snapshot.
+/// the three projections (only the plane of a planar scene; equal aspect,
+/// one scale). Times are told apart by a perceptually uniform sequential
+/// colormap (viridis, dark purple → green = early → late), each time
+/// labelled in the legend; with several rods every rod of a snapshot takes
+/// its time's colour (the rods are told apart by where they are), and one
+/// snapshot of several rods is drawn a colour per rod. Rigid bodies are
+/// outlined squares at their frame origins, in the same projections, named
+/// at the last snapshot.
 pub fn shapes(title: &str, snapshots: &[ShapeSnapshot]) -> Result<Figure, VizError> {
     if snapshots.is_empty() {
         return Err(VizError::Empty("snapshots"));
@@ -317,41 +349,32 @@ pub fn shapes(title: &str, snapshots: &[ShapeSnapshot]) -> Result<Figure, VizErr
             body_marks(&mut markers, s, c, k + 1 == m);
             legend.push(LegendEntry::line(time_text(s), c, 3));
         }
-    } else {
+    } else if m == 1 {
         legend.push(LegendEntry::header("rods"));
         for (r, rod) in snapshots[0].rods.iter().enumerate() {
             legend.push(LegendEntry::line(rod.name.clone(), color(r), 3));
+            curves.push(Curve3 {
+                points: rod.points.clone(),
+                color: color(r),
+                width: 2,
+                dashed: false,
+            });
         }
+        body_marks(&mut markers, &snapshots[0], BODY_COLOR, true);
+    } else {
+        legend.push(LegendEntry::header(format!("{} rods at", n_rods)));
         for (k, s) in snapshots.iter().enumerate() {
-            // Earlier snapshots mixed with white, the last at full colour.
-            let fade = if m == 1 {
-                0.0
-            } else {
-                0.7 * (1.0 - k as f64 / (m - 1) as f64)
-            };
-            for (r, rod) in s.rods.iter().enumerate() {
+            let c = sequential(k as f64 / (m - 1) as f64);
+            for rod in &s.rods {
                 curves.push(Curve3 {
                     points: rod.points.clone(),
-                    color: lighten(color(r), fade),
+                    color: c,
                     width: 2,
                     dashed: false,
                 });
             }
-            body_marks(&mut markers, s, lighten(BODY_COLOR, fade), k + 1 == m);
-        }
-        if m > 1 {
-            legend.push(LegendEntry {
-                label: "lighter = earlier:".into(),
-                swatch: Swatch::Note,
-            });
-            legend.push(LegendEntry {
-                label: format!(
-                    "{} … {}",
-                    time_text(&snapshots[0]),
-                    time_text(&snapshots[m - 1])
-                ),
-                swatch: Swatch::Note,
-            });
+            body_marks(&mut markers, s, c, k + 1 == m);
+            legend.push(LegendEntry::line(time_text(s), c, 3));
         }
     }
     if snapshots.iter().any(|s| !s.bodies.is_empty()) {
@@ -360,8 +383,8 @@ pub fn shapes(title: &str, snapshots: &[ShapeSnapshot]) -> Result<Figure, VizErr
             swatch: Swatch::HollowSquare(BODY_COLOR),
         });
     }
-    let (planes, per) = three_projections(curves, markers);
-    geometry_figure(title, &planes, &per, 3, &legend, PLOT)
+    let (planes, per, cols) = projections(curves, markers);
+    geometry_figure(title, &planes, &per, cols, &legend, PLOT)
 }
 
 /// The marks of a snapshot's bodies, drawn after the rods; named on the

@@ -4,7 +4,7 @@ use plotters::prelude::*;
 
 use super::common::{
     Area, LEGEND_W, LegendEntry, PanelSpec, Stroke, Swatch, TITLE_H, check_finite, check_len,
-    color, draw_legend, draw_panel, plot_err, range, si_prefix, titled,
+    color, draw_legend, draw_panel, finish_svg, plot_err, range, si_prefix, titled,
 };
 use super::{Figure, PanelInfo};
 use crate::error::VizError;
@@ -113,6 +113,7 @@ fn series_figure(
         draw_legend(&legend_area, 40, &legend, plot)?;
         root.present().map_err(plot_err(plot))?;
     }
+    finish_svg(&mut svg);
     Ok(Figure { svg, panels: infos })
 }
 

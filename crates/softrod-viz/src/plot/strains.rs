@@ -4,7 +4,7 @@ use plotters::prelude::*;
 
 use super::common::{
     Area, LEGEND_W, LegendEntry, PanelSpec, Stroke, TITLE_H, check_finite, check_len, color,
-    draw_legend, draw_panel, extent, length_unit, plot_err, range, sequential, titled,
+    draw_legend, draw_panel, extent, finish_svg, length_unit, plot_err, range, sequential, titled,
 };
 use super::{Figure, PanelInfo};
 use crate::error::VizError;
@@ -206,6 +206,7 @@ pub fn strains(title: &str, p: &StrainProfiles) -> Result<Figure, VizError> {
         draw_legend(&legend_area, 40, &legend, plot)?;
         root.present().map_err(plot_err(plot))?;
     }
+    finish_svg(&mut svg);
     Ok(Figure { svg, panels: infos })
 }
 

@@ -3,7 +3,7 @@
 
 use plotters::prelude::*;
 
-use super::common::plot_err;
+use super::common::{LEGEND_W, LegendEntry, Swatch, draw_legend, plot_err};
 use super::{Figure, PanelInfo};
 use crate::error::VizError;
 
@@ -31,6 +31,8 @@ const COLORS: [RGBColor; 6] = [
     RGBColor(140, 86, 75),
 ];
 
+/// The chart's size, px; the legend gets a column of [`LEGEND_W`] to its
+/// right, so it never covers a curve.
 const SIZE: (u32, u32) = (1000, 650);
 
 /// Log–log error against wall time, one curve per group (in order of
@@ -58,9 +60,12 @@ pub fn work_precision(title: &str, points: &[WorkPrecisionPoint]) -> Result<Figu
     let err = plot_err("work-precision");
     let mut svg = String::new();
     let (plot_px, plot_rect) = {
-        let root = SVGBackend::with_string(&mut svg, SIZE).into_drawing_area();
+        let root =
+            SVGBackend::with_string(&mut svg, (SIZE.0 + LEGEND_W, SIZE.1)).into_drawing_area();
         root.fill(&WHITE).map_err(&err)?;
-        let mut c = ChartBuilder::on(&root)
+        let (chart_area, legend_area) = root.split_horizontally(SIZE.0);
+        let mut legend = Vec::new();
+        let mut c = ChartBuilder::on(&chart_area)
             .caption(title, ("sans-serif", 20))
             .margin(15)
             .x_label_area_size(45)
@@ -93,9 +98,8 @@ pub fn work_precision(title: &str, points: &[WorkPrecisionPoint]) -> Result<Figu
                 .collect();
             line.sort_by(|a, b| b.1.total_cmp(&a.1));
             c.draw_series(LineSeries::new(line.clone(), color.stroke_width(2)))
-                .map_err(&err)?
-                .label(*g)
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
+                .map_err(&err)?;
+            legend.push(LegendEntry::line(*g, color, 3));
             c.draw_series(line.iter().map(|&q| Circle::new(q, 4, color.filled())))
                 .map_err(&err)?;
         }
@@ -115,9 +119,15 @@ pub fn work_precision(title: &str, points: &[WorkPrecisionPoint]) -> Result<Figu
                 stair.push((w, e));
             }
             c.draw_series(DashedLineSeries::new(stair, 6, 4, BLACK.stroke_width(1)))
-                .map_err(&err)?
-                .label("Pareto front")
-                .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK));
+                .map_err(&err)?;
+            legend.push(LegendEntry {
+                label: "Pareto front".into(),
+                swatch: Swatch::Line {
+                    color: BLACK,
+                    width: 1,
+                    dashed: true,
+                },
+            });
             c.draw_series(
                 front
                     .iter()
@@ -125,11 +135,7 @@ pub fn work_precision(title: &str, points: &[WorkPrecisionPoint]) -> Result<Figu
             )
             .map_err(&err)?;
         }
-        c.configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()
-            .map_err(&err)?;
+        draw_legend(&legend_area, 60, &legend, "work-precision")?;
         let area = c.plotting_area();
         let (xs, ys) = area.get_pixel_range();
         root.present().map_err(&err)?;
