@@ -477,3 +477,35 @@ fn shifted_solve_follows_the_prescribed_joint() {
         assert!(e < 1e-11, "t = {t}: {e:e}");
     }
 }
+
+#[test]
+fn breakpoints_are_the_drives_ends_and_the_tension_knots() {
+    use softrod_mechanics::{Cable, Routing, Tension};
+    let motion = Prescribed::samples(&[0.5, 1.0, 2.5], &[vec![0.0], vec![0.3], vec![0.4]]).unwrap();
+    let cable = Cable::new(
+        Routing::Offset { y: 0.0, z: 0.005 },
+        Tension::Table {
+            times: vec![0.0, 1.0, 3.0],
+            values: vec![0.0, 1.0, 1.0],
+        },
+    );
+    let model = Model::builder()
+        .rod_on(
+            rod("arm", 0.3, 3).cable(cable),
+            Attachment::world_joint(Joint::revolute([0.0, 1.0, 0.0]).with_prescribed(motion)),
+        )
+        .build()
+        .unwrap();
+    // The spline's ends 0.5 and 2.5 (not its inner sample 1.0, where it is
+    // C²) and the table's times 0, 1, 3 (its kinks), sorted, 1.0 once.
+    assert_eq!(model.breakpoints(), vec![0.0, 0.5, 1.0, 2.5, 3.0]);
+    // A model without drives has none.
+    assert!(
+        Model::builder()
+            .rod(rod("a", 0.3, 2))
+            .build()
+            .unwrap()
+            .breakpoints()
+            .is_empty()
+    );
+}

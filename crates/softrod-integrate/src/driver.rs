@@ -10,7 +10,7 @@ use crate::error::{IntegrateError, first_non_finite};
 use crate::hooks::{Control, Direction, EventKind, Hooks, StepInfo};
 use crate::integrator::Integrator;
 use crate::methods::{Dopri5, Esdirk, GeneralizedAlpha, Radau5, Rk4, Rosw34};
-use crate::options::Options;
+use crate::options::{Options, StepControl};
 use crate::problem::{FirstOrderProblem, Problem, SecondOrderProblem};
 use crate::solution::{EventRecord, Solution, Stats, Status};
 use crate::stepper::Stepper;
@@ -130,6 +130,9 @@ fn validate(t0: f64, t1: f64, y0: &DVector<f64>, opts: &Options) -> Result<(), I
     {
         return bad(format!("t_eval must lie in [{t0}, {t1}]"));
     }
+    if let Some(b) = opts.breakpoints.iter().find(|b| !b.is_finite()) {
+        return bad(format!("breakpoint {b} is not finite"));
+    }
     if let Some(i) = first_non_finite(y0.as_slice()) {
         return Err(IntegrateError::NonFinite {
             t: t0,
@@ -139,6 +142,20 @@ fn validate(t0: f64, t1: f64, y0: &DVector<f64>, opts: &Options) -> Result<(), I
         });
     }
     Ok(())
+}
+
+/// Where the next step must end at the latest: `t1`, or the first of the
+/// [`Options::breakpoints`] after `t` when the steps adapt.
+fn step_end(opts: &Options, t: f64, t1: f64) -> f64 {
+    match opts.step {
+        StepControl::Adaptive { .. } => opts
+            .breakpoints
+            .iter()
+            .copied()
+            .filter(|&b| b > t)
+            .fold(t1, f64::min),
+        StepControl::Fixed(_) => t1,
+    }
 }
 
 /// State value at `t` from the stepper (exact at the step end).
@@ -302,6 +319,7 @@ fn drive<P: Problem, St: Stepper<P>>(
         status = Status::Stopped;
     }
     let mut yo = DVector::zeros(n);
+    let mut after_breakpoint = false;
 
     while !early_stop && st.t() < t1 {
         if stats.steps >= opts.max_steps {
@@ -311,7 +329,12 @@ fn drive<P: Problem, St: Stepper<P>>(
                 max_steps: opts.max_steps,
             });
         }
-        st.step(p, t1, opts, &mut stats)?;
+        if after_breakpoint {
+            st.restart_after_breakpoint(p, &mut stats)?;
+        }
+        let end = step_end(opts, st.t(), t1);
+        st.step(p, end, opts, &mut stats)?;
+        after_breakpoint = end < t1 && st.t() == end;
         let (t, h) = (st.t(), st.h_last());
         if let Some(index) = first_non_finite(st.y().as_slice()) {
             return Err(IntegrateError::NonFinite {

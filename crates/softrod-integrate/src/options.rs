@@ -107,6 +107,14 @@ pub struct Options {
     /// `ρ∞ ∈ [0, 1]` ([`Integrator::GeneralizedAlpha`]; default
     /// [`Options::DEFAULT_RHO_INF`]).
     pub rho_inf: f64,
+    /// Times the adaptive steps never cross: each is the end of a step
+    /// (any order; those outside `(t0, t1)` are ignored). Where a drive
+    /// stops, starts or changes its rate (a prescribed curve's ends, the
+    /// knots of a piecewise-linear tension table) the right-hand side or its
+    /// derivatives jump: a step across such a time meets a solution that is
+    /// not smooth, which its error estimate and dense output assume. Fixed
+    /// steps keep their grid and ignore these. Default: none.
+    pub breakpoints: Vec<f64>,
 }
 
 impl Default for Options {
@@ -123,6 +131,7 @@ impl Default for Options {
             t_eval: None,
             max_norm: f64::INFINITY,
             rho_inf: Self::DEFAULT_RHO_INF,
+            breakpoints: Vec::new(),
         }
     }
 }

@@ -76,4 +76,45 @@ pub(crate) trait Stepper<P: Problem> {
     }
     /// The user changed the system: drop cached derivatives/Jacobians.
     fn system_changed(&mut self, p: &mut P, stats: &mut Stats) -> Result<(), IntegrateError>;
+    /// A step has just ended on one of [`Options::breakpoints`](crate::Options::breakpoints),
+    /// where the right-hand side jumps: the next step starts from the
+    /// derivative and Jacobian just after it (evaluated at the next
+    /// representable time), not from the values the step that ended there
+    /// used, which belong to the side before.
+    fn restart_after_breakpoint(
+        &mut self,
+        p: &mut P,
+        stats: &mut Stats,
+    ) -> Result<(), IntegrateError> {
+        let t = self.t();
+        self.state_mut().t = next_after(t);
+        let restarted = self.system_changed(p, stats);
+        self.state_mut().t = t;
+        restarted
+    }
+}
+
+/// The smallest `f64` greater than `t` (finite `t`).
+fn next_after(t: f64) -> f64 {
+    if t == 0.0 {
+        f64::from_bits(1)
+    } else if t > 0.0 {
+        f64::from_bits(t.to_bits() + 1)
+    } else {
+        f64::from_bits(t.to_bits() - 1)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn next_after_is_the_next_representable_time() {
+        for t in [0.0, -0.0, 1.0, -1.0, 6.0, 1e-300, -1e-300, 123.456] {
+            let n = super::next_after(t);
+            assert!(n > t, "{t}");
+            // Nothing lies between: the midpoint rounds to one of the two.
+            let mid = t + (n - t) / 2.0;
+            assert!(mid == t || mid == n, "{t}");
+        }
+    }
 }

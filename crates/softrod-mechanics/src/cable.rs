@@ -82,6 +82,15 @@ impl Tension {
         }
     }
 
+    /// The times where `T(t)` has a kink (a table's times; none for a
+    /// constant) \[s\]: steps should end there, not cross them.
+    pub fn breakpoints(&self) -> &[f64] {
+        match self {
+            Tension::Constant(_) => &[],
+            Tension::Table { times, .. } => times,
+        }
+    }
+
     /// Largest tension over all time \[N\].
     pub fn max(&self) -> f64 {
         match self {

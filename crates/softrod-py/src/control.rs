@@ -234,6 +234,9 @@ pub fn simulate_controlled(
                 t: 0.0,
                 message: e.to_string(),
             })?;
+    // Steps end where a drive stops or changes rate, as in Simulation's runs.
+    let mut base_opts = base_opts;
+    base_opts.breakpoints = inputs.sys.model.breakpoints();
     inputs.sys.jacobian = settings.stiff_jacobian();
     let times = output_times(duration, settings.output_spacing(duration));
     let n = inputs.dim();

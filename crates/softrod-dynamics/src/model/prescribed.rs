@@ -223,6 +223,46 @@ fn not_a_knot(t: &[f64], x: &[f64]) -> Result<Vec<f64>, String> {
     Ok(m)
 }
 
+impl Curve {
+    /// The times where the motion's rate or acceleration may jump \[s\]: a
+    /// spline's first and last sample times, where it starts from and
+    /// returns to holding its end values (a drive that stops moving there
+    /// is an impulse unless its rate is zero). A sinusoid has none.
+    pub fn breakpoints(&self) -> Vec<f64> {
+        match self {
+            Curve::Spline(s) if s.t.len() > 1 => vec![s.t[0], s.t[s.t.len() - 1]],
+            _ => Vec::new(),
+        }
+    }
+}
+
+impl crate::model::Model {
+    /// The times where a drive of the model changes abruptly, sorted and
+    /// without repeats \[s\]: the ends of the prescribed joints' spline
+    /// curves ([`Curve::breakpoints`]) and the times of the cables' tension
+    /// tables (piecewise linear, [`softrod_mechanics::Tension::breakpoints`]).
+    /// The solution is not smooth there; an adaptive integrator ends its
+    /// steps at these times instead of stepping across them
+    /// (`softrod_integrate::Options::breakpoints`).
+    pub fn breakpoints(&self) -> Vec<f64> {
+        let mut times: Vec<f64> = self
+            .elements
+            .iter()
+            .filter_map(|e| e.attachment.joint.prescribed.as_ref())
+            .flat_map(|p| p.curves.iter().flat_map(Curve::breakpoints))
+            .chain(self.rods.iter().flat_map(|r| {
+                r.spec
+                    .cables
+                    .iter()
+                    .flat_map(|c| c.tension.breakpoints().iter().copied())
+            }))
+            .collect();
+        times.sort_by(f64::total_cmp);
+        times.dedup();
+        times
+    }
+}
+
 /// The prescribed motion of a joint: one curve per joint coordinate.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Prescribed {
@@ -290,6 +330,21 @@ impl Prescribed {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_spline_breaks_where_it_starts_and_stops() {
+        let ramp = Spline::new(&[1.0, 2.0, 4.0], &[0.0, 1.0, 3.0]).unwrap();
+        assert_eq!(Curve::Spline(ramp).breakpoints(), vec![1.0, 4.0]);
+        let held = Spline::new(&[2.0], &[0.5]).unwrap();
+        assert!(Curve::Spline(held).breakpoints().is_empty());
+        let sine = Curve::Sine {
+            amplitude: 1.0,
+            frequency: 1.0,
+            phase: 0.0,
+            offset: 0.0,
+        };
+        assert!(sine.breakpoints().is_empty());
+    }
 
     #[test]
     fn spline_reproduces_a_cubic_and_its_derivatives() {

@@ -174,6 +174,9 @@ impl Simulation {
             dense_matrices_of(method),
         )?;
         opts.t_eval = Some(times);
+        // Steps end where a drive stops or changes rate (D59) rather than
+        // straddling it: the dense outputs there would be off the closures.
+        opts.breakpoints = self.system.model.breakpoints();
         self.system.jacobian = self.settings.stiff_jacobian();
         let saved_inputs = self.system.data.cable_tensions().map(<[f64]>::to_vec);
         let watch = if watch && self.settings.energy_tolerance.is_finite() {
