@@ -42,8 +42,11 @@ impl Energies {
 }
 
 /// A static equilibrium: `q` (n_dof,), Newton `iterations`, final
-/// `residual` (max-abs generalized force [N or N·m]) and the number of
-/// `load_steps` of the load continuation.
+/// `residual` (max-abs generalized force [N or N·m]), the number of
+/// `load_steps` of the load continuation, and `warnings`: the validity
+/// rules the equilibrium breaks (strains beyond the model's validity, a
+/// bending radius below the section's half size, a folded piece), in the
+/// words of `softrod statics`; empty when it is valid.
 #[pyclass(frozen, module = "softrod")]
 pub struct Statics {
     pub(crate) q: Py<PyArray1<f64>>,
@@ -53,6 +56,8 @@ pub struct Statics {
     pub(crate) residual: f64,
     #[pyo3(get)]
     pub(crate) load_steps: usize,
+    #[pyo3(get)]
+    pub(crate) warnings: Vec<String>,
 }
 
 #[pymethods]
@@ -65,18 +70,24 @@ impl Statics {
 
     fn __repr__(&self) -> String {
         format!(
-            "Statics(iterations={}, residual={:e}, load_steps={})",
-            self.iterations, self.residual, self.load_steps
+            "Statics(iterations={}, residual={:e}, load_steps={}, warnings={})",
+            self.iterations,
+            self.residual,
+            self.load_steps,
+            self.warnings.len()
         )
     }
 }
 
 /// Undamped natural modes, lowest first: `omega` [rad/s] (an unstable
-/// equilibrium shows negative values), `frequencies_hz`, `shapes` (n_dof,
-/// n_modes), M-orthonormal columns, the `equilibrium` they are about
-/// ("rest" or "statics") and its coordinates `q_equilibrium`, and the
-/// `asymmetry` of the tangent stiffness (non-zero with follower loads or
-/// cables; its symmetric part is used).
+/// equilibrium shows negative values, a rigid (zero) mode exactly 0),
+/// `frequencies_hz`, `shapes` (n_dof, n_modes), M-orthonormal columns, the
+/// `equilibrium` they are about ("rest" or "statics") and its coordinates
+/// `q_equilibrium`, the `asymmetry` of the tangent stiffness (non-zero
+/// with follower loads or cables; its symmetric part is used),
+/// `rigid_tolerance` (the |ω²| [rad²/s²] at or below which a mode counts
+/// as rigid), `n_rigid` and `n_unstable`, and the equilibrium's validity
+/// `warnings` (as `Statics.warnings`; empty for `modes_about`).
 #[pyclass(frozen, module = "softrod")]
 pub struct Modes {
     omega: Py<PyArray1<f64>>,
@@ -86,6 +97,14 @@ pub struct Modes {
     equilibrium: &'static str,
     #[pyo3(get)]
     asymmetry: f64,
+    #[pyo3(get)]
+    rigid_tolerance: f64,
+    #[pyo3(get)]
+    n_rigid: usize,
+    #[pyo3(get)]
+    n_unstable: usize,
+    #[pyo3(get)]
+    warnings: Vec<String>,
 }
 
 #[pymethods]
@@ -126,6 +145,7 @@ pub(crate) fn modes_py(
     m: &softrod::dynamics::Modes,
     eq: &'static str,
     q: &[f64],
+    warnings: Vec<String>,
 ) -> Modes {
     Modes {
         omega: vec_out(py, m.omega.as_slice()).unbind(),
@@ -133,5 +153,9 @@ pub(crate) fn modes_py(
         q_equilibrium: vec_out(py, q).unbind(),
         equilibrium: eq,
         asymmetry: m.asymmetry,
+        rigid_tolerance: m.rigid_tolerance,
+        n_rigid: m.n_rigid(),
+        n_unstable: m.n_unstable(),
+        warnings,
     }
 }

@@ -193,6 +193,9 @@ class Statics:
     def residual(self) -> float: ...
     @property
     def load_steps(self) -> int: ...
+    @property
+    def warnings(self) -> list[str]:
+        """The validity rules the equilibrium breaks; empty when valid."""
 
 @final
 class Modes:
@@ -213,6 +216,15 @@ class Modes:
     def equilibrium(self) -> Literal["rest", "statics", "given"]: ...
     @property
     def asymmetry(self) -> float: ...
+    @property
+    def rigid_tolerance(self) -> float:
+        """|ω²| [rad²/s²] at or below which a mode is rigid (ω = 0)"""
+    @property
+    def n_rigid(self) -> int: ...
+    @property
+    def n_unstable(self) -> int: ...
+    @property
+    def warnings(self) -> list[str]: ...
 
 @final
 class State:

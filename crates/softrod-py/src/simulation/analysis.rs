@@ -17,6 +17,7 @@ impl Simulation {
             iterations: r.iterations,
             residual: r.residual,
             load_steps: r.load_steps,
+            warnings: r.warnings,
         })
     }
 
@@ -27,7 +28,7 @@ impl Simulation {
             Equilibrium::Rest => ("rest", vec![0.0; self.n()]),
             Equilibrium::Statics(q) => ("statics", q.as_slice().to_vec()),
         };
-        Ok(modes_py(py, &m.modes, eq, &q))
+        Ok(modes_py(py, &m.modes, eq, &q, m.warnings.clone()))
     }
 
     pub(super) fn modes_about_impl(
@@ -38,6 +39,6 @@ impl Simulation {
         let qv = vector(q, "q", self.n())?.slice().to_vec();
         let sim = &mut self.sim;
         let m = guard_detached(py, || sim.modes_about(&qv).map_err(to_py))?;
-        Ok(modes_py(py, &m, "given", &qv))
+        Ok(modes_py(py, &m, "given", &qv, Vec::new()))
     }
 }
