@@ -93,3 +93,22 @@ fn a_free_body_has_rigid_modes_not_unstable_ones() {
     assert!(m["rigid_tolerance_omega2"].as_f64().unwrap() > 0.0);
     assert!(warnings(&m).is_empty());
 }
+
+/// An output directory that cannot be created is reported as such (exit
+/// 2), not as a disk without space (issue 26).
+#[test]
+fn an_uncreatable_out_dir_is_named() {
+    let dir = tmp("uncreatable");
+    let p = dir.join("small.toml");
+    std::fs::write(&p, cantilever("force = [0, 0, -1e-3]")).unwrap();
+    let o = run(&[
+        "run",
+        p.to_str().unwrap(),
+        "--out",
+        "/proc/self/zz",
+        "--quiet",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("cannot create it"), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("MB free"), "{}", stderr(&o));
+}
