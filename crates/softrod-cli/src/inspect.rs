@@ -115,21 +115,30 @@ pub fn statics(path: &Path, json: bool, out: Option<PathBuf>, png: bool) -> Resu
         return Err(failed("statics returned a non-finite state"));
     }
     // Newton finds equilibria, stable or not (a soft rod under gravity has an
-    // unstable upright one): check the lowest linearized mode when that is
-    // affordable (O(n_dof³)).
-    let stable = (l.sim.n_dof() <= STABILITY_CHECK_MAX_DOF)
+    // unstable upright one): check the linearized modes when that is
+    // affordable (O(n_dof³)). Rigid (zero) modes — a free body nothing
+    // holds — are neutral, not unstable (docs/theory.md E7).
+    let modes = (l.sim.n_dof() <= STABILITY_CHECK_MAX_DOF)
         .then(|| l.sim.modes_about(res.q.as_slice()))
-        .and_then(Result::ok)
-        .map(|m| (m.omega.iter().all(|w| *w > 0.0), m.omega.min()));
+        .and_then(Result::ok);
+    let stable = modes.as_ref().map(|m| m.n_unstable() == 0);
+    let mut warnings = res.warnings.clone();
+    if let Some(m) = modes.as_ref().filter(|m| m.n_unstable() > 0) {
+        let w = m.omega.min();
+        warnings.push(format!(
+            "this equilibrium is unstable ({} mode(s) with ω² < −{:.1e} rad²/s², the lowest \
+             ω² = {:.3e} rad²/s²); a stable one may exist nearby: start statics from another \
+             [initial] q",
+            m.n_unstable(),
+            m.rigid_tolerance,
+            -w * w
+        ));
+    }
+    for w in &warnings {
+        eprintln!("softrod: warning: {w}");
+    }
     let model = l.sim.model();
     let poser = sampled_poses(model, 0.0, res.q.as_slice())?;
-    if let Some((false, w)) = stable {
-        eprintln!(
-            "warning: this equilibrium is unstable (lowest linearized ω² = {:.3e} rad²/s²); \
-             a stable one may exist nearby: start statics from another [initial] q",
-            -w * w
-        );
-    }
     if let Some(dir) = &out {
         make_dir(dir)?;
         let c = centrelines(&poser);
@@ -158,7 +167,9 @@ pub fn statics(path: &Path, json: bool, out: Option<PathBuf>, png: bool) -> Resu
             "iterations": res.iterations,
             "residual": res.residual,
             "load_steps": res.load_steps,
-            "stable": stable.map(|(s, _)| s),
+            "stable": stable,
+            "rigid_modes": modes.as_ref().map(|m| m.n_rigid()),
+            "warnings": warnings,
             "q": res.q.as_slice(),
             "tip": pose_json(poser.tip(0)),
             "rods": rods,
@@ -171,6 +182,33 @@ pub fn statics(path: &Path, json: bool, out: Option<PathBuf>, png: bool) -> Resu
         println!(
             "statics converged: {} Newton iterations, {} load step(s), residual {:.3e}",
             res.iterations, res.load_steps, res.residual
+        );
+        if let Some(m) = &modes {
+            let rigid = m.n_rigid();
+            println!(
+                "stability: {}{}",
+                if m.n_unstable() > 0 {
+                    "unstable"
+                } else {
+                    "stable"
+                },
+                if rigid > 0 {
+                    format!(
+                        " ({rigid} rigid mode(s), |ω²| ≤ {:.1e} rad²/s²: neutral)",
+                        m.rigid_tolerance
+                    )
+                } else {
+                    String::new()
+                }
+            );
+        }
+        println!(
+            "warnings: {}",
+            if warnings.is_empty() {
+                "none".to_string()
+            } else {
+                format!("{} (on stderr)", warnings.len())
+            }
         );
         for (i, r) in model.rods().iter().enumerate() {
             let p = poser.tip(i).translation;
@@ -259,6 +297,9 @@ pub fn modes(
     let mut l = load(path)?;
     let analysis = l.sim.modes()?;
     let m = &analysis.modes;
+    for w in &analysis.warnings {
+        eprintln!("softrod: warning: {w}");
+    }
     if let Some(dir) = &out {
         make_dir(dir)?;
         let q_eq = match &analysis.equilibrium {
@@ -287,7 +328,8 @@ pub fn modes(
     }
     // ω² < 0: the equilibrium is unstable along that mode, whose
     // "frequency" is imaginary, i·|f|: it grows like exp(2π|f| t). The
-    // library reports such ω as −√|ω²|, hence negative entries.
+    // library reports such ω as −√|ω²|, hence negative entries; rigid
+    // modes (|ω²| within the rigid tolerance) as exactly 0.
     let imaginary: Vec<f64> = m
         .frequencies_hz()
         .into_iter()
@@ -316,6 +358,9 @@ pub fn modes(
                 "equilibrium": equilibrium,
                 "unstable": unstable,
                 "imaginary_frequencies_hz": imaginary,
+                "rigid_modes": m.n_rigid(),
+                "rigid_tolerance_omega2": m.rigid_tolerance,
+                "warnings": analysis.warnings,
             })
         );
     } else {
@@ -337,9 +382,22 @@ pub fn modes(
                     -v,
                     -v
                 );
+            } else if *v == 0.0 {
+                println!("  mode {:>2}: 0 Hz (rigid)", i + 1);
             } else {
                 println!("  mode {:>2}: {v:.6} Hz", i + 1);
             }
+        }
+        let rigid = m.n_rigid();
+        if rigid > 0 {
+            println!(
+                "rigid modes: {rigid} (|ω²| ≤ {:.3e} rad²/s², the round-off of the eigenproblem; \
+                 a free body or joint that nothing holds: neutral, not unstable)",
+                m.rigid_tolerance
+            );
+        }
+        if !analysis.warnings.is_empty() {
+            println!("warnings: {} (on stderr)", analysis.warnings.len());
         }
         if m.asymmetry > 1e-8 {
             println!(

@@ -20,7 +20,12 @@ pub fn linearize(path: &Path, json: bool) -> Result<(), CliError> {
     let mut l = load(path)?;
     let sim = &mut l.sim;
     let equilibrium = if sim.has_static_loads() {
-        Equilibrium::Statics(sim.statics()?.q)
+        let s = sim.statics()?;
+        // The validity rules of what is reported, as `statics` says them.
+        for w in &s.warnings {
+            eprintln!("softrod: warning: {w}");
+        }
+        Equilibrium::Statics(s.q)
     } else {
         Equilibrium::Rest
     };

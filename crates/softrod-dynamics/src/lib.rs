@@ -108,7 +108,7 @@ pub use algorithms::{
     bias_force, forward_dynamics_cholesky, inverse_dynamics, inverse_dynamics_with, mass_matrix,
 };
 pub use analysis::{
-    Energies, Modes, StaticsOptions, StaticsResult, actuation_matrix, closure_statics,
+    Energies, ModeKind, Modes, StaticsOptions, StaticsResult, actuation_matrix, closure_statics,
     coriolis_matrix, damping_matrix, energies, frames, generalized_gravity, modes,
     section_jacobian, static_force, statics, stiffness_matrix,
 };

@@ -239,10 +239,27 @@ const L: f64 = 1.0;
 /// s = L/2 is a piece boundary; its tip held by `kind` to the world at
 /// (L, 0, 0).
 fn beam(pieces: usize, kind: ClosureKind, load: Option<f64>, gravity: bool) -> Model {
+    beam_with(
+        &[Strain::Kx, Strain::Ky, Strain::Kz, Strain::Qx],
+        pieces,
+        kind,
+        load,
+        gravity,
+    )
+}
+
+/// [`beam`] with the strains `strains`.
+fn beam_with(
+    strains: &[Strain],
+    pieces: usize,
+    kind: ClosureKind,
+    load: Option<f64>,
+    gravity: bool,
+) -> Model {
     let mut spec = Rod::builder(L)
         .name("beam")
         .pieces(pieces)
-        .strains([Strain::Kx, Strain::Ky, Strain::Kz, Strain::Qx])
+        .strains(strains.iter().copied())
         .circle(R)
         .material(material(E, RHO));
     if let Some(p) = load {
@@ -311,6 +328,59 @@ fn clamped_clamped_beam_deflection_is_pl3_over_192ei() {
     let richardson = (4.0 * z(32) - z(16)) / 3.0;
     let rel = (richardson - exact).abs() / exact.abs();
     assert!(rel < 2e-4, "extrapolated {richardson} vs {exact}: {rel:e}");
+}
+
+/// A weld on a planar rod (bending in the x–z plane and stretch) has six
+/// rows of which three are independent: the out-of-plane rotations and
+/// the y translation cannot move. Statics drops the redundant rows (D69,
+/// the pivoted Cholesky of the dynamics) and finds the equilibrium of the
+/// model with out-of-plane strains, where the in-plane load leaves them at
+/// zero (a second model), and Euler–Bernoulli's PL³/192EI to the
+/// discretization error of the full model; its modes are the full model's
+/// in-plane ones.
+#[test]
+fn a_planar_weld_closure_has_redundant_rows_and_the_full_answer() {
+    let p = 0.01;
+    let planar = [Strain::Ky, Strain::Qx];
+    let solve = |model: &Model| {
+        let mut data = Data::new(model);
+        let q0 = vec![0.0; model.n_dof()];
+        let (st, lambda) =
+            closure_statics(model, &mut data, &q0, &StaticsOptions::default()).unwrap();
+        assert!(closure_residuals(model, &mut data, st.q.as_slice()).unwrap()[0] < 1e-12);
+        (z_at(model, st.q.as_slice(), L / 2.0), lambda)
+    };
+    let flat = beam_with(&planar, 16, ClosureKind::Weld, Some(p), false);
+    let mut data = Data::new(&flat);
+    assert_eq!(
+        constraint_rank(&flat, &mut data, &vec![0.0; flat.n_dof()]).unwrap(),
+        3
+    );
+    let (z_flat, lambda) = solve(&flat);
+    let (z_full, _) = solve(&beam(16, ClosureKind::Weld, Some(p), false));
+    let exact = -p * L.powi(3) / (192.0 * ei());
+    assert!(
+        (z_flat - z_full).abs() < 1e-9 * exact.abs(),
+        "{z_flat} vs {z_full}"
+    );
+    // 16 pieces: the full model's O(N⁻²) error (< 2e-2, see above).
+    assert!(
+        (z_flat - exact).abs() < 2e-2 * exact.abs(),
+        "{z_flat} vs {exact}"
+    );
+    // The far clamp carries half the load; the dropped rows carry nothing.
+    assert!((lambda[5] - p / 2.0).abs() < 1e-6 * p, "{lambda}");
+    for row in [0, 2, 4] {
+        assert!(lambda[row].abs() < 1e-12 * p, "{lambda}");
+    }
+    // Modes about it: the full model's first (in-plane) frequency.
+    let q0 = vec![0.0; flat.n_dof()];
+    let w_flat = modes(&flat, &mut Data::new(&flat), &q0, 0.0).unwrap();
+    let full = beam(16, ClosureKind::Weld, None, false);
+    let w_full = modes(&full, &mut Data::new(&full), &vec![0.0; full.n_dof()], 0.0).unwrap();
+    assert_eq!(w_flat.omega.len(), flat.n_dof() - 3);
+    let e = (w_flat.omega[0] - w_full.omega[0]).abs() / w_full.omega[0];
+    assert!(e < 1e-8, "{} vs {}", w_flat.omega[0], w_full.omega[0]);
 }
 
 #[test]

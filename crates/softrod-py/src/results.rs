@@ -47,9 +47,9 @@ impl Energies {
 /// A static equilibrium, with what `softrod statics --json` reports: `q`
 /// (n_dof,), `converged` (always True: a failure raises), Newton
 /// `iterations`, final `residual` (max-abs generalized force [N or N·m]),
-/// `load_steps` of the load continuation, `stable` (the lowest linearized
-/// mode is real; None when the model is too large to check), the first
-/// rod's `tip` pose (4, 4), every rod's tip pose `tips` and body pose
+/// `load_steps` of the load continuation, `stable` (no linearized mode is
+/// unstable, rigid ones being neutral; None when the model is too large to
+/// check), the first rod's `tip` pose (4, 4), every rod's tip pose `tips` and body pose
 /// `bodies` by name (4, 4) [m], loop-closure residuals `closures` by name
 /// [m] and `warnings`.
 #[pyclass(frozen, module = "softrod")]
@@ -146,11 +146,14 @@ impl Statics {
 }
 
 /// Undamped natural modes, lowest first: `omega` [rad/s] (an unstable
-/// equilibrium shows negative values), `frequencies_hz`, `shapes` (n_dof,
-/// n_modes), M-orthonormal columns, the `equilibrium` they are about
-/// ("rest" or "statics") and its coordinates `q_equilibrium`, and the
-/// `asymmetry` of the tangent stiffness (non-zero with follower loads or
-/// cables; its symmetric part is used).
+/// equilibrium shows negative values, a rigid (zero) mode exactly 0),
+/// `frequencies_hz`, `shapes` (n_dof, n_modes), M-orthonormal columns, the
+/// `equilibrium` they are about ("rest" or "statics") and its coordinates
+/// `q_equilibrium`, the `asymmetry` of the tangent stiffness (non-zero
+/// with follower loads or cables; its symmetric part is used),
+/// `rigid_tolerance` (the |ω²| [rad²/s²] at or below which a mode counts
+/// as rigid), `n_rigid` and `n_unstable`, and the equilibrium's validity
+/// `warnings` (as `Statics.warnings`; empty for `modes_about`).
 #[pyclass(frozen, module = "softrod")]
 pub struct Modes {
     omega: Py<PyArray1<f64>>,
@@ -160,6 +163,14 @@ pub struct Modes {
     equilibrium: &'static str,
     #[pyo3(get)]
     asymmetry: f64,
+    #[pyo3(get)]
+    rigid_tolerance: f64,
+    #[pyo3(get)]
+    n_rigid: usize,
+    #[pyo3(get)]
+    n_unstable: usize,
+    #[pyo3(get)]
+    warnings: Vec<String>,
 }
 
 #[pymethods]
@@ -222,6 +233,7 @@ pub(crate) fn modes_py(
     m: &softrod::dynamics::Modes,
     eq: &'static str,
     q: &[f64],
+    warnings: Vec<String>,
 ) -> Modes {
     Modes {
         omega: vec_out(py, m.omega.as_slice()).unbind(),
@@ -229,5 +241,9 @@ pub(crate) fn modes_py(
         q_equilibrium: vec_out(py, q).unbind(),
         equilibrium: eq,
         asymmetry: m.asymmetry,
+        rigid_tolerance: m.rigid_tolerance,
+        n_rigid: m.n_rigid(),
+        n_unstable: m.n_unstable(),
+        warnings,
     }
 }

@@ -109,6 +109,7 @@ pub use record::{Trajectory, TrajectoryRecorder};
 pub use settings::{GENERALIZED_ALPHA_RHO_INF, Settings, output_times};
 pub use simulation::{
     Equilibrium, Flow, ModalAnalysis, Observer, RodId, RunStatus, RunSummary, Sample, Simulation,
+    Statics,
 };
 pub use softrod_integrate::Integrator;
 

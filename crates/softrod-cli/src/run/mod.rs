@@ -44,7 +44,16 @@ pub fn run(
     let scene = &l.scene;
     let duration = scene.run.duration;
     let every = l.sim.settings().output_spacing(duration);
-    outputs::check_disk_space(&dir, l.sim.model(), duration, every)?;
+    // A directory that cannot be created is said so (not "0.0 MB free");
+    // one created here and then refused is removed again.
+    let existed = dir.exists();
+    outputs::prepare_out_dir(&dir)?;
+    if let Err(e) = outputs::check_disk_space(&dir, l.sim.model(), duration, every) {
+        if !existed {
+            let _ = std::fs::remove_dir(&dir);
+        }
+        return Err(e);
+    }
     let times = output_times(duration, every);
     if npz_out {
         let width = Columns::of(l.sim.model()).width();

@@ -3,10 +3,11 @@
 //! modes on the null space of `J`.
 
 use super::matrices::stiffness_matrix;
-use super::modes::Modes;
+use super::modes::{Modes, difference_noise, frequencies, mapped_noise};
 use super::statics::{StaticsOptions, StaticsResult};
 use crate::algorithms::tree::{self, outward};
 use crate::algorithms::{Motion, Pass};
+use crate::constraints::forward::pivoted_cholesky;
 use crate::constraints::queries::{check_workspace, length_scale};
 use crate::constraints::rows::assemble;
 use crate::error::DynamicsError;
@@ -61,17 +62,20 @@ impl Closed<'_> {
         tau - jv.transpose() * lambda
     }
 
-    /// `∂(τ − J_vᵀλ)/∂q`: `K` exact plus central differences of the rest.
+    /// `∂(τ − J_vᵀλ)/∂q`: `K` exact plus central differences of the
+    /// rest; and the bound of the differences' round-off, entry by entry
+    /// (for the rigid tolerance of the modes, docs/theory.md E7).
     fn tangent(
         &self,
         data: &mut Data,
         q: &DVector<f64>,
         lambda: &DVector<f64>,
         k: &DMatrix<f64>,
-    ) -> DMatrix<f64> {
+    ) -> (DMatrix<f64>, DMatrix<f64>) {
         let n = q.len();
         let mut jac = k.clone();
         let mut qp = q.clone();
+        let mut noise = DMatrix::zeros(n, n);
         for j in 0..n {
             let h = 6e-6 * q[j].abs().max(1.0);
             qp[j] = q[j] + h;
@@ -81,9 +85,10 @@ impl Closed<'_> {
             qp[j] = q[j];
             for i in 0..n {
                 jac[(i, j)] += (plus[i] - minus[i]) / (2.0 * h) - k[(i, j)];
+                noise[(i, j)] = difference_noise(plus[i], minus[i], h);
             }
         }
-        jac
+        (jac, noise)
     }
 
     /// Least-squares multipliers `λ = argmin ‖τ − J_vᵀλ‖` at `q`.
@@ -140,27 +145,40 @@ pub(crate) fn statics(
                 return Ok(Ok(r.amax()));
             }
             *iterations += 1;
-            let kt = cx.tangent(data, q, lam, &k);
+            let (kt, _) = cx.tangent(data, q, lam, &k);
             let (_, jv) = cx.phi_jac(data, q.as_slice(), false);
             let (_, je) = cx.phi_jac(data, q.as_slice(), true);
-            let mut kkt = DMatrix::zeros(n + m, n + m);
+            // Only independent rows enter the KKT matrix (D69): a
+            // redundant row (a planar model's out-of-plane weld rows) would
+            // make it singular; its multiplier keeps its value.
+            let rows = independent_rows(&je);
+            let mr = rows.len();
+            let mut kkt = DMatrix::zeros(n + mr, n + mr);
             kkt.view_mut((0, 0), (n, n)).copy_from(&kt);
-            kkt.view_mut((0, n), (n, m)).copy_from(&(-jv.transpose()));
-            kkt.view_mut((n, 0), (m, n)).copy_from(&je);
-            let mut rhs = DVector::zeros(n + m);
+            let mut rhs = DVector::zeros(n + mr);
             rhs.rows_mut(0, n).copy_from(&(-&r));
-            rhs.rows_mut(n, m).copy_from(&(-&p));
+            for (c, &row) in rows.iter().enumerate() {
+                for i in 0..n {
+                    kkt[(i, n + c)] = -jv[(row, i)];
+                    kkt[(n + c, i)] = je[(row, i)];
+                }
+                rhs[n + c] = -p[row];
+            }
             let Some(dz) = kkt.lu().solve(&rhs) else {
                 return Ok(Err(r.amax()));
             };
             if dz.iter().any(|v| !v.is_finite()) {
                 return Ok(Err(r.amax()));
             }
+            let mut dl = DVector::zeros(m);
+            for (c, &row) in rows.iter().enumerate() {
+                dl[row] = dz[n + c];
+            }
             let f0 = merit(&r, &p);
             let mut alpha = 1.0;
             loop {
                 let qt = &*q + dz.rows(0, n) * alpha;
-                let lt = &*lam + dz.rows(n, m) * alpha;
+                let lt = &*lam + &dl * alpha;
                 let rt = cx.force_residual(data, qt.as_slice(), &lt);
                 let (pt, _) = cx.phi_jac(data, qt.as_slice(), true);
                 let ok = rt.iter().chain(pt.iter()).all(|v| v.is_finite());
@@ -207,9 +225,7 @@ pub(crate) fn statics(
     l_prev.fill(0.0);
     if solve(at(0.0), data, &mut q_prev, &mut l_prev, &mut iterations)?.is_err() {
         return Err(DynamicsError::StaticsFailed {
-            reason: "no constrained equilibrium even without loads (do the closures hold, \
-                     are they redundant?)"
-                .into(),
+            reason: "no constrained equilibrium even without loads (do the closures hold?)".into(),
             load_fraction: 0.0,
             iterations,
             residual: f64::NAN,
@@ -271,7 +287,7 @@ pub(crate) fn modes(
     };
     let lam = cx.multipliers(data, q_eq);
     let q = DVector::from_column_slice(q_eq);
-    let keff = cx.tangent(data, &q, &lam, &k);
+    let (keff, noise) = cx.tangent(data, &q, &lam, &k);
     let asym = (&keff - keff.transpose()).norm() / keff.norm().max(f64::MIN_POSITIVE);
     let ksym = (&keff + keff.transpose()) * 0.5;
     let (_, je) = cx.phi_jac(data, q_eq, true);
@@ -292,27 +308,36 @@ pub(crate) fn modes(
     let c = (&c + c.transpose()) * 0.5;
     let eig = c.symmetric_eigen();
     let nr = z.ncols();
-    let mut order: Vec<usize> = (0..nr).collect();
-    order.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
-    let mut omega = DVector::zeros(nr);
+    let bound = mapped_noise(&(&linv * z.transpose()), &noise);
+    let (omega, rigid_tolerance) = frequencies(&eig.eigenvalues, bound, "constrained mode")?;
     let mut shapes = DMatrix::zeros(n, nr);
     let back = &z * linv.transpose();
-    for (i, &o) in order.iter().enumerate() {
-        let w2 = eig.eigenvalues[o];
-        omega[i] = w2.signum() * w2.abs().sqrt();
+    for (i, o) in super::modes::ascending(&eig.eigenvalues)
+        .into_iter()
+        .enumerate()
+    {
         shapes.set_column(i, &(&back * eig.eigenvectors.column(o)));
-    }
-    if let Some((i, &value)) = omega.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-        return Err(DynamicsError::NotFinite {
-            what: format!("angular frequency of constrained mode {i} [rad/s]"),
-            value,
-        });
     }
     Ok(Modes {
         omega,
         shapes,
         asymmetry: asym,
+        rigid_tolerance,
     })
+}
+
+/// The rows of the constraint Jacobian `j` (m×n) kept in the statics' KKT
+/// matrix (D69): those of the independent pivots of the pivoted Cholesky
+/// of `j jᵀ` (the algorithm and threshold of the dynamics, D68: a pivot
+/// below `1e-10` of the largest diagonal is a redundant row), ascending.
+fn independent_rows(j: &DMatrix<f64>) -> Vec<usize> {
+    let m = j.nrows();
+    let mut gram = j * j.transpose();
+    let mut perm = vec![0; m];
+    let rank = pivoted_cholesky(&mut gram, &mut perm);
+    let mut rows = perm[..rank].to_vec();
+    rows.sort_unstable();
+    rows
 }
 
 /// Orthonormal basis (n×(n−r)) of the null space of `j` (m×n): the rank

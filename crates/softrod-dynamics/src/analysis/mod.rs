@@ -19,5 +19,5 @@ pub use frames::{frames, section_jacobian};
 pub use matrices::{
     actuation_matrix, coriolis_matrix, damping_matrix, generalized_gravity, stiffness_matrix,
 };
-pub use modes::{Modes, modes};
+pub use modes::{ModeKind, Modes, modes};
 pub use statics::{StaticsOptions, StaticsResult, static_force, statics};

@@ -22,7 +22,7 @@ pub(crate) const RANK_TOLERANCE: f64 = 1e-10;
 /// Pivoted Cholesky of the symmetric positive semidefinite `a` in place
 /// (lower triangle, symmetric row/column swaps recorded in `perm`);
 /// returns the numerical rank.
-fn pivoted_cholesky(a: &mut DMatrix<f64>, perm: &mut [usize]) -> usize {
+pub(crate) fn pivoted_cholesky(a: &mut DMatrix<f64>, perm: &mut [usize]) -> usize {
     let m = a.nrows();
     for (i, p) in perm.iter_mut().enumerate() {
         *p = i;

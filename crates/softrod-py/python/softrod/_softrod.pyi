@@ -199,7 +199,7 @@ class Statics:
     def load_steps(self) -> int: ...
     @property
     def stable(self) -> bool | None:
-        """The lowest linearized mode is real; None for models over 600 DoF."""
+        """No linearized mode is unstable (rigid modes are neutral); None for models over 600 DoF."""
     @property
     def tip(self) -> _F64:
         """The first rod's tip pose (4, 4), world frame [m]."""
@@ -213,7 +213,8 @@ class Statics:
     def closures(self) -> dict[str, float]:
         """Loop-closure residuals [m] by closure name."""
     @property
-    def warnings(self) -> list[str]: ...
+    def warnings(self) -> list[str]:
+        """The validity rules the equilibrium breaks and, when it is unstable, that; empty otherwise."""
 
 @final
 class Modes:
@@ -234,6 +235,15 @@ class Modes:
     def equilibrium(self) -> Literal["rest", "statics", "given"]: ...
     @property
     def asymmetry(self) -> float: ...
+    @property
+    def rigid_tolerance(self) -> float:
+        """|ω²| [rad²/s²] at or below which a mode is rigid (ω = 0)"""
+    @property
+    def n_rigid(self) -> int: ...
+    @property
+    def n_unstable(self) -> int: ...
+    @property
+    def warnings(self) -> list[str]: ...
 
 @final
 class State:

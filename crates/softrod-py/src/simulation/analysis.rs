@@ -116,7 +116,7 @@ impl Simulation {
             Equilibrium::Rest => ("rest", vec![0.0; self.n()]),
             Equilibrium::Statics(q) => ("statics", q.as_slice().to_vec()),
         };
-        Ok(modes_py(py, &m.modes, eq, &q))
+        Ok(modes_py(py, &m.modes, eq, &q, m.warnings.clone()))
     }
 
     pub(super) fn modes_about_impl(
@@ -127,7 +127,7 @@ impl Simulation {
         let qv = vector(q, "q", self.n())?.slice().to_vec();
         let sim = &mut self.sim;
         let m = guard_detached(py, || sim.modes_about(&qv).map_err(to_py))?;
-        Ok(modes_py(py, &m, "given", &qv))
+        Ok(modes_py(py, &m, "given", &qv, Vec::new()))
     }
 }
 
@@ -156,12 +156,13 @@ fn solve(sim: &mut softrod::Simulation) -> PyResult<Solved> {
     // Newton finds equilibria, stable or not (a soft rod under gravity has
     // an unstable upright one): check the lowest linearized mode when that
     // is affordable (O(n_dof³)).
-    let lowest = (sim.n_dof() <= STABILITY_CHECK_MAX_DOF)
+    // Rigid (zero) modes are neutral, not unstable (docs/theory.md E7).
+    let modes = (sim.n_dof() <= STABILITY_CHECK_MAX_DOF)
         .then(|| sim.modes_about(q))
-        .and_then(Result::ok)
-        .map(|m| m.omega.min());
-    let mut warnings = Vec::new();
-    if let Some(w) = lowest.filter(|w| *w <= 0.0) {
+        .and_then(Result::ok);
+    let mut warnings = result.warnings.clone();
+    if let Some(m) = modes.as_ref().filter(|m| m.n_unstable() > 0) {
+        let w = m.omega.min();
         warnings.push(format!(
             "this equilibrium is unstable (lowest linearized ω² = {:.3e} rad²/s²); a stable \
              one may exist nearby: start statics from another initial q",
@@ -169,7 +170,7 @@ fn solve(sim: &mut softrod::Simulation) -> PyResult<Solved> {
         ));
     }
     Ok(Solved {
-        stable: lowest.map(|w| w > 0.0),
+        stable: modes.as_ref().map(|m| m.n_unstable() == 0),
         poses: sim.world_poses(q).map_err(to_py)?,
         closures: sim.closure_residuals(q).map_err(to_py)?,
         warnings,

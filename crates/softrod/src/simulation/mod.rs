@@ -18,7 +18,7 @@ mod dynamics;
 mod kinematics;
 mod run;
 
-pub use analysis::{Equilibrium, ModalAnalysis};
+pub use analysis::{Equilibrium, ModalAnalysis, Statics};
 pub use kinematics::RodId;
 pub use run::{Flow, Observer, RunStatus, RunSummary, Sample};
 
