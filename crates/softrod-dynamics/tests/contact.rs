@@ -9,8 +9,8 @@ use softrod_dynamics::{
 };
 use softrod_kinematics::Strain;
 use softrod_lie::{Pose, Vec3, exp_twist};
+use softrod_mechanics::Material;
 use softrod_mechanics::contact::{ContactSettings, Contactee, Obstacle, Shape};
-use softrod_mechanics::{Material, Section};
 
 fn silicone() -> Material {
     Material::builder()
@@ -67,12 +67,8 @@ fn obstacles_are_checked_and_parents_resolved() {
     assert!(text.contains("'cub'") && text.contains("cube"), "{text}");
     let model = Model::builder().rod(rod()).build().unwrap();
     assert!(!model.has_contact());
-    assert!(
-        model
-            .contacts(0.0, &[0.0; 9], &[0.0; 9])
-            .unwrap()
-            .is_empty()
-    );
+    let zero = vec![0.0; model.n_dof()];
+    assert!(model.contacts(0.0, &zero, &zero).unwrap().is_empty());
     let settings = ContactSettings {
         friction: -1.0,
         ..Default::default()
@@ -153,7 +149,7 @@ fn contact_jacobians_match_central_differences() {
         Obstacle::new(
             "pole",
             Shape::Cylinder {
-                point: Vec3::new(0.15, 0.0, 0.0),
+                point: Vec3::new(0.15, 0.0295, 0.0),
                 axis: Vec3::new(0.1, 0.0, 1.0).normalize(),
                 radius: 0.02,
             },
@@ -161,7 +157,7 @@ fn contact_jacobians_match_central_differences() {
         Obstacle::new(
             "bar",
             Shape::Capsule {
-                center: Vec3::new(0.33, -0.02, -0.028),
+                center: Vec3::new(0.33, -0.02, -0.0335),
                 axis,
                 length: 0.1,
                 radius: 0.02,
@@ -221,10 +217,13 @@ fn contact_jacobians_match_central_differences() {
             .unwrap()
             .clone()
     };
-    let h = 1e-7;
+    // Steps: |q̈| reaches 2e5 against the stiff contact, so a central
+    // difference carries ε·2e5/h of round-off; in q̇ the dependence is
+    // smooth (quadratic at most) and takes a larger step.
     let mut worst: f64 = 0.0;
     for l in 0..n {
         for (which, analytic) in [(0, &dq), (1, &dqd)] {
+            let h = if which == 0 { 1e-7 } else { 1e-4 };
             let (mut a, mut b) = ((q.clone(), qd.clone()), (q.clone(), qd.clone()));
             if which == 0 {
                 a.0[l] += h;
@@ -269,8 +268,13 @@ fn propped_cantilever_tip_force_follows_beam_theory() {
         .obstacle(Obstacle::new("table", plane(table)))
         .build()
         .unwrap();
-    let res = statics(&model, None, &StaticsOptions::default()).unwrap();
-    assert!(res.converged);
+    let mut data = Data::new(&model);
+    let rest = vec![0.0; model.n_dof()];
+    let res = statics(&model, &mut data, &rest, &StaticsOptions::default()).unwrap();
+    eprintln!(
+        "statics: {} iterations, {} load steps",
+        res.iterations, res.load_steps
+    );
     let q = res.q.as_slice();
     let contacts = model.contacts(0.0, q, &vec![0.0; q.len()]).unwrap();
     let force: Vec3 = contacts.iter().map(|c| c.force).sum();
