@@ -26,7 +26,7 @@ fn material() -> Material {
 
 /// A free rod (6-dof joint to the world) whose base pose is `base`, with
 /// `obstacle`, gravity −z.
-fn free_rod(base: Pose, obstacle: Obstacle) -> Simulation {
+fn free_rod(base: Pose, obstacle: Obstacle, energy_tolerance: f64) -> Simulation {
     let rod = Rod::builder(L)
         .name("rod")
         .pieces(4)
@@ -46,6 +46,7 @@ fn free_rod(base: Pose, obstacle: Obstacle) -> Simulation {
         rtol: 1e-6,
         atol: 1e-8,
         output_every: Some(0.01),
+        energy_tolerance,
         ..Settings::default()
     };
     sim.set_settings(settings).unwrap();
@@ -79,7 +80,7 @@ fn a_falling_rod_lands_and_rests_at_its_radius() {
             normal: Vec3::z(),
         },
     );
-    let mut sim = free_rod(base, table);
+    let mut sim = free_rod(base, table, Settings::default().energy_tolerance);
     let mut keep = Keep(Vec::new());
     sim.simulate_with(0.5, &mut keep).unwrap();
     let (q0, qd0) = (&keep.0[0].1, &keep.0[0].2);
@@ -115,6 +116,10 @@ fn a_falling_rod_lands_and_rests_at_its_radius() {
 
 /// A rod lying across an incline of angle `alpha` with friction `mu`:
 /// the distance its centre travels down the slope at the output times.
+///
+/// The run's energy watch is off while sliding: the friction force jumps
+/// where an anchor is dragged at a step's commit (CT5), and the watch's
+/// trapezoidal work misses those jumps (a known limit, issue 24).
 fn incline(alpha: f64, mu: f64, duration: f64) -> Vec<(f64, f64)> {
     let n = Vec3::new(alpha.sin(), 0.0, alpha.cos());
     let down = Vec3::new(alpha.cos(), 0.0, -alpha.sin());
@@ -129,7 +134,7 @@ fn incline(alpha: f64, mu: f64, duration: f64) -> Vec<(f64, f64)> {
         },
     )
     .friction(mu);
-    let mut sim = free_rod(base, slope);
+    let mut sim = free_rod(base, slope, f64::INFINITY);
     let mut keep = Keep(Vec::new());
     sim.simulate_with(duration, &mut keep).unwrap();
     let c0 = centre(&sim, &keep.0[0].1);
