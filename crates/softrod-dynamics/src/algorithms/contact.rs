@@ -68,6 +68,7 @@ fn point_rows(spatial: &DMatrix<f64>, p: &Vec3, sign: f64, out: &mut DMatrix<f64
 /// The relative translational Jacobian (3 × n_dof, into `out`) of a rod
 /// point against the obstacle's parent on a tree model: the rod's section
 /// at `s` minus the body point at the same place (zero for the world).
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn tree_point_jacobian(
     model: &Model,
     data: &Data,
