@@ -165,6 +165,9 @@ fn conservative_model(model: &Model) -> Result<Option<Model>, Error> {
                 .is_some_and(|d| d.translational != 0.0 || d.rotational != 0.0)
             || s.properties.material().viscosity() != 0.0
     }) || model.bodies().iter().any(|b| !b.spec.loads.is_empty())
+        // Contact forces do work (the penalty stores it, damping and
+        // friction dissipate it): the conservative model leaves them out.
+        || model.has_contact()
         || model
             .elements()
             .iter()
