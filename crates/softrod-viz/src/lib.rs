@@ -28,10 +28,12 @@ pub mod decimate;
 pub mod demo;
 pub mod error;
 pub mod html;
+pub mod obstacles;
 pub mod plot;
 pub mod png;
 pub mod run_dir;
 
 pub use data::{BodyShape, BodyTrack, CableTrack, Pose, RodTrack, ViewData};
 pub use error::VizError;
+pub use obstacles::{ObstacleShape, ObstacleTrack};
 pub use html::{ViewOptions, ViewStats, render_html, write_html};
