@@ -64,6 +64,7 @@ pub fn check(path: &Path) -> Result<(), CliError> {
         }
     }
     crate::closures::print_closures(m, sim.initial_state().0.as_slice())?;
+    crate::contact::print_contact(&scene);
     if scene.n_cables() > 0 {
         println!("cables: {}", scene.n_cables());
     }

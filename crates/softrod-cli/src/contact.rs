@@ -1,0 +1,102 @@
+//! What `check` says about contact (scene-format.md, "Contact: obstacles,
+//! rods touching rods, friction"): one line per obstacle, the settings of
+//! rod–rod contact and each rod's contact radius. The data are the scene's
+//! (`Scene::obstacles`, `Scene::contact`, `Scene::contact_radius`); this
+//! module only words them.
+
+use softrod::mechanics::contact::{Obstacle, Shape};
+use softrod_scene::Scene;
+
+/// `[x, y, z]` with the shortest decimals that read back exactly.
+fn v3(v: &softrod::lie::Vec3) -> String {
+    format!("[{}, {}, {}]", v[0], v[1], v[2])
+}
+
+/// The geometry of an obstacle in words, in its carrier's frame.
+pub fn shape_text(shape: &Shape) -> String {
+    match shape {
+        Shape::Plane { point, normal } => {
+            format!("plane through {} m, normal {}", v3(point), v3(normal))
+        }
+        Shape::Sphere { center, radius } => {
+            format!("sphere at {} m, radius {radius} m", v3(center))
+        }
+        Shape::Cylinder {
+            point,
+            axis,
+            radius,
+        } => format!(
+            "cylinder (infinite) through {} m, axis {}, radius {radius} m",
+            v3(point),
+            v3(axis)
+        ),
+        Shape::Capsule {
+            center,
+            axis,
+            length,
+            radius,
+        } => format!(
+            "capsule at {} m, axis {}, length {length} m, radius {radius} m",
+            v3(center),
+            v3(axis)
+        ),
+        Shape::Box {
+            center,
+            rotation,
+            half_extents,
+        } => {
+            let r = |i: usize| format!("[{}, {}, {}]", rotation[(i, 0)], rotation[(i, 1)], rotation[(i, 2)]);
+            format!(
+                "box at {} m, half extents {} m, rotation [{}, {}, {}]",
+                v3(center),
+                v3(half_extents),
+                r(0),
+                r(1),
+                r(2)
+            )
+        }
+    }
+}
+
+fn obstacle_line(o: &Obstacle) -> String {
+    let carrier = match &o.parent {
+        Some(b) => format!("carried by body '{b}'"),
+        None => "fixed in the world".to_owned(),
+    };
+    format!(
+        "obstacle '{}': {}, {carrier}, friction {}, restitution {}",
+        o.name,
+        shape_text(&o.shape),
+        o.friction,
+        o.restitution
+    )
+}
+
+/// `check`'s contact lines: nothing for a scene without contact.
+pub fn print_contact(scene: &Scene) {
+    if !scene.has_contact() {
+        return;
+    }
+    for o in &scene.obstacles {
+        println!("{}", obstacle_line(o));
+    }
+    let c = &scene.contact;
+    let yes = |b: bool| if b { "yes" } else { "no" };
+    println!(
+        "contact between rods: different rods {}, a rod with itself {}, friction {}, restitution {}",
+        yes(c.rods),
+        yes(c.self_contact),
+        c.friction,
+        c.restitution
+    );
+    for (i, r) in scene.rods.iter().enumerate() {
+        let length = r.properties.length();
+        let (r0, r1) = (scene.contact_radius(i, 0.0), scene.contact_radius(i, length));
+        let radius = if r0 == r1 {
+            format!("{r0} m")
+        } else {
+            format!("{r0} m at the base to {r1} m at the tip")
+        };
+        println!("contact radius of rod '{}': {radius}", r.name);
+    }
+}
