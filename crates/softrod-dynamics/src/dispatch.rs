@@ -36,6 +36,9 @@ pub fn forward_dynamics_with<'a>(
     tau_act: Option<&[f64]>,
 ) -> Result<&'a DVector<f64>, DynamicsError> {
     check_forward_inputs(model, forces, q, qd, tau_act)?;
+    if model.has_closures() && model.has_contact() {
+        return Err(DynamicsError::UnsupportedClosed { what: "contact" });
+    }
     match (&model.tree, model.has_closures()) {
         (Some(_), true) => {
             model.set_time(data, t);

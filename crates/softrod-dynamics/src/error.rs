@@ -357,6 +357,83 @@ pub enum DynamicsError {
         /// The axis given.
         axis: softrod_lie::Vec3,
     },
+    /// An obstacle's description is invalid.
+    #[error("obstacle {index} ('{name}') is invalid")]
+    Obstacle {
+        /// Position in the obstacle list (0-based).
+        index: usize,
+        /// Its name.
+        name: String,
+        /// What is wrong.
+        #[source]
+        source: softrod_mechanics::ObstacleError,
+    },
+    /// An obstacle's parent is no body of the model.
+    #[error(
+        "obstacle {index} ('{name}'): parent '{parent}' is not a body of the model (bodies: {})",
+        if bodies.is_empty() { "none; use \"world\"".to_string() } else { bodies.join(", ") }
+    )]
+    ObstacleParent {
+        /// Position in the obstacle list.
+        index: usize,
+        /// Its name.
+        name: String,
+        /// The unknown parent.
+        parent: String,
+        /// The model's bodies.
+        bodies: Vec<String>,
+    },
+    /// The rod–rod contact settings are invalid.
+    #[error("contact settings are invalid")]
+    ContactSettings {
+        /// What is wrong.
+        #[source]
+        source: softrod_mechanics::ObstacleError,
+    },
+    /// A rod's contact radius is not positive and finite.
+    #[error("{rod}: contact_radius must be positive and finite, got {value}")]
+    ContactRadius {
+        /// Which rod.
+        rod: RodId,
+        /// The value.
+        value: f64,
+    },
+    /// A rod starts inside an obstacle or another rod, deeper than allowed
+    /// (docs/theory-contact.md CT3).
+    #[error(
+        "{rod} starts inside {other} at s = {s:.6} m: penetration {depth:.3e} m > allowed          {allowed:.3e} m (move it out)"
+    )]
+    InitialOverlap {
+        /// The rod.
+        rod: RodId,
+        /// Arc length on it \[m\].
+        s: f64,
+        /// What it overlaps: `obstacle 'name'` or `rod 'name' at s = …`.
+        other: String,
+        /// Penetration depth \[m\].
+        depth: f64,
+        /// The allowed penetration \[m\].
+        allowed: f64,
+    },
+    /// A contact penetrated deeper than the model can resolve
+    /// (docs/theory-contact.md CT3).
+    #[error(
+        "{rod} penetrates {other} at s = {s:.6} m, t = {t} s by {depth:.3e} m > bound          {bound:.3e} m (contact failed: smaller steps, or a slower impact)"
+    )]
+    Penetration {
+        /// The rod.
+        rod: RodId,
+        /// Arc length on it \[m\].
+        s: f64,
+        /// What it penetrates.
+        other: String,
+        /// Time \[s\].
+        t: f64,
+        /// Penetration depth \[m\].
+        depth: f64,
+        /// The bound \[m\].
+        bound: f64,
+    },
     /// A closure does not hold at the initial state (D66).
     #[error(
         "closure '{closure}' does not hold at the initial state: residual {residual:.3e} m \
@@ -387,7 +464,8 @@ macro_rules! rod_of {
             | DynamicsError::Cable { rod, .. }
             | DynamicsError::PointLoad { rod, .. }
             | DynamicsError::DistributedLoad { rod, .. }
-            | DynamicsError::Drag { rod, .. } => Some(rod),
+            | DynamicsError::Drag { rod, .. }
+            | DynamicsError::ContactRadius { rod, .. } => Some(rod),
             _ => None,
         }
     };

@@ -108,9 +108,9 @@ pub use algorithms::{
     bias_force, forward_dynamics_cholesky, inverse_dynamics, inverse_dynamics_with, mass_matrix,
 };
 pub use analysis::{
-    Energies, Modes, StaticsOptions, StaticsResult, actuation_matrix, closure_statics,
-    coriolis_matrix, damping_matrix, energies, frames, generalized_gravity, modes,
-    section_jacobian, static_force, statics, stiffness_matrix,
+    Energies, FAILURE_PENETRATION, Modes, StaticsOptions, StaticsResult, actuation_matrix,
+    closure_statics, commit_contact, coriolis_matrix, damping_matrix, energies, frames,
+    generalized_gravity, modes, section_jacobian, static_force, statics, stiffness_matrix,
 };
 pub use constraints::{
     check_closures, closure_multipliers, closure_residuals, constraint_jacobian, constraint_rank,

@@ -292,6 +292,43 @@ pub fn contact_radius(section: &Section, s: f64, length: f64) -> f64 {
     }
 }
 
+/// What a rod touches at a [`ContactPoint`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Contactee {
+    /// The obstacle of this index (in the model's obstacle list).
+    Obstacle(usize),
+    /// Rod `rod` (index in the model's rods) at its arc length `s` \[m\].
+    Rod {
+        /// The other rod's index.
+        rod: usize,
+        /// Arc length on it \[m\].
+        s: f64,
+    },
+}
+
+/// One resolved contact at a state: pure data for outputs (scene contract,
+/// "Contact", the `contacts` entries). World frame, SI units.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ContactPoint {
+    /// Index of the rod `a` that is touched (in the model's rods).
+    pub a: usize,
+    /// Material arc length on rod `a` \[m\].
+    pub s: f64,
+    /// What touches it.
+    pub b: Contactee,
+    /// The contact point on `a`'s centreline, world \[m\].
+    pub point: Vec3,
+    /// Unit normal from `b` to `a`, world.
+    pub normal: Vec3,
+    /// Distance between the two surfaces \[m\]; negative: penetration.
+    pub gap: f64,
+    /// Force on `a`, world \[N\] (`b` feels its opposite).
+    pub force: Vec3,
+    /// Friction sticks (`true`) or slides (`false`; also for frictionless
+    /// contacts).
+    pub sticking: bool,
+}
+
 /// What is wrong with an obstacle or the contact settings. `what` is the
 /// contract's key (`radius`, `normal`, `axis`, `half_extents`, `length`,
 /// `friction`, `position`, `rotation`), so a scene loader can point at it.

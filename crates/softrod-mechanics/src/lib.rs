@@ -41,7 +41,7 @@ pub mod validity;
 
 pub use body::RodProperties;
 pub use cable::{Cable, Routing, Span, Tension};
-pub use contact::{ContactSettings, Obstacle, ObstacleError, Shape};
+pub use contact::{ContactPoint, ContactSettings, Contactee, Obstacle, ObstacleError, Shape};
 pub use elastic::{PieceMatrices, elastic_energy, integrated_constitutive, piece_matrices};
 pub use error::{MechanicsError, Quantity};
 pub use loads::{DistributedLoad, Drag, LoadFrame, PointLoad};

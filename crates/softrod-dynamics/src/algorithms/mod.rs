@@ -24,6 +24,7 @@
 //! form.
 
 pub(crate) mod chain;
+pub(crate) mod contact;
 pub(crate) mod frames;
 pub(crate) mod planar;
 pub(crate) mod shifted;
@@ -135,19 +136,56 @@ pub(crate) fn inverse_dynamics_open(
     t: f64,
     motion: Motion,
 ) {
+    // Contact first: on a tree its outward sweep leaves node data that the
+    // inverse dynamics' own sweep then overwrites.
+    let contact = contact_force(model, data, forces, t, motion.q, motion.qd);
     if let Some(tree) = &model.tree {
         model.set_time(data, t);
         tree::inverse_dynamics(model, tree, data, forces, t, motion);
-        return;
+    } else {
+        match motion {
+            Motion {
+                q,
+                qd: Some(qd),
+                qdd: Some(qdd),
+            } => chain::inverse_dynamics(model, data, forces, t, q, qd, qdd),
+            _ => chain::inverse_dynamics_general(model, data, forces, t, motion),
+        }
     }
-    match motion {
-        Motion {
-            q,
-            qd: Some(qd),
-            qdd: Some(qdd),
-        } => chain::inverse_dynamics(model, data, forces, t, q, qd, qdd),
-        _ => chain::inverse_dynamics_general(model, data, forces, t, motion),
+    if contact {
+        if let Some(w) = &data.contact {
+            data.tau -= &w.tau;
+        }
     }
+}
+
+/// The generalized contact force at `(q, q̇)` into `data.contact.tau`
+/// (docs/theory-contact.md); false (and nothing done) for a model without
+/// contact or forces without it (the generalized gravity).
+#[inline]
+pub(crate) fn contact_force(
+    model: &Model,
+    data: &mut Data,
+    forces: Forces,
+    t: f64,
+    q: &[f64],
+    qd: Option<&[f64]>,
+) -> bool {
+    if !model.contact.active() {
+        return false;
+    }
+    let Some(ask) = contact::Ask::of(forces, qd.is_some()) else {
+        return false;
+    };
+    let Some(mut work) = data.contact.take() else {
+        return false;
+    };
+    if model.tree.is_some() {
+        model.set_time(data, t);
+    }
+    contact::evaluate(model, data, &mut work, q, qd, ask);
+    data.contact = Some(work);
+    true
 }
 
 /// The forward dynamics of an open model, or of a closed model's open tree
@@ -155,6 +193,37 @@ pub(crate) fn inverse_dynamics_open(
 /// caller): the tree's with the prescribed joints at `t`, else the chain's.
 /// Result in `data.qdd`.
 pub(crate) fn forward_dynamics_open(
+    model: &Model,
+    data: &mut Data,
+    forces: Forces,
+    t: f64,
+    q: &[f64],
+    qd: &[f64],
+    tau_act: Option<&[f64]>,
+) -> Result<(), DynamicsError> {
+    if contact_force(model, data, forces, t, q, Some(qd)) {
+        let mut work = data.contact.take().expect("contact work");
+        match tau_act {
+            Some(ta) => work.tau_total.as_mut_slice().copy_from_slice(ta),
+            None => work.tau_total.fill(0.0),
+        }
+        work.tau_total += &work.tau;
+        let result = forward_open_paths(
+            model,
+            data,
+            forces,
+            t,
+            q,
+            qd,
+            Some(work.tau_total.as_slice()),
+        );
+        data.contact = Some(work);
+        return result;
+    }
+    forward_open_paths(model, data, forces, t, q, qd, tau_act)
+}
+
+fn forward_open_paths(
     model: &Model,
     data: &mut Data,
     forces: Forces,

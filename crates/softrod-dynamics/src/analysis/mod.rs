@@ -7,6 +7,7 @@
 //! closures (D69). A new analysis of a model goes here.
 
 pub(crate) mod closed;
+pub(crate) mod contact;
 pub(crate) mod energy;
 pub(crate) mod frames;
 pub(crate) mod matrices;
@@ -14,6 +15,7 @@ pub(crate) mod modes;
 pub(crate) mod statics;
 
 pub use closed::closure_statics;
+pub use contact::{FAILURE_PENETRATION, commit_contact};
 pub use energy::{Energies, energies};
 pub use frames::{frames, section_jacobian};
 pub use matrices::{

@@ -137,6 +137,14 @@ fn fd_derivatives<'a>(
         (Some(u), Some(t)) => t.as_mut_slice().copy_from_slice(u),
         (Some(u), t) => *t = Some(DVector::from_column_slice(u)),
     }
+    if let (Some(from), Some(to)) = (&data.contact, &mut work.id.contact) {
+        // The friction state of the run, not a fresh one.
+        if let Some(w) = &mut to.contact {
+            for (a, b) in w.anchors.iter_mut().zip(&from.anchors) {
+                a.copy_from_slice(b);
+            }
+        }
+    }
     inverse_dynamics_derivatives_with(model, &mut work.id, forces, t, q, qd, work.qdd.as_slice())?;
     work.solver.factor_at(model, t, q, 0.0, 0.0)?;
     work.dqdd_dq.copy_from(&work.id.dtau_dq);

@@ -14,6 +14,7 @@
 //! ones; a new derivative of the equations of motion goes here.
 
 pub(crate) mod chain;
+pub(crate) mod contact;
 pub(crate) mod forward;
 pub(crate) mod piece;
 pub(crate) mod point;
@@ -28,6 +29,7 @@ use crate::algorithms::check_vec;
 use crate::error::DynamicsError;
 use crate::forces::Forces;
 use crate::model::Model;
+use crate::model::data::Data;
 use nalgebra::{DMatrix, DVector};
 use piece::PieceWork;
 
@@ -63,6 +65,10 @@ pub struct IdDerivatives {
     n_dof: usize,
     /// The per-node buffers of an articulated model (D76–D80).
     tree: Option<Box<tree::TreeWork>>,
+    /// The buffers and friction anchors of contact (models with contact
+    /// only; [`crate::forward_dynamics_derivatives`] copies the anchors of
+    /// its `Data` here).
+    pub(crate) contact: Option<Box<Data>>,
 }
 
 impl IdDerivatives {
@@ -83,6 +89,7 @@ impl IdDerivatives {
             dtau_dqd: DMatrix::zeros(n, n),
             tau: DVector::zeros(n),
             tensions: None,
+            contact: model.has_contact().then(|| Box::new(Data::new(model))),
             n_dof: n,
             tree: model
                 .tree
@@ -181,6 +188,20 @@ pub(crate) fn id_derivatives_impl<'a>(
             chain::inward(model, rm, work, r, &at);
             chain::pairs(rm, work, r);
         }
+    }
+    if let Some(mut cd) = work.contact.take() {
+        contact::subtract_contact(
+            model,
+            &mut cd,
+            forces,
+            t,
+            q,
+            qd,
+            &mut work.tau,
+            &mut work.dtau_dq,
+            &mut work.dtau_dqd,
+        );
+        work.contact = Some(cd);
     }
     for (what, m) in [("dtau/dq", &work.dtau_dq), ("dtau/dqdot", &work.dtau_dqd)] {
         // One vectorizable pass (x·0 is NaN exactly for non-finite x), the

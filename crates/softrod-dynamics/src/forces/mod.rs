@@ -20,6 +20,7 @@
 //! wrenches at `(rod, s)` that change every evaluation — is a field of
 //! [`Forces`] borrowing the caller's list, applied like the point loads.
 
+pub(crate) mod contact;
 pub(crate) mod external;
 pub(crate) mod linearized;
 pub(crate) mod strain;

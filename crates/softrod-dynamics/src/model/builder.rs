@@ -8,6 +8,7 @@ use crate::model::joint::{Attachment, BodySpec};
 use crate::model::{Element, Model, Rod};
 use softrod_kinematics::{Basis, RodGeometry, Strain, straight};
 use softrod_lie::{Pose, Vec3, Vec6};
+use softrod_mechanics::contact::{ContactSettings, Obstacle};
 use softrod_mechanics::{
     Cable, DistributedLoad, Drag, Material, MechanicsError, PointLoad, RodProperties, Section,
 };
@@ -62,6 +63,7 @@ pub struct RodBuilder {
     cables: Vec<Cable>,
     point_loads: Vec<PointLoad>,
     distributed_loads: Vec<DistributedLoad>,
+    contact_radius: Option<f64>,
 }
 
 impl RodBuilder {
@@ -79,6 +81,7 @@ impl RodBuilder {
             stress_free: None,
             drag: None,
             cables: Vec::new(),
+            contact_radius: None,
             point_loads: Vec::new(),
             distributed_loads: Vec::new(),
         }
@@ -184,6 +187,13 @@ impl RodBuilder {
         self
     }
 
+    /// The radius of the rod's contact surface \[m\] (default: from the
+    /// section, [`softrod_mechanics::contact::contact_radius`]).
+    pub fn contact_radius(mut self, radius: f64) -> Self {
+        self.contact_radius = Some(radius);
+        self
+    }
+
     /// The rod, or the first thing wrong with it: the section and material
     /// present, the length and the section (mechanics), the pieces,
     /// strains, rest strain and base (kinematics), the piece lengths against
@@ -237,6 +247,7 @@ impl RodBuilder {
             distributed_loads: self.distributed_loads,
             drag: self.drag,
             cables: self.cables,
+            contact_radius: self.contact_radius,
         };
         spec.validate()?;
         Ok(spec)
@@ -300,6 +311,8 @@ pub struct ModelBuilder {
     gravity: Option<Vec3>,
     quadrature: Option<usize>,
     closures: Vec<Closure>,
+    obstacles: Vec<Obstacle>,
+    contact: ContactSettings,
 }
 
 impl ModelBuilder {
@@ -344,6 +357,18 @@ impl ModelBuilder {
         self
     }
 
+    /// Adds an obstacle (docs/theory-contact.md; see [`Model::with_contact`]).
+    pub fn obstacle(mut self, obstacle: Obstacle) -> Self {
+        self.obstacles.push(obstacle);
+        self
+    }
+
+    /// Rod–rod and self contact settings (see [`Model::with_contact`]).
+    pub fn contact(mut self, settings: ContactSettings) -> Self {
+        self.contact = settings;
+        self
+    }
+
     /// Gauss–Legendre points per piece (≥ 1).
     pub fn quadrature(mut self, points: usize) -> Self {
         self.quadrature = Some(points);
@@ -372,6 +397,7 @@ impl ModelBuilder {
             self.gravity,
             self.quadrature.unwrap_or(Model::DEFAULT_QUADRATURE),
         )?
-        .with_closures(self.closures)
+        .with_closures(self.closures)?
+        .with_contact(self.obstacles, self.contact)
     }
 }

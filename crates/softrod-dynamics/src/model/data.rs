@@ -101,6 +101,9 @@ pub struct Data {
     pub prescribed_force: DVector<f64>,
     /// Buffers of the constrained dynamics of a model with closures.
     pub(crate) closure: Option<ClosureWork>,
+    /// Contact buffers and friction state (docs/theory-contact.md), only
+    /// for models with contact.
+    pub(crate) contact: Option<Box<crate::model::contact::ContactWork>>,
 }
 
 impl Data {
@@ -157,6 +160,9 @@ impl Data {
                     model.tree.as_ref().map_or(0, |t| t.nodes.len()),
                 )
             }),
+            contact: model
+                .has_contact()
+                .then(|| Box::new(crate::model::contact::ContactWork::new(model))),
         };
         model.set_time(&mut data, 0.0);
         data

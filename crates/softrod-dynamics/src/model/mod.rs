@@ -8,6 +8,7 @@
 
 pub(crate) mod builder;
 pub(crate) mod closure;
+pub(crate) mod contact;
 pub(crate) mod data;
 pub(crate) mod element;
 pub(crate) mod joint;
@@ -62,6 +63,9 @@ pub struct Model {
     /// Whether the forward dynamics takes the planar path for planar rods
     /// (default on).
     pub(crate) planar_path: bool,
+    /// Obstacles, rod–rod settings and contact points
+    /// (docs/theory-contact.md); empty: no contact work anywhere.
+    pub(crate) contact: contact::ContactModel,
 }
 
 impl Model {
@@ -188,6 +192,7 @@ impl Model {
             closures: Vec::new(),
             baumgarte: 0.0,
             planar_path: true,
+            contact: contact::ContactModel::default(),
         };
         if articulated {
             model.tree = Some(Tree::build(&model)?);

@@ -59,6 +59,10 @@ pub struct Rod {
     pub drag: Option<Drag>,
     /// Cables (tendons) routed along this rod.
     pub cables: Vec<Cable>,
+    /// Radius of the rod's contact surface \[m\] (docs/theory-contact.md
+    /// CT1); `None`: from the section
+    /// ([`softrod_mechanics::contact::contact_radius`]).
+    pub contact_radius: Option<f64>,
 }
 
 impl Rod {
@@ -80,6 +84,7 @@ impl Rod {
             distributed_loads: Vec::new(),
             drag: None,
             cables: Vec::new(),
+            contact_radius: None,
         }
     }
 
@@ -121,6 +126,14 @@ impl Rod {
                         value,
                     });
                 }
+            }
+        }
+        if let Some(r) = self.contact_radius {
+            if !(r.is_finite() && r > 0.0) {
+                return Err(DynamicsError::ContactRadius {
+                    rod: rod(),
+                    value: r,
+                });
             }
         }
         if let Some(d) = &self.drag {

@@ -67,6 +67,19 @@ impl Simulation {
         Ok(inverse_dynamics(&s.model, &mut s.data, t, q, qdot, qddot)?.clone())
     }
 
+    /// The active contacts at `(t, q, q̇)` with their forces
+    /// (docs/theory-contact.md), friction as the run's committed state
+    /// leaves it; empty for a model without contact.
+    pub fn contacts(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        qdot: &[f64],
+    ) -> Result<Vec<softrod_mechanics::ContactPoint>> {
+        let s = &mut self.system;
+        Ok(s.model.contacts_with(&mut s.data, t, q, qdot)?)
+    }
+
     /// Mass matrix `M(q)` (n_dof × n_dof, symmetric positive definite; D19–D20).
     pub fn mass_matrix(&mut self, q: &[f64]) -> Result<DMatrix<f64>> {
         let (model, data) = self.at_time();

@@ -289,6 +289,15 @@ impl Hooks<RodSystem> for RunHooks<'_> {
                 return Control::Stop;
             }
         }
+        // Contact friction (docs/theory-contact.md CT5): the anchors move
+        // only at accepted steps.
+        let contact_changed = match sys.commit_contact(info.t, q, qd) {
+            Ok(changed) => changed,
+            Err(e) => {
+                self.failure = Some((info.t, e.to_string()));
+                return Control::Stop;
+            }
+        };
         if !self.u.is_empty() && self.observer.inputs(info.t, q, qd, &mut self.u) {
             if let Err(e) = sys.data.set_cable_tensions(&sys.model, Some(&self.u)) {
                 self.failure = Some((info.t, format!("controller: {e}")));
@@ -300,6 +309,9 @@ impl Hooks<RodSystem> for RunHooks<'_> {
                     return Control::Stop;
                 }
             }
+            return Control::SystemChanged;
+        }
+        if contact_changed {
             return Control::SystemChanged;
         }
         Control::Continue

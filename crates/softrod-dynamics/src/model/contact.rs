@@ -1,0 +1,261 @@
+//! Contact as the model holds it: the obstacles (resolved to their parent
+//! bodies), the rod–rod settings, and per rod the material points where
+//! contact is looked for, each with its surface radius, the mass it stands
+//! for and the penalty constants of docs/theory-contact.md (CT2–CT4).
+//! The forces themselves are in `crate::forces::contact`.
+
+use crate::error::{DynamicsError, RodId};
+use crate::model::Model;
+use nalgebra::{DMatrix, DVector, Matrix6xX};
+use softrod_kinematics::RodKinematics;
+use softrod_lie::{Mat3, Vec3};
+use softrod_mechanics::contact::{ContactSettings, Obstacle, contact_radius};
+
+/// Reference impact speed of the default stiffness (CT3) \[m/s\].
+pub(crate) const IMPACT_SPEED: f64 = 1.0;
+/// Penetration at rest under the rod's own weight, as a fraction of the
+/// smaller radius (CT3).
+pub(crate) const REST_PENETRATION: f64 = 0.01;
+/// Penetration of a 1 m/s impact, as a fraction of the smaller radius
+/// (CT3).
+pub(crate) const IMPACT_PENETRATION: f64 = 0.10;
+
+/// One material point where contact is looked for (CT1).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Sample {
+    /// Arc length \[m\].
+    pub s: f64,
+    /// Surface radius there \[m\].
+    pub radius: f64,
+    /// Mass the point stands for (its share of the rod) \[kg\].
+    pub mass: f64,
+}
+
+/// The contact part of a [`Model`].
+#[derive(Clone, Debug, Default)]
+pub(crate) struct ContactModel {
+    pub obstacles: Vec<Obstacle>,
+    /// Index of each obstacle's parent body (`None`: the world).
+    pub parents: Vec<Option<usize>>,
+    pub settings: ContactSettings,
+    /// Per rod, its contact points base to tip.
+    pub samples: Vec<Vec<Sample>>,
+}
+
+impl ContactModel {
+    /// Whether anything touches anything.
+    pub(crate) fn active(&self) -> bool {
+        !self.obstacles.is_empty() || self.settings.any()
+    }
+}
+
+/// The contact points of a rod (CT1): every piece boundary and interior
+/// points no farther apart than the local surface radius, so that a sphere
+/// of the swept surface sits on every stretch of the centreline.
+pub(crate) fn samples(spec: &crate::model::Rod) -> Vec<Sample> {
+    let g = &spec.geometry;
+    let length = g.length();
+    let section = spec.properties.section();
+    let radius_at = |s: f64| {
+        spec.contact_radius
+            .unwrap_or_else(|| contact_radius(section, s, length))
+    };
+    let mut s_list = vec![0.0];
+    let mut start = 0.0;
+    for l in g.piece_lengths() {
+        let r = radius_at(start).min(radius_at(start + l)).max(1e-12);
+        let m = (l / r).ceil().clamp(1.0, 1.0e4) as usize;
+        for j in 1..=m {
+            s_list.push(start + l * j as f64 / m as f64);
+        }
+        start += l;
+    }
+    let last = s_list.len() - 1;
+    s_list[last] = length;
+    (0..s_list.len())
+        .map(|i| {
+            let lo = if i == 0 {
+                s_list[0]
+            } else {
+                0.5 * (s_list[i - 1] + s_list[i])
+            };
+            let hi = if i == last {
+                s_list[last]
+            } else {
+                0.5 * (s_list[i] + s_list[i + 1])
+            };
+            let mid = 0.5 * (lo + hi);
+            Sample {
+                s: s_list[i],
+                radius: radius_at(s_list[i]),
+                mass: spec.properties.mass_per_length(mid) * (hi - lo),
+            }
+        })
+        .collect()
+}
+
+impl Model {
+    /// This model with obstacles and rod–rod contact settings
+    /// (docs/theory-contact.md). Replaces any given before.
+    ///
+    /// Errors: an invalid obstacle ([`DynamicsError::Obstacle`], naming
+    /// its index and name, the [`softrod_mechanics::ObstacleError`] as
+    /// source), a parent that is no body of the model
+    /// ([`DynamicsError::ObstacleParent`], listing the bodies), invalid
+    /// contact settings ([`DynamicsError::ContactSettings`]).
+    pub fn with_contact(
+        mut self,
+        obstacles: Vec<Obstacle>,
+        settings: ContactSettings,
+    ) -> Result<Self, DynamicsError> {
+        let mut parents = Vec::with_capacity(obstacles.len());
+        for (index, o) in obstacles.iter().enumerate() {
+            o.validate().map_err(|source| DynamicsError::Obstacle {
+                index,
+                name: o.name.clone(),
+                source,
+            })?;
+            parents.push(match &o.parent {
+                None => None,
+                Some(p) if p == "world" => None,
+                Some(p) => Some(
+                    self.bodies
+                        .iter()
+                        .position(|b| &b.spec.name == p)
+                        .ok_or_else(|| DynamicsError::ObstacleParent {
+                            index,
+                            name: o.name.clone(),
+                            parent: p.clone(),
+                            bodies: self.bodies.iter().map(|b| b.spec.name.clone()).collect(),
+                        })?,
+                ),
+            });
+        }
+        settings
+            .validate()
+            .map_err(|source| DynamicsError::ContactSettings { source })?;
+        let active = !obstacles.is_empty() || settings.any();
+        self.contact = ContactModel {
+            samples: if active {
+                self.rods.iter().map(|r| samples(&r.spec)).collect()
+            } else {
+                Vec::new()
+            },
+            obstacles,
+            parents,
+            settings,
+        };
+        Ok(self)
+    }
+
+    /// The obstacles, as given.
+    pub fn obstacles(&self) -> &[Obstacle] {
+        &self.contact.obstacles
+    }
+
+    /// The rod–rod and self contact settings (default: none).
+    pub fn contact_settings(&self) -> ContactSettings {
+        self.contact.settings
+    }
+
+    /// Whether the model has any contact (an obstacle, rod–rod or self
+    /// contact). Without it no evaluation does any contact work.
+    pub fn has_contact(&self) -> bool {
+        self.contact.active()
+    }
+
+    /// The penetration \[m\] a rod may start with at `s` before
+    /// [`Model::check_initial_contact`] refuses it: 1 % of its surface
+    /// radius there (CT3).
+    pub fn allowed_penetration(&self, rod: usize, s: f64) -> f64 {
+        let rm = &self.rods[rod];
+        let length = rm.spec.geometry.length();
+        let r = rm.spec.contact_radius.unwrap_or_else(|| {
+            contact_radius(rm.spec.properties.section(), s.clamp(0.0, length), length)
+        });
+        REST_PENETRATION * r
+    }
+
+    pub(crate) fn rod_id(&self, rod: usize) -> RodId {
+        self.rods[rod].spec.id(Some(rod))
+    }
+}
+
+/// One contact found by an evaluation (world frame): what the derivatives
+/// and the outputs read back.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Active {
+    pub rod: usize,
+    pub sample: usize,
+    pub obstacle: usize,
+    /// Rod point (centreline) and the unit normal from the obstacle.
+    pub point: Vec3,
+    pub normal: Vec3,
+    pub gap: f64,
+    /// Force on the rod and its derivatives in the point's position and
+    /// velocity relative to the obstacle.
+    pub force: Vec3,
+    pub dp: Mat3,
+    pub dv: Mat3,
+    pub sticking: bool,
+}
+
+/// The buffers and the friction state of contact, in [`crate::Data`]
+/// (only for models with contact).
+#[derive(Clone, Debug)]
+pub(crate) struct ContactWork {
+    /// Per rod, its kinematics (chain models).
+    pub kin: Vec<RodKinematics>,
+    /// Per rod, `J(s)` and `J̇(s)` in the mixed frame (6 × rod dofs).
+    pub jac: Vec<Matrix6xX<f64>>,
+    pub jdot: Vec<Matrix6xX<f64>>,
+    /// A dense spatial Jacobian (6 × n_dof) for tree models.
+    pub dense: DMatrix<f64>,
+    pub dense_body: DMatrix<f64>,
+    /// The relative point Jacobian (3 × n_dof) of tree models.
+    pub jrel: DMatrix<f64>,
+    /// The contacts of the last evaluation.
+    pub active: Vec<Active>,
+    /// The generalized contact force of the last evaluation (n_dof), and
+    /// `τ_act + τ_contact` for the forward dynamics.
+    pub tau: DVector<f64>,
+    pub tau_total: DVector<f64>,
+    /// Friction anchors (CT5), committed after accepted steps: per rod,
+    /// `sample · n_obstacles + obstacle`, in the obstacle's parent frame.
+    pub anchors: Vec<Vec<Option<Vec3>>>,
+}
+
+impl ContactWork {
+    pub(crate) fn new(model: &Model) -> Self {
+        let n_obs = model.contact.obstacles.len();
+        Self {
+            kin: model
+                .rods
+                .iter()
+                .map(|r| RodKinematics::new(&r.spec.geometry))
+                .collect(),
+            jac: model
+                .rods
+                .iter()
+                .map(|r| Matrix6xX::zeros(r.n_dof()))
+                .collect(),
+            jdot: model
+                .rods
+                .iter()
+                .map(|r| Matrix6xX::zeros(r.n_dof()))
+                .collect(),
+            dense: DMatrix::zeros(6, model.n_dof()),
+            dense_body: DMatrix::zeros(6, model.n_dof()),
+            jrel: DMatrix::zeros(3, model.n_dof()),
+            active: Vec::with_capacity(64),
+            tau: DVector::zeros(model.n_dof()),
+            tau_total: DVector::zeros(model.n_dof()),
+            anchors: model
+                .contact
+                .samples
+                .iter()
+                .map(|s| vec![None; s.len() * n_obs])
+                .collect(),
+        }
+    }
+}
