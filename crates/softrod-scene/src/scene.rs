@@ -100,9 +100,6 @@ pub struct Scene {
     pub obstacles: Vec<Obstacle>,
     /// `[contact]` (default: rods touch neither each other nor themselves).
     pub contact: ContactSettings,
-    /// `rod[i].contact_radius` as the file gives it, one per rod (`None`:
-    /// the section's, [`softrod_mechanics::contact::contact_radius`]).
-    pub(crate) contact_radii: Vec<Option<f64>>,
     pub(crate) origins: Origins,
 }
 
@@ -179,7 +176,7 @@ impl Scene {
     /// If `i >= rods.len()`.
     pub fn contact_radius(&self, i: usize, s: f64) -> f64 {
         let rod = &self.rods[i];
-        self.contact_radii.get(i).copied().flatten().unwrap_or_else(|| {
+        rod.contact_radius.unwrap_or_else(|| {
             softrod_mechanics::contact::contact_radius(
                 rod.properties.section(),
                 s,

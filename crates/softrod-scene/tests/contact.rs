@@ -434,3 +434,51 @@ fn contact_radius_must_be_positive() {
     assert_eq!(e.path(), Some("rod[0].contact_radius"), "{e}");
     assert!(e.to_string().contains("out of range: 0"), "{e}");
 }
+
+/// A rod that starts inside an obstacle is refused when the model is built
+/// (what every command does before it writes anything), naming the rod, the
+/// obstacle and the depth: a straight rod along x of radius 1 cm with a
+/// table 5 mm above its centreline penetrates 1 cm + 5 mm = 1.5e-2 m.
+#[test]
+fn a_rod_starting_inside_an_obstacle_is_refused_naming_both_and_the_depth() {
+    let text = format!(
+        "{ROD}[[obstacle]]\nname = \"table\"\nshape = \"plane\"\nposition = [0, 0, 0.005]\n\
+         normal = [0, 0, 1]\n"
+    );
+    let s = scene(&text);
+    let e = s.build().expect_err("overlap");
+    assert_eq!(e.path(), Some("obstacle[0]"), "{e}");
+    let msg = e.to_string();
+    for part in ["'arm'", "obstacle 'table'", "1.500e-2"] {
+        assert!(msg.contains(part), "{part:?} not in {msg}");
+    }
+    // Touching within the allowed penetration (1 % of the radius) is fine:
+    // the table 0.05 mm below the surface.
+    let ok = text.replace("position = [0, 0, 0.005]", "position = [0, 0, -0.00995]");
+    assert!(scene(&ok).build().is_ok());
+    // And so is a table clear of the rod; the model then has the contact.
+    let clear = text.replace("position = [0, 0, 0.005]", "position = [0, 0, -0.02]");
+    let built = scene(&clear).build().unwrap();
+    assert!(built.model.has_contact());
+    assert_eq!(built.model.obstacles().len(), 1);
+    // A scene without contact builds a model without.
+    assert!(!scene(ROD).build().unwrap().model.has_contact());
+}
+
+#[test]
+fn contact_radius_reaches_the_model() {
+    let text = ROD.replace("pieces = 4\n", "pieces = 4\ncontact_radius = 0.004\n");
+    let text = format!(
+        "{text}[[obstacle]]\nname = \"table\"\nshape = \"plane\"\nposition = [0, 0, -0.0045]\n\
+         normal = [0, 0, 1]\n"
+    );
+    // With the section's 1 cm radius the rod would start 5.5 mm deep; with
+    // its 4 mm contact radius it clears the table by 0.5 mm.
+    let built = scene(&text).build().unwrap();
+    assert_eq!(built.model.rods()[0].spec.contact_radius, Some(0.004));
+    let gap = built
+        .model
+        .max_penetration(0.0, built.q0.as_slice())
+        .unwrap();
+    assert_eq!(gap, 0.0);
+}

@@ -170,6 +170,9 @@ impl Ctx<'_> {
             .map(|(i, r)| self.contact_radius(i, r.contact_radius))
             .collect::<Result<Vec<_>>>()?;
         let mut rods = self.rods(raw_rods)?;
+        for (rod, r) in rods.iter_mut().zip(contact_radii) {
+            rod.contact_radius = r;
+        }
         let mut robot = self.robot(links, raw.body, &rods)?;
         robot.closures = self.closures(raw.closure, &rods, &robot)?;
         let obstacles = self.obstacles(raw.obstacle, &rods, &robot)?;
@@ -207,7 +210,6 @@ impl Ctx<'_> {
             reference,
             obstacles,
             contact,
-            contact_radii,
             origins,
         })
     }
