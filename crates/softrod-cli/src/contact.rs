@@ -100,3 +100,104 @@ pub fn print_contact(scene: &Scene) {
         println!("contact radius of rod '{}': {radius}", r.name);
     }
 }
+
+/// `statics --json`'s `contacts` entries (scene-format.md, "Contact"): `a`
+/// and `s`, `b` (an obstacle's or a rod's name) and `b_s` (null for an
+/// obstacle), `point`, `normal` (from b to a), `gap`, `force` (on `a`,
+/// world); and `max_penetration`, the largest `−gap` (0 if none).
+pub fn contacts_json(
+    model: &softrod::dynamics::Model,
+    contacts: &[softrod::mechanics::ContactPoint],
+) -> (serde_json::Value, f64) {
+    use softrod::mechanics::Contactee;
+    let v3 = |v: &softrod::lie::Vec3| [v[0], v[1], v[2]];
+    let entries: Vec<serde_json::Value> = contacts
+        .iter()
+        .map(|c| {
+            let (b, b_s) = match c.b {
+                Contactee::Obstacle(k) => (model.obstacles()[k].name.clone(), None),
+                Contactee::Rod { rod, s } => (model.rods()[rod].spec.name.clone(), Some(s)),
+            };
+            serde_json::json!({
+                "a": model.rods()[c.a].spec.name,
+                "s": c.s,
+                "b": b,
+                "b_s": b_s,
+                "point": v3(&c.point),
+                "normal": v3(&c.normal),
+                "gap": c.gap,
+                "force": v3(&c.force),
+            })
+        })
+        .collect();
+    let deepest = contacts.iter().fold(0.0, |m, c| f64::max(m, -c.gap));
+    (serde_json::json!(entries), deepest)
+}
+
+/// An obstacle's shape as the viewer's plain data (the scene's keys).
+pub fn viz_shape(shape: &Shape) -> softrod_viz::ObstacleShape {
+    use softrod_viz::ObstacleShape as V;
+    let a = |v: &softrod::lie::Vec3| [v[0], v[1], v[2]];
+    match shape {
+        Shape::Plane { point, normal } => V::Plane {
+            position: a(point),
+            normal: a(normal),
+        },
+        Shape::Sphere { center, radius } => V::Sphere {
+            position: a(center),
+            radius: *radius,
+        },
+        Shape::Cylinder {
+            point,
+            axis,
+            radius,
+        } => V::Cylinder {
+            position: a(point),
+            axis: a(axis),
+            radius: *radius,
+        },
+        Shape::Capsule {
+            center,
+            axis,
+            length,
+            radius,
+        } => V::Capsule {
+            position: a(center),
+            axis: a(axis),
+            length: *length,
+            radius: *radius,
+        },
+        Shape::Box {
+            center,
+            rotation,
+            half_extents,
+        } => V::Box {
+            position: a(center),
+            rotation: [0, 1, 2].map(|i| [rotation[(i, 0)], rotation[(i, 1)], rotation[(i, 2)]]),
+            half_extents: a(half_extents),
+        },
+    }
+}
+
+/// The model's obstacles for a figure of snapshots whose bodies have the
+/// poses `body_poses[k]` (model order): a carried obstacle gets its body's
+/// pose at each snapshot.
+pub fn obstacle_tracks(
+    model: &softrod::dynamics::Model,
+    body_poses: &[&[softrod_viz::Pose]],
+) -> Vec<softrod_viz::ObstacleTrack> {
+    model
+        .obstacles()
+        .iter()
+        .map(|o| {
+            let body = o.parent.as_ref().and_then(|p| {
+                model.bodies().iter().position(|b| &b.spec.name == p)
+            });
+            softrod_viz::ObstacleTrack {
+                name: o.name.clone(),
+                shape: viz_shape(&o.shape),
+                poses: body.map(|b| body_poses.iter().map(|poses| poses[b]).collect()),
+            }
+        })
+        .collect()
+}

@@ -122,6 +122,19 @@ pub fn statics(path: &Path, json: bool, out: Option<PathBuf>, png: bool) -> Resu
         .then(|| l.sim.modes_about(res.q.as_slice()))
         .and_then(Result::ok)
         .map(|m| (m.omega.iter().all(|w| *w > 0.0), m.omega.min()));
+    // The contacts at the equilibrium (frictionless: statics has no
+    // history to anchor friction to; docs/theory-contact.md).
+    let contacts = if l.sim.model().has_contact() {
+        let zero = vec![0.0; res.q.len()];
+        Some(
+            l.sim
+                .model()
+                .contacts(0.0, res.q.as_slice(), &zero)
+                .map_err(|e| failed(format!("contacts at the equilibrium: {e}")))?,
+        )
+    } else {
+        None
+    };
     let model = l.sim.model();
     let poser = sampled_poses(model, 0.0, res.q.as_slice())?;
     if let Some((false, w)) = stable {
@@ -135,7 +148,16 @@ pub fn statics(path: &Path, json: bool, out: Option<PathBuf>, png: bool) -> Resu
         make_dir(dir)?;
         let c = centrelines(&poser);
         let bodies: Vec<[f64; 3]> = poser.bodies().iter().map(position).collect();
-        let name = plots::statics_figure(dir, model, &c, &bodies, &scene_title(path))?;
+        let body_poses: Vec<softrod_viz::Pose> = poser
+            .bodies()
+            .iter()
+            .map(|g| softrod_viz::Pose {
+                position: position(g),
+                rotation: softrod::record::quaternion(g),
+            })
+            .collect();
+        let name =
+            plots::statics_figure(dir, model, &c, &bodies, &body_poses, &scene_title(path))?;
         if png {
             plots::rasterize(dir, std::slice::from_ref(&name), json)?;
         }
@@ -167,12 +189,24 @@ pub fn statics(path: &Path, json: bool, out: Option<PathBuf>, png: bool) -> Resu
         let mut v = v;
         crate::robot::add_statics_json(model, &poser, res.q.as_slice(), &mut v);
         crate::closures::add_statics_json(model, res.q.as_slice(), &mut v)?;
+        if let Some(c) = &contacts {
+            let (entries, deepest) = crate::contact::contacts_json(model, c);
+            v["contacts"] = entries;
+            v["max_penetration"] = serde_json::json!(deepest);
+        }
         println!("{v}");
     } else {
         println!(
             "statics converged: {} Newton iterations, {} load step(s), residual {:.3e}",
             res.iterations, res.load_steps, res.residual
         );
+        if let Some(c) = &contacts {
+            let (_, deepest) = crate::contact::contacts_json(model, c);
+            println!(
+                "contacts: {}, largest penetration {deepest:.3e} m",
+                c.len()
+            );
+        }
         for (i, r) in model.rods().iter().enumerate() {
             let p = poser.tip(i).translation;
             println!(

@@ -44,7 +44,16 @@ pub fn run(
     let scene = &l.scene;
     let duration = scene.run.duration;
     let every = l.sim.settings().output_spacing(duration);
-    outputs::check_disk_space(&dir, l.sim.model(), duration, every)?;
+    let initial_contacts = if l.sim.model().has_contact() {
+        let (q0, qd0) = l.sim.initial_state();
+        l.sim
+            .model()
+            .contacts(0.0, q0.as_slice(), qd0.as_slice())
+            .map_or(0, |c| c.len())
+    } else {
+        0
+    };
+    outputs::check_disk_space(&dir, l.sim.model(), duration, every, initial_contacts)?;
     let times = output_times(duration, every);
     if npz_out {
         let width = Columns::of(l.sim.model()).width();
@@ -166,6 +175,9 @@ pub fn run(
                 eprintln!("softrod: warning: {w}");
             }
         }
+    }
+    if l.sim.model().has_contact() {
+        summary_final.add_contact(streamer.max_penetration(), streamer.max_contacts());
     }
     if l.sim.model().has_closures() {
         let r = streamer.closure_residual_max();
