@@ -45,7 +45,14 @@ pub fn shape_text(shape: &Shape) -> String {
             rotation,
             half_extents,
         } => {
-            let r = |i: usize| format!("[{}, {}, {}]", rotation[(i, 0)], rotation[(i, 1)], rotation[(i, 2)]);
+            let r = |i: usize| {
+                format!(
+                    "[{}, {}, {}]",
+                    rotation[(i, 0)],
+                    rotation[(i, 1)],
+                    rotation[(i, 2)]
+                )
+            };
             format!(
                 "box at {} m, half extents {} m, rotation [{}, {}, {}]",
                 v3(center),
@@ -91,7 +98,10 @@ pub fn print_contact(scene: &Scene) {
     );
     for (i, r) in scene.rods.iter().enumerate() {
         let length = r.properties.length();
-        let (r0, r1) = (scene.contact_radius(i, 0.0), scene.contact_radius(i, length));
+        let (r0, r1) = (
+            scene.contact_radius(i, 0.0),
+            scene.contact_radius(i, length),
+        );
         let radius = if r0 == r1 {
             format!("{r0} m")
         } else {
@@ -190,9 +200,10 @@ pub fn obstacle_tracks(
         .obstacles()
         .iter()
         .map(|o| {
-            let body = o.parent.as_ref().and_then(|p| {
-                model.bodies().iter().position(|b| &b.spec.name == p)
-            });
+            let body = o
+                .parent
+                .as_ref()
+                .and_then(|p| model.bodies().iter().position(|b| &b.spec.name == p));
             softrod_viz::ObstacleTrack {
                 name: o.name.clone(),
                 shape: viz_shape(&o.shape),

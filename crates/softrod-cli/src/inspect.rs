@@ -156,8 +156,7 @@ pub fn statics(path: &Path, json: bool, out: Option<PathBuf>, png: bool) -> Resu
                 rotation: softrod::record::quaternion(g),
             })
             .collect();
-        let name =
-            plots::statics_figure(dir, model, &c, &bodies, &body_poses, &scene_title(path))?;
+        let name = plots::statics_figure(dir, model, &c, &bodies, &body_poses, &scene_title(path))?;
         if png {
             plots::rasterize(dir, std::slice::from_ref(&name), json)?;
         }
@@ -202,10 +201,7 @@ pub fn statics(path: &Path, json: bool, out: Option<PathBuf>, png: bool) -> Resu
         );
         if let Some(c) = &contacts {
             let (_, deepest) = crate::contact::contacts_json(model, c);
-            println!(
-                "contacts: {}, largest penetration {deepest:.3e} m",
-                c.len()
-            );
+            println!("contacts: {}, largest penetration {deepest:.3e} m", c.len());
         }
         for (i, r) in model.rods().iter().enumerate() {
             let p = poser.tip(i).translation;

@@ -226,8 +226,11 @@ pub fn run_figures(
                 bodies: body_marks(model, &sn.bodies),
             })
             .collect();
-        let poses: Vec<&[softrod_viz::Pose]> =
-            s.snapshots.iter().map(|sn| sn.body_poses.as_slice()).collect();
+        let poses: Vec<&[softrod_viz::Pose]> = s
+            .snapshots
+            .iter()
+            .map(|sn| sn.body_poses.as_slice())
+            .collect();
         let obstacles = crate::contact::obstacle_tracks(model, &poses);
         write(
             dir,

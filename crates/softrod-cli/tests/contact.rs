@@ -160,7 +160,10 @@ fn statics_json_lists_contacts_consistent_with_the_geometry() {
     assert!(o.status.success(), "{}", stderr(&o));
     let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
     let contacts = v["contacts"].as_array().expect("contacts");
-    assert!(!contacts.is_empty(), "the rod should rest on the table: {v}");
+    assert!(
+        !contacts.is_empty(),
+        "the rod should rest on the table: {v}"
+    );
     let mut deepest = 0.0f64;
     for c in contacts {
         assert_eq!(c["a"], "arm");
@@ -168,16 +171,36 @@ fn statics_json_lists_contacts_consistent_with_the_geometry() {
         assert!(c["b_s"].is_null());
         let s = c["s"].as_f64().unwrap();
         assert!((0.0..=0.3).contains(&s));
-        let p: Vec<f64> = c["point"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
-        let n: Vec<f64> = c["normal"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
-        let f: Vec<f64> = c["force"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+        let p: Vec<f64> = c["point"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect();
+        let n: Vec<f64> = c["normal"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect();
+        let f: Vec<f64> = c["force"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect();
         let gap = c["gap"].as_f64().unwrap();
         // `point` is where the rod's surface meets the normal (its
         // centreline point less r n): the centreline is r above it.
         let by_hand = ((p[2] + 0.01) - (-0.02)) - 0.01;
         assert!((gap - by_hand).abs() < 1e-12, "gap {gap} vs {by_hand}");
         assert!(n[0].abs() < 1e-12 && n[1].abs() < 1e-12 && (n[2] - 1.0).abs() < 1e-12);
-        assert!(f[2] >= 0.0 && f[0].abs() <= 1e-12 * f[2].abs().max(1.0) && f[1].abs() <= 1e-12 * f[2].abs().max(1.0), "{f:?}");
+        assert!(
+            f[2] >= 0.0
+                && f[0].abs() <= 1e-12 * f[2].abs().max(1.0)
+                && f[1].abs() <= 1e-12 * f[2].abs().max(1.0),
+            "{f:?}"
+        );
         deepest = deepest.max(-gap);
     }
     assert_eq!(v["max_penetration"].as_f64().unwrap(), deepest);
@@ -192,7 +215,13 @@ fn run_writes_contacts_csv_and_the_summary_agrees_with_it() {
     let scene = dir.join("droop.toml");
     std::fs::write(&scene, DROOP).unwrap();
     let out = dir.join("out");
-    let o = run(&["run", scene.to_str().unwrap(), "--out", out.to_str().unwrap(), "--quiet"]);
+    let o = run(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let text = std::fs::read_to_string(out.join("contacts.csv")).unwrap();
     let mut lines = text.lines();
@@ -229,7 +258,13 @@ fn no_contact_no_contacts_file() {
     let scene = dir.join("plain.toml");
     std::fs::write(&scene, DROOP.split("[[obstacle]]").next().unwrap()).unwrap();
     let out = dir.join("out");
-    let o = run(&["run", scene.to_str().unwrap(), "--out", out.to_str().unwrap(), "--quiet"]);
+    let o = run(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(!out.join("contacts.csv").exists());
     let summary = json_file(&out.join("summary.json"));
@@ -242,11 +277,27 @@ fn no_contact_no_contacts_file() {
 fn initial_overlap_exits_2_and_writes_nothing() {
     let dir = tmp("overlap");
     let scene = dir.join("o.toml");
-    std::fs::write(&scene, DROOP.replace("position = [0, 0, -0.02]", "position = [0, 0, 0.0]")).unwrap();
+    std::fs::write(
+        &scene,
+        DROOP.replace("position = [0, 0, -0.02]", "position = [0, 0, 0.0]"),
+    )
+    .unwrap();
     let out = dir.join("out");
-    let o = run(&["run", scene.to_str().unwrap(), "--out", out.to_str().unwrap(), "--quiet"]);
+    let o = run(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     let err = stderr(&o);
-    assert!(err.contains("obstacle[0]") && err.contains("'arm'") && err.contains("'table'") && err.contains("1.000e-2"), "{err}");
+    assert!(
+        err.contains("obstacle[0]")
+            && err.contains("'arm'")
+            && err.contains("'table'")
+            && err.contains("1.000e-2"),
+        "{err}"
+    );
     assert!(!out.exists());
 }

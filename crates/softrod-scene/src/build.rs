@@ -202,8 +202,11 @@ impl Scene {
         } else {
             "the rest shape"
         };
-        r.invalid(&path, format!("{e} (in {at_start}; move it or the obstacle)"))
-            .caused_by(Box::new(e.clone()))
+        r.invalid(
+            &path,
+            format!("{e} (in {at_start}; move it or the obstacle)"),
+        )
+        .caused_by(Box::new(e.clone()))
     }
 
     /// A closure error of the model, at the key path of its `[[closure]]`.

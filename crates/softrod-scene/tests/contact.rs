@@ -141,7 +141,12 @@ fn a_rotation_written_with_six_decimals_is_accepted_and_made_exact() {
     let Shape::Box { rotation, .. } = &s.obstacles[0].shape else {
         panic!()
     };
-    assert!((rotation.transpose() * rotation - Mat3::identity()).abs().max() < 1e-14);
+    assert!(
+        (rotation.transpose() * rotation - Mat3::identity())
+            .abs()
+            .max()
+            < 1e-14
+    );
     let h = std::f64::consts::FRAC_1_SQRT_2;
     assert!((rotation * Vec3::x() - Vec3::new(h, h, 0.0)).norm() < 1e-6);
 }
@@ -408,10 +413,8 @@ fn bad_obstacles_and_settings_name_the_key_and_the_problem() {
 
 #[test]
 fn errors_point_at_the_line_of_the_key() {
-    let text = format!(
-        "{ROD}{OBSTACLES}",
-    )
-    .replace("radius = 0.05\nrestitution", "radius = -0.05\nrestitution");
+    let text = format!("{ROD}{OBSTACLES}",)
+        .replace("radius = 0.05\nrestitution", "radius = -0.05\nrestitution");
     let e = error(&text);
     assert_eq!(e.path(), Some("obstacle[1].radius"));
     let line = text

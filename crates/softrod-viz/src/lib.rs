@@ -35,5 +35,5 @@ pub mod run_dir;
 
 pub use data::{BodyShape, BodyTrack, CableTrack, Pose, RodTrack, ViewData};
 pub use error::VizError;
-pub use obstacles::{ObstacleShape, ObstacleTrack};
 pub use html::{ViewOptions, ViewStats, render_html, write_html};
+pub use obstacles::{ObstacleShape, ObstacleTrack};

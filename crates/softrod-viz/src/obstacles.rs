@@ -301,7 +301,12 @@ impl Mesh {
 
     /// A grid of `rows + 1` × `cols + 1` vertices from `at(i, j)`, joined
     /// into quads.
-    fn grid(&mut self, rows: usize, cols: usize, at: impl Fn(usize, usize) -> ([f64; 3], [f64; 3])) {
+    fn grid(
+        &mut self,
+        rows: usize,
+        cols: usize,
+        at: impl Fn(usize, usize) -> ([f64; 3], [f64; 3]),
+    ) {
         let first = self.vertices.len() as u32;
         for i in 0..=rows {
             for j in 0..=cols {
@@ -342,7 +347,10 @@ pub fn mesh(shape: &ObstacleShape, region: &Region) -> Mesh {
             let n = unit(normal);
             let (u, v) = basis(n);
             // The patch centre: the region's centre projected onto the plane.
-            let c = sub(region.center, scale(n, dot(sub(region.center, position), n)));
+            let c = sub(
+                region.center,
+                scale(n, dot(sub(region.center, position), n)),
+            );
             let h = region.half_size;
             m.grid(1, 1, |i, j| {
                 let a = if i == 0 { -h } else { h };
@@ -438,7 +446,10 @@ pub fn view_region(d: &crate::data::ViewData) -> Region {
         .rods
         .iter()
         .flat_map(|r| r.frames.iter().flatten().map(|p| p.position));
-    let bodies = d.bodies.iter().flat_map(|b| b.poses.iter().map(|p| p.position));
+    let bodies = d
+        .bodies
+        .iter()
+        .flat_map(|b| b.poses.iter().map(|p| p.position));
     let max_radius = d
         .rods
         .iter()
@@ -568,9 +579,8 @@ mod tests {
                 half_extents,
             } => {
                 let d = sub(p, position);
-                let local = [0, 1, 2].map(|k| {
-                    rotation[0][k] * d[0] + rotation[1][k] * d[1] + rotation[2][k] * d[2]
-                });
+                let local = [0, 1, 2]
+                    .map(|k| rotation[0][k] * d[0] + rotation[1][k] * d[1] + rotation[2][k] * d[2]);
                 (0..3)
                     .map(|k| local[k].abs() - half_extents[k])
                     .fold(f64::NEG_INFINITY, f64::max)
@@ -617,7 +627,10 @@ mod tests {
                 // not differentiable, but outward it is the face's).
                 let h = 1e-7;
                 let grow = (on_surface(s, add(p, scale(n, h))) - on_surface(s, p)) / h;
-                assert!((grow - 1.0).abs() < 1e-6, "{s:?}: normal {n:?} at {p:?} grows {grow}");
+                assert!(
+                    (grow - 1.0).abs() < 1e-6,
+                    "{s:?}: normal {n:?} at {p:?} grows {grow}"
+                );
             }
         }
     }

@@ -6,7 +6,7 @@
 //! where its anchor is reported, and not where the box is in the other
 //! frame.
 
-use softrod_testkit::{Image, WIDTH, HEIGHT, attr, run_browser, scratch, screenshot, url};
+use softrod_testkit::{HEIGHT, Image, WIDTH, attr, run_browser, scratch, screenshot, url};
 use softrod_viz::demo::SwingingRods;
 use softrod_viz::{ObstacleShape, ObstacleTrack, Pose, ViewOptions, write_html};
 
@@ -45,7 +45,9 @@ fn anchors(
     let mut window = (WIDTH, HEIGHT);
     for _ in 0..3 {
         let dom = run_browser(dir, tag, window, &["--dump-dom".into(), url(page, hash)]);
-        let i = dom.find("<div id=\"softrod-status\"").expect("status marker");
+        let i = dom
+            .find("<div id=\"softrod-status\"")
+            .expect("status marker");
         let tag_text = &dom[i..i + dom[i..].find('>').unwrap()];
         let viewport = attr(tag_text, "data-viewport").unwrap_or_default();
         let (vw, vh) = viewport.split_once('x').unwrap_or(("0", "0"));
@@ -56,7 +58,11 @@ fn anchors(
             continue;
         }
         let errors: usize = attr(tag_text, "data-errors").unwrap().parse().unwrap();
-        assert_eq!(attr(tag_text, "data-ready").as_deref(), Some("1"), "not drawn");
+        assert_eq!(
+            attr(tag_text, "data-ready").as_deref(),
+            Some("1"),
+            "not drawn"
+        );
         let list = attr(tag_text, "data-obstacles").expect("data-obstacles");
         let points = list
             .split(';')
@@ -120,7 +126,10 @@ fn obstacles_are_drawn_and_carried_ones_move() {
     assert_eq!((ea, eb), (0, 0), "page reported errors");
     assert_eq!((a.len(), b.len()), (3, 3));
     let dist = |p: (f64, f64), q: (f64, f64)| (p.0 - q.0).hypot(p.1 - q.1);
-    assert!(dist(a[0], b[0]) < 0.5 && dist(a[1], b[1]) < 0.5, "fixed obstacles moved");
+    assert!(
+        dist(a[0], b[0]) < 0.5 && dist(a[1], b[1]) < 0.5,
+        "fixed obstacles moved"
+    );
     // 0.8 m of travel in a scene about a metre across, 960 px wide.
     let moved = dist(a[2], b[2]);
     assert!(moved > 150.0, "the carried box moved {moved:.1} px");
@@ -138,7 +147,15 @@ fn obstacles_are_drawn_and_carried_ones_move() {
         let n = obstacle_pixels_near(img, at, NEAR);
         assert!(n >= 60, "{what}: {n} obstacle pixels near its anchor");
     }
-    assert_eq!(obstacle_pixels_near(&ia, b[2], NEAR), 0, "box drawn where it is later");
-    assert_eq!(obstacle_pixels_near(&ib, a[2], NEAR), 0, "box drawn where it was");
+    assert_eq!(
+        obstacle_pixels_near(&ia, b[2], NEAR),
+        0,
+        "box drawn where it is later"
+    );
+    assert_eq!(
+        obstacle_pixels_near(&ib, a[2], NEAR),
+        0,
+        "box drawn where it was"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -57,8 +57,16 @@ fn outlines_are_drawn_and_named() {
     // The ball lies beyond the rod: every panel that shows x reaches past
     // its far side (0.9 m), the x–z and y–z panels above its top (0.4 m).
     let (xz, yz, xy) = (&fig.panels[0], &fig.panels[1], &fig.panels[2]);
-    assert!(xz.x_range.1 >= 0.9 && xy.x_range.1 >= 0.9, "{:?}", xz.x_range);
-    assert!(xz.y_range.1 >= 0.4 && yz.y_range.1 >= 0.4, "{:?}", xz.y_range);
+    assert!(
+        xz.x_range.1 >= 0.9 && xy.x_range.1 >= 0.9,
+        "{:?}",
+        xz.x_range
+    );
+    assert!(
+        xz.y_range.1 >= 0.4 && yz.y_range.1 >= 0.4,
+        "{:?}",
+        xz.y_range
+    );
     // The table seen from the side reaches below itself (its hatches).
     assert!(xz.y_range.0 < -0.05 && yz.y_range.0 < -0.05);
     // Without obstacles the figure is the plain one.

@@ -84,7 +84,9 @@ impl Ctx<'_> {
             let p = format!("obstacle[{i}]");
             let name_path = format!("{p}.name");
             if o.name.trim().is_empty() {
-                return Err(self.r.invalid(&name_path, "obstacle name must not be empty"));
+                return Err(self
+                    .r
+                    .invalid(&name_path, "obstacle name must not be empty"));
             }
             if let Some(k) = out.iter().position(|x| x.name == o.name) {
                 return Err(self.r.invalid(
@@ -259,7 +261,8 @@ impl Ctx<'_> {
             ),
             ObstacleError::NotRotation { .. } => self.r.invalid(&path("rotation"), &e),
             ObstacleError::Restitution { value } => {
-                self.r.out_of_range(&path("restitution"), value, "in [0, 1]")
+                self.r
+                    .out_of_range(&path("restitution"), value, "in [0, 1]")
             }
             other => self.r.invalid(p, other),
         };

@@ -214,7 +214,10 @@ pub(super) fn outline(
                 return Vec::new();
             }
             // The trace: through the region's centre projected onto the plane.
-            let c = sub(region.center, scale(n, dot(sub(region.center, position), n)));
+            let c = sub(
+                region.center,
+                scale(n, dot(sub(region.center, position), n)),
+            );
             let t = cross(n, {
                 let mut e = [0.0; 3];
                 e[view] = 1.0;
@@ -288,7 +291,8 @@ fn convex_hull(mut points: Vec<[f64; 2]>) -> Vec<[f64; 2]> {
             Box::new(points.iter().rev())
         };
         for &p in iter {
-            while hull.len() >= start + 2 && turn(hull[hull.len() - 2], hull[hull.len() - 1], p) <= 0.0
+            while hull.len() >= start + 2
+                && turn(hull[hull.len() - 2], hull[hull.len() - 1], p) <= 0.0
             {
                 hull.pop();
             }

@@ -347,7 +347,11 @@ impl Recorder {
             let bad = r.contacts.iter().position(|c| {
                 !(c.gap.is_finite()
                     && c.s.is_finite()
-                    && c.point.iter().chain(&c.normal).chain(&c.force).all(|v| v.is_finite()))
+                    && c.point
+                        .iter()
+                        .chain(&c.normal)
+                        .chain(&c.force)
+                        .all(|v| v.is_finite()))
             });
             if let Some(k) = bad {
                 return Err(RecordError::NonFinite {
