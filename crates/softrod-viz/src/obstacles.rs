@@ -129,11 +129,12 @@ impl ObstacleTrack {
                 length,
                 radius,
             } => {
-                if !finite(position)
-                    || !nonzero(axis)
-                    || !(length.is_finite() && *length >= 0.0)
-                    || !positive(*radius)
-                {
+                let ok = finite(position)
+                    && nonzero(axis)
+                    && length.is_finite()
+                    && *length >= 0.0
+                    && positive(*radius);
+                if !ok {
                     return bad(format!(
                         "position {position:?} must be finite, axis {axis:?} ≠ 0, length \
                          {length} ≥ 0, radius {radius} > 0"

@@ -275,7 +275,7 @@ impl Ctx<'_> {
                 },
                 Some(h),
             ) => {
-                let k = h.iter().position(|x| !(*x > 0.0)).unwrap_or(0);
+                let k = h.iter().position(|x| x.is_nan() || *x <= 0.0).unwrap_or(0);
                 self.r
                     .out_of_range(&format!("{p}.half_extents[{k}]"), value, "> 0")
             }

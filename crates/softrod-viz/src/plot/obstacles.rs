@@ -195,9 +195,9 @@ pub(super) fn outline(
             let corners: Vec<[f64; 2]> = (0..8)
                 .map(|c| {
                     let mut p = position;
-                    for k in 0..3 {
+                    for (k, h) in half_extents.iter().enumerate() {
                         let s = if c & (1 << k) != 0 { 1.0 } else { -1.0 };
-                        p = add(p, scale(col(k), s * half_extents[k]));
+                        p = add(p, scale(col(k), s * h));
                     }
                     flat(p)
                 })
