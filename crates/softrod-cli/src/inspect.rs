@@ -64,6 +64,7 @@ pub fn check(path: &Path) -> Result<(), CliError> {
         }
     }
     crate::closures::print_closures(m, sim.initial_state().0.as_slice())?;
+    crate::contact::print_contact(&scene);
     if scene.n_cables() > 0 {
         println!("cables: {}", scene.n_cables());
     }
@@ -137,13 +138,34 @@ pub fn statics(path: &Path, json: bool, out: Option<PathBuf>, png: bool) -> Resu
     for w in &warnings {
         eprintln!("softrod: warning: {w}");
     }
+    // The contacts at the equilibrium (frictionless: statics has no
+    // history to anchor friction to; docs/theory-contact.md).
+    let contacts = if l.sim.model().has_contact() {
+        let zero = vec![0.0; res.q.len()];
+        Some(
+            l.sim
+                .model()
+                .contacts(0.0, res.q.as_slice(), &zero)
+                .map_err(|e| failed(format!("contacts at the equilibrium: {e}")))?,
+        )
+    } else {
+        None
+    };
     let model = l.sim.model();
     let poser = sampled_poses(model, 0.0, res.q.as_slice())?;
     if let Some(dir) = &out {
         make_dir(dir)?;
         let c = centrelines(&poser);
         let bodies: Vec<[f64; 3]> = poser.bodies().iter().map(position).collect();
-        let name = plots::statics_figure(dir, model, &c, &bodies, &scene_title(path))?;
+        let body_poses: Vec<softrod_viz::Pose> = poser
+            .bodies()
+            .iter()
+            .map(|g| softrod_viz::Pose {
+                position: position(g),
+                rotation: softrod::record::quaternion(g),
+            })
+            .collect();
+        let name = plots::statics_figure(dir, model, &c, &bodies, &body_poses, &scene_title(path))?;
         if png {
             plots::rasterize(dir, std::slice::from_ref(&name), json)?;
         }
@@ -177,6 +199,11 @@ pub fn statics(path: &Path, json: bool, out: Option<PathBuf>, png: bool) -> Resu
         let mut v = v;
         crate::robot::add_statics_json(model, &poser, res.q.as_slice(), &mut v);
         crate::closures::add_statics_json(model, res.q.as_slice(), &mut v)?;
+        if let Some(c) = &contacts {
+            let (entries, deepest) = crate::contact::contacts_json(model, c);
+            v["contacts"] = entries;
+            v["max_penetration"] = serde_json::json!(deepest);
+        }
         println!("{v}");
     } else {
         println!(
@@ -210,6 +237,10 @@ pub fn statics(path: &Path, json: bool, out: Option<PathBuf>, png: bool) -> Resu
                 format!("{} (on stderr)", warnings.len())
             }
         );
+        if let Some(c) = &contacts {
+            let (_, deepest) = crate::contact::contacts_json(model, c);
+            println!("contacts: {}, largest penetration {deepest:.3e} m", c.len());
+        }
         for (i, r) in model.rods().iter().enumerate() {
             let p = poser.tip(i).translation;
             println!(

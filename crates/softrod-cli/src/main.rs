@@ -7,6 +7,7 @@
 
 mod closures;
 mod common;
+mod contact;
 mod inspect;
 mod linearize;
 mod npz;

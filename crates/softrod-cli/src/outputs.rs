@@ -70,6 +70,13 @@ pub fn view_spec(model: &Model, title: &str) -> ViewSpec {
             cable_no += 1;
         }
     }
+    for o in model.obstacles() {
+        spec.obstacles.push(softrod_viz::run_dir::ObstacleSpec {
+            name: o.name.clone(),
+            shape: crate::contact::viz_shape(&o.shape),
+            parent: o.parent.clone(),
+        });
+    }
     for b in model.bodies() {
         spec.bodies.push(softrod_viz::run_dir::BodySpec {
             name: b.spec.name.clone(),
@@ -120,8 +127,9 @@ pub fn regenerate_view(dir: &Path) -> Result<ViewStats, CliError> {
 
 /// The files `softrod run` writes (besides `strains_R.svg`): removed at the
 /// start of a run, so that a directory never mixes two runs' outputs.
-pub const RUN_OUTPUTS: [&str; 21] = [
+pub const RUN_OUTPUTS: [&str; 22] = [
     "trajectory.csv",
+    "contacts.csv",
     "trajectory.npz",
     "trajectory.npz.tmp",
     "shape.csv",
@@ -231,16 +239,18 @@ pub fn free_disk_bytes(dir: &Path) -> Option<u64> {
 }
 
 /// A lower bound of what `softrod run` writes per output time \[bytes\]:
-/// the `trajectory.csv` row (≥ 8 bytes per number) and the `shape.csv`
-/// rows of every rod's piece boundaries (≥ 60 bytes each).
-pub fn output_bytes_per_row(model: &Model) -> u64 {
+/// the `trajectory.csv` row (≥ 8 bytes per number), the `shape.csv` rows
+/// of every rod's piece boundaries (≥ 60 bytes each) and, for a model with
+/// contact, the `contacts.csv` rows of the `contacts` active at the start
+/// (≥ 100 bytes each: 13 numbers, two names and the state).
+pub fn output_bytes_per_row(model: &Model, contacts: usize) -> u64 {
     let numbers = 9 + 2 * model.n_dof() + 3 + 2 * model.n_cables();
     let shape_rows: usize = model
         .rods()
         .iter()
         .map(|r| r.spec.geometry.n_pieces() + 1)
         .sum();
-    8 * numbers as u64 + 60 * shape_rows as u64
+    8 * numbers as u64 + 60 * shape_rows as u64 + 100 * contacts as u64
 }
 
 /// Refuses (exit 2, naming `run.output_every`) a run whose outputs cannot
@@ -251,9 +261,10 @@ pub fn check_disk_space(
     model: &Model,
     duration: f64,
     every: f64,
+    contacts: usize,
 ) -> Result<(), CliError> {
     let rows = softrod::limits::output_sample_count(duration, every).unwrap_or(u64::MAX);
-    let need = rows.saturating_mul(output_bytes_per_row(model));
+    let need = rows.saturating_mul(output_bytes_per_row(model, contacts));
     if let Some(free) = free_disk_bytes(dir) {
         if need > free {
             return Err(CliError::Input(format!(

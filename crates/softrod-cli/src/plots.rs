@@ -26,6 +26,8 @@ pub struct Snapshot {
     /// Per rigid body (model order): the origin of its frame (world, m),
     /// as in bodies.csv.
     pub bodies: Vec<[f64; 3]>,
+    /// Per rigid body: its pose (what carries its obstacles).
+    pub body_poses: Vec<softrod_viz::Pose>,
 }
 
 /// What a run keeps in memory for its figures (one value per output row;
@@ -66,6 +68,14 @@ impl Snapshot {
                 })
                 .collect(),
             bodies: p.bodies().iter().map(position).collect(),
+            body_poses: p
+                .bodies()
+                .iter()
+                .map(|g| softrod_viz::Pose {
+                    position: position(g),
+                    rotation: softrod::record::quaternion(g),
+                })
+                .collect(),
         }
     }
 }
@@ -216,10 +226,16 @@ pub fn run_figures(
                 bodies: body_marks(model, &sn.bodies),
             })
             .collect();
+        let poses: Vec<&[softrod_viz::Pose]> = s
+            .snapshots
+            .iter()
+            .map(|sn| sn.body_poses.as_slice())
+            .collect();
+        let obstacles = crate::contact::obstacle_tracks(model, &poses);
         write(
             dir,
             "shapes.svg",
-            plot::shapes(&format!("{title}: rod shapes"), &snaps),
+            plot::shapes_with_obstacles(&format!("{title}: rod shapes"), &snaps, &obstacles),
         )?;
         written.push("shapes.svg".to_string());
         for (r, name) in names.iter().enumerate() {
@@ -274,6 +290,7 @@ pub fn statics_figure(
     model: &Model,
     centrelines: &[Vec<[f64; 3]>],
     bodies: &[[f64; 3]],
+    body_poses: &[softrod_viz::Pose],
     title: &str,
 ) -> Result<String, CliError> {
     let snap = ShapeSnapshot {
@@ -293,7 +310,11 @@ pub fn statics_figure(
     write(
         dir,
         name,
-        plot::shapes(&format!("{title}: static equilibrium"), &[snap]),
+        plot::shapes_with_obstacles(
+            &format!("{title}: static equilibrium"),
+            &[snap],
+            &crate::contact::obstacle_tracks(model, &[body_poses]),
+        ),
     )?;
     Ok(name.into())
 }

@@ -79,6 +79,14 @@ impl Scene {
                 .with_closures(self.robot.closures.clone())
                 .map_err(|e| self.closure_error(&r, e))?
         };
+        // Only a scene with contact gets any (a model without pays nothing).
+        let model = if self.has_contact() {
+            model
+                .with_contact(self.obstacles.clone(), self.contact)
+                .map_err(|e| self.contact_error(&r, e))?
+        } else {
+            model
+        };
         let n = model.n_dof();
         let initial = |v: &Option<Vec<f64>>| {
             v.as_ref()
@@ -138,12 +146,67 @@ impl Scene {
             softrod_dynamics::check_closures(&model, &mut data, q0.as_slice())
                 .map_err(|e| self.closure_error(&r, e))?;
         }
+        if model.has_contact() {
+            // A rod may not start inside an obstacle (beyond the penetration
+            // the contact law allows at rest), after any shape fit.
+            model
+                .check_initial_contact(q0.as_slice())
+                .map_err(|e| self.overlap_error(&r, &model, q0.as_slice(), e))?;
+        }
         Ok(Built {
             model,
             q0,
             qd0,
             shape_fits,
         })
+    }
+
+    /// A contact error of the model (an obstacle or the settings changed
+    /// after validation) at the key path of its `[[obstacle]]` or `[contact]`.
+    fn contact_error(&self, r: &Reporter, e: softrod_dynamics::DynamicsError) -> SceneError {
+        use softrod_dynamics::DynamicsError as D;
+        let path = match &e {
+            D::Obstacle { index, .. } => format!("obstacle[{index}]"),
+            D::ObstacleParent { index, .. } => format!("obstacle[{index}].parent"),
+            D::ContactSettings { .. } => "contact".to_owned(),
+            _ => "obstacle".to_owned(),
+        };
+        r.invalid(&path, &e).caused_by(Box::new(e.clone()))
+    }
+
+    /// An initial overlap: the error names the rod and `s`, what it
+    /// overlaps and the depth; its key path is that obstacle's
+    /// (`obstacle[k]`), or the rod's for rod–rod overlaps. The obstacle is
+    /// found from the contacts at `q0`, not from the message.
+    fn overlap_error(
+        &self,
+        r: &Reporter,
+        model: &Model,
+        q0: &[f64],
+        e: softrod_dynamics::DynamicsError,
+    ) -> SceneError {
+        use softrod_mechanics::contact::Contactee;
+        let zero = vec![0.0; q0.len()];
+        let deepest = model.contacts(0.0, q0, &zero).ok().and_then(|cs| {
+            cs.into_iter()
+                .filter(|c| -c.gap > model.allowed_penetration(c.a, c.s))
+                .max_by(|x, y| (-x.gap).total_cmp(&-y.gap))
+        });
+        let path = match deepest.map(|c| (c.a, c.b)) {
+            Some((_, Contactee::Obstacle(k))) => format!("obstacle[{k}]"),
+            Some((a, Contactee::Rod { .. })) => format!("rod[{a}]"),
+            None => "initial".to_owned(),
+        };
+        let at_start = if self.initial.q.is_some() || !self.initial.shape.is_empty() {
+            "the initial state"
+        } else {
+            "the rest shape"
+        };
+        r.invalid(
+            &path,
+            format!("{e} (in {at_start}; move it or the obstacle)"),
+        )
+        .caused_by(Box::new(e.clone()))
     }
 
     /// A closure error of the model, at the key path of its `[[closure]]`.

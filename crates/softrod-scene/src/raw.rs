@@ -25,6 +25,9 @@ pub(crate) struct RawScene {
     pub initial: Option<RawInitial>,
     pub run: Option<RawRun>,
     pub reference: Option<RawReference>,
+    #[serde(default)]
+    pub obstacle: Vec<crate::validate::contact::RawObstacle>,
+    pub contact: Option<crate::validate::contact::RawContact>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -49,6 +52,8 @@ pub(crate) struct RawRod {
     pub parent: Option<String>,
     pub at: Option<f64>,
     pub joint: Option<crate::robot::RawJoint>,
+    /// Radius of the rod's contact surface, overriding the section's.
+    pub contact_radius: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]

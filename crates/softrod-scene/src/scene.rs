@@ -7,6 +7,7 @@ use crate::overrides::Override;
 
 use serde::Serialize;
 use softrod_dynamics::Rod;
+use softrod_mechanics::contact::{ContactSettings, Obstacle};
 
 use crate::error::{SceneError, Warning};
 use crate::robot::Robot;
@@ -96,6 +97,11 @@ pub struct Scene {
     pub run: Run,
     /// Known answer, when the scene states one.
     pub reference: Option<Reference>,
+    /// The `[[obstacle]]` tables in file order, directions normalized
+    /// (empty: none).
+    pub obstacles: Vec<Obstacle>,
+    /// `[contact]` (default: rods touch neither each other nor themselves).
+    pub contact: ContactSettings,
     pub(crate) origins: Origins,
 }
 
@@ -182,6 +188,29 @@ impl Scene {
     /// Number of point loads over all rods (`[[load]]` entries).
     pub fn n_point_loads(&self) -> usize {
         self.rods.iter().map(|r| r.point_loads.len()).sum()
+    }
+
+    /// Whether the scene has any contact: an obstacle, or rod–rod or self
+    /// contact switched on. A scene without pays nothing for contact.
+    pub fn has_contact(&self) -> bool {
+        !self.obstacles.is_empty() || self.contact.any()
+    }
+
+    /// The radius of rod `i`'s contact surface at arc length `s` \[m\]: its
+    /// `contact_radius`, or the section's outer radius (half the diagonal of
+    /// a rectangle, a taper's local radius).
+    ///
+    /// # Panics
+    /// If `i >= rods.len()`.
+    pub fn contact_radius(&self, i: usize, s: f64) -> f64 {
+        let rod = &self.rods[i];
+        rod.contact_radius.unwrap_or_else(|| {
+            softrod_mechanics::contact::contact_radius(
+                rod.properties.section(),
+                s,
+                rod.properties.length(),
+            )
+        })
     }
 
     /// Whether the world has non-zero gravity.

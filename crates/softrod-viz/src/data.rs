@@ -198,6 +198,8 @@ pub struct ViewData {
     pub cables: Vec<CableTrack>,
     /// Rigid bodies (optional).
     pub bodies: Vec<BodyTrack>,
+    /// Obstacles (optional): fixed, or carried with a pose per time.
+    pub obstacles: Vec<crate::obstacles::ObstacleTrack>,
     /// The world direction drawn upward, e.g. `−g/|g|`; the grid lies in
     /// the plane normal to it. Default `[0, 0, 1]`.
     pub up: [f64; 3],
@@ -212,6 +214,7 @@ impl ViewData {
             rods: Vec::new(),
             cables: Vec::new(),
             bodies: Vec::new(),
+            obstacles: Vec::new(),
             up: [0.0, 0.0, 1.0],
         }
     }
@@ -309,6 +312,9 @@ impl ViewData {
             for (k, p) in body.poses.iter().enumerate() {
                 pose_ok(&format!("{what}.poses[{k}]"), p)?;
             }
+        }
+        for (o, obstacle) in self.obstacles.iter().enumerate() {
+            obstacle.validate(&format!("obstacles[{o}]"), m)?;
         }
         Ok(())
     }

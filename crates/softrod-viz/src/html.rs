@@ -27,8 +27,14 @@
 //! rods [{name, s [m], radius [m], frames [[x,y,z,qw,qx,qy,qz] × samples, one array per kept frame],
 //!        trace {t [s], p [x,y,z,…]}}],
 //! cables [{name, frames [[x,y,z,…] per kept frame]}],
-//! bodies [{name, shape "box"|"sphere", size [3] | radius, frames [[x,y,z,qw,qx,qy,qz] per kept frame]}]
+//! bodies [{name, shape "box"|"sphere", size [3] | radius, frames [[x,y,z,qw,qx,qy,qz] per kept frame]}],
+//! obstacles [{name, shape, mesh [x,y,z,nx,ny,nz, … per vertex] (m; relative to origin when fixed,
+//!             in the carrier's frame when carried), triangles [i, j, k, …],
+//!             frames null (fixed) | [[x,y,z,qw,qx,qy,qz] of the carrier per kept frame]}]
 //! ```
+//!
+//! Obstacle meshes come from [`crate::obstacles::mesh`]: planes and
+//! cylinders over the region around the rods and bodies.
 //!
 //! The output is deterministic: the same data and options give the same
 //! bytes (no clock, no random numbers, no hash-map order).
@@ -339,6 +345,10 @@ fn data_json(d: &ViewData, opts: &ViewOptions, q: &Quantizer, frames: &[usize]) 
         o.push_str("},");
     }
     close_array(&mut o);
+    o.push_str(",\"obstacles\":");
+    crate::obstacles::push_view_json(&mut o, d, frames, q.origin, &|o: &mut String, p: &Pose| {
+        q.push_pose(o, p)
+    });
     o.push('}');
     // `<` occurs only inside JSON strings; escaping it keeps a name such as
     // "</script>" from closing the data block.

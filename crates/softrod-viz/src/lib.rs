@@ -28,6 +28,7 @@ pub mod decimate;
 pub mod demo;
 pub mod error;
 pub mod html;
+pub mod obstacles;
 pub mod plot;
 pub mod png;
 pub mod run_dir;
@@ -35,6 +36,7 @@ pub mod run_dir;
 pub use data::{BodyShape, BodyTrack, CableTrack, Pose, RodTrack, ViewData};
 pub use error::VizError;
 pub use html::{ViewOptions, ViewStats, render_html, write_html};
+pub use obstacles::{ObstacleShape, ObstacleTrack};
 
 /// The README's examples, compiled and run as doctests.
 #[doc = include_str!("../README.md")]

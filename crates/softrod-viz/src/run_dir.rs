@@ -508,6 +508,24 @@ pub struct ViewSpec {
     /// Rigid bodies.
     #[serde(default)]
     pub bodies: Vec<BodySpec>,
+    /// Obstacles (absent from the file when there are none).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub obstacles: Vec<ObstacleSpec>,
+}
+
+/// An obstacle entry of `view.json`: its shape in its carrier's frame and
+/// the carrier (`parent`: a body of [`ViewSpec::bodies`], whose poses are in
+/// `bodies.csv`; absent: fixed in the world).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ObstacleSpec {
+    /// Name (legend).
+    pub name: String,
+    /// Shape and size, the scene format's keys.
+    #[serde(flatten)]
+    pub shape: crate::obstacles::ObstacleShape,
+    /// The carrying body, if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub parent: Option<String>,
 }
 
 fn default_up() -> [f64; 3] {
@@ -525,6 +543,7 @@ impl ViewSpec {
             rods: Vec::new(),
             cables: Vec::new(),
             bodies: Vec::new(),
+            obstacles: Vec::new(),
         }
     }
 
@@ -615,6 +634,7 @@ pub fn view_from_dir(dir: &Path) -> Result<ViewData, VizError> {
             points: routed_cable(rod, &c.path),
         });
     }
+    let mut body_poses = Vec::new();
     if !spec.bodies.is_empty() {
         let path = dir.join(BODIES_CSV);
         let (times, poses) = read_bodies_csv(&path)?;
@@ -645,6 +665,27 @@ pub fn view_from_dir(dir: &Path) -> Result<ViewData, VizError> {
                 poses: p.1.clone(),
             });
         }
+        body_poses = poses;
+    }
+    for o in &spec.obstacles {
+        let poses = match &o.parent {
+            None => None,
+            Some(body) => Some(
+                body_poses
+                    .iter()
+                    .find(|p| &p.0 == body)
+                    .map(|p| p.1.clone())
+                    .ok_or_else(|| VizError::Invalid {
+                        what: format!("{}: obstacle {:?}.parent", spec_path.display(), o.name),
+                        problem: format!("no body {body:?} in {VIEW_JSON} and {BODIES_CSV}"),
+                    })?,
+            ),
+        };
+        view.obstacles.push(crate::obstacles::ObstacleTrack {
+            name: o.name.clone(),
+            shape: o.shape,
+            poses,
+        });
     }
     Ok(view)
 }

@@ -44,11 +44,22 @@ pub fn run(
     let scene = &l.scene;
     let duration = scene.run.duration;
     let every = l.sim.settings().output_spacing(duration);
+    let initial_contacts = if l.sim.model().has_contact() {
+        let (q0, qd0) = l.sim.initial_state();
+        l.sim
+            .model()
+            .contacts(0.0, q0.as_slice(), qd0.as_slice())
+            .map_or(0, |c| c.len())
+    } else {
+        0
+    };
     // A directory that cannot be created is said so (not "0.0 MB free");
     // one created here and then refused is removed again.
     let existed = dir.exists();
     outputs::prepare_out_dir(&dir)?;
-    if let Err(e) = outputs::check_disk_space(&dir, l.sim.model(), duration, every) {
+    if let Err(e) =
+        outputs::check_disk_space(&dir, l.sim.model(), duration, every, initial_contacts)
+    {
         if !existed {
             let _ = std::fs::remove_dir(&dir);
         }
@@ -175,6 +186,9 @@ pub fn run(
                 eprintln!("softrod: warning: {w}");
             }
         }
+    }
+    if l.sim.model().has_contact() {
+        summary_final.add_contact(streamer.max_penetration(), streamer.max_contacts());
     }
     if l.sim.model().has_closures() {
         let r = streamer.closure_residual_max();

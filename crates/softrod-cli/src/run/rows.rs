@@ -1,5 +1,5 @@
-//! The rows of a run's files: `trajectory.csv`, `shape.csv` and
-//! `bodies.csv` written as each record arrives, and `trajectory.npz` from
+//! The rows of a run's files: `trajectory.csv`, `shape.csv`,
+//! `bodies.csv` and `contacts.csv` written as each record arrives, and `trajectory.npz` from
 //! the same numbers at the end. Only formatting: every number comes from
 //! the facade's [`Record`], every column name from its [`Columns`].
 
@@ -8,6 +8,7 @@ use std::io::Write;
 use std::path::Path;
 
 use softrod::dynamics::Model;
+use softrod::mechanics::Contactee;
 use softrod::record::{Columns, Record, position, quaternion};
 use softrod_viz::run_dir::{BODIES_HEADER, SHAPE_HEADER};
 
@@ -19,6 +20,12 @@ use crate::outputs::{csv_field, csv_line, num, push_csv_row};
 pub const NPZ: &str = "trajectory.npz";
 /// See [`NPZ`].
 pub const NPZ_TMP: &str = "trajectory.npz.tmp";
+/// The contacts of a run with contact (scene-format.md, "Contact").
+pub const CONTACTS_CSV: &str = "contacts.csv";
+/// Its header, the contract's.
+pub const CONTACTS_HEADER: [&str; 16] = [
+    "t", "a", "s", "b", "b_s", "x", "y", "z", "nx", "ny", "nz", "gap", "fx", "fy", "fz", "state",
+];
 
 /// An output file written row by row, unbuffered (each row is one write),
 /// that knows how many bytes hold whole rows: after a failed write (a full
@@ -69,6 +76,11 @@ pub struct RowWriter {
     shape: OutFile,
     /// `bodies.csv` (t, body, pose), for a model with rigid bodies.
     bodies: Option<OutFile>,
+    /// `contacts.csv` (one row per active contact), for a model with contact.
+    contacts: Option<OutFile>,
+    contacts_text: String,
+    /// The obstacles' names as CSV fields (a contact's `b`).
+    obstacle_fields: Vec<String>,
     traj_text: String,
     shape_text: String,
     bodies_text: String,
@@ -99,11 +111,27 @@ impl RowWriter {
                 &csv_line(BODIES_HEADER),
             )?)
         };
+        let contacts = if model.has_contact() {
+            Some(OutFile::create(
+                dir,
+                CONTACTS_CSV,
+                &csv_line(CONTACTS_HEADER),
+            )?)
+        } else {
+            None
+        };
         Ok(Self {
             columns,
             traj,
             shape,
             bodies,
+            contacts,
+            contacts_text: String::new(),
+            obstacle_fields: model
+                .obstacles()
+                .iter()
+                .map(|o| csv_field(&o.name))
+                .collect(),
             traj_text: String::new(),
             shape_text: String::new(),
             bodies_text: String::new(),
@@ -163,8 +191,47 @@ impl RowWriter {
                 position(g).into_iter().chain(quaternion(g)),
             );
         }
+        self.contacts_text.clear();
+        if self.contacts.is_some() {
+            for c in &rec.contacts {
+                self.prefix.clear();
+                self.prefix.push_str(&ts);
+                self.prefix.push(',');
+                self.prefix.push_str(&self.rod_fields[c.a]);
+                self.prefix.push(',');
+                self.prefix.push_str(&num(c.s));
+                self.prefix.push(',');
+                match c.b {
+                    Contactee::Obstacle(k) => {
+                        self.prefix.push_str(&self.obstacle_fields[k]);
+                        self.prefix.push_str(",,");
+                    }
+                    Contactee::Rod { rod, s } => {
+                        self.prefix.push_str(&self.rod_fields[rod]);
+                        self.prefix.push(',');
+                        self.prefix.push_str(&num(s));
+                        self.prefix.push(',');
+                    }
+                }
+                push_csv_row(
+                    &mut self.contacts_text,
+                    &self.prefix,
+                    c.point
+                        .iter()
+                        .chain(&c.normal)
+                        .chain(std::iter::once(&c.gap))
+                        .chain(&c.force)
+                        .copied(),
+                );
+                // The state closes the row: replace its line break.
+                self.contacts_text.pop();
+                self.contacts_text
+                    .push_str(if c.sticking { ",stick\n" } else { ",slip\n" });
+            }
+        }
         // Every file gets this time's rows, or none does.
         let bodies_text = &self.bodies_text;
+        let contacts_text = &self.contacts_text;
         let written = self
             .shape
             .append(&self.shape_text)
@@ -172,10 +239,15 @@ impl RowWriter {
                 Some(f) => f.append(bodies_text),
                 None => Ok(()),
             })
+            .and_then(|()| match &mut self.contacts {
+                Some(f) => f.append(contacts_text),
+                None => Ok(()),
+            })
             .and_then(|()| self.traj.append(&self.traj_text));
         if let Err(e) = written {
             let bodies_cut = self.bodies.as_mut().is_none_or(OutFile::rollback);
-            let cut = self.shape.rollback() & self.traj.rollback() & bodies_cut;
+            let contacts_cut = self.contacts.as_mut().is_none_or(OutFile::rollback);
+            let cut = self.shape.rollback() & self.traj.rollback() & bodies_cut & contacts_cut;
             return Err(format!(
                 "{e} at t = {t:e}; {}",
                 if cut {
@@ -188,6 +260,9 @@ impl RowWriter {
         self.shape.commit(self.shape_text.len());
         if let Some(f) = &mut self.bodies {
             f.commit(self.bodies_text.len());
+        }
+        if let Some(f) = &mut self.contacts {
+            f.commit(self.contacts_text.len());
         }
         self.traj.commit(self.traj_text.len());
         if let Some(rows) = &mut self.npz_rows {

@@ -134,6 +134,17 @@ impl Streamer {
         self.recorder.closure_residual_max()
     }
 
+    /// The largest penetration over the rows written \[m\] (0 without
+    /// contact).
+    pub fn max_penetration(&self) -> f64 {
+        self.recorder.max_penetration()
+    }
+
+    /// The most contacts active at one row.
+    pub fn max_contacts(&self) -> usize {
+        self.recorder.max_contacts()
+    }
+
     /// The file writer (for `trajectory.npz` at the end).
     pub fn rows(&self) -> &RowWriter {
         &self.rows

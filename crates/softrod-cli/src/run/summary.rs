@@ -69,6 +69,16 @@ impl Summary {
         );
     }
 
+    /// Adds `max_penetration` (the largest `−gap` over the output rows,
+    /// m) and `max_contacts` (the most contacts at one row), for a run with
+    /// contact (scene-format.md, "Contact").
+    pub fn add_contact(&mut self, max_penetration: f64, max_contacts: usize) {
+        self.fixed
+            .insert("max_penetration".into(), serde_json::json!(max_penetration));
+        self.fixed
+            .insert("max_contacts".into(), serde_json::json!(max_contacts));
+    }
+
     /// Writes the summary with the given progress.
     pub fn write(
         &self,

@@ -9,6 +9,7 @@ mod bodies;
 mod body;
 mod cables;
 pub(crate) mod closures;
+pub(crate) mod contact;
 mod initial;
 mod loads;
 mod reference;
@@ -186,9 +187,19 @@ impl Ctx<'_> {
             .iter_mut()
             .map(|r| (r.parent.take(), r.at.take(), r.joint.take()))
             .collect();
+        let contact_radii = raw_rods
+            .iter()
+            .enumerate()
+            .map(|(i, r)| self.contact_radius(i, r.contact_radius))
+            .collect::<Result<Vec<_>>>()?;
         let mut rods = self.rods(raw_rods)?;
+        for (rod, r) in rods.iter_mut().zip(contact_radii) {
+            rod.contact_radius = r;
+        }
         let mut robot = self.robot(links, raw.body, &rods)?;
         robot.closures = self.closures(raw.closure, &rods, &robot)?;
+        let obstacles = self.obstacles(raw.obstacle, &rods, &robot)?;
+        let contact = self.contact(raw.contact)?;
         let run = self.run(raw.run)?;
         let mut origins = Origins {
             cables: vec![Vec::new(); rods.len()],
@@ -220,6 +231,8 @@ impl Ctx<'_> {
             initial,
             run,
             reference,
+            obstacles,
+            contact,
             origins,
         })
     }

@@ -8,6 +8,8 @@
   var PALETTE = ['#1f77b4', '#d62728', '#2ca02c', '#ff7f0e', '#9467bd', '#8c564b', '#e377c2', '#17becf', '#bcbd22', '#7f7f7f'];
   var CABLE_COLOR = '#222831';
   var BODY_COLOR = '#9aa3b5';
+  var OBSTACLE_COLOR = '#b8976a';
+  var PLANE_COLOR = '#bba67a';
   var RING = 20;
   var FOV = 40 * Math.PI / 180;
 
@@ -89,6 +91,16 @@
   });
   var cables = D.cables;
   var bodies = D.bodies;
+  // Obstacles: a mesh in the world (less the origin) when fixed, in the
+  // carrier's frame when carried; anchor = the mean of the vertices.
+  var obstacles = (D.obstacles || []).map(function (o) {
+    var nv = o.mesh.length / 6, c = [0, 0, 0], reach = 0;
+    for (var i = 0; i < nv; i++) { c = add(c, [o.mesh[6 * i], o.mesh[6 * i + 1], o.mesh[6 * i + 2]]); }
+    c = scale(c, 1 / Math.max(1, nv));
+    for (var j = 0; j < nv; j++) { reach = Math.max(reach, norm([o.mesh[6 * j], o.mesh[6 * j + 1], o.mesh[6 * j + 2]])); }
+    return { name: o.name, shape: o.shape, mesh: o.mesh, triangles: o.triangles, frames: o.frames, anchor: c, reach: reach,
+      infinite: o.shape === 'plane' || o.shape === 'cylinder' };
+  });
 
   // Bounding box of everything over all frames (relative coordinates), with
   // radii and body sizes.
@@ -108,6 +120,16 @@
   bodies.forEach(function (b) {
     var pad = b.shape === 'sphere' ? b.radius : 0.5 * Math.sqrt(b.size[0] * b.size[0] + b.size[1] * b.size[1] + b.size[2] * b.size[2]);
     b.frames.forEach(function (f) { grow(f[0] * Q, f[1] * Q, f[2] * Q, pad); });
+  });
+  // Finite obstacles count in the framing; planes and cylinders are cut to
+  // the region around the rods and would only push the camera back.
+  obstacles.forEach(function (o) {
+    if (o.infinite) { return; }
+    if (o.frames === null) {
+      for (var i = 0; i < o.mesh.length; i += 6) { grow(o.mesh[i], o.mesh[i + 1], o.mesh[i + 2], 0); }
+    } else {
+      o.frames.forEach(function (f) { grow(f[0] * Q, f[1] * Q, f[2] * Q, o.reach); });
+    }
   });
   var center = scale(add(lo, hi), 0.5);
   var sceneR = Math.max(0.5 * norm(sub(hi, lo)), 1e-9);
@@ -255,6 +277,11 @@
     }
     return { vbo: staticBuffer(gl.ARRAY_BUFFER, new Float32Array(v)), ibo: staticBuffer(gl.ELEMENT_ARRAY_BUFFER, new Uint16Array(idx)), n: idx.length };
   }
+  obstacles.forEach(function (o) {
+    o.vbo = staticBuffer(gl.ARRAY_BUFFER, new Float32Array(o.mesh));
+    o.ibo = staticBuffer(gl.ELEMENT_ARRAY_BUFFER, new Uint16Array(o.triangles));
+    o.n = o.triangles.length;
+  });
   var cube = bodies.length ? cubeMesh() : null;
   var sphere = bodies.length ? sphereMesh(32, 16) : null;
 
@@ -405,6 +432,10 @@
     }
     if (cables.length) { head('cables'); cables.forEach(function (c) { row(CABLE_COLOR, c.name, true); }); }
     if (bodies.length) { head('bodies'); bodies.forEach(function (b) { row(BODY_COLOR, b.name); }); }
+    if (obstacles.length) {
+      head('obstacles');
+      obstacles.forEach(function (o) { row(o.shape === 'plane' ? PLANE_COLOR : OBSTACLE_COLOR, o.name + ' (' + o.shape + (o.frames === null ? '' : ', carried') + ')'); });
+    }
     head('axes');
     row('#d62728', 'x', true); row('#2ca02c', 'y', true); row('#1f4fd6', 'z', true);
   })();
@@ -556,7 +587,7 @@
     gl.vertexAttribPointer(0, 3, gl.FLOAT, false, 12, 0);
     gl.drawArrays(mode, 0, count);
   }
-  function drawMesh(vbo, ibo, count, type, mvp, model, rot, rgb, eye) {
+  function drawMesh(vbo, ibo, count, type, mvp, model, rot, rgb, eye, alpha) {
     gl.useProgram(lit.p);
     gl.uniformMatrix4fv(lit.u.uMVP, false, mvp);
     gl.uniformMatrix4fv(lit.u.uModel, false, model);
@@ -564,7 +595,7 @@
     gl.uniform3fv(lit.u.uColor, rgb);
     gl.uniform3fv(lit.u.uEye, eye);
     gl.uniform3fv(lit.u.uUp, up);
-    gl.uniform1f(lit.u.uAlpha, 1.0);
+    gl.uniform1f(lit.u.uAlpha, alpha === undefined ? 1.0 : alpha);
     gl.bindBuffer(gl.ARRAY_BUFFER, vbo);
     gl.enableVertexAttribArray(0);
     gl.enableVertexAttribArray(1);
@@ -582,6 +613,26 @@
     }
     m[12] = f[0] * Q; m[13] = f[1] * Q; m[14] = f[2] * Q; m[15] = 1; r[15] = 1;
     return [m, r];
+  }
+
+  // Model and normal matrices of an obstacle at the kept frame k (identity
+  // when fixed: its mesh is already relative to the origin).
+  function obstacleMatrices(o, k) {
+    if (o.frames === null) { return [IDENT, IDENT]; }
+    var f = o.frames[k], A = quatAxes(f[3] / QS, f[4] / QS, f[5] / QS, f[6] / QS);
+    var m = new Float32Array(16), r = new Float32Array(16);
+    for (var c = 0; c < 3; c++) {
+      for (var j = 0; j < 3; j++) { m[4 * c + j] = A[c][j]; r[4 * c + j] = A[c][j]; }
+    }
+    m[12] = f[0] * Q; m[13] = f[1] * Q; m[14] = f[2] * Q; m[15] = 1; r[15] = 1;
+    return [m, r];
+  }
+  function obstacleAnchor(o, k) {
+    if (o.frames === null) { return o.anchor; }
+    var f = o.frames[k], A = quatAxes(f[3] / QS, f[4] / QS, f[5] / QS, f[6] / QS), a = o.anchor;
+    return [f[0] * Q + A[0][0] * a[0] + A[1][0] * a[1] + A[2][0] * a[2],
+      f[1] * Q + A[0][1] * a[0] + A[1][1] * a[1] + A[2][1] * a[2],
+      f[2] * Q + A[0][2] * a[0] + A[1][2] * a[1] + A[2][2] * a[2]];
   }
 
   function draw() {
@@ -657,6 +708,19 @@
       var M = bodyMatrices(b, b.frames[frame]), mesh = b.shape === 'sphere' ? sphere : cube;
       drawMesh(mesh.vbo, mesh.ibo, mesh.n, gl.UNSIGNED_SHORT, mvp, M[0], M[1], hexRgb(BODY_COLOR), eye);
     });
+    // Solid obstacles, then planes see-through (a rod under a table shows).
+    obstacles.forEach(function (o) {
+      if (o.shape === 'plane') { return; }
+      var M = obstacleMatrices(o, frame);
+      drawMesh(o.vbo, o.ibo, o.n, gl.UNSIGNED_SHORT, mvp, M[0], M[1], hexRgb(OBSTACLE_COLOR), eye);
+    });
+    gl.depthMask(false);
+    obstacles.forEach(function (o) {
+      if (o.shape !== 'plane') { return; }
+      var M = obstacleMatrices(o, frame);
+      drawMesh(o.vbo, o.ibo, o.n, gl.UNSIGNED_SHORT, mvp, M[0], M[1], hexRgb(PLANE_COLOR), eye, 0.55);
+    });
+    gl.depthMask(true);
 
     // Text: grid numbers, axis names, rod names at the tips.
     ctx2d.clearRect(0, 0, overlay.width, overlay.height);
@@ -697,6 +761,10 @@
     // the drawn picture with the data.
     status.setAttribute('data-tips', rods.map(function (r) {
       var p = project(mvp, r.tip);
+      return p ? (p[0] / dpr).toFixed(1) + ',' + (p[1] / dpr).toFixed(1) : 'behind';
+    }).join(';'));
+    status.setAttribute('data-obstacles', obstacles.map(function (o) {
+      var p = project(mvp, obstacleAnchor(o, frame));
       return p ? (p[0] / dpr).toFixed(1) + ',' + (p[1] / dpr).toFixed(1) : 'behind';
     }).join(';'));
     status.setAttribute('data-viewport', window.innerWidth + 'x' + window.innerHeight);

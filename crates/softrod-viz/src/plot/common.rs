@@ -66,6 +66,12 @@ pub(crate) fn sequential(u: f64) -> RGBColor {
     RGBColor(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
 }
 
+/// `c` mixed with white by `w ∈ [0, 1]`.
+pub(crate) fn lighten(c: RGBColor, w: f64) -> RGBColor {
+    let m = |v: u8| (f64::from(v) + w * (255.0 - f64::from(v))).round() as u8;
+    RGBColor(m(c.0), m(c.1), m(c.2))
+}
+
 /// The display unit of lengths for a span (m): numbers between ~0.1 and
 /// ~1000 on the ticks. Returns (unit, factor from metres).
 pub(crate) fn length_unit(span: f64) -> (&'static str, f64) {

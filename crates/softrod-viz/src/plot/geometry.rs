@@ -5,7 +5,7 @@ use plotters::prelude::*;
 use super::common::{
     Area, LEGEND_W, LegendEntry, Marker, PanelSpec, Stroke, Swatch, TITLE_H, bounds, check_finite,
     check_len, color, draw_legend, draw_panel, equal_aspect_ranges, extent, finish_svg,
-    length_unit, plot_err, plot_size, sequential, significant, titled,
+    length_unit, lighten, plot_err, plot_size, sequential, significant, titled,
 };
 use super::{Figure, PanelInfo};
 use crate::error::VizError;
@@ -309,6 +309,17 @@ pub fn tip_trajectory(title: &str, tips: &[RodCurve]) -> Result<Figure, VizError
 /// outlined squares at their frame origins, in the same projections, named
 /// at the last snapshot.
 pub fn shapes(title: &str, snapshots: &[ShapeSnapshot]) -> Result<Figure, VizError> {
+    shapes_with_obstacles(title, snapshots, &[])
+}
+
+/// [`shapes`] with obstacles drawn in every projection (their outlines,
+/// `super::obstacles`): a carried obstacle's `poses` has one pose per
+/// snapshot, and it is drawn at each (lighter when earlier).
+pub fn shapes_with_obstacles(
+    title: &str,
+    snapshots: &[ShapeSnapshot],
+    obstacles: &[crate::obstacles::ObstacleTrack],
+) -> Result<Figure, VizError> {
     if snapshots.is_empty() {
         return Err(VizError::Empty("snapshots"));
     }
@@ -383,8 +394,50 @@ pub fn shapes(title: &str, snapshots: &[ShapeSnapshot]) -> Result<Figure, VizErr
             swatch: Swatch::HollowSquare(BODY_COLOR),
         });
     }
-    let (planes, per, cols) = projections(curves, markers);
+    for (k, o) in obstacles.iter().enumerate() {
+        o.validate(&format!("obstacles[{k}]"), m)?;
+    }
+    let region = super::obstacles::region_of(curves.iter().flat_map(|c| c.points.iter().copied()));
+    let (planes, mut per, cols) = projections(curves, markers);
+    add_obstacles(&planes, &mut per, &mut legend, obstacles, &region);
     geometry_figure(title, &planes, &per, cols, &legend, PLOT)
+}
+
+/// Colour of obstacle outlines.
+const OBSTACLE_COLOR: RGBColor = RGBColor(150, 110, 60);
+
+/// The obstacles' outlines added to each panel (drawn before the rods, so
+/// a rod resting on a table stays on top) and one legend line per obstacle.
+fn add_obstacles(
+    planes: &Planes,
+    per: &mut PanelContents,
+    legend: &mut Vec<LegendEntry>,
+    obstacles: &[crate::obstacles::ObstacleTrack],
+    region: &crate::obstacles::Region,
+) {
+    if obstacles.is_empty() {
+        return;
+    }
+    for ((a, b, _), (curves, _)) in planes.iter().zip(per.iter_mut()) {
+        let outlines = super::obstacles::outlines(obstacles, (*a, *b), region);
+        let drawn = outlines.into_iter().map(|o| Curve3 {
+            points: o.points,
+            color: lighten(OBSTACLE_COLOR, o.fade),
+            width: 2,
+            dashed: false,
+        });
+        let rods = std::mem::take(curves);
+        curves.extend(drawn);
+        curves.extend(rods);
+    }
+    legend.push(LegendEntry::header("obstacles"));
+    for o in obstacles {
+        legend.push(LegendEntry::line(
+            format!("{} ({})", o.name, crate::obstacles::kind(&o.shape)),
+            OBSTACLE_COLOR,
+            2,
+        ));
+    }
 }
 
 /// The marks of a snapshot's bodies, drawn after the rods; named on the

@@ -15,12 +15,14 @@
 
 mod common;
 mod geometry;
+mod obstacles;
 mod series;
 mod strains;
 mod work_precision;
 
 pub use geometry::{
-    BodyMark, Mode, ModeShapes, RodCurve, ShapeSnapshot, modes, shapes, tip_trajectory,
+    BodyMark, Mode, ModeShapes, RodCurve, ShapeSnapshot, modes, shapes, shapes_with_obstacles,
+    tip_trajectory,
 };
 pub use series::{ActuatorSeries, EnergySeries, NamedSeries, actuators, energy};
 pub use strains::{StrainComponent, StrainProfiles, strains};

@@ -19,10 +19,10 @@
 //!   [`Simulation::pose`](crate::Simulation::pose) and its siblings).
 //!
 //! A new recorded quantity goes into [`Record`] (computed in
-//! [`Recorder::record`]) and, if it is a column, into [`Columns`]. Contact
-//! forces (a later `contacts.csv`) belong beside the poses in [`Record`]:
-//! one entry per active contact, filled in [`Recorder::record`] from the
-//! sample's dynamics buffers.
+//! [`Recorder::record`]) and, if it is a column, into [`Columns`]. The
+//! contacts (`contacts.csv`, scene-format.md "Contact") are in
+//! [`Record::contacts`]: one entry per active contact with its force, from
+//! the sample's dynamics buffers (the run's friction state).
 
 mod columns;
 mod poses;
@@ -89,6 +89,11 @@ pub struct Record {
     pub closure_residual: f64,
     /// World poses of every rod and body.
     pub poses: WorldPoses,
+    /// The active contacts with their forces (rod `a` at `s`, what touches
+    /// it, point, normal from b to a, gap, force on `a` \[N\], stick or
+    /// slip; docs/theory-contact.md), as the run's committed friction state
+    /// gives them; empty for a model without contact.
+    pub contacts: Vec<softrod_mechanics::ContactPoint>,
 }
 
 impl Record {
@@ -188,6 +193,8 @@ pub struct Recorder {
     /// The residual that stops the run \[m\].
     closure_limit: f64,
     closure_residual_max: f64,
+    max_penetration: f64,
+    max_contacts: usize,
 }
 
 impl Recorder {
@@ -219,9 +226,12 @@ impl Recorder {
                 prescribed_force: vec![0.0; np],
                 closure_residual: 0.0,
                 poses,
+                contacts: Vec::new(),
             },
             closure_limit: CLOSURE_FAIL_RELATIVE * closure_length_scale(model),
             closure_residual_max: 0.0,
+            max_penetration: 0.0,
+            max_contacts: 0,
         }
     }
 
@@ -329,7 +339,42 @@ impl Recorder {
             r.prescribed_force
                 .copy_from_slice(data.prescribed_force.as_slice());
         }
+        r.contacts.clear();
+        if model.has_contact() {
+            r.contacts = model
+                .contacts_with(data, t, q, qdot)
+                .map_err(|e| RecordError::evaluation("contacts", t)(e.into()))?;
+            let bad = r.contacts.iter().position(|c| {
+                !(c.gap.is_finite()
+                    && c.s.is_finite()
+                    && c.point
+                        .iter()
+                        .chain(&c.normal)
+                        .chain(&c.force)
+                        .all(|v| v.is_finite()))
+            });
+            if let Some(k) = bad {
+                return Err(RecordError::NonFinite {
+                    what: format!("contact {k}"),
+                    t,
+                });
+            }
+            let deepest = r.contacts.iter().fold(0.0, |m, c| f64::max(m, -c.gap));
+            self.max_penetration = self.max_penetration.max(deepest);
+            self.max_contacts = self.max_contacts.max(r.contacts.len());
+        }
         Ok(&self.record)
+    }
+
+    /// The largest penetration `−gap` over the samples recorded \[m\] (0
+    /// without contact or when nothing penetrated).
+    pub fn max_penetration(&self) -> f64 {
+        self.max_penetration
+    }
+
+    /// The most contacts active at one sample.
+    pub fn max_contacts(&self) -> usize {
+        self.max_contacts
     }
 
     /// The last record (the state at `t = 0` of an empty one before the

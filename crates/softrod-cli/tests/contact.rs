@@ -1,0 +1,303 @@
+//! Contact in the command line (scene-format.md, "Contact: obstacles, rods
+//! touching rods, friction"): `check` lists obstacles and the contact
+//! settings; bad obstacles exit 2 naming the key.
+
+mod common;
+
+use common::{json_file, run, stderr, stdout, tmp};
+
+const SCENE: &str = r#"
+[world]
+gravity = [0, 0, -9.81]
+
+[[rod]]
+name = "arm"
+length = 0.5
+pieces = 4
+strains = ["ky", "qx"]
+section = { shape = "circle", radius = 0.01 }
+material = { density = 1000.0, young = 1.0e6, poisson = 0.5 }
+
+[[body]]
+name = "ball"
+parent = "world"
+base = { position = [0.3, 0, -0.3] }
+mass = 0.1
+inertia = [1e-4, 1e-4, 1e-4]
+
+[[obstacle]]
+name = "table"
+shape = "plane"
+position = [0, 0, -0.2]
+normal = [0, 0, 2]
+friction = 0.5
+
+[[obstacle]]
+name = "knob"
+shape = "sphere"
+radius = 0.03
+parent = "ball"
+
+[contact]
+rods = true
+friction = 0.25
+"#;
+
+#[test]
+fn check_lists_obstacles_and_contact_settings() {
+    let dir = tmp("check");
+    let scene = dir.join("c.toml");
+    std::fs::write(&scene, SCENE).unwrap();
+    let o = run(&["check", scene.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    // The normal as the model has it: unit.
+    assert!(
+        out.contains(
+            "obstacle 'table': plane through [0, 0, -0.2] m, normal [0, 0, 1], fixed in the \
+             world, friction 0.5, restitution 0"
+        ),
+        "{out}"
+    );
+    assert!(
+        out.contains(
+            "obstacle 'knob': sphere at [0, 0, 0] m, radius 0.03 m, carried by body 'ball', \
+             friction 0, restitution 0"
+        ),
+        "{out}"
+    );
+    assert!(
+        out.contains(
+            "contact between rods: different rods yes, a rod with itself no, friction 0.25, \
+             restitution 0"
+        ),
+        "{out}"
+    );
+    assert!(out.contains("contact radius of rod 'arm': 0.01 m"), "{out}");
+}
+
+#[test]
+fn a_scene_without_contact_says_nothing_of_it() {
+    let dir = tmp("none");
+    let scene = dir.join("n.toml");
+    let text = SCENE.split("[[obstacle]]").next().unwrap();
+    std::fs::write(&scene, text).unwrap();
+    let o = run(&["check", scene.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stdout(&o).contains("contact between"), "{}", stdout(&o));
+    assert!(!stdout(&o).contains("obstacle '"), "{}", stdout(&o));
+}
+
+#[test]
+fn bad_obstacles_exit_2_naming_the_key() {
+    let dir = tmp("bad");
+    for (edit, path) in [
+        ("radius = 0.03", "obstacle[1].radius"),
+        ("normal = [0, 0, 2]", "obstacle[0].normal"),
+        ("parent = \"ball\"", "obstacle[1].parent"),
+        ("friction = 0.5", "obstacle[0].friction"),
+    ] {
+        let bad = match edit {
+            "radius = 0.03" => SCENE.replace(edit, "radius = -0.03"),
+            "normal = [0, 0, 2]" => SCENE.replace(edit, "normal = [0, 0, 0]"),
+            "parent = \"ball\"" => SCENE.replace(edit, "parent = \"bal\""),
+            _ => SCENE.replace(edit, "friction = -0.5"),
+        };
+        let scene = dir.join("b.toml");
+        std::fs::write(&scene, bad).unwrap();
+        for cmd in ["check", "statics", "run"] {
+            let out = dir.join("out");
+            let o = run(&[cmd, scene.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+            let o = if cmd == "check" {
+                run(&[cmd, scene.to_str().unwrap()])
+            } else {
+                o
+            };
+            assert_eq!(o.status.code(), Some(2), "{cmd} {edit}: {}", stderr(&o));
+            let err = stderr(&o);
+            assert!(err.contains(path), "{cmd} {edit}: {err}");
+            assert!(!out.exists(), "{cmd} {edit}: wrote {}", out.display());
+        }
+    }
+}
+
+/// A soft cantilever along x (radius 1 cm) under gravity droops onto a
+/// frictionless table 2 cm below its centreline.
+const DROOP: &str = r#"
+[world]
+gravity = [0, 0, -9.81]
+
+[[rod]]
+name = "arm"
+length = 0.3
+pieces = 6
+strains = ["ky", "qx"]
+section = { shape = "circle", radius = 0.01 }
+material = { density = 1000.0, young = 1.0e6, poisson = 0.5, viscosity = 2000.0 }
+
+[[obstacle]]
+name = "table"
+shape = "plane"
+position = [0, 0, -0.02]
+normal = [0, 0, 1]
+
+[run]
+duration = 0.1
+output_every = 0.01
+"#;
+
+/// `statics --json` lists the contacts; each entry's gap is the distance
+/// of its centreline point to the table less the radius (computed here
+/// from the point), its normal the table's, its force along the normal
+/// (frictionless) and pushing the rod up; `max_penetration` is the largest
+/// `−gap`.
+#[test]
+fn statics_json_lists_contacts_consistent_with_the_geometry() {
+    let dir = tmp("statics");
+    let scene = dir.join("droop.toml");
+    std::fs::write(&scene, DROOP).unwrap();
+    let o = run(&["statics", scene.to_str().unwrap(), "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let contacts = v["contacts"].as_array().expect("contacts");
+    assert!(
+        !contacts.is_empty(),
+        "the rod should rest on the table: {v}"
+    );
+    let mut deepest = 0.0f64;
+    for c in contacts {
+        assert_eq!(c["a"], "arm");
+        assert_eq!(c["b"], "table");
+        assert!(c["b_s"].is_null());
+        let s = c["s"].as_f64().unwrap();
+        assert!((0.0..=0.3).contains(&s));
+        let p: Vec<f64> = c["point"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect();
+        let n: Vec<f64> = c["normal"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect();
+        let f: Vec<f64> = c["force"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect();
+        let gap = c["gap"].as_f64().unwrap();
+        // `point` is where the rod's surface meets the normal (its
+        // centreline point less r n): the centreline is r above it.
+        let by_hand = ((p[2] + 0.01) - (-0.02)) - 0.01;
+        assert!((gap - by_hand).abs() < 1e-12, "gap {gap} vs {by_hand}");
+        assert!(n[0].abs() < 1e-12 && n[1].abs() < 1e-12 && (n[2] - 1.0).abs() < 1e-12);
+        assert!(
+            f[2] >= 0.0
+                && f[0].abs() <= 1e-12 * f[2].abs().max(1.0)
+                && f[1].abs() <= 1e-12 * f[2].abs().max(1.0),
+            "{f:?}"
+        );
+        deepest = deepest.max(-gap);
+    }
+    assert_eq!(v["max_penetration"].as_f64().unwrap(), deepest);
+}
+
+/// `run` writes contacts.csv with the contract's header, one row per
+/// contact and output time; summary.json's max_penetration and
+/// max_contacts are those of the file's rows (recomputed here).
+#[test]
+fn run_writes_contacts_csv_and_the_summary_agrees_with_it() {
+    let dir = tmp("run");
+    let scene = dir.join("droop.toml");
+    std::fs::write(&scene, DROOP).unwrap();
+    let out = dir.join("out");
+    let o = run(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(out.join("contacts.csv")).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "t,a,s,b,b_s,x,y,z,nx,ny,nz,gap,fx,fy,fz,state"
+    );
+    let mut per_t: std::collections::BTreeMap<String, usize> = Default::default();
+    let mut deepest = 0.0f64;
+    for l in lines {
+        let f: Vec<&str> = l.split(',').collect();
+        assert_eq!(f.len(), 16, "{l}");
+        assert_eq!((f[1], f[3], f[4]), ("arm", "table", ""));
+        assert!(f[15] == "stick" || f[15] == "slip", "{l}");
+        let z: f64 = f[7].parse().unwrap();
+        let gap: f64 = f[11].parse().unwrap();
+        assert!((gap - ((z + 0.01 + 0.02) - 0.01)).abs() < 1e-12, "{l}");
+        deepest = deepest.max(-gap);
+        *per_t.entry(f[0].to_owned()).or_default() += 1;
+    }
+    assert!(!per_t.is_empty(), "the rod never touched the table");
+    let summary = json_file(&out.join("summary.json"));
+    assert_eq!(summary["max_penetration"].as_f64().unwrap(), deepest);
+    assert_eq!(
+        summary["max_contacts"].as_u64().unwrap() as usize,
+        per_t.values().copied().max().unwrap()
+    );
+}
+
+/// A scene without contact writes no contacts.csv and no contact keys.
+#[test]
+fn no_contact_no_contacts_file() {
+    let dir = tmp("plain");
+    let scene = dir.join("plain.toml");
+    std::fs::write(&scene, DROOP.split("[[obstacle]]").next().unwrap()).unwrap();
+    let out = dir.join("out");
+    let o = run(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!out.join("contacts.csv").exists());
+    let summary = json_file(&out.join("summary.json"));
+    assert!(summary.get("max_penetration").is_none());
+}
+
+/// A rod that starts inside an obstacle: exit 2 naming both and the depth,
+/// nothing written.
+#[test]
+fn initial_overlap_exits_2_and_writes_nothing() {
+    let dir = tmp("overlap");
+    let scene = dir.join("o.toml");
+    std::fs::write(
+        &scene,
+        DROOP.replace("position = [0, 0, -0.02]", "position = [0, 0, 0.0]"),
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let o = run(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("obstacle[0]")
+            && err.contains("'arm'")
+            && err.contains("'table'")
+            && err.contains("1.000e-2"),
+        "{err}"
+    );
+    assert!(!out.exists());
+}
