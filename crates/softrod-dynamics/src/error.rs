@@ -401,7 +401,8 @@ pub enum DynamicsError {
     /// A rod starts inside an obstacle or another rod, deeper than allowed
     /// (docs/theory-contact.md CT3).
     #[error(
-        "{rod} starts inside {other} at s = {s:.6} m: penetration {depth:.3e} m > allowed          {allowed:.3e} m (move it out)"
+        "{rod} starts inside {other} at s = {s:.6} m: penetration {depth:.3e} m > allowed \
+         {allowed:.3e} m (move it out)"
     )]
     InitialOverlap {
         /// The rod.
@@ -418,7 +419,8 @@ pub enum DynamicsError {
     /// A contact penetrated deeper than the model can resolve
     /// (docs/theory-contact.md CT3).
     #[error(
-        "{rod} penetrates {other} at s = {s:.6} m, t = {t} s by {depth:.3e} m > bound          {bound:.3e} m (contact failed: smaller steps, or a slower impact)"
+        "{rod} penetrates {other} at s = {s:.6} m, t = {t} s by {depth:.3e} m > bound \
+         {bound:.3e} m (contact failed: smaller steps, or a slower impact)"
     )]
     Penetration {
         /// The rod.

@@ -316,7 +316,8 @@ pub struct ContactPoint {
     pub s: f64,
     /// What touches it.
     pub b: Contactee,
-    /// The contact point on `a`'s centreline, world \[m\].
+    /// The contact point on `a`'s surface (its centreline point less the
+    /// contact radius along `normal`), world \[m\].
     pub point: Vec3,
     /// Unit normal from `b` to `a`, world.
     pub normal: Vec3,
