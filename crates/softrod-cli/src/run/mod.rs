@@ -53,6 +53,13 @@ pub fn run(
     } else {
         0
     };
+    // What can be refused without the directory is, before it exists.
+    let times = output_times(duration, every);
+    if npz_out {
+        let width = Columns::of(l.sim.model()).width();
+        npz::check_size(times.len() as u64, width).map_err(CliError::Input)?;
+    }
+    let snapshot_at = chosen_rows(&times, snapshots.as_deref())?;
     // A directory that cannot be created is said so (not "0.0 MB free");
     // one created here and then refused is removed again.
     let existed = dir.exists();
@@ -65,13 +72,6 @@ pub fn run(
         }
         return Err(e);
     }
-    let times = output_times(duration, every);
-    if npz_out {
-        let width = Columns::of(l.sim.model()).width();
-        npz::check_size(times.len() as u64, width).map_err(CliError::Input)?;
-    }
-    let snapshot_at = chosen_rows(&times, snapshots.as_deref())?;
-    outputs::prepare_out_dir(&dir)?;
     let stale = outputs::clear_stale(&dir)?;
     if !quiet && !stale.is_empty() {
         eprintln!(
