@@ -4,10 +4,17 @@
 use softrod_viz::plot::{RodCurve, ShapeSnapshot, shapes_with_obstacles};
 use softrod_viz::{ObstacleShape, ObstacleTrack, Pose};
 
+/// A rod that leaves every coordinate plane (a planar scene draws its one
+/// plane only), so that all three projections are drawn.
 fn rod() -> RodCurve {
     RodCurve {
         name: "arm".into(),
-        points: (0..=10).map(|i| [0.05 * i as f64, 0.0, 0.0]).collect(),
+        points: (0..=10)
+            .map(|i| {
+                let x = 0.05 * i as f64;
+                [x, 0.02 * x, 0.01 * x]
+            })
+            .collect(),
     }
 }
 
