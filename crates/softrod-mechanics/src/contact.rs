@@ -81,7 +81,7 @@ impl Shape {
     ///
     /// Zero vectors are errors, not normalized: a direction of length 0
     /// has no meaning. Callers that accept unnormalized directions
-    /// normalize them first with [`unit`].
+    /// normalize them first with [`unit()`].
     pub fn validate(&self) -> Result<(), ObstacleError> {
         let finite = |what: &'static str, v: &Vec3| {
             if v.iter().all(|x| x.is_finite()) {
