@@ -239,7 +239,7 @@ fn undamped_release_keeps_its_energy() {
 /// against Radau IIA at 1e-10.
 #[test]
 fn shipped_examples_run_and_agree_with_radau_iia() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples");
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples");
     let mut paths: Vec<_> = std::fs::read_dir(&dir)
         .unwrap()
         .map(|e| e.unwrap().path())
