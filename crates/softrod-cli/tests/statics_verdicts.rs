@@ -112,3 +112,33 @@ fn an_uncreatable_out_dir_is_named() {
     assert!(stderr(&o).contains("cannot create it"), "{}", stderr(&o));
     assert!(!stderr(&o).contains("MB free"), "{}", stderr(&o));
 }
+
+/// A run its settings refuse (D06: 1e19 fixed steps) is refused before its
+/// output directory exists, in `check`'s words: nothing is left that looks
+/// like a killed run.
+#[test]
+fn a_refused_run_leaves_no_output() {
+    let dir = tmp("refused");
+    let p = dir.join("d06.toml");
+    let scene = cantilever("force = [0, 0, -1e-3]")
+        + "[run]\nintegrator = \"rk4\"\ndt = 1e-15\nduration = 1e4\n";
+    std::fs::write(&p, &scene).unwrap();
+    let out = dir.join("out");
+    let o = run(&[
+        "run",
+        p.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("run.dt"), "{}", stderr(&o));
+    assert!(!out.exists(), "a refused run created {}", out.display());
+    let c = run(&["check", p.to_str().unwrap()]);
+    assert_eq!(c.status.code(), Some(2), "{}", stderr(&c));
+    assert!(
+        stderr(&c).contains("more than 1e12 steps"),
+        "{}",
+        stderr(&c)
+    );
+}

@@ -53,7 +53,9 @@ pub fn run(
     } else {
         0
     };
-    // What can be refused without the directory is, before it exists.
+    // What can be refused without the directory is, before it exists: the
+    // run's own admission (step budget, sizes) first, as `check` does.
+    l.sim.check_run(duration)?;
     let times = output_times(duration, every);
     if npz_out {
         let width = Columns::of(l.sim.model()).width();
@@ -135,8 +137,12 @@ pub fn run(
     // Rows are the integrator's dense output at the output times, streamed
     // to the observer as the run proceeds; nothing is kept in between.
     let result = match l.sim.simulate_with(duration, &mut streamer) {
-        // Refused before it started (too large for the machine): bad input.
-        Err(e) if e.is_input() => return Err(e.into()),
+        // Refused before it started (too large for the machine): bad input,
+        // and the summary says so rather than "running".
+        Err(e) if e.is_input() => {
+            let _ = summary_final.write(&Stats::default(), 0.0, 0.0, &format!("refused: {e}"), 0);
+            return Err(e.into());
+        }
         r => r,
     };
     if let Some(b) = &streamer.bar {
