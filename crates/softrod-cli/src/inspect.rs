@@ -15,7 +15,7 @@ use crate::run::scene_title;
 pub fn check(path: &Path) -> Result<(), CliError> {
     let Loaded {
         scene,
-        warnings,
+        mut warnings,
         sim,
     } = load_silent(path)?;
     // What `run` or `statics` would refuse before starting, `check` refuses
@@ -84,6 +84,9 @@ pub fn check(path: &Path) -> Result<(), CliError> {
         run.output_every,
         run.quadrature
     );
+    if run.mode == softrod::scene::Mode::Dynamics {
+        output_size(path, &sim, run, &mut warnings);
+    }
     if warnings.is_empty() {
         println!("warnings: none");
     } else {
@@ -93,6 +96,47 @@ pub fn check(path: &Path) -> Result<(), CliError> {
         }
     }
     Ok(())
+}
+
+/// Prints what `run` would write (at least) and warns, with `run`'s words,
+/// when it exceeds the free space where `run` writes by default.
+fn output_size(
+    path: &Path,
+    sim: &softrod::Simulation,
+    run: &softrod::scene::Run,
+    warnings: &mut Vec<softrod::scene::Warning>,
+) {
+    let m = sim.model();
+    let duration = run.duration;
+    let every = sim.settings().output_spacing(duration);
+    let contacts = if m.has_contact() {
+        let (q0, qd0) = sim.initial_state();
+        m.contacts(0.0, q0.as_slice(), qd0.as_slice())
+            .map_or(0, |c| c.len())
+    } else {
+        0
+    };
+    let samples = softrod::record::RodSampling::of_model(m, run.shape_points_per_piece)
+        .iter()
+        .map(|s| s.s.len())
+        .sum();
+    let per_row = crate::outputs::output_bytes_per_row(m, samples, contacts, false);
+    let (need, rows) = crate::outputs::disk_need(duration, every, per_row);
+    println!(
+        "outputs: {rows} output times, at least {} on disk (CSV files)",
+        crate::outputs::human(need)
+    );
+    let dir = crate::common::out_dir(path, None);
+    if let Err(e) = crate::outputs::check_disk_space(&dir, duration, every, per_row) {
+        warnings.push(softrod::scene::Warning {
+            path: "run.output_every".into(),
+            at: None,
+            message: format!(
+                "`run` would refuse this: {}",
+                e.to_string().trim_start_matches("run.output_every: ")
+            ),
+        });
+    }
 }
 
 /// Largest model whose equilibrium `softrod statics` checks for stability

@@ -238,38 +238,54 @@ pub fn free_disk_bytes(dir: &Path) -> Option<u64> {
     fs4::available_space(&probe).ok()
 }
 
-/// A lower bound of what `softrod run` writes per output time \[bytes\]:
-/// the `trajectory.csv` row (≥ 8 bytes per number), the `shape.csv` rows
-/// of every rod's piece boundaries (≥ 60 bytes each) and, for a model with
-/// contact, the `contacts.csv` rows of the `contacts` active at the start
-/// (≥ 100 bytes each: 13 numbers, two names and the state).
-pub fn output_bytes_per_row(model: &Model, contacts: usize) -> u64 {
-    let numbers = 9 + 2 * model.n_dof() + 3 + 2 * model.n_cables();
-    let shape_rows: usize = model
-        .rods()
-        .iter()
-        .map(|r| r.spec.geometry.n_pieces() + 1)
-        .sum();
-    8 * numbers as u64 + 60 * shape_rows as u64 + 100 * contacts as u64
+/// Bytes a CSV number takes at least once the motion has started (a
+/// shortest round-trip decimal of a generic `f64` has 15–17 digits, a sign,
+/// a point and often an exponent; 12 leaves room for the rounder ones).
+const CSV_NUMBER_BYTES: u64 = 12;
+
+/// What `softrod run` writes per output time \[bytes\], estimated from
+/// below: the `trajectory.csv` row, the `shape.csv` rows of every rod's
+/// samples (`shape_samples`, all rods), the `bodies.csv` rows, for a model
+/// with contact the `contacts.csv` rows of the `contacts` active at the
+/// start, and with `npz` the archive's 8 bytes per trajectory number.
+pub fn output_bytes_per_row(
+    model: &Model,
+    shape_samples: usize,
+    contacts: usize,
+    npz: bool,
+) -> u64 {
+    let numbers = (9 + 2 * model.n_dof() + 3 + 2 * model.n_cables()) as u64;
+    // t, name, s and a pose; t, name and a pose; 13 numbers, two names and
+    // the state.
+    let shape = shape_samples as u64 * (9 * CSV_NUMBER_BYTES + 2);
+    let bodies = model.bodies().len() as u64 * (8 * CSV_NUMBER_BYTES + 2);
+    let contact = contacts as u64 * (13 * CSV_NUMBER_BYTES + 6);
+    let archive = if npz { 8 * numbers } else { 0 };
+    CSV_NUMBER_BYTES * numbers + shape + bodies + contact + archive
+}
+
+/// The disk a run of `duration` s sampled every `every` s needs at least
+/// (see [`output_bytes_per_row`]), and its number of output times.
+pub fn disk_need(duration: f64, every: f64, per_row: u64) -> (u64, u64) {
+    let rows = softrod::limits::output_sample_count(duration, every).unwrap_or(u64::MAX);
+    (rows.saturating_mul(per_row), rows)
 }
 
 /// Refuses (exit 2, naming `run.output_every`) a run whose outputs cannot
 /// fit on the disk that holds `dir`, before anything is allocated or
-/// written.
+/// written. `per_row`: [`output_bytes_per_row`].
 pub fn check_disk_space(
     dir: &Path,
-    model: &Model,
     duration: f64,
     every: f64,
-    contacts: usize,
+    per_row: u64,
 ) -> Result<(), CliError> {
-    let rows = softrod::limits::output_sample_count(duration, every).unwrap_or(u64::MAX);
-    let need = rows.saturating_mul(output_bytes_per_row(model, contacts));
+    let (need, rows) = disk_need(duration, every, per_row);
     if let Some(free) = free_disk_bytes(dir) {
         if need > free {
             return Err(CliError::Input(format!(
-                "run.output_every: {rows} output times of {every:e} s over {duration} s need at least {} on disk, \
-                 {} free at {}; sample less often",
+                "run.output_every: {rows} output times of {every:e} s over {duration} s need at least {} on disk \
+                 (trajectory, shape, bodies, contacts and archive rows), {} free at {}; sample less often",
                 human(need),
                 human(free),
                 dir.display()
@@ -279,7 +295,8 @@ pub fn check_disk_space(
     Ok(())
 }
 
-fn human(bytes: u64) -> String {
+/// Bytes as "12.3 MB", "4.5 GB", "1.2 TB".
+pub fn human(bytes: u64) -> String {
     let b = bytes as f64;
     if b >= 1e12 {
         format!("{:.1} TB", b / 1e12)

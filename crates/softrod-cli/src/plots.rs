@@ -11,6 +11,7 @@ use softrod_viz::plot::{
     self, ActuatorSeries, BodyMark, EnergySeries, Figure, Mode, ModeShapes, NamedSeries, RodCurve,
     ShapeSnapshot, StrainComponent, StrainProfiles,
 };
+use softrod_viz::run_dir::{Thinning, halve};
 
 use crate::common::{CliError, failed};
 
@@ -30,9 +31,15 @@ pub struct Snapshot {
     pub body_poses: Vec<softrod_viz::Pose>,
 }
 
-/// What a run keeps in memory for its figures (one value per output row;
-/// snapshots at a few rows).
-#[derive(Clone, Debug, Default)]
+/// Most output rows a run keeps for its figures: between this and twice
+/// this many, evenly spaced, and the last (figures are decimated to
+/// sub-pixel detail anyway, so a longer run draws the same curves from
+/// memory that does not grow with its rows).
+pub const FIGURE_ROWS: usize = 20_000;
+
+/// What a run keeps in memory for its figures (one value per kept output
+/// row, see [`FIGURE_ROWS`]; snapshots at a few rows).
+#[derive(Clone, Debug)]
 pub struct Series {
     /// Output times, s.
     pub t: Vec<f64>,
@@ -47,6 +54,10 @@ pub struct Series {
     pub power: Vec<Vec<f64>>,
     /// Shape snapshots, in time order.
     pub snapshots: Vec<Snapshot>,
+    thin: Thinning,
+    offered: usize,
+    /// The latest row when it was not kept: appended by [`Series::finish`].
+    pending: Option<Box<Series>>,
 }
 
 impl Snapshot {
@@ -83,16 +94,74 @@ impl Snapshot {
 impl Series {
     /// Empty series of `rods` rods and `cables` cables.
     pub fn new(rods: usize, cables: usize) -> Self {
+        Self::with_capacity(rods, cables, FIGURE_ROWS)
+    }
+
+    fn with_capacity(rods: usize, cables: usize, cap: usize) -> Self {
         Self {
+            t: Vec::new(),
             tips: vec![Vec::new(); rods],
+            energies: Vec::new(),
             tensions: vec![Vec::new(); cables],
             power: vec![Vec::new(); cables],
-            ..Self::default()
+            snapshots: Vec::new(),
+            thin: Thinning::new(cap),
+            offered: 0,
+            pending: None,
         }
     }
 
-    /// Appends a record's time, tips, energies, tensions and powers.
+    /// Offers a record's time, tips, energies, tensions and powers: kept
+    /// if [`FIGURE_ROWS`]' thinning keeps its row, else held as the latest.
     pub fn push(&mut self, rec: &Record) {
+        let k = self.offered;
+        self.offered += 1;
+        if !self.thin.keeps(k) {
+            let p = self.pending.get_or_insert_with(|| {
+                Box::new(Self::with_capacity(self.tips.len(), self.tensions.len(), 1))
+            });
+            p.clear();
+            p.append(rec);
+            return;
+        }
+        self.pending = None;
+        self.append(rec);
+        if self.thin.full(self.t.len()) {
+            halve(&mut self.t);
+            self.tips.iter_mut().for_each(halve);
+            halve(&mut self.energies);
+            self.tensions.iter_mut().for_each(halve);
+            self.power.iter_mut().for_each(halve);
+        }
+    }
+
+    /// Appends the latest row if thinning skipped it, so the figures end
+    /// where the run did.
+    pub fn finish(&mut self) {
+        if let Some(p) = self.pending.take().map(|p| *p) {
+            self.t.extend(p.t);
+            self.energies.extend(p.energies);
+            for (a, b) in self.tips.iter_mut().zip(p.tips) {
+                a.extend(b);
+            }
+            for (a, b) in self.tensions.iter_mut().zip(p.tensions) {
+                a.extend(b);
+            }
+            for (a, b) in self.power.iter_mut().zip(p.power) {
+                a.extend(b);
+            }
+        }
+    }
+
+    fn clear(&mut self) {
+        self.t.clear();
+        self.energies.clear();
+        self.tips.iter_mut().for_each(Vec::clear);
+        self.tensions.iter_mut().for_each(Vec::clear);
+        self.power.iter_mut().for_each(Vec::clear);
+    }
+
+    fn append(&mut self, rec: &Record) {
         self.t.push(rec.t);
         for (r, tips) in self.tips.iter_mut().enumerate() {
             tips.push(position(rec.poses.tip(r)));
@@ -356,4 +425,42 @@ pub fn modes_figure(
         plot::modes(&format!("{title}: mode shapes"), &shapes),
     )?;
     Ok(name.into())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use softrod::record::Recorder;
+
+    /// A run's figure series keeps between `cap` and `2·cap + 1` rows
+    /// however many it is offered, one stride apart, with the last row.
+    #[test]
+    fn the_figure_series_is_bounded_and_ends_at_the_last_row() {
+        let scene = "[[rod]]\nname = \"a\"\nlength = 0.3\npieces = 2\n\
+                     section = { shape = \"circle\", radius = 0.01 }\n\
+                     material = { density = 1000.0, young = 1.0e6, poisson = 0.5 }\n";
+        let (sim, _, _) = softrod::Simulation::from_toml(scene, "s").unwrap();
+        let model = sim.model();
+        let mut data = softrod::dynamics::Data::new(model);
+        let mut rec = Recorder::new(model);
+        let (q, qd) = sim.initial_state();
+        let (n, cap) = (1003, 50);
+        let mut series = Series::with_capacity(1, 0, cap);
+        for k in 0..n {
+            let r = rec
+                .record(model, &mut data, k as f64, q.as_slice(), qd.as_slice())
+                .unwrap();
+            series.push(r);
+        }
+        series.finish();
+        let m = series.t.len();
+        assert!((cap..=2 * cap + 1).contains(&m), "{m}");
+        assert_eq!(series.t[0], 0.0);
+        assert_eq!(series.t[m - 1], (n - 1) as f64);
+        let stride = series.t[1] - series.t[0];
+        assert!(stride > 1.0);
+        assert!(series.t[..m - 1].windows(2).all(|w| w[1] - w[0] == stride));
+        assert_eq!(series.tips[0].len(), m);
+        assert_eq!(series.energies.len(), m);
+    }
 }

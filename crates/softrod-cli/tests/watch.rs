@@ -124,14 +124,14 @@ fn one_unstable_rk4_step_is_not_ok() {
 }
 
 /// Outputs that cannot fit on the disk are refused before anything is
-/// written (exit 2, naming `run.output_every` and the sizes): 1e9 output
-/// times of a 24-DoF rod need more than a terabyte.
+/// written (exit 2, naming `run.output_every` and the sizes): 1e8 output
+/// times of a 24-DoF rod and its 65 shape samples need almost a terabyte.
 #[test]
 fn outputs_larger_than_the_disk_are_refused_up_front() {
     let dir = tmp("disk-full-estimate");
     let scene = with_run(
         "cantilever_gravity.toml",
-        "[run]\nduration = 1000.0\noutput_every = 1e-6\n",
+        "[run]\nduration = 100.0\noutput_every = 1e-6\n",
         &dir,
     );
     let out = dir.join("out");
@@ -143,4 +143,50 @@ fn outputs_larger_than_the_disk_are_refused_up_front() {
         "{err}"
     );
     assert!(!out.join("trajectory.csv").exists(), "nothing written");
+    // `check` warns of it in the same words (issue 26: what `run` refuses
+    // at its start, `check` reports).
+    let c = run(&["check", scene.to_str().unwrap()]);
+    let said = String::from_utf8_lossy(&c.stdout);
+    assert!(
+        said.contains("`run` would refuse this") && said.contains("on disk"),
+        "{said}"
+    );
+}
+
+/// The disk estimate counts every file a run writes, not only
+/// trajectory.csv (D07: shape.csv is most of it): `check`'s "at least"
+/// is a lower bound of what a run writes, and not a loose one.
+#[test]
+fn the_disk_estimate_bounds_every_output_from_below() {
+    let dir = tmp("disk-estimate");
+    let scene = with_run(
+        "cantilever_gravity.toml",
+        "[run]\nduration = 0.5\noutput_every = 2.5e-4\n",
+        &dir,
+    );
+    let c = run(&["check", scene.to_str().unwrap()]);
+    let said = String::from_utf8_lossy(&c.stdout).into_owned();
+    let mb: f64 = said
+        .lines()
+        .find_map(|l| l.split("at least ").nth(1))
+        .and_then(|r| r.strip_suffix(" MB on disk (CSV files)"))
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("{said}"));
+    let out = dir.join("out");
+    let o = run_scene(&scene, &out);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let written: u64 = ["trajectory.csv", "shape.csv"]
+        .iter()
+        .map(|f| std::fs::metadata(out.join(f)).unwrap().len())
+        .sum();
+    let written = written as f64 / 1e6;
+    assert!(
+        mb <= written && written <= 2.0 * mb,
+        "estimate {mb} MB, written {written} MB"
+    );
 }

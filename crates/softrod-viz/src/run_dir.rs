@@ -192,13 +192,16 @@ fn csv_err(path: &Path, line: u64, problem: impl Into<String>) -> VizError {
     }
 }
 
-/// One data row: `(line, time, name, numbers)`, `numbers` being the
-/// columns after the name.
-type Row = (u64, f64, String, Vec<f64>);
-
-/// Rows of a CSV file with a required header prefix, `n_num` numbers after
-/// the name column.
-fn read_rows(path: &Path, header: &[&str], n_num: usize) -> Result<Vec<Row>, VizError> {
+/// Streams the data rows of a CSV file with a required header prefix,
+/// `n_num` numbers after the name column, to `row(line, time, name,
+/// numbers)`: nothing of the file is kept here, so its size does not bound
+/// what can be read.
+fn for_each_row(
+    path: &Path,
+    header: &[&str],
+    n_num: usize,
+    mut row: impl FnMut(u64, f64, &str, &[f64]) -> Result<(), VizError>,
+) -> Result<(), VizError> {
     let mut rdr = csv::ReaderBuilder::new()
         .has_headers(true)
         .from_path(path)
@@ -225,12 +228,17 @@ fn read_rows(path: &Path, header: &[&str], n_num: usize) -> Result<Vec<Row>, Viz
             ),
         ));
     }
-    let mut rows = Vec::new();
-    for rec in rdr.records() {
-        let rec = rec.map_err(|e| {
-            let line = e.position().map_or(0, |p| p.line());
-            csv_err(path, line, e.to_string())
-        })?;
+    let mut rec = csv::StringRecord::new();
+    let mut nums = vec![0.0; n_num];
+    loop {
+        match rdr.read_record(&mut rec) {
+            Ok(true) => {}
+            Ok(false) => return Ok(()),
+            Err(e) => {
+                let line = e.position().map_or(0, |p| p.line());
+                return Err(csv_err(path, line, e.to_string()));
+            }
+        }
         let line = rec.position().map_or(0, |p| p.line());
         if rec.len() < header.len() {
             return Err(csv_err(
@@ -251,37 +259,61 @@ fn read_rows(path: &Path, header: &[&str], n_num: usize) -> Result<Vec<Row>, Viz
             }
         };
         let t = parse(0)?;
-        let nums = (2..2 + n_num).map(parse).collect::<Result<Vec<_>, _>>()?;
-        rows.push((line, t, rec[1].to_string(), nums));
+        for (j, v) in nums.iter_mut().enumerate() {
+            *v = parse(2 + j)?;
+        }
+        row(line, t, &rec[1], &nums)?;
     }
-    Ok(rows)
+}
+
+/// Which output times a bounded read keeps: every `stride`-th, the stride
+/// doubling whenever `2·cap` are kept, and the last one. Memory stays
+/// between `cap` and `2·cap` times however long the run, and two files of
+/// the same times (`shape.csv`, `bodies.csv`) keep the same ones, because
+/// the choice depends only on a time's index.
+#[derive(Debug, Clone, Copy)]
+pub struct Thinning {
+    cap: usize,
+    stride: usize,
+}
+
+impl Thinning {
+    /// Keeps every time until `2·cap` are kept.
+    pub fn new(cap: usize) -> Self {
+        Self {
+            cap: cap.max(1),
+            stride: 1,
+        }
+    }
+
+    /// Whether the time of index `k` (0-based, in order) is kept.
+    pub fn keeps(&self, k: usize) -> bool {
+        k.is_multiple_of(self.stride)
+    }
+
+    /// After keeping a time: whether every other kept time is now dropped
+    /// (the caller then drops the odd positions of its lists).
+    pub fn full(&mut self, kept: usize) -> bool {
+        if kept >= self.cap.saturating_mul(2) {
+            self.stride *= 2;
+            true
+        } else {
+            false
+        }
+    }
+}
+
+/// Keeps the even positions of `v` (what [`Thinning::full`] asks for).
+pub fn halve<T>(v: &mut Vec<T>) {
+    let mut i = 0;
+    v.retain(|_| {
+        i += 1;
+        (i - 1) % 2 == 0
+    });
 }
 
 fn same(a: f64, b: f64) -> bool {
     (a - b).abs() <= SAME_NUMBER_RTOL * a.abs().max(b.abs()).max(1e-300)
-}
-
-/// Every rod has all its samples at each of the `n` times so far.
-fn complete(path: &Path, line: u64, rods: &[RodShape], n: usize, t: f64) -> Result<(), VizError> {
-    for r in rods {
-        let have = if r.frames.len() == n {
-            r.frames[n - 1].len()
-        } else {
-            0
-        };
-        if have != r.s.len() {
-            return Err(csv_err(
-                path,
-                line,
-                format!(
-                    "rod {:?} has {have} of its {} samples at t = {t}",
-                    r.name,
-                    r.s.len()
-                ),
-            ));
-        }
-    }
-    Ok(())
 }
 
 fn pose_of(v: &[f64]) -> Pose {
@@ -295,21 +327,77 @@ fn pose_of(v: &[f64]) -> Pose {
 /// each rod's samples base to tip); every rod has the same samples `s` at
 /// every time. Columns after the contract's ten are ignored.
 pub fn read_shape_csv(path: &Path) -> Result<ShapeData, VizError> {
-    let rows = read_rows(path, &SHAPE_HEADER, 8)?;
+    read_shape_csv_thinned(path, usize::MAX)
+}
+
+/// [`read_shape_csv`] keeping between `cap` and `2·cap` of the times
+/// (evenly spaced, the first and the last among them) whatever the file's
+/// length: what a view of a run of 10⁸ output rows is built from. Every
+/// row is still checked.
+pub fn read_shape_csv_thinned(path: &Path, cap: usize) -> Result<ShapeData, VizError> {
+    let mut thin = Thinning::new(cap);
     let mut times: Vec<f64> = Vec::new();
     let mut rods: Vec<RodShape> = Vec::new();
-    for (line, t, name, v) in rows {
-        let new_time = times.last().is_none_or(|last| !same(*last, t));
-        if new_time {
-            if let Some(&last) = times.last() {
+    // The time being read: its index, value and, per rod, its samples.
+    let mut k = 0usize;
+    let mut t_now: Option<f64> = None;
+    let mut now: Vec<Vec<Pose>> = Vec::new();
+    // Whether the previous time's frames were kept (else they are the
+    // pending last time, appended at the end).
+    let mut pending: Option<(f64, Vec<Vec<Pose>>)> = None;
+    let mut finish_time = |t: f64,
+                           k: usize,
+                           now: &mut Vec<Vec<Pose>>,
+                           rods: &mut Vec<RodShape>,
+                           times: &mut Vec<f64>,
+                           line: u64|
+     -> Result<(), VizError> {
+        for (r, f) in rods.iter().zip(now.iter()) {
+            if f.len() != r.s.len() {
+                return Err(csv_err(
+                    path,
+                    line,
+                    format!(
+                        "rod {:?} has {} of its {} samples at t = {t}",
+                        r.name,
+                        f.len(),
+                        r.s.len()
+                    ),
+                ));
+            }
+        }
+        if thin.keeps(k) {
+            times.push(t);
+            for (r, f) in rods.iter_mut().zip(now.iter_mut()) {
+                r.frames.push(std::mem::take(f));
+            }
+            pending = None;
+            if thin.full(times.len()) {
+                halve(times);
+                rods.iter_mut().for_each(|r| halve(&mut r.frames));
+            }
+        } else {
+            pending = Some((t, std::mem::take(now)));
+            *now = vec![Vec::new(); rods.len()];
+        }
+        for f in now.iter_mut() {
+            f.clear();
+        }
+        Ok(())
+    };
+    for_each_row(path, &SHAPE_HEADER, 8, |line, t, name, v| {
+        match t_now {
+            Some(last) if same(last, t) => {}
+            Some(last) => {
                 if t < last {
                     return Err(csv_err(path, line, format!("time {t} after {last}")));
                 }
-                complete(path, line, &rods, times.len(), last)?;
+                finish_time(last, k, &mut now, &mut rods, &mut times, line)?;
+                k += 1;
+                t_now = Some(t);
             }
-            times.push(t);
+            None => t_now = Some(t),
         }
-        let k = times.len() - 1;
         let r = match rods.iter().position(|r| r.name == name) {
             Some(r) => r,
             None => {
@@ -321,28 +409,16 @@ pub fn read_shape_csv(path: &Path) -> Result<ShapeData, VizError> {
                     ));
                 }
                 rods.push(RodShape {
-                    name: name.clone(),
+                    name: name.to_string(),
                     s: Vec::new(),
                     frames: Vec::new(),
                 });
+                now.push(Vec::new());
                 rods.len() - 1
             }
         };
         let rod = &mut rods[r];
-        if rod.frames.len() < k {
-            return Err(csv_err(
-                path,
-                line,
-                format!(
-                    "rod {name:?} has no rows at t = {}",
-                    times[rod.frames.len()]
-                ),
-            ));
-        }
-        if rod.frames.len() == k {
-            rod.frames.push(Vec::new());
-        }
-        let i = rod.frames[k].len();
+        let i = now[r].len();
         let s = v[0];
         if k == 0 {
             if rod.s.last().is_some_and(|last| s <= *last) {
@@ -365,13 +441,19 @@ pub fn read_shape_csv(path: &Path) -> Result<ShapeData, VizError> {
                 ),
             ));
         }
-        rod.frames[k].push(pose_of(&v[1..8]));
-    }
-    if times.is_empty() {
+        now[r].push(pose_of(&v[1..8]));
+        Ok(())
+    })?;
+    let Some(last) = t_now else {
         return Err(csv_err(path, 2, "no rows"));
+    };
+    finish_time(last, k, &mut now, &mut rods, &mut times, 0)?;
+    if let Some((t, frames)) = pending {
+        times.push(t);
+        for (r, f) in rods.iter_mut().zip(frames) {
+            r.frames.push(f);
+        }
     }
-    let last = times[times.len() - 1];
-    complete(path, 0, &rods, times.len(), last)?;
     Ok(ShapeData { times, rods })
 }
 
@@ -381,32 +463,100 @@ pub type BodyPoses = (String, Vec<Pose>);
 /// Reads `bodies.csv`: the times, and per body (in order of first
 /// appearance) its name and pose at each time.
 pub fn read_bodies_csv(path: &Path) -> Result<(Vec<f64>, Vec<BodyPoses>), VizError> {
-    let rows = read_rows(path, &BODIES_HEADER, 7)?;
+    read_bodies_csv_thinned(path, usize::MAX)
+}
+
+/// [`read_bodies_csv`] keeping the times [`read_shape_csv_thinned`] keeps
+/// of a `shape.csv` of the same times and the same `cap`.
+pub fn read_bodies_csv_thinned(
+    path: &Path,
+    cap: usize,
+) -> Result<(Vec<f64>, Vec<BodyPoses>), VizError> {
+    let mut thin = Thinning::new(cap);
     let mut times: Vec<f64> = Vec::new();
     let mut bodies: Vec<(String, Vec<Pose>)> = Vec::new();
-    for (line, t, name, v) in rows {
-        if times.last().is_none_or(|last| !same(*last, t)) {
-            times.push(t);
+    // Index of the time being read, its value, and the poses read at it.
+    let mut k = 0usize;
+    let mut t_now: Option<f64> = None;
+    let mut pending: Option<(f64, Vec<Pose>)> = None;
+    let mut now: Vec<Option<Pose>> = Vec::new();
+    let mut finish_time = |t: f64,
+                           k: usize,
+                           now: &mut Vec<Option<Pose>>,
+                           bodies: &mut Vec<(String, Vec<Pose>)>,
+                           times: &mut Vec<f64>,
+                           line: u64|
+     -> Result<(), VizError> {
+        let mut poses = Vec::with_capacity(now.len());
+        for (b, p) in bodies.iter().zip(now.iter_mut()) {
+            match p.take() {
+                Some(p) => poses.push(p),
+                None => {
+                    return Err(csv_err(
+                        path,
+                        line,
+                        format!("body {:?}: no pose at t = {t}", b.0),
+                    ));
+                }
+            }
         }
-        let k = times.len() - 1;
+        if thin.keeps(k) {
+            times.push(t);
+            for (b, p) in bodies.iter_mut().zip(poses) {
+                b.1.push(p);
+            }
+            pending = None;
+            if thin.full(times.len()) {
+                halve(times);
+                bodies.iter_mut().for_each(|b| halve(&mut b.1));
+            }
+        } else {
+            pending = Some((t, poses));
+        }
+        Ok(())
+    };
+    for_each_row(path, &BODIES_HEADER, 7, |line, t, name, v| {
+        match t_now {
+            Some(last) if same(last, t) => {}
+            Some(last) => {
+                finish_time(last, k, &mut now, &mut bodies, &mut times, line)?;
+                k += 1;
+                t_now = Some(t);
+            }
+            None => t_now = Some(t),
+        }
         let b = match bodies.iter().position(|b| b.0 == name) {
             Some(b) => b,
             None => {
-                bodies.push((name.clone(), Vec::new()));
+                if k > 0 {
+                    return Err(csv_err(
+                        path,
+                        line,
+                        format!("body {name:?} first appears at t = {t}, not at the first time"),
+                    ));
+                }
+                bodies.push((name.to_string(), Vec::new()));
+                now.push(None);
                 bodies.len() - 1
             }
         };
-        if bodies[b].1.len() != k {
+        if now[b].replace(pose_of(v)).is_some() {
             return Err(csv_err(
                 path,
                 line,
-                format!(
-                    "body {name:?}: {} poses before t = {t}, expected {k}",
-                    bodies[b].1.len()
-                ),
+                format!("body {name:?}: two poses at t = {t}"),
             ));
         }
-        bodies[b].1.push(pose_of(&v));
+        Ok(())
+    })?;
+    if let Some(last) = t_now {
+        finish_time(last, k, &mut now, &mut bodies, &mut times, 0)?;
+    }
+    if let Some((t, poses)) = pending {
+        times.push(t);
+        for (b, p) in bodies.iter_mut().zip(poses) {
+            b.1.push(p);
+        }
     }
     Ok((times, bodies))
 }
@@ -585,7 +735,13 @@ impl ViewSpec {
 /// The view of a run directory from its files: `shape.csv` (required),
 /// `view.json` and `bodies.csv` (optional).
 pub fn view_from_dir(dir: &Path) -> Result<ViewData, VizError> {
-    let shape = read_shape_csv(&dir.join(SHAPE_CSV))?;
+    view_from_dir_thinned(dir, usize::MAX)
+}
+
+/// [`view_from_dir`] from between `cap` and `2·cap` evenly spaced output
+/// times (see [`read_shape_csv_thinned`]).
+pub fn view_from_dir_thinned(dir: &Path, cap: usize) -> Result<ViewData, VizError> {
+    let shape = read_shape_csv_thinned(&dir.join(SHAPE_CSV), cap)?;
     let spec_path = dir.join(VIEW_JSON);
     let spec = if spec_path.exists() {
         ViewSpec::read(&spec_path)?
@@ -637,7 +793,7 @@ pub fn view_from_dir(dir: &Path) -> Result<ViewData, VizError> {
     let mut body_poses = Vec::new();
     if !spec.bodies.is_empty() {
         let path = dir.join(BODIES_CSV);
-        let (times, poses) = read_bodies_csv(&path)?;
+        let (times, poses) = read_bodies_csv_thinned(&path, cap)?;
         if times.len() != view.times.len()
             || !times.iter().zip(&view.times).all(|(a, b)| same(*a, *b))
         {
@@ -690,10 +846,45 @@ pub fn view_from_dir(dir: &Path) -> Result<ViewData, VizError> {
     Ok(view)
 }
 
+/// Most poses (`shape.csv` rows) [`write_view`] holds when it can keep
+/// more times than the page's frames (for finer tip traces): 2·10⁶, about
+/// 110 MB.
+pub const VIEW_POSE_BUDGET: usize = 2_000_000;
+
+/// Rows of `shape.csv`'s first output time (0 if unreadable: the full read
+/// reports why).
+fn rows_at_first_time(path: &Path) -> usize {
+    let Ok(mut rdr) = csv::ReaderBuilder::new().has_headers(true).from_path(path) else {
+        return 0;
+    };
+    let mut rec = csv::StringRecord::new();
+    let mut first: Option<String> = None;
+    let mut n = 0;
+    while let Ok(true) = rdr.read_record(&mut rec) {
+        let t = rec.get(0).unwrap_or("").to_string();
+        match &first {
+            Some(f) if *f != t => break,
+            Some(_) => {}
+            None => first = Some(t),
+        }
+        n += 1;
+    }
+    n
+}
+
 /// Regenerates `DIR/view.html` from the directory's files (what `softrod
 /// view DIR` does); returns its path and what it kept.
+///
+/// Its memory does not grow with the run's length: it reads the times the
+/// page can show — up to [`ViewOptions::max_trace_points`] for the tip
+/// traces while their poses fit in [`VIEW_POSE_BUDGET`], never fewer than
+/// [`ViewOptions::max_frames`] — and streams the rest past.
 pub fn write_view(dir: &Path, opts: &ViewOptions) -> Result<(PathBuf, ViewStats), VizError> {
-    let view = view_from_dir(dir)?;
+    let per_time = rows_at_first_time(&dir.join(SHAPE_CSV)).max(1);
+    let cap = (VIEW_POSE_BUDGET / per_time)
+        .min(opts.max_trace_points)
+        .max(opts.max_frames);
+    let view = view_from_dir_thinned(dir, cap)?;
     let out = dir.join(VIEW_HTML);
     let stats = write_html(&out, &view, opts)?;
     Ok((out, stats))

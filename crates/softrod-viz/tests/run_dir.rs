@@ -6,7 +6,8 @@ use std::path::{Path, PathBuf};
 use softrod_viz::demo::SwingingRods;
 use softrod_viz::run_dir::{
     BodiesCsvWriter, BodySpec, CableSpec, RadiusProfile, Rod, ShapeCsvWriter, ViewSpec,
-    read_bodies_csv, read_shape_csv, view_from_dir, write_view,
+    read_bodies_csv, read_bodies_csv_thinned, read_shape_csv, read_shape_csv_thinned,
+    view_from_dir, write_view,
 };
 use softrod_viz::{BodyShape, Pose, ViewOptions, VizError};
 
@@ -291,4 +292,68 @@ fn bodies_csv_round_trip() {
         assert_eq!(b.1, vec![p, p]);
     }
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A long run read for a view: between `cap` and `2·cap` of its times,
+/// evenly spaced, the first and the last among them, each with exactly the
+/// poses the full read has; `bodies.csv` of the same times keeps the same
+/// times (issue 26, D07: the view's memory must not grow with the rows).
+#[test]
+fn thinned_reads_keep_evenly_spaced_times_and_the_last() {
+    let dir = scratch("thinned");
+    let n = 10_007;
+    let s = [0.0, 0.5, 1.0];
+    let pose = |k: usize, i: usize| Pose {
+        position: [k as f64, i as f64, 0.25 * k as f64],
+        rotation: [1.0, 0.0, 0.0, 0.0],
+    };
+    let (shape, bodies) = (dir.join("shape.csv"), dir.join("bodies.csv"));
+    {
+        let mut w = ShapeCsvWriter::new(std::fs::File::create(&shape).unwrap()).unwrap();
+        let mut b = BodiesCsvWriter::new(std::fs::File::create(&bodies).unwrap()).unwrap();
+        for k in 0..n {
+            let t = 1e-3 * k as f64;
+            let frame: Vec<Pose> = (0..s.len()).map(|i| pose(k, i)).collect();
+            w.write_frame(t, "arm", &s, &frame).unwrap();
+            b.write_pose(t, "ball", &pose(k, 7)).unwrap();
+        }
+        w.flush().unwrap();
+        b.flush().unwrap();
+    }
+    let full = read_shape_csv(&shape).unwrap();
+    assert_eq!(full.times.len(), n);
+    for cap in [2, 100, 333] {
+        let thin = read_shape_csv_thinned(&shape, cap).unwrap();
+        let m = thin.times.len();
+        assert!((cap..=2 * cap + 1).contains(&m), "cap {cap}: {m} times");
+        assert_eq!(thin.times[0], full.times[0]);
+        assert_eq!(thin.times[m - 1], full.times[n - 1]);
+        // The kept indices (from the positions' x = k) are one stride apart
+        // but for the appended last one.
+        let idx: Vec<usize> = thin.rods[0]
+            .frames
+            .iter()
+            .map(|f| f[0].position[0] as usize)
+            .collect();
+        let stride = idx[1] - idx[0];
+        assert!(
+            idx[..m - 1].windows(2).all(|w| w[1] - w[0] == stride),
+            "{idx:?}"
+        );
+        assert!(n - 1 - idx[m - 2] <= stride);
+        for (j, &k) in idx.iter().enumerate() {
+            assert_eq!(thin.times[j], full.times[k]);
+            assert_eq!(thin.rods[0].frames[j], full.rods[0].frames[k]);
+        }
+        let (bt, bp) = read_bodies_csv_thinned(&bodies, cap).unwrap();
+        assert_eq!(bt, thin.times);
+        assert_eq!(bp[0].1.len(), m);
+        assert!(
+            bp[0]
+                .1
+                .iter()
+                .zip(&idx)
+                .all(|(p, &k)| p.position[0] == k as f64)
+        );
+    }
 }

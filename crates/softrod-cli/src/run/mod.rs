@@ -14,9 +14,7 @@ use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
 use softrod::integrate::Stats;
-use softrod::record::{
-    CLOSURE_WARN_RELATIVE, Columns, RodSampling, closure_length_scale, default_points_per_piece,
-};
+use softrod::record::{CLOSURE_WARN_RELATIVE, Columns, RodSampling, closure_length_scale};
 use softrod::{Error, output_times};
 
 use crate::common::{CliError, failed, load, out_dir};
@@ -62,13 +60,18 @@ pub fn run(
         npz::check_size(times.len() as u64, width).map_err(CliError::Input)?;
     }
     let snapshot_at = chosen_rows(&times, snapshots.as_deref())?;
+    let sampling = RodSampling::of_model(l.sim.model(), scene.run.shape_points_per_piece);
+    let per_row = outputs::output_bytes_per_row(
+        l.sim.model(),
+        sampling.iter().map(|s| s.s.len()).sum(),
+        initial_contacts,
+        npz_out,
+    );
     // A directory that cannot be created is said so (not "0.0 MB free");
     // one created here and then refused is removed again.
     let existed = dir.exists();
     outputs::prepare_out_dir(&dir)?;
-    if let Err(e) =
-        outputs::check_disk_space(&dir, l.sim.model(), duration, every, initial_contacts)
-    {
+    if let Err(e) = outputs::check_disk_space(&dir, duration, every, per_row) {
         if !existed {
             let _ = std::fs::remove_dir(&dir);
         }
@@ -102,20 +105,6 @@ pub fn run(
         }
         b
     });
-    let sampling: Vec<RodSampling> = l
-        .sim
-        .model()
-        .rods()
-        .iter()
-        .map(|r| {
-            let rod = &r.spec.geometry;
-            let per_piece = scene
-                .run
-                .shape_points_per_piece
-                .unwrap_or_else(|| default_points_per_piece(rod.n_pieces()));
-            RodSampling::new(rod, per_piece)
-        })
-        .collect();
     let mut summary_final = Summary::new(
         &dir,
         scene,

@@ -153,6 +153,7 @@ impl Streamer {
     /// The series for the figures; a run that stopped early gets its last
     /// row as the final snapshot, so it is drawn up to where it stopped.
     pub fn finish_series(&mut self) -> &Series {
+        self.series.finish();
         let stopped_early = self.next < self.expected;
         if let Some(last) = self.last_snapshot.take().filter(|_| stopped_early) {
             if self.series.snapshots.last().is_none_or(|s| s.t < last.t) {
