@@ -288,7 +288,7 @@ impl Thinning {
 
     /// Whether the time of index `k` (0-based, in order) is kept.
     pub fn keeps(&self, k: usize) -> bool {
-        k.is_multiple_of(self.stride)
+        k % self.stride == 0
     }
 
     /// After keeping a time: whether every other kept time is now dropped
