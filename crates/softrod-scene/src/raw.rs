@@ -149,6 +149,7 @@ pub(crate) struct RawRun {
     pub linearly_implicit: Option<bool>,
     pub energy_tolerance: Option<f64>,
     pub shape_points_per_piece: Option<i64>,
+    pub memory_limit_gib: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -67,6 +67,10 @@ pub struct Run {
     /// exact on its arc, then the tip; 1 gives the N+1 piece boundaries.
     /// `None` (default): the front end chooses enough to look smooth.
     pub shape_points_per_piece: Option<usize>,
+    /// Memory budget a run, statics or modes is checked against before it
+    /// allocates, GiB (an extension of the format; `None`: the facade's
+    /// default, 4 GiB). A scene that needs more is refused up front.
+    pub memory_limit_gib: Option<f64>,
 }
 
 impl Run {
@@ -121,6 +125,7 @@ impl Default for Run {
             linearly_implicit: false,
             energy_tolerance: Run::DEFAULT_ENERGY_TOLERANCE,
             shape_points_per_piece: None,
+            memory_limit_gib: None,
         }
     }
 }

@@ -91,6 +91,7 @@ fn contract_example_has_the_written_values() {
             linearly_implicit: false,
             energy_tolerance: Run::DEFAULT_ENERGY_TOLERANCE,
             shape_points_per_piece: None,
+            memory_limit_gib: None,
         }
     );
     assert_eq!(s.reference, None);

@@ -41,7 +41,7 @@ pub enum Error {
     /// The task would need more memory than its budget: refused before
     /// allocating (see [`Limits`](crate::Limits)).
     #[error(
-        "{key}: {what} need about {} but the memory budget is {}",
+        "{key}: {what} need about {} but the memory budget is {} (run.memory_limit_gib sets it)",
         human_bytes(*estimate),
         human_bytes(*limit)
     )]

@@ -131,3 +131,21 @@ fn absurd_durations_with_a_fixed_step_are_input_errors() {
         assert!(!e.to_string().contains("maximum number of steps"), "{e}");
     }
 }
+
+/// `[run] memory_limit_gib` is the budget: 100 pieces with rosenbrock need
+/// 8 dense 300×300 matrices (5.76 MB), refused under 5 MiB and admitted
+/// under 6 MiB; the refusal names the setting that raises it.
+#[test]
+fn the_scene_sets_the_memory_budget() {
+    let need = 8 * dense_bytes(1, 300);
+    assert_eq!(need, 5_760_000);
+    let with = |gib: f64| scene(100, "rosenbrock") + &format!("memory_limit_gib = {gib:e}\n");
+    let small = sim(&with(5.0 / 1024.0));
+    assert_eq!(small.limits().memory, 5 << 20);
+    let e = small.check_run(0.01).unwrap_err();
+    assert!(e.to_string().contains("run.memory_limit_gib"), "{e}");
+    too_large(e, "rod[0].pieces");
+    sim(&with(6.0 / 1024.0)).check_run(0.01).unwrap();
+    let bad = Simulation::from_toml(&with(-1.0), "bad.toml").unwrap_err();
+    assert!(bad.to_string().contains("run.memory_limit_gib"), "{bad}");
+}

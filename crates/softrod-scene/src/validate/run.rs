@@ -110,6 +110,10 @@ impl Ctx<'_> {
             "run.energy_tolerance",
             r.energy_tolerance.unwrap_or(d.energy_tolerance),
         )?;
+        let memory_limit_gib = match r.memory_limit_gib {
+            None => None,
+            Some(g) => Some(self.positive("run.memory_limit_gib", g)?),
+        };
         Ok(Run {
             mode,
             duration,
@@ -123,6 +127,7 @@ impl Ctx<'_> {
             linearly_implicit,
             energy_tolerance,
             shape_points_per_piece,
+            memory_limit_gib,
         })
     }
 }

@@ -77,6 +77,9 @@ impl Simulation {
         settings.validate()?;
         let mut sim = Self::new(built.model);
         sim.settings = settings;
+        if let Some(gib) = scene.run.memory_limit_gib {
+            sim.limits.memory = (gib * (1u64 << 30) as f64).min(u64::MAX as f64) as u64;
+        }
         sim.q0 = built.q0;
         sim.qd0 = built.qd0;
         Ok(sim)
