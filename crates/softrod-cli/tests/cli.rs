@@ -1078,6 +1078,53 @@ fn summary_of(out: &Path) -> Option<serde_json::Value> {
     serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).ok()?).ok()
 }
 
+/// A signal takes effect at the step it arrives in, not at the next output
+/// time (issue 26, D09): a run whose only outputs are its start and its end
+/// (10⁷ explicit steps between them) stops at once with a true summary.
+#[cfg(unix)]
+#[test]
+fn a_signal_does_not_wait_for_the_next_output_time() {
+    let dir = tmp("signal_between_outputs");
+    let scene = with_run(
+        "cantilever_gravity.toml",
+        "[run]\nduration = 100.0\nintegrator = \"rk4\"\ndt = 1e-5\noutput_every = 100.0",
+        &dir,
+    );
+    let out = dir.join("out");
+    let mut child = bin()
+        .args([
+            "run",
+            scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+        ])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = std::time::Instant::now();
+    while summary_of(&out).is_none_or(|s| s["output_rows"].as_u64() != Some(1)) {
+        assert!(start.elapsed().as_secs() < 120, "no running summary");
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    let kill = std::process::Command::new("kill")
+        .args(["-s", "TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let status = child.wait().unwrap();
+    let mut err = String::new();
+    std::io::Read::read_to_string(child.stderr.as_mut().unwrap(), &mut err).unwrap();
+    assert_eq!(status.code(), Some(1), "{err}");
+    let s = summary_of(&out).unwrap();
+    let st = s["status"].as_str().unwrap();
+    assert!(
+        st.contains("interrupted by SIGTERM at t = 0 (1 of 2"),
+        "{st}"
+    );
+    assert_eq!(s["output_rows"], 1);
+}
+
 /// SIGTERM and SIGINT end a run cleanly: the summary is current while it
 /// runs ("running", the process id), and after the signal it says so and
 /// matches the files (rows written, last time), the figures of what exists

@@ -215,6 +215,18 @@ impl Observer for Streamer {
         Ok(Flow::Continue)
     }
 
+    fn stop_requested(&mut self) -> bool {
+        // A signal stops the run at the step it arrives in, not at the next
+        // output time (which may be far off).
+        match signals::received() {
+            Some(sig) => {
+                self.interrupted = Some(sig);
+                true
+            }
+            None => false,
+        }
+    }
+
     fn step(&mut self, t: f64, stats: &Stats) {
         self.last_stats = *stats;
         if let Some(b) = &self.bar {

@@ -45,6 +45,14 @@ pub trait Observer {
     /// Called after each accepted step (e.g. for a progress bar).
     fn step(&mut self, _t: f64, _stats: &Stats) {}
 
+    /// Asked after each accepted step: `true` stops the run there (status
+    /// [`RunStatus::Stopped`]; the samples end at the last output time).
+    /// For a stop request that must not wait for the next output time — a
+    /// signal during a run whose output times are far apart.
+    fn stop_requested(&mut self) -> bool {
+        false
+    }
+
     /// A controller in the loop: called after each accepted step with the
     /// state there; write new cable tensions into `u` (one per cable, model
     /// order, \[N\], ≥ 0; it holds the current ones) and return `true` to
@@ -285,6 +293,9 @@ impl Hooks<RodSystem> for RunHooks<'_> {
 
     fn step(&mut self, info: &StepInfo<'_>, sys: &mut RodSystem) -> Control {
         self.observer.step(info.t, info.stats);
+        if self.observer.stop_requested() {
+            return Control::Stop;
+        }
         let (q, qd) = info.y.as_slice().split_at(self.n);
         if let Some(w) = &mut self.watch {
             if let Err(e) = w.step(&sys.model, &sys.data, info.t, q, qd) {
