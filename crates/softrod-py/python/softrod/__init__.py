@@ -37,6 +37,7 @@ from softrod._errors import (
     SoftrodError,
 )
 from softrod._softrod import (
+    BatchStepper,
     Cable,
     Circle,
     Energies,
@@ -65,6 +66,7 @@ STRAINS = ("kx", "ky", "kz", "qx", "qy", "qz")
 __all__ = [
     "INTEGRATORS",
     "STRAINS",
+    "BatchStepper",
     "Cable",
     "Circle",
     "Energies",
