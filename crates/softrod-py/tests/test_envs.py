@@ -60,6 +60,12 @@ def test_registered_envs_pass_gymnasiums_checker(env_id):
     env.close()
 
 
+def test_stable_baselines3_checker_where_installed():
+    sb3 = pytest.importorskip("stable_baselines3.common.env_checker")
+    sb3.check_env(se.reach_env(), warn=False)
+    sb3.check_env(se.track_env(), warn=False)
+
+
 def test_spaces_bounds_and_observation_layout():
     env = se.reach_env(max_tension=[2.0, 4.0])
     assert env.action_space.low.tolist() == [0.0, 0.0]
@@ -77,6 +83,23 @@ def test_spaces_bounds_and_observation_layout():
     tip = env.sim.tip_pose(0, q0)[:3, 3]
     np.testing.assert_array_equal(obs[env.observation_slices["tip_position"]], tip)
     assert se.reach_env().action_space.high.tolist() == [se.DEFAULT_MAX_TENSION] * 2
+
+
+def test_max_tension_from_the_scene_file_where_it_names_one(tmp_path):
+    """The scene's [[cable]] max_tension bounds a cable the env's argument
+    leaves open (read from the file; the key is the scene contract's)."""
+    from softrod.envs._core import _bounds, _scene_max_tensions
+
+    path = tmp_path / "arm.toml"
+    text = open(se.REACH_SCENE).read()
+    path.write_text(text.replace("tension = 0.0", "tension = 0.0\nmax_tension = 1.5", 1))
+    found = _scene_max_tensions(path)
+    assert found == [1.5, None]
+    assert _bounds(2, None, found).tolist() == [1.5, se.DEFAULT_MAX_TENSION]
+    assert _bounds(2, 4.0, found).tolist() == [4.0, 4.0]
+    assert _scene_max_tensions(se.REACH_SCENE) is None
+    with pytest.raises(softrod.InputError, match="positive"):
+        _bounds(2, [1.0, -2.0], None)
 
 
 def test_actions_clip_or_reject_and_nan_raises():

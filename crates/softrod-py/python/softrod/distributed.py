@@ -191,10 +191,11 @@ def simulate_many(
     for bit.
     """
     makers = [
-        s if isinstance(s, softrod.Simulation) and backend == "local" else _builder(s, i)
+        # Locally a Simulation needs no building (simulate_many copies it).
+        (lambda s=s: s) if backend == "local" and isinstance(s, softrod.Simulation)
+        else _builder(s, i)
         for i, s in enumerate(sims)
     ]
-    makers = [(lambda s=m: s) if isinstance(m, softrod.Simulation) else m for m in makers]
     return _run(makers, duration, backend, chunk_size, max_retries, threads, _settings(settings))
 
 
