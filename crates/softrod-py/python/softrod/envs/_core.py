@@ -140,20 +140,23 @@ class Task:
 class ReachTask(Task):
     """Reach a random static target.
 
-    At reset the target is the tip of the static equilibrium under cable
-    tensions drawn uniformly from ``[0, max_tension]`` for each cable
-    (``Simulation.statics(tensions=...)``), so every target is reachable
-    by a constant action. Reward per step, with ``d`` the tip–target
-    distance [m], ``L`` the rod's length and ``ū = u / max_tension``:
+    At reset the target is the tip of the static equilibrium
+    (``Simulation.statics(tensions=u*)``) under tensions ``u*`` where one
+    cable, drawn uniformly, pulls with a tension drawn uniformly from
+    ``[0, max_tension]`` and the others are slack: every target is
+    reachable by a constant action (``target_tensions``), and on an
+    antagonistic pair the targets spread evenly over both sides. Reward
+    per step, with ``d`` the tip–target distance [m], ``L`` the rod's
+    length and ``ū = u / max_tension``:
 
         r = −d / L − effort_weight · mean(ū²)
 
-    ``info["is_success"]``: ``d ≤ success_radius · L``. Episodes end by
-    truncation after ``episode_steps`` steps (no early termination on
-    success).
+    ``info["is_success"]``: ``d ≤ success_radius · L`` (default 2 % of L).
+    Episodes end by truncation after ``episode_steps`` steps (no early
+    termination on success).
     """
 
-    def __init__(self, *, effort_weight: float = 0.01, success_radius: float = 0.05):
+    def __init__(self, *, effort_weight: float = 0.01, success_radius: float = 0.02):
         self.effort_weight = float(effort_weight)
         self.success_radius = float(success_radius)
         self._target = np.zeros(3)
@@ -162,7 +165,9 @@ class ReachTask(Task):
         env = self.env
         last: Exception | None = None
         for _ in range(10):
-            u = rng.uniform(0.0, env.max_tension)
+            u = np.zeros(env.n_cables)
+            k = int(rng.integers(env.n_cables))
+            u[k] = rng.uniform(0.0, env.max_tension[k])
             try:
                 st = env.sim.statics(tensions=u)
             except SimulationError as e:  # rare: draw again
