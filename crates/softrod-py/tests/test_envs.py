@@ -242,6 +242,14 @@ def test_batched_vector_env_equals_sync_vector_env(mode):
                 np.testing.assert_array_equal(f1, f2)
         ends += int(np.sum(r1[2] | r1[3]))
     assert ends >= 6
+    # A partial reset (Gymnasium's reset_mask) resets the same copies.
+    mask = np.array([True, False, True, False])
+    o1, _ = sync.reset(seed=9, options={"reset_mask": mask.copy()})
+    o2, _ = batched.reset(seed=9, options={"reset_mask": mask.copy()})
+    np.testing.assert_array_equal(o1, o2)
+    a = rng.uniform(0.0, 3.0, (4, 2))
+    for x, y in zip(sync.step(a)[:4], batched.step(a)[:4]):
+        np.testing.assert_array_equal(x, y)
 
 
 def test_make_vec_gives_the_batched_env():

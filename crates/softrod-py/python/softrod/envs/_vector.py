@@ -39,7 +39,8 @@ class BatchedVectorEnv(VectorEnv):
     and info in ``info["final_obs"]`` and ``info["final_info"]``.
 
     ``reset(seed=s)`` seeds copy i with ``s + i`` (a list: one seed per
-    copy), as SyncVectorEnv does.
+    copy), as SyncVectorEnv does; ``options={"reset_mask": mask}`` resets
+    only the copies where ``mask`` (bool, (num_envs,)) is True.
     """
 
     metadata = {"render_modes": []}
@@ -92,11 +93,22 @@ class BatchedVectorEnv(VectorEnv):
             seeds = list(seed)
             if len(seeds) != self.num_envs:
                 raise InputError(f"seed: {len(seeds)} seeds for {self.num_envs} envs")
+        options = dict(options) if options else {}
+        mask = options.pop("reset_mask", None)
+        if mask is None:
+            mask = np.ones(self.num_envs, dtype=np.bool_)
+        elif not (isinstance(mask, np.ndarray) and mask.dtype == np.bool_
+                  and mask.shape == (self.num_envs,) and mask.any()):
+            raise InputError(
+                f"options['reset_mask'] must be a bool array of shape ({self.num_envs},) "
+                "with at least one True"
+            )
         infos: dict[str, Any] = {}
         for i, (env, s) in enumerate(zip(self.envs, seeds)):
-            self._obs[i], info = env.reset(seed=s, options=options)
-            infos = self._add_info(infos, info, i)
-        self._autoreset[:] = False
+            if mask[i]:
+                self._obs[i], info = env.reset(seed=s, options=options or None)
+                infos = self._add_info(infos, info, i)
+        self._autoreset[mask] = False
         return self._obs.copy(), infos
 
     def step(self, actions: Any):
