@@ -18,17 +18,15 @@ import softrod.distributed as sd
 from conftest import EXAMPLES
 
 ray = pytest.importorskip("ray")
+# The functions of this test module travel to the workers by value: the
+# workers do not have tests/ on their path.
+ray.cloudpickle.register_pickle_by_value(sys.modules[__name__])
 
 
-@pytest.fixture(scope="module")
-def cluster():
-    """One local cluster for the module (Ray starts in ~4 s)."""
-    # The functions of this test module travel by value: the workers do
-    # not have tests/ on their path.
-    ray.cloudpickle.register_pickle_by_value(sys.modules[__name__])
-    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
-    yield
-    ray.shutdown()
+@pytest.fixture
+def cluster(ray_cluster):
+    """The session's local Ray cluster (conftest.ray_cluster)."""
+    return ray_cluster
 
 
 def cantilever(young: float) -> softrod.Simulation:
