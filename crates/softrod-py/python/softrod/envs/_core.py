@@ -9,6 +9,7 @@ control period (zero-order hold, ``Simulation.step(state, dt, u)``).
 
 from __future__ import annotations
 
+import copy
 import math
 import os
 from collections.abc import Sequence
@@ -95,6 +96,11 @@ class Task:
     and scores a state (:meth:`reward`).
     """
 
+    #: Weight of the effort term of the reward.
+    effort_weight: float = 0.01
+    #: Success radius as a fraction of the rod's length.
+    success_radius: float = 0.05
+
     #: The observation keys a task's env shows by default.
     default_observation: tuple[str, ...] = (
         "strains",
@@ -132,9 +138,6 @@ class Task:
             "distance": distance,
             "is_success": distance <= self.success_radius * env.length,
         }
-
-    effort_weight: float = 0.01
-    success_radius: float = 0.05
 
 
 class ReachTask(Task):
@@ -264,7 +267,8 @@ class RodEnv(gymnasium.Env):
 
     ``scene``: a scene file path (str or os.PathLike) or a
     ``softrod.Simulation`` (copied; its model, settings and initial state
-    are used). ``task``: a :class:`Task` (default :class:`ReachTask`).
+    are used). ``task``: a :class:`Task` (default :class:`ReachTask`); the
+    env keeps its own copy, so one task object can configure many envs.
 
     Action: ``u`` (n_cables,) [N], a ``Box(0, max_tension)``. The bound of
     each cable is ``max_tension`` (a number or one per cable), else the
@@ -357,7 +361,8 @@ class RodEnv(gymnasium.Env):
         self.q0, self.qdot0 = self.sim.initial_state()
         self.max_tension = _bounds(self.n_cables, max_tension, scene_bounds)
 
-        self.task = task if task is not None else ReachTask()
+        # A copy: a task holds its episode's draw, so envs must not share one.
+        self.task = copy.deepcopy(task) if task is not None else ReachTask()
         self.task.bind(self)
         keys = tuple(observe) if observe is not None else self.task.default_observation
         unknown = [k for k in keys if k not in OBSERVATION_KEYS]
