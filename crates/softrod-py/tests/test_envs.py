@@ -66,6 +66,12 @@ def test_stable_baselines3_checker_where_installed():
     sb3.check_env(se.track_env(), warn=False)
 
 
+def test_the_shipped_scenes_load_without_warnings():
+    for path in (se.REACH_SCENE, se.TRACK_SCENE):
+        sim = softrod.Simulation.from_file(path)
+        assert sim.warnings == [] and sim.n_cables in (2, 4)
+
+
 def test_spaces_bounds_and_observation_layout():
     env = se.reach_env(max_tension=[2.0, 4.0])
     assert env.action_space.low.tolist() == [0.0, 0.0]
