@@ -56,6 +56,9 @@ def test_ray_backend_equals_local_simulate_many(cluster):
     assert len(runs) == 5
     for r, tr in zip(runs, local):
         assert_same(r, tr)
+    # The local backend gives the same Runs (Simulations accepted there).
+    for r, tr in zip(sd.simulate_many(sims, 0.2, output_every=0.01, threads=2), local):
+        assert_same(r, tr)
     # A Simulation cannot travel: refused with what to pass instead.
     with pytest.raises(softrod.InputError, match="scene file path"):
         sd.simulate_many([sims[1]], 0.1, backend="ray")
