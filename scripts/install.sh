@@ -3,7 +3,9 @@
 #
 #   bash scripts/install.sh [VENV]          release build, installed as a wheel (users)
 #   bash scripts/install.sh --dev [VENV]    dev-profile editable build with the test
-#                                           tools and test hooks (what scripts/test.sh uses)
+#                                           tools, the optional extras softrod[rl] and
+#                                           softrod[ray] (gymnasium, ray) and the test
+#                                           hooks (what scripts/test.sh uses)
 #
 # VENV defaults to .venv/ in the repository. Needs the Rust toolchain and
 # Python >= 3.10 with pip (PYTHON selects the interpreter, default python3);

@@ -1,7 +1,7 @@
 //! The compiled module `softrod._softrod` of the Python package `softrod`:
 //! the facade crate's [`softrod::Simulation`] with numpy arrays in and out,
 //! rods built in Python, cable-tension inputs, a controller in the loop,
-//! a step API and parallel runs.
+//! a step API, parallel runs and batched steps.
 //!
 //! Build and install with maturin (`scripts/install.sh`, or
 //! `scripts/test.sh` for the tests); the Python sources, type stubs and
@@ -25,6 +25,7 @@
 
 use pyo3::prelude::*;
 
+mod batch;
 mod control;
 mod convert;
 mod errors;
@@ -102,6 +103,7 @@ fn _softrod(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<model::PointLoad>()?;
     m.add_class::<model::Rod>()?;
     m.add_function(wrap_pyfunction!(simulate_many, m)?)?;
+    m.add_class::<batch::BatchStepper>()?;
     #[cfg(feature = "test-hooks")]
     hooks::register(m)?;
     Ok(())

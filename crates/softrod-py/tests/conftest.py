@@ -61,3 +61,13 @@ def softrod_bin() -> Path:
         pytest.skip("no softrod binary and no cargo to build it")
     subprocess.run([cargo, "build", "-p", "softrod-cli"], cwd=REPO, check=True)
     return REPO / "target" / "debug" / "softrod"
+
+
+@pytest.fixture(scope="session")
+def ray_cluster():
+    """One real local Ray cluster for the whole session (Ray starts in
+    seconds, so it is started once), shut down at the end."""
+    ray = pytest.importorskip("ray")
+    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
+    yield ray
+    ray.shutdown()

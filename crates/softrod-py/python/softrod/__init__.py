@@ -14,6 +14,10 @@ model, from Python.
 Or from a scene file: ``softrod.Simulation.from_file("examples/cantilever_gravity.toml")``
 (``Simulation.from_toml(text)`` for scene text).
 
+Learning and clusters (optional extras, not imported by ``import softrod``):
+``softrod.envs`` (Gymnasium environments, ``pip install softrod[rl]``) and
+``softrod.distributed`` (Ray, ``pip install softrod[ray]``); see docs/envs.md.
+
 Units are SI. ``q`` are the generalized coordinates in the order of
 ``Simulation.q_names``: joint coordinates and strain coordinates (pieces
 base to tip, the selected strains in the order kx, ky, kz, qx, qy, qz); arrays are
@@ -37,6 +41,7 @@ from softrod._errors import (
     SoftrodError,
 )
 from softrod._softrod import (
+    BatchStepper,
     Cable,
     Circle,
     Energies,
@@ -65,6 +70,7 @@ STRAINS = ("kx", "ky", "kz", "qx", "qy", "qz")
 __all__ = [
     "INTEGRATORS",
     "STRAINS",
+    "BatchStepper",
     "Cable",
     "Circle",
     "Energies",

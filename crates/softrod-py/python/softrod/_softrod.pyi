@@ -446,3 +446,21 @@ def simulate_many(
     output_every: float | None = None, integrator: _IntegratorName | None = None,
     rtol: float | None = None, atol: float | None = None, dt: float | None = None,
 ) -> list[Trajectory]: ...
+
+@final
+class BatchStepper:
+    """Copies of cable-driven simulations stepped together on Rust threads
+    (GIL released); row i of a step equals ``sims[i].step(...)`` bit for bit."""
+    def __new__(cls, sims: list[Simulation], *, threads: int | None = None) -> BatchStepper: ...
+    def __len__(self) -> int: ...
+    @property
+    def n_dof(self) -> int: ...
+    @property
+    def n_cables(self) -> int: ...
+    @property
+    def threads(self) -> int: ...
+    def step(
+        self, t: float | ArrayLike, q: ArrayLike, qdot: ArrayLike, u: ArrayLike, dt: float,
+        active: Sequence[bool] | None = None,
+    ) -> tuple[_F64, _F64, list[str | None]]:
+        """(q (n, n_dof), qdot (n, n_dof), errors: None or the failure's message per copy)"""

@@ -1,0 +1,267 @@
+"""softrod.envs (Gymnasium environments) and softrod.BatchStepper.
+
+The batched physics is checked against the single copies' own
+``Simulation.step`` (bit for bit), the batched vector env against
+Gymnasium's own SyncVectorEnv over the same envs (its autoreset semantics),
+the envs against Gymnasium's checker, and the Reach task's targets against
+the equilibrium the statics solver finds under a constant action held long
+enough (an independent path: integration vs Newton).
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import warnings
+
+import numpy as np
+import pytest
+
+import softrod
+
+gymnasium = pytest.importorskip("gymnasium")
+se = pytest.importorskip("softrod.envs")
+
+RK4_BLOWUP = ('[run]\nmode = "dynamics"', '[run]\nmode = "dynamics"\nintegrator = "rk4"\ndt = 0.05')
+
+
+def diverging_sim():
+    """The reach arm with fixed-step RK4 at the control period: unstable
+    on its stiff shear modes, so the first step blows up."""
+    text = open(se.REACH_SCENE).read().replace(*RK4_BLOWUP)
+    return softrod.Simulation.from_toml(text, name="reach_rk4.toml")
+
+
+def test_core_package_imports_neither_gymnasium_nor_ray():
+    code = (
+        "import sys, softrod, softrod.distributed\n"
+        "bad = [m for m in ('gymnasium', 'ray') if m in sys.modules]\n"
+        "assert not bad, bad\n"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True)
+
+
+@pytest.mark.parametrize("env_id", ["softrod/Reach-v0", "softrod/Track-v0"])
+def test_registered_envs_pass_gymnasiums_checker(env_id):
+    from gymnasium.utils.env_checker import check_env
+
+    env = gymnasium.make(env_id)
+    with warnings.catch_warnings():
+        # The checker's advice (normalized actions, finite observation
+        # bounds) is a recommendation; the spaces are documented as they are.
+        warnings.simplefilter("ignore")
+        check_env(env.unwrapped)
+    obs, info = env.reset(seed=1)
+    assert env.observation_space.contains(obs)
+    for _ in range(3):
+        obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
+        assert env.observation_space.contains(obs)
+        assert np.isfinite(reward) and not terminated
+    env.close()
+
+
+def test_stable_baselines3_checker_where_installed():
+    sb3 = pytest.importorskip("stable_baselines3.common.env_checker")
+    sb3.check_env(se.reach_env(), warn=False)
+    sb3.check_env(se.track_env(), warn=False)
+
+
+def test_the_shipped_scenes_load_without_warnings():
+    for path in (se.REACH_SCENE, se.TRACK_SCENE):
+        sim = softrod.Simulation.from_file(path)
+        assert sim.warnings == [] and sim.n_cables in (2, 4)
+
+
+def test_spaces_bounds_and_observation_layout():
+    env = se.reach_env(max_tension=[2.0, 4.0])
+    assert env.action_space.low.tolist() == [0.0, 0.0]
+    assert env.action_space.high.tolist() == [2.0, 4.0]
+    n = env.n_dof
+    assert env.observation_slices == {
+        "strains": slice(0, n),
+        "strain_rates": slice(n, 2 * n),
+        "tip_position": slice(2 * n, 2 * n + 3),
+        "target": slice(2 * n + 3, 2 * n + 6),
+    }
+    obs, _ = env.reset(seed=0)
+    q0, _ = env.sim.initial_state()
+    np.testing.assert_array_equal(obs[env.observation_slices["strains"]], q0)
+    tip = env.sim.tip_pose(0, q0)[:3, 3]
+    np.testing.assert_array_equal(obs[env.observation_slices["tip_position"]], tip)
+    assert se.reach_env().action_space.high.tolist() == [se.DEFAULT_MAX_TENSION] * 2
+
+
+def test_max_tension_from_the_scene_file_where_it_names_one(tmp_path):
+    """The scene's [[cable]] max_tension bounds a cable the env's argument
+    leaves open (read from the file; the key is the scene contract's)."""
+    from softrod.envs._core import _bounds, _scene_max_tensions
+
+    path = tmp_path / "arm.toml"
+    text = open(se.REACH_SCENE).read()
+    path.write_text(text.replace("tension = 0.0", "tension = 0.0\nmax_tension = 1.5", 1))
+    found = _scene_max_tensions(path)
+    assert found == [1.5, None]
+    assert _bounds(2, None, found).tolist() == [1.5, se.DEFAULT_MAX_TENSION]
+    assert _bounds(2, 4.0, found).tolist() == [4.0, 4.0]
+    assert _scene_max_tensions(se.REACH_SCENE) is None
+    with pytest.raises(softrod.InputError, match="positive"):
+        _bounds(2, [1.0, -2.0], None)
+
+
+def test_actions_clip_or_reject_and_nan_raises():
+    env = se.reach_env()
+    env.reset(seed=0)
+    _, _, _, _, info = env.step(np.array([-1.0, 99.0]))
+    assert info["action_clipped"]
+    np.testing.assert_array_equal(env.u, [0.0, se.DEFAULT_MAX_TENSION])
+    with pytest.raises(softrod.InputError, match="finite"):
+        env.step(np.array([np.nan, 1.0]))
+    with pytest.raises(ValueError, match="shape"):
+        env.step(np.array([1.0, 1.0, 1.0]))
+    strict = se.reach_env(action_policy="reject")
+    strict.reset(seed=0)
+    with pytest.raises(softrod.InputError, match="outside"):
+        strict.step(np.array([0.5, 3.5]))
+
+
+def test_a_scene_without_cables_is_refused():
+    sim = softrod.Simulation.from_toml(open(se.REACH_SCENE).read().split("[[cable]]")[0])
+    with pytest.raises(softrod.InputError, match="cables"):
+        se.RodEnv(sim, se.ReachTask())
+
+
+def test_diverging_step_terminates_with_a_reason_and_finite_observation():
+    env = se.RodEnv(diverging_sim(), se.ReachTask())
+    obs0, _ = env.reset(seed=0)
+    obs, reward, terminated, truncated, info = env.step(np.array([3.0, 0.0]))
+    assert terminated and not truncated
+    assert info["termination"].startswith("diverged: ")
+    assert np.all(np.isfinite(obs)) and np.isfinite(reward)
+    # The last valid state is the one observed.
+    np.testing.assert_array_equal(obs, obs0)
+
+
+def test_seeded_resets_repeat_and_differ():
+    a, b = se.track_env(), se.track_env()
+    oa, _ = a.reset(seed=7)
+    ob, _ = b.reset(seed=7)
+    np.testing.assert_array_equal(oa, ob)
+    oc, _ = b.reset(seed=8)
+    assert not np.array_equal(oa, oc)
+
+
+def test_reach_target_is_an_equilibrium_of_the_dynamics_under_its_tensions():
+    """The target drawn at reset is the statics tip under the drawn tensions
+    (Newton on the static residual): started from that equilibrium at rest
+    and holding those tensions, the integrated dynamics must stay there."""
+    env = se.reach_env()
+    env.reset(seed=3)
+    u = env.task.target_tensions
+    st = env.sim.statics(tensions=u)
+    env.q, env.qdot = st.q.copy(), np.zeros(env.n_dof)
+    for _ in range(20):  # 1 s
+        _, _, terminated, _, info = env.step(u)
+        assert not terminated
+        assert info["distance"] < 1e-6 * env.length
+    # And a different action moves the tip away from it.
+    _, _, _, _, info = env.step(env.max_tension - u)
+    assert info["distance"] > 1e-4 * env.length
+
+
+def test_track_target_moves_on_its_circle():
+    env = se.track_env()
+    env.reset(seed=2)
+    task = env.task
+    b, a, e1, e2 = task._frame
+    L, th = env.length, task.theta
+    for t in (0.0, 0.7, 3.1):
+        p, v = task.target(t)
+        d = p - b
+        np.testing.assert_allclose(d @ a, L * np.sin(th) / th, rtol=1e-12)
+        np.testing.assert_allclose(np.hypot(d @ e1, d @ e2), L * (1 - np.cos(th)) / th, rtol=1e-12)
+        h = 1e-6  # central difference of the position
+        fd = (task.target(t + h)[0] - task.target(t - h)[0]) / (2 * h)
+        np.testing.assert_allclose(v, fd, rtol=1e-6, atol=1e-12)
+
+
+def test_batch_stepper_equals_single_steps_bit_for_bit():
+    sims = [softrod.Simulation.from_file(se.REACH_SCENE) for _ in range(5)]
+    sims.append(diverging_sim())
+    rng = np.random.default_rng(11)
+    n = sims[0].n_dof
+    q0, qd0 = sims[0].initial_state()
+    q = q0 + 0.2 * rng.standard_normal((6, n))
+    qd = 0.1 * rng.standard_normal((6, n))
+    u = rng.uniform(0.0, 3.0, (6, 2))
+    t = np.linspace(0.0, 1.0, 6)
+    batch = softrod.BatchStepper(sims, threads=2)
+    q1, qd1, errors = batch.step(t, q, qd, u, 0.05)
+    for i, sim in enumerate(sims):
+        try:
+            s = sim.step(softrod.State(t[i], q[i], qd[i]), 0.05, u[i])
+        except softrod.SimulationError as e:
+            assert errors[i] == str(e)
+            np.testing.assert_array_equal(q1[i], q[i])
+            continue
+        assert errors[i] is None
+        np.testing.assert_array_equal(q1[i], s.q)
+        np.testing.assert_array_equal(qd1[i], s.qdot)
+    # Inactive copies are passed through untouched.
+    q2, _, errors2 = batch.step(t, q, qd, u, 0.05, [False] * 6)
+    np.testing.assert_array_equal(q2, q)
+    assert errors2 == [None] * 6
+    with pytest.raises(softrod.InputError, match=r"u\[2\]"):
+        bad = u.copy()
+        bad[2, 1] = -1.0
+        batch.step(t, q, qd, bad, 0.05)
+    with pytest.raises(softrod.InputError, match="shape"):
+        batch.step(t, q[:3], qd, u, 0.05)
+
+
+@pytest.mark.parametrize("mode", ["NextStep", "SameStep"])
+def test_batched_vector_env_equals_sync_vector_env(mode):
+    from gymnasium.vector import SyncVectorEnv
+
+    # Episodes of different lengths and one copy that diverges, so resets
+    # happen at different steps in different copies.
+    fns = [lambda k=k: se.reach_env(episode_steps=k) for k in (3, 5, 4)]
+    fns.append(lambda: se.RodEnv(diverging_sim(), se.ReachTask(), episode_steps=6))
+    sync = SyncVectorEnv(fns, autoreset_mode=mode)
+    batched = se.BatchedVectorEnv(fns, threads=2, autoreset_mode=mode)
+    o1, _ = sync.reset(seed=5)
+    o2, _ = batched.reset(seed=5)
+    np.testing.assert_array_equal(o1, o2)
+    rng = np.random.default_rng(0)
+    ends = 0
+    for _ in range(12):
+        a = rng.uniform(-0.5, 3.5, (4, 2))  # some outside the box: clipped
+        r1, r2 = sync.step(a), batched.step(a)
+        for x, y in zip(r1[:4], r2[:4]):
+            np.testing.assert_array_equal(x, y)
+        i1, i2 = r1[4], r2[4]
+        assert sorted(i1) == sorted(i2)
+        for key in ("distance", "_distance", "action_clipped", "termination"):
+            if key in i1:
+                np.testing.assert_array_equal(i1[key], i2[key])
+        if mode == "SameStep" and "final_obs" in i1:
+            for f1, f2 in zip(i1["final_obs"], i2["final_obs"]):
+                np.testing.assert_array_equal(f1, f2)
+        ends += int(np.sum(r1[2] | r1[3]))
+    assert ends >= 6
+    # A partial reset (Gymnasium's reset_mask) resets the same copies.
+    mask = np.array([True, False, True, False])
+    o1, _ = sync.reset(seed=9, options={"reset_mask": mask.copy()})
+    o2, _ = batched.reset(seed=9, options={"reset_mask": mask.copy()})
+    np.testing.assert_array_equal(o1, o2)
+    a = rng.uniform(0.0, 3.0, (4, 2))
+    for x, y in zip(sync.step(a)[:4], batched.step(a)[:4]):
+        np.testing.assert_array_equal(x, y)
+
+
+def test_make_vec_gives_the_batched_env():
+    env = gymnasium.make_vec("softrod/Track-v0", num_envs=3, vectorization_mode="vector_entry_point")
+    assert isinstance(env, se.BatchedVectorEnv)
+    obs, _ = env.reset(seed=0)
+    assert obs.shape == (3,) + env.single_observation_space.shape
+    obs, rew, term, trunc, _ = env.step(env.action_space.sample())
+    assert np.all(np.isfinite(obs)) and rew.shape == (3,)
