@@ -25,6 +25,7 @@
 
 use pyo3::prelude::*;
 
+mod contacts;
 mod control;
 mod convert;
 mod errors;
@@ -33,6 +34,7 @@ mod hooks;
 mod many;
 mod model;
 mod results;
+mod scene_dict;
 mod settings;
 mod simulation;
 mod trajectory;
@@ -101,6 +103,7 @@ fn _softrod(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<model::Cable>()?;
     m.add_class::<model::PointLoad>()?;
     m.add_class::<model::Rod>()?;
+    m.add_class::<contacts::Contact>()?;
     m.add_function(wrap_pyfunction!(simulate_many, m)?)?;
     #[cfg(feature = "test-hooks")]
     hooks::register(m)?;

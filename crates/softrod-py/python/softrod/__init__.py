@@ -39,6 +39,7 @@ from softrod._errors import (
 from softrod._softrod import (
     Cable,
     Circle,
+    Contact,
     Energies,
     Material,
     Modes,
@@ -57,6 +58,16 @@ from softrod._softrod import (
     __version__,
     simulate_many,
 )
+from softrod.builders import (
+    Base,
+    Body,
+    Closure,
+    ContactSettings,
+    Frame,
+    Joint,
+    Obstacle,
+    Prescribed,
+)
 
 #: The strain names of ``Rod(strains=...)``, in coordinate order: torsion,
 #: two bendings, stretch, two shears (body frame, local x along the rod).
@@ -65,8 +76,17 @@ STRAINS = ("kx", "ky", "kz", "qx", "qy", "qz")
 __all__ = [
     "INTEGRATORS",
     "STRAINS",
+    "Base",
+    "Body",
     "Cable",
     "Circle",
+    "Closure",
+    "Contact",
+    "ContactSettings",
+    "Frame",
+    "Joint",
+    "Obstacle",
+    "Prescribed",
     "Energies",
     "InputError",
     "InternalError",
