@@ -225,3 +225,30 @@ def test_bad_robots_raise_naming_the_key():
         softrod.Simulation([3.0], bodies=[])
     with pytest.raises(softrod.InputError, match=r"Rod\(joint\)"):
         softrod.Rod(0.2, 2, section=softrod.Circle(0.01), material=mat, joint="revolute")
+
+
+def test_a_body_on_a_free_joint_falls_freely_and_a_spherical_one_spins():
+    """A free body under gravity: z = z0 - g t^2 / 2, its orientation kept;
+    a body on a spherical joint with its centre of mass on the joint keeps
+    its spin rate about a principal axis (no gravity torque)."""
+    g = 9.81
+    post = softrod.Rod(0.05, 1, ["ky"], name="post", section=softrod.Circle(0.01),
+                       material=softrod.Material(density=1000.0, young=1e9, poisson=0.5))
+    stone = softrod.Body("stone", "world", mass=0.3, inertia=[1e-4, 2e-4, 3e-4],
+                         base=softrod.Base([1.0, 0, 2.0]), joint=softrod.Joint("free"))
+    top = softrod.Body("top", "world", mass=0.1, inertia=[1e-4, 1e-4, 2e-4],
+                       base=softrod.Base([2.0, 0, 0]), joint=softrod.Joint("spherical"))
+    sim = softrod.Simulation([post], [0, 0, -g], bodies=[stone, top])
+    assert sim.body_names == ["stone", "top"]
+    assert len(sim.q_names) == 1 + 6 + 3
+    q0 = np.zeros(sim.n_dof)
+    qd0 = np.zeros(sim.n_dof)
+    spin = 3.0
+    qd0[sim.q_names.index("top.joint.rz")] = spin
+    traj = sim.simulate(0.5, q0=q0, qdot0=qd0, output_every=0.05, rtol=1e-10, atol=1e-12)
+    for t, q in zip(traj.t, traj.q):
+        poses = sim.body_poses(q, t=t)
+        assert poses[0][2, 3] == pytest.approx(2.0 - 0.5 * g * t * t, abs=1e-9)
+        assert np.allclose(poses[0][:3, :3], np.eye(3), atol=1e-9)
+        c, s = np.cos(spin * t), np.sin(spin * t)
+        assert np.allclose(poses[1][:3, :3], [[c, -s, 0], [s, c, 0], [0, 0, 1]], atol=1e-8)
