@@ -44,6 +44,9 @@ def test_a_rod_lying_on_a_table_carries_its_weight_in_statics():
     sim = on_table(length)
     st = sim.statics()
     contacts = sim.contacts(st.q)
+    # The statics result lists the same (as statics --json does).
+    assert [repr(c) for c in st.contacts] == [repr(c) for c in contacts]
+    assert st.max_penetration == sim.max_penetration(st.q)
     weight = RHO * np.pi * R**2 * G * length
     f = total_force(contacts)
     # The vertical force balance of the joint coordinate: exact to the
@@ -127,8 +130,8 @@ def test_a_propped_cantilever_matches_beam_theory_and_the_cli(tmp_path, softrod_
     scene.write_text(PROPPED.replace("TABLE", repr(float(table)))
                      .replace("ROTATION", json.dumps(rotation)))
     sim = softrod.Simulation.from_file(scene)
-    q = sim.statics().q
-    contacts = sim.contacts(q)
+    st = sim.statics()
+    q, contacts = st.q, st.contacts
     assert len(contacts) == 1 and contacts[0].s == pytest.approx(length, abs=1e-12)
     force = total_force(contacts)
     delta = -sim.tip_pose("arm", q)[2, 3] - length * s

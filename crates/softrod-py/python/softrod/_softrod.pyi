@@ -218,6 +218,12 @@ class Statics:
     def closures(self) -> dict[str, float]:
         """Loop-closure residuals [m] by closure name."""
     @property
+    def contacts(self) -> list[Contact]:
+        """The contacts at the equilibrium (statics --json's)."""
+    @property
+    def max_penetration(self) -> float:
+        """Their largest -gap [m], 0 if none."""
+    @property
     def warnings(self) -> list[str]:
         """The validity rules the equilibrium breaks and, when it is unstable, that; empty otherwise."""
 
