@@ -76,6 +76,13 @@ pub fn value(obj: &Bound<'_, PyAny>, path: &str) -> PyResult<Value> {
             return value(&v, path);
         }
     }
+    if obj.cast::<crate::model::Rod>().is_ok() {
+        return Err(input(format!(
+            "{path}: a softrod.Rod stands for several tables (its cables and loads are \
+             [[cable]] and [[load]] entries): pass it to Simulation(rods=[...]), or give its \
+             [[rod]] keys as a dict"
+        )));
+    }
     let kind = obj.get_type().name()?;
     Err(input(format!(
         "{path}: a {kind} cannot be a scene value (give numbers, strings, booleans, lists or \

@@ -219,6 +219,8 @@ def test_bad_robots_raise_naming_the_key():
     with pytest.raises(softrod.SceneError, match=r"^robot: run\.integrator"):
         softrod.Simulation.from_dict({**tomllib.loads(ROBOT), "run": {"integrator": "euler"}},
                                      name="robot")
+    with pytest.raises(softrod.InputError, match=r"rod\[0\]: a softrod.Rod stands for"):
+        softrod.Simulation.from_dict({"rod": [rod]})
     with pytest.raises(softrod.InputError, match=r"keys must be strings"):
         softrod.Simulation.from_dict({1: 2})
     with pytest.raises(softrod.InputError, match=r"rods\[0\]"):
