@@ -1,7 +1,9 @@
 //! The compiled module `softrod._softrod` of the Python package `softrod`:
 //! the facade crate's [`softrod::Simulation`] with numpy arrays in and out,
-//! rods built in Python, cable-tension inputs, a controller in the loop,
-//! a step API and parallel runs.
+//! rods built in Python, everything else a scene can say read from Python
+//! values by the scene loader (`scene_dict`), contacts (`contacts`),
+//! cable-tension inputs, a controller in the loop, a step API and parallel
+//! runs.
 //!
 //! Build and install with maturin (`scripts/install.sh`, or
 //! `scripts/test.sh` for the tests); the Python sources, type stubs and

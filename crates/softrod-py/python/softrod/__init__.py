@@ -12,7 +12,11 @@ model, from Python.
 (11, 3)
 
 Or from a scene file: ``softrod.Simulation.from_file("examples/cantilever_gravity.toml")``
-(``Simulation.from_toml(text)`` for scene text).
+(``Simulation.from_toml(text)`` for scene text, ``Simulation.from_dict(scene)``
+for a scene as dicts). Bodies, joints, closures, obstacles and contact
+settings: ``softrod.Body``, ``Joint``, ``Closure``, ``Obstacle``,
+``ContactSettings`` (the scene's tables, see ``softrod.builders``), given to
+``Simulation(rods, ..., bodies=, closures=, obstacles=, contact=)``.
 
 Units are SI. ``q`` are the generalized coordinates in the order of
 ``Simulation.q_names``: joint coordinates and strain coordinates (pieces

@@ -18,7 +18,8 @@ joint=)`` or into a scene dict for ``softrod.Simulation.from_dict``.
 
 from __future__ import annotations
 
-from typing import Any, Mapping, Sequence
+from collections.abc import Mapping, Sequence
+from typing import Any
 
 __all__ = [
     "Base",

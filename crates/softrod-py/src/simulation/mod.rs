@@ -64,8 +64,11 @@ pub fn rod_index(model: &Model, rod: &Bound<'_, PyAny>) -> PyResult<usize> {
 /// softrod from Python.
 ///
 /// Build one from a scene file (`Simulation.from_file(path)`), scene text
-/// (`Simulation.from_toml(text)`) or rods
-/// (`Simulation(rods=[softrod.Rod(...)], gravity=[0, 0, -9.81])`).
+/// (`Simulation.from_toml(text)`), a scene as dicts
+/// (`Simulation.from_dict(scene)`) or rods
+/// (`Simulation(rods=[softrod.Rod(...)], gravity=[0, 0, -9.81])`, with
+/// `bodies=`, `closures=`, `obstacles=`, `contact=` tables as a scene has
+/// them).
 ///
 /// Conventions: SI units; `q` are the generalized coordinates in the order
 /// of `q_names`: each element's joint coordinates, then a rod's strain
