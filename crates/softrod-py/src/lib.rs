@@ -1,7 +1,9 @@
 //! The compiled module `softrod._softrod` of the Python package `softrod`:
 //! the facade crate's [`softrod::Simulation`] with numpy arrays in and out,
-//! rods built in Python, cable-tension inputs, a controller in the loop,
-//! a step API, parallel runs and batched steps.
+//! rods built in Python, everything else a scene can say read from Python
+//! values by the scene loader (`scene_dict`), contacts (`contacts`),
+//! cable-tension inputs, a controller in the loop, a step API, parallel
+//! runs and batched steps.
 //!
 //! Build and install with maturin (`scripts/install.sh`, or
 //! `scripts/test.sh` for the tests); the Python sources, type stubs and
@@ -26,6 +28,7 @@
 use pyo3::prelude::*;
 
 mod batch;
+mod contacts;
 mod control;
 mod convert;
 mod errors;
@@ -34,6 +37,7 @@ mod hooks;
 mod many;
 mod model;
 mod results;
+mod scene_dict;
 mod settings;
 mod simulation;
 mod trajectory;
@@ -102,6 +106,7 @@ fn _softrod(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<model::Cable>()?;
     m.add_class::<model::PointLoad>()?;
     m.add_class::<model::Rod>()?;
+    m.add_class::<contacts::Contact>()?;
     m.add_function(wrap_pyfunction!(simulate_many, m)?)?;
     m.add_class::<batch::BatchStepper>()?;
     #[cfg(feature = "test-hooks")]

@@ -408,11 +408,22 @@ impl PointLoad {
 /// 4×4 homogeneous transform (default identity: the rod along world x).
 /// `rest_strain`: the stress-free strain (kx, ky, kz, qx, qy, qz), default
 /// straight (0, 0, 0, 1, 0, 0). `drag`: (translational [N·s/m²],
-/// rotational [N·m·s]) linear drag per unit length.
+/// rotational [N·m·s]) linear drag per unit length. `contact_radius` [m]:
+/// the radius of the rod's contact surface (default: from the section,
+/// scene key `contact_radius`).
+///
+/// On a robot (scene keys of the same names, docs/scene-format.md):
+/// `parent` the name of a rod or body it hangs from ("world" default),
+/// `at` [m] the arc length on a parent rod (default its tip), `joint` the
+/// scene's joint table (`softrod.Joint(...)` or a dict, default fixed);
+/// `base` is then relative to the attachment frame.
 #[pyclass(frozen, module = "softrod")]
 pub struct Rod {
     pub(crate) spec: dynamics::Rod,
     pub(crate) named: bool,
+    /// The scene tables this rod stands for (`Simulation(…, bodies=, …)`
+    /// builds through the scene).
+    pub(crate) tables: crate::scene_dict::RodTables,
 }
 
 fn piece_lengths(length: f64, pieces: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
@@ -473,7 +484,8 @@ fn strain_indices(strains: &Bound<'_, PyAny>) -> PyResult<Vec<usize>> {
 impl Rod {
     #[new]
     #[pyo3(signature = (length, pieces, strains = None, *, section, material, name = None,
-                        base = None, rest_strain = None, drag = None, cables = None, loads = None))]
+                        base = None, rest_strain = None, drag = None, cables = None, loads = None,
+                        contact_radius = None, parent = None, at = None, joint = None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         length: f64,
@@ -487,6 +499,10 @@ impl Rod {
         drag: Option<(f64, f64)>,
         cables: Option<&Bound<'_, PyList>>,
         loads: Option<&Bound<'_, PyList>>,
+        contact_radius: Option<f64>,
+        parent: Option<String>,
+        at: Option<f64>,
+        joint: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         if !(length.is_finite() && length > 0.0) {
             return Err(input(format!(
@@ -545,9 +561,27 @@ impl Rod {
                 spec.point_loads.push(load);
             }
         }
+        if let Some(r) = contact_radius {
+            if !(r.is_finite() && r > 0.0) {
+                return Err(input(format!(
+                    "Rod(contact_radius) must be positive and finite, got {r}"
+                )));
+            }
+            spec.contact_radius = Some(r);
+        }
+        let tables = crate::scene_dict::rod_tables(
+            length,
+            &spec,
+            pieces.extract::<i64>().ok(),
+            strains.is_some().then(|| idx.clone()),
+            rest_strain.is_some(),
+            cables,
+            (parent, at, joint),
+        )?;
         Ok(Self {
             spec,
             named: name.is_some(),
+            tables,
         })
     }
 

@@ -51,7 +51,9 @@ impl Energies {
 /// unstable, rigid ones being neutral; None when the model is too large to
 /// check), the first rod's `tip` pose (4, 4), every rod's tip pose `tips` and body pose
 /// `bodies` by name (4, 4) [m], loop-closure residuals `closures` by name
-/// [m] and `warnings`.
+/// [m] and `warnings`; with obstacles, the `contacts` at the equilibrium (a
+/// list of `softrod.Contact`; frictionless: statics has no friction
+/// history) and their `max_penetration` [m].
 #[pyclass(frozen, module = "softrod")]
 pub struct Statics {
     pub(crate) q: Py<PyArray1<f64>>,
@@ -72,6 +74,10 @@ pub struct Statics {
     pub(crate) closures: BTreeMap<String, f64>,
     #[pyo3(get)]
     pub(crate) warnings: Vec<String>,
+    #[pyo3(get)]
+    pub(crate) contacts: Vec<Py<crate::contacts::Contact>>,
+    #[pyo3(get)]
+    pub(crate) max_penetration: f64,
 }
 
 fn named<'py>(

@@ -35,6 +35,9 @@ fn frozen<'py, T>(a: Bound<'py, T>) -> PyResult<Bound<'py, T>> {
 /// - `columns`, `table` (n_samples, len(columns)): every number as
 ///   `softrod run` writes `trajectory.csv`, in its column order
 /// - `shape(i, rod, s)`: positions along a rod at sample `i`
+/// - `contacts` (a list per sample of `softrod.Contact`), `max_penetration`
+///   [m], `max_contacts`: the contacts as `contacts.csv` and summary.json
+///   give them
 #[pyclass(frozen, module = "softrod")]
 pub struct Trajectory {
     t: Py<PyArray1<f64>>,
@@ -58,6 +61,10 @@ pub struct Trajectory {
     warnings: Vec<String>,
     n: usize,
     model: Model,
+    /// The contacts at each sample (with the run's friction state).
+    contacts: Vec<Vec<softrod::mechanics::ContactPoint>>,
+    max_penetration: f64,
+    max_contacts: usize,
 }
 
 fn rows<'py, R: AsRef<[f64]>>(
@@ -84,7 +91,8 @@ fn table<'py>(py: Python<'py>, tr: &RustTrajectory) -> PyResult<Bound<'py, PyArr
 
 impl Trajectory {
     /// The Python view of a run of `model`.
-    pub fn new(py: Python<'_>, tr: RustTrajectory, model: &Model) -> PyResult<Self> {
+    pub fn new(py: Python<'_>, mut tr: RustTrajectory, model: &Model) -> PyResult<Self> {
+        let contacts = std::mem::take(&mut tr.contacts);
         let n = model.n_dof();
         let m = tr.len();
         let nr = model.rods().len();
@@ -129,6 +137,9 @@ impl Trajectory {
             warnings: tr.summary.warnings.clone(),
             n: m,
             model: model.clone(),
+            contacts,
+            max_penetration: tr.max_penetration,
+            max_contacts: tr.max_contacts,
         })
     }
 
@@ -382,6 +393,32 @@ impl Trajectory {
         }
         let rows = out.len() / 3;
         array_out(py, out, &[rows, 3])
+    }
+
+    /// The active contacts at each sample (a list per output time of
+    /// `softrod.Contact`, as `softrod run` writes `contacts.csv`), with the
+    /// forces of the run's friction state; empty lists for a model without
+    /// contact.
+    #[getter]
+    fn contacts(&self) -> Vec<Vec<crate::contacts::Contact>> {
+        self.contacts
+            .iter()
+            .map(|c| crate::contacts::Contact::list(&self.model, c))
+            .collect()
+    }
+
+    /// The largest penetration `−gap` over the samples [m] (0 without
+    /// contact or when nothing penetrated), summary.json's `max_penetration`.
+    #[getter]
+    fn max_penetration(&self) -> f64 {
+        self.max_penetration
+    }
+
+    /// The most contacts active at one sample (summary.json's
+    /// `max_contacts`).
+    #[getter]
+    fn max_contacts(&self) -> usize {
+        self.max_contacts
     }
 
     fn __len__(&self) -> usize {

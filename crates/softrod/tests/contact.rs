@@ -171,3 +171,33 @@ fn above_the_friction_angle_a_rod_slides_at_coulombs_rate() {
     eprintln!("a = {a:.5} m/s², Coulomb {want:.5} ({rel:.2e})");
     assert!(rel < 1e-2, "{a} vs {want}");
 }
+
+/// `Simulation::simulate` keeps each sample's contacts (what the recorder
+/// gives `contacts.csv`): on a frictionless table, the contacts of each
+/// sample are those the model computes at that state, and the trajectory's
+/// `max_penetration` and `max_contacts` are those of its samples.
+#[test]
+fn a_trajectory_keeps_the_contacts_of_its_samples() {
+    let base = Pose::new(Mat3::identity(), Vec3::new(0.0, 0.0, R + 0.002));
+    let table = Obstacle::new(
+        "table",
+        Shape::Plane {
+            point: Vec3::zeros(),
+            normal: Vec3::z(),
+        },
+    );
+    let mut sim = free_rod(base, table, Settings::default().energy_tolerance);
+    let traj = sim.simulate(0.1).unwrap();
+    assert_eq!(traj.contacts.len(), traj.len());
+    let mut deepest = 0.0f64;
+    for i in 0..traj.len() {
+        let (q, qd) = (traj.q[i].as_slice(), traj.qdot[i].as_slice());
+        let want = sim.model().contacts(traj.t[i], q, qd).unwrap();
+        assert_eq!(traj.contacts[i], want, "sample {i}");
+        deepest = traj.contacts[i].iter().fold(deepest, |m, c| m.max(-c.gap));
+    }
+    assert!(deepest > 0.0, "the rod landed");
+    assert_eq!(traj.max_penetration, deepest);
+    let most = traj.contacts.iter().map(Vec::len).max().unwrap();
+    assert_eq!(traj.max_contacts, most);
+}

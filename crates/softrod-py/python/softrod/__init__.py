@@ -12,7 +12,11 @@ model, from Python.
 (11, 3)
 
 Or from a scene file: ``softrod.Simulation.from_file("examples/cantilever_gravity.toml")``
-(``Simulation.from_toml(text)`` for scene text).
+(``Simulation.from_toml(text)`` for scene text, ``Simulation.from_dict(scene)``
+for a scene as dicts). Bodies, joints, closures, obstacles and contact
+settings: ``softrod.Body``, ``Joint``, ``Closure``, ``Obstacle``,
+``ContactSettings`` (the scene's tables, see ``softrod.builders``), given to
+``Simulation(rods, ..., bodies=, closures=, obstacles=, contact=)``.
 
 Learning and clusters (optional extras, not imported by ``import softrod``):
 ``softrod.envs`` (Gymnasium environments, ``pip install softrod[rl]``) and
@@ -44,6 +48,7 @@ from softrod._softrod import (
     BatchStepper,
     Cable,
     Circle,
+    Contact,
     Energies,
     Material,
     Modes,
@@ -62,6 +67,16 @@ from softrod._softrod import (
     __version__,
     simulate_many,
 )
+from softrod.builders import (
+    Base,
+    Body,
+    Closure,
+    ContactSettings,
+    Frame,
+    Joint,
+    Obstacle,
+    Prescribed,
+)
 
 #: The strain names of ``Rod(strains=...)``, in coordinate order: torsion,
 #: two bendings, stretch, two shears (body frame, local x along the rod).
@@ -71,8 +86,17 @@ __all__ = [
     "INTEGRATORS",
     "STRAINS",
     "BatchStepper",
+    "Base",
+    "Body",
     "Cable",
     "Circle",
+    "Closure",
+    "Contact",
+    "ContactSettings",
+    "Frame",
+    "Joint",
+    "Obstacle",
+    "Prescribed",
     "Energies",
     "InputError",
     "InternalError",

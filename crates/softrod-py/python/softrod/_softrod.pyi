@@ -9,8 +9,8 @@ is read in place). Shapes are checked: a wrong one raises
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Sequence
-from typing import Literal, final, overload
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any, Literal, final, overload
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -114,7 +114,8 @@ class Rod:
     kx, ky, kz, qx, qy, qz; coordinates in that canonical order), `section`,
     `material`, optional `name`, `base` (4x4 transform or {"position",
     "rotation"}), `rest_strain` (6,), `drag` (translational, rotational),
-    `cables`, `loads`."""
+    `cables`, `loads`, `contact_radius` [m]; on a robot `parent`, `at` [m]
+    and `joint` (softrod.Joint(...) or a dict of the scene's joint keys)."""
     def __new__(
         cls,
         length: float,
@@ -129,6 +130,10 @@ class Rod:
         drag: tuple[float, float] | None = None,
         cables: list[Cable] | None = None,
         loads: list[PointLoad] | None = None,
+        contact_radius: float | None = None,
+        parent: str | None = None,
+        at: float | None = None,
+        joint: Mapping[str, Any] | None = None,
     ) -> Rod: ...
     @property
     def name(self) -> str: ...
@@ -212,6 +217,12 @@ class Statics:
     @property
     def closures(self) -> dict[str, float]:
         """Loop-closure residuals [m] by closure name."""
+    @property
+    def contacts(self) -> list[Contact]:
+        """The contacts at the equilibrium (statics --json's)."""
+    @property
+    def max_penetration(self) -> float:
+        """Their largest -gap [m], 0 if none."""
     @property
     def warnings(self) -> list[str]:
         """The validity rules the equilibrium breaks and, when it is unstable, that; empty otherwise."""
@@ -320,14 +331,71 @@ class Trajectory:
     def warnings(self) -> list[str]: ...
     def shape(self, i: int = -1, rod: _RodRef | None = None, s: ArrayLike | None = None) -> _F64:
         """Positions (N + 1, 3) at the piece boundaries, or (len(s), 3), at sample i."""
+    @property
+    def contacts(self) -> list[list[Contact]]:
+        """The active contacts at each sample (contacts.csv's rows)."""
+    @property
+    def max_penetration(self) -> float:
+        """The largest -gap over the samples [m] (summary.json's)."""
+    @property
+    def max_contacts(self) -> int:
+        """The most contacts at one sample (summary.json's)."""
     def __len__(self) -> int: ...
+
+@final
+class Contact:
+    """One contact at a state (world frame, SI): rod `rod` at `s` touches
+    `other` (an obstacle, or a rod at `other_s`); `normal` from other to the
+    rod, `gap` (negative: penetration), `force` on the rod."""
+    @property
+    def rod(self) -> str: ...
+    @property
+    def rod_index(self) -> int: ...
+    @property
+    def s(self) -> float: ...
+    @property
+    def other(self) -> str: ...
+    @property
+    def other_kind(self) -> Literal["obstacle", "rod"]: ...
+    @property
+    def other_index(self) -> int: ...
+    @property
+    def other_s(self) -> float | None: ...
+    @property
+    def point(self) -> _F64:
+        """(3,) [m]: on the rod's surface"""
+    @property
+    def normal(self) -> _F64:
+        """(3,): unit, from other to the rod"""
+    @property
+    def gap(self) -> float: ...
+    @property
+    def force(self) -> _F64:
+        """(3,) [N]: on the rod"""
+    @property
+    def sticking(self) -> bool: ...
+    @property
+    def state(self) -> Literal["stick", "slip"]: ...
 
 @final
 class Simulation:
     """A model with its initial state and run settings (see help(softrod.Simulation))."""
     def __new__(
-        cls, rods: list[Rod], gravity: ArrayLike | None = None, *, quadrature: int = 4
-    ) -> Simulation: ...
+        cls,
+        rods: list[Rod | Mapping[str, Any]],
+        gravity: ArrayLike | None = None,
+        *,
+        quadrature: int = 4,
+        bodies: Sequence[Mapping[str, Any]] | None = None,
+        closures: Sequence[Mapping[str, Any]] | None = None,
+        obstacles: Sequence[Mapping[str, Any]] | None = None,
+        contact: Mapping[str, Any] | None = None,
+    ) -> Simulation:
+        """Rods (softrod.Rod or [[rod]] dicts) and, with the scene's keys,
+        [[body]], [[closure]], [[obstacle]] tables and the [contact] table."""
+    @classmethod
+    def from_dict(cls, scene: Mapping[str, Any], *, name: str = "<dict>") -> Simulation:
+        """A scene as nested dicts and lists with the TOML file's keys."""
     @classmethod
     def from_toml(cls, text: str, *, name: str = "<string>") -> Simulation:
         """The scene text `text` (TOML); for a file call from_file."""
@@ -350,6 +418,14 @@ class Simulation:
     def prescribed_names(self) -> list[str]: ...
     @property
     def body_names(self) -> list[str]: ...
+    @property
+    def obstacle_names(self) -> list[str]: ...
+    def contacts(
+        self, q: ArrayLike, qdot: ArrayLike | None = None, *, t: float = 0.0
+    ) -> list[Contact]:
+        """The active contacts at (t, q, qdot); no friction history: zero friction."""
+    def max_penetration(self, q: ArrayLike, *, t: float = 0.0) -> float:
+        """The largest -gap [m] at q, 0 if none."""
     def prescribed_forces(self, t: float, q: ArrayLike, qdot: ArrayLike) -> _F64: ...
     def closure_residuals(self, q: ArrayLike, *, t: float = 0.0) -> dict[str, float]: ...
     @property

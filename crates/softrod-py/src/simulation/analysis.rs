@@ -46,6 +46,16 @@ impl Simulation {
             result
         })?;
         let model = sim.model();
+        // What `statics --json` lists (its `contacts`, `max_penetration`).
+        let zero = vec![0.0; out.q.len()];
+        let found = model
+            .contacts(0.0, &out.q, &zero)
+            .map_err(crate::errors::dynamics)?;
+        let max_penetration = found.iter().fold(0.0, |m, c| f64::max(m, -c.gap));
+        let contacts = crate::contacts::Contact::list(model, &found)
+            .into_iter()
+            .map(|c| Py::new(py, c))
+            .collect::<PyResult<Vec<_>>>()?;
         let pose = |g: &softrod::lie::Pose| -> PyResult<Py<PyArrayDyn<f64>>> {
             let mut m = vec![0.0; 16];
             pose_into(g, &mut m);
@@ -75,6 +85,8 @@ impl Simulation {
             bodies,
             closures: out.closures.into_iter().collect(),
             warnings: out.warnings,
+            contacts,
+            max_penetration,
         })
     }
 

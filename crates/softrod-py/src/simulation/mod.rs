@@ -64,8 +64,11 @@ pub fn rod_index(model: &Model, rod: &Bound<'_, PyAny>) -> PyResult<usize> {
 /// softrod from Python.
 ///
 /// Build one from a scene file (`Simulation.from_file(path)`), scene text
-/// (`Simulation.from_toml(text)`) or rods
-/// (`Simulation(rods=[softrod.Rod(...)], gravity=[0, 0, -9.81])`).
+/// (`Simulation.from_toml(text)`), a scene as dicts
+/// (`Simulation.from_dict(scene)`) or rods
+/// (`Simulation(rods=[softrod.Rod(...)], gravity=[0, 0, -9.81])`, with
+/// `bodies=`, `closures=`, `obstacles=`, `contact=` tables as a scene has
+/// them).
 ///
 /// Conventions: SI units; `q` are the generalized coordinates in the order
 /// of `q_names`: each element's joint coordinates, then a rod's strain
@@ -166,19 +169,68 @@ impl Simulation {
     /// have no name) under `gravity` [m/s², world frame], with `quadrature`
     /// Gauss points per piece (4: the scene default), from the rest shape at
     /// rest, with the recommended settings.
+    ///
+    /// What a scene file says beyond rods, with its keys and defaults
+    /// (docs/scene-format.md): `bodies`, `closures`, `obstacles` lists of
+    /// `[[body]]`, `[[closure]]`, `[[obstacle]]` tables (dicts, or
+    /// `softrod.Body(...)`, `softrod.Closure(...)`, `softrod.Obstacle(...)`),
+    /// `contact` the `[contact]` table (`softrod.ContactSettings(...)`); a rod may
+    /// also be a `[[rod]]` dict. The whole is then read as the scene would
+    /// read it (`Simulation.from_dict`), the rods before the bodies in
+    /// `q`; errors name the key path (`obstacle[0].radius`).
     #[new]
-    #[pyo3(signature = (rods, gravity = None, *, quadrature = 4))]
+    #[pyo3(signature = (rods, gravity = None, *, quadrature = 4, bodies = None, closures = None,
+                        obstacles = None, contact = None))]
     fn new(
         rods: &Bound<'_, PyList>,
         gravity: Option<&Bound<'_, PyAny>>,
         quadrature: usize,
+        bodies: Option<&Bound<'_, PyAny>>,
+        closures: Option<&Bound<'_, PyAny>>,
+        obstacles: Option<&Bound<'_, PyAny>>,
+        contact: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
+        let extras = crate::scene_dict::Extras {
+            bodies,
+            closures,
+            obstacles,
+            contact,
+        };
         guard(|| {
+            if crate::scene_dict::needs_scene(rods, &extras) {
+                let (sim, warnings) =
+                    crate::scene_dict::simulation_with(rods, gravity, quadrature, &extras)?;
+                return Ok(Self::wrap(sim, warnings, None));
+            }
             Ok(Self::wrap(
                 simulation_of(rods, gravity, quadrature)?,
                 Vec::new(),
                 None,
             ))
+        })
+    }
+
+    /// The simulation a scene given as nested dicts and lists describes,
+    /// with the keys of the TOML file (docs/scene-format.md): `{"world":
+    /// {"gravity": [...]}, "rod": [{...}], "body": [...], "closure": [...],
+    /// "obstacle": [...], "contact": {...}, "cable": [...], "load": [...],
+    /// "initial": {...}, "run": {...}}`. Read by the scene loader itself:
+    /// the same defaults, checks and warnings as `from_toml` (None values
+    /// are left out: the default). Rods and bodies enter `q` in the order
+    /// of the dict's keys and lists. Numpy arrays, `softrod.Section` and
+    /// `softrod.Material` objects may stand for their values. Errors raise
+    /// `softrod.SceneError` naming `name` and the key path.
+    #[classmethod]
+    #[pyo3(signature = (scene, *, name = "<dict>"))]
+    fn from_dict(
+        _cls: &Bound<'_, pyo3::types::PyType>,
+        scene: &Bound<'_, pyo3::types::PyDict>,
+        name: &str,
+    ) -> PyResult<Self> {
+        guard(|| {
+            let doc = crate::scene_dict::dict_document(scene)?;
+            let (sim, warnings, duration) = crate::scene_dict::simulation(&doc, name)?;
+            Ok(Self::wrap(sim, warnings, Some(duration)))
         })
     }
 
@@ -277,6 +329,57 @@ impl Simulation {
             .iter()
             .map(|b| b.spec.name.clone())
             .collect()
+    }
+
+    /// The obstacles' names, in the order of `Contact.other_index`.
+    #[getter]
+    fn obstacle_names(&self) -> Vec<String> {
+        self.sim
+            .model()
+            .obstacles()
+            .iter()
+            .map(|o| o.name.clone())
+            .collect()
+    }
+
+    /// The active contacts at `(t, q, qdot)` with their forces
+    /// (docs/theory-contact.md), a list of `softrod.Contact`; empty for a
+    /// model without contact. A bare state has no friction history, so the
+    /// friction forces are zero here (those of a run are in
+    /// `Trajectory.contacts`): the normal forces are the whole force.
+    #[pyo3(signature = (q, qdot = None, *, t = 0.0))]
+    fn contacts(
+        &self,
+        q: &Bound<'_, PyAny>,
+        qdot: Option<&Bound<'_, PyAny>>,
+        t: f64,
+    ) -> PyResult<Vec<crate::contacts::Contact>> {
+        guard(|| {
+            kinematics::check_time(t)?;
+            let n = self.n();
+            let q = vector(q, "q", n)?;
+            let qd = match qdot {
+                Some(v) => vector(v, "qdot", n)?.slice().to_vec(),
+                None => vec![0.0; n],
+            };
+            let model = self.sim.model();
+            let c = model.contacts(t, q.slice(), &qd).map_err(dynamics)?;
+            Ok(crate::contacts::Contact::list(model, &c))
+        })
+    }
+
+    /// The largest penetration `−gap` [m] of any contact at `q` (time `t`
+    /// for prescribed joints and carried obstacles), 0 if none.
+    #[pyo3(signature = (q, *, t = 0.0))]
+    fn max_penetration(&self, q: &Bound<'_, PyAny>, t: f64) -> PyResult<f64> {
+        guard(|| {
+            kinematics::check_time(t)?;
+            let q = vector(q, "q", self.n())?;
+            self.sim
+                .model()
+                .max_penetration(t, q.slice())
+                .map_err(dynamics)
+        })
     }
 
     /// The generalized forces [N·m or N] the prescribed joints' drives

@@ -31,6 +31,18 @@ pub struct Trajectory {
     pub prescribed_force: Vec<Vec<f64>>,
     /// The largest closure residual at each time \[m\] (0 without closures).
     pub closure_residual: Vec<f64>,
+    /// The active contacts at each time, with their forces, as the run's
+    /// committed friction state gives them (`contacts.csv`'s rows;
+    /// [`Record::contacts`](super::Record::contacts)); empty lists for a
+    /// model without contact.
+    pub contacts: Vec<Vec<softrod_mechanics::ContactPoint>>,
+    /// The largest penetration `−gap` over the samples \[m\] (0 without
+    /// contact or when nothing penetrated): `summary.json`'s
+    /// `max_penetration`.
+    pub max_penetration: f64,
+    /// The most contacts active at one sample (`summary.json`'s
+    /// `max_contacts`).
+    pub max_contacts: usize,
     /// The shape of the rows ([`Trajectory::row`]).
     pub columns: Columns,
     /// How the run ended.
@@ -51,6 +63,9 @@ impl Trajectory {
             prescribed_q: Vec::new(),
             prescribed_force: Vec::new(),
             closure_residual: Vec::new(),
+            contacts: Vec::new(),
+            max_penetration: 0.0,
+            max_contacts: 0,
             columns: Columns::of(model),
             summary: RunSummary::default(),
         }
@@ -98,6 +113,8 @@ impl Trajectory {
             + rods * size_of::<Pose>()
             + size_of::<Energies>()
             + 4 * vec
+            // The contacts' list (its entries depend on the run).
+            + size_of::<Vec<softrod_mechanics::ContactPoint>>()
             + 16 * (columns.n_cables + columns.n_prescribed)
             + 8) as u64
     }
@@ -148,6 +165,9 @@ impl TrajectoryRecorder {
         tr.prescribed_q.push(r.prescribed_q.clone());
         tr.prescribed_force.push(r.prescribed_force.clone());
         tr.closure_residual.push(r.closure_residual);
+        tr.contacts.push(r.contacts.clone());
+        tr.max_penetration = self.recorder.max_penetration();
+        tr.max_contacts = self.recorder.max_contacts();
         tr.summary.samples += 1;
         Ok(())
     }
