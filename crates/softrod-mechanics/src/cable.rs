@@ -148,7 +148,8 @@ pub enum Span {
     },
 }
 
-/// A cable: routing, span (anchored at its end) and tension.
+/// A cable: routing, span (anchored at its end), tension and friction along
+/// its sheath.
 ///
 /// ```
 /// use softrod_mechanics::{Cable, Routing, Tension};
@@ -169,6 +170,12 @@ pub struct Cable {
     pub tension: Tension,
     /// Where along the rod it runs.
     pub span: Span,
+    /// Coulomb coefficient `μ ≥ 0` between the cable and its channel (0:
+    /// frictionless). The cable is taken as being pulled (sliding toward
+    /// the actuated end, `from`): its tension decays along the span as
+    /// `T(s) = T e^{−μ φ(s)}`, `φ(s)` the angle the cable's path has turned
+    /// through from `from` to `s` (the capstan equation; docs/theory.md D15f).
+    pub friction: f64,
 }
 
 impl Cable {
@@ -178,7 +185,16 @@ impl Cable {
             routing,
             tension,
             span: Span::Whole,
+            friction: 0.0,
         }
+    }
+
+    /// The same cable with friction coefficient `mu` along its channel
+    /// ([`Cable::friction`]).
+    #[must_use]
+    pub fn with_friction(mut self, mu: f64) -> Self {
+        self.friction = mu;
+        self
     }
 
     /// The same cable over `[from, to]` \[m\] only (anchored at `to`).
@@ -224,6 +240,7 @@ impl Cable {
             }
             Routing::Path(pts) => validate_path(pts, rod_length, from, to)?,
         }
+        non_negative(Quantity::CableFriction, self.friction)?;
         self.tension.validate()
     }
 
@@ -289,10 +306,10 @@ impl Cable {
         quadrature: &GaussLegendre,
         out: &mut [f64],
     ) {
-        for p in rod.pieces() {
+        for (n, p) in rod.pieces().iter().enumerate() {
             let xi = p.strain(q);
             let mut acc = Wrench::zeros();
-            self.for_each_node(p, quadrature, |s, w| {
+            self.for_each_weighted_node(rod, q, n, quadrature, |s, w| {
                 acc += self.wrench_per_tension(&xi, s) * w;
             });
             if acc == Wrench::zeros() {
@@ -303,6 +320,111 @@ impl Cable {
                 *o -= p.basis.column(c).dot(&acc);
             }
         }
+    }
+
+    /// Calls `f(s, w e^{−μφ(s)})` for every quadrature node of piece `n` of
+    /// `rod` at coordinates `q` ([`Cable::for_each_node`]): the weights of
+    /// the cable's force with its tension decayed by friction (D15f). For a
+    /// frictionless cable, exactly [`Cable::for_each_node`]; with friction
+    /// it walks the cable from its entry (O(n)).
+    pub fn for_each_weighted_node(
+        &self,
+        rod: &RodGeometry,
+        q: &[f64],
+        n: usize,
+        quadrature: &GaussLegendre,
+        mut f: impl FnMut(f64, f64),
+    ) {
+        let pieces = rod.pieces();
+        if self.friction == 0.0 {
+            self.for_each_node(&pieces[n], quadrature, f);
+            return;
+        }
+        let mu = self.friction;
+        let mut turn = Turning::default();
+        for (m, p) in pieces.iter().enumerate().take(n + 1) {
+            let xi = p.strain(q);
+            self.walk_piece(p, &xi, quadrature, &mut turn, |s, w, phi| {
+                if m == n {
+                    f(s, w * (-mu * phi).exp());
+                }
+            });
+        }
+    }
+
+    /// The angle the cable's path has turned through from its entry to its
+    /// anchor at `q` \[rad\] (φ of D15f): `T(to) = T e^{−μφ}`.
+    pub fn turning_angle(&self, rod: &RodGeometry, q: &[f64], quadrature: &GaussLegendre) -> f64 {
+        let mut turn = Turning::default();
+        for p in rod.pieces() {
+            let xi = p.strain(q);
+            self.walk_piece(p, &xi, quadrature, &mut turn, |_, _, _| {});
+        }
+        turn.phi
+    }
+
+    /// The nodes of `piece ∩ [from, to]` (as [`Cable::for_each_node`]) with
+    /// the turning angle `φ` there, continuing `turn` from the pieces before.
+    /// Within a sub-interval (a piece between routing knots) the path's
+    /// body-frame tangent `t̂ = v/|v|`, `v = q + k × d + d′`, turns at the rate
+    /// `ρ = |k × t̂ + (I − t̂t̂ᵀ)(k × d′)/|v||` (the world tangent is `R t̂`),
+    /// taken at its Gauss mean over the sub-interval (exact for a constant
+    /// offset, where `ρ` is constant); where `t̂` jumps (a piece boundary or
+    /// a knot of the path) φ grows by the angle of the jump.
+    fn walk_piece(
+        &self,
+        piece: &Piece,
+        xi: &Vec6,
+        quadrature: &GaussLegendre,
+        turn: &mut Turning,
+        mut f: impl FnMut(f64, f64, f64),
+    ) {
+        let (a, b) = match self.span {
+            Span::Whole => (piece.start, piece.end()),
+            Span::Between { from, to } => (piece.start.max(from), piece.end().min(to)),
+        };
+        if b <= a {
+            return;
+        }
+        let (k, qv) = (angular(xi), linear(xi));
+        let mut part = |lo: f64, hi: f64, turn: &mut Turning| {
+            let (d0, dp) = self.offset(lo);
+            let tangent = |d: Vec3| {
+                let v = qv + k.cross(&d) + dp;
+                let n = v.norm();
+                (n > 0.0).then(|| (v / n, n))
+            };
+            if let (Some(prev), Some((t0, _))) = (turn.tangent, tangent(d0)) {
+                turn.phi += prev.cross(&t0).norm().atan2(prev.dot(&t0));
+            }
+            let kd = k.cross(&dp);
+            let (mut mean, mut len) = (0.0, 0.0);
+            for (x, w) in quadrature.on_interval(hi - lo) {
+                if let Some((t, n)) = tangent(d0 + dp * x) {
+                    let tp = (kd - t * t.dot(&kd)) / n;
+                    mean += w * (k.cross(&t) + tp).norm();
+                }
+                len += w;
+            }
+            let rate = if len > 0.0 { mean / len } else { 0.0 };
+            for (x, w) in quadrature.on_interval(hi - lo) {
+                f(lo + x, w, turn.phi + rate * x);
+            }
+            turn.phi += rate * (hi - lo);
+            turn.tangent = tangent(d0 + dp * (hi - lo)).map(|(t, _)| t);
+        };
+        let mut lo = a;
+        for knot in self
+            .routing
+            .points()
+            .iter()
+            .map(|p| p[0])
+            .filter(|&k| k > a && k < b)
+        {
+            part(lo, knot, turn);
+            lo = knot;
+        }
+        part(lo, b, turn);
     }
 
     /// Calls `f(s, w)` for every quadrature node of `piece ∩ [from, to]`, the
@@ -340,6 +462,14 @@ impl Cable {
         }
         rule(lo, b);
     }
+}
+
+/// Where a walk along a cable has got to: the angle turned so far and the
+/// tangent at the end of the last sub-interval.
+#[derive(Default)]
+struct Turning {
+    phi: f64,
+    tangent: Option<Vec3>,
 }
 
 fn validate_path(pts: &[[f64; 3]], length: f64, from: f64, to: f64) -> Result<(), MechanicsError> {

@@ -64,6 +64,8 @@ pub enum Quantity {
     TensionValues,
     /// Value `i` of a tension table.
     TensionValue(usize),
+    /// A cable's friction coefficient along its channel.
+    CableFriction,
     /// Abscissa `s` of a point load.
     LoadPosition,
     /// Component (0 = x, 1 = y, 2 = z) of a point-load force.
@@ -111,6 +113,7 @@ impl fmt::Display for Quantity {
             Quantity::TensionTime(i) => write!(f, "cable tension time {i} [s]"),
             Quantity::TensionValues => f.write_str("cable tension values"),
             Quantity::TensionValue(i) => write!(f, "cable tension value {i} [N]"),
+            Quantity::CableFriction => f.write_str("cable friction coefficient"),
             Quantity::LoadPosition => f.write_str("point load abscissa s [m]"),
             Quantity::Force(c) => write!(f, "point load force {} [N]", axis(c)),
             Quantity::Moment(c) => write!(f, "point load moment {} [N m]", axis(c)),

@@ -300,6 +300,7 @@ fn test_cables() -> Vec<Cable> {
                 [0.33, 0.0, -0.005],
             ]),
             tension: Tension::Constant(1.0),
+            friction: 0.0,
             span: Span::Between {
                 from: 0.04,
                 to: 0.31,
@@ -312,6 +313,7 @@ fn test_cables() -> Vec<Cable> {
                 [0.5, 0.0, -0.008],
             ]),
             tension: Tension::Constant(1.0),
+            friction: 0.0,
             span: Span::Between {
                 from: 0.0,
                 to: 0.45,
@@ -323,6 +325,7 @@ fn test_cables() -> Vec<Cable> {
                 z: -0.004,
             },
             tension: Tension::Constant(1.0),
+            friction: 0.0,
             span: Span::Between { from: 0.1, to: 0.4 },
         },
     ]
@@ -367,6 +370,7 @@ fn cable_straight_rod_sign_check() {
     let c = Cable {
         routing: Routing::Offset { y: 0.01, z: 0.0 },
         tension: Tension::Constant(2.0),
+        friction: 0.0,
         span: Span::Between { from: 0.0, to: L },
     };
     let mut f = vec![0.0; 6];
@@ -560,6 +564,7 @@ fn cable_uniform_strain_equilibrium() {
         let cable = Cable {
             routing: Routing::Offset { y, z },
             tension: Tension::Constant(tension),
+            friction: 0.0,
             span: Span::Between { from: 0.0, to: len },
         };
         cable.add_force_per_tension(&rod, &q, &quad, &mut fc);

@@ -354,6 +354,7 @@ fn tension_tables_interpolate_and_clamp() {
             times: vec![0.0, 1.0, 3.0],
             values: vec![0.0, 2.0, 1.0],
         },
+        friction: 0.0,
         span: Span::Between { from: 0.0, to: 1.0 },
     };
     assert_eq!(c.tension_at(-1.0), 0.0);
@@ -385,6 +386,7 @@ fn path_routing_is_piecewise_linear() {
     let c = Cable {
         routing: Routing::Path(vec![[0.1, 0.01, 0.0], [0.3, 0.0, 0.02]]),
         tension: Tension::Constant(1.0),
+        friction: 0.0,
         span: Span::Between { from: 0.0, to: 0.5 },
     };
     let (d, dp) = c.offset(0.2);

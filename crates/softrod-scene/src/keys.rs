@@ -41,6 +41,7 @@ fn quantity_key(q: Quantity) -> Option<String> {
             return Some(format!("path[{index}][{component}]"));
         }
         Quantity::Tension => "tension",
+        Quantity::CableFriction => "friction",
         Quantity::TensionTimes => "tension.times",
         Quantity::TensionTime(i) => return Some(format!("tension.times[{i}]")),
         Quantity::TensionValues => "tension.values",

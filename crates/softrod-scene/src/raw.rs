@@ -102,6 +102,7 @@ pub(crate) struct RawCable {
     pub tension: toml::Value,
     pub from: Option<f64>,
     pub to: Option<f64>,
+    pub friction: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]

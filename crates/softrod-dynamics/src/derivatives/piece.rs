@@ -275,8 +275,15 @@ pub(crate) fn write_piece(
     let k = piece.basis.dof();
     let o = rm.dof_offset + piece.dof_offset;
     let xi = piece.strain(&q[rm.dofs()]);
-    let (cable_force, cable_hess) =
-        cable_terms(model, rm, piece, &xi, t, scale, work.tensions.as_ref());
+    let (cable_force, cable_hess) = cable_terms(
+        model,
+        rm,
+        (n, &q[rm.dofs()]),
+        &xi,
+        t,
+        scale,
+        work.tensions.as_ref(),
+    );
     let bt_ = bm.transpose();
     let dq6 = bt_ * (diag_q + cable_hess) * bm;
     let dv6 = bt_ * diag_v * bm;

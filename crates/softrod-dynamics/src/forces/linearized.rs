@@ -6,7 +6,6 @@
 use crate::model::data::cable_tension;
 use crate::model::{Model, RodModel};
 use nalgebra::DVector;
-use softrod_kinematics::Piece;
 use softrod_lie::{Mat3, Mat6, Vec6, angular, linear, skew};
 use softrod_mechanics::LoadFrame;
 
@@ -55,12 +54,16 @@ pub(crate) fn has_dead_loads(rm: &RodModel) -> bool {
 /// Cable terms of one piece (D47): the sum over cables of `λT ∫ w ds` with
 /// `w = (d × t̂; t̂)` (the part `+λT ∫ w` of `τ = … − τ_c`), and of
 /// `λT ∫ H P Hᵀ/|v| ds` (its strain derivative), `H = [d̃; I]`,
-/// `P = I − t̂t̂ᵀ`.
+/// `P = I − t̂t̂ᵀ`. A cable with friction weighs each node by its decayed
+/// tension `e^{−μφ(s)}` (D15f) and the decay itself is held fixed (its
+/// derivative through `φ` couples every piece to those before it, which
+/// the O(N) solves do not carry): Newton on such cables converges
+/// linearly, not quadratically.
 #[inline(always)]
 pub(crate) fn cable_terms(
     model: &Model,
     rm: &RodModel,
-    piece: &Piece,
+    (n, q_rod): (usize, &[f64]),
     xi: &Vec6,
     t: f64,
     scale: f64,
@@ -74,7 +77,8 @@ pub(crate) fn cable_terms(
         if tension == 0.0 {
             continue;
         }
-        cable.for_each_node(piece, &model.quadrature, |s, w| {
+        let rod = &rm.spec.geometry;
+        cable.for_each_weighted_node(rod, q_rod, n, &model.quadrature, |s, w| {
             let (d, dp) = cable.offset(s);
             let v = qv + k.cross(&d) + dp;
             let nv = v.norm();

@@ -38,6 +38,7 @@ impl Ctx<'_> {
             routing,
             tension,
             span,
+            friction: c.friction.unwrap_or(0.0),
         };
         cable
             .validate(rods[i].geometry.length())
