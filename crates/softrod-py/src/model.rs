@@ -235,7 +235,9 @@ impl Material {
 /// `path=[(s, y, z), ...]`: piecewise linear along s. `tension` [N] ≥ 0:
 /// a constant, or `(times, values)` piecewise linear in time (held beyond
 /// the ends). `from_`, `to` [m]: the span along the rod (default: the whole
-/// rod). Cable-tension inputs `u` of `Simulation.forward_dynamics`,
+/// rod). `friction`: Coulomb coefficient along the cable's channel (a
+/// pulled cable's tension decays as `T e^{−μφ}`, docs/theory.md D15f).
+/// Cable-tension inputs `u` of `Simulation.forward_dynamics`,
 /// `simulate(controller=…)` and `step` replace the tension given here.
 #[pyclass(frozen, module = "softrod")]
 pub struct Cable {
@@ -243,18 +245,20 @@ pub struct Cable {
     pub(crate) from: f64,
     pub(crate) to: Option<f64>,
     pub(crate) tension: mech::Tension,
+    pub(crate) friction: f64,
 }
 
 #[pymethods]
 impl Cable {
     #[new]
-    #[pyo3(signature = (offset = None, *, path = None, tension = None, from_ = 0.0, to = None))]
+    #[pyo3(signature = (offset = None, *, path = None, tension = None, from_ = 0.0, to = None, friction = 0.0))]
     fn new(
         offset: Option<&Bound<'_, PyAny>>,
         path: Option<&Bound<'_, PyAny>>,
         tension: Option<&Bound<'_, PyAny>>,
         from_: f64,
         to: Option<f64>,
+        friction: f64,
     ) -> PyResult<Self> {
         let routing = match (offset, path) {
             (Some(o), None) => {
@@ -306,6 +310,7 @@ impl Cable {
             from: from_,
             to,
             tension,
+            friction,
         };
         cable
             .mech(end)
@@ -325,8 +330,8 @@ impl Cable {
         };
         let to = self.to.map_or("None".into(), |v| format!("{v:?}"));
         format!(
-            "Cable({routing}, tension={tension}, from_={:?}, to={to})",
-            self.from
+            "Cable({routing}, tension={tension}, from_={:?}, to={to}, friction={:?})",
+            self.from, self.friction
         )
     }
 }
@@ -336,6 +341,7 @@ impl Cable {
     pub(crate) fn mech(&self, length: f64) -> mech::Cable {
         mech::Cable::new(self.routing.clone(), self.tension.clone())
             .between(self.from, self.to.unwrap_or(length))
+            .with_friction(self.friction)
     }
 }
 

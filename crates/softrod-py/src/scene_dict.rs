@@ -220,6 +220,9 @@ pub fn cable_table(c: &crate::model::Cable) -> Table {
     };
     t.insert("tension".into(), tension);
     t.insert("from".into(), Value::Float(c.from));
+    if c.friction != 0.0 {
+        t.insert("friction".into(), Value::Float(c.friction));
+    }
     if let Some(to) = c.to {
         t.insert("to".into(), Value::Float(to));
     }

@@ -85,7 +85,9 @@ class Material:
 @final
 class Cable:
     """A cable through the section: `offset=(y, z)` [m] or `path=[(s, y, z), ...]`,
-    `tension` [N] constant or `(times, values)`, span `from_`..`to` [m]."""
+    `tension` [N] constant or `(times, values)`, span `from_`..`to` [m],
+    `friction` along the channel (a pulled cable's tension decays as
+    `T e^(-friction * turning angle)`)."""
     def __new__(
         cls,
         offset: ArrayLike | None = None,
@@ -94,6 +96,7 @@ class Cable:
         tension: float | tuple[ArrayLike, ArrayLike] | None = None,
         from_: float = 0.0,
         to: float | None = None,
+        friction: float = 0.0,
     ) -> Cable: ...
 
 @final
