@@ -95,6 +95,7 @@
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+pub mod control;
 mod error;
 pub mod limits;
 pub mod record;
@@ -103,6 +104,7 @@ mod simulation;
 pub mod study;
 mod watch;
 
+pub use control::{Actuation, ActuationOptions, Target};
 pub use error::{Error, Result, report};
 pub use limits::Limits;
 pub use record::{Trajectory, TrajectoryRecorder};
