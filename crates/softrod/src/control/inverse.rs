@@ -20,14 +20,17 @@ use softrod_lie::{Mat3, Vec3};
 
 use crate::error::{Error, Result};
 
-/// The default weight `ε` of the effort term `½ ε ‖T‖²` \[m²/N² for unit
-/// target weights\] (IS2): small enough that a target the tensions reach is
-/// reached to well under a micrometre on the arms of the examples (the
-/// optimum moves by about `ε T / σ`, `σ` the section's motion per newton),
-/// large enough to pick the least-effort tensions among equally good ones
-/// (redundant cables, antagonistic pairs). Set it to 0 for a plain
+/// The default relative weight `ρ` of the effort term (IS2): the term is
+/// `½ ε ‖T‖²` with `ε = ρ ‖∂e/∂T‖²_F` at the starting point, so it is
+/// `ρ` of the best-controlled direction whatever the units and stiffness.
+/// Small enough that a reachable target is missed by only about
+/// `ρ σ_max² ‖T‖ / σ_min` (σ the singular values of `∂e/∂T`: 6e-9 m on the
+/// shipped 3-cable example, whose stretch direction has σ_min = 3e-5 m/N);
+/// large enough that the least-effort tensions among equally good ones
+/// (redundant cables, antagonistic pairs) are found to ~1e-7 relative
+/// despite the round-off of forming `JᵀJ`. Set it to 0 for a plain
 /// least-squares fit when the tensions are determined.
-pub const DEFAULT_EFFORT_WEIGHT: f64 = 1e-12;
+pub const DEFAULT_EFFORT_WEIGHT: f64 = 1e-9;
 
 /// What a rod section should reach: a world position, a world orientation,
 /// or both, with a weight.
@@ -78,7 +81,8 @@ pub struct ActuationOptions {
     /// Upper bound of each cable's tension \[N\], model order; `+∞` for
     /// none. Empty: no upper bounds. The lower bound is 0 (a cable pulls).
     pub max_tension: Vec<f64>,
-    /// Weight `ε` of the effort term (IS2), `≥ 0`; [`DEFAULT_EFFORT_WEIGHT`].
+    /// Relative weight `ρ` of the effort term (IS2), `≥ 0`: `ε = ρ ‖∂e/∂T‖²_F`
+    /// at the starting point; [`DEFAULT_EFFORT_WEIGHT`].
     pub effort_weight: f64,
     /// Converged when a full Gauss–Newton step changes no tension by more
     /// than `step_tolerance · (1 + max T)` \[relative\] (IS6).
@@ -179,6 +183,8 @@ pub struct Actuation {
     pub residuals: Vec<TargetResidual>,
     /// `f = ½ Σ w‖e‖² + ½ε‖T‖²` at the solution (IS2).
     pub cost: f64,
+    /// The effort weight `ε` used \[(m or rad)²/N²\] (IS2).
+    pub effort_weight: f64,
     /// `√(Σ w ‖e‖²)`: the weighted target error \[m, rad\].
     pub target_error: f64,
     /// Where each tension is relative to its bounds.
@@ -267,10 +273,7 @@ fn validate(model: &Model, targets: &[Target], options: &ActuationOptions) -> Re
         }
         if let Some(rot) = &t.rotation {
             if rot.iter().any(|v| !v.is_finite()) {
-                return Err(bad(
-                    format!("target[{i}].rotation"),
-                    "must be finite",
-                ));
+                return Err(bad(format!("target[{i}].rotation"), "must be finite"));
             }
             let dev = (rot.transpose() * rot - Matrix3::identity()).amax();
             if dev > 1e-6 || rot.determinant() <= 0.0 {
@@ -338,7 +341,11 @@ fn validate(model: &Model, targets: &[Target], options: &ActuationOptions) -> Re
         if q.len() != model.n_dof() {
             return Err(bad(
                 "initial_q",
-                format!("has {} entries, the model has {} DoF", q.len(), model.n_dof()),
+                format!(
+                    "has {} entries, the model has {} DoF",
+                    q.len(),
+                    model.n_dof()
+                ),
             ));
         }
         if let Some(k) = q.iter().position(|v| !v.is_finite()) {
@@ -369,6 +376,8 @@ struct Solver<'a> {
     work: IdDerivatives,
     zero: Vec<f64>,
     statics_iterations: usize,
+    /// `ε` of IS2, fixed at the first step.
+    eps: f64,
 }
 
 impl<'a> Solver<'a> {
@@ -388,6 +397,7 @@ impl<'a> Solver<'a> {
             work: IdDerivatives::new(model),
             zero: vec![0.0; model.n_dof()],
             statics_iterations: 0,
+            eps: 0.0,
         }
     }
 
@@ -412,7 +422,7 @@ impl<'a> Solver<'a> {
         let r = statics(self.model, data, q0, &opts)?;
         self.statics_iterations += r.iterations;
         let e = self.residuals(data, r.q.as_slice(), None)?;
-        let cost = 0.5 * e.norm_squared() + 0.5 * self.options.effort_weight * t.norm_squared();
+        let cost = 0.5 * e.norm_squared() + 0.5 * self.eps * t.norm_squared();
         Ok(Point { t, q: r.q, e, cost })
     }
 
@@ -454,8 +464,7 @@ impl<'a> Solver<'a> {
                     .copy_from(&(err.scaled_axis() * sw));
                 if let Some(j) = jac.as_deref_mut() {
                     // d log(R R*ᵀ) ≈ ω (world), exact at zero error (IS2).
-                    j.rows_mut(row, 3)
-                        .copy_from(&(js.fixed_rows::<3>(0) * sw));
+                    j.rows_mut(row, 3).copy_from(&(js.fixed_rows::<3>(0) * sw));
                 }
                 row += 3;
             }
@@ -509,10 +518,12 @@ impl<'a> Solver<'a> {
             Some(t) => DVector::from_column_slice(t),
             None => DVector::from_iterator(
                 nc,
-                self.model
-                    .rods()
-                    .iter()
-                    .flat_map(|r| r.spec.cables.iter().map(|c| c.tension_at(self.options.time))),
+                self.model.rods().iter().flat_map(|r| {
+                    r.spec
+                        .cables
+                        .iter()
+                        .map(|c| c.tension_at(self.options.time))
+                }),
             ),
         };
         self.clamp(&mut t0);
@@ -522,7 +533,6 @@ impl<'a> Solver<'a> {
             .clone()
             .unwrap_or_else(|| vec![0.0; self.model.n_dof()]);
         let mut p = self.point(data, t0, &q0)?;
-        let eps = self.options.effort_weight;
         let mut iterations = 0;
         let mut converged = false;
         let mut why = String::new();
@@ -532,6 +542,11 @@ impl<'a> Solver<'a> {
                 why = "the tangent stiffness is singular at the equilibrium (a buckling or limit point)".into();
                 break;
             };
+            if iterations == 1 {
+                self.eps = self.options.effort_weight * j.norm_squared();
+                p.cost = 0.5 * p.e.norm_squared() + 0.5 * self.eps * p.t.norm_squared();
+            }
+            let eps = self.eps;
             // The QP of the linearized problem in the step d (IS4):
             // ½‖e + J d‖² + ½ε‖T + d‖² on lo − T ≤ d ≤ hi − T.
             let mut h = j.transpose() * &j;
@@ -598,7 +613,10 @@ impl<'a> Solver<'a> {
             }
         }
         if !converged && why.is_empty() {
-            why = format!("{} iterations without meeting the step tolerance", iterations);
+            why = format!(
+                "{} iterations without meeting the step tolerance",
+                iterations
+            );
         }
         self.finish(data, p, iterations, converged, why)
     }
@@ -636,7 +654,13 @@ impl<'a> Solver<'a> {
         // polished QP step puts it there exactly).
         let bounds = (0..p.t.len())
             .map(|i| {
-                let tol = 1e-9 * (1.0 + if self.hi[i].is_finite() { self.hi[i] } else { p.t[i] });
+                let tol = 1e-9
+                    * (1.0
+                        + if self.hi[i].is_finite() {
+                            self.hi[i]
+                        } else {
+                            p.t[i]
+                        });
                 if p.t[i] - self.lo[i] <= tol {
                     Bound::Lower
                 } else if self.hi[i] - p.t[i] <= tol {
@@ -681,6 +705,7 @@ impl<'a> Solver<'a> {
             statics_iterations: self.statics_iterations,
             residuals,
             cost: p.cost,
+            effort_weight: self.eps,
             target_error,
             bounds,
             message,
