@@ -490,7 +490,7 @@ impl<'a> Solver<'a> {
         &mut self,
         data: &mut softrod_dynamics::Data,
         p: &Point,
-    ) -> std::result::Result<Option<DMatrix<f64>>, DynamicsError> {
+    ) -> std::result::Result<Option<(DMatrix<f64>, DMatrix<f64>)>, DynamicsError> {
         let w = &mut self.work;
         w.tensions = Some(p.t.clone());
         inverse_dynamics_derivatives_with(
@@ -508,8 +508,8 @@ impl<'a> Solver<'a> {
         };
         let mut jq = DMatrix::zeros(0, 0);
         self.residuals(data, p.q.as_slice(), Some(&mut jq))?;
-        let j = jq * dq_dt;
-        Ok(j.iter().all(|v| v.is_finite()).then_some(j))
+        let j = jq * &dq_dt;
+        Ok(j.iter().all(|v| v.is_finite()).then_some((j, dq_dt)))
     }
 
     fn run(mut self, data: &mut softrod_dynamics::Data) -> Result<Actuation> {
@@ -538,7 +538,7 @@ impl<'a> Solver<'a> {
         let mut why = String::new();
         while iterations < self.options.max_iterations {
             iterations += 1;
-            let Some(j) = self.sensitivity(data, &p)? else {
+            let Some((j, dq_dt)) = self.sensitivity(data, &p)? else {
                 why = "the tangent stiffness is singular at the equilibrium (a buckling or limit point)".into();
                 break;
             };
@@ -582,7 +582,15 @@ impl<'a> Solver<'a> {
             while alpha >= 1e-6 {
                 let mut t = &p.t + &d * alpha;
                 self.clamp(&mut t);
-                match self.point(data, t, p.q.as_slice()) {
+                // The tangent predictor q + (∂q/∂T) ΔT (IS3) leaves the
+                // statics a second-order error to remove.
+                let guess = &p.q + &dq_dt * (&t - &p.t);
+                let start = if guess.iter().all(|v| v.is_finite()) {
+                    guess
+                } else {
+                    p.q.clone()
+                };
+                match self.point(data, t, start.as_slice()) {
                     Ok(trial) if trial.cost <= p.cost + 1e-4 * alpha * slope => {
                         accepted = Some(trial);
                         break;
