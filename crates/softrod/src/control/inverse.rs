@@ -367,6 +367,9 @@ struct Point {
     cost: f64,
 }
 
+/// `(∂e/∂T, ∂q/∂T)` at an equilibrium (IS3).
+type Sensitivity = (DMatrix<f64>, DMatrix<f64>);
+
 struct Solver<'a> {
     model: &'a Model,
     targets: &'a [Target],
@@ -490,7 +493,7 @@ impl<'a> Solver<'a> {
         &mut self,
         data: &mut softrod_dynamics::Data,
         p: &Point,
-    ) -> std::result::Result<Option<(DMatrix<f64>, DMatrix<f64>)>, DynamicsError> {
+    ) -> std::result::Result<Option<Sensitivity>, DynamicsError> {
         let w = &mut self.work;
         w.tensions = Some(p.t.clone());
         inverse_dynamics_derivatives_with(
