@@ -81,7 +81,7 @@ enum Command {
         #[arg(long, requires = "out")]
         png: bool,
     },
-    /// Cable tensions that bring the scene's [[target]] sections to their targets (inverse statics).
+    /// Cable tensions that bring the scene's target sections to their targets (inverse statics).
     #[command(
         long_about = "Inverse statics: the cable tensions within 0 <= T <= max_tension and the \
         static equilibrium that bring the sections of the scene's [[target]] tables closest to \
@@ -92,7 +92,7 @@ enum Command {
         to be so.\n\nExample:\n  softrod inverse examples/cable_arm_inverse.toml --json"
     )]
     Inverse {
-        /// The scene file (TOML), with [[target]] tables.
+        /// The scene file (TOML), with target tables.
         scene: PathBuf,
         /// Print one JSON object (converged, reached, message, tensions, cables, targets,
         /// residual, q, rods) on stdout.
