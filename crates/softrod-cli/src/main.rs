@@ -9,6 +9,7 @@ mod closures;
 mod common;
 mod contact;
 mod inspect;
+mod inverse;
 mod linearize;
 mod npz;
 mod outputs;
@@ -79,6 +80,24 @@ enum Command {
         /// With --out, also write DIR/statics_shape.png (same size; text in a system font).
         #[arg(long, requires = "out")]
         png: bool,
+    },
+    /// Cable tensions that bring the scene's target sections to their targets (inverse statics).
+    #[command(
+        long_about = "Inverse statics: the cable tensions within 0 <= T <= max_tension and the \
+        static equilibrium that bring the sections of the scene's [[target]] tables closest to \
+        their positions and rotations, the least effort among equally close ones \
+        (docs/theory-control.md). Prints the tensions, the reached poses, the residual and \
+        which bounds are active. Exit 2 on bad input, 1 if the iteration did not converge; a \
+        target out of reach is not a failure: the closest reachable shape is printed and said \
+        to be so.\n\nExample:\n  softrod inverse examples/cable_arm_inverse.toml --json"
+    )]
+    Inverse {
+        /// The scene file (TOML), with target tables.
+        scene: PathBuf,
+        /// Print one JSON object (converged, reached, message, tensions, cables, targets,
+        /// residual, q, rods) on stdout.
+        #[arg(long)]
+        json: bool,
     },
     /// Integrate the dynamics; write trajectory.csv, shape.csv, summary.json and SVG plots.
     #[command(
@@ -214,6 +233,7 @@ fn main() -> ExitCode {
             out,
             png,
         } => inspect::modes(&scene, json, count, out, png),
+        Command::Inverse { scene, json } => inverse::inverse(&scene, json),
         Command::View { dir } => run::view(&dir, quiet),
         Command::Linearize { scene, json } => linearize::linearize(&scene, json),
         Command::Report { scene, out, quick } => {

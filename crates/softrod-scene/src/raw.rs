@@ -28,6 +28,8 @@ pub(crate) struct RawScene {
     #[serde(default)]
     pub obstacle: Vec<crate::validate::contact::RawObstacle>,
     pub contact: Option<crate::validate::contact::RawContact>,
+    #[serde(default)]
+    pub target: Vec<crate::validate::targets::RawTarget>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -103,6 +105,8 @@ pub(crate) struct RawCable {
     pub from: Option<f64>,
     pub to: Option<f64>,
     pub friction: Option<f64>,
+    /// Bound of the tension for `softrod inverse` \[N\].
+    pub max_tension: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]

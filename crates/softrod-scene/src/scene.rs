@@ -102,10 +102,45 @@ pub struct Scene {
     pub obstacles: Vec<Obstacle>,
     /// `[contact]` (default: rods touch neither each other nor themselves).
     pub contact: ContactSettings,
+    /// The `[[target]]` tables in file order (for `softrod inverse`; empty:
+    /// none).
+    pub targets: Vec<Target>,
+    /// Each `[[cable]]`'s `max_tension` \[N\] in file order (`None`: no
+    /// upper bound); [`Scene::max_tensions`] in the model's order.
+    pub max_tension: Vec<Option<f64>>,
     pub(crate) origins: Origins,
 }
 
+/// A `[[target]]`: where `softrod inverse` should bring a rod section.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Target {
+    /// The rod's name, as written.
+    pub element: String,
+    /// Its index in [`Scene::rods`] (= in the model).
+    pub rod: usize,
+    /// Arc length of the section \[m\] (default the tip).
+    pub s: f64,
+    /// Wanted world position \[m\].
+    pub position: Option<softrod_lie::Vec3>,
+    /// Wanted orientation, section to world (made exactly orthonormal).
+    pub rotation: Option<softrod_lie::Mat3>,
+    /// Weight of the squared error (default 1).
+    pub weight: f64,
+}
+
 impl Scene {
+    /// The cables' `max_tension` \[N\] in the model's order (rod by rod,
+    /// each rod's cables in file order; `+∞` where none is given), with the
+    /// file index of each (for `cable[j]` in messages).
+    pub fn max_tensions(&self) -> Vec<(usize, f64)> {
+        self.origins
+            .cables
+            .iter()
+            .flatten()
+            .map(|&j| (j, self.max_tension[j].unwrap_or(f64::INFINITY)))
+            .collect()
+    }
+
     /// Reads and validates the scene file at `path`. Messages name the file as
     /// `path.display()`.
     ///

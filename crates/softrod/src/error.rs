@@ -105,6 +105,17 @@ pub enum Error {
         /// The length required.
         expected: usize,
     },
+    /// An inverse-statics problem is ill-posed or unsupported
+    /// ([`crate::control::solve_actuation`]): a target on no rod or outside
+    /// it, a bound below zero, NaN, a closed model.
+    #[error("{key}: {message}")]
+    Actuation {
+        /// The key of the offending input (`target[1].s`,
+        /// `cable[0].max_tension`), as a scene names it.
+        key: String,
+        /// What is wrong.
+        message: String,
+    },
     /// No rod of that name or index.
     #[error("no rod {0}")]
     UnknownRod(String),
@@ -144,6 +155,7 @@ impl Error {
             | Error::TooLarge { .. }
             | Error::SizeMismatch { .. }
             | Error::UnknownRod(_)
+            | Error::Actuation { .. }
             | Error::Mechanics(_)
             | Error::Kinematics(_) => true,
             Error::Dynamics(e) => {

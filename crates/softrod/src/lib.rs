@@ -86,6 +86,8 @@
 //! — a new output quantity or `trajectory.csv` column goes into
 //! [`record::Record`] and [`record::Columns`]), [`study`] (work–precision
 //! studies behind `softrod report`), [`limits`] (memory estimates),
+//! [`control`] (inverse statics: cable tensions for targets,
+//! [`Simulation::solve_actuation`]; docs/theory-control.md IS1–IS7),
 //! [`Settings`] and the energy watch ([`EnergyBalance`]).
 //!
 //! Units are SI; twists and wrenches are 6-vectors, angular part first;
@@ -95,6 +97,7 @@
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+pub mod control;
 mod error;
 pub mod limits;
 pub mod record;
@@ -103,6 +106,7 @@ mod simulation;
 pub mod study;
 mod watch;
 
+pub use control::{Actuation, ActuationOptions, Target};
 pub use error::{Error, Result, report};
 pub use limits::Limits;
 pub use record::{Trajectory, TrajectoryRecorder};

@@ -488,6 +488,21 @@ class Simulation:
         loads: Sequence[tuple[_RodRef, PointLoad]] | None = None,
     ) -> Statics:
         """tensions (n_cables,) [N] replace the schedules, loads are added, for this solve."""
+    def solve_actuation(
+        self,
+        targets: Sequence[dict[str, object]],
+        *,
+        max_tension: float | ArrayLike | None = None,
+        effort_weight: float = 1e-9,
+        reach_tolerance: float = 1e-6,
+        max_iterations: int = 100,
+        warm_start: dict[str, object] | None = None,
+        t: float = 0.0,
+    ) -> dict[str, object]:
+        """Inverse statics: tensions 0 <= T <= max_tension [N] and the equilibrium that bring
+        rod sections closest to targets ({"rod", "s", "position", "rotation", "weight"});
+        returns converged, reached, message, tensions, q, bounds, residual, targets, ...
+        Raises InputError on bad input, SimulationError if it does not converge."""
     def modes(self) -> Modes: ...
     def modes_about(self, q: ArrayLike) -> Modes: ...
     def simulate(

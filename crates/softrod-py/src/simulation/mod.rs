@@ -14,6 +14,7 @@
 //! read. Functions of the configuration alone (actuation, stiffness,
 //! damping, Coriolis) take none.
 
+mod actuation;
 mod analysis;
 mod dynamics;
 mod kinematics;
@@ -782,6 +783,49 @@ impl Simulation {
         loads: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Statics> {
         self.statics_impl(py, tensions, loads)
+    }
+
+    /// Inverse statics (docs/theory-control.md IS1–IS7): the cable tensions
+    /// `0 ≤ T ≤ max_tension` [N] and the static equilibrium that bring rod
+    /// sections closest to `targets`, the least effort among equally close
+    /// ones. `targets`: a list of dicts `{"rod": name or index (default 0),
+    /// "s": arc length [m] (default the tip), "position": (3,) [m, world],
+    /// "rotation": (3, 3) section → world, "weight": > 0 (default 1)}`, each
+    /// with a position, a rotation or both. `max_tension`: one number for
+    /// every cable or one per cable (default none). `effort_weight`: the
+    /// relative weight ρ of the effort term. `warm_start`: a previous result
+    /// (its tensions and q start the search: a target that moved a little
+    /// costs a few iterations). Returns a dict: `converged`, `reached`,
+    /// `message`, `tensions`, `q`, `bounds` ("free", "lower", "upper" per
+    /// cable), `residual` (weighted target error), `targets` (per target:
+    /// reached `position`, `rotation`, `position_error`, `rotation_error`),
+    /// `iterations`, `statics_iterations`, `cost`, `effort_weight`. A target
+    /// out of reach returns the closest reachable shape with `reached`
+    /// False. Bad input raises `softrod.InputError`; an iteration that does
+    /// not converge raises `softrod.SimulationError` with its residual.
+    /// Releases the GIL.
+    #[pyo3(signature = (targets, *, max_tension=None, effort_weight=1e-9, reach_tolerance=1e-6, max_iterations=100, warm_start=None, t=0.0))]
+    #[allow(clippy::too_many_arguments)]
+    fn solve_actuation<'py>(
+        &mut self,
+        py: Python<'py>,
+        targets: &Bound<'py, PyAny>,
+        max_tension: Option<&Bound<'py, PyAny>>,
+        effort_weight: f64,
+        reach_tolerance: f64,
+        max_iterations: usize,
+        warm_start: Option<&Bound<'py, pyo3::types::PyDict>>,
+        t: f64,
+    ) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+        let settings = actuation::Settings {
+            max_tension,
+            effort_weight,
+            reach_tolerance,
+            max_iterations,
+            warm_start,
+            t,
+        };
+        self.solve_actuation_impl(py, targets, settings)
     }
 
     /// Undamped natural modes about the static equilibrium (the rest shape

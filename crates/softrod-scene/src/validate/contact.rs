@@ -209,7 +209,7 @@ impl Ctx<'_> {
     /// matrix written with six decimals passes), then made exactly
     /// orthonormal (the nearest rotation, `U Vᵀ` of its SVD) for the
     /// library, which asks for 1e-9.
-    fn box_rotation(&self, path: &str, r: Option<[[f64; 3]; 3]>) -> Result<Mat3> {
+    pub(super) fn box_rotation(&self, path: &str, r: Option<[[f64; 3]; 3]>) -> Result<Mat3> {
         let Some(r) = r else {
             return Ok(Mat3::identity());
         };

@@ -16,6 +16,7 @@ mod reference;
 mod rods;
 mod run;
 mod start;
+pub(crate) mod targets;
 
 pub use run::MAX_QUADRATURE;
 
@@ -205,10 +206,18 @@ impl Ctx<'_> {
             cables: vec![Vec::new(); rods.len()],
             loads: vec![Vec::new(); rods.len()],
         };
-        for (j, c) in raw.cable.into_iter().enumerate() {
+        let mut max_tension = Vec::with_capacity(raw.cable.len());
+        for (j, mut c) in raw.cable.into_iter().enumerate() {
+            max_tension.push(self.max_tension(j, c.max_tension.take())?);
             let i = self.cable(j, c, &mut rods)?;
             origins.cables[i].push(j);
         }
+        let targets = raw
+            .target
+            .into_iter()
+            .enumerate()
+            .map(|(j, t)| self.target(j, t, &rods, &robot))
+            .collect::<Result<Vec<_>>>()?;
         for (j, l) in raw.load.into_iter().enumerate() {
             if l.body.is_some() {
                 self.body_load(j, l, &mut robot)?;
@@ -233,6 +242,8 @@ impl Ctx<'_> {
             reference,
             obstacles,
             contact,
+            targets,
+            max_tension,
             origins,
         })
     }

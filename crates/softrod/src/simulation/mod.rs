@@ -12,6 +12,7 @@
 //! the first argument, `f(t, q, q̇)` (forward and inverse dynamics, bias
 //! force, drive forces, linearization, a step) and leave the clock alone.
 
+mod actuation;
 mod analysis;
 mod checks;
 mod dynamics;

@@ -1,0 +1,163 @@
+//! `Simulation.solve_actuation`: inverse statics (the facade's
+//! `Simulation::solve_actuation`, docs/theory-control.md IS1–IS7) with
+//! Python targets in and a dict out.
+
+use numpy::PyArrayDyn;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use softrod::control::{ActuationOptions, Target};
+
+use super::{Simulation, rod_index};
+use crate::convert::{array_out, mat3, vec_out, vec3, vector};
+use crate::errors::{guard_detached, input, simulation, to_py};
+
+/// The keyword arguments of `solve_actuation` besides the targets.
+pub(super) struct Settings<'a, 'py> {
+    pub max_tension: Option<&'a Bound<'py, PyAny>>,
+    pub effort_weight: f64,
+    pub reach_tolerance: f64,
+    pub max_iterations: usize,
+    pub warm_start: Option<&'a Bound<'py, PyDict>>,
+    pub t: f64,
+}
+
+impl Simulation {
+    pub(super) fn solve_actuation_impl<'py>(
+        &mut self,
+        py: Python<'py>,
+        targets: &Bound<'py, PyAny>,
+        settings: Settings<'_, 'py>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let model = self.sim.model();
+        let nc = model.n_cables();
+        let list = targets
+            .cast::<PyList>()
+            .map_err(|_| input("targets must be a list of dicts"))?;
+        let mut parsed = Vec::with_capacity(list.len());
+        for (i, item) in list.iter().enumerate() {
+            let key = |k: &str| format!("targets[{i}].{k}");
+            let d = item
+                .cast::<PyDict>()
+                .map_err(|_| input(format!("targets[{i}] must be a dict")))?;
+            for k in d.keys() {
+                let k: String = k.extract()?;
+                if !["rod", "s", "position", "rotation", "weight"].contains(&k.as_str()) {
+                    return Err(input(format!(
+                        "targets[{i}]: unknown key {k:?} (rod, s, position, rotation, weight)"
+                    )));
+                }
+            }
+            let rod = match d.get_item("rod")? {
+                Some(r) => rod_index(model, &r)
+                    .map_err(|e| input(format!("{}: {}", key("rod"), e.value(py))))?,
+                None => 0,
+            };
+            let length = model.rods()[rod].spec.geometry.length();
+            let s = match d.get_item("s")? {
+                Some(v) => v
+                    .extract::<f64>()
+                    .map_err(|_| input(format!("{} must be a number", key("s"))))?,
+                None => length,
+            };
+            let position = match d.get_item("position")? {
+                Some(p) => Some(vec3(&p, &key("position"))?.into()),
+                None => None,
+            };
+            let rotation = match d.get_item("rotation")? {
+                Some(r) => Some(mat3(&r, &key("rotation"))?),
+                None => None,
+            };
+            let weight = match d.get_item("weight")? {
+                Some(w) => w
+                    .extract::<f64>()
+                    .map_err(|_| input(format!("{} must be a number", key("weight"))))?,
+                None => 1.0,
+            };
+            parsed.push(Target {
+                rod,
+                s,
+                position,
+                rotation,
+                weight,
+            });
+        }
+        let max_tension = match settings.max_tension {
+            None => Vec::new(),
+            Some(m) => match m.extract::<f64>() {
+                Ok(v) => vec![v; nc],
+                Err(_) => vector(m, "max_tension", nc)?.slice().to_vec(),
+            },
+        };
+        let (initial_tensions, initial_q) = match settings.warm_start {
+            None => (None, None),
+            Some(w) => {
+                let get = |k: &str, n: usize| -> PyResult<Vec<f64>> {
+                    let v = w.get_item(k)?.ok_or_else(|| {
+                        input(format!("warm_start must be a previous result (no {k:?})"))
+                    })?;
+                    Ok(vector(&v, &format!("warm_start[{k:?}]"), n)?
+                        .slice()
+                        .to_vec())
+                };
+                (Some(get("tensions", nc)?), Some(get("q", model.n_dof())?))
+            }
+        };
+        let options = ActuationOptions {
+            max_tension,
+            effort_weight: settings.effort_weight,
+            reach_tolerance: settings.reach_tolerance,
+            max_iterations: settings.max_iterations,
+            initial_tensions,
+            initial_q,
+            time: settings.t,
+            ..ActuationOptions::default()
+        };
+        // Errors in the library's words, with the Python argument names.
+        let sim = &mut self.sim;
+        let a = guard_detached(py, || {
+            sim.solve_actuation(&parsed, &options).map_err(|e| {
+                let text = e.report().replace("target[", "targets[");
+                if e.is_input() { input(text) } else { to_py(e) }
+            })
+        })?;
+        if !a.converged {
+            return Err(simulation(
+                format!(
+                    "solve_actuation: {} (tensions {:?})",
+                    a.message,
+                    a.tensions.as_slice()
+                ),
+                None,
+            ));
+        }
+        let out = PyDict::new(py);
+        out.set_item("converged", a.converged)?;
+        out.set_item("reached", a.reached)?;
+        out.set_item("message", &a.message)?;
+        out.set_item("tensions", vec_out(py, a.tensions.as_slice()))?;
+        out.set_item("q", vec_out(py, a.q.as_slice()))?;
+        out.set_item("iterations", a.iterations)?;
+        out.set_item("statics_iterations", a.statics_iterations)?;
+        out.set_item("residual", a.target_error)?;
+        out.set_item("cost", a.cost)?;
+        out.set_item("effort_weight", a.effort_weight)?;
+        let bounds: Vec<&str> = a.bounds.iter().map(|b| b.name()).collect();
+        out.set_item("bounds", bounds)?;
+        let per = PyList::empty(py);
+        for r in &a.residuals {
+            let d = PyDict::new(py);
+            d.set_item("position", vec_out(py, r.position.as_slice()))?;
+            let rot: Vec<f64> = (0..3)
+                .flat_map(|i| (0..3).map(move |j| (i, j)))
+                .map(|(i, j)| r.rotation[(i, j)])
+                .collect();
+            let m: Bound<'_, PyArrayDyn<f64>> = array_out(py, rot, &[3, 3])?;
+            d.set_item("rotation", m)?;
+            d.set_item("position_error", r.position_error)?;
+            d.set_item("rotation_error", r.rotation_error)?;
+            per.append(d)?;
+        }
+        out.set_item("targets", per)?;
+        Ok(out)
+    }
+}

@@ -1,0 +1,96 @@
+"""Simulation.solve_actuation (inverse statics, docs/theory-control.md) against the
+constant-curvature law of a cable at constant offset, a forward statics solve, the CLI,
+and its errors."""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+
+import numpy as np
+import pytest
+
+import softrod
+from conftest import EXAMPLES
+
+# A planar arm bending about y only, one cable 8 mm off the centreline along local z.
+PLANAR = """
+[[rod]]
+name = "arm"
+length = 0.5
+pieces = 10
+strains = ["ky"]
+section = { shape = "circle", radius = 0.01 }
+material = { density = 1000.0, young = 1.0e6, poisson = 0.5 }
+[[cable]]
+rod = "arm"
+offset = [0.0, 0.008]
+tension = 0.0
+"""
+EI = 1.0e6 * math.pi * 0.01**4 / 4
+
+
+def arc_tip(kappa: float) -> list[float]:
+    return [math.sin(kappa * 0.5) / kappa, 0.0, -(1 - math.cos(kappa * 0.5)) / kappa]
+
+
+def test_constant_curvature_tension():
+    # kappa = -T d / EI for the moment T d, uniform along the rod.
+    sim = softrod.Simulation.from_toml(PLANAR)
+    kappa = -2.0
+    r = sim.solve_actuation([{"rod": "arm", "position": arc_tip(kappa)}], effort_weight=0.0)
+    want = -kappa * EI / 0.008
+    assert r["converged"] and r["reached"], r["message"]
+    assert abs(r["tensions"][0] - want) < 1e-9 * want
+    assert np.allclose(r["q"], kappa, rtol=1e-9, atol=0)
+    assert r["bounds"] == ["free"]
+
+
+def test_recovers_the_tensions_of_a_forward_solve_and_warm_starts():
+    sim = softrod.Simulation.from_file(EXAMPLES / "cable_arm_inverse.toml")
+    truth = np.array([12.0, 3.0, 7.0])
+    st = sim.statics(tensions=truth)
+    tip = st.tip[:3, 3]
+    r = sim.solve_actuation([{"rod": 0, "position": tip}], max_tension=30.0, effort_weight=0.0)
+    assert r["reached"], r["message"]
+    assert np.allclose(r["tensions"], truth, rtol=0, atol=1e-6)
+    moved = tip + [0.0, 0.001, 0.0]
+    w = sim.solve_actuation([{"position": moved}], max_tension=30.0, warm_start=r)
+    assert w["reached"] and w["iterations"] <= 4, w
+
+
+def test_unreachable_and_bounds():
+    sim = softrod.Simulation.from_toml(PLANAR)
+    r = sim.solve_actuation([{"position": [0.0, 0.0, 0.4]}], max_tension=0.5)
+    assert r["converged"] and not r["reached"]
+    assert r["bounds"] == ["upper"] and r["tensions"][0] == 0.5
+    assert "not reachable" in r["message"]
+
+
+def test_matches_the_cli(softrod_bin):
+    path = EXAMPLES / "cable_arm_inverse.toml"
+    out = subprocess.run([softrod_bin, "inverse", str(path), "--json"], capture_output=True, text=True, check=True)
+    cli = json.loads(out.stdout)
+    sim = softrod.Simulation.from_file(path)
+    r = sim.solve_actuation([{"rod": "arm", "s": 0.5, "position": [0.497, 0.02, -0.03]}], max_tension=30.0)
+    assert np.allclose(r["tensions"], cli["tensions"], rtol=1e-12, atol=0)
+
+
+@pytest.mark.parametrize(
+    "targets, kwargs, words",
+    [
+        ([{"rod": "hand", "position": [0, 0, 0]}], {}, "targets[0].rod"),
+        ([{"s": 0.7, "position": [0, 0, 0]}], {}, "targets[0].s"),
+        ([{"position": [0, math.nan, 0]}], {}, "targets[0].position[1]"),
+        ([{"position": [0, 0, 0], "weight": 0.0}], {}, "targets[0].weight"),
+        ([{"position": [0, 0, 0]}], {"max_tension": -1.0}, "max_tension"),
+        ([{"position": [0, 0, 0]}], {"max_tension": math.nan}, "max_tension"),
+        ([{"spot": [0, 0, 0]}], {}, "unknown key"),
+        ([], {}, "no targets"),
+    ],
+)
+def test_bad_input_raises(targets, kwargs, words):
+    sim = softrod.Simulation.from_toml(PLANAR)
+    with pytest.raises(softrod.InputError, match=__import__("re").escape(words)):
+        sim.solve_actuation(targets, **kwargs)

@@ -1,0 +1,729 @@
+//! Inverse statics: cable tensions for targets (docs/theory-control.md
+//! IS1–IS7).
+//!
+//! The equilibrium `r(q, T) = τ_s(q) − B(q) T = 0` (IS1) defines `q(T)`
+//! wherever its tangent stiffness `K_t = ∂r/∂q` is regular, with
+//! `∂q/∂T = K_t⁻¹ B` (IS3, the implicit function theorem; `B = −∂ℓ/∂q` the
+//! actuation matrix, D15). The tensions minimize
+//! `f(T) = ½ Σ_i w_i ‖e_i(q(T))‖² + ½ ε ‖T‖²` on the box `0 ≤ T ≤ T_max`
+//! (IS2) by projected Gauss–Newton: each step solves the bounded QP of the
+//! linearized residuals (IS4, [`super::qp`]), then re-solves the statics at
+//! the trial tensions from the last equilibrium and backtracks until `f`
+//! decreases enough (IS5).
+
+use nalgebra::{DMatrix, DVector, Matrix3, Rotation3};
+use softrod_dynamics::{
+    DynamicsError, Forces, IdDerivatives, Model, StaticsOptions, actuation_matrix,
+    inverse_dynamics_derivatives_with, section_jacobian, statics,
+};
+use softrod_lie::{Mat3, Vec3};
+
+use crate::error::{Error, Result};
+
+/// The default relative weight `ρ` of the effort term (IS2): the term is
+/// `½ ε ‖T‖²` with `ε = ρ ‖∂e/∂T‖²_F` at the starting point, so it is
+/// `ρ` of the best-controlled direction whatever the units and stiffness.
+/// Small enough that a reachable target is missed by only about
+/// `ρ σ_max² ‖T‖ / σ_min` (σ the singular values of `∂e/∂T`: 6e-9 m on the
+/// shipped 3-cable example, whose stretch direction has σ_min = 3e-5 m/N);
+/// large enough that the least-effort tensions among equally good ones
+/// (redundant cables, antagonistic pairs) are found to ~1e-7 relative
+/// despite the round-off of forming `JᵀJ`. Set it to 0 for a plain
+/// least-squares fit when the tensions are determined.
+pub const DEFAULT_EFFORT_WEIGHT: f64 = 1e-9;
+
+/// What a rod section should reach: a world position, a world orientation,
+/// or both, with a weight.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Target {
+    /// The rod's index in [`Model::rods`].
+    pub rod: usize,
+    /// Arc length of the section \[m\], in `[0, L]`.
+    pub s: f64,
+    /// The section's wanted world position \[m\], if any.
+    pub position: Option<Vec3>,
+    /// The section's wanted orientation (maps the section frame to the
+    /// world, like `Pose::rotation`), if any.
+    pub rotation: Option<Mat3>,
+    /// Weight `w` of the target's squared error (position in m, rotation
+    /// angle in rad): `> 0`, finite.
+    pub weight: f64,
+}
+
+impl Target {
+    /// A position target of weight 1.
+    pub fn position(rod: usize, s: f64, position: [f64; 3]) -> Self {
+        Self {
+            rod,
+            s,
+            position: Some(Vec3::from(position)),
+            rotation: None,
+            weight: 1.0,
+        }
+    }
+
+    /// The same target with an orientation too.
+    pub fn with_rotation(mut self, rotation: Mat3) -> Self {
+        self.rotation = Some(rotation);
+        self
+    }
+
+    /// The same target with weight `w`.
+    pub fn with_weight(mut self, w: f64) -> Self {
+        self.weight = w;
+        self
+    }
+}
+
+/// Settings of [`solve_actuation`].
+#[derive(Clone, Debug)]
+pub struct ActuationOptions {
+    /// Upper bound of each cable's tension \[N\], model order; `+∞` for
+    /// none. Empty: no upper bounds. The lower bound is 0 (a cable pulls).
+    pub max_tension: Vec<f64>,
+    /// Relative weight `ρ` of the effort term (IS2), `≥ 0`: `ε = ρ ‖∂e/∂T‖²_F`
+    /// at the starting point; [`DEFAULT_EFFORT_WEIGHT`].
+    pub effort_weight: f64,
+    /// Converged when a full Gauss–Newton step changes no tension by more
+    /// than `step_tolerance · (1 + max T)` \[relative\] (IS6).
+    pub step_tolerance: f64,
+    /// A target counts as reached when its weighted error `√w ‖e‖` is at
+    /// most this \[m or rad\]; converged solutions with a larger error are
+    /// the closest reachable shape, and say so.
+    pub reach_tolerance: f64,
+    /// Gauss–Newton iterations at most.
+    pub max_iterations: usize,
+    /// Warm start: tensions to start from (clipped to the bounds); default
+    /// the tensions the model's cables have at `time` (clipped).
+    pub initial_tensions: Option<Vec<f64>>,
+    /// Warm start: the equilibrium at `initial_tensions` or near it; default
+    /// the rest shape.
+    pub initial_q: Option<Vec<f64>>,
+    /// Time of the prescribed joints (held at rest) \[s\].
+    pub time: f64,
+}
+
+impl Default for ActuationOptions {
+    fn default() -> Self {
+        Self {
+            max_tension: Vec::new(),
+            effort_weight: DEFAULT_EFFORT_WEIGHT,
+            step_tolerance: 1e-10,
+            reach_tolerance: 1e-6,
+            max_iterations: 100,
+            initial_tensions: None,
+            initial_q: None,
+            time: 0.0,
+        }
+    }
+}
+
+impl ActuationOptions {
+    /// These options warm-started from a previous solution (a target that
+    /// moved a little costs a few iterations).
+    pub fn warm_start(mut self, previous: &Actuation) -> Self {
+        self.initial_tensions = Some(previous.tensions.as_slice().to_vec());
+        self.initial_q = Some(previous.q.as_slice().to_vec());
+        self
+    }
+}
+
+/// Where a tension ended relative to its bounds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Bound {
+    /// Strictly inside.
+    Free,
+    /// At 0 (the cable would have to push to do better).
+    Lower,
+    /// At its `max_tension`.
+    Upper,
+}
+
+impl Bound {
+    /// `"free"`, `"lower"`, `"upper"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Bound::Free => "free",
+            Bound::Lower => "lower",
+            Bound::Upper => "upper",
+        }
+    }
+}
+
+/// How far one target is from where the solution puts its section.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TargetResidual {
+    /// The section's world position at the solution \[m\].
+    pub position: Vec3,
+    /// Its orientation (section to world).
+    pub rotation: Mat3,
+    /// `‖p − p*‖` \[m\] (0 without a position target).
+    pub position_error: f64,
+    /// Angle of `R R*ᵀ` \[rad\] (0 without an orientation target).
+    pub rotation_error: f64,
+}
+
+/// The result of [`solve_actuation`].
+#[derive(Clone, Debug)]
+pub struct Actuation {
+    /// Whether the iteration met its tolerance (IS6). When `false` the
+    /// tensions and shape are the last iterate, not a solution.
+    pub converged: bool,
+    /// Whether every target is reached within `reach_tolerance`.
+    pub reached: bool,
+    /// Cable tensions \[N\], model order.
+    pub tensions: DVector<f64>,
+    /// The equilibrium at these tensions (n_dof).
+    pub q: DVector<f64>,
+    /// Gauss–Newton iterations.
+    pub iterations: usize,
+    /// Newton iterations of the statics solves, all together.
+    pub statics_iterations: usize,
+    /// One per target, in order.
+    pub residuals: Vec<TargetResidual>,
+    /// `f = ½ Σ w‖e‖² + ½ε‖T‖²` at the solution (IS2).
+    pub cost: f64,
+    /// The effort weight `ε` used \[(m or rad)²/N²\] (IS2).
+    pub effort_weight: f64,
+    /// `√(Σ w ‖e‖²)`: the weighted target error \[m, rad\].
+    pub target_error: f64,
+    /// Where each tension is relative to its bounds.
+    pub bounds: Vec<Bound>,
+    /// One sentence: reached, closest reachable shape, or why not converged.
+    pub message: String,
+}
+
+/// Cable tensions within `0 ≤ T ≤ max_tension` and the equilibrium they
+/// hold that bring the sections of `targets` closest to them, the least
+/// effort among equally close ones (IS1–IS7). `data`'s cable inputs are
+/// left as they were.
+///
+/// Refused (an input error naming the key): no targets, no cables, a
+/// target on a rod that does not exist or outside `[0, L]`, a non-finite
+/// or non-orthonormal target, a weight not positive, `max_tension` of the
+/// wrong length, negative or NaN, a closed model (its statics has closure
+/// forces the implicit-function step does not yet carry; IS7). A statics
+/// failure at the starting tensions is an error; later ones shorten the
+/// step. Not converging within `max_iterations` is `converged: false`
+/// with the residual, never an error.
+pub fn solve_actuation(
+    model: &Model,
+    data: &mut softrod_dynamics::Data,
+    targets: &[Target],
+    options: &ActuationOptions,
+) -> Result<Actuation> {
+    validate(model, targets, options)?;
+    let saved = data.cable_tensions().map(<[f64]>::to_vec);
+    let out = Solver::new(model, targets, options).run(data);
+    data.set_cable_tensions(model, saved.as_deref())?;
+    out
+}
+
+fn bad(key: impl Into<String>, message: impl Into<String>) -> Error {
+    Error::Actuation {
+        key: key.into(),
+        message: message.into(),
+    }
+}
+
+fn validate(model: &Model, targets: &[Target], options: &ActuationOptions) -> Result<()> {
+    if model.has_closures() {
+        return Err(bad(
+            "closure",
+            "inverse statics of closed models is not supported yet (docs/theory-control.md IS7)",
+        ));
+    }
+    let nc = model.n_cables();
+    if nc == 0 {
+        return Err(bad("cable", "the model has no cables to solve for"));
+    }
+    if targets.is_empty() {
+        return Err(bad("target", "no targets given"));
+    }
+    let rods = model.rods();
+    for (i, t) in targets.iter().enumerate() {
+        let Some(r) = rods.get(t.rod) else {
+            return Err(bad(
+                format!("target[{i}].element"),
+                format!("no rod {} (the model has {})", t.rod, rods.len()),
+            ));
+        };
+        let len = r.spec.geometry.length();
+        // The rod's length is a sum of piece lengths: its nominal length
+        // may exceed it by round-off.
+        if !(t.s.is_finite() && (0.0..=len * (1.0 + 1e-12)).contains(&t.s)) {
+            return Err(bad(
+                format!("target[{i}].s"),
+                format!("must be in [0, {len}] (rod {:?}), got {}", r.spec.name, t.s),
+            ));
+        }
+        if t.position.is_none() && t.rotation.is_none() {
+            return Err(bad(
+                format!("target[{i}]"),
+                "needs a position, a rotation or both",
+            ));
+        }
+        if let Some(p) = &t.position
+            && let Some(k) = p.iter().position(|v| !v.is_finite())
+        {
+            return Err(bad(
+                format!("target[{i}].position[{k}]"),
+                format!("must be finite, got {}", p[k]),
+            ));
+        }
+        if let Some(rot) = &t.rotation {
+            if rot.iter().any(|v| !v.is_finite()) {
+                return Err(bad(format!("target[{i}].rotation"), "must be finite"));
+            }
+            let dev = (rot.transpose() * rot - Matrix3::identity()).amax();
+            if dev > 1e-6 || rot.determinant() <= 0.0 {
+                return Err(bad(
+                    format!("target[{i}].rotation"),
+                    format!(
+                        "must be a rotation matrix (RᵀR = I to 1e-6, det R = 1); RᵀR − I is off by {dev:.1e}"
+                    ),
+                ));
+            }
+        }
+        if !(t.weight.is_finite() && t.weight > 0.0) {
+            return Err(bad(
+                format!("target[{i}].weight"),
+                format!("must be positive and finite, got {}", t.weight),
+            ));
+        }
+    }
+    if !options.max_tension.is_empty() && options.max_tension.len() != nc {
+        return Err(bad(
+            "max_tension",
+            format!(
+                "has {} entries, the model has {nc} cables",
+                options.max_tension.len()
+            ),
+        ));
+    }
+    for (c, m) in options.max_tension.iter().enumerate() {
+        if m.is_nan() || *m < 0.0 {
+            return Err(bad(
+                format!("cable[{c}].max_tension"),
+                format!("must be ≥ 0, got {m}"),
+            ));
+        }
+    }
+    if !(options.effort_weight.is_finite() && options.effort_weight >= 0.0) {
+        return Err(bad(
+            "effort_weight",
+            format!("must be ≥ 0 and finite, got {}", options.effort_weight),
+        ));
+    }
+    for (key, v) in [
+        ("step_tolerance", options.step_tolerance),
+        ("reach_tolerance", options.reach_tolerance),
+    ] {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(bad(key, format!("must be positive and finite, got {v}")));
+        }
+    }
+    if let Some(t) = &options.initial_tensions {
+        if t.len() != nc {
+            return Err(bad(
+                "initial_tensions",
+                format!("has {} entries, the model has {nc} cables", t.len()),
+            ));
+        }
+        if let Some(k) = t.iter().position(|v| !v.is_finite()) {
+            return Err(bad(
+                format!("initial_tensions[{k}]"),
+                format!("must be finite, got {}", t[k]),
+            ));
+        }
+    }
+    if let Some(q) = &options.initial_q {
+        if q.len() != model.n_dof() {
+            return Err(bad(
+                "initial_q",
+                format!(
+                    "has {} entries, the model has {} DoF",
+                    q.len(),
+                    model.n_dof()
+                ),
+            ));
+        }
+        if let Some(k) = q.iter().position(|v| !v.is_finite()) {
+            return Err(bad(
+                format!("initial_q[{k}]"),
+                format!("must be finite, got {}", q[k]),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// An equilibrium and what the step needs of it.
+struct Point {
+    t: DVector<f64>,
+    q: DVector<f64>,
+    /// Weighted residuals `√w e` (IS2), stacked.
+    e: DVector<f64>,
+    cost: f64,
+}
+
+/// `(∂e/∂T, ∂q/∂T)` at an equilibrium (IS3).
+type Sensitivity = (DMatrix<f64>, DMatrix<f64>);
+
+struct Solver<'a> {
+    model: &'a Model,
+    targets: &'a [Target],
+    options: &'a ActuationOptions,
+    lo: Vec<f64>,
+    hi: Vec<f64>,
+    work: IdDerivatives,
+    zero: Vec<f64>,
+    statics_iterations: usize,
+    /// `ε` of IS2, fixed at the first step.
+    eps: f64,
+}
+
+impl<'a> Solver<'a> {
+    fn new(model: &'a Model, targets: &'a [Target], options: &'a ActuationOptions) -> Self {
+        let nc = model.n_cables();
+        let hi = if options.max_tension.is_empty() {
+            vec![f64::INFINITY; nc]
+        } else {
+            options.max_tension.clone()
+        };
+        Self {
+            model,
+            targets,
+            options,
+            lo: vec![0.0; nc],
+            hi,
+            work: IdDerivatives::new(model),
+            zero: vec![0.0; model.n_dof()],
+            statics_iterations: 0,
+            eps: 0.0,
+        }
+    }
+
+    fn clamp(&self, t: &mut DVector<f64>) {
+        for (i, v) in t.iter_mut().enumerate() {
+            *v = v.clamp(self.lo[i], self.hi[i]);
+        }
+    }
+
+    /// The equilibrium at tensions `t` from `q0` (IS1) and its residuals.
+    fn point(
+        &mut self,
+        data: &mut softrod_dynamics::Data,
+        t: DVector<f64>,
+        q0: &[f64],
+    ) -> std::result::Result<Point, DynamicsError> {
+        data.set_cable_tensions(self.model, Some(t.as_slice()))?;
+        let opts = StaticsOptions {
+            time: self.options.time,
+            ..StaticsOptions::default()
+        };
+        let r = statics(self.model, data, q0, &opts)?;
+        self.statics_iterations += r.iterations;
+        let e = self.residuals(data, r.q.as_slice(), None)?;
+        let cost = 0.5 * e.norm_squared() + 0.5 * self.eps * t.norm_squared();
+        Ok(Point { t, q: r.q, e, cost })
+    }
+
+    /// The stacked weighted residuals at `q` (IS2) and, with `jac`, their
+    /// Jacobian with respect to `q` (rows as the residuals, n_dof columns).
+    fn residuals(
+        &self,
+        data: &mut softrod_dynamics::Data,
+        q: &[f64],
+        mut jac: Option<&mut DMatrix<f64>>,
+    ) -> std::result::Result<DVector<f64>, DynamicsError> {
+        let rows = self.rows();
+        let mut e = DVector::zeros(rows);
+        if let Some(j) = jac.as_deref_mut() {
+            *j = DMatrix::zeros(rows, self.model.n_dof());
+        }
+        self.model.set_time(data, self.options.time);
+        let mut row = 0;
+        for tg in self.targets {
+            let (g, js) = section_jacobian(self.model, data, q, tg.rod, self.abscissa(tg))?;
+            let sw = tg.weight.sqrt();
+            if let Some(p) = &tg.position {
+                let d = g.translation - p;
+                e.fixed_rows_mut::<3>(row).copy_from(&(d * sw));
+                if let Some(j) = jac.as_deref_mut() {
+                    // The world point's velocity: v_o + ω × p = J_v − [p]× J_ω
+                    // (spatial twist, D11).
+                    let px = skew(&g.translation);
+                    let jw = js.fixed_rows::<3>(0);
+                    let jv = js.fixed_rows::<3>(3);
+                    let jp = (jv - px * jw) * sw;
+                    j.rows_mut(row, 3).copy_from(&jp);
+                }
+                row += 3;
+            }
+            if let Some(rs) = &tg.rotation {
+                let err = Rotation3::from_matrix_unchecked(g.rotation * rs.transpose());
+                e.fixed_rows_mut::<3>(row)
+                    .copy_from(&(err.scaled_axis() * sw));
+                if let Some(j) = jac.as_deref_mut() {
+                    // d log(R R*ᵀ) ≈ ω (world), exact at zero error (IS2).
+                    j.rows_mut(row, 3).copy_from(&(js.fixed_rows::<3>(0) * sw));
+                }
+                row += 3;
+            }
+        }
+        Ok(e)
+    }
+
+    /// The target's `s` inside the rod (a nominal tip `s = L` may exceed
+    /// the summed piece lengths by round-off).
+    fn abscissa(&self, tg: &Target) -> f64 {
+        tg.s.min(self.model.rods()[tg.rod].spec.geometry.length())
+    }
+
+    fn rows(&self) -> usize {
+        self.targets
+            .iter()
+            .map(|t| 3 * usize::from(t.position.is_some()) + 3 * usize::from(t.rotation.is_some()))
+            .sum()
+    }
+
+    /// `∂e/∂T = (∂e/∂q) K_t⁻¹ B` at the equilibrium `p` (IS3).
+    fn sensitivity(
+        &mut self,
+        data: &mut softrod_dynamics::Data,
+        p: &Point,
+    ) -> std::result::Result<Option<Sensitivity>, DynamicsError> {
+        let w = &mut self.work;
+        w.tensions = Some(p.t.clone());
+        inverse_dynamics_derivatives_with(
+            self.model,
+            w,
+            Forces::at_rest(1.0),
+            self.options.time,
+            p.q.as_slice(),
+            &self.zero,
+            &self.zero,
+        )?;
+        let b = actuation_matrix(self.model, p.q.as_slice())?;
+        let Some(dq_dt) = w.dtau_dq.clone().lu().solve(&b) else {
+            return Ok(None);
+        };
+        let mut jq = DMatrix::zeros(0, 0);
+        self.residuals(data, p.q.as_slice(), Some(&mut jq))?;
+        let j = jq * &dq_dt;
+        Ok(j.iter().all(|v| v.is_finite()).then_some((j, dq_dt)))
+    }
+
+    fn run(mut self, data: &mut softrod_dynamics::Data) -> Result<Actuation> {
+        let nc = self.model.n_cables();
+        let mut t0 = match &self.options.initial_tensions {
+            Some(t) => DVector::from_column_slice(t),
+            None => DVector::from_iterator(
+                nc,
+                self.model.rods().iter().flat_map(|r| {
+                    r.spec
+                        .cables
+                        .iter()
+                        .map(|c| c.tension_at(self.options.time))
+                }),
+            ),
+        };
+        self.clamp(&mut t0);
+        let q0 = self
+            .options
+            .initial_q
+            .clone()
+            .unwrap_or_else(|| vec![0.0; self.model.n_dof()]);
+        let mut p = self.point(data, t0, &q0)?;
+        let mut iterations = 0;
+        let mut converged = false;
+        let mut why = String::new();
+        while iterations < self.options.max_iterations {
+            iterations += 1;
+            let Some((j, dq_dt)) = self.sensitivity(data, &p)? else {
+                why = "the tangent stiffness is singular at the equilibrium (a buckling or limit point)".into();
+                break;
+            };
+            if iterations == 1 {
+                self.eps = self.options.effort_weight * j.norm_squared();
+                p.cost = 0.5 * p.e.norm_squared() + 0.5 * self.eps * p.t.norm_squared();
+            }
+            let eps = self.eps;
+            // The QP of the linearized problem in the step d (IS4):
+            // ½‖e + J d‖² + ½ε‖T + d‖² on lo − T ≤ d ≤ hi − T.
+            let mut h = j.transpose() * &j;
+            for i in 0..nc {
+                h[(i, i)] += eps;
+            }
+            let g = j.transpose() * &p.e + &p.t * eps;
+            let lo: Vec<f64> = (0..nc).map(|i| self.lo[i] - p.t[i]).collect();
+            let hi: Vec<f64> = (0..nc).map(|i| self.hi[i] - p.t[i]).collect();
+            // A singular H (a cable that moves no target, ε = 0) has many
+            // minimizers; a whisker of the effort term picks the smallest
+            // step among them without moving a determined one measurably.
+            let tiny = 1e-14 * h.diagonal().amax().max(f64::MIN_POSITIVE);
+            for i in 0..nc {
+                h[(i, i)] += tiny;
+            }
+            let d = match super::qp::bounded_qp(&h, &g, &lo, &hi) {
+                Ok(d) => d,
+                Err(e) => {
+                    why = e;
+                    break;
+                }
+            };
+            let tmax = p.t.amax();
+            if d.amax() <= self.options.step_tolerance * (1.0 + tmax) {
+                converged = true;
+                break;
+            }
+            // Backtracking on f with the statics re-solved (IS5).
+            let slope = g.dot(&d);
+            let mut alpha = 1.0;
+            let mut accepted = None;
+            while alpha >= 1e-6 {
+                let mut t = &p.t + &d * alpha;
+                self.clamp(&mut t);
+                // The tangent predictor q + (∂q/∂T) ΔT (IS3) leaves the
+                // statics a second-order error to remove.
+                let guess = &p.q + &dq_dt * (&t - &p.t);
+                let start = if guess.iter().all(|v| v.is_finite()) {
+                    guess
+                } else {
+                    p.q.clone()
+                };
+                match self.point(data, t, start.as_slice()) {
+                    Ok(trial) if trial.cost <= p.cost + 1e-4 * alpha * slope => {
+                        accepted = Some(trial);
+                        break;
+                    }
+                    Ok(_) | Err(DynamicsError::StaticsFailed { .. }) => alpha *= 0.5,
+                    Err(e) => return Err(e.into()),
+                }
+            }
+            let Some(next) = accepted else {
+                // No decrease along a descent direction: f is flat to
+                // round-off there, which is the optimum when the predicted
+                // decrease is itself at round-off.
+                if -slope <= 1e-12 * p.cost.max(f64::MIN_POSITIVE) + f64::MIN_POSITIVE {
+                    converged = true;
+                } else {
+                    why = format!(
+                        "the line search found no decrease (predicted {:.3e})",
+                        -slope
+                    );
+                }
+                break;
+            };
+            let small = (&next.t - &p.t).amax() <= self.options.step_tolerance * (1.0 + tmax);
+            p = next;
+            if small {
+                converged = true;
+                break;
+            }
+        }
+        if !converged && why.is_empty() {
+            why = format!(
+                "{} iterations without meeting the step tolerance",
+                iterations
+            );
+        }
+        self.finish(data, p, iterations, converged, why)
+    }
+
+    fn finish(
+        &self,
+        data: &mut softrod_dynamics::Data,
+        p: Point,
+        iterations: usize,
+        converged: bool,
+        why: String,
+    ) -> Result<Actuation> {
+        self.model.set_time(data, self.options.time);
+        let mut residuals = Vec::with_capacity(self.targets.len());
+        let mut reached = true;
+        for tg in self.targets {
+            let (g, _) =
+                section_jacobian(self.model, data, p.q.as_slice(), tg.rod, self.abscissa(tg))?;
+            let position_error = tg.position.map_or(0.0, |x| (g.translation - x).norm());
+            let rotation_error = tg.rotation.map_or(0.0, |r| {
+                Rotation3::from_matrix_unchecked(g.rotation * r.transpose()).angle()
+            });
+            let sw = tg.weight.sqrt();
+            if sw * position_error.max(rotation_error) > self.options.reach_tolerance {
+                reached = false;
+            }
+            residuals.push(TargetResidual {
+                position: g.translation,
+                rotation: g.rotation,
+                position_error,
+                rotation_error,
+            });
+        }
+        // A tension within 1e-9 of its range of a bound is at it (the
+        // polished QP step puts it there exactly).
+        let bounds = (0..p.t.len())
+            .map(|i| {
+                let tol = 1e-9
+                    * (1.0
+                        + if self.hi[i].is_finite() {
+                            self.hi[i]
+                        } else {
+                            p.t[i]
+                        });
+                if p.t[i] - self.lo[i] <= tol {
+                    Bound::Lower
+                } else if self.hi[i] - p.t[i] <= tol {
+                    Bound::Upper
+                } else {
+                    Bound::Free
+                }
+            })
+            .collect::<Vec<_>>();
+        let target_error = p.e.norm();
+        let message = if !converged {
+            format!(
+                "not converged: {why}; weighted target error {target_error:.3e} at the last iterate"
+            )
+        } else if reached {
+            format!(
+                "every target reached (weighted error {target_error:.3e} ≤ reach_tolerance {:e})",
+                self.options.reach_tolerance
+            )
+        } else {
+            let held: Vec<String> = bounds
+                .iter()
+                .enumerate()
+                .filter(|(_, b)| **b != Bound::Free)
+                .map(|(i, b)| format!("cable {i} at its {} bound", b.name()))
+                .collect();
+            format!(
+                "target not reachable: the closest reachable shape has weighted error {target_error:.3e}{}",
+                if held.is_empty() {
+                    String::new()
+                } else {
+                    format!(" ({})", held.join(", "))
+                }
+            )
+        };
+        Ok(Actuation {
+            converged,
+            reached: converged && reached,
+            tensions: p.t,
+            q: p.q,
+            iterations,
+            statics_iterations: self.statics_iterations,
+            residuals,
+            cost: p.cost,
+            effort_weight: self.eps,
+            target_error,
+            bounds,
+            message,
+        })
+    }
+}
+
+fn skew(p: &Vec3) -> Mat3 {
+    Mat3::new(0.0, -p.z, p.y, p.z, 0.0, -p.x, -p.y, p.x, 0.0)
+}
