@@ -25,6 +25,7 @@
 
 pub(crate) mod chain;
 pub(crate) mod contact;
+pub(crate) mod pairs;
 pub(crate) mod frames;
 pub(crate) mod planar;
 pub(crate) mod shifted;
