@@ -321,7 +321,11 @@ fn crossing_rods_example_reports_the_pair() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let text = std::fs::read_to_string(out.join("contacts.csv")).unwrap();
-    let rows: Vec<Vec<&str>> = text.lines().skip(1).map(|l| l.split(',').collect()).collect();
+    let rows: Vec<Vec<&str>> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
     assert!(!rows.is_empty(), "the rods never touched");
     for f in &rows {
         assert_eq!((f[1], f[3]), ("upper", "lower"), "{f:?}");
@@ -349,7 +353,10 @@ fn overlapping_rods_exit_2_and_write_nothing() {
     let scene = dir.join("o.toml");
     std::fs::write(
         &scene,
-        text.replace("position = [0.0, 0.0, 0.0205]", "position = [0.0, 0.0, 0.015]"),
+        text.replace(
+            "position = [0.0, 0.0, 0.0205]",
+            "position = [0.0, 0.0, 0.015]",
+        ),
     )
     .unwrap();
     let out = dir.join("out");

@@ -8,8 +8,8 @@
 
 use nalgebra::DVector;
 use softrod_dynamics::{
-    Attachment, Data, Joint, JointKind, DynamicsError, FdDerivatives, Model, Rod, StaticsOptions, commit_contact,
-    forward_dynamics, forward_dynamics_derivatives, statics,
+    Attachment, Data, DynamicsError, FdDerivatives, Joint, JointKind, Model, Rod, StaticsOptions,
+    commit_contact, forward_dynamics, forward_dynamics_derivatives, statics,
 };
 use softrod_kinematics::Strain;
 use softrod_lie::{Pose, Vec3, Vec6, exp_twist};
@@ -85,7 +85,10 @@ fn crossing_rods_touch_between_their_contact_points() {
         assert!((c.s - sa).abs() < 1e-9, "s_a {} vs {sa}", c.s);
         assert!((s_b - sb).abs() < 1e-9, "s_b {s_b} vs {sb}");
         assert!((c.gap + overlap).abs() < 1e-12, "gap {}", c.gap);
-        assert!((c.normal + Vec3::z()).norm() < 1e-12, "normal from upper to lower");
+        assert!(
+            (c.normal + Vec3::z()).norm() < 1e-12,
+            "normal from upper to lower"
+        );
         assert!(c.force.z < 0.0, "pushes the lower rod down");
         assert!((c.point - Vec3::new(sa, 0.0, r)).norm() < 1e-12);
     }
@@ -249,7 +252,11 @@ fn an_initial_overlap_of_two_rods_names_both() {
             .rod(rod("left", Pose::identity()))
             .rod(rod(
                 "right",
-                placed(Vec3::z(), 0.5 * std::f64::consts::PI, Vec3::new(0.1, -0.2, z)),
+                placed(
+                    Vec3::z(),
+                    0.5 * std::f64::consts::PI,
+                    Vec3::new(0.1, -0.2, z),
+                ),
             ))
             .build()
             .unwrap()

@@ -36,7 +36,11 @@ fn centre_of_mass(sim: &Simulation, rod: &str, q: &[f64]) -> Vec3 {
         } else {
             2.0
         };
-        sum += sim.pose(rod, L * i as f64 / n as f64, q).unwrap().translation * w;
+        sum += sim
+            .pose(rod, L * i as f64 / n as f64, q)
+            .unwrap()
+            .translation
+            * w;
     }
     sum / (3.0 * n as f64)
 }
@@ -61,12 +65,18 @@ fn colliding_free_rods_keep_their_momentum_and_gain_no_energy() {
             .strains([Strain::Ky, Strain::Kz])
             .base(base)
             .circle(R)
-            .material(material.clone())
+            .material(material)
     };
-    let turn = exp_twist(1.0, &Vec6::new(0.0, 0.0, 0.5 * std::f64::consts::PI, 0.0, 0.0, 0.0));
+    let turn = exp_twist(
+        1.0,
+        &Vec6::new(0.0, 0.0, 0.5 * std::f64::consts::PI, 0.0, 0.0, 0.0),
+    );
     let free = || Attachment::world_joint(Joint::new(JointKind::Free));
     let model = Model::builder()
-        .rod_on(rod("lower", Pose::new(Mat3::identity(), Vec3::zeros())), free())
+        .rod_on(
+            rod("lower", Pose::new(Mat3::identity(), Vec3::zeros())),
+            free(),
+        )
         .rod_on(
             rod(
                 "upper",
@@ -116,13 +126,19 @@ fn colliding_free_rods_keep_their_momentum_and_gain_no_energy() {
     let mut worst_drift: f64 = 0.0;
     for (t, q, qd) in &keep.0 {
         let drift = (com(&sim, q) - c0 - velocity * *t).norm();
-        assert!(drift < 1e-6, "centre of mass off its line by {drift:.3e} m at t = {t}");
+        assert!(
+            drift < 1e-6,
+            "centre of mass off its line by {drift:.3e} m at t = {t}"
+        );
         let et = e(&mut sim, q, qd);
         // Kinetic and elastic only: during the impact the penalty holds the
         // rest, so this sum is below the total; the allowance is the
         // integration error of the run's tolerances (rtol 1e-7 over ~50
         // steps through the stiff contact).
-        assert!(et <= e0 * (1.0 + 1e-5), "energy gained at t = {t}: {et} > {e0}");
+        assert!(
+            et <= e0 * (1.0 + 1e-5),
+            "energy gained at t = {t}: {et} > {e0}"
+        );
         worst_drift = worst_drift.max(drift);
         let contacts = sim.model().contacts(*t, q, qd).unwrap();
         touched |= !contacts.is_empty();

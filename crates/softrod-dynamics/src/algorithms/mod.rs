@@ -25,8 +25,8 @@
 
 pub(crate) mod chain;
 pub(crate) mod contact;
-pub(crate) mod pairs;
 pub(crate) mod frames;
+pub(crate) mod pairs;
 pub(crate) mod planar;
 pub(crate) mod shifted;
 pub(crate) mod tree;

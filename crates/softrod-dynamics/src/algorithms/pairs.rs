@@ -240,7 +240,10 @@ fn narrowphase(
     ask: Ask,
 ) {
     let (pa, pb) = (&pw.points[ba.rod], &pw.points[bb.rod]);
-    let (sa_, sb_) = (&model.contact.samples[ba.rod], &model.contact.samples[bb.rod]);
+    let (sa_, sb_) = (
+        &model.contact.samples[ba.rod],
+        &model.contact.samples[bb.rod],
+    );
     let (t, u) = closest_on_segments(&pa[ba.seg], &pa[ba.seg + 1], &pb[bb.seg], &pb[bb.seg + 1]);
     let mut sa = sa_[ba.seg].s + t * (sa_[ba.seg + 1].s - sa_[ba.seg].s);
     let mut sb = sb_[bb.seg].s + u * (sb_[bb.seg + 1].s - sb_[bb.seg].s);
@@ -259,10 +262,7 @@ fn narrowphase(
         let (ga, gb) = (w.dot(&ta), -w.dot(&tb));
         let det = haa * hbb - hab * hab;
         let (mut da, mut db) = if det > 1e-10 * haa * hbb {
-            (
-                (-ga * hbb + gb * hab) / det,
-                (-gb * haa + ga * hab) / det,
-            )
+            ((-ga * hbb + gb * hab) / det, (-gb * haa + ga * hab) / det)
         } else {
             // Parallel arcs: the closest point of a to b's point.
             (-ga / haa, 0.0)
@@ -322,11 +322,7 @@ fn narrowphase(
     } else {
         Mat3::zeros()
     };
-    let dist = Distance {
-        d,
-        normal,
-        hessian,
-    };
+    let dist = Distance { d, normal, hessian };
     let law = pair_law(model, a, sa, b, sb, ra.min(rb), ask.friction);
     let stretch = if law.mu > 0.0 {
         pw.anchors

@@ -10,9 +10,9 @@ use crate::error::DynamicsError;
 use crate::forces::Forces;
 use crate::model::Model;
 use crate::model::contact::{Active, ContactWork};
+use crate::model::data::Data;
 use crate::model::pairs::{PairAnchor, radius_at};
 use softrod_lie::Vec3;
-use crate::model::data::Data;
 use softrod_mechanics::contact::{ContactPoint, Contactee};
 
 /// A contact penetrating deeper than this fraction of the rod's radius

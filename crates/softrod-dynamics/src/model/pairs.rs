@@ -28,16 +28,23 @@ pub(crate) fn exclusion(ra: f64, rb: f64) -> f64 {
 pub(crate) fn radius_at(model: &Model, rod: usize, s: f64) -> f64 {
     let spec = &model.rods[rod].spec;
     let length = spec.geometry.length();
-    spec.contact_radius.unwrap_or_else(|| {
-        contact_radius(spec.properties.section(), s.clamp(0.0, length), length)
-    })
+    spec.contact_radius
+        .unwrap_or_else(|| contact_radius(spec.properties.section(), s.clamp(0.0, length), length))
 }
 
 /// Whether the points `(a, sa)` and `(b, sb)` may touch (CT9): different
 /// rods with `rods` on, except a child rod's base against its parent rod
 /// near the attachment; the same rod with `self` on, farther apart along
 /// it than [`exclusion`].
-pub(crate) fn may_touch(model: &Model, a: usize, sa: f64, b: usize, sb: f64, ra: f64, rb: f64) -> bool {
+pub(crate) fn may_touch(
+    model: &Model,
+    a: usize,
+    sa: f64,
+    b: usize,
+    sb: f64,
+    ra: f64,
+    rb: f64,
+) -> bool {
     let settings = &model.contact.settings;
     let reach = exclusion(ra, rb);
     if a == b {
@@ -128,7 +135,10 @@ impl PairWork {
         let samples = &model.contact.samples;
         let n_seg: usize = samples.iter().map(|s| s.len().saturating_sub(1)).sum();
         Some(Self {
-            points: samples.iter().map(|s| vec![Vec3::zeros(); s.len()]).collect(),
+            points: samples
+                .iter()
+                .map(|s| vec![Vec3::zeros(); s.len()])
+                .collect(),
             arcs: samples
                 .iter()
                 .map(|s| vec![0.0; s.len().saturating_sub(1)])
@@ -161,7 +171,10 @@ mod tests {
         Rod::builder(0.4)
             .name(name)
             .pieces(20)
-            .base(Pose::new(softrod_lie::Mat3::identity(), Vec3::new(0.0, y, 0.0)))
+            .base(Pose::new(
+                softrod_lie::Mat3::identity(),
+                Vec3::new(0.0, y, 0.0),
+            ))
             .circle(0.01)
             .material(material)
             .build()
