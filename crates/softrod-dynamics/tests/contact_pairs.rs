@@ -375,3 +375,100 @@ fn pair_jacobians_match_central_differences() {
         eprintln!("friction {friction}, tree {tree}: worst relative column error {worst:.3e}");
     }
 }
+
+/// A cantilever coiled into a helix by a dead tip moment `M` tilted by φ
+/// from the bending axis: without contact the turns of the helix of
+/// Kirchhoff's constant-moment solution (radius `EI cos φ/M`, pitch
+/// `2π EI sin φ/M`, here one radius) pass through each other; with self
+/// contact statics stops them touching. Checked by brute force over the
+/// centreline (points `π(r_a + r_b)/2` or more apart along the rod), not
+/// by the code's closest points: without contact the surfaces overlap by
+/// about a radius, with it by no more than the penalty's penetration.
+#[test]
+fn a_coiled_rod_stops_at_its_own_surface() {
+    use softrod_mechanics::{LoadFrame, PointLoad};
+    let (r, l): (f64, f64) = (0.01, 0.5);
+    let ei = silicone().young() * std::f64::consts::PI * r.powi(4) / 4.0;
+    let turns = 1.3;
+    let m = turns * 2.0 * std::f64::consts::PI * ei / l;
+    let pitch = r;
+    let sin_phi = pitch * m / (2.0 * std::f64::consts::PI * ei);
+    let phi = sin_phi.asin();
+    let build = |self_contact: bool| {
+        Model::builder()
+            .rod(
+                Rod::builder(l)
+                    .pieces(24)
+                    .strains([Strain::Kx, Strain::Ky, Strain::Kz])
+                    .circle(r)
+                    .material(silicone())
+                    .point_load(PointLoad {
+                        s: l,
+                        force: Vec3::zeros(),
+                        moment: Vec3::new(m * sin_phi, 0.0, m * phi.cos()),
+                        frame: LoadFrame::World,
+                    }),
+            )
+            .build()
+            .unwrap()
+            .with_contact(
+                Vec::new(),
+                ContactSettings {
+                    self_contact,
+                    ..Default::default()
+                },
+            )
+            .unwrap()
+    };
+    // The smallest surface distance between points at least the exclusion
+    // apart, over 400 points of the centreline.
+    let closest = |model: &Model, q: &[f64]| {
+        let n = 400;
+        let mut data = Data::new(model);
+        let pts: Vec<(f64, Vec3)> = (0..=n)
+            .map(|i| {
+                let s = l * i as f64 / n as f64;
+                let (pose, _) =
+                    softrod_dynamics::section_jacobian(model, &mut data, q, 0, s).unwrap();
+                (s, pose.translation)
+            })
+            .collect();
+        let reach = 0.5 * std::f64::consts::PI * 2.0 * r;
+        let mut best = f64::INFINITY;
+        for (i, (si, pi)) in pts.iter().enumerate() {
+            for (sj, pj) in &pts[i + 1..] {
+                if sj - si >= reach {
+                    best = best.min((pi - pj).norm() - 2.0 * r);
+                }
+            }
+        }
+        best
+    };
+    let options = StaticsOptions::default();
+    let free = build(false);
+    let mut data = Data::new(&free);
+    let rest = vec![0.0; free.n_dof()];
+    let q_free = statics(&free, &mut data, &rest, &options).unwrap().q;
+    let through = closest(&free, q_free.as_slice());
+    eprintln!("without contact: surfaces {through:.3e} m apart");
+    assert!(
+        through < -0.5 * r,
+        "the coil should pass through itself: {through}"
+    );
+    let touching = build(true);
+    let mut data = Data::new(&touching);
+    let res = statics(&touching, &mut data, &rest, &options).unwrap();
+    let q = res.q.as_slice();
+    let gap = closest(&touching, q);
+    let contacts = touching.contacts(0.0, q, &vec![0.0; q.len()]).unwrap();
+    let deepest = touching.max_penetration(0.0, q).unwrap();
+    eprintln!(
+        "with self contact: surfaces {gap:.3e} m apart, {} contacts, deepest {deepest:.3e} m",
+        contacts.len()
+    );
+    assert!(!contacts.is_empty());
+    // Sampling at 1.25 mm can miss the closest points by at most the
+    // sagitta-like error (1.25 mm)²/(8 ρ) ≈ 5e-6 m, far below r.
+    assert!(gap > -deepest - 1e-5 && gap < 0.05 * r, "{gap}");
+    assert!(deepest < 0.1 * r, "{deepest}");
+}
