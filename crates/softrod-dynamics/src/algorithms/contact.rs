@@ -6,6 +6,7 @@
 //! parents and the bodies that carry obstacles).
 
 use super::frames::{RowBlock, add_frame_columns, frame_state};
+use super::pairs::Search;
 use super::tree::outward;
 use super::{Motion, Pass};
 use crate::forces::Forces;
@@ -159,7 +160,7 @@ pub(crate) fn evaluate(
         }
     }
     if work.pairs.is_some() {
-        super::pairs::evaluate_pairs(model, data, work, q, qd, ask);
+        super::pairs::evaluate_pairs(model, data, work, q, qd, ask, Search::All);
         let pairs = work.pairs.as_ref().expect("pair work");
         work.tau += &pairs.tau;
     }
@@ -181,8 +182,8 @@ fn update_chain(model: &Model, work: &mut ContactWork, q: &[f64], qd: Option<&[f
 }
 
 /// Rod–rod contact alone at `(q, q̇)` into the pair work's `tau` (the
-/// central differences of its Jacobian on the chain, CT11). Nothing
-/// without rod–rod contact.
+/// central differences of its Jacobian on the chain, CT11), looking at
+/// the pairs `search` names. Nothing without rod–rod contact.
 pub(crate) fn evaluate_pairs_only(
     model: &Model,
     data: &mut Data,
@@ -190,6 +191,7 @@ pub(crate) fn evaluate_pairs_only(
     q: &[f64],
     qd: Option<&[f64]>,
     ask: Ask,
+    search: Search,
 ) {
     if work.pairs.is_none() {
         return;
@@ -207,7 +209,7 @@ pub(crate) fn evaluate_pairs_only(
             );
         }
     }
-    super::pairs::evaluate_pairs(model, data, work, q, qd, ask);
+    super::pairs::evaluate_pairs(model, data, work, q, qd, ask, search);
 }
 
 /// The force at one touching point, pushed onto `work.active`; `None` if

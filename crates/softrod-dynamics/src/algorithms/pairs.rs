@@ -93,6 +93,28 @@ impl Sections<'_> {
     }
 }
 
+/// Which pairs an evaluation looks at.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Search {
+    /// All: the broadphase over every segment.
+    All,
+    /// Only the segment pairs that seeded the pairs touching when
+    /// [`seed_differences`] was called (the central differences of CT11:
+    /// a pair that does not touch there adds nothing to the Jacobian).
+    Seeded,
+}
+
+/// Keeps the seeds of the pairs touching now for [`Search::Seeded`].
+pub(crate) fn seed_differences(work: &mut ContactWork) {
+    if let Some(pw) = work.pairs.as_mut() {
+        let PairWork {
+            active, fd_seeds, ..
+        } = &mut **pw;
+        fd_seeds.clear();
+        fd_seeds.extend(active.iter().map(|c| c.seeds));
+    }
+}
+
 /// The touching pairs at `(q, q̇)` and their generalized force into
 /// `pairs.tau` (`pairs.active` lists them). The chain's kinematics in
 /// `work.kin`, or the tree's node data in `data`, must be this state's.
@@ -103,6 +125,7 @@ pub(crate) fn evaluate_pairs(
     q: &[f64],
     qd: Option<&[f64]>,
     ask: Ask,
+    search: Search,
 ) {
     let Some(mut pw) = work.pairs.take() else {
         return;
@@ -110,7 +133,25 @@ pub(crate) fn evaluate_pairs(
     pw.active.clear();
     pw.tau.fill(0.0);
     pw.narrow_tests = 0;
-    {
+    if search == Search::Seeded {
+        let sec = Sections {
+            model,
+            data,
+            work,
+            q,
+            qd,
+        };
+        for k in 0..pw.fd_seeds.len() {
+            let (ba, bb) = pw.fd_seeds[k];
+            for b in [ba, bb] {
+                let smp = &model.contact.samples[b.rod];
+                for i in [b.seg, b.seg + 1] {
+                    pw.points[b.rod][i] = sec.at(b.rod, smp[i].s, false).pose.translation;
+                }
+            }
+            narrowphase(model, &sec, &mut pw, &ba, &bb, ask);
+        }
+    } else {
         let sec = Sections {
             model,
             data,
@@ -353,6 +394,7 @@ fn narrowphase(
         sticking: cf.sticking,
         radius_a: ra,
         k: law.k,
+        seeds: (*ba, *bb),
     });
 }
 

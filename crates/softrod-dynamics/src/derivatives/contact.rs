@@ -9,6 +9,7 @@
 
 use crate::algorithms::contact::{Ask, evaluate_pairs_only};
 use crate::algorithms::contact_force;
+use crate::algorithms::pairs::{Search, seed_differences};
 use crate::forces::Forces;
 use crate::model::Model;
 use crate::model::contact::ContactWork;
@@ -124,7 +125,8 @@ fn chain(
 
 /// Central differences of the rod–rod part of `τ_c` on a chain model
 /// (CT11): `2 n_dof` pair evaluations each for `q` and `q̇`, relative
-/// steps `1e-6` and `1e-4`, in the pair work's buffers. Zero without touching pairs: the
+/// steps `1e-6` and `1e-4`, in the pair work's buffers — each only of the
+/// segment pairs that seeded the touching pairs (no broadphase). Zero without touching pairs: the
 /// penalty is C¹ with `φ'(0) = 0`, so a pair about to touch adds nothing.
 #[allow(clippy::too_many_arguments)]
 fn pairs_by_differences(
@@ -141,6 +143,7 @@ fn pairs_by_differences(
         return;
     };
     let n = model.n_dof();
+    seed_differences(work);
     let mut x = std::mem::take(&mut work.pairs.as_mut().expect("pair work").scratch);
     for pass in 0..2 {
         let base = if pass == 0 { q } else { qd };
@@ -154,7 +157,7 @@ fn pairs_by_differences(
             for sign in [1.0, -1.0] {
                 x[l] = base[l] + sign * h;
                 let (qq, vv) = if pass == 0 { (&x[..], qd) } else { (q, &x[..]) };
-                evaluate_pairs_only(model, data, work, qq, Some(vv), ask);
+                evaluate_pairs_only(model, data, work, qq, Some(vv), ask, Search::Seeded);
                 let tau = &work.pairs.as_ref().expect("pair work").tau;
                 if sign > 0.0 {
                     work.tau_total.copy_from(tau);
@@ -169,7 +172,7 @@ fn pairs_by_differences(
         }
     }
     // Leave the kinematics and the pairs of (q, q̇) behind.
-    evaluate_pairs_only(model, data, work, q, Some(qd), ask);
+    evaluate_pairs_only(model, data, work, q, Some(qd), ask, Search::All);
     work.pairs.as_mut().expect("pair work").scratch = x;
 }
 

@@ -87,6 +87,8 @@ pub(crate) struct PairActive {
     /// Surface radius of `a` at `sa`, the stiffness of the pair's law.
     pub radius_a: f64,
     pub k: f64,
+    /// The two segments whose closest points seeded it.
+    pub seeds: (SegmentBox, SegmentBox),
 }
 
 /// The friction anchor of a touching pair (CT10): the material points
@@ -121,6 +123,9 @@ pub(crate) struct PairWork {
     pub next: Vec<PairAnchor>,
     /// Coordinates of the central differences (n_dof).
     pub scratch: Vec<f64>,
+    /// The seeds of the pairs touching at the state the central
+    /// differences start from: they re-evaluate only those (CT11).
+    pub fd_seeds: Vec<(SegmentBox, SegmentBox)>,
     /// Per segment pair tested, the evaluations of the last call (for the
     /// cost checks of the tests).
     pub narrow_tests: usize,
@@ -149,6 +154,7 @@ impl PairWork {
             anchors: Vec::with_capacity(64),
             next: Vec::with_capacity(64),
             scratch: vec![0.0; model.n_dof()],
+            fd_seeds: Vec::with_capacity(64),
             narrow_tests: 0,
         })
     }
