@@ -4,6 +4,7 @@
 //!
 //! Regenerate (numbers in docs/performance.md, section "softrod-dynamics"):
 //! `cargo bench -p softrod-benches --bench dynamics -- --warm-up-time 1 --measurement-time 2`
+//! (`rod_contact`: two crossing rods with rod–rod contact, docs/theory-contact.md).
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use softrod_dynamics::{
@@ -268,5 +269,82 @@ fn bench_dynamics(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench_dynamics);
+/// Two 20-piece rods (Ky, Kz; r = 1 cm, L = 0.4 m) crossing at 1.2 rad,
+/// pressed together 0.5 mm at the start, at rest: the forward dynamics
+/// with `[contact] rods` (broadphase, closest points, the pair's force and
+/// its generalized force, docs/theory-contact.md CT7–CT8) against the same
+/// model without contact, and the contact Jacobian (central differences of
+/// the pair, CT11) within the forward-dynamics derivatives.
+fn bench_rod_contact(c: &mut Criterion) {
+    use softrod_lie::{Mat3, exp_twist};
+    use softrod_mechanics::contact::ContactSettings;
+    let rod = |name: &str, base: Pose| {
+        let material = Material::builder()
+            .density(1000.0)
+            .young(1e6)
+            .poisson(0.5)
+            .build()
+            .unwrap();
+        Rod::builder(0.4)
+            .name(name)
+            .pieces(20)
+            .strains([Strain::Ky, Strain::Kz])
+            .base(base)
+            .circle(0.01)
+            .material(material)
+    };
+    let turn = exp_twist(1.0, &softrod_lie::Vec6::new(0.0, 0.0, 1.2, 0.0, 0.0, 0.0)).rotation;
+    let build = |contact: bool| {
+        let m = Model::builder()
+            .rod(rod("a", Pose::new(Mat3::identity(), Vec3::zeros())))
+            .rod(rod("b", Pose::new(turn, Vec3::new(0.2, -0.15, 0.0195))))
+            .gravity([0.0, 0.0, -9.81])
+            .build()
+            .unwrap();
+        if contact {
+            m.with_contact(
+                Vec::new(),
+                ContactSettings {
+                    rods: true,
+                    ..Default::default()
+                },
+            )
+            .unwrap()
+        } else {
+            m
+        }
+    };
+    let mut g = c.benchmark_group("rod_contact");
+    for (name, contact) in [
+        ("forward_dynamics_without", false),
+        ("forward_dynamics", true),
+    ] {
+        let m = build(contact);
+        let mut data = Data::new(&m);
+        let q = vec![0.0; m.n_dof()];
+        g.bench_function(name, |b| {
+            b.iter(|| forward_dynamics(&m, &mut data, 0.0, black_box(&q), &q, None).unwrap()[0])
+        });
+    }
+    for (name, contact) in [
+        ("forward_dynamics_derivatives_without", false),
+        ("forward_dynamics_derivatives", true),
+    ] {
+        let m = build(contact);
+        let mut data = Data::new(&m);
+        let mut work = FdDerivatives::new(&m);
+        let q = vec![0.0; m.n_dof()];
+        assert_eq!(m.contacts(0.0, &q, &q).unwrap().len(), usize::from(contact));
+        g.bench_function(name, |b| {
+            b.iter(|| {
+                forward_dynamics_derivatives(&m, &mut data, &mut work, 0.0, black_box(&q), &q, None)
+                    .unwrap()
+                    .dqdd_dq[(0, 0)]
+            })
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench_dynamics, bench_rod_contact);
 criterion_main!(benches);

@@ -301,3 +301,81 @@ fn initial_overlap_exits_2_and_writes_nothing() {
     );
     assert!(!out.exists());
 }
+
+/// examples/crossing_rods.toml: `run` writes the pair to contacts.csv
+/// with the other rod's name and arc length (`b`, `b_s`), where the upper
+/// rod passes over the lower (upper's s ≈ 0.3 m, lower's ≈ 0.1 m), its
+/// force never pulling the upper rod down; `statics --json` lists the same
+/// pair.
+#[test]
+fn crossing_rods_example_reports_the_pair() {
+    let dir = tmp("crossing");
+    let scene = common::examples().join("crossing_rods.toml");
+    let out = dir.join("out");
+    let o = run(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(out.join("contacts.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    assert!(!rows.is_empty(), "the rods never touched");
+    for f in &rows {
+        assert_eq!((f[1], f[3]), ("upper", "lower"), "{f:?}");
+        let (s, b_s): (f64, f64) = (f[2].parse().unwrap(), f[4].parse().unwrap());
+        assert!((s - 0.3).abs() < 0.01 && (b_s - 0.1).abs() < 0.01, "{f:?}");
+        // Never pulling (zero while an opening contact's damping would).
+        let fz: f64 = f[14].parse().unwrap();
+        assert!(fz >= 0.0, "{f:?}");
+    }
+    let o = run(&["statics", scene.to_str().unwrap(), "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let contacts = v["contacts"].as_array().expect("contacts");
+    assert_eq!(contacts.len(), 1, "{v}");
+    assert_eq!(contacts[0]["b"], "lower");
+    assert!((contacts[0]["b_s"].as_f64().unwrap() - 0.1).abs() < 0.01);
+}
+
+/// Two rods that start overlapping: exit 2 naming both rods, both arc
+/// lengths and the depth; nothing written.
+#[test]
+fn overlapping_rods_exit_2_and_write_nothing() {
+    let dir = tmp("rods_overlap");
+    let text = std::fs::read_to_string(common::examples().join("crossing_rods.toml")).unwrap();
+    let scene = dir.join("o.toml");
+    std::fs::write(
+        &scene,
+        text.replace(
+            "position = [0.0, 0.0, 0.0205]",
+            "position = [0.0, 0.0, 0.015]",
+        ),
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let o = run(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("'upper'")
+            && err.contains("'lower'")
+            && err.contains("s = 0.300000")
+            && err.contains("s = 0.100000")
+            && err.contains("5.000e-3"),
+        "{err}"
+    );
+    assert!(!out.exists());
+}

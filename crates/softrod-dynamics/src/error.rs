@@ -409,7 +409,7 @@ pub enum DynamicsError {
         rod: RodId,
         /// Arc length on it \[m\].
         s: f64,
-        /// What it overlaps: `obstacle 'name'` or `rod 'name' at s = …`.
+        /// What it overlaps: `obstacle 'name'` or `rod 'name' (its s = … m)`.
         other: String,
         /// Penetration depth \[m\].
         depth: f64,

@@ -6,6 +6,7 @@
 //! parents and the bodies that carry obstacles).
 
 use super::frames::{RowBlock, add_frame_columns, frame_state};
+use super::pairs::Search;
 use super::tree::outward;
 use super::{Motion, Pass};
 use crate::forces::Forces;
@@ -136,11 +137,14 @@ pub(crate) fn evaluate(
 ) {
     work.active.clear();
     work.tau.fill(0.0);
-    if model.contact.obstacles.is_empty() {
-        return;
-    }
+    let obstacles = !model.contact.obstacles.is_empty();
     match &model.tree {
-        None => evaluate_chain(model, work, q, qd, ask),
+        None => {
+            update_chain(model, work, q, qd);
+            if obstacles {
+                evaluate_chain(model, work, qd, ask);
+            }
+        }
         Some(tree) => {
             outward(
                 model,
@@ -150,9 +154,62 @@ pub(crate) fn evaluate(
                 Pass::Inverse,
                 Forces::ALL,
             );
-            evaluate_tree(model, data, work, q, qd, ask);
+            if obstacles {
+                evaluate_tree(model, data, work, q, qd, ask);
+            }
         }
     }
+    if work.pairs.is_some() {
+        super::pairs::evaluate_pairs(model, data, work, q, qd, ask, Search::All);
+        let pairs = work.pairs.as_ref().expect("pair work");
+        work.tau += &pairs.tau;
+    }
+}
+
+/// The rods' kinematics at `(q, q̇)` into `work.kin` (chain models).
+fn update_chain(model: &Model, work: &mut ContactWork, q: &[f64], qd: Option<&[f64]>) {
+    for (r, rm) in model.rods.iter().enumerate() {
+        let dofs = rm.dofs();
+        work.kin[r]
+            .update(
+                &rm.spec.geometry,
+                &q[dofs.clone()],
+                qd.map(|v| &v[dofs.clone()]),
+                None,
+            )
+            .expect("checked coordinates");
+    }
+}
+
+/// Rod–rod contact alone at `(q, q̇)` into the pair work's `tau` (the
+/// central differences of its Jacobian on the chain, CT11), looking at
+/// the pairs `search` names. Nothing without rod–rod contact.
+pub(crate) fn evaluate_pairs_only(
+    model: &Model,
+    data: &mut Data,
+    work: &mut ContactWork,
+    q: &[f64],
+    qd: Option<&[f64]>,
+    ask: Ask,
+    search: Search,
+) {
+    if work.pairs.is_none() {
+        return;
+    }
+    match &model.tree {
+        None => update_chain(model, work, q, qd),
+        Some(tree) => {
+            outward(
+                model,
+                tree,
+                data,
+                Motion::new(q, qd, None),
+                Pass::Inverse,
+                Forces::ALL,
+            );
+        }
+    }
+    super::pairs::evaluate_pairs(model, data, work, q, qd, ask, search);
 }
 
 /// The force at one touching point, pushed onto `work.active`; `None` if
@@ -198,14 +255,10 @@ fn touch(
     true
 }
 
-fn evaluate_chain(model: &Model, work: &mut ContactWork, q: &[f64], qd: Option<&[f64]>, ask: Ask) {
+fn evaluate_chain(model: &Model, work: &mut ContactWork, qd: Option<&[f64]>, ask: Ask) {
     let world = Pose::identity();
     for (r, rm) in model.rods.iter().enumerate() {
         let g = &rm.spec.geometry;
-        let dofs = rm.dofs();
-        work.kin[r]
-            .update(g, &q[dofs.clone()], qd.map(|v| &v[dofs.clone()]), None)
-            .expect("checked coordinates");
         for (i, smp) in model.contact.samples[r].iter().enumerate() {
             let p = work.kin[r]
                 .pose_at(g, smp.s)
@@ -311,7 +364,7 @@ fn evaluate_tree(
 
 /// The velocity of the world point `p` of a frame with spatial twist
 /// `twist` (angular first, velocity of the point at the origin).
-fn point_velocity(twist: &softrod_lie::Vec6, p: &Vec3) -> Vec3 {
+pub(crate) fn point_velocity(twist: &softrod_lie::Vec6, p: &Vec3) -> Vec3 {
     let w = Vec3::new(twist[0], twist[1], twist[2]);
     let v = Vec3::new(twist[3], twist[4], twist[5]);
     v + w.cross(p)

@@ -26,6 +26,7 @@
 pub(crate) mod chain;
 pub(crate) mod contact;
 pub(crate) mod frames;
+pub(crate) mod pairs;
 pub(crate) mod planar;
 pub(crate) mod shifted;
 pub(crate) mod tree;

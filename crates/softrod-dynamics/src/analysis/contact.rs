@@ -4,12 +4,15 @@
 //! step (CT5).
 
 use crate::algorithms::contact::{law, parent_pose};
+use crate::algorithms::pairs::pair_poses;
 use crate::algorithms::{check_vec, contact_force};
 use crate::error::DynamicsError;
 use crate::forces::Forces;
 use crate::model::Model;
-use crate::model::contact::Active;
+use crate::model::contact::{Active, ContactWork};
 use crate::model::data::Data;
+use crate::model::pairs::{PairAnchor, radius_at};
+use softrod_lie::Vec3;
 use softrod_mechanics::contact::{ContactPoint, Contactee};
 
 /// A contact penetrating deeper than this fraction of the rod's radius
@@ -47,7 +50,30 @@ impl Model {
             return Ok(Vec::new());
         }
         let work = data.contact.as_ref().expect("contact work");
-        Ok(work.active.iter().map(|a| self.point_of(a)).collect())
+        let mut out: Vec<ContactPoint> = work.active.iter().map(|a| self.point_of(a)).collect();
+        if let Some(pairs) = &work.pairs {
+            out.extend(pairs.active.iter().map(|c| ContactPoint {
+                a: c.a,
+                s: c.sa,
+                b: Contactee::Rod { rod: c.b, s: c.sb },
+                point: c.point - c.normal * c.radius_a,
+                normal: c.normal,
+                gap: c.gap,
+                force: c.force,
+                sticking: c.sticking,
+            }));
+        }
+        Ok(out)
+    }
+
+    /// The penetration a contact may start with (CT3): 1 % of the smaller
+    /// radius of the two surfaces.
+    fn allowed_at(&self, c: &ContactPoint) -> f64 {
+        let own = self.allowed_penetration(c.a, c.s);
+        match c.b {
+            Contactee::Obstacle(_) => own,
+            Contactee::Rod { rod, s } => own.min(self.allowed_penetration(rod, s)),
+        }
     }
 
     fn point_of(&self, a: &Active) -> ContactPoint {
@@ -74,16 +100,18 @@ impl Model {
     }
 
     /// Refuses an initial state where a rod starts deeper inside an
-    /// obstacle than [`Model::allowed_penetration`] (1 % of its radius):
-    /// [`DynamicsError::InitialOverlap`] naming the rod, the obstacle, `s`
-    /// and the depth.
+    /// obstacle or another rod (or itself) than
+    /// [`Model::allowed_penetration`] (1 % of its radius, of the smaller
+    /// radius for two rods): [`DynamicsError::InitialOverlap`] naming the
+    /// rod and `s`, the obstacle or the other rod and its `s`, and the
+    /// depth.
     pub fn check_initial_contact(&self, q: &[f64]) -> Result<(), DynamicsError> {
         if !self.has_contact() {
             return Ok(());
         }
         let zero = vec![0.0; self.n_dof()];
         for c in self.contacts(0.0, q, &zero)? {
-            let allowed = self.allowed_penetration(c.a, c.s);
+            let allowed = self.allowed_at(&c);
             if -c.gap > allowed {
                 return Err(DynamicsError::InitialOverlap {
                     rod: self.rod_id(c.a),
@@ -97,12 +125,12 @@ impl Model {
         Ok(())
     }
 
-    /// `obstacle 'name'` or `rod 'name' at s = …`, for messages.
+    /// `obstacle 'name'` or `rod 'name' (its s = … m)`, for messages.
     pub fn contactee_name(&self, b: &Contactee) -> String {
         match *b {
             Contactee::Obstacle(o) => format!("obstacle '{}'", self.contact.obstacles[o].name),
             Contactee::Rod { rod, s } => {
-                format!("rod '{}' at s = {s:.6} m", self.rods[rod].spec.name)
+                format!("rod '{}' (its s = {s:.6} m)", self.rods[rod].spec.name)
             }
         }
     }
@@ -171,6 +199,75 @@ pub fn commit_contact(
     for (rod, idx, a) in next {
         work.anchors[rod][idx] = Some(a);
     }
+    if work.pairs.is_some() {
+        let pair_result = commit_pairs(model, data, &mut work, t, q);
+        if result.is_ok() {
+            result = pair_result;
+        }
+    }
     data.contact = Some(work);
+    result
+}
+
+/// The commit of rod–rod contact (CT10): the penetration check against
+/// half the smaller radius, and the pairs' friction anchors — kept while
+/// sticking, moved to carry `μ f_n` while sliding, set where a new pair
+/// touches, dropped when it opens.
+fn commit_pairs(
+    model: &Model,
+    data: &Data,
+    work: &mut ContactWork,
+    t: f64,
+    q: &[f64],
+) -> Result<(), DynamicsError> {
+    let mut pw = work.pairs.take().expect("pair work");
+    let mut result = Ok(());
+    pw.next.clear();
+    let with_friction = model.contact.settings.friction > 0.0;
+    for c in &pw.active {
+        let rb = radius_at(model, c.b, c.sb);
+        let bound = FAILURE_PENETRATION * c.radius_a.min(rb);
+        if result.is_ok() && -c.gap > bound {
+            result = Err(DynamicsError::Penetration {
+                rod: model.rod_id(c.a),
+                s: c.sa,
+                other: model.contactee_name(&Contactee::Rod { rod: c.b, s: c.sb }),
+                t,
+                depth: -c.gap,
+                bound,
+            });
+        }
+        if !with_friction {
+            continue;
+        }
+        let kept = pw.anchors.iter().find(|k| {
+            k.a == c.a
+                && k.b == c.b
+                && (k.sa - c.sa).abs() < c.radius_a + rb
+                && (k.sb - c.sb).abs() < c.radius_a + rb
+        });
+        let anchor = match kept {
+            Some(k) if c.sticking => *k,
+            _ => {
+                // New, or sliding: anchor the touching points, offset so
+                // the stretch carries the sliding force (zero if new).
+                let (pa, gb) = pair_poses(model, data, work, q, c);
+                let ft = match kept {
+                    Some(_) => (c.force - c.normal * c.normal.dot(&c.force)) / c.k,
+                    None => Vec3::zeros(),
+                };
+                PairAnchor {
+                    a: c.a,
+                    sa: c.sa,
+                    b: c.b,
+                    sb: c.sb,
+                    offset: gb.rotation.transpose() * (pa - gb.translation + ft),
+                }
+            }
+        };
+        pw.next.push(anchor);
+    }
+    std::mem::swap(&mut pw.anchors, &mut pw.next);
+    work.pairs = Some(pw);
     result
 }

@@ -154,6 +154,54 @@ pub(crate) fn distance(shape: &Shape, frame: &Pose, p: &Vec3) -> Distance {
     }
 }
 
+/// The parameters `(t, u)` in `[0, 1]²` of the closest points
+/// `p0 + t (p1 − p0)` and `q0 + u (q1 − q0)` of two segments (CT8): the
+/// unconstrained minimizer clamped to the square edge by edge (each clamp
+/// re-solves the other parameter), so crossing segments are found wherever
+/// they cross; parallel segments take `t` of the middle of their overlap.
+pub(crate) fn closest_on_segments(p0: &Vec3, p1: &Vec3, q0: &Vec3, q1: &Vec3) -> (f64, f64) {
+    let d1 = p1 - p0;
+    let d2 = q1 - q0;
+    let r = p0 - q0;
+    let a = d1.norm_squared();
+    let e = d2.norm_squared();
+    let f = d2.dot(&r);
+    let tiny = 1e-30;
+    if a <= tiny && e <= tiny {
+        return (0.0, 0.0);
+    }
+    if a <= tiny {
+        return (0.0, (f / e).clamp(0.0, 1.0));
+    }
+    let c = d1.dot(&r);
+    if e <= tiny {
+        return ((-c / a).clamp(0.0, 1.0), 0.0);
+    }
+    let b = d1.dot(&d2);
+    let denom = a * e - b * b;
+    let mut t = if denom > 1e-12 * a * e {
+        ((b * f - c * e) / denom).clamp(0.0, 1.0)
+    } else {
+        // Parallel: the middle of the overlap of the projections of q0, q1.
+        let (u0, u1) = ((-c) / a, (b - c) / a);
+        let (lo, hi) = (u0.min(u1).max(0.0), u0.max(u1).min(1.0));
+        if lo <= hi {
+            0.5 * (lo + hi)
+        } else {
+            u0.min(u1).clamp(0.0, 1.0)
+        }
+    };
+    let mut u = (b * t + f) / e;
+    if u < 0.0 {
+        u = 0.0;
+        t = (-c / a).clamp(0.0, 1.0);
+    } else if u > 1.0 {
+        u = 1.0;
+        t = ((b - c) / a).clamp(0.0, 1.0);
+    }
+    (t, u)
+}
+
 /// The constants of one contact pair (CT3–CT5).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Law {
@@ -173,6 +221,13 @@ impl Law {
     /// magnitude `g` \[m/s²\], with restitution `e` and friction `mu`
     /// (CT3, CT4).
     pub(crate) fn new(mass: f64, radius: f64, g: f64, e: f64, mu: f64) -> Self {
+        Self::pair(mass, mass, radius, g, e, mu)
+    }
+
+    /// The constants of a contact whose stiffness is set by `mass` and
+    /// whose damping acts on the relative motion of mass `moving` (a rod
+    /// pair: the smaller side's mass and the reduced mass, CT11).
+    pub(crate) fn pair(mass: f64, moving: f64, radius: f64, g: f64, e: f64, mu: f64) -> Self {
         use crate::model::contact::{IMPACT_PENETRATION, IMPACT_SPEED, REST_PENETRATION};
         // At rest: m g / k at half the rest bound (the other half is the
         // quadratic start). In an impact: ½ m v² = ½ k δ² at the bound.
@@ -189,7 +244,7 @@ impl Law {
         };
         Self {
             k,
-            c: 2.0 * zeta * (k * mass).sqrt(),
+            c: 2.0 * zeta * (k * moving).sqrt(),
             eps: 0.1 * REST_PENETRATION * radius,
             mu,
         }
@@ -362,6 +417,46 @@ mod tests {
                     assert!(err < 1e-5, "{shape:?} {p} hessian {err}");
                 }
             }
+        }
+    }
+
+    /// Closest points of segments against a dense sampling of both.
+    #[test]
+    fn closest_points_of_segments_match_brute_force() {
+        let cases = [
+            // crossing at an angle, skew by 0.1
+            (
+                [Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0)],
+                [Vec3::new(0.3, -0.5, 0.1), Vec3::new(0.5, 0.5, 0.1)],
+            ),
+            // closest at an end of one
+            (
+                [Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0)],
+                [Vec3::new(1.2, 0.3, 0.0), Vec3::new(2.0, 1.0, 0.5)],
+            ),
+            // parallel, overlapping
+            (
+                [Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0)],
+                [Vec3::new(0.5, 0.1, 0.0), Vec3::new(1.5, 0.1, 0.0)],
+            ),
+            // parallel, apart along the axis
+            (
+                [Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0)],
+                [Vec3::new(2.0, 0.1, 0.0), Vec3::new(3.0, 0.1, 0.0)],
+            ),
+        ];
+        for ([p0, p1], [q0, q1]) in cases {
+            let (t, u) = closest_on_segments(&p0, &p1, &q0, &q1);
+            let d = (p0 + (p1 - p0) * t - q0 - (q1 - q0) * u).norm();
+            let mut best = f64::INFINITY;
+            let n = 400;
+            for i in 0..=n {
+                for j in 0..=n {
+                    let (a, b) = (i as f64 / n as f64, j as f64 / n as f64);
+                    best = best.min((p0 + (p1 - p0) * a - q0 - (q1 - q0) * b).norm());
+                }
+            }
+            assert!(d <= best + 1e-12 && d >= best - 5e-3, "{d} vs {best}");
         }
     }
 

@@ -6,6 +6,7 @@
 
 use crate::error::{DynamicsError, RodId};
 use crate::model::Model;
+use crate::model::pairs::PairWork;
 use nalgebra::{DMatrix, DVector, Matrix6xX};
 use softrod_kinematics::RodKinematics;
 use softrod_lie::{Mat3, Vec3};
@@ -40,6 +41,9 @@ pub(crate) struct ContactModel {
     pub settings: ContactSettings,
     /// Per rod, its contact points base to tip.
     pub samples: Vec<Vec<Sample>>,
+    /// `(child rod, parent rod, at)` for every rod attached to another
+    /// rod: no contact between the two near the attachment (CT9).
+    pub joined: Vec<(usize, usize, f64)>,
 }
 
 impl ContactModel {
@@ -135,7 +139,24 @@ impl Model {
             .validate()
             .map_err(|source| DynamicsError::ContactSettings { source })?;
         let active = !obstacles.is_empty() || settings.any();
+        let joined = self
+            .elements
+            .iter()
+            .filter_map(|e| {
+                let crate::model::ElementKind::Rod(child) = e.kind else {
+                    return None;
+                };
+                let parent = e.attachment.parent.as_ref()?;
+                let p = self.rods.iter().position(|r| &r.spec.name == parent)?;
+                let at = e
+                    .attachment
+                    .at
+                    .unwrap_or_else(|| self.rods[p].spec.geometry.length());
+                Some((child, p, at))
+            })
+            .collect();
         self.contact = ContactModel {
+            joined,
             samples: if active {
                 self.rods.iter().map(|r| samples(&r.spec)).collect()
             } else {
@@ -223,6 +244,9 @@ pub(crate) struct ContactWork {
     /// Friction anchors (CT5), committed after accepted steps: per rod,
     /// `sample · n_obstacles + obstacle`, in the obstacle's parent frame.
     pub anchors: Vec<Vec<Option<Vec3>>>,
+    /// Rod–rod and self contact (CT8–CT11); `None` without them: no
+    /// broadphase is built.
+    pub pairs: Option<Box<PairWork>>,
 }
 
 impl ContactWork {
@@ -256,6 +280,7 @@ impl ContactWork {
                 .iter()
                 .map(|s| vec![None; s.len() * n_obs])
                 .collect(),
+            pairs: PairWork::new(model).map(Box::new),
         }
     }
 }

@@ -12,6 +12,7 @@ pub(crate) mod contact;
 pub(crate) mod data;
 pub(crate) mod element;
 pub(crate) mod joint;
+pub(crate) mod pairs;
 pub(crate) mod planar;
 pub(crate) mod prescribed;
 pub(crate) mod rod;

@@ -1,0 +1,458 @@
+//! Rod–rod and self contact in the equations of motion
+//! (docs/theory-contact.md CT8–CT11): the broadphase over the segments of
+//! the rods' contact-point polylines (bounding spheres of each segment's
+//! swept surface, sort and sweep along x), the exact closest points of two
+//! centreline arcs (segment–segment seed, Gauss–Newton on the two arc
+//! lengths), the force law of `crate::forces::contact` at each touching
+//! pair, and its generalized force `J_a(s_a)ᵀ f − J_b(s_b)ᵀ f`. On the
+//! chain it reads the rods' kinematics in `ContactWork::kin`; on a tree the
+//! node data of the last outward sweep.
+
+use super::contact::{Ask, point_velocity, tree_point_jacobian};
+use super::frames::frame_state;
+use crate::forces::contact::{Distance, Law, closest_on_segments, force};
+use crate::model::Model;
+use crate::model::closure::{ResolvedFrame, Target};
+use crate::model::contact::ContactWork;
+use crate::model::data::Data;
+use crate::model::pairs::{
+    BROADPHASE_MARGIN, PairActive, PairWork, SegmentBox, exclusion, may_touch, radius_at,
+};
+use softrod_kinematics::Frame;
+use softrod_lie::{Mat3, Pose, Vec3};
+
+/// Iterations of the closest-point refinement (CT8); it stops earlier when
+/// the step falls below `1e-14` of the rods' lengths.
+const REFINE_ITERATIONS: usize = 30;
+
+/// Where one evaluation reads the rods' sections: the chain's kinematics
+/// or the tree's frames.
+struct Sections<'a> {
+    model: &'a Model,
+    data: &'a Data,
+    work: &'a ContactWork,
+    q: &'a [f64],
+    qd: Option<&'a [f64]>,
+}
+
+/// A rod section as contact needs it: pose, the centreline's tangent
+/// `∂p/∂s = R ν` (stretch included) and the point's velocity.
+struct At {
+    pose: Pose,
+    tangent: Vec3,
+    velocity: Vec3,
+}
+
+impl Sections<'_> {
+    fn at(&self, rod: usize, s: f64, velocity: bool) -> At {
+        let rm = &self.model.rods[rod];
+        let g = &rm.spec.geometry;
+        let (piece, x) = g.locate(s).expect("a contact point lies on its rod");
+        match &self.model.tree {
+            None => {
+                let kin = &self.work.kin[rod];
+                let pose = kin.pose_at(g, s).expect("on the rod");
+                let xi = kin.strains()[piece];
+                let velocity = match (velocity, self.qd) {
+                    (true, Some(_)) => {
+                        let eta = kin.velocity_at(g, s, Frame::Mixed).expect("on the rod");
+                        Vec3::new(eta[3], eta[4], eta[5])
+                    }
+                    _ => Vec3::zeros(),
+                };
+                At {
+                    tangent: pose.rotation * Vec3::new(xi[3], xi[4], xi[5]),
+                    pose,
+                    velocity,
+                }
+            }
+            Some(tree) => {
+                let frame = ResolvedFrame {
+                    target: Target::Rod {
+                        rod,
+                        piece,
+                        x,
+                        node: tree.rod_nodes[rod][piece],
+                    },
+                    offset: Pose::identity(),
+                };
+                let qd = if velocity { self.qd } else { None };
+                let fs = frame_state(self.model, tree, self.data, &frame, self.q, qd);
+                let xi = g.strain(piece, &self.q[rm.dofs()]);
+                At {
+                    tangent: fs.pose.rotation * Vec3::new(xi[3], xi[4], xi[5]),
+                    velocity: if qd.is_some() {
+                        point_velocity(&fs.vel, &fs.pose.translation)
+                    } else {
+                        Vec3::zeros()
+                    },
+                    pose: fs.pose,
+                }
+            }
+        }
+    }
+}
+
+/// Which pairs an evaluation looks at.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Search {
+    /// All: the broadphase over every segment.
+    All,
+    /// Only the segment pairs that seeded the pairs touching when
+    /// [`seed_differences`] was called (the central differences of CT11:
+    /// a pair that does not touch there adds nothing to the Jacobian).
+    Seeded,
+}
+
+/// Keeps the seeds of the pairs touching now for [`Search::Seeded`].
+pub(crate) fn seed_differences(work: &mut ContactWork) {
+    if let Some(pw) = work.pairs.as_mut() {
+        let PairWork {
+            active, fd_seeds, ..
+        } = &mut **pw;
+        fd_seeds.clear();
+        fd_seeds.extend(active.iter().map(|c| c.seeds));
+    }
+}
+
+/// The touching pairs at `(q, q̇)` and their generalized force into
+/// `pairs.tau` (`pairs.active` lists them). The chain's kinematics in
+/// `work.kin`, or the tree's node data in `data`, must be this state's.
+pub(crate) fn evaluate_pairs(
+    model: &Model,
+    data: &Data,
+    work: &mut ContactWork,
+    q: &[f64],
+    qd: Option<&[f64]>,
+    ask: Ask,
+    search: Search,
+) {
+    let Some(mut pw) = work.pairs.take() else {
+        return;
+    };
+    pw.active.clear();
+    pw.tau.fill(0.0);
+    pw.narrow_tests = 0;
+    if search == Search::Seeded {
+        let sec = Sections {
+            model,
+            data,
+            work,
+            q,
+            qd,
+        };
+        for k in 0..pw.fd_seeds.len() {
+            let (ba, bb) = pw.fd_seeds[k];
+            for b in [ba, bb] {
+                let smp = &model.contact.samples[b.rod];
+                for i in [b.seg, b.seg + 1] {
+                    pw.points[b.rod][i] = sec.at(b.rod, smp[i].s, false).pose.translation;
+                }
+            }
+            narrowphase(model, &sec, &mut pw, &ba, &bb, ask);
+        }
+    } else {
+        let sec = Sections {
+            model,
+            data,
+            work,
+            q,
+            qd,
+        };
+        broadphase(model, &sec, &mut pw);
+        let n = pw.boxes.len();
+        for i in 0..n {
+            let bi = pw.boxes[i];
+            let reach = bi.center.x + bi.radius;
+            for j in i + 1..n {
+                let bj = pw.boxes[j];
+                if bj.center.x - bj.radius > reach {
+                    break;
+                }
+                if (bi.center - bj.center).norm() > bi.radius + bj.radius
+                    || !could_touch(model, &bi, &bj)
+                {
+                    continue;
+                }
+                pw.narrow_tests += 1;
+                narrowphase(model, &sec, &mut pw, &bi, &bj, ask);
+            }
+        }
+    }
+    // The generalized force: J_a(s_a)ᵀ f − J_b(s_b)ᵀ f.
+    let mut jrel = std::mem::take(&mut work.jrel);
+    for k in 0..pw.active.len() {
+        let c = pw.active[k];
+        for (rod, s, sign) in [(c.a, c.sa, 1.0), (c.b, c.sb, -1.0)] {
+            let f = c.force * sign;
+            match &model.tree {
+                None => {
+                    let rm = &model.rods[rod];
+                    work.kin[rod]
+                        .jacobian_at(&rm.spec.geometry, s, Frame::Mixed, &mut work.jac[rod])
+                        .expect("on the rod");
+                    let jac = &work.jac[rod];
+                    for col in 0..rm.n_dof() {
+                        let jc = jac.column(col);
+                        pw.tau[rm.dof_offset + col] += jc[3] * f[0] + jc[4] * f[1] + jc[5] * f[2];
+                    }
+                }
+                Some(_) => {
+                    tree_point_jacobian(model, data, work, q, rod, s, None, &mut jrel);
+                    for col in 0..jrel.ncols() {
+                        pw.tau[col] +=
+                            jrel[(0, col)] * f[0] + jrel[(1, col)] * f[1] + jrel[(2, col)] * f[2];
+                    }
+                }
+            }
+        }
+    }
+    work.jrel = jrel;
+    work.pairs = Some(pw);
+}
+
+/// The contact points' positions, each segment's true arc length and the
+/// bounding sphere of its swept surface (an arc of length `ℓ` between two
+/// points lies within `ℓ/2` of their midpoint), sorted by lowest x.
+fn broadphase(model: &Model, sec: &Sections, pw: &mut PairWork) {
+    pw.boxes.clear();
+    for (r, samples) in model.contact.samples.iter().enumerate() {
+        let g = &model.rods[r].spec.geometry;
+        for (i, smp) in samples.iter().enumerate() {
+            pw.points[r][i] = sec.at(r, smp.s, false).pose.translation;
+        }
+        for i in 0..samples.len().saturating_sub(1) {
+            let (s0, s1) = (samples[i].s, samples[i + 1].s);
+            let (piece, _) = g.locate(0.5 * (s0 + s1)).expect("on the rod");
+            let stretch = match &model.tree {
+                None => {
+                    let xi = sec.work.kin[r].strains()[piece];
+                    Vec3::new(xi[3], xi[4], xi[5]).norm()
+                }
+                Some(_) => {
+                    let xi = g.strain(piece, &sec.q[model.rods[r].dofs()]);
+                    Vec3::new(xi[3], xi[4], xi[5]).norm()
+                }
+            };
+            let arc = stretch * (s1 - s0);
+            pw.arcs[r][i] = arc;
+            let radius = samples[i].radius.max(samples[i + 1].radius);
+            pw.boxes.push(SegmentBox {
+                rod: r,
+                seg: i,
+                center: 0.5 * (pw.points[r][i] + pw.points[r][i + 1]),
+                radius: 0.5 * arc + radius * (1.0 + BROADPHASE_MARGIN),
+            });
+        }
+    }
+    pw.boxes
+        .sort_unstable_by(|a, b| (a.center.x - a.radius).total_cmp(&(b.center.x - b.radius)));
+}
+
+/// Whether any points of the two segments may touch (CT9): rods and self
+/// contact switched on, and on one rod not every pair of their points
+/// within the exclusion arc.
+fn could_touch(model: &Model, a: &SegmentBox, b: &SegmentBox) -> bool {
+    let settings = &model.contact.settings;
+    if a.rod != b.rod {
+        return settings.rods;
+    }
+    if !settings.self_contact {
+        return false;
+    }
+    let smp = &model.contact.samples[a.rod];
+    let (lo, hi) = if a.seg < b.seg { (a, b) } else { (b, a) };
+    let farthest = smp[hi.seg + 1].s - smp[lo.seg].s;
+    let r = smp[lo.seg..=lo.seg + 1]
+        .iter()
+        .chain(&smp[hi.seg..=hi.seg + 1])
+        .fold(f64::INFINITY, |m, x| m.min(x.radius));
+    farthest >= exclusion(r, r)
+}
+
+/// The exact closest points of the two segments' arcs and, if the surfaces
+/// overlap there, the force of the pair (CT8, CT10, CT11).
+fn narrowphase(
+    model: &Model,
+    sec: &Sections,
+    pw: &mut PairWork,
+    ba: &SegmentBox,
+    bb: &SegmentBox,
+    ask: Ask,
+) {
+    let (pa, pb) = (&pw.points[ba.rod], &pw.points[bb.rod]);
+    let (sa_, sb_) = (
+        &model.contact.samples[ba.rod],
+        &model.contact.samples[bb.rod],
+    );
+    let (t, u) = closest_on_segments(&pa[ba.seg], &pa[ba.seg + 1], &pb[bb.seg], &pb[bb.seg + 1]);
+    let mut sa = sa_[ba.seg].s + t * (sa_[ba.seg + 1].s - sa_[ba.seg].s);
+    let mut sb = sb_[bb.seg].s + u * (sb_[bb.seg + 1].s - sb_[bb.seg].s);
+    let (la, lb) = (
+        model.rods[ba.rod].spec.geometry.length(),
+        model.rods[bb.rod].spec.geometry.length(),
+    );
+    let tol = 1e-14 * (la + lb);
+    let (mut xa, mut xb) = (sec.at(ba.rod, sa, false), sec.at(bb.rod, sb, false));
+    for _ in 0..REFINE_ITERATIONS {
+        // Gauss–Newton on ½|p_a(s_a) − p_b(s_b)|², each parameter kept on
+        // its rod (the round ends: a clamped end is the closest point).
+        let w = xa.pose.translation - xb.pose.translation;
+        let (ta, tb) = (xa.tangent, xb.tangent);
+        let (haa, hab, hbb) = (ta.dot(&ta), -ta.dot(&tb), tb.dot(&tb));
+        let (ga, gb) = (w.dot(&ta), -w.dot(&tb));
+        let det = haa * hbb - hab * hab;
+        let (mut da, mut db) = if det > 1e-10 * haa * hbb {
+            ((-ga * hbb + gb * hab) / det, (-gb * haa + ga * hab) / det)
+        } else {
+            // Parallel arcs: the closest point of a to b's point.
+            (-ga / haa, 0.0)
+        };
+        let na = (sa + da).clamp(0.0, la);
+        if na != sa + da {
+            da = na - sa;
+            db = -(gb + hab * da) / hbb;
+        }
+        let nb = (sb + db).clamp(0.0, lb);
+        if nb != sb + db {
+            db = nb - sb;
+            let na = (sa - (ga + hab * db) / haa).clamp(0.0, la);
+            da = na - sa;
+        }
+        sa += da;
+        sb += db;
+        xa = sec.at(ba.rod, sa, false);
+        xb = sec.at(bb.rod, sb, false);
+        if da.abs() + db.abs() <= tol {
+            break;
+        }
+    }
+    // One report per pair: a is the lower rod, or the lower s on one rod.
+    let (a, b, sa, sb, xa, xb) = if (ba.rod, sa) <= (bb.rod, sb) {
+        (ba.rod, bb.rod, sa, sb, xa, xb)
+    } else {
+        (bb.rod, ba.rod, sb, sa, xb, xa)
+    };
+    let (ra, rb) = (radius_at(model, a, sa), radius_at(model, b, sb));
+    let w = xa.pose.translation - xb.pose.translation;
+    let d = w.norm();
+    let gap = d - ra - rb;
+    if gap >= 0.0 || !may_touch(model, a, sa, b, sb, ra, rb) {
+        return;
+    }
+    let same = 1e-9 * (ra + rb);
+    if pw
+        .active
+        .iter()
+        .any(|c| c.a == a && c.b == b && (c.sa - sa).abs() < same && (c.sb - sb).abs() < same)
+    {
+        return;
+    }
+    let normal = if d > 0.0 {
+        w / d
+    } else {
+        let c = xa.tangent.cross(&xb.tangent);
+        if c.norm() > 0.0 {
+            c.normalize()
+        } else {
+            Vec3::z()
+        }
+    };
+    let hessian = if d > 0.0 {
+        (Mat3::identity() - normal * normal.transpose()) / d
+    } else {
+        Mat3::zeros()
+    };
+    let dist = Distance { d, normal, hessian };
+    let law = pair_law(model, a, sa, b, sb, ra.min(rb), ask.friction);
+    let stretch = if law.mu > 0.0 {
+        pw.anchors
+            .iter()
+            .find(|k| {
+                k.a == a && k.b == b && (k.sa - sa).abs() < ra + rb && (k.sb - sb).abs() < ra + rb
+            })
+            .map(|k| {
+                let pa = sec.at(a, k.sa, false).pose.translation;
+                let gb = sec.at(b, k.sb, false).pose;
+                pa - gb.translation - gb.rotation * k.offset
+            })
+    } else {
+        None
+    };
+    let va = sec.at(a, sa, true).velocity;
+    let vb = sec.at(b, sb, true).velocity;
+    let cf = force(&law, &dist, ra + rb, &(va - vb), stretch);
+    pw.active.push(PairActive {
+        a,
+        sa,
+        b,
+        sb,
+        point: xa.pose.translation,
+        normal,
+        gap,
+        force: cf.f,
+        sticking: cf.sticking,
+        radius_a: ra,
+        k: law.k,
+        seeds: (*ba, *bb),
+    });
+}
+
+/// The mass a contact point of rod `rod` at `s` stands for: that of the
+/// nearest contact point (CT1).
+fn mass_at(model: &Model, rod: usize, s: f64) -> f64 {
+    let smp = &model.contact.samples[rod];
+    let i = smp.partition_point(|x| x.s < s).min(smp.len() - 1);
+    if i > 0 && (s - smp[i - 1].s) < (smp[i].s - s) {
+        smp[i - 1].mass
+    } else {
+        smp[i].mass
+    }
+}
+
+/// The law of a rod pair (CT11): the stiffness of the smaller side's mass
+/// at the smaller radius, the damping of the reduced mass, the `[contact]`
+/// restitution and friction.
+pub(crate) fn pair_law(
+    model: &Model,
+    a: usize,
+    sa: f64,
+    b: usize,
+    sb: f64,
+    radius: f64,
+    friction: bool,
+) -> Law {
+    let (ma, mb) = (mass_at(model, a, sa), mass_at(model, b, sb));
+    let settings = &model.contact.settings;
+    let g = model.gravity.map_or(0.0, |g| g.norm());
+    Law::pair(
+        ma.min(mb),
+        ma * mb / (ma + mb),
+        radius,
+        g,
+        settings.restitution,
+        if friction { settings.friction } else { 0.0 },
+    )
+}
+
+/// The world poses of the two anchored points of a pair, for the commit
+/// of its friction anchor (CT10).
+pub(crate) fn pair_poses(
+    model: &Model,
+    data: &Data,
+    work: &ContactWork,
+    q: &[f64],
+    c: &PairActive,
+) -> (Vec3, Pose) {
+    let sec = Sections {
+        model,
+        data,
+        work,
+        q,
+        qd: None,
+    };
+    (
+        sec.at(c.a, c.sa, false).pose.translation,
+        sec.at(c.b, c.sb, false).pose,
+    )
+}
