@@ -379,15 +379,8 @@ impl Cable {
         turn: &mut Turning,
         mut f: impl FnMut(f64, f64, f64),
     ) {
-        let (a, b) = match self.span {
-            Span::Whole => (piece.start, piece.end()),
-            Span::Between { from, to } => (piece.start.max(from), piece.end().min(to)),
-        };
-        if b <= a {
-            return;
-        }
         let (k, qv) = (angular(xi), linear(xi));
-        let mut part = |lo: f64, hi: f64, turn: &mut Turning| {
+        self.for_each_part(piece, |lo, hi| {
             let (d0, dp) = self.offset(lo);
             let tangent = |d: Vec3| {
                 let v = qv + k.cross(&d) + dp;
@@ -412,19 +405,7 @@ impl Cable {
             }
             turn.phi += rate * (hi - lo);
             turn.tangent = tangent(d0 + dp * (hi - lo)).map(|(t, _)| t);
-        };
-        let mut lo = a;
-        for knot in self
-            .routing
-            .points()
-            .iter()
-            .map(|p| p[0])
-            .filter(|&k| k > a && k < b)
-        {
-            part(lo, knot, turn);
-            lo = knot;
-        }
-        part(lo, b, turn);
+        });
     }
 
     /// Calls `f(s, w)` for every quadrature node of `piece ∩ [from, to]`, the
@@ -437,6 +418,16 @@ impl Cable {
         quadrature: &GaussLegendre,
         mut f: impl FnMut(f64, f64),
     ) {
+        self.for_each_part(piece, |lo, hi| {
+            for (x, w) in quadrature.on_interval(hi - lo) {
+                f(lo + x, w);
+            }
+        });
+    }
+
+    /// Calls `part(lo, hi)` for each sub-interval of `piece ∩ [from, to]`
+    /// between the routing's knots, in order (none if they do not overlap).
+    fn for_each_part(&self, piece: &Piece, mut part: impl FnMut(f64, f64)) {
         let (a, b) = match self.span {
             Span::Whole => (piece.start, piece.end()),
             Span::Between { from, to } => (piece.start.max(from), piece.end().min(to)),
@@ -444,11 +435,6 @@ impl Cable {
         if b <= a {
             return;
         }
-        let mut rule = |lo: f64, hi: f64| {
-            for (x, w) in quadrature.on_interval(hi - lo) {
-                f(lo + x, w);
-            }
-        };
         let mut lo = a;
         for knot in self
             .routing
@@ -457,10 +443,10 @@ impl Cable {
             .map(|p| p[0])
             .filter(|&k| k > a && k < b)
         {
-            rule(lo, knot);
+            part(lo, knot);
             lo = knot;
         }
-        rule(lo, b);
+        part(lo, b);
     }
 }
 
