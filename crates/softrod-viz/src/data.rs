@@ -271,7 +271,7 @@ impl ViewData {
             for (k, f) in rod.frames.iter().enumerate() {
                 count(&format!("{}[{k}]", what("frames")), f.len(), n)?;
                 for (i, p) in f.iter().enumerate() {
-                    pose_ok(&format!("{}[{k}][{i}]", what("frames")), p)?;
+                    pose_ok(|| format!("{}[{k}][{i}]", what("frames")), p)?;
                 }
             }
             if let Some(tr) = &rod.tip_trace {
@@ -310,7 +310,7 @@ impl ViewData {
             }
             count(&format!("{what}.poses"), body.poses.len(), m)?;
             for (k, p) in body.poses.iter().enumerate() {
-                pose_ok(&format!("{what}.poses[{k}]"), p)?;
+                pose_ok(|| format!("{what}.poses[{k}]"), p)?;
             }
         }
         for (o, obstacle) in self.obstacles.iter().enumerate() {
@@ -346,12 +346,19 @@ fn finite(what: &str, at: Option<usize>, v: &[f64]) -> Result<(), VizError> {
     }
 }
 
-fn pose_ok(what: &str, p: &Pose) -> Result<(), VizError> {
-    finite(&format!("{what}.position"), None, &p.position)?;
-    finite(&format!("{what}.rotation"), None, &p.rotation)?;
+/// `what` names the pose in an error; it is only built for one (a view
+/// checks every pose of every frame).
+fn pose_ok(what: impl Fn() -> String, p: &Pose) -> Result<(), VizError> {
+    let ok = |v: &[f64]| v.iter().all(|x| x.is_finite());
+    if !ok(&p.position) {
+        finite(&format!("{}.position", what()), None, &p.position)?;
+    }
+    if !ok(&p.rotation) {
+        finite(&format!("{}.rotation", what()), None, &p.rotation)?;
+    }
     if p.rotation.iter().map(|v| v * v).sum::<f64>() < 1e-12 {
         return Err(VizError::Invalid {
-            what: format!("{what}.rotation"),
+            what: format!("{}.rotation", what()),
             problem: "zero quaternion".into(),
         });
     }

@@ -195,9 +195,11 @@ impl Quantizer {
     }
 
     fn push_point(&self, out: &mut String, p: &[f64; 3]) {
+        let mut buf = itoa::Buffer::new();
         for (x, o) in p.iter().zip(&self.origin) {
             let v = ((x - o) / self.quantum).round() as i64;
-            let _ = write!(out, "{v},");
+            out.push_str(buf.format(v));
+            out.push(',');
         }
     }
 
@@ -206,9 +208,11 @@ impl Quantizer {
         let r = p.rotation;
         let n = (r[0] * r[0] + r[1] * r[1] + r[2] * r[2] + r[3] * r[3]).sqrt();
         let sign = if r[0] < 0.0 { -1.0 } else { 1.0 };
+        let mut buf = itoa::Buffer::new();
         for v in r {
             let i = (sign * v / n * QUAT_SCALE).round() as i64;
-            let _ = write!(out, "{},", i);
+            out.push_str(buf.format(i));
+            out.push(',');
         }
     }
 }
