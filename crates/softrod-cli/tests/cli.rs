@@ -1078,19 +1078,17 @@ fn summary_of(out: &Path) -> Option<serde_json::Value> {
     serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).ok()?).ok()
 }
 
-/// A signal takes effect at the step it arrives in, not at the next output
-/// time (issue 26, D09): a run whose only outputs are its start and its end
-/// (10⁷ explicit steps between them) stops at once with a true summary.
+/// Runs `scene` into `out`, waits until its summary says `running` with
+/// more than `rows_before` rows (and its process id), sends `sig` (kill(1):
+/// the workspace denies unsafe code, which libc::kill needs), and returns
+/// the exit code, stderr and the final summary.
 #[cfg(unix)]
-#[test]
-fn a_signal_does_not_wait_for_the_next_output_time() {
-    let dir = tmp("signal_between_outputs");
-    let scene = with_run(
-        "cantilever_gravity.toml",
-        "[run]\nduration = 100.0\nintegrator = \"rk4\"\ndt = 1e-5\noutput_every = 100.0",
-        &dir,
-    );
-    let out = dir.join("out");
+fn signal_a_run(
+    scene: &Path,
+    out: &Path,
+    rows_before: u64,
+    sig: &str,
+) -> (Option<i32>, String, serde_json::Value) {
     let mut child = bin()
         .args([
             "run",
@@ -1103,20 +1101,41 @@ fn a_signal_does_not_wait_for_the_next_output_time() {
         .spawn()
         .unwrap();
     let start = std::time::Instant::now();
-    while summary_of(&out).is_none_or(|s| s["output_rows"].as_u64() != Some(1)) {
+    loop {
+        let s = summary_of(out);
+        if let Some(s) = s.filter(|s| s["output_rows"].as_u64().unwrap_or(0) > rows_before) {
+            assert_eq!(s["status"], "running");
+            assert_eq!(s["pid"], child.id());
+            break;
+        }
         assert!(start.elapsed().as_secs() < 120, "no running summary");
         std::thread::sleep(std::time::Duration::from_millis(50));
     }
     let kill = std::process::Command::new("kill")
-        .args(["-s", "TERM", &child.id().to_string()])
+        .args(["-s", sig, &child.id().to_string()])
         .status()
         .unwrap();
     assert!(kill.success());
     let status = child.wait().unwrap();
     let mut err = String::new();
     std::io::Read::read_to_string(child.stderr.as_mut().unwrap(), &mut err).unwrap();
-    assert_eq!(status.code(), Some(1), "{err}");
-    let s = summary_of(&out).unwrap();
+    (status.code(), err, summary_of(out).unwrap())
+}
+
+/// A signal takes effect at the step it arrives in, not at the next output
+/// time (issue 26, D09): a run whose only outputs are its start and its end
+/// (10⁷ explicit steps between them) stops at once with a true summary.
+#[cfg(unix)]
+#[test]
+fn a_signal_does_not_wait_for_the_next_output_time() {
+    let dir = tmp("signal_between_outputs");
+    let scene = with_run(
+        "cantilever_gravity.toml",
+        "[run]\nduration = 100.0\nintegrator = \"rk4\"\ndt = 1e-5\noutput_every = 100.0",
+        &dir,
+    );
+    let (code, err, s) = signal_a_run(&scene, &dir.join("out"), 0, "TERM");
+    assert_eq!(code, Some(1), "{err}");
     let st = s["status"].as_str().unwrap();
     assert!(
         st.contains("interrupted by SIGTERM at t = 0 (1 of 2"),
@@ -1141,40 +1160,8 @@ fn a_signal_ends_the_run_with_a_true_summary() {
             &dir,
         );
         let out = dir.join("out");
-        let mut child = bin()
-            .args([
-                "run",
-                scene.to_str().unwrap(),
-                "--out",
-                out.to_str().unwrap(),
-                "--quiet",
-            ])
-            .stderr(std::process::Stdio::piped())
-            .spawn()
-            .unwrap();
-        let start = std::time::Instant::now();
-        loop {
-            let s = summary_of(&out);
-            if let Some(s) = s.filter(|s| s["output_rows"].as_u64().unwrap_or(0) > 2) {
-                assert_eq!(s["status"], "running");
-                assert_eq!(s["pid"], child.id());
-                break;
-            }
-            assert!(start.elapsed().as_secs() < 120, "no running summary");
-            std::thread::sleep(std::time::Duration::from_millis(50));
-        }
-        // The signal by kill(1): the workspace denies unsafe code, and
-        // libc::kill would need it.
-        let kill = std::process::Command::new("kill")
-            .args(["-s", sig, &child.id().to_string()])
-            .status()
-            .unwrap();
-        assert!(kill.success());
-        let status = child.wait().unwrap();
-        let mut err = String::new();
-        std::io::Read::read_to_string(child.stderr.as_mut().unwrap(), &mut err).unwrap();
-        assert_eq!(status.code(), Some(1), "{name}: {err}");
-        let s = summary_of(&out).unwrap();
+        let (code, err, s) = signal_a_run(&scene, &out, 2, sig);
+        assert_eq!(code, Some(1), "{name}: {err}");
         let st = s["status"].as_str().unwrap();
         assert!(st.contains(&format!("interrupted by {name}")), "{st}");
         let (_, rows) = csv(&out.join("trajectory.csv"));
