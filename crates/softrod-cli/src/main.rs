@@ -203,7 +203,33 @@ enum Command {
     },
 }
 
+/// Exit status of a command whose standard output was closed under it
+/// (`softrod check SCENE | head`): 128 + SIGPIPE, what a shell reports for
+/// a writer the signal ended.
+const EXIT_BROKEN_PIPE: i32 = 141;
+
+/// A closed standard output ends the command quietly: Rust ignores SIGPIPE,
+/// so `println!` panics on the broken pipe (and restoring the signal needs
+/// unsafe code, which the workspace denies). Every other panic is reported
+/// as before.
+fn quiet_on_broken_pipe() {
+    let default = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let payload = info.payload();
+        let msg = payload
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| payload.downcast_ref::<&str>().copied())
+            .unwrap_or("");
+        if msg.starts_with("failed printing to stdout") && msg.contains("Broken pipe") {
+            std::process::exit(EXIT_BROKEN_PIPE);
+        }
+        default(info);
+    }));
+}
+
 fn main() -> ExitCode {
+    quiet_on_broken_pipe();
     let cli = Cli::parse();
     let quiet = cli.quiet;
     if !cli.set.is_empty() && matches!(cli.command, Command::View { .. }) {

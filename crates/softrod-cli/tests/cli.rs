@@ -1282,3 +1282,40 @@ fn snapshots_choose_the_drawn_times() {
     assert!(stderr(&o).contains("--snapshots"), "{}", stderr(&o));
     assert!(!dir.join("other").exists());
 }
+
+/// A reader that stops early (`softrod check SCENE | head`) ends the command
+/// quietly with 128 + SIGPIPE, as a shell reports, not with a panic: 2000
+/// rods print 185 kB, more than a pipe holds, so the writer meets the
+/// closed pipe.
+#[cfg(unix)]
+#[test]
+fn a_closed_stdout_ends_the_command_quietly() {
+    let dir = tmp("broken_pipe");
+    let rods: String = (0..2000)
+        .map(|i| {
+            format!(
+                "[[rod]]\nname = \"r{i}\"\nlength = 0.1\npieces = 1\n\
+                 base = {{ position = [{}, 0.0, 0.0] }}\n\
+                 section = {{ shape = \"circle\", radius = 0.001 }}\n\
+                 material = {{ density = 1000.0, young = 1.0e6, poisson = 0.5 }}\n",
+                0.1 * i as f64
+            )
+        })
+        .collect();
+    let scene = dir.join("many.toml");
+    std::fs::write(&scene, rods + "[run]\nintegrator = \"dopri5\"\n").unwrap();
+    let mut child = bin()
+        .args(["check", scene.to_str().unwrap()])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut first = [0u8; 10];
+    std::io::Read::read_exact(child.stdout.as_mut().unwrap(), &mut first).unwrap();
+    drop(child.stdout.take());
+    let status = child.wait().unwrap();
+    let mut err = String::new();
+    std::io::Read::read_to_string(child.stderr.as_mut().unwrap(), &mut err).unwrap();
+    assert_eq!(status.code(), Some(141), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+}
