@@ -379,3 +379,48 @@ fn overlapping_rods_exit_2_and_write_nothing() {
     );
     assert!(!out.exists());
 }
+
+/// A penetration beyond the stated bound (10 % of the radius, CT3) is never
+/// silent: a concentrated load presses the dropped rod's tip into the table
+/// (the stiffness is set by each point's own weight and inertia), and the
+/// run warns on stderr and in `summary.json`, naming the rod, `s` and the
+/// depth; the same drop without the load stays within the bound and says
+/// nothing.
+#[test]
+fn penetration_beyond_the_stated_bound_is_a_warning() {
+    let dir = tmp("penetration-warning");
+    let run_table = "[run]\nduration = 0.2\nrtol = 1.0e-5\natol = 1.0e-8\noutput_every = 5.0e-3\n";
+    let quiet = common::with_run("rod_dropped_on_table.toml", run_table, &dir);
+    let o = common::run_scene(&quiet, &dir.join("quiet"));
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let s = json_file(&dir.join("quiet/summary.json"));
+    let pen = s["max_penetration"].as_f64().unwrap();
+    assert!(pen > 0.0 && pen < 0.1 * 0.01, "{pen}");
+    assert!(!stderr(&o).contains("sank"), "{}", stderr(&o));
+    let pressed = dir.join("pressed.toml");
+    std::fs::write(
+        &pressed,
+        common::example_with_run("rod_dropped_on_table.toml", "")
+            + "[[load]]\nrod = \"rod\"\ns = 0.2\nforce = [0.0, 0.0, -2.0]\n"
+            + run_table,
+    )
+    .unwrap();
+    let out = dir.join("pressed");
+    let o = run(&[
+        "run",
+        pressed.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let s = json_file(&dir.join("pressed/summary.json"));
+    let pen = s["max_penetration"].as_f64().unwrap();
+    assert!(pen > 0.1 * 0.01, "{pen}");
+    let warned: Vec<String> = serde_json::from_value(s["warnings"].clone()).unwrap();
+    let w = warned
+        .iter()
+        .find(|w| w.starts_with("contact: rod \"rod\" at s = 0.2000 m sank"))
+        .unwrap_or_else(|| panic!("{warned:?}"));
+    assert!(w.contains("beyond the stated 10 %"), "{w}");
+    assert!(stderr(&o).contains(w.as_str()), "{}", stderr(&o));
+}

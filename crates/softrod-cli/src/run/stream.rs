@@ -140,6 +140,11 @@ impl Streamer {
         self.recorder.max_penetration()
     }
 
+    /// The deepest penetration relative to its contact's radius, and where.
+    pub fn deepest_relative_penetration(&self) -> Option<softrod::record::Penetration> {
+        self.recorder.deepest_relative_penetration()
+    }
+
     /// The most contacts active at one row.
     pub fn max_contacts(&self) -> usize {
         self.recorder.max_contacts()

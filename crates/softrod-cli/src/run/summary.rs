@@ -72,6 +72,17 @@ impl Summary {
     /// Adds `max_penetration` (the largest `−gap` over the output rows,
     /// m) and `max_contacts` (the most contacts at one row), for a run with
     /// contact (scene-format.md, "Contact").
+    /// Appends a warning to `warnings` (creating it).
+    pub fn add_warning(&mut self, warning: String) {
+        let list = self
+            .fixed
+            .entry("warnings")
+            .or_insert_with(|| serde_json::json!([]));
+        if let Some(a) = list.as_array_mut() {
+            a.push(serde_json::json!(warning));
+        }
+    }
+
     pub fn add_contact(&mut self, max_penetration: f64, max_contacts: usize) {
         self.fixed
             .insert("max_penetration".into(), serde_json::json!(max_penetration));

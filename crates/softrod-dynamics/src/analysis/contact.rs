@@ -76,6 +76,14 @@ impl Model {
         }
     }
 
+    /// The surface radius a contact's penetration is measured against \[m\]
+    /// (CT3): the rod's at `s`, the smaller of the two for rods touching.
+    /// The stated bounds are fractions of it (1 % at rest, 10 % in a 1 m/s
+    /// impact of the rod's own inertia).
+    pub fn contact_scale(&self, c: &ContactPoint) -> f64 {
+        self.allowed_at(c) / crate::model::contact::REST_PENETRATION
+    }
+
     fn point_of(&self, a: &Active) -> ContactPoint {
         let smp = &self.contact.samples[a.rod][a.sample];
         ContactPoint {
