@@ -300,8 +300,10 @@ pub fn simulate_controlled(
             break;
         }
     }
+    let warning = rec.inner.penetration_warning(&inputs.sys.model);
     let mut traj = rec.inner.into_trajectory();
     traj.summary.stats = stats;
+    traj.summary.warnings.extend(warning);
     Ok(traj)
 }
 

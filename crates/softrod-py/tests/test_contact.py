@@ -260,3 +260,25 @@ def test_bad_contact_settings_and_values_raise():
         sim.contacts(np.zeros(sim.n_dof + 1))
     with pytest.raises(softrod.InputError, match="t must be finite"):
         sim.contacts(np.zeros(sim.n_dof), t=float("nan"))
+
+
+def test_penetration_beyond_the_stated_bound_is_a_trajectory_warning():
+    """A run whose contact sinks deeper than 10 % of the radius says so in
+    `Trajectory.warnings` (as `softrod run` does in summary.json): a 2 N
+    load presses the tip of the dropped rod of
+    examples/rod_dropped_on_table.toml into the table; without it the
+    landing stays within the bound and nothing is said."""
+    from pathlib import Path
+
+    text = (Path(__file__).parents[3] / "examples" / "rod_dropped_on_table.toml").read_text()
+    text = text[: text.index("[run]")]
+    run = dict(duration=0.2, output_every=5e-3, rtol=1e-5, atol=1e-8)
+    calm = softrod.Simulation.from_toml(text).simulate(**run)
+    assert 0.0 < calm.max_penetration < 0.1 * 0.01
+    assert not [w for w in calm.warnings if w.startswith("contact:")]
+    pressed = softrod.Simulation.from_toml(
+        text + '[[load]]\nrod = "rod"\ns = 0.2\nforce = [0.0, 0.0, -2.0]\n'
+    ).simulate(**run)
+    assert pressed.max_penetration > 0.1 * 0.01
+    (w,) = [w for w in pressed.warnings if w.startswith("contact:")]
+    assert 'rod "rod" at s = 0.2000 m sank' in w and "beyond the stated 10 %" in w

@@ -24,10 +24,6 @@ use stream::{Streamer, chosen_rows};
 use summary::Summary;
 
 /// The scene's file stem: the title of figures and view.
-/// The penetration a run may reach, over the contact's radius, before it
-/// warns: the stated bound of a 1 m/s impact (docs/theory-contact.md CT3).
-const IMPACT_PENETRATION: f64 = 0.1;
-
 pub fn scene_title(path: &Path) -> String {
     path.file_stem()
         .map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned())
@@ -190,22 +186,7 @@ pub fn run(
         summary_final.add_contact(streamer.max_penetration(), streamer.max_contacts());
         // Beyond the stated bound (CT3) the run goes on (it fails only at
         // half the radius), but never silently.
-        if let Some(p) = streamer
-            .deepest_relative_penetration()
-            .filter(|p| p.relative > IMPACT_PENETRATION)
-        {
-            let w = format!(
-                "contact: rod {:?} at s = {:.4} m sank {:.3e} m ({:.1} % of its radius) at t = {}, \
-                 beyond the stated {:.0} % (docs/theory-contact.md CT3: the stiffness is set by \
-                 each point's own weight and inertia; a concentrated load or a faster impact sinks \
-                 deeper)",
-                l.sim.model().rods()[p.rod].spec.name,
-                p.s,
-                p.depth,
-                100.0 * p.relative,
-                p.t,
-                100.0 * IMPACT_PENETRATION
-            );
+        if let Some(w) = streamer.penetration_warning(l.sim.model()) {
             if !quiet {
                 eprintln!("softrod: warning: {w}");
             }

@@ -140,9 +140,9 @@ impl Streamer {
         self.recorder.max_penetration()
     }
 
-    /// The deepest penetration relative to its contact's radius, and where.
-    pub fn deepest_relative_penetration(&self) -> Option<softrod::record::Penetration> {
-        self.recorder.deepest_relative_penetration()
+    /// [`softrod::record::Recorder::penetration_warning`] of the rows so far.
+    pub fn penetration_warning(&self, model: &softrod::dynamics::Model) -> Option<String> {
+        self.recorder.penetration_warning(model)
     }
 
     /// The most contacts active at one row.

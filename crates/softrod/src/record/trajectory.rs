@@ -177,6 +177,11 @@ impl TrajectoryRecorder {
         &mut self.traj
     }
 
+    /// [`Recorder::penetration_warning`] of the samples recorded.
+    pub fn penetration_warning(&self, model: &Model) -> Option<String> {
+        self.recorder.penetration_warning(model)
+    }
+
     /// The record.
     pub fn into_trajectory(self) -> Trajectory {
         self.traj

@@ -259,8 +259,10 @@ impl Simulation {
         }
         let mut keep = TrajectoryRecorder::new(self.model());
         let summary = self.simulate_with(duration, &mut keep)?;
+        let warning = keep.penetration_warning(self.model());
         let mut traj = keep.into_trajectory();
         traj.summary = summary;
+        traj.summary.warnings.extend(warning);
         Ok(traj)
     }
 }
