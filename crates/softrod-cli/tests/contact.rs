@@ -215,13 +215,7 @@ fn run_writes_contacts_csv_and_the_summary_agrees_with_it() {
     let scene = dir.join("droop.toml");
     std::fs::write(&scene, DROOP).unwrap();
     let out = dir.join("out");
-    let o = run(&[
-        "run",
-        scene.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--quiet",
-    ]);
+    let o = common::run_scene(&scene, &out);
     assert!(o.status.success(), "{}", stderr(&o));
     let text = std::fs::read_to_string(out.join("contacts.csv")).unwrap();
     let mut lines = text.lines();
@@ -258,13 +252,7 @@ fn no_contact_no_contacts_file() {
     let scene = dir.join("plain.toml");
     std::fs::write(&scene, DROOP.split("[[obstacle]]").next().unwrap()).unwrap();
     let out = dir.join("out");
-    let o = run(&[
-        "run",
-        scene.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--quiet",
-    ]);
+    let o = common::run_scene(&scene, &out);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(!out.join("contacts.csv").exists());
     let summary = json_file(&out.join("summary.json"));
@@ -283,13 +271,7 @@ fn initial_overlap_exits_2_and_writes_nothing() {
     )
     .unwrap();
     let out = dir.join("out");
-    let o = run(&[
-        "run",
-        scene.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--quiet",
-    ]);
+    let o = common::run_scene(&scene, &out);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     let err = stderr(&o);
     assert!(
@@ -312,13 +294,7 @@ fn crossing_rods_example_reports_the_pair() {
     let dir = tmp("crossing");
     let scene = common::examples().join("crossing_rods.toml");
     let out = dir.join("out");
-    let o = run(&[
-        "run",
-        scene.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--quiet",
-    ]);
+    let o = common::run_scene(&scene, &out);
     assert!(o.status.success(), "{}", stderr(&o));
     let text = std::fs::read_to_string(out.join("contacts.csv")).unwrap();
     let rows: Vec<Vec<&str>> = text
@@ -360,13 +336,7 @@ fn overlapping_rods_exit_2_and_write_nothing() {
     )
     .unwrap();
     let out = dir.join("out");
-    let o = run(&[
-        "run",
-        scene.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--quiet",
-    ]);
+    let o = common::run_scene(&scene, &out);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     let err = stderr(&o);
     assert!(
