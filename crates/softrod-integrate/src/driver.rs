@@ -320,6 +320,7 @@ fn drive<P: Problem, St: Stepper<P>>(
     }
     let mut yo = DVector::zeros(n);
     let mut after_breakpoint = false;
+    let mut h_next = 0.0;
 
     while !early_stop && st.t() < t1 {
         if stats.steps >= opts.max_steps {
@@ -333,7 +334,15 @@ fn drive<P: Problem, St: Stepper<P>>(
             st.restart_after_breakpoint(p, &mut stats)?;
         }
         let end = step_end(opts, st.t(), t1);
+        let h_proposed = st.state().h_next;
         st.step(p, end, opts, &mut stats)?;
+        // A step shortened to land on t1 says nothing against the longer
+        // step proposed before it: a continuation may try that one.
+        h_next = if st.t() == t1 && st.h_last() < h_proposed {
+            st.state().h_next.max(h_proposed)
+        } else {
+            st.state().h_next
+        };
         after_breakpoint = end < t1 && st.t() == end;
         let (t, h) = (st.t(), st.h_last());
         if let Some(index) = first_non_finite(st.y().as_slice()) {
@@ -469,6 +478,7 @@ fn drive<P: Problem, St: Stepper<P>>(
         y_final,
         status,
         stats,
+        h_next,
     })
 }
 

@@ -66,4 +66,17 @@ pub struct Solution {
     pub status: Status,
     /// Work counters.
     pub stats: Stats,
+    /// The step the method would take next from `(t_final, y_final)` \[s\]
+    /// (its controller's proposal for an adaptive method, the step for a
+    /// fixed-step one; `0` if no step was taken; if the last step was cut
+    /// short to land on the end of the span, the larger of the proposal
+    /// before it and after it). A continuation of the run with the same
+    /// right-hand side can start with it
+    /// ([`StepControl::Adaptive`](crate::StepControl::Adaptive) `{ h0:
+    /// Some(h_next) }`) instead of ramping up again from a small first
+    /// step. Not after a jump of the inputs: the transient it starts needs
+    /// the small first step again (measured on 20 Hz control periods of a
+    /// cable arm, docs/performance.md "Learning environments": the carried
+    /// step is rejected ~5 times a period).
+    pub h_next: f64,
 }

@@ -682,3 +682,57 @@ fn output_callback_streams_dense_output_and_can_stop() {
         assert_eq!(sol.y_final, reference.y[4]);
     }
 }
+
+/// `Solution::h_next` lets a run be continued where it ended without
+/// ramping the step up again (issue 29's control periods): twenty periods
+/// of 0.05 s, each a new run from the last one's end, started with the
+/// carried `h_next` take fewer steps than the same periods each started
+/// from the small first step `1e-4`, and both stay within the tolerance of
+/// the exact solution at every period's end.
+#[test]
+fn a_continuation_starts_with_the_carried_step() {
+    let sys = Linear::damped();
+    for method in [
+        Integrator::Esdirk,
+        Integrator::Radau5,
+        Integrator::Rosenbrock,
+        Integrator::Dopri5,
+    ] {
+        let mut steps = [0usize; 2];
+        for (k, warm) in [false, true].into_iter().enumerate() {
+            let (mut q, mut qd) = (Linear::q0(), Linear::qd0());
+            let mut h: f64 = 1e-4;
+            let mut worst: f64 = 0.0;
+            for i in 0..20 {
+                let (t0, t1) = (0.05 * i as f64, 0.05 * (i + 1) as f64);
+                let opts = Options {
+                    step: softrod_integrate::StepControl::Adaptive {
+                        h0: Some(if warm { h.min(t1 - t0) } else { 1e-4 }),
+                    },
+                    ..Options::tol(1e-6, 1e-8)
+                };
+                let sol = integrate_second_order(
+                    &mut sys.clone(),
+                    method,
+                    (t0, t1),
+                    &q,
+                    &qd,
+                    &opts,
+                    &mut NoHooks,
+                )
+                .unwrap();
+                assert!(sol.h_next > 0.0 && sol.h_next.is_finite(), "{method:?}");
+                h = sol.h_next;
+                steps[k] += sol.stats.steps;
+                let n = q.len();
+                q.copy_from(&sol.y_final.rows(0, n));
+                qd.copy_from(&sol.y_final.rows(n, n));
+                let exact = sys.exact(t1, &Linear::y0());
+                worst = worst.max(dist(&sol.y_final, &exact));
+            }
+            assert!(worst < 1e-4, "{method:?} warm {warm}: error {worst:.2e}");
+        }
+        println!("{method:?}: {} steps cold, {} warm", steps[0], steps[1]);
+        assert!(steps[1] < steps[0], "{method:?}: {steps:?}");
+    }
+}
