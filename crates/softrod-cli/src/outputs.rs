@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use softrod::dynamics::Model;
 use softrod::mechanics::{Routing, Section};
 use softrod_viz::BodyShape;
+use softrod_viz::collect::FrameCollector;
 use softrod_viz::run_dir::{CableSpec, RadiusProfile, Rod, VIEW_JSON, ViewSpec};
 use softrod_viz::{ViewOptions, ViewStats};
 
@@ -106,23 +107,28 @@ fn equivalent_box(mass: f64, inertia: &nalgebra::Matrix3<f64>) -> [f64; 3] {
     [edge(0), edge(1), edge(2)]
 }
 
-/// Writes `DIR/view.json` and `DIR/view.html` from the directory's files.
-pub fn write_view(dir: &Path, model: &Model, title: &str) -> Result<ViewStats, CliError> {
-    view_spec(model, title)
-        .write(&dir.join(VIEW_JSON))
+/// Writes `DIR/view.json`, and `DIR/view.html` from the run's `frames`
+/// (the page `softrod view DIR` rebuilds from the files).
+pub fn write_view(
+    dir: &Path,
+    model: &Model,
+    title: &str,
+    frames: FrameCollector,
+) -> Result<ViewStats, CliError> {
+    let spec = view_spec(model, title);
+    spec.write(&dir.join(VIEW_JSON))
         .map_err(|e| failed(softrod::report(&e)))?;
-    regenerate_view(dir)
+    frames
+        .write_view(dir, &spec, &ViewOptions::default())
+        .map(|(_, stats)| stats)
+        .map_err(|e| view_failed(dir, &e))
 }
 
-/// Rebuilds `DIR/view.html` from `shape.csv`, `view.json` and `bodies.csv`.
-pub fn regenerate_view(dir: &Path) -> Result<ViewStats, CliError> {
-    softrod_viz::run_dir::write_view(dir, &ViewOptions::default())
-        .map(|(_, stats)| stats)
-        .map_err(|e| {
-            // Never leave a truncated page (a full disk) behind.
-            let _ = std::fs::remove_file(dir.join(softrod_viz::run_dir::VIEW_HTML));
-            failed(format!("3-D view: {}", softrod::report(&e)))
-        })
+/// A failed view: the page is removed (never a truncated one after a
+/// full disk) and the error says why.
+fn view_failed(dir: &Path, e: &softrod_viz::VizError) -> CliError {
+    let _ = std::fs::remove_file(dir.join(softrod_viz::run_dir::VIEW_HTML));
+    failed(format!("3-D view: {}", softrod::report(e)))
 }
 
 /// The files `softrod run` writes (besides `strains_R.svg`): removed at the

@@ -643,6 +643,35 @@ fn run_writes_the_view_and_view_rebuilds_it() {
     assert!(stderr(&o).contains("not a run directory"), "{}", stderr(&o));
 }
 
+/// The view `softrod run` builds from its frames is the page `softrod view`
+/// rebuilds from the files, also with a body (its poses from bodies.csv).
+#[test]
+fn the_runs_view_with_a_body_equals_the_rebuilt_one() {
+    let dir = tmp("view-body");
+    let scene = with_run(
+        "arm_with_payload.toml",
+        "[run]\nduration = 0.05\noutput_every = 0.001",
+        &dir,
+    );
+    let out = dir.join("out");
+    let o = run_scene(&scene, &out);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let page = std::fs::read(out.join("view.html")).unwrap();
+    let o = run(&["view", out.to_str().unwrap(), "--quiet"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        std::fs::read(out.join("view.html")).unwrap() == page,
+        "the pages differ"
+    );
+    let d = softrod_viz::html::embedded_data(&String::from_utf8(page).unwrap()).unwrap();
+    assert_eq!(
+        d["bodies"].as_array().unwrap().len(),
+        2,
+        "the scene's two bodies"
+    );
+    assert_eq!(d["times"].as_array().unwrap().len(), 51);
+}
+
 /// `statics --out` writes the equilibrium's figure, `modes --out` the mode
 /// shapes; the JSON on stdout is unchanged by it.
 #[test]

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import tomllib
 
+import re
+
 import numpy as np
 import pytest
 
@@ -129,14 +131,26 @@ def test_from_dict_reads_the_scene_as_toml():
     assert_same_model(softrod.Simulation.from_dict(as_dict), sim)
 
 
-@pytest.mark.parametrize("name", sorted(
-    p.name for p in EXAMPLES.glob("*.toml")
-    # Rods and bodies interleaved: a dict lists them apart, in another order.
-    if p.name != "arm_with_payload.toml"))
+def _interleaved(text):
+    """Whether a body table comes before a rod table: the file's q order
+    may then interleave them, which a dict (rods and bodies under two keys)
+    cannot state."""
+    heads = re.findall(r"^\[\[(rod|body)\]\]", text, flags=re.M)
+    return "body" in heads and "rod" in heads[heads.index("body"):]
+
+
+@pytest.mark.parametrize("name", sorted(p.name for p in EXAMPLES.glob("*.toml")))
 def test_every_example_reads_the_same_from_a_dict(name):
     path = EXAMPLES / name
+    text = path.read_text()
     a = softrod.Simulation.from_file(path)
-    b = softrod.Simulation.from_dict(tomllib.loads(path.read_text()), name=name)
+    b = softrod.Simulation.from_dict(tomllib.loads(text), name=name)
+    if a.q_names != b.q_names:
+        # Rods and bodies with coordinates interleaved in the file: the
+        # dict's model has the same coordinates, rods first.
+        assert _interleaved(text)
+        assert sorted(a.q_names) == sorted(b.q_names)
+        return
     assert_same_model(a, b, t=0.0)
     assert a.settings.integrator == b.settings.integrator
     assert a.settings.rtol == b.settings.rtol

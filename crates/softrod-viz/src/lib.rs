@@ -7,6 +7,7 @@
 //!   series.
 //! - [`run_dir`]: reading and writing a run directory's `shape.csv`,
 //!   `view.json` and `bodies.csv`, so a view can be rebuilt from files alone.
+//! - [`collect`]: the same view built from a run's frames as it produces them.
 //!
 //! The crate depends on no physics crate: every input is plain data in SI
 //! units and the world frame (see [`data`]).
@@ -23,6 +24,7 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod collect;
 pub mod data;
 pub mod decimate;
 pub mod demo;

@@ -752,6 +752,37 @@ pub fn view_from_dir_thinned(dir: &Path, cap: usize) -> Result<ViewData, VizErro
                 .unwrap_or_default(),
         )
     };
+    let mut body_poses = Vec::new();
+    if !spec.bodies.is_empty() {
+        let path = dir.join(BODIES_CSV);
+        let (times, poses) = read_bodies_csv_thinned(&path, cap)?;
+        if times.len() != shape.times.len()
+            || !times.iter().zip(&shape.times).all(|(a, b)| same(*a, *b))
+        {
+            return Err(csv_err(
+                &path,
+                0,
+                format!(
+                    "{} times, not the {} times of {SHAPE_CSV}",
+                    times.len(),
+                    shape.times.len()
+                ),
+            ));
+        }
+        body_poses = poses;
+    }
+    view_from_parts(&spec, &spec_path, shape, body_poses)
+}
+
+/// The view of `spec` (what `view.json` holds, read from `spec_path`,
+/// named in errors) with the rods' shapes and the bodies' poses over the
+/// same times.
+pub fn view_from_parts(
+    spec: &ViewSpec,
+    spec_path: &Path,
+    shape: ShapeData,
+    body_poses: Vec<BodyPoses>,
+) -> Result<ViewData, VizError> {
     let mut view = ViewData::new(spec.title.clone(), shape.times.clone());
     view.up = spec.up;
     for rod in shape.rods {
@@ -790,38 +821,19 @@ pub fn view_from_dir_thinned(dir: &Path, cap: usize) -> Result<ViewData, VizErro
             points: routed_cable(rod, &c.path),
         });
     }
-    let mut body_poses = Vec::new();
-    if !spec.bodies.is_empty() {
-        let path = dir.join(BODIES_CSV);
-        let (times, poses) = read_bodies_csv_thinned(&path, cap)?;
-        if times.len() != view.times.len()
-            || !times.iter().zip(&view.times).all(|(a, b)| same(*a, *b))
-        {
-            return Err(csv_err(
-                &path,
+    for b in &spec.bodies {
+        let p = body_poses.iter().find(|p| p.0 == b.name).ok_or_else(|| {
+            csv_err(
+                &spec_path.with_file_name(BODIES_CSV),
                 0,
-                format!(
-                    "{} times, not the {} times of {SHAPE_CSV}",
-                    times.len(),
-                    view.times.len()
-                ),
-            ));
-        }
-        for b in &spec.bodies {
-            let p = poses.iter().find(|p| p.0 == b.name).ok_or_else(|| {
-                csv_err(
-                    &path,
-                    0,
-                    format!("no rows for body {:?} of {VIEW_JSON}", b.name),
-                )
-            })?;
-            view.bodies.push(BodyTrack {
-                name: b.name.clone(),
-                shape: b.shape,
-                poses: p.1.clone(),
-            });
-        }
-        body_poses = poses;
+                format!("no rows for body {:?} of {VIEW_JSON}", b.name),
+            )
+        })?;
+        view.bodies.push(BodyTrack {
+            name: b.name.clone(),
+            shape: b.shape,
+            poses: p.1.clone(),
+        });
     }
     for o in &spec.obstacles {
         let poses = match &o.parent {
@@ -850,6 +862,16 @@ pub fn view_from_dir_thinned(dir: &Path, cap: usize) -> Result<ViewData, VizErro
 /// more times than the page's frames (for finer tip traces): 2·10⁶, about
 /// 110 MB.
 pub const VIEW_POSE_BUDGET: usize = 2_000_000;
+
+/// How many output times a view keeps (between `cap` and `2·cap`, see
+/// [`Thinning`]) when each time holds `per_time` poses: up to
+/// [`ViewOptions::max_trace_points`] for the tip traces while their poses
+/// fit in [`VIEW_POSE_BUDGET`], never fewer than [`ViewOptions::max_frames`].
+pub fn view_cap(per_time: usize, opts: &ViewOptions) -> usize {
+    (VIEW_POSE_BUDGET / per_time.max(1))
+        .min(opts.max_trace_points)
+        .max(opts.max_frames)
+}
 
 /// Rows of `shape.csv`'s first output time (0 if unreadable: the full read
 /// reports why).
@@ -880,10 +902,7 @@ fn rows_at_first_time(path: &Path) -> usize {
 /// traces while their poses fit in [`VIEW_POSE_BUDGET`], never fewer than
 /// [`ViewOptions::max_frames`] — and streams the rest past.
 pub fn write_view(dir: &Path, opts: &ViewOptions) -> Result<(PathBuf, ViewStats), VizError> {
-    let per_time = rows_at_first_time(&dir.join(SHAPE_CSV)).max(1);
-    let cap = (VIEW_POSE_BUDGET / per_time)
-        .min(opts.max_trace_points)
-        .max(opts.max_frames);
+    let cap = view_cap(rows_at_first_time(&dir.join(SHAPE_CSV)), opts);
     let view = view_from_dir_thinned(dir, cap)?;
     let out = dir.join(VIEW_HTML);
     let stats = write_html(&out, &view, opts)?;

@@ -357,3 +357,102 @@ fn thinned_reads_keep_evenly_spaced_times_and_the_last() {
         );
     }
 }
+
+/// The view a run builds from its frames as it writes them
+/// (`FrameCollector`) keeps the times and poses the files give back when
+/// read (thinned or not), and the same page as `write_view` of the
+/// directory: a second path to the same numbers.
+#[test]
+fn collected_frames_equal_the_files_read_back() {
+    use softrod_viz::collect::FrameCollector;
+    let dir = scratch("collect");
+    let view = SwingingRods {
+        rods: 2,
+        times: 61,
+        samples: 9,
+        body: true,
+        ..SwingingRods::default()
+    }
+    .build();
+    let ball = &view.bodies[0];
+    // Negative zeros are written "0": the collector must hold what the
+    // files hold.
+    let mut rods = view.rods.clone();
+    rods[1].frames[4][0].position = [-0.0, 1e-300, -2.5e-7];
+    let rod_list = || -> Vec<(String, Vec<f64>)> {
+        rods.iter().map(|r| (r.name.clone(), r.s.clone())).collect()
+    };
+    let collect = |mut c: FrameCollector| {
+        for (k, t) in view.times.iter().enumerate() {
+            for (i, r) in rods.iter().enumerate() {
+                c.push_rod(i, r.frames[k].iter().copied());
+            }
+            c.push_body(ball.poses[k]);
+            c.end_time(*t).unwrap();
+        }
+        c
+    };
+    {
+        let mut w =
+            ShapeCsvWriter::new(std::fs::File::create(dir.join("shape.csv")).unwrap()).unwrap();
+        let mut b =
+            BodiesCsvWriter::new(std::fs::File::create(dir.join("bodies.csv")).unwrap()).unwrap();
+        for (k, t) in view.times.iter().enumerate() {
+            for r in &rods {
+                w.write_frame(*t, &r.name, &r.s, &r.frames[k]).unwrap();
+            }
+            b.write_pose(*t, &ball.name, &ball.poses[k]).unwrap();
+        }
+        w.flush().unwrap();
+        b.flush().unwrap();
+    }
+    for cap in [1, 3, 7, 30, 1000] {
+        let c = collect(FrameCollector::with_cap(
+            rod_list(),
+            vec![ball.name.clone()],
+            cap,
+        ));
+        assert_eq!(c.times_seen(), view.times.len());
+        let (shape, bodies) = c.finish();
+        let file = read_shape_csv_thinned(&dir.join("shape.csv"), cap).unwrap();
+        assert_eq!(shape, file, "cap {cap}");
+        let (bt, bp) = read_bodies_csv_thinned(&dir.join("bodies.csv"), cap).unwrap();
+        assert_eq!(bt, shape.times, "cap {cap}");
+        assert_eq!(bodies, bp, "cap {cap}");
+    }
+    // A frame with a sample missing is an error naming the rod, and the
+    // time is dropped.
+    let mut c = FrameCollector::with_cap(rod_list(), vec![ball.name.clone()], 10);
+    c.push_rod(0, rods[0].frames[0][1..].iter().copied());
+    c.push_rod(1, rods[1].frames[0].iter().copied());
+    c.push_body(ball.poses[0]);
+    let e = c.end_time(0.0).unwrap_err().to_string();
+    assert!(
+        e.contains(&format!("rod {:?}: 8 poses for 9 samples", rods[0].name)),
+        "{e}"
+    );
+    assert_eq!(c.times_seen(), 0);
+
+    let mut spec = ViewSpec::new("collected");
+    spec.bodies.push(BodySpec {
+        name: ball.name.clone(),
+        shape: BodyShape::Sphere { radius: 0.02 },
+    });
+    spec.write(&dir.join("view.json")).unwrap();
+    let opts = ViewOptions::default();
+    let (html, _) = write_view(&dir, &opts).unwrap();
+    let from_files = std::fs::read(&html).unwrap();
+    let c = collect(FrameCollector::new(
+        rod_list(),
+        vec![ball.name.clone()],
+        &opts,
+    ));
+    let (html2, stats) = c.write_view(&dir, &spec, &opts).unwrap();
+    assert_eq!(html2, html);
+    assert_eq!(stats.source_frames, view.times.len());
+    assert!(
+        std::fs::read(&html).unwrap() == from_files,
+        "the pages differ"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -395,6 +395,13 @@ impl Watch {
     }
 
     fn sync_inputs(&mut self, model: &Model, data: &Data) -> Result<(), DynamicsError> {
+        // The friction forces whose power is counted are the run's: with
+        // its anchors, not a fresh workspace's (which would see every
+        // sticking contact as new and leave its dissipation out).
+        self.full.copy_friction_state_from(data);
+        if let Some((_, od)) = &mut self.open {
+            od.copy_friction_state_from(data);
+        }
         if self.full.cable_tensions() != data.cable_tensions() {
             self.full.set_cable_tensions(model, data.cable_tensions())?;
             if let Some((om, od)) = &mut self.open {

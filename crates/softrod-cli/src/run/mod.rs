@@ -221,6 +221,7 @@ pub fn run(
     // show where it went wrong).
     let title = scene_title(path);
     let model = l.sim.model();
+    let frames = streamer.take_view();
     let plot_result = plots::run_figures(&dir, streamer.finish_series(), model, &title)
         .and_then(|names| {
             if png {
@@ -229,12 +230,11 @@ pub fn run(
                 Ok(())
             }
         })
-        .and_then(|()| {
-            if streamer.rows_written() > 0 {
-                outputs::write_view(&dir, model, &title).map(|_| ())
-            } else {
-                Ok(())
+        .and_then(|()| match frames {
+            Some(frames) if streamer.rows_written() > 0 => {
+                outputs::write_view(&dir, model, &title, frames).map(|_| ())
             }
+            _ => Ok(()),
         });
     if status != "ok" {
         return Err(failed(format!(

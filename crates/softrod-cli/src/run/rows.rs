@@ -10,7 +10,9 @@ use std::path::Path;
 use softrod::dynamics::Model;
 use softrod::mechanics::Contactee;
 use softrod::record::{Columns, Record, position, quaternion};
+use softrod_viz::collect::FrameCollector;
 use softrod_viz::run_dir::{BODIES_HEADER, SHAPE_HEADER};
+use softrod_viz::{Pose, ViewOptions};
 
 use crate::common::{CliError, failed};
 use crate::npz;
@@ -94,6 +96,9 @@ pub struct RowWriter {
     /// With `--npz`: every written row's numbers, in `trajectory.csv`'s
     /// column order (kept for `trajectory.npz`, written at the end).
     npz_rows: Option<Vec<f64>>,
+    /// The frames of the 3-D view, kept as the rows are written (the view
+    /// is built from them, not from `shape.csv` read back).
+    view: Option<FrameCollector>,
 }
 
 impl RowWriter {
@@ -148,7 +153,24 @@ impl RowWriter {
             prefix: String::new(),
             values: Vec::with_capacity(columns.width()),
             npz_rows: npz.then(Vec::new),
+            view: None,
         })
+    }
+
+    /// Also keeps the frames of the 3-D view (`rods`: each rod's sample
+    /// abscissae, m), thinned as `softrod view` thins `shape.csv`.
+    pub fn collect_view(&mut self, model: &Model, rods: Vec<Vec<f64>>) {
+        let names = model.rods().iter().map(|r| r.spec.name.clone());
+        self.view = Some(FrameCollector::new(
+            names.zip(rods).collect(),
+            model.bodies().iter().map(|b| b.spec.name.clone()).collect(),
+            &ViewOptions::default(),
+        ));
+    }
+
+    /// The view's frames collected so far (see [`RowWriter::collect_view`]).
+    pub fn take_view(&mut self) -> Option<FrameCollector> {
+        self.view.take()
     }
 
     /// Appends `rec`'s rows to every file; on a failed write, cuts every
@@ -268,6 +290,25 @@ impl RowWriter {
         if let Some(rows) = &mut self.npz_rows {
             // `+ 0.0` turns −0 into 0, as the CSV writes it.
             rows.extend(self.values.iter().map(|v| v + 0.0));
+        }
+        if let Some(view) = &mut self.view {
+            for r in 0..self.rod_fields.len() {
+                view.push_rod(
+                    r,
+                    rec.poses.samples(r).iter().map(|g| Pose {
+                        position: position(g),
+                        rotation: quaternion(g),
+                    }),
+                );
+            }
+            for g in rec.poses.bodies() {
+                view.push_body(Pose {
+                    position: position(g),
+                    rotation: quaternion(g),
+                });
+            }
+            // The frame is whole by construction (the rows just written).
+            let _ = view.end_time(t);
         }
         Ok(())
     }

@@ -95,11 +95,12 @@ impl Streamer {
         model: &Model,
         times: &[f64],
         sampling: Vec<RodSampling>,
-        rows: RowWriter,
+        mut rows: RowWriter,
         snapshot_at: Vec<usize>,
         summary: Summary,
         bar: Option<ProgressBar>,
     ) -> Self {
+        rows.collect_view(model, sampling.iter().map(|r| r.s.clone()).collect());
         Self {
             recorder: Recorder::with_sampling(model, sampling),
             rows,
@@ -153,6 +154,11 @@ impl Streamer {
     /// The file writer (for `trajectory.npz` at the end).
     pub fn rows(&self) -> &RowWriter {
         &self.rows
+    }
+
+    /// The frames of the 3-D view kept from the rows written.
+    pub fn take_view(&mut self) -> Option<softrod_viz::collect::FrameCollector> {
+        self.rows.take_view()
     }
 
     /// The series for the figures; a run that stopped early gets its last

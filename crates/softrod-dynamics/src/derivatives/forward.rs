@@ -140,15 +140,7 @@ fn fd_derivatives<'a>(
     if let (Some(from), Some(to)) = (&data.contact, &mut work.id.contact) {
         // The friction state of the run, not a fresh one.
         if let Some(w) = &mut to.contact {
-            for (a, b) in w.anchors.iter_mut().zip(&from.anchors) {
-                a.copy_from_slice(b);
-            }
-            if let (Some(a), Some(b)) = (&mut w.pairs, &from.pairs) {
-                // Sized at most by the pairs that touch: no allocation
-                // once the list has grown to them.
-                a.anchors.clear();
-                a.anchors.extend_from_slice(&b.anchors);
-            }
+            w.copy_friction_state(from);
         }
     }
     inverse_dynamics_derivatives_with(model, &mut work.id, forces, t, q, qd, work.qdd.as_slice())?;

@@ -250,6 +250,19 @@ pub(crate) struct ContactWork {
 }
 
 impl ContactWork {
+    /// Takes `from`'s friction anchors (obstacles' and pairs'): the
+    /// friction state of a run, for a second evaluation of its forces.
+    /// Allocates only while the pairs' list grows to the pairs that touch.
+    pub(crate) fn copy_friction_state(&mut self, from: &ContactWork) {
+        for (a, b) in self.anchors.iter_mut().zip(&from.anchors) {
+            a.copy_from_slice(b);
+        }
+        if let (Some(a), Some(b)) = (&mut self.pairs, &from.pairs) {
+            a.anchors.clear();
+            a.anchors.extend_from_slice(&b.anchors);
+        }
+    }
+
     pub(crate) fn new(model: &Model) -> Self {
         let n_obs = model.contact.obstacles.len();
         Self {

@@ -221,6 +221,17 @@ impl Data {
         self.tensions.as_ref().map(|t| t.as_slice())
     }
 
+    /// Takes `other`'s friction state (the anchors of sticking contacts,
+    /// CT5, committed after accepted steps) so that forces evaluated with
+    /// this workspace are the forces of `other`'s run: e.g. a monitor that
+    /// keeps its own `Data` for the same model. Nothing without contact;
+    /// `other` must be a workspace of the same model.
+    pub fn copy_friction_state_from(&mut self, other: &Data) {
+        if let (Some(a), Some(b)) = (&mut self.contact, &other.contact) {
+            a.copy_friction_state(b);
+        }
+    }
+
     /// Tension of cable `c` of rod `rm` at time `t` \[N\]: the override
     /// when set, else the cable's schedule (without the load factor).
     #[inline]
