@@ -189,6 +189,15 @@ def test_the_contact_experiments_map_to_obstacles_and_contact_settings():
         assert cb.solver.Capability(cap) in solver.capabilities
 
 
+def test_the_crossing_is_unsupported_for_its_pinned_ends():
+    """The crossing's ropes are pinned at both ends (ball closures), and
+    softrod has no contact on models with loop closures yet: the runner
+    reports it unsupported with that reason."""
+    result = experiment.run(registry.load_experiment("crossing"), softrod_solver(), n_elements=5)
+    assert result.outcome == "unsupported"
+    assert any("loop closures" in m for m in result.missing), result.missing
+
+
 def test_rods_of_different_friction_are_refused_saying_why():
     a = Rod(((0.0, 0.0, 0.1), (0.2, 0.0, 0.1)), 0.01, MATERIAL, friction=0.2)
     # 1 cm apart: close enough to be simulated together (adapter._groups).

@@ -528,8 +528,13 @@ class SoftrodSolver:
         return 2.0 * scenario.slowest_frequency() if scenario.quasi_static else 0.0
 
     def settings(self, scenario: Scenario, *, n_elements: int, n_frames: int) -> dict:
-        """The numerical choices made for a run, and what building it measured."""
-        parts = self._parts(scenario, n_elements)
+        """The numerical choices made for a run, and what building it measured
+        (only the numerics, and why, for a scenario softrod cannot express:
+        :meth:`run` then raises what the runner reports as unsupported)."""
+        try:
+            parts = self._parts(scenario, n_elements)
+        except NotImplementedError as error:
+            return {**self.numerics(scenario), "unsupported": str(error)}
         rate = self._damping_rate(scenario)
         rods = scenario.rods
         fit = np.zeros(len(rods))
@@ -566,7 +571,10 @@ class SoftrodSolver:
                 "contact": "penalty, stiffness per contact point from its weight and a "
                 "1 m/s impact (docs/theory-contact.md CT3); Coulomb friction by "
                 "anchored springs, committed after accepted steps (CT5, CT10)",
-                "self_contact": bool(scenario.self_contact),
+                "self_contact": bool(scenario.self_contact) and (
+                    all("self = true" in p.scene for p in parts)
+                    or "not modelled: softrod has no contact on models with loop closures "
+                    "(pinned or clamped far ends) yet"),
                 "rod_friction": _friction(scenario),
             }
         if len(scenario.rods) > 1:
@@ -742,6 +750,14 @@ def _build(
                                              n_elements)
             extra += [drive, carriage]
             closures.append(weld | {"b": {"element": carriage.name}})
+    if closures and contact:
+        # softrod has no contact on models with loop closures yet.
+        if scenario.obstacles or len(scenario.rods) > 1:
+            raise _unsupported(
+                "contact on a model with loop closures (a rod's far end pinned, clamped or "
+                "driven): softrod has none yet"
+            )
+        contact = ""  # self contact alone is left out, and settings say so
     values = dict(zip(open_model.q_names, q_open))
     if not extra and not closures:
         scene = text("all", initial={"q": q_open}, touch=True)
