@@ -11,6 +11,9 @@
 #   bash scripts/cosseratbench.sh --quick          reduced resolution, a quick check:
 #                                                   writes out/cosseratbench/quick/
 #   bash scripts/cosseratbench.sh --report-only    rewrite the report from saved runs
+#   bash scripts/cosseratbench.sh --with-slow capstan   also softrod's runs that the
+#                                                   report leaves out (NOT_RUN in
+#                                                   run_cosseratbench.py: hours)
 #
 # Runs are saved under out/cosseratbench/results (cosseratbench reuses a
 # saved run while its scenario, resolution, options, solver version and

@@ -375,6 +375,33 @@ shape = [{{ rod = "arm", centerline = [{}] }}]
     assert!(fit.max < 1e-12, "{fit:?}");
 }
 
+/// A `[s, x, y, z]` shape ending at `s` = the scene's `length` is the
+/// rod's tip, though the sum of ten pieces of 0.1 m rounds below 1.0 m:
+/// the straight line through the two rows is fitted exactly.
+#[test]
+fn an_initial_shape_may_end_at_the_scene_length() {
+    let text = r#"
+[[rod]]
+name = "arm"
+length = 1.0
+pieces = 10
+strains = ["ky", "kz", "qx"]
+section = { shape = "circle", radius = 0.01 }
+material = { density = 1000.0, young = 1.0e6, poisson = 0.5 }
+
+[initial]
+shape = [{ rod = "arm", centerline = [[0, 0, 0, 0], [0.5, 0.5, 0, 0], [1.0, 1.0, 0, 0]] }]
+"#;
+    assert!(0.1_f64 * 10.0 <= 1.0 && (0..10).fold(0.0, |a, _| a + 0.1) < 1.0);
+    let (scene, _) = Scene::from_str(text, "shape.toml").unwrap();
+    let built = scene.build().unwrap();
+    // Straight and unstretched: no curvature, no stretch (qx is the
+    // stretch's deviation from 1) in every piece.
+    assert_eq!(built.q0.len(), 30);
+    assert!(built.q0.iter().all(|q| q.abs() < 1e-9), "{}", built.q0);
+    assert!(built.shape_fits[0].max < 1e-12, "{:?}", built.shape_fits[0]);
+}
+
 #[test]
 fn bad_initial_shapes_name_the_key() {
     let base = r#"

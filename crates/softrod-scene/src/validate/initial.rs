@@ -11,6 +11,9 @@ use crate::raw::{RawInitial, RawShape};
 use crate::robot::Robot;
 use crate::scene::{Initial, InitialShape};
 
+/// Relative round-off allowed past the rod's length in a shape's `s`.
+const SHAPE_END_TOL: f64 = 1e-12;
+
 impl Ctx<'_> {
     pub(super) fn initial(
         &mut self,
@@ -148,20 +151,24 @@ impl Ctx<'_> {
             }
             let mut points: Vec<(f64, [f64; 3])> = Vec::with_capacity(n);
             for (i, row) in sh.centerline.iter().enumerate() {
-                let (s, xyz) = if width == 4 {
+                let (mut s, xyz) = if width == 4 {
                     (row[0], [row[1], row[2], row[3]])
                 } else {
                     (length * i as f64 / (n - 1) as f64, [row[0], row[1], row[2]])
                 };
                 if width == 4 {
                     let sp = format!("{cp}[{i}][0]");
-                    if !(0.0..=length).contains(&s) {
+                    // The rod's length is the sum of its pieces', which rounds
+                    // a few ulps below the scene's `length` (0.1 * 10 < 1.0):
+                    // an s within that round-off of the end is the end.
+                    if !(0.0..=length * (1.0 + SHAPE_END_TOL)).contains(&s) {
                         return Err(self.r.out_of_range(
                             &sp,
                             s,
                             format!("in [0, {length}] (the rod's length)"),
                         ));
                     }
+                    s = s.min(length);
                     if let Some(&(prev, _)) = points.last()
                         && s <= prev
                     {
