@@ -8,8 +8,9 @@
 
 use nalgebra::{DMatrix, DVector};
 use softrod_dynamics::{
-    Data, DynamicsError, FdDerivatives, Model, ShiftedSolver, damping_matrix, forward_dynamics,
-    forward_dynamics_derivatives, inverse_dynamics, mass_matrix, stiffness_matrix,
+    ClosedDerivatives, Data, DynamicsError, FdDerivatives, Model, ShiftedSolver,
+    closed_dynamics_derivatives, damping_matrix, forward_dynamics, forward_dynamics_derivatives,
+    inverse_dynamics, mass_matrix, stiffness_matrix,
 };
 use softrod_mechanics::Tension;
 
@@ -34,6 +35,9 @@ pub struct RodSystem {
     /// The workspace of the analytic derivatives, allocated when the exact
     /// Jacobian is first asked for (it holds `n_dof × n_dof` matrices).
     derivatives: Option<Box<FdDerivatives>>,
+    /// The same for a model with closures (the constrained dynamics'
+    /// derivatives, `softrod_dynamics::closed_dynamics_derivatives`).
+    closed: Option<Box<ClosedDerivatives>>,
 }
 
 /// The Jacobians [`RodSystem`] hands to the stiff methods.
@@ -96,6 +100,7 @@ impl RodSystem {
             jacobian: RodJacobian::Exact,
             shifted,
             derivatives: None,
+            closed: None,
         }
     }
 }
@@ -182,8 +187,9 @@ impl SecondOrderSystem for RodSystem {
     }
 
     /// The exact `∂q̈/∂q`, `∂q̈/∂q̇` (the analytic derivatives of
-    /// `softrod_dynamics::forward_dynamics_derivatives`, no allocation after
-    /// the first call)
+    /// `softrod_dynamics::forward_dynamics_derivatives`, of
+    /// `softrod_dynamics::closed_dynamics_derivatives` for a model with
+    /// closures; no allocation after the first call)
     /// whatever [`RodSystem::jacobian`] says: the cheap approximation of
     /// [`RodJacobian::ElasticOnly`] is the mass-matrix form, and this is what
     /// the methods refresh to when it stops working.
@@ -195,32 +201,27 @@ impl SecondOrderSystem for RodSystem {
         dqdd_dq: &mut DMatrix<f64>,
         dqdd_dqd: &mut DMatrix<f64>,
     ) -> Result<(), DynamicsError> {
-        if self.model.has_closures() {
-            // No analytic derivatives of the constrained dynamics (the
-            // force a closed loop needs is not unique, docs/theory.md D67):
-            // forward finite differences of its q̈, as the trait's default.
-            let n = q.len();
-            let mut a0 = DVector::zeros(n);
-            let mut scratch = (DVector::zeros(n), DVector::zeros(n));
-            self.accel(t, q, qd, &mut a0)?;
-            crate::system::fd_jacobian(
-                |t, x, dy| self.accel(t, x, qd, dy),
-                t,
-                q,
-                &a0,
-                dqdd_dq,
-                &mut scratch,
-            )?;
-            return crate::system::fd_jacobian(
-                |t, x, dy| self.accel(t, q, x, dy),
-                t,
-                qd,
-                &a0,
-                dqdd_dqd,
-                &mut scratch,
-            );
-        }
         let tau = self.tau.as_ref().map(|v| v.as_slice());
+        if self.model.has_closures() {
+            // The constrained q̈'s derivatives (docs/theory-derivatives.md
+            // (CD1)–(CD4)): the open tree's analytic ones projected through
+            // the multiplier system, the closure rows differenced alone.
+            let work = self
+                .closed
+                .get_or_insert_with(|| Box::new(ClosedDerivatives::new(&self.model)));
+            let j = closed_dynamics_derivatives(
+                &self.model,
+                &mut self.data,
+                work,
+                t,
+                q.as_slice(),
+                qd.as_slice(),
+                tau,
+            )?;
+            dqdd_dq.copy_from(&j.dqdd_dq);
+            dqdd_dqd.copy_from(&j.dqdd_dqd);
+            return Ok(());
+        }
         let work = self
             .derivatives
             .get_or_insert_with(|| Box::new(FdDerivatives::new(&self.model)));
