@@ -1,5 +1,5 @@
 //! Derivatives of the constrained forward dynamics of a closed model
-//! (docs/theory-derivatives.md §9, (CD1)–(CD4)): the analytic
+//! (docs/theory-derivatives.md §8, (CD1)–(CD4)): the analytic
 //! inverse-dynamics derivatives of the open tree at the constrained `q̈`,
 //! the closure force `Jᵀλ` and the stabilized rows differentiated at fixed
 //! `λ` and `q̈` (central differences of the rows only: one kinematic sweep
