@@ -4,7 +4,11 @@
 //! (D59), and with its tip welded to the world (a closed chain, D63–D69:
 //! the tree's forward dynamics plus one O(N) solve with `M` per constraint
 //! row); the O(N) shifted factorization and solve on the tree; the analytic
-//! derivatives on the tree.
+//! derivatives on the tree; the Jacobian of a closed chain's constrained
+//! `q̈` (a rod pinned at both ends: spherical joint and ball closure, the
+//! cosseratbench catenary) by `closed_dynamics_derivatives` (CD1–CD4) and
+//! by forward differences of the constrained `q̈` (what the integrators
+//! used before: `2n` constrained forward dynamics).
 //! Compare with `forward_dynamics/N` and `shifted_factor_solve/N` of the
 //! `dynamics` benches.
 //!
@@ -13,8 +17,9 @@
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use softrod_dynamics::{
-    Attachment, Closure, ClosureFrame, ClosureKind, Curve, Data, Element, IdDerivatives, Joint,
-    Model, Prescribed, Rod, ShiftedSolver, forward_dynamics, inverse_dynamics_derivatives,
+    Attachment, ClosedDerivatives, Closure, ClosureFrame, ClosureKind, Curve, Data, Element,
+    IdDerivatives, Joint, Model, Prescribed, Rod, ShiftedSolver, closed_dynamics_derivatives,
+    forward_dynamics, inverse_dynamics_derivatives,
 };
 use softrod_kinematics::{Basis, RodGeometry, straight};
 use softrod_lie::{Pose, Vec3};
@@ -145,6 +150,67 @@ fn bench_robots(c: &mut Criterion) {
                 inverse_dynamics_derivatives(&m, &mut work, 0.1, black_box(&q), &qd, &qdd)
                     .unwrap()
                     .dtau_dq[(0, 0)]
+            })
+        });
+    }
+    g.finish();
+    // The Jacobian ∂q̈/∂q, ∂q̈/∂q̇ of the pinned–pinned rod (CD1–CD4)
+    // against forward differences of the constrained q̈.
+    let pinned = |n: usize| {
+        on(n, Joint::spherical())
+            .with_closures(vec![Closure::new(
+                "pin",
+                ClosureKind::Ball,
+                ClosureFrame::on("bench", None, Pose::identity()),
+                ClosureFrame::world(Pose::new(
+                    nalgebra::Matrix3::identity(),
+                    Vec3::new(LENGTH, 0.0, 0.0),
+                )),
+            )])
+            .unwrap()
+    };
+    let mut g = c.benchmark_group("closed_jacobian");
+    for n in [10usize, 50] {
+        let m = pinned(n);
+        let mut data = Data::new(&m);
+        let mut work = ClosedDerivatives::new(&m);
+        let (q, qd) = state(m.n_dof());
+        g.bench_with_input(BenchmarkId::new("analytic", n), &n, |b, _| {
+            b.iter(|| {
+                closed_dynamics_derivatives(&m, &mut data, &mut work, 0.1, black_box(&q), &qd, None)
+                    .unwrap()
+                    .dqdd_dq[(0, 0)]
+            })
+        });
+    }
+    for n in [10usize, 50] {
+        let m = pinned(n);
+        let mut data = Data::new(&m);
+        let (q, qd) = state(m.n_dof());
+        let nd = m.n_dof();
+        let (mut qx, mut qdx) = (q.clone(), qd.clone());
+        let mut jac = nalgebra::DMatrix::<f64>::zeros(nd, 2 * nd);
+        g.bench_with_input(BenchmarkId::new("differences", n), &n, |b, _| {
+            b.iter(|| {
+                let a0 = forward_dynamics(&m, &mut data, 0.1, black_box(&q), &qd, None)
+                    .unwrap()
+                    .clone_owned();
+                for j in 0..2 * nd {
+                    let (x, k) = if j < nd {
+                        (&mut qx, j)
+                    } else {
+                        (&mut qdx, j - nd)
+                    };
+                    let h = 1.5e-8 * x[k].abs().max(1.0);
+                    x[k] += h;
+                    let a = forward_dynamics(&m, &mut data, 0.1, &qx, &qdx, None).unwrap();
+                    for i in 0..nd {
+                        jac[(i, j)] = (a[i] - a0[i]) / h;
+                    }
+                    let x = if j < nd { &mut qx } else { &mut qdx };
+                    x[k] = if j < nd { q[k] } else { qd[k] };
+                }
+                jac[(0, 0)]
             })
         });
     }

@@ -20,6 +20,7 @@
 //! | [`modes`] | natural frequencies about an equilibrium | |
 //! | [`inverse_dynamics_derivatives`] | `∂τ/∂q`, `∂τ/∂q̇` (`∂τ/∂q̈ = M`) | docs/theory-derivatives.md (D37–D47) |
 //! | [`forward_dynamics_derivatives`] | `∂q̈/∂q`, `∂q̈/∂q̇`, `∂q̈/∂u` | (D48) |
+//! | [`closed_dynamics_derivatives`] | `∂q̈/∂q`, `∂q̈/∂q̇` of a closed model's constrained `q̈` | (CD1–CD4) |
 //! | [`linearize`] | `(A, B)` of `ẋ = f(x, u)`, `x = (q, q̇)` | (D49) |
 //! | [`dynamics_jacobians`] | `∂q̈/∂q`, `∂q̈/∂q̇` (allocating) | (D48) |
 //! | [`section_jacobian`] | world pose and spatial Jacobian of a rod section, through joints and parents | (D11), (D57), (D62) |
@@ -113,8 +114,9 @@ pub use analysis::{
     frames, generalized_gravity, modes, section_jacobian, static_force, statics, stiffness_matrix,
 };
 pub use constraints::{
-    check_closures, closure_multipliers, closure_residuals, constraint_jacobian, constraint_rank,
-    constraint_residual, max_closure_residual,
+    ClosedDerivatives, check_closures, closed_dynamics_derivatives, closure_multipliers,
+    closure_residuals, constraint_jacobian, constraint_rank, constraint_residual,
+    max_closure_residual,
 };
 pub use derivatives::{
     DynamicsJacobians, FdDerivatives, IdDerivatives, Linearization, dynamics_jacobians,

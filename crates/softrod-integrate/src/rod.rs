@@ -8,8 +8,9 @@
 
 use nalgebra::{DMatrix, DVector};
 use softrod_dynamics::{
-    Data, DynamicsError, FdDerivatives, Model, ShiftedSolver, damping_matrix, forward_dynamics,
-    forward_dynamics_derivatives, inverse_dynamics, mass_matrix, stiffness_matrix,
+    ClosedDerivatives, Data, DynamicsError, FdDerivatives, Model, ShiftedSolver,
+    closed_dynamics_derivatives, damping_matrix, forward_dynamics, forward_dynamics_derivatives,
+    inverse_dynamics, mass_matrix, stiffness_matrix,
 };
 use softrod_mechanics::Tension;
 
@@ -34,6 +35,9 @@ pub struct RodSystem {
     /// The workspace of the analytic derivatives, allocated when the exact
     /// Jacobian is first asked for (it holds `n_dof × n_dof` matrices).
     derivatives: Option<Box<FdDerivatives>>,
+    /// The same for a model with closures (the constrained dynamics'
+    /// derivatives, `softrod_dynamics::closed_dynamics_derivatives`).
+    closed: Option<Box<ClosedDerivatives>>,
 }
 
 /// The Jacobians [`RodSystem`] hands to the stiff methods.
@@ -96,6 +100,7 @@ impl RodSystem {
             jacobian: RodJacobian::Exact,
             shifted,
             derivatives: None,
+            closed: None,
         }
     }
 }
@@ -182,8 +187,9 @@ impl SecondOrderSystem for RodSystem {
     }
 
     /// The exact `∂q̈/∂q`, `∂q̈/∂q̇` (the analytic derivatives of
-    /// `softrod_dynamics::forward_dynamics_derivatives`, no allocation after
-    /// the first call)
+    /// `softrod_dynamics::forward_dynamics_derivatives`, of
+    /// `softrod_dynamics::closed_dynamics_derivatives` for a model with
+    /// closures; no allocation after the first call)
     /// whatever [`RodSystem::jacobian`] says: the cheap approximation of
     /// [`RodJacobian::ElasticOnly`] is the mass-matrix form, and this is what
     /// the methods refresh to when it stops working.
@@ -195,32 +201,27 @@ impl SecondOrderSystem for RodSystem {
         dqdd_dq: &mut DMatrix<f64>,
         dqdd_dqd: &mut DMatrix<f64>,
     ) -> Result<(), DynamicsError> {
-        if self.model.has_closures() {
-            // No analytic derivatives of the constrained dynamics (the
-            // force a closed loop needs is not unique, docs/theory.md D67):
-            // forward finite differences of its q̈, as the trait's default.
-            let n = q.len();
-            let mut a0 = DVector::zeros(n);
-            let mut scratch = (DVector::zeros(n), DVector::zeros(n));
-            self.accel(t, q, qd, &mut a0)?;
-            crate::system::fd_jacobian(
-                |t, x, dy| self.accel(t, x, qd, dy),
-                t,
-                q,
-                &a0,
-                dqdd_dq,
-                &mut scratch,
-            )?;
-            return crate::system::fd_jacobian(
-                |t, x, dy| self.accel(t, q, x, dy),
-                t,
-                qd,
-                &a0,
-                dqdd_dqd,
-                &mut scratch,
-            );
-        }
         let tau = self.tau.as_ref().map(|v| v.as_slice());
+        if self.model.has_closures() {
+            // The constrained q̈'s derivatives (docs/theory-derivatives.md
+            // (CD1)–(CD4)): the open tree's analytic ones projected through
+            // the multiplier system, the closure rows differenced alone.
+            let work = self
+                .closed
+                .get_or_insert_with(|| Box::new(ClosedDerivatives::new(&self.model)));
+            let j = closed_dynamics_derivatives(
+                &self.model,
+                &mut self.data,
+                work,
+                t,
+                q.as_slice(),
+                qd.as_slice(),
+                tau,
+            )?;
+            dqdd_dq.copy_from(&j.dqdd_dq);
+            dqdd_dqd.copy_from(&j.dqdd_dqd);
+            return Ok(());
+        }
         let work = self
             .derivatives
             .get_or_insert_with(|| Box::new(FdDerivatives::new(&self.model)));
@@ -455,5 +456,110 @@ mod tests {
             .set_cable_tensions(&sys.model, Some(&[0.5]))
             .unwrap();
         assert!(sys.is_autonomous());
+    }
+
+    /// A four-bar of two soft rods (revolute joints, ball closure at the
+    /// tips), released under gravity, undamped: with the exact closed-chain
+    /// Jacobians (CD1–CD4) ESDIRK and Radau IIA land where they land with
+    /// forward differences of the constrained q̈ (the Jacobian only steers
+    /// Newton), and the energy stays constant (an independent check: the
+    /// closure forces do no work on the manifold).
+    #[test]
+    fn closed_chain_runs_agree_with_difference_jacobians_and_conserve_energy() {
+        use softrod_dynamics::{Attachment, Closure, ClosureFrame, ClosureKind, Joint};
+        struct Differences(RodSystem);
+        impl SecondOrderSystem for Differences {
+            type Error = DynamicsError;
+            fn dim(&self) -> usize {
+                self.0.dim()
+            }
+            fn accel(
+                &mut self,
+                t: f64,
+                q: &DVector<f64>,
+                qd: &DVector<f64>,
+                qdd: &mut DVector<f64>,
+            ) -> Result<(), DynamicsError> {
+                self.0.accel(t, q, qd, qdd)
+            }
+        }
+        let mat = Material::with_poisson(1000.0, 1e6, 0.5, 0.0).unwrap();
+        let rod = |name: &str, l: f64, x: f64| {
+            let g = RodGeometry::uniform(
+                l,
+                2,
+                Basis::all(),
+                softrod_kinematics::straight(),
+                Pose::new(softrod_lie::Mat3::identity(), Vec3::new(x, 0.0, 0.0)),
+            )
+            .unwrap();
+            let body = RodProperties::new(Section::Circle { radius: 0.01 }, mat, l).unwrap();
+            Rod::new(name, g, body)
+        };
+        // Both rods along x, tips together at x = 0.3: the loop holds at q = 0.
+        let model = Model::builder()
+            .rod_on(
+                rod("a", 0.3, 0.0),
+                Attachment::world_joint(Joint::revolute([0.0, 1.0, 0.0])),
+            )
+            .rod_on(
+                rod("b", 0.15, 0.15),
+                Attachment::world_joint(Joint::revolute([0.0, 1.0, 0.0])),
+            )
+            .gravity([0.0, 0.0, -9.81])
+            .closure(Closure::new(
+                "tip",
+                ClosureKind::Ball,
+                ClosureFrame::on("a", None, Pose::identity()),
+                ClosureFrame::on("b", None, Pose::identity()),
+            ))
+            .build()
+            .unwrap();
+        let n = model.n_dof();
+        let (q0, v0) = (DVector::zeros(n), DVector::zeros(n));
+        let opts = Options::tol(1e-8, 1e-10);
+        for method in [Integrator::Esdirk, Integrator::Radau5] {
+            let mut exact = RodSystem::new(model.clone());
+            let a = integrate_second_order(
+                &mut exact,
+                method,
+                (0.0, 0.1),
+                &q0,
+                &v0,
+                &opts,
+                &mut NoHooks,
+            )
+            .unwrap();
+            let mut fd = Differences(RodSystem::new(model.clone()));
+            let b =
+                integrate_second_order(&mut fd, method, (0.0, 0.1), &q0, &v0, &opts, &mut NoHooks)
+                    .unwrap();
+            let scale = b.y_final.amax();
+            assert!(scale > 1e-3, "{method:?}: the loop moved");
+            let diff = (&a.y_final - &b.y_final).amax();
+            assert!(diff < 1e-5 * scale, "{method:?}: {diff:e} of {scale:e}");
+            let e = |y: &DVector<f64>, sys: &mut RodSystem| {
+                energies(
+                    &sys.model,
+                    &mut sys.data,
+                    &y.as_slice()[..n],
+                    &y.as_slice()[n..],
+                )
+                .unwrap()
+            };
+            let e0 = e(&a.y[0], &mut exact).total();
+            let mut kinetic: f64 = 0.0;
+            let mut drift: f64 = 0.0;
+            for y in &a.y {
+                let en = e(y, &mut exact);
+                kinetic = kinetic.max(en.kinetic);
+                drift = drift.max((en.total() - e0).abs());
+            }
+            assert!(kinetic > 0.0);
+            assert!(
+                drift < 1e-4 * kinetic,
+                "{method:?}: energy drift {drift:e} of {kinetic:e}"
+            );
+        }
     }
 }

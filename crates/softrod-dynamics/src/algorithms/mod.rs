@@ -46,6 +46,11 @@ pub(crate) enum Pass {
     Articulated,
     /// (D20) integrals only (mass matrix).
     Composite,
+    /// Tree only: poses, twists and the velocity-product accelerations of
+    /// the node tips and attachment frames (what the closure rows `φ`, `J`,
+    /// `J̇q̇` read, D63–D65), no per-point sums: the cheap kinematic sweep
+    /// of the closed-chain derivatives (docs/theory-derivatives.md D81).
+    Kinematic,
 }
 
 /// The motion a sweep evaluates at: coordinates `q`, their rates `q̇`

@@ -43,6 +43,22 @@ pub(crate) fn outward(
     pass: Pass,
     forces: Forces,
 ) -> f64 {
+    outward_from(model, tree, data, motion, pass, forces, 0)
+}
+
+/// [`outward`] over the nodes `from..` only: the nodes before `from` keep
+/// what the last sweep left (valid when `motion` differs from that sweep's
+/// only in coordinates of nodes `from..`, whose descendants come after
+/// them in the tree's order). The kinetic energy is of those nodes.
+pub(crate) fn outward_from(
+    model: &Model,
+    tree: &Tree,
+    data: &mut Data,
+    motion: Motion,
+    pass: Pass,
+    forces: Forces,
+    from: usize,
+) -> f64 {
     let Motion { q, qd, qdd } = motion;
     let scale = forces.load_scale;
     let only_gravity = forces.gravity_only;
@@ -57,7 +73,7 @@ pub(crate) fn outward(
         Vec6::zeros()
     };
     let has_vel = qd.is_some();
-    for (i, node) in tree.nodes.iter().enumerate() {
+    for (i, node) in tree.nodes.iter().enumerate().skip(from) {
         // A prescribed joint's acceleration `T₋(1)Bq̈_p`, added to its tip's.
         let mut drive = Vec6::zeros();
         let (parent_pose, eta_p, etadot_p) = match node.parent {
@@ -156,7 +172,7 @@ pub(crate) fn outward(
             }
         };
         let maps = PieceMaps::new(&xi, has_vel.then_some(&dxi));
-        if let NodeKind::Piece { rod, piece } = node.kind {
+        if let (&NodeKind::Piece { rod, piece }, false) = (&node.kind, pass == Pass::Kinematic) {
             let rm = &model.rods[rod];
             let pd = &rm.pieces[piece];
             let has_ext =

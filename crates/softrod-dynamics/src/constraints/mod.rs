@@ -2,14 +2,17 @@
 //! §11, D63–D69) — their rows `φ`, `J`, `J̇q̇` ([`rows`]), what a caller
 //! asks of them at a state ([`queries`]), and the constrained forward
 //! dynamics ([`forward`]), Lagrange multipliers on top of the tree's
-//! recursion. The constrained statics and modes are `crate::analysis`'s.
+//! recursion, and its derivatives ([`derivatives`], the open tree's
+//! analytic ones projected through the multiplier system). The constrained statics and modes are `crate::analysis`'s.
 //! A new kind of closure goes in `crate::model::closure` (its spec and
 //! number of rows) and [`rows`] (its residual and row operator).
 
+pub(crate) mod derivatives;
 pub(crate) mod forward;
 pub(crate) mod queries;
 pub(crate) mod rows;
 
+pub use derivatives::{ClosedDerivatives, closed_dynamics_derivatives};
 pub use queries::{
     check_closures, closure_multipliers, closure_residuals, constraint_jacobian, constraint_rank,
     constraint_residual, max_closure_residual,

@@ -168,6 +168,29 @@ pub(crate) fn id_derivatives_impl<'a>(
             what: "inverse_dynamics_derivatives",
         });
     }
+    open_tree_core(model, work, forces, t, q, qd, qdd)
+}
+
+crate::kernels::simd::dispatch! {
+    /// The derivatives of the open tree's inverse dynamics of a model with
+    /// closures (the closure forces `Jᵀλ` left out: the constrained
+    /// derivatives add theirs, docs/theory-derivatives.md (CD2)). Arguments
+    /// checked by the caller.
+    pub(crate) fn open_tree_id_derivatives<'a>(model: &Model, work: &'a mut IdDerivatives, forces: Forces, t: f64, q: &[f64], qd: &[f64], qdd: &[f64]) -> Result<&'a IdDerivatives, DynamicsError>
+    => open_tree_core, open_tree_core_avx2
+}
+
+/// The body of [`id_derivatives_impl`] after its checks.
+#[inline(always)]
+fn open_tree_core<'a>(
+    model: &Model,
+    work: &'a mut IdDerivatives,
+    forces: Forces,
+    t: f64,
+    q: &[f64],
+    qd: &[f64],
+    qdd: &[f64],
+) -> Result<&'a IdDerivatives, DynamicsError> {
     let at = At {
         t,
         q,

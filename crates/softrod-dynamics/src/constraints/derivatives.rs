@@ -1,0 +1,314 @@
+//! Derivatives of the constrained forward dynamics of a closed model
+//! (docs/theory-derivatives.md §8, (CD1)–(CD4)): the analytic
+//! inverse-dynamics derivatives of the open tree at the constrained `q̈`,
+//! the closure force `Jᵀλ` and the stabilized rows differentiated at fixed
+//! `λ` and `q̈` (central differences of the rows only: one kinematic sweep
+//! over the nodes below the perturbed coordinate per difference), and one
+//! projection through the multiplier system the forward solve factored.
+
+use super::forward::forward_dynamics as constrained_forward;
+use super::queries::check_workspace;
+use super::rows::{assemble, prescribed_columns};
+use crate::algorithms::shifted::tree_solve;
+use crate::algorithms::tree::outward_from;
+use crate::algorithms::{Motion, Pass, check_forward_inputs, check_qdd};
+use crate::derivatives::{IdDerivatives, open_tree_id_derivatives};
+use crate::error::DynamicsError;
+use crate::forces::Forces;
+use crate::model::Model;
+use crate::model::data::{ConstraintRows, Data, SolveNode};
+use crate::model::tree::Tree;
+use nalgebra::{DMatrix, DVector};
+
+/// Relative step of the central differences of the closure rows in `q`
+/// (≈ ε^{1/3}: truncation and rounding errors balance near 1e-11
+/// relative).
+const ROW_STEP: f64 = 6e-6;
+
+/// Relative step of the differences in `q̇` (exact for the quadratic rows).
+const RATE_STEP: f64 = 0.1;
+
+/// Workspace and results of [`closed_dynamics_derivatives`], allocated
+/// once for a closed model by [`ClosedDerivatives::new`] (three
+/// `n_dof × n_dof` matrices, the inverse-dynamics derivative buffers and
+/// a few `m × n_dof` rows, `m` = [`Model::n_constraints`]); evaluations
+/// allocate nothing.
+#[derive(Clone, Debug)]
+pub struct ClosedDerivatives {
+    /// The open tree's inverse-dynamics derivatives at `(q, q̇, q̈)`, `q̈`
+    /// the constrained acceleration (the closure forces left out).
+    pub id: IdDerivatives,
+    /// `∂q̈/∂q` of the constrained, Baumgarte-stabilized `q̈` (n_dof ×
+    /// n_dof) [1/s²].
+    pub dqdd_dq: DMatrix<f64>,
+    /// `∂q̈/∂q̇` (n_dof × n_dof) [1/s].
+    pub dqdd_dqd: DMatrix<f64>,
+    /// `q̈` at the point of evaluation (n_dof).
+    pub qdd: DVector<f64>,
+    /// The multipliers `λ` there (m; zero on redundant rows).
+    pub lambda: DVector<f64>,
+    /// `∂(Jᵀλ)/∂q` at fixed `λ` (n × n), then the columns `M⁻¹g`.
+    force_dq: DMatrix<f64>,
+    /// `∂R/∂q`, `∂R/∂q̇` of the stabilized rows (CD1) at fixed `q̈` (m × n).
+    rows_dq: DMatrix<f64>,
+    rows_dqd: DMatrix<f64>,
+    /// Rows at a perturbed state, and `J_p` there.
+    rows: ConstraintRows,
+    jac_p: DMatrix<f64>,
+    /// Perturbed coordinates and rates; the values of (CD1) at `±h`
+    /// (`Jᵀλ` then `R`).
+    qx: DVector<f64>,
+    qdx: DVector<f64>,
+    plus: DVector<f64>,
+    minus: DVector<f64>,
+    /// Coordinates in descending order of their node (the sweeps of the
+    /// differences then start at the node below the perturbed coordinate).
+    order: Vec<(usize, usize)>,
+    solve: Vec<SolveNode>,
+    /// One right side of the multiplier system (m).
+    z: DVector<f64>,
+}
+
+impl ClosedDerivatives {
+    /// Allocates the buffers for `model` (a model with closures; for an open
+    /// one the buffers are empty and [`closed_dynamics_derivatives`]
+    /// refuses it).
+    pub fn new(model: &Model) -> Self {
+        let n = model.n_dof();
+        let m = model.n_constraints();
+        let np = model.n_prescribed();
+        let mut order = Vec::new();
+        if let Some(tree) = &model.tree {
+            for (i, node) in tree.nodes.iter().enumerate() {
+                if node.prescribed.is_none() {
+                    order.extend((node.dof..node.dof + node.k).map(|j| (i, j)));
+                }
+            }
+        }
+        order.sort_by(|a, b| b.cmp(a));
+        Self {
+            id: IdDerivatives::new(model),
+            dqdd_dq: DMatrix::zeros(n, n),
+            dqdd_dqd: DMatrix::zeros(n, n),
+            qdd: DVector::zeros(n),
+            lambda: DVector::zeros(m),
+            force_dq: DMatrix::zeros(n, n),
+            rows_dq: DMatrix::zeros(m, n),
+            rows_dqd: DMatrix::zeros(m, n),
+            rows: ConstraintRows::new(m, n),
+            jac_p: DMatrix::zeros(m, np),
+            qx: DVector::zeros(n),
+            qdx: DVector::zeros(n),
+            plus: DVector::zeros(n + m),
+            minus: DVector::zeros(n + m),
+            order,
+            solve: vec![SolveNode::default(); model.tree.as_ref().map_or(0, |t| t.nodes.len())],
+            z: DVector::zeros(m),
+        }
+    }
+}
+
+/// The stabilized rows (CD1) at the state of the last kinematic sweep:
+/// `R = J q̈ + J̇q̇ + 2α(J q̇ + J_p q̇_p) + α²φ` into `out[n..]` and, with
+/// `force`, `Jᵀλ` into `out[..n]` (`q̈`, `λ` fixed).
+#[allow(clippy::too_many_arguments)]
+fn rows_at(
+    model: &Model,
+    tree: &Tree,
+    data: &Data,
+    w: &mut ClosedDerivatives,
+    qdd: &DVector<f64>,
+    plus: bool,
+    force: bool,
+) {
+    let n = model.n_dof();
+    let rate = model.baumgarte;
+    let motion = Motion::new(w.qx.as_slice(), Some(w.qdx.as_slice()), None);
+    assemble(model, tree, data, motion, false, &mut w.rows);
+    let out = if plus { &mut w.plus } else { &mut w.minus };
+    let mut r = out.rows_mut(n, model.n_constraints());
+    r.copy_from(&w.rows.jdot_qd);
+    r.axpy(rate * rate, &w.rows.phi, 1.0);
+    r.gemv(1.0, &w.rows.jac, qdd, 1.0);
+    r.gemv(2.0 * rate, &w.rows.jac, &w.qdx, 1.0);
+    if model.n_prescribed() > 0 {
+        prescribed_columns(model, tree, data, motion, &mut w.jac_p);
+        r.gemv(2.0 * rate, &w.jac_p, &data.prescribed_qd, 1.0);
+    }
+    if force {
+        out.rows_mut(0, n).gemv_tr(1.0, &w.rows.jac, &w.lambda, 0.0);
+    }
+}
+
+/// Exact derivatives `∂q̈/∂q`, `∂q̈/∂q̇` of the constrained forward dynamics
+/// of a closed model (docs/theory-derivatives.md (CD1)–(CD4)) at time `t`:
+/// with `M q̈ = τ_act − b + Jᵀλ`, `J q̈ = −J̇q̇ − 2α(J q̇ + J_p q̇_p) − α²φ`
+/// (docs/theory.md D67–D68) on the rows the forward solve keeps
+/// (redundant rows carry `λ = 0` there and here),
+/// `δq̈ = X + Y A⁻¹(h − J X)` with `X = M⁻¹(−∂ID/∂p + ∂(Jᵀλ)/∂p)`,
+/// `h = −∂R/∂p`, `Y = M⁻¹Jᵀ`, `A = J M⁻¹ Jᵀ` for `p = q` and `p = q̇`.
+///
+/// `∂ID/∂p` is analytic (the open tree's, at the constrained `q̈`);
+/// `∂(Jᵀλ)/∂q` and `∂R/∂p` are central differences of the closure rows
+/// alone (kinematics, no dynamics: `2n` sweeps over the nodes below each
+/// coordinate for `q`, exact for the quadratic `q̇` dependence), to about
+/// 1e-10 relative. `M⁻¹` is the O(N) articulated solve the forward
+/// dynamics factored. Results in `work` (`qdd`, `lambda` too); `data`
+/// holds the constrained forward dynamics at `(t, q, q̇)` afterwards. No
+/// allocation. Every force at full scale ([`Forces::ALL`]).
+///
+/// Errors: a model without closures or with contact
+/// ([`DynamicsError::UnsupportedClosed`]), a workspace of another model,
+/// bad inputs, a non-finite result.
+pub fn closed_dynamics_derivatives<'a>(
+    model: &Model,
+    data: &mut Data,
+    work: &'a mut ClosedDerivatives,
+    t: f64,
+    q: &[f64],
+    qd: &[f64],
+    tau_act: Option<&[f64]>,
+) -> Result<&'a ClosedDerivatives, DynamicsError> {
+    let forces = Forces::ALL;
+    let (Some(tree), true) = (&model.tree, model.has_closures()) else {
+        return Err(DynamicsError::UnsupportedClosed {
+            what: "closed_dynamics_derivatives of an open model (use forward_dynamics_derivatives)",
+        });
+    };
+    if model.has_contact() {
+        return Err(DynamicsError::UnsupportedClosed { what: "contact" });
+    }
+    let (n, m) = (model.n_dof(), model.n_constraints());
+    if work.qdd.len() != n || work.lambda.len() != m || work.solve.len() != tree.nodes.len() {
+        return Err(DynamicsError::WorkspaceMismatch {
+            what: "ClosedDerivatives",
+            built: work.qdd.len(),
+            got: n,
+        });
+    }
+    check_workspace(model, data)?;
+    check_forward_inputs(model, forces, q, qd, tau_act)?;
+    model.set_time(data, t);
+    constrained_forward(model, data, forces, t, q, qd, tau_act)?;
+    work.qdd.copy_from(check_qdd(data, t)?);
+    let Some(cw) = data.closure.as_ref() else {
+        unreachable!("check_workspace found the closure buffers")
+    };
+    work.lambda.copy_from(&cw.lambda);
+    match (data.cable_tensions(), &mut work.id.tensions) {
+        (None, t) => *t = None,
+        (Some(u), Some(t)) => t.as_mut_slice().copy_from_slice(u),
+        (Some(u), t) => *t = Some(DVector::from_column_slice(u)),
+    }
+    open_tree_id_derivatives(model, &mut work.id, forces, t, q, qd, work.qdd.as_slice())?;
+
+    // (CD3) Differences of the rows: q first (Jᵀλ and R), then q̇ (R only).
+    // The factorization of M in `data` survives the kinematic sweeps
+    // (they rewrite poses, twists and per-node sums the solve does not
+    // read, and the last sweep restores the poses at q).
+    let qdd = std::mem::take(&mut work.qdd);
+    work.qx.copy_from_slice(q);
+    work.qdx.copy_from_slice(qd);
+    let sweep = |data: &mut Data, w: &ClosedDerivatives, from: usize| {
+        let motion = Motion::new(w.qx.as_slice(), Some(w.qdx.as_slice()), None);
+        outward_from(model, tree, data, motion, Pass::Kinematic, forces, from);
+    };
+    sweep(data, work, 0);
+    for k in 0..work.order.len() {
+        let (node, j) = work.order[k];
+        let h = ROW_STEP * q[j].abs().max(1.0);
+        for (plus, x) in [(true, q[j] + h), (false, q[j] - h)] {
+            work.qx[j] = x;
+            sweep(data, work, node);
+            rows_at(model, tree, data, work, &qdd, plus, true);
+        }
+        work.qx[j] = q[j];
+        let inv = 0.5 / h;
+        for i in 0..n {
+            work.force_dq[(i, j)] = (work.plus[i] - work.minus[i]) * inv;
+        }
+        for i in 0..m {
+            work.rows_dq[(i, j)] = (work.plus[n + i] - work.minus[n + i]) * inv;
+        }
+    }
+    sweep(data, work, 0);
+    for k in 0..work.order.len() {
+        let (node, j) = work.order[k];
+        // R is quadratic in q̇ (J̇q̇) plus linear: a central difference is
+        // exact at any step, and a long one keeps the rounding small.
+        let h = RATE_STEP * qd[j].abs().max(1.0);
+        for (plus, x) in [(true, qd[j] + h), (false, qd[j] - h)] {
+            work.qdx[j] = x;
+            sweep(data, work, node);
+            rows_at(model, tree, data, work, &qdd, plus, false);
+        }
+        work.qdx[j] = qd[j];
+        let inv = 0.5 / h;
+        for i in 0..m {
+            work.rows_dqd[(i, j)] = (work.plus[n + i] - work.minus[n + i]) * inv;
+        }
+    }
+    sweep(data, work, 0);
+    work.qdd = qdd;
+
+    // (CD2) g = −∂ID/∂p + ∂(Jᵀλ)/∂p, X = M⁻¹g column by column.
+    let w = &mut *work;
+    w.dqdd_dq.copy_from(&w.force_dq);
+    w.dqdd_dq -= &w.id.dtau_dq;
+    w.dqdd_dqd.copy_from(&w.id.dtau_dqd);
+    w.dqdd_dqd.neg_mut();
+    for x in [&mut w.dqdd_dq, &mut w.dqdd_dqd] {
+        for col in x.as_mut_slice().chunks_exact_mut(n.max(1)) {
+            tree_solve(tree, data, &mut w.solve, col);
+        }
+    }
+    // (CD4) δq̈ = X + Y A⁻¹(h − J X), h = −∂R/∂p, on the kept rows.
+    let Some(cw) = data.closure.as_ref() else {
+        unreachable!("check_workspace found the closure buffers")
+    };
+    let r = cw.rank;
+    for (x, dr) in [(&mut w.dqdd_dq, &w.rows_dq), (&mut w.dqdd_dqd, &w.rows_dqd)] {
+        for j in 0..n {
+            // s = −∂R/∂p_j − J X_j, permuted to the pivot order.
+            for i in 0..m {
+                let p = cw.perm[i];
+                let mut s = -dr[(p, j)];
+                for c in 0..n {
+                    s -= cw.rows.jac[(p, c)] * x[(c, j)];
+                }
+                w.z[i] = s;
+            }
+            // L L^T z = s on the first r (kept) rows.
+            for i in 0..r {
+                let mut s = w.z[i];
+                for k in 0..i {
+                    s -= cw.a[(i, k)] * w.z[k];
+                }
+                w.z[i] = s / cw.a[(i, i)];
+            }
+            for i in (0..r).rev() {
+                let mut s = w.z[i];
+                for k in i + 1..r {
+                    s -= cw.a[(k, i)] * w.z[k];
+                }
+                w.z[i] = s / cw.a[(i, i)];
+            }
+            for i in 0..r {
+                let p = cw.perm[i];
+                let zi = w.z[i];
+                for c in 0..n {
+                    x[(c, j)] += cw.y[(c, p)] * zi;
+                }
+            }
+        }
+    }
+    for (what, x) in [("dqdd/dq", &w.dqdd_dq), ("dqdd/dqdot", &w.dqdd_dqd)] {
+        if let Some((i, v)) = x.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(DynamicsError::NotFinite {
+                what: format!("closed {what} entry ({}, {}) at t = {t}", i % n, i / n),
+                value: *v,
+            });
+        }
+    }
+    Ok(work)
+}
