@@ -73,9 +73,11 @@ pub fn dense_matrices_of(integrator: Integrator) -> u64 {
     }
 }
 
-/// Dense matrices of [`Simulation::statics`](crate::Simulation::statics):
-/// `K`, the Newton Jacobian and its factorization, and a copy for the line
-/// search.
+/// Dense matrices of [`Simulation::statics`](crate::Simulation::statics)
+/// on its dense path (small or closed models, or joints without springs;
+/// `softrod_dynamics::StaticsSolver::Auto`): `K`, the Newton Jacobian and
+/// its factorization, and a copy for the line search. The structured path
+/// of large open models has none.
 pub const STATICS_DENSE_MATRICES: u64 = 4;
 
 /// Dense matrices of [`Simulation::modes`](crate::Simulation::modes) beyond

@@ -10,6 +10,7 @@ pub(crate) mod closed;
 pub(crate) mod contact;
 pub(crate) mod energy;
 pub(crate) mod frames;
+pub(crate) mod krylov;
 pub(crate) mod matrices;
 pub(crate) mod modes;
 pub(crate) mod statics;
@@ -22,4 +23,4 @@ pub use matrices::{
     actuation_matrix, coriolis_matrix, damping_matrix, generalized_gravity, stiffness_matrix,
 };
 pub use modes::{ModeKind, Modes, modes};
-pub use statics::{StaticsOptions, StaticsResult, static_force, statics};
+pub use statics::{StaticsOptions, StaticsResult, StaticsSolver, static_force, statics};

@@ -1,6 +1,6 @@
 //! Static equilibrium by Newton's method with line search and load continuation.
 
-use super::matrices::stiffness_matrix;
+use super::krylov::{BlockStiffness, Tangent, gmres};
 use crate::algorithms::{check_vec, inverse_dynamics_with};
 use crate::derivatives::{IdDerivatives, inverse_dynamics_derivatives_with};
 use crate::error::DynamicsError;
@@ -21,19 +21,71 @@ pub struct StaticsOptions {
     pub max_load_steps: usize,
     /// Time at which time-dependent loads (cable tensions) are evaluated \[s\].
     pub time: f64,
+    /// How the Newton systems are solved ([`StaticsSolver`]).
+    pub solver: StaticsSolver,
+}
+
+/// How [`statics`] solves the Newton system `K_t Δq = −r` of each
+/// iteration (docs/theory.md E8–E10).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum StaticsSolver {
+    /// [`StaticsSolver::Structured`] on open models with at least
+    /// [`StaticsSolver::STRUCTURED_MIN_DOF`] coordinates whose `K` is
+    /// positive definite (no joint without a spring), else
+    /// [`StaticsSolver::Dense`]; a structured solve that fails is retried
+    /// dense up to [`StaticsSolver::DENSE_FALLBACK_MAX_DOF`] coordinates.
+    #[default]
+    Auto,
+    /// The analytic `K_t = ∂τ/∂q` (D37–D47) as an `n × n` matrix and its
+    /// LU: O(n²) memory, O(n³) time; every model, closed ones included.
+    Dense,
+    /// Matrix-free: GMRES on `K_t Δq = −r` with products `K_t v` by a
+    /// central difference of two O(N) inverse dynamics (E9),
+    /// preconditioned by the block-diagonal `K` (E10). O(N) memory and
+    /// time per product; open models whose `K` is positive definite
+    /// ([`DynamicsError::NotPositiveDefinite`] otherwise,
+    /// [`DynamicsError::UnsupportedClosed`] with closures).
+    Structured,
+}
+
+impl StaticsSolver {
+    /// Below this many coordinates [`StaticsSolver::Auto`] is dense: the
+    /// LU of a small `K_t` costs less than the Krylov iterations
+    /// (docs/performance.md, "Scaling").
+    pub const STRUCTURED_MIN_DOF: usize = 120;
+    /// [`StaticsSolver::Auto`] retries a failed structured solve dense up
+    /// to this many coordinates (an `n × n` LU of 2 000 is ~0.5 s).
+    pub const DENSE_FALLBACK_MAX_DOF: usize = 2000;
+
+    /// Whether [`statics`] of `model` with this setting runs structured
+    /// (no `n × n` matrix): `Structured`, or `Auto` on an open model with
+    /// at least [`Self::STRUCTURED_MIN_DOF`] coordinates and a positive
+    /// definite `K`.
+    pub fn is_structured(self, model: &Model) -> bool {
+        match self {
+            Self::Dense => false,
+            Self::Structured => true,
+            Self::Auto => {
+                !model.has_closures()
+                    && model.n_dof() >= Self::STRUCTURED_MIN_DOF
+                    && BlockStiffness::new(model).is_definite()
+            }
+        }
+    }
 }
 
 impl Default for StaticsOptions {
     /// `tolerance = 1e-12`: Newton converges quadratically, so the last step
     /// typically lands near round-off (~1e-15 of the balanced force); 1e-10
     /// could stop one step early with a 1e-10-relative error in the strains.
-    /// 30 iterations, 64 load steps.
+    /// 30 iterations, 64 load steps, [`StaticsSolver::Auto`].
     fn default() -> Self {
         Self {
             tolerance: 1e-12,
             max_iterations: 30,
             max_load_steps: 64,
             time: 0.0,
+            solver: StaticsSolver::Auto,
         }
     }
 }
@@ -56,9 +108,10 @@ pub struct StaticsResult {
 /// every static term of the model (gravity, elasticity, cables at
 /// `options.time`, point and distributed loads), starting from `q0`.
 ///
-/// Newton's method with the Jacobian `K + ∂(r − Kq)/∂q` (central
-/// differences for the geometric part only) and a backtracking line search
-/// on `‖r‖`. If the full load does not converge from `q0`, the loads are
+/// Newton's method with the analytic tangent stiffness `K_t = ∂r/∂q`
+/// (dense, or matrix-free by Krylov iterations on large open models:
+/// [`StaticsOptions::solver`], docs/theory.md E8–E10) and a backtracking
+/// line search on `‖r‖`. If the full load does not converge from `q0`, the loads are
 /// ramped (`λ` from 0 to 1, step halved on failure, grown on success) —
 /// large curls and follower loads need it. Never returns an unconverged
 /// state: failure is [`DynamicsError::StaticsFailed`] with the load fraction
@@ -73,11 +126,43 @@ pub fn statics(
     // Prescribed joints (D59) hold their values at `options.time`, at rest
     // (`Forces::at_rest` in every evaluation).
     if let (true, Some(tree)) = (model.has_closures(), &model.tree) {
+        if options.solver == StaticsSolver::Structured {
+            return Err(DynamicsError::UnsupportedClosed {
+                what: "the structured statics",
+            });
+        }
         // Closed chains: Newton on [τ − Jᵀλ; φ] (docs/theory.md D69).
         crate::constraints::queries::check_workspace(model, data)?;
         return super::closed::statics(model, tree, data, q0, options).map(|(r, _)| r);
     }
-    statics_inner(model, data, q0, options)
+    let stiffness = BlockStiffness::new(model);
+    let structured = match options.solver {
+        StaticsSolver::Dense => false,
+        StaticsSolver::Structured => {
+            if !stiffness.is_definite() {
+                return Err(DynamicsError::NotPositiveDefinite {
+                    what: "generalized stiffness K, the structured statics' preconditioner (a joint without a spring?)",
+                });
+            }
+            true
+        }
+        StaticsSolver::Auto => options.solver.is_structured(model),
+    };
+    if !structured {
+        return statics_inner(model, data, q0, options, stiffness, false);
+    }
+    let first = statics_inner(model, data, q0, options, stiffness, true);
+    match first {
+        Err(DynamicsError::StaticsFailed { .. })
+            if options.solver == StaticsSolver::Auto
+                && model.n_dof() <= StaticsSolver::DENSE_FALLBACK_MAX_DOF =>
+        {
+            let again = statics_inner(model, data, q0, options, BlockStiffness::new(model), false);
+            // The first failure is the one to report if both fail.
+            again.or(first)
+        }
+        r => r,
+    }
 }
 
 /// The static force `τ_s(q) = b(q, 0)` at time `t` (the bias of
@@ -107,12 +192,13 @@ pub fn static_force<'a>(
 
 struct Newton<'a> {
     model: &'a Model,
-    k: DMatrix<f64>,
+    k: BlockStiffness,
     zero: Vec<f64>,
     time: f64,
     iterations: usize,
-    /// The analytic `∂τ/∂q` (D37–D47, D76–D80) at `q̇ = q̈ = 0`.
-    derivatives: IdDerivatives,
+    /// The analytic `∂τ/∂q` (D37–D47, D76–D80) at `q̇ = q̈ = 0` (dense
+    /// path; `None` on the structured path, which never forms `n × n`).
+    derivatives: Option<IdDerivatives>,
 }
 
 impl Newton<'_> {
@@ -143,7 +229,9 @@ impl Newton<'_> {
         forces: Forces,
         q: &DVector<f64>,
     ) -> Result<DMatrix<f64>, DynamicsError> {
-        let w = &mut self.derivatives;
+        let w = self
+            .derivatives
+            .get_or_insert_with(|| IdDerivatives::new(self.model));
         match (data.cable_tensions(), &mut w.tensions) {
             (None, t) => *t = None,
             (Some(u), Some(t)) => t.as_mut_slice().copy_from_slice(u),
@@ -171,18 +259,24 @@ impl Newton<'_> {
         q: &mut DVector<f64>,
         tol_ref: f64,
         options: &StaticsOptions,
+        structured: bool,
     ) -> Result<Result<f64, f64>, DynamicsError> {
         let mut r = self.residual(data, forces, q)?;
         for _ in 0..options.max_iterations {
             let rn = r.amax();
-            let kq = (&self.k * &*q).amax();
+            let kq = self.k.mul_amax(q.as_slice());
             let tol = options.tolerance * tol_ref.max(kq);
             if rn <= tol {
                 return Ok(Ok(rn));
             }
             self.iterations += 1;
-            let jac = self.jacobian(data, forces, q)?;
-            let Some(dq) = jac.lu().solve(&(-&r)) else {
+            let step = if structured {
+                self.krylov_step(data, forces, q, &r, tol)?
+            } else {
+                let jac = self.jacobian(data, forces, q)?;
+                jac.lu().solve(&(-&r))
+            };
+            let Some(dq) = step else {
                 return Ok(Err(rn));
             };
             if dq.iter().any(|v| !v.is_finite()) {
@@ -212,32 +306,79 @@ impl Newton<'_> {
             }
         }
         let rn = r.amax();
-        let tol = options.tolerance * tol_ref.max((&self.k * &*q).amax());
+        let tol = options.tolerance * tol_ref.max(self.k.mul_amax(q.as_slice()));
         Ok(if rn <= tol { Ok(rn) } else { Err(rn) })
     }
+
+    /// The inexact Newton step of the structured path (E10): GMRES on
+    /// `K_t Δq = −r`, preconditioned by `K`, to the relative residual
+    /// `η = clamp(0.1·tol/‖r‖∞, 10⁻¹⁰, 10⁻³)` — loose while far from the
+    /// solution, as tight as the differenced products allow near it (an
+    /// inexact Newton iteration converges at the rate `η`). `None` if
+    /// GMRES does not at least halve the residual.
+    fn krylov_step(
+        &mut self,
+        data: &mut Data,
+        forces: Forces,
+        q: &DVector<f64>,
+        r: &DVector<f64>,
+        tol: f64,
+    ) -> Result<Option<DVector<f64>>, DynamicsError> {
+        let n = q.len();
+        let eta = (0.1 * tol / r.amax()).clamp(1e-10, 1e-3);
+        let mut tangent = Tangent::new(self.model, forces, self.time, q.as_slice(), &self.zero);
+        let rhs: Vec<f64> = r.iter().map(|v| -v).collect();
+        let mut dq = vec![0.0; n];
+        let k = &self.k;
+        let outcome = gmres(
+            |v, out| tangent.apply(data, v, out),
+            |x| k.solve(x),
+            &rhs,
+            &mut dq,
+            eta,
+            KRYLOV_RESTART,
+            KRYLOV_MAX_PRODUCTS,
+        )?;
+        Ok((outcome.relative_residual <= 0.5).then(|| DVector::from_vec(dq)))
+    }
 }
+
+/// GMRES restart length of the structured statics: long enough that the
+/// restart rarely happens on a `K`-preconditioned tangent (E10).
+const KRYLOV_RESTART: usize = 80;
+/// Products with `K_t` per structured Newton step before it gives up.
+const KRYLOV_MAX_PRODUCTS: usize = 400;
 
 fn statics_inner(
     model: &Model,
     data: &mut Data,
     q0: &[f64],
     options: &StaticsOptions,
+    k: BlockStiffness,
+    structured: bool,
 ) -> Result<StaticsResult, DynamicsError> {
     let n = model.n_dof();
     let mut newton = Newton {
         model,
-        k: stiffness_matrix(model),
+        k,
         zero: vec![0.0; n],
         time: options.time,
         iterations: 0,
-        derivatives: IdDerivatives::new(model),
+        derivatives: None,
     };
     let start = DVector::from_column_slice(q0);
     let r_full = newton.residual(data, Forces::at_rest(1.0), &start)?.amax();
     // Reference force: the full-load imbalance at the start.
     let tol_ref = r_full.max(f64::MIN_POSITIVE);
     let mut q = start.clone();
-    if let Ok(res) = newton.solve(data, Forces::at_rest(1.0), &mut q, tol_ref, options)? {
+    if let Ok(res) = newton.solve(
+        data,
+        Forces::at_rest(1.0),
+        &mut q,
+        tol_ref,
+        options,
+        structured,
+    )? {
         return Ok(StaticsResult {
             q,
             iterations: newton.iterations,
@@ -250,7 +391,7 @@ fn statics_inner(
     let mut q_prev = start.clone();
     let unloaded = Forces::at_rest(0.0);
     if newton
-        .solve(data, unloaded, &mut q_prev, tol_ref, options)?
+        .solve(data, unloaded, &mut q_prev, tol_ref, options, structured)?
         .is_err()
     {
         return Err(DynamicsError::StaticsFailed {
@@ -285,7 +426,14 @@ fn statics_inner(
         steps += 1;
         let target = (lam + step).min(1.0);
         let mut trial = q_prev.clone();
-        match newton.solve(data, Forces::at_rest(target), &mut trial, tol_ref, options)? {
+        match newton.solve(
+            data,
+            Forces::at_rest(target),
+            &mut trial,
+            tol_ref,
+            options,
+            structured,
+        )? {
             Ok(res) => {
                 lam = target;
                 q_prev = trial;

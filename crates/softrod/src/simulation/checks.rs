@@ -7,6 +7,7 @@ use crate::error::{Error, Result};
 use crate::limits::{
     STATICS_DENSE_MATRICES, check_memory, dense_bytes, dense_matrices_of, output_sample_count,
 };
+use softrod_dynamics::StaticsSolver;
 
 impl Simulation {
     /// Refuses `task` if its `count` dense `n_dof × n_dof` matrices exceed
@@ -79,6 +80,11 @@ impl Simulation {
     /// The check [`Simulation::statics`] passes before it starts: its dense
     /// matrices against the machine's memory ([`Error::TooLarge`]).
     pub fn check_statics(&self) -> Result<()> {
+        // Large open models take the matrix-free statics: no n × n matrix
+        // (its dense retry stops at `DENSE_FALLBACK_MAX_DOF`, 128 MB).
+        if StaticsSolver::Auto.is_structured(self.model()) {
+            return Ok(());
+        }
         self.check_dense("statics", STATICS_DENSE_MATRICES)
     }
 }
