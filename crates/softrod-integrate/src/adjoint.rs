@@ -178,10 +178,7 @@ pub fn adjoint_second_order<Sys: ParameterSystem>(
     let n = sys.dim();
     if tape.dim() != n {
         return Err(IntegrateError::InvalidInput {
-            what: format!(
-                "the tape has {} coordinates, the system {n}",
-                tape.dim()
-            ),
+            what: format!("the tape has {} coordinates, the system {n}", tape.dim()),
         });
     }
     let mut w = EsdirkAdjoint::new(n, sys.n_params());

@@ -139,23 +139,41 @@ fn esdirk_adjoint_matches_central_differences_of_whole_runs() {
     let check = |name: &str, exact: f64, plus: f64, minus: f64| {
         let fd = (plus - minus) / (2.0 * d);
         let rel = (exact - fd).abs() / fd.abs().max(1e-3);
-        assert!(rel < 1e-6, "{name}: adjoint {exact}, differences {fd}, rel {rel:e}");
+        assert!(
+            rel < 1e-6,
+            "{name}: adjoint {exact}, differences {fd}, rel {rel:e}"
+        );
     };
     for j in 0..3 {
         let (mut a, mut b) = (p, p);
         a[j] += d;
         b[j] -= d;
-        check(&format!("p{j}"), g.dp[j], run(a, q0, v0).0, run(b, q0, v0).0);
+        check(
+            &format!("p{j}"),
+            g.dp[j],
+            run(a, q0, v0).0,
+            run(b, q0, v0).0,
+        );
     }
     for j in 0..2 {
         let (mut a, mut b) = (q0, q0);
         a[j] += d;
         b[j] -= d;
-        check(&format!("q0[{j}]"), g.dq0[j], run(p, a, v0).0, run(p, b, v0).0);
+        check(
+            &format!("q0[{j}]"),
+            g.dq0[j],
+            run(p, a, v0).0,
+            run(p, b, v0).0,
+        );
         let (mut a, mut b) = (v0, v0);
         a[j] += d;
         b[j] -= d;
-        check(&format!("qd0[{j}]"), g.dqd0[j], run(p, q0, a).0, run(p, q0, b).0);
+        check(
+            &format!("qd0[{j}]"),
+            g.dqd0[j],
+            run(p, q0, a).0,
+            run(p, q0, b).0,
+        );
     }
 }
 

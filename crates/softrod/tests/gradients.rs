@@ -229,7 +229,12 @@ fn arm_with_joint_and_bodies_gradients_match_central_differences() {
     let d = central(rho, 0.0, |x| l(arm(e, x, mc, mg, t)));
     agree("lower.density", g.get("lower.density").unwrap()[0], d, 0.0);
     let d = central(mc, 0.0, |x| l(arm(e, rho, x, mg, t)));
-    agree("connector.mass", g.get("connector.mass").unwrap()[0], d, 0.0);
+    agree(
+        "connector.mass",
+        g.get("connector.mass").unwrap()[0],
+        d,
+        0.0,
+    );
     let d = central(mg, 0.0, |x| l(arm(e, rho, mc, x, t)));
     agree("gripper.mass", g.get("gripper.mass").unwrap()[0], d, 0.0);
     for k in 0..2 {
@@ -246,12 +251,18 @@ fn arm_with_joint_and_bodies_gradients_match_central_differences() {
         );
     }
     let shear = |x: f64| {
-        l(arm(e, rho, mc, mg, t).replace("shear_modulus = 6.0e5", &format!("shear_modulus = {x:e}")))
+        l(arm(e, rho, mc, mg, t)
+            .replace("shear_modulus = 6.0e5", &format!("shear_modulus = {x:e}")))
     };
     // Shear barely moves this arm (∂L/∂G·G ~ 4e-3 L): a larger step keeps
     // the differences' round-off below the tolerance (truncation ~1e-8).
     let d = (shear(6.0e5 * (1.0 + 1e-4)) - shear(6.0e5 * (1.0 - 1e-4))) / (2e-4 * 6.0e5);
-    agree("lower.shear_modulus", g.get("lower.shear_modulus").unwrap()[0], d, 0.0);
+    agree(
+        "lower.shear_modulus",
+        g.get("lower.shear_modulus").unwrap()[0],
+        d,
+        0.0,
+    );
     // The joint's velocity (the first coordinate of `lower`'s element).
     let names = s.q_names();
     let c = names.iter().position(|q| q.contains("joint")).unwrap();
@@ -299,7 +310,10 @@ fn custom_loss_equals_the_builtin_quadratic() {
     for ((na, ga), (nb, gb)) in a.gradients.iter().zip(&b.gradients) {
         assert_eq!(na, nb);
         for (x, y) in ga.iter().zip(gb) {
-            assert!((x - y).abs() <= 1e-12 * x.abs().max(1e-300), "{na}: {x} vs {y}");
+            assert!(
+                (x - y).abs() <= 1e-12 * x.abs().max(1e-300),
+                "{na}: {x} vs {y}"
+            );
         }
     }
 }
@@ -350,10 +364,8 @@ fn bad_requests_name_what_is_wrong() {
     }];
     let e = err(&mut s, &mut late, &["q0"]);
     assert!(e.contains("loss[0].times") && e.contains("0.5"), "{e}");
-    let mut s2 = sim(&cantilever(1.0e6, 1000.0, 500.0, [0.0, 1.5, 0.5]).replace(
-        "[run]",
-        "[run]\nintegrator = \"radau5\"",
-    ));
+    let mut s2 = sim(&cantilever(1.0e6, 1000.0, 500.0, [0.0, 1.5, 0.5])
+        .replace("[run]", "[run]\nintegrator = \"radau5\""));
     let e = err(&mut s2, &mut loss("arm", n), &["q0"]);
     assert!(e.contains("radau5") && e.contains("esdirk"), "{e}");
 }
@@ -376,6 +388,9 @@ fn adaptive_runs_give_gradients_too() {
     let b = s
         .value_and_gradient(&mut loss("arm", n), &["arm.young"], DURATION, &OPTIONS)
         .unwrap();
-    let (ga, gb) = (a.get("arm.young").unwrap()[0], b.get("arm.young").unwrap()[0]);
+    let (ga, gb) = (
+        a.get("arm.young").unwrap()[0],
+        b.get("arm.young").unwrap()[0],
+    );
     assert!((ga - gb).abs() < 1e-3 * gb.abs(), "{ga:e} vs {gb:e}");
 }

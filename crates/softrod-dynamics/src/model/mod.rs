@@ -389,9 +389,12 @@ impl Model {
     /// Errors: an index past the bodies ([`DynamicsError::Unsupported`]),
     /// an invalid body ([`BodySpec::validate`]).
     pub fn with_body_spec(mut self, body: usize, spec: BodySpec) -> Result<Self, DynamicsError> {
-        let b = self.bodies.get_mut(body).ok_or(DynamicsError::Unsupported {
-            what: "a body index past the model's bodies",
-        })?;
+        let b = self
+            .bodies
+            .get_mut(body)
+            .ok_or(DynamicsError::Unsupported {
+                what: "a body index past the model's bodies",
+            })?;
         // The tree placed the body with its base pose: that stays.
         let spec = BodySpec {
             base: b.spec.base,

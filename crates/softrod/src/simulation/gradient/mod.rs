@@ -19,8 +19,8 @@ use params::{Kind, ParamSystem};
 
 /// A user loss: at `(t, q, q̇)` returns `(ℓ, ∂ℓ/∂q, ∂ℓ/∂q̇)` (both
 /// `n_dof` long) or an error message.
-pub type LossFn<'a> = dyn FnMut(f64, &[f64], &[f64]) -> std::result::Result<(f64, Vec<f64>, Vec<f64>), String>
-    + 'a;
+pub type LossFn<'a> =
+    dyn FnMut(f64, &[f64], &[f64]) -> std::result::Result<(f64, Vec<f64>, Vec<f64>), String> + 'a;
 
 /// One term of a loss `L = Σₜ ℓ(t, q(t), q̇(t))`, evaluated at its `times`
 /// (each in `[0, duration]`; `0` is the initial state). The run's steps end
@@ -283,7 +283,10 @@ impl Simulation {
                         return Err(bad(key("targets"), format!("a target is {p}")));
                     }
                     if !(weight.is_finite() && *weight >= 0.0) {
-                        return Err(bad(key("weight"), format!("{weight} must be finite and ≥ 0")));
+                        return Err(bad(
+                            key("weight"),
+                            format!("{weight} must be finite and ≥ 0"),
+                        ));
                     }
                 }
                 LossTerm::Quadratic {
@@ -395,7 +398,8 @@ impl Simulation {
             for (j, &t) in term.times().to_vec().iter().enumerate() {
                 let k = node(t)?;
                 let (q, qd) = (tape.q(k), tape.qd(k));
-                let (dq, dv) = seeds[k].get_or_insert_with(|| (DVector::zeros(n), DVector::zeros(n)));
+                let (dq, dv) =
+                    seeds[k].get_or_insert_with(|| (DVector::zeros(n), DVector::zeros(n)));
                 match term {
                     LossTerm::Position {
                         rod,
@@ -426,7 +430,8 @@ impl Simulation {
                     } => {
                         for c in 0..n {
                             let d = q[c] - q_ref.as_ref().map_or(0.0, |r| r[c]);
-                            *value += 0.5 * (q_weights[c] * d * d + qdot_weights[c] * qd[c] * qd[c]);
+                            *value +=
+                                0.5 * (q_weights[c] * d * d + qdot_weights[c] * qd[c] * qd[c]);
                             dq[c] += q_weights[c] * d;
                             dv[c] += qdot_weights[c] * qd[c];
                         }
@@ -445,7 +450,10 @@ impl Simulation {
                             ));
                         }
                         if !l.is_finite() || gq.iter().chain(&gv).any(|v| !v.is_finite()) {
-                            return Err(bad(key("f"), format!("returned a non-finite value at t = {t}")));
+                            return Err(bad(
+                                key("f"),
+                                format!("returned a non-finite value at t = {t}"),
+                            ));
                         }
                         *value += l;
                         for c in 0..n {

@@ -103,7 +103,12 @@ pub(crate) fn parse(model: &Model, name: &str) -> Result<Param> {
         "young" => Kind::Young(rod()?),
         "shear_modulus" => {
             let r = rod()?;
-            if let Some(nu) = model.rods()[r].spec.properties.material().specified_poisson() {
+            if let Some(nu) = model.rods()[r]
+                .spec
+                .properties
+                .material()
+                .specified_poisson()
+            {
                 return Err(bad(
                     name,
                     format!(
@@ -177,12 +182,8 @@ struct Variant {
 
 /// A rod material with one constant moved.
 fn material_with(m: &Material, kind: Kind, delta: f64) -> Result<Material> {
-    let (mut rho, mut e, mut g, mut mu) = (
-        m.density(),
-        m.young(),
-        m.shear_modulus(),
-        m.viscosity(),
-    );
+    let (mut rho, mut e, mut g, mut mu) =
+        (m.density(), m.young(), m.shear_modulus(), m.viscosity());
     match kind {
         Kind::Young(_) => e += delta,
         Kind::Shear(_) => g += delta,
@@ -355,8 +356,14 @@ impl ParameterSystem for ParamSystem<'_> {
         self.z.copy_from(w);
         self.sys.solve_shifted_mass(&mut self.z)?;
         let (q, qd, qdd) = (q.as_slice(), qd.as_slice(), qdd.as_slice());
-        self.id0
-            .copy_from(inverse_dynamics(&self.sys.model, &mut self.sys.data, t, q, qd, qdd)?);
+        self.id0.copy_from(inverse_dynamics(
+            &self.sys.model,
+            &mut self.sys.data,
+            t,
+            q,
+            qd,
+            qdd,
+        )?);
         for v in &mut self.variants {
             let id = inverse_dynamics(&v.model, &mut v.data, t, q, qd, qdd)?;
             let mut s = 0.0;
