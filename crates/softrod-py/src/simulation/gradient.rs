@@ -184,12 +184,13 @@ impl Simulation {
             })?;
         let out = PyDict::new(py);
         for (name, v) in &g.gradients {
-            let arr = vec_out(py, v);
-            // Scalars as floats, so that a dict of them feeds an optimizer.
-            if v.len() == 1 && !name.starts_with('q') {
-                out.set_item(name, v[0])?;
+            // Material constants and masses as floats; the initial state and
+            // the tension tables as arrays (whatever their length).
+            let array = name == "q0" || name == "qdot0" || name.ends_with(".tension");
+            if array {
+                out.set_item(name, vec_out(py, v))?;
             } else {
-                out.set_item(name, arr)?;
+                out.set_item(name, v[0])?;
             }
         }
         Ok((g.value, out))
