@@ -148,6 +148,10 @@ pub struct AdjointGradient {
     pub accel_evaluations: usize,
 }
 
+/// Adds the explicit loss derivatives `(∂ℓ/∂qₖ, ∂ℓ/∂q̇ₖ)` at node `k` to
+/// its second and third arguments ([`adjoint_second_order`]).
+pub type Seed<'a> = dyn FnMut(usize, &mut DVector<f64>, &mut DVector<f64>) + 'a;
+
 /// The discrete adjoint of a run recorded on `tape` with `integrator`
 /// (docs/theory-control.md G1–G8): `L = Σₖ ℓₖ(qₖ, q̇ₖ)` over the tape's
 /// nodes, with `seed(k, ∂L/∂qₖ, ∂L/∂q̇ₖ)` adding the explicit derivatives
@@ -162,7 +166,7 @@ pub fn adjoint_second_order<Sys: ParameterSystem>(
     sys: &mut Sys,
     integrator: Integrator,
     tape: &Tape,
-    seed: &mut dyn FnMut(usize, &mut DVector<f64>, &mut DVector<f64>),
+    seed: &mut Seed<'_>,
 ) -> Result<AdjointGradient, IntegrateError> {
     if !ADJOINT_INTEGRATORS.contains(&integrator) {
         let names: Vec<&str> = ADJOINT_INTEGRATORS.iter().map(|i| i.name()).collect();

@@ -149,7 +149,7 @@ mod driver;
 mod recommended;
 
 pub use adjoint::{
-    ADJOINT_INTEGRATORS, AdjointGradient, ParameterSystem, Tape, adjoint_second_order,
+    ADJOINT_INTEGRATORS, AdjointGradient, ParameterSystem, Seed, Tape, adjoint_second_order,
 };
 pub use driver::{integrate, integrate_second_order};
 pub use error::{IntegrateError, SystemError};
