@@ -51,7 +51,7 @@ def main() -> int:
 
     def sim(young: float, viscosity: float) -> softrod.Simulation:
         return softrod.Simulation.from_toml(
-            SCENE.format(pieces=pieces, young=young, viscosity=viscosity)
+            SCENE.format(pieces=pieces, young=float(young), viscosity=float(viscosity))
         )
 
     # The data: the truth's tip at the sample times, plus noise.
