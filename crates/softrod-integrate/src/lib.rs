@@ -144,9 +144,13 @@ mod stepper;
 
 mod methods;
 
+mod adjoint;
 mod driver;
 mod recommended;
 
+pub use adjoint::{
+    ADJOINT_INTEGRATORS, AdjointGradient, ParameterSystem, Seed, Tape, adjoint_second_order,
+};
 pub use driver::{integrate, integrate_second_order};
 pub use error::{IntegrateError, SystemError};
 pub use hooks::{

@@ -116,6 +116,18 @@ pub enum Error {
         /// What is wrong.
         message: String,
     },
+    /// A gradient request is ill-posed or unsupported
+    /// ([`Simulation::value_and_gradient`](crate::Simulation::value_and_gradient)):
+    /// a parameter or loss naming nothing in the model, NaN in a target or
+    /// weight, an integrator without an adjoint, a closed model.
+    #[error("{key}: {message}")]
+    Gradient {
+        /// The offending parameter name (`arm.young`) or loss key
+        /// (`loss[0].rod`).
+        key: String,
+        /// What is wrong.
+        message: String,
+    },
     /// No rod of that name or index.
     #[error("no rod {0}")]
     UnknownRod(String),
@@ -156,6 +168,7 @@ impl Error {
             | Error::SizeMismatch { .. }
             | Error::UnknownRod(_)
             | Error::Actuation { .. }
+            | Error::Gradient { .. }
             | Error::Mechanics(_)
             | Error::Kinematics(_) => true,
             Error::Dynamics(e) => {

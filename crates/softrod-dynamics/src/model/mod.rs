@@ -356,6 +356,56 @@ impl Model {
         Ok(self)
     }
 
+    /// The same model with rod `rod` described by `spec` instead: a change
+    /// of its properties (material, section), cables' tensions or loads
+    /// that keeps its coordinates and its number of cables. Its pieces
+    /// (`K_n`, `D_n`, quadrature inertia, placed loads, planar path) are
+    /// computed again, as [`Model::with_quadrature`] does. For a parameter
+    /// study or the parameter derivatives of a gradient
+    /// (docs/theory-control.md G8) without rebuilding the scene.
+    ///
+    /// Errors: a rod index past the rods; a spec with other coordinates
+    /// (strains, pieces) or another number of cables
+    /// ([`DynamicsError::Unsupported`]); those of [`Rod::validate`].
+    pub fn with_rod_spec(mut self, rod: usize, spec: Rod) -> Result<Self, DynamicsError> {
+        let count = self.rods.len();
+        let r = self
+            .rods
+            .get(rod)
+            .ok_or(DynamicsError::RodIndex { index: rod, count })?;
+        if spec.geometry.n_dof() != r.n_dof() || spec.cables.len() != r.spec.cables.len() {
+            return Err(DynamicsError::Unsupported {
+                what: "a rod variant with other coordinates or cables",
+            });
+        }
+        self.rods[rod] = build_rod(spec, rod, r.dof_offset, r.cable_offset, &self.quadrature)?;
+        Ok(self)
+    }
+
+    /// The same model with body `body` (index among [`Model::bodies`])
+    /// described by `spec` (mass, inertia, centre of mass, loads; its base
+    /// pose and attachment stay): its screw inertia is computed again.
+    ///
+    /// Errors: an index past the bodies ([`DynamicsError::Unsupported`]),
+    /// an invalid body ([`BodySpec::validate`]).
+    pub fn with_body_spec(mut self, body: usize, spec: BodySpec) -> Result<Self, DynamicsError> {
+        let b = self
+            .bodies
+            .get_mut(body)
+            .ok_or(DynamicsError::Unsupported {
+                what: "a body index past the model's bodies",
+            })?;
+        // The tree placed the body with its base pose: that stays.
+        let spec = BodySpec {
+            base: b.spec.base,
+            ..spec
+        };
+        spec.validate()?;
+        b.inertia = spec.spatial_inertia();
+        b.spec = spec;
+        Ok(self)
+    }
+
     /// The rigid bodies, in the order given.
     pub fn bodies(&self) -> &[BodyModel] {
         &self.bodies

@@ -503,6 +503,24 @@ class Simulation:
         rod sections closest to targets ({"rod", "s", "position", "rotation", "weight"});
         returns converged, reached, message, tensions, q, bounds, residual, targets, ...
         Raises InputError on bad input, SimulationError if it does not converge."""
+    def value_and_gradient(
+        self,
+        loss: dict[str, object]
+        | Callable[[float, _F64, _F64], tuple[float, ArrayLike, ArrayLike]]
+        | Sequence[object],
+        params: Sequence[str],
+        duration: float | None = None,
+        *,
+        times: ArrayLike | None = None,
+        fixed_step: float | None = None,
+        newton_tol: float | None = None,
+    ) -> tuple[float, dict[str, float | _F64]]:
+        """Loss of a run and its exact gradient (discrete adjoint of ESDIRK) w.r.t. params
+        ("q0", "qdot0", "ROD.young", "ROD.shear_modulus", "ROD.density", "ROD.viscosity",
+        "BODY.mass", "cableN.tension"). loss: {"type": "position", "rod", "s", "times",
+        "targets", "weight"}, {"type": "quadratic", "times", "q_weights", "qdot_weights",
+        "q_ref"}, a callable l(t, q, qdot) -> (value, dl_dq, dl_dqdot) at `times`, or a list.
+        Raises InputError naming a bad parameter or loss key."""
     def modes(self) -> Modes: ...
     def modes_about(self, q: ArrayLike) -> Modes: ...
     def simulate(

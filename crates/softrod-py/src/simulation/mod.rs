@@ -17,6 +17,7 @@
 mod actuation;
 mod analysis;
 mod dynamics;
+mod gradient;
 mod kinematics;
 mod run;
 
@@ -826,6 +827,46 @@ impl Simulation {
             t,
         };
         self.solve_actuation_impl(py, targets, settings)
+    }
+
+    /// The loss `L` of a run of `duration` seconds (default the scene's)
+    /// from the initial state and its exact gradient with respect to
+    /// `params` (docs/theory-control.md G1–G9): returns `(value, {param:
+    /// gradient})`, the shape `scipy.optimize.minimize(jac=True)` takes.
+    /// `params`: names among `"q0"`, `"qdot0"` (arrays of n_dof),
+    /// `"ROD.young"`, `"ROD.shear_modulus"`, `"ROD.density"`,
+    /// `"ROD.viscosity"`, `"BODY.mass"` (floats), `"cableN.tension"` (an
+    /// array, one entry per value of the tension table). `loss`: a dict or a
+    /// list of dicts — `{"type": "position", "rod": name or index, "s":
+    /// arc length (default the tip), "times": (k,), "targets": (k, 3) [m],
+    /// "weight": w}` for `½ w ‖p(t) − target‖²`, `{"type": "quadratic",
+    /// "times", "q_weights", "qdot_weights" (number or (n_dof,)), "q_ref"}`
+    /// for `½ Σ wq (q − q_ref)² + wv q̇²` — or a callable
+    /// `l(t, q, qdot) -> (value, dl_dq, dl_dqdot)` evaluated at `times`.
+    /// The gradient is the discrete adjoint of the ESDIRK run (its step
+    /// sequence held fixed; the steps end on every loss time): exact for
+    /// the computed trajectory to round-off and the Newton tolerance
+    /// (`newton_tol`). `fixed_step`: fixed steps of that size (one step
+    /// sequence whatever the parameters). Bad input raises
+    /// `softrod.InputError` naming the parameter or loss key. Holds the GIL
+    /// (a callable loss is called during the run).
+    #[pyo3(signature = (loss, params, duration = None, *, times = None, fixed_step = None, newton_tol = None))]
+    #[allow(clippy::too_many_arguments)]
+    fn value_and_gradient<'py>(
+        &mut self,
+        py: Python<'py>,
+        loss: &Bound<'py, PyAny>,
+        params: Vec<String>,
+        duration: Option<f64>,
+        times: Option<Bound<'py, PyAny>>,
+        fixed_step: Option<f64>,
+        newton_tol: Option<f64>,
+    ) -> PyResult<(f64, Bound<'py, pyo3::types::PyDict>)> {
+        let options = softrod::GradientOptions {
+            fixed_step,
+            newton_tol,
+        };
+        self.value_and_gradient_impl(py, loss, params, duration, times, options)
     }
 
     /// Undamped natural modes about the static equilibrium (the rest shape

@@ -16,10 +16,12 @@ mod actuation;
 mod analysis;
 mod checks;
 mod dynamics;
+mod gradient;
 mod kinematics;
 mod run;
 
 pub use analysis::{Equilibrium, ModalAnalysis, Statics};
+pub use gradient::{Gradient, GradientOptions, LossFn, LossTerm};
 pub use kinematics::RodId;
 pub use run::{Flow, Observer, RunStatus, RunSummary, Sample};
 

@@ -1,0 +1,129 @@
+"""Simulation.value_and_gradient (exact trajectory gradients by the discrete adjoint,
+docs/theory-control.md G1-G9) against central differences of whole runs on one fixed
+step sequence, its use by scipy.optimize.minimize(jac=True), and its errors."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import softrod
+
+SCENE = """
+[world]
+gravity = [0.0, 0.0, -9.81]
+[[rod]]
+name = "arm"
+length = 0.3
+pieces = 3
+strains = ["ky", "kz", "qx"]
+section = {{ shape = "circle", radius = 0.01 }}
+material = {{ density = 1000.0, young = {young!r}, poisson = 0.5, viscosity = {viscosity!r} }}
+[[cable]]
+rod = "arm"
+offset = [0.0, 0.006]
+tension = {{ times = [0.0, 0.1], values = [{t0!r}, {t1!r}] }}
+[run]
+rtol = 1e-8
+atol = 1e-10
+"""
+TRUTH = {"young": 1.0e6, "viscosity": 500.0, "t0": 1.0, "t1": 3.0}
+TIMES = [0.04, 0.08, 0.1]
+KW = {"fixed_step": 0.004, "newton_tol": 1e-3}
+
+
+def sim(**over: float) -> softrod.Simulation:
+    return softrod.Simulation.from_toml(SCENE.format(**{**TRUTH, **over}))
+
+
+def loss(n: int) -> list[object]:
+    targets = [[0.25, 0.0, 0.05], [0.28, 0.0, 0.0], [0.27, 0.0, -0.02]]
+    return [
+        {"type": "position", "rod": "arm", "times": TIMES, "targets": targets, "weight": 100.0},
+        {"type": "quadratic", "times": [0.1], "q_weights": 0.1, "qdot_weights": np.full(n, 1e-3)},
+    ]
+
+
+def value(s: softrod.Simulation) -> float:
+    return s.value_and_gradient(loss(s.n_dof), [], 0.1, **KW)[0]
+
+
+def test_gradients_match_central_differences():
+    s = sim()
+    v, g = s.value_and_gradient(
+        loss(s.n_dof), ["arm.young", "arm.viscosity", "cable0.tension", "qdot0"], 0.1, **KW
+    )
+    assert v > 0
+    assert isinstance(g["arm.young"], float)
+    assert g["cable0.tension"].shape == (2,) and g["qdot0"].shape == (s.n_dof,)
+    for key, name, index in [
+        ("young", "arm.young", None),
+        ("viscosity", "arm.viscosity", None),
+        ("t0", "cable0.tension", 0),
+        ("t1", "cable0.tension", 1),
+    ]:
+        d = 1e-6 * TRUTH[key]
+        fd = (value(sim(**{key: TRUTH[key] + d})) - value(sim(**{key: TRUTH[key] - d}))) / (2 * d)
+        adjoint = g[name] if index is None else g[name][index]
+        assert adjoint == pytest.approx(fd, rel=1e-6), key
+
+
+def test_callable_loss_and_scipy():
+    scipy_optimize = pytest.importorskip("scipy.optimize")
+    # Recover the final tension value from the state it produces at the end.
+    qref = _final_q(sim())
+
+    def fun(x: np.ndarray) -> tuple[float, np.ndarray]:
+        s = sim(t1=float(x[0]))
+
+        def ell(t: float, q: np.ndarray, qd: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
+            e = q - qref
+            return 0.5e4 * float(e @ e), 1e4 * e, np.zeros_like(qd)
+
+        v, g = s.value_and_gradient(ell, ["cable0.tension"], 0.1, times=[0.1], **KW)
+        return v, np.array([g["cable0.tension"][1]])
+
+    r = scipy_optimize.minimize(fun, [1.0], jac=True, method="L-BFGS-B", bounds=[(0.0, 10.0)])
+    assert r.x[0] == pytest.approx(TRUTH["t1"], rel=1e-4), r
+
+
+def _final_q(s: softrod.Simulation) -> np.ndarray:
+    captured: list[np.ndarray] = []
+
+    def grab(t: float, q: np.ndarray, qd: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
+        captured.append(q.copy())
+        return 0.0, np.zeros_like(q), np.zeros_like(qd)
+
+    s.value_and_gradient(grab, [], 0.1, times=[0.1], **KW)
+    return captured[-1]
+
+
+@pytest.mark.parametrize(
+    ("params", "loss_term", "says"),
+    [
+        (["nope.young"], None, "no rod named 'nope'"),
+        (["payload.mass"], None, "no body named 'payload'"),
+        (["arm.stiffness"], None, "unknown parameter"),
+        (["q0"], {"type": "position", "rod": "hand", "times": [0.1], "targets": [[0, 0, 0]]}, "hand"),
+        (["q0"], {"type": "position", "times": [0.1], "targets": [[np.nan, 0, 0]]}, "NaN"),
+        (["q0"], {"type": "wiggle", "times": [0.1]}, "unknown loss"),
+    ],
+)
+def test_bad_input_names_it(params, loss_term, says):
+    s = sim()
+    with pytest.raises(softrod.InputError, match=says):
+        s.value_and_gradient(loss_term or loss(s.n_dof), params, 0.1, **KW)
+
+
+def test_a_failing_loss_function_is_reported():
+    s = sim()
+
+    def boom(t, q, qd):
+        raise ValueError("no loss here")
+
+    with pytest.raises(softrod.InputError, match="no loss here"):
+        s.value_and_gradient(boom, ["q0"], 0.1, times=[0.1], **KW)
+    with pytest.raises(softrod.InputError, match="non-finite"):
+        s.value_and_gradient(
+            lambda t, q, qd: (np.nan, q, qd), ["q0"], 0.1, times=[0.1], **KW
+        )

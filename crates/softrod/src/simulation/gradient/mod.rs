@@ -1,0 +1,469 @@
+//! Exact gradients of whole trajectories
+//! ([`Simulation::value_and_gradient`]): a forward run records its accepted
+//! steps, the discrete adjoint of the integrator
+//! (`softrod_integrate::adjoint_second_order`) runs them backwards
+//! (docs/theory-control.md G1–G9).
+
+mod params;
+
+use nalgebra::DVector;
+use softrod_integrate::{
+    Control, Hooks, Integrator, Iteration, RodSystem, StepControl, StepInfo, Tape,
+    adjoint_second_order, integrate_second_order,
+};
+use softrod_kinematics::Frame;
+
+use super::Simulation;
+use crate::error::{Error, Result};
+use params::{Kind, ParamSystem};
+
+/// A user loss: at `(t, q, q̇)` returns `(ℓ, ∂ℓ/∂q, ∂ℓ/∂q̇)` (both
+/// `n_dof` long) or an error message.
+pub type LossFn<'a> =
+    dyn FnMut(f64, &[f64], &[f64]) -> std::result::Result<(f64, Vec<f64>, Vec<f64>), String> + 'a;
+
+/// One term of a loss `L = Σₜ ℓ(t, q(t), q̇(t))`, evaluated at its `times`
+/// (each in `[0, duration]`; `0` is the initial state). The run's steps end
+/// on every such time, so the loss is a function of the accepted states and
+/// no dense output enters it (G9).
+pub enum LossTerm<'a> {
+    /// Tracking of a rod section's world position:
+    /// `ℓ = ½ w ‖p(t) − p*(t)‖²` \[w·m²\] with `p(t)` the position of rod
+    /// `rod` at `s` (the tip when `None`).
+    Position {
+        /// The rod's name.
+        rod: String,
+        /// Abscissa \[m\]; `None`: the tip.
+        s: Option<f64>,
+        /// Sample times \[s\].
+        times: Vec<f64>,
+        /// Target positions, one per time \[m\], world frame.
+        targets: Vec<[f64; 3]>,
+        /// Weight `w ≥ 0`.
+        weight: f64,
+    },
+    /// `ℓ = ½ Σᵢ (wqᵢ (qᵢ − q*ᵢ)² + wvᵢ q̇ᵢ²)` (diagonal weights, `n_dof`
+    /// each; `q*` 0 when `None`).
+    Quadratic {
+        /// Sample times \[s\].
+        times: Vec<f64>,
+        /// Weights of `q − q*`.
+        q_weights: Vec<f64>,
+        /// Weights of `q̇`.
+        qdot_weights: Vec<f64>,
+        /// Reference `q*`.
+        q_ref: Option<Vec<f64>>,
+    },
+    /// A user function at each of `times`.
+    Custom {
+        /// Sample times \[s\].
+        times: Vec<f64>,
+        /// `(t, q, q̇) ↦ (ℓ, ∂ℓ/∂q, ∂ℓ/∂q̇)`.
+        f: Box<LossFn<'a>>,
+    },
+}
+
+impl LossTerm<'_> {
+    fn times(&self) -> &[f64] {
+        match self {
+            LossTerm::Position { times, .. }
+            | LossTerm::Quadratic { times, .. }
+            | LossTerm::Custom { times, .. } => times,
+        }
+    }
+}
+
+/// How [`Simulation::value_and_gradient`] runs.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GradientOptions {
+    /// Fixed steps of this size \[s\] instead of the run settings' adaptive
+    /// ones (the last step before a loss time is shortened to land on it):
+    /// one step sequence whatever the parameters, for comparisons with
+    /// differences of whole runs.
+    pub fixed_step: Option<f64>,
+    /// The Newton tolerance of the forward run's stage equations (relative
+    /// to the error weights, as `Iteration::Newton`'s `tol`); the gradient is
+    /// exact for the map whose stages are solved exactly, so a run whose
+    /// stages are solved loosely has a gradient off by about this relative
+    /// to the tolerance. `None`: the integrator's default.
+    pub newton_tol: Option<f64>,
+}
+
+/// The result of [`Simulation::value_and_gradient`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Gradient {
+    /// The loss `L`.
+    pub value: f64,
+    /// `∂L/∂p` for each parameter named, in the order named: one entry
+    /// for a material constant or a mass, one per table value (or one for
+    /// a constant) for a cable's tension, `n_dof` for `q0` and `qdot0`.
+    pub gradients: Vec<(String, Vec<f64>)>,
+    /// Accepted steps of the forward run (the backward pass has as many).
+    pub steps: usize,
+    /// Dense Jacobian evaluations of the backward pass.
+    pub jacobian_evaluations: usize,
+}
+
+impl Gradient {
+    /// The gradient of parameter `name`, if it was asked for.
+    pub fn get(&self, name: &str) -> Option<&[f64]> {
+        self.gradients
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, g)| g.as_slice())
+    }
+}
+
+/// Records the tape: every accepted step.
+struct TapeHooks {
+    n: usize,
+    tape: Tape,
+}
+
+impl Hooks<RodSystem> for TapeHooks {
+    fn keep_outputs(&self) -> bool {
+        false
+    }
+    fn step(&mut self, info: &StepInfo<'_>, _sys: &mut RodSystem) -> Control {
+        let (q, qd) = info.y.as_slice().split_at(self.n);
+        self.tape.push(info.t, info.h, q, qd);
+        Control::Continue
+    }
+}
+
+fn bad(key: impl Into<String>, message: impl Into<String>) -> Error {
+    Error::Gradient {
+        key: key.into(),
+        message: message.into(),
+    }
+}
+
+impl Simulation {
+    /// The loss `L = Σ` over `loss`'s terms and times of `ℓ(t, q, q̇)`
+    /// along a run of `duration` seconds from the initial state, and its
+    /// exact gradient with respect to `params` (docs/theory-control.md
+    /// G1–G9): `"q0"`, `"qdot0"`, `"ROD.young"`, `"ROD.shear_modulus"`
+    /// (a material given by its shear modulus), `"ROD.density"`,
+    /// `"ROD.viscosity"`, `"BODY.mass"`, `"cableN.tension"` (one entry per
+    /// value of a tension table, the scene's `[[cable]]` order).
+    ///
+    /// The gradient is the discrete adjoint of the run's integrator: exact
+    /// for the computed trajectory (its accepted step sequence held fixed)
+    /// to round-off and the Newton tolerance of the forward run
+    /// ([`GradientOptions::newton_tol`]). Its cost does not grow with the
+    /// number of parameters beyond two O(N) inverse dynamics per parameter
+    /// and stage (docs/performance.md, "Trajectory gradients").
+    ///
+    /// Errors ([`Error::Gradient`], naming the key): an integrator without
+    /// an adjoint (supported: esdirk), a closed model or one with contact,
+    /// a parameter or loss naming nothing in the model, a time outside the
+    /// run, non-finite or negative weights, non-finite targets, a custom
+    /// loss that fails or returns the wrong lengths or NaN.
+    pub fn value_and_gradient(
+        &mut self,
+        loss: &mut [LossTerm<'_>],
+        params: &[&str],
+        duration: f64,
+        options: &GradientOptions,
+    ) -> Result<Gradient> {
+        self.check_run(duration)?;
+        let integrator = self.settings.integrator;
+        if integrator != Integrator::Esdirk {
+            return Err(bad(
+                "run.integrator",
+                format!(
+                    "gradients need the discrete adjoint of the integrator; {} has none \
+                     (supported: esdirk)",
+                    integrator.name()
+                ),
+            ));
+        }
+        if self.model().has_closures() {
+            return Err(bad(
+                "closure",
+                "gradients of closed models are not supported yet",
+            ));
+        }
+        if self.model().has_contact() {
+            return Err(bad(
+                "contact",
+                "gradients of models with contact are not supported yet",
+            ));
+        }
+        let parsed = params
+            .iter()
+            .map(|p| params::parse(self.model(), p))
+            .collect::<Result<Vec<_>>>()?;
+        let stops = self.check_loss(loss, duration)?;
+        let tape = self.record(duration, &stops, options)?;
+        // The loss at the nodes, and its derivatives as the seeds of the
+        // backward pass.
+        let n = self.n_dof();
+        let mut seeds: Vec<Option<(DVector<f64>, DVector<f64>)>> = vec![None; tape.nodes()];
+        let mut value = 0.0;
+        let saved_time = self.time;
+        let evaluated = self.evaluate_loss(loss, &tape, duration, &mut seeds, &mut value);
+        self.time = saved_time;
+        evaluated?;
+        if !value.is_finite() {
+            return Err(bad("loss", format!("the loss is {value}")));
+        }
+        let mut sys = ParamSystem::new(&mut self.system, &parsed)?;
+        let g = adjoint_second_order(&mut sys, integrator, &tape, &mut |k, lq, lv| {
+            if let Some((dq, dv)) = &seeds[k] {
+                *lq += dq;
+                *lv += dv;
+            }
+        })
+        .map_err(|e| Error::Integration(Box::new(e)))?;
+        let mut gradients = Vec::with_capacity(parsed.len());
+        let mut slot = 0;
+        for p in &parsed {
+            let v = match p.kind {
+                Kind::Q0 => g.dq0.as_slice().to_vec(),
+                Kind::Qdot0 => g.dqd0.as_slice().to_vec(),
+                _ => {
+                    slot += p.len;
+                    g.dp[slot - p.len..slot].to_vec()
+                }
+            };
+            debug_assert_eq!(v.len(), if p.kind == Kind::Q0 { n } else { v.len() });
+            gradients.push((p.name.clone(), v));
+        }
+        Ok(Gradient {
+            value,
+            gradients,
+            steps: tape.steps(),
+            jacobian_evaluations: g.jacobian_evaluations,
+        })
+    }
+
+    /// Checks the loss terms; returns the sorted distinct times where steps
+    /// must end (without 0).
+    fn check_loss(&self, loss: &[LossTerm<'_>], duration: f64) -> Result<Vec<f64>> {
+        let n = self.n_dof();
+        let mut stops = Vec::new();
+        for (i, term) in loss.iter().enumerate() {
+            let key = |k: &str| format!("loss[{i}].{k}");
+            for &t in term.times() {
+                if !(t.is_finite() && (0.0..=duration).contains(&t)) {
+                    return Err(bad(key("times"), format!("{t} is outside [0, {duration}]")));
+                }
+                if t > 0.0 {
+                    stops.push(t);
+                }
+            }
+            match term {
+                LossTerm::Position {
+                    rod,
+                    s,
+                    times,
+                    targets,
+                    weight,
+                } => {
+                    let r = self
+                        .rod_index(rod.as_str())
+                        .map_err(|_| bad(key("rod"), format!("no rod named '{rod}'")))?;
+                    let length = self.model().rods()[r].spec.properties.length();
+                    if let Some(s) = s {
+                        if !(s.is_finite() && (0.0..=length).contains(s)) {
+                            return Err(bad(
+                                key("s"),
+                                format!("{s} is outside rod '{rod}' [0, {length}]"),
+                            ));
+                        }
+                    }
+                    if targets.len() != times.len() {
+                        return Err(bad(
+                            key("targets"),
+                            format!("{} targets for {} times", targets.len(), times.len()),
+                        ));
+                    }
+                    if let Some(p) = targets.iter().flatten().find(|v| !v.is_finite()) {
+                        return Err(bad(key("targets"), format!("a target is {p}")));
+                    }
+                    if !(weight.is_finite() && *weight >= 0.0) {
+                        return Err(bad(
+                            key("weight"),
+                            format!("{weight} must be finite and ≥ 0"),
+                        ));
+                    }
+                }
+                LossTerm::Quadratic {
+                    q_weights,
+                    qdot_weights,
+                    q_ref,
+                    ..
+                } => {
+                    for (k, v) in [
+                        ("q_weights", Some(q_weights)),
+                        ("qdot_weights", Some(qdot_weights)),
+                        ("q_ref", q_ref.as_ref()),
+                    ] {
+                        let Some(v) = v else { continue };
+                        if v.len() != n {
+                            return Err(bad(key(k), format!("{} entries, n_dof is {n}", v.len())));
+                        }
+                        if let Some(x) = v.iter().find(|x| !x.is_finite()) {
+                            return Err(bad(key(k), format!("an entry is {x}")));
+                        }
+                    }
+                }
+                LossTerm::Custom { .. } => {}
+            }
+        }
+        stops.sort_by(f64::total_cmp);
+        stops.dedup();
+        Ok(stops)
+    }
+
+    /// The forward run, recorded: steps end on every loss time.
+    fn record(&mut self, duration: f64, stops: &[f64], options: &GradientOptions) -> Result<Tape> {
+        let (method, mut opts) = self.settings.method_and_options(duration)?;
+        opts.t_eval = Some(Vec::new());
+        if let Some(tol) = options.newton_tol {
+            if !(tol.is_finite() && tol > 0.0) {
+                return Err(bad("newton_tol", format!("{tol} must be positive")));
+            }
+            opts.iteration = Iteration::Newton { tol, max_iter: 40 };
+        }
+        if let Some(dt) = options.fixed_step {
+            if !(dt.is_finite() && dt > 0.0) {
+                return Err(bad("fixed_step", format!("{dt} must be positive")));
+            }
+            opts.step = StepControl::Fixed(dt);
+            opts.max_steps = 2 * (duration / dt).ceil().min(1e12) as usize + 2 * stops.len() + 100;
+        }
+        let mut breakpoints = self.system.model.breakpoints();
+        breakpoints.extend_from_slice(stops);
+        breakpoints.sort_by(f64::total_cmp);
+        breakpoints.dedup();
+        opts.breakpoints = breakpoints;
+        self.system.jacobian = self.settings.stiff_jacobian();
+        let n = self.n_dof();
+        let mut hooks = TapeHooks {
+            n,
+            tape: Tape::new(0.0, self.q0.as_slice(), self.qd0.as_slice()),
+        };
+        // Fixed steps do not stop at breakpoints: one run per interval
+        // between loss times. Adaptive ones end their steps there.
+        let segments: Vec<(f64, f64)> = if options.fixed_step.is_some() {
+            let mut ends = stops.to_vec();
+            if ends.last() != Some(&duration) {
+                ends.push(duration);
+            }
+            let mut t0 = 0.0;
+            ends.iter()
+                .map(|&t1| {
+                    let s = (t0, t1);
+                    t0 = t1;
+                    s
+                })
+                .collect()
+        } else {
+            vec![(0.0, duration)]
+        };
+        let (mut q, mut qd) = (self.q0.clone(), self.qd0.clone());
+        for span in segments {
+            integrate_second_order(&mut self.system, method, span, &q, &qd, &opts, &mut hooks)
+                .map_err(|e| Error::Integration(Box::new(e)))?;
+            let last = hooks.tape.nodes() - 1;
+            q.copy_from_slice(hooks.tape.q(last));
+            qd.copy_from_slice(hooks.tape.qd(last));
+        }
+        Ok(hooks.tape)
+    }
+
+    /// Evaluates every loss term at its nodes: adds to `value` and to the
+    /// nodes' seeds `(∂ℓ/∂q, ∂ℓ/∂q̇)`. Moves the clock (the caller restores it).
+    fn evaluate_loss(
+        &mut self,
+        loss: &mut [LossTerm<'_>],
+        tape: &Tape,
+        duration: f64,
+        seeds: &mut [Option<(DVector<f64>, DVector<f64>)>],
+        value: &mut f64,
+    ) -> Result<()> {
+        let n = self.n_dof();
+        // The node where the steps ended on `t` (they end there exactly;
+        // the tolerance only absorbs a representation of `t` off by an ulp).
+        let eps = 1e-12 * duration.max(1.0);
+        let node = |t: f64| -> Result<usize> {
+            (0..tape.nodes())
+                .find(|&k| (tape.time(k) - t).abs() <= eps)
+                .ok_or_else(|| bad("loss", format!("no step ended at t = {t}")))
+        };
+        for (i, term) in loss.iter_mut().enumerate() {
+            let key = |k: &str| format!("loss[{i}].{k}");
+            for (j, &t) in term.times().to_vec().iter().enumerate() {
+                let k = node(t)?;
+                let (q, qd) = (tape.q(k), tape.qd(k));
+                let (dq, dv) =
+                    seeds[k].get_or_insert_with(|| (DVector::zeros(n), DVector::zeros(n)));
+                match term {
+                    LossTerm::Position {
+                        rod,
+                        s,
+                        targets,
+                        weight,
+                        ..
+                    } => {
+                        self.time = tape.time(k);
+                        let r = self.rod_index(rod.as_str())?;
+                        let s = s.unwrap_or(self.model().rods()[r].spec.properties.length());
+                        let p = self.pose(r, s, q)?.translation;
+                        let jac = self.jacobian(r, s, q, Frame::Mixed)?;
+                        let target = targets[j];
+                        let e = [p.x - target[0], p.y - target[1], p.z - target[2]];
+                        *value += 0.5 * *weight * (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+                        // ∂p/∂q: the linear rows of the mixed-frame Jacobian.
+                        for c in 0..n {
+                            dq[c] += *weight
+                                * (e[0] * jac[(3, c)] + e[1] * jac[(4, c)] + e[2] * jac[(5, c)]);
+                        }
+                    }
+                    LossTerm::Quadratic {
+                        q_weights,
+                        qdot_weights,
+                        q_ref,
+                        ..
+                    } => {
+                        for c in 0..n {
+                            let d = q[c] - q_ref.as_ref().map_or(0.0, |r| r[c]);
+                            *value +=
+                                0.5 * (q_weights[c] * d * d + qdot_weights[c] * qd[c] * qd[c]);
+                            dq[c] += q_weights[c] * d;
+                            dv[c] += qdot_weights[c] * qd[c];
+                        }
+                    }
+                    LossTerm::Custom { f, .. } => {
+                        let (l, gq, gv) = f(tape.time(k), q, qd)
+                            .map_err(|m| bad(key("f"), format!("at t = {t}: {m}")))?;
+                        if gq.len() != n || gv.len() != n {
+                            return Err(bad(
+                                key("f"),
+                                format!(
+                                    "returned gradients of {} and {} entries, n_dof is {n}",
+                                    gq.len(),
+                                    gv.len()
+                                ),
+                            ));
+                        }
+                        if !l.is_finite() || gq.iter().chain(&gv).any(|v| !v.is_finite()) {
+                            return Err(bad(
+                                key("f"),
+                                format!("returned a non-finite value at t = {t}"),
+                            ));
+                        }
+                        *value += l;
+                        for c in 0..n {
+                            dq[c] += gq[c];
+                            dv[c] += gv[c];
+                        }
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,377 @@
+//! The parameters a gradient is taken with respect to, and the system the
+//! backward pass differentiates: the rod system plus the derivatives
+//! `∂q̈/∂p` of its parameters, formed by linearity (docs/theory-control.md
+//! G8).
+//!
+//! The inverse dynamics `ID(q, q̇, q̈; p)` is affine in each parameter the
+//! names below allow: Young's and shear modulus (the elastic force
+//! `K(q − q̄)`, `K` linear in `E` and `G`), density (inertia, Coriolis and
+//! gravity of the rods), viscosity (`D q̇`), a body's mass (its screw
+//! inertia and weight, at a fixed inertia about its centre of mass), and a
+//! cable's tension values (the cable force is linear in the tension, a
+//! table interpolates its values linearly). So for any `Δ ≠ 0`
+//! `∂ID/∂p = (ID(p + Δ) − ID(p))/Δ` exactly — no step error, only the
+//! round-off of the two evaluations — and `∂q̈/∂p = −M⁻¹ ∂ID/∂p`. The
+//! backward pass needs `wᵀ ∂q̈/∂p = −(M⁻¹w)ᵀ ∂ID/∂p` (`M` symmetric): one
+//! O(N) solve with `M` and two O(N) inverse dynamics per parameter.
+
+use nalgebra::{DMatrix, DVector};
+use softrod_dynamics::{Data, DynamicsError, Model, inverse_dynamics};
+use softrod_integrate::{ParameterSystem, RodSystem, SecondOrderSystem};
+use softrod_mechanics::{Material, RodProperties, Tension};
+
+use crate::error::{Error, Result};
+
+/// What a parameter name refers to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Kind {
+    Young(usize),
+    Shear(usize),
+    Density(usize),
+    Viscosity(usize),
+    /// A body's mass (index among the model's bodies).
+    Mass(usize),
+    /// A cable's tension (index in the model's cable order): its constant,
+    /// or one entry per table value.
+    Tension(usize),
+    Q0,
+    Qdot0,
+}
+
+/// One parameter of a gradient request, with the number of gradient
+/// entries it has.
+#[derive(Clone, Debug)]
+pub(crate) struct Param {
+    pub name: String,
+    pub kind: Kind,
+    pub len: usize,
+}
+
+fn bad(name: &str, message: impl Into<String>) -> Error {
+    Error::Gradient {
+        key: name.to_owned(),
+        message: message.into(),
+    }
+}
+
+/// The cable `c` of `model`: its rod and its index on the rod.
+fn locate_cable(model: &Model, c: usize) -> Option<(usize, usize)> {
+    model.rods().iter().enumerate().find_map(|(r, rod)| {
+        let k = c.checked_sub(rod.cable_offset)?;
+        (k < rod.spec.cables.len()).then_some((r, k))
+    })
+}
+
+/// Parses a parameter name: `q0`, `qdot0`, `ROD.young`,
+/// `ROD.shear_modulus`, `ROD.density`, `ROD.viscosity`, `BODY.mass`,
+/// `cableN.tension` (or `cable[N].tension`; `N` in the model's cable
+/// order, the scene's `[[cable]]` order).
+pub(crate) fn parse(model: &Model, name: &str) -> Result<Param> {
+    let n = model.n_dof();
+    match name {
+        "q0" => {
+            return Ok(Param {
+                name: name.into(),
+                kind: Kind::Q0,
+                len: n,
+            });
+        }
+        "qdot0" => {
+            return Ok(Param {
+                name: name.into(),
+                kind: Kind::Qdot0,
+                len: n,
+            });
+        }
+        _ => {}
+    }
+    let Some((element, key)) = name.rsplit_once('.') else {
+        return Err(bad(
+            name,
+            "expected q0, qdot0, ROD.young, ROD.shear_modulus, ROD.density, ROD.viscosity, \
+             BODY.mass or cableN.tension",
+        ));
+    };
+    let rod = || {
+        model
+            .rods()
+            .iter()
+            .position(|r| r.spec.name == element)
+            .ok_or_else(|| bad(name, format!("no rod named '{element}'")))
+    };
+    let kind = match key {
+        "young" => Kind::Young(rod()?),
+        "shear_modulus" => {
+            let r = rod()?;
+            if let Some(nu) = model.rods()[r]
+                .spec
+                .properties
+                .material()
+                .specified_poisson()
+            {
+                return Err(bad(
+                    name,
+                    format!(
+                        "rod '{element}' gives its material by poisson = {nu}: its shear \
+                         modulus follows young (differentiate '{element}.young', at a fixed \
+                         Poisson ratio)"
+                    ),
+                ));
+            }
+            Kind::Shear(r)
+        }
+        "density" => Kind::Density(rod()?),
+        "viscosity" => Kind::Viscosity(rod()?),
+        "mass" => Kind::Mass(
+            model
+                .bodies()
+                .iter()
+                .position(|b| b.spec.name == element)
+                .ok_or_else(|| bad(name, format!("no body named '{element}'")))?,
+        ),
+        "tension" => {
+            let index = element
+                .strip_prefix("cable")
+                .map(|s| s.trim_start_matches('[').trim_end_matches(']'))
+                .and_then(|s| s.parse::<usize>().ok())
+                .ok_or_else(|| bad(name, "a tension is named cableN.tension (N from 0)"))?;
+            if index >= model.n_cables() {
+                return Err(bad(
+                    name,
+                    format!("no cable {index} (the model has {})", model.n_cables()),
+                ));
+            }
+            Kind::Tension(index)
+        }
+        _ => {
+            return Err(bad(
+                name,
+                format!(
+                    "unknown parameter '{key}' (young, shear_modulus, density, viscosity, mass, \
+                     tension)"
+                ),
+            ));
+        }
+    };
+    let len = match kind {
+        Kind::Tension(c) => {
+            let (r, k) = locate_cable(model, c).expect("index checked");
+            match &model.rods()[r].spec.cables[k].tension {
+                Tension::Constant(_) => 1,
+                Tension::Table { values, .. } => values.len(),
+            }
+        }
+        _ => 1,
+    };
+    Ok(Param {
+        name: name.into(),
+        kind,
+        len,
+    })
+}
+
+/// A model with one parameter moved by `delta`, and its buffers.
+#[derive(Debug)]
+struct Variant {
+    model: Model,
+    data: Data,
+    delta: f64,
+    /// Where its derivative goes among the system's parameters.
+    slot: usize,
+}
+
+/// A rod material with one constant moved.
+fn material_with(m: &Material, kind: Kind, delta: f64) -> Result<Material> {
+    let (mut rho, mut e, mut g, mut mu) =
+        (m.density(), m.young(), m.shear_modulus(), m.viscosity());
+    match kind {
+        Kind::Young(_) => e += delta,
+        Kind::Shear(_) => g += delta,
+        Kind::Density(_) => rho += delta,
+        Kind::Viscosity(_) => mu += delta,
+        _ => unreachable!("not a material constant"),
+    }
+    let b = Material::builder().density(rho).young(e).viscosity(mu);
+    // A material given by its Poisson ratio keeps it: G follows E.
+    Ok(match m.specified_poisson() {
+        Some(nu) => b.poisson(nu),
+        None => b.shear_modulus(g),
+    }
+    .build()?)
+}
+
+/// The model with entry `entry` of parameter `kind` moved by `Δ` (chosen
+/// here: the value itself when positive, else a scale of the model), and
+/// `Δ`.
+fn variant(model: &Model, kind: Kind, entry: usize) -> Result<(Model, f64)> {
+    let scaled = |v: f64, fallback: f64| if v > 0.0 { v } else { fallback };
+    match kind {
+        Kind::Young(r) | Kind::Shear(r) | Kind::Density(r) | Kind::Viscosity(r) => {
+            let spec = &model.rods()[r].spec;
+            let m = spec.properties.material();
+            let delta = match kind {
+                Kind::Young(_) => m.young(),
+                Kind::Shear(_) => m.shear_modulus(),
+                Kind::Density(_) => m.density(),
+                // A zero viscosity: the one that damps in a millisecond.
+                _ => scaled(m.viscosity(), 1e-3 * m.shear_modulus()),
+            };
+            let mut spec = spec.clone();
+            spec.properties = RodProperties::new(
+                spec.properties.section().clone(),
+                material_with(m, kind, delta)?,
+                spec.properties.length(),
+            )?;
+            Ok((model.clone().with_rod_spec(r, spec)?, delta))
+        }
+        Kind::Mass(b) => {
+            let mut spec = model.bodies()[b].spec.clone();
+            let delta = spec.mass;
+            spec.mass += delta;
+            Ok((model.clone().with_body_spec(b, spec)?, delta))
+        }
+        Kind::Tension(c) => {
+            let (r, k) = locate_cable(model, c).expect("index checked");
+            let mut spec = model.rods()[r].spec.clone();
+            let tension = &mut spec.cables[k].tension;
+            let delta = match tension {
+                Tension::Constant(v) => {
+                    let d = scaled(*v, 1.0);
+                    *v += d;
+                    d
+                }
+                Tension::Table { values, .. } => {
+                    let d = scaled(values[entry], 1.0);
+                    values[entry] += d;
+                    d
+                }
+            };
+            Ok((model.clone().with_rod_spec(r, spec)?, delta))
+        }
+        Kind::Q0 | Kind::Qdot0 => unreachable!("initial states have no model variant"),
+    }
+}
+
+/// The rod system with the parameter derivatives of the backward pass
+/// (a [`ParameterSystem`]); its parameters are the model parameters of
+/// `params` in order, one per gradient entry (`q0`, `qdot0` are the
+/// adjoint's own).
+pub(crate) struct ParamSystem<'a> {
+    sys: &'a mut RodSystem,
+    variants: Vec<Variant>,
+    n_params: usize,
+    z: DVector<f64>,
+    id0: DVector<f64>,
+}
+
+impl<'a> ParamSystem<'a> {
+    pub(crate) fn new(sys: &'a mut RodSystem, params: &[Param]) -> Result<Self> {
+        let mut variants = Vec::new();
+        let mut slot = 0;
+        let inputs = sys.data.cable_tensions().map(<[f64]>::to_vec);
+        for p in params {
+            if matches!(p.kind, Kind::Q0 | Kind::Qdot0) {
+                continue;
+            }
+            if matches!(p.kind, Kind::Tension(_)) && inputs.is_some() {
+                return Err(bad(
+                    &p.name,
+                    "the cable tensions are set as inputs, not by the model's tension",
+                ));
+            }
+            for entry in 0..p.len {
+                let (model, delta) = variant(&sys.model, p.kind, entry)?;
+                let mut data = Data::new(&model);
+                data.set_cable_tensions(&model, inputs.as_deref())?;
+                variants.push(Variant {
+                    model,
+                    data,
+                    delta,
+                    slot,
+                });
+                slot += 1;
+            }
+        }
+        let n = sys.model.n_dof();
+        Ok(Self {
+            sys,
+            variants,
+            n_params: slot,
+            z: DVector::zeros(n),
+            id0: DVector::zeros(n),
+        })
+    }
+}
+
+impl SecondOrderSystem for ParamSystem<'_> {
+    type Error = DynamicsError;
+
+    fn dim(&self) -> usize {
+        self.sys.dim()
+    }
+
+    fn accel(
+        &mut self,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+        qdd: &mut DVector<f64>,
+    ) -> Result<(), DynamicsError> {
+        self.sys.accel(t, q, qd, qdd)
+    }
+
+    fn jacobians(
+        &mut self,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+        dqdd_dq: &mut DMatrix<f64>,
+        dqdd_dqd: &mut DMatrix<f64>,
+    ) -> Result<(), DynamicsError> {
+        self.sys.jacobians(t, q, qd, dqdd_dq, dqdd_dqd)
+    }
+}
+
+impl ParameterSystem for ParamSystem<'_> {
+    fn n_params(&self) -> usize {
+        self.n_params
+    }
+
+    /// `wᵀ ∂q̈/∂pⱼ = −(M⁻¹w)ᵀ (ID(pⱼ + Δⱼ) − ID(pⱼ))/Δⱼ` (G8).
+    fn accel_param_vjp(
+        &mut self,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+        qdd: &DVector<f64>,
+        w: &DVector<f64>,
+        out: &mut [f64],
+    ) -> Result<(), DynamicsError> {
+        if self.variants.is_empty() {
+            return Ok(());
+        }
+        // M(q) by the O(N) shifted solver with no shift (open models only:
+        // value_and_gradient refuses closed ones).
+        self.sys.factor_shifted_mass(t, q, 0.0, 0.0)?;
+        self.z.copy_from(w);
+        self.sys.solve_shifted_mass(&mut self.z)?;
+        let (q, qd, qdd) = (q.as_slice(), qd.as_slice(), qdd.as_slice());
+        self.id0.copy_from(inverse_dynamics(
+            &self.sys.model,
+            &mut self.sys.data,
+            t,
+            q,
+            qd,
+            qdd,
+        )?);
+        for v in &mut self.variants {
+            let id = inverse_dynamics(&v.model, &mut v.data, t, q, qd, qdd)?;
+            let mut s = 0.0;
+            for r in 0..id.len() {
+                s += self.z[r] * (id[r] - self.id0[r]);
+            }
+            out[v.slot] -= s / v.delta;
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,396 @@
+//! Trajectory gradients (`Simulation::value_and_gradient`, the discrete
+//! adjoint of ESDIRK) against central differences of whole runs: every
+//! parameter kind on a cantilever with a cable, and on an arm with a joint
+//! and two bodies (examples/arm_with_payload.toml's structure). The
+//! differenced runs are separate scenes with the parameter changed in the
+//! text, run with the same fixed step sequence (GradientOptions::fixed_step)
+//! and their stage equations solved far below the differences' step: the
+//! adjoint must then agree with them to round-off and truncation, ~1e-7.
+
+use softrod::{GradientOptions, LossTerm, Simulation};
+
+const OPTIONS: GradientOptions = GradientOptions {
+    fixed_step: Some(0.004),
+    newton_tol: Some(1e-3),
+};
+const DURATION: f64 = 0.1;
+const TIMES: [f64; 3] = [0.03, 0.07, 0.1];
+
+/// A cantilever under gravity with a cable whose tension is a table.
+fn cantilever(young: f64, density: f64, viscosity: f64, tension: [f64; 3]) -> String {
+    format!(
+        r#"
+[world]
+gravity = [0.0, 0.0, -9.81]
+[[rod]]
+name = "arm"
+length = 0.3
+pieces = 3
+strains = ["ky", "kz", "qx"]
+section = {{ shape = "circle", radius = 0.01 }}
+material = {{ density = {density:e}, young = {young:e}, poisson = 0.5, viscosity = {viscosity:e} }}
+[[cable]]
+rod = "arm"
+offset = [0.0, 0.006]
+tension = {{ times = [0.0, 0.05, 0.1], values = [{:e}, {:e}, {:e}] }}
+[run]
+rtol = 1e-8
+atol = 1e-10
+"#,
+        tension[0], tension[1], tension[2]
+    )
+}
+
+/// The arm of examples/arm_with_payload.toml, shorter pieces.
+fn arm(young: f64, density: f64, connector: f64, gripper: f64, tension: [f64; 2]) -> String {
+    format!(
+        r#"
+[world]
+gravity = [0.0, 0.0, -9.81]
+[[rod]]
+name = "upper"
+length = 0.25
+pieces = 2
+strains = ["ky", "kz", "qx"]
+section = {{ shape = "circle", radius = 0.01 }}
+material = {{ density = 1100.0, young = {young:e}, poisson = 0.5, viscosity = 2.0e3 }}
+[[body]]
+name = "connector"
+parent = "upper"
+mass = {connector:e}
+inertia = [1e-6, 1e-6, 1e-6]
+center_of_mass = [0.005, 0.0, 0.0]
+[[rod]]
+name = "lower"
+parent = "connector"
+base = {{ position = [0.01, 0.0, 0.0] }}
+joint = {{ type = "revolute", axis = [0, 1, 0], stiffness = 0.2, damping = 0.002 }}
+length = 0.2
+pieces = 2
+strains = ["ky", "kz", "qx", "qz"]
+section = {{ shape = "circle", radius = 0.008 }}
+material = {{ density = {density:e}, young = 2.0e6, shear_modulus = 6.0e5, viscosity = 2.0e3 }}
+[[body]]
+name = "gripper"
+parent = "lower"
+mass = {gripper:e}
+inertia = [4e-6, 4e-6, 4e-6]
+center_of_mass = [0.01, 0.0, 0.0]
+[[cable]]
+rod = "upper"
+offset = [0.0, 0.006]
+tension = {{ times = [0.0, 0.1], values = [{:e}, {:e}] }}
+[run]
+rtol = 1e-8
+atol = 1e-10
+"#,
+        tension[0], tension[1]
+    )
+}
+
+fn sim(text: &str) -> Simulation {
+    Simulation::from_toml(text, "gradient test").unwrap().0
+}
+
+/// The loss: the tip of `rod` tracked to fixed points, plus a quadratic
+/// form in q and q̇.
+fn loss(rod: &str, n: usize) -> Vec<LossTerm<'static>> {
+    vec![
+        LossTerm::Position {
+            rod: rod.into(),
+            s: None,
+            times: TIMES.to_vec(),
+            targets: vec![[0.2, 0.01, 0.05], [0.25, 0.0, -0.02], [0.22, -0.01, 0.0]],
+            weight: 100.0,
+        },
+        LossTerm::Quadratic {
+            times: vec![0.0, 0.05, 0.1],
+            q_weights: (0..n).map(|i| 0.1 + 0.01 * i as f64).collect(),
+            qdot_weights: vec![1e-3; n],
+            q_ref: None,
+        },
+    ]
+}
+
+fn value(mut s: Simulation, rod: &str) -> f64 {
+    let n = s.n_dof();
+    s.value_and_gradient(&mut loss(rod, n), &[], DURATION, &OPTIONS)
+        .unwrap()
+        .value
+}
+
+/// Central difference of `f` at `x` with relative step 1e-6 (absolute
+/// `floor` for a zero `x`).
+fn central(x: f64, floor: f64, f: impl Fn(f64) -> f64) -> f64 {
+    let d = (1e-6 * x.abs()).max(floor);
+    (f(x + d) - f(x - d)) / (2.0 * d)
+}
+
+fn agree(name: &str, adjoint: f64, differences: f64, scale: f64) {
+    let err = (adjoint - differences).abs() / differences.abs().max(scale);
+    assert!(
+        err < 1e-6,
+        "{name}: adjoint {adjoint:e}, differences {differences:e}, relative {err:e}"
+    );
+    eprintln!("{name}: adjoint {adjoint:e}, differences {differences:e}, relative {err:e}");
+}
+
+#[test]
+fn cantilever_gradients_match_central_differences() {
+    let (e, rho, mu, t) = (1.0e6, 1000.0, 500.0, [0.0, 1.5, 0.5]);
+    let mut s = sim(&cantilever(e, rho, mu, t));
+    let n = s.n_dof();
+    let names = [
+        "arm.young",
+        "arm.density",
+        "arm.viscosity",
+        "cable0.tension",
+        "q0",
+        "qdot0",
+    ];
+    let g = s
+        .value_and_gradient(&mut loss("arm", n), &names, DURATION, &OPTIONS)
+        .unwrap();
+    assert!(g.value > 0.0);
+    assert_eq!(g.get("cable0.tension").unwrap().len(), 3);
+    let l = |text: String| value(sim(&text), "arm");
+    let d = central(e, 0.0, |x| l(cantilever(x, rho, mu, t)));
+    agree("young", g.get("arm.young").unwrap()[0], d, 0.0);
+    let d = central(rho, 0.0, |x| l(cantilever(e, x, mu, t)));
+    agree("density", g.get("arm.density").unwrap()[0], d, 0.0);
+    let d = central(mu, 0.0, |x| l(cantilever(e, rho, x, t)));
+    agree("viscosity", g.get("arm.viscosity").unwrap()[0], d, 0.0);
+    // The first table value is 0: a one-sided … central difference around
+    // it would need a negative tension; 1e-6 N forward and back from 1e-6.
+    for k in 1..3 {
+        let d = central(t[k], 1e-6, |x| {
+            let mut tk = t;
+            tk[k] = x;
+            l(cantilever(e, rho, mu, tk))
+        });
+        agree(
+            &format!("tension[{k}]"),
+            g.get("cable0.tension").unwrap()[k],
+            d,
+            0.0,
+        );
+    }
+    // Initial state: a few components (the loss's scale for the zero ones).
+    let gq = g.get("q0").unwrap();
+    let gv = g.get("qdot0").unwrap();
+    let scale = gq.iter().map(|v| v.abs()).fold(0.0, f64::max);
+    for c in [0, 4, n - 1] {
+        let at = |x: f64, velocity: bool| {
+            let mut s = sim(&cantilever(e, rho, mu, t));
+            let (mut q, mut v) = (vec![0.0; n], vec![0.0; n]);
+            if velocity {
+                v[c] = x;
+            } else {
+                q[c] = x;
+            }
+            s.set_initial_state(&q, &v).unwrap();
+            value(s, "arm")
+        };
+        agree(
+            &format!("q0[{c}]"),
+            gq[c],
+            central(0.0, 1e-6, |x| at(x, false)),
+            1e-3 * scale,
+        );
+        agree(
+            &format!("qdot0[{c}]"),
+            gv[c],
+            central(0.0, 1e-6, |x| at(x, true)),
+            1e-3 * scale,
+        );
+    }
+}
+
+#[test]
+fn arm_with_joint_and_bodies_gradients_match_central_differences() {
+    let (e, rho, mc, mg, t) = (2.0e6, 1100.0, 0.01, 0.02, [2.0, 8.0]);
+    let mut s = sim(&arm(e, rho, mc, mg, t));
+    let n = s.n_dof();
+    let names = [
+        "upper.young",
+        "lower.density",
+        "lower.shear_modulus",
+        "connector.mass",
+        "gripper.mass",
+        "cable0.tension",
+        "qdot0",
+    ];
+    let g = s
+        .value_and_gradient(&mut loss("lower", n), &names, DURATION, &OPTIONS)
+        .unwrap();
+    let l = |text: String| value(sim(&text), "lower");
+    let d = central(e, 0.0, |x| l(arm(x, rho, mc, mg, t)));
+    agree("upper.young", g.get("upper.young").unwrap()[0], d, 0.0);
+    let d = central(rho, 0.0, |x| l(arm(e, x, mc, mg, t)));
+    agree("lower.density", g.get("lower.density").unwrap()[0], d, 0.0);
+    let d = central(mc, 0.0, |x| l(arm(e, rho, x, mg, t)));
+    agree(
+        "connector.mass",
+        g.get("connector.mass").unwrap()[0],
+        d,
+        0.0,
+    );
+    let d = central(mg, 0.0, |x| l(arm(e, rho, mc, x, t)));
+    agree("gripper.mass", g.get("gripper.mass").unwrap()[0], d, 0.0);
+    for k in 0..2 {
+        let d = central(t[k], 0.0, |x| {
+            let mut tk = t;
+            tk[k] = x;
+            l(arm(e, rho, mc, mg, tk))
+        });
+        agree(
+            &format!("tension[{k}]"),
+            g.get("cable0.tension").unwrap()[k],
+            d,
+            0.0,
+        );
+    }
+    let shear = |x: f64| {
+        l(arm(e, rho, mc, mg, t)
+            .replace("shear_modulus = 6.0e5", &format!("shear_modulus = {x:e}")))
+    };
+    // Shear barely moves this arm (∂L/∂G·G ~ 4e-3 L): a larger step keeps
+    // the differences' round-off below the tolerance (truncation ~1e-8).
+    let d = (shear(6.0e5 * (1.0 + 1e-4)) - shear(6.0e5 * (1.0 - 1e-4))) / (2e-4 * 6.0e5);
+    agree(
+        "lower.shear_modulus",
+        g.get("lower.shear_modulus").unwrap()[0],
+        d,
+        0.0,
+    );
+    // The joint's velocity (the first coordinate of `lower`'s element).
+    let names = s.q_names();
+    let c = names.iter().position(|q| q.contains("joint")).unwrap();
+    let gv = g.get("qdot0").unwrap();
+    let d = central(0.0, 1e-6, |x| {
+        let mut s = sim(&arm(e, rho, mc, mg, t));
+        let mut v = vec![0.0; n];
+        v[c] = x;
+        s.set_initial_state(&vec![0.0; n], &v).unwrap();
+        value(s, "lower")
+    });
+    agree("qdot0[joint]", gv[c], d, 0.0);
+}
+
+#[test]
+fn custom_loss_equals_the_builtin_quadratic() {
+    let mut s = sim(&cantilever(1.0e6, 1000.0, 500.0, [0.0, 1.5, 0.5]));
+    let n = s.n_dof();
+    let w: Vec<f64> = (0..n).map(|i| 0.1 + 0.01 * i as f64).collect();
+    let mut builtin = vec![LossTerm::Quadratic {
+        times: TIMES.to_vec(),
+        q_weights: w.clone(),
+        qdot_weights: vec![1e-3; n],
+        q_ref: None,
+    }];
+    let a = s
+        .value_and_gradient(&mut builtin, &["arm.young", "q0"], DURATION, &OPTIONS)
+        .unwrap();
+    let mut custom = vec![LossTerm::Custom {
+        times: TIMES.to_vec(),
+        f: Box::new(move |_t, q, qd| {
+            let l = (0..q.len())
+                .map(|i| 0.5 * (w[i] * q[i] * q[i] + 1e-3 * qd[i] * qd[i]))
+                .sum();
+            let gq = (0..q.len()).map(|i| w[i] * q[i]).collect();
+            let gv = qd.iter().map(|v| 1e-3 * v).collect();
+            Ok((l, gq, gv))
+        }),
+    }];
+    let b = s
+        .value_and_gradient(&mut custom, &["arm.young", "q0"], DURATION, &OPTIONS)
+        .unwrap();
+    // The same numbers summed in another order.
+    assert!((a.value - b.value).abs() <= 1e-14 * a.value);
+    for ((na, ga), (nb, gb)) in a.gradients.iter().zip(&b.gradients) {
+        assert_eq!(na, nb);
+        for (x, y) in ga.iter().zip(gb) {
+            assert!(
+                (x - y).abs() <= 1e-12 * x.abs().max(1e-300),
+                "{na}: {x} vs {y}"
+            );
+        }
+    }
+}
+
+#[test]
+fn bad_requests_name_what_is_wrong() {
+    let mut s = sim(&cantilever(1.0e6, 1000.0, 500.0, [0.0, 1.5, 0.5]));
+    let n = s.n_dof();
+    let err = |s: &mut Simulation, loss: &mut [LossTerm<'_>], p: &[&str]| {
+        s.value_and_gradient(loss, p, DURATION, &OPTIONS)
+            .unwrap_err()
+            .to_string()
+    };
+    for (p, says) in [
+        ("nope.young", "no rod named 'nope'"),
+        ("arm.stiffness", "unknown parameter 'stiffness'"),
+        ("payload.mass", "no body named 'payload'"),
+        ("cable3.tension", "no cable 3"),
+        ("arm.shear_modulus", "poisson"),
+        ("young", "expected q0"),
+    ] {
+        let e = err(&mut s, &mut loss("arm", n), &[p]);
+        assert!(e.contains(p) && e.contains(says), "{p}: {e}");
+    }
+    let mut nan = vec![LossTerm::Position {
+        rod: "arm".into(),
+        s: Some(0.1),
+        times: vec![0.05],
+        targets: vec![[f64::NAN, 0.0, 0.0]],
+        weight: 1.0,
+    }];
+    let e = err(&mut s, &mut nan, &["q0"]);
+    assert!(e.contains("loss[0].targets") && e.contains("NaN"), "{e}");
+    let mut off = vec![LossTerm::Position {
+        rod: "hand".into(),
+        s: None,
+        times: vec![0.05],
+        targets: vec![[0.0; 3]],
+        weight: 1.0,
+    }];
+    let e = err(&mut s, &mut off, &["q0"]);
+    assert!(e.contains("loss[0].rod") && e.contains("hand"), "{e}");
+    let mut late = vec![LossTerm::Quadratic {
+        times: vec![0.5],
+        q_weights: vec![1.0; n],
+        qdot_weights: vec![0.0; n],
+        q_ref: None,
+    }];
+    let e = err(&mut s, &mut late, &["q0"]);
+    assert!(e.contains("loss[0].times") && e.contains("0.5"), "{e}");
+    let mut s2 = sim(&cantilever(1.0e6, 1000.0, 500.0, [0.0, 1.5, 0.5])
+        .replace("[run]", "[run]\nintegrator = \"radau5\""));
+    let e = err(&mut s2, &mut loss("arm", n), &["q0"]);
+    assert!(e.contains("radau5") && e.contains("esdirk"), "{e}");
+}
+
+/// The adaptive run (the default settings' step sequence) gives the
+/// gradient of its own discrete map: agreeing with the fixed-step one to
+/// the discretization error, not to round-off.
+#[test]
+fn adaptive_runs_give_gradients_too() {
+    let text = cantilever(1.0e6, 1000.0, 500.0, [0.0, 1.5, 0.5]);
+    let mut s = sim(&text);
+    let n = s.n_dof();
+    let adaptive = GradientOptions {
+        fixed_step: None,
+        newton_tol: Some(1e-3),
+    };
+    let a = s
+        .value_and_gradient(&mut loss("arm", n), &["arm.young"], DURATION, &adaptive)
+        .unwrap();
+    let b = s
+        .value_and_gradient(&mut loss("arm", n), &["arm.young"], DURATION, &OPTIONS)
+        .unwrap();
+    let (ga, gb) = (
+        a.get("arm.young").unwrap()[0],
+        b.get("arm.young").unwrap()[0],
+    );
+    assert!((ga - gb).abs() < 1e-3 * gb.abs(), "{ga:e} vs {gb:e}");
+}
