@@ -115,7 +115,6 @@ fn main() {
             cells[2] = format!("{t:.2e}");
         }
         let zero = vec![0.0; nd];
-        let mut q_eq = zero.clone();
         if what.contains("statics") {
             let solver = match env("SOLVER", String::from("auto")).as_str() {
                 _ if dense && n <= 200 => StaticsSolver::Dense,
@@ -130,7 +129,6 @@ fn main() {
                 statics(&model, &mut data, &zero, &options).unwrap()
             });
             cells[3] = format!("{t:.2e} ({})", r.iterations);
-            q_eq = r.q.as_slice().to_vec();
         }
         println!(
             "| {n} | {nd} | {} | {} | {} | {} |",

@@ -157,43 +157,6 @@ impl<'a> Tangent<'a> {
     }
 }
 
-impl Tangent<'_> {
-    /// `‖δ(K_t v)‖₂`, the round-off bound of the difference
-    /// [`Tangent::apply`] forms, entry by entry
-    /// [`super::modes::difference_noise`] (E7).
-    pub(crate) fn noise(&mut self, data: &mut Data, v: &[f64]) -> Result<f64, DynamicsError> {
-        let vmax = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        if vmax == 0.0 {
-            return Ok(0.0);
-        }
-        let qmax = self.q.iter().fold(1.0f64, |m, x| m.max(x.abs()));
-        let h = 6e-6 * qmax / vmax;
-        let mut sum = 0.0;
-        for sign in [1.0, -1.0] {
-            for ((t, q), d) in self.trial.iter_mut().zip(self.q).zip(v) {
-                *t = q + sign * h * d;
-            }
-            let tau = inverse_dynamics_with(
-                self.model,
-                data,
-                self.forces,
-                self.time,
-                &self.trial,
-                self.zero,
-                self.zero,
-            )?;
-            if sign > 0.0 {
-                self.plus.copy_from_slice(tau.as_slice());
-            } else {
-                for (p, m) in self.plus.iter().zip(tau.iter()) {
-                    sum += super::modes::difference_noise(*p, *m, h).powi(2);
-                }
-            }
-        }
-        Ok(sum.sqrt())
-    }
-}
-
 /// What [`gmres`] reached.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct GmresOutcome {

@@ -218,7 +218,7 @@ fn variant(model: &Model, kind: Kind, entry: usize) -> Result<(Model, f64)> {
             };
             let mut spec = spec.clone();
             spec.properties = RodProperties::new(
-                spec.properties.section().clone(),
+                *spec.properties.section(),
                 material_with(m, kind, delta)?,
                 spec.properties.length(),
             )?;
