@@ -46,16 +46,27 @@ fn too_large(e: Error, key: &str) -> (u64, u64) {
 }
 
 /// 100 000 pieces × 3 strains: one dense matrix is 300 000² · 8 B = 720 GB,
-/// more than any machine running the tests. Statics, modes and a
-/// Rosenbrock run are refused with the estimate; nothing is allocated.
+/// more than any machine running the tests. Modes and a Rosenbrock run are
+/// refused with the estimate; nothing is allocated. Statics needs no dense
+/// matrix on an open rod (GMRES on the tangent, docs/theory.md E8–E10): it
+/// converges, and its curvature over the middle thirtieth of the rod
+/// averages to the coarse 30-piece equilibrium's (solved densely) there, to
+/// the coarse model's discretization error (O(h²) ≈ 1e-3).
 #[test]
-fn a_hundred_thousand_pieces_are_refused_not_aborted() {
+fn a_hundred_thousand_pieces_solve_statics_and_refuse_dense_work() {
     let mut s = sim(&scene(100_000, "rosenbrock"));
     assert_eq!(s.n_dof(), 300_000);
     let one = dense_bytes(1, 300_000);
     assert_eq!(one, 720_000_000_000);
-    let (est, limit) = too_large(s.statics().unwrap_err(), "rod[0].pieces");
-    assert!(est >= one && est > limit);
+    let fine = s.statics().unwrap();
+    assert!(fine.residual < 1e-8, "residual {}", fine.residual);
+    let coarse = sim(&scene(30, "rosenbrock")).statics().unwrap();
+    // Piece 15 of 30 spans s ∈ [0.25, 0.2667]: pieces 50 000..53 333 of the fine rod.
+    let (a, b) = (50_000, 53_333);
+    let mean = (a..b).map(|p| fine.q[3 * p]).sum::<f64>() / (b - a) as f64;
+    let want = coarse.q[3 * 15];
+    eprintln!("ky over [0.25, 0.2667]: fine {mean:.6}, coarse {want:.6}");
+    assert!((mean - want).abs() < 1e-3 * want.abs(), "{mean} vs {want}");
     let (est, _) = too_large(s.modes().unwrap_err(), "rod[0].pieces");
     assert!(est >= one);
     let e = s.simulate_with(1e-3, &mut Discard).unwrap_err();
