@@ -4,12 +4,14 @@ the viscosity of a soft cantilever from a noisy synthetic tip trajectory.
     .venv/bin/python examples/python/system_identification.py [--noise MM] [--quick]
 
 The truth (E = 1.2 MPa, mu = 800 Pa s) makes a released cantilever sag and ring; its
-tip positions at 20 times, with Gaussian noise of --noise mm (default 0.5), are the
-data. From E = 0.5 MPa, mu = 200 Pa s, scipy's L-BFGS-B minimizes the tracking loss
+tip positions at 100 times over 1 s, with Gaussian noise of --noise mm (default 0.5),
+are the data (--quick: 3 pieces instead of 5). From E = 0.5 MPa, mu = 200 Pa s, scipy's L-BFGS-B minimizes the tracking loss
 1/2 sum |p(t_k) - data_k|^2 over (log E, log mu), each step one
 `Simulation.value_and_gradient` (the discrete adjoint of the ESDIRK run,
 docs/theory-control.md G1-G9). Prints what it found beside the truth; exits 1 when
-either is off by more than 5 % (the noise moves the optimum by well under that).
+either is off by more than 5 %. With 0.5 mm of noise it finds E within 0.02 % and mu
+within 0.5 % (--quick: 0.9 %); the viscosity needs the whole ring-down: over the first
+0.4 s (20 samples) the same noise moves its optimum by 14 %, over 0.5 s by 5 %.
 """
 
 from __future__ import annotations
@@ -45,9 +47,10 @@ def main() -> int:
     ap.add_argument("--noise", type=float, default=0.5, help="noise of the data [mm]")
     ap.add_argument("--quick", action="store_true", help="a shorter run (tests)")
     args = ap.parse_args()
-    duration = 0.2 if args.quick else 0.4
+    duration = 1.0 if args.quick else 1.0
     pieces = 3 if args.quick else 5
-    times = np.linspace(duration / 20, duration, 20)
+    n_samples = 100 if args.quick else 100
+    times = np.linspace(duration / n_samples, duration, n_samples)
 
     def sim(young: float, viscosity: float) -> softrod.Simulation:
         return softrod.Simulation.from_toml(
