@@ -29,7 +29,10 @@ use nalgebra::{DMatrix, DVector};
 use crate::error::{IntegrateError, first_non_finite};
 use crate::integrator::Integrator;
 use crate::linalg::DenseLu;
-use crate::methods::{ESDIRK_A as A, ESDIRK_C as C, ESDIRK_GAMMA as GAMMA};
+use crate::methods::{
+    ESDIRK_A as A, ESDIRK_C as C, ESDIRK_GAMMA as GAMMA, esdirk_explicit_part as explicit_part,
+    esdirk_stage_values as stage_values,
+};
 use crate::system::SecondOrderSystem;
 
 const S: usize = 6;
@@ -329,27 +332,32 @@ impl EsdirkAdjoint {
         // matrix, to round-off.
         for i in 1..S {
             let ti = if i == S - 1 { t_new } else { t + C[i] * h };
-            self.qhat.copy_from(&self.q);
-            self.vhat.copy_from(&self.v);
-            for (j, &a) in A[i][..i].iter().enumerate() {
-                if a != 0.0 {
-                    self.qhat.axpy(h * a, &self.vs[j], 1.0);
-                    self.vhat.axpy(h * a, &self.accs[j], 1.0);
-                }
-            }
+            explicit_part(
+                i,
+                h,
+                &self.q,
+                &self.v,
+                &self.vs,
+                &self.accs,
+                &mut self.qhat,
+                &mut self.vhat,
+            );
             let (done, rest) = self.accs.split_at_mut(i);
             let x = &mut rest[0];
             x.copy_from(&done[i - 1]);
             let mut prev = f64::INFINITY;
             let mut converged = false;
             for _ in 0..MAX_NEWTON {
-                let (vi, qi) = (&mut self.vs[i], &mut self.qs[i]);
-                for r in 0..n {
-                    let vr = self.vhat[r] + hg * x[r];
-                    vi[r] = vr;
-                    qi[r] = self.qhat[r] + hg * vr;
-                }
-                sys.accel(ti, qi, vi, &mut self.f).map_err(err("accel"))?;
+                stage_values(
+                    hg,
+                    &self.qhat,
+                    &self.vhat,
+                    x,
+                    &mut self.vs[i],
+                    &mut self.qs[i],
+                );
+                sys.accel(ti, &self.qs[i], &self.vs[i], &mut self.f)
+                    .map_err(err("accel"))?;
                 self.accels += 1;
                 for r in 0..n {
                     self.g[r] = x[r] - self.f[r];
@@ -383,12 +391,14 @@ impl EsdirkAdjoint {
                 });
             }
             let x = &self.accs[i];
-            let (vi, qi) = (&mut self.vs[i], &mut self.qs[i]);
-            for r in 0..n {
-                let vr = self.vhat[r] + hg * x[r];
-                vi[r] = vr;
-                qi[r] = self.qhat[r] + hg * vr;
-            }
+            stage_values(
+                hg,
+                &self.qhat,
+                &self.vhat,
+                x,
+                &mut self.vs[i],
+                &mut self.qs[i],
+            );
             let (jq, jv) = (&mut self.jq[i], &mut self.jv[i]);
             sys.jacobians(ti, &self.qs[i], &self.vs[i], jq, jv)
                 .map_err(err("jacobian"))?;

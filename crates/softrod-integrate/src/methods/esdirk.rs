@@ -105,6 +105,47 @@ pub(crate) const B_HAT: [f64; S] = [
 
 /// Step-size controller (RADAU5's defaults): safety factor, bounds of
 /// `h_new/h`, and the band within which `h` is kept.
+/// Stage `i`'s explicit part `(Q̂ᵢ, V̂ᵢ) = (q, v) + h Σ_{j<i} a_ij (V_j, A_j)`
+/// (shared with the adjoint's recomputed stages, so both take the same
+/// rounding).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn explicit_part(
+    i: usize,
+    h: f64,
+    q: &DVector<f64>,
+    v: &DVector<f64>,
+    vs: &[DVector<f64>],
+    accs: &[DVector<f64>],
+    qhat: &mut DVector<f64>,
+    vhat: &mut DVector<f64>,
+) {
+    qhat.copy_from(q);
+    vhat.copy_from(v);
+    for (j, &a) in A[i][..i].iter().enumerate() {
+        if a != 0.0 {
+            qhat.axpy(h * a, &vs[j], 1.0);
+            vhat.axpy(h * a, &accs[j], 1.0);
+        }
+    }
+}
+
+/// A stage's values from its acceleration `x`: `Vᵢ = V̂ᵢ + hγ x`,
+/// `Qᵢ = Q̂ᵢ + hγ Vᵢ`.
+pub(crate) fn stage_values(
+    hg: f64,
+    qhat: &DVector<f64>,
+    vhat: &DVector<f64>,
+    x: &DVector<f64>,
+    vi: &mut DVector<f64>,
+    qi: &mut DVector<f64>,
+) {
+    for r in 0..x.len() {
+        let vr = vhat[r] + hg * x[r];
+        vi[r] = vr;
+        qi[r] = qhat[r] + hg * vr;
+    }
+}
+
 const SAFETY: f64 = 0.9;
 const FAC_MIN: f64 = 0.2;
 const FAC_MAX: f64 = 8.0;
@@ -268,14 +309,16 @@ impl Esdirk {
         for i in 1..S {
             let ti = if i == S - 1 { t_new } else { t + C[i] * h };
             // Explicit parts.
-            self.qhat.copy_from(&self.q);
-            self.vhat.copy_from(&self.v);
-            for (j, &a) in A[i][..i].iter().enumerate() {
-                if a != 0.0 {
-                    self.qhat.axpy(h * a, &self.vs[j], 1.0);
-                    self.vhat.axpy(h * a, &self.accs[j], 1.0);
-                }
-            }
+            explicit_part(
+                i,
+                h,
+                &self.q,
+                &self.v,
+                &self.vs,
+                &self.accs,
+                &mut self.qhat,
+                &mut self.vhat,
+            );
             // Predictor: the previous stage's acceleration (extrapolating
             // from the earlier stages or the last step saved no iterations
             // on the rod: the first correction is dominated by the stiff
@@ -287,13 +330,15 @@ impl Esdirk {
             let mut converged = false;
             for k in 1..=max_iter {
                 // Stage values from the current acceleration.
-                let (vi, qi) = (&mut self.vs[i], &mut self.qs[i]);
-                for r in 0..n {
-                    let vr = self.vhat[r] + hg * x[r];
-                    vi[r] = vr;
-                    qi[r] = self.qhat[r] + hg * vr;
-                }
-                p.newmark_correction(ti, qi, vi, x, &mut self.g)
+                stage_values(
+                    hg,
+                    &self.qhat,
+                    &self.vhat,
+                    x,
+                    &mut self.vs[i],
+                    &mut self.qs[i],
+                );
+                p.newmark_correction(ti, &self.qs[i], &self.vs[i], x, &mut self.g)
                     .map_err(sys_err(t, h, "accel"))?;
                 stats.rhs_evaluations += 1;
                 stats.newton_iterations += 1;
@@ -341,12 +386,14 @@ impl Esdirk {
             }
             // The stage values of the converged acceleration.
             let x = &self.accs[i];
-            let (vi, qi) = (&mut self.vs[i], &mut self.qs[i]);
-            for r in 0..n {
-                let vr = self.vhat[r] + hg * x[r];
-                vi[r] = vr;
-                qi[r] = self.qhat[r] + hg * vr;
-            }
+            stage_values(
+                hg,
+                &self.qhat,
+                &self.vhat,
+                x,
+                &mut self.vs[i],
+                &mut self.qs[i],
+            );
         }
         Ok(Ok(()))
     }

@@ -11,7 +11,10 @@ mod rosw;
 pub(crate) use dopri5::Dopri5;
 pub(crate) use esdirk::Esdirk;
 // The tableau, for the discrete adjoint (`crate::adjoint`).
-pub(crate) use esdirk::{A as ESDIRK_A, C as ESDIRK_C, GAMMA as ESDIRK_GAMMA};
+pub(crate) use esdirk::{
+    A as ESDIRK_A, C as ESDIRK_C, GAMMA as ESDIRK_GAMMA, explicit_part as esdirk_explicit_part,
+    stage_values as esdirk_stage_values,
+};
 pub(crate) use genalpha::GeneralizedAlpha;
 pub use genalpha::generalized_alpha_parameters;
 pub(crate) use radau5::Radau5;
