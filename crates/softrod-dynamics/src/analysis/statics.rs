@@ -287,7 +287,7 @@ impl Newton<'_> {
                 let trial = &*q + &dq * alpha;
                 let rt = match self.residual(data, forces, &trial) {
                     Ok(v) => v,
-                    Err(DynamicsError::NotFinite { .. }) => {
+                    Err(DynamicsError::NotFinite { .. } | DynamicsError::NonFiniteResult { .. }) => {
                         DVector::from_element(r.len(), f64::INFINITY)
                     }
                     Err(e) => return Err(e),
