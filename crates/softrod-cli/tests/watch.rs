@@ -161,7 +161,10 @@ dt = 5e-5
     assert_eq!(o.status.code(), Some(1), "{stderr}");
     let status = summary(&out)["status"].as_str().unwrap().to_owned();
     assert!(status.starts_with("error: "), "{status}");
-    assert!(status.contains("is not finite (NaN) at a finite state"), "{status}");
+    assert!(
+        status.contains("is not finite (NaN) at a finite state"),
+        "{status}"
+    );
 }
 
 /// Outputs that cannot fit on the disk are refused before anything is
