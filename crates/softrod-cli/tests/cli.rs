@@ -1173,6 +1173,39 @@ fn a_signal_does_not_wait_for_the_next_output_time() {
     assert_eq!(s["output_rows"], 1);
 }
 
+/// A signal that arrives inside one long step — here the first Jacobian and
+/// dense factorization of a 3 000-coordinate Rosenbrock step, minutes in
+/// this build — still ends the run (issue 26, D09): the watchdog writes a
+/// summary that matches the files (the row at t = 0) and says where the
+/// run was, and the process exits 1 without waiting for the step.
+#[cfg(unix)]
+#[test]
+fn a_signal_inside_a_long_step_ends_the_run() {
+    let dir = tmp("signal_inside_a_step");
+    let scene = dir.join("long_step.toml");
+    std::fs::write(
+        &scene,
+        "[world]\ngravity = [0, 0, -9.81]\n[[rod]]\nname = \"a\"\nlength = 0.3\n\
+         strains = [\"ky\", \"qx\", \"qz\"]\n\
+         section = { shape = \"circle\", radius = 0.01 }\n\
+         material = { density = 1000.0, young = 1.0e6, poisson = 0.5, viscosity = 100.0 }\n\
+         pieces = 1000\n[run]\nintegrator = \"rosenbrock\"\nduration = 0.01\n",
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let (code, err, s) = signal_a_run(&scene, &out, 0, "TERM");
+    assert_eq!(code, Some(1), "{err}");
+    let st = s["status"].as_str().unwrap();
+    assert!(
+        st.contains("interrupted by SIGTERM at t = 0 (1 of 1001 output rows written) inside a long computation"),
+        "{st}"
+    );
+    assert!(err.contains("inside a long computation"), "{err}");
+    let (_, rows) = csv(&out.join("trajectory.csv"));
+    assert_eq!(rows.len(), 1);
+    assert_eq!(s["steps"], 0);
+}
+
 /// SIGTERM and SIGINT end a run cleanly: the summary is current while it
 /// runs ("running", the process id), and after the signal it says so and
 /// matches the files (rows written, last time), the figures of what exists

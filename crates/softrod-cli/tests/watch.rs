@@ -123,6 +123,50 @@ fn one_unstable_rk4_step_is_not_ok() {
     );
 }
 
+/// A fuzzed scene (a one-piece rod fitted to a point 100 lengths away: a
+/// bend of radius 8e-8 m, warned about) on which rk4 at dt 5e-5 diverges
+/// within its first step: the dynamics at the watch's midpoint state is NaN.
+/// That is a failed run (exit 1, "error:"), not a refused input (exit 2,
+/// "refused:"), which it used to be reported as.
+#[test]
+fn a_step_that_diverges_is_an_error_not_a_refusal() {
+    let dir = tmp("diverge");
+    let s = dir.join("scene.toml");
+    std::fs::write(
+        &s,
+        r#"[[rod]]
+name = "r0"
+length = 0.02
+pieces = 1
+strains = ["ky", "qz"]
+section = { shape = "circle", radius = 0.008 }
+material = { density = 1100.0, young = 1.0e6, poisson = 0.5, viscosity = 500.0 }
+rest_strain = [0, 3, 0, 1, 0.7, 0]
+joint = { type = "revolute", axis = [0, 1, 0], prescribed = { times = [0, 0.01], values = [0, 0.5] } }
+[world]
+gravity = [0.0, 0.0, -9.81]
+[initial]
+shape = [{ rod = "r0", centerline = [[0,0,0], [-1.8910282922396568e0, 1.2229680187320713e0, 3.0524942036876673e-1]] }]
+[run]
+duration = 0.0001
+output_every = 0.00005
+integrator = "rk4"
+dt = 5e-5
+"#,
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let o = run_scene(&s, &out);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    let status = summary(&out)["status"].as_str().unwrap().to_owned();
+    assert!(status.starts_with("error: "), "{status}");
+    assert!(
+        status.contains("is not finite (NaN) at a finite state"),
+        "{status}"
+    );
+}
+
 /// Outputs that cannot fit on the disk are refused before anything is
 /// written (exit 2, naming `run.output_every` and the sizes): 1e8 output
 /// times of a 24-DoF rod and its 65 shape samples need almost a terabyte.

@@ -208,6 +208,19 @@ pub enum DynamicsError {
         /// The value.
         value: f64,
     },
+    /// The dynamics evaluated at finite arguments gave a value that is not
+    /// finite: not bad input but a breakdown at the state reached (an
+    /// explicit step that diverged, a state far beyond the model's validity).
+    #[error(
+        "{what} is not finite ({value}) at a finite state: the dynamics broke down there \
+         (a step that diverged, or a state far beyond the model's validity)"
+    )]
+    NonFiniteResult {
+        /// Which quantity, at which time.
+        what: String,
+        /// The value.
+        value: f64,
+    },
     /// A per-piece matrix that must be positive definite is not.
     #[error("{what} of rod {rod}, piece {piece} is not positive definite")]
     Singular {

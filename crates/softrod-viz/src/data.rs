@@ -370,15 +370,34 @@ fn pose_ok(what: impl Fn() -> String, p: &Pose) -> Result<(), VizError> {
 /// quaternions (sign-aligned); clamped to the sampled range. `s_samples`
 /// strictly increasing, same length as `frames`, at least one.
 pub fn frame_at(s_samples: &[f64], frames: &[Pose], s: f64) -> Pose {
+    let (i, u) = bracket(s_samples, s);
+    between(frames, i, u)
+}
+
+/// Where `s` falls among `s_samples` (the [`frame_at`] clamping): the
+/// sample `i` and the fraction `u ∈ [0, 1)` towards `i + 1`, `None` at or
+/// beyond either end (the end frame itself).
+fn bracket(s_samples: &[f64], s: f64) -> (usize, Option<f64>) {
     let n = s_samples.len();
     if n == 1 || s <= s_samples[0] {
-        return frames[0];
+        return (0, None);
     }
     if s >= s_samples[n - 1] {
-        return frames[n - 1];
+        return (n - 1, None);
     }
     let i = s_samples.partition_point(|v| *v <= s).clamp(1, n - 1) - 1;
-    let u = (s - s_samples[i]) / (s_samples[i + 1] - s_samples[i]);
+    (
+        i,
+        Some((s - s_samples[i]) / (s_samples[i + 1] - s_samples[i])),
+    )
+}
+
+/// The frame a fraction `u` from `frames[i]` towards `frames[i + 1]`
+/// (`frames[i]` itself without one).
+fn between(frames: &[Pose], i: usize, u: Option<f64>) -> Pose {
+    let Some(u) = u else {
+        return frames[i];
+    };
     let (a, b) = (&frames[i], &frames[i + 1]);
     let dot: f64 = (0..4).map(|j| a.rotation[j] * b.rotation[j]).sum();
     let sign = if dot < 0.0 { -1.0 } else { 1.0 };
@@ -423,15 +442,22 @@ pub fn routed_cable(rod: &RodTrack, path: &[[f64; 3]]) -> Vec<Vec<[f64; 3]>> {
         let u = (s - a[0]) / (b[0] - a[0]);
         [a[1] + u * (b[1] - a[1]), a[2] + u * (b[2] - a[2])]
     };
+    // Where each point falls along the rod and its offset are the same at
+    // every time: found once, not per frame.
+    let stencil: Vec<(usize, Option<f64>, [f64; 3])> = s_pts
+        .iter()
+        .map(|&s| {
+            let (i, u) = bracket(&rod.s, s);
+            let [y, z] = offset(s);
+            (i, u, [0.0, y, z])
+        })
+        .collect();
     rod.frames
         .iter()
         .map(|frames| {
-            s_pts
+            stencil
                 .iter()
-                .map(|&s| {
-                    let [y, z] = offset(s);
-                    frame_at(&rod.s, frames, s).apply([0.0, y, z])
-                })
+                .map(|&(i, u, local)| between(frames, i, u).apply(local))
                 .collect()
         })
         .collect()

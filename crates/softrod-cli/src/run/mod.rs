@@ -10,6 +10,7 @@ mod summary;
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
@@ -20,7 +21,7 @@ use softrod::{Error, output_times};
 use crate::common::{CliError, failed, load, out_dir};
 use crate::{npz, outputs, plots, signals};
 use rows::RowWriter;
-use stream::{Streamer, chosen_rows};
+use stream::{Progress, Streamer, chosen_rows};
 use summary::Summary;
 
 /// The scene's file stem: the title of figures and view.
@@ -112,17 +113,44 @@ pub fn run(
         times.len(),
     );
     let rows = RowWriter::create(&dir, l.sim.model(), npz_out)?;
+    let start = Instant::now();
+    let progress = Arc::new(Mutex::new(Progress {
+        summary,
+        rows: 0,
+        expected: times.len(),
+        t: 0.0,
+        stats: Stats::default(),
+        start,
+        closing: false,
+        finished: None,
+    }));
     let mut streamer = Streamer::new(
         l.sim.model(),
         &times,
         sampling,
         rows,
         snapshot_at,
-        summary,
+        Arc::clone(&progress),
         bar,
     );
     signals::install();
-    let start = Instant::now();
+    {
+        // A signal that a long step keeps the run from seeing (one dense
+        // factorization can take minutes) still ends it within GRACE.
+        let (progress, dir) = (Arc::clone(&progress), dir.clone());
+        signals::watchdog(move |sig| {
+            let p = Progress::lock(&progress);
+            let status = p.expire(sig);
+            eprintln!(
+                "softrod: simulation failed: {} (outputs up to t = {} in {})",
+                status.trim_start_matches("error: "),
+                p.t,
+                dir.display()
+            );
+            // The lock stays held: the main thread writes nothing more.
+            std::mem::forget(p);
+        });
+    }
     // Rows are the integrator's dense output at the output times, streamed
     // to the observer as the run proceeds; nothing is kept in between.
     let result = match l.sim.simulate_with(duration, &mut streamer) {
@@ -134,6 +162,7 @@ pub fn run(
         }
         r => r,
     };
+    Progress::lock(&progress).closing = true;
     if let Some(b) = &streamer.bar {
         b.finish_and_clear();
     }
@@ -217,6 +246,11 @@ pub fn run(
         };
     }
     summary_final.write(&stats, wall, t_final, &status, streamer.rows_written())?;
+    {
+        let mut p = Progress::lock(&progress);
+        (p.stats, p.t) = (stats, t_final);
+        p.finished = Some((summary_final.clone(), status.clone()));
+    }
     // Plots and view of whatever was computed (also after a failure: they
     // show where it went wrong).
     let title = scene_title(path);

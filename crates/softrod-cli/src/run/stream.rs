@@ -2,6 +2,7 @@
 //! [`Recorder`], written as rows, kept for the figures; the progress bar,
 //! the running summary and the signals that stop a run.
 
+use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::Instant;
 
 use indicatif::ProgressBar;
@@ -19,11 +20,74 @@ use crate::signals;
 /// Longest wall time between two writes of the running summary, s.
 pub const SUMMARY_EVERY: f64 = 0.5;
 
+/// Where the run is, shared with the signal watchdog
+/// ([`signals::watchdog`]): it is updated under the lock together with
+/// each row written, so the watchdog, which takes the lock and never
+/// releases it, writes a summary that matches the files.
+pub struct Progress {
+    /// The running summary (the run's fixed facts).
+    pub summary: Summary,
+    pub rows: usize,
+    pub expected: usize,
+    /// The last row's time, s.
+    pub t: f64,
+    pub stats: Stats,
+    pub start: Instant,
+    /// The run has stopped integrating (ended, failed or acted on the
+    /// signal): the outputs are being closed.
+    pub closing: bool,
+    /// The final summary and its status, once written: the figures and
+    /// the 3-D view follow.
+    pub finished: Option<(Summary, String)>,
+}
+
+impl Progress {
+    /// The lock, also if a panicking holder poisoned it (the counters stay
+    /// consistent: each is a plain store).
+    pub fn lock(p: &Mutex<Progress>) -> MutexGuard<'_, Progress> {
+        p.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
+    }
+
+    /// What the watchdog writes when the run did not stop within the
+    /// grace after signal `sig`: the summary that matches the files now.
+    pub fn expire(&self, sig: &str) -> String {
+        let wall = self.start.elapsed().as_secs_f64();
+        let grace = signals::GRACE.as_secs_f64();
+        if let Some((summary, status)) = &self.finished {
+            let note = format!(
+                "interrupted by {sig} while drawing the figures and the 3-D view (not \
+                 finished {grace} s after the signal: some are missing)"
+            );
+            let status = if status == "ok" {
+                format!("error: {note}")
+            } else {
+                format!("{status}; {note}")
+            };
+            let _ = summary.write(&self.stats, wall, self.t, &status, self.rows);
+            return status;
+        }
+        let (rows, expected, t) = (self.rows, self.expected, self.t);
+        let when = if self.closing {
+            "while closing the outputs"
+        } else {
+            "inside a long computation (no step ended"
+        };
+        let status = format!(
+            "error: interrupted by {sig} at t = {t} ({rows} of {expected} output rows \
+             written) {when}{} within {grace} s of the signal): the figures, the 3-D view \
+             and trajectory.npz were not made",
+            if self.closing { " (not finished" } else { "" }
+        );
+        let _ = self.summary.write(&self.stats, wall, t, &status, rows);
+        status
+    }
+}
+
 /// Records, writes and keeps output rows as the integration produces them.
 pub struct Streamer {
     recorder: Recorder,
     rows: RowWriter,
-    summary: Summary,
+    progress: Arc<Mutex<Progress>>,
     start: Instant,
     summary_written: Option<Instant>,
     /// The signal that ended the run, if one did.
@@ -97,14 +161,14 @@ impl Streamer {
         sampling: Vec<RodSampling>,
         mut rows: RowWriter,
         snapshot_at: Vec<usize>,
-        summary: Summary,
+        progress: Arc<Mutex<Progress>>,
         bar: Option<ProgressBar>,
     ) -> Self {
         rows.collect_view(model, sampling.iter().map(|r| r.s.clone()).collect());
         Self {
             recorder: Recorder::with_sampling(model, sampling),
             rows,
-            summary,
+            progress,
             start: Instant::now(),
             summary_written: None,
             interrupted: None,
@@ -196,12 +260,17 @@ impl Observer for Streamer {
     /// One output row: the integrator's dense output at the next output time.
     fn sample(&mut self, s: Sample<'_>) -> Result<Flow, String> {
         let t = s.t;
+        // Held while the row is written and counted: the watchdog then
+        // sees whole rows only.
+        let progress = Arc::clone(&self.progress);
+        let mut p = Progress::lock(&progress);
         if let Err(e) = self.write_row(s) {
             self.error = Some(e.clone());
             return Err(e);
         }
         self.next += 1;
         self.last_t = t;
+        (p.rows, p.t) = (self.next, t);
         // Keep summary.json current, so a run killed with SIGKILL still
         // says how far it got (its status stays "running").
         if self
@@ -209,7 +278,7 @@ impl Observer for Streamer {
             .is_none_or(|w| w.elapsed().as_secs_f64() >= SUMMARY_EVERY)
         {
             let wall = self.start.elapsed().as_secs_f64();
-            if let Err(e) = self
+            if let Err(e) = p
                 .summary
                 .write(&self.last_stats, wall, t, "running", self.next)
             {
@@ -221,6 +290,7 @@ impl Observer for Streamer {
         }
         if let Some(sig) = signals::received() {
             self.interrupted = Some(sig);
+            p.closing = true;
             return Ok(Flow::Stop);
         }
         Ok(Flow::Continue)
@@ -232,6 +302,7 @@ impl Observer for Streamer {
         match signals::received() {
             Some(sig) => {
                 self.interrupted = Some(sig);
+                Progress::lock(&self.progress).closing = true;
                 true
             }
             None => false,
@@ -240,6 +311,7 @@ impl Observer for Streamer {
 
     fn step(&mut self, t: f64, stats: &Stats) {
         self.last_stats = *stats;
+        Progress::lock(&self.progress).stats = *stats;
         if let Some(b) = &self.bar {
             b.set_position((t / self.duration * 1000.0) as u64);
             b.set_message(format!("{t:.4}"));

@@ -12,6 +12,7 @@ use crate::common::{CliError, failed};
 /// `summary.json`: the run's fixed facts and, at each write, its progress.
 /// Written atomically (a temporary file renamed over it), so a reader never
 /// sees half a file, even of a killed run.
+#[derive(Clone)]
 pub struct Summary {
     path: PathBuf,
     fixed: serde_json::Map<String, serde_json::Value>,

@@ -120,10 +120,11 @@ pub(crate) fn check_forward_inputs(
     Ok(())
 }
 
-/// `data.qdd`, or the first entry that is not finite as an error.
+/// `data.qdd`, or the first entry that is not finite as an error (of the
+/// result, not of the arguments, which the caller checked).
 pub(crate) fn check_qdd(data: &Data, t: f64) -> Result<&DVector<f64>, DynamicsError> {
     if let Some((i, v)) = data.qdd.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-        return Err(DynamicsError::NotFinite {
+        return Err(DynamicsError::NonFiniteResult {
             what: format!("qddot[{i}] at t = {t}"),
             value: *v,
         });

@@ -287,9 +287,9 @@ impl Newton<'_> {
                 let trial = &*q + &dq * alpha;
                 let rt = match self.residual(data, forces, &trial) {
                     Ok(v) => v,
-                    Err(DynamicsError::NotFinite { .. }) => {
-                        DVector::from_element(r.len(), f64::INFINITY)
-                    }
+                    Err(
+                        DynamicsError::NotFinite { .. } | DynamicsError::NonFiniteResult { .. },
+                    ) => DVector::from_element(r.len(), f64::INFINITY),
                     Err(e) => return Err(e),
                 };
                 if rt.amax() < (1.0 - 1e-4 * alpha) * rn || rt.amax() <= tol {
