@@ -1,17 +1,18 @@
 //! Cost against the number of pieces (issue 30; docs/performance.md,
 //! "Scaling to 10 000 pieces"): one forward dynamics, the analytic
 //! derivatives, the factor + solve of `M + aK + bD` (the implicit step's
-//! linear algebra) and a statics solve of a clamped soft rod under gravity, at N = 10, 100, 1 000, 10 000 pieces.
+//! linear algebra), a statics solve and the lowest 10 modes of a clamped
+//! soft rod under gravity, at N = 10, 100, 1 000, 10 000 pieces.
 //!
 //! `cargo run --release -p softrod-benches --example scaling`
-//! (`SIZES=10,100 BASIS=all|planar WHAT=step,statics REPS=3`). Each
+//! (`SIZES=10,100 BASIS=all|planar WHAT=step,statics,modes REPS=3`). Each
 //! figure is the fastest of `REPS` repetitions \[s\]. The derivatives
 //! (`n × n` outputs) are skipped above `DERIV_MAX` pieces (default 1 000),
-//! the dense statics (for comparison, `DENSE=1`) above 200.
+//! the dense statics and modes (for comparison, `DENSE=1`) above 200.
 
 use softrod_dynamics::{
     Data, IdDerivatives, Model, Rod, ShiftedSolver, StaticsOptions, StaticsSolver,
-    forward_dynamics, inverse_dynamics_derivatives, statics,
+    forward_dynamics, inverse_dynamics_derivatives, lowest_modes, statics,
 };
 use softrod_kinematics::Strain;
 use softrod_lie::Vec3;
@@ -70,7 +71,7 @@ fn main() {
         .map(|s| s.trim().parse().unwrap())
         .collect();
     let planar = env("BASIS", String::from("all")) == "planar";
-    let what = env("WHAT", String::from("step,statics"));
+    let what = env("WHAT", String::from("step,statics,modes"));
     let reps = env("REPS", 3usize);
     let deriv_max = env("DERIV_MAX", 1000usize);
     let dense = env("DENSE", 0usize) == 1;
@@ -82,15 +83,17 @@ fn main() {
             "all six"
         }
     );
-    println!("| N | n_dof | FD [s] | derivatives [s] | factor+solve [s] | statics [s] (its) |");
-    println!("|---|---|---|---|---|---|");
+    println!(
+        "| N | n_dof | FD [s] | derivatives [s] | factor+solve [s] | statics [s] (its) | modes [s] | ω₁ [rad/s] |"
+    );
+    println!("|---|---|---|---|---|---|---|---|");
     for &n in &sizes {
         let model = rod_model(n, planar);
         let nd = model.n_dof();
         let mut data = Data::new(&model);
         let q: Vec<f64> = (0..nd).map(|i| 0.01 * ((i as f64) * 0.7).sin()).collect();
         let qd: Vec<f64> = (0..nd).map(|i| 0.1 * ((i as f64) * 1.3).cos()).collect();
-        let mut cells = vec![String::from("–"); 4];
+        let mut cells = vec![String::from("–"); 6];
         if what.contains("step") {
             let (t, _) = best(reps, || {
                 forward_dynamics(&model, &mut data, 0.0, &q, &qd, None)
@@ -115,6 +118,7 @@ fn main() {
             cells[2] = format!("{t:.2e}");
         }
         let zero = vec![0.0; nd];
+        let mut q_eq = zero.clone();
         if what.contains("statics") {
             let solver = match env("SOLVER", String::from("auto")).as_str() {
                 _ if dense && n <= 200 => StaticsSolver::Dense,
@@ -129,10 +133,20 @@ fn main() {
                 statics(&model, &mut data, &zero, &options).unwrap()
             });
             cells[3] = format!("{t:.2e} ({})", r.iterations);
+            q_eq = r.q.as_slice().to_vec();
+        }
+        if what.contains("modes") {
+            // The lowest 10 modes about the sagged equilibrium (or the
+            // straight rod without WHAT=statics).
+            let (t, m) = best(reps, || {
+                lowest_modes(&model, &mut data, &q_eq, 0.0, 10).unwrap()
+            });
+            cells[4] = format!("{t:.2e}");
+            cells[5] = format!("{:.4}", m.omega[0]);
         }
         println!(
-            "| {n} | {nd} | {} | {} | {} | {} |",
-            cells[0], cells[1], cells[2], cells[3]
+            "| {n} | {nd} | {} | {} | {} | {} | {} | {} |",
+            cells[0], cells[1], cells[2], cells[3], cells[4], cells[5]
         );
     }
 }

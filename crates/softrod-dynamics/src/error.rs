@@ -238,6 +238,18 @@ pub enum DynamicsError {
         /// Which matrix.
         what: &'static str,
     },
+    /// A matrix-free analysis that needs a symmetric tangent stiffness
+    /// ([`crate::lowest_modes`]) met a non-symmetric one (follower loads,
+    /// cables).
+    #[error(
+        "{what} needs a symmetric tangent stiffness, this one's relative asymmetry is about {asymmetry:.1e} (non-conservative loads: world-frame moments, follower loads or cables): use the dense modes, which take the symmetric part"
+    )]
+    NotSymmetric {
+        /// Which analysis.
+        what: &'static str,
+        /// The estimated `‖K − Kᵀ‖_F / ‖K‖_F`.
+        asymmetry: f64,
+    },
     /// Statics did not converge.
     #[error(
         "statics did not converge: {reason} (load fraction {load_fraction:.3}, {iterations} Newton iterations, residual {residual:.3e})"

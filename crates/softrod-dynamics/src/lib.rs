@@ -18,6 +18,7 @@
 //! | [`energies`] | kinetic, elastic, gravitational | §7 |
 //! | [`statics`] | equilibrium, Newton + line search + continuation | |
 //! | [`modes`] | natural frequencies about an equilibrium | |
+//! | [`lowest_modes`] | the lowest modes, matrix-free, O(N) per step | docs/theory.md E11 |
 //! | [`inverse_dynamics_derivatives`] | `∂τ/∂q`, `∂τ/∂q̇` (`∂τ/∂q̈ = M`) | docs/theory-derivatives.md (D37–D47) |
 //! | [`forward_dynamics_derivatives`] | `∂q̈/∂q`, `∂q̈/∂q̇`, `∂q̈/∂u` | (D48) |
 //! | [`closed_dynamics_derivatives`] | `∂q̈/∂q`, `∂q̈/∂q̇` of a closed model's constrained `q̈` | (CD1–CD4) |
@@ -111,7 +112,8 @@ pub use algorithms::{
 pub use analysis::{
     Energies, FAILURE_PENETRATION, ModeKind, Modes, StaticsOptions, StaticsResult, StaticsSolver,
     actuation_matrix, closure_statics, commit_contact, coriolis_matrix, damping_matrix, energies,
-    frames, generalized_gravity, modes, section_jacobian, static_force, statics, stiffness_matrix,
+    frames, generalized_gravity, lowest_modes, modes, section_jacobian, static_force, statics,
+    stiffness_matrix,
 };
 pub use constraints::{
     ClosedDerivatives, check_closures, closed_dynamics_derivatives, closure_multipliers,

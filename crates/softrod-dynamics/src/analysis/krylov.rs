@@ -125,9 +125,37 @@ impl<'a> Tangent<'a> {
         v: &[f64],
         out: &mut [f64],
     ) -> Result<(), DynamicsError> {
+        out.fill(0.0);
+        self.difference(data, v, |plus, minus, h| {
+            for ((o, p), m) in out.iter_mut().zip(plus).zip(minus) {
+                *o = (p - m) / (2.0 * h);
+            }
+        })
+    }
+
+    /// `‖δ(K_t v)‖₂`, the round-off bound of the difference
+    /// [`Tangent::apply`] forms, entry by entry
+    /// [`super::modes::difference_noise`] (E7).
+    pub(crate) fn noise(&mut self, data: &mut Data, v: &[f64]) -> Result<f64, DynamicsError> {
+        let mut sum = 0.0;
+        self.difference(data, v, |plus, minus, h| {
+            for (p, m) in plus.iter().zip(minus) {
+                sum += super::modes::difference_noise(*p, *m, h).powi(2);
+            }
+        })?;
+        Ok(sum.sqrt())
+    }
+
+    /// The inverse dynamics at `q ± h v` (the step `h` scaled to `v`)
+    /// handed to `pair(plus, minus, h)`; nothing for `v = 0`.
+    fn difference(
+        &mut self,
+        data: &mut Data,
+        v: &[f64],
+        pair: impl FnOnce(&[f64], &[f64], f64),
+    ) -> Result<(), DynamicsError> {
         let vmax = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
         if vmax == 0.0 {
-            out.fill(0.0);
             return Ok(());
         }
         let qmax = self.q.iter().fold(1.0f64, |m, x| m.max(x.abs()));
@@ -148,9 +176,8 @@ impl<'a> Tangent<'a> {
             if sign > 0.0 {
                 self.plus.copy_from_slice(tau.as_slice());
             } else {
-                for ((o, p), m) in out.iter_mut().zip(&self.plus).zip(tau.iter()) {
-                    *o = (p - m) / (2.0 * h);
-                }
+                pair(&self.plus, tau.as_slice(), h);
+                return Ok(());
             }
         }
         Ok(())

@@ -11,6 +11,7 @@ pub(crate) mod contact;
 pub(crate) mod energy;
 pub(crate) mod frames;
 pub(crate) mod krylov;
+pub(crate) mod lanczos;
 pub(crate) mod matrices;
 pub(crate) mod modes;
 pub(crate) mod statics;
@@ -19,6 +20,7 @@ pub use closed::closure_statics;
 pub use contact::{FAILURE_PENETRATION, commit_contact};
 pub use energy::{Energies, energies};
 pub use frames::{frames, section_jacobian};
+pub use lanczos::lowest_modes;
 pub use matrices::{
     actuation_matrix, coriolis_matrix, damping_matrix, generalized_gravity, stiffness_matrix,
 };
