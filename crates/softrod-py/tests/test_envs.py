@@ -65,12 +65,12 @@ def test_registered_envs_pass_gymnasiums_checker(env_id):
 
 def test_stable_baselines3_checker_where_installed():
     sb3 = pytest.importorskip("stable_baselines3.common.env_checker")
-    sb3.check_env(se.reach_env(), warn=False)
-    sb3.check_env(se.track_env(), warn=False)
+    for make in (se.reach_env, se.track_env, se.reach_around_env, se.push_env):
+        sb3.check_env(make(), warn=False)
 
 
 def test_the_shipped_scenes_load_without_warnings():
-    for path in (se.REACH_SCENE, se.TRACK_SCENE):
+    for path in (se.REACH_SCENE, se.TRACK_SCENE, se.REACH_AROUND_SCENE, se.PUSH_SCENE):
         sim = softrod.Simulation.from_file(path)
         assert sim.warnings == [] and sim.n_cables in (2, 4)
 
