@@ -290,7 +290,8 @@ class RodEnv(gymnasium.Env):
     Step: the tensions are held for ``control_period`` seconds (default
     0.05 s, 20 Hz) and the scene's integrator advances the state
     (``Simulation.step``): adaptively at the scene's tolerances, or at
-    relative tolerance ``rtol`` when given (the registered tasks use 1e-2:
+    relative tolerance ``rtol`` when given (and an absolute tolerance no
+    looser than it; the registered tasks use 1e-2:
     the tip within ~0.1 mm of a tight-tolerance run, docs/envs.md,
     "Integration"), or in ``substeps`` fixed steps per period when given (a
     fixed cost; its accuracy is the caller's to check — measured on the
@@ -310,7 +311,8 @@ class RodEnv(gymnasium.Env):
     frame's rotation matrix row by row), ``"target"`` (3, m),
     ``"target_velocity"`` (3, m/s), ``"tensions"`` (n_cables, N: the last
     applied action), ``"body_positions"`` (3 per rigid body of the scene,
-    m, world frame: the origins of their frames, in the scene's order). ``observation_slices`` maps each key to its slice.
+    m, world frame: the origins of their frames, in the scene's order).
+    ``observation_slices`` maps each key to its slice.
 
     Reset: the scene's initial state, plus Gaussian noise of standard
     deviation ``initial_noise`` on q and q̇ when positive, and the task's
@@ -359,8 +361,9 @@ class RodEnv(gymnasium.Env):
             if not (math.isfinite(rtol) and rtol > 0):
                 raise InputError(f"rtol must be positive and finite, got {rtol}")
             s = self.sim.settings
+            # atol no looser than rtol: the rule of Settings(rtol=...) alone.
             self.sim.settings = softrod.Settings(
-                integrator=s.integrator, rtol=float(rtol), atol=s.atol, dt=s.dt,
+                integrator=s.integrator, rtol=float(rtol), atol=min(s.atol, rtol), dt=s.dt,
                 output_every=s.output_every, error_control=s.error_control,
                 linearly_implicit=s.linearly_implicit,
             )
