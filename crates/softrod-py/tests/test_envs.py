@@ -390,3 +390,22 @@ def test_env_from_a_config_mapping():
     assert isinstance(se.make_env_from_config({}).task, se.ReachTask)
     with pytest.raises(softrod.InputError, match="task"):
         se.make_env_from_config({"task": "juggle"})
+
+
+@pytest.mark.parametrize("which", ["reach_around", "push"])
+def test_contact_tasks_terminate_a_diverging_step_without_nan(which):
+    """The contact scenes with fixed-step RK4 at the control period (unstable
+    on the stiff modes): the first step diverges, the episode ends with the
+    reason, the observation and reward stay those of the last valid state."""
+    path = se.REACH_AROUND_SCENE if which == "reach_around" else se.PUSH_SCENE
+    text = open(path).read().replace(*RK4_BLOWUP)
+    assert "rk4" in text
+    sim = softrod.Simulation.from_toml(text, name=f"{which}_rk4.toml")
+    task = se.ReachAroundTask() if which == "reach_around" else se.PushTask()
+    env = se.RodEnv(sim, task)
+    obs0, _ = env.reset(seed=0)
+    obs, reward, terminated, truncated, info = env.step(env.action_space.high)
+    assert terminated and not truncated
+    assert info["termination"].startswith("diverged: ")
+    assert np.all(np.isfinite(obs)) and np.isfinite(reward)
+    np.testing.assert_array_equal(obs, obs0)
