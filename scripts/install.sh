@@ -5,7 +5,10 @@
 #   bash scripts/install.sh --dev [VENV]    dev-profile editable build with the test
 #                                           tools, the optional extras softrod[rl] and
 #                                           softrod[ray] (gymnasium, ray) and the test
-#                                           hooks (what scripts/test.sh uses)
+#                                           hooks (what scripts/test.sh uses); with
+#                                           SOFTROD_TEST_RLLIB=1 also RLlib and PyTorch
+#                                           (requirements-rllib.txt: ~3 GB, opt-in) so
+#                                           that tests/test_rllib.py runs, not skips
 #
 # VENV defaults to .venv/ in the repository. Needs the Rust toolchain and
 # Python >= 3.10 with pip (PYTHON selects the interpreter, default python3);
@@ -30,6 +33,9 @@ venv="$(cd "$venv" && pwd)"
 pip=("$venv/bin/python" -m pip --disable-pip-version-check --quiet)
 if [[ $dev == 1 ]]; then
     "${pip[@]}" install -r "$pkg/requirements-dev.txt"
+    if [[ "${SOFTROD_TEST_RLLIB:-0}" == 1 ]]; then
+        "${pip[@]}" install -r "$pkg/requirements-rllib.txt"
+    fi
     # Editable install of a dev-profile build in the workspace's target/:
     # the numeric crates cargo test just built are reused, only PyO3 and the
     # bindings compile. The test hooks (`_panic`, …) the tests call are in

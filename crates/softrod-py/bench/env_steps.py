@@ -3,6 +3,7 @@ benchmark, not a test; the numbers go to docs/performance.md, "Learning
 environments").
 
     python crates/softrod-py/bench/env_steps.py [--steps 2000] [--envs 16]
+        [--rtol R] [--substeps K] [--repeats 3]
 
 Measures, with uniformly random actions and automatic resets:
 
@@ -12,9 +13,14 @@ Measures, with uniformly random actions and automatic resets:
   physics on T Rust threads (T = 1 and every core), counting every copy's
   step.
 
-Each figure is the best of ``--repeats`` timed runs (contention on a
-shared machine only ever adds time). Use a release install
-(``bash scripts/install.sh``) for numbers worth recording.
+Each configuration prints two rates, each the best of ``--repeats`` timed
+runs: env steps per second of wall-clock time, and env steps per second of
+CPU time consumed by this process (all its threads: ``time.process_time``)
+— per core, and much less disturbed than the wall clock when other work
+shares the machine (contention adds waiting, not CPU time). ``--rtol`` and
+``--substeps`` set the env's integration (default: the task's, rtol 1e-2).
+Use a release install (``bash scripts/install.sh``) for numbers worth
+recording.
 """
 
 from __future__ import annotations
@@ -31,29 +37,42 @@ import softrod
 import softrod.envs as se
 
 
-def single(steps: int) -> float:
-    env = gymnasium.make("softrod/Reach-v0")
+def clocks():
+    return time.perf_counter(), time.process_time()
+
+
+def rates(steps: int, start) -> tuple[float, float]:
+    wall, cpu = clocks()
+    return steps / (wall - start[0]), steps / max(cpu - start[1], 1e-9)
+
+
+def single(steps: int, kw: dict) -> tuple[float, float]:
+    env = gymnasium.make("softrod/Reach-v0", **kw)
     env.reset(seed=0)
     rng = np.random.default_rng(0)
     actions = rng.uniform(0.0, se.DEFAULT_MAX_TENSION, (steps, env.action_space.shape[0]))
-    t0 = time.perf_counter()
+    start = clocks()
     for a in actions:
         _, _, terminated, truncated, _ = env.step(a)
         if terminated or truncated:
             env.reset()
-    return steps / (time.perf_counter() - t0)
+    return rates(steps, start)
 
 
-def batched(steps: int, n_envs: int, threads: int) -> float:
-    venv = se.reach_vector_env(n_envs, threads=threads)
+def batched(steps: int, n_envs: int, threads: int, kw: dict) -> tuple[float, float]:
+    venv = se.reach_vector_env(n_envs, threads=threads, **kw)
     venv.reset(seed=0)
     rng = np.random.default_rng(0)
     rounds = max(1, steps // n_envs)
     actions = rng.uniform(0.0, se.DEFAULT_MAX_TENSION, (rounds, n_envs, 2))
-    t0 = time.perf_counter()
+    start = clocks()
     for a in actions:
         venv.step(a)
-    return rounds * n_envs / (time.perf_counter() - t0)
+    return rates(rounds * n_envs, start)
+
+
+def best(runs: list[tuple[float, float]]) -> tuple[float, float]:
+    return max(r[0] for r in runs), max(r[1] for r in runs)
 
 
 def main() -> None:
@@ -61,20 +80,34 @@ def main() -> None:
     ap.add_argument("--steps", type=int, default=2000, help="env steps per timed run")
     ap.add_argument("--envs", type=int, default=16, help="copies of the batched env")
     ap.add_argument("--repeats", type=int, default=3, help="timed runs; the best is kept")
+    ap.add_argument("--rtol", type=float, default=None, help="the env's rtol (default the task's)")
+    ap.add_argument("--substeps", type=int, default=None, help="fixed steps per period")
     args = ap.parse_args()
+    kw = {}
+    if args.rtol is not None:
+        kw["rtol"] = args.rtol
+    if args.substeps is not None:
+        kw["substeps"] = args.substeps
     cores = os.cpu_count() or 1
     print(
         f"softrod {softrod.__version__}, Python {platform.python_version()}, "
-        f"{cores} cores, {platform.processor() or platform.machine()}"
+        f"{cores} cores, {platform.processor() or platform.machine()}, "
+        f"load average {os.getloadavg()[0]:.1f}"
     )
-    print("softrod/Reach-v0, 20 Hz control (0.05 s per step), random actions\n")
-    print("| configuration | env steps/s |\n|---|---|")
-    best = max(single(args.steps) for _ in range(args.repeats))
-    print(f"| single env, Python loop (1 core) | {best:,.0f} |")
+    env = se.reach_env(**kw)
+    s = env.sim.settings
+    print(
+        f"softrod/Reach-v0, 20 Hz control (0.05 s per step), random actions, "
+        f"{s.integrator} rtol {s.rtol:g} atol {s.atol:g}, substeps {env.substeps}\n"
+    )
+    print("| configuration | env steps/s (wall) | env steps per CPU-second |\n|---|---|---|")
+    w, c = best([single(args.steps, kw) for _ in range(args.repeats)])
+    print(f"| single env, Python loop (1 core) | {w:,.0f} | {c:,.0f} |")
     for threads in sorted({1, cores}):
-        best = max(batched(args.steps, args.envs, threads) for _ in range(args.repeats))
+        w, c = best([batched(args.steps, args.envs, threads, kw) for _ in range(args.repeats)])
         label = f"BatchedVectorEnv, {args.envs} copies, {threads} thread{'s' * (threads > 1)}"
-        print(f"| {label} | {best:,.0f} |")
+        print(f"| {label} | {w:,.0f} | {c:,.0f} |")
+    print(f"\nload average after: {os.getloadavg()[0]:.1f}")
 
 
 if __name__ == "__main__":

@@ -24,7 +24,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyList;
 use rayon::prelude::*;
 
-use crate::control::{CableInputs, check_tensions, step};
+use crate::control::{CableInputs, check_substeps, check_tensions, step};
 use crate::convert::{array, shaped};
 use crate::errors::{dynamics, guard, input};
 use crate::simulation::Simulation;
@@ -55,8 +55,9 @@ type Outcome = Result<(DVector<f64>, DVector<f64>), String>;
 /// `(q, qdot, errors)`: the new states (n, n_dof) and a list of n
 /// entries, None for a copy that stepped, else the message of its failure
 /// (then its rows are its input state). `active` (n bools): copies to
-/// step; the others are returned unchanged with error None. The GIL is
-/// released while the copies step.
+/// step; the others are returned unchanged with error None. `substeps`:
+/// as for `Simulation.step` (k fixed steps per call instead of adaptive
+/// ones). The GIL is released while the copies step.
 #[pyclass(module = "softrod")]
 pub struct BatchStepper {
     copies: Vec<Copy>,
@@ -158,7 +159,7 @@ impl BatchStepper {
     }
 
     /// Steps every active copy `dt` seconds (see the class documentation).
-    #[pyo3(signature = (t, q, qdot, u, dt, active = None))]
+    #[pyo3(signature = (t, q, qdot, u, dt, active = None, *, substeps = None))]
     #[allow(clippy::type_complexity, clippy::too_many_arguments)]
     fn step<'py>(
         &mut self,
@@ -169,6 +170,7 @@ impl BatchStepper {
         u: &Bound<'py, PyAny>,
         dt: f64,
         active: Option<Vec<bool>>,
+        substeps: Option<usize>,
     ) -> PyResult<(
         Bound<'py, PyArray2<f64>>,
         Bound<'py, PyArray2<f64>>,
@@ -187,6 +189,9 @@ impl BatchStepper {
         }
         if !(dt.is_finite() && dt > 0.0) {
             return Err(input(format!("dt must be positive and finite, got {dt}")));
+        }
+        if let Some(k) = substeps {
+            check_substeps(k).map_err(input)?;
         }
         let active = match active {
             Some(a) if a.len() != n => {
@@ -230,7 +235,15 @@ impl BatchStepper {
                         c.inputs.u.clear();
                         c.inputs.u.extend_from_slice(us[i]);
                         let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                            step(&mut c.inputs, &c.settings, ts[i], dt, &q_in[i], &qd_in[i])
+                            step(
+                                &mut c.inputs,
+                                &c.settings,
+                                ts[i],
+                                dt,
+                                &q_in[i],
+                                &qd_in[i],
+                                substeps,
+                            )
                         }));
                         Some(match r {
                             Ok(Ok(state)) => Ok(state),

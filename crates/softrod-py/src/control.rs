@@ -118,6 +118,30 @@ impl SecondOrderSystem for CableInputs {
         self.sys.mass_form_jacobians(t, q, qd, mass, constant)
     }
 
+    fn has_mass_form(&self) -> bool {
+        self.sys.has_mass_form()
+    }
+
+    /// The rod's O(N) shifted-mass factorization `M(q) + aK + bD`: the
+    /// cables' `u` does not enter it (their force `A(q) u` is a load term,
+    /// which the structured Newton matrix leaves out like gravity). Without
+    /// this forward the implicit methods fell back to the dense exact
+    /// Jacobian at every update (docs/performance.md, "Learning
+    /// environments").
+    fn factor_shifted_mass(
+        &mut self,
+        t: f64,
+        q: &DVector<f64>,
+        a: f64,
+        b: f64,
+    ) -> Result<bool, DynamicsError> {
+        self.sys.factor_shifted_mass(t, q, a, b)
+    }
+
+    fn solve_shifted_mass(&mut self, x: &mut DVector<f64>) -> Result<(), DynamicsError> {
+        self.sys.solve_shifted_mass(x)
+    }
+
     fn force_residual(
         &mut self,
         t: f64,
@@ -366,6 +390,12 @@ fn add_stats(acc: &mut softrod::integrate::Stats, s: &softrod::integrate::Stats)
 /// One step of the step API: from `(t, q, q̇)` over `dt` with the run
 /// settings' integrator, on `sys` (a [`RodSystem`] with the scheduled
 /// tensions, or [`CableInputs`] with `u` held). Returns `(q, q̇)` at `t + dt`.
+///
+/// `substeps`: `None` integrates with the settings (adaptive methods adapt,
+/// starting from `settings.dt`); `Some(k)` takes `k` fixed steps of
+/// `dt / k` with the settings' integrator (an implicit method still halves a
+/// step whose Newton iteration fails; `rtol`, `atol` then only weight its
+/// Newton test).
 pub fn step<S: SecondOrderSystem>(
     sys: &mut S,
     settings: &Settings,
@@ -373,6 +403,7 @@ pub fn step<S: SecondOrderSystem>(
     dt: f64,
     q: &DVector<f64>,
     qd: &DVector<f64>,
+    substeps: Option<usize>,
 ) -> Result<(DVector<f64>, DVector<f64>), softrod::Error> {
     if !(dt.is_finite() && dt > 0.0) {
         return Err(softrod::Error::InvalidSetting {
@@ -381,6 +412,14 @@ pub fn step<S: SecondOrderSystem>(
         });
     }
     let (method, mut opts) = settings.method_and_options(dt)?;
+    if let Some(k) = substeps {
+        check_substeps(k).map_err(|message| softrod::Error::InvalidSetting {
+            key: "substeps",
+            message,
+        })?;
+        opts.step = StepControl::Fixed(dt / k as f64);
+        opts.max_steps = 2 * k + 100;
+    }
     opts.t_eval = Some(Vec::new());
     let n = sys.dim();
     let sol = integrate_second_order(sys, method, (t, t + dt), q, qd, &opts, &mut NoHooks)?;
@@ -388,4 +427,13 @@ pub fn step<S: SecondOrderSystem>(
         sol.y_final.rows(0, n).into_owned(),
         sol.y_final.rows(n, n).into_owned(),
     ))
+}
+
+/// Checks a number of fixed steps per call: at least 1, at most 10⁶.
+pub fn check_substeps(k: usize) -> Result<(), String> {
+    if (1..=1_000_000).contains(&k) {
+        Ok(())
+    } else {
+        Err(format!("substeps must be between 1 and 1000000, got {k}"))
+    }
 }

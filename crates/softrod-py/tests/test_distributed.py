@@ -59,9 +59,14 @@ def test_ray_backend_equals_local_simulate_many(cluster):
     # The local backend gives the same Runs (Simulations accepted there).
     for r, tr in zip(sd.simulate_many(sims, 0.2, output_every=0.01, threads=2), local):
         assert_same(r, tr)
-    # A Simulation cannot travel: refused with what to pass instead.
-    with pytest.raises(softrod.InputError, match="scene file path"):
-        sd.simulate_many([sims[1]], 0.1, backend="ray")
+    # Simulations travel too (pickled: scene text, settings, initial
+    # state), one with its initial state changed: the same runs bit for bit.
+    q0, qd0 = sims[1].initial_state()
+    sims[1].set_initial_state(q0, qd0 + 0.1)
+    local = softrod.simulate_many(sims[:3], 0.2, output_every=0.01)
+    runs = sd.simulate_many(sims[:3], 0.2, backend="ray", chunk_size=2, output_every=0.01)
+    for r, tr in zip(runs, local):
+        assert_same(r, tr)
 
 
 def test_ray_sweep_equals_local_and_differs_by_parameter(cluster):

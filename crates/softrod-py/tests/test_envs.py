@@ -41,7 +41,10 @@ def test_core_package_imports_neither_gymnasium_nor_ray():
     subprocess.run([sys.executable, "-c", code], check=True)
 
 
-@pytest.mark.parametrize("env_id", ["softrod/Reach-v0", "softrod/Track-v0"])
+ENV_IDS = ["softrod/Reach-v0", "softrod/Track-v0", "softrod/ReachAround-v0", "softrod/Push-v0"]
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
 def test_registered_envs_pass_gymnasiums_checker(env_id):
     from gymnasium.utils.env_checker import check_env
 
@@ -62,12 +65,12 @@ def test_registered_envs_pass_gymnasiums_checker(env_id):
 
 def test_stable_baselines3_checker_where_installed():
     sb3 = pytest.importorskip("stable_baselines3.common.env_checker")
-    sb3.check_env(se.reach_env(), warn=False)
-    sb3.check_env(se.track_env(), warn=False)
+    for make in (se.reach_env, se.track_env, se.reach_around_env, se.push_env):
+        sb3.check_env(make(), warn=False)
 
 
 def test_the_shipped_scenes_load_without_warnings():
-    for path in (se.REACH_SCENE, se.TRACK_SCENE):
+    for path in (se.REACH_SCENE, se.TRACK_SCENE, se.REACH_AROUND_SCENE, se.PUSH_SCENE):
         sim = softrod.Simulation.from_file(path)
         assert sim.warnings == [] and sim.n_cables in (2, 4)
 
@@ -265,3 +268,144 @@ def test_make_vec_gives_the_batched_env():
     assert obs.shape == (3,) + env.single_observation_space.shape
     obs, rew, term, trunc, _ = env.step(env.action_space.sample())
     assert np.all(np.isfinite(obs)) and rew.shape == (3,)
+
+
+def test_task_tolerance_keeps_the_tip_near_a_tight_run():
+    """The registered tasks integrate at TASK_RTOL (1e-2): over 40 periods
+    of random tensions the tip stays within 0.2 mm (3 % of Reach's success
+    radius) of the same episode at rtol 1e-9 (docs/envs.md measures ~0.1 mm
+    over 1000 periods)."""
+    fast, tight = se.reach_env(), se.reach_env(rtol=1e-9)
+    assert fast.sim.settings.rtol == se.TASK_RTOL and tight.sim.settings.rtol == 1e-9
+    fast.reset(seed=2)
+    tight.reset(seed=2)
+    rng = np.random.default_rng(5)
+    worst = 0.0
+    for _ in range(40):
+        a = rng.uniform(0.0, 3.0, 2)
+        fast.step(a)
+        tight.step(a)
+        worst = max(worst, float(np.linalg.norm(fast._tip - tight._tip)))
+    assert worst < 2e-4, worst
+    # rtol=None keeps the scene's own settings.
+    scene = softrod.Simulation.from_file(se.REACH_SCENE).settings
+    assert se.RodEnv(se.REACH_SCENE, rtol=None).sim.settings.rtol == scene.rtol
+
+
+def test_substeps_fixed_steps_converge_and_batch_equals_single():
+    """``substeps=k``: k fixed steps of the settings' integrator per call.
+    Radau IIA's fixed steps approach the tight adaptive step as k grows,
+    and a batch with substeps equals the single steps bit for bit."""
+    sim = softrod.Simulation.from_file(se.REACH_SCENE)
+    sim.settings = softrod.Settings(integrator="radau5", rtol=1e-3)
+    tight = softrod.Simulation.from_file(se.REACH_SCENE)
+    tight.settings = softrod.Settings(rtol=1e-10, atol=1e-13)
+    q0, qd0 = sim.initial_state()
+    st = softrod.State(0.0, q0, qd0)
+    u = np.array([2.5, 0.0])
+    ref = tight.step(st, 0.05, u).q
+    errs = [np.max(np.abs(sim.step(st, 0.05, u, substeps=k).q - ref)) for k in (1, 4, 16)]
+    assert errs[2] < errs[1] < errs[0], errs
+    batch = softrod.BatchStepper([sim, sim.copy()], threads=2)
+    qb, qdb, errors = batch.step(0.0, np.array([q0, q0]), np.array([qd0, qd0]),
+                                 np.array([u, u[::-1]]), 0.05, substeps=4)
+    assert errors == [None, None]
+    for i, ui in enumerate((u, u[::-1])):
+        s = sim.step(st, 0.05, ui, substeps=4)
+        np.testing.assert_array_equal(qb[i], s.q)
+        np.testing.assert_array_equal(qdb[i], s.qdot)
+    for bad in (0, -1):
+        with pytest.raises((softrod.InputError, OverflowError), match="substeps|negative"):
+            sim.step(st, 0.05, u, substeps=bad)
+    with pytest.raises(softrod.InputError, match="substeps"):
+        se.reach_env(substeps=0)
+    env = se.reach_env(substeps=2)
+    env.reset(seed=0)
+    obs, *_ = env.step(np.array([1.0, 0.0]))
+    assert np.all(np.isfinite(obs))
+
+
+def test_reach_around_targets_are_equilibria_in_contact():
+    """ReachAround's targets are statics tips with the post in place: a
+    target drawn on the post's side presses the arm on it (the statics
+    solver's contacts), and started there at rest, holding the target's
+    tensions, the integrated dynamics (the same penalty contact) stay at
+    the target."""
+    env = se.reach_around_env()
+    for seed in range(40):
+        env.reset(seed=seed)
+        u = env.task.target_tensions
+        st = env.sim.statics(tensions=u)
+        if env.sim.contacts(st.q):
+            break
+    else:
+        pytest.fail("no target in contact with the post in 40 draws")
+    assert u[0] > 0  # the cable that bends the arm towards the post (+x)
+    free = se.reach_env()  # the same arm and tensions without the post
+    tip_free = free.sim.statics(tensions=u).tips["arm"][:3, 3]
+    assert np.linalg.norm(tip_free - env.task.target(0.0)[0]) > 1e-3  # the post moved the target
+    env.q, env.qdot = st.q.copy(), np.zeros(env.n_dof)
+    for _ in range(20):  # 1 s
+        obs, _, terminated, _, info = env.step(u)
+        assert not terminated and np.all(np.isfinite(obs))
+        assert info["in_contact"]
+        assert info["distance"] < 1e-4 * env.length, info["distance"]
+
+
+def test_push_moves_the_box_towards_its_goal():
+    env = se.push_env()
+    obs, info = env.reset(seed=1)
+    sl = env.observation_slices
+    box0, goal = obs[sl["body_positions"]].copy(), obs[sl["target"]].copy()
+    assert goal[0] - box0[0] >= 0.01 and np.allclose(goal[1:], box0[1:])
+    contact = False
+    for _ in range(40):  # 2 s pulling the cable on the box's side
+        obs, reward, terminated, truncated, info = env.step(np.array([4.0, 0.0]))
+        assert np.all(np.isfinite(obs)) and not terminated
+        contact |= info["in_contact"]
+        box = obs[sl["body_positions"]]
+        # info and reward from the same state the observation shows
+        assert info["distance"] == pytest.approx(np.linalg.norm(box - goal), rel=1e-12)
+        tip = obs[sl["tip_position"]]
+        expected = (-info["distance"] / env.length - 0.1 * np.linalg.norm(tip - box) / env.length
+                    - 0.01 * np.mean((np.array([4.0, 0.0]) / env.max_tension) ** 2))
+        assert reward == pytest.approx(expected, rel=1e-12)
+    assert contact
+    # The box moved along +x only (its joint), by the joint coordinate.
+    assert box[0] - box0[0] > 0.02 and np.allclose(box[1:], box0[1:])
+    assert box[0] - box0[0] == pytest.approx(obs[sl["strains"]][-1], rel=1e-9)
+
+
+def test_contact_tasks_refuse_scenes_without_their_objects():
+    with pytest.raises(softrod.InputError, match="body"):
+        se.RodEnv(se.REACH_SCENE, se.PushTask())
+    with pytest.raises(softrod.InputError, match="obstacle"):
+        se.RodEnv(se.REACH_SCENE, se.ReachAroundTask())
+
+
+def test_env_from_a_config_mapping():
+    """The factory RLlib and Ray Tune call with their env_config dict."""
+    env = se.make_env_from_config({"task": "push", "episode_steps": 7})
+    assert isinstance(env.task, se.PushTask) and env.episode_steps == 7
+    assert isinstance(se.make_env_from_config({}).task, se.ReachTask)
+    with pytest.raises(softrod.InputError, match="task"):
+        se.make_env_from_config({"task": "juggle"})
+
+
+@pytest.mark.parametrize("which", ["reach_around", "push"])
+def test_contact_tasks_terminate_a_diverging_step_without_nan(which):
+    """The contact scenes with fixed-step RK4 at the control period (unstable
+    on the stiff modes): the first step diverges, the episode ends with the
+    reason, the observation and reward stay those of the last valid state."""
+    path = se.REACH_AROUND_SCENE if which == "reach_around" else se.PUSH_SCENE
+    text = open(path).read().replace(*RK4_BLOWUP)
+    assert "rk4" in text
+    sim = softrod.Simulation.from_toml(text, name=f"{which}_rk4.toml")
+    task = se.ReachAroundTask() if which == "reach_around" else se.PushTask()
+    env = se.RodEnv(sim, task)
+    obs0, _ = env.reset(seed=0)
+    obs, reward, terminated, truncated, info = env.step(env.action_space.high)
+    assert terminated and not truncated
+    assert info["termination"].startswith("diverged: ")
+    assert np.all(np.isfinite(obs)) and np.isfinite(reward)
+    np.testing.assert_array_equal(obs, obs0)

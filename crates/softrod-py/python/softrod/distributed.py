@@ -9,12 +9,13 @@ results are the same numbers, bit for bit, as the local run: each
 simulation is integrated by the same code from the same inputs, whichever
 process runs it.
 
-A ``softrod.Simulation`` lives in Rust memory and is not sent between
-processes; what travels is how to build one — a scene file path (on a
-cluster, a path every node can read), or any picklable zero-argument
-function returning a Simulation (``functools.partial(softrod.Simulation
-.from_toml, text)`` for scene text). Each result comes back as a
-:class:`Run`: plain numpy arrays, picklable.
+What travels to a worker is a ``softrod.Simulation`` itself (it pickles:
+its scene text, settings and initial state, rebuilt on the worker bit for
+bit), a scene file path (on a cluster, a path every node can read), or
+any picklable zero-argument function returning a Simulation
+(``functools.partial(softrod.Simulation.from_toml, text)`` for scene
+text). Each result comes back as a :class:`Run`: plain numpy arrays,
+picklable.
 
 Ray is imported only when ``backend="ray"`` is used: ``import softrod`` and
 this module import neither Ray nor Gymnasium. Ray is started by the caller
@@ -30,6 +31,7 @@ with a note naming the run.
 
 from __future__ import annotations
 
+import functools
 import math
 import os
 from collections.abc import Callable, Sequence
@@ -76,16 +78,17 @@ class Run:
         )
 
 
+def _itself(sim: softrod.Simulation) -> softrod.Simulation:
+    return sim
+
+
 def _builder(spec: Any, i: int) -> Callable[[], softrod.Simulation]:
     if isinstance(spec, (str, os.PathLike)):
         path = os.fspath(spec)
         return lambda: softrod.Simulation.from_file(path)
     if isinstance(spec, softrod.Simulation):
-        raise softrod.InputError(
-            f"sims[{i}] is a softrod.Simulation, which cannot be sent to another process: "
-            "pass its scene file path, or a function that builds it "
-            "(functools.partial(softrod.Simulation.from_toml, text))"
-        )
+        # Pickled with the task (Simulation.__reduce__), rebuilt there.
+        return functools.partial(_itself, spec)
     if callable(spec):
         return spec
     raise softrod.InputError(
@@ -178,8 +181,8 @@ def simulate_many(
     """Runs independent simulations and returns a :class:`Run` for each, in
     order.
 
-    ``sims``: scene file paths or zero-argument functions returning a
-    ``softrod.Simulation`` (with ``backend="local"`` also Simulations).
+    ``sims``: ``softrod.Simulation`` objects, scene file paths or
+    zero-argument functions returning a Simulation.
     ``duration`` [s]: as for ``softrod.simulate_many`` (default: each
     scene's ``[run] duration``); keywords ``output_every``, ``integrator``,
     ``rtol``, ``atol``, ``dt`` override every run's settings.

@@ -19,6 +19,7 @@ mod analysis;
 mod dynamics;
 mod gradient;
 mod kinematics;
+mod pickle;
 mod run;
 
 use nalgebra::DMatrix;
@@ -98,6 +99,8 @@ pub struct Simulation {
     inputs: Option<Box<CableInputs>>,
     /// The full model as an integrable system, for `step` without `u`.
     stepper: Option<Box<RodSystem>>,
+    /// The scene text this simulation was built from (what a pickle holds).
+    source: Option<std::sync::Arc<str>>,
 }
 
 impl Clone for Simulation {
@@ -108,6 +111,7 @@ impl Clone for Simulation {
             duration: self.duration,
             inputs: self.inputs.clone(),
             stepper: self.stepper.clone(),
+            source: self.source.clone(),
         }
     }
 }
@@ -124,6 +128,7 @@ impl Simulation {
             duration,
             inputs: None,
             stepper: None,
+            source: None,
         }
     }
 
@@ -199,16 +204,23 @@ impl Simulation {
             contact,
         };
         guard(|| {
-            if crate::scene_dict::needs_scene(rods, &extras) {
+            let mut me = if crate::scene_dict::needs_scene(rods, &extras) {
                 let (sim, warnings) =
                     crate::scene_dict::simulation_with(rods, gravity, quadrature, &extras)?;
-                return Ok(Self::wrap(sim, warnings, None));
-            }
-            Ok(Self::wrap(
-                simulation_of(rods, gravity, quadrature)?,
-                Vec::new(),
-                None,
-            ))
+                Self::wrap(sim, warnings, None)
+            } else {
+                Self::wrap(simulation_of(rods, gravity, quadrature)?, Vec::new(), None)
+            };
+            // The scene text of the same simulation, for pickling (the
+            // scene loader builds the same model: tests/test_pickle.py).
+            let g = match gravity {
+                Some(g) => Some(crate::convert::vec3(g, "gravity")?),
+                None => None,
+            };
+            me.source = crate::scene_dict::document(rods, g, quadrature, &extras)
+                .ok()
+                .map(|doc| crate::scene_dict::text(&doc).into());
+            Ok(me)
         })
     }
 
@@ -232,7 +244,9 @@ impl Simulation {
         guard(|| {
             let doc = crate::scene_dict::dict_document(scene)?;
             let (sim, warnings, duration) = crate::scene_dict::simulation(&doc, name)?;
-            Ok(Self::wrap(sim, warnings, Some(duration)))
+            let mut me = Self::wrap(sim, warnings, Some(duration));
+            me.source = Some(crate::scene_dict::text(&doc).into());
+            Ok(me)
         })
     }
 
@@ -263,7 +277,9 @@ impl Simulation {
                      path: call Simulation.from_file({text:?})"
                 )));
             }
-            Self::from_loaded(softrod::Simulation::from_toml(text, name))
+            let mut me = Self::from_loaded(softrod::Simulation::from_toml(text, name))?;
+            me.source = Some(text.into());
+            Ok(me)
         })
     }
 
@@ -274,7 +290,11 @@ impl Simulation {
         _cls: &Bound<'_, pyo3::types::PyType>,
         path: std::path::PathBuf,
     ) -> PyResult<Self> {
-        guard(|| Self::from_loaded(softrod::Simulation::from_scene_file(&path)))
+        guard(|| {
+            let mut me = Self::from_loaded(softrod::Simulation::from_scene_file(&path))?;
+            me.source = std::fs::read_to_string(&path).ok().map(Into::into);
+            Ok(me)
+        })
     }
 
     /// Number of generalized coordinates.
@@ -951,16 +971,21 @@ impl Simulation {
     /// loops: `state = sim.step(state, 1e-3, u)`. Each call starts the
     /// integrator afresh (first step `settings.dt`, capped at `dt`), so a
     /// loop of steps equals `simulate(controller=…, control_every=dt)`.
-    /// Releases the GIL.
-    #[pyo3(signature = (state, dt, u = None))]
+    /// `substeps` (an int k ≥ 1): instead of adapting, take k fixed steps
+    /// of `dt / k` with the settings' integrator (an implicit method halves
+    /// a step whose Newton iteration fails; rtol and atol then only weight
+    /// its Newton test): a fixed cost per call, at an accuracy the caller
+    /// must check (docs/envs.md, "Integration"). Releases the GIL.
+    #[pyo3(signature = (state, dt, u = None, *, substeps = None))]
     fn step(
         &mut self,
         py: Python<'_>,
         state: PyRef<'_, State>,
         dt: f64,
         u: Option<&Bound<'_, PyAny>>,
+        substeps: Option<usize>,
     ) -> PyResult<State> {
-        self.step_impl(py, state, dt, u)
+        self.step_impl(py, state, dt, u, substeps)
     }
 
     /// An independent copy (its own buffers), e.g. for another thread.
@@ -974,6 +999,22 @@ impl Simulation {
 
     fn __deepcopy__(&self, _memo: &Bound<'_, PyAny>) -> Self {
         self.clone()
+    }
+
+    /// Pickling (Ray, multiprocessing): the scene text the simulation was
+    /// built from, its settings, initial state, the tensions `step` last
+    /// held, its duration and warnings — plain values; loading rebuilds the
+    /// model by the scene loader, so a loaded copy steps and simulates bit
+    /// for bit as the original. A Simulation not built from a scene
+    /// raises TypeError.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyTuple>> {
+        self.reduce(py)
+    }
+
+    /// The simulation a pickle's state dict describes (`__reduce__`).
+    #[staticmethod]
+    fn _from_state(state: &Bound<'_, pyo3::types::PyDict>) -> PyResult<Self> {
+        guard(|| Self::from_state(state))
     }
 
     fn __repr__(&self) -> String {

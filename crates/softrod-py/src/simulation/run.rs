@@ -6,7 +6,9 @@ use pyo3::prelude::*;
 use softrod::integrate::RodSystem;
 
 use super::Simulation;
-use crate::control::{ControlError, ControlledRun, check_tensions, simulate_controlled, step};
+use crate::control::{
+    ControlError, ControlledRun, check_substeps, check_tensions, simulate_controlled, step,
+};
 use crate::convert::{vec_out, vector};
 use crate::errors::{guard, guard_detached, input, integrate, simulation, to_py};
 use crate::trajectory::{State, Trajectory};
@@ -134,7 +136,11 @@ impl Simulation {
         state: PyRef<'_, State>,
         dt: f64,
         u: Option<&Bound<'_, PyAny>>,
+        substeps: Option<usize>,
     ) -> PyResult<State> {
+        if let Some(k) = substeps {
+            check_substeps(k).map_err(input)?;
+        }
         let n = self.n();
         let q =
             DVector::from_column_slice(vector(state.q.bind(py).as_any(), "state.q", n)?.slice());
@@ -151,7 +157,7 @@ impl Simulation {
                 inputs.tau_extra = None;
                 inputs.sys.jacobian = settings.stiff_jacobian();
                 guard_detached(py, || {
-                    step(inputs, &settings, t, dt, &q, &qd).map_err(to_py)
+                    step(inputs, &settings, t, dt, &q, &qd, substeps).map_err(to_py)
                 })?
             }
             None => {
@@ -161,7 +167,7 @@ impl Simulation {
                 let sys = self.stepper.as_mut().expect("just set");
                 sys.jacobian = settings.stiff_jacobian();
                 guard_detached(py, || {
-                    step(&mut **sys, &settings, t, dt, &q, &qd).map_err(to_py)
+                    step(&mut **sys, &settings, t, dt, &q, &qd, substeps).map_err(to_py)
                 })?
             }
         };

@@ -12,7 +12,12 @@ Importing this module registers:
 - ``softrod/Reach-v0``: a two-cable planar arm reaching a random static
   target (:func:`reach_env`, :class:`ReachTask`);
 - ``softrod/Track-v0``: a four-cable arm tracking a target moving on a
-  circle in 3-D (:func:`track_env`, :class:`TrackTask`).
+  circle in 3-D (:func:`track_env`, :class:`TrackTask`);
+- ``softrod/ReachAround-v0``: the two-cable arm reaching a random target
+  with a post in its way, in contact (:func:`reach_around_env`,
+  :class:`ReachAroundTask`);
+- ``softrod/Push-v0``: the two-cable arm pushing a box along a table to a
+  random goal, in contact (:func:`push_env`, :class:`PushTask`).
 
 Both accept the keywords of :class:`RodEnv` through ``gymnasium.make``
 (``scene=``, ``control_period=``, ``max_tension=``, ``observe=``, …), and
@@ -26,11 +31,14 @@ from __future__ import annotations
 
 import gymnasium
 
+from softrod._errors import InputError
+
 from ._core import (
     DEFAULT_MAX_TENSION,
     DEFAULT_Q_LIMIT,
     OBSERVATION_KEYS,
     REACH_SCENE,
+    TASK_RTOL,
     TRACK_SCENE,
     ReachTask,
     RodEnv,
@@ -38,6 +46,14 @@ from ._core import (
     TrackTask,
     reach_env,
     track_env,
+)
+from ._contact import (
+    PUSH_SCENE,
+    REACH_AROUND_SCENE,
+    PushTask,
+    ReachAroundTask,
+    push_env,
+    reach_around_env,
 )
 from ._vector import BatchedVectorEnv
 
@@ -54,6 +70,43 @@ def track_vector_env(num_envs: int, *, threads: int | None = None, autoreset_mod
     return _vector(track_env, num_envs, threads, autoreset_mode, kwargs)
 
 
+def reach_around_vector_env(
+    num_envs: int, *, threads: int | None = None, autoreset_mode=None, **kwargs
+):
+    """A :class:`BatchedVectorEnv` of ``num_envs`` softrod/ReachAround-v0
+    copies (keywords of :func:`reach_around_env`)."""
+    return _vector(reach_around_env, num_envs, threads, autoreset_mode, kwargs)
+
+
+def push_vector_env(num_envs: int, *, threads: int | None = None, autoreset_mode=None, **kwargs):
+    """A :class:`BatchedVectorEnv` of ``num_envs`` softrod/Push-v0 copies
+    (keywords of :func:`push_env`)."""
+    return _vector(push_env, num_envs, threads, autoreset_mode, kwargs)
+
+
+#: The task names of :func:`make_env_from_config`.
+TASKS = {
+    "reach": reach_env,
+    "track": track_env,
+    "reach_around": reach_around_env,
+    "push": push_env,
+}
+
+
+def make_env_from_config(config) -> RodEnv:
+    """An env from a config mapping, the form RLlib and Ray Tune hand to an
+    env factory (``ray.tune.registry.register_env(name, lambda c:
+    softrod.envs.make_env_from_config(c))``): ``config["task"]`` names the
+    task (``"reach"`` — the default —, ``"track"``, ``"reach_around"``,
+    ``"push"``); the other entries are the keywords of its env function
+    (:func:`reach_env`, …). An unknown task raises ``softrod.InputError``."""
+    kwargs = dict(config or {})
+    task = kwargs.pop("task", "reach")
+    if task not in TASKS:
+        raise InputError(f"config['task'] = {task!r}: one of {sorted(TASKS)}")
+    return TASKS[task](**kwargs)
+
+
 def _vector(make, num_envs, threads, autoreset_mode, kwargs):
     kw = {} if autoreset_mode is None else {"autoreset_mode": autoreset_mode}
     # gymnasium.make_vec passes render_mode; these envs do not render.
@@ -65,6 +118,12 @@ def _register() -> None:
     for env_id, entry, vector in (
         ("softrod/Reach-v0", "softrod.envs:reach_env", "softrod.envs:reach_vector_env"),
         ("softrod/Track-v0", "softrod.envs:track_env", "softrod.envs:track_vector_env"),
+        (
+            "softrod/ReachAround-v0",
+            "softrod.envs:reach_around_env",
+            "softrod.envs:reach_around_vector_env",
+        ),
+        ("softrod/Push-v0", "softrod.envs:push_env", "softrod.envs:push_vector_env"),
     ):
         if env_id not in gymnasium.registry:
             # No max_episode_steps: the env truncates by itself (episode_steps),
@@ -78,13 +137,24 @@ __all__ = [
     "DEFAULT_MAX_TENSION",
     "DEFAULT_Q_LIMIT",
     "OBSERVATION_KEYS",
+    "PUSH_SCENE",
+    "REACH_AROUND_SCENE",
     "REACH_SCENE",
+    "TASK_RTOL",
     "TRACK_SCENE",
+    "TASKS",
     "BatchedVectorEnv",
+    "PushTask",
+    "ReachAroundTask",
     "ReachTask",
     "RodEnv",
     "Task",
     "TrackTask",
+    "make_env_from_config",
+    "push_env",
+    "push_vector_env",
+    "reach_around_env",
+    "reach_around_vector_env",
     "reach_env",
     "reach_vector_env",
     "track_env",

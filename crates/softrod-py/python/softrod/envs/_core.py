@@ -31,6 +31,12 @@ DEFAULT_MAX_TENSION = 3.0
 #: 1000 times its length) ends the episode as diverged.
 DEFAULT_Q_LIMIT = 1.0e3
 
+#: The relative tolerance the registered tasks integrate at (the scene's
+#: integrator, ESDIRK): on the reach arm the tip stays within 0.1 mm (1.6 %
+#: of Reach's success radius) of an rtol 1e-9 run at every period end, for
+#: 1.35 times the speed of rtol 1e-3 (docs/envs.md, "Integration").
+TASK_RTOL = 1e-2
+
 #: The observation keys and their sizes (n_dof and n_cables are the
 #: model's): see :class:`RodEnv`.
 OBSERVATION_KEYS = (
@@ -41,6 +47,7 @@ OBSERVATION_KEYS = (
     "target",
     "target_velocity",
     "tensions",
+    "body_positions",
 )
 
 
@@ -281,8 +288,15 @@ class RodEnv(gymnasium.Env):
     ``ValueError``).
 
     Step: the tensions are held for ``control_period`` seconds (default
-    0.05 s, 20 Hz) and the scene's integrator and tolerances advance the
-    state (``Simulation.step``). Episodes are truncated after
+    0.05 s, 20 Hz) and the scene's integrator advances the state
+    (``Simulation.step``): adaptively at the scene's tolerances, or at
+    relative tolerance ``rtol`` when given (and an absolute tolerance no
+    looser than it; the registered tasks use 1e-2:
+    the tip within ~0.1 mm of a tight-tolerance run, docs/envs.md,
+    "Integration"), or in ``substeps`` fixed steps per period when given (a
+    fixed cost; its accuracy is the caller's to check — measured on the
+    reach arm it is worse than the adaptive default for the same cost).
+    Episodes are truncated after
     ``episode_steps`` steps. A step that fails (the integrator gives up, a
     non-finite state, a coordinate beyond ``q_limit``) ends the episode:
     ``terminated=True``, ``info["termination"]`` says why (``"diverged:
@@ -296,7 +310,9 @@ class RodEnv(gymnasium.Env):
     ``"tip_position"`` (3, m, world frame), ``"tip_rotation"`` (9, the tip
     frame's rotation matrix row by row), ``"target"`` (3, m),
     ``"target_velocity"`` (3, m/s), ``"tensions"`` (n_cables, N: the last
-    applied action). ``observation_slices`` maps each key to its slice.
+    applied action), ``"body_positions"`` (3 per rigid body of the scene,
+    m, world frame: the origins of their frames, in the scene's order).
+    ``observation_slices`` maps each key to its slice.
 
     Reset: the scene's initial state, plus Gaussian noise of standard
     deviation ``initial_noise`` on q and q̇ when positive, and the task's
@@ -319,6 +335,8 @@ class RodEnv(gymnasium.Env):
         initial_noise: float = 0.0,
         q_limit: float = DEFAULT_Q_LIMIT,
         rod: int | str = 0,
+        rtol: float | None = None,
+        substeps: int | None = None,
     ):
         super().__init__()
         scene_bounds = None
@@ -339,6 +357,19 @@ class RodEnv(gymnasium.Env):
             raise InputError(f'action_policy must be "clip" or "reject", got {action_policy!r}')
         if not (math.isfinite(initial_noise) and initial_noise >= 0):
             raise InputError(f"initial_noise must be >= 0 and finite, got {initial_noise}")
+        if rtol is not None:
+            if not (math.isfinite(rtol) and rtol > 0):
+                raise InputError(f"rtol must be positive and finite, got {rtol}")
+            s = self.sim.settings
+            # atol no looser than rtol: the rule of Settings(rtol=...) alone.
+            self.sim.settings = softrod.Settings(
+                integrator=s.integrator, rtol=float(rtol), atol=min(s.atol, rtol), dt=s.dt,
+                output_every=s.output_every, error_control=s.error_control,
+                linearly_implicit=s.linearly_implicit,
+            )
+        if substeps is not None and (int(substeps) != substeps or substeps < 1):
+            raise InputError(f"substeps must be a positive integer or None, got {substeps}")
+        self.substeps = None if substeps is None else int(substeps)
         self.control_period = float(control_period)
         self.episode_steps = int(episode_steps)
         self.action_policy = action_policy
@@ -381,6 +412,7 @@ class RodEnv(gymnasium.Env):
             "target": 3,
             "target_velocity": 3,
             "tensions": self.n_cables,
+            "body_positions": 3 * len(self.sim.body_names),
         }
         lo, hi, self.observation_slices, k = [], [], {}, 0
         for key in keys:
@@ -426,6 +458,9 @@ class RodEnv(gymnasium.Env):
             "target_velocity": target_v,
             "tensions": self.u,
         }
+        if "body_positions" in self.observe:
+            poses = self.sim.body_poses(self.q, t=t)
+            parts["body_positions"] = poses[:, :3, 3].reshape(-1)
         self._tip = tip[:3, 3].copy()
         return np.concatenate([np.asarray(parts[k], dtype=np.float64) for k in self.observe])
 
@@ -472,7 +507,7 @@ class RodEnv(gymnasium.Env):
         """One control period under ``u``: the new (q, q̇), or the failure."""
         state = softrod.State(self.t, self.q, self.qdot)
         try:
-            s = self.sim.step(state, self.control_period, u)
+            s = self.sim.step(state, self.control_period, u, substeps=self.substeps)
         except SimulationError as e:
             return self.q, self.qdot, str(e)
         return s.q, s.qdot, None
@@ -526,6 +561,7 @@ def reach_env(scene=None, *, task: ReachTask | None = None, **kwargs) -> RodEnv:
     ``success_radius``)."""
     task_kw = {k: kwargs.pop(k) for k in ("effort_weight", "success_radius") if k in kwargs}
     kwargs.setdefault("episode_steps", 100)
+    kwargs.setdefault("rtol", TASK_RTOL)
     return RodEnv(scene or REACH_SCENE, task or ReachTask(**task_kw), **kwargs)
 
 
@@ -536,4 +572,5 @@ def track_env(scene=None, *, task: TrackTask | None = None, **kwargs) -> RodEnv:
     names = ("arc_angle", "frequency", "effort_weight", "success_radius")
     task_kw = {k: kwargs.pop(k) for k in names if k in kwargs}
     kwargs.setdefault("episode_steps", 200)
+    kwargs.setdefault("rtol", TASK_RTOL)
     return RodEnv(scene or TRACK_SCENE, task or TrackTask(**task_kw), **kwargs)

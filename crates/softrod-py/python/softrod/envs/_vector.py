@@ -66,9 +66,10 @@ class BatchedVectorEnv(VectorEnv):
                 e.observation_space != first.observation_space
                 or e.action_space != first.action_space
                 or e.control_period != first.control_period
+                or e.substeps != first.substeps
             ):
                 raise InputError(
-                    f"env {i} differs from env 0 in its spaces or control period: a batch's "
+                    f"env {i} differs from env 0 in its spaces, control period or substeps: a batch's "
                     "copies must match"
                 )
         self.num_envs = len(self.envs)
@@ -133,7 +134,8 @@ class BatchedVectorEnv(VectorEnv):
         q = np.array([e.q for e in self.envs])
         qd = np.array([e.qdot for e in self.envs])
         q1, qd1, errors = self.stepper.step(
-            t, q, qd, u, self.envs[0].control_period, [bool(a) for a in active]
+            t, q, qd, u, self.envs[0].control_period, [bool(a) for a in active],
+            substeps=self.envs[0].substeps,
         )
         rewards = np.zeros(n)
         terms = np.zeros(n, dtype=np.bool_)
