@@ -16,6 +16,7 @@ use crate::forces::Forces;
 use crate::model::Model;
 use crate::model::contact::ContactWork;
 use crate::model::data::Data;
+use crate::model::second::Gathered;
 use nalgebra::{DMatrix, DVector};
 use softrod_kinematics::Frame;
 use softrod_lie::{Vec3, angular};
@@ -100,17 +101,29 @@ fn tree(
             v -= sw.b.pdot;
             wb = angular(&sw.b.blocks[0].vel);
         }
-        // ∂f/∂q = f_p J_w + f_v (∂v/∂q + [v]× J_ω) − [f]× J_ω (CT12).
+        // ∂f/∂q = f_p J_w + f_v (∂v/∂q + [v]× J_ω) − [f]× J_ω (CT12); the
+        // carrier's rotation also turns J_w: the term f·(ω_i × j_l).
+        sw.gather.clear();
         for &l in &sw.dofs {
             let jl = column(&sw.jw, l);
             let ol = column(&sw.jomega, l);
             let vl = column(&sw.vq, l) - wb.cross(&jl);
-            let fl = a.dp * jl + a.dv * (vl + v.cross(&ol)) - a.force.cross(&ol);
-            let gl = a.dv * jl;
-            for &i in &sw.dofs {
-                let ji = column(&sw.jw, i);
-                dq[(i, l)] -= ji.dot(&fl) - a.force.dot(&column(&sw.jomega, i).cross(&jl));
-                dqd[(i, l)] -= ji.dot(&gl);
+            sw.gather.push(Gathered {
+                j: jl,
+                f: a.dp * jl + a.dv * (vl + v.cross(&ol)) - a.force.cross(&ol),
+                g: a.dv * jl,
+                u: ol,
+                a: 0.0,
+                b: 0.0,
+            });
+        }
+        let n = dq.nrows();
+        let (mq, mqd) = (dq.as_mut_slice(), dqd.as_mut_slice());
+        for (gl, &l) in sw.gather.iter().zip(&sw.dofs) {
+            let jf = gl.j.cross(&a.force);
+            for (gi, &i) in sw.gather.iter().zip(&sw.dofs) {
+                mq[l * n + i] -= gi.j.dot(&gl.f) - gi.u.dot(&jf);
+                mqd[l * n + i] -= gi.j.dot(&gl.g);
             }
         }
         sw.a.add_hessian_contraction(&a.force, -1.0, dq);

@@ -11,7 +11,7 @@ use super::second;
 use crate::model::Model;
 use crate::model::contact::ContactWork;
 use crate::model::data::Data;
-use crate::model::second::PointPath;
+use crate::model::second::{Gathered, PointPath};
 use nalgebra::DMatrix;
 use softrod_lie::Vec3;
 
@@ -145,19 +145,29 @@ pub(crate) fn linearize(
         }
         let (tda, tdb) = (sw.a.tangent_rate(), sw.b.tangent_rate());
         let f = c.force;
+        sw.gather.clear();
         for &l in &sw.dofs {
             let (da, db) = (sw.dsa[l], sw.dsb[l]);
             let jl = column(&sw.jw, l);
             let dw = jl + ta * da - tb * db;
             let dv = column(&sw.vq, l) + tda * da - tdb * db;
-            let fl = c.dw * dw + c.de * column(&sw.je, l) + c.dv * dv;
-            let gl = c.dv * jl;
-            for &i in &sw.dofs {
-                let ji = column(&sw.jw, i);
+            sw.gather.push(Gathered {
+                j: jl,
+                f: c.dw * dw + c.de * column(&sw.je, l) + c.dv * dv,
+                g: c.dv * jl,
                 // J_w's own motion with s: ∂J_a/∂s = ∂t_a/∂q.
-                let moving = column(&sw.ta, i).dot(&f) * da - column(&sw.tb, i).dot(&f) * db;
-                dq[(i, l)] -= ji.dot(&fl) + moving;
-                dqd[(i, l)] -= ji.dot(&gl);
+                u: Vec3::new(column(&sw.ta, l).dot(&f), column(&sw.tb, l).dot(&f), 0.0),
+                a: da,
+                b: db,
+            });
+        }
+        let n = dq.nrows();
+        let (mq, mqd) = (dq.as_mut_slice(), dqd.as_mut_slice());
+        for (gl, &l) in sw.gather.iter().zip(&sw.dofs) {
+            for (gi, &i) in sw.gather.iter().zip(&sw.dofs) {
+                let moving = gi.u.x * gl.a - gi.u.y * gl.b;
+                mq[l * n + i] -= gi.j.dot(&gl.f) + moving;
+                mqd[l * n + i] -= gi.j.dot(&gl.g);
             }
         }
         sw.a.add_hessian_contraction(&f, -1.0, dq);

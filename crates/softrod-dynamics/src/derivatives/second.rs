@@ -363,14 +363,28 @@ impl PointPath {
     }
 
     /// Adds `sign · f·∂²p/∂q∂q` (n × n) into `m`, the geometric term
-    /// (CT6).
-    pub(crate) fn add_hessian_contraction(&self, f: &Vec3, sign: f64, m: &mut DMatrix<f64>) {
-        for i in 0..self.cols.len() {
-            let di = self.cols[i].dof;
-            for l in 0..self.cols.len() {
-                m[(di, self.cols[l].dof)] += sign * f.dot(&self.hessian(i, l));
+    /// (CT6): between two nodes `f·(ω_e × j_o) = ω_e·(j_o × f)`, one dot
+    /// product per entry with `j_o × f` formed once per column.
+    pub(crate) fn add_hessian_contraction(&mut self, f: &Vec3, sign: f64, m: &mut DMatrix<f64>) {
+        let n = m.nrows();
+        let mut u = std::mem::take(&mut self.scratch);
+        u.clear();
+        u.extend(self.cols.iter().map(|c| c.j.cross(f) * sign));
+        let out = m.as_mut_slice();
+        for (l, cl) in self.cols.iter().enumerate() {
+            let col = cl.dof * n;
+            for (i, ci) in self.cols.iter().enumerate() {
+                let v = if ci.block == cl.block {
+                    sign * f.dot(&self.hessian(i, l))
+                } else if ci.block > cl.block {
+                    ci.w.dot(&u[l])
+                } else {
+                    cl.w.dot(&u[i])
+                };
+                out[col + ci.dof] += v;
             }
         }
+        self.scratch = u;
     }
 
     /// Adds `sign · ∂t/∂q` (3 × n) of the tangent `t = R ν` of a rod

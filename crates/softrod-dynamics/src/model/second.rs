@@ -60,6 +60,8 @@ pub(crate) struct PointPath {
     pub rotation: softrod_lie::Mat3,
     pub strain: Vec6,
     pub strain_rate: Vec6,
+    /// `j_i × f` per column (the geometric term's work space).
+    pub scratch: Vec<Vec3>,
 }
 
 /// The buffers of one linearization (CT12–CT14).
@@ -85,6 +87,20 @@ pub(crate) struct SecondWork {
     pub dsb: Vec<f64>,
     /// The coordinates the current contact touches, sorted.
     pub dofs: Vec<usize>,
+    /// Per coordinate of `dofs`: `J_w` column, `∂f/∂q` column, `∂f/∂q̇ J_w`
+    /// column, and two scalars or a vector the assembly pairs with them.
+    pub gather: Vec<Gathered>,
+}
+
+/// One coordinate's columns, gathered for the `dofs × dofs` products.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Gathered {
+    pub j: Vec3,
+    pub f: Vec3,
+    pub g: Vec3,
+    pub u: Vec3,
+    pub a: f64,
+    pub b: f64,
 }
 
 impl SecondWork {
@@ -104,6 +120,7 @@ impl SecondWork {
             dsa: vec![0.0; n],
             dsb: vec![0.0; n],
             dofs: Vec::with_capacity(n),
+            gather: Vec::with_capacity(n),
         }
     }
 }
