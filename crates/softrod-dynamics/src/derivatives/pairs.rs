@@ -391,6 +391,10 @@ mod tests {
     }
 
     fn crossing(friction: f64, tree: bool) -> Model {
+        crossing_at(friction, tree, 1.2, Vec3::new(0.2, -0.15, 0.0195))
+    }
+
+    fn crossing_at(friction: f64, tree: bool, angle: f64, base_b: Vec3) -> Model {
         let rod = |name: &str, base: Pose| {
             Rod::builder(0.3)
                 .name(name)
@@ -406,7 +410,7 @@ mod tests {
             restitution: 0.4,
             ..Default::default()
         };
-        let b = rod("b", placed(Vec3::z(), 1.2, Vec3::new(0.2, -0.15, 0.0195)));
+        let b = rod("b", placed(Vec3::z(), angle, base_b));
         let builder = Model::builder().rod(rod("a", Pose::identity()));
         let builder = if tree {
             builder.rod_on(b, Attachment::world_joint(Joint::new(JointKind::Free)))
@@ -438,6 +442,29 @@ mod tests {
                 } else if friction > 0.0 {
                     assert!(slip > 0, "{what}");
                 }
+            }
+        }
+    }
+
+    /// The round end of rod b pressed on rod a from the side (a T): b's
+    /// closest point is clamped at its end (`∂s_b/∂q = 0`, CT13), on the
+    /// chain and the tree, frictionless and with friction.
+    #[test]
+    fn a_rod_end_pressed_on_another_rod() {
+        use std::f64::consts::FRAC_PI_2;
+        for tree in [false, true] {
+            for (friction, by) in [(0.0, 0.0), (0.6, 1e-7), (0.05, 3e-4)] {
+                let model = crossing_at(friction, tree, FRAC_PI_2, Vec3::new(0.15, -0.304, 0.0195));
+                let n = model.n_dof();
+                let q = wiggle(n, 1e-5, 1.3);
+                let qd = wiggle(n, 0.02, 0.7);
+                let what = format!("end on rod, tree {tree}, friction {friction}");
+                check(&model, &q, &qd, &shifted(&q, by * 0.01), &what);
+                let mut data = Data::new(&model);
+                contact_force(&model, &mut data, Forces::ALL, 0.0, &q, Some(&qd));
+                let pw = data.contact.as_ref().unwrap().pairs.as_ref().unwrap();
+                assert_eq!(pw.active.len(), 1, "{what}");
+                assert_eq!(pw.active[0].sb, 0.3, "{what}: clamped at b's end");
             }
         }
     }
