@@ -336,6 +336,56 @@ mod tests {
         }
     }
 
+    /// An arm on a prescribed revolute joint sweeping it over a table (the
+    /// joint has no coordinate but moves: its rate enters `∂ṗ/∂q` through
+    /// the frames' twists, CT12), sticking and sliding.
+    #[test]
+    fn an_arm_swept_over_a_table_by_a_prescribed_joint() {
+        use crate::model::{Curve, Prescribed};
+        for (friction, by) in [(0.5, 1e-7), (0.05, 3e-4)] {
+            let sweep = Prescribed::new(vec![Curve::Sine {
+                amplitude: 0.1,
+                frequency: 1.0,
+                phase: 0.0,
+                offset: 0.0,
+            }]);
+            let joint = Joint::new(JointKind::Revolute { axis: Vec3::z() }).with_prescribed(sweep);
+            let arm = Rod::builder(0.3)
+                .pieces(4)
+                .strains(Strain::ALL)
+                .base(Pose::new(
+                    softrod_lie::Mat3::identity(),
+                    Vec3::new(0.0, 0.0, 0.0098),
+                ))
+                .circle(0.01)
+                .material(silicone());
+            let table = Obstacle::new(
+                "table",
+                Shape::Plane {
+                    point: Vec3::zeros(),
+                    normal: Vec3::z(),
+                },
+            )
+            .friction(friction);
+            let model = Model::builder()
+                .rod_on(arm, Attachment::world_joint(joint))
+                .gravity([0.0, 0.0, -9.81])
+                .build()
+                .unwrap()
+                .with_contact(vec![table], ContactSettings::default())
+                .unwrap();
+            let n = model.n_dof();
+            let q = wiggle(n, 1e-5, 1.3);
+            let qd = wiggle(n, 0.05, 0.7);
+            let what = format!("swept arm, friction {friction}");
+            let (stick, slip) = check(&model, &q, &qd, &shifted(&q, by), &what);
+            assert!(
+                if by < 1e-6 { stick > 0 } else { slip > 0 },
+                "{what}: {stick} {slip}"
+            );
+        }
+    }
+
     fn shifted(q: &[f64], by: f64) -> Vec<f64> {
         q.iter()
             .enumerate()
