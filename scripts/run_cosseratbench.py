@@ -97,7 +97,8 @@ NOT_RUN = {
         "100 pieces fitting the wrapped start takes 194 s and 0.002 s take 21 s (39 "
         "steps of ~5e-5 s, 0.54 s each): the step size, not the Newton iteration, is what "
         "is small, and each step factors the dense ~600-coordinate Radau system. The pile "
-        "was not measured to the end."
+        "at its 100 pieces: 0.3 s of the 4.45 s take 252 s (781 steps, 27 rejected, "
+        "0.32 s per step) after 36-51 s to build."
     )
     for name in ("capstan", "pile")
 }
