@@ -89,18 +89,16 @@ EXPLAIN_TIME = {
 NOT_RUN = {
     name: (
         "not run in this report: the adapter expresses it (contact tables, "
-        "docs/theory-contact.md), but softrod's contact Jacobian on a model with "
-        "joints (a free rope, pinned ends, a driven clamp) is taken by central "
-        "differences of the whole contact force, two evaluations of every contact "
-        "point per coordinate, at every Radau IIA step: O(n^2) per step, and the "
-        "stick-slip switches of the anchored friction make Radau IIA reject one step "
-        "in three. Measured on the capstan (dev build, its numeric crates at opt-level 3, "
-        "as in release): at 20 pieces 0.05 s of the 2 s took 151 s (424 "
-        "steps, 136 rejected, a Jacobian per step); at its 100 pieces 0.01 s did not "
-        "finish in 5 minutes, and fitting the wrapped start took 190 s. The pile (a "
-        "driven clamp: a joint as well) was not measured. The "
-        "analytic contact Jacobian on models with joints (docs/theory-contact.md CT6, "
-        "CT11) is what is missing."
+        "docs/theory-contact.md), and the contact Jacobian on models with joints is now "
+        "analytic (CT12-CT14; it was central differences of the whole contact force), but "
+        "the runs stay far too slow. Measured on the capstan (release build, on the shared "
+        "2-core VM): at 20 pieces 0.05 s of the 2 s take 16 s (357 Radau IIA steps, 28 "
+        "rejected, 1413 Newton iterations; 151 s with the differenced Jacobian); at its "
+        "100 pieces fitting the wrapped start takes 194 s and 0.002 s take 21 s (39 "
+        "steps of ~5e-5 s, 0.54 s each): the step size, not the Newton iteration, is what "
+        "is small, and each step factors the dense ~600-coordinate Radau system. The pile "
+        "at its 100 pieces: 0.3 s of the 4.45 s take 252 s (781 steps, 27 rejected, "
+        "0.32 s per step) after 36-51 s to build."
     )
     for name in ("capstan", "pile")
 }

@@ -4,7 +4,9 @@
 //!
 //! Regenerate (numbers in docs/performance.md, section "softrod-dynamics"):
 //! `cargo bench -p softrod-benches --bench dynamics -- --warm-up-time 1 --measurement-time 2`
-//! (`rod_contact`: two crossing rods with rod–rod contact, docs/theory-contact.md).
+//! (`rod_contact`: two crossing rods with rod–rod contact;
+//! `contact_derivatives`: an arm on a joint lying on a table;
+//! docs/theory-contact.md).
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use softrod_dynamics::{
@@ -346,5 +348,76 @@ fn bench_rod_contact(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench_dynamics, bench_rod_contact);
+/// A 20-piece arm (Ky, Kz, 40 coordinates) on a revolute joint, lying on a
+/// table 0.2 mm into it along its whole length (41 contact points touching,
+/// friction 0.5, anchors committed: sticking): the forward-dynamics
+/// derivatives with the contact's linearization on a tree
+/// (docs/theory-contact.md CT12) against the same arm without the table.
+fn bench_contact_derivatives(c: &mut Criterion) {
+    use softrod_dynamics::{Attachment, Joint, JointKind, commit_contact};
+    use softrod_lie::Mat3;
+    use softrod_mechanics::contact::{ContactSettings, Obstacle, Shape};
+    let build = |table: bool| {
+        let material = Material::builder()
+            .density(1000.0)
+            .young(1e6)
+            .poisson(0.5)
+            .build()
+            .unwrap();
+        let arm = Rod::builder(0.4)
+            .name("arm")
+            .pieces(20)
+            .strains([Strain::Ky, Strain::Kz])
+            .base(Pose::new(Mat3::identity(), Vec3::new(0.0, 0.0, 0.0098)))
+            .circle(0.01)
+            .material(material);
+        let m = Model::builder()
+            .rod_on(
+                arm,
+                Attachment::world_joint(Joint::new(JointKind::Revolute { axis: Vec3::y() })),
+            )
+            .gravity([0.0, 0.0, -9.81])
+            .build()
+            .unwrap();
+        if table {
+            let plane = Shape::Plane {
+                point: Vec3::zeros(),
+                normal: Vec3::z(),
+            };
+            m.with_contact(
+                vec![Obstacle::new("table", plane).friction(0.5)],
+                ContactSettings::default(),
+            )
+            .unwrap()
+        } else {
+            m
+        }
+    };
+    let mut g = c.benchmark_group("contact_derivatives");
+    for (name, table) in [("arm_on_table_without", false), ("arm_on_table", true)] {
+        let m = build(table);
+        let mut data = Data::new(&m);
+        let q = vec![0.0; m.n_dof()];
+        if table {
+            commit_contact(&m, &mut data, 0.0, &q, &q).unwrap();
+            assert_eq!(m.contacts_with(&mut data, 0.0, &q, &q).unwrap().len(), 41);
+        }
+        let mut work = FdDerivatives::new(&m);
+        g.bench_function(name, |b| {
+            b.iter(|| {
+                forward_dynamics_derivatives(&m, &mut data, &mut work, 0.0, black_box(&q), &q, None)
+                    .unwrap()
+                    .dqdd_dq[(0, 0)]
+            })
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(
+    benches,
+    bench_dynamics,
+    bench_rod_contact,
+    bench_contact_derivatives
+);
 criterion_main!(benches);

@@ -403,8 +403,8 @@ fn pair_jacobians_match_central_differences() {
         };
         let b = rod("b", placed(Vec3::z(), 1.2, Vec3::new(0.2, -0.15, 0.0195)));
         let builder = Model::builder().rod(rod("a", Pose::identity()));
-        // A free rod b makes a tree model (its Jacobian by differences of
-        // the whole contact force, CT6).
+        // A free rod b makes a tree model (the pair's Jacobian through the
+        // points' paths on the tree, CT12–CT14).
         let builder = if tree {
             builder.rod_on(b, Attachment::world_joint(Joint::new(JointKind::Free)))
         } else {

@@ -365,20 +365,18 @@ fn narrowphase(
     };
     let dist = Distance { d, normal, hessian };
     let law = pair_law(model, a, sa, b, sb, ra.min(rb), ask.friction);
-    let stretch = if law.mu > 0.0 {
-        pw.anchors
-            .iter()
-            .find(|k| {
-                k.a == a && k.b == b && (k.sa - sa).abs() < ra + rb && (k.sb - sb).abs() < ra + rb
-            })
-            .map(|k| {
-                let pa = sec.at(a, k.sa, false).pose.translation;
-                let gb = sec.at(b, k.sb, false).pose;
-                pa - gb.translation - gb.rotation * k.offset
-            })
+    let anchor = if law.mu > 0.0 {
+        pw.anchors.iter().copied().find(|k| {
+            k.a == a && k.b == b && (k.sa - sa).abs() < ra + rb && (k.sb - sb).abs() < ra + rb
+        })
     } else {
         None
     };
+    let stretch = anchor.map(|k| {
+        let pa = sec.at(a, k.sa, false).pose.translation;
+        let gb = sec.at(b, k.sb, false).pose;
+        pa - gb.translation - gb.rotation * k.offset
+    });
     let va = sec.at(a, sa, true).velocity;
     let vb = sec.at(b, sb, true).velocity;
     let cf = force(&law, &dist, ra + rb, &(va - vb), stretch);
@@ -395,6 +393,10 @@ fn narrowphase(
         radius_a: ra,
         k: law.k,
         seeds: (*ba, *bb),
+        dw: cf.dp - cf.de,
+        dv: cf.dv,
+        de: cf.de,
+        anchor,
     });
 }
 

@@ -1,12 +1,14 @@
-//! The linearization of the contact force (docs/theory-contact.md CT6):
-//! `∂τ_c/∂q = Σ J_pᵀ (∂f/∂p) J_p + J_pᵀ (∂f/∂v) ∂v/∂q + G(f)` and
+//! The linearization of the contact force (docs/theory-contact.md CT6,
+//! CT12): `∂τ_c/∂q = Σ J_pᵀ (∂f/∂p) J_p + J_pᵀ (∂f/∂v) ∂v/∂q + G(f)` and
 //! `∂τ_c/∂q̇ = Σ J_pᵀ (∂f/∂v) J_p`, with `J_p` the translational Jacobian of
-//! the contact point and, on the chain, the two second-order terms exact
-//! from the kinematics' `J̇`: `∂v/∂q = J̇_p[q̇]` and the geometric term
-//! `G(f) e_l = J̇_p[e_l]ᵀ f` (the symmetry of the position's Hessian). On a
-//! tree (joints, bodies carrying obstacles) the Jacobian is taken by
-//! central differences of `τ_c` (CT6).
+//! the contact point and the two second-order terms exact: on the chain
+//! from the kinematics' `J̇` (`∂v/∂q = J̇_p[q̇]`, `G(f) e_l = J̇_p[e_l]ᵀ f`),
+//! on a tree from the point's path to the root ([`super::second`]), the
+//! obstacle's carrier on the other side. Rod pairs: [`super::pairs`]
+//! (CT13–CT14); central differences only for pairs of rods whose contact
+//! radius varies along them (CT14).
 
+use super::second;
 use crate::algorithms::contact::{Ask, evaluate_pairs_only};
 use crate::algorithms::contact_force;
 use crate::algorithms::pairs::{Search, seed_differences};
@@ -14,9 +16,10 @@ use crate::forces::Forces;
 use crate::model::Model;
 use crate::model::contact::ContactWork;
 use crate::model::data::Data;
+use crate::model::second::Gathered;
 use nalgebra::{DMatrix, DVector};
 use softrod_kinematics::Frame;
-use softrod_lie::Vec3;
+use softrod_lie::{Vec3, angular};
 
 /// Subtracts the contact force and its derivatives from the inverse
 /// dynamics' `τ`, `∂τ/∂q`, `∂τ/∂q̇` (`τ_ID = … − τ_c`), evaluating contact
@@ -40,15 +43,100 @@ pub(crate) fn subtract_contact(
     *tau -= &work.tau;
     if model.tree.is_none() {
         chain(model, &mut work, q, qd, dq, dqd);
-        let pairs_touch = work.pairs.as_ref().is_some_and(|p| !p.active.is_empty());
-        if pairs_touch {
+    } else {
+        tree(model, data, &mut work, q, qd, dq, dqd);
+    }
+    let pairs_touch = work.pairs.as_ref().is_some_and(|p| !p.active.is_empty());
+    if pairs_touch {
+        if super::pairs::analytic_applies(model, &work) {
+            super::pairs::linearize(model, data, &mut work, q, qd, dq, dqd);
+        } else {
             pairs_by_differences(model, data, &mut work, forces, q, qd, dq, dqd);
         }
-        data.contact = Some(work);
-    } else {
-        data.contact = Some(work);
-        by_differences(model, data, forces, t, q, qd, dq, dqd);
     }
+    data.contact = Some(work);
+}
+
+/// The analytic linearization of rod–obstacle contact on a tree (CT12):
+/// the relative Jacobian `J_w = J_p − J_b` of the rod point and the
+/// carrying body's point at the same place, the rotation of the carrier
+/// (it turns the force and the relative velocity with it), and both
+/// points' second-order terms.
+#[allow(clippy::too_many_arguments)]
+fn tree(
+    model: &Model,
+    data: &Data,
+    work: &mut ContactWork,
+    q: &[f64],
+    qd: &[f64],
+    dq: &mut DMatrix<f64>,
+    dqd: &mut DMatrix<f64>,
+) {
+    let ContactWork { active, second, .. } = work;
+    let sw = &mut **second;
+    for a in active.iter() {
+        let s = model.contact.samples[a.rod][a.sample].s;
+        let p = second::tree_rod(model, data, q, Some(qd), a.rod, s, Vec3::zeros(), &mut sw.a);
+        let body = model.contact.parents[a.obstacle];
+        if let Some(b) = body {
+            second::tree_body(model, data, q, Some(qd), b, p, &mut sw.b);
+        }
+        sw.dofs.clear();
+        sw.dofs.extend(sw.a.cols.iter().map(|c| c.dof));
+        if body.is_some() {
+            sw.dofs.extend(sw.b.cols.iter().map(|c| c.dof));
+        }
+        sw.dofs.sort_unstable();
+        sw.dofs.dedup();
+        for m in [&mut sw.jw, &mut sw.jomega, &mut sw.vq] {
+            m.fill(0.0);
+        }
+        sw.a.add_jacobian(1.0, &mut sw.jw);
+        sw.a.add_velocity_derivative(qd, 1.0, &mut sw.vq);
+        let (mut v, mut wb) = (sw.a.pdot, Vec3::zeros());
+        if body.is_some() {
+            sw.b.add_jacobian(-1.0, &mut sw.jw);
+            sw.b.add_angular(1.0, &mut sw.jomega);
+            sw.b.add_velocity_derivative(qd, -1.0, &mut sw.vq);
+            v -= sw.b.pdot;
+            wb = angular(&sw.b.blocks[0].vel);
+        }
+        // ∂f/∂q = f_p J_w + f_v (∂v/∂q + [v]× J_ω) − [f]× J_ω (CT12); the
+        // carrier's rotation also turns J_w: the term f·(ω_i × j_l).
+        sw.gather.clear();
+        for &l in &sw.dofs {
+            let jl = column(&sw.jw, l);
+            let ol = column(&sw.jomega, l);
+            let vl = column(&sw.vq, l) - wb.cross(&jl);
+            sw.gather.push(Gathered {
+                j: jl,
+                f: a.dp * jl + a.dv * (vl + v.cross(&ol)) - a.force.cross(&ol),
+                g: a.dv * jl,
+                u: ol,
+                a: 0.0,
+                b: 0.0,
+            });
+        }
+        let n = dq.nrows();
+        let (mq, mqd) = (dq.as_mut_slice(), dqd.as_mut_slice());
+        for (gl, &l) in sw.gather.iter().zip(&sw.dofs) {
+            let jf = gl.j.cross(&a.force);
+            for (gi, &i) in sw.gather.iter().zip(&sw.dofs) {
+                mq[l * n + i] -= gi.j.dot(&gl.f) - gi.u.dot(&jf);
+                mqd[l * n + i] -= gi.j.dot(&gl.g);
+            }
+        }
+        sw.a.add_hessian_contraction(&a.force, -1.0, dq);
+        if body.is_some() {
+            sw.b.add_hessian_contraction(&a.force, 1.0, dq);
+        }
+    }
+}
+
+/// Column `c` of a 3 × n matrix.
+#[inline]
+pub(crate) fn column(m: &DMatrix<f64>, c: usize) -> Vec3 {
+    Vec3::new(m[(0, c)], m[(1, c)], m[(2, c)])
 }
 
 fn column3(m: &nalgebra::Matrix6xX<f64>, c: usize) -> Vec3 {
@@ -123,8 +211,8 @@ fn chain(
     }
 }
 
-/// Central differences of the rod–rod part of `τ_c` on a chain model
-/// (CT11): `2 n_dof` pair evaluations each for `q` and `q̇`, relative
+/// Central differences of the rod–rod part of `τ_c` (CT11; only for rods
+/// whose contact radius varies, CT14): `2 n_dof` pair evaluations each for `q` and `q̇`, relative
 /// steps `1e-6` and `1e-4`, in the pair work's buffers — each only of the
 /// segment pairs that seeded the touching pairs (no broadphase). Zero without touching pairs: the
 /// penalty is C¹ with `φ'(0) = 0`, so a pair about to touch adds nothing.
@@ -174,49 +262,4 @@ fn pairs_by_differences(
     // Leave the kinematics and the pairs of (q, q̇) behind.
     evaluate_pairs_only(model, data, work, q, Some(qd), ask, Search::All);
     work.pairs.as_mut().expect("pair work").scratch = x;
-}
-
-/// Central differences of `τ_c` on a tree model (CT6): `2 n_dof`
-/// evaluations each for `q` and `q̇`, relative steps `1e-6` and `1e-4`.
-#[allow(clippy::too_many_arguments)]
-fn by_differences(
-    model: &Model,
-    data: &mut Data,
-    forces: Forces,
-    t: f64,
-    q: &[f64],
-    qd: &[f64],
-    dq: &mut DMatrix<f64>,
-    dqd: &mut DMatrix<f64>,
-) {
-    let n = model.n_dof();
-    let mut x = q.to_vec();
-    let mut plus = DVector::zeros(n);
-    for pass in 0..2 {
-        let base = if pass == 0 { q } else { qd };
-        x.copy_from_slice(base);
-        // As for the pairs: a larger step in q̇, where the force is linear
-        // but for the slip direction.
-        let step = if pass == 0 { 1e-6 } else { 1e-4 };
-        for l in 0..n {
-            let h = step * (1.0 + base[l].abs());
-            for (sign, out) in [(1.0, true), (-1.0, false)] {
-                x[l] = base[l] + sign * h;
-                let (qq, vv) = if pass == 0 { (&x[..], qd) } else { (q, &x[..]) };
-                contact_force(model, data, forces, t, qq, Some(vv));
-                let w = data.contact.as_ref().expect("contact work");
-                if out {
-                    plus.copy_from(&w.tau);
-                } else {
-                    let m = if pass == 0 { &mut *dq } else { &mut *dqd };
-                    for i in 0..n {
-                        m[(i, l)] -= (plus[i] - w.tau[i]) / (2.0 * h);
-                    }
-                }
-            }
-            x[l] = base[l];
-        }
-    }
-    // Leave the state of (q, q̇) behind, as the chain does.
-    contact_force(model, data, forces, t, q, Some(qd));
 }

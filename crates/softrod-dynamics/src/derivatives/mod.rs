@@ -16,8 +16,10 @@
 pub(crate) mod chain;
 pub(crate) mod contact;
 pub(crate) mod forward;
+pub(crate) mod pairs;
 pub(crate) mod piece;
 pub(crate) mod point;
+pub(crate) mod second;
 pub(crate) mod tree;
 
 pub use forward::{

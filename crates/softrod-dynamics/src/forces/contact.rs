@@ -276,6 +276,9 @@ pub(crate) struct ContactForce {
     /// relative to the obstacle).
     pub dp: Mat3,
     pub dv: Mat3,
+    /// `∂f/∂e` of the friction stretch alone (`dp` holds it too: there the
+    /// stretch moves with `p`); zero without friction (CT14).
+    pub de: Mat3,
     pub sticking: bool,
 }
 
@@ -317,6 +320,7 @@ pub(crate) fn force(
     let mut dp = n * dfn_dp.transpose() + dist.hessian * fn_;
     let mut dv = n * dfn_dv.transpose();
     let mut sticking = false;
+    let mut de = Mat3::zeros();
     if let (Some(e), true) = (stretch, law.mu > 0.0 && fn_ > 0.0) {
         // Tangential projection P = I − nnᵀ and its derivative along p
         // (n moves with p by H): ∂(P x)/∂p = −(n xᵀ H + (n·x) H).
@@ -336,6 +340,7 @@ pub(crate) fn force(
             f += trial;
             dp += dtrial_dp;
             dv += dtrial_dv;
+            de = -kt * proj;
         } else {
             // Slip: μ fn along the trial force.
             let u = trial / t;
@@ -343,12 +348,14 @@ pub(crate) fn force(
             f += u * bound;
             dp += u * (law.mu * dfn_dp).transpose() + du * dtrial_dp * bound;
             dv += u * (law.mu * dfn_dv).transpose() + du * dtrial_dv * bound;
+            de = du * (-kt * proj) * bound;
         }
     }
     ContactForce {
         f,
         dp,
         dv,
+        de,
         sticking,
     }
 }

@@ -7,6 +7,7 @@
 use crate::error::{DynamicsError, RodId};
 use crate::model::Model;
 use crate::model::pairs::PairWork;
+use crate::model::second::SecondWork;
 use nalgebra::{DMatrix, DVector, Matrix6xX};
 use softrod_kinematics::RodKinematics;
 use softrod_lie::{Mat3, Vec3};
@@ -247,6 +248,8 @@ pub(crate) struct ContactWork {
     /// Rod–rod and self contact (CT8–CT11); `None` without them: no
     /// broadphase is built.
     pub pairs: Option<Box<PairWork>>,
+    /// The buffers of the analytic linearization (CT12–CT14).
+    pub second: Box<SecondWork>,
 }
 
 impl ContactWork {
@@ -294,6 +297,7 @@ impl ContactWork {
                 .map(|s| vec![None; s.len() * n_obs])
                 .collect(),
             pairs: PairWork::new(model).map(Box::new),
+            second: Box::new(SecondWork::new(model.n_dof())),
         }
     }
 }

@@ -16,6 +16,7 @@ pub(crate) mod pairs;
 pub(crate) mod planar;
 pub(crate) mod prescribed;
 pub(crate) mod rod;
+pub(crate) mod second;
 pub(crate) mod tree;
 
 pub use builder::{IntoRod, ModelBuilder, RodBuilder};

@@ -6,7 +6,7 @@
 
 use crate::model::Model;
 use nalgebra::DVector;
-use softrod_lie::Vec3;
+use softrod_lie::{Mat3, Vec3};
 use softrod_mechanics::contact::contact_radius;
 
 /// Extra clearance of the broadphase's bounding spheres, as a fraction of
@@ -89,6 +89,12 @@ pub(crate) struct PairActive {
     pub k: f64,
     /// The two segments whose closest points seeded it.
     pub seeds: (SegmentBox, SegmentBox),
+    /// `∂f/∂w` (`w = p_a − p_b`, the stretch held), `∂f/∂v`, `∂f/∂e` of
+    /// the force law, and the friction anchor it used (CT14).
+    pub dw: Mat3,
+    pub dv: Mat3,
+    pub de: Mat3,
+    pub anchor: Option<PairAnchor>,
 }
 
 /// The friction anchor of a touching pair (CT10): the material points
