@@ -278,17 +278,7 @@ impl EsdirkAdjoint {
     /// Fills slot `i` of `lus` with `I − hγ Jv − h²γ² Jq` of stage `j`,
     /// transposed when `transpose`, and factors it.
     fn factor(&mut self, i: usize, j: usize, h: f64, transpose: bool) -> bool {
-        let (hg, hg2) = (h * GAMMA, h * h * GAMMA * GAMMA);
-        let (jq, jv) = (&self.jq[j], &self.jv[j]);
-        let m = self.lus[i].matrix_mut();
-        for c in 0..self.n {
-            for r in 0..self.n {
-                let (a, b) = if transpose { (c, r) } else { (r, c) };
-                let d = if r == c { 1.0 } else { 0.0 };
-                m[(r, c)] = d - hg * jv[(a, b)] - hg2 * jq[(a, b)];
-            }
-        }
-        self.lus[i].factor()
+        stage_matrix(&mut self.lus[i], &self.jq[j], &self.jv[j], h, transpose)
     }
 
     /// One step backwards: `(λq, λv)` at node `k + 1` in, at node `k` out
@@ -347,7 +337,10 @@ impl EsdirkAdjoint {
             x.copy_from(&done[i - 1]);
             let mut prev = f64::INFINITY;
             let mut converged = false;
-            for _ in 0..MAX_NEWTON {
+            // The LU the iteration solves with: the step-start matrix, or
+            // (after a slow iteration) the stage's own at its iterate.
+            let mut slot = 0;
+            for iteration in 0..MAX_NEWTON {
                 stage_values(
                     hg,
                     &self.qhat,
@@ -362,7 +355,7 @@ impl EsdirkAdjoint {
                 for r in 0..n {
                     self.g[r] = x[r] - self.f[r];
                 }
-                self.lus[0].solve_in_place(&mut self.g);
+                self.lus[slot].solve_in_place(&mut self.g);
                 *x -= &self.g;
                 let dx = self.g.amax();
                 let size = x.amax();
@@ -374,11 +367,41 @@ impl EsdirkAdjoint {
                         index: first_non_finite(x.as_slice()).unwrap_or(0),
                     });
                 }
-                // Converged to round-off, or stalled there (the change no
-                // longer shrinks and is already tiny).
-                if dx <= 4.0 * f64::EPSILON * size || (dx >= 0.5 * prev && dx <= 1e-10 * size) {
+                // Converged to round-off, or stalled there: the change no
+                // longer shrinks and is already tiny, relative to the
+                // acceleration or (a stage near rest, whose acceleration is
+                // a small difference of large forces and carries their
+                // round-off) by what it moves the stage's position,
+                // `h²γ² δA`, relative to that position.
+                let moved = hg2 * dx <= 1e-13 * self.qs[i].amax().max(hg * self.vs[i].amax());
+                if dx <= 4.0 * f64::EPSILON * size
+                    || (dx >= 0.5 * prev && (dx <= 1e-10 * size || moved))
+                {
                     converged = true;
                     break;
+                }
+                // A long stiff step can leave the step-start matrix a poor
+                // model of the stage's (the forward run stopped at its
+                // tolerance; this iteration must reach round-off): a slow
+                // contraction switches to the stage's own Jacobian at the
+                // current iterate (once: the rest is at round-off).
+                if slot == 0 && iteration >= 2 && dx > 0.25 * prev {
+                    stage_values(
+                        hg,
+                        &self.qhat,
+                        &self.vhat,
+                        x,
+                        &mut self.vs[i],
+                        &mut self.qs[i],
+                    );
+                    let (jq, jv) = (&mut self.jq[i], &mut self.jv[i]);
+                    sys.jacobians(ti, &self.qs[i], &self.vs[i], jq, jv)
+                        .map_err(err("jacobian"))?;
+                    self.jacobians += 1;
+                    if !stage_matrix(&mut self.lus[i], jq, jv, h, false) {
+                        return Err(singular(ti, h));
+                    }
+                    slot = i;
                 }
                 prev = dx;
             }
@@ -465,6 +488,28 @@ impl EsdirkAdjoint {
         .map_err(err("parameter derivatives"))?;
         Ok(())
     }
+}
+
+/// Fills `lu` with `I − hγ Jv − h²γ² Jq`, transposed when `transpose`, and
+/// factors it; false when singular.
+fn stage_matrix(
+    lu: &mut DenseLu,
+    jq: &DMatrix<f64>,
+    jv: &DMatrix<f64>,
+    h: f64,
+    transpose: bool,
+) -> bool {
+    let (hg, hg2) = (h * GAMMA, h * h * GAMMA * GAMMA);
+    let n = jq.nrows();
+    let m = lu.matrix_mut();
+    for c in 0..n {
+        for r in 0..n {
+            let (a, b) = if transpose { (c, r) } else { (r, c) };
+            let d = if r == c { 1.0 } else { 0.0 };
+            m[(r, c)] = d - hg * jv[(a, b)] - hg2 * jq[(a, b)];
+        }
+    }
+    lu.factor()
 }
 
 fn singular(t: f64, h: f64) -> IntegrateError {

@@ -44,6 +44,12 @@ pub(crate) fn clip_step(t: f64, h: f64, t_end: f64) -> (f64, bool) {
     }
 }
 
+/// The smallest step allowed at `t`: `h_min`, and never below the
+/// resolution of `t` (16 ulps).
+pub(crate) fn min_step(t: f64, opts: &Options) -> f64 {
+    opts.h_min.max(16.0 * f64::EPSILON * t.abs())
+}
+
 /// Checks the step size against `h_min` and the resolution of `t`.
 pub(crate) fn check_underflow(
     t: f64,
@@ -51,7 +57,7 @@ pub(crate) fn check_underflow(
     opts: &Options,
     reason: &'static str,
 ) -> Result<(), IntegrateError> {
-    let floor = opts.h_min.max(16.0 * f64::EPSILON * t.abs());
+    let floor = min_step(t, opts);
     if !(h >= floor) || h == 0.0 {
         return Err(IntegrateError::StepSizeUnderflow {
             t,

@@ -6,6 +6,7 @@
 
 use nalgebra::DVector;
 
+use crate::control::min_step;
 use crate::error::{IntegrateError, first_non_finite};
 use crate::hooks::{Control, Direction, EventKind, Hooks, StepInfo};
 use crate::integrator::Integrator;
@@ -146,13 +147,18 @@ fn validate(t0: f64, t1: f64, y0: &DVector<f64>, opts: &Options) -> Result<(), I
 
 /// Where the next step must end at the latest: `t1`, or the first of the
 /// [`Options::breakpoints`] after `t` when the steps adapt.
+///
+/// A breakpoint closer to `t` or to `t1` than the smallest step allowed
+/// there ([`min_step`]) is not a step end: it is the same time up to
+/// rounding (`0.1 + 0.2` beside `0.3`), and landing on it would leave a
+/// step of a few ulps that the underflow check must refuse.
 fn step_end(opts: &Options, t: f64, t1: f64) -> f64 {
     match opts.step {
         StepControl::Adaptive { .. } => opts
             .breakpoints
             .iter()
             .copied()
-            .filter(|&b| b > t)
+            .filter(|&b| b - t > min_step(b, opts) && t1 - b > min_step(t1, opts))
             .fold(t1, f64::min),
         StepControl::Fixed(_) => t1,
     }

@@ -104,3 +104,22 @@ fn a_non_finite_breakpoint_is_an_input_error() {
     .unwrap_err();
     assert!(err.to_string().contains("breakpoint"), "{err}");
 }
+
+/// Breakpoints that are one time up to rounding (`0.3` and `0.1 + 0.2`,
+/// 5.6e-17 apart; one a few ulps before the end) are one step end: the run
+/// completes instead of failing on a step of a few ulps (issue 28: the loss
+/// times `0.05·k` beside a tension table's knot at 0.3), and it is as exact
+/// as with the single breakpoint.
+#[test]
+fn breakpoints_within_rounding_are_one() {
+    let third = 0.1 + 0.2;
+    assert!(third != 0.3);
+    let end = 3.0 - 2.0 * f64::EPSILON;
+    assert!(end != 3.0);
+    for method in [Integrator::Dopri5, Integrator::Esdirk, Integrator::Radau5] {
+        let one = worst_error(method, vec![1.0]);
+        let many = worst_error(method, vec![0.3, third, 1.0, 1.0 + f64::EPSILON, end]);
+        assert!(many < 1e-12, "{method:?}: {many:e}");
+        assert!(one < 1e-12, "{method:?}: {one:e}");
+    }
+}

@@ -131,6 +131,11 @@ impl Hooks<RodSystem> for TapeHooks {
     }
 }
 
+/// Two loss times closer than this are one node of the run \[s\].
+fn node_tolerance(duration: f64) -> f64 {
+    1e-12 * duration.max(1.0)
+}
+
 fn bad(key: impl Into<String>, message: impl Into<String>) -> Error {
     Error::Gradient {
         key: key.into(),
@@ -152,7 +157,8 @@ impl Simulation {
     /// to round-off and the Newton tolerance of the forward run
     /// ([`GradientOptions::newton_tol`]). Its cost does not grow with the
     /// number of parameters beyond two O(N) inverse dynamics per parameter
-    /// and stage (docs/performance.md, "Trajectory gradients").
+    /// and stage (docs/performance.md, "Trajectory gradients"). With no
+    /// `params` it is the loss of the recorded run alone (no backward pass).
     ///
     /// Errors ([`Error::Gradient`], naming the key): an integrator without
     /// an adjoint (supported: esdirk), a closed model or one with contact,
@@ -207,6 +213,15 @@ impl Simulation {
         evaluated?;
         if !value.is_finite() {
             return Err(bad("loss", format!("the loss is {value}")));
+        }
+        if parsed.is_empty() {
+            // Nothing to differentiate: the loss alone, no backward pass.
+            return Ok(Gradient {
+                value,
+                gradients: Vec::new(),
+                steps: tape.steps(),
+                jacobian_evaluations: 0,
+            });
         }
         let mut sys = ParamSystem::new(&mut self.system, &parsed)?;
         let g = adjoint_second_order(&mut sys, integrator, &tape, &mut |k, lq, lv| {
@@ -312,8 +327,13 @@ impl Simulation {
                 LossTerm::Custom { .. } => {}
             }
         }
+        // Times equal up to rounding (`0.05 * 6` and `0.3`) are one node
+        // (`evaluate_loss` finds it within the same tolerance): a fixed-step
+        // segment between them would be a step of a few ulps.
+        let eps = node_tolerance(duration);
+        stops.retain(|&t| t > eps);
         stops.sort_by(f64::total_cmp);
-        stops.dedup();
+        stops.dedup_by(|b, a| *b - *a <= eps);
         Ok(stops)
     }
 
@@ -349,9 +369,14 @@ impl Simulation {
         // between loss times. Adaptive ones end their steps there.
         let segments: Vec<(f64, f64)> = if options.fixed_step.is_some() {
             let mut ends = stops.to_vec();
-            if ends.last() != Some(&duration) {
-                ends.push(duration);
+            // A last loss time within rounding of the end is the end.
+            if ends
+                .last()
+                .is_some_and(|&t| duration - t <= node_tolerance(duration))
+            {
+                ends.pop();
             }
+            ends.push(duration);
             let mut t0 = 0.0;
             ends.iter()
                 .map(|&t1| {
@@ -387,7 +412,7 @@ impl Simulation {
         let n = self.n_dof();
         // The node where the steps ended on `t` (they end there exactly;
         // the tolerance only absorbs a representation of `t` off by an ulp).
-        let eps = 1e-12 * duration.max(1.0);
+        let eps = node_tolerance(duration);
         let node = |t: f64| -> Result<usize> {
             (0..tape.nodes())
                 .find(|&k| (tape.time(k) - t).abs() <= eps)
