@@ -82,15 +82,22 @@ impl PieceMaps {
         out
     }
 
+    /// `R = I + xa k̃ + x²b k̃²` and `p` (D4). The matrix sums are written on
+    /// the structure of their terms — `k̃` skew, `k̃²` symmetric — each
+    /// off-diagonal pair from one product of each (the same operations in
+    /// the same order as the dense sums, so the same bits, in half the
+    /// multiplications).
     #[inline(always)]
     fn pose(&self, x: f64, a: f64, b: f64, c: f64) -> Pose {
         let x2 = x * x;
         Pose {
-            rotation: Mat3::identity() + self.kmat * (x * a) + self.k2 * (x2 * b),
+            rotation: skew_plus_sym(1.0, &self.kmat, x * a, &self.k2, x2 * b),
             translation: self.q * x + self.kq * (x2 * b) + self.kkq * (x2 * x * c),
         }
     }
 
+    /// `T₋(x)` (D3′) in block form, on the structure of its terms as
+    /// [`Self::pose`]: `q̃`, `k̃` skew, `P₂`, `k̃²` symmetric.
     #[inline(always)]
     fn tangent_minus(&self, x: f64, b: f64, c: f64, t3: f64, t4: f64) -> AdOp {
         let x2 = x * x;
@@ -98,9 +105,22 @@ impl PieceMaps {
         let cb = -x2 * b;
         let cc = x3 * c;
         let s = 2.0 * self.sigma * x2 * x2;
+        let (st3, st4) = (s * t3, s * x * t4);
+        let (qm, p2, km, k2) = (&self.qmat, &self.p2, &self.kmat, &self.k2);
+        // ((q̃ cb + P₂ cc) + k̃ st3) − k̃² st4 entry by entry; the skew terms
+        // change sign across the diagonal and vanish on it.
+        let e = |i: usize, j: usize| {
+            let (qa, pc) = (qm[(i, j)] * cb, p2[(i, j)] * cc);
+            let (ka, ks) = (km[(i, j)] * st3, k2[(i, j)] * st4);
+            (((qa + pc) + ka) - ks, ((pc - qa) - ka) - ks)
+        };
+        let d = |i: usize| p2[(i, i)] * cc - k2[(i, i)] * st4;
+        let (b01, b10) = e(0, 1);
+        let (b02, b20) = e(0, 2);
+        let (b12, b21) = e(1, 2);
         AdOp {
-            a: Mat3::from_diagonal_element(x) + self.kmat * cb + self.k2 * cc,
-            b: self.qmat * cb + self.p2 * cc + self.kmat * (s * t3) - self.k2 * (s * x * t4),
+            a: skew_plus_sym(x, km, cb, k2, cc),
+            b: Mat3::new(d(0), b01, b02, b10, d(1), b12, b20, b21, d(2)),
         }
     }
 
@@ -145,6 +165,22 @@ impl PieceMaps {
             bias,
         )
     }
+}
+
+/// `δI + α K + β S` for a skew `K` and a symmetric `S`, entry by entry as
+/// `(δI + αK) + βS` sums them (bit-identical, but each off-diagonal pair
+/// from one product of each).
+#[inline(always)]
+fn skew_plus_sym(delta: f64, k: &Mat3, alpha: f64, s: &Mat3, beta: f64) -> Mat3 {
+    let e = |i: usize, j: usize| {
+        let (ka, sb) = (k[(i, j)] * alpha, s[(i, j)] * beta);
+        (ka + sb, sb - ka)
+    };
+    let d = |i: usize| delta + s[(i, i)] * beta;
+    let (m01, m10) = e(0, 1);
+    let (m02, m20) = e(0, 2);
+    let (m12, m21) = e(1, 2);
+    Mat3::new(d(0), m01, m02, m10, d(1), m12, m20, m21, d(2))
 }
 
 #[cfg(test)]

@@ -22,7 +22,7 @@ use super::Motion;
 use crate::error::DynamicsError;
 use crate::forces::Forces;
 use crate::forces::external::{external_density, gravity_base_acceleration};
-use crate::kernels::planar::{Pose2, ad2, cholesky, coad2, maps, scale_rows};
+use crate::kernels::planar::{PlanarSums, Pose2, ad2, cholesky, coad2, maps};
 use crate::model::data::Data;
 use crate::model::planar::PlanarRod;
 use crate::model::{Model, RodModel};
@@ -76,7 +76,7 @@ pub(crate) fn outward(
         // At rest (ξ̇ = 0, η(0) = 0) every velocity and bias term vanishes.
         let has_vel = dxi != Vec3::zeros() || eta0 != Vec3::zeros();
         let (mut p_big, mut p_small) = (Vec3::zeros(), Vec3::zeros());
-        let (mut uf, mut df, mut mt) = (Mat3::zeros(), Mat3::zeros(), Mat3::zeros());
+        let mut sums = PlanarSums::default();
         for (qp, m) in pd.points.iter().zip(&pp.inertia) {
             let (gl, tm, dbias) = maps(&xi, &dxi, qp.x, has_vel);
             let carried = gl.ad_inv_vec(&eta0);
@@ -106,11 +106,7 @@ pub(crate) fn outward(
             p_big += gl.ad_inv_tr_vec(&fw);
             p_small += tm.tr_mul(&fw);
             if !inverse {
-                let mw = m * qp.w;
-                let a = gl.ad_inv();
-                uf += a.tr_mul(&scale_rows(&mw, &tm));
-                df += tm.tr_mul(&scale_rows(&mw, &tm));
-                mt += a.tr_mul(&scale_rows(&mw, &a));
+                sums.add(&gl, &tm, &(m * qp.w));
             }
         }
         if !only_gravity {
@@ -139,9 +135,9 @@ pub(crate) fn outward(
         w.tm_tip = tm;
         w.p_big = p_big;
         w.p_small = p_small;
-        w.ut = uf;
-        w.dt = df;
-        w.mt = mt;
+        if !inverse {
+            (w.ut, w.dt, w.mt) = sums.finish();
+        }
         eta0 = carried + sv;
         pose = pose.compose(&gl);
     }

@@ -30,7 +30,7 @@ pub(crate) fn tr_mul_sym(a: &Mat3, b: &Mat3) -> Mat3 {
 
 /// `x yᵀ` known to be symmetric: six row dots, mirrored.
 #[inline(always)]
-fn mul_tr_sym(x: &Mat3, y: &Mat3) -> Mat3 {
+pub(crate) fn mul_tr_sym(x: &Mat3, y: &Mat3) -> Mat3 {
     let e = |i: usize, j: usize| x.row(i).dot(&y.row(j));
     let (m00, m01, m02, m11, m12, m22) = (e(0, 0), e(0, 1), e(0, 2), e(1, 1), e(1, 2), e(2, 2));
     Mat3::new(m00, m01, m02, m01, m11, m12, m02, m12, m22)

@@ -3,7 +3,7 @@
 //! in 3×3 blocks ([`FullSums`]), their projection on a strain basis
 //! ([`project_add`]) and the columns of `S = T₋B` ([`s_columns`]).
 
-use crate::kernels::blocks::{Sym6, cross_cols, tr_mul_sym, tr_mul_sym2};
+use crate::kernels::blocks::{Sym6, cross_cols, mul_tr_sym, tr_mul_sym, tr_mul_sym2};
 use softrod_lie::{AdOp, Mat6, Pose, Vec6};
 
 /// `diag(d) M` by row scaling (bit-identical to the product with the
@@ -51,6 +51,15 @@ fn add_sandwich(
     v += br;
 }
 
+/// `a bᵀ` known to be symmetric (`a` a multiple of `b`): six products,
+/// mirrored.
+#[inline(always)]
+fn outer_sym(a: &softrod_lie::Vec3, b: &softrod_lie::Vec3) -> softrod_lie::Mat3 {
+    let (m00, m01, m02) = (a[0] * b[0], a[0] * b[1], a[0] * b[2]);
+    let (m11, m12, m22) = (a[1] * b[1], a[1] * b[2], a[2] * b[2]);
+    softrod_lie::Mat3::new(m00, m01, m02, m01, m11, m12, m02, m12, m22)
+}
+
 /// Elementwise product with a diagonal given as a vector.
 #[inline(always)]
 pub(crate) fn diag_mul(d: &Vec6, v: &Vec6) -> Vec6 {
@@ -75,17 +84,19 @@ impl PointInertia {
         // is the classic spatial inertia [[R J Rᵀ − m p̃², m p̃], [−m p̃, m I]];
         // accumulate its parts.
         if mw[3] == mw[4] && mw[3] == mw[5] {
+            // R J Rᵀ = (RJ)Rᵀ and m ppᵀ by their upper halves (symmetric
+            // by construction): 27 multiplications where the three outer
+            // products of R's columns and the dense ppᵀ take 63.
             let sp = &mut self.sp;
             let r = &gl.rotation;
             let pt = &gl.translation;
-            for i in 0..3 {
-                let ri = r.column(i);
-                sp.rot += ri * ri.transpose() * mw[i];
-            }
+            let rj = softrod_lie::Mat3::from_fn(|i, j| r[(i, j)] * mw[j]);
+            sp.rot += mul_tr_sym(&rj, r);
+            let mp = pt * mw[3];
             sp.mass += mw[3];
-            sp.mp += pt * mw[3];
-            sp.mpp += pt * pt.transpose() * mw[3];
-            sp.mp2 += pt.norm_squared() * mw[3];
+            sp.mp += mp;
+            sp.mpp += outer_sym(&mp, pt);
+            sp.mp2 += mp.dot(pt);
         } else {
             let a = gl.ad_inv();
             let dw = softrod_lie::angular(mw);
