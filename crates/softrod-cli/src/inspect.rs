@@ -360,6 +360,11 @@ fn mode_curves(
     Ok((eq, out))
 }
 
+/// Relative asymmetry of `K_eff` above which `softrod modes` says that it
+/// reports the symmetric part: conservative loads leave round-off
+/// (~3e-14), world-frame moments and cables ~1e-6 (docs/performance.md).
+const ASYMMETRY_NOTE: f64 = 1e-9;
+
 type ModeCurves = (Vec<Vec<[f64; 3]>>, Vec<(f64, Vec<Vec<[f64; 3]>>)>);
 
 pub fn modes(
@@ -370,7 +375,7 @@ pub fn modes(
     png: bool,
 ) -> Result<(), CliError> {
     let mut l = load(path)?;
-    let analysis = l.sim.modes()?;
+    let analysis = l.sim.lowest_modes(count)?;
     let m = &analysis.modes;
     for w in &analysis.warnings {
         eprintln!("softrod: warning: {w}");
@@ -425,6 +430,14 @@ pub fn modes(
                 .join(", i·")
         );
     }
+    if m.asymmetry > ASYMMETRY_NOTE {
+        eprintln!(
+            "softrod: note: the tangent stiffness is not symmetric (relative asymmetry {:.1e}: \
+             follower loads, world-frame moments or cables are not conservative); these are the \
+             frequencies of its symmetric part, and a non-symmetric linearization can flutter",
+            m.asymmetry
+        );
+    }
     if json {
         println!(
             "{}",
@@ -435,6 +448,7 @@ pub fn modes(
                 "imaginary_frequencies_hz": imaginary,
                 "rigid_modes": m.n_rigid(),
                 "rigid_tolerance_omega2": m.rigid_tolerance,
+                "asymmetry": m.asymmetry,
                 "warnings": analysis.warnings,
             })
         );

@@ -126,6 +126,27 @@ def test_modes_are_euler_bernoulli_frequencies():
     assert np.abs(v.T @ mm @ v - np.eye(v.shape[1])).max() < 1e-9
 
 
+def test_lowest_modes_of_a_long_chain():
+    """lowest_modes on 200 bending pieces (Lanczos, above 160 coordinates):
+    Euler-Bernoulli with the Ritz error C_i/N^2 as above, N = 200, and
+    M-orthonormal shapes."""
+    ritz = [0.19366, 1.35072]
+    ritz_rel_tol = 0.02
+    n, r = 200, 1e-4  # L/r = 1e4: rotary inertia far below C/N^2
+    sim = softrod.Simulation(rods=[rod(length=1.0, pieces=n, strains=["ky"], radius=r)])
+    m = sim.lowest_modes(2)
+    assert m.equilibrium == "rest"
+    assert m.omega.shape == (2,) and m.shapes.shape == (n, 2)
+    i, a = math.pi * r**4 / 4, math.pi * r**2
+    for k, bl in enumerate([1.875104, 4.694091]):
+        exact = bl * bl * math.sqrt(E * i / (RHO * a))
+        err = m.omega[k] / exact - 1
+        assert abs(err / (ritz[k] / n**2) - 1) < ritz_rel_tol
+    mm = sim.mass_matrix(0.0, np.zeros(sim.n_dof))
+    v = m.shapes
+    assert np.abs(v.T @ mm @ v - np.eye(2)).max() < 1e-9
+
+
 def test_undamped_release_conserves_energy():
     # dopri5 at rtol 1e-9 over 0.05 s: drift ~1e-9 of the ~1e-2 J exchanged.
     energy_tol = 1e-8

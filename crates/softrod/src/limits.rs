@@ -85,6 +85,14 @@ pub const STATICS_DENSE_MATRICES: u64 = 4;
 /// symmetric eigenproblem's matrix and eigenvectors, and the mode shapes.
 pub const MODES_DENSE_MATRICES: u64 = 8;
 
+/// Coordinates from which [`Simulation::lowest_modes`](crate::Simulation::lowest_modes)
+/// takes the matrix-free Lanczos instead of the dense eigensolver (on open
+/// models with a positive definite generalized stiffness): where the two
+/// cost the same for the lowest 10 modes of a clamped rod under gravity,
+/// statics included (docs/performance.md, "Scaling": 120 coordinates 9–14
+/// ms dense against 15 ms, 240 coordinates 58 ms against 31 ms).
+pub const LANCZOS_MIN_DOF: usize = 160;
+
 /// Bytes of `count` dense `n × n` matrices of `f64` (saturating).
 pub fn dense_bytes(count: u64, n: usize) -> u64 {
     (n as u64)

@@ -401,3 +401,80 @@ fn q_names_name_the_strain_each_coordinate_sets() {
     assert!((p(&mut s, 0.05)[1] - 1.0).abs() < 1e-15);
     assert!((s.pose("a", 0.4, &q).unwrap().translation[0] - 0.4).abs() < 1e-15);
 }
+
+/// `lowest_modes` on a model large enough for Lanczos (200 bending
+/// coordinates, above `LANCZOS_MIN_DOF`) has the Euler–Bernoulli
+/// frequencies with the PCS Ritz error `C_i/N²` (docs/validation.md), as
+/// the dense `modes` has at N = 20 above: the same analytic reference, an
+/// error 100× smaller.
+#[test]
+fn lowest_modes_of_a_long_chain_are_euler_bernoulli_frequencies() {
+    const RITZ: [f64; 2] = [0.19366, 1.35072];
+    const RITZ_REL_TOL: f64 = 0.02;
+    const N: usize = 200;
+    const { assert!(N >= softrod::limits::LANCZOS_MIN_DOF) };
+    // L/r = 10⁴: rotary inertia (∝ (r/L)²) stays far below the Ritz error.
+    let text = format!(
+        "[[rod]]\nname = \"arm\"\nlength = 1.0\npieces = {N}\nstrains = [\"ky\"]\n\
+         section = {{ shape = \"circle\", radius = 0.0001 }}\n\
+         material = {{ density = 1000.0, young = 1.0e7, poisson = 0.5 }}\n"
+    );
+    let mut s = sim(&text);
+    let m = s.lowest_modes(2).unwrap();
+    assert_eq!(m.equilibrium, softrod::Equilibrium::Rest);
+    assert_eq!(m.modes.omega.len(), 2);
+    assert_eq!(m.modes.shapes.shape(), (N, 2));
+    let (e, r, rho) = (1e7_f64, 1e-4_f64, 1000.0_f64);
+    let (i, a) = (PI * r.powi(4) / 4.0, PI * r * r);
+    for (k, bl) in [1.875104_f64, 4.694091].iter().enumerate() {
+        let exact = bl * bl * (e * i / (rho * a)).sqrt();
+        let err = m.modes.omega[k] / exact - 1.0;
+        let ritz = RITZ[k] / (N * N) as f64;
+        assert!(
+            (err / ritz - 1.0).abs() < RITZ_REL_TOL,
+            "mode {k}: relative error {err:.4e}, Ritz estimate {ritz:.4e}"
+        );
+    }
+}
+
+/// Under gravity (a sagged equilibrium, all six strains, 40 pieces = 240
+/// coordinates) Lanczos and the dense eigensolver — two algorithms on the
+/// same linearization — agree on the lowest frequencies; with a
+/// world-frame point moment (not conservative: `K_eff` is not symmetric,
+/// which Lanczos refuses) `lowest_modes` is the dense solver's symmetric
+/// part, as `modes`.
+#[test]
+fn lowest_modes_agree_with_the_dense_modes() {
+    // Lanczos converges θ = 1/ω² to a residual 1e-9 θ; the dense solver's
+    // eigenvalues are exact to round-off of a 240 × 240 problem.
+    const AGREE: f64 = 1e-7;
+    let rod = |extra: &str| {
+        format!(
+            "[world]\ngravity = [0.0, 0.0, -9.81]\n\
+             [[rod]]\nname = \"arm\"\nlength = 0.5\npieces = 40\n\
+             section = {{ shape = \"circle\", radius = 0.01 }}\n\
+             material = {{ density = 1000.0, young = 1.0e6, poisson = 0.5 }}\n{extra}"
+        )
+    };
+    let moment = "[[load]]\nrod = \"arm\"\ns = 0.5\nmoment = [0.0, 0.002, 0.001]\n";
+    for (text, symmetric) in [(rod(""), true), (rod(moment), false)] {
+        let mut s = sim(&text);
+        let dense = s.modes().unwrap();
+        let lowest = s.lowest_modes(4).unwrap();
+        assert!(matches!(
+            lowest.equilibrium,
+            softrod::Equilibrium::Statics(_)
+        ));
+        assert_eq!(
+            symmetric,
+            dense.modes.asymmetry < 1e-9,
+            "{}",
+            dense.modes.asymmetry
+        );
+        for k in 0..4 {
+            let (a, b) = (lowest.modes.omega[k], dense.modes.omega[k]);
+            let tol = if symmetric { AGREE * b } else { 0.0 };
+            assert!((a - b).abs() <= tol, "mode {k}: {a} vs dense {b}");
+        }
+    }
+}

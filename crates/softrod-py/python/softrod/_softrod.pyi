@@ -522,6 +522,8 @@ class Simulation:
         "q_ref"}, a callable l(t, q, qdot) -> (value, dl_dq, dl_dqdot) at `times`, or a list.
         Raises InputError naming a bad parameter or loss key."""
     def modes(self) -> Modes: ...
+    def lowest_modes(self, count: int = 10) -> Modes:
+        """The `count` lowest modes, lowest first; matrix-free (Lanczos) on large open models."""
     def modes_about(self, q: ArrayLike) -> Modes: ...
     def simulate(
         self,

@@ -131,6 +131,16 @@ impl Simulation {
         Ok(modes_py(py, &m.modes, eq, &q, m.warnings.clone()))
     }
 
+    pub(super) fn lowest_modes_impl(&mut self, py: Python<'_>, count: usize) -> PyResult<Modes> {
+        let sim = &mut self.sim;
+        let m = guard_detached(py, || sim.lowest_modes(count).map_err(to_py))?;
+        let (eq, q) = match &m.equilibrium {
+            Equilibrium::Rest => ("rest", vec![0.0; self.n()]),
+            Equilibrium::Statics(q) => ("statics", q.as_slice().to_vec()),
+        };
+        Ok(modes_py(py, &m.modes, eq, &q, m.warnings.clone()))
+    }
+
     pub(super) fn modes_about_impl(
         &mut self,
         py: Python<'_>,

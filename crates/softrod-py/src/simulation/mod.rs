@@ -895,6 +895,17 @@ impl Simulation {
         self.modes_impl(py)
     }
 
+    /// The `count` lowest undamped modes about the static equilibrium (the
+    /// rest shape without static loads), lowest first: the same modes as
+    /// `modes()`, but open models of at least 160 coordinates whose joints
+    /// all have springs are solved without dense matrices (shift-invert
+    /// Lanczos, docs/theory.md E11), so thousands of pieces take a second.
+    /// Releases the GIL.
+    #[pyo3(signature = (count = 10))]
+    fn lowest_modes(&mut self, py: Python<'_>, count: usize) -> PyResult<Modes> {
+        self.lowest_modes_impl(py, count)
+    }
+
     /// Undamped natural modes of the model linearized about `q` (which
     /// should be an equilibrium). Releases the GIL.
     fn modes_about(&mut self, py: Python<'_>, q: &Bound<'_, PyAny>) -> PyResult<Modes> {

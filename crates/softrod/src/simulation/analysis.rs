@@ -2,12 +2,14 @@
 //! modes about it.
 
 use nalgebra::DVector;
-use softrod_dynamics::{Data, Modes, StaticsOptions, modes, statics};
+use softrod_dynamics::{
+    Data, DynamicsError, Modes, StaticsOptions, StaticsSolver, lowest_modes, modes, statics,
+};
 use softrod_mechanics::validity::strain_validity;
 
 use super::Simulation;
 use crate::error::Result;
-use crate::limits::{MODES_DENSE_MATRICES, STATICS_DENSE_MATRICES};
+use crate::limits::{LANCZOS_MIN_DOF, MODES_DENSE_MATRICES, STATICS_DENSE_MATRICES};
 
 /// Which equilibrium [`Simulation::modes`] linearized about.
 #[derive(Clone, Debug, PartialEq)]
@@ -112,26 +114,95 @@ impl Simulation {
     }
 
     /// Undamped natural modes about the static equilibrium (the rest shape
-    /// when the model has no static loads).
+    /// when the model has no static loads): all `n_dof` of them, by the
+    /// dense eigensolver. [`Simulation::lowest_modes`] gives the lowest few
+    /// of a large model without `n × n` matrices.
     pub fn modes(&mut self) -> Result<ModalAnalysis> {
         self.check_dense("modes", STATICS_DENSE_MATRICES + MODES_DENSE_MATRICES)?;
-        let (equilibrium, warnings) = if self.has_static_loads() {
-            let s = self.statics()?;
-            (Equilibrium::Statics(s.q), s.warnings)
-        } else {
-            let z = vec![0.0; self.n_dof()];
-            (Equilibrium::Rest, self.validity_warnings(&z, "at rest"))
-        };
-        let q = match &equilibrium {
-            Equilibrium::Rest => DVector::zeros(self.n_dof()),
-            Equilibrium::Statics(q) => q.clone(),
-        };
+        let (equilibrium, q, warnings) = self.modal_equilibrium()?;
         let modes = self.modes_about(q.as_slice())?;
         Ok(ModalAnalysis {
             modes,
             equilibrium,
             warnings,
         })
+    }
+
+    /// The `count` lowest undamped modes about the static equilibrium (the
+    /// rest shape when the model has no static loads), lowest first; fewer
+    /// when the model has fewer coordinates. The same modes as
+    /// [`Simulation::modes`] to the eigensolvers' tolerances, by the
+    /// cheaper method ([`Simulation::lowest_modes_about`]): the
+    /// matrix-free statics and Lanczos (docs/theory.md E8–E11, O(N) memory
+    /// and time per iteration) on large open models, the dense ones
+    /// otherwise.
+    pub fn lowest_modes(&mut self, count: usize) -> Result<ModalAnalysis> {
+        if self.lanczos_applies() {
+            self.check_statics()?;
+        } else {
+            self.check_dense("modes", STATICS_DENSE_MATRICES + MODES_DENSE_MATRICES)?;
+        }
+        let (equilibrium, q, warnings) = self.modal_equilibrium()?;
+        let modes = self.lowest_modes_about(q.as_slice(), count)?;
+        Ok(ModalAnalysis {
+            modes,
+            equilibrium,
+            warnings,
+        })
+    }
+
+    /// The equilibrium [`Simulation::modes`] linearizes about, its
+    /// coordinates and its validity warnings.
+    fn modal_equilibrium(&mut self) -> Result<(Equilibrium, DVector<f64>, Vec<String>)> {
+        if self.has_static_loads() {
+            let s = self.statics()?;
+            Ok((Equilibrium::Statics(s.q.clone()), s.q, s.warnings))
+        } else {
+            let z = vec![0.0; self.n_dof()];
+            let warnings = self.validity_warnings(&z, "at rest");
+            Ok((Equilibrium::Rest, DVector::zeros(self.n_dof()), warnings))
+        }
+    }
+
+    /// Whether [`Simulation::lowest_modes_about`] starts with Lanczos: an
+    /// open model of at least [`LANCZOS_MIN_DOF`] coordinates whose
+    /// generalized stiffness is positive definite (the conditions of
+    /// `softrod_dynamics::lowest_modes` that are known before it runs).
+    fn lanczos_applies(&self) -> bool {
+        self.n_dof() >= LANCZOS_MIN_DOF && StaticsSolver::Auto.is_structured(self.model())
+    }
+
+    /// The `count` lowest undamped modes of the model linearized about `q`
+    /// (an equilibrium), lowest first. From [`LANCZOS_MIN_DOF`]
+    /// coordinates on an open model whose generalized stiffness is
+    /// positive definite: shift-invert Lanczos
+    /// (`softrod_dynamics::lowest_modes`, docs/theory.md E11), no `n × n`
+    /// matrix. Otherwise — closures, free joints or joints without springs,
+    /// small models, or a tangent stiffness that is not symmetric
+    /// (follower loads, world-frame moments, cables), which Lanczos
+    /// refuses — the dense eigensolver of [`Simulation::modes_about`]
+    /// (the symmetric part, as there), whose matrices must fit the memory
+    /// limit ([`crate::Error::TooLarge`]); a large non-symmetric model
+    /// whose matrices do not fit gets Lanczos' refusal.
+    pub fn lowest_modes_about(&mut self, q: &[f64], count: usize) -> Result<Modes> {
+        self.check("q", q)?;
+        if self.lanczos_applies() {
+            let s = &mut self.system;
+            match lowest_modes(&s.model, &mut s.data, q, 0.0, count) {
+                Ok(m) => return Ok(m),
+                Err(e @ DynamicsError::NotSymmetric { .. }) => {
+                    if self.check_dense("modes", MODES_DENSE_MATRICES).is_err() {
+                        return Err(e.into());
+                    }
+                }
+                Err(e) => return Err(e.into()),
+            }
+        }
+        let mut m = self.modes_about(q)?;
+        let k = count.min(m.omega.len());
+        m.omega = m.omega.rows(0, k).into_owned();
+        m.shapes = m.shapes.columns(0, k).into_owned();
+        Ok(m)
     }
 
     /// Undamped natural modes of the model linearized about `q` (which
