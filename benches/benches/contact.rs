@@ -55,7 +55,9 @@ fn bench_rest(c: &mut Criterion) {
         let t = sim.simulate(DURATION).unwrap();
         eprintln!(
             "contact_rest/{name}: {} steps, {} rejected, {} Jacobians over {DURATION} s",
-            t.summary.stats.steps, t.summary.stats.rejected_steps, t.summary.stats.jacobian_evaluations
+            t.summary.stats.steps,
+            t.summary.stats.rejected_steps,
+            t.summary.stats.jacobian_evaluations
         );
     }
     let mut g = c.benchmark_group("contact_rest");

@@ -130,7 +130,7 @@ fn a_rod_landing_at_one_metre_per_second_stays_within_a_tenth_of_its_radius() {
     let (_, q, qd) = keep.0.last().unwrap();
     for s in [0.0, 0.25 * L, 0.5 * L, 0.75 * L, L] {
         let z = sim.pose("rod", s, q).unwrap().translation.z;
-        assert!(z <= R && z >= 0.99 * R, "rest height {z} at s = {s}");
+        assert!((0.99 * R..=R).contains(&z), "rest height {z} at s = {s}");
     }
     let speed = qd.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     assert!(speed < 1e-3, "at rest: {speed}");
@@ -268,4 +268,113 @@ fn the_implicit_step_with_contact_follows_a_small_step_explicit_reference() {
     eprintln!("slid {slid:.5} m, largest difference {worst:.3e} m");
     assert!(slid > 0.01, "it slides: {slid}");
     assert!(worst < 0.01 * R, "{worst}");
+}
+
+/// Rod–rod Coulomb friction (CT10): a free rod "bar" lies across two stiff
+/// clamped rods ("rails", along x at y = ±5 cm), pressed on by its weight
+/// and a 1 N load at its middle (N = 1.616 N in all), and is pulled along
+/// its own axis (y: no rolling) by `F`. Returns the bar's centre y at the
+/// output times (every 10 ms).
+fn bar_on_rails(pull: f64, duration: f64) -> Vec<(f64, f64)> {
+    let stiff = Material::builder()
+        .density(1000.0)
+        .young(1.0e9)
+        .poisson(0.5)
+        .viscosity(1.0e5)
+        .build()
+        .unwrap();
+    let rail = |y: f64, name: &str| {
+        Rod::builder(0.3)
+            .name(name)
+            .pieces(6)
+            .strains([Strain::Ky, Strain::Kz])
+            .base(Pose::new(Mat3::identity(), Vec3::new(0.0, y, 0.0)))
+            .circle(R)
+            .material(stiff)
+    };
+    // The bar along y, across the rails at x = 0.15, on top of them.
+    let along_y = Mat3::new(0.0, -1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0);
+    let bar = Rod::builder(L)
+        .name("bar")
+        .pieces(4)
+        .strains([Strain::Ky, Strain::Kz])
+        .base(Pose::new(along_y, Vec3::new(0.15, -0.5 * L, 2.0 * R)))
+        .circle(R)
+        .material(material(1.0e3))
+        .point_load(PointLoad {
+            s: 0.5 * L,
+            force: Vec3::new(0.0, pull, -1.0),
+            moment: Vec3::zeros(),
+            frame: LoadFrame::World,
+        });
+    let model = Model::builder()
+        .rod(rail(-0.05, "rail a"))
+        .rod(rail(0.05, "rail b"))
+        .rod_on(bar, Attachment::world_joint(Joint::new(JointKind::Free)))
+        .gravity([0.0, 0.0, -G])
+        .contact(softrod_mechanics::ContactSettings {
+            rods: true,
+            friction: MU,
+            ..Default::default()
+        })
+        .build()
+        .unwrap();
+    let mut sim = Simulation::new(model);
+    sim.set_settings(settings(Integrator::Esdirk, 1e-7, 0.01))
+        .unwrap();
+    let mut keep = Keep(Vec::new());
+    sim.simulate_with(duration, &mut keep).unwrap();
+    keep.0
+        .iter()
+        .map(|(t, q, _)| (*t, sim.pose("bar", 0.5 * L, q).unwrap().translation.y))
+        .collect()
+}
+
+const MU: f64 = 0.3;
+
+fn normal_force() -> f64 {
+    1.0 + 1000.0 * std::f64::consts::PI * R * R * L * G
+}
+
+/// Below μN (F = μN/2) the bar holds: after the rails' elastic give
+/// has settled it does not move (no creep beyond 1e-6 m over 0.2 s).
+///
+/// FAILS today: the bar moves 3.2 mm in the first 0.2 s and 1.5 mm in
+/// the next 0.2 s (the rails' elastic give is ~0.03 mm): rod–rod friction
+/// creeps under a steady pull below μN. Not yet known whether the pair
+/// anchors (CT10) or their interplay with the stiffness raise (CT12: a
+/// pair's sticking anchor is not shrunk on a raise) is the cause.
+#[test]
+#[ignore = "rod–rod friction creeps below μN (3.2 mm in 0.2 s): open, see the doc comment"]
+fn a_rod_pulled_across_two_rods_below_mu_n_holds() {
+    let path = bar_on_rails(0.5 * MU * normal_force(), 0.4);
+    let at = |t: f64| path.iter().find(|(s, _)| (s - t).abs() < 1e-9).unwrap().1;
+    eprintln!(
+        "moved {:.3e} m by 0.2 s, {:.3e} m from 0.2 s to 0.4 s",
+        at(0.2) - at(0.0),
+        at(0.4) - at(0.2)
+    );
+    assert!((at(0.2) - at(0.0)).abs() < 0.01 * R, "{}", at(0.2));
+    assert!(
+        (at(0.4) - at(0.2)).abs() < 1e-6,
+        "crept {}",
+        at(0.4) - at(0.2)
+    );
+}
+
+/// Above μN (F = 1.4 μN) the bar slides with `(F − μN)/m` (Coulomb's
+/// friction force μN, the rails' give constant while it slides).
+#[test]
+fn a_rod_pulled_across_two_rods_above_mu_n_slides_against_mu_n() {
+    let n = normal_force();
+    let pull = 1.4 * MU * n;
+    let path = bar_on_rails(pull, 0.2);
+    let at = |t: f64| path.iter().find(|(s, _)| (s - t).abs() < 1e-9).unwrap().1;
+    let dt = 0.05;
+    let a = (at(0.2) - 2.0 * at(0.15) + at(0.1)) / (dt * dt);
+    let m = 1000.0 * std::f64::consts::PI * R * R * L;
+    let want = (pull - MU * n) / m;
+    let rel = (a - want).abs() / want;
+    eprintln!("a = {a:.5} m/s², (F − μN)/m = {want:.5} ({rel:.2e})");
+    assert!(rel < 2e-2, "{a} vs {want}");
 }
