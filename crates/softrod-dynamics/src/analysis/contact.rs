@@ -363,8 +363,9 @@ fn pair_base(model: &Model, a: usize, sa: f64, b: usize, sb: f64, radius: f64) -
     (law, mass_at(model, a, sa).min(mass_at(model, b, sb)))
 }
 
-/// The commit of rod–rod contact (CT10): the penetration check against
-/// half the smaller radius, and the pairs' friction anchors — kept while
+/// The commit of rod–rod contact (CT10, CT12): the stiffness states, the
+/// penetration check against [`IMPACT_LIMIT`] of the smaller radius, and
+/// the pairs' friction anchors — kept while
 /// sticking, moved to carry `μ f_n` while sliding, set where a new pair
 /// touches, dropped when it opens.
 fn commit_pairs(
