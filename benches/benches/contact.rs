@@ -1,5 +1,5 @@
 //! Criterion bench of contact at rest (issue 24, docs/theory-contact.md
-//! CT12, docs/performance.md "Contact"): a free 20-piece rod (r = 1 cm,
+//! CT15, docs/performance.md "Contact"): a free 20-piece rod (r = 1 cm,
 //! L = 0.5 m, E = 1 MPa) lying on a table, integrated 0.5 s with the
 //! default integrator and settings of `Simulation`, against the same rod
 //! free in the air (no table). The target of issue 24: the rod on the

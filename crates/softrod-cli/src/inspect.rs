@@ -184,7 +184,7 @@ pub fn statics(path: &Path, json: bool, out: Option<PathBuf>, png: bool) -> Resu
     }
     // The contacts at the equilibrium (frictionless: statics has no
     // history to anchor friction to), with the contact stiffness the
-    // solve raised (docs/theory-contact.md CT12).
+    // solve raised (docs/theory-contact.md CT15).
     let contacts = if l.sim.model().has_contact() {
         let zero = vec![0.0; res.q.len()];
         Some(

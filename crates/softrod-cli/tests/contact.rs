@@ -351,7 +351,7 @@ fn overlapping_rods_exit_2_and_write_nothing() {
 }
 
 /// A concentrated load no longer sinks a contact beyond the bound: the
-/// contact stiffness follows the force carried (CT12), so a 2 N load on the
+/// contact stiffness follows the force carried (CT15), so a 2 N load on the
 /// dropped rod's tip (130 times the tip point's weight; it sank 43 % of the
 /// radius with the stiffness of the points' own weight) stays within the
 /// 10 % bound over the whole run, landing included, and the run says

@@ -144,7 +144,7 @@ impl RodSystem {
     /// After an accepted step to `(t, q, q̇)`: commits the contact friction
     /// anchors and stiffnesses and checks the penetration
     /// (`softrod_dynamics::commit_contact`, docs/theory-contact.md CT5,
-    /// CT12). Returns whether the system changed (a stiffness rose, or a
+    /// CT15). Returns whether the system changed (a stiffness rose, or a
     /// model with friction: the
     /// cached derivatives no longer hold, the caller returns
     /// [`Control::SystemChanged`](crate::Control::SystemChanged)). Call it

@@ -192,7 +192,7 @@ fn above_the_friction_angle_a_rod_slides_at_coulombs_rate() {
 /// `Simulation::simulate` keeps each sample's contacts (what the recorder
 /// gives `contacts.csv`): on a frictionless table, the contacts of each
 /// sample are those the model computes at that state (their forces with
-/// the run's contact stiffness, CT12), and the trajectory's
+/// the run's contact stiffness, CT15), and the trajectory's
 /// `max_penetration` and `max_contacts` are those of its samples.
 #[test]
 fn a_trajectory_keeps_the_contacts_of_its_samples() {
@@ -212,7 +212,7 @@ fn a_trajectory_keeps_the_contacts_of_its_samples() {
         let (q, qd) = (traj.q[i].as_slice(), traj.qdot[i].as_slice());
         let want = sim.model().contacts(traj.t[i], q, qd).unwrap();
         // The same contacts and geometry; the forces are the run's, whose
-        // stiffness a load raised (CT12), not a fresh workspace's.
+        // stiffness a load raised (CT15), not a fresh workspace's.
         assert_eq!(traj.contacts[i].len(), want.len(), "sample {i}");
         for (c, w) in traj.contacts[i].iter().zip(&want) {
             assert_eq!(

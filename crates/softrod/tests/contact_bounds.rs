@@ -1,4 +1,4 @@
-//! The penetration bounds of contact (docs/theory-contact.md CT3, CT12)
+//! The penetration bounds of contact (docs/theory-contact.md CT3, CT15)
 //! against independent references: a rod dropped at 1 m/s penetrates at
 //! most 10 % of its radius, gains no energy and rests at centreline height
 //! `r`; loads far above a contact point's own weight (a tip load, a rope's
@@ -92,7 +92,7 @@ fn deepest(sim: &mut Simulation, keep: &Keep) -> f64 {
 
 /// Dropped flat onto an inelastic table arriving at 1 m/s: at most 10 % of
 /// the radius in (CT3), never more energy than it came with, and at rest
-/// at centreline height `r` within 1 % of `r` (the rest bound, CT12).
+/// at centreline height `r` within 1 % of `r` (the rest bound, CT15).
 #[test]
 fn a_rod_landing_at_one_metre_per_second_stays_within_a_tenth_of_its_radius() {
     let gap = 0.001;
@@ -139,7 +139,7 @@ fn a_rod_landing_at_one_metre_per_second_stays_within_a_tenth_of_its_radius() {
 /// A free rod lying on a frictionless table with a 2 N dead load down at
 /// its tip — 130 times the tip contact point's weight; the stiffness from
 /// the points' own weight let it sink 43 % of the radius in
-/// (docs/theory-contact.md CT3 before CT12). Once at rest it is within
+/// (docs/theory-contact.md CT3 before CT15). Once at rest it is within
 /// 1 % of the radius everywhere, and the table carries the load and the
 /// weight (the sum of the contact forces, an independent balance).
 #[test]
@@ -342,7 +342,7 @@ fn normal_force() -> f64 {
 /// FAILS today: the bar moves 3.2 mm in the first 0.2 s and 1.5 mm in
 /// the next 0.2 s (the rails' elastic give is ~0.03 mm): rod–rod friction
 /// creeps under a steady pull below μN. Not yet known whether the pair
-/// anchors (CT10) or their interplay with the stiffness raise (CT12: a
+/// anchors (CT10) or their interplay with the stiffness raise (CT15: a
 /// pair's sticking anchor is not shrunk on a raise) is the cause.
 #[test]
 #[ignore = "rod–rod friction creeps below μN (3.2 mm in 0.2 s): open, see the doc comment"]

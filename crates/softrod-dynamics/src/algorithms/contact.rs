@@ -233,7 +233,7 @@ fn touch(
         return false;
     }
     let n_obs = model.contact.obstacles.len();
-    // The stiffness this contact's state holds (CT12), frozen in a step.
+    // The stiffness this contact's state holds (CT15), frozen in a step.
     let (scale, offset) = work.held(rod, sample * n_obs + o);
     let law = law(model, rod, sample, o, ask.friction).scaled(scale, offset);
     let stretch = if law.mu > 0.0 {

@@ -364,7 +364,7 @@ fn narrowphase(
         Mat3::zeros()
     };
     let dist = Distance { d, normal, hessian };
-    // The stiffness the pair's state holds (CT12), frozen in a step.
+    // The stiffness the pair's state holds (CT15), frozen in a step.
     let (scale, offset) = pw
         .holds
         .iter()

@@ -18,7 +18,7 @@ use crate::model::pairs::{PairAnchor, PairHold, radius_at};
 use softrod_lie::Vec3;
 use softrod_mechanics::contact::{ContactPoint, Contactee};
 
-/// The stiffness state of a contact after an accepted step at `t` (CT12),
+/// The stiffness state of a contact after an accepted step at `t` (CT15),
 /// and the depth \[m\] that stops the run: `prev` the state the step used
 /// (`None`: it starts touching), `base` its law of CT3, `mass` the mass
 /// that law was set by, `radius` the surface radius, `depth` the
@@ -55,7 +55,7 @@ fn next_hold(
     (h, IMPACT_LIMIT * radius)
 }
 
-/// The scale of a contact's stiffness at a static equilibrium (CT12):
+/// The scale of a contact's stiffness at a static equilibrium (CT15):
 /// `prev` raised, as in [`next_hold`], if the spring of the law it scales
 /// carries its force deeper than [`REST_TARGET`] of the radius (no offset:
 /// statics solves again from there).
@@ -199,7 +199,7 @@ impl Model {
 /// (CT5: a sticking contact keeps its anchor, a sliding one drags it to
 /// where the spring carries `μ f_n`, a new contact anchors where it
 /// touches, a contact that opened forgets it), raises the stiffness of
-/// contacts whose spring carries more than its target (CT12) and checks
+/// contacts whose spring carries more than its target (CT15) and checks
 /// the penetration: [`DynamicsError::Penetration`] (naming the rod, `s`,
 /// the obstacle or other rod, `t` and the depth) if a contact is deeper
 /// than [`IMPACT_LIMIT`] of its radius. Returns whether a stiffness rose (the law changed: cached
@@ -247,7 +247,7 @@ pub fn commit_contact(
             continue;
         }
         // The tangential spring has the normal stiffness: after a raise
-        // the stretch shrinks by the same factor (CT12), so the
+        // the stretch shrinks by the same factor (CT15), so the
         // tangential force is continuous like the normal one.
         let k = base.k * hold.scale;
         let shrink = before.0 / hold.scale;
@@ -292,7 +292,7 @@ pub fn commit_contact(
     result.map(|()| raised)
 }
 
-/// The stiffness of resting contacts for statics (CT12): at the
+/// The stiffness of resting contacts for statics (CT15): at the
 /// equilibrium `q` (drives at rest at `t`), every contact whose spring
 /// carries its force deeper than [`REST_TARGET`] of its radius has its
 /// scale raised as in [`commit_contact`] (a state held in `data`, read by
@@ -363,7 +363,7 @@ fn pair_base(model: &Model, a: usize, sa: f64, b: usize, sb: f64, radius: f64) -
     (law, mass_at(model, a, sa).min(mass_at(model, b, sb)))
 }
 
-/// The commit of rod–rod contact (CT10, CT12): the stiffness states, the
+/// The commit of rod–rod contact (CT10, CT15): the stiffness states, the
 /// penetration check against [`IMPACT_LIMIT`] of the smaller radius, and
 /// the pairs' friction anchors — kept while
 /// sticking, moved to carry `μ f_n` while sliding, set where a new pair

@@ -136,7 +136,7 @@ pub fn statics(
         return super::closed::statics(model, tree, data, q0, options).map(|(r, _)| r);
     }
     let mut result = statics_open(model, data, q0, options)?;
-    // Contact (docs/theory-contact.md CT12): resting contacts whose spring
+    // Contact (docs/theory-contact.md CT15): resting contacts whose spring
     // carries its force deeper than its target have their stiffness raised,
     // and the equilibrium is solved again from where it was, until none is.
     let mut rounds = 0;
@@ -155,7 +155,7 @@ pub fn statics(
     Ok(result)
 }
 
-/// Rounds of contact stiffness raises in [`statics`] (CT12); each raises a
+/// Rounds of contact stiffness raises in [`statics`] (CT15); each raises a
 /// scale by at least [`crate::model::contact::RAISE_HEADROOM`], so a
 /// contact settles in one or two.
 const MAX_STIFFNESS_ROUNDS: usize = 20;
@@ -265,7 +265,7 @@ impl Newton<'_> {
             .derivatives
             .get_or_insert_with(|| IdDerivatives::new(self.model));
         if let (Some(from), Some(to)) = (&data.contact, &mut w.contact) {
-            // The contact stiffness of this solve (CT12), not a fresh one.
+            // The contact stiffness of this solve (CT15), not a fresh one.
             if let Some(cw) = &mut to.contact {
                 cw.copy_friction_state(from);
             }

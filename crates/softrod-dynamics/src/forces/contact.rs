@@ -213,7 +213,7 @@ pub(crate) struct Law {
     pub eps: f64,
     /// Coulomb coefficient.
     pub mu: f64,
-    /// Penetration at which the penalty starts \[m\] (CT12: zero but
+    /// Penetration at which the penalty starts \[m\] (CT15: zero but
     /// while a raised stiffness heals from its raise).
     pub offset: f64,
 }
@@ -255,7 +255,7 @@ impl Law {
     }
 
     /// This law with its stiffness raised by `scale` and its penalty
-    /// starting at the penetration `offset` (CT12): `k` times `scale`, `c`
+    /// starting at the penetration `offset` (CT15): `k` times `scale`, `c`
     /// times `√scale` (the same damping ratio), the same `ε`.
     pub(crate) fn scaled(self, scale: f64, offset: f64) -> Self {
         Self {
@@ -267,7 +267,7 @@ impl Law {
     }
 
     /// The penetration at which the spring of this law (offset aside)
-    /// carries `force` ≥ 0 (the inverse of `φ`, CT12).
+    /// carries `force` ≥ 0 (the inverse of `φ`, CT15).
     pub(crate) fn depth_of(&self, force: f64) -> f64 {
         if force >= 0.5 * self.k * self.eps {
             force / self.k + 0.5 * self.eps

@@ -21,21 +21,21 @@ pub(crate) const REST_PENETRATION: f64 = 0.01;
 /// (CT3).
 pub(crate) const IMPACT_PENETRATION: f64 = 0.10;
 /// The spring part of the penetration a contact's stiffness is raised to
-/// hold (CT12): half the rest bound, the other half is margin for the
+/// hold (CT15): half the rest bound, the other half is margin for the
 /// quadratic start and a load that grows between two raises.
 pub(crate) const REST_TARGET: f64 = 0.5 * REST_PENETRATION;
 /// A raised stiffness carries the force that triggered it at the target
-/// divided by this (CT12): headroom so that a slowly growing load raises
+/// divided by this (CT15): headroom so that a slowly growing load raises
 /// it once per 50 % of growth, not at every step.
 pub(crate) const RAISE_HEADROOM: f64 = 1.5;
 /// The offset of a raise heals with the time constant of this many
-/// periods `2π/ω` of the contact's base law (`ω = √(k/m)`, CT12).
+/// periods `2π/ω` of the contact's base law (`ω = √(k/m)`, CT15).
 pub(crate) const HEAL_PERIODS: f64 = 2.0;
-/// A contact deeper than this fraction of the radius stops a run (CT12):
+/// A contact deeper than this fraction of the radius stops a run (CT15):
 /// one and a half times the stated impact bound.
 pub const IMPACT_LIMIT: f64 = 1.5 * IMPACT_PENETRATION;
 
-/// The stiffness state of one touching contact (CT12): a run state like
+/// The stiffness state of one touching contact (CT15): a run state like
 /// the friction anchors, committed after accepted steps and read, never
 /// written, by the evaluations of a step.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -284,7 +284,7 @@ pub(crate) struct ContactWork {
     /// Friction anchors (CT5), committed after accepted steps: per rod,
     /// `sample · n_obstacles + obstacle`, in the obstacle's parent frame.
     pub anchors: Vec<Vec<Option<Vec3>>>,
-    /// Stiffness states (CT12), indexed like `anchors`.
+    /// Stiffness states (CT15), indexed like `anchors`.
     pub holds: Vec<Vec<Option<Hold>>>,
     /// Rod–rod and self contact (CT8–CT11); `None` without them: no
     /// broadphase is built.
@@ -293,7 +293,7 @@ pub(crate) struct ContactWork {
 
 impl ContactWork {
     /// Takes `from`'s friction anchors and stiffness states (obstacles' and
-    /// pairs', CT5, CT12): the contact state of a run, for a second
+    /// pairs', CT5, CT15): the contact state of a run, for a second
     /// evaluation of its forces. Allocates only while the pairs' lists grow
     /// to the pairs that touch.
     pub(crate) fn copy_friction_state(&mut self, from: &ContactWork) {
@@ -312,7 +312,7 @@ impl ContactWork {
     }
 
     /// The stiffness scale and offset of obstacle contact `idx` of `rod`
-    /// (CT12).
+    /// (CT15).
     pub(crate) fn held(&self, rod: usize, idx: usize) -> (f64, f64) {
         self.holds[rod][idx].map_or((1.0, 0.0), |h| (h.scale, h.offset))
     }

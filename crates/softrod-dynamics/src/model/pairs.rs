@@ -103,7 +103,7 @@ pub(crate) struct PairAnchor {
     pub offset: Vec3,
 }
 
-/// The stiffness state of a touching pair (CT12), keyed like
+/// The stiffness state of a touching pair (CT15), keyed like
 /// [`PairAnchor`] by its rods and arc lengths.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct PairHold {
@@ -140,7 +140,7 @@ pub(crate) struct PairWork {
     /// commit builds.
     pub anchors: Vec<PairAnchor>,
     pub next: Vec<PairAnchor>,
-    /// Stiffness states of touching pairs (CT12), committed like the
+    /// Stiffness states of touching pairs (CT15), committed like the
     /// anchors, and the list the commit builds.
     pub holds: Vec<PairHold>,
     pub next_holds: Vec<PairHold>,

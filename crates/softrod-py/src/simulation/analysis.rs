@@ -46,7 +46,7 @@ impl Simulation {
             result
         })?;
         // What `statics --json` lists (its `contacts`, `max_penetration`),
-        // with the contact stiffness the solve raised (CT12).
+        // with the contact stiffness the solve raised (CT15).
         let zero = vec![0.0; out.q.len()];
         let found = sim
             .contacts(0.0, &out.q, &zero)

@@ -313,7 +313,7 @@ impl Hooks<RodSystem> for RunHooks<'_> {
             }
         };
         if contact_changed {
-            // The next step's law (anchors, stiffness: CT5, CT12) is not
+            // The next step's law (anchors, stiffness: CT5, CT15) is not
             // this one's: its power from here on is the new law's.
             if let Some(w) = &mut self.watch {
                 if let Err(e) = w.inputs_changed(&sys.model, &sys.data, info.t, q, qd) {
