@@ -287,6 +287,29 @@ impl Newton<'_> {
         Ok(w.dtau_dq.clone())
     }
 
+    /// Central differences of the residual, steps `10⁻⁶ (1 + |q_j|)`: the
+    /// fallback of a singular analytic tangent (see [`Newton::solve`]).
+    fn secant(
+        &self,
+        data: &mut Data,
+        forces: Forces,
+        q: &DVector<f64>,
+    ) -> Result<DMatrix<f64>, DynamicsError> {
+        let n = q.len();
+        let mut jac = DMatrix::zeros(n, n);
+        let mut trial = q.clone();
+        for j in 0..n {
+            let h = 1e-6 * (1.0 + q[j].abs());
+            trial[j] = q[j] + h;
+            let plus = self.residual(data, forces, &trial)?;
+            trial[j] = q[j] - h;
+            let minus = self.residual(data, forces, &trial)?;
+            trial[j] = q[j];
+            jac.set_column(j, &((plus - minus) / (2.0 * h)));
+        }
+        Ok(jac)
+    }
+
     /// Newton from `q` under `forces` (one load scale of the continuation):
     /// `Ok(Ok(residual))` when converged (q updated), `Ok(Err(residual))`
     /// with the last residual when it failed (q unspecified).
@@ -312,7 +335,15 @@ impl Newton<'_> {
                 self.krylov_step(data, forces, q, &r, tol)?
             } else {
                 let jac = self.jacobian(data, forces, q)?;
-                jac.lu().solve(&(-&r))
+                match jac.lu().solve(&(-&r)) {
+                    Some(dq) if dq.iter().all(|v| v.is_finite()) => Some(dq),
+                    // A singular tangent at a kink of the forces: a contact
+                    // at zero gap has zero stiffness (the penalty starts
+                    // C¹, CT2), and a coordinate nothing else holds (a free
+                    // joint resting on it) has none at all. The secant
+                    // over ±h sees both sides of the kink.
+                    _ => self.secant(data, forces, q)?.lu().solve(&(-&r)),
+                }
             };
             let Some(dq) = step else {
                 return Ok(Err(rn));
