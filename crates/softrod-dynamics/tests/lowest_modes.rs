@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{Shape, Terms, bases, model};
+use common::{Shape, Terms, bases, cantilever_root, model, ritz_constant};
 use softrod_dynamics::{
     Data, Model, Rod, StaticsOptions, lowest_modes, mass_matrix, modes, statics,
 };
@@ -63,45 +63,6 @@ fn lowest_modes_match_the_dense_eigensolve() {
         let overlap = (low.shapes.column(i).transpose() * &m * dense.shapes.column(i))[0].abs();
         assert!((overlap - 1.0).abs() < 1e-6, "mode {i}: overlap {overlap}");
     }
-}
-
-fn cantilever_root(mut b: f64) -> f64 {
-    for _ in 0..50 {
-        let f = b.cosh() * b.cos() + 1.0;
-        let df = b.sinh() * b.cos() - b.cosh() * b.sin();
-        b -= f / df;
-    }
-    b
-}
-
-/// Leading-order Ritz error constant `C` of the mode `β` (`δω/ω ≈ C/N²`
-/// for piecewise-constant curvature; the derivation is in
-/// tests/validation.rs), by Simpson on the analytic mode shape.
-fn ritz_constant(bl: f64) -> f64 {
-    let sigma = (bl.cosh() + bl.cos()) / (bl.sinh() + bl.sin());
-    let d2 = |u: f64| {
-        let z = bl * u;
-        z.cosh() + z.cos() - sigma * (z.sinh() + z.sin())
-    };
-    let d3 = |u: f64| {
-        let z = bl * u;
-        bl * (z.sinh() - z.sin() - sigma * (z.cosh() + z.cos()))
-    };
-    let m = 20_000;
-    let (mut a, mut b) = (0.0, 0.0);
-    for i in 0..=m {
-        let u = i as f64 / m as f64;
-        let w = if i == 0 || i == m {
-            1.0
-        } else if i % 2 == 1 {
-            4.0
-        } else {
-            2.0
-        };
-        a += w * d3(u).powi(2);
-        b += w * d2(u).powi(2);
-    }
-    a / b / 24.0
 }
 
 /// The lowest 10 modes of a 1 000-piece cantilever (bending κ_y only,

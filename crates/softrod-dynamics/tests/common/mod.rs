@@ -486,3 +486,47 @@ pub fn robot(gravity: bool, damping: bool, tree: bool, loads: bool) -> Model {
     }
     b.build().unwrap()
 }
+
+/// `cosh β cos β + 1 = 0` (clamped–free beam), Newton from a guess.
+pub fn cantilever_root(mut b: f64) -> f64 {
+    for _ in 0..50 {
+        let f = b.cosh() * b.cos() + 1.0;
+        let df = b.sinh() * b.cos() - b.cosh() * b.sin();
+        b -= f / df;
+    }
+    b
+}
+
+/// Leading-order Ritz error constant of mode `β` (with `βL` given): for
+/// piecewise-constant curvature the best energy approximation of the mode's
+/// curvature `φ''` is its piece mean, missing `(h²/12)∫φ'''²`; so
+/// `δλ/λ ≈ (h²/12) ∫φ'''²/∫φ''²` and `δω/ω ≈ C/N²` with
+/// `C = (L²/24) ∫φ'''²/∫φ''²`, evaluated here by Simpson on the analytic
+/// Euler–Bernoulli mode shape.
+pub fn ritz_constant(bl: f64) -> f64 {
+    let sigma = (bl.cosh() + bl.cos()) / (bl.sinh() + bl.sin());
+    // Dimensionless u = s/L ∈ [0,1]; derivatives up to powers of β that cancel in the ratio.
+    let d2 = |u: f64| {
+        let z = bl * u;
+        z.cosh() + z.cos() - sigma * (z.sinh() + z.sin())
+    };
+    let d3 = |u: f64| {
+        let z = bl * u;
+        bl * (z.sinh() - z.sin() - sigma * (z.cosh() + z.cos()))
+    };
+    let m = 20_000;
+    let (mut a, mut b) = (0.0, 0.0);
+    for i in 0..=m {
+        let u = i as f64 / m as f64;
+        let w = if i == 0 || i == m {
+            1.0
+        } else if i % 2 == 1 {
+            4.0
+        } else {
+            2.0
+        };
+        a += w * d3(u).powi(2);
+        b += w * d2(u).powi(2);
+    }
+    a / b / 24.0
+}
