@@ -398,9 +398,7 @@ mod tests {
     /// enter the relative motion and the reaction acts on it (CT12).
     #[test]
     fn a_rod_pressing_on_an_obstacle_carried_by_a_free_body() {
-        // Sticks below a stretch μN/k_t, which the stiffness raised at the
-        // commit (CT15: 5 % of r deep, several times the base) shrinks.
-        for by in [1e-10, 3e-4] {
+        for by in [1e-7, 3e-4] {
             let model = Model::builder()
                 .rod(
                     Rod::builder(0.3)
@@ -433,7 +431,16 @@ mod tests {
                 .unwrap();
             let n = model.n_dof();
             let q = wiggle(n, 1e-4, 1.3);
-            let qd = wiggle(n, 0.05, 0.7);
+            // The contact moves at ~1 cm/s relative to the ball: its trial
+            // force `k e + c v_t` stays within μ f_n under the law the
+            // commit raised (CT15: c × √s). At 5 cm/s (this test before
+            // CT15) the damping alone, 0.9 N against μ f_n = 0.25 N, slides.
+            let qd = wiggle(n, 0.01, 0.7);
+            let mut data = Data::new(&model);
+            crate::commit_contact(&model, &mut data, 0.0, &shifted(&q, by), &qd).unwrap();
+            let held = data.contact.as_ref().unwrap().holds.iter().flatten().flatten();
+            let scale = held.fold(0.0, |m: f64, h| m.max(h.scale));
+            assert!(scale > 3.0, "the raised law is the one checked: {scale}");
             let (stick, slip) = check(&model, &q, &qd, &shifted(&q, by), "carried obstacle");
             assert!(
                 if by < 1e-6 { stick > 0 } else { slip > 0 },
