@@ -341,19 +341,21 @@ fn normal_force() -> f64 {
 ///
 /// FAILS today: the bar moves 3.2 mm in the first 0.2 s and 1.5 mm in
 /// the next 0.2 s (the rails' elastic give is ~0.03 mm). What is known:
+///
 /// - Not CT15: with the raise switched off (main's pair law: scale 1, no
 ///   offset) it moves 4.3 mm, then 1.2 mm.
 /// - Not the pair anchor's lever (the anchor offset ≈ 2r n stored in b's
 ///   section frame swings with b's section rotation): storing only the
 ///   tangential residual `f_t/k` there moves it 3.6 mm, then 1.5 mm.
 /// - The commits show a slowly decaying vibration started by the sudden
-///   load: each rail's normal force swings 0.61–1.01 N (static 0.81 N)
+///   load: rail a's normal force swings 0.61–1.01 N (static 0.81 N)
 ///   at 0.05 s and still 0.70–0.80 N at 0.35 s, and the tangential force
 ///   at ~70 Hz. The load is shared unevenly between the two rails (one
 ///   carries ~0.22 N = μ f_n, the other ~0.1 N), so the loaded one
 ///   reaches μ f_n on every swing and slips toward the pull: a vibration
 ///   ratchet that slows as the vibration decays (about half of that
 ///   rail's commits slide before 0.1 s, a fifth after 0.35 s).
+///
 /// Open: whether the swings should decay faster (the rails' viscosity
 /// 1e5 Pa s gives them ζ ≈ 0.02) or the pair law feeds them; a test that
 /// applies the pull after the bar has settled would tell.

@@ -438,7 +438,14 @@ mod tests {
             let qd = wiggle(n, 0.01, 0.7);
             let mut data = Data::new(&model);
             crate::commit_contact(&model, &mut data, 0.0, &shifted(&q, by), &qd).unwrap();
-            let held = data.contact.as_ref().unwrap().holds.iter().flatten().flatten();
+            let held = data
+                .contact
+                .as_ref()
+                .unwrap()
+                .holds
+                .iter()
+                .flatten()
+                .flatten();
             let scale = held.fold(0.0, |m: f64, h| m.max(h.scale));
             assert!(scale > 3.0, "the raised law is the one checked: {scale}");
             let (stick, slip) = check(&model, &q, &qd, &shifted(&q, by), "carried obstacle");
