@@ -183,12 +183,12 @@ pub fn statics(path: &Path, json: bool, out: Option<PathBuf>, png: bool) -> Resu
         eprintln!("softrod: warning: {w}");
     }
     // The contacts at the equilibrium (frictionless: statics has no
-    // history to anchor friction to; docs/theory-contact.md).
+    // history to anchor friction to), with the contact stiffness the
+    // solve raised (docs/theory-contact.md CT15).
     let contacts = if l.sim.model().has_contact() {
         let zero = vec![0.0; res.q.len()];
         Some(
             l.sim
-                .model()
                 .contacts(0.0, res.q.as_slice(), &zero)
                 .map_err(|e| failed(format!("contacts at the equilibrium: {e}")))?,
         )

@@ -110,7 +110,7 @@ pub use algorithms::{
     bias_force, forward_dynamics_cholesky, inverse_dynamics, inverse_dynamics_with, mass_matrix,
 };
 pub use analysis::{
-    Energies, FAILURE_PENETRATION, ModeKind, Modes, StaticsOptions, StaticsResult, StaticsSolver,
+    Energies, IMPACT_LIMIT, ModeKind, Modes, StaticsOptions, StaticsResult, StaticsSolver,
     actuation_matrix, closure_statics, commit_contact, coriolis_matrix, damping_matrix, energies,
     frames, generalized_gravity, lowest_modes, modes, section_jacobian, static_force, statics,
     stiffness_matrix,

@@ -142,9 +142,10 @@ impl RodSystem {
 
 impl RodSystem {
     /// After an accepted step to `(t, q, q̇)`: commits the contact friction
-    /// anchors and checks the penetration
-    /// (`softrod_dynamics::commit_contact`, docs/theory-contact.md CT5).
-    /// Returns whether the system changed (a model with friction: the
+    /// anchors and stiffnesses and checks the penetration
+    /// (`softrod_dynamics::commit_contact`, docs/theory-contact.md CT5,
+    /// CT15). Returns whether the system changed (a stiffness rose, or a
+    /// model with friction: the
     /// cached derivatives no longer hold, the caller returns
     /// [`Control::SystemChanged`](crate::Control::SystemChanged)). Call it
     /// from the `step` hook only: a rejected step must leave the anchors
@@ -153,8 +154,9 @@ impl RodSystem {
         if !self.model.has_contact() {
             return Ok(false);
         }
-        softrod_dynamics::commit_contact(&self.model, &mut self.data, t, q, qd)?;
-        Ok(self.model.obstacles().iter().any(|o| o.friction > 0.0)
+        let raised = softrod_dynamics::commit_contact(&self.model, &mut self.data, t, q, qd)?;
+        Ok(raised
+            || self.model.obstacles().iter().any(|o| o.friction > 0.0)
             || self.model.contact_settings().friction > 0.0)
     }
 }

@@ -214,7 +214,7 @@ pub fn run(
     if l.sim.model().has_contact() {
         summary_final.add_contact(streamer.max_penetration(), streamer.max_contacts());
         // Beyond the stated bound (CT3) the run goes on (it fails only at
-        // half the radius), but never silently.
+        // 15 % of the radius, CT15), but never silently.
         if let Some(w) = streamer.penetration_warning(l.sim.model()) {
             if !quiet {
                 eprintln!("softrod: warning: {w}");

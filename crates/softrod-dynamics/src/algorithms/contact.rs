@@ -232,8 +232,10 @@ fn touch(
     if gap >= 0.0 {
         return false;
     }
-    let law = law(model, rod, sample, o, ask.friction);
     let n_obs = model.contact.obstacles.len();
+    // The stiffness this contact's state holds (CT15), frozen in a step.
+    let (scale, offset) = work.held(rod, sample * n_obs + o);
+    let law = law(model, rod, sample, o, ask.friction).scaled(scale, offset);
     let stretch = if law.mu > 0.0 {
         work.anchors[rod][sample * n_obs + o].map(|a| p - frame.transform_point(&a))
     } else {

@@ -364,7 +364,13 @@ fn narrowphase(
         Mat3::zeros()
     };
     let dist = Distance { d, normal, hessian };
-    let law = pair_law(model, a, sa, b, sb, ra.min(rb), ask.friction);
+    // The stiffness the pair's state holds (CT15), frozen in a step.
+    let (scale, offset) = pw
+        .holds
+        .iter()
+        .find(|h| h.matches(a, sa, b, sb, ra + rb))
+        .map_or((1.0, 0.0), |h| (h.hold.scale, h.hold.offset));
+    let law = pair_law(model, a, sa, b, sb, ra.min(rb), ask.friction).scaled(scale, offset);
     let anchor = if law.mu > 0.0 {
         pw.anchors.iter().copied().find(|k| {
             k.a == a && k.b == b && (k.sa - sa).abs() < ra + rb && (k.sb - sb).abs() < ra + rb
@@ -402,7 +408,7 @@ fn narrowphase(
 
 /// The mass a contact point of rod `rod` at `s` stands for: that of the
 /// nearest contact point (CT1).
-fn mass_at(model: &Model, rod: usize, s: f64) -> f64 {
+pub(crate) fn mass_at(model: &Model, rod: usize, s: f64) -> f64 {
     let smp = &model.contact.samples[rod];
     let i = smp.partition_point(|x| x.s < s).min(smp.len() - 1);
     if i > 0 && (s - smp[i - 1].s) < (smp[i].s - s) {

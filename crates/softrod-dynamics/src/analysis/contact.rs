@@ -4,20 +4,71 @@
 //! step (CT5).
 
 use crate::algorithms::contact::{law, parent_pose};
-use crate::algorithms::pairs::pair_poses;
+use crate::algorithms::pairs::{mass_at, pair_law, pair_poses};
 use crate::algorithms::{check_vec, contact_force};
 use crate::error::DynamicsError;
-use crate::forces::Forces;
+use crate::forces::contact::Law;
+use crate::forces::{Drives, Forces};
 use crate::model::Model;
-use crate::model::contact::{Active, ContactWork};
+use crate::model::contact::{
+    Active, ContactWork, HEAL_PERIODS, Hold, IMPACT_LIMIT, RAISE_HEADROOM, REST_TARGET,
+};
 use crate::model::data::Data;
-use crate::model::pairs::{PairAnchor, radius_at};
+use crate::model::pairs::{PairAnchor, PairHold, radius_at};
 use softrod_lie::Vec3;
 use softrod_mechanics::contact::{ContactPoint, Contactee};
 
-/// A contact penetrating deeper than this fraction of the rod's radius
-/// stops a run ([`commit_contact`]): the penalty no longer resolves it.
-pub const FAILURE_PENETRATION: f64 = 0.5;
+/// The stiffness state of a contact after an accepted step at `t` (CT15),
+/// and the depth \[m\] that stops the run: `prev` the state the step used
+/// (`None`: it starts touching), `base` its law of CT3, `mass` the mass
+/// that law was set by, `radius` the surface radius, `depth` the
+/// penetration. First the offset heals (`× e^(−Δt/τ)`, `τ` =
+/// [`HEAL_PERIODS`] periods of the base law; zero below `ε/10`). Then, if
+/// the spring carries its force `f` beyond [`REST_TARGET`] of the radius
+/// (`f/k > target`), the scale rises so that `f` would sit at the target
+/// divided by [`RAISE_HEADROOM`], and the offset is set so that the raised
+/// penalty carries the same `f` at this depth: the force is continuous, the
+/// unloading path steeper than the loading one (a raise only dissipates).
+/// Any contact deeper than [`IMPACT_LIMIT`] of its radius stops the run.
+fn next_hold(
+    prev: Option<Hold>,
+    base: &Law,
+    (mass, radius): (f64, f64),
+    depth: f64,
+    t: f64,
+) -> (Hold, f64) {
+    let mut h = prev.unwrap_or_else(|| Hold::new(t));
+    let tau = HEAL_PERIODS * 2.0 * std::f64::consts::PI * (mass / base.k).sqrt();
+    let spring = base.scaled(h.scale, h.offset).penalty(depth).0;
+    h.offset *= (-(t - h.t).max(0.0) / tau).exp();
+    if h.offset < 0.1 * base.eps {
+        h.offset = 0.0;
+    }
+    h.t = t;
+    let target = REST_TARGET * radius;
+    let k = base.k * h.scale;
+    if spring > k * target {
+        h.scale *= RAISE_HEADROOM * spring / (k * target);
+        let raised = base.scaled(h.scale, 0.0);
+        h.offset = (depth - raised.depth_of(spring)).max(0.0);
+    }
+    (h, IMPACT_LIMIT * radius)
+}
+
+/// The scale of a contact's stiffness at a static equilibrium (CT15):
+/// `prev` raised, as in [`next_hold`], if the spring of the law it scales
+/// carries its force deeper than [`REST_TARGET`] of the radius (no offset:
+/// statics solves again from there).
+fn static_scale(prev: f64, base: &Law, radius: f64, depth: f64) -> f64 {
+    let law = base.scaled(prev, 0.0);
+    let spring = law.penalty(depth).0;
+    let target = REST_TARGET * radius;
+    if spring > law.k * target {
+        prev * RAISE_HEADROOM * spring / (law.k * target)
+    } else {
+        prev
+    }
+}
 
 impl Model {
     /// The active contacts at `(t, q, q̇)` and their forces, for outputs
@@ -147,10 +198,13 @@ impl Model {
 /// After an accepted step to `(t, q, q̇)`: commits the friction anchors
 /// (CT5: a sticking contact keeps its anchor, a sliding one drags it to
 /// where the spring carries `μ f_n`, a new contact anchors where it
-/// touches, a contact that opened forgets it) and checks the penetration:
-/// [`DynamicsError::Penetration`] if a contact is deeper than
-/// [`FAILURE_PENETRATION`] of the rod's radius. Nothing for a model
-/// without contact. A rejected step must not be committed: the anchors are
+/// touches, a contact that opened forgets it), raises the stiffness of
+/// contacts whose spring carries more than its target (CT15) and checks
+/// the penetration: [`DynamicsError::Penetration`] (naming the rod, `s`,
+/// the obstacle or other rod, `t` and the depth) if a contact is deeper
+/// than [`IMPACT_LIMIT`] of its radius. Returns whether a stiffness rose (the law changed: cached
+/// derivatives no longer hold). Nothing for a model without contact. A
+/// rejected step must not be committed: the anchors and stiffnesses are
 /// read, never written, by the evaluations of a step.
 pub fn commit_contact(
     model: &Model,
@@ -158,46 +212,59 @@ pub fn commit_contact(
     t: f64,
     q: &[f64],
     qd: &[f64],
-) -> Result<(), DynamicsError> {
+) -> Result<bool, DynamicsError> {
     check_vec(model, "q", q)?;
     check_vec(model, "qdot", qd)?;
     if !contact_force(model, data, Forces::ALL, t, q, Some(qd)) {
-        return Ok(());
+        return Ok(false);
     }
     let mut work = data.contact.take().expect("contact work");
     let n_obs = model.contact.obstacles.len();
     let mut result = Ok(());
+    let mut raised = false;
     let mut next: Vec<(usize, usize, softrod_lie::Vec3)> = Vec::with_capacity(work.active.len());
+    let mut holds: Vec<(usize, usize, Hold)> = Vec::with_capacity(work.active.len());
     for a in &work.active {
         let smp = &model.contact.samples[a.rod][a.sample];
-        if result.is_ok() && -a.gap > FAILURE_PENETRATION * smp.radius {
+        let idx = a.sample * n_obs + a.obstacle;
+        let prev = work.holds[a.rod][idx];
+        let base = law(model, a.rod, a.sample, a.obstacle, true);
+        let (hold, limit) = next_hold(prev, &base, (smp.mass, smp.radius), -a.gap, t);
+        let before = prev.map_or((1.0, 0.0), |p| (p.scale, p.offset));
+        raised |= (hold.scale, hold.offset) != before;
+        holds.push((a.rod, idx, hold));
+        if result.is_ok() && -a.gap > limit {
             result = Err(DynamicsError::Penetration {
                 rod: model.rod_id(a.rod),
                 s: smp.s,
                 other: model.contactee_name(&Contactee::Obstacle(a.obstacle)),
                 t,
                 depth: -a.gap,
-                bound: FAILURE_PENETRATION * smp.radius,
+                bound: limit,
             });
         }
-        let l = law(model, a.rod, a.sample, a.obstacle, true);
-        if l.mu <= 0.0 {
+        if base.mu <= 0.0 {
             continue;
         }
+        // The tangential spring has the normal stiffness: after a raise
+        // the stretch shrinks by the same factor (CT15), so the
+        // tangential force is continuous like the normal one.
+        let k = base.k * hold.scale;
+        let shrink = before.0 / hold.scale;
         let frame = parent_pose(model, data, a.obstacle);
-        let idx = a.sample * n_obs + a.obstacle;
         let anchor_world = match work.anchors[a.rod][idx] {
-            Some(_) if a.sticking => None,
+            Some(k0) if a.sticking => {
+                let k0 = frame.transform_point(&k0);
+                Some(a.point - (a.point - k0) * shrink)
+            }
             Some(_) => {
                 // Slip: the stretch that carries the tangential force.
                 let ft = a.force - a.normal * a.normal.dot(&a.force);
-                Some(a.point + ft / l.k)
+                Some(a.point + ft / k)
             }
             None => Some(a.point),
         };
-        let keep = work.anchors[a.rod][idx];
-        let world = anchor_world.or_else(|| keep.map(|k| frame.transform_point(&k)));
-        if let Some(w) = world {
+        if let Some(w) = anchor_world {
             next.push((a.rod, idx, frame.inverse().transform_point(&w)));
         }
     }
@@ -207,18 +274,98 @@ pub fn commit_contact(
     for (rod, idx, a) in next {
         work.anchors[rod][idx] = Some(a);
     }
+    for h in &mut work.holds {
+        h.fill(None);
+    }
+    for (rod, idx, h) in holds {
+        work.holds[rod][idx] = Some(h);
+    }
     if work.pairs.is_some() {
         let pair_result = commit_pairs(model, data, &mut work, t, q);
-        if result.is_ok() {
-            result = pair_result;
+        match pair_result {
+            Ok(r) => raised |= r,
+            Err(e) if result.is_ok() => result = Err(e),
+            Err(_) => {}
         }
     }
     data.contact = Some(work);
-    result
+    result.map(|()| raised)
 }
 
-/// The commit of rod–rod contact (CT10): the penetration check against
-/// half the smaller radius, and the pairs' friction anchors — kept while
+/// The stiffness of resting contacts for statics (CT15): at the
+/// equilibrium `q` (drives at rest at `t`), every contact whose spring
+/// carries its force deeper than [`REST_TARGET`] of its radius has its
+/// scale raised as in [`commit_contact`] (a state held in `data`, read by
+/// the next solve); contacts apart forget theirs. Returns whether any
+/// scale rose (the equilibrium must be solved again).
+pub(crate) fn raise_for_rest(model: &Model, data: &mut Data, t: f64, q: &[f64]) -> bool {
+    let zero = vec![0.0; model.n_dof()];
+    let forces = Forces::ALL.with_drives(Drives::AtRest);
+    if !contact_force(model, data, forces, t, q, Some(&zero)) {
+        return false;
+    }
+    let mut work = data.contact.take().expect("contact work");
+    let n_obs = model.contact.obstacles.len();
+    let mut raised = false;
+    let at_rest = |scale: f64| Hold {
+        scale,
+        offset: 0.0,
+        t: f64::NEG_INFINITY,
+    };
+    let mut holds = Vec::with_capacity(work.active.len());
+    for a in &work.active {
+        let smp = &model.contact.samples[a.rod][a.sample];
+        let idx = a.sample * n_obs + a.obstacle;
+        let prev = work.holds[a.rod][idx].map_or(1.0, |h| h.scale);
+        let base = law(model, a.rod, a.sample, a.obstacle, false);
+        let scale = static_scale(prev, &base, smp.radius, -a.gap);
+        raised |= scale != prev;
+        holds.push((a.rod, idx, at_rest(scale)));
+    }
+    for h in &mut work.holds {
+        h.fill(None);
+    }
+    for (rod, idx, h) in holds {
+        work.holds[rod][idx] = Some(h);
+    }
+    if let Some(pw) = &mut work.pairs {
+        pw.next_holds.clear();
+        for c in &pw.active {
+            let rb = radius_at(model, c.b, c.sb);
+            let reach = c.radius_a + rb;
+            let prev = pw
+                .holds
+                .iter()
+                .find(|h| h.matches(c.a, c.sa, c.b, c.sb, reach))
+                .map_or(1.0, |h| h.hold.scale);
+            let radius = c.radius_a.min(rb);
+            let (base, _) = pair_base(model, c.a, c.sa, c.b, c.sb, radius);
+            let scale = static_scale(prev, &base, radius, -c.gap);
+            raised |= scale != prev;
+            pw.next_holds.push(PairHold {
+                a: c.a,
+                sa: c.sa,
+                b: c.b,
+                sb: c.sb,
+                hold: at_rest(scale),
+            });
+        }
+        std::mem::swap(&mut pw.holds, &mut pw.next_holds);
+    }
+    data.contact = Some(work);
+    raised
+}
+
+/// The base law of a rod pair (CT11, frictionless) and the mass its
+/// stiffness is set by (the smaller side's).
+fn pair_base(model: &Model, a: usize, sa: f64, b: usize, sb: f64, radius: f64) -> (Law, f64) {
+    let law = pair_law(model, a, sa, b, sb, radius, false);
+    (law, mass_at(model, a, sa).min(mass_at(model, b, sb)))
+}
+
+/// The commit of rod–rod contact (CT10, CT15): the stiffness states, the
+/// penetration check against [`IMPACT_LIMIT`] of the smaller radius, and
+/// the pairs' friction anchors — kept while
 /// sticking, moved to carry `μ f_n` while sliding, set where a new pair
 /// touches, dropped when it opens.
 fn commit_pairs(
@@ -227,14 +374,32 @@ fn commit_pairs(
     work: &mut ContactWork,
     t: f64,
     q: &[f64],
-) -> Result<(), DynamicsError> {
+) -> Result<bool, DynamicsError> {
     let mut pw = work.pairs.take().expect("pair work");
     let mut result = Ok(());
+    let mut raised = false;
     pw.next.clear();
+    pw.next_holds.clear();
     let with_friction = model.contact.settings.friction > 0.0;
     for c in &pw.active {
         let rb = radius_at(model, c.b, c.sb);
-        let bound = FAILURE_PENETRATION * c.radius_a.min(rb);
+        let radius = c.radius_a.min(rb);
+        let prev = pw
+            .holds
+            .iter()
+            .find(|h| h.matches(c.a, c.sa, c.b, c.sb, c.radius_a + rb))
+            .map(|h| h.hold);
+        let (base, mass) = pair_base(model, c.a, c.sa, c.b, c.sb, radius);
+        let (hold, bound) = next_hold(prev, &base, (mass, radius), -c.gap, t);
+        raised |= Some((hold.scale, hold.offset)) != prev.map(|p| (p.scale, p.offset))
+            && (hold.scale, hold.offset) != (1.0, 0.0);
+        pw.next_holds.push(PairHold {
+            a: c.a,
+            sa: c.sa,
+            b: c.b,
+            sb: c.sb,
+            hold,
+        });
         if result.is_ok() && -c.gap > bound {
             result = Err(DynamicsError::Penetration {
                 rod: model.rod_id(c.a),
@@ -276,6 +441,7 @@ fn commit_pairs(
         pw.next.push(anchor);
     }
     std::mem::swap(&mut pw.anchors, &mut pw.next);
+    std::mem::swap(&mut pw.holds, &mut pw.next_holds);
     work.pairs = Some(pw);
-    result
+    result.map(|()| raised)
 }

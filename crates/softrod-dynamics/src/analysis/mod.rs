@@ -16,8 +16,10 @@ pub(crate) mod matrices;
 pub(crate) mod modes;
 pub(crate) mod statics;
 
+pub use crate::model::contact::IMPACT_LIMIT;
 pub use closed::closure_statics;
-pub use contact::{FAILURE_PENETRATION, commit_contact};
+pub use contact::commit_contact;
+pub(crate) use contact::raise_for_rest;
 pub use energy::{Energies, energies};
 pub use frames::{frames, section_jacobian};
 pub use lanczos::lowest_modes;

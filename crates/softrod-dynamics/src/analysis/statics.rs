@@ -135,6 +135,38 @@ pub fn statics(
         crate::constraints::queries::check_workspace(model, data)?;
         return super::closed::statics(model, tree, data, q0, options).map(|(r, _)| r);
     }
+    let mut result = statics_open(model, data, q0, options)?;
+    // Contact (docs/theory-contact.md CT15): resting contacts whose spring
+    // carries its force deeper than its target have their stiffness raised,
+    // and the equilibrium is solved again from where it was, until none is.
+    let mut rounds = 0;
+    while model.has_contact()
+        && rounds < MAX_STIFFNESS_ROUNDS
+        && super::raise_for_rest(model, data, options.time, result.q.as_slice())
+    {
+        let again = statics_open(model, data, result.q.as_slice(), options)?;
+        result = StaticsResult {
+            iterations: result.iterations + again.iterations,
+            load_steps: result.load_steps.max(again.load_steps),
+            ..again
+        };
+        rounds += 1;
+    }
+    Ok(result)
+}
+
+/// Rounds of contact stiffness raises in [`statics`] (CT15); each raises a
+/// scale by at least [`crate::model::contact::RAISE_HEADROOM`], so a
+/// contact settles in one or two.
+const MAX_STIFFNESS_ROUNDS: usize = 20;
+
+/// [`statics`] of an open model with the contact stiffness `data` holds.
+fn statics_open(
+    model: &Model,
+    data: &mut Data,
+    q0: &[f64],
+    options: &StaticsOptions,
+) -> Result<StaticsResult, DynamicsError> {
     let stiffness = BlockStiffness::new(model);
     let structured = match options.solver {
         StaticsSolver::Dense => false,
@@ -232,6 +264,12 @@ impl Newton<'_> {
         let w = self
             .derivatives
             .get_or_insert_with(|| IdDerivatives::new(self.model));
+        if let (Some(from), Some(to)) = (&data.contact, &mut w.contact) {
+            // The contact stiffness of this solve (CT15), not a fresh one.
+            if let Some(cw) = &mut to.contact {
+                cw.copy_friction_state(from);
+            }
+        }
         match (data.cable_tensions(), &mut w.tensions) {
             (None, t) => *t = None,
             (Some(u), Some(t)) => t.as_mut_slice().copy_from_slice(u),

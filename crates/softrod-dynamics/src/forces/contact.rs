@@ -213,6 +213,9 @@ pub(crate) struct Law {
     pub eps: f64,
     /// Coulomb coefficient.
     pub mu: f64,
+    /// Penetration at which the penalty starts \[m\] (CT15: zero but
+    /// while a raised stiffness heals from its raise).
+    pub offset: f64,
 }
 
 impl Law {
@@ -247,6 +250,29 @@ impl Law {
             c: 2.0 * zeta * (k * moving).sqrt(),
             eps: 0.1 * REST_PENETRATION * radius,
             mu,
+            offset: 0.0,
+        }
+    }
+
+    /// This law with its stiffness raised by `scale` and its penalty
+    /// starting at the penetration `offset` (CT15): `k` times `scale`, `c`
+    /// times `√scale` (the same damping ratio), the same `ε`.
+    pub(crate) fn scaled(self, scale: f64, offset: f64) -> Self {
+        Self {
+            k: self.k * scale,
+            c: self.c * scale.sqrt(),
+            offset,
+            ..self
+        }
+    }
+
+    /// The penetration at which the spring of this law (offset aside)
+    /// carries `force` ≥ 0 (the inverse of `φ`, CT15).
+    pub(crate) fn depth_of(&self, force: f64) -> f64 {
+        if force >= 0.5 * self.k * self.eps {
+            force / self.k + 0.5 * self.eps
+        } else {
+            (2.0 * self.eps * force / self.k).sqrt()
         }
     }
 
@@ -254,6 +280,7 @@ impl Law {
     /// apart, quadratic over `[0, ε]`, then linear of slope `k` (C¹).
     #[inline]
     pub(crate) fn penalty(&self, delta: f64) -> (f64, f64) {
+        let delta = delta - self.offset;
         if delta <= 0.0 {
             (0.0, 0.0)
         } else if delta < self.eps {
@@ -301,7 +328,8 @@ pub(crate) fn force(
     let vn = n.dot(v);
     let mut fn_ = phi - law.c * ramp * vn;
     // ∂fn/∂p = −φ' n − c ramp (H v) − c vn ramp' n ... ramp' = φ''/k.
-    let ddphi = if delta > 0.0 && delta < law.eps {
+    let x = delta - law.offset;
+    let ddphi = if x > 0.0 && x < law.eps {
         law.k / law.eps
     } else {
         0.0

@@ -21,6 +21,46 @@ pub(crate) const REST_PENETRATION: f64 = 0.01;
 /// Penetration of a 1 m/s impact, as a fraction of the smaller radius
 /// (CT3).
 pub(crate) const IMPACT_PENETRATION: f64 = 0.10;
+/// The spring part of the penetration a contact's stiffness is raised to
+/// hold (CT15): half the rest bound, the other half is margin for the
+/// quadratic start and a load that grows between two raises.
+pub(crate) const REST_TARGET: f64 = 0.5 * REST_PENETRATION;
+/// A raised stiffness carries the force that triggered it at the target
+/// divided by this (CT15): headroom so that a slowly growing load raises
+/// it once per 50 % of growth, not at every step.
+pub(crate) const RAISE_HEADROOM: f64 = 1.5;
+/// The offset of a raise heals with the time constant of this many
+/// periods `2π/ω` of the contact's base law (`ω = √(k/m)`, CT15).
+pub(crate) const HEAL_PERIODS: f64 = 2.0;
+/// A contact deeper than this fraction of the radius stops a run (CT15):
+/// one and a half times the stated impact bound.
+pub const IMPACT_LIMIT: f64 = 1.5 * IMPACT_PENETRATION;
+
+/// The stiffness state of one touching contact (CT15): a run state like
+/// the friction anchors, committed after accepted steps and read, never
+/// written, by the evaluations of a step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Hold {
+    /// Factor on the base stiffness `k` of CT3 (on the damping `c`: its
+    /// square root, the damping ratio stays).
+    pub scale: f64,
+    /// Penetration at which the raised penalty starts \[m\]: set by a
+    /// raise so that the force is continuous, then healed to zero.
+    pub offset: f64,
+    /// Time of the last commit \[s\].
+    pub t: f64,
+}
+
+impl Hold {
+    /// A contact that starts touching at `t`.
+    pub(crate) fn new(t: f64) -> Self {
+        Self {
+            scale: 1.0,
+            offset: 0.0,
+            t,
+        }
+    }
+}
 
 /// One material point where contact is looked for (CT1).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -245,6 +285,8 @@ pub(crate) struct ContactWork {
     /// Friction anchors (CT5), committed after accepted steps: per rod,
     /// `sample · n_obstacles + obstacle`, in the obstacle's parent frame.
     pub anchors: Vec<Vec<Option<Vec3>>>,
+    /// Stiffness states (CT15), indexed like `anchors`.
+    pub holds: Vec<Vec<Option<Hold>>>,
     /// Rod–rod and self contact (CT8–CT11); `None` without them: no
     /// broadphase is built.
     pub pairs: Option<Box<PairWork>>,
@@ -253,17 +295,29 @@ pub(crate) struct ContactWork {
 }
 
 impl ContactWork {
-    /// Takes `from`'s friction anchors (obstacles' and pairs'): the
-    /// friction state of a run, for a second evaluation of its forces.
-    /// Allocates only while the pairs' list grows to the pairs that touch.
+    /// Takes `from`'s friction anchors and stiffness states (obstacles' and
+    /// pairs', CT5, CT15): the contact state of a run, for a second
+    /// evaluation of its forces. Allocates only while the pairs' lists grow
+    /// to the pairs that touch.
     pub(crate) fn copy_friction_state(&mut self, from: &ContactWork) {
         for (a, b) in self.anchors.iter_mut().zip(&from.anchors) {
+            a.copy_from_slice(b);
+        }
+        for (a, b) in self.holds.iter_mut().zip(&from.holds) {
             a.copy_from_slice(b);
         }
         if let (Some(a), Some(b)) = (&mut self.pairs, &from.pairs) {
             a.anchors.clear();
             a.anchors.extend_from_slice(&b.anchors);
+            a.holds.clear();
+            a.holds.extend_from_slice(&b.holds);
         }
+    }
+
+    /// The stiffness scale and offset of obstacle contact `idx` of `rod`
+    /// (CT15).
+    pub(crate) fn held(&self, rod: usize, idx: usize) -> (f64, f64) {
+        self.holds[rod][idx].map_or((1.0, 0.0), |h| (h.scale, h.offset))
     }
 
     pub(crate) fn new(model: &Model) -> Self {
@@ -291,6 +345,12 @@ impl ContactWork {
             tau: DVector::zeros(model.n_dof()),
             tau_total: DVector::zeros(model.n_dof()),
             anchors: model
+                .contact
+                .samples
+                .iter()
+                .map(|s| vec![None; s.len() * n_obs])
+                .collect(),
+            holds: model
                 .contact
                 .samples
                 .iter()

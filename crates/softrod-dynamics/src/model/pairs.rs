@@ -109,6 +109,25 @@ pub(crate) struct PairAnchor {
     pub offset: Vec3,
 }
 
+/// The stiffness state of a touching pair (CT15), keyed like
+/// [`PairAnchor`] by its rods and arc lengths.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PairHold {
+    pub a: usize,
+    pub sa: f64,
+    pub b: usize,
+    pub sb: f64,
+    pub hold: crate::model::contact::Hold,
+}
+
+impl PairHold {
+    /// Whether this state belongs to the pair `(a, sa)`–`(b, sb)` of radii
+    /// summing to `reach` (the anchors' rule, CT10).
+    pub(crate) fn matches(&self, a: usize, sa: f64, b: usize, sb: f64, reach: f64) -> bool {
+        self.a == a && self.b == b && (self.sa - sa).abs() < reach && (self.sb - sb).abs() < reach
+    }
+}
+
 /// The buffers of rod–rod contact, all sized once.
 #[derive(Clone, Debug)]
 pub(crate) struct PairWork {
@@ -127,6 +146,10 @@ pub(crate) struct PairWork {
     /// commit builds.
     pub anchors: Vec<PairAnchor>,
     pub next: Vec<PairAnchor>,
+    /// Stiffness states of touching pairs (CT15), committed like the
+    /// anchors, and the list the commit builds.
+    pub holds: Vec<PairHold>,
+    pub next_holds: Vec<PairHold>,
     /// Coordinates of the central differences (n_dof).
     pub scratch: Vec<f64>,
     /// The seeds of the pairs touching at the state the central
@@ -159,6 +182,8 @@ impl PairWork {
             tau: DVector::zeros(model.n_dof()),
             anchors: Vec::with_capacity(64),
             next: Vec::with_capacity(64),
+            holds: Vec::with_capacity(64),
+            next_holds: Vec::with_capacity(64),
             scratch: vec![0.0; model.n_dof()],
             fd_seeds: Vec::with_capacity(64),
             narrow_tests: 0,

@@ -426,9 +426,11 @@ class Simulation:
     def contacts(
         self, q: ArrayLike, qdot: ArrayLike | None = None, *, t: float = 0.0
     ) -> list[Contact]:
-        """The active contacts at (t, q, qdot); no friction history: zero friction."""
+        """The active contacts at (t, q, qdot) under the contact state this simulation holds:
+        the stiffness its last statics (without loads) or simulate (no controller) left,
+        and that run's friction anchors; before any, the base stiffness and zero friction."""
     def max_penetration(self, q: ArrayLike, *, t: float = 0.0) -> float:
-        """The largest -gap [m] at q, 0 if none."""
+        """The largest -gap [m] at q, 0 if none (geometry: independent of the contact state)."""
     def prescribed_forces(self, t: float, q: ArrayLike, qdot: ArrayLike) -> _F64: ...
     def closure_residuals(self, q: ArrayLike, *, t: float = 0.0) -> dict[str, float]: ...
     @property

@@ -45,12 +45,13 @@ impl Simulation {
             }
             result
         })?;
-        let model = sim.model();
-        // What `statics --json` lists (its `contacts`, `max_penetration`).
+        // What `statics --json` lists (its `contacts`, `max_penetration`),
+        // with the contact stiffness the solve raised (CT15).
         let zero = vec![0.0; out.q.len()];
-        let found = model
+        let found = sim
             .contacts(0.0, &out.q, &zero)
-            .map_err(crate::errors::dynamics)?;
+            .map_err(crate::errors::to_py)?;
+        let model = sim.model();
         let max_penetration = found.iter().fold(0.0, |m, c| f64::max(m, -c.gap));
         let contacts = crate::contacts::Contact::list(model, &found)
             .into_iter()

@@ -366,12 +366,16 @@ impl Simulation {
 
     /// The active contacts at `(t, q, qdot)` with their forces
     /// (docs/theory-contact.md), a list of `softrod.Contact`; empty for a
-    /// model without contact. A bare state has no friction history, so the
-    /// friction forces are zero here (those of a run are in
-    /// `Trajectory.contacts`): the normal forces are the whole force.
+    /// model without contact. The forces are those of the contact state
+    /// this simulation holds (CT5, CT15): the stiffness scales its last
+    /// `statics()` (without `loads`) raised or its last `simulate` (without
+    /// a controller) committed, and that run's friction anchors. Before any, the base stiffness of
+    /// CT3 and no friction history (friction zero: the normal forces are
+    /// the whole force). `step` integrates a copy and leaves this state
+    /// alone; the forces of a run's samples are in `Trajectory.contacts`.
     #[pyo3(signature = (q, qdot = None, *, t = 0.0))]
     fn contacts(
-        &self,
+        &mut self,
         q: &Bound<'_, PyAny>,
         qdot: Option<&Bound<'_, PyAny>>,
         t: f64,
@@ -384,14 +388,18 @@ impl Simulation {
                 Some(v) => vector(v, "qdot", n)?.slice().to_vec(),
                 None => vec![0.0; n],
             };
-            let model = self.sim.model();
-            let c = model.contacts(t, q.slice(), &qd).map_err(dynamics)?;
-            Ok(crate::contacts::Contact::list(model, &c))
+            let c = self
+                .sim
+                .contacts(t, q.slice(), &qd)
+                .map_err(crate::errors::to_py)?;
+            Ok(crate::contacts::Contact::list(self.sim.model(), &c))
         })
     }
 
     /// The largest penetration `−gap` [m] of any contact at `q` (time `t`
-    /// for prescribed joints and carried obstacles), 0 if none.
+    /// for prescribed joints and carried obstacles), 0 if none: geometry
+    /// alone, the same whatever contact stiffness or friction state the
+    /// simulation holds.
     #[pyo3(signature = (q, *, t = 0.0))]
     fn max_penetration(&self, q: &Bound<'_, PyAny>, t: f64) -> PyResult<f64> {
         guard(|| {

@@ -312,6 +312,16 @@ impl Hooks<RodSystem> for RunHooks<'_> {
                 return Control::Stop;
             }
         };
+        if contact_changed {
+            // The next step's law (anchors, stiffness: CT5, CT15) is not
+            // this one's: its power from here on is the new law's.
+            if let Some(w) = &mut self.watch {
+                if let Err(e) = w.inputs_changed(&sys.model, &sys.data, info.t, q, qd) {
+                    self.violation = Some(e);
+                    return Control::Stop;
+                }
+            }
+        }
         if !self.u.is_empty() && self.observer.inputs(info.t, q, qd, &mut self.u) {
             if let Err(e) = sys.data.set_cable_tensions(&sys.model, Some(&self.u)) {
                 self.failure = Some((info.t, format!("controller: {e}")));
