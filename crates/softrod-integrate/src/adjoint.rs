@@ -20,6 +20,13 @@
 //! The system's parameters `p` enter through [`ParameterSystem`]: it gives
 //! the vector–Jacobian product `wᵀ ∂a/∂p` at a state, so the backward pass
 //! costs the same whatever the number of parameters (beyond those products).
+//!
+//! A system that offers the force form of its linearization
+//! ([`ParameterSystem::force_jacobians`]: `M` and the derivatives of the
+//! force residual, as a rod does) gets the transposed stage solves of G11:
+//! `Sᵀν = Ã` with `S = M + hγ ∂r/∂q̇ + h²γ² ∂r/∂q`, by GMRES preconditioned
+//! with its structured `M + h²γ²K + hγD`, no Jacobian of the acceleration
+//! and no dense LU of a transposed stage matrix ([`AdjointSolver`]).
 
 // Negated comparisons are deliberate: a NaN must fail every check.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -357,7 +364,11 @@ impl EsdirkAdjoint {
         let z = DVector::zeros(n);
         let m = DMatrix::zeros(n, n);
         // The force form's matrices are allocated only when it is asked for.
-        let fm = if force { m.clone() } else { DMatrix::zeros(0, 0) };
+        let fm = if force {
+            m.clone()
+        } else {
+            DMatrix::zeros(0, 0)
+        };
         Self {
             n,
             force,
@@ -540,13 +551,24 @@ impl EsdirkAdjoint {
                     &mut self.vs[i],
                     &mut self.qs[i],
                 );
-                sys.accel(ti, &self.qs[i], &self.vs[i], &mut self.f)
-                    .map_err(err("accel"))?;
+                // The force form iterates on the force residual
+                // r = ID(Qᵢ, Vᵢ, x) − τ = M(Qᵢ)(x − a): an inverse dynamics
+                // instead of a forward one, and `S⁻¹r` for `W⁻¹(x − a)`.
+                let forced = self.force
+                    && sys
+                        .force_residual(ti, &self.qs[i], &self.vs[i], &self.accs[i], &mut self.g)
+                        .map_err(err("force residual"))?;
                 self.accels += 1;
-                for r in 0..n {
-                    self.g[r] = self.accs[i][r] - self.f[r];
+                if forced {
+                    self.lus[slot].solve_in_place(&mut self.g);
+                } else {
+                    sys.accel(ti, &self.qs[i], &self.vs[i], &mut self.f)
+                        .map_err(err("accel"))?;
+                    for r in 0..n {
+                        self.g[r] = self.accs[i][r] - self.f[r];
+                    }
+                    self.newton_correction(slot);
                 }
-                self.newton_correction(slot);
                 let x = &mut self.accs[i];
                 *x -= &self.g;
                 let dx = self.g.amax();
@@ -577,7 +599,16 @@ impl EsdirkAdjoint {
                 // tolerance; this iteration must reach round-off): a slow
                 // contraction switches to the stage's own Jacobian at the
                 // current iterate (once: the rest is at round-off).
-                if slot == 0 && iteration >= 2 && dx > 0.25 * prev {
+                // In the force form an iteration (one inverse dynamics and a
+                // solve) costs ~1/30 of a linearization (the inverse
+                // dynamics' dense derivatives and an LU): only a contraction
+                // slower than 2×, or a long one, switches.
+                let slow = if self.force {
+                    dx > 0.5 * prev || iteration >= 16
+                } else {
+                    dx > 0.25 * prev
+                };
+                if slot == 0 && iteration >= 2 && slow {
                     stage_values(
                         hg,
                         &self.qhat,
@@ -772,7 +803,11 @@ impl EsdirkAdjoint {
 
     /// `mu ← M₀⁻¹ mu` at the step start: the system's structured solve with
     /// no shift, or a dense Cholesky of `M₀`.
-    fn solve_mass<Sys: ParameterSystem>(&mut self, sys: &mut Sys, t: f64) -> Result<(), Sys::Error> {
+    fn solve_mass<Sys: ParameterSystem>(
+        &mut self,
+        sys: &mut Sys,
+        t: f64,
+    ) -> Result<(), Sys::Error> {
         if sys.factor_shifted_mass(t, &self.qs[0], 0.0, 0.0)? {
             return sys.solve_shifted_mass(&mut self.mu);
         }

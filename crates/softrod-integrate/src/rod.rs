@@ -124,6 +124,7 @@ impl RodSystem {
     /// G11). Returns `Ok(false)` (nothing written) for models with closures
     /// (their `q̈` carries closure forces, `r` is not their equation) or
     /// contact (its friction anchors are the run's state).
+    #[allow(clippy::too_many_arguments)]
     pub fn force_jacobians(
         &mut self,
         t: f64,

@@ -254,7 +254,7 @@ impl Simulation {
             }
         };
         let g = adjoint_second_order_with(&mut sys, integrator, &tape, &mut seed, solver)
-        .map_err(|e| Error::Integration(Box::new(e)))?;
+            .map_err(|e| Error::Integration(Box::new(e)))?;
         let mut gradients = Vec::with_capacity(parsed.len());
         let mut slot = 0;
         for p in &parsed {
