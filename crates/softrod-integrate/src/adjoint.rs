@@ -20,6 +20,13 @@
 //! The system's parameters `p` enter through [`ParameterSystem`]: it gives
 //! the vector–Jacobian product `wᵀ ∂a/∂p` at a state, so the backward pass
 //! costs the same whatever the number of parameters (beyond those products).
+//!
+//! A system that offers the force form of its linearization
+//! ([`ParameterSystem::force_jacobians`]: `M` and the derivatives of the
+//! force residual, as a rod does) gets the transposed stage solves of G11:
+//! `Sᵀν = Ã` with `S = M + hγ ∂r/∂q̇ + h²γ² ∂r/∂q`, by GMRES preconditioned
+//! with its structured `M + h²γ²K + hγD`, no Jacobian of the acceleration
+//! and no dense LU of a transposed stage matrix ([`AdjointSolver`]).
 
 // Negated comparisons are deliberate: a NaN must fail every check.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -28,6 +35,7 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::error::{IntegrateError, first_non_finite};
 use crate::integrator::Integrator;
+use crate::krylov::Gmres;
 use crate::linalg::DenseLu;
 use crate::methods::{
     ESDIRK_A as A, ESDIRK_C as C, ESDIRK_GAMMA as GAMMA, esdirk_explicit_part as explicit_part,
@@ -61,6 +69,72 @@ pub trait ParameterSystem: SecondOrderSystem {
         w: &DVector<f64>,
         out: &mut [f64],
     ) -> Result<(), Self::Error>;
+
+    /// Optional: the linearization in force form (docs/theory-control.md
+    /// G11). For a system `M(q) q̈ = f(t, q, q̇)` with the force residual
+    /// `r = M(q) q̈ − f`, writes `M(q)` (symmetric positive definite) into
+    /// `mass`, `∂r/∂q` at fixed `q̇, q̈` into `dr_dq`, `∂r/∂q̇` into `dr_dqd`
+    /// (all n×n) at the given `q̈`, and returns `Ok(true)`. Then
+    /// `∂a/∂q = −M⁻¹ ∂r/∂q`, `∂a/∂q̇ = −M⁻¹ ∂r/∂q̇` at `q̈ = a`, and the
+    /// backward pass never forms them. A system that provides it must also
+    /// provide [`force_param_vjp`](Self::force_param_vjp). The default
+    /// returns `Ok(false)`: the backward pass uses
+    /// [`jacobians`](SecondOrderSystem::jacobians).
+    #[allow(clippy::too_many_arguments)]
+    fn force_jacobians(
+        &mut self,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+        qdd: &DVector<f64>,
+        mass: &mut DMatrix<f64>,
+        dr_dq: &mut DMatrix<f64>,
+        dr_dqd: &mut DMatrix<f64>,
+    ) -> Result<bool, Self::Error> {
+        let _ = (t, q, qd, qdd, mass, dr_dq, dr_dqd);
+        Ok(false)
+    }
+
+    /// With [`force_jacobians`](Self::force_jacobians): adds
+    /// `−zᵀ ∂r/∂pⱼ (t, q, q̇, q̈)` to `out[j]` — which is
+    /// `wᵀ ∂a/∂pⱼ` for `w = M z` (`∂a/∂p = −M⁻¹ ∂r/∂p`, `M` symmetric), so
+    /// [`accel_param_vjp`](Self::accel_param_vjp) is this after one solve
+    /// with `M`, which the force form does not need.
+    ///
+    /// # Panics
+    ///
+    /// The default panics: the backward pass calls it only after
+    /// `force_jacobians` returned `Ok(true)`.
+    fn force_param_vjp(
+        &mut self,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+        qdd: &DVector<f64>,
+        z: &DVector<f64>,
+        out: &mut [f64],
+    ) -> Result<(), Self::Error> {
+        let _ = (t, q, qd, qdd, z, out);
+        unimplemented!("force_param_vjp: the system provides force_jacobians but not this")
+    }
+}
+
+/// How [`adjoint_second_order_with`] solves the transposed stage systems.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum AdjointSolver {
+    /// The force form (G11) where the system provides
+    /// [`ParameterSystem::force_jacobians`]: no Jacobian of the
+    /// acceleration, the transposed stage system `Sᵀν = Ã` solved by GMRES
+    /// preconditioned with the system's structured
+    /// [`factor_shifted_mass`](SecondOrderSystem::factor_shifted_mass)
+    /// (O(N) per iteration beside one dense product), a dense LU of `Sᵀ`
+    /// where that is not offered or does not converge to round-off.
+    /// Otherwise [`AdjointSolver::Dense`].
+    #[default]
+    Structured,
+    /// The dense Jacobians of the acceleration and dense LUs of the
+    /// transposed stage matrices (G5–G7): the reference.
+    Dense,
 }
 
 /// The record of a forward run the backward pass needs: the times `tₙ`
@@ -145,10 +219,17 @@ pub struct AdjointGradient {
     pub dqd0: DVector<f64>,
     /// `∂L/∂pⱼ`.
     pub dp: Vec<f64>,
-    /// Dense Jacobian evaluations of the backward pass (6 per step).
+    /// Dense Jacobian evaluations of the backward pass (6 per step): of
+    /// the acceleration ([`AdjointSolver::Dense`]) or of the force residual
+    /// (the force form, G11).
     pub jacobian_evaluations: usize,
     /// Acceleration evaluations of the recomputed stages.
     pub accel_evaluations: usize,
+    /// Dense LU factorizations (the recomputing Newton iteration's, and
+    /// the transposed stage matrices solved directly).
+    pub dense_factorizations: usize,
+    /// GMRES iterations of the transposed stage solves (the force form).
+    pub krylov_iterations: usize,
 }
 
 /// Adds the explicit loss derivatives `(∂ℓ/∂qₖ, ∂ℓ/∂q̇ₖ)` at node `k` to
@@ -156,10 +237,11 @@ pub struct AdjointGradient {
 pub type Seed<'a> = dyn FnMut(usize, &mut DVector<f64>, &mut DVector<f64>) + 'a;
 
 /// The discrete adjoint of a run recorded on `tape` with `integrator`
-/// (docs/theory-control.md G1–G8): `L = Σₖ ℓₖ(qₖ, q̇ₖ)` over the tape's
-/// nodes, with `seed(k, ∂L/∂qₖ, ∂L/∂q̇ₖ)` adding the explicit derivatives
-/// of the loss at node `k` (called once per node, last node first; leave
-/// them alone at a node without loss).
+/// (docs/theory-control.md G1–G8, G11): `L = Σₖ ℓₖ(qₖ, q̇ₖ)` over the
+/// tape's nodes, with `seed(k, ∂L/∂qₖ, ∂L/∂q̇ₖ)` adding the explicit
+/// derivatives of the loss at node `k` (called once per node, last node
+/// first; leave them alone at a node without loss).
+/// [`adjoint_second_order_with`] with [`AdjointSolver::Structured`].
 ///
 /// Errors: an integrator without an adjoint ([`ADJOINT_INTEGRATORS`]), a
 /// tape of another dimension than the system, a failing or non-finite
@@ -170,6 +252,19 @@ pub fn adjoint_second_order<Sys: ParameterSystem>(
     integrator: Integrator,
     tape: &Tape,
     seed: &mut Seed<'_>,
+) -> Result<AdjointGradient, IntegrateError> {
+    adjoint_second_order_with(sys, integrator, tape, seed, AdjointSolver::Structured)
+}
+
+/// [`adjoint_second_order`] with the transposed stage systems solved as
+/// `solver` says. The two solvers give the same gradient to round-off
+/// (G11).
+pub fn adjoint_second_order_with<Sys: ParameterSystem>(
+    sys: &mut Sys,
+    integrator: Integrator,
+    tape: &Tape,
+    seed: &mut Seed<'_>,
+    solver: AdjointSolver,
 ) -> Result<AdjointGradient, IntegrateError> {
     if !ADJOINT_INTEGRATORS.contains(&integrator) {
         let names: Vec<&str> = ADJOINT_INTEGRATORS.iter().map(|i| i.name()).collect();
@@ -188,7 +283,7 @@ pub fn adjoint_second_order<Sys: ParameterSystem>(
             what: format!("the tape has {} coordinates, the system {n}", tape.dim()),
         });
     }
-    let mut w = EsdirkAdjoint::new(n, sys.n_params());
+    let mut w = EsdirkAdjoint::new(n, sys.n_params(), solver == AdjointSolver::Structured);
     let mut lq = DVector::zeros(n);
     let mut lv = DVector::zeros(n);
     let last = tape.nodes() - 1;
@@ -214,12 +309,22 @@ pub fn adjoint_second_order<Sys: ParameterSystem>(
         dp: w.dp,
         jacobian_evaluations: w.jacobians,
         accel_evaluations: w.accels,
+        dense_factorizations: w.factorizations,
+        krylov_iterations: w.krylov,
     })
 }
+
+/// GMRES iterations per cycle and cycles of a transposed stage solve
+/// before it falls back to the dense LU (G11).
+const KRYLOV_ITERATIONS: usize = 40;
+const KRYLOV_CYCLES: usize = 3;
 
 /// The buffers of the ESDIRK backward pass (allocated once per pass).
 struct EsdirkAdjoint {
     n: usize,
+    /// The force form (G11): `jq`, `jv` hold `∂r/∂q`, `∂r/∂q̇` and `mass`
+    /// `M`; otherwise (or once the system declined it) `∂a/∂q`, `∂a/∂q̇`.
+    force: bool,
     q: DVector<f64>,
     v: DVector<f64>,
     qs: [DVector<f64>; S],
@@ -227,9 +332,15 @@ struct EsdirkAdjoint {
     accs: [DVector<f64>; S],
     jq: [DMatrix<f64>; S],
     jv: [DMatrix<f64>; S],
-    /// `(I − hγJ)ᵀ` of each implicit stage, factored; slot 0: the
-    /// (untransposed) step-start matrix of the recomputing Newton iteration.
+    /// `M` at each stage (force form).
+    mass: [DMatrix<f64>; S],
+    /// `S = M + hγ ∂r/∂q̇ + h²γ² ∂r/∂q` of each implicit stage (force form).
+    shifted: [DMatrix<f64>; S],
+    /// `(I − hγJ)ᵀ` (force form: `Sᵀ`) of each implicit stage, factored;
+    /// slot 0: the (untransposed) step-start matrix of the recomputing
+    /// Newton iteration.
     lus: [DenseLu; S],
+    gmres: Gmres,
     qhat: DVector<f64>,
     vhat: DVector<f64>,
     f: DVector<f64>,
@@ -238,19 +349,29 @@ struct EsdirkAdjoint {
     vbar: [DVector<f64>; S],
     abar: [DVector<f64>; S],
     mu: DVector<f64>,
+    rhs: DVector<f64>,
     qhat_bar: DVector<f64>,
     vhat_bar: DVector<f64>,
     dp: Vec<f64>,
     jacobians: usize,
     accels: usize,
+    factorizations: usize,
+    krylov: usize,
 }
 
 impl EsdirkAdjoint {
-    fn new(n: usize, np: usize) -> Self {
+    fn new(n: usize, np: usize, force: bool) -> Self {
         let z = DVector::zeros(n);
         let m = DMatrix::zeros(n, n);
+        // The force form's matrices are allocated only when it is asked for.
+        let fm = if force {
+            m.clone()
+        } else {
+            DMatrix::zeros(0, 0)
+        };
         Self {
             n,
+            force,
             q: z.clone(),
             v: z.clone(),
             qs: std::array::from_fn(|_| z.clone()),
@@ -258,7 +379,10 @@ impl EsdirkAdjoint {
             accs: std::array::from_fn(|_| z.clone()),
             jq: std::array::from_fn(|_| m.clone()),
             jv: std::array::from_fn(|_| m.clone()),
+            mass: std::array::from_fn(|_| fm.clone()),
+            shifted: std::array::from_fn(|_| fm.clone()),
             lus: std::array::from_fn(|_| DenseLu::new(n)),
+            gmres: Gmres::new(if force { n } else { 0 }, KRYLOV_ITERATIONS.min(n)),
             qhat: z.clone(),
             vhat: z.clone(),
             f: z.clone(),
@@ -267,22 +391,100 @@ impl EsdirkAdjoint {
             vbar: std::array::from_fn(|_| z.clone()),
             abar: std::array::from_fn(|_| z.clone()),
             mu: z.clone(),
+            rhs: z.clone(),
             qhat_bar: z.clone(),
             vhat_bar: z,
             dp: vec![0.0; np],
             jacobians: 0,
             accels: 0,
+            factorizations: 0,
+            krylov: 0,
         }
     }
 
-    /// Fills slot `i` of `lus` with `I − hγ Jv − h²γ² Jq` of stage `j`,
-    /// transposed when `transpose`, and factors it.
-    fn factor(&mut self, i: usize, j: usize, h: f64, transpose: bool) -> bool {
-        stage_matrix(&mut self.lus[i], &self.jq[j], &self.jv[j], h, transpose)
+    /// The linearization at stage `i`, `(tᵢ, qs[i], vs[i])` with the
+    /// acceleration `accs[qdd]`: the force form's `M`, `∂r/∂q`, `∂r/∂q̇` (and
+    /// `S` into `shifted[i]` when `keep`), or the acceleration's Jacobians
+    /// (the dense form, or a system without the force form: then the pass
+    /// continues in the dense form).
+    #[allow(clippy::too_many_arguments)]
+    fn linearize<Sys: ParameterSystem>(
+        &mut self,
+        sys: &mut Sys,
+        i: usize,
+        ti: f64,
+        qdd: usize,
+        h: f64,
+        keep: bool,
+    ) -> Result<(), Sys::Error> {
+        self.jacobians += 1;
+        if self.force {
+            if sys.force_jacobians(
+                ti,
+                &self.qs[i],
+                &self.vs[i],
+                &self.accs[qdd],
+                &mut self.mass[i],
+                &mut self.jq[i],
+                &mut self.jv[i],
+            )? {
+                if keep {
+                    let (hg, hg2) = (h * GAMMA, h * h * GAMMA * GAMMA);
+                    let s = self.shifted[i].as_mut_slice();
+                    let (m, jv, jq) = (&self.mass[i], &self.jv[i], &self.jq[i]);
+                    for (k, x) in s.iter_mut().enumerate() {
+                        *x = m.as_slice()[k] + hg * jv.as_slice()[k] + hg2 * jq.as_slice()[k];
+                    }
+                }
+                return Ok(());
+            }
+            // Declined (a model the force form does not cover): the dense
+            // form from here on (this step's stage 0 comes first).
+            debug_assert_eq!(i, 0, "the force form declined after its first stage");
+            self.force = false;
+        }
+        sys.jacobians(
+            ti,
+            &self.qs[i],
+            &self.vs[i],
+            &mut self.jq[i],
+            &mut self.jv[i],
+        )
+    }
+
+    /// Fills `lus[slot]` with the stage matrix of stage `j` — `I − hγJv −
+    /// h²γ²Jq` of the acceleration's Jacobians, or the force form's
+    /// `M + hγ ∂r/∂q̇ + h²γ² ∂r/∂q` — transposed when `transpose`, and
+    /// factors it.
+    fn factor(&mut self, slot: usize, j: usize, h: f64, transpose: bool) -> bool {
+        self.factorizations += 1;
+        if self.force {
+            let (hg, hg2) = (h * GAMMA, h * h * GAMMA * GAMMA);
+            let m = self.lus[slot].matrix_mut();
+            let (mass, jq, jv) = (&self.mass[j], &self.jq[j], &self.jv[j]);
+            for c in 0..self.n {
+                for r in 0..self.n {
+                    let (a, b) = if transpose { (c, r) } else { (r, c) };
+                    m[(r, c)] = mass[(a, b)] + hg * jv[(a, b)] + hg2 * jq[(a, b)];
+                }
+            }
+            return self.lus[slot].factor();
+        }
+        stage_matrix(&mut self.lus[slot], &self.jq[j], &self.jv[j], h, transpose)
+    }
+
+    /// The Newton correction of a recomputed stage, `W⁻¹ g` with the matrix
+    /// of `slot` (force form: `S⁻¹ M g`, `W = M⁻¹S`), in place in `g`.
+    fn newton_correction(&mut self, slot: usize) {
+        if self.force {
+            self.mu.gemv(1.0, &self.mass[slot], &self.g, 0.0);
+            self.g.copy_from(&self.mu);
+        }
+        self.lus[slot].solve_in_place(&mut self.g);
     }
 
     /// One step backwards: `(λq, λv)` at node `k + 1` in, at node `k` out
-    /// (G4–G7); adds the step's `∂L/∂p` to `dp`.
+    /// (G4–G7, G11); adds the step's `∂L/∂p` to `dp`.
     fn step<Sys: ParameterSystem>(
         &mut self,
         sys: &mut Sys,
@@ -312,9 +514,8 @@ impl EsdirkAdjoint {
         sys.accel(t, &self.q, &self.v, &mut self.accs[0])
             .map_err(err("accel"))?;
         self.accels += 1;
-        sys.jacobians(t, &self.q, &self.v, &mut self.jq[0], &mut self.jv[0])
+        self.linearize(sys, 0, t, 0, h, false)
             .map_err(err("jacobian"))?;
-        self.jacobians += 1;
         if !self.factor(0, 0, h, false) {
             return Err(singular(t, h));
         }
@@ -332,9 +533,10 @@ impl EsdirkAdjoint {
                 &mut self.qhat,
                 &mut self.vhat,
             );
-            let (done, rest) = self.accs.split_at_mut(i);
-            let x = &mut rest[0];
-            x.copy_from(&done[i - 1]);
+            {
+                let (done, rest) = self.accs.split_at_mut(i);
+                rest[0].copy_from(&done[i - 1]);
+            }
             let mut prev = f64::INFINITY;
             let mut converged = false;
             // The LU the iteration solves with: the step-start matrix, or
@@ -345,17 +547,29 @@ impl EsdirkAdjoint {
                     hg,
                     &self.qhat,
                     &self.vhat,
-                    x,
+                    &self.accs[i],
                     &mut self.vs[i],
                     &mut self.qs[i],
                 );
-                sys.accel(ti, &self.qs[i], &self.vs[i], &mut self.f)
-                    .map_err(err("accel"))?;
+                // The force form iterates on the force residual
+                // r = ID(Qᵢ, Vᵢ, x) − τ = M(Qᵢ)(x − a): an inverse dynamics
+                // instead of a forward one, and `S⁻¹r` for `W⁻¹(x − a)`.
+                let forced = self.force
+                    && sys
+                        .force_residual(ti, &self.qs[i], &self.vs[i], &self.accs[i], &mut self.g)
+                        .map_err(err("force residual"))?;
                 self.accels += 1;
-                for r in 0..n {
-                    self.g[r] = x[r] - self.f[r];
+                if forced {
+                    self.lus[slot].solve_in_place(&mut self.g);
+                } else {
+                    sys.accel(ti, &self.qs[i], &self.vs[i], &mut self.f)
+                        .map_err(err("accel"))?;
+                    for r in 0..n {
+                        self.g[r] = self.accs[i][r] - self.f[r];
+                    }
+                    self.newton_correction(slot);
                 }
-                self.lus[slot].solve_in_place(&mut self.g);
+                let x = &mut self.accs[i];
                 *x -= &self.g;
                 let dx = self.g.amax();
                 let size = x.amax();
@@ -385,20 +599,27 @@ impl EsdirkAdjoint {
                 // tolerance; this iteration must reach round-off): a slow
                 // contraction switches to the stage's own Jacobian at the
                 // current iterate (once: the rest is at round-off).
-                if slot == 0 && iteration >= 2 && dx > 0.25 * prev {
+                // In the force form an iteration (one inverse dynamics and a
+                // solve) costs ~1/30 of a linearization (the inverse
+                // dynamics' dense derivatives and an LU): only a contraction
+                // slower than 2×, or a long one, switches.
+                let slow = if self.force {
+                    dx > 0.5 * prev || iteration >= 16
+                } else {
+                    dx > 0.25 * prev
+                };
+                if slot == 0 && iteration >= 2 && slow {
                     stage_values(
                         hg,
                         &self.qhat,
                         &self.vhat,
-                        x,
+                        &self.accs[i],
                         &mut self.vs[i],
                         &mut self.qs[i],
                     );
-                    let (jq, jv) = (&mut self.jq[i], &mut self.jv[i]);
-                    sys.jacobians(ti, &self.qs[i], &self.vs[i], jq, jv)
+                    self.linearize(sys, i, ti, i, h, false)
                         .map_err(err("jacobian"))?;
-                    self.jacobians += 1;
-                    if !stage_matrix(&mut self.lus[i], jq, jv, h, false) {
+                    if !self.factor(i, i, h, false) {
                         return Err(singular(ti, h));
                     }
                     slot = i;
@@ -413,20 +634,19 @@ impl EsdirkAdjoint {
                     what: "recomputed stage of the adjoint",
                 });
             }
-            let x = &self.accs[i];
             stage_values(
                 hg,
                 &self.qhat,
                 &self.vhat,
-                x,
+                &self.accs[i],
                 &mut self.vs[i],
                 &mut self.qs[i],
             );
-            let (jq, jv) = (&mut self.jq[i], &mut self.jv[i]);
-            sys.jacobians(ti, &self.qs[i], &self.vs[i], jq, jv)
+            self.linearize(sys, i, ti, i, h, true)
                 .map_err(err("jacobian"))?;
-            self.jacobians += 1;
-            if !self.factor(i, i, h, true) {
+            // The dense form factors Wᵢᵀ now; the force form solves with
+            // Sᵢᵀ in the sweep (G11).
+            if !self.force && !self.factor(i, i, h, true) {
                 return Err(singular(ti, h));
             }
         }
@@ -442,27 +662,54 @@ impl EsdirkAdjoint {
         lv.fill(0.0);
         for i in (1..S).rev() {
             let ti = if i == S - 1 { t_new } else { t + C[i] * h };
-            // Ã = Ā + hγ V̄ + h²γ² Q̄, μ = W⁻ᵀ Ã.
+            // Ã = Ā + hγ V̄ + h²γ² Q̄.
             for r in 0..n {
-                self.mu[r] = self.abar[i][r] + hg * self.vbar[i][r] + hg2 * self.qbar[i][r];
+                self.rhs[r] = self.abar[i][r] + hg * self.vbar[i][r] + hg2 * self.qbar[i][r];
             }
-            self.lus[i].solve_in_place(&mut self.mu);
-            // q̂̄ = Q̄ + Jqᵀμ; v̂̄ = V̄ + hγ Q̄ + hγ Jqᵀμ + Jvᵀμ.
-            self.qhat_bar.copy_from(&self.qbar[i]);
-            self.qhat_bar.gemv_tr(1.0, &self.jq[i], &self.mu, 1.0);
-            self.vhat_bar.copy_from(&self.vbar[i]);
-            self.vhat_bar.axpy(hg, &self.qbar[i], 1.0);
-            self.vhat_bar.gemv_tr(hg, &self.jq[i], &self.mu, 1.0);
-            self.vhat_bar.gemv_tr(1.0, &self.jv[i], &self.mu, 1.0);
-            sys.accel_param_vjp(
-                ti,
-                &self.qs[i],
-                &self.vs[i],
-                &self.accs[i],
-                &self.mu,
-                &mut self.dp,
-            )
-            .map_err(err("parameter derivatives"))?;
+            if self.force {
+                // Sᵀν = Ã (G11): μ = Mν, Jqᵀμ = −(∂r/∂q)ᵀν.
+                if !self
+                    .solve_transposed(sys, i, ti, h)
+                    .map_err(err("transposed stage solve"))?
+                {
+                    return Err(singular(ti, h));
+                }
+                let nu = &self.mu;
+                self.qhat_bar.copy_from(&self.qbar[i]);
+                self.qhat_bar.gemv_tr(-1.0, &self.jq[i], nu, 1.0);
+                self.vhat_bar.copy_from(&self.vbar[i]);
+                self.vhat_bar.axpy(hg, &self.qbar[i], 1.0);
+                self.vhat_bar.gemv_tr(-hg, &self.jq[i], nu, 1.0);
+                self.vhat_bar.gemv_tr(-1.0, &self.jv[i], nu, 1.0);
+                sys.force_param_vjp(
+                    ti,
+                    &self.qs[i],
+                    &self.vs[i],
+                    &self.accs[i],
+                    nu,
+                    &mut self.dp,
+                )
+                .map_err(err("parameter derivatives"))?;
+            } else {
+                // μ = W⁻ᵀ Ã; q̂̄ = Q̄ + Jqᵀμ; v̂̄ = V̄ + hγ Q̄ + hγ Jqᵀμ + Jvᵀμ.
+                self.mu.copy_from(&self.rhs);
+                self.lus[i].solve_in_place(&mut self.mu);
+                self.qhat_bar.copy_from(&self.qbar[i]);
+                self.qhat_bar.gemv_tr(1.0, &self.jq[i], &self.mu, 1.0);
+                self.vhat_bar.copy_from(&self.vbar[i]);
+                self.vhat_bar.axpy(hg, &self.qbar[i], 1.0);
+                self.vhat_bar.gemv_tr(hg, &self.jq[i], &self.mu, 1.0);
+                self.vhat_bar.gemv_tr(1.0, &self.jv[i], &self.mu, 1.0);
+                sys.accel_param_vjp(
+                    ti,
+                    &self.qs[i],
+                    &self.vs[i],
+                    &self.accs[i],
+                    &self.mu,
+                    &mut self.dp,
+                )
+                .map_err(err("parameter derivatives"))?;
+            }
             *lq += &self.qhat_bar;
             *lv += &self.vhat_bar;
             for (j, &a) in A[i][..i].iter().enumerate() {
@@ -475,17 +722,103 @@ impl EsdirkAdjoint {
         // Stage 0: Q₀ = qₙ, V₀ = q̇ₙ, A₀ = a(tₙ, qₙ, q̇ₙ; p).
         *lq += &self.qbar[0];
         *lv += &self.vbar[0];
-        lq.gemv_tr(1.0, &self.jq[0], &self.abar[0], 1.0);
-        lv.gemv_tr(1.0, &self.jv[0], &self.abar[0], 1.0);
-        sys.accel_param_vjp(
-            t,
-            &self.qs[0],
-            &self.vs[0],
-            &self.accs[0],
-            &self.abar[0],
-            &mut self.dp,
-        )
-        .map_err(err("parameter derivatives"))?;
+        if self.force {
+            // Jᵀ Ā₀ = −(∂r)ᵀ M⁻¹ Ā₀.
+            self.mu.copy_from(&self.abar[0]);
+            self.solve_mass(sys, t).map_err(err("mass solve"))?;
+            lq.gemv_tr(-1.0, &self.jq[0], &self.mu, 1.0);
+            lv.gemv_tr(-1.0, &self.jv[0], &self.mu, 1.0);
+            sys.force_param_vjp(
+                t,
+                &self.qs[0],
+                &self.vs[0],
+                &self.accs[0],
+                &self.mu,
+                &mut self.dp,
+            )
+            .map_err(err("parameter derivatives"))?;
+        } else {
+            lq.gemv_tr(1.0, &self.jq[0], &self.abar[0], 1.0);
+            lv.gemv_tr(1.0, &self.jv[0], &self.abar[0], 1.0);
+            sys.accel_param_vjp(
+                t,
+                &self.qs[0],
+                &self.vs[0],
+                &self.accs[0],
+                &self.abar[0],
+                &mut self.dp,
+            )
+            .map_err(err("parameter derivatives"))?;
+        }
+        Ok(())
+    }
+
+    /// `ν = Sᵢ⁻ᵀ rhs` into `mu` (G11): GMRES preconditioned by the system's
+    /// structured `M + h²γ²K + hγD` at the stage, or a dense LU of `Sᵢᵀ`
+    /// (no structured factorization, or GMRES not at round-off). False
+    /// when `Sᵢ` is singular.
+    fn solve_transposed<Sys: ParameterSystem>(
+        &mut self,
+        sys: &mut Sys,
+        i: usize,
+        ti: f64,
+        h: f64,
+    ) -> Result<bool, Sys::Error> {
+        let (hg, hg2) = (h * GAMMA, h * h * GAMMA * GAMMA);
+        if sys.factor_shifted_mass(ti, &self.qs[i], hg2, hg)? {
+            let s = &self.shifted[i];
+            // ‖Sᵀ‖∞: the largest column sum of |S|.
+            let anorm = s
+                .column_iter()
+                .map(|c| c.iter().map(|v| v.abs()).sum::<f64>())
+                .fold(0.0, f64::max);
+            let rtol = 16.0 * f64::EPSILON * (self.n as f64).sqrt();
+            let solved = self.gmres.solve(
+                &self.rhs,
+                &mut self.mu,
+                anorm,
+                rtol,
+                KRYLOV_CYCLES,
+                |v, out| out.gemv_tr(1.0, s, v, 0.0),
+                |v| sys.solve_shifted_mass(v),
+            )?;
+            match solved {
+                Some(iterations) => {
+                    self.krylov += iterations;
+                    return Ok(true);
+                }
+                None => self.krylov += KRYLOV_ITERATIONS.min(self.n) * KRYLOV_CYCLES,
+            }
+        }
+        self.factorizations += 1;
+        let m = self.lus[i].matrix_mut();
+        m.tr_copy_from(&self.shifted[i]);
+        if !self.lus[i].factor() {
+            return Ok(false);
+        }
+        self.mu.copy_from(&self.rhs);
+        self.lus[i].solve_in_place(&mut self.mu);
+        Ok(true)
+    }
+
+    /// `mu ← M₀⁻¹ mu` at the step start: the system's structured solve with
+    /// no shift, or a dense Cholesky of `M₀`.
+    fn solve_mass<Sys: ParameterSystem>(
+        &mut self,
+        sys: &mut Sys,
+        t: f64,
+    ) -> Result<(), Sys::Error> {
+        if sys.factor_shifted_mass(t, &self.qs[0], 0.0, 0.0)? {
+            return sys.solve_shifted_mass(&mut self.mu);
+        }
+        self.factorizations += 1;
+        self.lus[0].matrix_mut().copy_from(&self.mass[0]);
+        if !self.lus[0].factor_cholesky() {
+            // Not positive definite: left to the final non-finite check.
+            self.mu.fill(f64::NAN);
+            return Ok(());
+        }
+        self.lus[0].solve_in_place(&mut self.mu);
         Ok(())
     }
 }

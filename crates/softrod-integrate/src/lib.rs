@@ -146,10 +146,12 @@ mod methods;
 
 mod adjoint;
 mod driver;
+mod krylov;
 mod recommended;
 
 pub use adjoint::{
-    ADJOINT_INTEGRATORS, AdjointGradient, ParameterSystem, Seed, Tape, adjoint_second_order,
+    ADJOINT_INTEGRATORS, AdjointGradient, AdjointSolver, ParameterSystem, Seed, Tape,
+    adjoint_second_order, adjoint_second_order_with,
 };
 pub use driver::{integrate, integrate_second_order};
 pub use error::{IntegrateError, SystemError};

@@ -8,9 +8,9 @@
 
 use nalgebra::{DMatrix, DVector};
 use softrod_dynamics::{
-    ClosedDerivatives, Data, DynamicsError, FdDerivatives, Model, ShiftedSolver,
+    ClosedDerivatives, Data, DynamicsError, FdDerivatives, IdDerivatives, Model, ShiftedSolver,
     closed_dynamics_derivatives, damping_matrix, forward_dynamics, forward_dynamics_derivatives,
-    inverse_dynamics, mass_matrix, stiffness_matrix,
+    inverse_dynamics, inverse_dynamics_derivatives, mass_matrix, stiffness_matrix,
 };
 use softrod_mechanics::Tension;
 
@@ -38,6 +38,9 @@ pub struct RodSystem {
     /// The same for a model with closures (the constrained dynamics'
     /// derivatives, `softrod_dynamics::closed_dynamics_derivatives`).
     closed: Option<Box<ClosedDerivatives>>,
+    /// The workspace of [`RodSystem::force_jacobians`] (the inverse
+    /// dynamics' derivatives alone), allocated on first use.
+    id_derivatives: Option<Box<IdDerivatives>>,
 }
 
 /// The Jacobians [`RodSystem`] hands to the stiff methods.
@@ -101,7 +104,63 @@ impl RodSystem {
             shifted,
             derivatives: None,
             closed: None,
+            id_derivatives: None,
         }
+    }
+}
+
+impl RodSystem {
+    /// The linearization of the equation of motion in force form,
+    /// `r(t, q, q̇, q̈) = ID(t, q, q̇, q̈) − τ_act = M(q) q̈ − f(t, q, q̇)`, at
+    /// a given `q̈`: `M(q)` into `mass`, `∂r/∂q` (at fixed `q̇`, `q̈`;
+    /// with the change of `M(q) q̈`) into `dr_dq`, `∂r/∂q̇` into `dr_dqd`
+    /// (all n_dof × n_dof; `softrod_dynamics::mass_matrix` and
+    /// `softrod_dynamics::inverse_dynamics_derivatives`, analytic, O(N·n_dof),
+    /// no allocation after the first call). At `q̈ = a(t, q, q̇)` the
+    /// Jacobians of [`SecondOrderSystem::jacobians`] are
+    /// `∂a/∂q = −M⁻¹ ∂r/∂q`, `∂a/∂q̇ = −M⁻¹ ∂r/∂q̇` — which this leaves
+    /// unformed (they cost `2·n_dof` O(N) mass solves; the adjoint's
+    /// transposed stage solves need only `M` and `∂r`, docs/theory-control.md
+    /// G11). Returns `Ok(false)` (nothing written) for models with closures
+    /// (their `q̈` carries closure forces, `r` is not their equation) or
+    /// contact (its friction anchors are the run's state).
+    #[allow(clippy::too_many_arguments)]
+    pub fn force_jacobians(
+        &mut self,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+        qdd: &DVector<f64>,
+        mass: &mut DMatrix<f64>,
+        dr_dq: &mut DMatrix<f64>,
+        dr_dqd: &mut DMatrix<f64>,
+    ) -> Result<bool, DynamicsError> {
+        if self.model.has_closures() || self.model.has_contact() {
+            return Ok(false);
+        }
+        self.model.set_time(&mut self.data, t);
+        mass.copy_from(mass_matrix(&self.model, &mut self.data, q.as_slice())?);
+        let work = self
+            .id_derivatives
+            .get_or_insert_with(|| Box::new(IdDerivatives::new(&self.model)));
+        // Cable tensions set as inputs replace the schedules, as in the
+        // forward dynamics.
+        match (self.data.cable_tensions(), &mut work.tensions) {
+            (None, t) => *t = None,
+            (Some(u), Some(t)) => t.as_mut_slice().copy_from_slice(u),
+            (Some(u), t) => *t = Some(DVector::from_column_slice(u)),
+        }
+        let d = inverse_dynamics_derivatives(
+            &self.model,
+            work,
+            t,
+            q.as_slice(),
+            qd.as_slice(),
+            qdd.as_slice(),
+        )?;
+        dr_dq.copy_from(&d.dtau_dq);
+        dr_dqd.copy_from(&d.dtau_dqd);
+        Ok(true)
     }
 }
 

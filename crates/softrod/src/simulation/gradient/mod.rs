@@ -5,11 +5,13 @@
 //! (docs/theory-control.md G1–G9).
 
 mod params;
+#[cfg(test)]
+mod tests;
 
 use nalgebra::DVector;
 use softrod_integrate::{
-    Control, Hooks, Integrator, Iteration, RodSystem, StepControl, StepInfo, Tape,
-    adjoint_second_order, integrate_second_order,
+    AdjointSolver, Control, Hooks, Integrator, Iteration, RodSystem, StepControl, StepInfo, Tape,
+    adjoint_second_order_with, integrate_second_order,
 };
 use softrod_kinematics::Frame;
 
@@ -100,8 +102,14 @@ pub struct Gradient {
     pub gradients: Vec<(String, Vec<f64>)>,
     /// Accepted steps of the forward run (the backward pass has as many).
     pub steps: usize,
-    /// Dense Jacobian evaluations of the backward pass.
+    /// Dense Jacobian evaluations of the backward pass (of the force
+    /// residual, docs/theory-control.md G11).
     pub jacobian_evaluations: usize,
+    /// Dense LU factorizations of the backward pass (one per step for the
+    /// recomputed stages; more where a transposed stage solve fell back).
+    pub dense_factorizations: usize,
+    /// GMRES iterations of the backward pass's transposed stage solves.
+    pub krylov_iterations: usize,
 }
 
 impl Gradient {
@@ -172,6 +180,19 @@ impl Simulation {
         duration: f64,
         options: &GradientOptions,
     ) -> Result<Gradient> {
+        self.gradient_with(loss, params, duration, options, AdjointSolver::Structured)
+    }
+
+    /// [`Simulation::value_and_gradient`] with the backward pass's linear
+    /// algebra chosen (the dense one is the reference of the tests).
+    pub(crate) fn gradient_with(
+        &mut self,
+        loss: &mut [LossTerm<'_>],
+        params: &[&str],
+        duration: f64,
+        options: &GradientOptions,
+        solver: AdjointSolver,
+    ) -> Result<Gradient> {
         self.check_run(duration)?;
         let integrator = self.settings.integrator;
         if integrator != Integrator::Esdirk {
@@ -221,16 +242,19 @@ impl Simulation {
                 gradients: Vec::new(),
                 steps: tape.steps(),
                 jacobian_evaluations: 0,
+                dense_factorizations: 0,
+                krylov_iterations: 0,
             });
         }
         let mut sys = ParamSystem::new(&mut self.system, &parsed)?;
-        let g = adjoint_second_order(&mut sys, integrator, &tape, &mut |k, lq, lv| {
+        let mut seed = |k: usize, lq: &mut DVector<f64>, lv: &mut DVector<f64>| {
             if let Some((dq, dv)) = &seeds[k] {
                 *lq += dq;
                 *lv += dv;
             }
-        })
-        .map_err(|e| Error::Integration(Box::new(e)))?;
+        };
+        let g = adjoint_second_order_with(&mut sys, integrator, &tape, &mut seed, solver)
+            .map_err(|e| Error::Integration(Box::new(e)))?;
         let mut gradients = Vec::with_capacity(parsed.len());
         let mut slot = 0;
         for p in &parsed {
@@ -250,6 +274,8 @@ impl Simulation {
             gradients,
             steps: tape.steps(),
             jacobian_evaluations: g.jacobian_evaluations,
+            dense_factorizations: g.dense_factorizations,
+            krylov_iterations: g.krylov_iterations,
         })
     }
 

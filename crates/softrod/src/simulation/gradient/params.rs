@@ -330,6 +330,53 @@ impl SecondOrderSystem for ParamSystem<'_> {
     ) -> Result<(), DynamicsError> {
         self.sys.jacobians(t, q, qd, dqdd_dq, dqdd_dqd)
     }
+
+    // The rod system's structured solves, forwarded: the backward pass
+    // preconditions its transposed stage solves with the O(N)
+    // `M + aK + bD` (docs/theory-control.md G11).
+    fn mass_form_jacobians(
+        &mut self,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+        mass: &mut DMatrix<f64>,
+        constant: Option<(&mut DMatrix<f64>, &mut DMatrix<f64>)>,
+    ) -> Result<bool, DynamicsError> {
+        self.sys.mass_form_jacobians(t, q, qd, mass, constant)
+    }
+
+    fn has_mass_form(&self) -> bool {
+        self.sys.has_mass_form()
+    }
+
+    fn force_residual(
+        &mut self,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+        qdd: &DVector<f64>,
+        r: &mut DVector<f64>,
+    ) -> Result<bool, DynamicsError> {
+        self.sys.force_residual(t, q, qd, qdd, r)
+    }
+
+    fn factor_shifted_mass(
+        &mut self,
+        t: f64,
+        q: &DVector<f64>,
+        a: f64,
+        b: f64,
+    ) -> Result<bool, DynamicsError> {
+        self.sys.factor_shifted_mass(t, q, a, b)
+    }
+
+    fn solve_shifted_mass(&mut self, x: &mut DVector<f64>) -> Result<(), DynamicsError> {
+        self.sys.solve_shifted_mass(x)
+    }
+
+    fn is_autonomous(&self) -> bool {
+        self.sys.is_autonomous()
+    }
 }
 
 impl ParameterSystem for ParamSystem<'_> {
@@ -337,7 +384,8 @@ impl ParameterSystem for ParamSystem<'_> {
         self.n_params
     }
 
-    /// `wᵀ ∂q̈/∂pⱼ = −(M⁻¹w)ᵀ (ID(pⱼ + Δⱼ) − ID(pⱼ))/Δⱼ` (G8).
+    /// `wᵀ ∂q̈/∂pⱼ = −(M⁻¹w)ᵀ (ID(pⱼ + Δⱼ) − ID(pⱼ))/Δⱼ` (G8): one O(N)
+    /// solve with `M`, then [`force_param_vjp`](Self::force_param_vjp).
     fn accel_param_vjp(
         &mut self,
         t: f64,
@@ -353,8 +401,45 @@ impl ParameterSystem for ParamSystem<'_> {
         // M(q) by the O(N) shifted solver with no shift (open models only:
         // value_and_gradient refuses closed ones).
         self.sys.factor_shifted_mass(t, q, 0.0, 0.0)?;
-        self.z.copy_from(w);
-        self.sys.solve_shifted_mass(&mut self.z)?;
+        let mut z = std::mem::take(&mut self.z);
+        z.copy_from(w);
+        let solved = self
+            .sys
+            .solve_shifted_mass(&mut z)
+            .and_then(|()| self.force_param_vjp(t, q, qd, qdd, &z, out));
+        self.z = z;
+        solved
+    }
+
+    /// `M(q)`, `∂ID/∂q`, `∂ID/∂q̇` of the rod system
+    /// ([`RodSystem::force_jacobians`]).
+    fn force_jacobians(
+        &mut self,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+        qdd: &DVector<f64>,
+        mass: &mut DMatrix<f64>,
+        dr_dq: &mut DMatrix<f64>,
+        dr_dqd: &mut DMatrix<f64>,
+    ) -> Result<bool, DynamicsError> {
+        self.sys.force_jacobians(t, q, qd, qdd, mass, dr_dq, dr_dqd)
+    }
+
+    /// `−zᵀ (ID(pⱼ + Δⱼ) − ID(pⱼ))/Δⱼ` (G8): two O(N) inverse dynamics
+    /// per parameter entry (`ID` is affine in each).
+    fn force_param_vjp(
+        &mut self,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+        qdd: &DVector<f64>,
+        z: &DVector<f64>,
+        out: &mut [f64],
+    ) -> Result<(), DynamicsError> {
+        if self.variants.is_empty() {
+            return Ok(());
+        }
         let (q, qd, qdd) = (q.as_slice(), qd.as_slice(), qdd.as_slice());
         self.id0.copy_from(inverse_dynamics(
             &self.sys.model,
@@ -368,7 +453,7 @@ impl ParameterSystem for ParamSystem<'_> {
             let id = inverse_dynamics(&v.model, &mut v.data, t, q, qd, qdd)?;
             let mut s = 0.0;
             for r in 0..id.len() {
-                s += self.z[r] * (id[r] - self.id0[r]);
+                s += z[r] * (id[r] - self.id0[r]);
             }
             out[v.slot] -= s / v.delta;
         }
