@@ -306,12 +306,27 @@ impl Cable {
         quadrature: &GaussLegendre,
         out: &mut [f64],
     ) {
+        // A constant offset without friction: `d′ = 0` and `d` constant, so
+        // on a piece (constant strain) the integrand `(d × t̂; t̂)` is
+        // constant and the integral is the overlap's length times its value
+        // — the Gauss rule's sum up to rounding, at one evaluation instead of
+        // one per node (this force is in every right-hand side of a cable
+        // model).
+        let constant = self.friction == 0.0 && matches!(self.routing, Routing::Offset { .. });
         for (n, p) in rod.pieces().iter().enumerate() {
             let xi = p.strain(q);
             let mut acc = Wrench::zeros();
-            self.for_each_weighted_node(rod, q, n, quadrature, |s, w| {
-                acc += self.wrench_per_tension(&xi, s) * w;
-            });
+            if constant {
+                let mut length = 0.0;
+                self.for_each_part(p, |lo, hi| length += hi - lo);
+                if length > 0.0 {
+                    acc = self.wrench_per_tension(&xi, p.start) * length;
+                }
+            } else {
+                self.for_each_weighted_node(rod, q, n, quadrature, |s, w| {
+                    acc += self.wrench_per_tension(&xi, s) * w;
+                });
+            }
             if acc == Wrench::zeros() {
                 continue;
             }

@@ -15,7 +15,8 @@
 //! the largest and the mean tip distance at the period ends from the same
 //! loop (same tensions) at ESDIRK rtol 1e-9 (the accuracy each keeps).
 //!
-//! `cargo run --release -p softrod --example control_periods -- [--periods 2000] [--repeat 3]`
+//! `cargo run --release -p softrod --example control_periods -- [--periods 2000] [--repeat 3] [--only TEXT]`
+//! (`--only`: the rows whose label contains `TEXT`, e.g. `rtol 1e-2`)
 
 use std::time::Instant;
 
@@ -173,6 +174,12 @@ fn main() {
     };
     let periods = value("--periods", 2000);
     let repeat = value("--repeat", 3);
+    // `--only TEXT`: only the rows whose label contains TEXT.
+    let only = args
+        .iter()
+        .position(|a| a == "--only")
+        .and_then(|i| args.get(i + 1))
+        .cloned();
     let path = concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/../softrod-py/python/softrod/envs/scenes/reach_arm.toml"
@@ -184,7 +191,14 @@ fn main() {
         atol: 1e-12,
         ..settings.clone()
     };
-    let (_, _, reference) = run_loop(&sim, &tight, periods, Start::Cold).expect("the reference");
+    // `--no-reference`: skip the tight run (for profiling; errors print NaN).
+    let reference = if args.iter().any(|a| a == "--no-reference") {
+        vec![[f64::NAN; 3]; periods]
+    } else {
+        run_loop(&sim, &tight, periods, Start::Cold)
+            .expect("the reference")
+            .2
+    };
     println!(
         "reach arm, {periods} periods of {PERIOD} s, {} rtol {:e} atol {:e}",
         settings.integrator.name(),
@@ -238,6 +252,9 @@ fn main() {
                 if k > 1 { "s" } else { "" }
             ),
         };
+        if only.as_ref().is_some_and(|o| !label.contains(o.as_str())) {
+            continue;
+        }
         let mut best = f64::INFINITY;
         let mut last = None;
         let mut failed = None;
