@@ -100,6 +100,38 @@ impl Settings {
         Ok(Self { inner })
     }
 
+    /// A copy with the given keywords changed, by the rules of
+    /// `Settings(...)` (`rtol` alone also lowers a larger `atol`); what
+    /// is not named — including the scene's `[run] duration` and energy
+    /// tolerance, which `Settings(...)` cannot state and would reset to
+    /// their defaults — is kept. Raises `InputError` as `Settings(...)`.
+    #[pyo3(signature = (*, integrator = None, rtol = None, atol = None, dt = None,
+                        output_every = None, error_control = None, linearly_implicit = None))]
+    #[allow(clippy::too_many_arguments)]
+    fn replace(
+        &self,
+        integrator: Option<&str>,
+        rtol: Option<f64>,
+        atol: Option<f64>,
+        dt: Option<f64>,
+        output_every: Option<f64>,
+        error_control: Option<bool>,
+        linearly_implicit: Option<bool>,
+    ) -> PyResult<Self> {
+        let mut inner = self.inner.clone();
+        overrides(
+            &mut inner,
+            integrator,
+            rtol,
+            atol,
+            dt,
+            output_every,
+            error_control,
+            linearly_implicit,
+        )?;
+        Ok(Self { inner })
+    }
+
     /// The integrator's name.
     #[getter]
     fn integrator(&self) -> &'static str {

@@ -173,6 +173,22 @@ def test_settings_are_validated_and_apply():
         sim.simulate(-1.0)
 
 
+def test_settings_replace_keeps_what_it_does_not_name():
+    """Settings.replace changes only the keywords named, by the rules of
+    Settings(...); the scene's [run] duration, which Settings(...) cannot
+    state, stays (the envs' rtol= used to reset it)."""
+    sim = softrod.Simulation.from_toml(scene_text(
+        extra='[run]\nduration = 0.02\nintegrator = "radau5"\nrtol = 1e-3\natol = 1e-5\n'))
+    s = sim.settings.replace(rtol=1e-7)
+    assert (s.integrator, s.rtol, s.atol) == ("radau5", 1e-7, 1e-7)
+    assert sim.settings.replace(rtol=1e-4).atol == 1e-5
+    assert sim.settings.replace(atol=1e-9).rtol == 1e-3
+    sim.settings = s
+    assert sim.simulate().t[-1] == pytest.approx(0.02, abs=1e-15)
+    with pytest.raises(softrod.InputError, match="run.rtol"):
+        s.replace(rtol=-1.0)
+
+
 @pytest.mark.parametrize("kw", [
     dict(integrator="rosenbrock", rtol=1e-5, atol=1e-8),
     dict(integrator="esdirk", rtol=1e-5, atol=1e-8),

@@ -162,6 +162,19 @@ class Settings:
         error_control: bool | None = None,
         linearly_implicit: bool | None = None,
     ) -> Settings: ...
+    def replace(
+        self,
+        *,
+        integrator: _IntegratorName | None = None,
+        rtol: float | None = None,
+        atol: float | None = None,
+        dt: float | None = None,
+        output_every: float | None = None,
+        error_control: bool | None = None,
+        linearly_implicit: bool | None = None,
+    ) -> Settings:
+        """A copy with the named keywords changed; the rest (and the scene's duration and
+        energy tolerance) kept."""
     @property
     def integrator(self) -> _IntegratorName: ...
     @property

@@ -360,13 +360,9 @@ class RodEnv(gymnasium.Env):
         if rtol is not None:
             if not (math.isfinite(rtol) and rtol > 0):
                 raise InputError(f"rtol must be positive and finite, got {rtol}")
-            s = self.sim.settings
-            # atol no looser than rtol: the rule of Settings(rtol=...) alone.
-            self.sim.settings = softrod.Settings(
-                integrator=s.integrator, rtol=float(rtol), atol=min(s.atol, rtol), dt=s.dt,
-                output_every=s.output_every, error_control=s.error_control,
-                linearly_implicit=s.linearly_implicit,
-            )
+            # replace, not Settings(...): the scene's duration and energy
+            # tolerance stay; rtol alone lowers a larger atol to it.
+            self.sim.settings = self.sim.settings.replace(rtol=float(rtol))
         if substeps is not None and (int(substeps) != substeps or substeps < 1):
             raise InputError(f"substeps must be a positive integer or None, got {substeps}")
         self.substeps = None if substeps is None else int(substeps)
