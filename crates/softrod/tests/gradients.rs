@@ -649,4 +649,19 @@ atol = 1e-9
         (adjoint - fd).abs() <= AGREE * fd.abs(),
         "adjoint {adjoint:e} vs central difference {fd:e}"
     );
+    // A Newton tolerance below the stage equations' round-off (1e-12 of
+    // error weights down to atol 1e-9) cannot be met: the fixed steps are
+    // cut until the step count runs out, and the error says why.
+    let tight = GradientOptions {
+        fixed_step: Some(0.1),
+        newton_tol: Some(1e-12),
+    };
+    let e = sim(&text(0.2))
+        .value_and_gradient(&mut loss, &["cable0.tension"], 0.5, &tight)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("newton_tol") && e.contains("1e-12") && e.contains("fixed steps"),
+        "{e}"
+    );
 }

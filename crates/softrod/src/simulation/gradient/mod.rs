@@ -10,8 +10,8 @@ mod tests;
 
 use nalgebra::DVector;
 use softrod_integrate::{
-    AdjointSolver, Control, Hooks, Integrator, Iteration, RodSystem, StepControl, StepInfo, Tape,
-    adjoint_second_order_with, integrate_second_order,
+    AdjointSolver, Control, Hooks, IntegrateError, Integrator, Iteration, RodSystem, StepControl,
+    StepInfo, Tape, adjoint_second_order_with, integrate_second_order,
 };
 use softrod_kinematics::Frame;
 
@@ -417,7 +417,24 @@ impl Simulation {
         let (mut q, mut qd) = (self.q0.clone(), self.qd0.clone());
         for span in segments {
             integrate_second_order(&mut self.system, method, span, &q, &qd, &opts, &mut hooks)
-                .map_err(|e| Error::Integration(Box::new(e)))?;
+                .map_err(|e| match (e, options.fixed_step) {
+                    // A fixed step whose Newton fails is subdivided; running out
+                    // of steps then means the stage equations cannot be solved to
+                    // `newton_tol` at all (a tolerance below their round-off), which
+                    // the bare step count would hide.
+                    (IntegrateError::MaxStepsExceeded { t, h, .. }, Some(dt)) => bad(
+                        "newton_tol",
+                        format!(
+                            "the fixed steps of {dt:e} s had to be cut to {h:e} s at t = {t:e} s: \
+                             Newton could not solve the stage equations to newton_tol = {} \
+                             (below their round-off?); use a looser newton_tol or a smaller fixed_step",
+                            options
+                                .newton_tol
+                                .map_or("the integrator's default".into(), |v| format!("{v:e}"))
+                        ),
+                    ),
+                    (e, _) => Error::Integration(Box::new(e)),
+                })?;
             let last = hooks.tape.nodes() - 1;
             q.copy_from_slice(hooks.tape.q(last));
             qd.copy_from_slice(hooks.tape.qd(last));
