@@ -314,6 +314,22 @@ impl ContactWork {
         }
     }
 
+    /// Forgets the friction anchors and stiffness states (obstacles' and
+    /// pairs', CT5, CT15): the contact state of a model no run has
+    /// touched (base stiffness, no anchors). Keeps the buffers' capacity.
+    pub(crate) fn reset_friction_state(&mut self) {
+        for a in &mut self.anchors {
+            a.fill(None);
+        }
+        for h in &mut self.holds {
+            h.fill(None);
+        }
+        if let Some(p) = &mut self.pairs {
+            p.anchors.clear();
+            p.holds.clear();
+        }
+    }
+
     /// The stiffness scale and offset of obstacle contact `idx` of `rod`
     /// (CT15).
     pub(crate) fn held(&self, rod: usize, idx: usize) -> (f64, f64) {

@@ -232,6 +232,20 @@ impl Data {
         }
     }
 
+    /// Forgets the contact state that runs and statics commit to this
+    /// workspace — the friction anchors (docs/theory-contact.md CT5) and
+    /// the raised stiffness scales and offsets (CT15) of obstacle and
+    /// rod–rod contacts — so that the next evaluation sees the contact
+    /// state of a fresh workspace: the base stiffness of CT3, no friction
+    /// history. A run or a statics solve that starts from a scene's
+    /// initial state calls it first (CT15); a continuation (the next step
+    /// of a run) must not. Nothing without contact; no allocation.
+    pub fn reset_contact(&mut self) {
+        if let Some(c) = &mut self.contact {
+            c.reset_friction_state();
+        }
+    }
+
     /// Tension of cable `c` of rod `rm` at time `t` \[N\]: the override
     /// when set, else the cable's schedule (without the load factor).
     #[inline]

@@ -70,9 +70,13 @@ impl Simulation {
     /// Static equilibrium under every static term at `t = 0`, from the
     /// initial `q` (Newton with line search and load continuation), with
     /// the validity warnings of the equilibrium ([`Statics::warnings`]).
+    /// From a fresh contact state (docs/theory-contact.md CT15: the base
+    /// stiffness, no friction anchors), whatever a run before it committed;
+    /// the stiffness it raises stays for [`Simulation::contacts`].
     pub fn statics(&mut self) -> Result<Statics> {
         self.check_statics()?;
         let s = &mut self.system;
+        s.data.reset_contact();
         let r = statics(
             &s.model,
             &mut s.data,

@@ -80,6 +80,16 @@ impl Simulation {
         Ok(s.model.contacts_with(&mut s.data, t, q, qdot)?)
     }
 
+    /// Forgets the contact state the last run, statics or step committed
+    /// (docs/theory-contact.md CT5 anchors, CT15 raised stiffnesses): the
+    /// next [`Simulation::step`] or [`Simulation::contacts`] sees the base
+    /// stiffness and no friction history, as a new simulation would.
+    /// [`Simulation::simulate_with`] and [`Simulation::statics`] do this
+    /// themselves.
+    pub fn reset_contact(&mut self) {
+        self.system.data.reset_contact();
+    }
+
     /// Mass matrix `M(q)` (n_dof × n_dof, symmetric positive definite; D19–D20).
     pub fn mass_matrix(&mut self, q: &[f64]) -> Result<DMatrix<f64>> {
         let (model, data) = self.at_time();

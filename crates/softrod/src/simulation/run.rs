@@ -110,12 +110,19 @@ impl Simulation {
     /// Integrates `duration` seconds from the initial state, handing each
     /// sample to `observer` as it is produced (the integrator's dense output
     /// at the output times; nothing is kept here).
+    ///
+    /// The run starts from a fresh contact state (docs/theory-contact.md
+    /// CT15: base stiffness, no friction anchors), whatever an earlier run
+    /// or [`Simulation::statics`] committed: the same call gives the same
+    /// bits whatever came before it. The state it ends with stays for
+    /// [`Simulation::contacts`] and [`Simulation::step`] to continue from.
     pub fn simulate_with(
         &mut self,
         duration: f64,
         observer: &mut dyn Observer,
     ) -> Result<RunSummary> {
         self.check_run(duration)?;
+        self.system.data.reset_contact();
         let times = output_times(duration, self.settings.output_spacing(duration));
         let (q0, qd0) = (self.q0.clone(), self.qd0.clone());
         self.integrate_span((0.0, duration), times, &q0, &qd0, observer, true)
@@ -126,7 +133,11 @@ impl Simulation {
     /// the state at `t + dt`. For reinforcement-learning and MPC loops that
     /// set `u` between steps. Each call starts the integrator afresh (an
     /// adaptive method takes as many internal steps as its tolerance needs;
-    /// a stiff one evaluates its Jacobian once per call).
+    /// a stiff one evaluates its Jacobian once per call). A continuation:
+    /// the contact state (friction anchors, raised stiffnesses, CT15) is
+    /// the one the last run, statics or step left, and this step commits
+    /// its own; a loop of steps from the initial state after another run
+    /// should start with [`Simulation::reset_contact`].
     pub fn step(
         &mut self,
         t: f64,
