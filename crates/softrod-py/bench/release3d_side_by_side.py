@@ -30,8 +30,6 @@ from __future__ import annotations
 
 import argparse
 import datetime
-import os
-import platform
 import subprocess
 import sys
 import tempfile
@@ -39,6 +37,9 @@ import time
 from pathlib import Path
 
 import numpy as np
+
+# The machine line of the planar script (this directory is on sys.path when run as a script).
+from release_side_by_side import machine
 
 DURATION, EVERY = 0.3, 1e-3
 L, R, RHO, E = 0.5, 0.01, 1000.0, 1e7
@@ -76,18 +77,6 @@ sim.finalize()
 ea.integrate(ea.PositionVerlet(), sim, T, steps, progress_bar=False)
 np.save(out, np.array(tips))
 """
-
-
-def machine() -> str:
-    cpu = "unknown CPU"
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    return f"{platform.machine()}, {os.cpu_count()} CPUs ({cpu}), load average {os.getloadavg()[0]:.1f} at start"
 
 
 def scene(pieces: int, integrator: str, rtol: float) -> str:
