@@ -51,7 +51,10 @@ type Outcome = Result<(DVector<f64>, DVector<f64>), String>;
 /// velocities `qdot` (n, n_dof) under cable tensions `u` (n, n_cables) [N,
 /// finite and ≥ 0] held over the step (zero-order hold), with its
 /// settings' integrator started afresh: row i equals
-/// `sims[i].step(State(t_i, q_i, qdot_i), dt, u_i)` bit for bit. Returns
+/// `sims[i].step(State(t_i, q_i, qdot_i), dt, u_i)` bit for bit (with
+/// contact: when both carry the same contact state — a copy starts fresh,
+/// keeps what its steps commit, and `reset_contact(i)` starts it over).
+/// Returns
 /// `(q, qdot, errors)`: the new states (n, n_dof) and a list of n
 /// entries, None for a copy that stepped, else the message of its failure
 /// (then its rows are its input state). `active` (n bools): copies to
@@ -133,6 +136,32 @@ impl BatchStepper {
                 pool,
             })
         })
+    }
+
+    /// Forgets the contact state of copy `i` (None: of every copy): the
+    /// friction anchors and raised stiffnesses (docs/theory-contact.md CT5,
+    /// CT15) its steps committed. Each copy carries its own contact state
+    /// from step to step, as `Simulation.step` does; an episode that starts
+    /// over on a copy (a vector env's reset or autoreset) calls this for
+    /// it. Raises InputError for an index out of range.
+    #[pyo3(signature = (i = None))]
+    fn reset_contact(&mut self, i: Option<usize>) -> PyResult<()> {
+        match i {
+            None => self
+                .copies
+                .iter_mut()
+                .for_each(|c| c.inputs.sys.data.reset_contact()),
+            Some(i) => {
+                let n = self.copies.len();
+                let c = self.copies.get_mut(i).ok_or_else(|| {
+                    input(format!(
+                        "i = {i} is out of range: this stepper has {n} copies"
+                    ))
+                })?;
+                c.inputs.sys.data.reset_contact();
+            }
+        }
+        Ok(())
     }
 
     /// Number of copies.

@@ -14,8 +14,8 @@ use nalgebra::DVector;
 use softrod::Settings;
 use softrod::dynamics::{DynamicsError, Model, forward_dynamics};
 use softrod::integrate::{
-    Control, Hooks, IntegrateError, NoHooks, Options, RodSystem, SecondOrderSystem, Status,
-    StepControl, StepInfo, integrate_second_order,
+    Control, Hooks, IntegrateError, Options, RodSystem, SecondOrderSystem, Status, StepControl,
+    StepInfo, integrate_second_order,
 };
 use softrod::{RunStatus, Trajectory, TrajectoryRecorder, output_times};
 
@@ -213,6 +213,55 @@ pub enum ControlError {
     Controller(pyo3::PyErr),
     /// Recording a sample failed.
     Output { t: f64, message: String },
+    /// Committing the contact state after an accepted step failed (a
+    /// contact deeper than the bound, docs/theory-contact.md CT15).
+    Contact { t: f64, error: DynamicsError },
+}
+
+/// Systems whose contact state (friction anchors, raised stiffnesses;
+/// docs/theory-contact.md CT5, CT15) moves at accepted steps, as
+/// `Simulation::simulate`'s does.
+pub trait CommitContact {
+    /// `RodSystem::commit_contact` of the system's rod model.
+    fn commit_contact(&mut self, t: f64, q: &[f64], qd: &[f64]) -> Result<bool, DynamicsError>;
+}
+
+impl CommitContact for RodSystem {
+    fn commit_contact(&mut self, t: f64, q: &[f64], qd: &[f64]) -> Result<bool, DynamicsError> {
+        RodSystem::commit_contact(self, t, q, qd)
+    }
+}
+
+impl CommitContact for CableInputs {
+    fn commit_contact(&mut self, t: f64, q: &[f64], qd: &[f64]) -> Result<bool, DynamicsError> {
+        self.sys.commit_contact(t, q, qd)
+    }
+}
+
+/// The step API's hooks: only the contact commit after every accepted step
+/// (without it friction never sticks and the penetration bound is never
+/// checked on stepped, environment and batched runs).
+struct CommitHooks {
+    n: usize,
+    failure: Option<DynamicsError>,
+}
+
+impl<S: SecondOrderSystem + CommitContact> Hooks<S> for CommitHooks {
+    fn keep_outputs(&self) -> bool {
+        false
+    }
+
+    fn step(&mut self, info: &StepInfo<'_>, sys: &mut S) -> Control {
+        let (q, qd) = info.y.as_slice().split_at(self.n);
+        match sys.commit_contact(info.t, q, qd) {
+            Ok(true) => Control::SystemChanged,
+            Ok(false) => Control::Continue,
+            Err(e) => {
+                self.failure = Some(e);
+                Control::Stop
+            }
+        }
+    }
 }
 
 /// A controller: `u = f(t, q, q̇)`, written into `u`.
@@ -358,12 +407,24 @@ impl Hooks<CableInputs> for ControlHooks<'_, '_> {
         }
     }
 
-    /// `u` from the controller at the step's end, held from there on.
+    /// The contact commit, then `u` from the controller at the step's end,
+    /// held from there on.
     fn step(&mut self, info: &StepInfo<'_>, sys: &mut CableInputs) -> Control {
-        let Some(controller) = self.controller.as_mut() else {
-            return Control::Continue;
-        };
         let (q, qd) = info.y.as_slice().split_at(self.n);
+        let changed = match sys.commit_contact(info.t, q, qd) {
+            Ok(changed) => changed,
+            Err(error) => {
+                self.failure = Some(ControlError::Contact { t: info.t, error });
+                return Control::Stop;
+            }
+        };
+        let Some(controller) = self.controller.as_mut() else {
+            return if changed {
+                Control::SystemChanged
+            } else {
+                Control::Continue
+            };
+        };
         let mut u = std::mem::take(&mut sys.u);
         let r = controller(info.t, q, qd, &mut u);
         sys.u = u;
@@ -396,7 +457,7 @@ fn add_stats(acc: &mut softrod::integrate::Stats, s: &softrod::integrate::Stats)
 /// `dt / k` with the settings' integrator (an implicit method still halves a
 /// step whose Newton iteration fails; `rtol`, `atol` then only weight its
 /// Newton test).
-pub fn step<S: SecondOrderSystem>(
+pub fn step<S: SecondOrderSystem + CommitContact>(
     sys: &mut S,
     settings: &Settings,
     t: f64,
@@ -422,7 +483,12 @@ pub fn step<S: SecondOrderSystem>(
     }
     opts.t_eval = Some(Vec::new());
     let n = sys.dim();
-    let sol = integrate_second_order(sys, method, (t, t + dt), q, qd, &opts, &mut NoHooks)?;
+    let mut hooks = CommitHooks { n, failure: None };
+    let result = integrate_second_order(sys, method, (t, t + dt), q, qd, &opts, &mut hooks);
+    if let Some(e) = hooks.failure {
+        return Err(e.into());
+    }
+    let sol = result?;
     Ok((
         sol.y_final.rows(0, n).into_owned(),
         sol.y_final.rows(n, n).into_owned(),

@@ -440,8 +440,11 @@ class Simulation:
         self, q: ArrayLike, qdot: ArrayLike | None = None, *, t: float = 0.0
     ) -> list[Contact]:
         """The active contacts at (t, q, qdot) under the contact state this simulation holds:
-        the stiffness its last statics (without loads) or simulate (no controller) left,
-        and that run's friction anchors; before any, the base stiffness and zero friction."""
+        the stiffness its last statics (without loads), simulate or step left, and their
+        friction anchors; before any, the base stiffness and zero friction."""
+    def reset_contact(self) -> None:
+        """Forget the committed contact state (friction anchors, raised stiffnesses): the
+        next step starts fresh, as on a new simulation."""
     def max_penetration(self, q: ArrayLike, *, t: float = 0.0) -> float:
         """The largest -gap [m] at q, 0 if none (geometry: independent of the contact state)."""
     def prescribed_forces(self, t: float, q: ArrayLike, qdot: ArrayLike) -> _F64: ...
@@ -590,6 +593,8 @@ class BatchStepper:
     def n_cables(self) -> int: ...
     @property
     def threads(self) -> int: ...
+    def reset_contact(self, i: int | None = None) -> None:
+        """Forget copy i's (None: every copy's) committed contact state."""
     def step(
         self, t: float | ArrayLike, q: ArrayLike, qdot: ArrayLike, u: ArrayLike, dt: float,
         active: Sequence[bool] | None = None, *, substeps: int | None = None,

@@ -369,10 +369,10 @@ impl Simulation {
     /// model without contact. The forces are those of the contact state
     /// this simulation holds (CT5, CT15): the stiffness scales its last
     /// `statics()` (without `loads`) raised or its last `simulate` (without
-    /// a controller) committed, and that run's friction anchors. Before any, the base stiffness of
-    /// CT3 and no friction history (friction zero: the normal forces are
-    /// the whole force). `step` integrates a copy and leaves this state
-    /// alone; the forces of a run's samples are in `Trajectory.contacts`.
+    /// `simulate` or `step` committed, and their friction anchors. Before
+    /// any, the base stiffness of CT3 and no friction history (friction
+    /// zero: the normal forces are the whole force). The forces of a run's
+    /// samples are in `Trajectory.contacts`.
     #[pyo3(signature = (q, qdot = None, *, t = 0.0))]
     fn contacts(
         &mut self,
@@ -394,6 +394,17 @@ impl Simulation {
                 .map_err(crate::errors::to_py)?;
             Ok(crate::contacts::Contact::list(self.sim.model(), &c))
         })
+    }
+
+    /// Forgets the contact state this simulation holds (the friction
+    /// anchors and raised stiffnesses the last `simulate`, `statics` or
+    /// `step` committed, docs/theory-contact.md CT5, CT15): the next `step`
+    /// or `contacts` sees the base stiffness and no friction history, as
+    /// on a new simulation. `simulate` and `statics` start fresh by
+    /// themselves; a loop of `step`s from an initial state (an episode)
+    /// calls this first. Nothing for a model without contact.
+    fn reset_contact(&mut self) {
+        self.sim.reset_contact();
     }
 
     /// The largest penetration `−gap` [m] of any contact at `q` (time `t`
@@ -995,6 +1006,15 @@ impl Simulation {
     /// a step whose Newton iteration fails; rtol and atol then only weight
     /// its Newton test): a fixed cost per call, at an accuracy the caller
     /// must check (docs/envs.md, "Integration"). Releases the GIL.
+    ///
+    /// Contact: a step continues from the contact state this simulation
+    /// holds (friction anchors and raised stiffnesses, docs/theory-contact.md
+    /// CT5, CT15, left by the last `simulate`, `statics` or `step`) and
+    /// commits its own after each accepted internal step, as `simulate`
+    /// does — so friction sticks, and a contact deeper than the CT15 bound
+    /// raises `SimulationError`. A loop of steps that starts an episode
+    /// from an initial state calls `reset_contact()` first (the
+    /// environments' `reset` does).
     #[pyo3(signature = (state, dt, u = None, *, substeps = None))]
     fn step(
         &mut self,

@@ -91,6 +91,10 @@ impl Simulation {
                 self.inputs()?;
                 let inputs = self.inputs.as_mut().expect("built above");
                 inputs.tau_extra = None;
+                // A run starts from a fresh contact state, as the facade's
+                // does (CT15), and leaves what it committed for `contacts`
+                // and `step`.
+                inputs.sys.data.reset_contact();
                 let call = |t: f64, q: &[f64], qd: &[f64], u: &mut Vec<f64>| -> PyResult<()> {
                     Python::attach(|py| {
                         let r = f.bind(py).call1((t, vec_out(py, q), vec_out(py, qd)))?;
@@ -117,6 +121,7 @@ impl Simulation {
                         Ok(simulate_controlled(inputs, &settings, run, &mut controller))
                     })
                 })?;
+                self.sim.contact_state_from(&inputs.sys.data);
                 match r {
                     Ok(traj) => Trajectory::new(py, traj, self.sim.model()),
                     Err(ControlError::Integrate(e)) => Err(integrate(e)),
@@ -125,6 +130,9 @@ impl Simulation {
                         format!("output at t = {t:e} s failed: {message}"),
                         Some(t),
                     )),
+                    Err(ControlError::Contact { t, error }) => {
+                        Err(simulation(format!("at t = {t:e} s: {error}"), Some(t)))
+                    }
                 }
             }
         }
@@ -152,13 +160,17 @@ impl Simulation {
         let (q1, qd1) = match u {
             Some(u) => {
                 let u = self.tensions(u)?;
-                let inputs = self.inputs()?;
+                self.inputs()?;
+                let inputs = self.inputs.as_mut().expect("built above");
                 inputs.u = u;
                 inputs.tau_extra = None;
                 inputs.sys.jacobian = settings.stiff_jacobian();
-                guard_detached(py, || {
-                    step(inputs, &settings, t, dt, &q, &qd, substeps).map_err(to_py)
-                })?
+                self.sim.contact_state_into(&mut inputs.sys.data);
+                let r = guard_detached(py, || {
+                    step(&mut **inputs, &settings, t, dt, &q, &qd, substeps).map_err(to_py)
+                })?;
+                self.sim.contact_state_from(&inputs.sys.data);
+                r
             }
             None => {
                 if self.stepper.is_none() {
@@ -166,9 +178,12 @@ impl Simulation {
                 }
                 let sys = self.stepper.as_mut().expect("just set");
                 sys.jacobian = settings.stiff_jacobian();
-                guard_detached(py, || {
+                self.sim.contact_state_into(&mut sys.data);
+                let r = guard_detached(py, || {
                     step(&mut **sys, &settings, t, dt, &q, &qd, substeps).map_err(to_py)
-                })?
+                })?;
+                self.sim.contact_state_from(&sys.data);
+                r
             }
         };
         State::from_slices(py, t + dt, q1.as_slice(), qd1.as_slice())

@@ -3,7 +3,7 @@
 
 use nalgebra::{DMatrix, DVector};
 use softrod_dynamics::{
-    Energies, FdDerivatives, Linearization, actuation_matrix, bias_force, coriolis_matrix,
+    Data, Energies, FdDerivatives, Linearization, actuation_matrix, bias_force, coriolis_matrix,
     damping_matrix, energies, forward_dynamics, generalized_gravity, inverse_dynamics, linearize,
     mass_matrix, stiffness_matrix,
 };
@@ -88,6 +88,25 @@ impl Simulation {
     /// themselves.
     pub fn reset_contact(&mut self) {
         self.system.data.reset_contact();
+    }
+
+    /// Copies the contact state this simulation holds (the friction anchors
+    /// of CT5 and the raised stiffnesses of CT15, docs/theory-contact.md)
+    /// into `data`, a workspace of this simulation's model: a front end
+    /// that integrates with its own workspace (Python `step` with tensions
+    /// as inputs) continues from the state the last run, statics or step
+    /// committed. Nothing for a model without contact; no allocation once
+    /// `data` has held as many rod–rod anchors.
+    pub fn contact_state_into(&self, data: &mut Data) {
+        data.copy_friction_state_from(&self.system.data);
+    }
+
+    /// Takes the contact state `data` (a workspace of this model) committed
+    /// as this simulation's, so that [`Simulation::contacts`] and the next
+    /// [`Simulation::step`] continue from it: the counterpart of
+    /// [`Simulation::contact_state_into`].
+    pub fn contact_state_from(&mut self, data: &Data) {
+        self.system.data.copy_friction_state_from(data);
     }
 
     /// Mass matrix `M(q)` (n_dof × n_dof, symmetric positive definite; D19–D20).

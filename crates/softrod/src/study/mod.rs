@@ -154,6 +154,47 @@ mod tests {
         assert_eq!(marks, vec![true, false, true, true]);
     }
 
+    /// Coulomb's law: a rod on a 20° incline with μ = 0.5 > tan 20° stays
+    /// where it was put. The study's runs must commit the contact state
+    /// after accepted steps as `softrod run` does: without the friction
+    /// anchors (CT5) the rod slid 1.7 cm in 0.1 s, the frictionless
+    /// g sin 20° t²/2.
+    #[test]
+    fn a_study_run_sticks_where_coulomb_friction_holds() {
+        let (a, b) = (20f64.to_radians().sin(), 20f64.to_radians().cos());
+        let text = format!(
+            "[world]\ngravity = [0.0, 0.0, -9.81]\n\
+             [[rod]]\nname = \"rod\"\nlength = 0.2\npieces = 4\nstrains = [\"ky\", \"kz\"]\n\
+             joint = {{ type = \"free\" }}\n\
+             base = {{ position = [{px:?}, -0.1, {pz:?}], rotation = [[0, -1, 0], [1, 0, 0], [0, 0, 1]] }}\n\
+             section = {{ shape = \"circle\", radius = 0.01 }}\n\
+             material = {{ density = 1000.0, young = 1.0e6, poisson = 0.5 }}\n\
+             [[obstacle]]\nname = \"slope\"\nshape = \"plane\"\nposition = [0.0, 0.0, 0.0]\n\
+             normal = [{a:?}, 0.0, {b:?}]\nfriction = 0.5\n",
+            px = 0.01 * a,
+            pz = 0.01 * b,
+        );
+        let (scene, _) = Scene::from_str(&text, "incline.toml").unwrap();
+        let built = scene.build().unwrap();
+        let opts = softrod_integrate::Options {
+            rtol: 1e-6,
+            atol: 1e-8,
+            ..Default::default()
+        };
+        let times = [0.0, 0.05, 0.1];
+        let out = runs::simulate(
+            &built,
+            softrod_integrate::Integrator::Esdirk,
+            &opts,
+            &times,
+            60.0,
+            1,
+        )
+        .unwrap();
+        let moved = dist(&out.tips[0], &out.tips[2]);
+        assert!(moved < 1e-4, "the rod moved {moved} m");
+    }
+
     #[test]
     fn variant_splits_pieces_and_repeats_initial_values() {
         let text = "[[rod]]\nname = \"a\"\nlength = 0.4\npieces = 2\nstrains = [\"ky\", \"qx\"]\n\

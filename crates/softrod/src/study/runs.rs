@@ -54,11 +54,23 @@ pub(super) fn simulate_once(
         ..opts.clone()
     };
     let start = Instant::now();
-    let mut hooks = Callbacks::new().on_step(move |_, _: &mut RodSystem| {
+    let n = sys.model.n_dof();
+    // The contact state moves at accepted steps as in `Simulation::simulate`
+    // (friction anchors, raised stiffnesses, the penetration bound; CT5,
+    // CT15): without the commit friction never sticks.
+    let failure = std::cell::RefCell::new(None);
+    let mut hooks = Callbacks::new().on_step(|info, sys: &mut RodSystem| {
         if start.elapsed().as_secs_f64() > budget {
-            Control::Stop
-        } else {
-            Control::Continue
+            return Control::Stop;
+        }
+        let (q, qd) = info.y.as_slice().split_at(n);
+        match sys.commit_contact(info.t, q, qd) {
+            Ok(true) => Control::SystemChanged,
+            Ok(false) => Control::Continue,
+            Err(e) => {
+                *failure.borrow_mut() = Some(format!("at t = {:e} s: {e}", info.t));
+                Control::Stop
+            }
         }
     });
     let sol = integrate_second_order(
@@ -72,13 +84,16 @@ pub(super) fn simulate_once(
     )
     .map_err(|e| crate::error::report(&e))?;
     let wall = start.elapsed().as_secs_f64();
+    drop(hooks);
+    if let Some(m) = failure.into_inner() {
+        return Err(m);
+    }
     if sol.status == Status::Stopped {
         return Err(format!(
             "stopped at t = {:.3e} s: over the time budget of {budget} s ({} steps)",
             sol.t_final, sol.stats.steps
         ));
     }
-    let n = sys.model.n_dof();
     let mut poses = WorldPoses::new(&sys.model);
     let mut tips = Vec::with_capacity(sol.y.len());
     for (t, y) in sol.t.iter().zip(&sol.y) {

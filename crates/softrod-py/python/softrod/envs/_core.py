@@ -472,6 +472,9 @@ class RodEnv(gymnasium.Env):
             self.qdot = self.qdot + rng.normal(0.0, self.initial_noise, self.n_dof)
         self.u = np.zeros(self.n_cables)
         self.task.reset(rng)
+        # An episode starts with no friction history (after the task's
+        # statics, which commits its own contact state).
+        self.sim.reset_contact()
         obs = self._observation()
         _, info = self.task.reward(self.t, self._tip, self.u)
         return obs, info

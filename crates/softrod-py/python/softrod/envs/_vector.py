@@ -108,6 +108,7 @@ class BatchedVectorEnv(VectorEnv):
         for i, (env, s) in enumerate(zip(self.envs, seeds)):
             if mask[i]:
                 self._obs[i], info = env.reset(seed=s, options=options or None)
+                self.stepper.reset_contact(i)
                 infos = self._add_info(infos, info, i)
         self._autoreset[mask] = False
         return self._obs.copy(), infos
@@ -145,6 +146,7 @@ class BatchedVectorEnv(VectorEnv):
             p = prepared[i]
             if p is None:  # NEXT_STEP: this copy's episode ended last step
                 self._obs[i], info = env.reset()
+                self.stepper.reset_contact(i)
             else:
                 self._obs[i], rewards[i], terms[i], truncs[i], info = env._finish(
                     p[0], p[1], q1[i], qd1[i], errors[i]
@@ -154,6 +156,7 @@ class BatchedVectorEnv(VectorEnv):
                         infos, {"final_obs": self._obs[i].copy(), "final_info": info}, i
                     )
                     self._obs[i], info = env.reset()
+                    self.stepper.reset_contact(i)
             infos = self._add_info(infos, info, i)
         self._autoreset = terms | truncs
         return self._obs.copy(), rewards, terms, truncs, infos
