@@ -1,9 +1,9 @@
-"""Environment steps per second on softrod/Reach-v0 at 20 Hz control (a
-benchmark, not a test; the numbers go to docs/performance.md, "Learning
-environments").
+"""Environment steps per second on softrod/Reach-v0 (or ``--env`` another
+registered task) at 20 Hz control (a benchmark, not a test; the numbers go
+to docs/performance.md, "Learning environments", and docs/envs.md).
 
-    python crates/softrod-py/bench/env_steps.py [--steps 2000] [--envs 16]
-        [--rtol R] [--substeps K] [--repeats 3]
+    python crates/softrod-py/bench/env_steps.py [--env Reach-v0] [--steps 2000]
+        [--envs 16] [--rtol R] [--substeps K] [--repeats 3]
 
 Measures, with uniformly random actions and automatic resets:
 
@@ -37,6 +37,16 @@ import softrod
 import softrod.envs as se
 
 
+# The task measured (--env) and its batched vector env.
+ENV = "Reach-v0"
+VECTOR = {
+    "Reach-v0": se.reach_vector_env,
+    "Track-v0": se.track_vector_env,
+    "ReachAround-v0": se.reach_around_vector_env,
+    "Push-v0": se.push_vector_env,
+}
+
+
 def clocks():
     return time.perf_counter(), time.process_time()
 
@@ -47,7 +57,7 @@ def rates(steps: int, start) -> tuple[float, float]:
 
 
 def single(steps: int, kw: dict) -> tuple[float, float]:
-    env = gymnasium.make("softrod/Reach-v0", **kw)
+    env = gymnasium.make(f"softrod/{ENV}", **kw)
     env.reset(seed=0)
     rng = np.random.default_rng(0)
     actions = rng.uniform(0.0, se.DEFAULT_MAX_TENSION, (steps, env.action_space.shape[0]))
@@ -60,7 +70,7 @@ def single(steps: int, kw: dict) -> tuple[float, float]:
 
 
 def batched(steps: int, n_envs: int, threads: int, kw: dict) -> tuple[float, float]:
-    venv = se.reach_vector_env(n_envs, threads=threads, **kw)
+    venv = VECTOR[ENV](n_envs, threads=threads, **kw)
     venv.reset(seed=0)
     rng = np.random.default_rng(0)
     rounds = max(1, steps // n_envs)
@@ -77,12 +87,15 @@ def best(runs: list[tuple[float, float]]) -> tuple[float, float]:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--env", default="Reach-v0", choices=sorted(VECTOR), help="the task")
     ap.add_argument("--steps", type=int, default=2000, help="env steps per timed run")
     ap.add_argument("--envs", type=int, default=16, help="copies of the batched env")
     ap.add_argument("--repeats", type=int, default=3, help="timed runs; the best is kept")
     ap.add_argument("--rtol", type=float, default=None, help="the env's rtol (default the task's)")
     ap.add_argument("--substeps", type=int, default=None, help="fixed steps per period")
     args = ap.parse_args()
+    global ENV
+    ENV = args.env
     kw = {}
     if args.rtol is not None:
         kw["rtol"] = args.rtol
@@ -94,10 +107,10 @@ def main() -> None:
         f"{cores} cores, {platform.processor() or platform.machine()}, "
         f"load average {os.getloadavg()[0]:.1f}"
     )
-    env = se.reach_env(**kw)
+    env = gymnasium.make(f"softrod/{ENV}", **kw).unwrapped
     s = env.sim.settings
     print(
-        f"softrod/Reach-v0, 20 Hz control (0.05 s per step), random actions, "
+        f"softrod/{ENV}, 20 Hz control (0.05 s per step), random actions, "
         f"{s.integrator} rtol {s.rtol:g} atol {s.atol:g}, substeps {env.substeps}\n"
     )
     print("| configuration | env steps/s (wall) | env steps per CPU-second |\n|---|---|---|")
