@@ -25,6 +25,18 @@ if [[ -z "${SOFTROD_CHROMIUM:-}" ]] && ! command -v chromium >/dev/null 2>&1; th
     fi
 fi
 
+# The instruction-count gate counts with valgrind's callgrind.
+if ! command -v valgrind >/dev/null 2>&1; then
+    if command -v apt-get >/dev/null 2>&1 && [[ "$(id -u)" == 0 ]]; then
+        echo "== installing Debian's valgrind for the instruction-count gate"
+        apt-get update -qq
+        DEBIAN_FRONTEND=noninteractive apt-get install -y -qq valgrind >/dev/null
+    else
+        echo "scripts/test.sh: the instruction-count gate needs valgrind (apt-get install valgrind)" >&2
+        exit 1
+    fi
+fi
+
 echo "== Rust tests"
 # The criterion benches (softrod-benches: criterion and its dependencies, the
 # bench tables binary, the study examples) hold no tests: they are built
@@ -35,6 +47,9 @@ if [[ "${SOFTROD_TEST_BENCHES:-0}" == 1 ]]; then
 else
     cargo test --workspace --exclude softrod-benches
 fi
+
+echo "== instruction-count gate (the dynamics' hot paths, callgrind; docs/performance.md)"
+python3 scripts/instruction_gate.py
 
 echo "== Python package (dev build into $venv)"
 bash scripts/install.sh --dev "$venv"
