@@ -180,7 +180,10 @@ def versions() -> list[tuple[str, str]]:
             found.append((package, "not installed"))
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=REPO,
                             capture_output=True, text=True).stdout.strip()
-    dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=REPO,
+    # The report and its plots are this script's output, not softrod: a
+    # rewrite over a previous one is not a modified softrod.
+    dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no", "--", ".",
+                            ":!docs/benchmarks.md", ":!docs/images/benchmarks"], cwd=REPO,
                            capture_output=True, text=True).stdout.strip()
     found[0] = ("softrod", f"{found[0][1]} (commit {commit}{', modified' if dirty else ''}, "
                 "release build)")
