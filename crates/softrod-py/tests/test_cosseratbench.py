@@ -191,8 +191,11 @@ def test_the_contact_experiments_map_to_obstacles_and_contact_settings():
 
 def test_the_crossing_is_unsupported_for_its_pinned_ends():
     """The crossing's ropes are pinned at both ends (ball closures), and
-    softrod has no contact on models with loop closures yet: the runner
-    reports it unsupported with that reason."""
+    softrod's dynamics has no contact on models with loop closures yet: the
+    adapter asks softrod (one evaluation of the closed model with contact)
+    and the runner reports it unsupported with that reason. When the
+    dynamics accepts such models, the adapter runs the crossing unchanged
+    and this test is to become a run against the elastica."""
     result = experiment.run(registry.load_experiment("crossing"), softrod_solver(), n_elements=5)
     assert result.outcome == "unsupported"
     assert any("loop closures" in m for m in result.missing), result.missing

@@ -750,21 +750,39 @@ def _build(
                                              n_elements)
             extra += [drive, carriage]
             closures.append(weld | {"b": {"element": carriage.name}})
-    if closures and contact:
-        # softrod has no contact on models with loop closures yet.
-        if scenario.obstacles or len(scenario.rods) > 1:
-            raise _unsupported(
-                "contact on a model with loop closures (a rod's far end pinned, clamped or "
-                "driven): softrod has none yet"
-            )
-        contact = ""  # self contact alone is left out, and settings say so
     values = dict(zip(open_model.q_names, q_open))
     if not extra and not closures:
         scene = text("all", initial={"q": q_open}, touch=True)
         return _scene(scene), scene, fit_error, offset, lift
     draft = _scene(text("all", extra))
-    scene = text("all", extra, closures, {"q": carried(draft, values)}, touch=True)
-    return _scene(scene), scene, fit_error, offset, lift
+    initial = {"q": carried(draft, values)}
+    scene = text("all", extra, closures, initial, touch=True)
+    sim = _scene(scene)
+    if closures and contact and not _accepts_contact(sim):
+        # This softrod's dynamics has no contact on models with loop
+        # closures (it says so at the first evaluation).
+        if scenario.obstacles or len(scenario.rods) > 1:
+            raise _unsupported(
+                "contact on a model with loop closures (a rod's far end pinned, clamped or "
+                "driven): softrod has none yet"
+            )
+        # Self contact alone is left out, and settings say so.
+        scene = text("all", extra, closures, initial)
+        sim = _scene(scene)
+    return sim, scene, fit_error, offset, lift
+
+
+def _accepts_contact(sim: softrod.Simulation) -> bool:
+    """Whether softrod's dynamics runs ``sim`` (a model with loop closures
+    and contact): asked of softrod by one evaluation at the start, so the
+    adapter expresses such scenarios (pinned ropes by closures, rod–rod
+    contact with friction) as soon as the dynamics accepts them."""
+    q, qd = sim.initial_state()
+    try:
+        sim.forward_dynamics(0.0, q, qd)
+    except softrod.NotSupportedError:
+        return False
+    return True
 
 
 def _drive(name: str, motion: Motion, rotation: np.ndarray, position: np.ndarray, spec,
