@@ -20,7 +20,7 @@
 //! | [`modes`] | natural frequencies about an equilibrium | |
 //! | [`lowest_modes`] | the lowest modes, matrix-free, O(N) per step | docs/theory.md E11 |
 //! | [`inverse_dynamics_derivatives`] | `∂τ/∂q`, `∂τ/∂q̇` (`∂τ/∂q̈ = M`) | docs/theory-derivatives.md (D37–D47) |
-//! | [`inverse_dynamics_linearization_with`], [`inverse_dynamics_vjp`] | `uᵀ∂τ/∂q`, `uᵀ∂τ/∂q̇` in O(N), no dense matrix | (D81–D83) |
+//! | [`inverse_dynamics_linearization_with`], [`inverse_dynamics_vjp`], [`inverse_dynamics_jvp`] | `uᵀ∂τ/∂q`, `uᵀ∂τ/∂q̇`, `∂τ/∂q·a + ∂τ/∂q̇·b` in O(N), no dense matrix | (D81–D84) |
 //! | [`forward_dynamics_derivatives`] | `∂q̈/∂q`, `∂q̈/∂q̇`, `∂q̈/∂u` | (D48) |
 //! | [`closed_dynamics_derivatives`] | `∂q̈/∂q`, `∂q̈/∂q̇` of a closed model's constrained `q̈` | (CD1–CD4) |
 //! | [`linearize`] | `(A, B)` of `ẋ = f(x, u)`, `x = (q, q̇)` | (D49) |
@@ -124,8 +124,8 @@ pub use constraints::{
 pub use derivatives::{
     DynamicsJacobians, FdDerivatives, IdDerivatives, Linearization, dynamics_jacobians,
     dynamics_jacobians_with, forward_dynamics_derivatives, inverse_dynamics_derivatives,
-    inverse_dynamics_derivatives_with, inverse_dynamics_linearization_with, inverse_dynamics_vjp,
-    linearize,
+    inverse_dynamics_derivatives_with, inverse_dynamics_jvp, inverse_dynamics_linearization_with,
+    inverse_dynamics_vjp, linearize,
 };
 pub use dispatch::{forward_dynamics, forward_dynamics_with};
 pub use error::{DynamicsError, RodId};

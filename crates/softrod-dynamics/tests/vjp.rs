@@ -1,6 +1,7 @@
 //! The O(N) vector–Jacobian products of the inverse dynamics
 //! (`inverse_dynamics_linearization_with` + `inverse_dynamics_vjp`,
-//! docs/theory-derivatives.md D81–D83) against `uᵀ` times the dense
+//! docs/theory-derivatives.md D81–D83), and the Jacobian–vector products
+//! (`inverse_dynamics_jvp`, D84), against `uᵀ` times (or times `a`, `b`) the dense
 //! derivatives (`inverse_dynamics_derivatives`, themselves checked against
 //! differences in id_derivatives.rs and tree_derivatives.rs): a six-strain
 //! chain with every force term and cables (with friction, and as inputs),
@@ -17,7 +18,8 @@ use softrod_lie::{Pose, Vec6};
 use softrod_mechanics::{Cable, Routing, Tension};
 
 /// `max_j |vjp_j − (uᵀD)_j| / max_j Σᵢ |uᵢ||D_ij|` for `D = ∂τ/∂q` and
-/// `∂τ/∂q̇`, over three random `u`: the products sum the same per-piece
+/// `∂τ/∂q̇`, over three random `u`, and the same measure of
+/// `∂τ/∂q·a + ∂τ/∂q̇·b` for two random pairs: the products sum the same per-piece
 /// quantities in another order, so they agree to round-off of the sums
 /// `Σ |u||D|`, amplified at most by the world-frame lever arms the pairing
 /// quantities carry (≤ 1 m here).
@@ -42,6 +44,17 @@ fn vjp_error(m: &Model, t: f64, q: &[f64], qd: &[f64], qdd: &[f64], rng: &mut Lc
             let e = (DVector::from_column_slice(out) - reference).amax() / scale;
             worst = worst.max(e);
         }
+    }
+    // The forward products of the same linearization (D84).
+    for _ in 0..2 {
+        let a = DVector::from_vec(rng.vec(n, 1.0));
+        let b = DVector::from_vec(rng.vec(n, 1.0));
+        let mut out = vec![0.0; n];
+        inverse_dynamics_jvp(m, &mut work, a.as_slice(), b.as_slice(), &mut out).unwrap();
+        let reference = &dense.dtau_dq * &a + &dense.dtau_dqd * &b;
+        let scale = (dense.dtau_dq.abs() * a.abs() + dense.dtau_dqd.abs() * b.abs()).amax();
+        let e = (DVector::from_column_slice(&out) - reference).amax() / scale;
+        worst = worst.max(e);
     }
     // The products after a dense evaluation (same workspace kept).
     let u = DVector::from_vec(rng.vec(n, 1.0));

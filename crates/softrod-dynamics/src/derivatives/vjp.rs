@@ -61,32 +61,10 @@ pub fn inverse_dynamics_vjp(
     out_q: &mut [f64],
     out_qd: &mut [f64],
 ) -> Result<(), DynamicsError> {
-    let nodes = model.tree.as_ref().map(|t| t.nodes.len());
-    if work.n_dof != model.n_dof()
-        || work.pieces.len() != model.rods().len()
-        || work.tree.as_ref().map(|t| t.n_nodes()) != nodes
-    {
-        return Err(DynamicsError::WorkspaceMismatch {
-            what: "IdDerivatives",
-            built: work.n_dof,
-            got: model.n_dof(),
-        });
-    }
-    if !work.linearized {
-        return Err(DynamicsError::NotLinearized {
-            what: "inverse_dynamics_vjp",
-        });
-    }
+    check_work(model, work, "inverse_dynamics_vjp")?;
     check_vec(model, "u", u)?;
-    for (what, o) in [("out_q", out_q.len()), ("out_qd", out_qd.len())] {
-        if o != model.n_dof() {
-            return Err(DynamicsError::SizeMismatch {
-                what,
-                got: o,
-                expected: model.n_dof(),
-            });
-        }
-    }
+    check_len(model, "out_q", out_q.len())?;
+    check_len(model, "out_qd", out_qd.len())?;
     out_q.fill(0.0);
     out_qd.fill(0.0);
     match (&model.tree, work.tree.as_deref_mut()) {
@@ -106,6 +84,102 @@ pub fn inverse_dynamics_vjp(
         }
     }
     Ok(())
+}
+
+/// `∂τ/∂q · a + ∂τ/∂q̇ · b` into `out` (all dim `n_dof`) at the point of
+/// the last successful linearization on `work`, the forward (column)
+/// products of the same quantities as [`inverse_dynamics_vjp`]: the sums
+/// run the other way along the paths (D84). O(N), no allocation. Errors as
+/// [`inverse_dynamics_vjp`].
+pub fn inverse_dynamics_jvp(
+    model: &Model,
+    work: &mut IdDerivatives,
+    a: &[f64],
+    b: &[f64],
+    out: &mut [f64],
+) -> Result<(), DynamicsError> {
+    check_work(model, work, "inverse_dynamics_jvp")?;
+    check_vec(model, "a", a)?;
+    check_vec(model, "b", b)?;
+    check_len(model, "out", out.len())?;
+    out.fill(0.0);
+    match (&model.tree, work.tree.as_deref_mut()) {
+        (Some(tree), Some(tw)) => tree_jvp(tree, tw, a, b, out),
+        _ => {
+            for (r, rm) in model.rods().iter().enumerate() {
+                chain_jvp(rm, &work.pieces[r], a, b, out);
+            }
+        }
+    }
+    if let Some(i) = out.iter().position(|v| !v.is_finite()) {
+        return Err(DynamicsError::NotFinite {
+            what: format!("dtau/dq a + dtau/dqdot b entry {i}"),
+            value: out[i],
+        });
+    }
+    Ok(())
+}
+
+/// The workspace fits the model and holds a linearization.
+fn check_work(
+    model: &Model,
+    work: &IdDerivatives,
+    what: &'static str,
+) -> Result<(), DynamicsError> {
+    let nodes = model.tree.as_ref().map(|t| t.nodes.len());
+    if work.n_dof != model.n_dof()
+        || work.pieces.len() != model.rods().len()
+        || work.tree.as_ref().map(|t| t.n_nodes()) != nodes
+    {
+        return Err(DynamicsError::WorkspaceMismatch {
+            what: "IdDerivatives",
+            built: work.n_dof,
+            got: model.n_dof(),
+        });
+    }
+    if !work.linearized {
+        return Err(DynamicsError::NotLinearized { what });
+    }
+    Ok(())
+}
+
+fn check_len(model: &Model, what: &'static str, got: usize) -> Result<(), DynamicsError> {
+    if got != model.n_dof() {
+        return Err(DynamicsError::SizeMismatch {
+            what,
+            got,
+            expected: model.n_dof(),
+        });
+    }
+    Ok(())
+}
+
+/// The forward products on one rod of a chain (D84): the diagonal blocks,
+/// the prefix sums of the sources `[w̄, u, Δ]_j` against the receivers of
+/// the later pieces, the suffix sum of the columns `δW_j` against the
+/// earlier pieces' `Ad S_i`.
+fn chain_jvp(rm: &RodModel, ws: &[PieceWork], a: &[f64], b: &[f64], out: &mut [f64]) {
+    let pieces = rm.spec.geometry.pieces();
+    let dead = has_dead_loads(rm);
+    let (mut sm, mut sb, mut sy) = (Vec6::zeros(), Vec6::zeros(), Vec6::zeros());
+    for (p, w) in pieces.iter().zip(ws) {
+        let (o, k) = (rm.dof_offset + p.dof_offset, p.basis.dof());
+        let (aj, bj) = (local(a, o, k), local(b, o, k));
+        let mut v = w.blk_q * aj + w.blk_v * bj + w.rcv_m * sm + w.rcv_b * sb;
+        if dead {
+            v += w.rcv_y * sy;
+            sy += w.s_world * aj;
+        }
+        add_local(out, o, k, &v);
+        sm += w.src_wq * aj + w.src_wv * bj;
+        sb += w.src_uq * aj + w.src_uv * bj;
+    }
+    let mut d = Vec6::zeros();
+    for (p, w) in pieces.iter().zip(ws).rev() {
+        let (o, k) = (rm.dof_offset + p.dof_offset, p.basis.dof());
+        add_local(out, o, k, &w.s_world.tr_mul(&d));
+        d += w.dwq_world * local(a, o, k) + w.dwv_world * local(b, o, k);
+    }
 }
 
 /// The products on one rod of a chain (pieces `0 … N−1` base to tip):
@@ -226,5 +300,61 @@ fn tree_vjp(tree: &Tree, tw: &mut TreeWork, u: &[f64], out_q: &mut [f64], out_qd
         d[0] += sm;
         d[1] += sb;
         d[2] += sy;
+    }
+}
+
+/// The forward products on a tree (D84): forward, each node gathers the
+/// sources of its ancestors through the exits its branch leaves them by
+/// (`down` holds the three sums); backward, each node hands the columns
+/// `δW` of its subtree (`up`) to its parent, which pairs them with the
+/// exit towards that child.
+fn tree_jvp(tree: &Tree, tw: &mut TreeWork, a: &[f64], b: &[f64], out: &mut [f64]) {
+    let dead = tw.dead;
+    for (i, node) in tree.nodes.iter().enumerate() {
+        let sums = match node.parent {
+            None => [Vec6::zeros(); 3],
+            Some(p) => {
+                let pn = &tree.nodes[p];
+                let mut s = tw.down[p];
+                if pn.k > 0 {
+                    let ex = exit_towards(tree, tw, p, i);
+                    let (ap, bp) = (local(a, pn.dof, pn.k), local(b, pn.dof, pn.k));
+                    s[0] += ex.wq * ap + ex.wv * bp;
+                    s[1] += ex.uq * ap + ex.s * bp;
+                    if dead {
+                        s[2] += ex.s * ap;
+                    }
+                }
+                s
+            }
+        };
+        tw.down[i] = sums;
+        if node.k > 0 {
+            let w = &tw.nodes[i];
+            let (ai, bi) = (local(a, node.dof, node.k), local(b, node.dof, node.k));
+            let mut v = w.blk_q * ai + w.blk_v * bi + w.rcv_m * sums[0] + w.rcv_b * sums[1];
+            if dead {
+                v += w.rcv_y * sums[2];
+            }
+            add_local(out, node.dof, node.k, &v);
+        }
+    }
+    for u in tw.up.iter_mut() {
+        *u = Vec6::zeros();
+    }
+    for (i, node) in tree.nodes.iter().enumerate().rev() {
+        if node.k > 0 {
+            let w = &tw.nodes[i];
+            let (ai, bi) = (local(a, node.dof, node.k), local(b, node.dof, node.k));
+            tw.up[i] += w.dwq_world * ai + w.dwv_world * bi;
+        }
+        let Some(p) = node.parent else { continue };
+        let d = tw.up[i];
+        let pn = &tree.nodes[p];
+        if pn.k > 0 {
+            let ex = exit_towards(tree, tw, p, i);
+            add_local(out, pn.dof, pn.k, &ex.s.tr_mul(&d));
+        }
+        tw.up[p] += d;
     }
 }
