@@ -27,6 +27,10 @@
 //! `Sᵀν = Ã` with `S = M + hγ ∂r/∂q̇ + h²γ² ∂r/∂q`, by GMRES preconditioned
 //! with its structured `M + h²γ²K + hγD`, no Jacobian of the acceleration
 //! and no dense LU of a transposed stage matrix ([`AdjointSolver`]).
+//! A system that also keeps the linearization as an O(N) operator
+//! ([`ParameterSystem::force_linearization`] with its transposed products)
+//! gets G12: the stages the reverse sweep solves with are linearized in
+//! O(N) and used only through products.
 
 // Negated comparisons are deliberate: a NaN must fail every check.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -156,24 +160,6 @@ pub trait ParameterSystem: SecondOrderSystem {
         let _ = (slot, u, out_q, out_qd);
         unimplemented!("force_vjp: the system provides force_linearization but not this")
     }
-    /// With [`force_linearization`](Self::force_linearization):
-    /// `(∂r/∂q) a + (∂r/∂q̇) b` into `out` at the linearization kept in
-    /// `slot` (the recomputed stages' Newton–Krylov iteration). Must not
-    /// allocate.
-    ///
-    /// # Panics
-    ///
-    /// The default panics, as [`force_vjp`](Self::force_vjp)'s.
-    fn force_jvp(
-        &mut self,
-        slot: usize,
-        a: &DVector<f64>,
-        b: &DVector<f64>,
-        out: &mut DVector<f64>,
-    ) -> Result<(), Self::Error> {
-        let _ = (slot, a, b, out);
-        unimplemented!("force_jvp: the system provides force_linearization but not this")
-    }
 }
 
 /// How [`adjoint_second_order_with`] solves the transposed stage systems.
@@ -276,9 +262,10 @@ pub struct AdjointGradient {
     pub dqd0: DVector<f64>,
     /// `∂L/∂pⱼ`.
     pub dp: Vec<f64>,
-    /// Dense Jacobian evaluations of the backward pass (6 per step): of
-    /// the acceleration ([`AdjointSolver::Dense`]) or of the force residual
-    /// (the force form, G11).
+    /// Linearizations of the backward pass (6 per step, plus the
+    /// recomputation's switches): the dense Jacobians of the acceleration
+    /// ([`AdjointSolver::Dense`]) or of the force residual (the force form,
+    /// G11), or the O(N) operators of a system that keeps them (G12).
     pub jacobian_evaluations: usize,
     /// Acceleration evaluations of the recomputed stages.
     pub accel_evaluations: usize,
@@ -375,10 +362,6 @@ pub fn adjoint_second_order_with<Sys: ParameterSystem>(
 /// before it falls back to the dense LU (G11).
 const KRYLOV_ITERATIONS: usize = 40;
 const KRYLOV_CYCLES: usize = 3;
-/// Relative residual of the recomputation's Newton–Krylov corrections
-/// (one cycle): the simplified Newton then contracts about as fast as with
-/// the exact LU.
-const NEWTON_KRYLOV_RTOL: f64 = 1e-10;
 
 /// The buffers of the ESDIRK backward pass (allocated once per pass).
 struct EsdirkAdjoint {
@@ -402,12 +385,6 @@ struct EsdirkAdjoint {
     /// (G12): products by [`ParameterSystem::force_vjp`], `jq`, `jv`,
     /// `shifted` not formed.
     ops: [bool; S],
-    /// The system offers the operators (until it declines once).
-    products: bool,
-    /// Stage times, and the slot whose `M + h²γ²K + hγD` the system has
-    /// factored for the recomputation's Newton–Krylov iteration.
-    ts: [f64; S],
-    newton_slot: Option<usize>,
     /// The products' outputs `(∂r/∂q)ᵀu`, `(∂r/∂q̇)ᵀu`, and probes.
     pq: DVector<f64>,
     pv: DVector<f64>,
@@ -458,9 +435,6 @@ impl EsdirkAdjoint {
             mass: std::array::from_fn(|_| fm.clone()),
             shifted: std::array::from_fn(|_| fm.clone()),
             ops: [false; S],
-            products: force,
-            ts: [0.0; S],
-            newton_slot: None,
             pq: z.clone(),
             pv: z.clone(),
             probe: z.clone(),
@@ -502,24 +476,21 @@ impl EsdirkAdjoint {
     ) -> Result<(), Sys::Error> {
         self.jacobians += 1;
         self.ops[i] = false;
-        self.ts[i] = ti;
-        if self.newton_slot == Some(i) {
-            self.newton_slot = None;
-        }
-        // The O(N) operator where the system keeps one (G12).
-        if self.force && self.products {
-            if sys.force_linearization(
+        // The stages the reverse sweep solves with: the O(N) operator
+        // where the system keeps one (G12).
+        if self.force
+            && keep
+            && sys.force_linearization(
                 i,
                 ti,
                 &self.qs[i],
                 &self.vs[i],
                 &self.accs[qdd],
                 &mut self.mass[i],
-            )? {
-                self.ops[i] = true;
-                return Ok(());
-            }
-            self.products = false;
+            )?
+        {
+            self.ops[i] = true;
+            return Ok(());
         }
         if self.force {
             if sys.force_jacobians(
@@ -576,111 +547,6 @@ impl EsdirkAdjoint {
         stage_matrix(&mut self.lus[slot], &self.jq[j], &self.jv[j], h, transpose)
     }
 
-    /// Prepares the recomputation's Newton matrix of stage `slot` (just
-    /// linearized): with the O(N) operator, the system's factored
-    /// `M + h²γ²K + hγD` there (the Newton–Krylov preconditioner, G12);
-    /// otherwise (or when the system has no structured factorization) the
-    /// dense LU of `S` (or `W`). False when singular.
-    fn newton_matrix<Sys: ParameterSystem>(
-        &mut self,
-        sys: &mut Sys,
-        slot: usize,
-        h: f64,
-    ) -> Result<bool, Sys::Error> {
-        if self.ops[slot] {
-            if self.factor_newton_preconditioner(sys, slot, h)? {
-                return Ok(true);
-            }
-            // No structured factorization: the dense derivatives and LU.
-            let ti = self.ts[slot];
-            sys.force_jacobians(
-                ti,
-                &self.qs[slot],
-                &self.vs[slot],
-                &self.accs[slot],
-                &mut self.mass[slot],
-                &mut self.jq[slot],
-                &mut self.jv[slot],
-            )?;
-            self.ops[slot] = false;
-        }
-        Ok(self.factor(slot, slot, h, false))
-    }
-
-    /// `M + h²γ²K + hγD` at stage `slot`, factored by the system (unless it
-    /// is already); false when it has no such factorization.
-    fn factor_newton_preconditioner<Sys: ParameterSystem>(
-        &mut self,
-        sys: &mut Sys,
-        slot: usize,
-        h: f64,
-    ) -> Result<bool, Sys::Error> {
-        if self.newton_slot == Some(slot) {
-            return Ok(true);
-        }
-        let (hg, hg2) = (h * GAMMA, h * h * GAMMA * GAMMA);
-        let done = sys.factor_shifted_mass(self.ts[slot], &self.qs[slot], hg2, hg)?;
-        self.newton_slot = done.then_some(slot);
-        Ok(done)
-    }
-
-    /// The Newton correction `S⁻¹ g` (in place in `g`) of a recomputed
-    /// stage by GMRES on `S x = M x + (∂r/∂q)(h²γ² x) + (∂r/∂q̇)(hγ x)` with
-    /// the system's O(N) products, preconditioned by its
-    /// `M + h²γ²K + hγD` (G12). Inexact Newton: a correction to
-    /// `NEWTON_KRYLOV_RTOL` (or GMRES's last iterate) keeps the iteration
-    /// contracting by about that factor; the iteration's own test decides
-    /// convergence to round-off.
-    fn krylov_correction<Sys: ParameterSystem>(
-        &mut self,
-        sys: &mut Sys,
-        slot: usize,
-        h: f64,
-    ) -> Result<(), Sys::Error> {
-        if !self.factor_newton_preconditioner(sys, slot, h)? {
-            unreachable!("newton_matrix left the operator only with its preconditioner");
-        }
-        let (hg, hg2) = (h * GAMMA, h * h * GAMMA * GAMMA);
-        let anorm = self.mass[slot]
-            .column_iter()
-            .map(|c| c.iter().map(|v| v.abs()).sum::<f64>())
-            .fold(0.0, f64::max);
-        self.rhs.copy_from(&self.g);
-        let cell = std::cell::RefCell::new(sys);
-        let mut failure = None;
-        let (mass, pq, pv) = (&self.mass[slot], &mut self.pq, &mut self.pv);
-        let solved = self.gmres.solve(
-            &self.rhs,
-            &mut self.mu,
-            anorm,
-            NEWTON_KRYLOV_RTOL,
-            1,
-            |x, out| {
-                if failure.is_none() {
-                    pq.copy_from(x);
-                    *pq *= hg2;
-                    pv.copy_from(x);
-                    *pv *= hg;
-                    match cell.borrow_mut().force_jvp(slot, pq, pv, out) {
-                        Ok(()) => {
-                            out.gemv(1.0, mass, x, 1.0);
-                            return;
-                        }
-                        Err(e) => failure = Some(e),
-                    }
-                }
-                out.fill(0.0);
-            },
-            |v| cell.borrow_mut().solve_shifted_mass(v),
-        )?;
-        if let Some(e) = failure {
-            return Err(e);
-        }
-        self.krylov += solved.unwrap_or(KRYLOV_ITERATIONS.min(self.n));
-        self.g.copy_from(&self.mu);
-        Ok(())
-    }
-
     /// The Newton correction of a recomputed stage, `W⁻¹ g` with the matrix
     /// of `slot` (force form: `S⁻¹ M g`, `W = M⁻¹S`), in place in `g`.
     fn newton_correction(&mut self, slot: usize) {
@@ -714,8 +580,6 @@ impl EsdirkAdjoint {
                 source: Box::new(e),
             }
         };
-        // The parameter products may have used the system's factorization.
-        self.newton_slot = None;
         self.q.copy_from_slice(tape.q(k));
         self.v.copy_from_slice(tape.qd(k));
         // Stage 0: the step start (G2).
@@ -726,7 +590,7 @@ impl EsdirkAdjoint {
         self.accels += 1;
         self.linearize(sys, 0, t, 0, h, false)
             .map_err(err("jacobian"))?;
-        if !self.newton_matrix(sys, 0, h).map_err(err("jacobian"))? {
+        if !self.factor(0, 0, h, false) {
             return Err(singular(t, h));
         }
         // Stages 1..5, recomputed (G3): simplified Newton on the step-start
@@ -770,27 +634,14 @@ impl EsdirkAdjoint {
                         .map_err(err("force residual"))?;
                 self.accels += 1;
                 if forced {
-                    if self.ops[slot] {
-                        self.krylov_correction(sys, slot, h)
-                            .map_err(err("Newton-Krylov correction"))?;
-                    } else {
-                        self.lus[slot].solve_in_place(&mut self.g);
-                    }
+                    self.lus[slot].solve_in_place(&mut self.g);
                 } else {
                     sys.accel(ti, &self.qs[i], &self.vs[i], &mut self.f)
                         .map_err(err("accel"))?;
                     for r in 0..n {
                         self.g[r] = self.accs[i][r] - self.f[r];
                     }
-                    if self.ops[slot] {
-                        // W⁻¹g = S⁻¹Mg.
-                        self.mu.gemv(1.0, &self.mass[slot], &self.g, 0.0);
-                        self.g.copy_from(&self.mu);
-                        self.krylov_correction(sys, slot, h)
-                            .map_err(err("Newton-Krylov correction"))?;
-                    } else {
-                        self.newton_correction(slot);
-                    }
+                    self.newton_correction(slot);
                 }
                 let x = &mut self.accs[i];
                 *x -= &self.g;
@@ -842,7 +693,7 @@ impl EsdirkAdjoint {
                     );
                     self.linearize(sys, i, ti, i, h, false)
                         .map_err(err("jacobian"))?;
-                    if !self.newton_matrix(sys, i, h).map_err(err("jacobian"))? {
+                    if !self.factor(i, i, h, false) {
                         return Err(singular(ti, h));
                     }
                     slot = i;
@@ -957,15 +808,8 @@ impl EsdirkAdjoint {
             // Jᵀ Ā₀ = −(∂r)ᵀ M⁻¹ Ā₀.
             self.mu.copy_from(&self.abar[0]);
             self.solve_mass(sys, t).map_err(err("mass solve"))?;
-            if self.ops[0] {
-                sys.force_vjp(0, &self.mu, &mut self.pq, &mut self.pv)
-                    .map_err(err("transposed products"))?;
-                *lq -= &self.pq;
-                *lv -= &self.pv;
-            } else {
-                lq.gemv_tr(-1.0, &self.jq[0], &self.mu, 1.0);
-                lv.gemv_tr(-1.0, &self.jv[0], &self.mu, 1.0);
-            }
+            lq.gemv_tr(-1.0, &self.jq[0], &self.mu, 1.0);
+            lv.gemv_tr(-1.0, &self.jv[0], &self.mu, 1.0);
             sys.force_param_vjp(
                 t,
                 &self.qs[0],
@@ -1003,7 +847,6 @@ impl EsdirkAdjoint {
         h: f64,
     ) -> Result<bool, Sys::Error> {
         let (hg, hg2) = (h * GAMMA, h * h * GAMMA * GAMMA);
-        self.newton_slot = None;
         if sys.factor_shifted_mass(ti, &self.qs[i], hg2, hg)? {
             let rtol = 16.0 * f64::EPSILON * (self.n as f64).sqrt();
             let solved = if self.ops[i] {
@@ -1138,7 +981,6 @@ impl EsdirkAdjoint {
         sys: &mut Sys,
         t: f64,
     ) -> Result<(), Sys::Error> {
-        self.newton_slot = None;
         if sys.factor_shifted_mass(t, &self.qs[0], 0.0, 0.0)? {
             return sys.solve_shifted_mass(&mut self.mu);
         }

@@ -11,8 +11,7 @@ use softrod_dynamics::{
     ClosedDerivatives, Data, DynamicsError, FdDerivatives, Forces, IdDerivatives, Model,
     ShiftedSolver, closed_dynamics_derivatives, damping_matrix, forward_dynamics,
     forward_dynamics_derivatives, inverse_dynamics, inverse_dynamics_derivatives,
-    inverse_dynamics_jvp, inverse_dynamics_linearization_with, inverse_dynamics_vjp, mass_matrix,
-    stiffness_matrix,
+    inverse_dynamics_linearization_with, inverse_dynamics_vjp, mass_matrix, stiffness_matrix,
 };
 use softrod_mechanics::Tension;
 
@@ -237,29 +236,6 @@ impl RodSystem {
             u.as_slice(),
             out_q.as_mut_slice(),
             out_qd.as_mut_slice(),
-        )
-    }
-
-    /// `(∂r/∂q) a + (∂r/∂q̇) b` into `out` (dim n_dof) at the linearization
-    /// of `slot`; O(N) (`softrod_dynamics::inverse_dynamics_jvp`).
-    pub fn force_jvp(
-        &mut self,
-        slot: usize,
-        a: &DVector<f64>,
-        b: &DVector<f64>,
-        out: &mut DVector<f64>,
-    ) -> Result<(), DynamicsError> {
-        let Some(work) = self.products.get_mut(slot) else {
-            return Err(DynamicsError::NotLinearized {
-                what: "RodSystem::force_jvp",
-            });
-        };
-        inverse_dynamics_jvp(
-            &self.model,
-            work,
-            a.as_slice(),
-            b.as_slice(),
-            out.as_mut_slice(),
         )
     }
 }

@@ -451,17 +451,6 @@ impl ParameterSystem for ParamSystem<'_> {
         self.sys.force_vjp(slot, u, out_q, out_qd)
     }
 
-    /// Its forward products ([`RodSystem::force_jvp`]).
-    fn force_jvp(
-        &mut self,
-        slot: usize,
-        a: &DVector<f64>,
-        b: &DVector<f64>,
-        out: &mut DVector<f64>,
-    ) -> Result<(), DynamicsError> {
-        self.sys.force_jvp(slot, a, b, out)
-    }
-
     /// `−zᵀ (ID(pⱼ + Δⱼ) − ID(pⱼ))/Δⱼ` (G8): two O(N) inverse dynamics
     /// per parameter entry (`ID` is affine in each).
     fn force_param_vjp(
