@@ -6,7 +6,9 @@
 //! derivatives of its maps (D30)–(D36) — on a chain ([`chain`]) or a tree
 //! ([`tree`], D76–D80); and what is built on them ([`forward`]): the
 //! derivatives of the forward dynamics (D48) and the linearization of
-//! `ẋ = f(x, u)` (D49).
+//! `ẋ = f(x, u)` (D49). [`vjp`]: the same sweeps without the dense
+//! matrices, and their O(N) products `uᵀ∂τ/∂(q, q̇)` and `∂τ/∂(q, q̇)·v`
+//! (D81–D84).
 //!
 //! [`point`] linearizes one evaluation point, [`piece`] closes one piece.
 //! A new force term adds its linearization (`crate::forces::linearized`)
