@@ -4,14 +4,17 @@
 //!
 //! Regenerate (numbers in docs/performance.md, section "softrod-dynamics"):
 //! `cargo bench -p softrod-benches --bench dynamics -- --warm-up-time 1 --measurement-time 2`
+//! (`id_vjp`: the adjoint's products of the inverse-dynamics derivatives,
+//! dense against O(N), docs/performance.md "Trajectory gradients")
 //! (`rod_contact`: two crossing rods with rod–rod contact;
 //! `contact_derivatives`: an arm on a joint lying on a table;
 //! docs/theory-contact.md).
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use softrod_dynamics::{
-    Data, FdDerivatives, IdDerivatives, Model, Rod, ShiftedSolver, forward_dynamics,
-    forward_dynamics_derivatives, inverse_dynamics, inverse_dynamics_derivatives, mass_matrix,
+    Data, FdDerivatives, Forces, IdDerivatives, Model, Rod, ShiftedSolver, forward_dynamics,
+    forward_dynamics_derivatives, inverse_dynamics, inverse_dynamics_derivatives,
+    inverse_dynamics_linearization_with, inverse_dynamics_vjp, mass_matrix,
 };
 use softrod_kinematics::{Basis, RodGeometry, Strain, straight};
 use softrod_lie::{Pose, Vec3};
@@ -196,6 +199,56 @@ fn bench_dynamics(c: &mut Criterion) {
                 inverse_dynamics_derivatives(&m, &mut work, 0.0, black_box(&q), &qd, &qdd)
                     .unwrap()
                     .dtau_dq[(0, 0)]
+            })
+        });
+    }
+    g.finish();
+
+    // What the adjoint needs of them, u^T ∂τ/∂q and u^T ∂τ/∂q̇
+    // (docs/theory-derivatives.md D81–D83): the dense pair then two
+    // transposed products, against the O(N) linearization then its
+    // products; and one more product on a kept linearization (what a GMRES
+    // iteration adds).
+    let mut g = c.benchmark_group("id_vjp");
+    for n in [5usize, 20, 100] {
+        let m = model(n);
+        let nd = m.n_dof();
+        let (q, qd, qdd) = state(nd, 42);
+        let u = nalgebra::DVector::from_vec(state(nd, 7).0);
+        let mut dense = IdDerivatives::new(&m);
+        let (mut pq, mut pv) = (nalgebra::DVector::zeros(nd), nalgebra::DVector::zeros(nd));
+        g.bench_with_input(BenchmarkId::new("dense", n), &n, |b, _| {
+            b.iter(|| {
+                let d = inverse_dynamics_derivatives(&m, &mut dense, 0.0, black_box(&q), &qd, &qdd)
+                    .unwrap();
+                pq.gemv_tr(1.0, &d.dtau_dq, &u, 0.0);
+                pv.gemv_tr(1.0, &d.dtau_dqd, &u, 0.0);
+                pq[0] + pv[0]
+            })
+        });
+        let mut work = IdDerivatives::for_products(&m);
+        let (mut oq, mut ov) = (vec![0.0; nd], vec![0.0; nd]);
+        g.bench_with_input(BenchmarkId::new("linearization_vjp", n), &n, |b, _| {
+            b.iter(|| {
+                inverse_dynamics_linearization_with(
+                    &m,
+                    &mut work,
+                    Forces::ALL,
+                    0.0,
+                    black_box(&q),
+                    &qd,
+                    &qdd,
+                )
+                .unwrap();
+                inverse_dynamics_vjp(&m, &mut work, u.as_slice(), &mut oq, &mut ov).unwrap();
+                oq[0] + ov[0]
+            })
+        });
+        g.bench_with_input(BenchmarkId::new("vjp_only", n), &n, |b, _| {
+            b.iter(|| {
+                inverse_dynamics_vjp(&m, &mut work, black_box(u.as_slice()), &mut oq, &mut ov)
+                    .unwrap();
+                oq[0] + ov[0]
             })
         });
     }

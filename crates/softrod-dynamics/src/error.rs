@@ -361,6 +361,19 @@ pub enum DynamicsError {
         /// Which algorithm.
         what: &'static str,
     },
+    /// An algorithm that does not cover contact was called on a model
+    /// with contact (its forces enter the dense derivatives only).
+    #[error("{what} does not support models with contact (use the dense derivatives)")]
+    UnsupportedContact {
+        /// Which algorithm.
+        what: &'static str,
+    },
+    /// Products of a linearization were asked before one succeeded.
+    #[error("{what}: no linearization evaluated (or the last one failed)")]
+    NotLinearized {
+        /// Which product.
+        what: &'static str,
+    },
     /// A closure frame is invalid: unknown element, `at` off the rod, a
     /// base pose that is not a rigid motion.
     #[error("closure '{closure}', frame {end} (element '{element}'): {reason}")]

@@ -20,6 +20,7 @@
 //! | [`modes`] | natural frequencies about an equilibrium | |
 //! | [`lowest_modes`] | the lowest modes, matrix-free, O(N) per step | docs/theory.md E11 |
 //! | [`inverse_dynamics_derivatives`] | `∂τ/∂q`, `∂τ/∂q̇` (`∂τ/∂q̈ = M`) | docs/theory-derivatives.md (D37–D47) |
+//! | [`inverse_dynamics_linearization_with`], [`inverse_dynamics_vjp`], [`inverse_dynamics_jvp`] | `uᵀ∂τ/∂q`, `uᵀ∂τ/∂q̇`, `∂τ/∂q·a + ∂τ/∂q̇·b` in O(N), no dense matrix | (D81–D84) |
 //! | [`forward_dynamics_derivatives`] | `∂q̈/∂q`, `∂q̈/∂q̇`, `∂q̈/∂u` | (D48) |
 //! | [`closed_dynamics_derivatives`] | `∂q̈/∂q`, `∂q̈/∂q̇` of a closed model's constrained `q̈` | (CD1–CD4) |
 //! | [`linearize`] | `(A, B)` of `ẋ = f(x, u)`, `x = (q, q̇)` | (D49) |
@@ -84,7 +85,7 @@
 //! | `model/` | [`Model`] and its builders, [`Rod`]/[`RodModel`], joints and bodies, prescribed curves, the tree of nodes, closures as the model holds them, planar detection, contact as the model holds it (obstacles, contact points, which rod points may touch), and [`Data`] with every algorithm's work space | **joint type** (`model/joint.rs`: its motion subspace as virtual pieces, D50), element, or the description of a load |
 //! | `forces/` | [`Forces`]; each force term's value — gravity as base acceleration, drag and distributed loads per point, elasticity, damping, cables, joint springs in strain space — and its linearization | **force term**: value in `external.rs` or `strain.rs`, linearization in `linearized.rs`, a field of [`Forces`] if an evaluation may leave it out (contact forces at material points: a per-evaluation list there, applied like point loads) |
 //! | `algorithms/` | the O(N) recursions on open models, each on the chain (`chain.rs`, AVX2 copies), the planar chain (`planar.rs`) and the tree (`tree.rs`, `frames.rs`): inverse dynamics, articulated forward dynamics, mass matrix, shifted solve; the public [`inverse_dynamics`], [`mass_matrix`], [`bias_force`] | **algorithm** on the equations of motion (an integrator's evaluation), with a chain and a tree form |
-//! | `derivatives/` | `∂τ/∂q`, `∂τ/∂q̇` on chain and tree (point linearization, piece closing), forward-dynamics derivatives, [`linearize`] | **derivative** |
+//! | `derivatives/` | `∂τ/∂q`, `∂τ/∂q̇` on chain and tree (point linearization, piece closing), their O(N) products (`vjp.rs`), forward-dynamics derivatives, [`linearize`] | **derivative** |
 //! | `constraints/` | loop closures: `φ`, `J`, `J̇q̇`, their queries, the constrained forward dynamics | kind of closure (with `model/closure.rs`) |
 //! | `analysis/` | energies, frames and section Jacobians, `K`, `D`, `G`, `C`, actuation, [`statics`] and [`modes`], open and closed | analysis built on the above |
 //! | `dispatch.rs` | the public [`forward_dynamics`]: the open recursion, or the constrained solve on a closed chain | — |
@@ -123,7 +124,8 @@ pub use constraints::{
 pub use derivatives::{
     DynamicsJacobians, FdDerivatives, IdDerivatives, Linearization, dynamics_jacobians,
     dynamics_jacobians_with, forward_dynamics_derivatives, inverse_dynamics_derivatives,
-    inverse_dynamics_derivatives_with, linearize,
+    inverse_dynamics_derivatives_with, inverse_dynamics_jvp, inverse_dynamics_linearization_with,
+    inverse_dynamics_vjp, linearize,
 };
 pub use dispatch::{forward_dynamics, forward_dynamics_with};
 pub use error::{DynamicsError, RodId};

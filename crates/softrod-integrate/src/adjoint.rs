@@ -27,6 +27,10 @@
 //! `Sᵀν = Ã` with `S = M + hγ ∂r/∂q̇ + h²γ² ∂r/∂q`, by GMRES preconditioned
 //! with its structured `M + h²γ²K + hγD`, no Jacobian of the acceleration
 //! and no dense LU of a transposed stage matrix ([`AdjointSolver`]).
+//! A system that also keeps the linearization as an O(N) operator
+//! ([`ParameterSystem::force_linearization`] with its transposed products)
+//! gets G12: the stages the reverse sweep solves with are linearized in
+//! O(N) and used only through products.
 
 // Negated comparisons are deliberate: a NaN must fail every check.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -116,6 +120,45 @@ pub trait ParameterSystem: SecondOrderSystem {
     ) -> Result<(), Self::Error> {
         let _ = (t, q, qd, qdd, z, out);
         unimplemented!("force_param_vjp: the system provides force_jacobians but not this")
+    }
+    /// Optional, beside [`force_jacobians`](Self::force_jacobians)
+    /// (docs/theory-control.md G12): writes `M(q)` into `mass` and keeps
+    /// the force residual's `∂r/∂q`, `∂r/∂q̇` at `(t, q, q̇, q̈)` in `slot`
+    /// (`slot < 6`; a later call on the same slot replaces it) as an
+    /// operator for [`force_vjp`](Self::force_vjp), without forming them.
+    /// Returns `Ok(true)`; the default `Ok(false)` (not offered: the
+    /// backward pass forms the dense derivatives).
+    #[allow(clippy::too_many_arguments)]
+    fn force_linearization(
+        &mut self,
+        slot: usize,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+        qdd: &DVector<f64>,
+        mass: &mut DMatrix<f64>,
+    ) -> Result<bool, Self::Error> {
+        let _ = (slot, t, q, qd, qdd, mass);
+        Ok(false)
+    }
+
+    /// With [`force_linearization`](Self::force_linearization): `(∂r/∂q)ᵀu`
+    /// into `out_q` and `(∂r/∂q̇)ᵀu` into `out_qd` at the linearization
+    /// kept in `slot`. Runs at every GMRES iteration: must not allocate.
+    ///
+    /// # Panics
+    ///
+    /// The default panics: the backward pass calls it only after
+    /// `force_linearization` returned `Ok(true)`.
+    fn force_vjp(
+        &mut self,
+        slot: usize,
+        u: &DVector<f64>,
+        out_q: &mut DVector<f64>,
+        out_qd: &mut DVector<f64>,
+    ) -> Result<(), Self::Error> {
+        let _ = (slot, u, out_q, out_qd);
+        unimplemented!("force_vjp: the system provides force_linearization but not this")
     }
 }
 
@@ -219,9 +262,10 @@ pub struct AdjointGradient {
     pub dqd0: DVector<f64>,
     /// `∂L/∂pⱼ`.
     pub dp: Vec<f64>,
-    /// Dense Jacobian evaluations of the backward pass (6 per step): of
-    /// the acceleration ([`AdjointSolver::Dense`]) or of the force residual
-    /// (the force form, G11).
+    /// Linearizations of the backward pass (6 per step, plus the
+    /// recomputation's switches): the dense Jacobians of the acceleration
+    /// ([`AdjointSolver::Dense`]) or of the force residual (the force form,
+    /// G11), or the O(N) operators of a system that keeps them (G12).
     pub jacobian_evaluations: usize,
     /// Acceleration evaluations of the recomputed stages.
     pub accel_evaluations: usize,
@@ -334,8 +378,17 @@ struct EsdirkAdjoint {
     jv: [DMatrix<f64>; S],
     /// `M` at each stage (force form).
     mass: [DMatrix<f64>; S],
-    /// `S = M + hγ ∂r/∂q̇ + h²γ² ∂r/∂q` of each implicit stage (force form).
+    /// `S = M + hγ ∂r/∂q̇ + h²γ² ∂r/∂q` of each implicit stage (force form,
+    /// formed only where the system keeps no operator).
     shifted: [DMatrix<f64>; S],
+    /// Stage `i`'s `∂r/∂q`, `∂r/∂q̇` are kept by the system in slot `i`
+    /// (G12): products by [`ParameterSystem::force_vjp`], `jq`, `jv`,
+    /// `shifted` not formed.
+    ops: [bool; S],
+    /// The products' outputs `(∂r/∂q)ᵀu`, `(∂r/∂q̇)ᵀu`, and probes.
+    pq: DVector<f64>,
+    pv: DVector<f64>,
+    probe: DVector<f64>,
     /// `(I − hγJ)ᵀ` (force form: `Sᵀ`) of each implicit stage, factored;
     /// slot 0: the (untransposed) step-start matrix of the recomputing
     /// Newton iteration.
@@ -381,6 +434,10 @@ impl EsdirkAdjoint {
             jv: std::array::from_fn(|_| m.clone()),
             mass: std::array::from_fn(|_| fm.clone()),
             shifted: std::array::from_fn(|_| fm.clone()),
+            ops: [false; S],
+            pq: z.clone(),
+            pv: z.clone(),
+            probe: z.clone(),
             lus: std::array::from_fn(|_| DenseLu::new(n)),
             gmres: Gmres::new(if force { n } else { 0 }, KRYLOV_ITERATIONS.min(n)),
             qhat: z.clone(),
@@ -418,6 +475,23 @@ impl EsdirkAdjoint {
         keep: bool,
     ) -> Result<(), Sys::Error> {
         self.jacobians += 1;
+        self.ops[i] = false;
+        // The stages the reverse sweep solves with: the O(N) operator
+        // where the system keeps one (G12).
+        if self.force
+            && keep
+            && sys.force_linearization(
+                i,
+                ti,
+                &self.qs[i],
+                &self.vs[i],
+                &self.accs[qdd],
+                &mut self.mass[i],
+            )?
+        {
+            self.ops[i] = true;
+            return Ok(());
+        }
         if self.force {
             if sys.force_jacobians(
                 ti,
@@ -676,11 +750,19 @@ impl EsdirkAdjoint {
                 }
                 let nu = &self.mu;
                 self.qhat_bar.copy_from(&self.qbar[i]);
-                self.qhat_bar.gemv_tr(-1.0, &self.jq[i], nu, 1.0);
                 self.vhat_bar.copy_from(&self.vbar[i]);
                 self.vhat_bar.axpy(hg, &self.qbar[i], 1.0);
-                self.vhat_bar.gemv_tr(-hg, &self.jq[i], nu, 1.0);
-                self.vhat_bar.gemv_tr(-1.0, &self.jv[i], nu, 1.0);
+                if self.ops[i] {
+                    sys.force_vjp(i, nu, &mut self.pq, &mut self.pv)
+                        .map_err(err("transposed products"))?;
+                    self.qhat_bar.axpy(-1.0, &self.pq, 1.0);
+                    self.vhat_bar.axpy(-hg, &self.pq, 1.0);
+                    self.vhat_bar.axpy(-1.0, &self.pv, 1.0);
+                } else {
+                    self.qhat_bar.gemv_tr(-1.0, &self.jq[i], nu, 1.0);
+                    self.vhat_bar.gemv_tr(-hg, &self.jq[i], nu, 1.0);
+                    self.vhat_bar.gemv_tr(-1.0, &self.jv[i], nu, 1.0);
+                }
                 sys.force_param_vjp(
                     ti,
                     &self.qs[i],
@@ -766,28 +848,54 @@ impl EsdirkAdjoint {
     ) -> Result<bool, Sys::Error> {
         let (hg, hg2) = (h * GAMMA, h * h * GAMMA * GAMMA);
         if sys.factor_shifted_mass(ti, &self.qs[i], hg2, hg)? {
-            let s = &self.shifted[i];
-            // ‖Sᵀ‖∞: the largest column sum of |S|.
-            let anorm = s
-                .column_iter()
-                .map(|c| c.iter().map(|v| v.abs()).sum::<f64>())
-                .fold(0.0, f64::max);
             let rtol = 16.0 * f64::EPSILON * (self.n as f64).sqrt();
-            let solved = self.gmres.solve(
-                &self.rhs,
-                &mut self.mu,
-                anorm,
-                rtol,
-                KRYLOV_CYCLES,
-                |v, out| out.gemv_tr(1.0, s, v, 0.0),
-                |v| sys.solve_shifted_mass(v),
-            )?;
+            let solved = if self.ops[i] {
+                self.gmres_products(sys, i, h, rtol)?
+            } else {
+                let s = &self.shifted[i];
+                // ‖Sᵀ‖∞: the largest column sum of |S|.
+                let anorm = s
+                    .column_iter()
+                    .map(|c| c.iter().map(|v| v.abs()).sum::<f64>())
+                    .fold(0.0, f64::max);
+                self.gmres.solve(
+                    &self.rhs,
+                    &mut self.mu,
+                    anorm,
+                    rtol,
+                    KRYLOV_CYCLES,
+                    |v, out| out.gemv_tr(1.0, s, v, 0.0),
+                    |v| sys.solve_shifted_mass(v),
+                )?
+            };
             match solved {
                 Some(iterations) => {
                     self.krylov += iterations;
                     return Ok(true);
                 }
                 None => self.krylov += KRYLOV_ITERATIONS.min(self.n) * KRYLOV_CYCLES,
+            }
+        }
+        if self.ops[i] {
+            // The dense fallback needs the dense derivatives of the stage.
+            let ti_acc = &self.accs[i];
+            if !sys.force_jacobians(
+                ti,
+                &self.qs[i],
+                &self.vs[i],
+                ti_acc,
+                &mut self.mass[i],
+                &mut self.jq[i],
+                &mut self.jv[i],
+            )? {
+                unreachable!("a system that keeps the operator gives the dense derivatives")
+            }
+            self.jacobians += 1;
+            self.ops[i] = false;
+            let s = self.shifted[i].as_mut_slice();
+            let (m, jv, jq) = (&self.mass[i], &self.jv[i], &self.jq[i]);
+            for (k, x) in s.iter_mut().enumerate() {
+                *x = m.as_slice()[k] + hg * jv.as_slice()[k] + hg2 * jq.as_slice()[k];
             }
         }
         self.factorizations += 1;
@@ -799,6 +907,71 @@ impl EsdirkAdjoint {
         self.mu.copy_from(&self.rhs);
         self.lus[i].solve_in_place(&mut self.mu);
         Ok(true)
+    }
+
+    /// GMRES on `Sᵢᵀν = rhs` with `Sᵢᵀv = Mv + hγ(∂r/∂q̇)ᵀv + h²γ²(∂r/∂q)ᵀv`
+    /// by the system's O(N) products (G12), preconditioned by its factored
+    /// `M + h²γ²K + hγD`. `‖Sᵀ‖∞` for the stopping test is estimated from
+    /// `‖M‖∞` and two probes `‖Sᵀx‖∞` (all ones, alternating signs): a
+    /// lower bound, so the test is at most stricter than the dense one's.
+    fn gmres_products<Sys: ParameterSystem>(
+        &mut self,
+        sys: &mut Sys,
+        i: usize,
+        h: f64,
+        rtol: f64,
+    ) -> Result<Option<usize>, Sys::Error> {
+        let (hg, hg2) = (h * GAMMA, h * h * GAMMA * GAMMA);
+        let mut anorm = self.mass[i]
+            .column_iter()
+            .map(|c| c.iter().map(|v| v.abs()).sum::<f64>())
+            .fold(0.0, f64::max);
+        for sign in [1.0, -1.0] {
+            let mut x = 1.0;
+            for p in self.probe.iter_mut() {
+                *p = x;
+                x *= sign;
+            }
+            sys.force_vjp(i, &self.probe, &mut self.pq, &mut self.pv)?;
+            let m = &self.mass[i];
+            let mut worst: f64 = 0.0;
+            for r in 0..self.n {
+                let mx = m.column(r).dot(&self.probe);
+                worst = worst.max((mx + hg * self.pv[r] + hg2 * self.pq[r]).abs());
+            }
+            anorm = anorm.max(worst);
+        }
+        // Both closures need the system: the products and the
+        // preconditioner take turns through a RefCell.
+        let cell = std::cell::RefCell::new(sys);
+        let mut failure = None;
+        let (mass, pq, pv) = (&self.mass[i], &mut self.pq, &mut self.pv);
+        let solved = self.gmres.solve(
+            &self.rhs,
+            &mut self.mu,
+            anorm,
+            rtol,
+            KRYLOV_CYCLES,
+            |v, out| {
+                if failure.is_none() {
+                    match cell.borrow_mut().force_vjp(i, v, pq, pv) {
+                        Ok(()) => {
+                            out.gemv_tr(1.0, mass, v, 0.0);
+                            out.axpy(hg, pv, 1.0);
+                            out.axpy(hg2, pq, 1.0);
+                            return;
+                        }
+                        Err(e) => failure = Some(e),
+                    }
+                }
+                out.fill(0.0);
+            },
+            |v| cell.borrow_mut().solve_shifted_mass(v),
+        )?;
+        match failure {
+            Some(e) => Err(e),
+            None => Ok(solved),
+        }
     }
 
     /// `mu ← M₀⁻¹ mu` at the step start: the system's structured solve with

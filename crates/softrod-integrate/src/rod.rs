@@ -8,9 +8,10 @@
 
 use nalgebra::{DMatrix, DVector};
 use softrod_dynamics::{
-    ClosedDerivatives, Data, DynamicsError, FdDerivatives, IdDerivatives, Model, ShiftedSolver,
-    closed_dynamics_derivatives, damping_matrix, forward_dynamics, forward_dynamics_derivatives,
-    inverse_dynamics, inverse_dynamics_derivatives, mass_matrix, stiffness_matrix,
+    ClosedDerivatives, Data, DynamicsError, FdDerivatives, Forces, IdDerivatives, Model,
+    ShiftedSolver, closed_dynamics_derivatives, damping_matrix, forward_dynamics,
+    forward_dynamics_derivatives, inverse_dynamics, inverse_dynamics_derivatives,
+    inverse_dynamics_linearization_with, inverse_dynamics_vjp, mass_matrix, stiffness_matrix,
 };
 use softrod_mechanics::Tension;
 
@@ -41,6 +42,9 @@ pub struct RodSystem {
     /// The workspace of [`RodSystem::force_jacobians`] (the inverse
     /// dynamics' derivatives alone), allocated on first use.
     id_derivatives: Option<Box<IdDerivatives>>,
+    /// The linearizations of [`RodSystem::force_linearization`], one per
+    /// slot (O(N) each, no `n×n` matrix), allocated on first use.
+    products: Vec<IdDerivatives>,
 }
 
 /// The Jacobians [`RodSystem`] hands to the stiff methods.
@@ -105,6 +109,7 @@ impl RodSystem {
             derivatives: None,
             closed: None,
             id_derivatives: None,
+            products: Vec::new(),
         }
     }
 }
@@ -143,13 +148,7 @@ impl RodSystem {
         let work = self
             .id_derivatives
             .get_or_insert_with(|| Box::new(IdDerivatives::new(&self.model)));
-        // Cable tensions set as inputs replace the schedules, as in the
-        // forward dynamics.
-        match (self.data.cable_tensions(), &mut work.tensions) {
-            (None, t) => *t = None,
-            (Some(u), Some(t)) => t.as_mut_slice().copy_from_slice(u),
-            (Some(u), t) => *t = Some(DVector::from_column_slice(u)),
-        }
+        copy_tensions(&self.data, work);
         let d = inverse_dynamics_derivatives(
             &self.model,
             work,
@@ -161,6 +160,83 @@ impl RodSystem {
         dr_dq.copy_from(&d.dtau_dq);
         dr_dqd.copy_from(&d.dtau_dqd);
         Ok(true)
+    }
+}
+
+/// Cable tensions set as inputs replace the schedules in the derivatives'
+/// workspace, as in the forward dynamics.
+fn copy_tensions(data: &Data, work: &mut IdDerivatives) {
+    match (data.cable_tensions(), &mut work.tensions) {
+        (None, t) => *t = None,
+        (Some(u), Some(t)) => t.as_mut_slice().copy_from_slice(u),
+        (Some(u), t) => *t = Some(DVector::from_column_slice(u)),
+    }
+}
+
+impl RodSystem {
+    /// [`RodSystem::force_jacobians`] without the dense derivatives: `M(q)`
+    /// into `mass`, and `∂r/∂q`, `∂r/∂q̇` kept as an operator in `slot`
+    /// (any index; one O(N) workspace each) for
+    /// [`RodSystem::force_vjp`] — `softrod_dynamics::
+    /// inverse_dynamics_linearization_with`, O(N), no allocation after a
+    /// slot's first use (docs/theory-derivatives.md D81–D83,
+    /// docs/theory-control.md G12). Returns `Ok(false)` (nothing written)
+    /// where `force_jacobians` does (closures, contact).
+    #[allow(clippy::too_many_arguments)]
+    pub fn force_linearization(
+        &mut self,
+        slot: usize,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+        qdd: &DVector<f64>,
+        mass: &mut DMatrix<f64>,
+    ) -> Result<bool, DynamicsError> {
+        if self.model.has_closures() || self.model.has_contact() {
+            return Ok(false);
+        }
+        self.model.set_time(&mut self.data, t);
+        mass.copy_from(mass_matrix(&self.model, &mut self.data, q.as_slice())?);
+        while self.products.len() <= slot {
+            self.products.push(IdDerivatives::for_products(&self.model));
+        }
+        let work = &mut self.products[slot];
+        copy_tensions(&self.data, work);
+        inverse_dynamics_linearization_with(
+            &self.model,
+            work,
+            Forces::ALL,
+            t,
+            q.as_slice(),
+            qd.as_slice(),
+            qdd.as_slice(),
+        )?;
+        Ok(true)
+    }
+
+    /// `(∂r/∂q)ᵀu` into `out_q`, `(∂r/∂q̇)ᵀu` into `out_qd` (dim n_dof) at
+    /// the linearization of `slot` ([`RodSystem::force_linearization`]);
+    /// O(N) (`softrod_dynamics::inverse_dynamics_vjp`). An error for a slot
+    /// without a successful linearization.
+    pub fn force_vjp(
+        &mut self,
+        slot: usize,
+        u: &DVector<f64>,
+        out_q: &mut DVector<f64>,
+        out_qd: &mut DVector<f64>,
+    ) -> Result<(), DynamicsError> {
+        let Some(work) = self.products.get_mut(slot) else {
+            return Err(DynamicsError::NotLinearized {
+                what: "RodSystem::force_vjp",
+            });
+        };
+        inverse_dynamics_vjp(
+            &self.model,
+            work,
+            u.as_slice(),
+            out_q.as_mut_slice(),
+            out_qd.as_mut_slice(),
+        )
     }
 }
 

@@ -61,7 +61,10 @@ pub(crate) fn inward(model: &Model, rm: &RodModel, work: &mut IdDerivatives, r: 
         let bm = basis6(&piece.basis);
         let (diag_q, diag_v, wrench, base) = close_piece(&mut work.pieces[r][n], &sub, &bm, dead);
         sub = base;
-        write_piece(model, rm, n, work, at, &bm, (&diag_q, &diag_v, &wrench));
+        let (bq, bv) = write_piece(model, rm, n, work, at, &bm, (&diag_q, &diag_v, &wrench));
+        let w = &mut work.pieces[r][n];
+        w.blk_q = bq;
+        w.blk_v = bv;
     }
 }
 

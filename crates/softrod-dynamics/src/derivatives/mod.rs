@@ -6,7 +6,9 @@
 //! derivatives of its maps (D30)–(D36) — on a chain ([`chain`]) or a tree
 //! ([`tree`], D76–D80); and what is built on them ([`forward`]): the
 //! derivatives of the forward dynamics (D48) and the linearization of
-//! `ẋ = f(x, u)` (D49).
+//! `ẋ = f(x, u)` (D49). [`vjp`]: the same sweeps without the dense
+//! matrices, and their O(N) products `uᵀ∂τ/∂(q, q̇)` and `∂τ/∂(q, q̇)·v`
+//! (D81–D84).
 //!
 //! [`point`] linearizes one evaluation point, [`piece`] closes one piece.
 //! A new force term adds its linearization (`crate::forces::linearized`)
@@ -21,6 +23,7 @@ pub(crate) mod piece;
 pub(crate) mod point;
 pub(crate) mod second;
 pub(crate) mod tree;
+pub(crate) mod vjp;
 
 pub use forward::{
     DynamicsJacobians, FdDerivatives, Linearization, dynamics_jacobians, dynamics_jacobians_with,
@@ -34,6 +37,7 @@ use crate::model::Model;
 use crate::model::data::Data;
 use nalgebra::{DMatrix, DVector};
 use piece::PieceWork;
+pub use vjp::{inverse_dynamics_jvp, inverse_dynamics_vjp};
 
 /// Where the derivatives are taken: the time \[s\], the motion `(q, q̇, q̈)`
 /// (dim n_dof each) and the forces of the evaluation.
@@ -44,6 +48,9 @@ pub(crate) struct At<'a> {
     pub qd: &'a [f64],
     pub qdd: &'a [f64],
     pub forces: Forces,
+    /// Whether the dense `∂τ/∂q`, `∂τ/∂q̇` are formed (the off-diagonal
+    /// pairings, O(N·n_dof)), or only what the O(N) products need (D81).
+    pub dense: bool,
 }
 
 /// Workspace and results of [`inverse_dynamics_derivatives`]
@@ -71,12 +78,28 @@ pub struct IdDerivatives {
     /// only; [`crate::forward_dynamics_derivatives`] copies the anchors of
     /// its `Data` here).
     pub(crate) contact: Option<Box<Data>>,
+    /// A linearization (dense or not) succeeded: the per-piece quantities
+    /// of [`inverse_dynamics_vjp`] are those of the last evaluation.
+    pub(crate) linearized: bool,
 }
 
 impl IdDerivatives {
     /// Allocates the buffers and the two `n_dof × n_dof` results for `model`.
     pub fn new(model: &Model) -> Self {
+        Self::with_dense(model, true)
+    }
+
+    /// The buffers of [`inverse_dynamics_linearization_with`] and
+    /// [`inverse_dynamics_vjp`] alone: O(N) memory, no `n_dof × n_dof`
+    /// matrices (`dtau_dq`, `dtau_dqd` are 0×0; the dense
+    /// [`inverse_dynamics_derivatives_with`] refuses this workspace).
+    pub fn for_products(model: &Model) -> Self {
+        Self::with_dense(model, false)
+    }
+
+    fn with_dense(model: &Model, dense: bool) -> Self {
         let n = model.n_dof();
+        let nd = if dense { n } else { 0 };
         Self {
             pieces: model
                 .rods()
@@ -87,8 +110,8 @@ impl IdDerivatives {
                         .collect()
                 })
                 .collect(),
-            dtau_dq: DMatrix::zeros(n, n),
-            dtau_dqd: DMatrix::zeros(n, n),
+            dtau_dq: DMatrix::zeros(nd, nd),
+            dtau_dqd: DMatrix::zeros(nd, nd),
             tau: DVector::zeros(n),
             tensions: None,
             contact: model.has_contact().then(|| Box::new(Data::new(model))),
@@ -97,6 +120,7 @@ impl IdDerivatives {
                 .tree
                 .as_ref()
                 .map(|t| Box::new(tree::TreeWork::new(model, t))),
+            linearized: false,
         }
     }
 }
@@ -125,6 +149,24 @@ crate::kernels::simd::dispatch! {
     => id_derivatives_impl, id_derivatives_avx2
 }
 
+crate::kernels::simd::dispatch! {
+    /// The linearization of the inverse dynamics without its dense
+    /// matrices (docs/theory-derivatives.md §8, D81): the sweeps of
+    /// [`inverse_dynamics_derivatives_with`] — `τ` into `work.tau`, each
+    /// piece's and joint's diagonal blocks and world-frame pairing
+    /// quantities kept per piece — but not the off-diagonal blocks, which
+    /// [`inverse_dynamics_vjp`] then applies as products in O(N). Cost O(N),
+    /// no allocation; `work.dtau_dq`, `work.dtau_dqd` are not touched
+    /// (a workspace from [`IdDerivatives::for_products`] has none).
+    ///
+    /// Arguments as [`inverse_dynamics_derivatives_with`]. Models with
+    /// contact: [`DynamicsError::UnsupportedContact`] (their contact forces
+    /// enter the dense derivatives only); with closures:
+    /// [`DynamicsError::UnsupportedClosed`].
+    pub fn inverse_dynamics_linearization_with<'a>(model: &Model, work: &'a mut IdDerivatives, forces: Forces, t: f64, q: &[f64], qd: &[f64], qdd: &[f64]) -> Result<&'a IdDerivatives, DynamicsError>
+    => id_linearization_impl, id_linearization_avx2
+}
+
 /// [`inverse_dynamics_derivatives_with`] of every force of the model
 /// ([`Forces::ALL`]).
 pub fn inverse_dynamics_derivatives<'a>(
@@ -148,8 +190,41 @@ pub(crate) fn id_derivatives_impl<'a>(
     qd: &[f64],
     qdd: &[f64],
 ) -> Result<&'a IdDerivatives, DynamicsError> {
+    checked(model, work, forces, t, (q, qd, qdd), true)
+}
+
+#[inline(always)]
+fn id_linearization_impl<'a>(
+    model: &Model,
+    work: &'a mut IdDerivatives,
+    forces: Forces,
+    t: f64,
+    q: &[f64],
+    qd: &[f64],
+    qdd: &[f64],
+) -> Result<&'a IdDerivatives, DynamicsError> {
+    if model.has_contact() {
+        return Err(DynamicsError::UnsupportedContact {
+            what: "inverse_dynamics_linearization",
+        });
+    }
+    checked(model, work, forces, t, (q, qd, qdd), false)
+}
+
+/// The checks of both evaluations, then the sweeps.
+#[inline(always)]
+fn checked<'a>(
+    model: &Model,
+    work: &'a mut IdDerivatives,
+    forces: Forces,
+    t: f64,
+    (q, qd, qdd): (&[f64], &[f64], &[f64]),
+    dense: bool,
+) -> Result<&'a IdDerivatives, DynamicsError> {
+    work.linearized = false;
     let nodes = model.tree.as_ref().map(|t| t.nodes.len());
     if work.n_dof != model.n_dof()
+        || (dense && work.dtau_dq.nrows() != work.n_dof)
         || work.pieces.len() != model.rods().len()
         || work.tree.as_ref().map(|t| t.n_nodes()) != nodes
     {
@@ -170,7 +245,7 @@ pub(crate) fn id_derivatives_impl<'a>(
             what: "inverse_dynamics_derivatives",
         });
     }
-    open_tree_core(model, work, forces, t, q, qd, qdd)
+    open_tree_core(model, work, forces, t, (q, qd, qdd), dense)
 }
 
 crate::kernels::simd::dispatch! {
@@ -179,12 +254,11 @@ crate::kernels::simd::dispatch! {
     /// derivatives add theirs, docs/theory-derivatives.md (CD2)). Arguments
     /// checked by the caller.
     pub(crate) fn open_tree_id_derivatives<'a>(model: &Model, work: &'a mut IdDerivatives, forces: Forces, t: f64, q: &[f64], qd: &[f64], qdd: &[f64]) -> Result<&'a IdDerivatives, DynamicsError>
-    => open_tree_core, open_tree_core_avx2
+    => open_tree_dense, open_tree_dense_avx2
 }
 
-/// The body of [`id_derivatives_impl`] after its checks.
 #[inline(always)]
-fn open_tree_core<'a>(
+fn open_tree_dense<'a>(
     model: &Model,
     work: &'a mut IdDerivatives,
     forces: Forces,
@@ -193,26 +267,55 @@ fn open_tree_core<'a>(
     qd: &[f64],
     qdd: &[f64],
 ) -> Result<&'a IdDerivatives, DynamicsError> {
+    work.linearized = false;
+    open_tree_core(model, work, forces, t, (q, qd, qdd), true)
+}
+
+/// The body of [`id_derivatives_impl`] after its checks; the dense
+/// matrices only when `dense`.
+#[inline(always)]
+fn open_tree_core<'a>(
+    model: &Model,
+    work: &'a mut IdDerivatives,
+    forces: Forces,
+    t: f64,
+    (q, qd, qdd): (&[f64], &[f64], &[f64]),
+    dense: bool,
+) -> Result<&'a IdDerivatives, DynamicsError> {
     let at = At {
         t,
         q,
         qd,
         qdd,
         forces,
+        dense,
     };
     if let (Some(tr), Some(mut tw)) = (&model.tree, work.tree.take()) {
         tree::tree_id_derivatives(model, tr, work, &mut tw, &at);
         work.tree = Some(tw);
     } else {
-        if model.rods().len() > 1 {
+        if dense && model.rods().len() > 1 {
             work.dtau_dq.fill(0.0);
             work.dtau_dqd.fill(0.0);
         }
         for (r, rm) in model.rods().iter().enumerate() {
             chain::outward(model, rm, &mut work.pieces[r], &at);
             chain::inward(model, rm, work, r, &at);
-            chain::pairs(rm, work, r);
+            if dense {
+                chain::pairs(rm, work, r);
+            }
         }
+    }
+    if !dense {
+        // The products check what they return (vjp.rs); τ here.
+        if let Some(i) = work.tau.iter().position(|v| !v.is_finite()) {
+            return Err(DynamicsError::NotFinite {
+                what: format!("tau[{i}] of the linearization at t = {t}"),
+                value: work.tau[i],
+            });
+        }
+        work.linearized = true;
+        return Ok(work);
     }
     if let Some(mut cd) = work.contact.take() {
         contact::subtract_contact(
@@ -245,5 +348,6 @@ fn open_tree_core<'a>(
             }
         }
     }
+    work.linearized = true;
     Ok(work)
 }

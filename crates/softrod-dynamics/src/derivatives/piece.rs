@@ -60,6 +60,11 @@ pub(crate) struct PieceWork {
     pub(crate) rcv_m: Mat6,
     pub(crate) rcv_b: Mat6,
     pub(crate) rcv_y: Mat6,
+    /// The piece's (or joint's) diagonal blocks `∂τ_n/∂q_n`, `∂τ_n/∂q̇_n`
+    /// with the strain-space terms (k×k in the leading part), kept for the
+    /// products of [`super::vjp`].
+    pub(crate) blk_q: Mat6,
+    pub(crate) blk_v: Mat6,
 }
 
 impl PieceWork {
@@ -106,6 +111,8 @@ impl PieceWork {
             rcv_m: z,
             rcv_b: z,
             rcv_y: z,
+            blk_q: z,
+            blk_v: z,
         }
     }
 
@@ -254,9 +261,11 @@ pub(crate) fn close_piece(
     (diag_q, diag_v, w.tsum + tlt * wn, base)
 }
 
-/// Writes a piece's `τ_n` and its diagonal blocks, adding the strain-space
-/// terms (D13, D15, D47): `K_n q_n + D_n q̇_n`, the elastic offset and the
-/// cables' force and strain Hessian. `bm`: the piece's basis
+/// Writes a piece's `τ_n` and returns its diagonal blocks (k×k in the
+/// leading part of 6×6), adding the strain-space terms (D13, D15, D47):
+/// `K_n q_n + D_n q̇_n`, the elastic offset and the cables' force and
+/// strain Hessian; the blocks go into the dense matrices too when the
+/// evaluation forms them (`at.dense`). `bm`: the piece's basis
 /// ([`super::point::basis6`]); `diag_q`, `diag_v`, `wrench` are [`close_piece`]'s.
 #[inline(always)]
 pub(crate) fn write_piece(
@@ -267,7 +276,7 @@ pub(crate) fn write_piece(
     at: &At,
     bm: &Mat6,
     (diag_q, diag_v, wrench): (&Mat6, &Mat6, &Vec6),
-) {
+) -> (Mat6, Mat6) {
     let At { t, q, qd, .. } = *at;
     let scale = at.forces.load_scale;
     let piece = &rm.spec.geometry.pieces()[n];
@@ -285,16 +294,32 @@ pub(crate) fn write_piece(
         work.tensions.as_ref(),
     );
     let bt_ = bm.transpose();
-    let dq6 = bt_ * (diag_q + cable_hess) * bm;
-    let dv6 = bt_ * diag_v * bm;
+    let mut dq6 = bt_ * (diag_q + cable_hess) * bm;
+    let mut dv6 = bt_ * diag_v * bm;
     let inert = wrench + cable_force;
     for i in 0..k {
         let mut tau = piece.basis.column(i).dot(&inert) + pd.offset6[i];
         for j in 0..k {
             tau += pd.stiffness[(i, j)] * q[o + j] + pd.damping[(i, j)] * qd[o + j];
-            work.dtau_dq[(o + i, o + j)] = dq6[(i, j)] + pd.stiffness[(i, j)];
-            work.dtau_dqd[(o + i, o + j)] = dv6[(i, j)] + pd.damping[(i, j)];
+            dq6[(i, j)] += pd.stiffness[(i, j)];
+            dv6[(i, j)] += pd.damping[(i, j)];
         }
         work.tau[o + i] = tau;
+    }
+    if at.dense {
+        put_block(work, o, k, &dq6, &dv6);
+    }
+    (dq6, dv6)
+}
+
+/// Writes the diagonal blocks `(bq, bv)` of the coordinates `o .. o + k`
+/// into the dense `∂τ/∂q`, `∂τ/∂q̇`.
+#[inline(always)]
+pub(crate) fn put_block(work: &mut IdDerivatives, o: usize, k: usize, bq: &Mat6, bv: &Mat6) {
+    for i in 0..k {
+        for j in 0..k {
+            work.dtau_dq[(o + i, o + j)] = bq[(i, j)];
+            work.dtau_dqd[(o + i, o + j)] = bv[(i, j)];
+        }
     }
 }

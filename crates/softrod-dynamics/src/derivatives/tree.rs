@@ -9,7 +9,7 @@
 //! taken where that path leaves the proximal node, and nodes on different
 //! branches do not couple.
 
-use super::piece::{PieceWork, Subtree, close_piece, write_piece};
+use super::piece::{PieceWork, Subtree, close_piece, put_block, write_piece};
 use super::point::{PieceLin, PointLin, basis6, linearize_point, own_points};
 use super::{At, IdDerivatives};
 use crate::algorithms::tree::local;
@@ -28,10 +28,10 @@ use softrod_mechanics::LoadFrame;
 /// and `Ad_G w̄` per unit rate (6×k each).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Exit {
-    s: Mat6,
-    wq: Mat6,
-    uq: Mat6,
-    wv: Mat6,
+    pub(super) s: Mat6,
+    pub(super) wq: Mat6,
+    pub(super) uq: Mat6,
+    pub(super) wv: Mat6,
 }
 
 impl Exit {
@@ -48,12 +48,16 @@ impl Exit {
 /// Per-node buffers of the tree derivatives (allocated once).
 #[derive(Clone, Debug)]
 pub(crate) struct TreeWork {
-    nodes: Vec<PieceWork>,
+    pub(super) nodes: Vec<PieceWork>,
     /// For a node hanging inside its parent piece (D62): the parent's
     /// section there, linearized in the parent's strain (its local pose and
     /// (D39)–(D41)), and the parent's exit quantities at it.
     at: Vec<Option<(Pose, PointLin)>>,
-    exit: Vec<Exit>,
+    pub(super) exit: Vec<Exit>,
+    /// The products' sums per node ([`super::vjp`], D81): `Σ S_exit u` over
+    /// the ancestors, and `Σ ℛᵀu` (`𝓜`, `𝓑`, `𝒴` receivers) over the subtree.
+    pub(super) up: Vec<Vec6>,
+    pub(super) down: Vec<[Vec6; 3]>,
     /// What the children at a node's tip hand to it, and what the node
     /// hands to its own base frame (D43, D77).
     tip: Vec<Subtree>,
@@ -63,7 +67,7 @@ pub(crate) struct TreeWork {
     pqd: DVector<f64>,
     pqdd: DVector<f64>,
     /// Any dead (world-frame) load in the model: the `𝒴` terms.
-    dead: bool,
+    pub(super) dead: bool,
 }
 
 impl TreeWork {
@@ -79,6 +83,8 @@ impl TreeWork {
             nodes: (0..n).map(|_| PieceWork::new()).collect(),
             at: vec![None; n],
             exit: vec![Exit::zero(); n],
+            up: vec![Vec6::zeros(); n],
+            down: vec![[Vec6::zeros(); 3]; n],
             tip: vec![Subtree::zero(); n],
             base: vec![Subtree::zero(); n],
             pq: DVector::zeros(np),
@@ -117,11 +123,15 @@ pub(crate) fn tree_id_derivatives(
         tw.pqdd.fill(0.0);
     }
     // Nodes on different branches do not couple: those blocks stay zero.
-    work.dtau_dq.fill(0.0);
-    work.dtau_dqd.fill(0.0);
+    if at.dense {
+        work.dtau_dq.fill(0.0);
+        work.dtau_dqd.fill(0.0);
+    }
     outward(model, tree, tw, at);
     inward(model, tree, work, tw, at);
-    pairs(tree, work, tw);
+    if at.dense {
+        pairs(tree, work, tw);
+    }
 }
 
 /// The outward sweep (D76): each node's base motion from its parent's tip
@@ -297,7 +307,6 @@ fn add_inner(
 /// its sums, writes its `τ` and diagonal blocks, and hands its subtree to
 /// its parent.
 fn inward(model: &Model, tree: &Tree, work: &mut IdDerivatives, tw: &mut TreeWork, at: &At) {
-    let (q, qd) = (at.q, at.qd);
     let dead = tw.dead;
     for s in tw.tip.iter_mut() {
         *s = Subtree::zero();
@@ -325,14 +334,20 @@ fn inward(model: &Model, tree: &Tree, work: &mut IdDerivatives, tw: &mut TreeWor
                 let rm = &model.rods()[rod];
                 let bm = basis6(&rm.spec.geometry.pieces()[piece].basis);
                 let (dq, dv, wrench, base) = close_piece(&mut tw.nodes[i], &tw.tip[i], &bm, dead);
-                write_piece(model, rm, piece, work, at, &bm, (&dq, &dv, &wrench));
+                let (bq, bv) = write_piece(model, rm, piece, work, at, &bm, (&dq, &dv, &wrench));
+                let w = &mut tw.nodes[i];
+                w.blk_q = bq;
+                w.blk_v = bv;
                 base
             }
             NodeKind::Joint { element } => {
                 let (dq, dv, wrench, base) =
                     close_piece(&mut tw.nodes[i], &tw.tip[i], &node.bpad, dead);
                 if node.k > 0 {
-                    write_joint(model, element, node, work, (q, qd), (&dq, &dv, &wrench));
+                    let (bq, bv) = write_joint(model, element, node, work, at, (&dq, &dv, &wrench));
+                    let w = &mut tw.nodes[i];
+                    w.blk_q = bq;
+                    w.blk_v = bv;
                 }
                 base
             }
@@ -347,30 +362,34 @@ fn inward(model: &Model, tree: &Tree, work: &mut IdDerivatives, tw: &mut TreeWor
 }
 
 /// A joint's `τ` and diagonal blocks: the projection of its transmitted
-/// wrench plus its spring and damper (D53) on the diagonal.
+/// wrench plus its spring and damper (D53) on the diagonal; the blocks are
+/// returned (k×k in the leading part) and written into the dense matrices
+/// when the evaluation forms them.
 fn write_joint(
     model: &Model,
     element: usize,
     node: &crate::model::tree::Node,
     work: &mut IdDerivatives,
-    (q, qd): (&[f64], &[f64]),
+    at: &At,
     (diag_q, diag_v, wrench): (&Mat6, &Mat6, &Vec6),
-) {
+) -> (Mat6, Mat6) {
+    let (q, qd) = (at.q, at.qd);
     let info = &model.elements()[element];
     let joint = &info.attachment.joint;
     let first = node.dof - info.joint_dofs.start;
     let b = &node.bpad;
-    let (dq6, dv6) = (b.transpose() * diag_q * b, b.transpose() * diag_v * b);
+    let (mut dq6, mut dv6) = (b.transpose() * diag_q * b, b.transpose() * diag_v * b);
     let o = node.dof;
     for i in 0..node.k {
         let (kc, dc, rest) = joint.coefficients(first + i);
         work.tau[o + i] = b.column(i).dot(wrench) + kc * (q[o + i] - rest) + dc * qd[o + i];
-        for j in 0..node.k {
-            let (ks, ds) = if i == j { (kc, dc) } else { (0.0, 0.0) };
-            work.dtau_dq[(o + i, o + j)] = dq6[(i, j)] + ks;
-            work.dtau_dqd[(o + i, o + j)] = dv6[(i, j)] + ds;
-        }
+        dq6[(i, i)] += kc;
+        dv6[(i, i)] += dc;
     }
+    if at.dense {
+        put_block(work, o, node.k, &dq6, &dv6);
+    }
+    (dq6, dv6)
 }
 
 /// The off-diagonal blocks (D80): for every node `i` with coordinates and

@@ -426,6 +426,31 @@ impl ParameterSystem for ParamSystem<'_> {
         self.sys.force_jacobians(t, q, qd, qdd, mass, dr_dq, dr_dqd)
     }
 
+    /// `M(q)` and `∂ID/∂q`, `∂ID/∂q̇` kept as an O(N) operator
+    /// ([`RodSystem::force_linearization`]).
+    fn force_linearization(
+        &mut self,
+        slot: usize,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+        qdd: &DVector<f64>,
+        mass: &mut DMatrix<f64>,
+    ) -> Result<bool, DynamicsError> {
+        self.sys.force_linearization(slot, t, q, qd, qdd, mass)
+    }
+
+    /// Its transposed products ([`RodSystem::force_vjp`]).
+    fn force_vjp(
+        &mut self,
+        slot: usize,
+        u: &DVector<f64>,
+        out_q: &mut DVector<f64>,
+        out_qd: &mut DVector<f64>,
+    ) -> Result<(), DynamicsError> {
+        self.sys.force_vjp(slot, u, out_q, out_qd)
+    }
+
     /// `−zᵀ (ID(pⱼ + Δⱼ) − ID(pⱼ))/Δⱼ` (G8): two O(N) inverse dynamics
     /// per parameter entry (`ID` is affine in each).
     fn force_param_vjp(
