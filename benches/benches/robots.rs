@@ -8,7 +8,11 @@
 //! `q̈` (a rod pinned at both ends: spherical joint and ball closure, the
 //! cosseratbench catenary) by `closed_dynamics_derivatives` (CD1–CD4) and
 //! by forward differences of the constrained `q̈` (what the integrators
-//! used before: `2n` constrained forward dynamics).
+//! used before: `2n` constrained forward dynamics); the Newton matrix of a
+//! closed chain's implicit step (the same pinned rod): the structured KKT
+//! factorization and solve (`ClosedShiftedSolver`, CD5–CD7) with its two
+//! residuals, against what the dense path pays (an `n×n` LU of the
+//! iteration matrix and the constrained forward dynamics per iteration).
 //! Compare with `forward_dynamics/N` and `shifted_factor_solve/N` of the
 //! `dynamics` benches.
 //!
@@ -17,9 +21,9 @@
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use softrod_dynamics::{
-    Attachment, ClosedDerivatives, Closure, ClosureFrame, ClosureKind, Curve, Data, Element,
-    IdDerivatives, Joint, Model, Prescribed, Rod, ShiftedSolver, closed_dynamics_derivatives,
-    forward_dynamics, inverse_dynamics_derivatives,
+    Attachment, ClosedDerivatives, ClosedShiftedSolver, Closure, ClosureFrame, ClosureKind, Curve,
+    Data, Element, IdDerivatives, Joint, Model, Prescribed, Rod, ShiftedSolver,
+    closed_dynamics_derivatives, forward_dynamics, inverse_dynamics_derivatives,
 };
 use softrod_kinematics::{Basis, RodGeometry, straight};
 use softrod_lie::{Pose, Vec3};
@@ -212,6 +216,67 @@ fn bench_robots(c: &mut Criterion) {
                 }
                 jac[(0, 0)]
             })
+        });
+    }
+    g.finish();
+    bench_closed_newton(c, &pinned);
+}
+
+/// One Newton iteration's pieces on the pinned rod (CD5–CD7), structured
+/// and dense.
+fn bench_closed_newton(c: &mut Criterion, pinned: &dyn Fn(usize) -> Model) {
+    let mut g = c.benchmark_group("closed_newton");
+    let (a, b) = (1e-6, 1e-3);
+    for n in [10usize, 50] {
+        let m = pinned(n);
+        let (nd, rows) = (m.n_dof(), m.n_constraints());
+        let mut data = Data::new(&m);
+        let mut kkt = ClosedShiftedSolver::new(&m);
+        let (q, qd) = state(nd);
+        let qdd = vec![0.5; nd];
+        g.bench_with_input(BenchmarkId::new("kkt_factor", n), &n, |bch, _| {
+            bch.iter(|| kkt.factor_at(&m, 0.1, black_box(&q), a, b).unwrap())
+        });
+        let (mut r, mut cr) = (vec![0.0; nd], vec![0.0; rows]);
+        g.bench_with_input(BenchmarkId::new("residuals", n), &n, |bch, _| {
+            bch.iter(|| {
+                kkt.residuals(
+                    &m,
+                    &mut data,
+                    0.1,
+                    black_box(&q),
+                    &qd,
+                    &qdd,
+                    None,
+                    &mut r,
+                    &mut cr,
+                )
+                .unwrap();
+                r[0]
+            })
+        });
+        let mut x = r.clone();
+        g.bench_with_input(BenchmarkId::new("kkt_solve", n), &n, |bch, _| {
+            bch.iter(|| {
+                x.copy_from_slice(&r);
+                kkt.solve(&m, black_box(&mut x), &cr).unwrap();
+                x[0]
+            })
+        });
+        g.bench_with_input(BenchmarkId::new("constrained_forward", n), &n, |bch, _| {
+            bch.iter(|| forward_dynamics(&m, &mut data, 0.1, black_box(&q), &qd, None).unwrap()[0])
+        });
+        // The dense path's factorization: an LU of an n×n iteration matrix
+        // (ESDIRK's real one; Radau IIA factors a real and a complex one).
+        let dense = nalgebra::DMatrix::<f64>::from_fn(nd, nd, |i, j| {
+            if i == j {
+                nd as f64
+            } else {
+                ((i * 7 + j * 3) % 11) as f64 / 11.0
+            }
+        });
+        g.bench_with_input(BenchmarkId::new("dense_lu", n), &n, |bch, _| {
+            bch.iter(|| black_box(dense.clone()).lu().determinant())
         });
     }
     g.finish();

@@ -27,6 +27,7 @@
 //! | [`dynamics_jacobians`] | `∂q̈/∂q`, `∂q̈/∂q̇` (allocating) | (D48) |
 //! | [`section_jacobian`] | world pose and spatial Jacobian of a rod section, through joints and parents | (D11), (D57), (D62) |
 //! | [`ShiftedSolver`] | `(M + aK + bD)⁻¹ x`, O(N), chains and trees | §6 with armature `aK_n + bD_n` |
+//! | [`ClosedShiftedSolver`] | the KKT solve of a closed model's implicit step, O(N·m) | docs/theory-derivatives.md (CD5–CD7) |
 //!
 //! Robots: rods and rigid bodies ([`BodySpec`]) hang from parents (the world,
 //! a rod's piece boundary, a body) through joints ([`Joint`]: fixed,
@@ -117,9 +118,9 @@ pub use analysis::{
     stiffness_matrix,
 };
 pub use constraints::{
-    ClosedDerivatives, check_closures, closed_dynamics_derivatives, closure_multipliers,
-    closure_residuals, constraint_jacobian, constraint_rank, constraint_residual,
-    max_closure_residual,
+    ClosedDerivatives, ClosedShiftedSolver, check_closures, closed_dynamics_derivatives,
+    closure_multipliers, closure_residuals, constraint_jacobian, constraint_rank,
+    constraint_residual, max_closure_residual,
 };
 pub use derivatives::{
     DynamicsJacobians, FdDerivatives, IdDerivatives, Linearization, dynamics_jacobians,

@@ -8,9 +8,9 @@
 
 use nalgebra::{DMatrix, DVector};
 use softrod_dynamics::{
-    ClosedDerivatives, Data, DynamicsError, FdDerivatives, Forces, IdDerivatives, Model,
-    ShiftedSolver, closed_dynamics_derivatives, damping_matrix, forward_dynamics,
-    forward_dynamics_derivatives, inverse_dynamics, inverse_dynamics_derivatives,
+    ClosedDerivatives, ClosedShiftedSolver, Data, DynamicsError, FdDerivatives, Forces,
+    IdDerivatives, Model, ShiftedSolver, closed_dynamics_derivatives, damping_matrix,
+    forward_dynamics, forward_dynamics_derivatives, inverse_dynamics, inverse_dynamics_derivatives,
     inverse_dynamics_linearization_with, inverse_dynamics_vjp, mass_matrix, stiffness_matrix,
 };
 use softrod_mechanics::Tension;
@@ -30,6 +30,20 @@ pub struct RodSystem {
     pub tau: Option<DVector<f64>>,
     /// Which Jacobians the stiff methods get (default [`RodJacobian::Exact`]).
     pub jacobian: RodJacobian,
+    /// Models with closures (and no contact): whether the implicit methods
+    /// that iterate on the shifted mass matrix (ESDIRK) get the structured
+    /// KKT solve of [`SecondOrderSystem::factor_shifted_constrained`]
+    /// (`softrod_dynamics::ClosedShiftedSolver`, O(N·m) per factorization,
+    /// docs/theory-derivatives.md CD5–CD8) — **experimental, default
+    /// `false`** — or the dense exact Jacobian of the constrained `q̈`
+    /// (`n×n` LU factorizations). The structured iteration has the right
+    /// fixed point (with a tight Newton tolerance whole runs agree with the
+    /// dense path, `tests/closed.rs`), but on soft, ringing closed models
+    /// its simplified Newton contracts slowly and unevenly and ESDIRK's
+    /// stopping test (RADAU5's) accepts iterates far from it at the default
+    /// tolerance: on the test models 1–30 % off at `rtol = 1e-8` where the
+    /// dense path is within 2e-4 (docs/performance.md).
+    pub structured_closures: bool,
     /// The factored `M(q) + aK + bD` of
     /// [`SecondOrderSystem::factor_shifted_mass`] (O(N), no `n×n` matrix).
     shifted: ShiftedSolver,
@@ -45,6 +59,9 @@ pub struct RodSystem {
     /// The linearizations of [`RodSystem::force_linearization`], one per
     /// slot (O(N) each, no `n×n` matrix), allocated on first use.
     products: Vec<IdDerivatives>,
+    /// The KKT factorization of a closed model's implicit step, allocated
+    /// on first use.
+    kkt: Option<Box<ClosedShiftedSolver>>,
 }
 
 /// The Jacobians [`RodSystem`] hands to the stiff methods.
@@ -105,11 +122,13 @@ impl RodSystem {
             data,
             tau: None,
             jacobian: RodJacobian::Exact,
+            structured_closures: false,
             shifted,
             derivatives: None,
             closed: None,
             id_derivatives: None,
             products: Vec::new(),
+            kkt: None,
         }
     }
 }
@@ -455,6 +474,82 @@ impl SecondOrderSystem for RodSystem {
 
     fn solve_shifted_mass(&mut self, x: &mut DVector<f64>) -> Result<(), DynamicsError> {
         self.shifted.solve(&self.model, x.as_mut_slice())
+    }
+
+    /// The closure rows `m` for a model with closures and without contact
+    /// when [`RodSystem::structured_closures`] is on, else 0.
+    fn n_constraints(&self) -> usize {
+        if self.structured_closures && self.model.has_closures() && !self.model.has_contact() {
+            self.model.n_constraints()
+        } else {
+            0
+        }
+    }
+
+    /// The KKT matrix of the closed model's implicit step,
+    /// `[M + aK + bD, −Jᵀ; s·J, 0]` (`softrod_dynamics::ClosedShiftedSolver`:
+    /// the open tree's O(N) shifted factorization, `m` solves for
+    /// `S⁻¹Jᵀ`, an `m×m` Cholesky; docs/theory-derivatives.md CD6–CD7).
+    fn factor_shifted_constrained(
+        &mut self,
+        t: f64,
+        q: &DVector<f64>,
+        a: f64,
+        b: f64,
+    ) -> Result<bool, DynamicsError> {
+        if self.n_constraints() == 0 {
+            return Ok(false);
+        }
+        let kkt = self
+            .kkt
+            .get_or_insert_with(|| Box::new(ClosedShiftedSolver::new(&self.model)));
+        kkt.factor_at(&self.model, t, q.as_slice(), a, b)?;
+        Ok(true)
+    }
+
+    fn solve_shifted_constrained(
+        &mut self,
+        x: &mut DVector<f64>,
+        d: &DVector<f64>,
+    ) -> Result<(), DynamicsError> {
+        let Some(kkt) = self.kkt.as_mut() else {
+            return Err(DynamicsError::NotFactored {
+                what: "ClosedShiftedSolver",
+            });
+        };
+        kkt.solve(&self.model, x.as_mut_slice(), d.as_slice())
+    }
+
+    /// The open tree's force residual `ID(t, q, q̇, q̈) − τ_act` and the
+    /// Baumgarte-stabilized closure rows at `q̈` (docs/theory-derivatives.md
+    /// CD5).
+    fn constrained_residual(
+        &mut self,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+        qdd: &DVector<f64>,
+        r: &mut DVector<f64>,
+        c: &mut DVector<f64>,
+    ) -> Result<bool, DynamicsError> {
+        if self.n_constraints() == 0 {
+            return Ok(false);
+        }
+        let kkt = self
+            .kkt
+            .get_or_insert_with(|| Box::new(ClosedShiftedSolver::new(&self.model)));
+        kkt.residuals(
+            &self.model,
+            &mut self.data,
+            t,
+            q.as_slice(),
+            qd.as_slice(),
+            qdd.as_slice(),
+            self.tau.as_ref().map(|v| v.as_slice()),
+            r.as_mut_slice(),
+            c.as_mut_slice(),
+        )?;
+        Ok(true)
     }
 
     /// Time enters through prescribed joints (D59) and cable tension

@@ -219,6 +219,85 @@ pub trait SecondOrderSystem {
         unimplemented!("solve_shifted_mass: the system provides factor_shifted_mass but not this")
     }
 
+    /// Optional, for systems whose accelerations are held by `m` algebraic
+    /// constraints (closed chains, docs/theory.md D67–D68:
+    /// `M q̈ = f + Jᵀλ`, `R = J q̈ + … = 0`): the number `m` of constraint
+    /// rows the structured Newton solve of
+    /// [`factor_shifted_constrained`](Self::factor_shifted_constrained)
+    /// handles. Default 0 (no constraints, or none handled structurally:
+    /// the methods then use [`factor_shifted_mass`](Self::factor_shifted_mass)
+    /// or dense matrices).
+    fn n_constraints(&self) -> usize {
+        0
+    }
+
+    /// Optional, with [`n_constraints`](Self::n_constraints) `= m > 0`:
+    /// factors the KKT matrix `[S, −Jᵀ; s·J, 0]` of the constrained
+    /// dynamics' implicit step at `(t, q)`, `S = M(q) + a·K + b·D` as in
+    /// [`factor_shifted_mass`](Self::factor_shifted_mass), `J` the
+    /// constraint rows and `s = ∂R/∂q̈` along the step (for Baumgarte-stabilized
+    /// rows `s = 1 + 2α·b + α²·a`, docs/theory-derivatives.md CD6), for
+    /// later [`solve_shifted_constrained`](Self::solve_shifted_constrained)
+    /// calls. Returns `Ok(true)` if provided (default `Ok(false)`).
+    ///
+    /// A system that provides it must provide
+    /// [`constrained_residual`](Self::constrained_residual): the implicit
+    /// methods then take Newton corrections `Δ` from
+    /// `[S, −Jᵀ; s·J, 0] [Δ; μ] = −[r; R]`, whose fixed point (`r = Jᵀμ`,
+    /// `R = 0`) is the constrained `q̈`. Like the shifted mass matrix it
+    /// approximates the exact iteration matrix; the methods fall back to the
+    /// exact [`jacobians`](Self::jacobians) when Newton converges badly.
+    fn factor_shifted_constrained(
+        &mut self,
+        t: f64,
+        q: &DVector<f64>,
+        a: f64,
+        b: f64,
+    ) -> Result<bool, Self::Error> {
+        let _ = (t, q, a, b);
+        Ok(false)
+    }
+
+    /// `x ←` the first block of the solution of `[S, −Jᵀ; s·J, 0] [x; μ] =
+    /// [x; d]` with the last successful
+    /// [`factor_shifted_constrained`](Self::factor_shifted_constrained)
+    /// (`x`: n, `d`: m).
+    ///
+    /// # Panics
+    ///
+    /// The default panics: the methods call it only after
+    /// `factor_shifted_constrained` returned `Ok(true)`.
+    fn solve_shifted_constrained(
+        &mut self,
+        x: &mut DVector<f64>,
+        d: &DVector<f64>,
+    ) -> Result<(), Self::Error> {
+        let _ = (x, d);
+        unimplemented!(
+            "solve_shifted_constrained: the system provides factor_shifted_constrained but not this"
+        )
+    }
+
+    /// Optional, with [`factor_shifted_constrained`](Self::factor_shifted_constrained):
+    /// the residuals of the constrained equations of motion at a trial
+    /// `q̈`: the force residual without the constraint forces,
+    /// `r = M(q) q̈ − f(t, q, q̇)` (n), and the constraint rows `R` (m; for
+    /// a closed chain the Baumgarte-stabilized `J q̈ + J̇q̇ + 2α J q̇ + α²φ`),
+    /// both affine in `q̈`. Returns `Ok(true)` if provided (default
+    /// `Ok(false)`).
+    fn constrained_residual(
+        &mut self,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+        qdd: &DVector<f64>,
+        r: &mut DVector<f64>,
+        c: &mut DVector<f64>,
+    ) -> Result<bool, Self::Error> {
+        let _ = (t, q, qd, qdd, r, c);
+        Ok(false)
+    }
+
     /// Whether `a` does not depend on `t` explicitly (see
     /// [`OdeSystem::is_autonomous`]). Default `false`.
     fn is_autonomous(&self) -> bool {

@@ -3,16 +3,20 @@
 //! asks of them at a state ([`queries`]), and the constrained forward
 //! dynamics ([`forward`]), Lagrange multipliers on top of the tree's
 //! recursion, and its derivatives ([`derivatives`], the open tree's
-//! analytic ones projected through the multiplier system). The constrained statics and modes are `crate::analysis`'s.
+//! analytic ones projected through the multiplier system), and the
+//! structured Newton matrix of a closed model's implicit step ([`newton`],
+//! KKT form on the open tree's shifted solve). The constrained statics and modes are `crate::analysis`'s.
 //! A new kind of closure goes in `crate::model::closure` (its spec and
 //! number of rows) and [`rows`] (its residual and row operator).
 
 pub(crate) mod derivatives;
 pub(crate) mod forward;
+pub(crate) mod newton;
 pub(crate) mod queries;
 pub(crate) mod rows;
 
 pub use derivatives::{ClosedDerivatives, closed_dynamics_derivatives};
+pub use newton::ClosedShiftedSolver;
 pub use queries::{
     check_closures, closure_multipliers, closure_residuals, constraint_jacobian, constraint_rank,
     constraint_residual, max_closure_residual,

@@ -26,8 +26,10 @@ pub(crate) enum JacKind {
     /// ([`SecondOrderSystem::mass_form_jacobians`]).
     MassForm,
     /// The system's structured `M(q_J) + aK + bD`
-    /// ([`SecondOrderSystem::factor_shifted_mass`]) with the force residual:
-    /// no dense matrix.
+    /// ([`SecondOrderSystem::factor_shifted_mass`]) with the force residual,
+    /// or for a constrained system (`m > 0`) its KKT form
+    /// ([`SecondOrderSystem::factor_shifted_constrained`]) with the force
+    /// and constraint residuals: no dense matrix.
     Structured,
 }
 
@@ -46,6 +48,14 @@ pub(crate) enum JacKind {
 pub(crate) struct SecondOrderProblem<'a, S: SecondOrderSystem> {
     pub(crate) sys: &'a mut S,
     n: usize,
+    /// Constraint rows of the structured KKT solve
+    /// ([`SecondOrderSystem::n_constraints`]; 0: none).
+    m: usize,
+    /// Constraint residuals (m each): a Newton step's, and two of the
+    /// error filter.
+    cres: DVector<f64>,
+    cres0: DVector<f64>,
+    cres1: DVector<f64>,
     q: DVector<f64>,
     qd: DVector<f64>,
     qdd: DVector<f64>,
@@ -93,9 +103,14 @@ pub(crate) struct SecondOrderProblem<'a, S: SecondOrderSystem> {
 impl<'a, S: SecondOrderSystem> SecondOrderProblem<'a, S> {
     pub(crate) fn new(sys: &'a mut S) -> Self {
         let n = sys.dim();
+        let m = sys.n_constraints();
         Self {
             sys,
             n,
+            m,
+            cres: DVector::zeros(m),
+            cres0: DVector::zeros(m),
+            cres1: DVector::zeros(m),
             q: DVector::zeros(n),
             qd: DVector::zeros(n),
             qdd: DVector::zeros(n),
@@ -212,19 +227,25 @@ impl<'a, S: SecondOrderSystem> SecondOrderProblem<'a, S> {
         q: &DVector<f64>,
         qd: &DVector<f64>,
     ) -> Result<bool, SystemError> {
+        let map = |e| Box::new(e) as SystemError;
         if self.has_structured.is_none() {
-            let has = self
-                .sys
-                .factor_shifted_mass(t, q, 0.0, 0.0)
-                .map_err(|e| Box::new(e) as SystemError)?;
+            let has = if self.m > 0 {
+                self.sys.factor_shifted_constrained(t, q, 0.0, 0.0)
+            } else {
+                self.sys.factor_shifted_mass(t, q, 0.0, 0.0)
+            }
+            .map_err(map)?;
             self.has_structured = Some(has);
         }
         if self.has_structured == Some(true) && self.has_residual.is_none() {
             self.qdd.fill(0.0);
-            let has = self
-                .sys
-                .force_residual(t, q, qd, &self.qdd, &mut self.tmp)
-                .map_err(|e| Box::new(e) as SystemError)?;
+            let has = if self.m > 0 {
+                self.sys
+                    .constrained_residual(t, q, qd, &self.qdd, &mut self.tmp, &mut self.cres)
+            } else {
+                self.sys.force_residual(t, q, qd, &self.qdd, &mut self.tmp)
+            }
+            .map_err(map)?;
             self.has_residual = Some(has);
         }
         Ok(self.has_structured == Some(true) && self.has_residual == Some(true))

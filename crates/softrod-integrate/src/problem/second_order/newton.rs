@@ -23,9 +23,13 @@ impl<S: SecondOrderSystem> SecondOrderProblem<'_, S> {
         match self.kind {
             JacKind::Structured => {
                 let q = std::mem::take(&mut self.jac_q);
-                let r = self
-                    .sys
-                    .factor_shifted_mass(self.jac_t, &q, beta_p, gamma_p);
+                let r = if self.m > 0 {
+                    self.sys
+                        .factor_shifted_constrained(self.jac_t, &q, beta_p, gamma_p)
+                } else {
+                    self.sys
+                        .factor_shifted_mass(self.jac_t, &q, beta_p, gamma_p)
+                };
                 self.jac_q = q;
                 return r.map_err(|e| Box::new(e) as SystemError);
             }
@@ -71,6 +75,20 @@ impl<S: SecondOrderSystem> SecondOrderProblem<'_, S> {
         x: &DVector<f64>,
         out: &mut DVector<f64>,
     ) -> Result<(), SystemError> {
+        if self.kind == JacKind::Structured && self.m > 0 {
+            // The KKT step (docs/theory-derivatives.md CD5–CD7):
+            // [S, −Jᵀ; s·J, 0] [Δ; μ] = −[r; R].
+            let map = |e| Box::new(e) as SystemError;
+            self.sys
+                .constrained_residual(t, q, qd, x, out, &mut self.cres)
+                .map_err(map)?;
+            out.neg_mut();
+            self.cres.neg_mut();
+            return self
+                .sys
+                .solve_shifted_constrained(out, &self.cres)
+                .map_err(map);
+        }
         if self.kind == JacKind::Structured {
             self.sys
                 .force_residual(t, q, qd, x, out)
@@ -130,6 +148,15 @@ impl<S: SecondOrderSystem> SecondOrderProblem<'_, S> {
                 self.tmp.gemv(-hg, &self.k, eq, 1.0);
                 self.lu.solve_in_place(&mut self.tmp);
             }
+            JacKind::Structured if self.m > 0 => {
+                let q = std::mem::take(&mut self.jac_q);
+                let out = self.constrained_filter_rhs(t, hg, &q, eq, ev);
+                self.jac_q = q;
+                out?;
+                self.sys
+                    .solve_shifted_constrained(&mut self.tmp, &self.cres)
+                    .map_err(map)?;
+            }
             JacKind::Structured => {
                 let q = std::mem::take(&mut self.jac_q);
                 let out = self.structured_filter_rhs(t, hg, &q, eq, ev);
@@ -176,6 +203,50 @@ impl<S: SecondOrderSystem> SecondOrderProblem<'_, S> {
             .map_err(map)?;
         self.r1 -= &self.r0;
         self.tmp.axpy(-hg / sq, &self.r1, 1.0);
+        Ok(())
+    }
+
+    /// The constrained filter's right-hand side (docs/theory-derivatives.md
+    /// CD8): `tmp = M e_v − hγ K̃ e_q` as in
+    /// [`structured_filter_rhs`](Self::structured_filter_rhs) and
+    /// `cres = J e_v − hγ ∂R/∂q e_q` (`∂R/∂q = α²J` at rest), each a
+    /// directional difference of [`SecondOrderSystem::constrained_residual`]
+    /// at `(q_J, 0, ·)`: three residuals.
+    fn constrained_filter_rhs(
+        &mut self,
+        t: f64,
+        hg: f64,
+        qj: &DVector<f64>,
+        eq: &DVector<f64>,
+        ev: &DVector<f64>,
+    ) -> Result<(), SystemError> {
+        let map = |e| Box::new(e) as SystemError;
+        let z = &self.zero;
+        self.sys
+            .constrained_residual(t, qj, z, z, &mut self.r0, &mut self.cres0)
+            .map_err(map)?;
+        // Exactly linear in q̈: M e_v and J e_v.
+        let sv = 1.0 / ev.amax().max(f64::MIN_POSITIVE);
+        self.q.copy_from(ev);
+        self.q *= sv;
+        self.sys
+            .constrained_residual(t, qj, z, &self.q, &mut self.tmp, &mut self.cres)
+            .map_err(map)?;
+        self.tmp -= &self.r0;
+        self.tmp /= sv;
+        self.cres -= &self.cres0;
+        self.cres /= sv;
+        // K̃ e_q and ∂R/∂q e_q with a √ε-sized step.
+        let sq = f64::EPSILON.sqrt() * qj.amax().max(1.0) / eq.amax().max(f64::MIN_POSITIVE);
+        self.q.copy_from(qj);
+        self.q.axpy(sq, eq, 1.0);
+        self.sys
+            .constrained_residual(t, &self.q, z, z, &mut self.r1, &mut self.cres1)
+            .map_err(map)?;
+        self.r1 -= &self.r0;
+        self.tmp.axpy(-hg / sq, &self.r1, 1.0);
+        self.cres1 -= &self.cres0;
+        self.cres.axpy(-hg / sq, &self.cres1, 1.0);
         Ok(())
     }
 }
