@@ -3,26 +3,16 @@
 //! at centreline height r; a rod on an incline sticks below the friction
 //! angle (no creep) and slides with g(sin α − μ cos α) above it.
 
-use softrod::{Flow, Observer, Sample, Settings, Simulation};
+mod common;
+
+use common::{G, Keep, L, R, silicone};
+
+use softrod::{Settings, Simulation};
 use softrod_dynamics::{Attachment, Joint, JointKind, Model, Rod};
 use softrod_kinematics::Strain;
 use softrod_lie::{Mat3, Pose, Vec3};
-use softrod_mechanics::Material;
 use softrod_mechanics::contact::{Obstacle, Shape};
 use softrod_scene::Integrator;
-
-const R: f64 = 0.01;
-const L: f64 = 0.2;
-const G: f64 = 9.81;
-
-fn material() -> Material {
-    Material::builder()
-        .density(1000.0)
-        .young(1.0e6)
-        .poisson(0.5)
-        .build()
-        .unwrap()
-}
 
 /// A free rod (6-dof joint to the world) whose base pose is `base`, with
 /// `obstacle`, gravity −z.
@@ -33,7 +23,7 @@ fn free_rod(base: Pose, obstacle: Obstacle, energy_tolerance: f64) -> Simulation
         .strains([Strain::Ky, Strain::Kz])
         .base(base)
         .circle(R)
-        .material(material());
+        .material(silicone());
     let model = Model::builder()
         .rod_on(rod, Attachment::world_joint(Joint::new(JointKind::Free)))
         .gravity([0.0, 0.0, -G])
@@ -51,14 +41,6 @@ fn free_rod(base: Pose, obstacle: Obstacle, energy_tolerance: f64) -> Simulation
     };
     sim.set_settings(settings).unwrap();
     sim
-}
-
-struct Keep(Vec<(f64, Vec<f64>, Vec<f64>)>);
-impl Observer for Keep {
-    fn sample(&mut self, s: Sample<'_>) -> Result<Flow, String> {
-        self.0.push((s.t, s.q.to_vec(), s.qd.to_vec()));
-        Ok(Flow::Continue)
-    }
 }
 
 fn centre(sim: &Simulation, q: &[f64]) -> Vec3 {

@@ -6,27 +6,17 @@
 //! runs and in statics; the implicit step with contact against a
 //! small-step explicit reference.
 
-use softrod::{Flow, Observer, Sample, Settings, Simulation};
+mod common;
+
+use common::{G, Keep, L, R, material};
+
+use softrod::{Settings, Simulation};
 use softrod_dynamics::{Attachment, Joint, JointKind, Model, Rod};
 use softrod_kinematics::Strain;
 use softrod_lie::{Mat3, Pose, Vec3};
 use softrod_mechanics::contact::{Obstacle, Shape};
 use softrod_mechanics::{LoadFrame, Material, PointLoad};
 use softrod_scene::Integrator;
-
-const R: f64 = 0.01;
-const L: f64 = 0.2;
-const G: f64 = 9.81;
-
-fn material(viscosity: f64) -> Material {
-    Material::builder()
-        .density(1000.0)
-        .young(1.0e6)
-        .poisson(0.5)
-        .viscosity(viscosity)
-        .build()
-        .unwrap()
-}
 
 fn table() -> Obstacle {
     Obstacle::new(
@@ -47,7 +37,7 @@ fn free_rod(base: Pose, obstacle: Obstacle, loads: &[PointLoad], viscosity: f64)
         .strains([Strain::Ky, Strain::Kz])
         .base(base)
         .circle(R)
-        .material(material(viscosity));
+        .material(material(1.0e6, viscosity));
     for l in loads {
         rod = rod.point_load(*l);
     }
@@ -67,14 +57,6 @@ fn settings(integrator: Integrator, rtol: f64, output_every: f64) -> Settings {
         atol: rtol * 1e-2,
         output_every: Some(output_every),
         ..Settings::default()
-    }
-}
-
-struct Keep(Vec<(f64, Vec<f64>, Vec<f64>)>);
-impl Observer for Keep {
-    fn sample(&mut self, s: Sample<'_>) -> Result<Flow, String> {
-        self.0.push((s.t, s.q.to_vec(), s.qd.to_vec()));
-        Ok(Flow::Continue)
     }
 }
 
@@ -188,7 +170,7 @@ fn statics_holds_a_rope_under_tension_over_a_cylinder_within_a_hundredth_of_its_
         .strains([Strain::Ky, Strain::Qx])
         .base(base)
         .circle(r)
-        .material(material(0.0))
+        .material(material(1.0e6, 0.0))
         .point_load(PointLoad {
             s: l,
             force: Vec3::new(0.0, 0.0, -1.0),
@@ -300,7 +282,7 @@ fn bar_on_rails(pull: f64, duration: f64) -> Vec<(f64, f64)> {
         .strains([Strain::Ky, Strain::Kz])
         .base(Pose::new(along_y, Vec3::new(0.15, -0.5 * L, 2.0 * R)))
         .circle(R)
-        .material(material(1.0e3))
+        .material(material(1.0e6, 1.0e3))
         .point_load(PointLoad {
             s: 0.5 * L,
             force: Vec3::new(0.0, pull, -1.0),

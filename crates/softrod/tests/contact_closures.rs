@@ -6,30 +6,18 @@
 //! into one by a closure, lying across an incline, stick below the
 //! friction angle and slide at `g (sin α − μ cos α)` above it.
 
-use softrod::{Flow, Observer, Sample, Settings, Simulation};
+mod common;
+
+use common::{G, Keep, L, R, RHO, material};
+
+use softrod::{Settings, Simulation};
 use softrod_dynamics::{
     Attachment, Closure, ClosureFrame, ClosureKind, Joint, JointKind, Model, Rod,
 };
 use softrod_kinematics::Strain;
 use softrod_lie::{Mat3, Pose, Vec3};
-use softrod_mechanics::Material;
 use softrod_mechanics::contact::{Obstacle, Shape};
 use softrod_scene::Integrator;
-
-const R: f64 = 0.01;
-const L: f64 = 0.2;
-const G: f64 = 9.81;
-const RHO: f64 = 1000.0;
-
-fn material(young: f64, viscosity: f64) -> Material {
-    Material::builder()
-        .density(RHO)
-        .young(young)
-        .viscosity(viscosity)
-        .poisson(0.5)
-        .build()
-        .unwrap()
-}
 
 fn plane(point: Vec3, normal: Vec3) -> Shape {
     Shape::Plane { point, normal }
@@ -70,14 +58,6 @@ fn held_rod(
     })
     .unwrap();
     sim
-}
-
-struct Keep(Vec<(f64, Vec<f64>, Vec<f64>)>);
-impl Observer for Keep {
-    fn sample(&mut self, s: Sample<'_>) -> Result<Flow, String> {
-        self.0.push((s.t, s.q.to_vec(), s.qd.to_vec()));
-        Ok(Flow::Continue)
-    }
 }
 
 fn centre(sim: &Simulation, q: &[f64]) -> Vec3 {

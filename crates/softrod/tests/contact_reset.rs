@@ -4,26 +4,17 @@
 //! `Simulation` built from the same model that has done nothing else, and
 //! the results must agree bit for bit.
 
+mod common;
+
+use common::{G, L, R, silicone};
+
 use softrod::{Settings, Simulation, Trajectory};
 use softrod_dynamics::{Attachment, Joint, JointKind, Model, Rod};
 use softrod_kinematics::Strain;
 use softrod_lie::{Mat3, Pose, Vec3};
 use softrod_mechanics::contact::{Obstacle, Shape};
-use softrod_mechanics::{LoadFrame, Material, PointLoad};
+use softrod_mechanics::{LoadFrame, PointLoad};
 use softrod_scene::Integrator;
-
-const R: f64 = 0.01;
-const L: f64 = 0.2;
-const G: f64 = 9.81;
-
-fn material() -> Material {
-    Material::builder()
-        .density(1000.0)
-        .young(1.0e6)
-        .poisson(0.5)
-        .build()
-        .unwrap()
-}
 
 fn settings() -> Settings {
     Settings {
@@ -56,7 +47,7 @@ fn rod_on_incline() -> Simulation {
         .strains([Strain::Ky, Strain::Kz])
         .base(base)
         .circle(R)
-        .material(material());
+        .material(silicone());
     let model = Model::builder()
         .rod_on(rod, Attachment::world_joint(Joint::new(JointKind::Free)))
         .gravity([0.0, 0.0, -G])
@@ -80,7 +71,7 @@ fn rope_over_cylinder() -> Simulation {
         .strains([Strain::Ky, Strain::Qx])
         .base(base)
         .circle(r)
-        .material(material())
+        .material(silicone())
         .point_load(PointLoad {
             s: l,
             force: Vec3::new(0.0, 0.0, -1.0),
