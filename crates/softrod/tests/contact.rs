@@ -5,11 +5,9 @@
 
 mod common;
 
-use common::{G, Keep, L, R, silicone};
+use common::{G, Keep, L, R, across_incline, free_rod_model, plane};
 
 use softrod::{Settings, Simulation};
-use softrod_dynamics::{Attachment, Joint, JointKind, Model, Rod};
-use softrod_kinematics::Strain;
 use softrod_lie::{Mat3, Pose, Vec3};
 use softrod_mechanics::contact::{Obstacle, Shape};
 use softrod_scene::Integrator;
@@ -17,19 +15,7 @@ use softrod_scene::Integrator;
 /// A free rod (6-dof joint to the world) whose base pose is `base`, with
 /// `obstacle`, gravity −z.
 fn free_rod(base: Pose, obstacle: Obstacle, energy_tolerance: f64) -> Simulation {
-    let rod = Rod::builder(L)
-        .name("rod")
-        .pieces(4)
-        .strains([Strain::Ky, Strain::Kz])
-        .base(base)
-        .circle(R)
-        .material(silicone());
-    let model = Model::builder()
-        .rod_on(rod, Attachment::world_joint(Joint::new(JointKind::Free)))
-        .gravity([0.0, 0.0, -G])
-        .obstacle(obstacle)
-        .build()
-        .unwrap();
+    let model = free_rod_model(base, obstacle, &[], 0.0);
     let mut sim = Simulation::new(model);
     let settings = Settings {
         integrator: Integrator::Esdirk,
@@ -100,19 +86,8 @@ fn a_falling_rod_lands_and_rests_at_its_radius() {
 /// the distance its centre travels down the slope at the output times,
 /// and the run's energy balance (friction's dissipation counted as work).
 fn incline(alpha: f64, mu: f64, duration: f64) -> (Vec<(f64, f64)>, softrod::EnergyBalance) {
-    let n = Vec3::new(alpha.sin(), 0.0, alpha.cos());
-    let down = Vec3::new(alpha.cos(), 0.0, -alpha.sin());
-    // The rod along y, its centreline at r from the plane.
-    let rot = Mat3::new(0.0, -1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0);
-    let base = Pose::new(rot, n * R - Vec3::y() * (0.5 * L));
-    let slope = Obstacle::new(
-        "slope",
-        Shape::Plane {
-            point: Vec3::zeros(),
-            normal: n,
-        },
-    )
-    .friction(mu);
+    let (base, n, down) = across_incline(alpha);
+    let slope = plane("slope", Vec3::zeros(), n).friction(mu);
     // The watch on, with room to report rather than stop.
     let mut sim = free_rod(base, slope, 1.0);
     let mut keep = Keep(Vec::new());
