@@ -21,7 +21,8 @@ use nalgebra::DVector;
 /// `k_n×k_n` Cholesky per piece. Pass 3 (outward): `q̈_n` and `η̇(L_n)`
 /// (D27). Cost O(N·n_g). On a tree the same recursion node by node (D56);
 /// with loop closures the Baumgarte-stabilized constrained `q̈` (D67–D68,
-/// multipliers in [`crate::closure_multipliers`]). Prescribed joints move
+/// multipliers in [`crate::closure_multipliers`]; contact forces, CT16,
+/// enter the open tree's before the projection). Prescribed joints move
 /// as prescribed at `t`. Result in `data.qdd`.
 ///
 /// Fails if `D̂_n` is not positive definite (a degenerate basis or inertia)
@@ -36,9 +37,6 @@ pub fn forward_dynamics_with<'a>(
     tau_act: Option<&[f64]>,
 ) -> Result<&'a DVector<f64>, DynamicsError> {
     check_forward_inputs(model, forces, q, qd, tau_act)?;
-    if model.has_closures() && model.has_contact() {
-        return Err(DynamicsError::UnsupportedClosed { what: "contact" });
-    }
     match (&model.tree, model.has_closures()) {
         (Some(_), true) => {
             model.set_time(data, t);

@@ -4,7 +4,9 @@
 //! four-bar-like loop, a pinned–pinned rod (the catenary), a weld to the
 //! world, a slider, a redundant pair of closures, and closures on a
 //! prescribed joint at two times; a state off the constraint manifold so
-//! the Baumgarte terms count.
+//! the Baumgarte terms count. With contact (docs/theory-contact.md CT16):
+//! a pinned rope on a table with friction, two crossing pinned ropes with
+//! rod–rod friction.
 
 mod common;
 
@@ -13,10 +15,11 @@ use common::{soft_rod as rod, wavy};
 use nalgebra::DMatrix;
 use softrod_dynamics::{
     Attachment, ClosedDerivatives, Closure, ClosureFrame, ClosureKind, Curve, Data, Joint, Model,
-    Prescribed, closed_dynamics_derivatives, forward_dynamics,
+    Prescribed, closed_dynamics_derivatives, commit_contact, forward_dynamics,
 };
 use softrod_lie::{Mat3, Pose, Vec3};
 use softrod_mechanics::Drag;
+use softrod_mechanics::contact::{ContactSettings, Obstacle, Shape};
 
 fn rot(a: f64, b: f64, c: f64) -> Mat3 {
     *nalgebra::Rotation3::from_euler_angles(a, b, c).matrix()
@@ -241,5 +244,180 @@ fn closures_on_a_prescribed_joint() {
     let (q, qd) = state(&model, 0.4);
     for t in [0.0, 0.37] {
         check(&format!("prescribed t = {t}"), &model, t, &q, &qd);
+    }
+}
+
+/// Central differences of the constrained `q̈` of a model with contact
+/// (docs/theory-contact.md CT16) against the analytic derivatives, column
+/// by column, with the contact state committed in `data` (anchors). The
+/// stiff contact makes `q̈` curve fast in `q` (a truncation error `∝ h²`
+/// that reaches 1e-5 of a column at `h = 1e-6`) while its size (|q̈| to
+/// 1e5) leaves round-off `ε|q̈|/h` at small steps: Richardson's
+/// extrapolation of the steps `h` and `h/2` removes the `h²` term
+/// (`h = 2e-6` in `q`; `3e-3` in `q̇`, where `q̈` is quadratic but for the
+/// slip direction and the law's switches: 1e-4 meets round-off, 3e-5 of
+/// a column, 1e-2 steps over a switch of the rope's damping); each column
+/// within `1e-5 (|col| + 1)`.
+fn check_contact(name: &str, model: &Model, data: &mut Data, q: &[f64], qd: &[f64]) {
+    let n = model.n_dof();
+    let mut work = ClosedDerivatives::new(model);
+    let d = closed_dynamics_derivatives(model, data, &mut work, 0.0, q, qd, None).unwrap();
+    let (dq, dqd) = (d.dqdd_dq.clone(), d.dqdd_dqd.clone());
+    let qdd = forward_dynamics(model, data, 0.0, q, qd, None)
+        .unwrap()
+        .clone();
+    assert!((&d.qdd - &qdd).amax() <= 1e-12 * qdd.amax().max(1.0));
+    let mut worst: f64 = 0.0;
+    for l in 0..n {
+        for (which, analytic) in [(0, &dq), (1, &dqd)] {
+            let mut diff = |h: f64| {
+                let (mut a, mut b) = ((q.to_vec(), qd.to_vec()), (q.to_vec(), qd.to_vec()));
+                if which == 0 {
+                    a.0[l] += h;
+                    b.0[l] -= h;
+                } else {
+                    a.1[l] += h;
+                    b.1[l] -= h;
+                }
+                let plus = forward_dynamics(model, data, 0.0, &a.0, &a.1, None)
+                    .unwrap()
+                    .clone();
+                let minus = forward_dynamics(model, data, 0.0, &b.0, &b.1, None)
+                    .unwrap()
+                    .clone();
+                (plus - minus) / (2.0 * h)
+            };
+            let h = if which == 0 { 2e-6 } else { 3e-3 };
+            let fd = (diff(h / 2.0) * 4.0 - diff(h)) / 3.0;
+            let col = analytic.column(l);
+            let err = (&fd - col).norm() / (col.norm() + 1.0);
+            worst = worst.max(err);
+            assert!(err < 1e-5, "{name}: column {l} of d/d{which}: {err:.3e}");
+        }
+    }
+    eprintln!("{name}: worst relative column error {worst:.3e}");
+}
+
+/// The contacts at `(q, q̇)` in the contact state of `data`: how many,
+/// and how many stick.
+fn touching(model: &Model, data: &mut Data, q: &[f64], qd: &[f64]) -> (usize, usize) {
+    let c = model.contacts_with(data, 0.0, q, qd).unwrap();
+    (c.len(), c.iter().filter(|c| c.sticking).count())
+}
+
+#[test]
+fn pinned_rope_pressed_on_a_table_with_friction() {
+    // The catenary of `pinned_pinned_rod` lying into a tilted table with
+    // friction, and a ball below it: sticking and sliding contacts on a
+    // closed chain.
+    let table = Obstacle::new(
+        "table",
+        Shape::Plane {
+            point: Vec3::new(0.0, 0.0, -0.0097),
+            normal: Vec3::new(0.03, 0.02, 1.0).normalize(),
+        },
+    )
+    .friction(0.4)
+    .restitution(0.3);
+    let ball = Obstacle::new(
+        "ball",
+        Shape::Sphere {
+            center: Vec3::new(0.3, 0.0, 0.1097),
+            radius: 0.1,
+        },
+    )
+    .friction(0.6);
+    let model = Model::builder()
+        .rod_on(
+            rod("cable", 0.5, 5).drag(DRAG),
+            Attachment::world_joint(Joint::spherical()),
+        )
+        .gravity([0.0, 0.0, -9.81])
+        .closure(Closure::new(
+            "pin",
+            ClosureKind::Ball,
+            ClosureFrame::on("cable", None, Pose::identity()),
+            ClosureFrame::world(at([0.499, 0.001, 0.0])),
+        ))
+        .obstacle(table)
+        .obstacle(ball)
+        .build()
+        .unwrap();
+    let n = model.n_dof();
+    let q = wavy(n, 1e-3, 0.4);
+    let qd = wavy(n, 0.05, 1.1);
+    let mut data = Data::new(&model);
+    // Anchors where the rope was a moment ago: some contacts stick, some
+    // slide.
+    let before: Vec<f64> = q
+        .iter()
+        .zip(wavy(n, 2e-4, 2.0))
+        .map(|(a, b)| a - b)
+        .collect();
+    commit_contact(&model, &mut data, 0.0, &before, &qd).unwrap();
+    let (touch, stick) = touching(&model, &mut data, &q, &qd);
+    assert!(touch >= 3 && stick > 0 && stick < touch, "{touch} {stick}");
+    check_contact("rope on a table", &model, &mut data, &q, &qd);
+}
+
+#[test]
+fn crossing_pinned_ropes_with_rod_friction() {
+    // cosseratbench's crossing: two ropes pinned at both ends, one
+    // across the other, pressed together (1 mm interference), rod–rod
+    // friction, moving.
+    let (r, l) = (0.01, 0.4);
+    let across = Pose::new(rot(0.0, 0.0, std::f64::consts::FRAC_PI_2), Vec3::zeros());
+    let b_base = Pose::new(across.rotation, Vec3::new(0.2, -0.2, 2.0 * r - 0.001));
+    let model = Model::builder()
+        .rod_on(
+            rod("lower", l, 4),
+            Attachment::world_joint(Joint::spherical()),
+        )
+        .rod_on(
+            rod("upper", l, 4).base(b_base),
+            Attachment::world_joint(Joint::spherical()),
+        )
+        .gravity([0.0, 0.0, -9.81])
+        .closure(Closure::new(
+            "lower pin",
+            ClosureKind::Ball,
+            ClosureFrame::on("lower", None, Pose::identity()),
+            ClosureFrame::world(at([l, 0.0, 0.0])),
+        ))
+        .closure(Closure::new(
+            "upper pin",
+            ClosureKind::Ball,
+            ClosureFrame::on("upper", None, Pose::identity()),
+            ClosureFrame::world(at([0.2, 0.2, 2.0 * r - 0.001])),
+        ))
+        .contact(ContactSettings {
+            rods: true,
+            friction: 0.5,
+            ..Default::default()
+        })
+        .build()
+        .unwrap();
+    let n = model.n_dof();
+    let mut data = Data::new(&model);
+    for (name, shift) in [("sticking", 1e-6), ("sliding", 3e-4)] {
+        let q = wavy(n, 1e-3, 0.9);
+        let qd = wavy(n, 0.05, 0.3);
+        let before: Vec<f64> = q
+            .iter()
+            .zip(wavy(n, shift, 2.5))
+            .map(|(a, b)| a - b)
+            .collect();
+        data.reset_contact();
+        commit_contact(&model, &mut data, 0.0, &before, &qd).unwrap();
+        let (touch, stick) = touching(&model, &mut data, &q, &qd);
+        assert_eq!(touch, 1, "{name}");
+        assert_eq!(stick == 1, name == "sticking", "{name}");
+        check_contact(
+            &format!("crossing ropes, {name}"),
+            &model,
+            &mut data,
+            &q,
+            &qd,
+        );
     }
 }

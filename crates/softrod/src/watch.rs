@@ -225,8 +225,11 @@ fn conservative_model(model: &Model) -> Result<Option<Model>, Error> {
     ))
 }
 
-/// The model with the same elements and no closures (`None` without
-/// closures): its inverse dynamics at the constrained `q̈` is `Jᵀλ`.
+/// The model with the same elements and contact and no closures (`None`
+/// without closures): its inverse dynamics at the constrained `q̈` is
+/// `Jᵀλ` — with the contact force on both sides (`M q̈ + b = τ_c + Jᵀλ`),
+/// so that the contact's power is counted once, in the non-conservative
+/// power, and not again as the closures'.
 fn open_model(model: &Model) -> Result<Option<Model>, Error> {
     if !model.has_closures() {
         return Ok(None);
@@ -241,11 +244,12 @@ fn open_model(model: &Model) -> Result<Option<Model>, Error> {
             }
         })
         .collect();
-    Ok(Some(Model::with_elements(
-        elements,
-        model.gravity(),
-        model.quadrature().len(),
-    )?))
+    let open = Model::with_elements(elements, model.gravity(), model.quadrature().len())?;
+    Ok(Some(if model.has_contact() {
+        open.with_contact(model.obstacles().to_vec(), model.contact_settings())?
+    } else {
+        open
+    }))
 }
 
 /// The model's work scale `F L` \[J\] (module documentation, "Round-off

@@ -3,43 +3,19 @@
 //! at centreline height r; a rod on an incline sticks below the friction
 //! angle (no creep) and slides with g(sin α − μ cos α) above it.
 
-use softrod::{Flow, Observer, Sample, Settings, Simulation};
-use softrod_dynamics::{Attachment, Joint, JointKind, Model, Rod};
-use softrod_kinematics::Strain;
+mod common;
+
+use common::{G, Keep, L, R, across_incline, free_rod_model, plane};
+
+use softrod::{Settings, Simulation};
 use softrod_lie::{Mat3, Pose, Vec3};
-use softrod_mechanics::Material;
 use softrod_mechanics::contact::{Obstacle, Shape};
 use softrod_scene::Integrator;
-
-const R: f64 = 0.01;
-const L: f64 = 0.2;
-const G: f64 = 9.81;
-
-fn material() -> Material {
-    Material::builder()
-        .density(1000.0)
-        .young(1.0e6)
-        .poisson(0.5)
-        .build()
-        .unwrap()
-}
 
 /// A free rod (6-dof joint to the world) whose base pose is `base`, with
 /// `obstacle`, gravity −z.
 fn free_rod(base: Pose, obstacle: Obstacle, energy_tolerance: f64) -> Simulation {
-    let rod = Rod::builder(L)
-        .name("rod")
-        .pieces(4)
-        .strains([Strain::Ky, Strain::Kz])
-        .base(base)
-        .circle(R)
-        .material(material());
-    let model = Model::builder()
-        .rod_on(rod, Attachment::world_joint(Joint::new(JointKind::Free)))
-        .gravity([0.0, 0.0, -G])
-        .obstacle(obstacle)
-        .build()
-        .unwrap();
+    let model = free_rod_model(base, obstacle, &[], 0.0);
     let mut sim = Simulation::new(model);
     let settings = Settings {
         integrator: Integrator::Esdirk,
@@ -51,14 +27,6 @@ fn free_rod(base: Pose, obstacle: Obstacle, energy_tolerance: f64) -> Simulation
     };
     sim.set_settings(settings).unwrap();
     sim
-}
-
-struct Keep(Vec<(f64, Vec<f64>, Vec<f64>)>);
-impl Observer for Keep {
-    fn sample(&mut self, s: Sample<'_>) -> Result<Flow, String> {
-        self.0.push((s.t, s.q.to_vec(), s.qd.to_vec()));
-        Ok(Flow::Continue)
-    }
 }
 
 fn centre(sim: &Simulation, q: &[f64]) -> Vec3 {
@@ -118,19 +86,8 @@ fn a_falling_rod_lands_and_rests_at_its_radius() {
 /// the distance its centre travels down the slope at the output times,
 /// and the run's energy balance (friction's dissipation counted as work).
 fn incline(alpha: f64, mu: f64, duration: f64) -> (Vec<(f64, f64)>, softrod::EnergyBalance) {
-    let n = Vec3::new(alpha.sin(), 0.0, alpha.cos());
-    let down = Vec3::new(alpha.cos(), 0.0, -alpha.sin());
-    // The rod along y, its centreline at r from the plane.
-    let rot = Mat3::new(0.0, -1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0);
-    let base = Pose::new(rot, n * R - Vec3::y() * (0.5 * L));
-    let slope = Obstacle::new(
-        "slope",
-        Shape::Plane {
-            point: Vec3::zeros(),
-            normal: n,
-        },
-    )
-    .friction(mu);
+    let (base, n, down) = across_incline(alpha);
+    let slope = plane("slope", Vec3::zeros(), n).friction(mu);
     // The watch on, with room to report rather than stop.
     let mut sim = free_rod(base, slope, 1.0);
     let mut keep = Keep(Vec::new());

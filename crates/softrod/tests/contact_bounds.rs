@@ -6,27 +6,17 @@
 //! runs and in statics; the implicit step with contact against a
 //! small-step explicit reference.
 
-use softrod::{Flow, Observer, Sample, Settings, Simulation};
+mod common;
+
+use common::{G, Keep, L, R, ROPE_RADIUS, free_rod_model, material, rope_over_cylinder_model};
+
+use softrod::{Settings, Simulation};
 use softrod_dynamics::{Attachment, Joint, JointKind, Model, Rod};
 use softrod_kinematics::Strain;
 use softrod_lie::{Mat3, Pose, Vec3};
 use softrod_mechanics::contact::{Obstacle, Shape};
 use softrod_mechanics::{LoadFrame, Material, PointLoad};
 use softrod_scene::Integrator;
-
-const R: f64 = 0.01;
-const L: f64 = 0.2;
-const G: f64 = 9.81;
-
-fn material(viscosity: f64) -> Material {
-    Material::builder()
-        .density(1000.0)
-        .young(1.0e6)
-        .poisson(0.5)
-        .viscosity(viscosity)
-        .build()
-        .unwrap()
-}
 
 fn table() -> Obstacle {
     Obstacle::new(
@@ -39,25 +29,9 @@ fn table() -> Obstacle {
 }
 
 /// A free rod along x (6-dof joint), its base at `base`, with `obstacle`,
-/// gravity −z, and the given point loads.
+/// gravity −z, and the given point loads (`common::free_rod_model`).
 fn free_rod(base: Pose, obstacle: Obstacle, loads: &[PointLoad], viscosity: f64) -> Simulation {
-    let mut rod = Rod::builder(L)
-        .name("rod")
-        .pieces(4)
-        .strains([Strain::Ky, Strain::Kz])
-        .base(base)
-        .circle(R)
-        .material(material(viscosity));
-    for l in loads {
-        rod = rod.point_load(*l);
-    }
-    let model = Model::builder()
-        .rod_on(rod, Attachment::world_joint(Joint::new(JointKind::Free)))
-        .gravity([0.0, 0.0, -G])
-        .obstacle(obstacle)
-        .build()
-        .unwrap();
-    Simulation::new(model)
+    Simulation::new(free_rod_model(base, obstacle, loads, viscosity))
 }
 
 fn settings(integrator: Integrator, rtol: f64, output_every: f64) -> Settings {
@@ -67,14 +41,6 @@ fn settings(integrator: Integrator, rtol: f64, output_every: f64) -> Settings {
         atol: rtol * 1e-2,
         output_every: Some(output_every),
         ..Settings::default()
-    }
-}
-
-struct Keep(Vec<(f64, Vec<f64>, Vec<f64>)>);
-impl Observer for Keep {
-    fn sample(&mut self, s: Sample<'_>) -> Result<Flow, String> {
-        self.0.push((s.t, s.q.to_vec(), s.qd.to_vec()));
-        Ok(Flow::Continue)
     }
 }
 
@@ -178,37 +144,10 @@ fn a_tip_load_is_held_within_a_hundredth_of_the_radius_at_rest() {
 /// the rope's weight: an independent force balance with the clamp).
 #[test]
 fn statics_holds_a_rope_under_tension_over_a_cylinder_within_a_hundredth_of_its_radius() {
-    let (r, rc, l) = (0.002, 0.03, 0.2);
     // The rope along x, level, touching the top of a cylinder along y
-    // under its middle.
-    let base = Pose::new(Mat3::identity(), Vec3::new(-0.5 * l, 0.0, rc + r));
-    let rope = Rod::builder(l)
-        .name("rope")
-        .pieces(16)
-        .strains([Strain::Ky, Strain::Qx])
-        .base(base)
-        .circle(r)
-        .material(material(0.0))
-        .point_load(PointLoad {
-            s: l,
-            force: Vec3::new(0.0, 0.0, -1.0),
-            moment: Vec3::zeros(),
-            frame: LoadFrame::World,
-        });
-    let cylinder = Obstacle::new(
-        "capstan",
-        Shape::Cylinder {
-            point: Vec3::zeros(),
-            axis: Vec3::y(),
-            radius: rc,
-        },
-    );
-    let model = Model::builder()
-        .rod(rope)
-        .obstacle(cylinder)
-        .gravity([0.0, 0.0, -G])
-        .build()
-        .unwrap();
+    // under its middle, frictionless.
+    let r = ROPE_RADIUS;
+    let model = rope_over_cylinder_model(0.0);
     let mut sim = Simulation::new(model);
     let eq = sim.statics().unwrap();
     let zero = vec![0.0; eq.q.len()];
@@ -300,7 +239,7 @@ fn bar_on_rails(pull: f64, duration: f64) -> Vec<(f64, f64)> {
         .strains([Strain::Ky, Strain::Kz])
         .base(Pose::new(along_y, Vec3::new(0.15, -0.5 * L, 2.0 * R)))
         .circle(R)
-        .material(material(1.0e3))
+        .material(material(1.0e6, 1.0e3))
         .point_load(PointLoad {
             s: 0.5 * L,
             force: Vec3::new(0.0, pull, -1.0),

@@ -4,26 +4,13 @@
 //! `Simulation` built from the same model that has done nothing else, and
 //! the results must agree bit for bit.
 
+mod common;
+
+use common::{across_incline, free_rod_model, plane, rope_over_cylinder_model};
+
 use softrod::{Settings, Simulation, Trajectory};
-use softrod_dynamics::{Attachment, Joint, JointKind, Model, Rod};
-use softrod_kinematics::Strain;
-use softrod_lie::{Mat3, Pose, Vec3};
-use softrod_mechanics::contact::{Obstacle, Shape};
-use softrod_mechanics::{LoadFrame, Material, PointLoad};
+use softrod_lie::Vec3;
 use softrod_scene::Integrator;
-
-const R: f64 = 0.01;
-const L: f64 = 0.2;
-const G: f64 = 9.81;
-
-fn material() -> Material {
-    Material::builder()
-        .density(1000.0)
-        .young(1.0e6)
-        .poisson(0.5)
-        .build()
-        .unwrap()
-}
 
 fn settings() -> Settings {
     Settings {
@@ -39,31 +26,9 @@ fn settings() -> Settings {
 /// holding its weight by the anchored springs of CT5 from the first step).
 fn rod_on_incline() -> Simulation {
     let alpha = 20f64.to_radians();
-    let n = Vec3::new(alpha.sin(), 0.0, alpha.cos());
-    let rot = Mat3::new(0.0, -1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0);
-    let base = Pose::new(rot, n * R - Vec3::y() * (0.5 * L));
-    let slope = Obstacle::new(
-        "slope",
-        Shape::Plane {
-            point: Vec3::zeros(),
-            normal: n,
-        },
-    )
-    .friction(0.5);
-    let rod = Rod::builder(L)
-        .name("rod")
-        .pieces(4)
-        .strains([Strain::Ky, Strain::Kz])
-        .base(base)
-        .circle(R)
-        .material(material());
-    let model = Model::builder()
-        .rod_on(rod, Attachment::world_joint(Joint::new(JointKind::Free)))
-        .gravity([0.0, 0.0, -G])
-        .obstacle(slope)
-        .build()
-        .unwrap();
-    let mut sim = Simulation::new(model);
+    let (base, n, _) = across_incline(alpha);
+    let slope = plane("slope", Vec3::zeros(), n).friction(0.5);
+    let mut sim = Simulation::new(free_rod_model(base, slope, &[], 0.0));
     sim.set_settings(settings()).unwrap();
     sim
 }
@@ -72,37 +37,7 @@ fn rod_on_incline() -> Simulation {
 /// over it by a tip weight far above its own: statics raises the
 /// stiffness of the contacts it presses (CT15).
 fn rope_over_cylinder() -> Simulation {
-    let (r, rc, l) = (0.002, 0.03, 0.2);
-    let base = Pose::new(Mat3::identity(), Vec3::new(-0.5 * l, 0.0, rc + r));
-    let rope = Rod::builder(l)
-        .name("rope")
-        .pieces(16)
-        .strains([Strain::Ky, Strain::Qx])
-        .base(base)
-        .circle(r)
-        .material(material())
-        .point_load(PointLoad {
-            s: l,
-            force: Vec3::new(0.0, 0.0, -1.0),
-            moment: Vec3::zeros(),
-            frame: LoadFrame::World,
-        });
-    let cylinder = Obstacle::new(
-        "capstan",
-        Shape::Cylinder {
-            point: Vec3::zeros(),
-            axis: Vec3::y(),
-            radius: rc,
-        },
-    )
-    .friction(0.3);
-    let model = Model::builder()
-        .rod(rope)
-        .obstacle(cylinder)
-        .gravity([0.0, 0.0, -G])
-        .build()
-        .unwrap();
-    let mut sim = Simulation::new(model);
+    let mut sim = Simulation::new(rope_over_cylinder_model(0.3));
     sim.set_settings(settings()).unwrap();
     sim
 }

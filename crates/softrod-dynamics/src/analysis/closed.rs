@@ -4,9 +4,9 @@
 
 use super::matrices::stiffness_matrix;
 use super::modes::{Modes, difference_noise, frequencies, mapped_noise};
-use super::statics::{StaticsOptions, StaticsResult};
+use super::statics::{MAX_STIFFNESS_ROUNDS, StaticsOptions, StaticsResult};
 use crate::algorithms::tree::{self, outward};
-use crate::algorithms::{Motion, Pass};
+use crate::algorithms::{Motion, Pass, contact_force};
 use crate::constraints::forward::pivoted_cholesky;
 use crate::constraints::queries::{check_workspace, length_scale};
 use crate::constraints::rows::assemble;
@@ -30,12 +30,23 @@ struct Closed<'a> {
 }
 
 impl Closed<'_> {
-    /// `τ(q) = ID(q, 0, 0)` of the tree under `forces`, ignoring the closures.
+    /// `τ(q) = ID(q, 0, 0)` of the tree under `forces`, ignoring the
+    /// closures, less the frictionless contact force at rest with the
+    /// stiffness `data` holds (CT5, CT15; CT16).
     fn static_force(&self, data: &mut Data, q: &[f64]) -> DVector<f64> {
         let zero = vec![0.0; q.len()];
         let at_rest = Motion::new(q, Some(&zero), Some(&zero));
+        // Contact first: its outward sweep rewrites the node data the
+        // inverse dynamics' own sweep then sets.
+        let contact = contact_force(self.model, data, self.forces, self.t, q, Some(&zero));
         tree::inverse_dynamics(self.model, self.tree, data, self.forces, self.t, at_rest);
-        data.tau.clone()
+        let mut tau = data.tau.clone();
+        if contact {
+            if let Some(w) = &data.contact {
+                tau -= &w.tau;
+            }
+        }
+        tau
     }
 
     /// `φ(q)` and the constraint Jacobian: exact `∂φ/∂q` or velocity rows.
@@ -102,11 +113,42 @@ impl Closed<'_> {
     }
 }
 
-/// Constrained statics (D69): Newton on `F(q, λ) = [τ(q) − J_vᵀλ; φ(q)] = 0`
+/// Constrained statics (D69) with contact stiffness raised to the loads
+/// (CT15, CT16): `statics_once`, then, as long as a resting contact's
+/// spring carries its force deeper than its target, the scales raised
+/// and the equilibrium solved again from where it was (as the open
+/// statics, at most `MAX_STIFFNESS_ROUNDS` rounds).
+pub(crate) fn statics(
+    model: &Model,
+    tree: &Tree,
+    data: &mut Data,
+    q0: &[f64],
+    options: &StaticsOptions,
+) -> Result<(StaticsResult, DVector<f64>), DynamicsError> {
+    let (mut result, mut lambda) = statics_once(model, tree, data, q0, options)?;
+    let mut rounds = 0;
+    while model.has_contact()
+        && rounds < MAX_STIFFNESS_ROUNDS
+        && super::raise_for_rest(model, data, options.time, result.q.as_slice())
+    {
+        let (again, l) = statics_once(model, tree, data, result.q.as_slice(), options)?;
+        result = StaticsResult {
+            iterations: result.iterations + again.iterations,
+            load_steps: result.load_steps.max(again.load_steps),
+            ..again
+        };
+        lambda = l;
+        rounds += 1;
+    }
+    Ok((result, lambda))
+}
+
+/// Constrained statics (D69) at the contact stiffness `data` holds:
+/// Newton on `F(q, λ) = [τ(q) − J_vᵀλ; φ(q)] = 0`
 /// with the KKT matrix `[[∂F₁/∂q, −J_vᵀ], [J, 0]]`, a backtracking line
 /// search on the scaled `‖F‖` and load continuation as [`crate::statics`]
 /// (the loads scaled by `λ_s` of [`Forces::at_rest`], drives at rest).
-pub(crate) fn statics(
+fn statics_once(
     model: &Model,
     tree: &Tree,
     data: &mut Data,

@@ -158,7 +158,7 @@ pub fn statics(
 /// Rounds of contact stiffness raises in [`statics`] (CT15); each raises a
 /// scale by at least [`crate::model::contact::RAISE_HEADROOM`], so a
 /// contact settles in one or two.
-const MAX_STIFFNESS_ROUNDS: usize = 20;
+pub(crate) const MAX_STIFFNESS_ROUNDS: usize = 20;
 
 /// [`statics`] of an open model with the contact stiffness `data` holds.
 fn statics_open(

@@ -157,7 +157,11 @@ fn rows_at(
 /// holds the constrained forward dynamics at `(t, q, q̇)` afterwards. No
 /// allocation. Every force at full scale ([`Forces::ALL`]).
 ///
-/// Errors: a model without closures or with contact
+/// With contact, `ID` is the open tree's less the contact force `τ_c` of
+/// the contact state `data` holds (its analytic derivatives, CT6,
+/// CT12–CT14, enter `∂ID/∂p`; docs/theory-contact.md CT16).
+///
+/// Errors: a model without closures
 /// ([`DynamicsError::UnsupportedClosed`]), a workspace of another model,
 /// bad inputs, a non-finite result.
 pub fn closed_dynamics_derivatives<'a>(
@@ -175,9 +179,6 @@ pub fn closed_dynamics_derivatives<'a>(
             what: "closed_dynamics_derivatives of an open model (use forward_dynamics_derivatives)",
         });
     };
-    if model.has_contact() {
-        return Err(DynamicsError::UnsupportedClosed { what: "contact" });
-    }
     let (n, m) = (model.n_dof(), model.n_constraints());
     if work.qdd.len() != n || work.lambda.len() != m || work.solve.len() != tree.nodes.len() {
         return Err(DynamicsError::WorkspaceMismatch {
@@ -199,6 +200,14 @@ pub fn closed_dynamics_derivatives<'a>(
         (None, t) => *t = None,
         (Some(u), Some(t)) => t.as_mut_slice().copy_from_slice(u),
         (Some(u), t) => *t = Some(DVector::from_column_slice(u)),
+    }
+    if let (Some(from), Some(to)) = (&data.contact, &mut work.id.contact) {
+        // The contact state of the run (anchors, raised stiffness), not a
+        // fresh one: the open tree's derivatives then carry the contact
+        // force's (CT6, CT12–CT14; CT16).
+        if let Some(w) = &mut to.contact {
+            w.copy_friction_state(from);
+        }
     }
     open_tree_id_derivatives(model, &mut work.id, forces, t, q, qd, work.qdd.as_slice())?;
 

@@ -7,6 +7,7 @@ use super::queries::check_workspace;
 use super::rows::{assemble, prescribed_columns};
 use crate::algorithms::Motion;
 use crate::algorithms::Pass;
+use crate::algorithms::contact_force;
 use crate::algorithms::shifted::tree_solve;
 use crate::algorithms::tree::{self, outward};
 use crate::error::DynamicsError;
@@ -60,7 +61,8 @@ pub(crate) fn pivoted_cholesky(a: &mut DMatrix<f64>, perm: &mut [usize]) -> usiz
 
 /// Constrained forward dynamics (D67–D68), after the free `q̈` is in
 /// `data.qdd`: `q̈ = q̈_free + M⁻¹Jᵀλ` with
-/// `(J M⁻¹ Jᵀ) λ = −(J q̈_free + J̇q̇) − 2α J q̇ − β² φ`.
+/// `(J M⁻¹ Jᵀ) λ = −(J q̈_free + J̇q̇) − 2α J q̇ − β² φ`, the free `q̈`
+/// under `τ_act` plus the contact force `τ_c` (CT16).
 /// Arguments checked by the caller, the prescribed joints set to `t`.
 pub(crate) fn forward_dynamics(
     model: &Model,
@@ -75,7 +77,25 @@ pub(crate) fn forward_dynamics(
     let Some(mut w) = data.closure.take() else {
         unreachable!("check_workspace found the closure buffers")
     };
-    let out = forward_inner(model, data, &mut w, forces, t, (q, qd), tau_act);
+    // Contact (docs/theory-contact.md CT16): its generalized force joins
+    // τ_act in the open tree's forward dynamics, before the projection —
+    // the multipliers then see it like any other applied force. It runs
+    // first: on a tree its outward sweep rewrites the node data the
+    // articulated pass below then sets.
+    let out = if contact_force(model, data, forces, t, q, Some(qd)) {
+        let mut cw = data.contact.take().expect("contact work");
+        match tau_act {
+            Some(ta) => cw.tau_total.as_mut_slice().copy_from_slice(ta),
+            None => cw.tau_total.fill(0.0),
+        }
+        cw.tau_total += &cw.tau;
+        let total = Some(cw.tau_total.as_slice());
+        let out = forward_inner(model, data, &mut w, forces, t, (q, qd), total);
+        data.contact = Some(cw);
+        out
+    } else {
+        forward_inner(model, data, &mut w, forces, t, (q, qd), tau_act)
+    };
     data.closure = Some(w);
     out
 }
