@@ -573,8 +573,8 @@ class SoftrodSolver:
                 "anchored springs, committed after accepted steps (CT5, CT10)",
                 "self_contact": bool(scenario.self_contact) and (
                     all("self = true" in p.scene for p in parts)
-                    or "not modelled: softrod has no contact on models with loop closures "
-                    "(pinned or clamped far ends) yet"),
+                    or "not modelled: this softrod refuses contact on models with loop "
+                    "closures (pinned or clamped far ends)"),
                 "rod_friction": _friction(scenario),
             }
         if len(scenario.rods) > 1:
