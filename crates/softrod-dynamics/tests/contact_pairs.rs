@@ -94,6 +94,121 @@ fn crossing_rods_touch_between_their_contact_points() {
     }
 }
 
+/// Two rods crossing exactly at a piece boundary of both — the symmetric
+/// crossing at mid-span of rods with an even number of pieces, a contact
+/// point of both: the four segment pairs that meet there each refine to
+/// that one contact, which must be reported once (four reports would be
+/// four springs, a contact four times as stiff). The lower rod is bent with
+/// a curvature jump at the boundary; the upper, straight, passes its point
+/// at `s = L/2` along the common perpendicular `n = t × d` of its tangent
+/// `t` and the upper direction `d`, so the exact closest points are both
+/// `L/2` and the gap is `−overlap` (the geometry, independent of the code).
+#[test]
+fn a_crossing_at_a_piece_boundary_of_both_rods_is_one_contact() {
+    let (r, l, overlap) = (0.01, 0.4, 0.002);
+    let rod = |name: &str, base: Pose| {
+        Rod::builder(l)
+            .name(name)
+            .pieces(2)
+            .strains([Strain::Ky])
+            .base(base)
+            .circle(r)
+            .material(silicone())
+    };
+    let cases = [
+        (0.7, 0.0, 0.0),
+        (1.2, 1.5, -1.0),
+        (0.7, -2.5, 0.5),
+        (std::f64::consts::FRAC_PI_2, 3.0, 3.0),
+    ];
+    for (alpha, b0, b1) in cases {
+        let probe = Model::builder()
+            .rod(rod("lower", Pose::identity()))
+            .build()
+            .unwrap();
+        let geometry = &probe.rods()[0].spec.geometry;
+        let mut kin = softrod_kinematics::RodKinematics::new(geometry);
+        kin.update(geometry, &[b0, b1], None, None).unwrap();
+        let g = kin.pose_at(geometry, 0.5 * l).unwrap();
+        let t = g.rotation * Vec3::x();
+        let d = t * alpha.cos() + Vec3::y() * alpha.sin();
+        let n = t.cross(&d).normalize();
+        let y = n.cross(&d);
+        let base_b = g.translation + n * (2.0 * r - overlap) - d * (0.5 * l);
+        let frame = softrod_lie::Mat3::from_columns(&[d, y, n]);
+        let model = Model::builder()
+            .rod(rod("lower", Pose::identity()))
+            .rod(rod("upper", Pose::new(frame, base_b)))
+            .build()
+            .unwrap()
+            .with_contact(Vec::new(), rods_on())
+            .unwrap();
+        let q = [b0, b1, 0.0, 0.0];
+        let zero = vec![0.0; model.n_dof()];
+        let contacts = model.contacts(0.0, &q, &zero).unwrap();
+        assert_eq!(
+            contacts.len(),
+            1,
+            "alpha {alpha}, bends {b0}, {b1}: {contacts:?}"
+        );
+        let c = &contacts[0];
+        let Contactee::Rod { rod: 1, s: s_b } = c.b else {
+            panic!("{:?}", c.b)
+        };
+        assert!((c.s - 0.5 * l).abs() < 1e-9, "s_a {}", c.s);
+        assert!((s_b - 0.5 * l).abs() < 1e-9, "s_b {s_b}");
+        assert!((c.gap + overlap).abs() < 1e-12, "gap {}", c.gap);
+    }
+}
+
+/// The crossing at a corner: the lower rod sheared up on its first piece
+/// and down on its second (tangents `(1, 0, ±0.2)`, an apex at the piece
+/// boundary `s = L/2`), the upper rod straight along y just above the apex.
+/// The closest points are the apex and the upper rod's middle, gap
+/// `−overlap` (the geometry), but the distance is not stationary there on
+/// either side: the refinement from the four segment pairs at the apex
+/// crosses the boundary back and forth. Still one contact, at the apex.
+#[test]
+fn a_crossing_at_a_corner_between_pieces_is_one_contact() {
+    let (r, l, overlap, shear) = (0.01, 0.4, 0.002, 0.2);
+    let lower = Rod::builder(l)
+        .name("lower")
+        .pieces(2)
+        .strains([Strain::Qz])
+        .circle(r)
+        .material(silicone());
+    let apex = Vec3::new(0.5 * l, 0.0, 0.5 * l * shear);
+    let along_y = softrod_lie::Mat3::new(0.0, -1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0);
+    let upper = Rod::builder(l)
+        .name("upper")
+        .pieces(2)
+        .strains([Strain::Ky])
+        .base(Pose::new(
+            along_y,
+            apex + Vec3::new(0.0, -0.5 * l, 2.0 * r - overlap),
+        ))
+        .circle(r)
+        .material(silicone());
+    let model = Model::builder()
+        .rod(lower)
+        .rod(upper)
+        .build()
+        .unwrap()
+        .with_contact(Vec::new(), rods_on())
+        .unwrap();
+    let q = [shear, -shear, 0.0, 0.0];
+    let zero = vec![0.0; model.n_dof()];
+    let contacts = model.contacts(0.0, &q, &zero).unwrap();
+    assert_eq!(contacts.len(), 1, "{contacts:?}");
+    let c = &contacts[0];
+    let Contactee::Rod { rod: 1, s: s_b } = c.b else {
+        panic!("{:?}", c.b)
+    };
+    assert!((c.s - 0.5 * l).abs() < 1e-9, "s_a {}", c.s);
+    assert!((s_b - 0.5 * l).abs() < 1e-9, "s_b {s_b}");
+    assert!((c.gap + overlap).abs() < 1e-9, "gap {}", c.gap);
+}
+
 /// Two curved rods (rest curvature in two planes, coarse pieces) crossing
 /// over each other: the contact's arc lengths and gap against a brute-force
 /// search over 2000 × 2000 centreline points, zoomed in — the refinement finds the

@@ -293,10 +293,18 @@ fn narrowphase(
         model.rods[bb.rod].spec.geometry.length(),
     );
     let tol = 1e-14 * (la + lb);
+    // Each parameter stays on the piece of its seed segment, where the
+    // centreline is smooth (one strain): across a piece boundary the
+    // tangent may turn (a jump of shear), the distance then has a corner
+    // there, and an iteration allowed to cross it bounces from side to side
+    // without converging. A corner that is the closest point is reached
+    // from both sides as a clamp and kept once (the test below).
+    let (a_lo, a_hi) = piece_span(model, ba.rod, 0.5 * (sa_[ba.seg].s + sa_[ba.seg + 1].s));
+    let (b_lo, b_hi) = piece_span(model, bb.rod, 0.5 * (sb_[bb.seg].s + sb_[bb.seg + 1].s));
     let (mut xa, mut xb) = (sec.at(ba.rod, sa, false), sec.at(bb.rod, sb, false));
     for _ in 0..REFINE_ITERATIONS {
         // Gauss–Newton on ½|p_a(s_a) − p_b(s_b)|², each parameter kept on
-        // its rod (the round ends: a clamped end is the closest point).
+        // its piece (a rod's round end: a clamped end is the closest point).
         let w = xa.pose.translation - xb.pose.translation;
         let (ta, tb) = (xa.tangent, xb.tangent);
         let (haa, hab, hbb) = (ta.dot(&ta), -ta.dot(&tb), tb.dot(&tb));
@@ -308,15 +316,15 @@ fn narrowphase(
             // Parallel arcs: the closest point of a to b's point.
             (-ga / haa, 0.0)
         };
-        let na = (sa + da).clamp(0.0, la);
+        let na = (sa + da).clamp(a_lo, a_hi);
         if na != sa + da {
             da = na - sa;
             db = -(gb + hab * da) / hbb;
         }
-        let nb = (sb + db).clamp(0.0, lb);
+        let nb = (sb + db).clamp(b_lo, b_hi);
         if nb != sb + db {
             db = nb - sb;
-            let na = (sa - (ga + hab * db) / haa).clamp(0.0, la);
+            let na = (sa - (ga + hab * db) / haa).clamp(a_lo, a_hi);
             da = na - sa;
         }
         sa += da;
@@ -325,6 +333,37 @@ fn narrowphase(
         xb = sec.at(bb.rod, sb, false);
         if da.abs() + db.abs() <= tol {
             break;
+        }
+    }
+    // A parameter held at an interior piece boundary is a closest point
+    // only if the distance does not fall on into the next piece (there the
+    // seed of that piece finds the closest point itself): a corner.
+    // Differences below the merge tolerance count as stationary.
+    let w = xa.pose.translation - xb.pose.translation;
+    let flat = |t: &Vec3| 0.5e-9 * (la + lb).min(1.0) * t.norm_squared();
+    if sa == a_hi && a_hi < la {
+        // d/ds_a ½|w|² = w·t_a; beyond the boundary, the next piece's t_a.
+        let t = sec.at(ba.rod, past(a_hi, la), false).tangent;
+        if w.dot(&t) < -flat(&t) {
+            return;
+        }
+    }
+    if sa == a_lo && a_lo > 0.0 {
+        let t = sec.at(ba.rod, before(a_lo, la), false).tangent;
+        if w.dot(&t) > flat(&t) {
+            return;
+        }
+    }
+    if sb == b_hi && b_hi < lb {
+        let t = sec.at(bb.rod, past(b_hi, lb), false).tangent;
+        if w.dot(&t) > flat(&t) {
+            return;
+        }
+    }
+    if sb == b_lo && b_lo > 0.0 {
+        let t = sec.at(bb.rod, before(b_lo, lb), false).tangent;
+        if w.dot(&t) < -flat(&t) {
+            return;
         }
     }
     // One report per pair: a is the lower rod, or the lower s on one rod.
@@ -408,6 +447,37 @@ fn narrowphase(
 
 /// The mass a contact point of rod `rod` at `s` stands for: that of the
 /// nearest contact point (CT1).
+/// The bounds \[m\] of the refinement on the piece of `rod` containing `s`
+/// (a seed segment's midpoint: inside one piece): its end, and its start
+/// moved [`past`] it, so that every evaluation on the piece reads this
+/// piece's strain — a boundary belongs to the piece that ends there, and a
+/// tangent read across a corner would make the iteration cycle.
+fn piece_span(model: &Model, rod: usize, s: f64) -> (f64, f64) {
+    let g = &model.rods[rod].spec.geometry;
+    let (n, x) = g.locate(s).expect("a seed lies on its rod");
+    let l = g.length();
+    let start = s - x;
+    let end = start + g.pieces()[n].length;
+    // Round-off of `s − x` must not leave a gap at the rod's ends.
+    (
+        if n == 0 { 0.0 } else { past(start, l) },
+        if n + 1 == g.pieces().len() { l } else { end },
+    )
+}
+
+/// An abscissa just past the piece boundary `s` \[m\] on a rod of length
+/// `l`, where `Sections::at` reads the next piece: `10⁻¹²·l` on, well inside
+/// the pairs' merge tolerance, so the two sides' clamps are one contact.
+fn past(s: f64, l: f64) -> f64 {
+    (s + 1e-12 * l).min(l)
+}
+
+/// Back from a start moved [`past`] its boundary: an abscissa where
+/// `Sections::at` reads the piece before.
+fn before(s: f64, l: f64) -> f64 {
+    s - 1e-12 * l
+}
+
 pub(crate) fn mass_at(model: &Model, rod: usize, s: f64) -> f64 {
     let smp = &model.contact.samples[rod];
     let i = smp.partition_point(|x| x.s < s).min(smp.len() - 1);
