@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{G, Keep, L, R, across_incline, free_rod_model, plane};
+use common::{G, Keep, L, R, across_incline, centre, free_rod_model, path_along, plane};
 
 use softrod::{Settings, Simulation};
 use softrod_lie::{Mat3, Pose, Vec3};
@@ -27,10 +27,6 @@ fn free_rod(base: Pose, obstacle: Obstacle, energy_tolerance: f64) -> Simulation
     };
     sim.set_settings(settings).unwrap();
     sim
-}
-
-fn centre(sim: &Simulation, q: &[f64]) -> Vec3 {
-    sim.pose("rod", 0.5 * L, q).unwrap().translation
 }
 
 /// Dropped flat from 5 cm onto a frictionless, inelastic table: free fall
@@ -90,15 +86,7 @@ fn incline(alpha: f64, mu: f64, duration: f64) -> (Vec<(f64, f64)>, softrod::Ene
     let slope = plane("slope", Vec3::zeros(), n).friction(mu);
     // The watch on, with room to report rather than stop.
     let mut sim = free_rod(base, slope, 1.0);
-    let mut keep = Keep(Vec::new());
-    let summary = sim.simulate_with(duration, &mut keep).unwrap();
-    let c0 = centre(&sim, &keep.0[0].1);
-    let path = keep
-        .0
-        .iter()
-        .map(|(t, q, _)| (*t, (centre(&sim, q) - c0).dot(&down)))
-        .collect();
-    (path, summary.energy.expect("the energy watch"))
+    path_along(&mut sim, duration, down)
 }
 
 #[test]

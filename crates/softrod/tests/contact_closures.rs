@@ -8,7 +8,7 @@
 
 mod common;
 
-use common::{G, Keep, L, R, RHO, material};
+use common::{G, Keep, L, R, RHO, centre, material, path_along};
 
 use softrod::{Settings, Simulation};
 use softrod_dynamics::{
@@ -58,10 +58,6 @@ fn held_rod(
     })
     .unwrap();
     sim
-}
-
-fn centre(sim: &Simulation, q: &[f64]) -> Vec3 {
-    sim.pose("rod", 0.5 * L, q).unwrap().translation
 }
 
 fn mass() -> f64 {
@@ -243,15 +239,7 @@ fn incline(alpha: f64, mu: f64, duration: f64) -> (Vec<(f64, f64)>, softrod::Ene
         ..Settings::default()
     })
     .unwrap();
-    let mut keep = Keep(Vec::new());
-    let summary = sim.simulate_with(duration, &mut keep).unwrap();
-    let c0 = centre(&sim, &keep.0[0].1);
-    let path = keep
-        .0
-        .iter()
-        .map(|(t, q, _)| (*t, (centre(&sim, q) - c0).dot(&down)))
-        .collect();
-    (path, summary.energy.expect("the energy watch"))
+    path_along(&mut sim, duration, down)
 }
 
 #[test]

@@ -121,11 +121,7 @@ impl ShiftedSolver {
     ) -> Result<(), DynamicsError> {
         self.check_model(model)?;
         self.factored = false;
-        for (what, value) in [("a", a), ("b", b)] {
-            if !(value.is_finite() && value >= 0.0) {
-                return Err(DynamicsError::InvalidShift { what, value });
-            }
-        }
+        check_shift(a, b)?;
         check_vec(model, "q", q)?;
         if model.has_closures() {
             return Err(DynamicsError::UnsupportedClosed {
@@ -408,4 +404,16 @@ pub(crate) fn tree_solve(tree: &Tree, data: &Data, scratch: &mut [SolveNode], x:
         sc.qn = qn;
         sc.etadot_tip = w.tip.ad_inv().mul_vec(&etadot_b) + w.s_tip * qn;
     }
+}
+
+/// The shifts `a`, `b` of `M + a·K + b·D`: finite and non-negative (the
+/// matrix is then positive definite with `M`), else `InvalidShift` naming
+/// the one that is not. Shared by the open and the closed (KKT) solvers.
+pub(crate) fn check_shift(a: f64, b: f64) -> Result<(), DynamicsError> {
+    for (what, value) in [("a", a), ("b", b)] {
+        if !(value.is_finite() && value >= 0.0) {
+            return Err(DynamicsError::InvalidShift { what, value });
+        }
+    }
+    Ok(())
 }

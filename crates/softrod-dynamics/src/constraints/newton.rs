@@ -6,7 +6,7 @@
 
 use super::forward::pivoted_cholesky;
 use super::rows::{assemble, prescribed_columns};
-use crate::algorithms::shifted::{tree_factor, tree_solve};
+use crate::algorithms::shifted::{check_shift, tree_factor, tree_solve};
 use crate::algorithms::tree::outward;
 use crate::algorithms::{Motion, Pass, check_vec, inverse_dynamics_open};
 use crate::error::DynamicsError;
@@ -141,11 +141,7 @@ impl ClosedShiftedSolver {
     ) -> Result<(), DynamicsError> {
         self.check_model(model)?;
         self.factored = false;
-        for (what, value) in [("a", a), ("b", b)] {
-            if !(value.is_finite() && value >= 0.0) {
-                return Err(DynamicsError::InvalidShift { what, value });
-            }
-        }
+        check_shift(a, b)?;
         check_vec(model, "q", q)?;
         if model.has_contact() {
             return Err(DynamicsError::UnsupportedClosed {

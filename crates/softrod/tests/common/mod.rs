@@ -6,7 +6,7 @@
 //! settings.
 #![allow(dead_code)]
 
-use softrod::{Flow, Observer, Sample};
+use softrod::{EnergyBalance, Flow, Observer, Sample, Simulation};
 use softrod_dynamics::{Attachment, Joint, JointKind, Model, Rod};
 use softrod_kinematics::Strain;
 use softrod_lie::{Mat3, Pose, Vec3};
@@ -130,4 +130,28 @@ pub fn rope_over_cylinder_model(mu: f64) -> Model {
         .gravity([0.0, 0.0, -G])
         .build()
         .unwrap()
+}
+
+/// The centre `s = L/2` of the rod named "rod" at `q` \[m, world\].
+pub fn centre(sim: &Simulation, q: &[f64]) -> Vec3 {
+    sim.pose("rod", 0.5 * L, q).unwrap().translation
+}
+
+/// Runs `sim` for `duration` s (its settings must keep the energy watch
+/// on) and returns how far the rod's centre moved along `down` at each
+/// sample \[s, m\], with the run's energy balance.
+pub fn path_along(
+    sim: &mut Simulation,
+    duration: f64,
+    down: Vec3,
+) -> (Vec<(f64, f64)>, EnergyBalance) {
+    let mut keep = Keep(Vec::new());
+    let summary = sim.simulate_with(duration, &mut keep).unwrap();
+    let c0 = centre(sim, &keep.0[0].1);
+    let path = keep
+        .0
+        .iter()
+        .map(|(t, q, _)| (*t, (centre(sim, q) - c0).dot(&down)))
+        .collect();
+    (path, summary.energy.expect("the energy watch"))
 }
