@@ -15,6 +15,7 @@
 //! | [`forward_dynamics_cholesky`] | `q̈ = M⁻¹(τ − b)` | cross-check |
 //! | [`mass_matrix`] | `M(q)`, composite recursion | (D19–D20) |
 //! | [`bias_force`] | `b = C q̇ + G + τ_e + D q̇ − τ_c − Q_ext` | (D21–D22) |
+//! | [`strain_space_force`] | `τ_c − τ_e − D q̇` (and joint springs), the strain-space part of `−ID` | (D13, D15, D53) |
 //! | [`energies`] | kinetic, elastic, gravitational | §7 |
 //! | [`statics`] | equilibrium, Newton + line search + continuation | |
 //! | [`modes`] | natural frequencies about an equilibrium | |
@@ -110,6 +111,7 @@ mod model;
 pub use algorithms::shifted::ShiftedSolver;
 pub use algorithms::{
     bias_force, forward_dynamics_cholesky, inverse_dynamics, inverse_dynamics_with, mass_matrix,
+    strain_space_force,
 };
 pub use analysis::{
     Energies, IMPACT_LIMIT, ModeKind, Modes, StaticsOptions, StaticsResult, StaticsSolver,

@@ -51,6 +51,13 @@ const S: usize = 6;
 /// Newton iterations allowed when a stage is recomputed.
 const MAX_NEWTON: usize = 50;
 
+/// What switching the recomputation to a stage's own matrix costs, in
+/// iterations of the force form's residual iteration (its dense derivatives
+/// and LU ~30 iterations at 20 pieces, G11, less the few iterations the
+/// switched iteration still takes): a slower predicted convergence
+/// switches.
+const SWITCH_ITERATIONS: f64 = 24.0;
+
 /// The integrators whose discrete adjoint [`adjoint_second_order`] has.
 pub const ADJOINT_INTEGRATORS: [Integrator; 1] = [Integrator::Esdirk];
 
@@ -374,6 +381,11 @@ struct EsdirkAdjoint {
     qs: [DVector<f64>; S],
     vs: [DVector<f64>; S],
     accs: [DVector<f64>; S],
+    /// The node whose step-start acceleration `accs[0]` holds (the pass
+    /// runs backwards, so at step `k` it is node `k + 1`'s, the end of the
+    /// step: the recomputation's predictor), and a copy of it.
+    a0_node: Option<usize>,
+    a_end: DVector<f64>,
     jq: [DMatrix<f64>; S],
     jv: [DMatrix<f64>; S],
     /// `M` at each stage (force form).
@@ -430,6 +442,8 @@ impl EsdirkAdjoint {
             qs: std::array::from_fn(|_| z.clone()),
             vs: std::array::from_fn(|_| z.clone()),
             accs: std::array::from_fn(|_| z.clone()),
+            a0_node: None,
+            a_end: z.clone(),
             jq: std::array::from_fn(|_| m.clone()),
             jv: std::array::from_fn(|_| m.clone()),
             mass: std::array::from_fn(|_| fm.clone()),
@@ -582,12 +596,20 @@ impl EsdirkAdjoint {
         };
         self.q.copy_from_slice(tape.q(k));
         self.v.copy_from_slice(tape.qd(k));
+        // The step end's acceleration a(tₙ₊₁, yₙ₊₁), from the step done
+        // before (the next one in time), for the predictor (G3).
+        let end = self.a0_node == Some(k + 1);
+        if end {
+            self.a_end.copy_from(&self.accs[0]);
+        }
+        self.a0_node = None;
         // Stage 0: the step start (G2).
         self.qs[0].copy_from(&self.q);
         self.vs[0].copy_from(&self.v);
         sys.accel(t, &self.q, &self.v, &mut self.accs[0])
             .map_err(err("accel"))?;
         self.accels += 1;
+        self.a0_node = Some(k);
         self.linearize(sys, 0, t, 0, h, false)
             .map_err(err("jacobian"))?;
         if !self.factor(0, 0, h, false) {
@@ -607,11 +629,26 @@ impl EsdirkAdjoint {
                 &mut self.qhat,
                 &mut self.vhat,
             );
+            // The starting guess: the cubic Hermite interpolant of the
+            // velocity through (q̇ₙ, aₙ) and (q̇ₙ₊₁, aₙ₊₁), differentiated at
+            // cᵢ (G3); without the step end, the previous stage's.
             {
                 let (done, rest) = self.accs.split_at_mut(i);
-                rest[0].copy_from(&done[i - 1]);
+                if end {
+                    let th = C[i];
+                    let wd = (6.0 * th - 6.0 * th * th) / h;
+                    let w0 = 3.0 * th * th - 4.0 * th + 1.0;
+                    let w1 = 3.0 * th * th - 2.0 * th;
+                    let (v0, v1) = (tape.qd(k), tape.qd(k + 1));
+                    for r in 0..n {
+                        rest[0][r] = wd * (v1[r] - v0[r]) + w0 * done[0][r] + w1 * self.a_end[r];
+                    }
+                } else {
+                    rest[0].copy_from(&done[i - 1]);
+                }
             }
             let mut prev = f64::INFINITY;
+            let mut prev2 = f64::INFINITY;
             let mut converged = false;
             // The LU the iteration solves with: the step-start matrix, or
             // (after a slow iteration) the stage's own at its iterate.
@@ -676,9 +713,21 @@ impl EsdirkAdjoint {
                 // In the force form an iteration (one inverse dynamics and a
                 // solve) costs ~1/30 of a linearization (the inverse
                 // dynamics' dense derivatives and an LU): only a contraction
-                // slower than 2×, or a long one, switches.
+                // expected to need more iterations to round-off than a
+                // switch costs, or a long one, switches. The rate is
+                // measured over the last two iterations: the step-start
+                // matrix's iteration often alternates a fast and a slow
+                // iteration (0.01, then 0.5–1.9 on a six-strain chain, 4×
+                // per two iterations or better), which one slow iteration
+                // alone took for a stall.
                 let slow = if self.force {
-                    dx > 0.5 * prev || iteration >= 16
+                    let rate = (dx / prev2).sqrt();
+                    let left = if rate < 1.0 {
+                        (1e-13 * size / dx).ln() / rate.ln()
+                    } else {
+                        f64::INFINITY
+                    };
+                    left > SWITCH_ITERATIONS || iteration >= 16
                 } else {
                     dx > 0.25 * prev
                 };
@@ -698,6 +747,7 @@ impl EsdirkAdjoint {
                     }
                     slot = i;
                 }
+                prev2 = prev;
                 prev = dx;
             }
             if !converged {

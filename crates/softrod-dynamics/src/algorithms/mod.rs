@@ -355,6 +355,32 @@ pub(crate) fn bias_force_with<'a>(
     Ok(&data.tau)
 }
 
+/// The strain-space generalized forces alone (docs/theory.md D13, D15,
+/// D53): `τ_s = τ_c(q, t) − τ_e(q) − D q̇ − k_j(q_j − q_rest) − d_j q̇_j`
+/// — cable forces at their tensions at `t` (schedules, or the inputs of
+/// [`Data::set_cable_tensions`]), elasticity with its stress-free offset,
+/// Kelvin–Voigt damping, joint springs and dampers. Every inverse dynamics
+/// subtracts exactly this vector from its other terms (`ID = ID_rest − τ_s`,
+/// `ID_rest` the inertial, gravity, load and drag terms), so the part of
+/// `ID` that depends on Young's or shear modulus, viscosity or a cable's
+/// tension is `−τ_s`, at O(N) strain-space cost with no kinematic sweep
+/// (the parameter products of docs/theory-control.md G8). Result in
+/// `data.strain_force` (dim `n_dof`, N·m or N per coordinate unit); no
+/// allocation.
+pub fn strain_space_force<'a>(
+    model: &Model,
+    data: &'a mut Data,
+    t: f64,
+    q: &[f64],
+    qd: &[f64],
+) -> Result<&'a DVector<f64>, DynamicsError> {
+    check_vec(model, "q", q)?;
+    check_vec(model, "qdot", qd)?;
+    crate::forces::strain::strain_forces(model, data, Forces::ALL, t, q, Some(qd), None);
+    crate::forces::strain::joint_forces(model, data, Forces::ALL, q, Some(qd));
+    Ok(&data.strain_force)
+}
+
 /// Forward dynamics through the mass matrix, the cross-check of the O(N)
 /// recursion: `q̈ = M⁻¹(τ_act − ID(q, q̇, 0))` with a dense Cholesky
 /// (O(n_dof³), allocates the factor). Result in `data.qdd`.

@@ -13,10 +13,14 @@
 //! `∂ID/∂p = (ID(p + Δ) − ID(p))/Δ` exactly — no step error, only the
 //! round-off of the two evaluations — and `∂q̈/∂p = −M⁻¹ ∂ID/∂p`. The
 //! backward pass needs `wᵀ ∂q̈/∂p = −(M⁻¹w)ᵀ ∂ID/∂p` (`M` symmetric): one
-//! O(N) solve with `M` and two O(N) inverse dynamics per parameter.
+//! O(N) solve with `M` per stage, one inverse dynamics per density or mass
+//! entry (and one shared by them at `p`), and for the moduli, viscosity and
+//! tensions the difference of the strain-space forces alone
+//! (`softrod_dynamics::strain_space_force`: `ID = ID_rest − τ_s`, and only
+//! `τ_s` depends on them), O(N) with no kinematic sweep.
 
 use nalgebra::{DMatrix, DVector};
-use softrod_dynamics::{Data, DynamicsError, Model, inverse_dynamics};
+use softrod_dynamics::{Data, DynamicsError, Model, inverse_dynamics, strain_space_force};
 use softrod_integrate::{ParameterSystem, RodSystem, SecondOrderSystem};
 use softrod_mechanics::{Material, RodProperties, Tension};
 
@@ -178,6 +182,9 @@ struct Variant {
     delta: f64,
     /// Where its derivative goes among the system's parameters.
     slot: usize,
+    /// The parameter enters the strain-space forces only (moduli,
+    /// viscosity, tensions): `∂ID/∂p = −∂τ_s/∂p`.
+    strain_only: bool,
 }
 
 /// A rod material with one constant moved.
@@ -262,6 +269,7 @@ pub(crate) struct ParamSystem<'a> {
     n_params: usize,
     z: DVector<f64>,
     id0: DVector<f64>,
+    sf0: DVector<f64>,
 }
 
 impl<'a> ParamSystem<'a> {
@@ -288,6 +296,10 @@ impl<'a> ParamSystem<'a> {
                     data,
                     delta,
                     slot,
+                    strain_only: matches!(
+                        p.kind,
+                        Kind::Young(_) | Kind::Shear(_) | Kind::Viscosity(_) | Kind::Tension(_)
+                    ),
                 });
                 slot += 1;
             }
@@ -299,6 +311,7 @@ impl<'a> ParamSystem<'a> {
             n_params: slot,
             z: DVector::zeros(n),
             id0: DVector::zeros(n),
+            sf0: DVector::zeros(n),
         })
     }
 }
@@ -451,8 +464,11 @@ impl ParameterSystem for ParamSystem<'_> {
         self.sys.force_vjp(slot, u, out_q, out_qd)
     }
 
-    /// `−zᵀ (ID(pⱼ + Δⱼ) − ID(pⱼ))/Δⱼ` (G8): two O(N) inverse dynamics
-    /// per parameter entry (`ID` is affine in each).
+    /// `−zᵀ (ID(pⱼ + Δⱼ) − ID(pⱼ))/Δⱼ` (G8; `ID` is affine in each
+    /// parameter): one inverse dynamics per density or mass entry plus one
+    /// at `p`; for the moduli, viscosity and tensions `+zᵀ (τ_s(pⱼ + Δⱼ) −
+    /// τ_s(pⱼ))/Δⱼ` of the strain-space forces alone (`ID = ID_rest − τ_s`,
+    /// `ID_rest` independent of them), O(N) without a kinematic sweep.
     fn force_param_vjp(
         &mut self,
         t: f64,
@@ -462,25 +478,29 @@ impl ParameterSystem for ParamSystem<'_> {
         z: &DVector<f64>,
         out: &mut [f64],
     ) -> Result<(), DynamicsError> {
-        if self.variants.is_empty() {
-            return Ok(());
-        }
         let (q, qd, qdd) = (q.as_slice(), qd.as_slice(), qdd.as_slice());
-        self.id0.copy_from(inverse_dynamics(
-            &self.sys.model,
-            &mut self.sys.data,
-            t,
-            q,
-            qd,
-            qdd,
-        )?);
+        let model = &self.sys.model;
+        if self.variants.iter().any(|v| !v.strain_only) {
+            self.id0
+                .copy_from(inverse_dynamics(model, &mut self.sys.data, t, q, qd, qdd)?);
+        }
+        if self.variants.iter().any(|v| v.strain_only) {
+            self.sf0
+                .copy_from(strain_space_force(model, &mut self.sys.data, t, q, qd)?);
+        }
         for v in &mut self.variants {
-            let id = inverse_dynamics(&v.model, &mut v.data, t, q, qd, qdd)?;
+            let (moved, base, sign) = if v.strain_only {
+                let sf = strain_space_force(&v.model, &mut v.data, t, q, qd)?;
+                (sf, &self.sf0, -1.0)
+            } else {
+                let id = inverse_dynamics(&v.model, &mut v.data, t, q, qd, qdd)?;
+                (id, &self.id0, 1.0)
+            };
             let mut s = 0.0;
-            for r in 0..id.len() {
-                s += z[r] * (id[r] - self.id0[r]);
+            for r in 0..moved.len() {
+                s += z[r] * (moved[r] - base[r]);
             }
-            out[v.slot] -= s / v.delta;
+            out[v.slot] -= sign * s / v.delta;
         }
         Ok(())
     }
