@@ -10,29 +10,16 @@
 
 mod common;
 
+use common::closed::{DRAG, at, catenary, driven, four_bar, redundant, rot, two_closures};
 use common::{soft_rod as rod, wavy};
 
 use nalgebra::DMatrix;
 use softrod_dynamics::{
-    Attachment, ClosedDerivatives, Closure, ClosureFrame, ClosureKind, Curve, Data, Joint, Model,
-    Prescribed, closed_dynamics_derivatives, commit_contact, forward_dynamics,
+    Attachment, ClosedDerivatives, Closure, ClosureFrame, ClosureKind, Data, Joint, Model,
+    closed_dynamics_derivatives, commit_contact, forward_dynamics,
 };
-use softrod_lie::{Mat3, Pose, Vec3};
-use softrod_mechanics::Drag;
+use softrod_lie::{Pose, Vec3};
 use softrod_mechanics::contact::{ContactSettings, Obstacle, Shape};
-
-fn rot(a: f64, b: f64, c: f64) -> Mat3 {
-    *nalgebra::Rotation3::from_euler_angles(a, b, c).matrix()
-}
-
-fn at(p: [f64; 3]) -> Pose {
-    Pose::new(Mat3::identity(), Vec3::from(p))
-}
-
-const DRAG: Drag = Drag {
-    translational: 0.3,
-    rotational: 1e-4,
-};
 
 /// Central differences of the constrained `q̈` in `q` (step `1e-6`
 /// relative) and `q̇` against the analytic result, relative to the largest
@@ -92,24 +79,7 @@ fn state(model: &Model, seed: f64) -> (Vec<f64>, Vec<f64>) {
 fn four_bar_loop() {
     // Two rods on revolute joints to the world, their tips held by a ball:
     // with the ground, a four-bar of flexible links.
-    let model = Model::builder()
-        .rod_on(
-            rod("a", 0.3, 3).drag(DRAG),
-            Attachment::world_joint(Joint::revolute([0.0, 1.0, 0.1])),
-        )
-        .rod_on(
-            rod("b", 0.25, 2).base(at([0.2, 0.0, 0.0])),
-            Attachment::world_joint(Joint::revolute([0.0, 1.0, 0.0])),
-        )
-        .gravity([0.0, 0.0, -9.81])
-        .closure(Closure::new(
-            "coupler",
-            ClosureKind::Ball,
-            ClosureFrame::on("a", None, at([0.0, 0.0, 0.02])),
-            ClosureFrame::on("b", Some(0.25), Pose::identity()),
-        ))
-        .build()
-        .unwrap();
+    let model = four_bar();
     let (q, qd) = state(&model, 0.2);
     check("four-bar", &model, 0.0, &q, &qd);
 }
@@ -118,20 +88,7 @@ fn four_bar_loop() {
 fn pinned_pinned_rod() {
     // The catenary: a spherical joint at the base, a ball to the world at
     // the tip.
-    let model = Model::builder()
-        .rod_on(
-            rod("cable", 0.5, 6).drag(DRAG),
-            Attachment::world_joint(Joint::spherical()),
-        )
-        .gravity([0.0, 0.0, -9.81])
-        .closure(Closure::new(
-            "pin",
-            ClosureKind::Ball,
-            ClosureFrame::on("cable", None, Pose::identity()),
-            ClosureFrame::world(at([0.45, 0.0, 0.0])),
-        ))
-        .build()
-        .unwrap();
+    let model = catenary(6);
     let (q, qd) = state(&model, 0.7);
     check("catenary", &model, 0.0, &q, &qd);
 }
@@ -144,31 +101,7 @@ fn weld_and_slider_closures() {
             axis: Vec3::new(0.3, 1.0, -0.2),
         },
     ] {
-        let model = Model::builder()
-            .rod(rod("a", 0.3, 3).drag(DRAG))
-            .rod_on(
-                rod("b", 0.2, 2).base(at([0.0, 0.2, 0.0])),
-                Attachment::world_joint(Joint::free()),
-            )
-            .gravity([0.2, 0.0, -9.81])
-            .closure(Closure::new(
-                "c",
-                kind.clone(),
-                ClosureFrame::on(
-                    "a",
-                    Some(0.21),
-                    Pose::new(rot(0.1, 0.2, 0.3), Vec3::zeros()),
-                ),
-                ClosureFrame::on("b", None, Pose::new(rot(-0.2, 0.0, 0.1), Vec3::zeros())),
-            ))
-            .closure(Closure::new(
-                "ground",
-                kind.clone(),
-                ClosureFrame::on("b", Some(0.1), Pose::identity()),
-                ClosureFrame::world(at([0.1, 0.3, 0.0])),
-            ))
-            .build()
-            .unwrap();
+        let model = two_closures(kind.clone());
         let (q, qd) = state(&model, 1.3);
         check(&format!("{kind:?}"), &model, 0.0, &q, &qd);
     }
@@ -178,26 +111,7 @@ fn weld_and_slider_closures() {
 fn redundant_closures() {
     // A weld and a ball on the same frames: three redundant rows, which
     // the forward solve gives λ = 0 (D68).
-    let weld = |kind| {
-        Closure::new(
-            "c",
-            kind,
-            ClosureFrame::on("a", None, Pose::identity()),
-            ClosureFrame::world(at([0.28, 0.0, 0.05])),
-        )
-    };
-    let mut ball = weld(ClosureKind::Ball);
-    ball.name = "c2".into();
-    let model = Model::builder()
-        .rod_on(
-            rod("a", 0.3, 3).drag(DRAG),
-            Attachment::world_joint(Joint::spherical()),
-        )
-        .gravity([0.0, 0.0, -9.81])
-        .closure(weld(ClosureKind::Weld))
-        .closure(ball)
-        .build()
-        .unwrap();
+    let model = redundant();
     let (q, qd) = state(&model, 2.1);
     check("redundant", &model, 0.0, &q, &qd);
 }
@@ -207,40 +121,7 @@ fn closures_on_a_prescribed_joint() {
     // Like cosseratbench's twist: a rod hangs from a prescribed free joint
     // (rotation and motion) and is welded to the world at its tip, and a
     // second rod is held to it by a ball.
-    let drive = Prescribed::new(
-        (0..6)
-            .map(|c| Curve::Sine {
-                amplitude: 0.05 + 0.01 * c as f64,
-                frequency: 0.7 + 0.1 * c as f64,
-                phase: 0.3 * c as f64,
-                offset: 0.0,
-            })
-            .collect(),
-    );
-    let model = Model::builder()
-        .rod_on(
-            rod("a", 0.3, 3).drag(DRAG),
-            Attachment::world_joint(Joint::free().with_prescribed(drive)),
-        )
-        .rod_on(
-            rod("b", 0.2, 2).base(at([0.0, 0.1, 0.0])),
-            Attachment::world_joint(Joint::revolute([1.0, 0.0, 0.0])),
-        )
-        .gravity([0.0, 0.0, -9.81])
-        .closure(Closure::new(
-            "tip",
-            ClosureKind::Weld,
-            ClosureFrame::on("a", None, Pose::identity()),
-            ClosureFrame::world(at([0.3, 0.0, 0.0])),
-        ))
-        .closure(Closure::new(
-            "link",
-            ClosureKind::Ball,
-            ClosureFrame::on("a", Some(0.15), Pose::identity()),
-            ClosureFrame::on("b", None, Pose::identity()),
-        ))
-        .build()
-        .unwrap();
+    let model = driven();
     let (q, qd) = state(&model, 0.4);
     for t in [0.0, 0.37] {
         check(&format!("prescribed t = {t}"), &model, t, &q, &qd);

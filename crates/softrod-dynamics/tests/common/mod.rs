@@ -3,6 +3,8 @@
 //! on its own, so not every item is used by each).
 #![allow(dead_code)]
 
+pub mod closed;
+
 use nalgebra::{DMatrix, DVector, Matrix6xX};
 use softrod_dynamics::{
     Attachment, BodyLoad, BodySpec, Data, Joint, Model, Rod, RodBuilder, forward_dynamics,
