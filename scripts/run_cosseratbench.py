@@ -47,8 +47,11 @@ EXPLAIN = {
         "both settle through the same mass-proportional damping, critical for the "
         "slowest mode; softrod's residual is what that damping leaves after 10 s of the "
         "transient of the suddenly applied load ((1 + w t) e^(-w t) of the first mode's "
-        "speed, a few 1e-6 rod lengths per second). Why the peers' transients end "
-        "lower under the same rule is not established."
+        "speed, a few 1e-6 rod lengths per second): converged in time, 3.71e-6 with "
+        "Radau IIA at rtol 1e-7 and 3.70e-6 with ESDIRK at rtol 1e-6 (20 pieces); the "
+        "rule's ESDIRK at rtol 1e-3 adds its path error to that (3.8e-6 with Radau IIA "
+        "at the same tolerance). Why the peers' transients end lower under the same "
+        "rule is not established."
     ),
     ("twist", "n/a"): (
         "cosseratbench fits the critical twist to the three growing rods nearest the "
@@ -64,23 +67,34 @@ EXPLAIN = {
 }
 #: Why softrod's wall time is longer than PyElastica's where it is.
 EXPLAIN_TIME = {
-    "cantilever": (
-        "the quasi-static rule takes Radau IIA, which factors its Newton matrix densely "
-        "(the rule is chosen for the closed chains, where ESDIRK's Newton iterations "
-        "are rejected step after step); an open rod has the O(n) solve of softrod's other "
-        "methods."
-    ),
     "catenary": (
         "a cable pinned at both ends is a closed chain for softrod (a spherical joint "
-        "and a ball closure). The Jacobian of its constrained dynamics is analytic "
-        "(closed-chain derivatives, docs/theory-derivatives.md), but the implicit "
-        "integrators factor a closed chain's Newton matrix densely (O(n^3) in its "
-        "coordinates, six per piece), where an open rod has an O(n) solve."
+        "and a ball closure), and the quasi-static rule takes Radau IIA on closed chains, "
+        "which factors the Newton matrix densely (O(n^3) in the coordinates, six per "
+        "piece; the Jacobian itself is analytic, docs/theory-derivatives.md). ESDIRK, "
+        "the rule on open chains, runs this catenary in 2.8-3.0 s, but at the rule's "
+        "tolerances it lets the closure drift (the pinned end's gap 5e-5 m against "
+        "Radau's 3e-6 m) and the sag wanders by +-40 um to the end instead of settling "
+        "(settling residual 3.2e-5 rod lengths per second against Radau's 1.7e-7; "
+        "1e-5 at rtol 1e-4, 3e-6 at rtol 1e-5: a floor that scales with the tolerance), "
+        "and it breaks the twist's loops (there). softrod's structured O(n) Newton "
+        "solve of closed chains (the KKT form, CD5-CD8) is off by default and not "
+        "reachable from Python."
     ),
     "twist": (
         "each rod is a closed chain (a weld to a carriage on a prescribed drive), "
-        "with the dense Newton matrices of the catenary; the six rods "
-        "run as six simulations. PyElastica's explicit step costs 26 microseconds."
+        "with the dense Radau IIA Newton matrices of the catenary; the six rods "
+        "run as six simulations one after the other, and the rod that buckles costs "
+        "nearly all of it: measured alone after this report's run (same build, the shared "
+        "machine), the rod held at 1.06 of the critical twist took 199 s (3068 steps, 395 "
+        "rejected, 1198 dense Jacobians, 2591 factorizations) as it grows sideways, the "
+        "rod at 0.96 8.2 s (177 steps). The report of commit 36f46bc timed all six at "
+        "47.1 s with the same rule and the same critical_twist_error (9.081e-4): the "
+        "slowdown is not the adapter's (its numerics are unchanged on closed chains) "
+        "but softrod's changes since or this machine's load; not bisected. ESDIRK (the "
+        "open chains' rule) fails here: a rod's loop comes apart (closure "
+        "residual 1.8 mm at t = 15.4 s, which softrod's watch stops). PyElastica's "
+        "explicit step costs 26 microseconds."
     ),
 }
 
@@ -88,6 +102,18 @@ EXPLAIN_TIME = {
 #: whose softrod runs this report leaves out, with the reason measured; run
 #: them with --with-slow.
 NOT_RUN = {
+    "crossing": (
+        "not run in this report: the adapter expresses it (two ropes pinned by ball "
+        "closures, rod-rod contact on closed models, docs/theory-contact.md CT16) and "
+        "softrod runs it (the Python suite runs it at 5 pieces per rope against the "
+        "elastica: lift error 17.7 %, 2.7 % at 10 pieces), but far too slowly at its "
+        "51 pieces. Measured (release build, the shared 2-core VM): building it takes "
+        "22 s, and the first 0.08 s of its 8 s take 122 s with the quasi-static rule's "
+        "Radau IIA on closed chains (477 steps of 1.7e-4 s, 25 rejected, 233 dense "
+        "Jacobians and 343 dense factorizations of the two ropes' ~620 coordinates "
+        "plus closures) while the upper rope drapes onto the lower, so the whole run "
+        "would take hours unless the steps grow once the ropes settle (not measured)."
+    ),
     "capstan": (
         "not run in this report: the adapter expresses it (contact tables, "
         "docs/theory-contact.md) and softrod runs it, but far too slowly. Measured at its "
