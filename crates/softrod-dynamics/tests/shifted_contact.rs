@@ -115,7 +115,10 @@ fn check(model: &Model, q: &[f64], label: &str) -> usize {
         let mut y = r.as_slice().to_vec();
         solver.solve(model, &mut y).unwrap();
         let off = (DVector::from_vec(y) - &reference).amax() / reference.amax();
-        assert!(off > 1e-3, "{label}, a = {a:e}: contact negligible ({off:e})");
+        assert!(
+            off > 1e-3,
+            "{label}, a = {a:e}: contact negligible ({off:e})"
+        );
         solver
             .linearize_contact(model, &mut run, 0.0, q, &zero)
             .unwrap();

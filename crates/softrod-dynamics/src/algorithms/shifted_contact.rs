@@ -114,8 +114,7 @@ fn point_block(rot: &Mat3, r: &Vec3, w: &Mat3) -> Mat6 {
     let wg = -(wl * rx);
     out.fixed_view_mut::<3, 3>(0, 0)
         .copy_from(&(rx.transpose() * (wl * rx)));
-    out.fixed_view_mut::<3, 3>(0, 3)
-        .copy_from(&wg.transpose());
+    out.fixed_view_mut::<3, 3>(0, 3).copy_from(&wg.transpose());
     out.fixed_view_mut::<3, 3>(3, 0).copy_from(&wg);
     out.fixed_view_mut::<3, 3>(3, 3).copy_from(&wl);
     out
@@ -179,7 +178,16 @@ impl ContactShift {
                     });
                 }
                 Some(body) => {
-                    tree_point_jacobian(model, data, &mut work, q, a.rod, smp.s, Some(body), &mut jrel);
+                    tree_point_jacobian(
+                        model,
+                        data,
+                        &mut work,
+                        q,
+                        a.rod,
+                        smp.s,
+                        Some(body),
+                        &mut jrel,
+                    );
                     self.push_pair(n, k, c, |r, j| jrel[(r, j)]);
                 }
             }
