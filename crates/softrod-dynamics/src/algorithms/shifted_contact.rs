@@ -263,7 +263,7 @@ impl ContactShift {
                 s.set_column(c, col);
             }
             let mca = mc * am;
-            w.mt = w.mt + Sym6::from_mat6(&(am.transpose() * mca));
+            w.mt += Sym6::from_mat6(&(am.transpose() * mca));
             w.ut += mca.transpose() * s;
             w.dt += s.transpose() * (mc * s);
         }
