@@ -49,6 +49,11 @@ pub struct RodSystem {
     /// stiffness and damping (docs/theory-contact.md CT17; default `true`).
     /// `false` is the matrix without them, for comparisons.
     pub contact_in_shifted: bool,
+    /// The configuration of the last contact linearization
+    /// ([`SecondOrderSystem::linearize_shifted`]); the factorizations carry
+    /// it only at that `q` (a wrapper that forwards the factorization but
+    /// not the linearization gets none, never a stale one).
+    contact_q: Option<DVector<f64>>,
     /// The factored `M(q) + aK + bD` of
     /// [`SecondOrderSystem::factor_shifted_mass`] (O(N), no `n×n` matrix).
     shifted: ShiftedSolver,
@@ -129,6 +134,7 @@ impl RodSystem {
             jacobian: RodJacobian::Exact,
             structured_closures: false,
             contact_in_shifted: true,
+            contact_q: None,
             shifted,
             derivatives: None,
             closed: None,
@@ -480,8 +486,13 @@ impl SecondOrderSystem for RodSystem {
                 q.as_slice(),
                 qd.as_slice(),
             )?;
+            match &mut self.contact_q {
+                Some(at) => at.copy_from(q),
+                None => self.contact_q = Some(q.clone()),
+            }
         } else {
             self.shifted.clear_contact();
+            self.contact_q = None;
         }
         Ok(())
     }
@@ -501,6 +512,10 @@ impl SecondOrderSystem for RodSystem {
             // The constrained Newton matrix is not a shifted mass matrix:
             // dense matrices.
             return Ok(false);
+        }
+        if self.contact_q.as_ref().is_some_and(|at| at != q) {
+            self.shifted.clear_contact();
+            self.contact_q = None;
         }
         self.shifted.factor_at(&self.model, t, q.as_slice(), a, b)?;
         Ok(true)
