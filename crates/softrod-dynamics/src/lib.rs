@@ -27,7 +27,7 @@
 //! | [`linearize`] | `(A, B)` of `ẋ = f(x, u)`, `x = (q, q̇)` | (D49) |
 //! | [`dynamics_jacobians`] | `∂q̈/∂q`, `∂q̈/∂q̇` (allocating) | (D48) |
 //! | [`section_jacobian`] | world pose and spatial Jacobian of a rod section, through joints and parents | (D11), (D57), (D62) |
-//! | [`ShiftedSolver`] | `(M + aK + bD)⁻¹ x`, O(N), chains and trees | §6 with armature `aK_n + bD_n` |
+//! | [`ShiftedSolver`] | `(M + aK + bD)⁻¹ x`, O(N), chains and trees; with the contact's stiffness and damping ([`ShiftedSolver::linearize_contact`]) | §6 with armature `aK_n + bD_n`; docs/theory-contact.md CT17 |
 //! | [`ClosedShiftedSolver`] | the KKT solve of a closed model's implicit step, O(N·m) | docs/theory-derivatives.md (CD5–CD7) |
 //!
 //! Robots: rods and rigid bodies ([`BodySpec`]) hang from parents (the world,

@@ -44,6 +44,16 @@ pub struct RodSystem {
     /// tolerance: on the test models 1–30 % off at `rtol = 1e-8` where the
     /// dense path is within 2e-4 (docs/performance.md).
     pub structured_closures: bool,
+    /// Models with contact: whether the structured Newton matrix
+    /// `M + aK + bD` of the implicit methods also carries the contact's
+    /// stiffness and damping (docs/theory-contact.md CT17; default `true`).
+    /// `false` is the matrix without them, for comparisons.
+    pub contact_in_shifted: bool,
+    /// The configuration of the last contact linearization
+    /// ([`SecondOrderSystem::linearize_shifted`]); the factorizations carry
+    /// it only at that `q` (a wrapper that forwards the factorization but
+    /// not the linearization gets none, never a stale one).
+    contact_q: Option<DVector<f64>>,
     /// The factored `M(q) + aK + bD` of
     /// [`SecondOrderSystem::factor_shifted_mass`] (O(N), no `n×n` matrix).
     shifted: ShiftedSolver,
@@ -123,6 +133,8 @@ impl RodSystem {
             tau: None,
             jacobian: RodJacobian::Exact,
             structured_closures: false,
+            contact_in_shifted: true,
+            contact_q: None,
             shifted,
             derivatives: None,
             closed: None,
@@ -453,9 +465,42 @@ impl SecondOrderSystem for RodSystem {
         Ok(true)
     }
 
+    /// With contact: the contact's stiffness and damping at `(t, q, q̇)`
+    /// with the run's contact state (`ShiftedSolver::linearize_contact`,
+    /// docs/theory-contact.md CT17), for the factorizations that follow.
+    /// Nothing without contact.
+    fn linearize_shifted(
+        &mut self,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+    ) -> Result<(), DynamicsError> {
+        if !self.model.has_contact() || self.model.has_closures() {
+            return Ok(());
+        }
+        if self.contact_in_shifted {
+            self.shifted.linearize_contact(
+                &self.model,
+                &mut self.data,
+                t,
+                q.as_slice(),
+                qd.as_slice(),
+            )?;
+            match &mut self.contact_q {
+                Some(at) => at.copy_from(q),
+                None => self.contact_q = Some(q.clone()),
+            }
+        } else {
+            self.shifted.clear_contact();
+            self.contact_q = None;
+        }
+        Ok(())
+    }
+
     /// `M(q) + aK + bD` by the O(N) articulated recursion
     /// (`softrod_dynamics::ShiftedSolver`, on the tree for models with
-    /// joints and bodies, prescribed joints where they stand at `t`).
+    /// joints and bodies, prescribed joints where they stand at `t`), with
+    /// the contact of the last [`SecondOrderSystem::linearize_shifted`].
     fn factor_shifted_mass(
         &mut self,
         t: f64,
@@ -467,6 +512,10 @@ impl SecondOrderSystem for RodSystem {
             // The constrained Newton matrix is not a shifted mass matrix:
             // dense matrices.
             return Ok(false);
+        }
+        if self.contact_q.as_ref().is_some_and(|at| at != q) {
+            self.shifted.clear_contact();
+            self.contact_q = None;
         }
         self.shifted.factor_at(&self.model, t, q.as_slice(), a, b)?;
         Ok(true)

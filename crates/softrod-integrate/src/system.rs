@@ -206,6 +206,23 @@ pub trait SecondOrderSystem {
         Ok(false)
     }
 
+    /// Optional, with [`factor_shifted_mass`](Self::factor_shifted_mass):
+    /// called at every Jacobian update of the structured path with the
+    /// state `(t, q, q̇)` it is taken at, before the factorizations at `q`,
+    /// so that a system whose shifted matrix has state-dependent parts
+    /// beyond `M(q)` can linearize them there — for a rod in contact, the
+    /// contact's stiffness and damping (`M + a(K + K_c) + b(D + D_c)`,
+    /// docs/theory-contact.md CT17). The default does nothing.
+    fn linearize_shifted(
+        &mut self,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+    ) -> Result<(), Self::Error> {
+        let _ = (t, q, qd);
+        Ok(())
+    }
+
     /// `x ← S⁻¹ x` with the `S` of the last successful
     /// [`factor_shifted_mass`](Self::factor_shifted_mass).
     ///

@@ -142,6 +142,17 @@ impl SecondOrderSystem for CableInputs {
         self.sys.solve_shifted_mass(x)
     }
 
+    /// The contact's stiffness and damping in the shifted matrix
+    /// (docs/theory-contact.md CT17): `u` does not enter them.
+    fn linearize_shifted(
+        &mut self,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+    ) -> Result<(), DynamicsError> {
+        self.sys.linearize_shifted(t, q, qd)
+    }
+
     fn force_residual(
         &mut self,
         t: f64,

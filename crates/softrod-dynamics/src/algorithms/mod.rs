@@ -29,6 +29,7 @@ pub(crate) mod frames;
 pub(crate) mod pairs;
 pub(crate) mod planar;
 pub(crate) mod shifted;
+pub(crate) mod shifted_contact;
 pub(crate) mod tree;
 
 use crate::error::DynamicsError;

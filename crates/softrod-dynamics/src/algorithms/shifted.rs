@@ -14,6 +14,7 @@
 //! not covered (their Newton matrix carries the constraints).
 
 use super::chain::outward_inl;
+use super::shifted_contact::{ContactShift, check_point};
 use super::tree::{inverse_k, local, outward};
 use super::{Motion, Pass, check_vec};
 use crate::error::DynamicsError;
@@ -55,6 +56,10 @@ pub struct ShiftedSolver {
     n_dof: usize,
     /// Per-node scratch of the tree solve (empty for chain models).
     tree_scratch: Vec<crate::model::data::SolveNode>,
+    /// The contact's stiffness and damping at the last
+    /// [`Self::linearize_contact`] (docs/theory-contact.md CT17; empty:
+    /// none, `S = M + aK + bD`).
+    contact: ContactShift,
 }
 
 impl ShiftedSolver {
@@ -66,7 +71,49 @@ impl ShiftedSolver {
             factored: false,
             n_dof: model.n_dof(),
             tree_scratch: vec![Default::default(); nodes],
+            contact: ContactShift::default(),
         }
+    }
+
+    /// Makes the following factorizations include the contact at
+    /// `(t, q, q̇)`: `S = M(q) + a(K + K_c) + b(D + D_c)` with
+    /// `K_c = Σ J_wᵀ K_p J_w`, `D_c = Σ J_wᵀ C_p J_w` over the touching
+    /// contacts, `K_p`, `C_p` the positive semi-definite symmetric parts of
+    /// `−∂f/∂p`, `−∂f/∂v` of each contact's force law (CT6) — the stiffness
+    /// and damping of the contact in the implicit integrators' Newton
+    /// matrix (docs/theory-contact.md CT17). Contact is evaluated with
+    /// `data` (the run's friction anchors and raised stiffnesses; its
+    /// contact buffers are overwritten). A rod point on an obstacle fixed
+    /// in the world is a point inertia at its section (O(1) each);
+    /// two-sided contacts (rod pairs, self contact, obstacles carried by a
+    /// body) join by a rank-3 Woodbury update each (3 O(N) solves per
+    /// factorization, O(n) per solve). Returns the number of contacts kept.
+    /// A model without contact keeps none. No allocation once the buffers
+    /// have grown to the largest contact count.
+    pub fn linearize_contact(
+        &mut self,
+        model: &Model,
+        data: &mut Data,
+        t: f64,
+        q: &[f64],
+        qd: &[f64],
+    ) -> Result<usize, DynamicsError> {
+        self.check_model(model)?;
+        self.factored = false;
+        self.contact.clear();
+        if !model.has_contact() {
+            return Ok(0);
+        }
+        check_point(model, q, qd)?;
+        self.contact.linearize(model, data, t, q, qd);
+        Ok(self.contact.blocks.len() + self.contact.pair_kc.len())
+    }
+
+    /// Forgets the contact of [`Self::linearize_contact`]: the following
+    /// factorizations are of `M + aK + bD` again.
+    pub fn clear_contact(&mut self) {
+        self.factored = false;
+        self.contact.clear();
     }
 
     fn check_model(&self, model: &Model) -> Result<(), DynamicsError> {
@@ -128,11 +175,16 @@ impl ShiftedSolver {
                 what: "ShiftedSolver",
             });
         }
+        let contact = (!self.contact.is_empty()).then_some(&self.contact);
         if let Some(tree) = &model.tree {
             model.set_time(&mut self.data, t);
-            tree_factor(model, tree, &mut self.data, q, a, b)?;
+            tree_factor(model, tree, &mut self.data, q, a, b, contact)?;
         } else {
-            shifted_factor(model, &mut self.data, q, a, b)?;
+            shifted_factor(model, &mut self.data, q, a, b, contact)?;
+        }
+        if contact.is_some() {
+            self.contact
+                .factor_low_rank(model, &self.data, &mut self.tree_scratch, a, b);
         }
         self.factored = true;
         Ok(())
@@ -157,6 +209,9 @@ impl ShiftedSolver {
             Some(tree) => tree_solve(tree, &self.data, &mut self.tree_scratch, x),
             None => shifted_solve(model, &self.data, x),
         }
+        if !self.contact.is_empty() {
+            self.contact.solve_low_rank(self.n_dof, x);
+        }
         if let Some((i, v)) = x.iter().enumerate().find(|(_, v)| !v.is_finite()) {
             return Err(DynamicsError::NotFinite {
                 what: format!("shifted solve x[{i}]"),
@@ -170,7 +225,7 @@ impl ShiftedSolver {
 crate::kernels::simd::dispatch! {
     /// The factorization of [`ShiftedSolver::factor`] into `data` (arguments
     /// checked by the caller).
-    pub fn shifted_factor<'a>(model: &Model, data: &'a mut Data, q: &[f64], a: f64, b: f64) -> Result<&'a Data, DynamicsError>
+    pub fn shifted_factor<'a>(model: &Model, data: &'a mut Data, q: &[f64], a: f64, b: f64, contact: Option<&ContactShift>) -> Result<&'a Data, DynamicsError>
     => shifted_factor_impl, shifted_factor_avx2
 }
 
@@ -181,6 +236,7 @@ pub(crate) fn shifted_factor_impl<'a>(
     q: &[f64],
     a: f64,
     b: f64,
+    contact: Option<&ContactShift>,
 ) -> Result<&'a Data, DynamicsError> {
     outward_inl(
         model,
@@ -189,6 +245,9 @@ pub(crate) fn shifted_factor_impl<'a>(
         Pass::Composite,
         Forces::ALL,
     );
+    if let Some(c) = contact {
+        c.add_chain(model, data, q, a, b);
+    }
     for (r, rm) in model.rods().iter().enumerate() {
         let pieces = rm.spec.geometry.pieces();
         let mut ma_next = Sym6::default();
@@ -239,7 +298,7 @@ pub(crate) fn shifted_factor_impl<'a>(
 }
 
 /// The solve of [`ShiftedSolver::solve`] (arguments checked by the caller).
-fn shifted_solve(model: &Model, data: &Data, x: &mut [f64]) {
+pub(crate) fn shifted_solve(model: &Model, data: &Data, x: &mut [f64]) {
     for (r, rm) in model.rods().iter().enumerate() {
         let pieces = rm.spec.geometry.pieces();
         let mut pa = Vec6::zeros();
@@ -283,6 +342,7 @@ fn shifted_solve(model: &Model, data: &Data, x: &mut [f64]) {
 /// `K_n`, `D_n` (D13), a joint's spring and damper constants (D53), nothing
 /// for bodies and prescribed joints. Leaves `Û`, `D̂⁻¹` per node in `data`;
 /// prescribed joints at `data.prescribed_q` (their last [`Model::set_time`]).
+/// With `contact`, its one-sided blocks join the nodes' sums (CT17).
 pub(crate) fn tree_factor(
     model: &Model,
     tree: &Tree,
@@ -290,6 +350,7 @@ pub(crate) fn tree_factor(
     q: &[f64],
     a: f64,
     b: f64,
+    contact: Option<&ContactShift>,
 ) -> Result<(), DynamicsError> {
     outward(
         model,
@@ -299,6 +360,9 @@ pub(crate) fn tree_factor(
         Pass::Composite,
         Forces::ALL,
     );
+    if let Some(c) = contact {
+        c.add_tree(model, data, q, a, b);
+    }
     for w in &mut data.nodes {
         w.m_tip = Mat6::zeros();
     }

@@ -197,10 +197,13 @@ mod tests {
             "dτ/dq̇"
         );
 
-        crate::algorithms::shifted::shifted_factor_impl(&model, &mut d1, &q, 1e-4, 1e-2).unwrap();
-        // SAFETY: as above.
-        unsafe { crate::algorithms::shifted::shifted_factor_avx2(&model, &mut d2, &q, 1e-4, 1e-2) }
+        crate::algorithms::shifted::shifted_factor_impl(&model, &mut d1, &q, 1e-4, 1e-2, None)
             .unwrap();
+        // SAFETY: as above.
+        unsafe {
+            crate::algorithms::shifted::shifted_factor_avx2(&model, &mut d2, &q, 1e-4, 1e-2, None)
+        }
+        .unwrap();
         for (p1, p2) in d1.pieces[0].iter().zip(&d2.pieces[0]) {
             assert_eq!(
                 bits(p1.dt.as_slice()),

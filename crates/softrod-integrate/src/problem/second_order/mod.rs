@@ -285,7 +285,8 @@ impl<'a, S: SecondOrderSystem> SecondOrderProblem<'a, S> {
 
     /// The Jacobian update of the implicit second-order methods at
     /// `(t, q, q̇)`: the system's structured `M(q) + aK + bD` if it provides
-    /// one and `structured` allows it (nothing is evaluated now; the
+    /// one and `structured` allows it (only its state-dependent extras are
+    /// evaluated now, [`SecondOrderSystem::linearize_shifted`]; the
     /// factorization happens at `q`), else the dense mass-matrix form if the
     /// system provides it, else the dense `∂a/∂q`, `∂a/∂q̇`. Non-finite
     /// entries are reported as `Ok(Some(index))`.
@@ -297,6 +298,11 @@ impl<'a, S: SecondOrderSystem> SecondOrderProblem<'a, S> {
         structured: bool,
     ) -> Result<Option<usize>, SystemError> {
         if structured && self.structured_available(t, q, qd)? {
+            if self.m == 0 {
+                self.sys
+                    .linearize_shifted(t, q, qd)
+                    .map_err(|e| Box::new(e) as SystemError)?;
+            }
             self.kind = JacKind::Structured;
             self.jac_t = t;
             self.jac_q.copy_from(q);

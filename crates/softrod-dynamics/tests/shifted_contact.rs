@@ -1,0 +1,183 @@
+//! The O(N) shifted solve with the contact's stiffness and damping
+//! (`ShiftedSolver::linearize_contact`, docs/theory-contact.md CT17)
+//! against a dense solve of `M + a(K + K_c) + b(D + D_c)` assembled from
+//! independent pieces: the dense `mass_matrix`, `stiffness_matrix`,
+//! `damping_matrix`, and each contact's term from central differences of
+//! what `Model::contacts_with` reports — for a frictionless flat contact
+//! the force is `f_n n` with `n` fixed, so `J_wᵀ K_p J_w = −g_qᵀ ∂f_n/∂q`
+//! and `J_wᵀ C_p J_w = −g_qᵀ ∂f_n/∂q̇` with `g_q = ∂gap/∂q` (the gap's
+//! gradient is `nᵀJ_w`). Contacts at every contact point of the rods,
+//! piece boundaries included, on a chain (one-sided blocks) and on a tree
+//! whose body carries an obstacle pressing from above (two-sided: the
+//! Woodbury part).
+
+use nalgebra::{DMatrix, DVector};
+use softrod_dynamics::{
+    Attachment, BodySpec, Data, Joint, Model, Rod, ShiftedSolver, damping_matrix, mass_matrix,
+    stiffness_matrix,
+};
+use softrod_kinematics::Strain;
+use softrod_lie::Vec3;
+use softrod_mechanics::Material;
+use softrod_mechanics::contact::{Contactee, Obstacle, Shape};
+
+fn silicone() -> Material {
+    Material::builder()
+        .density(1000.0)
+        .young(1.0e6)
+        .poisson(0.5)
+        .viscosity(50.0)
+        .build()
+        .unwrap()
+}
+
+fn plane(z: f64, up: bool) -> Shape {
+    Shape::Plane {
+        point: Vec3::new(0.0, 0.0, z),
+        normal: if up { Vec3::z() } else { -Vec3::z() },
+    }
+}
+
+/// `(gap, normal force)` of every contact at `(q, q̇)`, in the model's order.
+fn report(model: &Model, q: &[f64], qd: &[f64]) -> Vec<(f64, f64)> {
+    let mut data = Data::new(model);
+    model
+        .contacts_with(&mut data, 0.0, q, qd)
+        .unwrap()
+        .iter()
+        .map(|c| (c.gap, c.force.dot(&c.normal)))
+        .collect()
+}
+
+/// `Σ −g_qᵀ (a ∂f_n/∂q + b ∂f_n/∂q̇)` by central differences.
+fn contact_terms(model: &Model, q: &[f64], a: f64, b: f64) -> DMatrix<f64> {
+    let n = model.n_dof();
+    let zero = vec![0.0; n];
+    let base = report(model, q, &zero);
+    let m = base.len();
+    let (mut gq, mut fq, mut fv) = (
+        DMatrix::zeros(m, n),
+        DMatrix::zeros(m, n),
+        DMatrix::zeros(m, n),
+    );
+    let h = 1e-7;
+    for j in 0..n {
+        let mut x = q.to_vec();
+        x[j] += h;
+        let plus = report(model, &x, &zero);
+        x[j] -= 2.0 * h;
+        let minus = report(model, &x, &zero);
+        let mut v = zero.clone();
+        v[j] = h;
+        let vplus = report(model, q, &v);
+        v[j] = -h;
+        let vminus = report(model, q, &v);
+        assert!(plus.len() == m && minus.len() == m && vplus.len() == m && vminus.len() == m);
+        for i in 0..m {
+            gq[(i, j)] = (plus[i].0 - minus[i].0) / (2.0 * h);
+            fq[(i, j)] = (plus[i].1 - minus[i].1) / (2.0 * h);
+            fv[(i, j)] = (vplus[i].1 - vminus[i].1) / (2.0 * h);
+        }
+    }
+    -(gq.transpose() * (fq * a + fv * b))
+}
+
+/// Solves a random right-hand side with the O(N) solver and checks it
+/// against the dense reference; returns the number of contacts.
+fn check(model: &Model, q: &[f64], label: &str) -> usize {
+    let n = model.n_dof();
+    let zero = vec![0.0; n];
+    let contacts = model.contacts(0.0, q, &zero).unwrap();
+    let mut run = Data::new(model);
+    let mut solver = ShiftedSolver::new(model);
+    let kept = solver
+        .linearize_contact(model, &mut run, 0.0, q, &zero)
+        .unwrap();
+    assert_eq!(kept, contacts.len(), "{label}");
+    for (a, b) in [(1e-6, 1e-3), (1e-4, 1e-2), (1e-2, 1e-1)] {
+        let mut data = Data::new(model);
+        let dense = mass_matrix(model, &mut data, q).unwrap().clone()
+            + stiffness_matrix(model) * a
+            + damping_matrix(model) * b
+            + contact_terms(model, q, a, b);
+        let r = DVector::from_fn(n, |i, _| ((i as f64) * 0.77 + 0.3).sin());
+        solver.factor(model, q, a, b).unwrap();
+        let mut x = r.as_slice().to_vec();
+        solver.solve(model, &mut x).unwrap();
+        let x = DVector::from_vec(x);
+        let reference = dense.clone().lu().solve(&r).unwrap();
+        let err = (&x - &reference).amax() / reference.amax();
+        // The differences are good to ~1e-9 of the contact terms.
+        assert!(err < 1e-6, "{label}, a = {a:e}, b = {b:e}: {err:e}");
+        // And the contact matters at these shifts: M + aK + bD alone is far.
+        solver.clear_contact();
+        solver.factor(model, q, a, b).unwrap();
+        let mut y = r.as_slice().to_vec();
+        solver.solve(model, &mut y).unwrap();
+        let off = (DVector::from_vec(y) - &reference).amax() / reference.amax();
+        assert!(
+            off > 1e-3,
+            "{label}, a = {a:e}: contact negligible ({off:e})"
+        );
+        solver
+            .linearize_contact(model, &mut run, 0.0, q, &zero)
+            .unwrap();
+    }
+    contacts.len()
+}
+
+#[test]
+fn a_chain_lying_on_a_table_solves_like_the_dense_matrix() {
+    let r = 0.01;
+    let model = Model::builder()
+        .rod(
+            Rod::builder(0.3)
+                .pieces(4)
+                .strains(Strain::ALL)
+                .circle(r)
+                .material(silicone()),
+        )
+        .gravity([0.0, 0.0, -9.81])
+        .obstacle(Obstacle::new("table", plane(-0.995 * r, true)))
+        .build()
+        .unwrap();
+    let n = model.n_dof();
+    let q: Vec<f64> = (0..n).map(|i| 2e-5 * ((i as f64) * 1.3).sin()).collect();
+    let touching = check(&model, &q, "chain");
+    // Every contact point of the rod but its clamped base: piece
+    // boundaries among them.
+    assert!(touching > 20, "{touching}");
+}
+
+#[test]
+fn a_tree_with_a_body_pressing_from_above_solves_like_the_dense_matrix() {
+    let r = 0.01;
+    let model = Model::builder()
+        .rod_on(
+            Rod::builder(0.2)
+                .name("arm")
+                .pieces(3)
+                .strains(Strain::ALL)
+                .circle(r)
+                .material(silicone()),
+            Attachment::world_joint(Joint::revolute([0.0, 1.0, 0.0])),
+        )
+        .body(
+            BodySpec::principal("lid", 0.05, [1e-5, 1e-5, 1e-5]),
+            Attachment::world_joint(Joint::prismatic([0.0, 0.0, 1.0])),
+        )
+        .gravity([0.0, 0.0, -9.81])
+        .obstacle(Obstacle::new("table", plane(-0.995 * r, true)))
+        .obstacle(Obstacle::new("lid", plane(0.996 * r, false)).on("lid"))
+        .build()
+        .unwrap();
+    let n = model.n_dof();
+    let q: Vec<f64> = (0..n).map(|i| 1e-5 * ((i as f64) * 1.3).sin()).collect();
+    let contacts = model.contacts(0.0, &q, &vec![0.0; n]).unwrap();
+    let on_lid = contacts
+        .iter()
+        .filter(|c| c.b == Contactee::Obstacle(1))
+        .count();
+    assert!(on_lid > 10, "{on_lid}");
+    check(&model, &q, "tree with a body");
+}
