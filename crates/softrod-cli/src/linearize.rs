@@ -1,4 +1,6 @@
-//! `linearize`: the state-space model `(A, B)` about the static equilibrium.
+//! `linearize`: the state-space model `(A, B)` about the static equilibrium;
+//! on a closed model, of its constrained (Baumgarte-stabilized) dynamics
+//! in the model's coordinates (docs/theory-derivatives.md CD9).
 
 use std::path::Path;
 
@@ -51,6 +53,10 @@ pub fn linearize(path: &Path, json: bool) -> Result<(), CliError> {
     // How far the point is from an equilibrium: |q̈| there (statics'
     // residual, seen through M⁻¹).
     let residual = lin.xdot.amax();
+    // Closed models: the rows and the stabilization rate whose double
+    // eigenvalue −α each independent row adds to A.
+    let rows_closed = sim.model().n_constraints();
+    let alpha = sim.model().baumgarte_rate();
     let eq_name = match equilibrium {
         Equilibrium::Rest => "rest",
         Equilibrium::Statics(_) => "statics",
@@ -66,6 +72,8 @@ pub fn linearize(path: &Path, json: bool) -> Result<(), CliError> {
                 "q": q,
                 "u": lin.u.as_slice(),
                 "xdot_residual": residual,
+                "closure_rows": rows_closed,
+                "baumgarte_rate": alpha,
                 "A": rows(&lin.a),
                 "B": rows(&lin.b),
             })
@@ -82,6 +90,13 @@ pub fn linearize(path: &Path, json: bool) -> Result<(), CliError> {
         2 * n,
         inputs.len()
     );
+    if rows_closed > 0 {
+        println!(
+            "closed model: the constrained dynamics (Baumgarte-stabilized), {rows_closed} closure rows; \
+             each independent row adds a double eigenvalue -alpha = {:.4e} 1/s",
+            -alpha
+        );
+    }
     println!("state: {}", state.join(", "));
     if !inputs.is_empty() {
         println!("inputs (cable tensions, N): {}", inputs.join(", "));

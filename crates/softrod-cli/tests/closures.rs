@@ -126,3 +126,70 @@ fn a_closure_that_does_not_hold_is_an_input_error() {
     assert!(err.contains("does not hold"), "{err}");
     std::fs::remove_file(&path).ok();
 }
+
+/// `softrod linearize` on a closed scene (docs/theory-derivatives.md CD9):
+/// a rope pinned at both ends (spherical joint at its base, ball closure
+/// at its tip) sagging under gravity, undamped. The eigenvalues of `A`
+/// are the constrained motion's `±iω`, with `ω` what `softrod modes`
+/// finds on the null space of the closure rows (a second algorithm), and
+/// the Baumgarte stabilization's `−α`, a double per independent row
+/// (here 3: 6 eigenvalues).
+#[test]
+fn linearize_of_a_closed_scene_agrees_with_modes() {
+    let dir = std::env::temp_dir().join(format!("softrod_closed_linearize_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join("rope.toml");
+    std::fs::write(
+        &p,
+        "[world]\ngravity = [0.0, 0.0, -9.81]\n\
+         [[rod]]\nname = \"rope\"\nlength = 0.5\npieces = 4\n\
+         joint = { type = \"spherical\" }\n\
+         section = { shape = \"circle\", radius = 0.01 }\n\
+         material = { density = 1000.0, young = 1.0e6, poisson = 0.5 }\n\
+         [[closure]]\nname = \"pin\"\ntype = \"ball\"\na = { element = \"rope\" }\n\
+         b = { element = \"world\", base = { position = [0.5, 0, 0] } }\n",
+    )
+    .unwrap();
+    let path = p.to_str().unwrap();
+    let v: serde_json::Value =
+        serde_json::from_str(&ok(&softrod(&["linearize", path, "--json"]))).unwrap();
+    assert_eq!(v["equilibrium"], "statics");
+    assert!(v["xdot_residual"].as_f64().unwrap() < 1e-6);
+    assert_eq!(v["closure_rows"], 3);
+    let alpha = v["baumgarte_rate"].as_f64().unwrap();
+    let a_rows = v["A"].as_array().unwrap();
+    let n = a_rows.len();
+    let a = nalgebra::DMatrix::from_fn(n, n, |i, j| a_rows[i][j].as_f64().unwrap());
+    let ev = a.complex_eigenvalues();
+    let stab = ev
+        .iter()
+        .filter(|z| (z.re + alpha).hypot(z.im) < 1e-3 * alpha)
+        .count();
+    assert_eq!(stab, 6, "{ev}");
+    let mut omega: Vec<f64> = ev
+        .iter()
+        .filter(|z| z.im > 1e-3 && z.re.abs() < 1e-6 * z.im)
+        .map(|z| z.im)
+        .collect();
+    omega.sort_by(f64::total_cmp);
+    let m: serde_json::Value =
+        serde_json::from_str(&ok(&softrod(&["modes", path, "--json", "--count", "6"]))).unwrap();
+    let f: Vec<f64> = m["frequencies_hz"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .filter(|x| *x > 0.0)
+        .collect();
+    assert!(f.len() >= 4, "{m}");
+    for (k, fk) in f.iter().enumerate() {
+        let w = 2.0 * std::f64::consts::PI * fk;
+        assert!(
+            (omega[k] - w).abs() < 1e-6 * w,
+            "mode {k}: {} vs {w}",
+            omega[k]
+        );
+    }
+    let text = ok(&softrod(&["linearize", path]));
+    assert!(text.contains("constrained"), "{text}");
+}

@@ -24,7 +24,7 @@
 //! | [`inverse_dynamics_linearization_with`], [`inverse_dynamics_vjp`], [`inverse_dynamics_jvp`] | `uᵀ∂τ/∂q`, `uᵀ∂τ/∂q̇`, `∂τ/∂q·a + ∂τ/∂q̇·b` in O(N), no dense matrix | (D81–D84) |
 //! | [`forward_dynamics_derivatives`] | `∂q̈/∂q`, `∂q̈/∂q̇`, `∂q̈/∂u` | (D48) |
 //! | [`closed_dynamics_derivatives`] | `∂q̈/∂q`, `∂q̈/∂q̇` of a closed model's constrained `q̈` | (CD1–CD4) |
-//! | [`linearize`] | `(A, B)` of `ẋ = f(x, u)`, `x = (q, q̇)` | (D49) |
+//! | [`linearize`] | `(A, B)` of `ẋ = f(x, u)`, `x = (q, q̇)`; closed models: of the constrained `q̈` | (D49), (CD9) |
 //! | [`dynamics_jacobians`] | `∂q̈/∂q`, `∂q̈/∂q̇` (allocating) | (D48) |
 //! | [`section_jacobian`] | world pose and spatial Jacobian of a rod section, through joints and parents | (D11), (D57), (D62) |
 //! | [`ShiftedSolver`] | `(M + aK + bD)⁻¹ x`, O(N), chains and trees; with the contact's stiffness and damping ([`ShiftedSolver::linearize_contact`]) | §6 with armature `aK_n + bD_n`; docs/theory-contact.md CT17 |
@@ -128,9 +128,9 @@ pub use derivatives::{
     DynamicsJacobians, FdDerivatives, IdDerivatives, Linearization, dynamics_jacobians,
     dynamics_jacobians_with, forward_dynamics_derivatives, inverse_dynamics_derivatives,
     inverse_dynamics_derivatives_with, inverse_dynamics_jvp, inverse_dynamics_linearization_with,
-    inverse_dynamics_vjp, linearize,
+    inverse_dynamics_vjp,
 };
-pub use dispatch::{forward_dynamics, forward_dynamics_with};
+pub use dispatch::{forward_dynamics, forward_dynamics_with, linearize};
 pub use error::{DynamicsError, RodId};
 pub use forces::{Drives, Forces};
 pub use model::Data;

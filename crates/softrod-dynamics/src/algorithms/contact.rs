@@ -5,7 +5,7 @@
 //! kinematics, on the tree with the frames of [`super::frames`] (joints,
 //! parents and the bodies that carry obstacles).
 
-use super::frames::{RowBlock, add_frame_columns, frame_state};
+use super::frames::{RowBlock, add_frame_columns, add_prescribed_wrench, frame_state};
 use super::pairs::Search;
 use super::tree::outward;
 use super::{Motion, Pass};
@@ -17,7 +17,7 @@ use crate::model::contact::{Active, ContactWork};
 use crate::model::data::Data;
 use nalgebra::DMatrix;
 use softrod_kinematics::Frame;
-use softrod_lie::{Mat6, Pose, Vec3, skew};
+use softrod_lie::{Mat6, Pose, Vec3, Vec6, skew};
 
 /// What one evaluation asks of contact.
 #[derive(Clone, Copy, Debug)]
@@ -362,6 +362,69 @@ fn evaluate_tree(
         }
     }
     work.jrel = jrel;
+}
+
+/// The contacts' share of the prescribed joints' forces (CT18) into
+/// `work.tau_p`: `Σ J_pᵀ f` over the touching points of the last
+/// evaluation (`work.active` and the pairs'), each force at its rod's
+/// centreline point, an obstacle's body and a pair's rod `b` feeling the
+/// opposite. `J_p` are the prescribed joints' columns on each point's path
+/// to the root; the node poses in `data.nodes` must be this state's (any
+/// sweep at the same `q`). Zero without prescribed joints.
+pub(crate) fn prescribed_share(model: &Model, data: &Data, work: &mut ContactWork, q: &[f64]) {
+    work.tau_p.fill(0.0);
+    let Some(tree) = &model.tree else {
+        return;
+    };
+    if model.n_prescribed() == 0 {
+        return;
+    }
+    let rod_frame = |rod: usize, s: f64| {
+        let (piece, x) = model.rods[rod]
+            .spec
+            .geometry
+            .locate(s)
+            .expect("a contact point lies on its rod");
+        ResolvedFrame {
+            target: Target::Rod {
+                rod,
+                piece,
+                x,
+                node: tree.rod_nodes[rod][piece],
+            },
+            offset: Pose::identity(),
+        }
+    };
+    let wrench = |p: &Vec3, f: &Vec3| {
+        let m = p.cross(f);
+        Vec6::new(m.x, m.y, m.z, f.x, f.y, f.z)
+    };
+    let out = work.tau_p.as_mut_slice();
+    for a in &work.active {
+        let s = model.contact.samples[a.rod][a.sample].s;
+        let fs = frame_state(model, tree, data, &rod_frame(a.rod, s), q, None);
+        let w = wrench(&fs.pose.translation, &a.force);
+        add_prescribed_wrench(tree, data, &fs, &w, out);
+        if let Some(b) = model.contact.parents[a.obstacle] {
+            let body = ResolvedFrame {
+                target: Target::Body {
+                    node: tree.body_nodes[b],
+                },
+                offset: Pose::identity(),
+            };
+            let fb = frame_state(model, tree, data, &body, q, None);
+            add_prescribed_wrench(tree, data, &fb, &(-w), out);
+        }
+    }
+    if let Some(pw) = &work.pairs {
+        for c in &pw.active {
+            for (rod, s, sign) in [(c.a, c.sa, 1.0), (c.b, c.sb, -1.0)] {
+                let fs = frame_state(model, tree, data, &rod_frame(rod, s), q, None);
+                let w = wrench(&fs.pose.translation, &(c.force * sign));
+                add_prescribed_wrench(tree, data, &fs, &w, out);
+            }
+        }
+    }
 }
 
 /// The velocity of the world point `p` of a frame with spatial twist

@@ -184,6 +184,33 @@ pub(crate) fn add_frame_columns(
     }
 }
 
+/// Adds `S_pᵀ W` into `out` (n_prescribed) for every prescribed joint on
+/// the frame's path to the root (D59, D62): the generalized force on the
+/// prescribed coordinates of the world wrench `W` (spatial, at the world
+/// origin, angular first) acting on the frame's node — `J_pᵀ f` of a
+/// force `f` at a point `p` with `W = (p × f, f)`.
+pub(crate) fn add_prescribed_wrench(
+    tree: &Tree,
+    data: &Data,
+    fs: &FrameState,
+    wrench: &Vec6,
+    out: &mut [f64],
+) {
+    let mut c = fs.from;
+    let mut anc = fs.ancestors;
+    while let Some(j) = anc {
+        let nj = &tree.nodes[j];
+        if let (Some((o, kp)), Some(cc)) = (nj.prescribed, c) {
+            let col = parent_column(tree, data, cc);
+            for k in 0..kp {
+                out[o + k] += col.column(k).dot(wrench);
+            }
+        }
+        c = Some(j);
+        anc = nj.parent;
+    }
+}
+
 /// World poses of every rod's base frame and every body's frame into
 /// `data.rod_bases`, `data.body_poses` (D51).
 pub(crate) fn frames(model: &Model, tree: &Tree, data: &mut Data, q: &[f64]) {

@@ -161,8 +161,12 @@ pub(crate) fn inverse_dynamics_open(
         }
     }
     if contact {
-        if let Some(w) = &data.contact {
+        if let Some(mut w) = data.contact.take() {
             data.tau -= &w.tau;
+            // The drives hold the rods against the contact forces too (CT18).
+            contact::prescribed_share(model, data, &mut w, motion.q);
+            data.prescribed_force -= &w.tau_p;
+            data.contact = Some(w);
         }
     }
 }
@@ -225,6 +229,11 @@ pub(crate) fn forward_dynamics_open(
             qd,
             Some(work.tau_total.as_slice()),
         );
+        if result.is_ok() {
+            // The drives hold the rods against the contact forces too (CT18).
+            contact::prescribed_share(model, data, &mut work, q);
+            data.prescribed_force -= &work.tau_p;
+        }
         data.contact = Some(work);
         return result;
     }

@@ -17,6 +17,7 @@ use crate::model::contact::ContactWork;
 use crate::model::data::Data;
 use crate::model::pairs::{
     BROADPHASE_MARGIN, PairActive, PairWork, SegmentBox, exclusion, may_touch, radius_at,
+    radius_slope,
 };
 use softrod_kinematics::Frame;
 use softrod_lie::{Mat3, Pose, Vec3};
@@ -425,6 +426,25 @@ fn narrowphase(
     let va = sec.at(a, sa, true).velocity;
     let vb = sec.at(b, sb, true).velocity;
     let cf = force(&law, &dist, ra + rb, &(va - vb), stretch);
+    // The law's radius moves with the closest point on a tapered rod
+    // (CT14): its derivative by a central difference of the scalar law
+    // (two force evaluations, only then; the branches of min and max held).
+    let slope = if ra <= rb {
+        radius_slope(model, a)
+    } else {
+        radius_slope(model, b)
+    };
+    let dr = if slope != 0.0 {
+        let r = ra.min(rb);
+        let h = 1e-4 * r;
+        let at = |r: f64| {
+            let law = pair_law(model, a, sa, b, sb, r, ask.friction).scaled(scale, offset);
+            force(&law, &dist, ra + rb, &(va - vb), stretch).f
+        };
+        (at(r + h) - at(r - h)) / (2.0 * h)
+    } else {
+        Vec3::zeros()
+    };
     pw.active.push(PairActive {
         a,
         sa,
@@ -437,6 +457,7 @@ fn narrowphase(
         sticking: cf.sticking,
         radius_a: ra,
         k: law.k,
+        dr,
         seeds: (*ba, *bb),
         dw: cf.dp - cf.de,
         dv: cf.dv,

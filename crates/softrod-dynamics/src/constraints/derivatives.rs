@@ -16,7 +16,7 @@ use crate::derivatives::{IdDerivatives, open_tree_id_derivatives};
 use crate::error::DynamicsError;
 use crate::forces::Forces;
 use crate::model::Model;
-use crate::model::data::{ConstraintRows, Data, SolveNode};
+use crate::model::data::{ClosureWork, ConstraintRows, Data, SolveNode};
 use crate::model::tree::Tree;
 use nalgebra::{DMatrix, DVector};
 
@@ -275,42 +275,8 @@ pub fn closed_dynamics_derivatives<'a>(
     let Some(cw) = data.closure.as_ref() else {
         unreachable!("check_workspace found the closure buffers")
     };
-    let r = cw.rank;
-    for (x, dr) in [(&mut w.dqdd_dq, &w.rows_dq), (&mut w.dqdd_dqd, &w.rows_dqd)] {
-        for j in 0..n {
-            // s = −∂R/∂p_j − J X_j, permuted to the pivot order.
-            for i in 0..m {
-                let p = cw.perm[i];
-                let mut s = -dr[(p, j)];
-                for c in 0..n {
-                    s -= cw.rows.jac[(p, c)] * x[(c, j)];
-                }
-                w.z[i] = s;
-            }
-            // L L^T z = s on the first r (kept) rows.
-            for i in 0..r {
-                let mut s = w.z[i];
-                for k in 0..i {
-                    s -= cw.a[(i, k)] * w.z[k];
-                }
-                w.z[i] = s / cw.a[(i, i)];
-            }
-            for i in (0..r).rev() {
-                let mut s = w.z[i];
-                for k in i + 1..r {
-                    s -= cw.a[(k, i)] * w.z[k];
-                }
-                w.z[i] = s / cw.a[(i, i)];
-            }
-            for i in 0..r {
-                let p = cw.perm[i];
-                let zi = w.z[i];
-                for c in 0..n {
-                    x[(c, j)] += cw.y[(c, p)] * zi;
-                }
-            }
-        }
-    }
+    project(cw, &mut w.dqdd_dq, Some(&w.rows_dq), &mut w.z);
+    project(cw, &mut w.dqdd_dqd, Some(&w.rows_dqd), &mut w.z);
     for (what, x) in [("dqdd/dq", &w.dqdd_dq), ("dqdd/dqdot", &w.dqdd_dqd)] {
         if let Some((i, v)) = x.iter().enumerate().find(|(_, v)| !v.is_finite()) {
             return Err(DynamicsError::NotFinite {
@@ -320,4 +286,77 @@ pub fn closed_dynamics_derivatives<'a>(
         }
     }
     Ok(work)
+}
+
+/// (CD4) in place on the columns of `x` (each `X_j = M⁻¹ g_j`):
+/// `x_j ← X_j + Y A⁻¹(h_j − J X_j)`, `h_j = −(∂R/∂p)_j` (`dr`; `None`:
+/// `h = 0`, the response to a generalized force), with `Y = M⁻¹Jᵀ`, `J`
+/// and the pivoted Cholesky of `A = J M⁻¹ Jᵀ` the constrained forward
+/// dynamics left in `cw` (its kept rows; redundant ones get `λ = 0`).
+// Triangular solves read clearest with explicit indices.
+#[allow(clippy::needless_range_loop)]
+fn project(
+    cw: &ClosureWork,
+    x: &mut DMatrix<f64>,
+    dr: Option<&DMatrix<f64>>,
+    z: &mut DVector<f64>,
+) {
+    let (n, m, r) = (x.nrows(), z.len(), cw.rank);
+    for j in 0..x.ncols() {
+        // s = h − J X_j, permuted to the pivot order.
+        for i in 0..m {
+            let p = cw.perm[i];
+            let mut s = dr.map_or(0.0, |d| -d[(p, j)]);
+            for c in 0..n {
+                s -= cw.rows.jac[(p, c)] * x[(c, j)];
+            }
+            z[i] = s;
+        }
+        // L L^T z = s on the first r (kept) rows.
+        for i in 0..r {
+            let mut s = z[i];
+            for k in 0..i {
+                s -= cw.a[(i, k)] * z[k];
+            }
+            z[i] = s / cw.a[(i, i)];
+        }
+        for i in (0..r).rev() {
+            let mut s = z[i];
+            for k in i + 1..r {
+                s -= cw.a[(k, i)] * z[k];
+            }
+            z[i] = s / cw.a[(i, i)];
+        }
+        for i in 0..r {
+            let p = cw.perm[i];
+            let zi = z[i];
+            for c in 0..n {
+                x[(c, j)] += cw.y[(c, p)] * zi;
+            }
+        }
+    }
+}
+
+/// `∂q̈/∂u` of the constrained forward dynamics (CD4 with `h = 0`): the
+/// cables' generalized forces `λA(q)` (`x`, n_dof × n_u, overwritten)
+/// through `M⁻¹` and the projection on the closures' rows. Call right
+/// after [`closed_dynamics_derivatives`] at the same state (its
+/// factorizations are in `data`).
+pub(crate) fn closed_input_response(
+    model: &Model,
+    data: &mut Data,
+    work: &mut ClosedDerivatives,
+    x: &mut DMatrix<f64>,
+) {
+    let Some(tree) = &model.tree else {
+        unreachable!("closures live on the tree")
+    };
+    let n = model.n_dof();
+    for col in x.as_mut_slice().chunks_exact_mut(n.max(1)) {
+        tree_solve(tree, data, &mut work.solve, col);
+    }
+    let Some(cw) = data.closure.as_ref() else {
+        unreachable!("the constrained forward dynamics ran")
+    };
+    project(cw, x, None, &mut work.z);
 }

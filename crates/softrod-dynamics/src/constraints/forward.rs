@@ -7,6 +7,7 @@ use super::queries::check_workspace;
 use super::rows::{assemble, prescribed_columns};
 use crate::algorithms::Motion;
 use crate::algorithms::Pass;
+use crate::algorithms::contact::prescribed_share;
 use crate::algorithms::contact_force;
 use crate::algorithms::shifted::tree_solve;
 use crate::algorithms::tree::{self, outward};
@@ -91,6 +92,12 @@ pub(crate) fn forward_dynamics(
         cw.tau_total += &cw.tau;
         let total = Some(cw.tau_total.as_slice());
         let out = forward_inner(model, data, &mut w, forces, t, (q, qd), total);
+        if out.is_ok() && model.n_prescribed() > 0 {
+            // The drives hold the rods against the contact forces too
+            // (CT18), on top of the closures' share.
+            prescribed_share(model, data, &mut cw, q);
+            data.prescribed_force -= &cw.tau_p;
+        }
         data.contact = Some(cw);
         out
     } else {

@@ -126,7 +126,7 @@ fn fd_derivatives<'a>(
     }
     if model.has_closures() {
         return Err(DynamicsError::UnsupportedClosed {
-            what: "forward_dynamics_derivatives",
+            what: "forward_dynamics_derivatives (closed models: closed_dynamics_derivatives, or linearize)",
         });
     }
     check_forward_inputs(model, forces, q, qd, tau_act)?;
@@ -158,7 +158,7 @@ fn fd_derivatives<'a>(
 }
 
 /// `λ A(q)` into `out` (n_dof × n_cables) without allocating.
-fn fill_actuation(
+pub(crate) fn fill_actuation(
     model: &Model,
     q: &[f64],
     scale: f64,
@@ -203,35 +203,27 @@ pub struct Linearization {
     pub u: DVector<f64>,
 }
 
-/// Linearizes `ẋ = f(x, u)`, `x = (q, q̇)`, about `(q, q̇)` at time `t`
-/// under `τ_act` (`None` = 0), with `u` the cable tensions (their operating
-/// values are the tension schedules at `t`, or the inputs set by
-/// [`Data::set_cable_tensions`]):
-/// `ẋ ≈ f(x₀, u₀) + A (x − x₀) + B (u − u₀)` with `A`, `B` of
-/// [`Linearization`], from [`forward_dynamics_derivatives`]. What
-/// model-based control (LQR, MPC, trajectory optimization) needs. Allocates
-/// the outputs (A: 2n × 2n, B: 2n × n_u); the heavy work is in `work`.
-pub fn linearize(
+/// The [`Linearization`] of the derivatives `∂q̈/∂q`, `∂q̈/∂q̇`, `∂q̈/∂u`
+/// and `q̈` at `(t, q̇)` (D49), the operating tensions from `data`.
+pub(crate) fn assemble_linearization(
     model: &Model,
-    data: &mut Data,
-    work: &mut FdDerivatives,
+    data: &Data,
     t: f64,
-    q: &[f64],
     qd: &[f64],
-    tau_act: Option<&[f64]>,
-) -> Result<Linearization, DynamicsError> {
-    forward_dynamics_derivatives(model, data, work, t, q, qd, tau_act)?;
+    (dqdd_dq, dqdd_dqd, dqdd_du): (&DMatrix<f64>, &DMatrix<f64>, &DMatrix<f64>),
+    qdd: &DVector<f64>,
+) -> Linearization {
     let n = model.n_dof();
     let nu = model.n_cables();
     let mut a = DMatrix::zeros(2 * n, 2 * n);
     a.view_mut((0, n), (n, n)).fill_with_identity();
-    a.view_mut((n, 0), (n, n)).copy_from(&work.dqdd_dq);
-    a.view_mut((n, n), (n, n)).copy_from(&work.dqdd_dqd);
+    a.view_mut((n, 0), (n, n)).copy_from(dqdd_dq);
+    a.view_mut((n, n), (n, n)).copy_from(dqdd_dqd);
     let mut b = DMatrix::zeros(2 * n, nu);
-    b.view_mut((n, 0), (n, nu)).copy_from(&work.dqdd_du);
+    b.view_mut((n, 0), (n, nu)).copy_from(dqdd_du);
     let mut xdot = DVector::zeros(2 * n);
     xdot.rows_mut(0, n).copy_from_slice(qd);
-    xdot.rows_mut(n, n).copy_from(&work.qdd);
+    xdot.rows_mut(n, n).copy_from(qdd);
     let u = DVector::from_iterator(
         nu,
         model
@@ -239,7 +231,7 @@ pub fn linearize(
             .iter()
             .flat_map(|r| (0..r.spec.cables.len()).map(|c| data.tension(r, c, t))),
     );
-    Ok(Linearization { a, b, xdot, u })
+    Linearization { a, b, xdot, u }
 }
 
 /// Jacobians of the forward dynamics at `(q, q̇, t)` under `τ_act`:

@@ -27,7 +27,7 @@ pub(crate) mod vjp;
 
 pub use forward::{
     DynamicsJacobians, FdDerivatives, Linearization, dynamics_jacobians, dynamics_jacobians_with,
-    forward_dynamics_derivatives, linearize,
+    forward_dynamics_derivatives,
 };
 
 use crate::algorithms::check_vec;

@@ -282,6 +282,9 @@ pub(crate) struct ContactWork {
     /// `τ_act + τ_contact` for the forward dynamics.
     pub tau: DVector<f64>,
     pub tau_total: DVector<f64>,
+    /// The contact forces' generalized force on the prescribed coordinates
+    /// (n_prescribed, `Σ J_pᵀ f`, CT18): what the drives need less.
+    pub tau_p: DVector<f64>,
     /// Friction anchors (CT5), committed after accepted steps: per rod,
     /// `sample · n_obstacles + obstacle`, in the obstacle's parent frame.
     pub anchors: Vec<Vec<Option<Vec3>>>,
@@ -360,6 +363,7 @@ impl ContactWork {
             active: Vec::with_capacity(64),
             tau: DVector::zeros(model.n_dof()),
             tau_total: DVector::zeros(model.n_dof()),
+            tau_p: DVector::zeros(model.n_prescribed()),
             anchors: model
                 .contact
                 .samples

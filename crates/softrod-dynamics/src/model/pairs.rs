@@ -32,6 +32,23 @@ pub(crate) fn radius_at(model: &Model, rod: usize, s: f64) -> f64 {
         .unwrap_or_else(|| contact_radius(spec.properties.section(), s.clamp(0.0, length), length))
 }
 
+/// `∂r/∂s` of rod `rod`'s contact radius (CT14): the taper's slope for
+/// a tapered circle, zero for a uniform section or a fixed `contact_radius`.
+pub(crate) fn radius_slope(model: &Model, rod: usize) -> f64 {
+    let spec = &model.rods[rod].spec;
+    let length = spec.geometry.length();
+    match (spec.contact_radius, *spec.properties.section()) {
+        (
+            None,
+            softrod_mechanics::Section::TaperedCircle {
+                radius_base,
+                radius_tip,
+            },
+        ) if length > 0.0 => (radius_tip - radius_base) / length,
+        _ => 0.0,
+    }
+}
+
 /// Whether the points `(a, sa)` and `(b, sb)` may touch (CT9): different
 /// rods with `rods` on, except a child rod's base against its parent rod
 /// near the attachment; the same rod with `self` on, farther apart along
@@ -87,6 +104,10 @@ pub(crate) struct PairActive {
     /// Surface radius of `a` at `sa`, the stiffness of the pair's law.
     pub radius_a: f64,
     pub k: f64,
+    /// `∂f/∂r` of the law's radius `r = min(r_a, r_b)` (its stiffness,
+    /// damping and `ε`, `Law::pair`) at this pair's state; zero unless
+    /// that radius varies along its rod (CT14).
+    pub dr: Vec3,
     /// The two segments whose closest points seeded it.
     pub seeds: (SegmentBox, SegmentBox),
     /// `∂f/∂w` (`w = p_a − p_b`, the stretch held), `∂f/∂v`, `∂f/∂e` of

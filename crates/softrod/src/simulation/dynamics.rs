@@ -162,6 +162,9 @@ impl Simulation {
     /// dynamics about `(q, q̇)` at `t`, `x = (q, q̇)` (2·n_dof), `u` the cable
     /// tensions (the inputs, or the schedules at `t`), from the analytic
     /// derivatives (D30–D49): what LQR, MPC and trajectory optimization need.
+    /// On a model with loop closures, of the constrained (Baumgarte-
+    /// stabilized) dynamics in the model's coordinates
+    /// (docs/theory-derivatives.md CD9).
     pub fn linearize(&mut self, t: f64, q: &[f64], qdot: &[f64]) -> Result<Linearization> {
         let s = &mut self.system;
         let mut work = FdDerivatives::new(&s.model);
