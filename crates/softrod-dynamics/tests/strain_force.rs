@@ -9,7 +9,7 @@
 
 mod common;
 
-use common::{Lcg, Shape, Terms, bases, model, robot, rod_spec, state, tilted_base};
+use common::{Lcg, Shape, Terms, driven_tree, model, robot, rod_spec, state};
 use nalgebra::DVector;
 use softrod_dynamics::*;
 use softrod_kinematics::{Basis, Strain};
@@ -97,49 +97,7 @@ fn the_strain_space_force_is_all_of_id_that_moduli_viscosity_and_tensions_change
     check("planar rod", &planar, 0.1, &mut rng);
     check("robot", &robot(true, true, true, true), 0.0, &mut rng);
     // A branch inside a piece and a rod on a prescribed joint.
-    let trunk = rod_spec(
-        "trunk",
-        &Shape::new(3, vec![Basis::all()]),
-        Terms::ALL,
-        tilted_base(),
-    );
-    let mut bs = Shape::new(2, bases());
-    bs.length = 0.2;
-    let branch = rod_spec("branch", &bs, Terms::ALL, Pose::identity());
-    let tail = rod_spec(
-        "tail",
-        &Shape::new(2, vec![Basis::all()]),
-        Terms::ALL,
-        Pose::identity(),
-    );
-    let drive =
-        Joint::prismatic([0.0, 1.0, 0.3]).with_prescribed(Prescribed::new(vec![Curve::Sine {
-            amplitude: 0.02,
-            frequency: 1.3,
-            phase: 0.4,
-            offset: 0.01,
-        }]));
-    let tree = Model::with_elements(
-        vec![
-            Element::Rod(
-                trunk,
-                Attachment::world_joint(
-                    Joint::revolute([0.0, 1.0, 0.3])
-                        .with_stiffness(&[0.2])
-                        .with_damping(&[0.01]),
-                ),
-            ),
-            Element::Rod(
-                branch,
-                Attachment::to("trunk", Joint::universal([0.0, 0.0, 1.0], [0.0, 1.0, 0.0]))
-                    .at(0.17),
-            ),
-            Element::Rod(tail, Attachment::to("trunk", drive)),
-        ],
-        Some(softrod_lie::Vec3::new(0.0, 0.0, -9.81)),
-        4,
-    )
-    .unwrap();
+    let tree = driven_tree();
     check("tree with a prescribed joint", &tree, 0.37, &mut rng);
 }
 

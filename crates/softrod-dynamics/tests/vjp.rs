@@ -10,7 +10,9 @@
 
 mod common;
 
-use common::{Lcg, Shape, Terms, bases, model, robot, rod_spec, state, tilted_base, two_rods};
+use common::{
+    Lcg, Shape, Terms, driven_tree, model, robot, rod_spec, state, tilted_base, two_rods,
+};
 use nalgebra::DVector;
 use softrod_dynamics::*;
 use softrod_kinematics::{Basis, Strain};
@@ -163,46 +165,7 @@ fn trees_with_joints_bodies_and_branches() {
 #[test]
 fn tree_with_revolute_inside_branch_and_prescribed_joint() {
     let mut rng = Lcg(29);
-    let trunk = rod_spec(
-        "trunk",
-        &Shape::new(3, vec![Basis::all()]),
-        Terms::ALL,
-        tilted_base(),
-    );
-    let mut bs = Shape::new(2, bases());
-    bs.length = 0.2;
-    let branch = rod_spec("branch", &bs, Terms::ALL, Pose::identity());
-    let mut ts = Shape::new(2, vec![Basis::all()]);
-    ts.length = 0.15;
-    let tail = rod_spec("tail", &ts, Terms::ALL, Pose::identity());
-    let drive =
-        Joint::prismatic([0.0, 1.0, 0.3]).with_prescribed(Prescribed::new(vec![Curve::Sine {
-            amplitude: 0.02,
-            frequency: 1.3,
-            phase: 0.4,
-            offset: 0.01,
-        }]));
-    let m = Model::with_elements(
-        vec![
-            Element::Rod(
-                trunk,
-                Attachment::world_joint(
-                    Joint::revolute([0.0, 1.0, 0.3])
-                        .with_stiffness(&[0.2])
-                        .with_damping(&[0.01]),
-                ),
-            ),
-            Element::Rod(
-                branch,
-                Attachment::to("trunk", Joint::universal([0.0, 0.0, 1.0], [0.0, 1.0, 0.0]))
-                    .at(0.17),
-            ),
-            Element::Rod(tail, Attachment::to("trunk", drive)),
-        ],
-        Some(softrod_lie::Vec3::new(0.0, 0.0, -9.81)),
-        4,
-    )
-    .unwrap();
+    let m = driven_tree();
     assert_eq!(m.n_prescribed(), 1);
     for t in [0.0, 0.37] {
         let (q, qd, qdd) = state(&mut rng, m.n_dof(), 0.3, 1.0, 2.0);

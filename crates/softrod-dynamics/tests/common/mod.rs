@@ -7,7 +7,8 @@ pub mod closed;
 
 use nalgebra::{DMatrix, DVector, Matrix6xX};
 use softrod_dynamics::{
-    Attachment, BodyLoad, BodySpec, Data, Joint, Model, Rod, RodBuilder, forward_dynamics,
+    Attachment, BodyLoad, BodySpec, Curve, Data, Element, Joint, Model, Prescribed, Rod,
+    RodBuilder, forward_dynamics,
 };
 use softrod_kinematics::{Basis, PieceSpec, RodGeometry, Strain};
 use softrod_lie::{Mat3, Pose, Vec3, Vec6, exp_twist};
@@ -531,4 +532,51 @@ pub fn ritz_constant(bl: f64) -> f64 {
         b += w * d2(u).powi(2);
     }
     a / b / 24.0
+}
+
+/// A trunk on a revolute joint with a spring and a damper, a branch on a
+/// universal joint inside its second piece, and at its tip a rod on a
+/// prescribed prismatic joint (a sine drive), every rod with cables and
+/// dead loads (`Terms::ALL`), under gravity.
+pub fn driven_tree() -> Model {
+    let trunk = rod_spec(
+        "trunk",
+        &Shape::new(3, vec![Basis::all()]),
+        Terms::ALL,
+        tilted_base(),
+    );
+    let mut bs = Shape::new(2, bases());
+    bs.length = 0.2;
+    let branch = rod_spec("branch", &bs, Terms::ALL, Pose::identity());
+    let mut ts = Shape::new(2, vec![Basis::all()]);
+    ts.length = 0.15;
+    let tail = rod_spec("tail", &ts, Terms::ALL, Pose::identity());
+    let drive =
+        Joint::prismatic([0.0, 1.0, 0.3]).with_prescribed(Prescribed::new(vec![Curve::Sine {
+            amplitude: 0.02,
+            frequency: 1.3,
+            phase: 0.4,
+            offset: 0.01,
+        }]));
+    Model::with_elements(
+        vec![
+            Element::Rod(
+                trunk,
+                Attachment::world_joint(
+                    Joint::revolute([0.0, 1.0, 0.3])
+                        .with_stiffness(&[0.2])
+                        .with_damping(&[0.01]),
+                ),
+            ),
+            Element::Rod(
+                branch,
+                Attachment::to("trunk", Joint::universal([0.0, 0.0, 1.0], [0.0, 1.0, 0.0]))
+                    .at(0.17),
+            ),
+            Element::Rod(tail, Attachment::to("trunk", drive)),
+        ],
+        Some(softrod_lie::Vec3::new(0.0, 0.0, -9.81)),
+        4,
+    )
+    .unwrap()
 }
