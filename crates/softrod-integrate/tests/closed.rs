@@ -11,8 +11,8 @@
 
 use nalgebra::DVector;
 use softrod_dynamics::{
-    Attachment, Closure, ClosureFrame, ClosureKind, Curve, Joint, Model, Prescribed, Rod,
-    Data, constraint_residual, max_closure_residual,
+    Attachment, Closure, ClosureFrame, ClosureKind, Curve, Data, Joint, Model, Prescribed, Rod,
+    constraint_residual, max_closure_residual,
 };
 use softrod_integrate::{
     Integrator, Iteration, NoHooks, Options, RodSystem, Solution, Stats, integrate_second_order,
@@ -244,9 +244,16 @@ fn esdirk_settles_a_pinned_cable_like_a_tight_radau_run() {
         let mut opts = Options::tol(rtol, atol);
         opts.t_eval = Some(times.clone());
         let z = DVector::zeros(n);
-        let sol =
-            integrate_second_order(&mut sys, integrator, (0.0, t1), &q0, &z, &opts, &mut NoHooks)
-                .unwrap();
+        let sol = integrate_second_order(
+            &mut sys,
+            integrator,
+            (0.0, t1),
+            &q0,
+            &z,
+            &opts,
+            &mut NoHooks,
+        )
+        .unwrap();
         let mut gaps = Vec::new();
         for y in &sol.y {
             gaps.push(max_closure_residual(&sys.model, &mut sys.data, &y.as_slice()[..n]).unwrap());
@@ -282,7 +289,11 @@ fn esdirk_settles_a_pinned_cable_like_a_tight_radau_run() {
     };
     let (reference, _) = solve(Integrator::Radau5, 1e-10, 1e-12);
     let (esdirk, gaps) = solve(Integrator::Esdirk, 1e-3, 1e-5);
-    assert!(gaps[0] < 1e-12, "the start holds the closure: {:e}", gaps[0]);
+    assert!(
+        gaps[0] < 1e-12,
+        "the start holds the closure: {:e}",
+        gaps[0]
+    );
     let (mut late, mut late_gap): (f64, f64) = (0.0, 0.0);
     for (k, (a, b)) in esdirk.y.iter().zip(&reference.y).enumerate() {
         if times[k] >= 2.0 {
@@ -298,7 +309,10 @@ fn esdirk_settles_a_pinned_cable_like_a_tight_radau_run() {
     // Measured: 4.2e-7 m after t = 2 s, a speed of 5.7e-9 m/s in 363 steps;
     // with the outputs taken from the Hermite across the steps (before
     // CD10) 4.4e-5 m.
-    assert!(late < 2e-6, "after t = 2 s the points are {late:e} m off the reference");
+    assert!(
+        late < 2e-6,
+        "after t = 2 s the points are {late:e} m off the reference"
+    );
     assert!(speed < 1e-7, "settling speed {speed:e} m/s");
     assert!(late_gap < 1e-6, "closure gap after t = 2 s {late_gap:e} m");
 }
