@@ -97,8 +97,9 @@ pub struct Options {
     /// Maximum number of accepted steps.
     pub max_steps: usize,
     /// Output times (sorted, within `[t0, t1]`), filled by dense output — the
-    /// steps are not forced to hit them. `None`: output `t0` and every accepted
-    /// step.
+    /// steps are not forced to hit them, except ESDIRK's adaptive steps,
+    /// which end on them (docs/theory-derivatives.md CD10). `None`: output
+    /// `t0` and every accepted step.
     pub t_eval: Option<Vec<f64>>,
     /// Bound on the max-norm of the state; exceeding it is an error
     /// (default `∞`).
