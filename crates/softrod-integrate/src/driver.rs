@@ -165,7 +165,7 @@ fn step_end(opts: &Options, t: f64, t1: f64) -> f64 {
 }
 
 /// Where the next step must end at the latest when the method's steps end
-/// on the output times ([`Stepper::STEPS_TO_OUTPUTS`]): the first output
+/// on the output times ([`Options::steps_to_outputs`]): the first output
 /// time after `t` that comes before `end` (the breakpoint or `t1`), with
 /// the same rounding rule as [`step_end`]; `end` otherwise, and always for
 /// fixed steps.
@@ -357,7 +357,7 @@ fn drive<P: Problem, St: Stepper<P>>(
             st.restart_after_breakpoint(p, &mut stats)?;
         }
         let bp_end = step_end(opts, st.t(), t1);
-        let end = if St::STEPS_TO_OUTPUTS {
+        let end = if opts.steps_to_outputs {
             output_end(opts, te, next_out, st.t(), bp_end)
         } else {
             bp_end

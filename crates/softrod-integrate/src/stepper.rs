@@ -14,11 +14,6 @@ pub(crate) trait Stepper<P: Problem> {
     /// The order `p` the starting-step heuristic assumes (the first step
     /// aims at a local error `~ h^(p+1)` of the tolerance).
     const START_ORDER: i32;
-    /// Whether adaptive steps end on the requested output times
-    /// ([`Options::t_eval`]) rather than straddling them: for a method whose
-    /// dense output is not to be trusted over its longest steps (ESDIRK's
-    /// quintic Hermite, docs/theory-derivatives.md CD10). Default `false`.
-    const STEPS_TO_OUTPUTS: bool = false;
     /// Resets the method's own state for a run from the step state's
     /// `(t, y)` (just set by [`init`](Self::init)) and evaluates what its
     /// first step needs, the derivative `f` at least.

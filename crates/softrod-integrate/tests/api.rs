@@ -97,6 +97,65 @@ fn dense_output_at_requested_times_does_not_force_steps() {
     }
 }
 
+/// `Options::steps_to_outputs` (docs/theory-derivatives.md CD10): the
+/// adaptive methods' steps end on the 401 output times (at least one step
+/// per output interval, where the same run without it steps across them),
+/// and the outputs, now step ends, are as accurate as the dense ones
+/// against the exact solution.
+#[test]
+fn steps_to_outputs_ends_the_adaptive_steps_on_the_output_times() {
+    let sys = Linear::damped();
+    let t_eval: Vec<f64> = (0..=400).map(|i| i as f64 * 0.01).collect();
+    for method in [
+        Integrator::Dopri5,
+        Integrator::Rosenbrock,
+        Integrator::Esdirk,
+        Integrator::Radau5,
+    ] {
+        let free_opts = opts_for(method, 0.0, 1e-6).with_t_eval(t_eval.clone());
+        let landed_opts = Options {
+            steps_to_outputs: true,
+            ..free_opts.clone()
+        };
+        let free = run(method, &mut sys.clone(), 4.0, &free_opts);
+        let landed = run(method, &mut sys.clone(), 4.0, &landed_opts);
+        assert_eq!(landed.t, t_eval);
+        assert!(
+            free.stats.steps < 400 && landed.stats.steps >= 400,
+            "{method:?}: {} steps free, {} landed",
+            free.stats.steps,
+            landed.stats.steps
+        );
+        let err = |sol: &softrod_integrate::Solution| {
+            sol.t
+                .iter()
+                .zip(&sol.y)
+                .map(|(&t, y)| dist(y, &sys.exact(t, &Linear::y0())))
+                .fold(0.0, f64::max)
+        };
+        assert!(
+            err(&landed) < 1e-4 && err(&free) < 1e-4,
+            "{method:?}: error {:e} landed, {:e} free",
+            err(&landed),
+            err(&free)
+        );
+    }
+    // Fixed steps keep their grid.
+    let fixed = opts_for(Integrator::Rk4, 0.05, 0.0).with_t_eval(t_eval.clone());
+    let a = run(Integrator::Rk4, &mut sys.clone(), 4.0, &fixed);
+    let b = run(
+        Integrator::Rk4,
+        &mut sys.clone(),
+        4.0,
+        &Options {
+            steps_to_outputs: true,
+            ..fixed
+        },
+    );
+    assert_eq!(a.stats.steps, b.stats.steps);
+    assert_eq!(a.y, b.y);
+}
+
 /// `q̈ = −diag(4, 9) q`, `q(0) = (1, 0)`: `q₁ = cos 2t` is zero at π/4, 3π/4.
 fn decoupled() -> Linear {
     Linear {

@@ -40,11 +40,11 @@
 //! controller for an `O(h⁴)` estimate, as RADAU5's, with `h` kept for
 //! factors in `[1, 1.2]` so the factorization is reused. Dense output: the
 //! quintic Hermite interpolant of `(q, q̇, q̈)` at both ends of the step
-//! (`O(h⁶)` in `q`, `O(h⁵)` in `q̇`: it does not lower the method's order),
-//! for events; the adaptive steps end on the requested output times, so
-//! outputs are step ends (docs/theory-derivatives.md CD10: on a settle the
-//! steps outgrow the decay of the damped modes, and the interpolant across
-//! them does not follow it).
+//! (`O(h⁶)` in `q`, `O(h⁵)` in `q̇`: it does not lower the method's order;
+//! on a quasi-static settle the steps outgrow the decay of the damped
+//! modes and the interpolant across them does not follow it, so
+//! outputs can be step ends instead: `Options::steps_to_outputs`,
+//! docs/theory-derivatives.md CD10).
 
 // The coefficients are transcribed with all the digits published.
 #![allow(clippy::excessive_precision)]
@@ -472,12 +472,6 @@ impl Esdirk {
 
 impl<Sys: SecondOrderSystem> Stepper<SecondOrderProblem<'_, Sys>> for Esdirk {
     const START_ORDER: i32 = 3;
-    // The quintic Hermite dense output is O(h⁶ y⁽⁶⁾): on steps long against
-    // the decay of the modes the L-stable step damps (a quasi-static settle
-    // under drag: steps of 1.4 s against a drag time of 0.16 s on the
-    // cosseratbench catenary) the step ends are accurate and the
-    // interpolant between them is not (docs/theory-derivatives.md CD10).
-    const STEPS_TO_OUTPUTS: bool = true;
 
     fn restart(
         &mut self,

@@ -69,7 +69,7 @@ declares (``settings`` states them):
   constrained one on loop closures), on every model but those with both
   loop closures (a pinned, clamped or driven far end) and contact, which
   take Radau IIA order 5. ESDIRK's steps end on the output frames
-  (docs/theory-derivatives.md CD10): before, its quintic Hermite between
+  (``steps_to_outputs``, docs/theory-derivatives.md CD10): before, its quintic Hermite between
   steps of up to 1.4 s left the catenary's sag wandering by +-40 um (a
   settling residual of 3e-5 against Radau's 2e-7 rod lengths per second),
   which kept every closed model on Radau IIA, 3 to 7 times slower. With
@@ -548,10 +548,16 @@ class SoftrodSolver:
         """The integrator and its settings for ``scenario`` (keywords of
         ``softrod.Simulation.simulate``)."""
         if scenario.quasi_static:
+            integrator = "radau5" if _closed_with_contact(scenario) else "esdirk"
             return {
-                "integrator": "radau5" if _closed_with_contact(scenario) else "esdirk",
+                "integrator": integrator,
                 "rtol": RTOL_QUASI_STATIC * self.time_step_scale**STEP_ORDER,
                 "atol": ATOL_QUASI_STATIC,
+                # A settle's ESDIRK steps outgrow the decay of the damped
+                # modes, and its quintic Hermite dense output across them
+                # does not follow that decay (docs/theory-derivatives.md
+                # CD10): the frames are step ends instead.
+                "steps_to_outputs": integrator == "esdirk",
             }
         period = 2.0 * np.pi / scenario.slowest_frequency()
         return {
