@@ -52,10 +52,11 @@ pub struct RodSystem {
     /// Whether the structured Newton matrix also carries the geometric
     /// stiffness of gravity and of the contact forces
     /// (`ShiftedSolver::set_geometric`, docs/theory-contact.md CT19–CT23;
-    /// default `true`): the `T/ℓ` stiffness of a rope under tension, without
-    /// which the simplified Newton iteration stalls on tensioned thin rods
-    /// once the steps grow. `false` is the matrix without it, for
-    /// comparisons.
+    /// default `false`): the `T/ℓ` stiffness of a rope under tension, which
+    /// the matrix without it lacks. Off by default: on the capstan benchmark
+    /// it did not change the step count (docs/performance.md, "The
+    /// geometric stiffness in the Newton matrix"), and on chain models it
+    /// moves the factorization to the tree recursion (~1.5× its cost).
     pub geometric_in_shifted: bool,
     /// The configuration of the last contact linearization
     /// ([`SecondOrderSystem::linearize_shifted`]); the factorizations carry
@@ -142,7 +143,7 @@ impl RodSystem {
             jacobian: RodJacobian::Exact,
             structured_closures: false,
             contact_in_shifted: true,
-            geometric_in_shifted: true,
+            geometric_in_shifted: false,
             contact_q: None,
             shifted,
             derivatives: None,

@@ -119,9 +119,11 @@ impl ShiftedSolver {
     /// is this term. Off by default here; `softrod_integrate::RodSystem`
     /// turns it on. A chain model then factors on its tree (built here
     /// once, an allocation; the tree recursion costs ~1.5× the chain's).
-    /// If a factorization with the terms is not positive definite (a
-    /// compressed or overhanging configuration can make `K_g` negative
-    /// enough), [`Self::factor_at`] factors without them.
+    /// `K_g` is indefinite where the forces destabilize (a compressed or
+    /// overhanging rod, the twist of a bent tensioned rod): a node whose
+    /// articulated block is then not positive definite is factored with
+    /// its eigenvalues' magnitudes (CT23), and if even that fails,
+    /// [`Self::factor_at`] factors without the terms.
     pub fn set_geometric(&mut self, model: &Model, on: bool) -> Result<(), DynamicsError> {
         self.check_model(model)?;
         self.factored = false;
@@ -521,10 +523,18 @@ pub(crate) fn tree_factor(
             NodeKind::Body { .. } => {}
         }
         let dinv = if k > 0 {
-            inverse_k(&dhat, k).ok_or_else(|| DynamicsError::SingularNode {
-                node: tree.describe(model, i),
-                what: "shifted articulated block D̂ + aK + bD",
-            })?
+            // With the geometric terms a node's D̂ may be indefinite where
+            // the forces destabilize (CT23): its eigenvalues' magnitudes.
+            inverse_k(&dhat, k)
+                .or_else(|| {
+                    geometric
+                        .then(|| shifted_geometric::abs_inverse_k(&dhat, k))
+                        .flatten()
+                })
+                .ok_or_else(|| DynamicsError::SingularNode {
+                    node: tree.describe(model, i),
+                    what: "shifted articulated block D̂ + aK + bD",
+                })?
         } else {
             Mat6::zeros()
         };

@@ -220,3 +220,32 @@ fn node_length(model: &Model, node: &Node) -> f64 {
         _ => 1.0,
     }
 }
+
+/// `|D|⁻¹` of the symmetric part of `d`'s leading `k×k` block (padded like
+/// [`super::tree::inverse_k`]): the eigenvalues replaced by their
+/// magnitudes, floored at `1e-12` of the largest (CT23). `None` if `d` is
+/// not finite or zero.
+pub(crate) fn abs_inverse_k(d: &Mat6, k: usize) -> Option<Mat6> {
+    let padded = Mat6::from_fn(|i, j| {
+        if i < k && j < k {
+            0.5 * (d[(i, j)] + d[(j, i)])
+        } else if i == j {
+            1.0
+        } else {
+            0.0
+        }
+    });
+    if !padded.iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    let e = padded.symmetric_eigen();
+    let top = e.eigenvalues.amax();
+    if top == 0.0 {
+        return None;
+    }
+    let inv = e.eigenvalues.map(|l| 1.0 / l.abs().max(1e-12 * top));
+    let full = e.eigenvectors * Mat6::from_diagonal(&inv) * e.eigenvectors.transpose();
+    Some(Mat6::from_fn(|i, j| {
+        if i < k && j < k { full[(i, j)] } else { 0.0 }
+    }))
+}
