@@ -49,6 +49,15 @@ pub struct RodSystem {
     /// stiffness and damping (docs/theory-contact.md CT17; default `true`).
     /// `false` is the matrix without them, for comparisons.
     pub contact_in_shifted: bool,
+    /// Whether the structured Newton matrix also carries the geometric
+    /// stiffness of gravity and of the contact forces
+    /// (`ShiftedSolver::set_geometric`, docs/theory-contact.md CT19–CT23;
+    /// default `false`): the `T/ℓ` stiffness of a rope under tension, which
+    /// the matrix without it lacks. Off by default: on the capstan benchmark
+    /// it did not change the step count (docs/performance.md, "The
+    /// geometric stiffness in the Newton matrix"), and on chain models it
+    /// moves the factorization to the tree recursion (~1.5× its cost).
+    pub geometric_in_shifted: bool,
     /// The configuration of the last contact linearization
     /// ([`SecondOrderSystem::linearize_shifted`]); the factorizations carry
     /// it only at that `q` (a wrapper that forwards the factorization but
@@ -134,6 +143,7 @@ impl RodSystem {
             jacobian: RodJacobian::Exact,
             structured_closures: false,
             contact_in_shifted: true,
+            geometric_in_shifted: false,
             contact_q: None,
             shifted,
             derivatives: None,
@@ -517,6 +527,9 @@ impl SecondOrderSystem for RodSystem {
             self.shifted.clear_contact();
             self.contact_q = None;
         }
+        // Cheap when unchanged (a chain model's tree is built once).
+        self.shifted
+            .set_geometric(&self.model, self.geometric_in_shifted)?;
         self.shifted.factor_at(&self.model, t, q.as_slice(), a, b)?;
         Ok(true)
     }
