@@ -114,10 +114,10 @@ pub use algorithms::{
     strain_space_force,
 };
 pub use analysis::{
-    Energies, IMPACT_LIMIT, ModeKind, Modes, StaticsOptions, StaticsResult, StaticsSolver,
-    actuation_matrix, closure_statics, commit_contact, coriolis_matrix, damping_matrix, energies,
-    frames, generalized_gravity, lowest_modes, modes, section_jacobian, static_force, statics,
-    stiffness_matrix,
+    ContactChange, Energies, IMPACT_LIMIT, ModeKind, Modes, StaticsOptions, StaticsResult,
+    StaticsSolver, actuation_matrix, closure_statics, commit_contact, commit_contact_change,
+    coriolis_matrix, damping_matrix, energies, frames, generalized_gravity, lowest_modes, modes,
+    section_jacobian, static_force, statics, stiffness_matrix,
 };
 pub use constraints::{
     ClosedDerivatives, ClosedShiftedSolver, check_closures, closed_dynamics_derivatives,

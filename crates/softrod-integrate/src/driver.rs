@@ -223,7 +223,9 @@ impl Outputs {
         }
         match hooks.output(t, y, p.user()) {
             Control::Stop => (true, false),
-            Control::SystemChanged => (false, true),
+            // An output hook's change of forces is rare: dropped as a
+            // change of the system.
+            Control::SystemChanged | Control::ForcesChanged => (false, true),
             Control::Continue => (false, false),
         }
     }
@@ -438,6 +440,7 @@ fn drive<P: Problem, St: Stepper<P>>(
         // Output.
         let t_out_end = t.min(t_stop);
         let mut changed = false;
+        let mut forces_changed = false;
         let mut stopped_at = None;
         if opts.t_eval.is_some() {
             while next_out < te.len() && te[next_out] <= t_out_end {
@@ -493,9 +496,14 @@ fn drive<P: Problem, St: Stepper<P>>(
                 break;
             }
             Control::SystemChanged => changed = true,
+            Control::ForcesChanged => forces_changed = true,
         }
         if changed {
             st.system_changed(p, &mut stats)?;
+        } else if forces_changed {
+            st.forces_changed(p, &mut stats)?;
+        }
+        if changed || forces_changed {
             for (i, g) in g_prev.iter_mut().enumerate() {
                 *g = hooks.event(i, st.t(), st.y());
             }

@@ -330,10 +330,36 @@ impl RodSystem {
         if !self.model.has_contact() {
             return Ok(false);
         }
-        let raised = softrod_dynamics::commit_contact(&self.model, &mut self.data, t, q, qd)?;
-        Ok(raised
-            || self.model.obstacles().iter().any(|o| o.friction > 0.0)
-            || self.model.contact_settings().friction > 0.0)
+        Ok(self.commit_contact_control(t, q, qd)? != crate::Control::Continue)
+    }
+
+    /// [`commit_contact`](Self::commit_contact) as what the step hook
+    /// returns (CT25): a stiffness that rose changes the law's slope
+    /// ([`Control::SystemChanged`](crate::Control::SystemChanged): the
+    /// Jacobians are dropped); friction anchors and healing offsets change
+    /// only the forces at the current state
+    /// ([`Control::ForcesChanged`](crate::Control::ForcesChanged): the
+    /// step-start acceleration is re-evaluated); nothing else,
+    /// [`Control::Continue`](crate::Control::Continue).
+    pub fn commit_contact_control(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        qd: &[f64],
+    ) -> Result<crate::Control, DynamicsError> {
+        if !self.model.has_contact() {
+            return Ok(crate::Control::Continue);
+        }
+        let c = softrod_dynamics::commit_contact_change(&self.model, &mut self.data, t, q, qd)?;
+        let friction = self.model.obstacles().iter().any(|o| o.friction > 0.0)
+            || self.model.contact_settings().friction > 0.0;
+        Ok(if c.scale_rose {
+            crate::Control::SystemChanged
+        } else if c.offset_moved || friction {
+            crate::Control::ForcesChanged
+        } else {
+            crate::Control::Continue
+        })
     }
 }
 

@@ -795,3 +795,74 @@ fn a_continuation_starts_with_the_carried_step() {
         assert!(steps[1] < steps[0], "{method:?}: {steps:?}");
     }
 }
+
+/// `q̈ = −q + f`, the constant force `f` set by a step hook.
+struct Pushed {
+    f: f64,
+}
+
+impl SecondOrderSystem for Pushed {
+    type Error = Infallible;
+    fn dim(&self) -> usize {
+        1
+    }
+    fn accel(
+        &mut self,
+        _t: f64,
+        q: &DVector<f64>,
+        _qd: &DVector<f64>,
+        qdd: &mut DVector<f64>,
+    ) -> Result<(), Infallible> {
+        qdd[0] = -q[0] + self.f;
+        Ok(())
+    }
+}
+
+/// At the first step with `t ≥ 1` it pushes with `f = 1` and says only the
+/// forces changed (the Jacobian is the same).
+struct Push {
+    t_switch: f64,
+}
+
+impl Hooks<Pushed> for Push {
+    fn step(&mut self, info: &StepInfo<'_>, s: &mut Pushed) -> Control {
+        if info.t >= 1.0 && self.t_switch.is_nan() {
+            self.t_switch = info.t;
+            s.f = 1.0;
+            Control::ForcesChanged
+        } else {
+            Control::Continue
+        }
+    }
+}
+
+#[test]
+fn a_hook_changing_only_the_forces_restarts_from_the_new_acceleration() {
+    // q̈ = −q from (1, 0) until t_s, then q̈ = −q + 1: exactly
+    // q = 1 + (cos t_s − 1) cos(t − t_s) − sin t_s sin(t − t_s) after it.
+    // Every method must start the next step from the new acceleration
+    // (ESDIRK's step-start acceleration is carried from the last stage).
+    for method in [Integrator::Esdirk, Integrator::Radau5, Integrator::Dopri5] {
+        let mut hooks = Push { t_switch: f64::NAN };
+        let sol = integrate_second_order(
+            &mut Pushed { f: 0.0 },
+            method,
+            (0.0, 3.0),
+            &dv(&[1.0]),
+            &dv(&[0.0]),
+            &opts_for(method, 0.01, 1e-9),
+            &mut hooks,
+        )
+        .unwrap();
+        let ts = hooks.t_switch;
+        assert!((1.0..1.5).contains(&ts), "{method:?}: switched at {ts}");
+        let u = 3.0 - ts;
+        let q = 1.0 + (ts.cos() - 1.0) * u.cos() - ts.sin() * u.sin();
+        let v = -(ts.cos() - 1.0) * u.sin() - ts.sin() * u.cos();
+        let (eq, ev) = (sol.y_final[0] - q, sol.y_final[1] - v);
+        assert!(
+            eq.abs() < 1e-6 && ev.abs() < 1e-6,
+            "{method:?}: errors {eq:e}, {ev:e}"
+        );
+    }
+}
