@@ -43,23 +43,30 @@ fn inertia_error(m: &Model, t: f64, q: &[f64], qd: &[f64], qdd: &[f64], rng: &mu
     let z = DVector::from_vec(rng.vec(n, 1.0));
     let mut work = IdDerivatives::for_products(m);
     inverse_dynamics_linearization_with(m, &mut work, Forces::ALL, t, q, qd, qdd).unwrap();
-    let (mut rods, mut bodies) = (vec![0.0; m.rods().len()], vec![Mat6::zeros(); m.bodies().len()]);
+    let (mut rods, mut bodies) = (
+        vec![0.0; m.rods().len()],
+        vec![Mat6::zeros(); m.bodies().len()],
+    );
     inverse_dynamics_inertia_vjp(m, &mut work, z.as_slice(), &mut rods, &mut bodies).unwrap();
     let mut data = Data::new(m);
-    let tau = inverse_dynamics(m, &mut data, t, q, qd, qdd).unwrap().clone();
+    let tau = inverse_dynamics(m, &mut data, t, q, qd, qdd)
+        .unwrap()
+        .clone();
     let mut worst: f64 = 0.0;
     let mut check = |moved: &Model, got: f64| {
         let mut d = Data::new(moved);
-        let t2 = inverse_dynamics(moved, &mut d, t, q, qd, qdd).unwrap().clone();
+        let t2 = inverse_dynamics(moved, &mut d, t, q, qd, qdd)
+            .unwrap()
+            .clone();
         let diff = &t2 - &tau;
         let reference = z.dot(&diff);
         let scale = z.abs().dot(&(t2.abs() + tau.abs()));
         assert!(diff.amax() > 0.0, "the parameter moves tau");
         worst = worst.max((got - reference).abs() / scale);
     };
-    for r in 0..m.rods().len() {
+    for (r, &got) in rods.iter().enumerate() {
         // Doubled density: Δρ = ρ, s_r from 1 to 2.
-        check(&denser(m, r), rods[r]);
+        check(&denser(m, r), got);
     }
     for (b, g) in bodies.iter().enumerate() {
         let mut spec = m.bodies()[b].spec.clone();
@@ -117,7 +124,10 @@ fn misuse_is_an_error() {
     let n = m.n_dof();
     let mut work = IdDerivatives::for_products(&m);
     let z = vec![1.0; n];
-    let (mut rods, mut bodies) = (vec![0.0; m.rods().len()], vec![Mat6::zeros(); m.bodies().len()]);
+    let (mut rods, mut bodies) = (
+        vec![0.0; m.rods().len()],
+        vec![Mat6::zeros(); m.bodies().len()],
+    );
     assert!(matches!(
         inverse_dynamics_inertia_vjp(&m, &mut work, &z, &mut rods, &mut bodies),
         Err(DynamicsError::NotLinearized { .. })

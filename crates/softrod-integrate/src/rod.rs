@@ -11,7 +11,8 @@ use softrod_dynamics::{
     ClosedDerivatives, ClosedShiftedSolver, Data, DynamicsError, FdDerivatives, Forces,
     IdDerivatives, Model, ShiftedSolver, closed_dynamics_derivatives, damping_matrix,
     forward_dynamics, forward_dynamics_derivatives, inverse_dynamics, inverse_dynamics_derivatives,
-    inverse_dynamics_inertia_vjp, inverse_dynamics_linearization_with, inverse_dynamics_vjp, mass_matrix, stiffness_matrix,
+    inverse_dynamics_inertia_vjp, inverse_dynamics_linearization_with, inverse_dynamics_vjp,
+    mass_matrix, stiffness_matrix,
 };
 use softrod_mechanics::Tension;
 

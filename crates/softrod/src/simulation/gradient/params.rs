@@ -194,10 +194,10 @@ struct Variant {
 /// `r`'s `zᵀ∂ID/∂s_r` times `1/ρ` (`ID` is linear in the density), or body
 /// `b`'s `G_b` against `∂𝓜_b/∂m` (affine: the variant's inertia minus the
 /// model's, over `Δ`).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 enum Inertia {
     Rod { rod: usize, per_density: f64 },
-    Body { body: usize, dm: Matrix6<f64> },
+    Body { body: usize, dm: Box<Matrix6<f64>> },
 }
 
 /// A rod material with one constant moved.
@@ -308,12 +308,15 @@ impl<'a> ParamSystem<'a> {
                 let inertia = match p.kind {
                     Kind::Density(rod) => Some(Inertia::Rod {
                         rod,
-                        per_density: 1.0 / sys.model.rods()[rod].spec.properties.material().density(),
+                        per_density: 1.0
+                            / sys.model.rods()[rod].spec.properties.material().density(),
                     }),
                     Kind::Mass(body) => Some(Inertia::Body {
                         body,
-                        dm: (model.bodies()[body].inertia - sys.model.bodies()[body].inertia)
-                            / delta,
+                        dm: Box::new(
+                            (model.bodies()[body].inertia - sys.model.bodies()[body].inertia)
+                                / delta,
+                        ),
                     }),
                     _ => None,
                 };
@@ -552,9 +555,9 @@ impl ParameterSystem for ParamSystem<'_> {
         }
         self.strain_products(t, q, qd, z, out)?;
         for v in &self.variants {
-            out[v.slot] -= match v.inertia {
-                Some(Inertia::Rod { rod, per_density }) => self.rods[rod] * per_density,
-                Some(Inertia::Body { body, dm }) => self.bodies[body].component_mul(&dm).sum(),
+            out[v.slot] -= match &v.inertia {
+                Some(Inertia::Rod { rod, per_density }) => self.rods[*rod] * per_density,
+                Some(Inertia::Body { body, dm }) => self.bodies[*body].component_mul(dm).sum(),
                 None => continue,
             };
         }
