@@ -6,12 +6,13 @@
 //! O(N) `ShiftedSolver`, and the exact Jacobians by the analytic derivatives
 //! of the forward dynamics.
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DVector, Matrix6};
 use softrod_dynamics::{
     ClosedDerivatives, ClosedShiftedSolver, Data, DynamicsError, FdDerivatives, Forces,
     IdDerivatives, Model, ShiftedSolver, closed_dynamics_derivatives, damping_matrix,
     forward_dynamics, forward_dynamics_derivatives, inverse_dynamics, inverse_dynamics_derivatives,
-    inverse_dynamics_linearization_with, inverse_dynamics_vjp, mass_matrix, stiffness_matrix,
+    inverse_dynamics_inertia_vjp, inverse_dynamics_linearization_with, inverse_dynamics_vjp,
+    mass_matrix, stiffness_matrix,
 };
 use softrod_mechanics::Tension;
 
@@ -278,6 +279,30 @@ impl RodSystem {
             out_q.as_mut_slice(),
             out_qd.as_mut_slice(),
         )
+    }
+}
+
+impl RodSystem {
+    /// The inertia products at the linearization of `slot`
+    /// ([`RodSystem::force_linearization`]): `rods[r] = zᵀ ∂r/∂s_r` for a
+    /// factor `s_r` on rod `r`'s inertia, `bodies[b]` the 6×6 `G_b` with
+    /// `zᵀ ∂r/∂𝓜_b [δ𝓜] = Σ G_b,ij δ𝓜ᵢⱼ` for body `b`'s screw inertia
+    /// (`softrod_dynamics::inverse_dynamics_inertia_vjp`, O(N), no
+    /// allocation; docs/theory-derivatives.md D85). An error for a slot
+    /// without a successful linearization.
+    pub fn force_inertia_vjp(
+        &mut self,
+        slot: usize,
+        z: &DVector<f64>,
+        rods: &mut [f64],
+        bodies: &mut [Matrix6<f64>],
+    ) -> Result<(), DynamicsError> {
+        let Some(work) = self.products.get_mut(slot) else {
+            return Err(DynamicsError::NotLinearized {
+                what: "RodSystem::force_inertia_vjp",
+            });
+        };
+        inverse_dynamics_inertia_vjp(&self.model, work, z.as_slice(), rods, bodies)
     }
 }
 
