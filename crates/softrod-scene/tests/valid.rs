@@ -576,7 +576,9 @@ fn run_error_control_is_read_and_warned_where_it_does_not_apply() {
 /// error naming the key.
 #[test]
 fn run_steps_to_outputs_is_read_and_warned_with_fixed_steps() {
-    let (s, warnings) = parse(&minimal("[run]\nintegrator = \"esdirk\"\nsteps_to_outputs = true"));
+    let (s, warnings) = parse(&minimal(
+        "[run]\nintegrator = \"esdirk\"\nsteps_to_outputs = true",
+    ));
     assert!(warnings.is_empty(), "{warnings:?}");
     assert!(s.run.steps_to_outputs);
     let (s, _) = parse(&minimal("[run]\nintegrator = \"esdirk\""));
@@ -585,7 +587,9 @@ fn run_steps_to_outputs_is_read_and_warned_with_fixed_steps() {
         "[run]\nintegrator = \"generalized-alpha\"\nerror_control = true\nsteps_to_outputs = true",
     ));
     assert!(warnings.is_empty(), "{warnings:?}");
-    let (_, warnings) = parse(&minimal("[run]\nintegrator = \"rk4\"\nsteps_to_outputs = true"));
+    let (_, warnings) = parse(&minimal(
+        "[run]\nintegrator = \"rk4\"\nsteps_to_outputs = true",
+    ));
     assert_eq!(warnings.len(), 1, "{warnings:?}");
     assert_eq!(warnings[0].path, "run.steps_to_outputs");
     assert!(warnings[0].message.contains("ignored"));
