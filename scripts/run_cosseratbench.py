@@ -44,14 +44,19 @@ EXPLAIN = {
         "resolves (the shape error is converged in the resolution)."
     ),
     ("cantilever", "settling_residual"): (
-        "both settle through the same mass-proportional damping, critical for the "
-        "slowest mode; softrod's residual is what that damping leaves after 10 s of the "
-        "transient of the suddenly applied load ((1 + w t) e^(-w t) of the first mode's "
-        "speed, a few 1e-6 rod lengths per second): converged in time, 3.71e-6 with "
-        "Radau IIA at rtol 1e-7 and 3.70e-6 with ESDIRK at rtol 1e-6 (20 pieces); the "
-        "rule's ESDIRK at rtol 1e-3 adds its path error to that (3.8e-6 with Radau IIA "
-        "at the same tolerance). Why the peers' transients end lower under the same "
-        "rule is not established."
+        "both settle through the same mass-proportional damping at the rate 2w, with w "
+        "the Euler-Bernoulli estimate of the slowest mode (1.112 rad/s). softrod's 20 "
+        "pieces reproduce that mode, so it is damped exactly critically and its speed "
+        "after the suddenly applied load is d w^2 t e^(-w t): 3.6e-6 rod lengths per "
+        "second at t = 10 s for the static deflection d = P L^3/(3 E I) = 1.99 cm; "
+        "softrod's converged residual is 3.71e-6 (Radau IIA at rtol 1e-7; 3.70e-6 with "
+        "ESDIRK at rtol 1e-6), and the rule's ESDIRK at rtol 1e-3 adds its path error "
+        "(3.8e-6 with Radau IIA at the same tolerance). PyElastica's beam is stiffer (its "
+        "clamped element held rigid: the tip settles at 1.844 cm), so under the same rate "
+        "its slowest mode is slightly underdamped: its tip overshoots (the tip speed "
+        "changes sign near t = 8.7 s in a 401-frame run of cosseratbench's PyElastica "
+        "adapter) and its speed decays as e^(-w t) without the factor w t = 11, ending "
+        "near a turning point. A smaller residual here is not a closer equilibrium."
     ),
     ("twist", "n/a"): (
         "cosseratbench fits the critical twist to the three growing rods nearest the "
@@ -69,16 +74,12 @@ EXPLAIN = {
 EXPLAIN_TIME = {
     "catenary": (
         "a cable pinned at both ends is a closed chain for softrod (a spherical joint "
-        "and a ball closure), and the quasi-static rule takes Radau IIA on closed chains, "
-        "which factors the Newton matrix densely (O(n^3) in the coordinates, six per "
-        "piece; the Jacobian itself is analytic, docs/theory-derivatives.md). ESDIRK, "
-        "the rule on open chains, runs this catenary in 2.8-3.0 s, but at the rule's "
-        "tolerances it lets the closure drift (the pinned end's gap 5e-5 m against "
-        "Radau's 3e-6 m) and the sag wanders by +-40 um to the end instead of settling "
-        "(settling residual 3.2e-5 rod lengths per second against Radau's 1.7e-7; "
-        "1e-5 at rtol 1e-4, 3e-6 at rtol 1e-5: a floor that scales with the tolerance), "
-        "and it breaks the twist's loops (there). softrod's structured O(n) Newton "
-        "solve of closed chains (the KKT form, CD5-CD8) is off by default and not "
+        "and a ball closure), whose Newton matrices are dense (O(n^3) in the coordinates, "
+        "six per piece; the Jacobian itself is analytic, docs/theory-derivatives.md): "
+        "the quasi-static rule's ESDIRK refreshes and factors them a few hundred times "
+        "over the settle (its steps end on the 101 output frames, CD10). Radau IIA, the "
+        "rule on closed chains before CD10, took 15.6 s here. softrod's structured O(n) "
+        "Newton solve of closed chains (the KKT form, CD5-CD8) is off by default and not "
         "reachable from Python."
     ),
     "twist": (
@@ -98,8 +99,9 @@ EXPLAIN_TIME = {
         "into a plectoneme, first reaches itself, and the remaining 0.8 s take at least "
         "2779 of the 3068 steps. Its plectoneme then passes through the rod at 1.04 "
         "(cosseratbench's max_rod_overlap, 1.48 radii): the rods run as separate "
-        "simulations. ESDIRK (the "
-        "open chains' rule) fails here: a rod's loop comes apart (closure "
+        "simulations (one model of all six would have dense Newton matrices of 1806 "
+        "coordinates, docs/performance.md). ESDIRK (the rule on models without both "
+        "closures and contact) fails here: a rod's loop comes apart (closure "
         "residual 1.8 mm at t = 15.4 s, which softrod's watch stops). PyElastica's "
         "explicit step costs 26 microseconds."
     ),

@@ -22,6 +22,7 @@
 //! | [`lowest_modes`] | the lowest modes, matrix-free, O(N) per step | docs/theory.md E11 |
 //! | [`inverse_dynamics_derivatives`] | `∂τ/∂q`, `∂τ/∂q̇` (`∂τ/∂q̈ = M`) | docs/theory-derivatives.md (D37–D47) |
 //! | [`inverse_dynamics_linearization_with`], [`inverse_dynamics_vjp`], [`inverse_dynamics_jvp`] | `uᵀ∂τ/∂q`, `uᵀ∂τ/∂q̇`, `∂τ/∂q·a + ∂τ/∂q̇·b` in O(N), no dense matrix | (D81–D84) |
+//! | [`inverse_dynamics_inertia_vjp`] | `zᵀ∂τ/∂(inertia)` of every rod and body at once, O(N) | (D85) |
 //! | [`forward_dynamics_derivatives`] | `∂q̈/∂q`, `∂q̈/∂q̇`, `∂q̈/∂u` | (D48) |
 //! | [`closed_dynamics_derivatives`] | `∂q̈/∂q`, `∂q̈/∂q̇` of a closed model's constrained `q̈` | (CD1–CD4) |
 //! | [`linearize`] | `(A, B)` of `ẋ = f(x, u)`, `x = (q, q̇)`; closed models: of the constrained `q̈` | (D49), (CD9) |
@@ -114,10 +115,10 @@ pub use algorithms::{
     strain_space_force,
 };
 pub use analysis::{
-    Energies, IMPACT_LIMIT, ModeKind, Modes, StaticsOptions, StaticsResult, StaticsSolver,
-    actuation_matrix, closure_statics, commit_contact, coriolis_matrix, damping_matrix, energies,
-    frames, generalized_gravity, lowest_modes, modes, section_jacobian, static_force, statics,
-    stiffness_matrix,
+    ContactChange, Energies, IMPACT_LIMIT, ModeKind, Modes, StaticsOptions, StaticsResult,
+    StaticsSolver, actuation_matrix, closure_statics, commit_contact, commit_contact_change,
+    coriolis_matrix, damping_matrix, energies, frames, generalized_gravity, lowest_modes, modes,
+    section_jacobian, static_force, statics, stiffness_matrix,
 };
 pub use constraints::{
     ClosedDerivatives, ClosedShiftedSolver, check_closures, closed_dynamics_derivatives,
@@ -127,8 +128,8 @@ pub use constraints::{
 pub use derivatives::{
     DynamicsJacobians, FdDerivatives, IdDerivatives, Linearization, dynamics_jacobians,
     dynamics_jacobians_with, forward_dynamics_derivatives, inverse_dynamics_derivatives,
-    inverse_dynamics_derivatives_with, inverse_dynamics_jvp, inverse_dynamics_linearization_with,
-    inverse_dynamics_vjp,
+    inverse_dynamics_derivatives_with, inverse_dynamics_inertia_vjp, inverse_dynamics_jvp,
+    inverse_dynamics_linearization_with, inverse_dynamics_vjp,
 };
 pub use dispatch::{forward_dynamics, forward_dynamics_with, linearize};
 pub use error::{DynamicsError, RodId};

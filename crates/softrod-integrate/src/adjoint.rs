@@ -149,6 +149,28 @@ pub trait ParameterSystem: SecondOrderSystem {
         Ok(false)
     }
 
+    /// Optional, with [`force_linearization`](Self::force_linearization):
+    /// [`force_param_vjp`](Self::force_param_vjp) at the point of the
+    /// linearization kept in `slot` (its `t, q, q̇, q̈` are passed again),
+    /// free to use what that linearization kept (docs/theory-control.md
+    /// G13). Returns `Ok(true)` when it added the products; the default
+    /// `Ok(false)` (nothing added: the backward pass calls
+    /// `force_param_vjp`).
+    #[allow(clippy::too_many_arguments)]
+    fn force_param_vjp_kept(
+        &mut self,
+        slot: usize,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+        qdd: &DVector<f64>,
+        z: &DVector<f64>,
+        out: &mut [f64],
+    ) -> Result<bool, Self::Error> {
+        let _ = (slot, t, q, qd, qdd, z, out);
+        Ok(false)
+    }
+
     /// With [`force_linearization`](Self::force_linearization): `(∂r/∂q)ᵀu`
     /// into `out_q` and `(∂r/∂q̇)ᵀu` into `out_qd` at the linearization
     /// kept in `slot`. Runs at every GMRES iteration: must not allocate.
@@ -813,15 +835,31 @@ impl EsdirkAdjoint {
                     self.vhat_bar.gemv_tr(-hg, &self.jq[i], nu, 1.0);
                     self.vhat_bar.gemv_tr(-1.0, &self.jv[i], nu, 1.0);
                 }
-                sys.force_param_vjp(
-                    ti,
-                    &self.qs[i],
-                    &self.vs[i],
-                    &self.accs[i],
-                    nu,
-                    &mut self.dp,
-                )
-                .map_err(err("parameter derivatives"))?;
+                // The parameter products on the kept linearization where
+                // the system has them (G13), else by themselves.
+                let kept = self.ops[i]
+                    && sys
+                        .force_param_vjp_kept(
+                            i,
+                            ti,
+                            &self.qs[i],
+                            &self.vs[i],
+                            &self.accs[i],
+                            nu,
+                            &mut self.dp,
+                        )
+                        .map_err(err("parameter derivatives"))?;
+                if !kept {
+                    sys.force_param_vjp(
+                        ti,
+                        &self.qs[i],
+                        &self.vs[i],
+                        &self.accs[i],
+                        nu,
+                        &mut self.dp,
+                    )
+                    .map_err(err("parameter derivatives"))?;
+                }
             } else {
                 // μ = W⁻ᵀ Ã; q̂̄ = Q̄ + Jqᵀμ; v̂̄ = V̄ + hγ Q̄ + hγ Jqᵀμ + Jvᵀμ.
                 self.mu.copy_from(&self.rhs);

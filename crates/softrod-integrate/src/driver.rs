@@ -164,6 +164,23 @@ fn step_end(opts: &Options, t: f64, t1: f64) -> f64 {
     }
 }
 
+/// Where the next step must end at the latest when the method's steps end
+/// on the output times ([`Options::steps_to_outputs`]): the first output
+/// time after `t` that comes before `end` (the breakpoint or `t1`), with
+/// the same rounding rule as [`step_end`]; `end` otherwise, and always for
+/// fixed steps.
+fn output_end(opts: &Options, te: &[f64], next_out: usize, t: f64, end: f64) -> f64 {
+    if !matches!(opts.step, StepControl::Adaptive { .. }) {
+        return end;
+    }
+    te[next_out.min(te.len())..]
+        .iter()
+        .copied()
+        .find(|&o| o - t > min_step(o, opts))
+        .filter(|&o| end - o > min_step(end, opts))
+        .unwrap_or(end)
+}
+
 /// State value at `t` from the stepper (exact at the step end).
 fn eval<P: Problem, St: Stepper<P>>(st: &St, t: f64, out: &mut DVector<f64>) {
     if t == st.t() {
@@ -206,7 +223,9 @@ impl Outputs {
         }
         match hooks.output(t, y, p.user()) {
             Control::Stop => (true, false),
-            Control::SystemChanged => (false, true),
+            // An output hook's change of forces is rare: dropped as a
+            // change of the system.
+            Control::SystemChanged | Control::ForcesChanged => (false, true),
             Control::Continue => (false, false),
         }
     }
@@ -339,17 +358,26 @@ fn drive<P: Problem, St: Stepper<P>>(
         if after_breakpoint {
             st.restart_after_breakpoint(p, &mut stats)?;
         }
-        let end = step_end(opts, st.t(), t1);
+        let bp_end = step_end(opts, st.t(), t1);
+        let end = if opts.steps_to_outputs {
+            output_end(opts, te, next_out, st.t(), bp_end)
+        } else {
+            bp_end
+        };
         let h_proposed = st.state().h_next;
         st.step(p, end, opts, &mut stats)?;
-        // A step shortened to land on t1 says nothing against the longer
-        // step proposed before it: a continuation may try that one.
-        h_next = if st.t() == t1 && st.h_last() < h_proposed {
+        // A step shortened to land on t1 (or on an output time) says
+        // nothing against the longer step proposed before it: a
+        // continuation, or the step after the output, may try that one.
+        h_next = if (st.t() == t1 || st.t() == end) && st.h_last() < h_proposed {
             st.state().h_next.max(h_proposed)
         } else {
             st.state().h_next
         };
-        after_breakpoint = end < t1 && st.t() == end;
+        if st.t() == end && end < bp_end {
+            st.state_mut().h_next = h_next;
+        }
+        after_breakpoint = bp_end < t1 && st.t() == bp_end;
         let (t, h) = (st.t(), st.h_last());
         if let Some(index) = first_non_finite(st.y().as_slice()) {
             return Err(IntegrateError::NonFinite {
@@ -412,6 +440,7 @@ fn drive<P: Problem, St: Stepper<P>>(
         // Output.
         let t_out_end = t.min(t_stop);
         let mut changed = false;
+        let mut forces_changed = false;
         let mut stopped_at = None;
         if opts.t_eval.is_some() {
             while next_out < te.len() && te[next_out] <= t_out_end {
@@ -467,9 +496,14 @@ fn drive<P: Problem, St: Stepper<P>>(
                 break;
             }
             Control::SystemChanged => changed = true,
+            Control::ForcesChanged => forces_changed = true,
         }
         if changed {
             st.system_changed(p, &mut stats)?;
+        } else if forces_changed {
+            st.forces_changed(p, &mut stats)?;
+        }
+        if changed || forces_changed {
             for (i, g) in g_prev.iter_mut().enumerate() {
                 *g = hooks.event(i, st.t(), st.y());
             }

@@ -16,6 +16,16 @@ pub enum Control {
     /// and the event functions re-evaluated, then the run goes on from the
     /// same state.
     SystemChanged,
+    /// The hook changed the forces at the current state, not how they
+    /// vary with it (a contact model committed its friction anchors or
+    /// healed a penalty offset, docs/theory-contact.md CT5, CT15, CT25):
+    /// the derivative at the current state and the event functions are
+    /// re-evaluated. A method may keep its Jacobian across it (its
+    /// stepper's `forces_changed`); every method
+    /// currently drops it as for [`SystemChanged`](Self::SystemChanged) —
+    /// ESDIRK keeping its Newton matrix moved a friction test's path by
+    /// more than its bound (CT25).
+    ForcesChanged,
     /// Stop here; the solution ends at the current step or output
     /// ([`Status::Stopped`](crate::Status::Stopped)).
     Stop,

@@ -97,9 +97,18 @@ pub struct Options {
     /// Maximum number of accepted steps.
     pub max_steps: usize,
     /// Output times (sorted, within `[t0, t1]`), filled by dense output — the
-    /// steps are not forced to hit them. `None`: output `t0` and every accepted
-    /// step.
+    /// steps are not forced to hit them unless [`steps_to_outputs`](Self::steps_to_outputs).
+    /// `None`: output `t0` and every accepted step.
     pub t_eval: Option<Vec<f64>>,
+    /// Adaptive steps end on the output times ([`t_eval`](Self::t_eval)), so
+    /// every output is a step end rather than a dense-output value
+    /// (docs/theory-derivatives.md CD10). Off by default: it costs at least
+    /// one step per output, and the dense output is accurate to the
+    /// tolerance; it pays where steps grow far beyond the decay of modes the
+    /// method damps (a quasi-static settle under drag), where the
+    /// interpolant across them does not follow the decay that the step ends
+    /// do. Fixed steps ignore it.
+    pub steps_to_outputs: bool,
     /// Bound on the max-norm of the state; exceeding it is an error
     /// (default `∞`).
     pub max_norm: f64,
@@ -129,6 +138,7 @@ impl Default for Options {
             h_min: 0.0,
             max_steps: 100_000,
             t_eval: None,
+            steps_to_outputs: false,
             max_norm: f64::INFINITY,
             rho_inf: Self::DEFAULT_RHO_INF,
             breakpoints: Vec::new(),

@@ -6,12 +6,13 @@
 //! O(N) `ShiftedSolver`, and the exact Jacobians by the analytic derivatives
 //! of the forward dynamics.
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DVector, Matrix6};
 use softrod_dynamics::{
     ClosedDerivatives, ClosedShiftedSolver, Data, DynamicsError, FdDerivatives, Forces,
     IdDerivatives, Model, ShiftedSolver, closed_dynamics_derivatives, damping_matrix,
     forward_dynamics, forward_dynamics_derivatives, inverse_dynamics, inverse_dynamics_derivatives,
-    inverse_dynamics_linearization_with, inverse_dynamics_vjp, mass_matrix, stiffness_matrix,
+    inverse_dynamics_inertia_vjp, inverse_dynamics_linearization_with, inverse_dynamics_vjp,
+    mass_matrix, stiffness_matrix,
 };
 use softrod_mechanics::Tension;
 
@@ -49,6 +50,15 @@ pub struct RodSystem {
     /// stiffness and damping (docs/theory-contact.md CT17; default `true`).
     /// `false` is the matrix without them, for comparisons.
     pub contact_in_shifted: bool,
+    /// Whether the structured Newton matrix also carries the geometric
+    /// stiffness of gravity and of the contact forces
+    /// (`ShiftedSolver::set_geometric`, docs/theory-contact.md CT19–CT23;
+    /// default `false`): the `T/ℓ` stiffness of a rope under tension, which
+    /// the matrix without it lacks. Off by default: on the capstan benchmark
+    /// it did not change the step count (docs/performance.md, "The
+    /// geometric stiffness in the Newton matrix"), and on chain models it
+    /// moves the factorization to the tree recursion (~1.5× its cost).
+    pub geometric_in_shifted: bool,
     /// The configuration of the last contact linearization
     /// ([`SecondOrderSystem::linearize_shifted`]); the factorizations carry
     /// it only at that `q` (a wrapper that forwards the factorization but
@@ -134,6 +144,7 @@ impl RodSystem {
             jacobian: RodJacobian::Exact,
             structured_closures: false,
             contact_in_shifted: true,
+            geometric_in_shifted: false,
             contact_q: None,
             shifted,
             derivatives: None,
@@ -272,6 +283,30 @@ impl RodSystem {
 }
 
 impl RodSystem {
+    /// The inertia products at the linearization of `slot`
+    /// ([`RodSystem::force_linearization`]): `rods[r] = zᵀ ∂r/∂s_r` for a
+    /// factor `s_r` on rod `r`'s inertia, `bodies[b]` the 6×6 `G_b` with
+    /// `zᵀ ∂r/∂𝓜_b [δ𝓜] = Σ G_b,ij δ𝓜ᵢⱼ` for body `b`'s screw inertia
+    /// (`softrod_dynamics::inverse_dynamics_inertia_vjp`, O(N), no
+    /// allocation; docs/theory-derivatives.md D85). An error for a slot
+    /// without a successful linearization.
+    pub fn force_inertia_vjp(
+        &mut self,
+        slot: usize,
+        z: &DVector<f64>,
+        rods: &mut [f64],
+        bodies: &mut [Matrix6<f64>],
+    ) -> Result<(), DynamicsError> {
+        let Some(work) = self.products.get_mut(slot) else {
+            return Err(DynamicsError::NotLinearized {
+                what: "RodSystem::force_inertia_vjp",
+            });
+        };
+        inverse_dynamics_inertia_vjp(&self.model, work, z.as_slice(), rods, bodies)
+    }
+}
+
+impl RodSystem {
     /// The dense elastic/viscous Jacobian approximation `∂q̈/∂q ≈ −M(q)⁻¹K`,
     /// `∂q̈/∂q̇ ≈ −M(q)⁻¹D` (n_dof × n_dof each; one mass matrix, one dense
     /// Cholesky, `n_dof` solves; allocates). The integrators never form it
@@ -320,10 +355,36 @@ impl RodSystem {
         if !self.model.has_contact() {
             return Ok(false);
         }
-        let raised = softrod_dynamics::commit_contact(&self.model, &mut self.data, t, q, qd)?;
-        Ok(raised
-            || self.model.obstacles().iter().any(|o| o.friction > 0.0)
-            || self.model.contact_settings().friction > 0.0)
+        Ok(self.commit_contact_control(t, q, qd)? != crate::Control::Continue)
+    }
+
+    /// [`commit_contact`](Self::commit_contact) as what the step hook
+    /// returns (CT25): a stiffness that rose changes the law's slope
+    /// ([`Control::SystemChanged`](crate::Control::SystemChanged): the
+    /// Jacobians are dropped); friction anchors and healing offsets change
+    /// only the forces at the current state
+    /// ([`Control::ForcesChanged`](crate::Control::ForcesChanged): the
+    /// step-start acceleration is re-evaluated); nothing else,
+    /// [`Control::Continue`](crate::Control::Continue).
+    pub fn commit_contact_control(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        qd: &[f64],
+    ) -> Result<crate::Control, DynamicsError> {
+        if !self.model.has_contact() {
+            return Ok(crate::Control::Continue);
+        }
+        let c = softrod_dynamics::commit_contact_change(&self.model, &mut self.data, t, q, qd)?;
+        let friction = self.model.obstacles().iter().any(|o| o.friction > 0.0)
+            || self.model.contact_settings().friction > 0.0;
+        Ok(if c.scale_rose {
+            crate::Control::SystemChanged
+        } else if c.offset_moved || friction {
+            crate::Control::ForcesChanged
+        } else {
+            crate::Control::Continue
+        })
     }
 }
 
@@ -517,6 +578,9 @@ impl SecondOrderSystem for RodSystem {
             self.shifted.clear_contact();
             self.contact_q = None;
         }
+        // Cheap when unchanged (a chain model's tree is built once).
+        self.shifted
+            .set_geometric(&self.model, self.geometric_in_shifted)?;
         self.shifted.factor_at(&self.model, t, q.as_slice(), a, b)?;
         Ok(true)
     }

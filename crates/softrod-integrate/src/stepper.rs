@@ -76,6 +76,13 @@ pub(crate) trait Stepper<P: Problem> {
     }
     /// The user changed the system: drop cached derivatives/Jacobians.
     fn system_changed(&mut self, p: &mut P, stats: &mut Stats) -> Result<(), IntegrateError>;
+    /// The user changed the forces at the current state but not their
+    /// linearization much ([`Control::ForcesChanged`](crate::Control::ForcesChanged)):
+    /// re-evaluate the derivative at the current state. By default, as
+    /// [`system_changed`](Self::system_changed).
+    fn forces_changed(&mut self, p: &mut P, stats: &mut Stats) -> Result<(), IntegrateError> {
+        self.system_changed(p, stats)
+    }
     /// A step has just ended on one of [`Options::breakpoints`](crate::Options::breakpoints),
     /// where the right-hand side jumps: the next step starts from the
     /// derivative and Jacobian just after it (evaluated at the next

@@ -97,6 +97,65 @@ fn dense_output_at_requested_times_does_not_force_steps() {
     }
 }
 
+/// `Options::steps_to_outputs` (docs/theory-derivatives.md CD10): the
+/// adaptive methods' steps end on the 401 output times (at least one step
+/// per output interval, where the same run without it steps across them),
+/// and the outputs, now step ends, are as accurate as the dense ones
+/// against the exact solution.
+#[test]
+fn steps_to_outputs_ends_the_adaptive_steps_on_the_output_times() {
+    let sys = Linear::damped();
+    let t_eval: Vec<f64> = (0..=400).map(|i| i as f64 * 0.01).collect();
+    for method in [
+        Integrator::Dopri5,
+        Integrator::Rosenbrock,
+        Integrator::Esdirk,
+        Integrator::Radau5,
+    ] {
+        let free_opts = opts_for(method, 0.0, 1e-6).with_t_eval(t_eval.clone());
+        let landed_opts = Options {
+            steps_to_outputs: true,
+            ..free_opts.clone()
+        };
+        let free = run(method, &mut sys.clone(), 4.0, &free_opts);
+        let landed = run(method, &mut sys.clone(), 4.0, &landed_opts);
+        assert_eq!(landed.t, t_eval);
+        assert!(
+            free.stats.steps < 400 && landed.stats.steps >= 400,
+            "{method:?}: {} steps free, {} landed",
+            free.stats.steps,
+            landed.stats.steps
+        );
+        let err = |sol: &softrod_integrate::Solution| {
+            sol.t
+                .iter()
+                .zip(&sol.y)
+                .map(|(&t, y)| dist(y, &sys.exact(t, &Linear::y0())))
+                .fold(0.0, f64::max)
+        };
+        assert!(
+            err(&landed) < 1e-4 && err(&free) < 1e-4,
+            "{method:?}: error {:e} landed, {:e} free",
+            err(&landed),
+            err(&free)
+        );
+    }
+    // Fixed steps keep their grid.
+    let fixed = opts_for(Integrator::Rk4, 0.05, 0.0).with_t_eval(t_eval.clone());
+    let a = run(Integrator::Rk4, &mut sys.clone(), 4.0, &fixed);
+    let b = run(
+        Integrator::Rk4,
+        &mut sys.clone(),
+        4.0,
+        &Options {
+            steps_to_outputs: true,
+            ..fixed
+        },
+    );
+    assert_eq!(a.stats.steps, b.stats.steps);
+    assert_eq!(a.y, b.y);
+}
+
 /// `q̈ = −diag(4, 9) q`, `q(0) = (1, 0)`: `q₁ = cos 2t` is zero at π/4, 3π/4.
 fn decoupled() -> Linear {
     Linear {
@@ -734,5 +793,76 @@ fn a_continuation_starts_with_the_carried_step() {
         }
         println!("{method:?}: {} steps cold, {} warm", steps[0], steps[1]);
         assert!(steps[1] < steps[0], "{method:?}: {steps:?}");
+    }
+}
+
+/// `q̈ = −q + f`, the constant force `f` set by a step hook.
+struct Pushed {
+    f: f64,
+}
+
+impl SecondOrderSystem for Pushed {
+    type Error = Infallible;
+    fn dim(&self) -> usize {
+        1
+    }
+    fn accel(
+        &mut self,
+        _t: f64,
+        q: &DVector<f64>,
+        _qd: &DVector<f64>,
+        qdd: &mut DVector<f64>,
+    ) -> Result<(), Infallible> {
+        qdd[0] = -q[0] + self.f;
+        Ok(())
+    }
+}
+
+/// At the first step with `t ≥ 1` it pushes with `f = 1` and says only the
+/// forces changed (the Jacobian is the same).
+struct Push {
+    t_switch: f64,
+}
+
+impl Hooks<Pushed> for Push {
+    fn step(&mut self, info: &StepInfo<'_>, s: &mut Pushed) -> Control {
+        if info.t >= 1.0 && self.t_switch.is_nan() {
+            self.t_switch = info.t;
+            s.f = 1.0;
+            Control::ForcesChanged
+        } else {
+            Control::Continue
+        }
+    }
+}
+
+#[test]
+fn a_hook_changing_only_the_forces_restarts_from_the_new_acceleration() {
+    // q̈ = −q from (1, 0) until t_s, then q̈ = −q + 1: exactly
+    // q = 1 + (cos t_s − 1) cos(t − t_s) − sin t_s sin(t − t_s) after it.
+    // Every method must start the next step from the new acceleration
+    // (ESDIRK's step-start acceleration is carried from the last stage).
+    for method in [Integrator::Esdirk, Integrator::Radau5, Integrator::Dopri5] {
+        let mut hooks = Push { t_switch: f64::NAN };
+        let sol = integrate_second_order(
+            &mut Pushed { f: 0.0 },
+            method,
+            (0.0, 3.0),
+            &dv(&[1.0]),
+            &dv(&[0.0]),
+            &opts_for(method, 0.01, 1e-9),
+            &mut hooks,
+        )
+        .unwrap();
+        let ts = hooks.t_switch;
+        assert!((1.0..1.5).contains(&ts), "{method:?}: switched at {ts}");
+        let u = 3.0 - ts;
+        let q = 1.0 + (ts.cos() - 1.0) * u.cos() - ts.sin() * u.sin();
+        let v = -(ts.cos() - 1.0) * u.sin() - ts.sin() * u.cos();
+        let (eq, ev) = (sol.y_final[0] - q, sol.y_final[1] - v);
+        assert!(
+            eq.abs() < 1e-6 && ev.abs() < 1e-6,
+            "{method:?}: errors {eq:e}, {ev:e}"
+        );
     }
 }

@@ -75,7 +75,17 @@ fn simulate_many(
     dt: Option<f64>,
 ) -> PyResult<Vec<trajectory::Trajectory>> {
     let set = |s: &mut softrod::Settings| {
-        overrides(s, integrator, rtol, atol, dt, output_every, None, None)
+        overrides(
+            s,
+            integrator,
+            rtol,
+            atol,
+            dt,
+            output_every,
+            None,
+            None,
+            None,
+        )
     };
     Ok(many::run_many(py, sims, duration, threads, q0, qdot0, &set)?.0)
 }

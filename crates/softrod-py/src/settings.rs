@@ -20,7 +20,11 @@ use crate::errors::{input, to_py};
 /// of the adaptive methods; setting `rtol` alone also lowers `atol` to it
 /// if `atol` was larger, so that the error tracks `rtol`. `dt` [s]: step of the fixed-step methods, first
 /// step of the adaptive ones. `output_every` [s]: spacing of the samples
-/// (None: a thousandth of the duration). Defaults: `softrod.Settings()`,
+/// (None: a thousandth of the duration). `steps_to_outputs`: the adaptive
+/// methods' steps end on the sample times, so every sample is a step's
+/// solution rather than the dense output between steps (at least one step
+/// per sample; for quasi-static settles, docs/theory-derivatives.md CD10).
+/// Defaults: `softrod.Settings()`,
 /// the recommended setting of docs/defaults.md.
 #[pyclass(module = "softrod", from_py_object)]
 #[derive(Clone)]
@@ -43,6 +47,7 @@ pub(crate) fn overrides(
     output_every: Option<f64>,
     error_control: Option<bool>,
     linearly_implicit: Option<bool>,
+    steps_to_outputs: Option<bool>,
 ) -> PyResult<()> {
     if let Some(i) = integrator_name {
         s.integrator = integrator(i)?;
@@ -65,6 +70,9 @@ pub(crate) fn overrides(
     if let Some(v) = linearly_implicit {
         s.linearly_implicit = v;
     }
+    if let Some(v) = steps_to_outputs {
+        s.steps_to_outputs = v;
+    }
     s.validate().map_err(to_py)
 }
 
@@ -72,7 +80,7 @@ pub(crate) fn overrides(
 impl Settings {
     #[new]
     #[pyo3(signature = (integrator = None, rtol = None, atol = None, dt = None, output_every = None,
-                        error_control = None, linearly_implicit = None))]
+                        error_control = None, linearly_implicit = None, steps_to_outputs = None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         integrator: Option<&str>,
@@ -82,6 +90,7 @@ impl Settings {
         output_every: Option<f64>,
         error_control: Option<bool>,
         linearly_implicit: Option<bool>,
+        steps_to_outputs: Option<bool>,
     ) -> PyResult<Self> {
         let mut inner = RustSettings {
             output_every: None,
@@ -96,6 +105,7 @@ impl Settings {
             output_every,
             error_control,
             linearly_implicit,
+            steps_to_outputs,
         )?;
         Ok(Self { inner })
     }
@@ -106,7 +116,7 @@ impl Settings {
     /// tolerance, which `Settings(...)` cannot state and would reset to
     /// their defaults — is kept. Raises `InputError` as `Settings(...)`.
     #[pyo3(signature = (*, integrator = None, rtol = None, atol = None, dt = None,
-                        output_every = None, error_control = None, linearly_implicit = None))]
+                        output_every = None, error_control = None, linearly_implicit = None, steps_to_outputs = None))]
     #[allow(clippy::too_many_arguments)]
     fn replace(
         &self,
@@ -117,6 +127,7 @@ impl Settings {
         output_every: Option<f64>,
         error_control: Option<bool>,
         linearly_implicit: Option<bool>,
+        steps_to_outputs: Option<bool>,
     ) -> PyResult<Self> {
         let mut inner = self.inner.clone();
         overrides(
@@ -128,6 +139,7 @@ impl Settings {
             output_every,
             error_control,
             linearly_implicit,
+            steps_to_outputs,
         )?;
         Ok(Self { inner })
     }
@@ -174,11 +186,18 @@ impl Settings {
         self.inner.linearly_implicit
     }
 
+    /// Adaptive methods: steps end on the output times, so every sample is
+    /// a step's solution (docs/theory-derivatives.md CD10).
+    #[getter]
+    fn steps_to_outputs(&self) -> bool {
+        self.inner.steps_to_outputs
+    }
+
     fn __repr__(&self) -> String {
         let s = &self.inner;
         format!(
             "Settings(integrator={:?}, rtol={:?}, atol={:?}, dt={:?}, output_every={}, \
-             error_control={}, linearly_implicit={})",
+             error_control={}, linearly_implicit={}, steps_to_outputs={})",
             s.integrator.name(),
             s.rtol,
             s.atol,
@@ -186,6 +205,7 @@ impl Settings {
             s.output_every.map_or("None".into(), |v| format!("{v:?}")),
             if s.error_control { "True" } else { "False" },
             if s.linearly_implicit { "True" } else { "False" },
+            if s.steps_to_outputs { "True" } else { "False" },
         )
     }
 }

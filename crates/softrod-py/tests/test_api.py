@@ -189,9 +189,23 @@ def test_settings_replace_keeps_what_it_does_not_name():
         s.replace(rtol=-1.0)
 
 
+def test_steps_to_outputs_is_a_setting_that_survives_replace_and_pickle():
+    """steps_to_outputs (docs/theory-derivatives.md CD10): off by default,
+    kept by replace() and by a pickle, and in the repr."""
+    import pickle
+    assert not softrod.Settings().steps_to_outputs
+    s = softrod.Settings(steps_to_outputs=True)
+    assert s.steps_to_outputs and "steps_to_outputs=True" in repr(s)
+    assert s.replace(rtol=1e-4).steps_to_outputs
+    sim = softrod.Simulation(rods=[rod(pieces=2)])
+    sim.settings = s
+    assert pickle.loads(pickle.dumps(sim)).settings.steps_to_outputs
+
+
 @pytest.mark.parametrize("kw", [
     dict(integrator="rosenbrock", rtol=1e-5, atol=1e-8),
     dict(integrator="esdirk", rtol=1e-5, atol=1e-8),
+    dict(integrator="esdirk", rtol=1e-5, atol=1e-8, steps_to_outputs=True),
     dict(integrator="radau5", rtol=1e-5, atol=1e-8),
     dict(integrator="dopri5", rtol=1e-5, atol=1e-8),
     dict(integrator="rk4", dt=2e-5),

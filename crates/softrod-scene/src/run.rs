@@ -58,6 +58,11 @@ pub struct Run {
     /// gravity, Coriolis, loads and cables explicit (default `false`: Newton
     /// to convergence).
     pub linearly_implicit: bool,
+    /// Adaptive methods (an extension of the format): end the steps on the
+    /// output times, so every sample is a step's solution rather than the
+    /// dense output between step ends (docs/theory-derivatives.md CD10;
+    /// default `false`: at least one step per `output_every`).
+    pub steps_to_outputs: bool,
     /// Bound on the run's energy-balance error relative to its energy scale
     /// (an extension of the format; default [`Run::DEFAULT_ENERGY_TOLERANCE`]):
     /// beyond it the run fails, beyond a tenth of it the summary warns.
@@ -123,6 +128,7 @@ impl Default for Run {
             quadrature: Run::DEFAULT_QUADRATURE,
             error_control: false,
             linearly_implicit: false,
+            steps_to_outputs: false,
             energy_tolerance: Run::DEFAULT_ENERGY_TOLERANCE,
             shape_points_per_piece: None,
             memory_limit_gib: None,

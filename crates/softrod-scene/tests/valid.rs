@@ -89,6 +89,7 @@ fn contract_example_has_the_written_values() {
             quadrature: 4,
             error_control: false,
             linearly_implicit: false,
+            steps_to_outputs: false,
             energy_tolerance: Run::DEFAULT_ENERGY_TOLERANCE,
             shape_points_per_piece: None,
             memory_limit_gib: None,
@@ -568,6 +569,34 @@ fn run_error_control_is_read_and_warned_where_it_does_not_apply() {
         "{}",
         warnings[0].message
     );
+}
+
+/// `[run] steps_to_outputs` (extension): read for the adaptive methods,
+/// default false, a warning (ignored) with fixed steps; a non-boolean is an
+/// error naming the key.
+#[test]
+fn run_steps_to_outputs_is_read_and_warned_with_fixed_steps() {
+    let (s, warnings) = parse(&minimal(
+        "[run]\nintegrator = \"esdirk\"\nsteps_to_outputs = true",
+    ));
+    assert!(warnings.is_empty(), "{warnings:?}");
+    assert!(s.run.steps_to_outputs);
+    let (s, _) = parse(&minimal("[run]\nintegrator = \"esdirk\""));
+    assert!(!s.run.steps_to_outputs);
+    let (_, warnings) = parse(&minimal(
+        "[run]\nintegrator = \"generalized-alpha\"\nerror_control = true\nsteps_to_outputs = true",
+    ));
+    assert!(warnings.is_empty(), "{warnings:?}");
+    let (_, warnings) = parse(&minimal(
+        "[run]\nintegrator = \"rk4\"\nsteps_to_outputs = true",
+    ));
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    assert_eq!(warnings[0].path, "run.steps_to_outputs");
+    assert!(warnings[0].message.contains("ignored"));
+    let err = Scene::from_str(&minimal("[run]\nsteps_to_outputs = \"yes\""), "t.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("run.steps_to_outputs"), "{err}");
 }
 
 /// `[run] linearly_implicit` (extension): read for generalized-alpha,

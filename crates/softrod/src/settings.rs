@@ -33,6 +33,13 @@ pub struct Settings {
     /// Generalized-α only: one Newton iteration per step with the elastic
     /// Jacobian (the linearly implicit, IMEX scheme).
     pub linearly_implicit: bool,
+    /// Adaptive methods: end the steps on the output times, so every sample
+    /// is a step's solution, not the dense output between step ends
+    /// (`softrod_integrate::Options::steps_to_outputs`,
+    /// docs/theory-derivatives.md CD10). Costs at least one step per output
+    /// interval; pays on quasi-static settles whose steps grow far beyond
+    /// the decay of the damped modes. Fixed steps ignore it.
+    pub steps_to_outputs: bool,
     /// The run length a scene asks for (`[run] duration`) \[s\]: what a
     /// front end simulates when the user names no duration.
     pub duration: f64,
@@ -63,6 +70,7 @@ impl Settings {
             output_every: Some(run.output_every),
             error_control: run.error_control,
             linearly_implicit: run.linearly_implicit,
+            steps_to_outputs: run.steps_to_outputs,
             duration: run.duration,
             energy_tolerance: run.energy_tolerance,
         }
@@ -163,6 +171,7 @@ impl Settings {
             // (ρ∞ < 1, which its explicit remainder needs).
             opts.iteration = Iteration::LinearlyImplicit;
         }
+        opts.steps_to_outputs = adaptive && self.steps_to_outputs;
         if adaptive {
             opts.max_steps = Recommended::MAX_STEPS;
         } else {
@@ -247,6 +256,25 @@ mod tests {
         .unwrap();
         assert_eq!(o.iteration, Iteration::LinearlyImplicit);
         assert_eq!(o.step, StepControl::Fixed(1e-3));
+    }
+
+    /// `steps_to_outputs` reaches the adaptive methods' options, never the
+    /// fixed-step ones'; off by default.
+    #[test]
+    fn steps_to_outputs_reaches_adaptive_options_only() {
+        let (_, o) = Settings::default().method_and_options(1.0).unwrap();
+        assert!(!o.steps_to_outputs);
+        let on = Settings {
+            steps_to_outputs: true,
+            ..Settings::default()
+        };
+        let (_, o) = on.clone().method_and_options(1.0).unwrap();
+        assert!(o.steps_to_outputs);
+        let (_, o) = on
+            .with_integrator(Integrator::Rk4)
+            .method_and_options(1.0)
+            .unwrap();
+        assert!(!o.steps_to_outputs);
     }
 
     /// `with_rtol` tightens `atol` to `rtol`, never loosens it.

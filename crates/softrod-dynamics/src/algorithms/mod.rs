@@ -30,6 +30,7 @@ pub(crate) mod pairs;
 pub(crate) mod planar;
 pub(crate) mod shifted;
 pub(crate) mod shifted_contact;
+pub(crate) mod shifted_geometric;
 pub(crate) mod tree;
 
 use crate::error::DynamicsError;

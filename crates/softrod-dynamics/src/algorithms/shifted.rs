@@ -15,6 +15,7 @@
 
 use super::chain::outward_inl;
 use super::shifted_contact::{ContactShift, check_point};
+use super::shifted_geometric;
 use super::tree::{inverse_k, local, outward};
 use super::{Motion, Pass, check_vec};
 use crate::error::DynamicsError;
@@ -60,6 +61,33 @@ pub struct ShiftedSolver {
     /// [`Self::linearize_contact`] (docs/theory-contact.md CT17; empty:
     /// none, `S = M + aK + bD`).
     contact: ContactShift,
+    /// Whether the factorizations add the geometric stiffness of the
+    /// world-fixed forces (docs/theory-contact.md CT19–CT23).
+    geometric: bool,
+    geo_factored: bool,
+    /// A chain model's own tree, with its buffers: the geometric terms are
+    /// not symmetric, so they run on the tree recursion (dense 6×6 per
+    /// node) rather than the chain's symmetric one (CT21). Built by
+    /// [`Self::set_geometric`].
+    chain_tree: Option<Box<ChainTree>>,
+    /// Which recursion holds the last factorization.
+    path: Path,
+}
+
+/// A chain model as a tree, for the geometric factorization.
+#[derive(Clone, Debug)]
+struct ChainTree {
+    model: Model,
+    data: Data,
+    scratch: Vec<SolveNode>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Path {
+    /// The model's own recursion (chain or tree).
+    Own,
+    /// A chain model on its [`ChainTree`].
+    ChainTree,
 }
 
 impl ShiftedSolver {
@@ -72,7 +100,51 @@ impl ShiftedSolver {
             n_dof: model.n_dof(),
             tree_scratch: vec![Default::default(); nodes],
             contact: ContactShift::default(),
+            geometric: false,
+            geo_factored: false,
+            chain_tree: None,
+            path: Path::Own,
         }
+    }
+
+    /// Turns the geometric stiffness of the world-fixed forces on or off
+    /// for the following factorizations: `S = M + a(K + K_c + K_g) + b(D +
+    /// D_c)`, `K_g` the Hessian of the potential of gravity (on the rods'
+    /// quadrature points and the bodies) and of the contact forces of the
+    /// last [`Self::linearize_contact`] held fixed in the world while their
+    /// points move (docs/theory-contact.md CT19–CT23: exact between the
+    /// coordinates of different pieces, joints and bodies; inside a piece
+    /// the second derivative of the piece's map is left out, CT22). What a
+    /// tensioned rope's Newton iteration needs: the rope's `T/ℓ` stiffness
+    /// is this term. Off by default here; `softrod_integrate::RodSystem`
+    /// turns it on. A chain model then factors on its tree (built here
+    /// once, an allocation; the tree recursion costs ~1.5× the chain's).
+    /// `K_g` is indefinite where the forces destabilize (a compressed or
+    /// overhanging rod, the twist of a bent tensioned rod): a node whose
+    /// articulated block is then not positive definite is factored with
+    /// its eigenvalues' magnitudes (CT23), and if even that fails,
+    /// [`Self::factor_at`] factors without the terms.
+    pub fn set_geometric(&mut self, model: &Model, on: bool) -> Result<(), DynamicsError> {
+        self.check_model(model)?;
+        self.factored = false;
+        self.geometric = on;
+        if on && model.tree.is_none() && self.chain_tree.is_none() {
+            let mut m = model.clone();
+            m.tree = Some(Tree::build(&m)?);
+            let nodes = m.tree.as_ref().map_or(0, |t| t.nodes.len());
+            self.chain_tree = Some(Box::new(ChainTree {
+                data: Data::new(&m),
+                scratch: vec![SolveNode::default(); nodes],
+                model: m,
+            }));
+        }
+        Ok(())
+    }
+
+    /// Whether the last successful factorization holds the geometric
+    /// stiffness ([`Self::set_geometric`]; false after a fallback).
+    pub fn geometric_in_factor(&self) -> bool {
+        self.geometric && self.factored && self.geo_factored
     }
 
     /// Makes the following factorizations include the contact at
@@ -175,10 +247,24 @@ impl ShiftedSolver {
                 what: "ShiftedSolver",
             });
         }
+        self.geo_factored = false;
+        if self.geometric {
+            match self.factor_geometric(model, t, q, a, b) {
+                Ok(()) => {
+                    self.geo_factored = true;
+                    self.factored = true;
+                    return Ok(());
+                }
+                // Not positive definite with K_g: without it below.
+                Err(DynamicsError::Singular { .. } | DynamicsError::SingularNode { .. }) => {}
+                Err(e) => return Err(e),
+            }
+        }
+        self.path = Path::Own;
         let contact = (!self.contact.is_empty()).then_some(&self.contact);
         if let Some(tree) = &model.tree {
             model.set_time(&mut self.data, t);
-            tree_factor(model, tree, &mut self.data, q, a, b, contact)?;
+            tree_factor(model, tree, &mut self.data, q, a, b, contact, false)?;
         } else {
             shifted_factor(model, &mut self.data, q, a, b, contact)?;
         }
@@ -187,6 +273,36 @@ impl ShiftedSolver {
                 .factor_low_rank(model, &self.data, &mut self.tree_scratch, a, b);
         }
         self.factored = true;
+        Ok(())
+    }
+
+    /// The factorization with the geometric terms, on the model's tree or
+    /// a chain model's [`ChainTree`] (arguments checked by the caller).
+    fn factor_geometric(
+        &mut self,
+        model: &Model,
+        t: f64,
+        q: &[f64],
+        a: f64,
+        b: f64,
+    ) -> Result<(), DynamicsError> {
+        let contact = (!self.contact.is_empty()).then_some(&self.contact);
+        let (m, data, scratch, path) = match (&model.tree, self.chain_tree.as_deref_mut()) {
+            (Some(_), _) => (model, &mut self.data, &mut self.tree_scratch, Path::Own),
+            (None, Some(ct)) => (&ct.model, &mut ct.data, &mut ct.scratch, Path::ChainTree),
+            (None, None) => {
+                return Err(DynamicsError::NotFactored {
+                    what: "ShiftedSolver (set_geometric on another model)",
+                });
+            }
+        };
+        let tree = m.tree.as_ref().expect("a tree");
+        m.set_time(data, t);
+        tree_factor(m, tree, data, q, a, b, contact, true)?;
+        if contact.is_some() {
+            self.contact.factor_low_rank(m, data, scratch, a, b);
+        }
+        self.path = path;
         Ok(())
     }
 
@@ -205,9 +321,13 @@ impl ShiftedSolver {
             });
         }
         check_vec(model, "x", x)?;
-        match &model.tree {
-            Some(tree) => tree_solve(tree, &self.data, &mut self.tree_scratch, x),
-            None => shifted_solve(model, &self.data, x),
+        match (&model.tree, self.path, self.chain_tree.as_deref_mut()) {
+            (None, Path::ChainTree, Some(ct)) => {
+                let tree = ct.model.tree.as_ref().expect("a tree");
+                tree_solve(tree, &ct.data, &mut ct.scratch, x);
+            }
+            (Some(tree), ..) => tree_solve(tree, &self.data, &mut self.tree_scratch, x),
+            (None, ..) => shifted_solve(model, &self.data, x),
         }
         if !self.contact.is_empty() {
             self.contact.solve_low_rank(self.n_dof, x);
@@ -342,7 +462,12 @@ pub(crate) fn shifted_solve(model: &Model, data: &Data, x: &mut [f64]) {
 /// `K_n`, `D_n` (D13), a joint's spring and damper constants (D53), nothing
 /// for bodies and prescribed joints. Leaves `Û`, `D̂⁻¹` per node in `data`;
 /// prescribed joints at `data.prescribed_q` (their last [`Model::set_time`]).
-/// With `contact`, its one-sided blocks join the nodes' sums (CT17).
+/// With `contact`, its one-sided blocks join the nodes' sums (CT17); with
+/// `geometric`, the geometric stiffness of gravity and of the contact
+/// forces (CT19–CT22): non-symmetric `𝓜ᵗ`, `𝓤`, `𝓓`, read with the inboard
+/// coordinate on the left (`Û = 𝓤 + AᵀM_tip S`, `M_base = 𝓜ᵗ + AᵀM_tipA −
+/// ÛD̂⁻¹Ûᵀ`), `D̂`'s symmetric part factored.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn tree_factor(
     model: &Model,
     tree: &Tree,
@@ -351,6 +476,7 @@ pub(crate) fn tree_factor(
     a: f64,
     b: f64,
     contact: Option<&ContactShift>,
+    geometric: bool,
 ) -> Result<(), DynamicsError> {
     outward(
         model,
@@ -362,6 +488,9 @@ pub(crate) fn tree_factor(
     );
     if let Some(c) = contact {
         c.add_tree(model, data, q, a, b);
+    }
+    if geometric {
+        shifted_geometric::add(model, tree, data, q, a, contact);
     }
     for w in &mut data.nodes {
         w.m_tip = Mat6::zeros();
@@ -394,10 +523,18 @@ pub(crate) fn tree_factor(
             NodeKind::Body { .. } => {}
         }
         let dinv = if k > 0 {
-            inverse_k(&dhat, k).ok_or_else(|| DynamicsError::SingularNode {
-                node: tree.describe(model, i),
-                what: "shifted articulated block D̂ + aK + bD",
-            })?
+            // With the geometric terms a node's D̂ may be indefinite where
+            // the forces destabilize (CT23): its eigenvalues' magnitudes.
+            inverse_k(&dhat, k)
+                .or_else(|| {
+                    geometric
+                        .then(|| shifted_geometric::abs_inverse_k(&dhat, k))
+                        .flatten()
+                })
+                .ok_or_else(|| DynamicsError::SingularNode {
+                    node: tree.describe(model, i),
+                    what: "shifted articulated block D̂ + aK + bD",
+                })?
         } else {
             Mat6::zeros()
         };

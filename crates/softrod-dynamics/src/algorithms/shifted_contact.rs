@@ -53,6 +53,9 @@ pub(crate) struct PointBlock {
     pub site: Site,
     pub k: Mat3,
     pub c: Mat3,
+    /// The contact force on the rod (world) \[N\], for its geometric
+    /// stiffness (CT21, `shifted_geometric`).
+    pub f: Vec3,
 }
 
 /// The contact part of the shifted matrix at a linearization point, and
@@ -175,6 +178,7 @@ impl ContactShift {
                         },
                         k,
                         c,
+                        f: a.force,
                     });
                 }
                 Some(body) => {

@@ -202,10 +202,12 @@ impl Model {
 /// contacts whose spring carries more than its target (CT15) and checks
 /// the penetration: [`DynamicsError::Penetration`] (naming the rod, `s`,
 /// the obstacle or other rod, `t` and the depth) if a contact is deeper
-/// than [`IMPACT_LIMIT`] of its radius. Returns whether a stiffness rose (the law changed: cached
-/// derivatives no longer hold). Nothing for a model without contact. A
-/// rejected step must not be committed: the anchors and stiffnesses are
-/// read, never written, by the evaluations of a step.
+/// than [`IMPACT_LIMIT`] of its radius. Returns whether a stiffness rose
+/// or an offset moved (the law changed: cached derivatives no longer
+/// hold; [`commit_contact_change`] tells the two apart). Nothing for a
+/// model without contact. A rejected step must not be committed: the
+/// anchors and stiffnesses are read, never written, by the evaluations of
+/// a step.
 pub fn commit_contact(
     model: &Model,
     data: &mut Data,
@@ -213,15 +215,39 @@ pub fn commit_contact(
     q: &[f64],
     qd: &[f64],
 ) -> Result<bool, DynamicsError> {
+    commit_contact_change(model, data, t, q, qd).map(|c| c.scale_rose || c.offset_moved)
+}
+
+/// What [`commit_contact_change`] changed in the contact law (CT15).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct ContactChange {
+    /// A contact's stiffness scale changed (a raise, or a contact that
+    /// starts or stops at a raised scale): the law's slope changed.
+    pub scale_rose: bool,
+    /// Only penalty offsets moved (healing, CT15 step 1): the force at a
+    /// given depth changed, its slope did not.
+    pub offset_moved: bool,
+}
+
+/// [`commit_contact`], telling a raised stiffness from a healed offset
+/// (CT25: an integrator keeps its Newton matrix across the second and
+/// across friction anchors, and refreshes it after the first).
+pub fn commit_contact_change(
+    model: &Model,
+    data: &mut Data,
+    t: f64,
+    q: &[f64],
+    qd: &[f64],
+) -> Result<ContactChange, DynamicsError> {
     check_vec(model, "q", q)?;
     check_vec(model, "qdot", qd)?;
     if !contact_force(model, data, Forces::ALL, t, q, Some(qd)) {
-        return Ok(false);
+        return Ok(ContactChange::default());
     }
     let mut work = data.contact.take().expect("contact work");
     let n_obs = model.contact.obstacles.len();
     let mut result = Ok(());
-    let mut raised = false;
+    let mut change = ContactChange::default();
     let mut next: Vec<(usize, usize, softrod_lie::Vec3)> = Vec::with_capacity(work.active.len());
     let mut holds: Vec<(usize, usize, Hold)> = Vec::with_capacity(work.active.len());
     for a in &work.active {
@@ -231,7 +257,8 @@ pub fn commit_contact(
         let base = law(model, a.rod, a.sample, a.obstacle, true);
         let (hold, limit) = next_hold(prev, &base, (smp.mass, smp.radius), -a.gap, t);
         let before = prev.map_or((1.0, 0.0), |p| (p.scale, p.offset));
-        raised |= (hold.scale, hold.offset) != before;
+        change.scale_rose |= hold.scale != before.0;
+        change.offset_moved |= hold.offset != before.1;
         holds.push((a.rod, idx, hold));
         if result.is_ok() && -a.gap > limit {
             result = Err(DynamicsError::Penetration {
@@ -283,13 +310,16 @@ pub fn commit_contact(
     if work.pairs.is_some() {
         let pair_result = commit_pairs(model, data, &mut work, t, q);
         match pair_result {
-            Ok(r) => raised |= r,
+            Ok(c) => {
+                change.scale_rose |= c.scale_rose;
+                change.offset_moved |= c.offset_moved;
+            }
             Err(e) if result.is_ok() => result = Err(e),
             Err(_) => {}
         }
     }
     data.contact = Some(work);
-    result.map(|()| raised)
+    result.map(|()| change)
 }
 
 /// The stiffness of resting contacts for statics (CT15): at the
@@ -374,10 +404,10 @@ fn commit_pairs(
     work: &mut ContactWork,
     t: f64,
     q: &[f64],
-) -> Result<bool, DynamicsError> {
+) -> Result<ContactChange, DynamicsError> {
     let mut pw = work.pairs.take().expect("pair work");
     let mut result = Ok(());
-    let mut raised = false;
+    let mut change = ContactChange::default();
     pw.next.clear();
     pw.next_holds.clear();
     let with_friction = model.contact.settings.friction > 0.0;
@@ -391,8 +421,9 @@ fn commit_pairs(
             .map(|h| h.hold);
         let (base, mass) = pair_base(model, c.a, c.sa, c.b, c.sb, radius);
         let (hold, bound) = next_hold(prev, &base, (mass, radius), -c.gap, t);
-        raised |= Some((hold.scale, hold.offset)) != prev.map(|p| (p.scale, p.offset))
-            && (hold.scale, hold.offset) != (1.0, 0.0);
+        let before = prev.map_or((1.0, 0.0), |p| (p.scale, p.offset));
+        change.scale_rose |= hold.scale != before.0;
+        change.offset_moved |= hold.offset != before.1;
         pw.next_holds.push(PairHold {
             a: c.a,
             sa: c.sa,
@@ -443,5 +474,5 @@ fn commit_pairs(
     std::mem::swap(&mut pw.anchors, &mut pw.next);
     std::mem::swap(&mut pw.holds, &mut pw.next_holds);
     work.pairs = Some(pw);
-    result.map(|()| raised)
+    result.map(|()| change)
 }

@@ -18,8 +18,8 @@ pub(crate) mod statics;
 
 pub use crate::model::contact::IMPACT_LIMIT;
 pub use closed::closure_statics;
-pub use contact::commit_contact;
 pub(crate) use contact::raise_for_rest;
+pub use contact::{ContactChange, commit_contact, commit_contact_change};
 pub use energy::{Energies, energies};
 pub use frames::{frames, section_jacobian};
 pub use lanczos::lowest_modes;

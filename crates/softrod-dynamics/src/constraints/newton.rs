@@ -166,7 +166,7 @@ impl ClosedShiftedSolver {
             Forces::ALL,
         );
         assemble(model, tree, &self.data, motion, false, &mut self.rows);
-        tree_factor(model, tree, &mut self.data, q, a, b, None)?;
+        tree_factor(model, tree, &mut self.data, q, a, b, None, false)?;
         let m = model.n_constraints();
         for c in 0..m {
             for i in 0..self.n_dof {

@@ -37,7 +37,7 @@ use crate::model::Model;
 use crate::model::data::Data;
 use nalgebra::{DMatrix, DVector};
 use piece::PieceWork;
-pub use vjp::{inverse_dynamics_jvp, inverse_dynamics_vjp};
+pub use vjp::{inverse_dynamics_inertia_vjp, inverse_dynamics_jvp, inverse_dynamics_vjp};
 
 /// Where the derivatives are taken: the time \[s\], the motion `(q, q̇, q̈)`
 /// (dim n_dof each) and the forces of the evaluation.

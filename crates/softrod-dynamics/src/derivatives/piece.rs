@@ -38,6 +38,12 @@ pub(crate) struct PieceWork {
     /// `Σ w T₋ᵀ f`, `Σ w Aᵀ f` (D17–D18 sums).
     pub(crate) tsum: Vec6,
     pub(crate) wsum: Vec6,
+    /// The same sums of the own Gauss points' inertial wrench densities
+    /// alone, `f = 𝓜η̇′ + ad*_η 𝓜η` (gravity in `η̇′`; no drag, loads or
+    /// inside subtrees): linear in the density, for the inertia products
+    /// of [`super::vjp::inverse_dynamics_inertia_vjp`] (D85).
+    pub(crate) tin: Vec6,
+    pub(crate) win: Vec6,
     /// Own-point derivative sums, columns = strain perturbation `ζ` (D42).
     pub(crate) dq_diag: Mat6,
     pub(crate) dv_diag: Mat6,
@@ -93,6 +99,8 @@ impl PieceWork {
             ry: z,
             tsum: Vec6::zeros(),
             wsum: Vec6::zeros(),
+            tin: Vec6::zeros(),
+            win: Vec6::zeros(),
             dq_diag: z,
             dv_diag: z,
             dq_w: z,
@@ -142,6 +150,8 @@ impl PieceWork {
         self.ry = z;
         self.tsum = Vec6::zeros();
         self.wsum = Vec6::zeros();
+        self.tin = Vec6::zeros();
+        self.win = Vec6::zeros();
         self.dq_diag = z;
         self.dv_diag = z;
         self.dq_w = z;

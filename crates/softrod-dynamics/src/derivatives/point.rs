@@ -149,11 +149,20 @@ pub(crate) fn own_points(
     w: &mut PieceWork,
 ) {
     let (maps, dm) = (pc.maps, pc.dm);
+    // Drag or distributed loads make `f` more than the inertial wrench
+    // density: then the inertial sums of D85 are summed apart; otherwise
+    // they are `tsum`, `wsum` as they stand after the Gauss points.
+    let apart = drag.is_some() || !rm.spec.distributed_loads.is_empty();
     for qp in &pd.points {
         let (g, p) = linearize_point(pc, qp.x);
         let m = &qp.inertia;
         let me = m.component_mul(&p.eta);
         let mut f = m.component_mul(&p.etad) + coad_vec(&p.eta, &me);
+        if apart {
+            let fw = f * qp.w;
+            w.tin += p.t.tr_mul_vec(&fw);
+            w.win += p.a.tr_mul_vec(&fw);
+        }
         // (D38): b = Λ(𝓜η) + ad*_η 𝓜 + C, the velocity part of δf.
         let mut b = lambda(&me) + scale_columns(&coad(&p.eta), m);
         if let Some(c) = drag {
@@ -208,6 +217,10 @@ pub(crate) fn own_points(
             w.yt += op_tr_mul(&p.a, &ya);
             w.ry += op_tr_mul(&p.t, &ya);
         }
+    }
+    if !apart {
+        w.tin = w.tsum;
+        w.win = w.wsum;
     }
     for pl in &pd.loads {
         let load = &rm.spec.point_loads[pl.index];

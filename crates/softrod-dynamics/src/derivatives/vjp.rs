@@ -17,13 +17,14 @@
 
 use super::IdDerivatives;
 use super::piece::PieceWork;
+use super::point::basis6;
 use super::tree::{Exit, TreeWork};
 use crate::algorithms::check_vec;
 use crate::error::DynamicsError;
 use crate::forces::linearized::has_dead_loads;
-use crate::model::tree::Tree;
+use crate::model::tree::{NodeKind, Tree};
 use crate::model::{Model, RodModel};
-use softrod_lie::Vec6;
+use softrod_lie::{Mat6, Vec6, coad};
 
 /// `u`'s coordinates `o .. o + k` as a zero-padded 6-vector.
 #[inline(always)]
@@ -118,6 +119,126 @@ pub fn inverse_dynamics_jvp(
         });
     }
     Ok(())
+}
+
+/// The inertia products (docs/theory-derivatives.md D85) at the point of
+/// the last successful linearization on `work`: for every rod `r`,
+/// `rods[r] = zᵀ ∂τ/∂s_r`, the derivative of `τ(q, q̇, q̈)` by a factor
+/// `s_r` on the screw inertia of all of rod `r`'s points (at `s_r = 1`;
+/// `τ` is linear in it, so `zᵀ∂τ/∂ρ_r = rods[r]/ρ_r` for its density
+/// `ρ_r`); for every body `b`, the 6×6 `bodies[b] = G_b` with
+/// `zᵀ ∂τ/∂𝓜_b [δ𝓜] = Σᵢⱼ G_b,ij δ𝓜ᵢⱼ` for a change `δ𝓜` of its screw
+/// inertia at its frame. Each is the virtual power of the inertial wrenches
+/// in the twists `J z` (`zᵀτ = Σ_points (J z)ᵀ f`): one outward pass of the
+/// prefix sums of [`inverse_dynamics_vjp`] against the sums the
+/// linearization kept, O(N), no allocation. Overwrites `rods`, `bodies`.
+///
+/// Errors: `z` of the wrong length or not finite, `rods` or `bodies` of the
+/// wrong length, no linearization evaluated, a product that is not finite.
+pub fn inverse_dynamics_inertia_vjp(
+    model: &Model,
+    work: &mut IdDerivatives,
+    z: &[f64],
+    rods: &mut [f64],
+    bodies: &mut [Mat6],
+) -> Result<(), DynamicsError> {
+    check_work(model, work, "inverse_dynamics_inertia_vjp")?;
+    check_vec(model, "z", z)?;
+    for (what, got, expected) in [
+        ("rods", rods.len(), model.rods().len()),
+        ("bodies", bodies.len(), model.bodies().len()),
+    ] {
+        if got != expected {
+            return Err(DynamicsError::SizeMismatch {
+                what,
+                got,
+                expected,
+            });
+        }
+    }
+    rods.fill(0.0);
+    bodies.fill(Mat6::zeros());
+    match (&model.tree, work.tree.as_deref_mut()) {
+        (Some(tree), Some(tw)) => tree_inertia(model, tree, tw, z, rods, bodies),
+        _ => {
+            for (r, rm) in model.rods().iter().enumerate() {
+                let mut a = Vec6::zeros();
+                for (p, w) in rm.spec.geometry.pieces().iter().zip(&work.pieces[r]) {
+                    let (o, k) = (rm.dof_offset + p.dof_offset, p.basis.dof());
+                    let zj = local(z, o, k);
+                    rods[r] += piece_power(w, &basis6(&p.basis), &zj, &a);
+                    a += w.s_world * zj;
+                }
+            }
+        }
+    }
+    let bad = rods
+        .iter()
+        .position(|v| !v.is_finite())
+        .map(|i| (format!("z^T dtau/ds of rod {i}"), rods[i]))
+        .or_else(|| {
+            bodies.iter().enumerate().find_map(|(b, g)| {
+                g.iter()
+                    .find(|v| !v.is_finite())
+                    .map(|v| (format!("z^T dtau/dM of body {b}"), *v))
+            })
+        });
+    match bad {
+        Some((what, value)) => Err(DynamicsError::NotFinite { what, value }),
+        None => Ok(()),
+    }
+}
+
+/// A piece's own points' inertial virtual power (D85): the twist of `z` at
+/// the piece's base is `up` (world axes) from the coordinates before it,
+/// plus `T₋(x) B z_n` inside from its own.
+#[inline(always)]
+fn piece_power(w: &PieceWork, bm: &Mat6, zj: &Vec6, up: &Vec6) -> f64 {
+    let base = w.base_world.ad_inv().mul_vec(up);
+    base.dot(&w.win) + (bm * zj).dot(&w.tin)
+}
+
+/// [`inverse_dynamics_inertia_vjp`] on a tree: the prefix sums `up` of
+/// [`tree_vjp`], then each piece's and body's virtual power.
+fn tree_inertia(
+    model: &Model,
+    tree: &Tree,
+    tw: &mut TreeWork,
+    z: &[f64],
+    rods: &mut [f64],
+    bodies: &mut [Mat6],
+) {
+    for (i, node) in tree.nodes.iter().enumerate() {
+        let up = match node.parent {
+            None => Vec6::zeros(),
+            Some(p) => {
+                let pn = &tree.nodes[p];
+                let mut a = tw.up[p];
+                if pn.k > 0 {
+                    let ex = exit_towards(tree, tw, p, i);
+                    a += ex.s * local(z, pn.dof, pn.k);
+                }
+                a
+            }
+        };
+        tw.up[i] = up;
+        let w = &tw.nodes[i];
+        match node.kind {
+            NodeKind::Piece { rod, piece } => {
+                let pc = &model.rods()[rod].spec.geometry.pieces()[piece];
+                let zi = local(z, node.dof, node.k);
+                rods[rod] += piece_power(w, &basis6(&pc.basis), &zi, &up);
+            }
+            NodeKind::Body { body } => {
+                // f = 𝓜η̇′ + ad*_η 𝓜η at the body frame (its tip):
+                // (J z)ᵀ δf = tr(δ𝓜 · (η̇′ (J z)ᵀ + η (ad*_ηᵀ J z)ᵀ)ᵀ).
+                let ez = w.base_world.ad_inv().mul_vec(&up);
+                let cz = coad(&w.eta_tip).tr_mul(&ez);
+                bodies[body] = ez * w.etad_tip.transpose() + cz * w.eta_tip.transpose();
+            }
+            NodeKind::Joint { .. } => {}
+        }
+    }
 }
 
 /// The workspace fits the model and holds a linearization.

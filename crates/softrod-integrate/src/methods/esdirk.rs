@@ -40,7 +40,11 @@
 //! controller for an `O(h⁴)` estimate, as RADAU5's, with `h` kept for
 //! factors in `[1, 1.2]` so the factorization is reused. Dense output: the
 //! quintic Hermite interpolant of `(q, q̇, q̈)` at both ends of the step
-//! (`O(h⁶)` in `q`, `O(h⁵)` in `q̇`: it does not lower the method's order).
+//! (`O(h⁶)` in `q`, `O(h⁵)` in `q̇`: it does not lower the method's order;
+//! on a quasi-static settle the steps outgrow the decay of the damped
+//! modes and the interpolant across them does not follow it, so
+//! outputs can be step ends instead: `Options::steps_to_outputs`,
+//! docs/theory-derivatives.md CD10).
 
 // The coefficients are transcribed with all the digits published.
 #![allow(clippy::excessive_precision)]
@@ -479,6 +483,7 @@ impl<Sys: SecondOrderSystem> Stepper<SecondOrderProblem<'_, Sys>> for Esdirk {
         self.q.copy_from(&self.s.y.rows(0, n));
         self.v.copy_from(&self.s.y.rows(n, n));
         self.system_changed(p, stats)?;
+        self.matrix = Matrix::Cheap;
         self.accepted = 0;
         Ok(())
     }
@@ -632,7 +637,13 @@ impl<Sys: SecondOrderSystem> Stepper<SecondOrderProblem<'_, Sys>> for Esdirk {
         p.system_changed();
         self.jac_valid = false;
         self.factored_h = f64::NAN;
-        self.matrix = Matrix::Cheap;
+        // The matrix kind stays (CT25): a step hook that changes the system
+        // after every step (a model with friction commits its anchors, CT5)
+        // would otherwise send every step back to the cheap matrix the
+        // previous one failed with, and pay a failed Newton iteration per
+        // step before the exact Jacobian (the capstan: 46 of 48 steps;
+        // docs/performance.md, "Contact-heavy scenes"). It returns to the
+        // cheap matrix after `EXACT_STEPS` accepted steps as usual.
         Ok(())
     }
 }

@@ -161,6 +161,7 @@ class Settings:
         output_every: float | None = None,
         error_control: bool | None = None,
         linearly_implicit: bool | None = None,
+        steps_to_outputs: bool | None = None,
     ) -> Settings: ...
     def replace(
         self,
@@ -172,6 +173,7 @@ class Settings:
         output_every: float | None = None,
         error_control: bool | None = None,
         linearly_implicit: bool | None = None,
+        steps_to_outputs: bool | None = None,
     ) -> Settings:
         """A copy with the named keywords changed; the rest (and the scene's duration and
         energy tolerance) kept."""
@@ -189,6 +191,8 @@ class Settings:
     def error_control(self) -> bool: ...
     @property
     def linearly_implicit(self) -> bool: ...
+    @property
+    def steps_to_outputs(self) -> bool: ...
 
 @final
 class Energies:
@@ -554,6 +558,7 @@ class Simulation:
         dt: float | None = None,
         error_control: bool | None = None,
         linearly_implicit: bool | None = None,
+        steps_to_outputs: bool | None = None,
         q0: ArrayLike | None = None,
         qdot0: ArrayLike | None = None,
         controller: _Controller | None = None,

@@ -63,21 +63,25 @@ declares (``settings`` states them):
   time_step_scale**4`` (the steps of both methods below scale as the
   fourth root of the tolerance) and ``atol = ATOL_QUASI_STATIC``: the
   tolerances bound only the path to the equilibrium. The method follows
-  the model's structure (:func:`_closed`): ESDIRK4(3), softrod's default
-  (Newton on the exact Jacobian with the O(n) structured solve), on open
-  chains; Radau IIA order 5 on models with loop closures (a pinned,
-  clamped or driven far end). On closures ESDIRK at these tolerances lets
-  the constraint drift (measured, 50 pieces: on the catenary the pinned
-  end's gap reaches 5e-5 m against Radau's 3e-6 m and the sag wanders by
-  +-40 um to the end, a settling residual of 3e-5 against 2e-7 rod lengths
-  per second, at a noise floor that scales with rtol; on the twist the
-  loop comes apart, a closure residual of 1.8 mm at t = 15.4 s), where
-  Radau IIA settles at the damping's rate. Damping: linear drag
-  proportional to mass (force ``-c_t v``, moment ``-c_r w`` per unit
-  length, ``c_t = 2 omega_1 rho A``, ``c_r = 2 omega_1 rho I``), critical
-  for the slowest mode ``omega_1 = Scenario.slowest_frequency()``: the rule
-  of the PyElastica, MuJoCo and dismech adapters, so every solver settles
-  through the same damping.
+  the model's structure
+  (:func:`_closed_with_contact`): ESDIRK4(3), softrod's default (Newton on
+  the exact Jacobian: the O(n) structured solve on open chains, the dense
+  constrained one on loop closures), on every model but those with both
+  loop closures (a pinned, clamped or driven far end) and contact, which
+  take Radau IIA order 5. ESDIRK's steps end on the output frames
+  (``steps_to_outputs``, docs/theory-derivatives.md CD10): before, its quintic Hermite between
+  steps of up to 1.4 s left the catenary's sag wandering by +-40 um (a
+  settling residual of 3e-5 against Radau's 2e-7 rod lengths per second),
+  which kept every closed model on Radau IIA, 3 to 7 times slower. With
+  contact on loop closures ESDIRK at these tolerances still lets a loop
+  come apart (a closure residual above 1e-3 of the rod: the crossing's at
+  t = 0.1 s, the twist's at self contact, t = 15.4 s); why is open
+  (docs/performance.md). Damping: linear drag proportional to mass (force
+  ``-c_t v``, moment ``-c_r w`` per unit length, ``c_t = 2 omega_1 rho
+  A``, ``c_r = 2 omega_1 rho I``), critical for the slowest mode
+  ``omega_1 = Scenario.slowest_frequency()``: the rule of the PyElastica,
+  MuJoCo and dismech adapters, so every solver settles through the same
+  damping.
 """
 
 from __future__ import annotations
@@ -111,7 +115,7 @@ RTOL_QUASI_STATIC = 1e-3
 ATOL_QUASI_STATIC = 1e-5
 #: Order of the step in the tolerance: ESDIRK4(3)'s error estimate (its
 #: embedded order-3 solution) is O(h^4), so its step scales as rtol^(1/4).
-#: Radau IIA(5)'s, the rule on loop closures, is O(h^4) too.
+#: Radau IIA(5)'s, the rule on loop closures with contact, is O(h^4) too.
 STEP_ORDER = 4
 #: A centerline is straight when every point is within this many rod
 #: lengths of the line through its ends.
@@ -498,10 +502,12 @@ def _parts(scenario: Scenario, n_elements: int, damping_rate: float) -> list[_Pa
     ]
 
 
-def _closed(scenario: Scenario) -> bool:
-    """Whether the scenario's model has loop closures: a rod whose far end
-    is pinned, clamped or driven (see :func:`_build`)."""
-    return any(r.end is not EndCondition.FREE for r in scenario.rods)
+def _closed_with_contact(scenario: Scenario) -> bool:
+    """Whether the scenario's model has loop closures (a rod whose far end
+    is pinned, clamped or driven, see :func:`_build`) and contact (obstacles,
+    rods that can touch each other or themselves)."""
+    closed = any(r.end is not EndCondition.FREE for r in scenario.rods)
+    return closed and bool(scenario.obstacles or _touching(scenario))
 
 
 def _build_key(scenario: Scenario, n_elements: int) -> tuple:
@@ -542,10 +548,16 @@ class SoftrodSolver:
         """The integrator and its settings for ``scenario`` (keywords of
         ``softrod.Simulation.simulate``)."""
         if scenario.quasi_static:
+            integrator = "radau5" if _closed_with_contact(scenario) else "esdirk"
             return {
-                "integrator": "radau5" if _closed(scenario) else "esdirk",
+                "integrator": integrator,
                 "rtol": RTOL_QUASI_STATIC * self.time_step_scale**STEP_ORDER,
                 "atol": ATOL_QUASI_STATIC,
+                # A settle's ESDIRK steps outgrow the decay of the damped
+                # modes, and its quintic Hermite dense output across them
+                # does not follow that decay (docs/theory-derivatives.md
+                # CD10): the frames are step ends instead.
+                "steps_to_outputs": integrator == "esdirk",
             }
         period = 2.0 * np.pi / scenario.slowest_frequency()
         return {
@@ -575,8 +587,9 @@ class SoftrodSolver:
             fit[list(part.rods)] = part.fit_error
         return {
             **self.numerics(scenario),
-            **({"integrator_rule": "quasi-static: ESDIRK on open chains, Radau IIA on "
-                "models with loop closures (the adapter's docstring says why)"}
+            **({"integrator_rule": "quasi-static: ESDIRK4(3) (steps ending on the output "
+                "frames), Radau IIA on models with both loop closures and contact (the "
+                "adapter's docstring says why)"}
                if scenario.quasi_static else {}),
             "pieces_per_rod": n_elements,
             "strains": "all",

@@ -936,7 +936,7 @@ impl Simulation {
     ///
     /// Keywords override the run settings for this call only:
     /// `integrator`, `rtol`, `atol`, `dt`, `output_every`, `error_control`,
-    /// `linearly_implicit` (see `softrod.Settings`); `q0`, `qdot0`
+    /// `linearly_implicit`, `steps_to_outputs` (see `softrod.Settings`); `q0`, `qdot0`
     /// (n_dof,) override the initial state.
     ///
     /// Without `controller` this is the facade's `Simulation::simulate`,
@@ -956,7 +956,7 @@ impl Simulation {
     /// raised by the controller ends the run and propagates.
     #[pyo3(signature = (duration = None, *, output_every = None, integrator = None, rtol = None,
                         atol = None, dt = None, error_control = None, linearly_implicit = None,
-                        q0 = None, qdot0 = None, controller = None, control_every = None))]
+                        steps_to_outputs = None, q0 = None, qdot0 = None, controller = None, control_every = None))]
     #[allow(clippy::too_many_arguments)]
     fn simulate(
         &mut self,
@@ -969,6 +969,7 @@ impl Simulation {
         dt: Option<f64>,
         error_control: Option<bool>,
         linearly_implicit: Option<bool>,
+        steps_to_outputs: Option<bool>,
         q0: Option<&Bound<'_, PyAny>>,
         qdot0: Option<&Bound<'_, PyAny>>,
         controller: Option<Py<PyAny>>,
@@ -984,6 +985,7 @@ impl Simulation {
             output_every,
             error_control,
             linearly_implicit,
+            steps_to_outputs,
         )?;
         let start = run::RunStart {
             q0,

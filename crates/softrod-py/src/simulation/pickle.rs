@@ -41,6 +41,7 @@ impl Simulation {
         settings.set_item("output_every", s.output_every)?;
         settings.set_item("error_control", s.error_control)?;
         settings.set_item("linearly_implicit", s.linearly_implicit)?;
+        settings.set_item("steps_to_outputs", s.steps_to_outputs)?;
         settings.set_item("duration", s.duration)?;
         settings.set_item("energy_tolerance", s.energy_tolerance)?;
         d.set_item("settings", settings)?;
@@ -101,6 +102,11 @@ impl Simulation {
             output_every: get("output_every")?.extract()?,
             error_control: get("error_control")?.extract()?,
             linearly_implicit: get("linearly_implicit")?.extract()?,
+            // Absent from pickles written before the setting existed.
+            steps_to_outputs: match st.get_item("steps_to_outputs")? {
+                Some(v) => v.extract()?,
+                None => false,
+            },
             duration: get("duration")?.extract()?,
             energy_tolerance: get("energy_tolerance")?.extract()?,
         };

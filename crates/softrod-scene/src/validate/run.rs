@@ -91,6 +91,15 @@ impl Ctx<'_> {
                 ),
             );
         }
+        let steps_to_outputs = r.steps_to_outputs.unwrap_or(d.steps_to_outputs);
+        let adaptive = integrator.is_adaptive()
+            || (integrator == Integrator::GeneralizedAlpha && error_control);
+        if steps_to_outputs && !adaptive {
+            self.warn(
+                "run.steps_to_outputs",
+                format!("steps_to_outputs only applies to adaptive steps ({integrator} here has fixed steps): ignored"),
+            );
+        }
         if r.dt.is_some() && dt > duration {
             self.warn(
                 "run.dt",
@@ -125,6 +134,7 @@ impl Ctx<'_> {
             quadrature,
             error_control,
             linearly_implicit,
+            steps_to_outputs,
             energy_tolerance,
             shape_points_per_piece,
             memory_limit_gib,

@@ -316,13 +316,14 @@ impl Hooks<RodSystem> for RunHooks<'_> {
         }
         // Contact friction (docs/theory-contact.md CT5): the anchors move
         // only at accepted steps.
-        let contact_changed = match sys.commit_contact(info.t, q, qd) {
-            Ok(changed) => changed,
+        let contact_control = match sys.commit_contact_control(info.t, q, qd) {
+            Ok(c) => c,
             Err(e) => {
                 self.failure = Some((info.t, e.to_string()));
                 return Control::Stop;
             }
         };
+        let contact_changed = contact_control != Control::Continue;
         if contact_changed {
             // The next step's law (anchors, stiffness: CT5, CT15) is not
             // this one's: its power from here on is the new law's.
@@ -346,9 +347,8 @@ impl Hooks<RodSystem> for RunHooks<'_> {
             }
             return Control::SystemChanged;
         }
-        if contact_changed {
-            return Control::SystemChanged;
-        }
-        Control::Continue
+        // A raised stiffness changes the law's slope (the Jacobians go);
+        // moved anchors and healing offsets only its forces here (CT25).
+        contact_control
     }
 }

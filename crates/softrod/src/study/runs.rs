@@ -64,9 +64,8 @@ pub(super) fn simulate_once(
             return Control::Stop;
         }
         let (q, qd) = info.y.as_slice().split_at(n);
-        match sys.commit_contact(info.t, q, qd) {
-            Ok(true) => Control::SystemChanged,
-            Ok(false) => Control::Continue,
+        match sys.commit_contact_control(info.t, q, qd) {
+            Ok(c) => c,
             Err(e) => {
                 *failure.borrow_mut() = Some(format!("at t = {:e} s: {e}", info.t));
                 Control::Stop

@@ -19,7 +19,7 @@
 //! (`softrod_dynamics::strain_space_force`: `ID = ID_rest − τ_s`, and only
 //! `τ_s` depends on them), O(N) with no kinematic sweep.
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DVector, Matrix6};
 use softrod_dynamics::{Data, DynamicsError, Model, inverse_dynamics, strain_space_force};
 use softrod_integrate::{ParameterSystem, RodSystem, SecondOrderSystem};
 use softrod_mechanics::{Material, RodProperties, Tension};
@@ -185,6 +185,19 @@ struct Variant {
     /// The parameter enters the strain-space forces only (moduli,
     /// viscosity, tensions): `∂ID/∂p = −∂τ_s/∂p`.
     strain_only: bool,
+    /// A density or mass: how `∂ID/∂p` follows from the inertia products
+    /// of a kept linearization (G13).
+    inertia: Option<Inertia>,
+}
+
+/// `∂ID/∂p` of a density or mass through the inertia products (D85): rod
+/// `r`'s `zᵀ∂ID/∂s_r` times `1/ρ` (`ID` is linear in the density), or body
+/// `b`'s `G_b` against `∂𝓜_b/∂m` (affine: the variant's inertia minus the
+/// model's, over `Δ`).
+#[derive(Clone, Debug)]
+enum Inertia {
+    Rod { rod: usize, per_density: f64 },
+    Body { body: usize, dm: Box<Matrix6<f64>> },
 }
 
 /// A rod material with one constant moved.
@@ -270,6 +283,9 @@ pub(crate) struct ParamSystem<'a> {
     z: DVector<f64>,
     id0: DVector<f64>,
     sf0: DVector<f64>,
+    /// The inertia products' outputs (G13, D85), per rod and per body.
+    rods: Vec<f64>,
+    bodies: Vec<Matrix6<f64>>,
 }
 
 impl<'a> ParamSystem<'a> {
@@ -289,6 +305,21 @@ impl<'a> ParamSystem<'a> {
             }
             for entry in 0..p.len {
                 let (model, delta) = variant(&sys.model, p.kind, entry)?;
+                let inertia = match p.kind {
+                    Kind::Density(rod) => Some(Inertia::Rod {
+                        rod,
+                        per_density: 1.0
+                            / sys.model.rods()[rod].spec.properties.material().density(),
+                    }),
+                    Kind::Mass(body) => Some(Inertia::Body {
+                        body,
+                        dm: Box::new(
+                            (model.bodies()[body].inertia - sys.model.bodies()[body].inertia)
+                                / delta,
+                        ),
+                    }),
+                    _ => None,
+                };
                 let mut data = Data::new(&model);
                 data.set_cable_tensions(&model, inputs.as_deref())?;
                 variants.push(Variant {
@@ -300,11 +331,13 @@ impl<'a> ParamSystem<'a> {
                         p.kind,
                         Kind::Young(_) | Kind::Shear(_) | Kind::Viscosity(_) | Kind::Tension(_)
                     ),
+                    inertia,
                 });
                 slot += 1;
             }
         }
         let n = sys.model.n_dof();
+        let (rods, bodies) = (sys.model.rods().len(), sys.model.bodies().len());
         Ok(Self {
             sys,
             variants,
@@ -312,7 +345,43 @@ impl<'a> ParamSystem<'a> {
             z: DVector::zeros(n),
             id0: DVector::zeros(n),
             sf0: DVector::zeros(n),
+            rods: vec![0.0; rods],
+            bodies: vec![Matrix6::zeros(); bodies],
         })
+    }
+}
+
+impl ParamSystem<'_> {
+    /// The moduli, viscosity and tensions: adds `+zᵀ (τ_s(pⱼ + Δⱼ) −
+    /// τ_s(pⱼ))/Δⱼ` of the strain-space forces alone (G8).
+    fn strain_products(
+        &mut self,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+        z: &DVector<f64>,
+        out: &mut [f64],
+    ) -> Result<(), DynamicsError> {
+        if !self.variants.iter().any(|v| v.strain_only) {
+            return Ok(());
+        }
+        let (q, qd) = (q.as_slice(), qd.as_slice());
+        self.sf0.copy_from(strain_space_force(
+            &self.sys.model,
+            &mut self.sys.data,
+            t,
+            q,
+            qd,
+        )?);
+        for v in self.variants.iter_mut().filter(|v| v.strain_only) {
+            let sf = strain_space_force(&v.model, &mut v.data, t, q, qd)?;
+            let mut s = 0.0;
+            for r in 0..sf.len() {
+                s += z[r] * (sf[r] - self.sf0[r]);
+            }
+            out[v.slot] += s / v.delta;
+        }
+        Ok(())
     }
 }
 
@@ -464,6 +533,37 @@ impl ParameterSystem for ParamSystem<'_> {
         self.sys.force_vjp(slot, u, out_q, out_qd)
     }
 
+    /// [`force_param_vjp`](Self::force_param_vjp) on the linearization
+    /// kept in `slot` (G13): the densities and masses by the inertia
+    /// products of that linearization (one O(N) pass for all of them,
+    /// [`RodSystem::force_inertia_vjp`], D85) instead of an inverse
+    /// dynamics each and one at `p`; the moduli, viscosity and tensions as
+    /// there.
+    fn force_param_vjp_kept(
+        &mut self,
+        slot: usize,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+        _qdd: &DVector<f64>,
+        z: &DVector<f64>,
+        out: &mut [f64],
+    ) -> Result<bool, DynamicsError> {
+        if self.variants.iter().any(|v| v.inertia.is_some()) {
+            self.sys
+                .force_inertia_vjp(slot, z, &mut self.rods, &mut self.bodies)?;
+        }
+        self.strain_products(t, q, qd, z, out)?;
+        for v in &self.variants {
+            out[v.slot] -= match &v.inertia {
+                Some(Inertia::Rod { rod, per_density }) => self.rods[*rod] * per_density,
+                Some(Inertia::Body { body, dm }) => self.bodies[*body].component_mul(dm).sum(),
+                None => continue,
+            };
+        }
+        Ok(true)
+    }
+
     /// `−zᵀ (ID(pⱼ + Δⱼ) − ID(pⱼ))/Δⱼ` (G8; `ID` is affine in each
     /// parameter): one inverse dynamics per density or mass entry plus one
     /// at `p`; for the moduli, viscosity and tensions `+zᵀ (τ_s(pⱼ + Δⱼ) −
@@ -478,29 +578,26 @@ impl ParameterSystem for ParamSystem<'_> {
         z: &DVector<f64>,
         out: &mut [f64],
     ) -> Result<(), DynamicsError> {
+        self.strain_products(t, q, qd, z, out)?;
+        if !self.variants.iter().any(|v| !v.strain_only) {
+            return Ok(());
+        }
         let (q, qd, qdd) = (q.as_slice(), qd.as_slice(), qdd.as_slice());
-        let model = &self.sys.model;
-        if self.variants.iter().any(|v| !v.strain_only) {
-            self.id0
-                .copy_from(inverse_dynamics(model, &mut self.sys.data, t, q, qd, qdd)?);
-        }
-        if self.variants.iter().any(|v| v.strain_only) {
-            self.sf0
-                .copy_from(strain_space_force(model, &mut self.sys.data, t, q, qd)?);
-        }
-        for v in &mut self.variants {
-            let (moved, base, sign) = if v.strain_only {
-                let sf = strain_space_force(&v.model, &mut v.data, t, q, qd)?;
-                (sf, &self.sf0, -1.0)
-            } else {
-                let id = inverse_dynamics(&v.model, &mut v.data, t, q, qd, qdd)?;
-                (id, &self.id0, 1.0)
-            };
+        self.id0.copy_from(inverse_dynamics(
+            &self.sys.model,
+            &mut self.sys.data,
+            t,
+            q,
+            qd,
+            qdd,
+        )?);
+        for v in self.variants.iter_mut().filter(|v| !v.strain_only) {
+            let id = inverse_dynamics(&v.model, &mut v.data, t, q, qd, qdd)?;
             let mut s = 0.0;
-            for r in 0..moved.len() {
-                s += z[r] * (moved[r] - base[r]);
+            for r in 0..id.len() {
+                s += z[r] * (id[r] - self.id0[r]);
             }
-            out[v.slot] -= sign * s / v.delta;
+            out[v.slot] -= s / v.delta;
         }
         Ok(())
     }
