@@ -209,18 +209,7 @@ fn tree_inertia(
     bodies: &mut [Mat6],
 ) {
     for (i, node) in tree.nodes.iter().enumerate() {
-        let up = match node.parent {
-            None => Vec6::zeros(),
-            Some(p) => {
-                let pn = &tree.nodes[p];
-                let mut a = tw.up[p];
-                if pn.k > 0 {
-                    let ex = exit_towards(tree, tw, p, i);
-                    a += ex.s * local(z, pn.dof, pn.k);
-                }
-                a
-            }
-        };
+        let up = up_through_parent(tree, tw, i, z);
         tw.up[i] = up;
         let w = &tw.nodes[i];
         match node.kind {
@@ -344,6 +333,21 @@ fn chain_vjp(rm: &RodModel, ws: &[PieceWork], u: &[f64], out_q: &mut [f64], out_
 /// The exit of node `p` towards its child `c` (D80): the section of an
 /// inside attachment, or `p`'s tip.
 #[inline(always)]
+/// The forward pass's sum at node `i`: its parent's sum (`tw.up`, already
+/// set: nodes are in topological order) plus the parent's exit twist
+/// towards `i` times the parent's coordinates of `x`; zero at a root.
+fn up_through_parent(tree: &Tree, tw: &TreeWork, i: usize, x: &[f64]) -> Vec6 {
+    let Some(p) = tree.nodes[i].parent else {
+        return Vec6::zeros();
+    };
+    let pn = &tree.nodes[p];
+    let mut a = tw.up[p];
+    if pn.k > 0 {
+        a += exit_towards(tree, tw, p, i).s * local(x, pn.dof, pn.k);
+    }
+    a
+}
+
 fn exit_towards(tree: &Tree, tw: &TreeWork, p: usize, c: usize) -> Exit {
     if tree.nodes[c].attach.is_some() {
         tw.exit[c]
@@ -367,18 +371,7 @@ fn exit_towards(tree: &Tree, tw: &TreeWork, p: usize, c: usize) -> Exit {
 fn tree_vjp(tree: &Tree, tw: &mut TreeWork, u: &[f64], out_q: &mut [f64], out_qd: &mut [f64]) {
     let dead = tw.dead;
     for (i, node) in tree.nodes.iter().enumerate() {
-        let up = match node.parent {
-            None => Vec6::zeros(),
-            Some(p) => {
-                let pn = &tree.nodes[p];
-                let mut a = tw.up[p];
-                if pn.k > 0 {
-                    let ex = exit_towards(tree, tw, p, i);
-                    a += ex.s * local(u, pn.dof, pn.k);
-                }
-                a
-            }
-        };
+        let up = up_through_parent(tree, tw, i, u);
         tw.up[i] = up;
         if node.k > 0 {
             let w = &tw.nodes[i];
