@@ -81,6 +81,35 @@ pub trait ParameterSystem: SecondOrderSystem {
         out: &mut [f64],
     ) -> Result<(), Self::Error>;
 
+    /// `∂a/∂p (t, q, q̇)` as an `n × n_params` matrix into `out`, for the
+    /// forward sensitivities (G21; `qdd` is `a(t, q, q̇)`). The default
+    /// forms it row by row from [`accel_param_vjp`](Self::accel_param_vjp)
+    /// with the unit vectors (`n` products); a system that can apply
+    /// `∂a/∂pⱼ` directly should.
+    fn accel_param_jvp(
+        &mut self,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+        qdd: &DVector<f64>,
+        out: &mut DMatrix<f64>,
+    ) -> Result<(), Self::Error> {
+        let n = q.len();
+        let np = self.n_params();
+        let mut w = DVector::zeros(n);
+        let mut row = vec![0.0; np];
+        for r in 0..n {
+            w[r] = 1.0;
+            row.fill(0.0);
+            self.accel_param_vjp(t, q, qd, qdd, &w, &mut row)?;
+            for (c, v) in row.iter().enumerate() {
+                out[(r, c)] = *v;
+            }
+            w[r] = 0.0;
+        }
+        Ok(())
+    }
+
     /// Optional: the linearization in force form (docs/theory-control.md
     /// G11). For a system `M(q) q̈ = f(t, q, q̇)` with the force residual
     /// `r = M(q) q̈ − f`, writes `M(q)` (symmetric positive definite) into

@@ -148,6 +148,7 @@ mod adjoint;
 mod driver;
 mod krylov;
 mod recommended;
+mod sensitivity;
 
 pub use adjoint::{
     ADJOINT_INTEGRATORS, AdjointGradient, AdjointSolver, ParameterSystem, Seed, Tape,
@@ -163,6 +164,7 @@ pub use methods::generalized_alpha_parameters;
 pub use options::{Iteration, Options, StepControl};
 pub use recommended::Recommended;
 pub use rod::{RodJacobian, RodSystem};
+pub use sensitivity::forward_sensitivity_second_order;
 pub use solution::{EventRecord, Solution, Stats, Status};
 pub use system::{OdeSystem, SecondOrderSystem, fd_jacobian};
 

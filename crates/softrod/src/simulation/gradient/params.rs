@@ -493,6 +493,43 @@ impl ParameterSystem for ParamSystem<'_> {
         solved
     }
 
+    /// `∂a/∂pⱼ = −M⁻¹ (ID(pⱼ + Δⱼ) − ID(pⱼ))/Δⱼ` column by column (G8,
+    /// G21; `ID` is affine in each parameter): one inverse dynamics per
+    /// entry and one at `p`, one O(N) solve with `M` each.
+    fn accel_param_jvp(
+        &mut self,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+        qdd: &DVector<f64>,
+        out: &mut DMatrix<f64>,
+    ) -> Result<(), DynamicsError> {
+        if self.variants.is_empty() {
+            return Ok(());
+        }
+        self.sys.factor_shifted_mass(t, q, 0.0, 0.0)?;
+        let (qs, qds, qdds) = (q.as_slice(), qd.as_slice(), qdd.as_slice());
+        self.id0.copy_from(inverse_dynamics(
+            &self.sys.model,
+            &mut self.sys.data,
+            t,
+            qs,
+            qds,
+            qdds,
+        )?);
+        let mut z = std::mem::take(&mut self.z);
+        for v in &mut self.variants {
+            let id = inverse_dynamics(&v.model, &mut v.data, t, qs, qds, qdds)?;
+            for r in 0..z.len() {
+                z[r] = -(id[r] - self.id0[r]) / v.delta;
+            }
+            self.sys.solve_shifted_mass(&mut z)?;
+            out.set_column(v.slot, &z);
+        }
+        self.z = z;
+        Ok(())
+    }
+
     /// `M(q)`, `∂ID/∂q`, `∂ID/∂q̇` of the rod system
     /// ([`RodSystem::force_jacobians`]).
     fn force_jacobians(
