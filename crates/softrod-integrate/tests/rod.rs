@@ -607,7 +607,9 @@ fn esdirk5_agrees_with_radau_at_tight_tolerance_on_the_rod() {
     let reference = at(Integrator::Radau5, 1e-10);
     // Basis::all() orders each piece's strains (kx, ky, kz, qx, qy, qz).
     let curvatures = |y: &DVector<f64>| -> Vec<f64> {
-        (0..4).flat_map(|p| (0..3).map(move |j| y[6 * p + j])).collect()
+        (0..4)
+            .flat_map(|p| (0..3).map(move |j| y[6 * p + j]))
+            .collect()
     };
     let mut errors = Vec::new();
     for rtol in [1e-6, 1e-8] {
