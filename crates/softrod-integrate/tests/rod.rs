@@ -610,7 +610,8 @@ fn esdirk5_agrees_with_radau_at_tight_tolerance_on_the_rod() {
         sol.y
             .iter()
             .map(|y| {
-                kin.update(geometry, &y.as_slice()[..n], None, None).unwrap();
+                kin.update(geometry, &y.as_slice()[..n], None, None)
+                    .unwrap();
                 kin.tip_pose().translation
             })
             .collect()
