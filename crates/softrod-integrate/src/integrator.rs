@@ -284,7 +284,7 @@ mod tests {
         let e = "euler".parse::<Integrator>().unwrap_err().to_string();
         assert_eq!(
             e,
-            "unknown integrator \"euler\" (valid: rk4, dopri5, rosenbrock, generalized-alpha, esdirk, radau5)"
+            "unknown integrator \"euler\" (valid: rk4, dopri5, rosenbrock, generalized-alpha, esdirk, esdirk5, radau5)"
         );
     }
 }
