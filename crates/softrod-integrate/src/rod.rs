@@ -123,7 +123,7 @@ impl RodJacobian {
     /// explicit methods use none (`ElasticOnly`, never evaluated).
     pub fn recommended(integrator: Integrator) -> Self {
         match integrator {
-            Integrator::Esdirk | Integrator::Radau5 => RodJacobian::Exact,
+            Integrator::Esdirk | Integrator::Esdirk5 | Integrator::Radau5 => RodJacobian::Exact,
             Integrator::Rk4
             | Integrator::Dopri5
             | Integrator::Rosenbrock

@@ -369,6 +369,14 @@ fn bad_requests_name_what_is_wrong() {
         .replace("[run]", "[run]\nintegrator = \"radau5\""));
     let e = err(&mut s2, &mut loss("arm", n), &["q0"]);
     assert!(e.contains("radau5") && e.contains("esdirk"), "{e}");
+    // ESDIRK5(4)7L[2]SA has no adjoint: refused, naming the setting.
+    let mut s3 = sim(&cantilever(1.0e6, 1000.0, 500.0, [0.0, 1.5, 0.5])
+        .replace("[run]", "[run]\nintegrator = \"esdirk5\""));
+    let e = err(&mut s3, &mut loss("arm", n), &["q0"]);
+    assert!(
+        e.contains("run.integrator") && e.contains("esdirk5 has none"),
+        "{e}"
+    );
 }
 
 /// The adaptive run (the default settings' step sequence) gives the

@@ -20,7 +20,7 @@ _RodRef = str | int
 _Frame = Literal["body", "world"]
 # The integrator names, in the order of softrod.INTEGRATORS (Rust's
 # Integrator::ALL); tests/test_integrators.py checks that they agree.
-_IntegratorName = Literal["rk4", "dopri5", "rosenbrock", "generalized-alpha", "esdirk", "radau5"]
+_IntegratorName = Literal["rk4", "dopri5", "rosenbrock", "generalized-alpha", "esdirk", "esdirk5", "radau5"]
 _Controller = Callable[[float, _F64, _F64], ArrayLike]
 
 __version__: str
