@@ -368,23 +368,7 @@ pub fn adjoint_second_order_with<Sys: ParameterSystem>(
     seed: &mut Seed<'_>,
     solver: AdjointSolver,
 ) -> Result<AdjointGradient, IntegrateError> {
-    if !ADJOINT_INTEGRATORS.contains(&integrator) {
-        let names: Vec<&str> = ADJOINT_INTEGRATORS.iter().map(|i| i.name()).collect();
-        return Err(IntegrateError::InvalidInput {
-            what: format!(
-                "gradients need the discrete adjoint of the integrator; {} has none \
-                 (supported: {})",
-                integrator.name(),
-                names.join(", ")
-            ),
-        });
-    }
-    let n = sys.dim();
-    if tape.dim() != n {
-        return Err(IntegrateError::InvalidInput {
-            what: format!("the tape has {} coordinates, the system {n}", tape.dim()),
-        });
-    }
+    let n = check_request(sys.dim(), integrator, tape)?;
     let mut w = EsdirkAdjoint::new(n, sys.n_params(), solver == AdjointSolver::Structured);
     let mut lq = DVector::zeros(n);
     let mut lv = DVector::zeros(n);
@@ -414,6 +398,34 @@ pub fn adjoint_second_order_with<Sys: ParameterSystem>(
         dense_factorizations: w.factorizations,
         krylov_iterations: w.krylov,
     })
+}
+
+/// The checks a gradient request passes before either pass (the adjoint,
+/// the forward sensitivities): an integrator with the discrete derivatives
+/// ([`ADJOINT_INTEGRATORS`]) and a tape of the system's dimension `n`,
+/// which it returns.
+pub(crate) fn check_request(
+    n: usize,
+    integrator: Integrator,
+    tape: &Tape,
+) -> Result<usize, IntegrateError> {
+    if !ADJOINT_INTEGRATORS.contains(&integrator) {
+        let names: Vec<&str> = ADJOINT_INTEGRATORS.iter().map(|i| i.name()).collect();
+        return Err(IntegrateError::InvalidInput {
+            what: format!(
+                "gradients need the discrete adjoint of the integrator; {} has none \
+                 (supported: {})",
+                integrator.name(),
+                names.join(", ")
+            ),
+        });
+    }
+    if tape.dim() != n {
+        return Err(IntegrateError::InvalidInput {
+            what: format!("the tape has {} coordinates, the system {n}", tape.dim()),
+        });
+    }
+    Ok(n)
 }
 
 /// GMRES iterations per cycle and cycles of a transposed stage solve

@@ -15,7 +15,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::adjoint::{ADJOINT_INTEGRATORS, AdjointGradient, ParameterSystem, Seed, Tape};
+use crate::adjoint::{AdjointGradient, ParameterSystem, Seed, Tape, check_request};
 use crate::error::{IntegrateError, first_non_finite};
 use crate::integrator::Integrator;
 use crate::linalg::DenseLu;
@@ -47,23 +47,7 @@ pub fn forward_sensitivity_second_order<Sys: ParameterSystem>(
     seed: &mut Seed<'_>,
     initial: bool,
 ) -> Result<AdjointGradient, IntegrateError> {
-    if !ADJOINT_INTEGRATORS.contains(&integrator) {
-        let names: Vec<&str> = ADJOINT_INTEGRATORS.iter().map(|i| i.name()).collect();
-        return Err(IntegrateError::InvalidInput {
-            what: format!(
-                "gradients need the discrete sensitivities of the integrator; {} has none \
-                 (supported: {})",
-                integrator.name(),
-                names.join(", ")
-            ),
-        });
-    }
-    let n = sys.dim();
-    if tape.dim() != n {
-        return Err(IntegrateError::InvalidInput {
-            what: format!("the tape has {} coordinates, the system {n}", tape.dim()),
-        });
-    }
+    let n = check_request(sys.dim(), integrator, tape)?;
     let np = sys.n_params();
     let m = np + if initial { 2 * n } else { 0 };
     let mut w = Forward::new(n, np, m);
