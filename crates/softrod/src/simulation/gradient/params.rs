@@ -290,8 +290,11 @@ pub(crate) struct ParamSystem<'a> {
     /// [`force_jacobians`](ParameterSystem::force_jacobians) (stage 0 of a
     /// step, or a switched stage), whose derivatives' workspace the inertia
     /// products can use (G16); `None` before one.
-    dense_at: Option<(f64, DVector<f64>, DVector<f64>, DVector<f64>)>,
+    dense_at: Option<Point>,
 }
+
+/// An evaluation point `(t, q, q̇, q̈)`.
+struct Point(f64, DVector<f64>, DVector<f64>, DVector<f64>);
 
 impl<'a> ParamSystem<'a> {
     pub(crate) fn new(sys: &'a mut RodSystem, params: &[Param]) -> Result<Self> {
@@ -404,7 +407,7 @@ impl ParamSystem<'_> {
 
     /// `(t, q, q̇, q̈)` is the point of the last dense linearization.
     fn at_dense(&self, t: f64, q: &DVector<f64>, qd: &DVector<f64>, qdd: &DVector<f64>) -> bool {
-        matches!(&self.dense_at, Some((t0, q0, qd0, qdd0))
+        matches!(&self.dense_at, Some(Point(t0, q0, qd0, qdd0))
             if *t0 == t && q0 == q && qd0 == qd && qdd0 == qdd)
     }
 }
@@ -534,13 +537,13 @@ impl ParameterSystem for ParamSystem<'_> {
             .force_jacobians(t, q, qd, qdd, mass, dr_dq, dr_dqd)?;
         match (&mut self.dense_at, done) {
             (_, false) => self.dense_at = None,
-            (Some((t0, q0, qd0, qdd0)), true) => {
+            (Some(Point(t0, q0, qd0, qdd0)), true) => {
                 *t0 = t;
                 q0.copy_from(q);
                 qd0.copy_from(qd);
                 qdd0.copy_from(qdd);
             }
-            (None, true) => self.dense_at = Some((t, q.clone(), qd.clone(), qdd.clone())),
+            (None, true) => self.dense_at = Some(Point(t, q.clone(), qd.clone(), qdd.clone())),
         }
         Ok(done)
     }
