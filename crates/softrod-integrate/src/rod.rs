@@ -11,8 +11,8 @@ use softrod_dynamics::{
     ClosedDerivatives, ClosedShiftedSolver, Data, DynamicsError, FdDerivatives, Forces,
     IdDerivatives, Model, ShiftedSolver, closed_dynamics_derivatives, damping_matrix,
     forward_dynamics, forward_dynamics_derivatives, inverse_dynamics, inverse_dynamics_derivatives,
-    inverse_dynamics_inertia_vjp, inverse_dynamics_linearization_with, inverse_dynamics_vjp,
-    mass_matrix, stiffness_matrix,
+    inverse_dynamics_inertia_vjp, inverse_dynamics_linearization_with,
+    inverse_dynamics_mass_product, inverse_dynamics_vjp, mass_matrix, stiffness_matrix,
 };
 use softrod_mechanics::Tension;
 
@@ -256,6 +256,58 @@ impl RodSystem {
         Ok(true)
     }
 
+    /// [`RodSystem::force_linearization`] without forming `M(q)`: `M` is
+    /// kept in `slot` too, as the O(N) products of
+    /// [`RodSystem::force_mass_product`] (docs/theory-derivatives.md D86,
+    /// docs/theory-control.md G15). Returns `Ok(false)` (nothing kept)
+    /// where `force_jacobians` does (closures, contact).
+    pub fn force_operators(
+        &mut self,
+        slot: usize,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+        qdd: &DVector<f64>,
+    ) -> Result<bool, DynamicsError> {
+        if self.model.has_closures() || self.model.has_contact() {
+            return Ok(false);
+        }
+        while self.products.len() <= slot {
+            self.products.push(IdDerivatives::for_products(&self.model));
+        }
+        let work = &mut self.products[slot];
+        copy_tensions(&self.data, work);
+        inverse_dynamics_linearization_with(
+            &self.model,
+            work,
+            Forces::ALL,
+            t,
+            q.as_slice(),
+            qd.as_slice(),
+            qdd.as_slice(),
+        )?;
+        Ok(true)
+    }
+
+    /// `M(q) v` into `out` (dim n_dof) at the linearization of `slot`
+    /// ([`RodSystem::force_operators`] or
+    /// [`RodSystem::force_linearization`]); O(N)
+    /// (`softrod_dynamics::inverse_dynamics_mass_product`). An error for a
+    /// slot without a successful linearization.
+    pub fn force_mass_product(
+        &mut self,
+        slot: usize,
+        v: &DVector<f64>,
+        out: &mut DVector<f64>,
+    ) -> Result<(), DynamicsError> {
+        let Some(work) = self.products.get_mut(slot) else {
+            return Err(DynamicsError::NotLinearized {
+                what: "RodSystem::force_mass_product",
+            });
+        };
+        inverse_dynamics_mass_product(&self.model, work, v.as_slice(), out.as_mut_slice())
+    }
+
     /// `(∂r/∂q)ᵀu` into `out_q`, `(∂r/∂q̇)ᵀu` into `out_qd` (dim n_dof) at
     /// the linearization of `slot` ([`RodSystem::force_linearization`]);
     /// O(N) (`softrod_dynamics::inverse_dynamics_vjp`). An error for a slot
@@ -283,6 +335,23 @@ impl RodSystem {
 }
 
 impl RodSystem {
+    /// The inertia products of [`RodSystem::force_inertia_vjp`] at the
+    /// point of the last [`RodSystem::force_jacobians`] (its dense
+    /// derivatives keep the same per-piece sums, D85). An error before any.
+    pub fn force_jacobians_inertia_vjp(
+        &mut self,
+        z: &DVector<f64>,
+        rods: &mut [f64],
+        bodies: &mut [Matrix6<f64>],
+    ) -> Result<(), DynamicsError> {
+        let Some(work) = self.id_derivatives.as_deref_mut() else {
+            return Err(DynamicsError::NotLinearized {
+                what: "RodSystem::force_jacobians_inertia_vjp",
+            });
+        };
+        inverse_dynamics_inertia_vjp(&self.model, work, z.as_slice(), rods, bodies)
+    }
+
     /// The inertia products at the linearization of `slot`
     /// ([`RodSystem::force_linearization`]): `rods[r] = zᵀ ∂r/∂s_r` for a
     /// factor `s_r` on rod `r`'s inertia, `bodies[b]` the 6×6 `G_b` with
