@@ -817,6 +817,77 @@ mod tests {
         );
     }
 
+    /// The structured error filter (Shampine's `(I − hγJ)⁻¹ e` through the
+    /// shifted matrix): `ẽ_v = (M + h²γ²K + hγD)⁻¹ (M e_v − hγ K̃ e_q)`,
+    /// `ẽ_q = e_q + hγ ẽ_v`, with `M e_v` and the static stiffness `K̃ e_q`
+    /// as differences of the O(N) force residual at `(q_J, 0, ·)`, against
+    /// the same formula on dense matrices: `M` of the composite recursion,
+    /// `K̃ = ∂ID/∂q` at `(q_J, 0, 0)` from the analytic derivatives, the
+    /// elastic `K` and `D`. At the update's own time (the residual at
+    /// `(q_J, 0, 0)` evaluated) and at a later step's time of the same update
+    /// (that residual held, the system being autonomous).
+    #[test]
+    fn structured_error_filter_with_held_residual_equals_the_dense_filter() {
+        use crate::problem::{JacKind, SecondOrderProblem};
+        let l = 0.2;
+        let rod = RodGeometry::uniform(
+            l,
+            2,
+            Basis::all(),
+            softrod_kinematics::straight(),
+            Pose::identity(),
+        )
+        .unwrap();
+        let mat = Material::with_poisson(1000.0, 1e5, 0.5, 50.0).unwrap();
+        let body = RodProperties::new(Section::Circle { radius: 0.01 }, mat, l).unwrap();
+        let model = Model::new(
+            vec![Rod::new("r", rod, body)],
+            Some(Vec3::new(0.0, 0.0, -9.81)),
+            4,
+        )
+        .unwrap();
+        let mut sys = RodSystem::new(model);
+        assert!(sys.is_autonomous());
+        let n = sys.dim();
+        let q = DVector::from_fn(n, |i, _| 0.3 * ((i as f64) * 0.7).sin());
+        let zero = DVector::zeros(n);
+        let hg = 0.25 * 2e-3;
+        // Dense reference.
+        let m = mass_matrix(&sys.model, &mut sys.data, q.as_slice())
+            .unwrap()
+            .clone();
+        let mut work = IdDerivatives::new(&sys.model);
+        let kt = inverse_dynamics_derivatives(
+            &sys.model,
+            &mut work,
+            0.0,
+            q.as_slice(),
+            zero.as_slice(),
+            zero.as_slice(),
+        )
+        .unwrap()
+        .dtau_dq
+        .clone();
+        let shifted =
+            &m + stiffness_matrix(&sys.model) * (hg * hg) + damping_matrix(&sys.model) * hg;
+        let eq0 = DVector::from_fn(n, |i, _| 1e-4 * (1.0 + ((i as f64) * 1.3).cos()));
+        let ev0 = DVector::from_fn(n, |i, _| 1e-3 * ((i as f64) * 0.9).sin());
+        let want_v = shifted.lu().solve(&(&m * &ev0 - &kt * &eq0 * hg)).unwrap();
+        let want_q = &eq0 + &want_v * hg;
+        let mut p = SecondOrderProblem::new(&mut sys);
+        assert_eq!(p.update_jacobians_qv(0.0, &q, &zero, true).unwrap(), None);
+        assert_eq!(p.kind(), JacKind::Structured);
+        assert!(p.factor_newmark(hg * hg, hg).unwrap());
+        for t in [0.0, 0.37] {
+            let (mut eq, mut ev) = (eq0.clone(), ev0.clone());
+            p.filter_error(t, hg, &mut eq, &mut ev).unwrap();
+            // K̃ e_q is a directional difference with a √ε-sized step.
+            let dv = (&ev - &want_v).amax() / want_v.amax();
+            let dq = (&eq - &want_q).amax() / want_q.amax();
+            assert!(dv < 1e-6 && dq < 1e-6, "t = {t}: {dv:e}, {dq:e}");
+        }
+    }
+
     /// Time enters through a prescribed joint and a tension table, not
     /// through a table that the data's tensions override.
     #[test]
