@@ -558,6 +558,13 @@ impl SecondOrderSystem for RodSystem {
         Ok(())
     }
 
+    /// With contact in the structured matrix: the contact set and its
+    /// stick/slide branches change within a step, so ESDIRK re-linearizes
+    /// the contact at every Newton iterate (docs/theory-contact.md CT27).
+    fn relinearize_in_newton(&self) -> bool {
+        self.contact_in_shifted && self.model.has_contact() && !self.model.has_closures()
+    }
+
     /// `M(q) + aK + bD` by the O(N) articulated recursion
     /// (`softrod_dynamics::ShiftedSolver`, on the tree for models with
     /// joints and bodies, prescribed joints where they stand at `t`), with
