@@ -262,6 +262,7 @@ fn sliding_friction_damping_joins_the_tree_factorization_whole() {
         "the damping is not skew enough to test: {skew:e}"
     );
     let mut solver = ShiftedSolver::new(&model);
+    solver.set_contact_whole(true);
     let kept = solver
         .linearize_contact(&model, &mut run, 0.0, &q, &qd)
         .unwrap();

@@ -28,7 +28,10 @@ const GAMMA: f64 = 0.25;
 
 fn system(text: &str, name: &str) -> RodSystem {
     let (sim, _, _) = Simulation::from_toml(text, name).expect("scene");
-    RodSystem::new(sim.model().clone())
+    let mut sys = RodSystem::new(sim.model().clone());
+    // CT26 on with `SOFTROD_CONTACT_WHOLE=1` (the "S with CT26" column).
+    sys.contact_active_set = std::env::var_os("SOFTROD_CONTACT_WHOLE").is_some();
+    sys
 }
 
 /// `∂r/∂q`, `∂r/∂q̇` of the inverse dynamics by central differences.

@@ -183,6 +183,18 @@ impl ShiftedSolver {
         Ok(self.contact.blocks.len() + self.contact.pair_kc.len())
     }
 
+    /// Whether the following [`Self::linearize_contact`] keeps a tree
+    /// model's world-obstacle contact blocks whole — the law's
+    /// non-symmetric `−∂f/∂p`, `−∂f/∂v` (sliding friction's skew damping),
+    /// factored by the recursion's non-symmetric form (docs/theory-contact.md
+    /// CT26) — instead of their positive semi-definite symmetric parts
+    /// (CT17). Default off. Chain models and the factorization with the
+    /// geometric terms keep the symmetric parts either way.
+    pub fn set_contact_whole(&mut self, on: bool) {
+        self.factored = false;
+        self.contact.whole = on;
+    }
+
     /// Forgets the contact of [`Self::linearize_contact`]: the following
     /// factorizations are of `M + aK + bD` again.
     pub fn clear_contact(&mut self) {

@@ -77,6 +77,9 @@ pub(crate) struct ContactShift {
     /// Whether some block is not symmetric (CT26): the tree's
     /// factorization then runs its non-symmetric form.
     pub nonsym: bool,
+    /// Whether a tree model's one-sided blocks are taken whole (CT26;
+    /// `ShiftedSolver::set_contact_whole`, default off).
+    pub whole: bool,
     /// Two-sided contacts: `(K, C)` each, and `J_w` (3 rows of `n` each,
     /// contact after contact).
     pub pair_kc: Vec<(Mat3, Mat3)>,
@@ -186,9 +189,9 @@ impl ContactShift {
                         .expect("a sample lies on its rod");
                     // The tree's factorization takes the law's blocks
                     // whole (CT26); a chain's keeps their PSD parts.
-                    let (kw, cw) = match &model.tree {
-                        Some(_) => (-a.dp, -a.dv),
-                        None => (k, c),
+                    let (kw, cw) = match (&model.tree, self.whole) {
+                        (Some(_), true) => (-a.dp, -a.dv),
+                        _ => (k, c),
                     };
                     self.nonsym |= kw != kw.transpose() || cw != cw.transpose();
                     self.blocks.push(PointBlock {
@@ -328,11 +331,18 @@ impl ContactShift {
             let mc = point_block(&rot, &Vec3::zeros(), &pw);
             let am = gl.ad_inv().to_mat6();
             let s = tm.to_mat6() * node.bpad;
-            let amt = am.transpose();
-            w.mt += amt * (mc * am);
-            w.ut += amt * (mc * s);
-            w.ul += amt * (mc.transpose() * s);
-            w.dt += s.transpose() * (mc * s);
+            if whole {
+                let amt = am.transpose();
+                w.mt += amt * (mc * am);
+                w.ut += amt * (mc * s);
+                w.ul += amt * (mc.transpose() * s);
+                w.dt += s.transpose() * (mc * s);
+            } else {
+                let mca = mc * am;
+                w.mt += am.transpose() * mca;
+                w.ut += mca.transpose() * s;
+                w.dt += s.transpose() * (mc * s);
+            }
         }
     }
 
