@@ -59,6 +59,16 @@ pub struct RodSystem {
     /// geometric stiffness in the Newton matrix"), and on chain models it
     /// moves the factorization to the tree recursion (~1.5× its cost).
     pub geometric_in_shifted: bool,
+    /// Models with contact (a tree model: joints or bodies): the structured
+    /// Newton matrix takes the world-obstacle contact laws whole
+    /// (`ShiftedSolver::set_contact_whole`, docs/theory-contact.md CT26)
+    /// and ESDIRK re-linearizes the contact at every Newton iterate (CT27).
+    /// **Experimental, default `false`**: on the cosseratbench capstan it
+    /// halves the CPU time and cuts the dense Jacobians from 70 to 20
+    /// (docs/performance.md, "Contact-heavy scenes"), but it moves the
+    /// friction reference path of `tests/contact_bounds.rs` by 7.8e-4 m
+    /// (its bound 1e-4 m): friction anchors commit at accepted steps (CT25).
+    pub contact_active_set: bool,
     /// The configuration of the last contact linearization
     /// ([`SecondOrderSystem::linearize_shifted`]); the factorizations carry
     /// it only at that `q` (a wrapper that forwards the factorization but
@@ -145,6 +155,7 @@ impl RodSystem {
             structured_closures: false,
             contact_in_shifted: true,
             geometric_in_shifted: false,
+            contact_active_set: false,
             contact_q: None,
             shifted,
             derivatives: None,
@@ -609,6 +620,7 @@ impl SecondOrderSystem for RodSystem {
             return Ok(());
         }
         if self.contact_in_shifted {
+            self.shifted.set_contact_whole(self.contact_active_set);
             self.shifted.linearize_contact(
                 &self.model,
                 &mut self.data,
@@ -625,6 +637,16 @@ impl SecondOrderSystem for RodSystem {
             self.contact_q = None;
         }
         Ok(())
+    }
+
+    /// With contact in the structured matrix: the contact set and its
+    /// stick/slide branches change within a step, so ESDIRK re-linearizes
+    /// the contact at every Newton iterate (docs/theory-contact.md CT27).
+    fn relinearize_in_newton(&self) -> bool {
+        self.contact_active_set
+            && self.contact_in_shifted
+            && self.model.has_contact()
+            && !self.model.has_closures()
     }
 
     /// `M(q) + aK + bD` by the O(N) articulated recursion

@@ -158,6 +158,13 @@ impl<'a, S: SecondOrderSystem> SecondOrderProblem<'a, S> {
         }
     }
 
+    /// Whether the system asks for its structured matrix to be
+    /// re-linearized at every Newton iterate
+    /// ([`SecondOrderSystem::relinearize_in_newton`]).
+    pub(crate) fn relinearize_in_newton(&self) -> bool {
+        self.sys.relinearize_in_newton()
+    }
+
     /// What the last Jacobian update produced.
     pub(crate) fn kind(&self) -> JacKind {
         self.kind
