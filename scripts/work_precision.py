@@ -16,7 +16,7 @@ import math
 import sys
 from pathlib import Path
 
-COLORS = {"esdirk": "#1f77b4", "radau5": "#d62728", "rosenbrock": "#2ca02c",
+COLORS = {"esdirk": "#1f77b4", "esdirk5": "#ff7f0e", "radau5": "#d62728", "rosenbrock": "#2ca02c",
           "generalized-alpha": "#9467bd", "dopri5": "#8c564b"}
 TITLES = {"planar": "planar release (cantilever_gravity, 8 pieces, 1 s)",
           "3d": "3-D release (32 pieces, all strains, 0.3 s)",

@@ -1426,3 +1426,56 @@ fn a_closed_stdout_ends_the_command_quietly() {
     assert_eq!(status.code(), Some(141), "{err}");
     assert!(!err.contains("panicked"), "{err}");
 }
+
+/// `shape.csv`'s leading fields, which the writer formats once per time
+/// (`t`) or once per run (the rod's name, each sample's `s`), are at every
+/// row what the facade's sampling and output times give, formatted here by
+/// the standard library's shortest round-trip `Debug` (`0` for zero):
+/// two rods with different pieces, three points per piece, and a body.
+#[test]
+fn shape_csv_leading_fields_match_the_sampling_at_every_row() {
+    let dir = tmp("leading");
+    let run_table = "[run]\nduration = 0.01\noutput_every = 0.0025\nshape_points_per_piece = 3";
+    // The lower rod gets 3 pieces (the upper keeps 4): different samples.
+    let scene = with_run("arm_with_payload.toml", run_table, &dir);
+    let text = std::fs::read_to_string(&scene).unwrap().replacen(
+        "length = 0.2\npieces = 4",
+        "length = 0.2\npieces = 3",
+        1,
+    );
+    std::fs::write(&scene, &text).unwrap();
+    let out = dir.join("out");
+    let o = run_scene(&scene, &out);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (sim, _, _) = softrod::Simulation::from_toml(&text, "arm_with_payload").unwrap();
+    let sampling = softrod::record::RodSampling::of_model(sim.model(), Some(3));
+    let names: Vec<String> = sim
+        .model()
+        .rods()
+        .iter()
+        .map(|r| r.spec.name.clone())
+        .collect();
+    assert_eq!(names.len(), 2);
+    assert_ne!(sampling[0].s.len(), sampling[1].s.len());
+    let fmt = |v: f64| {
+        if v == 0.0 {
+            "0".to_string()
+        } else {
+            format!("{v:?}")
+        }
+    };
+    let times = softrod::output_times(0.01, 0.0025);
+    let shape = std::fs::read_to_string(out.join("shape.csv")).unwrap();
+    let mut lines = shape.lines().skip(1);
+    for &t in &times {
+        for (name, samp) in names.iter().zip(&sampling) {
+            for &s in &samp.s {
+                let line = lines.next().expect("a row per time, rod and sample");
+                let want = format!("{},{},{},", fmt(t), name, fmt(s));
+                assert!(line.starts_with(&want), "{line:?} vs {want:?}");
+                assert_eq!(line.split(',').count(), 10, "{line}");
+            }
+        }
+    }
+    assert!(lines.next().is_none());
+}

@@ -23,6 +23,7 @@
 //! | [`inverse_dynamics_derivatives`] | `∂τ/∂q`, `∂τ/∂q̇` (`∂τ/∂q̈ = M`) | docs/theory-derivatives.md (D37–D47) |
 //! | [`inverse_dynamics_linearization_with`], [`inverse_dynamics_vjp`], [`inverse_dynamics_jvp`] | `uᵀ∂τ/∂q`, `uᵀ∂τ/∂q̇`, `∂τ/∂q·a + ∂τ/∂q̇·b` in O(N), no dense matrix | (D81–D84) |
 //! | [`inverse_dynamics_inertia_vjp`] | `zᵀ∂τ/∂(inertia)` of every rod and body at once, O(N) | (D85) |
+//! | [`inverse_dynamics_mass_product`] | `M(q) v` from the same linearization, O(N), no mass matrix | (D86) |
 //! | [`forward_dynamics_derivatives`] | `∂q̈/∂q`, `∂q̈/∂q̇`, `∂q̈/∂u` | (D48) |
 //! | [`closed_dynamics_derivatives`] | `∂q̈/∂q`, `∂q̈/∂q̇` of a closed model's constrained `q̈` | (CD1–CD4) |
 //! | [`linearize`] | `(A, B)` of `ẋ = f(x, u)`, `x = (q, q̇)`; closed models: of the constrained `q̈` | (D49), (CD9) |
@@ -129,7 +130,7 @@ pub use derivatives::{
     DynamicsJacobians, FdDerivatives, IdDerivatives, Linearization, dynamics_jacobians,
     dynamics_jacobians_with, forward_dynamics_derivatives, inverse_dynamics_derivatives,
     inverse_dynamics_derivatives_with, inverse_dynamics_inertia_vjp, inverse_dynamics_jvp,
-    inverse_dynamics_linearization_with, inverse_dynamics_vjp,
+    inverse_dynamics_linearization_with, inverse_dynamics_mass_product, inverse_dynamics_vjp,
 };
 pub use dispatch::{forward_dynamics, forward_dynamics_with, linearize};
 pub use error::{DynamicsError, RodId};

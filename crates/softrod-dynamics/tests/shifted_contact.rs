@@ -181,3 +181,115 @@ fn a_tree_with_a_body_pressing_from_above_solves_like_the_dense_matrix() {
     assert!(on_lid > 10, "{on_lid}");
     check(&model, &q, "tree with a body");
 }
+
+/// `−∂τ_c/∂q̇` of the generalized contact force `τ_c = ID(without
+/// obstacles) − ID(with)` at `(q, q̇, 0)` by central differences, with `data`'s
+/// friction anchors: the contact's damping `Σ J_wᵀ(−∂f/∂v)J_w` exactly (no
+/// second-order kinematic term depends on `q̇`).
+fn contact_damping(
+    with: &Model,
+    without: &Model,
+    data: &Data,
+    q: &[f64],
+    qd: &[f64],
+) -> DMatrix<f64> {
+    let n = with.n_dof();
+    let zero = vec![0.0; n];
+    let (mut dw, mut dn) = (data.clone(), Data::new(without));
+    let mut tau = |v: &[f64]| {
+        softrod_dynamics::inverse_dynamics(with, &mut dw, 0.0, q, v, &zero)
+            .unwrap()
+            .clone()
+            - softrod_dynamics::inverse_dynamics(without, &mut dn, 0.0, q, v, &zero).unwrap()
+    };
+    let mut out = DMatrix::zeros(n, n);
+    let h = 1e-7;
+    let mut v = qd.to_vec();
+    for j in 0..n {
+        v[j] = qd[j] + h;
+        let plus = tau(&v);
+        v[j] = qd[j] - h;
+        let minus = tau(&v);
+        v[j] = qd[j];
+        // ID(with) − ID(without) = −τ_c: its slope is `D_c = −∂τ_c/∂q̇`.
+        out.set_column(j, &((plus - minus) / (2.0 * h)));
+    }
+    out
+}
+
+/// CT26: a rod on a free joint sliding across a table with friction: the
+/// sliding law's damping `−∂f/∂v` is not symmetric (the friction force
+/// follows the normal velocity, `μ c u nᵀ`), and the tree's factorization
+/// takes it whole. At `a = 0` the shifted matrix is `M + b(D + D_c)` with
+/// no geometric term left out, so the O(N) solve must equal a dense LU of
+/// `M + bD + b D_c`, `D_c` from central differences of the inverse
+/// dynamics in `q̇` (independent of the contact law's derivatives).
+#[test]
+fn sliding_friction_damping_joins_the_tree_factorization_whole() {
+    let r = 0.01;
+    let build = |obstacle: bool| {
+        let mut b = Model::builder()
+            .rod_on(
+                Rod::builder(0.2)
+                    .name("rod")
+                    .pieces(3)
+                    .strains([Strain::Ky, Strain::Kz, Strain::Qx])
+                    .circle(r)
+                    .material(silicone()),
+                Attachment::world_joint(Joint::new(softrod_dynamics::JointKind::Free)),
+            )
+            .gravity([0.0, 0.0, -9.81]);
+        if obstacle {
+            b = b.obstacle(Obstacle::new("table", plane(-0.995 * r, true)).friction(0.3));
+        }
+        b.build().unwrap()
+    };
+    let (model, free) = (build(true), build(false));
+    let n = model.n_dof();
+    let q: Vec<f64> = (0..n).map(|i| 1e-5 * ((i as f64) * 1.3).sin()).collect();
+    // Anchored where the rod lies (CT5), then moving along the table and
+    // into it: every touching point slides (`c |v_t| ≫ μ f_n`).
+    let mut run = Data::new(&model);
+    softrod_dynamics::commit_contact(&model, &mut run, 0.0, &q, &vec![0.0; n]).unwrap();
+    let mut qd = vec![0.0; n];
+    qd[3] = 0.05; // free joint: x velocity (after the three rotations)
+    qd[5] = -0.002;
+    qd[1] = 0.1;
+    let dc = contact_damping(&model, &free, &run, &q, &qd);
+    let skew = (&dc - dc.transpose()).amax() / dc.amax();
+    assert!(
+        skew > 1e-2,
+        "the damping is not skew enough to test: {skew:e}"
+    );
+    let mut solver = ShiftedSolver::new(&model);
+    solver.set_contact_whole(true);
+    let kept = solver
+        .linearize_contact(&model, &mut run, 0.0, &q, &qd)
+        .unwrap();
+    assert!(kept > 10, "{kept}");
+    let r_vec = DVector::from_fn(n, |i, _| ((i as f64) * 0.77 + 0.3).sin());
+    for b in [1e-4, 1e-3, 1e-2] {
+        let mut data = Data::new(&model);
+        let dense = mass_matrix(&model, &mut data, &q).unwrap().clone()
+            + damping_matrix(&model) * b
+            + &dc * b;
+        let reference = dense.lu().solve(&r_vec).unwrap();
+        solver.factor(&model, &q, 0.0, b).unwrap();
+        let mut x = r_vec.as_slice().to_vec();
+        solver.solve(&model, &mut x).unwrap();
+        let err = (DVector::from_vec(x) - &reference).amax() / reference.amax();
+        // The central differences of the sliding law are good to ~1e-6 of
+        // the solution here (6.8e-7 at b = 1e-4, 1.2e-6 at 1e-3).
+        assert!(err < 1e-5, "b = {b:e}: {err:e}");
+        // With the geometric terms on (zero at a = 0) the blocks are CT17's
+        // positive semi-definite symmetric parts: off by the skew damping.
+        solver.set_geometric(&model, true).unwrap();
+        solver.factor(&model, &q, 0.0, b).unwrap();
+        let mut y = r_vec.as_slice().to_vec();
+        solver.solve(&model, &mut y).unwrap();
+        solver.set_geometric(&model, false).unwrap();
+        let off = (DVector::from_vec(y) - &reference).amax() / reference.amax();
+        eprintln!("b = {b:e}: whole {err:.2e}, PSD parts {off:.2e}");
+        assert!(off > 100.0 * err, "b = {b:e}: {off:e} against {err:e}");
+    }
+}

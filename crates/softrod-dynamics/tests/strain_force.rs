@@ -128,3 +128,65 @@ fn its_damping_part_is_the_damping_matrix_times_the_rates() {
     bad[0] = f64::NAN;
     assert!(strain_space_force(&m, &mut d, 0.0, &bad, &qd).is_err());
 }
+
+/// With only constant-offset frictionless cables the cables' part of the
+/// strain-space force is summed per piece for all cables at once (one
+/// strain and one projection per piece); it is still
+/// `Σ_c T_c (−∂ℓ_c/∂q)` (D15), here against central differences of each
+/// cable's length `ℓ_c(q)` on a planar rod (two offset cables, one of them
+/// over part of the rod).
+#[test]
+fn offset_cables_force_is_minus_the_length_gradient_times_the_tensions() {
+    use Strain::*;
+    use softrod_kinematics::GaussLegendre;
+    use softrod_mechanics::{Cable, Routing};
+    let mut shape = Shape::new(4, vec![Basis::select(&[Ky, Qx, Qz]).unwrap()]);
+    shape.rest = Vec6::new(0.0, 0.3, 0.0, 1.0, 0.0, 0.05);
+    let mut spec = rod_spec("planar", &shape, Terms::NONE, Pose::identity());
+    let length = shape.length;
+    let tensions = [1.5, 0.7];
+    spec.cables = vec![
+        Cable::new(
+            Routing::Offset { y: 0.0, z: 0.008 },
+            Tension::Constant(tensions[0]),
+        ),
+        Cable::new(
+            Routing::Offset { y: 0.0, z: -0.006 },
+            Tension::Constant(tensions[1]),
+        )
+        .between(0.3 * length, 0.9 * length),
+    ];
+    let m = Model::new(vec![spec], None, 4).unwrap();
+    let n = m.n_dof();
+    let q: Vec<f64> = (0..n).map(|i| 0.2 * ((i as f64) * 1.1).sin()).collect();
+    let zero = vec![0.0; n];
+    let mut data = Data::new(&m);
+    let got = strain_space_force(&m, &mut data, 0.0, &q, &zero)
+        .unwrap()
+        .clone();
+    // The elastic part, from the same model without its cables' tensions.
+    data.set_cable_tensions(&m, Some(&[0.0, 0.0])).unwrap();
+    let elastic = strain_space_force(&m, &mut data, 0.0, &q, &zero)
+        .unwrap()
+        .clone();
+    let rod = &m.rods()[0].spec.geometry;
+    let quad = GaussLegendre::new(4);
+    let h = 1e-6;
+    for i in 0..n {
+        let (mut qp, mut qm) = (q.clone(), q.clone());
+        qp[i] += h;
+        qm[i] -= h;
+        let want: f64 = m.rods()[0]
+            .spec
+            .cables
+            .iter()
+            .zip(tensions)
+            .map(|(c, t)| -t * (c.length(rod, &qp, &quad) - c.length(rod, &qm, &quad)) / (2.0 * h))
+            .sum();
+        let cable = got[i] - elastic[i];
+        assert!(
+            (cable - want).abs() <= 1e-7 * (1.0 + want.abs()),
+            "coordinate {i}: {cable:e} vs {want:e}"
+        );
+    }
+}

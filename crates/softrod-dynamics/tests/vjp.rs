@@ -1,7 +1,8 @@
 //! The O(N) vector–Jacobian products of the inverse dynamics
 //! (`inverse_dynamics_linearization_with` + `inverse_dynamics_vjp`,
 //! docs/theory-derivatives.md D81–D83), and the Jacobian–vector products
-//! (`inverse_dynamics_jvp`, D84), against `uᵀ` times (or times `a`, `b`) the dense
+//! (`inverse_dynamics_jvp`, D84), and `M v` (`inverse_dynamics_mass_product`,
+//! D86, against `mass_matrix`), against `uᵀ` times (or times `a`, `b`) the dense
 //! derivatives (`inverse_dynamics_derivatives`, themselves checked against
 //! differences in id_derivatives.rs and tree_derivatives.rs): a six-strain
 //! chain with every force term and cables (with friction, and as inputs),
@@ -58,6 +59,25 @@ fn vjp_error(m: &Model, t: f64, q: &[f64], qd: &[f64], qdd: &[f64], rng: &mut Lc
         let e = (DVector::from_column_slice(&out) - reference).amax() / scale;
         worst = worst.max(e);
     }
+    // The mass products of the same linearization (D86) against the mass
+    // matrix of the composite-rigid-body sweep (another algorithm).
+    let mut data = Data::new(m);
+    m.set_time(&mut data, t);
+    let mm = mass_matrix(m, &mut data, q).unwrap().clone();
+    for _ in 0..2 {
+        let v = DVector::from_vec(rng.vec(n, 1.0));
+        let mut out = vec![0.0; n];
+        inverse_dynamics_mass_product(m, &mut work, v.as_slice(), &mut out).unwrap();
+        let scale = (mm.abs() * v.abs()).amax();
+        let e = (DVector::from_column_slice(&out) - &mm * &v).amax() / scale;
+        worst = worst.max(e);
+    }
+    // A dense evaluation keeps no mass blocks: refused.
+    let mut out = vec![0.0; n];
+    assert!(matches!(
+        inverse_dynamics_mass_product(m, &mut dense, &vec![1.0; n], &mut out),
+        Err(DynamicsError::NotLinearized { .. })
+    ));
     // The products after a dense evaluation (same workspace kept).
     let u = DVector::from_vec(rng.vec(n, 1.0));
     inverse_dynamics_vjp(m, &mut dense, u.as_slice(), &mut oq, &mut ov).unwrap();

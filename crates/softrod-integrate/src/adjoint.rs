@@ -58,6 +58,12 @@ const MAX_NEWTON: usize = 50;
 /// switches.
 const SWITCH_ITERATIONS: f64 = 24.0;
 
+/// The relative error of a recomputed stage's acceleration taken for its
+/// round-off (G14): once converged, the changes of the iteration on the
+/// gradient scenes' rods scatter 5e-14–2e-13 of the acceleration, the
+/// noise of the inverse dynamics' force sums.
+const RECOMPUTE_ROUNDOFF: f64 = 1e-13;
+
 /// The integrators whose discrete adjoint [`adjoint_second_order`] has.
 pub const ADJOINT_INTEGRATORS: [Integrator; 1] = [Integrator::Esdirk];
 
@@ -80,6 +86,35 @@ pub trait ParameterSystem: SecondOrderSystem {
         w: &DVector<f64>,
         out: &mut [f64],
     ) -> Result<(), Self::Error>;
+
+    /// `∂a/∂p (t, q, q̇)` as an `n × n_params` matrix into `out`, for the
+    /// forward sensitivities (G21; `qdd` is `a(t, q, q̇)`). The default
+    /// forms it row by row from [`accel_param_vjp`](Self::accel_param_vjp)
+    /// with the unit vectors (`n` products); a system that can apply
+    /// `∂a/∂pⱼ` directly should.
+    fn accel_param_jvp(
+        &mut self,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+        qdd: &DVector<f64>,
+        out: &mut DMatrix<f64>,
+    ) -> Result<(), Self::Error> {
+        let n = q.len();
+        let np = self.n_params();
+        let mut w = DVector::zeros(n);
+        let mut row = vec![0.0; np];
+        for r in 0..n {
+            w[r] = 1.0;
+            row.fill(0.0);
+            self.accel_param_vjp(t, q, qd, qdd, &w, &mut row)?;
+            for (c, v) in row.iter().enumerate() {
+                out[(r, c)] = *v;
+            }
+            w[r] = 0.0;
+        }
+        Ok(())
+    }
 
     /// Optional: the linearization in force form (docs/theory-control.md
     /// G11). For a system `M(q) q̈ = f(t, q, q̇)` with the force residual
@@ -147,6 +182,42 @@ pub trait ParameterSystem: SecondOrderSystem {
     ) -> Result<bool, Self::Error> {
         let _ = (slot, t, q, qd, qdd, mass);
         Ok(false)
+    }
+
+    /// Optional, beside [`force_linearization`](Self::force_linearization)
+    /// (docs/theory-control.md G15): the same operator kept in `slot`, and
+    /// `M(q)` with it as the O(N) products of
+    /// [`force_mass_product`](Self::force_mass_product) instead of a dense
+    /// matrix. Returns `Ok(true)`; the default `Ok(false)` (not offered: the
+    /// backward pass calls `force_linearization`).
+    fn force_operators(
+        &mut self,
+        slot: usize,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+        qdd: &DVector<f64>,
+    ) -> Result<bool, Self::Error> {
+        let _ = (slot, t, q, qd, qdd);
+        Ok(false)
+    }
+
+    /// With [`force_operators`](Self::force_operators): `M(q) v` into `out`
+    /// at the linearization kept in `slot`. Runs at every GMRES iteration:
+    /// must not allocate.
+    ///
+    /// # Panics
+    ///
+    /// The default panics: the backward pass calls it only after
+    /// `force_operators` returned `Ok(true)`.
+    fn force_mass_product(
+        &mut self,
+        slot: usize,
+        v: &DVector<f64>,
+        out: &mut DVector<f64>,
+    ) -> Result<(), Self::Error> {
+        let _ = (slot, v, out);
+        unimplemented!("force_mass_product: the system provides force_operators but not this")
     }
 
     /// Optional, with [`force_linearization`](Self::force_linearization):
@@ -339,23 +410,7 @@ pub fn adjoint_second_order_with<Sys: ParameterSystem>(
     seed: &mut Seed<'_>,
     solver: AdjointSolver,
 ) -> Result<AdjointGradient, IntegrateError> {
-    if !ADJOINT_INTEGRATORS.contains(&integrator) {
-        let names: Vec<&str> = ADJOINT_INTEGRATORS.iter().map(|i| i.name()).collect();
-        return Err(IntegrateError::InvalidInput {
-            what: format!(
-                "gradients need the discrete adjoint of the integrator; {} has none \
-                 (supported: {})",
-                integrator.name(),
-                names.join(", ")
-            ),
-        });
-    }
-    let n = sys.dim();
-    if tape.dim() != n {
-        return Err(IntegrateError::InvalidInput {
-            what: format!("the tape has {} coordinates, the system {n}", tape.dim()),
-        });
-    }
+    let n = check_request(sys.dim(), integrator, tape)?;
     let mut w = EsdirkAdjoint::new(n, sys.n_params(), solver == AdjointSolver::Structured);
     let mut lq = DVector::zeros(n);
     let mut lv = DVector::zeros(n);
@@ -385,6 +440,34 @@ pub fn adjoint_second_order_with<Sys: ParameterSystem>(
         dense_factorizations: w.factorizations,
         krylov_iterations: w.krylov,
     })
+}
+
+/// The checks a gradient request passes before either pass (the adjoint,
+/// the forward sensitivities): an integrator with the discrete derivatives
+/// ([`ADJOINT_INTEGRATORS`]) and a tape of the system's dimension `n`,
+/// which it returns.
+pub(crate) fn check_request(
+    n: usize,
+    integrator: Integrator,
+    tape: &Tape,
+) -> Result<usize, IntegrateError> {
+    if !ADJOINT_INTEGRATORS.contains(&integrator) {
+        let names: Vec<&str> = ADJOINT_INTEGRATORS.iter().map(|i| i.name()).collect();
+        return Err(IntegrateError::InvalidInput {
+            what: format!(
+                "gradients need the discrete adjoint of the integrator; {} has none \
+                 (supported: {})",
+                integrator.name(),
+                names.join(", ")
+            ),
+        });
+    }
+    if tape.dim() != n {
+        return Err(IntegrateError::InvalidInput {
+            what: format!("the tape has {} coordinates, the system {n}", tape.dim()),
+        });
+    }
+    Ok(n)
 }
 
 /// GMRES iterations per cycle and cycles of a transposed stage solve
@@ -419,6 +502,9 @@ struct EsdirkAdjoint {
     /// (G12): products by [`ParameterSystem::force_vjp`], `jq`, `jv`,
     /// `shifted` not formed.
     ops: [bool; S],
+    /// Stage `i`'s `M` is kept with its operator too (G15): `M v` by
+    /// [`ParameterSystem::force_mass_product`], `mass[i]` not formed.
+    mass_ops: [bool; S],
     /// The products' outputs `(∂r/∂q)ᵀu`, `(∂r/∂q̇)ᵀu`, and probes.
     pq: DVector<f64>,
     pv: DVector<f64>,
@@ -471,6 +557,7 @@ impl EsdirkAdjoint {
             mass: std::array::from_fn(|_| fm.clone()),
             shifted: std::array::from_fn(|_| fm.clone()),
             ops: [false; S],
+            mass_ops: [false; S],
             pq: z.clone(),
             pv: z.clone(),
             probe: z.clone(),
@@ -512,8 +599,18 @@ impl EsdirkAdjoint {
     ) -> Result<(), Sys::Error> {
         self.jacobians += 1;
         self.ops[i] = false;
+        self.mass_ops[i] = false;
         // The stages the reverse sweep solves with: the O(N) operator
-        // where the system keeps one (G12).
+        // where the system keeps one (G12), with `M` as products where it
+        // keeps that too (G15).
+        if self.force
+            && keep
+            && sys.force_operators(i, ti, &self.qs[i], &self.vs[i], &self.accs[qdd])?
+        {
+            self.ops[i] = true;
+            self.mass_ops[i] = true;
+            return Ok(());
+        }
         if self.force
             && keep
             && sys.force_linearization(
@@ -675,6 +772,9 @@ impl EsdirkAdjoint {
             // The LU the iteration solves with: the step-start matrix, or
             // (after a slow iteration) the stage's own at its iterate.
             let mut slot = 0;
+            // Iterations done with the present `slot` (the contraction rate
+            // is measured on one matrix only).
+            let mut on_slot = 0;
             for iteration in 0..MAX_NEWTON {
                 stage_values(
                     hg,
@@ -721,7 +821,19 @@ impl EsdirkAdjoint {
                 // round-off) by what it moves the stage's position,
                 // `h²γ² δA`, relative to that position.
                 let moved = hg2 * dx <= 1e-13 * self.qs[i].amax().max(hg * self.vs[i].amax());
+                // Or the error left after this change, `ρ/(1 − ρ)·|δA|` by
+                // the contraction rate `ρ` of the last two iterations on
+                // this matrix (the larger, for the alternating iteration
+                // below), is below the acceleration's round-off (G14).
+                on_slot += 1;
+                let rate = match on_slot {
+                    0 | 1 => f64::INFINITY,
+                    2 => dx / prev,
+                    _ => (dx / prev).max(prev / prev2),
+                };
+                let left = rate < 1.0 && rate / (1.0 - rate) * dx <= RECOMPUTE_ROUNDOFF * size;
                 if dx <= 4.0 * f64::EPSILON * size
+                    || left
                     || (dx >= 0.5 * prev && (dx <= 1e-10 * size || moved))
                 {
                     converged = true;
@@ -768,6 +880,7 @@ impl EsdirkAdjoint {
                         return Err(singular(ti, h));
                     }
                     slot = i;
+                    on_slot = 0;
                 }
                 prev2 = prev;
                 prev = dx;
@@ -980,6 +1093,7 @@ impl EsdirkAdjoint {
             }
             self.jacobians += 1;
             self.ops[i] = false;
+            self.mass_ops[i] = false;
             let s = self.shifted[i].as_mut_slice();
             let (m, jv, jq) = (&self.mass[i], &self.jv[i], &self.jq[i]);
             for (k, x) in s.iter_mut().enumerate() {
@@ -1010,10 +1124,17 @@ impl EsdirkAdjoint {
         rtol: f64,
     ) -> Result<Option<usize>, Sys::Error> {
         let (hg, hg2) = (h * GAMMA, h * h * GAMMA * GAMMA);
-        let mut anorm = self.mass[i]
-            .column_iter()
-            .map(|c| c.iter().map(|v| v.abs()).sum::<f64>())
-            .fold(0.0, f64::max);
+        let kept_mass = self.mass_ops[i];
+        // ‖M‖∞ where `M` is formed; where it is kept as products (G15),
+        // its probes `‖M x‖∞` (a lower bound, like the probes of `Sᵀ`).
+        let mut anorm = if kept_mass {
+            0.0
+        } else {
+            self.mass[i]
+                .column_iter()
+                .map(|c| c.iter().map(|v| v.abs()).sum::<f64>())
+                .fold(0.0, f64::max)
+        };
         for sign in [1.0, -1.0] {
             let mut x = 1.0;
             for p in self.probe.iter_mut() {
@@ -1021,11 +1142,15 @@ impl EsdirkAdjoint {
                 x *= sign;
             }
             sys.force_vjp(i, &self.probe, &mut self.pq, &mut self.pv)?;
-            let m = &self.mass[i];
+            if kept_mass {
+                sys.force_mass_product(i, &self.probe, &mut self.f)?;
+                anorm = anorm.max(self.f.amax());
+            } else {
+                self.f.gemv_tr(1.0, &self.mass[i], &self.probe, 0.0);
+            }
             let mut worst: f64 = 0.0;
             for r in 0..self.n {
-                let mx = m.column(r).dot(&self.probe);
-                worst = worst.max((mx + hg * self.pv[r] + hg2 * self.pq[r]).abs());
+                worst = worst.max((self.f[r] + hg * self.pv[r] + hg2 * self.pq[r]).abs());
             }
             anorm = anorm.max(worst);
         }
@@ -1042,9 +1167,17 @@ impl EsdirkAdjoint {
             KRYLOV_CYCLES,
             |v, out| {
                 if failure.is_none() {
-                    match cell.borrow_mut().force_vjp(i, v, pq, pv) {
-                        Ok(()) => {
+                    let mut s = cell.borrow_mut();
+                    let done = s.force_vjp(i, v, pq, pv).and_then(|()| {
+                        if kept_mass {
+                            s.force_mass_product(i, v, out)
+                        } else {
                             out.gemv_tr(1.0, mass, v, 0.0);
+                            Ok(())
+                        }
+                    });
+                    match done {
+                        Ok(()) => {
                             out.axpy(hg, pv, 1.0);
                             out.axpy(hg2, pq, 1.0);
                             return;

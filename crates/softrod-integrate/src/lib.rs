@@ -18,13 +18,14 @@
 //! | integrator | kind | order | steps | for |
 //! |---|---|---|---|---|
 //! | [`Integrator::Esdirk`] | ESDIRK4(3)6L\[2\]SA, L-stable, Newton on `M + h²γ²K + hγD` (O(N)), exact-Jacobian fallback | 4 | adaptive or fixed | stiff rods, any size: **recommended** |
+//! | [`Integrator::Esdirk5`] | ESDIRK5(4)7L\[2\]SA, L-stable, the same structured Newton | 5 | adaptive or fixed | stiff rods, tighter tolerances (no adjoint) |
 //! | [`Integrator::Radau5`] | Radau IIA, RADAU5's design, exact dense Jacobian | 5 | adaptive or fixed | small stiff systems, tight tolerances |
 //! | [`Integrator::Rosenbrock`] | Rosenbrock–W ROS34PW2, L-stable, no Newton | 3 | adaptive or fixed | stiff, loose tolerances |
 //! | [`Integrator::GeneralizedAlpha`] | Chung–Hulbert / Arnold–Brüls, `ρ∞` dissipation | 2 | fixed, or adaptive | large fixed steps (linearly implicit: [`Iteration::LinearlyImplicit`]) |
 //! | [`Integrator::Dopri5`] | explicit RK 5(4), dense order 4 | 5 | adaptive or fixed | non-stiff, references |
 //! | [`Integrator::Rk4`] | explicit RK | 4 | fixed | non-stiff, reference runs |
 //!
-//! ESDIRK and generalized-α need a [`SecondOrderSystem`]; the others
+//! The ESDIRKs and generalized-α need a [`SecondOrderSystem`]; the others
 //! run on first-order systems too (on `y = (q, q̇)` for a second-order one,
 //! with `n×n` Schur complements instead of `2n×2n` matrices).
 //!
@@ -148,6 +149,7 @@ mod adjoint;
 mod driver;
 mod krylov;
 mod recommended;
+mod sensitivity;
 
 pub use adjoint::{
     ADJOINT_INTEGRATORS, AdjointGradient, AdjointSolver, ParameterSystem, Seed, Tape,
@@ -163,6 +165,7 @@ pub use methods::generalized_alpha_parameters;
 pub use options::{Iteration, Options, StepControl};
 pub use recommended::Recommended;
 pub use rod::{RodJacobian, RodSystem};
+pub use sensitivity::forward_sensitivity_second_order;
 pub use solution::{EventRecord, Solution, Stats, Status};
 pub use system::{OdeSystem, SecondOrderSystem, fd_jacobian};
 

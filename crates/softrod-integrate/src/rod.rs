@@ -11,8 +11,8 @@ use softrod_dynamics::{
     ClosedDerivatives, ClosedShiftedSolver, Data, DynamicsError, FdDerivatives, Forces,
     IdDerivatives, Model, ShiftedSolver, closed_dynamics_derivatives, damping_matrix,
     forward_dynamics, forward_dynamics_derivatives, inverse_dynamics, inverse_dynamics_derivatives,
-    inverse_dynamics_inertia_vjp, inverse_dynamics_linearization_with, inverse_dynamics_vjp,
-    mass_matrix, stiffness_matrix,
+    inverse_dynamics_inertia_vjp, inverse_dynamics_linearization_with,
+    inverse_dynamics_mass_product, inverse_dynamics_vjp, mass_matrix, stiffness_matrix,
 };
 use softrod_mechanics::Tension;
 
@@ -59,6 +59,16 @@ pub struct RodSystem {
     /// geometric stiffness in the Newton matrix"), and on chain models it
     /// moves the factorization to the tree recursion (~1.5× its cost).
     pub geometric_in_shifted: bool,
+    /// Models with contact (a tree model: joints or bodies): the structured
+    /// Newton matrix takes the world-obstacle contact laws whole
+    /// (`ShiftedSolver::set_contact_whole`, docs/theory-contact.md CT26)
+    /// and ESDIRK re-linearizes the contact at every Newton iterate (CT27).
+    /// **Experimental, default `false`**: on the cosseratbench capstan it
+    /// halves the CPU time and cuts the dense Jacobians from 70 to 20
+    /// (docs/performance.md, "Contact-heavy scenes"), but it moves the
+    /// friction reference path of `tests/contact_bounds.rs` by 7.8e-4 m
+    /// (its bound 1e-4 m): friction anchors commit at accepted steps (CT25).
+    pub contact_active_set: bool,
     /// The configuration of the last contact linearization
     /// ([`SecondOrderSystem::linearize_shifted`]); the factorizations carry
     /// it only at that `q` (a wrapper that forwards the factorization but
@@ -123,7 +133,7 @@ impl RodJacobian {
     /// explicit methods use none (`ElasticOnly`, never evaluated).
     pub fn recommended(integrator: Integrator) -> Self {
         match integrator {
-            Integrator::Esdirk | Integrator::Radau5 => RodJacobian::Exact,
+            Integrator::Esdirk | Integrator::Esdirk5 | Integrator::Radau5 => RodJacobian::Exact,
             Integrator::Rk4
             | Integrator::Dopri5
             | Integrator::Rosenbrock
@@ -145,6 +155,7 @@ impl RodSystem {
             structured_closures: false,
             contact_in_shifted: true,
             geometric_in_shifted: false,
+            contact_active_set: false,
             contact_q: None,
             shifted,
             derivatives: None,
@@ -256,6 +267,58 @@ impl RodSystem {
         Ok(true)
     }
 
+    /// [`RodSystem::force_linearization`] without forming `M(q)`: `M` is
+    /// kept in `slot` too, as the O(N) products of
+    /// [`RodSystem::force_mass_product`] (docs/theory-derivatives.md D86,
+    /// docs/theory-control.md G15). Returns `Ok(false)` (nothing kept)
+    /// where `force_jacobians` does (closures, contact).
+    pub fn force_operators(
+        &mut self,
+        slot: usize,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+        qdd: &DVector<f64>,
+    ) -> Result<bool, DynamicsError> {
+        if self.model.has_closures() || self.model.has_contact() {
+            return Ok(false);
+        }
+        while self.products.len() <= slot {
+            self.products.push(IdDerivatives::for_products(&self.model));
+        }
+        let work = &mut self.products[slot];
+        copy_tensions(&self.data, work);
+        inverse_dynamics_linearization_with(
+            &self.model,
+            work,
+            Forces::ALL,
+            t,
+            q.as_slice(),
+            qd.as_slice(),
+            qdd.as_slice(),
+        )?;
+        Ok(true)
+    }
+
+    /// `M(q) v` into `out` (dim n_dof) at the linearization of `slot`
+    /// ([`RodSystem::force_operators`] or
+    /// [`RodSystem::force_linearization`]); O(N)
+    /// (`softrod_dynamics::inverse_dynamics_mass_product`). An error for a
+    /// slot without a successful linearization.
+    pub fn force_mass_product(
+        &mut self,
+        slot: usize,
+        v: &DVector<f64>,
+        out: &mut DVector<f64>,
+    ) -> Result<(), DynamicsError> {
+        let Some(work) = self.products.get_mut(slot) else {
+            return Err(DynamicsError::NotLinearized {
+                what: "RodSystem::force_mass_product",
+            });
+        };
+        inverse_dynamics_mass_product(&self.model, work, v.as_slice(), out.as_mut_slice())
+    }
+
     /// `(∂r/∂q)ᵀu` into `out_q`, `(∂r/∂q̇)ᵀu` into `out_qd` (dim n_dof) at
     /// the linearization of `slot` ([`RodSystem::force_linearization`]);
     /// O(N) (`softrod_dynamics::inverse_dynamics_vjp`). An error for a slot
@@ -283,6 +346,23 @@ impl RodSystem {
 }
 
 impl RodSystem {
+    /// The inertia products of [`RodSystem::force_inertia_vjp`] at the
+    /// point of the last [`RodSystem::force_jacobians`] (its dense
+    /// derivatives keep the same per-piece sums, D85). An error before any.
+    pub fn force_jacobians_inertia_vjp(
+        &mut self,
+        z: &DVector<f64>,
+        rods: &mut [f64],
+        bodies: &mut [Matrix6<f64>],
+    ) -> Result<(), DynamicsError> {
+        let Some(work) = self.id_derivatives.as_deref_mut() else {
+            return Err(DynamicsError::NotLinearized {
+                what: "RodSystem::force_jacobians_inertia_vjp",
+            });
+        };
+        inverse_dynamics_inertia_vjp(&self.model, work, z.as_slice(), rods, bodies)
+    }
+
     /// The inertia products at the linearization of `slot`
     /// ([`RodSystem::force_linearization`]): `rods[r] = zᵀ ∂r/∂s_r` for a
     /// factor `s_r` on rod `r`'s inertia, `bodies[b]` the 6×6 `G_b` with
@@ -540,6 +620,7 @@ impl SecondOrderSystem for RodSystem {
             return Ok(());
         }
         if self.contact_in_shifted {
+            self.shifted.set_contact_whole(self.contact_active_set);
             self.shifted.linearize_contact(
                 &self.model,
                 &mut self.data,
@@ -556,6 +637,16 @@ impl SecondOrderSystem for RodSystem {
             self.contact_q = None;
         }
         Ok(())
+    }
+
+    /// With contact in the structured matrix: the contact set and its
+    /// stick/slide branches change within a step, so ESDIRK re-linearizes
+    /// the contact at every Newton iterate (docs/theory-contact.md CT27).
+    fn relinearize_in_newton(&self) -> bool {
+        self.contact_active_set
+            && self.contact_in_shifted
+            && self.model.has_contact()
+            && !self.model.has_closures()
     }
 
     /// `M(q) + aK + bD` by the O(N) articulated recursion
@@ -746,6 +837,77 @@ mod tests {
             "relative energy drift {}",
             worst / scale
         );
+    }
+
+    /// The structured error filter (Shampine's `(I − hγJ)⁻¹ e` through the
+    /// shifted matrix): `ẽ_v = (M + h²γ²K + hγD)⁻¹ (M e_v − hγ K̃ e_q)`,
+    /// `ẽ_q = e_q + hγ ẽ_v`, with `M e_v` and the static stiffness `K̃ e_q`
+    /// as differences of the O(N) force residual at `(q_J, 0, ·)`, against
+    /// the same formula on dense matrices: `M` of the composite recursion,
+    /// `K̃ = ∂ID/∂q` at `(q_J, 0, 0)` from the analytic derivatives, the
+    /// elastic `K` and `D`. At the update's own time (the residual at
+    /// `(q_J, 0, 0)` evaluated) and at a later step's time of the same update
+    /// (that residual held, the system being autonomous).
+    #[test]
+    fn structured_error_filter_with_held_residual_equals_the_dense_filter() {
+        use crate::problem::{JacKind, SecondOrderProblem};
+        let l = 0.2;
+        let rod = RodGeometry::uniform(
+            l,
+            2,
+            Basis::all(),
+            softrod_kinematics::straight(),
+            Pose::identity(),
+        )
+        .unwrap();
+        let mat = Material::with_poisson(1000.0, 1e5, 0.5, 50.0).unwrap();
+        let body = RodProperties::new(Section::Circle { radius: 0.01 }, mat, l).unwrap();
+        let model = Model::new(
+            vec![Rod::new("r", rod, body)],
+            Some(Vec3::new(0.0, 0.0, -9.81)),
+            4,
+        )
+        .unwrap();
+        let mut sys = RodSystem::new(model);
+        assert!(sys.is_autonomous());
+        let n = sys.dim();
+        let q = DVector::from_fn(n, |i, _| 0.3 * ((i as f64) * 0.7).sin());
+        let zero = DVector::zeros(n);
+        let hg = 0.25 * 2e-3;
+        // Dense reference.
+        let m = mass_matrix(&sys.model, &mut sys.data, q.as_slice())
+            .unwrap()
+            .clone();
+        let mut work = IdDerivatives::new(&sys.model);
+        let kt = inverse_dynamics_derivatives(
+            &sys.model,
+            &mut work,
+            0.0,
+            q.as_slice(),
+            zero.as_slice(),
+            zero.as_slice(),
+        )
+        .unwrap()
+        .dtau_dq
+        .clone();
+        let shifted =
+            &m + stiffness_matrix(&sys.model) * (hg * hg) + damping_matrix(&sys.model) * hg;
+        let eq0 = DVector::from_fn(n, |i, _| 1e-4 * (1.0 + ((i as f64) * 1.3).cos()));
+        let ev0 = DVector::from_fn(n, |i, _| 1e-3 * ((i as f64) * 0.9).sin());
+        let want_v = shifted.lu().solve(&(&m * &ev0 - &kt * &eq0 * hg)).unwrap();
+        let want_q = &eq0 + &want_v * hg;
+        let mut p = SecondOrderProblem::new(&mut sys);
+        assert_eq!(p.update_jacobians_qv(0.0, &q, &zero, true).unwrap(), None);
+        assert_eq!(p.kind(), JacKind::Structured);
+        assert!(p.factor_newmark(hg * hg, hg).unwrap());
+        for t in [0.0, 0.37] {
+            let (mut eq, mut ev) = (eq0.clone(), ev0.clone());
+            p.filter_error(t, hg, &mut eq, &mut ev).unwrap();
+            // K̃ e_q is a directional difference with a √ε-sized step.
+            let dv = (&ev - &want_v).amax() / want_v.amax();
+            let dq = (&eq - &want_q).amax() / want_q.amax();
+            assert!(dv < 1e-6 && dq < 1e-6, "t = {t}: {dv:e}, {dq:e}");
+        }
     }
 
     /// Time enters through a prescribed joint and a tension table, not

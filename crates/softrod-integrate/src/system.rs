@@ -223,6 +223,17 @@ pub trait SecondOrderSystem {
         Ok(())
     }
 
+    /// Optional, with [`linearize_shifted`](Self::linearize_shifted):
+    /// whether the structured matrix should be re-linearized and refactored
+    /// at every Newton iterate rather than once per step — for a system
+    /// whose state-dependent part switches within a step (contacts that
+    /// open, close, stick or slide: docs/theory-contact.md CT27). ESDIRK
+    /// then runs an active-set Newton iteration on its structured matrix.
+    /// The default is `false`.
+    fn relinearize_in_newton(&self) -> bool {
+        false
+    }
+
     /// `x ← S⁻¹ x` with the `S` of the last successful
     /// [`factor_shifted_mass`](Self::factor_shifted_mass).
     ///

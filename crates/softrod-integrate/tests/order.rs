@@ -83,6 +83,37 @@ fn esdirk46_is_fourth_order() {
 }
 
 #[test]
+fn esdirk5_is_fifth_order() {
+    for sys in [Linear::undamped(), Linear::damped()] {
+        assert_order(observed_order(&sys, Integrator::Esdirk5, 0.1), 5.0);
+    }
+}
+
+#[test]
+fn esdirk5_is_fifth_order_on_a_non_autonomous_problem() {
+    // The stage times tₙ + cᵢh (one of them, c₆ = 1.04, beyond the step)
+    // enter the forcing; a wrong one drops the order.
+    let err = |h: f64| {
+        let mut s = Forced { w: 2.0, big_w: 1.3 };
+        let sol = integrate_second_order(
+            &mut s,
+            Integrator::Esdirk5,
+            (0.0, T1),
+            &dv(&[0.0]),
+            &dv(&[0.0]),
+            &Options::fixed(h),
+            &mut NoHooks,
+        )
+        .unwrap();
+        let (q, v) = s.exact(T1);
+        (sol.y_final[0] - q).abs().max((sol.y_final[1] - v).abs())
+    };
+    let p = (err(0.1) / err(0.05)).log2();
+    println!("esdirk5 forced: observed order {p:.3}");
+    assert_order(p, 5.0);
+}
+
+#[test]
 fn radau5_is_fifth_order() {
     // Classical order 5 on linear problems (stage order 3 limits it only on
     // very stiff nonlinear ones).
@@ -241,6 +272,8 @@ fn adaptive_methods_show_their_order_in_error_versus_steps() {
     assert!((2.5..=3.6).contains(&p), "rosw34 slope {p}");
     let p = adaptive_slope(Integrator::Esdirk, 1e-4, 1e-8);
     assert!((3.4..=4.6).contains(&p), "esdirk46 slope {p}");
+    let p = adaptive_slope(Integrator::Esdirk5, 1e-4, 1e-8);
+    assert!((4.3..=5.8).contains(&p), "esdirk5 slope {p}");
     let p = adaptive_slope(Integrator::Radau5, 1e-4, 1e-8);
     assert!((4.3..=5.8).contains(&p), "radau5 slope {p}");
 }

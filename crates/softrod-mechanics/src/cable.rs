@@ -312,16 +312,12 @@ impl Cable {
         // — the Gauss rule's sum up to rounding, at one evaluation instead of
         // one per node (this force is in every right-hand side of a cable
         // model).
-        let constant = self.friction == 0.0 && matches!(self.routing, Routing::Offset { .. });
+        let constant = self.is_constant_per_piece();
         for (n, p) in rod.pieces().iter().enumerate() {
             let xi = p.strain(q);
             let mut acc = Wrench::zeros();
             if constant {
-                let mut length = 0.0;
-                self.for_each_part(p, |lo, hi| length += hi - lo);
-                if length > 0.0 {
-                    acc = self.wrench_per_tension(&xi, p.start) * length;
-                }
+                acc = self.constant_piece_wrench(p, &xi);
             } else {
                 self.for_each_weighted_node(rod, q, n, quadrature, |s, w| {
                     acc += self.wrench_per_tension(&xi, s) * w;
@@ -334,6 +330,32 @@ impl Cable {
             for (c, o) in out[r].iter_mut().enumerate() {
                 *o -= p.basis.column(c).dot(&acc);
             }
+        }
+    }
+
+    /// Whether the integrand `(d × t̂; t̂)` of the force per unit tension is
+    /// constant on each piece (constant strain): a constant offset (`d′ = 0`,
+    /// `d` constant) without friction. Then [`Self::constant_piece_wrench`]
+    /// is the piece's integral.
+    #[inline]
+    pub fn is_constant_per_piece(&self) -> bool {
+        self.friction == 0.0 && matches!(self.routing, Routing::Offset { .. })
+    }
+
+    /// `∫_{piece ∩ [from,to]} (d × t̂; t̂) ds` at the piece's strain `xi`
+    /// for a cable whose integrand is constant on the piece
+    /// ([`Self::is_constant_per_piece`]): the overlap's length times the
+    /// integrand (\[m²; m\] per unit tension; zero without overlap). Its
+    /// projection `−B_nᵀ(·)` is the piece's rows of
+    /// [`Self::add_force_per_tension`].
+    #[inline]
+    pub fn constant_piece_wrench(&self, piece: &Piece, xi: &Vec6) -> Wrench {
+        let mut length = 0.0;
+        self.for_each_part(piece, |lo, hi| length += hi - lo);
+        if length > 0.0 {
+            self.wrench_per_tension(xi, piece.start) * length
+        } else {
+            Wrench::zeros()
         }
     }
 

@@ -233,19 +233,21 @@ pub enum ControlError {
 /// docs/theory-contact.md CT5, CT15) moves at accepted steps, as
 /// `Simulation::simulate`'s does.
 pub trait CommitContact {
-    /// `RodSystem::commit_contact` of the system's rod model.
-    fn commit_contact(&mut self, t: f64, q: &[f64], qd: &[f64]) -> Result<bool, DynamicsError>;
+    /// `RodSystem::commit_contact_control` of the system's rod model: what
+    /// changed, as the step hook reports it (CT25: a raised stiffness drops
+    /// the Jacobians, moved anchors only re-evaluate the forces).
+    fn commit_contact(&mut self, t: f64, q: &[f64], qd: &[f64]) -> Result<Control, DynamicsError>;
 }
 
 impl CommitContact for RodSystem {
-    fn commit_contact(&mut self, t: f64, q: &[f64], qd: &[f64]) -> Result<bool, DynamicsError> {
-        RodSystem::commit_contact(self, t, q, qd)
+    fn commit_contact(&mut self, t: f64, q: &[f64], qd: &[f64]) -> Result<Control, DynamicsError> {
+        self.commit_contact_control(t, q, qd)
     }
 }
 
 impl CommitContact for CableInputs {
-    fn commit_contact(&mut self, t: f64, q: &[f64], qd: &[f64]) -> Result<bool, DynamicsError> {
-        self.sys.commit_contact(t, q, qd)
+    fn commit_contact(&mut self, t: f64, q: &[f64], qd: &[f64]) -> Result<Control, DynamicsError> {
+        self.sys.commit_contact_control(t, q, qd)
     }
 }
 
@@ -265,8 +267,7 @@ impl<S: SecondOrderSystem + CommitContact> Hooks<S> for CommitHooks {
     fn step(&mut self, info: &StepInfo<'_>, sys: &mut S) -> Control {
         let (q, qd) = info.y.as_slice().split_at(self.n);
         match sys.commit_contact(info.t, q, qd) {
-            Ok(true) => Control::SystemChanged,
-            Ok(false) => Control::Continue,
+            Ok(control) => control,
             Err(e) => {
                 self.failure = Some(e);
                 Control::Stop
@@ -422,19 +423,15 @@ impl Hooks<CableInputs> for ControlHooks<'_, '_> {
     /// held from there on.
     fn step(&mut self, info: &StepInfo<'_>, sys: &mut CableInputs) -> Control {
         let (q, qd) = info.y.as_slice().split_at(self.n);
-        let changed = match sys.commit_contact(info.t, q, qd) {
-            Ok(changed) => changed,
+        let contact_control = match sys.commit_contact(info.t, q, qd) {
+            Ok(control) => control,
             Err(error) => {
                 self.failure = Some(ControlError::Contact { t: info.t, error });
                 return Control::Stop;
             }
         };
         let Some(controller) = self.controller.as_mut() else {
-            return if changed {
-                Control::SystemChanged
-            } else {
-                Control::Continue
-            };
+            return contact_control;
         };
         let mut u = std::mem::take(&mut sys.u);
         let r = controller(info.t, q, qd, &mut u);

@@ -127,3 +127,21 @@ def test_a_failing_loss_function_is_reported():
         s.value_and_gradient(
             lambda t, q, qd: (np.nan, q, qd), ["q0"], 0.1, times=[0.1], **KW
         )
+
+
+def test_forward_sensitivities_equal_the_adjoint():
+    # G21: a second algorithm over the same recorded steps; equal to round-off.
+    s = sim()
+    params = ["arm.young", "arm.viscosity", "cable0.tension", "q0", "qdot0"]
+    va, ga = s.value_and_gradient(loss(s.n_dof), params, 0.1, **KW)
+    vf, gf = s.value_and_gradient(loss(s.n_dof), params, 0.1, method="forward", **KW)
+    assert va == vf
+    scale = max(float(np.max(np.abs(ga[p]))) for p in params)
+    for p in params:
+        np.testing.assert_allclose(gf[p], ga[p], rtol=1e-8, atol=1e-12 * scale)
+
+
+def test_an_unknown_gradient_method_names_it():
+    s = sim()
+    with pytest.raises(softrod.InputError, match="method: 'backward' is not a gradient method"):
+        s.value_and_gradient(loss(s.n_dof), ["arm.young"], 0.1, method="backward", **KW)

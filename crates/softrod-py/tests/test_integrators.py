@@ -35,7 +35,7 @@ def test_the_list_is_the_scene_names():
     # The scene format's names (docs/scene-format-extensions.md), each
     # accepted by Settings and reported back unchanged.
     assert set(softrod.INTEGRATORS) == {
-        "rk4", "dopri5", "rosenbrock", "generalized-alpha", "esdirk", "radau5"}
+        "rk4", "dopri5", "rosenbrock", "generalized-alpha", "esdirk", "esdirk5", "radau5"}
     for name in softrod.INTEGRATORS:
         assert softrod.Settings(integrator=name).integrator == name
     with pytest.raises(softrod.InputError, match="unknown integrator"):

@@ -104,8 +104,8 @@ fn main() {
     };
     let repeat: usize = value("--repeat").map_or(3, |v| v.parse().expect("--repeat N"));
     let scenes = value("--scene").unwrap_or_else(|| "planar,3d,steel".into());
-    let methods =
-        value("--method").unwrap_or_else(|| "esdirk,radau5,rosenbrock,generalized-alpha".into());
+    let methods = value("--method")
+        .unwrap_or_else(|| "esdirk,esdirk5,radau5,rosenbrock,generalized-alpha".into());
     println!(
         "scene,method,setting,wall_s,steps,rejected,newton,jacobians,factorizations,lu_solves,rhs,error_m,status"
     );

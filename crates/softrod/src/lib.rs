@@ -112,8 +112,8 @@ pub use limits::Limits;
 pub use record::{Trajectory, TrajectoryRecorder};
 pub use settings::{GENERALIZED_ALPHA_RHO_INF, Settings, output_times};
 pub use simulation::{
-    Equilibrium, Flow, Gradient, GradientOptions, LossFn, LossTerm, ModalAnalysis, Observer, RodId,
-    RunStatus, RunSummary, Sample, Simulation, Statics,
+    Equilibrium, Flow, Gradient, GradientMethod, GradientOptions, LossFn, LossTerm, ModalAnalysis,
+    Observer, RodId, RunStatus, RunSummary, Sample, Simulation, Statics,
 };
 pub use softrod_integrate::Integrator;
 

@@ -67,7 +67,7 @@ fn available_memory() -> Option<u64> {
 pub fn dense_matrices_of(integrator: Integrator) -> u64 {
     match integrator {
         Integrator::Rk4 | Integrator::Dopri5 | Integrator::GeneralizedAlpha => 0,
-        Integrator::Esdirk => 5,
+        Integrator::Esdirk | Integrator::Esdirk5 => 5,
         Integrator::Rosenbrock => 8,
         Integrator::Radau5 => 10,
     }

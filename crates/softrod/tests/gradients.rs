@@ -7,11 +7,12 @@
 //! and their stage equations solved far below the differences' step: the
 //! adjoint must then agree with them to round-off and truncation, ~1e-7.
 
-use softrod::{GradientOptions, LossTerm, Simulation};
+use softrod::{GradientMethod, GradientOptions, LossTerm, Simulation};
 
 const OPTIONS: GradientOptions = GradientOptions {
     fixed_step: Some(0.004),
     newton_tol: Some(1e-3),
+    method: GradientMethod::Adjoint,
 };
 const DURATION: f64 = 0.1;
 const TIMES: [f64; 3] = [0.03, 0.07, 0.1];
@@ -368,6 +369,14 @@ fn bad_requests_name_what_is_wrong() {
         .replace("[run]", "[run]\nintegrator = \"radau5\""));
     let e = err(&mut s2, &mut loss("arm", n), &["q0"]);
     assert!(e.contains("radau5") && e.contains("esdirk"), "{e}");
+    // ESDIRK5(4)7L[2]SA has no adjoint: refused, naming the setting.
+    let mut s3 = sim(&cantilever(1.0e6, 1000.0, 500.0, [0.0, 1.5, 0.5])
+        .replace("[run]", "[run]\nintegrator = \"esdirk5\""));
+    let e = err(&mut s3, &mut loss("arm", n), &["q0"]);
+    assert!(
+        e.contains("run.integrator") && e.contains("esdirk5 has none"),
+        "{e}"
+    );
 }
 
 /// The adaptive run (the default settings' step sequence) gives the
@@ -381,6 +390,7 @@ fn adaptive_runs_give_gradients_too() {
     let adaptive = GradientOptions {
         fixed_step: None,
         newton_tol: Some(1e-3),
+        method: GradientMethod::Adjoint,
     };
     let a = s
         .value_and_gradient(&mut loss("arm", n), &["arm.young"], DURATION, &adaptive)
@@ -423,10 +433,12 @@ fn loss_times_within_rounding_of_a_knot_are_one_node() {
     let adaptive = GradientOptions {
         fixed_step: None,
         newton_tol: Some(1e-3),
+        method: GradientMethod::Adjoint,
     };
     let fixed = GradientOptions {
         fixed_step: Some(1e-3),
         newton_tol: Some(1e-3),
+        method: GradientMethod::Adjoint,
     };
     let p = ["upper.young"];
     let a = s
@@ -529,6 +541,7 @@ material = {{ density = {rho:e}, young = {e:e}, poisson = 0.5 }}
         let options = GradientOptions {
             fixed_step: Some(h),
             newton_tol: Some(1e-10),
+            method: GradientMethod::Adjoint,
         };
         let g = s
             .value_and_gradient(&mut loss, &["arm.young", "arm.density"], 0.6, &options)
@@ -635,6 +648,7 @@ atol = 1e-9
     let options = GradientOptions {
         fixed_step: Some(0.1),
         newton_tol: Some(1e-8),
+        method: GradientMethod::Adjoint,
     };
     let run = |t4: f64, loss: &mut Vec<LossTerm<'_>>| {
         sim(&text(t4))
@@ -655,6 +669,7 @@ atol = 1e-9
     let tight = GradientOptions {
         fixed_step: Some(0.1),
         newton_tol: Some(1e-12),
+        method: GradientMethod::Adjoint,
     };
     let e = sim(&text(0.2))
         .value_and_gradient(&mut loss, &["cable0.tension"], 0.5, &tight)
@@ -664,4 +679,74 @@ atol = 1e-9
         e.contains("newton_tol") && e.contains("1e-12") && e.contains("fixed steps"),
         "{e}"
     );
+}
+
+/// Issue 28, G21: forward sensitivities — a second algorithm carrying the
+/// derivatives forward through the same recorded steps — give the adjoint's
+/// gradient to round-off on every parameter kind: the cantilever (moduli,
+/// density, viscosity, a tension table, q0, qdot0; fixed and adaptive
+/// steps) and the arm with a joint and two bodies (masses, shear modulus).
+#[test]
+fn forward_sensitivities_equal_the_adjoint() {
+    let compare = |text: &str, rod: &str, names: &[&str], options: GradientOptions| {
+        let mut s = sim(text);
+        let n = s.n_dof();
+        let a = s
+            .value_and_gradient(&mut loss(rod, n), names, DURATION, &options)
+            .unwrap();
+        let forward = GradientOptions {
+            method: GradientMethod::Forward,
+            ..options
+        };
+        let f = s
+            .value_and_gradient(&mut loss(rod, n), names, DURATION, &forward)
+            .unwrap();
+        assert_eq!(a.value, f.value, "one recorded run, one loss");
+        let scale = a
+            .gradients
+            .iter()
+            .flat_map(|(_, g)| g.iter())
+            .fold(0.0f64, |m, v| m.max(v.abs()));
+        for ((name, ga), (_, gf)) in a.gradients.iter().zip(&f.gradients) {
+            assert_eq!(ga.len(), gf.len(), "{name}");
+            for (k, (x, y)) in ga.iter().zip(gf).enumerate() {
+                // Relative to the entry, or (entries near zero, as q0's
+                // of strains the loss hardly sees) to the largest.
+                let err = (x - y).abs() / x.abs().max(1e-6 * scale);
+                assert!(
+                    err < 1e-8,
+                    "{name}[{k}]: adjoint {x:e}, forward {y:e}, {err:e}"
+                );
+            }
+        }
+    };
+    let cantilever_text = cantilever(1.0e6, 1000.0, 500.0, [0.0, 1.5, 0.5]);
+    let names = [
+        "arm.young",
+        "arm.density",
+        "arm.viscosity",
+        "cable0.tension",
+        "q0",
+        "qdot0",
+    ];
+    // Both algorithms recompute every stage from the tape to round-off, so
+    // the forward run's own Newton tolerance does not enter the comparison.
+    let tight = |fixed_step| GradientOptions {
+        fixed_step,
+        newton_tol: Some(1e-3),
+        method: GradientMethod::Adjoint,
+    };
+    compare(&cantilever_text, "arm", &names, tight(Some(0.004)));
+    compare(&cantilever_text, "arm", &names, tight(None));
+    let arm_text = arm(2.0e6, 1100.0, 0.01, 0.02, [2.0, 8.0]);
+    let names = [
+        "upper.young",
+        "lower.density",
+        "lower.shear_modulus",
+        "connector.mass",
+        "gripper.mass",
+        "cable0.tension",
+        "qdot0",
+    ];
+    compare(&arm_text, "lower", &names, tight(Some(0.004)));
 }

@@ -255,21 +255,28 @@ pub fn run(
     // show where it went wrong).
     let title = scene_title(path);
     let model = l.sim.model();
-    let frames = streamer.take_view();
-    let plot_result = plots::run_figures(&dir, streamer.finish_series(), model, &title)
-        .and_then(|names| {
+    let frames = streamer.take_view().filter(|_| streamer.rows_written() > 0);
+    let series = streamer.finish_series();
+    // The 3-D view and the figures are independent files from the same
+    // rows: drawn side by side, the process ends when the longer is done
+    // (their bytes are those of one after the other).
+    let plot_result = std::thread::scope(|scope| {
+        let view = scope.spawn(|| match frames {
+            Some(frames) => outputs::write_view(&dir, model, &title, frames).map(|_| ()),
+            None => Ok(()),
+        });
+        let figures = plots::run_figures(&dir, series, model, &title).and_then(|names| {
             if png {
                 plots::rasterize(&dir, &names, quiet)
             } else {
                 Ok(())
             }
-        })
-        .and_then(|()| match frames {
-            Some(frames) if streamer.rows_written() > 0 => {
-                outputs::write_view(&dir, model, &title, frames).map(|_| ())
-            }
-            _ => Ok(()),
         });
+        let view = view
+            .join()
+            .unwrap_or_else(|_| Err(failed("writing the 3-D view failed unexpectedly")));
+        figures.and(view)
+    });
     if status != "ok" {
         return Err(failed(format!(
             "simulation failed: {} (outputs up to t = {} in {})",

@@ -91,6 +91,10 @@ pub struct RowWriter {
     rod_fields: Vec<String>,
     body_fields: Vec<String>,
     prefix: String,
+    /// Per rod, per sample: its abscissa `s` and that number as CSV text
+    /// with its comma (the same at every time: formatted once, not at
+    /// every row of `shape.csv`).
+    s_fields: Vec<Vec<(f64, String)>>,
     /// The current row's numbers (allocated once).
     values: Vec<f64>,
     /// With `--npz`: every written row's numbers, in `trajectory.csv`'s
@@ -151,6 +155,7 @@ impl RowWriter {
                 .map(|b| csv_field(&b.spec.name))
                 .collect(),
             prefix: String::new(),
+            s_fields: vec![Vec::new(); model.rods().len()],
             values: Vec::with_capacity(columns.width()),
             npz_rows: npz.then(Vec::new),
             view: None,
@@ -190,14 +195,25 @@ impl RowWriter {
             self.prefix.push_str(name);
             self.prefix.push(',');
             let s = &rec.poses.sampling(r).s;
-            for (sv, g) in s.iter().zip(rec.poses.samples(r)) {
+            let cached = &mut self.s_fields[r];
+            let same = cached.len() == s.len()
+                && cached
+                    .iter()
+                    .zip(s)
+                    .all(|(c, v)| c.0.to_bits() == v.to_bits());
+            if !same {
+                cached.clear();
+                cached.extend(s.iter().map(|&v| {
+                    let mut text = num(v);
+                    text.push(',');
+                    (v, text)
+                }));
+            }
+            for ((_, s_text), g) in cached.iter().zip(rec.poses.samples(r)) {
                 let [x, y, z] = position(g);
                 let [qw, qx, qy, qz] = quaternion(g);
-                push_csv_row(
-                    &mut self.shape_text,
-                    &self.prefix,
-                    [*sv, x, y, z, qw, qx, qy, qz],
-                );
+                self.shape_text.push_str(&self.prefix);
+                push_csv_row(&mut self.shape_text, s_text, [x, y, z, qw, qx, qy, qz]);
             }
         }
         self.bodies_text.clear();

@@ -151,7 +151,9 @@ impl ShiftedSolver {
     /// `(t, q, q̇)`: `S = M(q) + a(K + K_c) + b(D + D_c)` with
     /// `K_c = Σ J_wᵀ K_p J_w`, `D_c = Σ J_wᵀ C_p J_w` over the touching
     /// contacts, `K_p`, `C_p` the positive semi-definite symmetric parts of
-    /// `−∂f/∂p`, `−∂f/∂v` of each contact's force law (CT6) — the stiffness
+    /// `−∂f/∂p`, `−∂f/∂v` of each contact's force law (CT6; on a tree model
+    /// without the geometric terms a world obstacle's contact takes them
+    /// whole, non-symmetric, CT26) — the stiffness
     /// and damping of the contact in the implicit integrators' Newton
     /// matrix (docs/theory-contact.md CT17). Contact is evaluated with
     /// `data` (the run's friction anchors and raised stiffnesses; its
@@ -179,6 +181,18 @@ impl ShiftedSolver {
         check_point(model, q, qd)?;
         self.contact.linearize(model, data, t, q, qd);
         Ok(self.contact.blocks.len() + self.contact.pair_kc.len())
+    }
+
+    /// Whether the following [`Self::linearize_contact`] keeps a tree
+    /// model's world-obstacle contact blocks whole — the law's
+    /// non-symmetric `−∂f/∂p`, `−∂f/∂v` (sliding friction's skew damping),
+    /// factored by the recursion's non-symmetric form (docs/theory-contact.md
+    /// CT26) — instead of their positive semi-definite symmetric parts
+    /// (CT17). Default off. Chain models and the factorization with the
+    /// geometric terms keep the symmetric parts either way.
+    pub fn set_contact_whole(&mut self, on: bool) {
+        self.factored = false;
+        self.contact.whole = on;
     }
 
     /// Forgets the contact of [`Self::linearize_contact`]: the following
@@ -486,8 +500,16 @@ pub(crate) fn tree_factor(
         Pass::Composite,
         Forces::ALL,
     );
+    // Non-symmetric contact blocks (CT26) are taken whole only without the
+    // geometric terms, whose blocks are read "inboard on the left" (CT21).
+    let nonsym = !geometric && contact.is_some_and(|c| c.nonsym);
+    if nonsym {
+        for w in &mut data.nodes {
+            w.ul = w.ut;
+        }
+    }
     if let Some(c) = contact {
-        c.add_tree(model, data, q, a, b);
+        c.add_tree(model, data, q, a, b, nonsym);
     }
     if geometric {
         shifted_geometric::add(model, tree, data, q, a, contact);
@@ -522,7 +544,17 @@ pub(crate) fn tree_factor(
             }
             NodeKind::Body { .. } => {}
         }
-        let dinv = if k > 0 {
+        let dinv = if nonsym {
+            // CT26: `D̂` is not symmetric; its LU.
+            if k > 0 {
+                general_inverse_k(&dhat, k).ok_or_else(|| DynamicsError::SingularNode {
+                    node: tree.describe(model, i),
+                    what: "shifted articulated block D̂ + aK + bD",
+                })?
+            } else {
+                Mat6::zeros()
+            }
+        } else if k > 0 {
             // With the geometric terms a node's D̂ may be indefinite where
             // the forces destabilize (CT23): its eigenvalues' magnitudes.
             inverse_k(&dhat, k)
@@ -538,9 +570,17 @@ pub(crate) fn tree_factor(
         } else {
             Mat6::zeros()
         };
+        // `Û_L`: the node's rows against the parent's columns (CT26); `Û`
+        // itself when the matrix is symmetric.
+        let uhat_l = if nonsym {
+            w.ul + am.transpose() * (ma.transpose() * w.s_tip)
+        } else {
+            uhat
+        };
         let ud = uhat * dinv;
-        let mb = w.mt + am.transpose() * ma * am - ud * uhat.transpose();
+        let mb = w.mt + am.transpose() * ma * am - ud * uhat_l.transpose();
         w.uhat = uhat;
+        w.uhat_l = uhat_l;
         w.dinv = dinv;
         if let Some(p) = node.parent {
             let x = node.offset.ad_inv().to_mat6();
@@ -550,6 +590,9 @@ pub(crate) fn tree_factor(
                 let pw = &mut data.nodes[p];
                 pw.mt += ax.transpose() * mx * ax;
                 pw.ut += ax.transpose() * mx * sx;
+                if nonsym {
+                    pw.ul += ax.transpose() * (mx.transpose() * sx);
+                }
                 pw.dt += sx.transpose() * mx * sx;
             } else {
                 data.nodes[p].m_tip += mx;
@@ -596,7 +639,7 @@ pub(crate) fn tree_solve(tree: &Tree, data: &Data, scratch: &mut [SolveNode], x:
             None => Vec6::zeros(),
         };
         let etadot_b = node.offset.ad_inv().mul_vec(&etadot_p);
-        let qn = w.dinv * (scratch[i].u - w.uhat.tr_mul(&etadot_b));
+        let qn = w.dinv * (scratch[i].u - w.uhat_l.tr_mul(&etadot_b));
         for c in 0..node.k {
             x[node.dof + c] = qn[c];
         }
@@ -605,6 +648,24 @@ pub(crate) fn tree_solve(tree: &Tree, data: &Data, scratch: &mut [SolveNode], x:
         sc.qn = qn;
         sc.etadot_tip = w.tip.ad_inv().mul_vec(&etadot_b) + w.s_tip * qn;
     }
+}
+
+/// The inverse of the leading `k×k` block of a general `d` (LU), padded
+/// with zeros; `None` if singular.
+fn general_inverse_k(d: &Mat6, k: usize) -> Option<Mat6> {
+    let padded = Mat6::from_fn(|i, j| {
+        if i < k && j < k {
+            d[(i, j)]
+        } else if i == j {
+            1.0
+        } else {
+            0.0
+        }
+    });
+    let inv = padded.try_inverse()?;
+    inv.iter()
+        .all(|v| v.is_finite())
+        .then(|| Mat6::from_fn(|i, j| if i < k && j < k { inv[(i, j)] } else { 0.0 }))
 }
 
 /// The shifts `a`, `b` of `M + a·K + b·D`: finite and non-negative (the

@@ -19,6 +19,10 @@
 //!   and a `3m × 3m` Cholesky per factorization for `m` such contacts,
 //!   `O(n·m)` more per solve. Exact too.
 //!
+//! On a tree model the one-sided blocks are the law's `−∂f/∂p`, `−∂f/∂v`
+//! whole (CT26: the articulated recursion in its non-symmetric form, LU
+//! of each `D̂`). Elsewhere (a chain, the tree with the geometric terms,
+//! the two-sided Woodbury part)
 //! `K_p`, `C_p` are the symmetric parts of `−∂f/∂p`, `−∂f/∂v` with their
 //! negative eigenvalues dropped: `S` must stay positive definite for the
 //! recursion's Cholesky factors, and what is dropped (the obstacle's
@@ -51,8 +55,14 @@ pub(crate) enum Site {
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct PointBlock {
     pub site: Site,
+    /// `−∂f/∂p`, `−∂f/∂v` as the law gives them (CT26: the tree's
+    /// factorization takes them whole) and their positive semi-definite
+    /// symmetric parts (CT17: the chain's, and the tree's with the
+    /// geometric terms).
     pub k: Mat3,
     pub c: Mat3,
+    pub k_psd: Mat3,
+    pub c_psd: Mat3,
     /// The contact force on the rod (world) \[N\], for its geometric
     /// stiffness (CT21, `shifted_geometric`).
     pub f: Vec3,
@@ -64,6 +74,12 @@ pub(crate) struct PointBlock {
 #[derive(Clone, Debug, Default)]
 pub(crate) struct ContactShift {
     pub blocks: Vec<PointBlock>,
+    /// Whether some block is not symmetric (CT26): the tree's
+    /// factorization then runs its non-symmetric form.
+    pub nonsym: bool,
+    /// Whether a tree model's one-sided blocks are taken whole (CT26;
+    /// `ShiftedSolver::set_contact_whole`, default off).
+    pub whole: bool,
     /// Two-sided contacts: `(K, C)` each, and `J_w` (3 rows of `n` each,
     /// contact after contact).
     pub pair_kc: Vec<(Mat3, Mat3)>,
@@ -125,6 +141,7 @@ fn point_block(rot: &Mat3, r: &Vec3, w: &Mat3) -> Mat6 {
 
 impl ContactShift {
     pub(crate) fn clear(&mut self) {
+        self.nonsym = false;
         self.blocks.clear();
         self.pair_kc.clear();
         self.jw.clear();
@@ -170,14 +187,23 @@ impl ContactShift {
                         .geometry
                         .locate(smp.s)
                         .expect("a sample lies on its rod");
+                    // The tree's factorization takes the law's blocks
+                    // whole (CT26); a chain's keeps their PSD parts.
+                    let (kw, cw) = match (&model.tree, self.whole) {
+                        (Some(_), true) => (-a.dp, -a.dv),
+                        _ => (k, c),
+                    };
+                    self.nonsym |= kw != kw.transpose() || cw != cw.transpose();
                     self.blocks.push(PointBlock {
                         site: Site::Section {
                             rod: a.rod,
                             piece,
                             x,
                         },
-                        k,
-                        c,
+                        k: kw,
+                        c: cw,
+                        k_psd: k,
+                        c_psd: c,
                         f: a.force,
                     });
                 }
@@ -259,7 +285,7 @@ impl ContactShift {
             let (gl, tm) = PieceMaps::new(&xi, None).exp_and_tangent_minus(x);
             let w = &mut data.pieces[rod][piece];
             let rot = w.base_pose.compose(&gl).rotation;
-            let mc = point_block(&rot, &Vec3::zeros(), &(blk.k * a + blk.c * b));
+            let mc = point_block(&rot, &Vec3::zeros(), &(blk.k_psd * a + blk.c_psd * b));
             let am = gl.ad_inv().to_mat6();
             let k = s_columns(&tm, &pc.basis, &mut scols);
             let mut s = Mat6::zeros();
@@ -273,8 +299,19 @@ impl ContactShift {
         }
     }
 
-    /// The same on the tree's nodes (after its composite outward sweep).
-    pub(crate) fn add_tree(&self, model: &Model, data: &mut Data, q: &[f64], a: f64, b: f64) {
+    /// The same on the tree's nodes (after its composite outward sweep),
+    /// whole (CT26) when `whole`, else their positive semi-definite
+    /// symmetric parts: `𝓜ᵗ += AᵀM_cA`, `𝓤 += AᵀM_cS`, `𝓤_L += AᵀM_cᵀS`,
+    /// `𝓓 += SᵀM_cS`.
+    pub(crate) fn add_tree(
+        &self,
+        model: &Model,
+        data: &mut Data,
+        q: &[f64],
+        a: f64,
+        b: f64,
+        whole: bool,
+    ) {
         let tree = model.tree.as_ref().expect("a tree model");
         for blk in &self.blocks {
             let Site::Section { rod, piece, x } = blk.site;
@@ -286,13 +323,26 @@ impl ContactShift {
             let node = &tree.nodes[i];
             let w = &mut data.nodes[i];
             let rot = w.base_world.compose(&gl).rotation;
-            let mc = point_block(&rot, &Vec3::zeros(), &(blk.k * a + blk.c * b));
+            let pw = if whole {
+                blk.k * a + blk.c * b
+            } else {
+                blk.k_psd * a + blk.c_psd * b
+            };
+            let mc = point_block(&rot, &Vec3::zeros(), &pw);
             let am = gl.ad_inv().to_mat6();
             let s = tm.to_mat6() * node.bpad;
-            let mca = mc * am;
-            w.mt += am.transpose() * mca;
-            w.ut += mca.transpose() * s;
-            w.dt += s.transpose() * (mc * s);
+            if whole {
+                let amt = am.transpose();
+                w.mt += amt * (mc * am);
+                w.ut += amt * (mc * s);
+                w.ul += amt * (mc.transpose() * s);
+                w.dt += s.transpose() * (mc * s);
+            } else {
+                let mca = mc * am;
+                w.mt += am.transpose() * mca;
+                w.ut += mca.transpose() * s;
+                w.dt += s.transpose() * (mc * s);
+            }
         }
     }
 

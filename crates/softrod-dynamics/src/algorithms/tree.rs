@@ -392,6 +392,8 @@ pub(crate) fn forward_dynamics(
         let mb = w.mt + a.transpose() * ma * a - ud * uhat.transpose();
         let pb = w.p_big + a.transpose() * y + ud * u;
         w.uhat = uhat;
+        // The mass matrix is symmetric: `tree_solve` reads `Û_L = Û`.
+        w.uhat_l = uhat;
         w.dinv = dinv;
         w.u = u;
         if let Some(p) = node.parent {

@@ -4,7 +4,7 @@
 //! closes the pieces, and the off-diagonal blocks pair per-piece
 //! world-frame quantities.
 
-use super::piece::{PieceWork, Subtree, close_piece, write_piece};
+use super::piece::{PieceWork, Subtree, close_mass, close_piece, write_piece};
 use super::point::{PieceLin, basis6, linearize_point, own_points};
 use super::{At, IdDerivatives};
 use crate::forces::external::gravity_base_acceleration;
@@ -42,7 +42,7 @@ pub(crate) fn outward(model: &Model, rm: &RodModel, works: &mut [PieceWork], at:
             xid: &xid,
             xidd: &xidd,
         };
-        own_points(rm, pd, &pc, &pose, drag.as_ref(), scale, w);
+        own_points(rm, pd, &pc, &pose, drag.as_ref(), scale, !at.dense, w);
         let (g, p) = linearize_point(&pc, piece.length);
         w.set_tip(g, &p, &dm);
         eta0 = p.eta;
@@ -60,6 +60,9 @@ pub(crate) fn inward(model: &Model, rm: &RodModel, work: &mut IdDerivatives, r: 
     for (n, piece) in rm.spec.geometry.pieces().iter().enumerate().rev() {
         let bm = basis6(&piece.basis);
         let (diag_q, diag_v, wrench, base) = close_piece(&mut work.pieces[r][n], &sub, &bm, dead);
+        if !at.dense {
+            close_mass(&mut work.pieces[r][n], &sub.m, &bm);
+        }
         sub = base;
         let (bq, bv) = write_piece(model, rm, n, work, at, &bm, (&diag_q, &diag_v, &wrench));
         let w = &mut work.pieces[r][n];

@@ -37,7 +37,10 @@ use crate::model::Model;
 use crate::model::data::Data;
 use nalgebra::{DMatrix, DVector};
 use piece::PieceWork;
-pub use vjp::{inverse_dynamics_inertia_vjp, inverse_dynamics_jvp, inverse_dynamics_vjp};
+pub use vjp::{
+    inverse_dynamics_inertia_vjp, inverse_dynamics_jvp, inverse_dynamics_mass_product,
+    inverse_dynamics_vjp,
+};
 
 /// Where the derivatives are taken: the time \[s\], the motion `(q, q̇, q̈)`
 /// (dim n_dof each) and the forces of the evaluation.
@@ -81,6 +84,9 @@ pub struct IdDerivatives {
     /// A linearization (dense or not) succeeded: the per-piece quantities
     /// of [`inverse_dynamics_vjp`] are those of the last evaluation.
     pub(crate) linearized: bool,
+    /// That linearization was the one without the dense matrices: it kept
+    /// the mass matrix's blocks too ([`inverse_dynamics_mass_product`]).
+    pub(crate) mass_kept: bool,
 }
 
 impl IdDerivatives {
@@ -121,6 +127,7 @@ impl IdDerivatives {
                 .as_ref()
                 .map(|t| Box::new(tree::TreeWork::new(model, t))),
             linearized: false,
+            mass_kept: false,
         }
     }
 }
@@ -222,6 +229,7 @@ fn checked<'a>(
     dense: bool,
 ) -> Result<&'a IdDerivatives, DynamicsError> {
     work.linearized = false;
+    work.mass_kept = false;
     let nodes = model.tree.as_ref().map(|t| t.nodes.len());
     if work.n_dof != model.n_dof()
         || (dense && work.dtau_dq.nrows() != work.n_dof)
@@ -268,6 +276,7 @@ fn open_tree_dense<'a>(
     qdd: &[f64],
 ) -> Result<&'a IdDerivatives, DynamicsError> {
     work.linearized = false;
+    work.mass_kept = false;
     open_tree_core(model, work, forces, t, (q, qd, qdd), true)
 }
 
@@ -315,6 +324,7 @@ fn open_tree_core<'a>(
             });
         }
         work.linearized = true;
+        work.mass_kept = true;
         return Ok(work);
     }
     if let Some(mut cd) = work.contact.take() {

@@ -35,6 +35,10 @@ pub(crate) struct PieceWork {
     pub(crate) rm: Mat6,
     pub(crate) rb: Mat6,
     pub(crate) ry: Mat6,
+    /// The own points' (and inside subtrees') part of the mass matrix's
+    /// diagonal block in strain space, `Σ w T₋ᵀ𝓜T₋` (D86; summed only by
+    /// the linearization without the dense matrices).
+    pub(crate) mtt: Mat6,
     /// `Σ w T₋ᵀ f`, `Σ w Aᵀ f` (D17–D18 sums).
     pub(crate) tsum: Vec6,
     pub(crate) wsum: Vec6,
@@ -71,6 +75,8 @@ pub(crate) struct PieceWork {
     /// products of [`super::vjp`].
     pub(crate) blk_q: Mat6,
     pub(crate) blk_v: Mat6,
+    /// The diagonal block of `M` (k×k in the leading part), D86.
+    pub(crate) blk_a: Mat6,
 }
 
 impl PieceWork {
@@ -97,6 +103,7 @@ impl PieceWork {
             rm: z,
             rb: z,
             ry: z,
+            mtt: z,
             tsum: Vec6::zeros(),
             wsum: Vec6::zeros(),
             tin: Vec6::zeros(),
@@ -121,6 +128,7 @@ impl PieceWork {
             rcv_y: z,
             blk_q: z,
             blk_v: z,
+            blk_a: z,
         }
     }
 
@@ -148,6 +156,7 @@ impl PieceWork {
         self.rm = z;
         self.rb = z;
         self.ry = z;
+        self.mtt = z;
         self.tsum = Vec6::zeros();
         self.wsum = Vec6::zeros();
         self.tin = Vec6::zeros();
@@ -269,6 +278,16 @@ pub(crate) fn close_piece(
         w: w.wsum + alt * wn,
     };
     (diag_q, diag_v, w.tsum + tlt * wn, base)
+}
+
+/// The diagonal block of the mass matrix of a closed piece or joint (D86):
+/// `Bᵀ(Σ w T₋ᵀ𝓜T₋ + T₋(ℓ)ᵀ 𝓜ᶜ T₋(ℓ))B`, the own points' (and inside
+/// subtrees') inertia and the composite `mc` at the tip, each moved by the
+/// piece's acceleration `T₋ B q̈_n`.
+#[inline(always)]
+pub(crate) fn close_mass(w: &mut PieceWork, mc: &Mat6, bm: &Mat6) {
+    let tl = w.tm_tip;
+    w.blk_a = bm.transpose() * (w.mtt + tl.transpose() * mc * tl) * bm;
 }
 
 /// Writes a piece's `τ_n` and returns its diagonal blocks (k×k in the

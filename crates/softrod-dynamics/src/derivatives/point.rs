@@ -137,8 +137,11 @@ pub(crate) fn linearize_point(pc: &PieceLin, x: f64) -> (Pose, PointLin) {
 /// transmitted-wrench sums (D42), the composites' own parts and the
 /// receivers (D43, D45); point loads likewise, with weight 1. `pose` is the
 /// world pose of the piece's base frame; the loads are scaled by `scale`
-/// (the evaluation's [`crate::Forces::load_scale`]).
+/// (the evaluation's [`crate::Forces::load_scale`]). With `mass`, also the
+/// own points' part of the mass matrix's diagonal block, `Σ w T₋ᵀ𝓜T₋`
+/// (D86), for the O(N) products `M v`.
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn own_points(
     rm: &RodModel,
     pd: &PieceData,
@@ -146,6 +149,7 @@ pub(crate) fn own_points(
     pose: &Pose,
     drag: Option<&Vec6>,
     scale: f64,
+    mass: bool,
     w: &mut PieceWork,
 ) {
     let (maps, dm) = (pc.maps, pc.dm);
@@ -212,6 +216,9 @@ pub(crate) fn own_points(
         w.bt += op_tr_mul(&p.a, &ba);
         w.rm += op_tr_mul(&p.t, &ma);
         w.rb += op_tr_mul(&p.t, &ba);
+        if mass {
+            w.mtt += op_tr_mul(&p.t, &diag_mul(&(m * wt), &p.t.to_mat6()));
+        }
         if has_y {
             let ya = mul_op(&(y * wt), &p.a);
             w.yt += op_tr_mul(&p.a, &ya);

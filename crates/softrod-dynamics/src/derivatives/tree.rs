@@ -9,7 +9,7 @@
 //! taken where that path leaves the proximal node, and nodes on different
 //! branches do not couple.
 
-use super::piece::{PieceWork, Subtree, close_piece, put_block, write_piece};
+use super::piece::{PieceWork, Subtree, close_mass, close_piece, put_block, write_piece};
 use super::point::{PieceLin, PointLin, basis6, linearize_point, own_points};
 use super::{At, IdDerivatives};
 use crate::algorithms::tree::local;
@@ -212,6 +212,7 @@ fn outward(model: &Model, tree: &Tree, tw: &mut TreeWork, at: &At) {
                 &base_world,
                 drag.as_ref(),
                 scale,
+                !at.dense,
                 w,
             );
         }
@@ -284,6 +285,7 @@ fn add_inner(
         w.chi[i] += sub.w * lin.co.c[i];
     }
     let (ma, ba) = (sub.m * a, sub.b * a);
+    w.mtt += tt * sub.m * t;
     w.mt += at * ma;
     w.bt += at * ba;
     w.rm += tt * ma;
@@ -334,6 +336,9 @@ fn inward(model: &Model, tree: &Tree, work: &mut IdDerivatives, tw: &mut TreeWor
                 let rm = &model.rods()[rod];
                 let bm = basis6(&rm.spec.geometry.pieces()[piece].basis);
                 let (dq, dv, wrench, base) = close_piece(&mut tw.nodes[i], &tw.tip[i], &bm, dead);
+                if !at.dense {
+                    close_mass(&mut tw.nodes[i], &tw.tip[i].m, &bm);
+                }
                 let (bq, bv) = write_piece(model, rm, piece, work, at, &bm, (&dq, &dv, &wrench));
                 let w = &mut tw.nodes[i];
                 w.blk_q = bq;
@@ -343,6 +348,9 @@ fn inward(model: &Model, tree: &Tree, work: &mut IdDerivatives, tw: &mut TreeWor
             NodeKind::Joint { element } => {
                 let (dq, dv, wrench, base) =
                     close_piece(&mut tw.nodes[i], &tw.tip[i], &node.bpad, dead);
+                if node.k > 0 && !at.dense {
+                    close_mass(&mut tw.nodes[i], &tw.tip[i].m, &node.bpad);
+                }
                 if node.k > 0 {
                     let (bq, bv) = write_joint(model, element, node, work, at, (&dq, &dv, &wrench));
                     let w = &mut tw.nodes[i];

@@ -189,6 +189,104 @@ pub fn inverse_dynamics_inertia_vjp(
     }
 }
 
+/// `M(q) v` into `out` (dim `n_dof`; `M = ∂τ/∂q̈`, [`crate::mass_matrix`])
+/// at the point of the last successful
+/// [`crate::inverse_dynamics_linearization_with`] on `work`
+/// (docs/theory-derivatives.md D86): the diagonal blocks that linearization
+/// kept, the receivers `ℛ^𝓜` of each piece against the prefix sum of the
+/// world twists `Ad S v` of the pieces before it (the distal blocks
+/// `M_ji = ℛ^𝓜_j Ad S_i`), and by the symmetry of `M` the suffix sums of
+/// `ℛ^𝓜ᵀ v` against `Ad S` (the proximal blocks). O(N), no allocation, no
+/// `n_dof × n_dof` matrix; equal to [`crate::mass_matrix`] times `v` to
+/// round-off.
+///
+/// Errors: `v` or `out` of the wrong length, `v` not finite, no
+/// linearization without the dense matrices evaluated on `work` (the dense
+/// [`crate::inverse_dynamics_derivatives_with`] does not keep `M`'s
+/// blocks: [`DynamicsError::NotLinearized`]), a product that is not finite.
+pub fn inverse_dynamics_mass_product(
+    model: &Model,
+    work: &mut IdDerivatives,
+    v: &[f64],
+    out: &mut [f64],
+) -> Result<(), DynamicsError> {
+    check_work(model, work, "inverse_dynamics_mass_product")?;
+    if !work.mass_kept {
+        return Err(DynamicsError::NotLinearized {
+            what: "inverse_dynamics_mass_product (after a dense linearization)",
+        });
+    }
+    check_vec(model, "v", v)?;
+    check_len(model, "out", out.len())?;
+    out.fill(0.0);
+    match (&model.tree, work.tree.as_deref_mut()) {
+        (Some(tree), Some(tw)) => tree_mass(tree, tw, v, out),
+        _ => {
+            for (r, rm) in model.rods().iter().enumerate() {
+                chain_mass(rm, &work.pieces[r], v, out);
+            }
+        }
+    }
+    if let Some(i) = out.iter().position(|x| !x.is_finite()) {
+        return Err(DynamicsError::NotFinite {
+            what: format!("M v entry {i}"),
+            value: out[i],
+        });
+    }
+    Ok(())
+}
+
+/// [`inverse_dynamics_mass_product`] on one rod of a chain.
+fn chain_mass(rm: &RodModel, ws: &[PieceWork], v: &[f64], out: &mut [f64]) {
+    let pieces = rm.spec.geometry.pieces();
+    let mut a = Vec6::zeros();
+    for (p, w) in pieces.iter().zip(ws) {
+        let (o, k) = (rm.dof_offset + p.dof_offset, p.basis.dof());
+        let vj = local(v, o, k);
+        add_local(out, o, k, &(w.blk_a * vj + w.rcv_m * a));
+        a += w.s_world * vj;
+    }
+    let mut d = Vec6::zeros();
+    for (p, w) in pieces.iter().zip(ws).rev() {
+        let (o, k) = (rm.dof_offset + p.dof_offset, p.basis.dof());
+        add_local(out, o, k, &w.s_world.tr_mul(&d));
+        d += w.rcv_m.tr_mul(&local(v, o, k));
+    }
+}
+
+/// [`inverse_dynamics_mass_product`] on a tree: forward, the prefix sums
+/// of the ancestors' exit twists (as [`tree_vjp`]'s) against each node's
+/// receivers; backward, each subtree's `Σ ℛ^𝓜ᵀ v` handed to its parent
+/// through the exit the branch leaves it by.
+fn tree_mass(tree: &Tree, tw: &mut TreeWork, v: &[f64], out: &mut [f64]) {
+    for (i, node) in tree.nodes.iter().enumerate() {
+        let up = up_through_parent(tree, tw, i, v);
+        tw.up[i] = up;
+        if node.k > 0 {
+            let w = &tw.nodes[i];
+            let vi = local(v, node.dof, node.k);
+            add_local(out, node.dof, node.k, &(w.blk_a * vi + w.rcv_m * up));
+        }
+    }
+    for d in tw.down.iter_mut() {
+        d[0] = Vec6::zeros();
+    }
+    for (i, node) in tree.nodes.iter().enumerate().rev() {
+        if node.k > 0 {
+            let w = &tw.nodes[i];
+            tw.down[i][0] += w.rcv_m.tr_mul(&local(v, node.dof, node.k));
+        }
+        let Some(p) = node.parent else { continue };
+        let d = tw.down[i][0];
+        let pn = &tree.nodes[p];
+        if pn.k > 0 {
+            let ex = exit_towards(tree, tw, p, i);
+            add_local(out, pn.dof, pn.k, &ex.s.tr_mul(&d));
+        }
+        tw.down[p][0] += d;
+    }
+}
+
 /// A piece's own points' inertial virtual power (D85): the twist of `z` at
 /// the piece's base is `up` (world axes) from the coordinates before it,
 /// plus `T₋(x) B z_n` inside from its own.

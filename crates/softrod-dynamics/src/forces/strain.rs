@@ -53,7 +53,35 @@ pub(crate) fn strain_forces(
                 *s -= ei;
             }
         }
-        if !rm.spec.cables.is_empty() {
+        if !rm.spec.cables.is_empty() && rm.spec.cables.iter().all(|c| c.is_constant_per_piece()) {
+            // Every cable's integrand is constant on a piece: one strain and
+            // one projection per piece for all of them,
+            // `τ_n −= B_nᵀ Σ_c T_c w_c` (D15), instead of one per cable.
+            let qr = &q[rm.dofs()];
+            for piece in rod.pieces() {
+                let mut acc = Vec6::zeros();
+                let mut xi = None;
+                for (c, cable) in rm.spec.cables.iter().enumerate() {
+                    let tension =
+                        cable_tension(data.tensions.as_ref(), rm, c, t) * forces.load_scale;
+                    if tension == 0.0 {
+                        continue;
+                    }
+                    let xi = *xi.get_or_insert_with(|| piece.strain(qr));
+                    acc += cable.constant_piece_wrench(piece, &xi) * tension;
+                }
+                if acc == Vec6::zeros() {
+                    continue;
+                }
+                let o = off + piece.dof_offset;
+                for (c, s) in sf.as_mut_slice()[o..o + piece.basis.dof()]
+                    .iter_mut()
+                    .enumerate()
+                {
+                    *s -= piece.basis.column(c).dot(&acc);
+                }
+            }
+        } else if !rm.spec.cables.is_empty() {
             let range = rm.dofs();
             for (c, cable) in rm.spec.cables.iter().enumerate() {
                 let tension = cable_tension(data.tensions.as_ref(), rm, c, t) * forces.load_scale;

@@ -282,6 +282,12 @@ pub(crate) struct NodeWork {
     pub mt: Mat6,
     pub ut: Mat6,
     pub dt: Mat6,
+    /// The shifted factorization with non-symmetric contact blocks (CT26):
+    /// `𝓤` of the transposed blocks (the node's rows against the parent's
+    /// columns), and `Û_L`, its articulated counterpart used by the
+    /// solve's outward pass (equal to `Û` when the matrix is symmetric).
+    pub ul: Mat6,
+    pub uhat_l: Mat6,
     pub p_big: Vec6,
     pub p_small: Vec6,
     /// What the children hand to the tip (tip axes): articulated or
@@ -321,6 +327,8 @@ impl NodeWork {
             mt: Mat6::zeros(),
             ut: Mat6::zeros(),
             dt: Mat6::zeros(),
+            ul: Mat6::zeros(),
+            uhat_l: Mat6::zeros(),
             p_big: Vec6::zeros(),
             p_small: Vec6::zeros(),
             m_tip: Mat6::zeros(),

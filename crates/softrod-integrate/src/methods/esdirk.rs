@@ -216,6 +216,9 @@ pub(crate) struct Esdirk {
     jac_fresh: bool,
     /// The step size of the current factorization (NaN: none).
     factored_h: f64,
+    /// The structured matrix was re-linearized within the step (CT27): it
+    /// no longer holds the step start's linearization.
+    relinearized: bool,
 }
 
 impl Esdirk {
@@ -245,6 +248,7 @@ impl Esdirk {
             jac_valid: false,
             jac_fresh: false,
             factored_h: f64::NAN,
+            relinearized: false,
         }
     }
 
@@ -283,6 +287,7 @@ impl Esdirk {
         self.jac_valid = true;
         self.jac_fresh = true;
         self.factored_h = f64::NAN;
+        self.relinearized = false;
         Ok(())
     }
 
@@ -310,6 +315,9 @@ impl Esdirk {
         self.accs[0].copy_from(&self.acc);
         self.eta = self.eta.max(f64::EPSILON).powf(0.8);
         self.theta_max = 0.0;
+        let relinearize = self.matrix == Matrix::Cheap
+            && p.kind() == JacKind::Structured
+            && p.relinearize_in_newton();
         for i in 1..S {
             let ti = if i == S - 1 { t_new } else { t + C[i] * h };
             // Explicit parts.
@@ -352,6 +360,22 @@ impl Esdirk {
                     &mut self.vs[i],
                     &mut self.qs[i],
                 );
+                if k >= 2 && relinearize {
+                    // Active-set Newton on the structured matrix (CT27): the
+                    // contact linearized and the matrix factored again at
+                    // the current iterate, O(N) each.
+                    p.update_jacobians_qv(ti, &self.qs[i], &self.vs[i], true)
+                        .map_err(sys_err(t, h, "jacobian"))?;
+                    stats.factorizations += 1;
+                    if !p
+                        .factor_newmark(hg2, hg)
+                        .map_err(sys_err(t, h, "factorization"))?
+                    {
+                        return Ok(Err("singular iteration matrix"));
+                    }
+                    self.factored_h = f64::NAN;
+                    self.relinearized = true;
+                }
                 p.newmark_correction(ti, &self.qs[i], &self.vs[i], x, &mut self.g)
                     .map_err(sys_err(t, h, "accel"))?;
                 stats.rhs_evaluations += 1;
@@ -498,6 +522,7 @@ impl<Sys: SecondOrderSystem> Stepper<SecondOrderProblem<'_, Sys>> for Esdirk {
         let fixed = opts.fixed_dt();
         let mut h = self.s.h_next.min(opts.h_max);
         let mut rejected_before = false;
+        let mut relinearized_failed = false;
         let mut reason = "step size";
         loop {
             let t = self.s.t;
@@ -535,7 +560,15 @@ impl<Sys: SecondOrderSystem> Stepper<SecondOrderProblem<'_, Sys>> for Esdirk {
                     stats.rejected_steps += 1;
                     rejected_before = true;
                     reason = why;
-                    if !self.jac_fresh {
+                    if self.relinearized && !relinearized_failed {
+                        // The active-set iteration (CT27) already followed
+                        // the contact through its iterates: first a smaller
+                        // step from a linearization at the step start, then
+                        // (a second failure) the exact Jacobian as usual.
+                        relinearized_failed = true;
+                        self.jac_valid = false;
+                        h *= 0.5;
+                    } else if !self.jac_fresh {
                         self.jac_valid = false;
                     } else if self.matrix == Matrix::Cheap && p.kind() != JacKind::Full {
                         self.matrix = Matrix::Exact;
@@ -592,7 +625,7 @@ impl<Sys: SecondOrderSystem> Stepper<SecondOrderProblem<'_, Sys>> for Esdirk {
                         self.jac_valid = false;
                     }
                 }
-                if self.theta_max > keep {
+                if self.theta_max > keep || self.relinearized {
                     self.jac_valid = false;
                 }
                 return Ok(());

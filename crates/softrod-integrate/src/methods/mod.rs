@@ -3,6 +3,7 @@
 
 mod dopri5;
 mod esdirk;
+mod esdirk5;
 mod genalpha;
 mod radau5;
 mod rk4;
@@ -10,6 +11,7 @@ mod rosw;
 
 pub(crate) use dopri5::Dopri5;
 pub(crate) use esdirk::Esdirk;
+pub(crate) use esdirk5::Esdirk5;
 // The tableau, for the discrete adjoint (`crate::adjoint`).
 pub(crate) use esdirk::{
     A as ESDIRK_A, C as ESDIRK_C, GAMMA as ESDIRK_GAMMA, explicit_part as esdirk_explicit_part,

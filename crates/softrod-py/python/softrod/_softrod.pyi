@@ -20,7 +20,7 @@ _RodRef = str | int
 _Frame = Literal["body", "world"]
 # The integrator names, in the order of softrod.INTEGRATORS (Rust's
 # Integrator::ALL); tests/test_integrators.py checks that they agree.
-_IntegratorName = Literal["rk4", "dopri5", "rosenbrock", "generalized-alpha", "esdirk", "radau5"]
+_IntegratorName = Literal["rk4", "dopri5", "rosenbrock", "generalized-alpha", "esdirk", "esdirk5", "radau5"]
 _Controller = Callable[[float, _F64, _F64], ArrayLike]
 
 __version__: str
@@ -536,12 +536,14 @@ class Simulation:
         times: ArrayLike | None = None,
         fixed_step: float | None = None,
         newton_tol: float | None = None,
+        method: Literal["adjoint", "forward"] | None = None,
     ) -> tuple[float, dict[str, float | _F64]]:
         """Loss of a run and its exact gradient (discrete adjoint of ESDIRK) w.r.t. params
         ("q0", "qdot0", "ROD.young", "ROD.shear_modulus", "ROD.density", "ROD.viscosity",
         "BODY.mass", "cableN.tension"). loss: {"type": "position", "rod", "s", "times",
         "targets", "weight"}, {"type": "quadratic", "times", "q_weights", "qdot_weights",
         "q_ref"}, a callable l(t, q, qdot) -> (value, dl_dq, dl_dqdot) at `times`, or a list.
+        method: "adjoint" (default) or "forward" (forward sensitivities; few parameters).
         Raises InputError naming a bad parameter or loss key."""
     def modes(self) -> Modes: ...
     def lowest_modes(self, count: int = 10) -> Modes:

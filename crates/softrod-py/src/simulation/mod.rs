@@ -888,8 +888,11 @@ impl Simulation {
     /// (`newton_tol`). `fixed_step`: fixed steps of that size (one step
     /// sequence whatever the parameters). Bad input raises
     /// `softrod.InputError` naming the parameter or loss key. Holds the GIL
-    /// (a callable loss is called during the run).
-    #[pyo3(signature = (loss, params, duration = None, *, times = None, fixed_step = None, newton_tol = None))]
+    /// (a callable loss is called during the run). `method`: `"adjoint"`
+    /// (default; cost independent of the number of parameters) or
+    /// `"forward"` (forward sensitivities, G21: for few parameters on small
+    /// models; the same gradient to round-off).
+    #[pyo3(signature = (loss, params, duration = None, *, times = None, fixed_step = None, newton_tol = None, method = None))]
     #[allow(clippy::too_many_arguments)]
     fn value_and_gradient<'py>(
         &mut self,
@@ -900,10 +903,21 @@ impl Simulation {
         times: Option<Bound<'py, PyAny>>,
         fixed_step: Option<f64>,
         newton_tol: Option<f64>,
+        method: Option<String>,
     ) -> PyResult<(f64, Bound<'py, pyo3::types::PyDict>)> {
+        let method = match method.as_deref() {
+            None | Some("adjoint") => softrod::GradientMethod::Adjoint,
+            Some("forward") => softrod::GradientMethod::Forward,
+            Some(other) => {
+                return Err(input(format!(
+                    "method: '{other}' is not a gradient method (adjoint, forward)"
+                )));
+            }
+        };
         let options = softrod::GradientOptions {
             fixed_step,
             newton_tol,
+            method,
         };
         self.value_and_gradient_impl(py, loss, params, duration, times, options)
     }

@@ -21,7 +21,7 @@ mod kinematics;
 mod run;
 
 pub use analysis::{Equilibrium, ModalAnalysis, Statics};
-pub use gradient::{Gradient, GradientOptions, LossFn, LossTerm};
+pub use gradient::{Gradient, GradientMethod, GradientOptions, LossFn, LossTerm};
 pub use kinematics::RodId;
 pub use run::{Flow, Observer, RunStatus, RunSummary, Sample};
 

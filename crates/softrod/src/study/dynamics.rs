@@ -217,6 +217,14 @@ fn temporal_configs(d: f64) -> Vec<Config> {
             Options::tol(rtol, rtol * 1e-3),
         ));
     }
+    for rtol in [1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8] {
+        configs.push((
+            "esdirk5",
+            format!("rtol {rtol:e}"),
+            Integrator::Esdirk5,
+            Options::tol(rtol, rtol * 1e-3),
+        ));
+    }
     for div in [100.0, 300.0, 1000.0, 3000.0, 10000.0] {
         let dt = d / div;
         configs.push((

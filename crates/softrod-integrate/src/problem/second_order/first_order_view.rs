@@ -45,6 +45,7 @@ impl<S: SecondOrderSystem> Problem for SecondOrderProblem<'_, S> {
     fn system_changed(&mut self) {
         self.kd_valid = false;
         self.kind = JacKind::None;
+        self.r0_t = f64::NAN;
     }
     fn has_cheap_jacobian(&self) -> bool {
         self.sys.has_mass_form()

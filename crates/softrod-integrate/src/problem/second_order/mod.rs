@@ -98,6 +98,12 @@ pub(crate) struct SecondOrderProblem<'a, S: SecondOrderSystem> {
     zero: DVector<f64>,
     r0: DVector<f64>,
     r1: DVector<f64>,
+    /// The time at which `r0` (and `cres0`) hold the filter's residual at
+    /// `(q_J, 0, 0)` of the current structured update (NaN: not held). The
+    /// Jacobian is kept over several steps; for an autonomous system the
+    /// residual at `q_J` is then the same at every step's `t`, so it is
+    /// evaluated once per update instead of once per step.
+    r0_t: f64,
 }
 
 impl<'a, S: SecondOrderSystem> SecondOrderProblem<'a, S> {
@@ -135,6 +141,7 @@ impl<'a, S: SecondOrderSystem> SecondOrderProblem<'a, S> {
             zero: DVector::zeros(n),
             r0: DVector::zeros(n),
             r1: DVector::zeros(n),
+            r0_t: f64::NAN,
         }
     }
 
@@ -149,6 +156,13 @@ impl<'a, S: SecondOrderSystem> SecondOrderProblem<'a, S> {
         if full && self.jv.nrows() != n {
             self.jv = DMatrix::zeros(n, n);
         }
+    }
+
+    /// Whether the system asks for its structured matrix to be
+    /// re-linearized at every Newton iterate
+    /// ([`SecondOrderSystem::relinearize_in_newton`]).
+    pub(crate) fn relinearize_in_newton(&self) -> bool {
+        self.sys.relinearize_in_newton()
     }
 
     /// What the last Jacobian update produced.
@@ -306,6 +320,7 @@ impl<'a, S: SecondOrderSystem> SecondOrderProblem<'a, S> {
             self.kind = JacKind::Structured;
             self.jac_t = t;
             self.jac_q.copy_from(q);
+            self.r0_t = f64::NAN;
             return Ok(None);
         }
         self.eval_jacobians(t, q, qd)

@@ -127,7 +127,8 @@ impl<S: SecondOrderSystem> SecondOrderProblem<'_, S> {
     /// `γ' = hγ` — and `ẽ_q = e_q + hγ ẽ_v`. In mass-matrix and structured
     /// form the right-hand side is `M e_v − hγ K̃ e_q`; structured, `M e_v` and
     /// the static stiffness `K̃ e_q` (elastic plus geometric) are directional
-    /// differences of the force residual at `(q_J, 0, ·)`: three residuals.
+    /// differences of the force residual at `(q_J, 0, ·)`: three residuals,
+    /// two once the one at `(q_J, 0, 0)` is held for the update.
     pub(crate) fn filter_error(
         &mut self,
         t: f64,
@@ -170,6 +171,14 @@ impl<S: SecondOrderSystem> SecondOrderProblem<'_, S> {
         Ok(())
     }
 
+    /// Whether `r0` (and `cres0`) hold the residual at `(t, q_J, 0, 0)` of
+    /// the current structured update: evaluated at this `t`, or at another
+    /// time of the same update when the system does not depend on `t`
+    /// (then the same numbers).
+    fn r0_held(&self, t: f64) -> bool {
+        self.r0_t == t || (self.r0_t.is_finite() && self.sys.is_autonomous())
+    }
+
     /// `tmp = M(q_J) e_v − hγ K̃ e_q` by three force residuals (see
     /// [`filter_error`](Self::filter_error)).
     fn structured_filter_rhs(
@@ -182,9 +191,13 @@ impl<S: SecondOrderSystem> SecondOrderProblem<'_, S> {
     ) -> Result<(), SystemError> {
         let map = |e| Box::new(e) as SystemError;
         let z = &self.zero;
-        self.sys
-            .force_residual(t, qj, z, z, &mut self.r0)
-            .map_err(map)?;
+        if !self.r0_held(t) {
+            self.r0_t = f64::NAN;
+            self.sys
+                .force_residual(t, qj, z, z, &mut self.r0)
+                .map_err(map)?;
+            self.r0_t = t;
+        }
         // M e_v = (r(q_J, 0, σ e_v) − r0) / σ: exactly linear in e_v.
         let sv = 1.0 / ev.amax().max(f64::MIN_POSITIVE);
         self.q.copy_from(ev);
@@ -211,7 +224,8 @@ impl<S: SecondOrderSystem> SecondOrderProblem<'_, S> {
     /// [`structured_filter_rhs`](Self::structured_filter_rhs) and
     /// `cres = J e_v − hγ ∂R/∂q e_q` (`∂R/∂q = α²J` at rest), each a
     /// directional difference of [`SecondOrderSystem::constrained_residual`]
-    /// at `(q_J, 0, ·)`: three residuals.
+    /// at `(q_J, 0, ·)`: three residuals (two when the one at `(q_J, 0, 0)`
+    /// is held).
     fn constrained_filter_rhs(
         &mut self,
         t: f64,
@@ -222,9 +236,13 @@ impl<S: SecondOrderSystem> SecondOrderProblem<'_, S> {
     ) -> Result<(), SystemError> {
         let map = |e| Box::new(e) as SystemError;
         let z = &self.zero;
-        self.sys
-            .constrained_residual(t, qj, z, z, &mut self.r0, &mut self.cres0)
-            .map_err(map)?;
+        if !self.r0_held(t) {
+            self.r0_t = f64::NAN;
+            self.sys
+                .constrained_residual(t, qj, z, z, &mut self.r0, &mut self.cres0)
+                .map_err(map)?;
+            self.r0_t = t;
+        }
         // Exactly linear in q̈: M e_v and J e_v.
         let sv = 1.0 / ev.amax().max(f64::MIN_POSITIVE);
         self.q.copy_from(ev);

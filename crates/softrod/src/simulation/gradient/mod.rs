@@ -11,7 +11,8 @@ mod tests;
 use nalgebra::DVector;
 use softrod_integrate::{
     AdjointSolver, Control, Hooks, IntegrateError, Integrator, Iteration, RodSystem, StepControl,
-    StepInfo, Tape, adjoint_second_order_with, integrate_second_order,
+    StepInfo, Tape, adjoint_second_order_with, forward_sensitivity_second_order,
+    integrate_second_order,
 };
 use softrod_kinematics::Frame;
 
@@ -89,6 +90,24 @@ pub struct GradientOptions {
     /// stages are solved loosely has a gradient off by about this relative
     /// to the tolerance. `None`: the integrator's default.
     pub newton_tol: Option<f64>,
+    /// How the derivatives are carried: backwards (the adjoint, the
+    /// default: its cost does not grow with the parameters) or forwards
+    /// (sensitivities, G21: one column per parameter entry, `n` more each
+    /// for `q0` and `qdot0`; for few parameters on small models, and a
+    /// second algorithm for the same numbers).
+    pub method: GradientMethod,
+}
+
+/// The algorithm of [`Simulation::value_and_gradient`]
+/// ([`GradientOptions::method`]); both give the exact gradient of the
+/// computed trajectory, equal to round-off.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum GradientMethod {
+    /// The discrete adjoint (docs/theory-control.md G1–G13).
+    #[default]
+    Adjoint,
+    /// Forward sensitivities (G21).
+    Forward,
 }
 
 /// The result of [`Simulation::value_and_gradient`].
@@ -253,8 +272,18 @@ impl Simulation {
                 *lv += dv;
             }
         };
-        let g = adjoint_second_order_with(&mut sys, integrator, &tape, &mut seed, solver)
-            .map_err(|e| Error::Integration(Box::new(e)))?;
+        let g = match options.method {
+            GradientMethod::Adjoint => {
+                adjoint_second_order_with(&mut sys, integrator, &tape, &mut seed, solver)
+            }
+            GradientMethod::Forward => {
+                let initial = parsed
+                    .iter()
+                    .any(|p| matches!(p.kind, Kind::Q0 | Kind::Qdot0));
+                forward_sensitivity_second_order(&mut sys, integrator, &tape, &mut seed, initial)
+            }
+        }
+        .map_err(|e| Error::Integration(Box::new(e)))?;
         let mut gradients = Vec::with_capacity(parsed.len());
         let mut slot = 0;
         for p in &parsed {

@@ -286,7 +286,15 @@ pub(crate) struct ParamSystem<'a> {
     /// The inertia products' outputs (G13, D85), per rod and per body.
     rods: Vec<f64>,
     bodies: Vec<Matrix6<f64>>,
+    /// The point `(t, q, q̇, q̈)` of the last dense
+    /// [`force_jacobians`](ParameterSystem::force_jacobians) (stage 0 of a
+    /// step, or a switched stage), whose derivatives' workspace the inertia
+    /// products can use (G16); `None` before one.
+    dense_at: Option<Point>,
 }
+
+/// An evaluation point `(t, q, q̇, q̈)`.
+struct Point(f64, DVector<f64>, DVector<f64>, DVector<f64>);
 
 impl<'a> ParamSystem<'a> {
     pub(crate) fn new(sys: &'a mut RodSystem, params: &[Param]) -> Result<Self> {
@@ -347,6 +355,7 @@ impl<'a> ParamSystem<'a> {
             sf0: DVector::zeros(n),
             rods: vec![0.0; rods],
             bodies: vec![Matrix6::zeros(); bodies],
+            dense_at: None,
         })
     }
 }
@@ -382,6 +391,24 @@ impl ParamSystem<'_> {
             out[v.slot] += s / v.delta;
         }
         Ok(())
+    }
+
+    /// Subtracts the inertia products in `rods`, `bodies` (`zᵀ∂ID/∂s_r`,
+    /// `G_b`, D85) from the density and mass entries of `out` (G13).
+    fn apply_inertia(&self, out: &mut [f64]) {
+        for v in &self.variants {
+            out[v.slot] -= match &v.inertia {
+                Some(Inertia::Rod { rod, per_density }) => self.rods[*rod] * per_density,
+                Some(Inertia::Body { body, dm }) => self.bodies[*body].component_mul(dm).sum(),
+                None => continue,
+            };
+        }
+    }
+
+    /// `(t, q, q̇, q̈)` is the point of the last dense linearization.
+    fn at_dense(&self, t: f64, q: &DVector<f64>, qd: &DVector<f64>, qdd: &DVector<f64>) -> bool {
+        matches!(&self.dense_at, Some(Point(t0, q0, qd0, qdd0))
+            if *t0 == t && q0 == q && qd0 == qd && qdd0 == qdd)
     }
 }
 
@@ -493,6 +520,43 @@ impl ParameterSystem for ParamSystem<'_> {
         solved
     }
 
+    /// `∂a/∂pⱼ = −M⁻¹ (ID(pⱼ + Δⱼ) − ID(pⱼ))/Δⱼ` column by column (G8,
+    /// G21; `ID` is affine in each parameter): one inverse dynamics per
+    /// entry and one at `p`, one O(N) solve with `M` each.
+    fn accel_param_jvp(
+        &mut self,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+        qdd: &DVector<f64>,
+        out: &mut DMatrix<f64>,
+    ) -> Result<(), DynamicsError> {
+        if self.variants.is_empty() {
+            return Ok(());
+        }
+        self.sys.factor_shifted_mass(t, q, 0.0, 0.0)?;
+        let (qs, qds, qdds) = (q.as_slice(), qd.as_slice(), qdd.as_slice());
+        self.id0.copy_from(inverse_dynamics(
+            &self.sys.model,
+            &mut self.sys.data,
+            t,
+            qs,
+            qds,
+            qdds,
+        )?);
+        let mut z = std::mem::take(&mut self.z);
+        for v in &mut self.variants {
+            let id = inverse_dynamics(&v.model, &mut v.data, t, qs, qds, qdds)?;
+            for r in 0..z.len() {
+                z[r] = -(id[r] - self.id0[r]) / v.delta;
+            }
+            self.sys.solve_shifted_mass(&mut z)?;
+            out.set_column(v.slot, &z);
+        }
+        self.z = z;
+        Ok(())
+    }
+
     /// `M(q)`, `∂ID/∂q`, `∂ID/∂q̇` of the rod system
     /// ([`RodSystem::force_jacobians`]).
     fn force_jacobians(
@@ -505,7 +569,20 @@ impl ParameterSystem for ParamSystem<'_> {
         dr_dq: &mut DMatrix<f64>,
         dr_dqd: &mut DMatrix<f64>,
     ) -> Result<bool, DynamicsError> {
-        self.sys.force_jacobians(t, q, qd, qdd, mass, dr_dq, dr_dqd)
+        let done = self
+            .sys
+            .force_jacobians(t, q, qd, qdd, mass, dr_dq, dr_dqd)?;
+        match (&mut self.dense_at, done) {
+            (_, false) => self.dense_at = None,
+            (Some(Point(t0, q0, qd0, qdd0)), true) => {
+                *t0 = t;
+                q0.copy_from(q);
+                qd0.copy_from(qd);
+                qdd0.copy_from(qdd);
+            }
+            (None, true) => self.dense_at = Some(Point(t, q.clone(), qd.clone(), qdd.clone())),
+        }
+        Ok(done)
     }
 
     /// `M(q)` and `∂ID/∂q`, `∂ID/∂q̇` kept as an O(N) operator
@@ -520,6 +597,29 @@ impl ParameterSystem for ParamSystem<'_> {
         mass: &mut DMatrix<f64>,
     ) -> Result<bool, DynamicsError> {
         self.sys.force_linearization(slot, t, q, qd, qdd, mass)
+    }
+
+    /// The same operator with `M(q)` kept as products
+    /// ([`RodSystem::force_operators`], G15).
+    fn force_operators(
+        &mut self,
+        slot: usize,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+        qdd: &DVector<f64>,
+    ) -> Result<bool, DynamicsError> {
+        self.sys.force_operators(slot, t, q, qd, qdd)
+    }
+
+    /// Its `M v` ([`RodSystem::force_mass_product`]).
+    fn force_mass_product(
+        &mut self,
+        slot: usize,
+        v: &DVector<f64>,
+        out: &mut DVector<f64>,
+    ) -> Result<(), DynamicsError> {
+        self.sys.force_mass_product(slot, v, out)
     }
 
     /// Its transposed products ([`RodSystem::force_vjp`]).
@@ -554,13 +654,7 @@ impl ParameterSystem for ParamSystem<'_> {
                 .force_inertia_vjp(slot, z, &mut self.rods, &mut self.bodies)?;
         }
         self.strain_products(t, q, qd, z, out)?;
-        for v in &self.variants {
-            out[v.slot] -= match &v.inertia {
-                Some(Inertia::Rod { rod, per_density }) => self.rods[*rod] * per_density,
-                Some(Inertia::Body { body, dm }) => self.bodies[*body].component_mul(dm).sum(),
-                None => continue,
-            };
-        }
+        self.apply_inertia(out);
         Ok(true)
     }
 
@@ -580,6 +674,14 @@ impl ParameterSystem for ParamSystem<'_> {
     ) -> Result<(), DynamicsError> {
         self.strain_products(t, q, qd, z, out)?;
         if !self.variants.iter().any(|v| !v.strain_only) {
+            return Ok(());
+        }
+        // At the point of the last dense linearization (stage 0): the
+        // inertia products of its kept sums (G16), as G13 on stages 1–5.
+        if self.at_dense(t, q, qd, qdd) {
+            self.sys
+                .force_jacobians_inertia_vjp(z, &mut self.rods, &mut self.bodies)?;
+            self.apply_inertia(out);
             return Ok(());
         }
         let (q, qd, qdd) = (q.as_slice(), qd.as_slice(), qdd.as_slice());

@@ -5,7 +5,7 @@
 
 use softrod_integrate::AdjointSolver;
 
-use super::{GradientOptions, LossTerm};
+use super::{GradientMethod, GradientOptions, LossTerm};
 use crate::Simulation;
 
 /// A cantilever in full 3-D (six strains) with a cable table, released
@@ -112,6 +112,7 @@ fn structured_and_dense_backward_passes_agree_on_a_chain() {
     let fixed = GradientOptions {
         fixed_step: Some(0.002),
         newton_tol: None,
+        method: GradientMethod::Adjoint,
     };
     compare(CHAIN, "arm", &params, 0.05, &fixed);
 }
