@@ -446,8 +446,9 @@ fn report_writes_table_and_plot() {
     );
     assert_eq!(
         n,
-        1 + 9 + 6 + 6 + 7 + 5,
-        "header, 9 spatial (pieces x3, quadrature x3), 6 dopri5, 6 rosenbrock, 7 esdirk, 5 generalized-alpha"
+        1 + 9 + 6 + 6 + 7 + 7 + 5,
+        "header, 9 spatial (pieces x3, quadrature x3), 6 dopri5, 6 rosenbrock, 7 esdirk, \
+         7 esdirk5, 5 generalized-alpha"
     );
     let md = std::fs::read_to_string(out.join("report.md")).unwrap();
     assert!(md.contains("Temporal reference") && md.contains("Spatial reference"));

@@ -10,7 +10,7 @@ use crate::control::min_step;
 use crate::error::{IntegrateError, first_non_finite};
 use crate::hooks::{Control, Direction, EventKind, Hooks, StepInfo};
 use crate::integrator::Integrator;
-use crate::methods::{Dopri5, Esdirk, Esdirk5, GeneralizedAlpha, Radau5, Rk4, Rosw34};
+use crate::methods::{Dopri5, Esdirk, Esdirk5, Esdirk43, GeneralizedAlpha, Radau5, Rk4, Rosw34};
 use crate::options::{Options, StepControl};
 use crate::problem::{FirstOrderProblem, Problem, SecondOrderProblem};
 use crate::solution::{EventRecord, Solution, Stats, Status};
@@ -112,7 +112,7 @@ pub fn integrate_second_order<S: SecondOrderSystem>(
         Integrator::Dopri5 => drive(&mut p, &mut Dopri5::new(m), run),
         Integrator::Rosenbrock => drive(&mut p, &mut Rosw34::new(m), run),
         Integrator::Radau5 => drive(&mut p, &mut Radau5::new(m, Some(n)), run),
-        Integrator::Esdirk => drive(&mut p, &mut Esdirk::new(n), run),
+        Integrator::Esdirk => drive(&mut p, &mut Esdirk::<Esdirk43>::new(n), run),
         Integrator::Esdirk5 => drive(&mut p, &mut Esdirk5::new(n), run),
         Integrator::GeneralizedAlpha => {
             drive(&mut p, &mut GeneralizedAlpha::new(n, opts.rho_inf), run)

@@ -123,9 +123,24 @@ pub(crate) fn explicit_part(
     qhat: &mut DVector<f64>,
     vhat: &mut DVector<f64>,
 ) {
+    explicit_part_of_row(&A[i][..i], h, q, v, vs, accs, qhat, vhat);
+}
+
+/// [`explicit_part`] with the coefficients `a_ij, j < i` of any tableau.
+#[allow(clippy::too_many_arguments)]
+fn explicit_part_of_row(
+    row: &[f64],
+    h: f64,
+    q: &DVector<f64>,
+    v: &DVector<f64>,
+    vs: &[DVector<f64>],
+    accs: &[DVector<f64>],
+    qhat: &mut DVector<f64>,
+    vhat: &mut DVector<f64>,
+) {
     qhat.copy_from(q);
     vhat.copy_from(v);
-    for (j, &a) in A[i][..i].iter().enumerate() {
+    for (j, &a) in row.iter().enumerate() {
         if a != 0.0 {
             qhat.axpy(h * a, &vs[j], 1.0);
             vhat.axpy(h * a, &accs[j], 1.0);
@@ -148,6 +163,39 @@ pub(crate) fn stage_values(
         vi[r] = vr;
         qi[r] = qhat[r] + hg * vr;
     }
+}
+
+/// An ESDIRK tableau for [`Esdirk`]: explicit first stage, the same
+/// diagonal `γ` on the implicit ones, stiffly accurate (`b` is the last row
+/// of `A`), with an embedded solution `b̂` one order lower.
+pub(crate) trait Tableau {
+    /// Stages (the first explicit).
+    const S: usize;
+    /// The diagonal of the implicit stages.
+    const GAMMA: f64;
+    /// Nodes `cᵢ`.
+    const C: &'static [f64];
+    /// Rows of `aᵢⱼ`.
+    const A: &'static [&'static [f64]];
+    /// Weights of the embedded solution.
+    const B_HAT: &'static [f64];
+    /// The step controller's exponent, `1/(order of the estimate + 1)`.
+    const EXPONENT: f64;
+    /// The driver's starting-step order ([`Stepper::START_ORDER`]).
+    const START_ORDER: i32;
+}
+
+/// ESDIRK4(3)6L\[2\]SA (the module's tableau; the default method).
+pub(crate) struct Esdirk43;
+
+impl Tableau for Esdirk43 {
+    const S: usize = S;
+    const GAMMA: f64 = GAMMA;
+    const C: &'static [f64] = &C;
+    const A: &'static [&'static [f64]] = &[&A[0], &A[1], &A[2], &A[3], &A[4], &A[5]];
+    const B_HAT: &'static [f64] = &B_HAT;
+    const EXPONENT: f64 = 0.25;
+    const START_ORDER: i32 = 3;
 }
 
 const SAFETY: f64 = 0.9;
@@ -181,8 +229,9 @@ enum Matrix {
 /// Why the Newton iteration of a step failed.
 type NewtonFailure = &'static str;
 
-/// ESDIRK4(3)6L\[2\]SA state and buffers (allocated once).
-pub(crate) struct Esdirk {
+/// The state and buffers of an ESDIRK method with tableau `T` (allocated
+/// once); `Esdirk<Esdirk43>` is ESDIRK4(3)6L\[2\]SA.
+pub(crate) struct Esdirk<T: Tableau = Esdirk43> {
     n: usize,
     /// First-order views `y = (q, q̇)`, `f = (q̇, q̈)` for the driver and the
     /// dense output.
@@ -191,9 +240,9 @@ pub(crate) struct Esdirk {
     v: DVector<f64>,
     acc: DVector<f64>,
     /// Stage values; stage 0 is the step start.
-    qs: [DVector<f64>; S],
-    vs: [DVector<f64>; S],
-    accs: [DVector<f64>; S],
+    qs: Vec<DVector<f64>>,
+    vs: Vec<DVector<f64>>,
+    accs: Vec<DVector<f64>>,
     qhat: DVector<f64>,
     vhat: DVector<f64>,
     g: DVector<f64>,
@@ -219,9 +268,10 @@ pub(crate) struct Esdirk {
     /// The structured matrix was re-linearized within the step (CT27): it
     /// no longer holds the step start's linearization.
     relinearized: bool,
+    tableau: std::marker::PhantomData<T>,
 }
 
-impl Esdirk {
+impl<T: Tableau> Esdirk<T> {
     pub(crate) fn new(n: usize) -> Self {
         let z = DVector::zeros(n);
         Self {
@@ -230,9 +280,9 @@ impl Esdirk {
             q: z.clone(),
             v: z.clone(),
             acc: z.clone(),
-            qs: std::array::from_fn(|_| z.clone()),
-            vs: std::array::from_fn(|_| z.clone()),
-            accs: std::array::from_fn(|_| z.clone()),
+            qs: vec![z.clone(); T::S],
+            vs: vec![z.clone(); T::S],
+            accs: vec![z.clone(); T::S],
             qhat: z.clone(),
             vhat: z.clone(),
             g: z.clone(),
@@ -249,6 +299,7 @@ impl Esdirk {
             jac_fresh: false,
             factored_h: f64::NAN,
             relinearized: false,
+            tableau: std::marker::PhantomData,
         }
     }
 
@@ -304,7 +355,7 @@ impl Esdirk {
     ) -> Result<Result<(), NewtonFailure>, IntegrateError> {
         let n = self.n;
         let t = self.s.t;
-        let (hg, hg2) = (h * GAMMA, h * h * GAMMA * GAMMA);
+        let (hg, hg2) = (h * T::GAMMA, h * h * T::GAMMA * T::GAMMA);
         let (tol, max_iter) = match opts.iteration {
             Iteration::Newton { tol, max_iter } => (tol, max_iter.max(1)),
             // Options::validate keeps this generalized-α's.
@@ -318,11 +369,15 @@ impl Esdirk {
         let relinearize = self.matrix == Matrix::Cheap
             && p.kind() == JacKind::Structured
             && p.relinearize_in_newton();
-        for i in 1..S {
-            let ti = if i == S - 1 { t_new } else { t + C[i] * h };
+        for i in 1..T::S {
+            let ti = if i == T::S - 1 {
+                t_new
+            } else {
+                t + T::C[i] * h
+            };
             // Explicit parts.
-            explicit_part(
-                i,
+            explicit_part_of_row(
+                &T::A[i][..i],
                 h,
                 &self.q,
                 &self.v,
@@ -344,7 +399,7 @@ impl Esdirk {
             let x = &mut rest[0];
             x.copy_from(&done[i - 1]);
             if i >= 2 {
-                let w = (C[i] - C[i - 1]) / (C[i - 1] - C[i - 2]);
+                let w = (T::C[i] - T::C[i - 1]) / (T::C[i - 1] - T::C[i - 2]);
                 x.axpy(w, &done[i - 1], 1.0);
                 x.axpy(-w, &done[i - 2], 1.0);
             }
@@ -452,8 +507,8 @@ impl Esdirk {
         for r in 0..n {
             let mut eq = 0.0;
             let mut ev = 0.0;
-            for i in 0..S {
-                let d = A[S - 1][i] - B_HAT[i];
+            for i in 0..T::S {
+                let d = T::A[T::S - 1][i] - T::B_HAT[i];
                 eq += d * self.vs[i][r];
                 ev += d * self.accs[i][r];
             }
@@ -467,12 +522,12 @@ impl Esdirk {
         }
         {
             let t = self.s.t;
-            p.filter_error(t, h * GAMMA, &mut self.eq, &mut self.ev)
+            p.filter_error(t, h * T::GAMMA, &mut self.eq, &mut self.ev)
                 .map_err(sys_err(t, h, "error filter"))?;
             stats.lu_solves += 1;
         }
         let mut s = 0.0;
-        let qn = &self.qs[S - 1];
+        let qn = &self.qs[T::S - 1];
         for r in 0..n {
             let wq = opts.atol + opts.rtol * self.q[r].abs().max(qn[r].abs());
             // The velocity error as the position error it makes over the step.
@@ -485,17 +540,17 @@ impl Esdirk {
 
     fn accept(&mut self, t_new: f64, h: f64, stats: &mut Stats) {
         self.s.save_prev();
-        std::mem::swap(&mut self.q, &mut self.qs[S - 1]);
-        std::mem::swap(&mut self.v, &mut self.vs[S - 1]);
-        std::mem::swap(&mut self.acc, &mut self.accs[S - 1]);
+        std::mem::swap(&mut self.q, &mut self.qs[T::S - 1]);
+        std::mem::swap(&mut self.v, &mut self.vs[T::S - 1]);
+        std::mem::swap(&mut self.acc, &mut self.accs[T::S - 1]);
         self.set_first_order();
         self.s.advance(t_new, h, stats);
         self.accepted += 1;
     }
 }
 
-impl<Sys: SecondOrderSystem> Stepper<SecondOrderProblem<'_, Sys>> for Esdirk {
-    const START_ORDER: i32 = 3;
+impl<T: Tableau, Sys: SecondOrderSystem> Stepper<SecondOrderProblem<'_, Sys>> for Esdirk<T> {
+    const START_ORDER: i32 = T::START_ORDER;
 
     fn restart(
         &mut self,
@@ -535,7 +590,7 @@ impl<Sys: SecondOrderSystem> Stepper<SecondOrderProblem<'_, Sys>> for Esdirk {
             if h != self.factored_h {
                 stats.factorizations += 1;
                 let ok = p
-                    .factor_newmark(h * h * GAMMA * GAMMA, h * GAMMA)
+                    .factor_newmark(h * h * T::GAMMA * T::GAMMA, h * T::GAMMA)
                     .map_err(sys_err(t, h, "factorization"))?;
                 if !ok {
                     self.factored_h = f64::NAN;
@@ -591,11 +646,12 @@ impl<Sys: SecondOrderSystem> Stepper<SecondOrderProblem<'_, Sys>> for Esdirk {
                     Some(dt) => dt.min(opts.h_max),
                     None => {
                         let e = err.max(1e-10);
-                        let mut fac = SAFETY * e.powf(-0.25);
+                        let mut fac = SAFETY * e.powf(-T::EXPONENT);
                         if self.accepted > 1 && self.h_acc > 0.0 {
                             // Gustafsson's predictive controller.
-                            let gus =
-                                SAFETY * (h / self.h_acc) * (self.err_acc / (e * e)).powf(0.25);
+                            let gus = SAFETY
+                                * (h / self.h_acc)
+                                * (self.err_acc / (e * e)).powf(T::EXPONENT);
                             fac = fac.min(gus);
                         }
                         let mut fac = fac.clamp(FAC_MIN, FAC_MAX);
@@ -638,7 +694,7 @@ impl<Sys: SecondOrderSystem> Stepper<SecondOrderProblem<'_, Sys>> for Esdirk {
                 "non-finite trial state"
             };
             h *= if err.is_finite() {
-                (SAFETY * err.powf(-0.25)).clamp(FAC_MIN, 1.0)
+                (SAFETY * err.powf(-T::EXPONENT)).clamp(FAC_MIN, 1.0)
             } else {
                 FAC_MIN
             };

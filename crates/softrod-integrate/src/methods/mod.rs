@@ -10,7 +10,7 @@ mod rk4;
 mod rosw;
 
 pub(crate) use dopri5::Dopri5;
-pub(crate) use esdirk::Esdirk;
+pub(crate) use esdirk::{Esdirk, Esdirk43};
 pub(crate) use esdirk5::Esdirk5;
 // The tableau, for the discrete adjoint (`crate::adjoint`).
 pub(crate) use esdirk::{
