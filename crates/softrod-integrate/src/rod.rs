@@ -250,21 +250,7 @@ impl RodSystem {
         }
         self.model.set_time(&mut self.data, t);
         mass.copy_from(mass_matrix(&self.model, &mut self.data, q.as_slice())?);
-        while self.products.len() <= slot {
-            self.products.push(IdDerivatives::for_products(&self.model));
-        }
-        let work = &mut self.products[slot];
-        copy_tensions(&self.data, work);
-        inverse_dynamics_linearization_with(
-            &self.model,
-            work,
-            Forces::ALL,
-            t,
-            q.as_slice(),
-            qd.as_slice(),
-            qdd.as_slice(),
-        )?;
-        Ok(true)
+        self.force_operators(slot, t, q, qd, qdd)
     }
 
     /// [`RodSystem::force_linearization`] without forming `M(q)`: `M` is
