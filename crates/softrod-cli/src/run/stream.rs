@@ -2,7 +2,7 @@
 //! [`Recorder`], written as rows, kept for the figures; the progress bar,
 //! the running summary and the signals that stop a run.
 
-use std::sync::mpsc::{Receiver, SyncSender, TryRecvError};
+use std::sync::mpsc::{Receiver, SyncSender};
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::thread::JoinHandle;
 use std::time::Instant;
@@ -116,6 +116,8 @@ type Written = (RowWriter, usize, f64, Option<String>);
 /// and the text of the rows costs about as much as the integration of a
 /// short run: docs/performance.md, issue 30), or, if no thread can be
 /// started, here.
+// One per run: the variants' sizes do not matter.
+#[allow(clippy::large_enum_variant)]
 enum Sink {
     Thread {
         rows: SyncSender<RowData>,
@@ -240,10 +242,7 @@ impl Sink {
                 if let Some(e) = failure() {
                     return Err(e);
                 }
-                let mut d = match spent.try_recv() {
-                    Ok(d) => d,
-                    Err(TryRecvError::Empty | TryRecvError::Disconnected) => RowData::default(),
-                };
+                let mut d: RowData = spent.try_recv().unwrap_or_default();
                 fill(&mut d);
                 // Fails only once the writer has stopped: at an error (set
                 // before it stops) or a panic.
