@@ -102,10 +102,19 @@ impl Progress {
     }
 }
 
-/// Output times in flight between the integration and the writer thread:
-/// enough that neither waits for the other's jitter, few enough that a
-/// failed write stops the run soon after.
-const ROWS_IN_FLIGHT: usize = 32;
+/// Batches of output times in flight between the integration and the
+/// writer thread: enough that neither waits for the other's jitter, few
+/// enough that a failed write stops the run soon after.
+const BATCHES_IN_FLIGHT: usize = 4;
+/// Output times per batch: the writer is woken once per batch, not once
+/// per row (on a busy machine each wake-up is a switch between threads).
+const BATCH_ROWS: usize = 16;
+/// Longest wall time a computed row waits for its batch, s: a slow run's
+/// files still follow it.
+const BATCH_WAIT: f64 = 0.05;
+
+/// One batch of output times.
+type Batch = Vec<RowData>;
 
 /// What the writer thread hands back: the files' writer, the rows it
 /// wrote, the last one's time \[s\], and the error it stopped at.
@@ -120,12 +129,17 @@ type Written = (RowWriter, usize, f64, Option<String>);
 #[allow(clippy::large_enum_variant)]
 enum Sink {
     Thread {
-        rows: SyncSender<RowData>,
-        /// Buffers written, for reuse.
-        spent: Receiver<RowData>,
+        rows: SyncSender<Batch>,
+        /// Batches written, for reuse.
+        spent: Receiver<Batch>,
+        /// The batch being filled, and when its first row was computed.
+        batch: Batch,
+        since: Option<Instant>,
+        /// Row buffers for reuse.
+        free: Vec<RowData>,
         /// The error the writer stopped at.
         failed: Arc<Mutex<Option<String>>>,
-        writer: JoinHandle<Written>,
+        writer: JoinHandle<Option<Written>>,
     },
     /// Written on the integration's thread; also the writer once the
     /// thread is joined.
@@ -146,29 +160,30 @@ enum Sink {
 /// and a summary that matches the files), and stops at the first error.
 fn write_rows(
     mut rows: RowWriter,
-    incoming: Receiver<RowData>,
-    spent: SyncSender<RowData>,
+    incoming: Receiver<Batch>,
+    spent: SyncSender<Batch>,
     failed: Arc<Mutex<Option<String>>>,
     progress: Arc<Mutex<Progress>>,
 ) -> Written {
     let (mut written, mut last_t, mut summary_at) = (0, 0.0, None);
-    for d in incoming {
-        let mut p = Progress::lock(&progress);
-        let done = rows
-            .write(&d)
-            .and_then(|()| p.count_row(d.t, &mut summary_at));
-        if let Err(e) = done {
-            drop(p);
-            *failed
-                .lock()
-                .unwrap_or_else(std::sync::PoisonError::into_inner) = Some(e.clone());
-            return (rows, written, last_t, Some(e));
+    for batch in incoming {
+        for d in &batch {
+            let mut p = Progress::lock(&progress);
+            let done = rows
+                .write(d)
+                .and_then(|()| p.count_row(d.t, &mut summary_at));
+            if let Err(e) = done {
+                drop(p);
+                *failed
+                    .lock()
+                    .unwrap_or_else(std::sync::PoisonError::into_inner) = Some(e.clone());
+                return (rows, written, last_t, Some(e));
+            }
+            written += 1;
+            last_t = d.t;
         }
-        written += 1;
-        last_t = d.t;
-        drop(p);
-        // Full only if the integration has buffers enough: then drop it.
-        let _ = spent.try_send(d);
+        // Full only if the integration has buffers enough: then dropped.
+        let _ = spent.try_send(batch);
     }
     (rows, written, last_t, None)
 }
@@ -176,8 +191,8 @@ fn write_rows(
 impl Sink {
     /// The writer thread for `rows`, or `rows` here if no thread starts.
     fn start(rows: RowWriter, progress: &Arc<Mutex<Progress>>) -> Self {
-        let (tx, incoming) = std::sync::mpsc::sync_channel(ROWS_IN_FLIGHT);
-        let (spent_tx, spent) = std::sync::mpsc::sync_channel(ROWS_IN_FLIGHT + 2);
+        let (tx, incoming) = std::sync::mpsc::sync_channel(BATCHES_IN_FLIGHT);
+        let (spent_tx, spent) = std::sync::mpsc::sync_channel(BATCHES_IN_FLIGHT + 2);
         let failed = Arc::new(Mutex::new(None));
         // Held in a slot so that it comes back if the thread cannot start.
         let slot = Arc::new(Mutex::new(Some(rows)));
@@ -189,15 +204,17 @@ impl Sink {
                     .lock()
                     .unwrap_or_else(std::sync::PoisonError::into_inner)
                     .take();
-                match rows {
-                    Some(rows) => write_rows(rows, incoming, spent_tx, f, p),
-                    None => unreachable!("the writer is in the slot until the thread takes it"),
-                }
+                // Always there: it leaves the slot here or, if the thread
+                // never starts, below.
+                rows.map(|rows| write_rows(rows, incoming, spent_tx, f, p))
             });
         match started {
             Ok(writer) => Sink::Thread {
                 rows: tx,
                 spent,
+                batch: Vec::with_capacity(BATCH_ROWS),
+                since: None,
+                free: Vec::new(),
                 failed,
                 writer,
             },
@@ -228,27 +245,28 @@ impl Sink {
     ) -> Result<(), String> {
         match self {
             Sink::Thread {
-                rows,
-                spent,
                 failed,
+                batch,
+                since,
+                free,
                 ..
             } => {
-                let failure = || {
-                    failed
-                        .lock()
-                        .unwrap_or_else(std::sync::PoisonError::into_inner)
-                        .clone()
-                };
-                if let Some(e) = failure() {
+                if let Some(e) = failed
+                    .lock()
+                    .unwrap_or_else(std::sync::PoisonError::into_inner)
+                    .clone()
+                {
                     return Err(e);
                 }
-                let mut d: RowData = spent.try_recv().unwrap_or_default();
+                let mut d = free.pop().unwrap_or_default();
                 fill(&mut d);
-                // Fails only once the writer has stopped: at an error (set
-                // before it stops) or a panic.
-                rows.send(d).map_err(|_| {
-                    failure().unwrap_or_else(|| "writing the rows failed unexpectedly".into())
-                })
+                batch.push(d);
+                since.get_or_insert_with(Instant::now);
+                if batch.len() >= BATCH_ROWS {
+                    self.send()
+                } else {
+                    self.send_if_due()
+                }
             }
             Sink::Here {
                 rows,
@@ -269,15 +287,65 @@ impl Sink {
         }
     }
 
+    /// Sends the batch if its first row has waited [`BATCH_WAIT`].
+    fn send_if_due(&mut self) -> Result<(), String> {
+        match self {
+            Sink::Thread {
+                since: Some(since), ..
+            } if since.elapsed().as_secs_f64() >= BATCH_WAIT => self.send(),
+            _ => Ok(()),
+        }
+    }
+
+    /// Hands the batch to the writer thread (if it holds rows) and takes
+    /// back the row buffers of the batches it has written.
+    fn send(&mut self) -> Result<(), String> {
+        let Sink::Thread {
+            rows,
+            spent,
+            batch,
+            since,
+            free,
+            failed,
+            ..
+        } = self
+        else {
+            return Ok(());
+        };
+        *since = None;
+        if batch.is_empty() {
+            return Ok(());
+        }
+        let mut next = match spent.try_recv() {
+            Ok(mut done) => {
+                free.append(&mut done);
+                done
+            }
+            Err(_) => Vec::with_capacity(BATCH_ROWS),
+        };
+        std::mem::swap(batch, &mut next);
+        // Fails only once the writer has stopped: at an error (set before
+        // it stops) or a panic.
+        rows.send(next).map_err(|_| {
+            failed
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner)
+                .clone()
+                .unwrap_or_else(|| "writing the rows failed unexpectedly".into())
+        })
+    }
+
     /// Waits for the writer to write every row handed to it: the rows
     /// written, the last one's time \[s\], and the error it stopped at.
-    fn finish(self) -> (Sink, usize, f64, Option<String>) {
+    fn finish(mut self) -> (Sink, usize, f64, Option<String>) {
+        // An error here is the writer's, returned by its join below.
+        let _ = self.send();
         match self {
             Sink::Thread { rows, writer, .. } => {
                 // Closing the channel ends the writer's loop.
                 drop(rows);
                 match writer.join() {
-                    Ok((rows, written, last_t, error)) => (
+                    Ok(Some((rows, written, last_t, error))) => (
                         Sink::Here {
                             rows,
                             written,
@@ -289,7 +357,7 @@ impl Sink {
                         last_t,
                         error,
                     ),
-                    Err(_) => (
+                    Ok(None) | Err(_) => (
                         Sink::Lost,
                         0,
                         0.0,
@@ -538,6 +606,9 @@ impl Observer for Streamer {
     }
 
     fn step(&mut self, t: f64, stats: &Stats) {
+        // A row computed long ago reaches the files also while no new row
+        // comes (a slow run); a failed write shows at the next row.
+        let _ = self.sink.send_if_due();
         self.last_stats = *stats;
         Progress::lock(&self.progress).stats = *stats;
         if let Some(b) = &self.bar {
