@@ -109,8 +109,10 @@ const BATCHES_IN_FLIGHT: usize = 4;
 /// Output times per batch: the writer is woken once per batch, not once
 /// per row (on a busy machine each wake-up is a switch between threads).
 const BATCH_ROWS: usize = 16;
-/// Longest wall time a computed row waits for its batch, s: a slow run's
-/// files still follow it.
+/// Batching is for rows that come fast: a row computed at least this long
+/// after the last batch was sent goes at once (the first row too), and a
+/// batch is sent at the end of the step in which its first row has waited
+/// this long, s — a slow run's files follow it as before.
 const BATCH_WAIT: f64 = 0.05;
 
 /// One batch of output times.
@@ -132,9 +134,11 @@ enum Sink {
         rows: SyncSender<Batch>,
         /// Batches written, for reuse.
         spent: Receiver<Batch>,
-        /// The batch being filled, and when its first row was computed.
+        /// The batch being filled, when its first row was computed, and
+        /// when the last batch was sent.
         batch: Batch,
         since: Option<Instant>,
+        sent: Option<Instant>,
         /// Row buffers for reuse.
         free: Vec<RowData>,
         /// The error the writer stopped at.
@@ -214,6 +218,7 @@ impl Sink {
                 spent,
                 batch: Vec::with_capacity(BATCH_ROWS),
                 since: None,
+                sent: None,
                 free: Vec::new(),
                 failed,
                 writer,
@@ -248,6 +253,7 @@ impl Sink {
                 failed,
                 batch,
                 since,
+                sent,
                 free,
                 ..
             } => {
@@ -262,10 +268,11 @@ impl Sink {
                 fill(&mut d);
                 batch.push(d);
                 since.get_or_insert_with(Instant::now);
-                if batch.len() >= BATCH_ROWS {
+                let sparse = sent.is_none_or(|w| w.elapsed().as_secs_f64() >= BATCH_WAIT);
+                if batch.len() >= BATCH_ROWS || sparse {
                     self.send()
                 } else {
-                    self.send_if_due()
+                    Ok(())
                 }
             }
             Sink::Here {
@@ -305,6 +312,7 @@ impl Sink {
             spent,
             batch,
             since,
+            sent,
             free,
             failed,
             ..
@@ -316,6 +324,7 @@ impl Sink {
         if batch.is_empty() {
             return Ok(());
         }
+        *sent = Some(Instant::now());
         let mut next = match spent.try_recv() {
             Ok(mut done) => {
                 free.append(&mut done);
