@@ -91,6 +91,9 @@ atol = 1e-10
     )
 }
 
+/// A parameter's name, value and the model with it moved.
+type Moved = Box<dyn Fn(f64) -> P>;
+
 const FULL: &str = r#"["ky", "kz", "qx"]"#;
 const PLANAR: &str = r#"["ky", "qx"]"#;
 
@@ -163,7 +166,7 @@ fn closed_parameter_derivative_matches_differences_of_the_constrained_dynamics()
         let id0 = open_tree_inverse_dynamics(&model, &mut data, t, &q, &qd, qdd.as_slice())
             .unwrap()
             .clone();
-        let moved: [(&str, f64, Box<dyn Fn(f64) -> P>); 4] = [
+        let moved: [(&str, f64, Moved); 4] = [
             ("young", BASE.young, Box::new(|x| P { young: x, ..BASE })),
             (
                 "density",
@@ -203,7 +206,7 @@ fn closed_parameter_derivative_matches_differences_of_the_constrained_dynamics()
                     .clone()
             };
             let fd = (a(p0 + h) - a(p0 - h)) / (2.0 * h);
-            let err = (&x.column(0) - &fd).amax() / fd.amax();
+            let err = (x.column(0) - &fd).amax() / fd.amax();
             eprintln!(
                 "{strains} {name}: |dqdd/dp| {:e}, relative {err:e}",
                 fd.amax()
