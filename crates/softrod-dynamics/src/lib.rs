@@ -123,8 +123,8 @@ pub use analysis::{
 };
 pub use constraints::{
     ClosedDerivatives, ClosedShiftedSolver, check_closures, closed_dynamics_derivatives,
-    closure_multipliers, closure_residuals, constraint_jacobian, constraint_rank,
-    constraint_residual, max_closure_residual,
+    closed_force_response, closure_multipliers, closure_residuals, constraint_jacobian,
+    constraint_rank, constraint_residual, max_closure_residual, open_tree_inverse_dynamics,
 };
 pub use derivatives::{
     DynamicsJacobians, FdDerivatives, IdDerivatives, Linearization, dynamics_jacobians,
