@@ -84,7 +84,7 @@ fn inverse(c: &mut Criterion) {
     let text = std::fs::read_to_string(path).unwrap()
         + "[[closure]]\ntype = \"slider\"\naxis = [1, 0, 0]\n\
            a = { element = \"arm\" }\nb = { element = \"world\" }\n";
-    let (mut closed, _) = Simulation::from_toml(&text, "closed.toml").unwrap();
+    let (mut closed, _, _) = Simulation::from_toml(&text, "closed.toml").unwrap();
     closed.set_cable_tensions(Some(&[12.0, 3.0, 7.0])).unwrap();
     let q = closed.statics().unwrap().q;
     closed.set_cable_tensions(None).unwrap();

@@ -1,5 +1,5 @@
 //! Inverse statics (`Simulation::solve_actuation`, docs/theory-control.md
-//! IS1–IS7) against independent references: tensions of a forward statics
+//! IS1–IS12) against independent references: tensions of a forward statics
 //! solve recovered, the constant-curvature law `κ = T d / EI` of a cable at
 //! constant offset, the nearest reachable point of a dense scan of
 //! tensions, the least-effort point of a redundant family known in closed

@@ -1,5 +1,5 @@
 //! `Simulation.solve_actuation`: inverse statics (the facade's
-//! `Simulation::solve_actuation`, docs/theory-control.md IS1–IS7) with
+//! `Simulation::solve_actuation`, docs/theory-control.md IS1–IS12) with
 //! Python targets in and a dict out.
 
 use numpy::PyArrayDyn;
