@@ -136,9 +136,10 @@ fn closed_sensitivities_match_central_differences() {
         let q = r.q.as_slice().to_vec();
         assert_eq!(lambda.len(), model.n_constraints());
         let b = actuation_matrix(model, &q).unwrap();
-        let (dq, dl) = statics_sensitivity(model, &mut data, 0.0, &q, lambda.as_slice(), &b)
+        let sens = statics_sensitivity(model, &mut data, 0.0, &q, lambda.as_slice(), &b)
             .unwrap()
             .expect("a regular bordered matrix");
+        let (dq, dl) = (sens.dq, sens.dlambda);
         let mut fq = DMatrix::zeros(model.n_dof(), 3);
         let mut fl = DMatrix::zeros(model.n_constraints(), 3);
         for c in 0..3 {

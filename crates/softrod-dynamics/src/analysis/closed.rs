@@ -420,6 +420,16 @@ pub fn closure_statics(
     statics(model, tree, data, q0, options)
 }
 
+/// `∂q/∂p` and `∂λ/∂p` of an equilibrium, from [`statics_sensitivity`].
+#[derive(Clone, Debug)]
+pub struct StaticsSensitivity {
+    /// `∂q/∂p` (n_dof × k), in the units of `q` per unit of `p`.
+    pub dq: DMatrix<f64>,
+    /// `∂λ/∂p` (n_constraints × k; zero on redundant rows; 0 × k on an open
+    /// model), in the units of `λ` (N, N·m) per unit of `p`.
+    pub dlambda: DMatrix<f64>,
+}
+
 /// The sensitivity of a static equilibrium to a parameter `p` that enters
 /// its generalized force linearly (docs/theory-control.md IS3, IS8–IS10):
 /// with the equilibrium `F(q, λ, p) = [τ_s(q) − G(q) p − J_vᵀλ; φ(q)] = 0`
@@ -427,7 +437,7 @@ pub fn closure_statics(
 /// `data` holds, `G` given as `rhs` = `−∂τ/∂p` at `q`, n_dof × k; for cable
 /// tensions `G = B`, [`crate::actuation_matrix`]), returns `∂q/∂p`
 /// (n_dof × k) and `∂λ/∂p` (n_constraints × k, zero on redundant rows)
-/// from the bordered system (IS9)
+/// ([`StaticsSensitivity`]) from the bordered system (IS9)
 ///
 /// ```text
 /// [ K_t   −J_vᵀ ] [∂q/∂p]   [G]
@@ -449,7 +459,7 @@ pub fn statics_sensitivity(
     q: &[f64],
     lambda: &[f64],
     rhs: &DMatrix<f64>,
-) -> Result<Option<(DMatrix<f64>, DMatrix<f64>)>, DynamicsError> {
+) -> Result<Option<StaticsSensitivity>, DynamicsError> {
     crate::algorithms::check_vec(model, "q", q)?;
     let n = model.n_dof();
     let m = model.n_constraints();
@@ -483,7 +493,10 @@ pub fn statics_sensitivity(
             &zero,
         )?;
         let dq = w.dtau_dq.clone().lu().solve(rhs);
-        return Ok(dq.filter(finite).map(|dq| (dq, DMatrix::zeros(0, k))));
+        return Ok(dq.filter(finite).map(|dq| StaticsSensitivity {
+            dq,
+            dlambda: DMatrix::zeros(0, k),
+        }));
     };
     check_workspace(model, data)?;
     let cx = Closed {
@@ -517,5 +530,8 @@ pub fn statics_sensitivity(
     for (c, &row) in rows.iter().enumerate() {
         dl.row_mut(row).copy_from(&x.row(n + c));
     }
-    Ok(Some((x.rows(0, n).into_owned(), dl)))
+    Ok(Some(StaticsSensitivity {
+        dq: x.rows(0, n).into_owned(),
+        dlambda: dl,
+    }))
 }

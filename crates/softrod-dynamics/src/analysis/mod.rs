@@ -17,7 +17,7 @@ pub(crate) mod modes;
 pub(crate) mod statics;
 
 pub use crate::model::contact::IMPACT_LIMIT;
-pub use closed::{closure_statics, statics_sensitivity};
+pub use closed::{StaticsSensitivity, closure_statics, statics_sensitivity};
 pub(crate) use contact::raise_for_rest;
 pub use contact::{ContactChange, commit_contact, commit_contact_change};
 pub use energy::{Energies, energies};

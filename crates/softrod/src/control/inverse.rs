@@ -547,7 +547,7 @@ impl<'a> Solver<'a> {
         if self.model.has_closures() {
             let b = actuation_matrix(self.model, p.q.as_slice())?;
             data.set_cable_tensions(self.model, Some(p.t.as_slice()))?;
-            let Some((dq_dt, _)) = statics_sensitivity(
+            let Some(sens) = statics_sensitivity(
                 self.model,
                 data,
                 self.options.time,
@@ -560,8 +560,8 @@ impl<'a> Solver<'a> {
             };
             let mut jq = DMatrix::zeros(0, 0);
             self.residuals(data, p.q.as_slice(), Some(&mut jq))?;
-            let j = jq * &dq_dt;
-            return Ok(j.iter().all(|v| v.is_finite()).then_some((j, dq_dt)));
+            let j = jq * &sens.dq;
+            return Ok(j.iter().all(|v| v.is_finite()).then_some((j, sens.dq)));
         }
         let w = &mut self.work;
         w.tensions = Some(p.t.clone());
