@@ -7,6 +7,7 @@
 use super::point::PointLin;
 use super::{At, IdDerivatives};
 use crate::forces::linearized::cable_terms;
+use crate::kernels::mat6::{mm, mm3, tm};
 use crate::kernels::piece_derivs::{Coefficients, PieceDerivMaps, lambda, tangent_transpose_form};
 use crate::model::{Model, RodModel};
 use softrod_lie::{Mat6, Pose, Vec6, ad};
@@ -196,9 +197,13 @@ impl Subtree {
     pub(crate) fn through(&self, a: &Mat6, dead: bool) -> Self {
         let at = a.transpose();
         Self {
-            m: at * self.m * a,
-            b: at * self.b * a,
-            y: if dead { at * self.y * a } else { Mat6::zeros() },
+            m: mm3(&at, &self.m, a),
+            b: mm3(&at, &self.b, a),
+            y: if dead {
+                mm3(&at, &self.y, a)
+            } else {
+                Mat6::zeros()
+            },
             w: at * self.w,
         }
     }
@@ -230,14 +235,14 @@ pub(crate) fn close_piece(
     let adeta = ad(&w.eta_tip);
     // (D43): the subtree's wrench at L_n changes by
     // 𝓜ᶜ w̄ + 𝓑ᶜ u + 𝒴ᶜ Δ, with u = δη(ℓ), w̄ = δη̇′(ℓ) + ad_η(ℓ) δη(ℓ).
-    let wq = w.h_etad + adeta * w.h_eta;
+    let wq = w.h_etad + mm(&adeta, &w.h_eta);
     let uq = w.h_eta;
-    let mut dwn_q = mc * wq + bc * uq;
+    let mut dwn_q = mm(mc, &wq) + mm(bc, &uq);
     if dead {
-        dwn_q += yc * tl;
+        dwn_q += mm(yc, &tl);
     }
-    let wv = w.h_vd + adeta * tl;
-    let dwn_v = mc * wv + bc * tl;
+    let wv = w.h_vd + mm(&adeta, &tl);
+    let dwn_v = mm(mc, &wv) + mm(bc, &tl);
     let (mut phi, mut chi) = (w.phi, w.chi);
     for i in 0..4 {
         phi[i] += wn * w.co_tip.d[i];
@@ -245,33 +250,33 @@ pub(crate) fn close_piece(
     }
     let qform = tangent_transpose_form(&w.powers, &w.kbar, &phi, &chi);
     let tlt = tl.transpose();
-    let diag_q = w.dq_diag + tlt * dwn_q + qform;
-    let diag_v = w.dv_diag + tlt * dwn_v;
+    let diag_q = w.dq_diag + mm(&tlt, &dwn_q) + qform;
+    let diag_v = w.dv_diag + mm(&tlt, &dwn_v);
     let alt = al.transpose();
-    let dw_q = w.dq_w + alt * (lambda(wn) * tl + dwn_q);
-    let dw_v = w.dv_w + alt * dwn_v;
+    let dw_q = w.dq_w + mm(&alt, &(mm(&lambda(wn), &tl) + dwn_q));
+    let dw_v = w.dv_w + mm(&alt, &dwn_v);
     // World-frame pairing quantities (D46).
     let to_world_tip = w.tip_world.ad().to_mat6();
     let base_inv = w.base_world.ad_inv().to_mat6();
-    w.s_world = to_world_tip * tl * bm;
-    w.src_wq = to_world_tip * wq * bm;
-    w.src_uq = to_world_tip * uq * bm;
-    w.src_wv = to_world_tip * wv * bm;
+    w.s_world = mm3(&to_world_tip, &tl, bm);
+    w.src_wq = mm3(&to_world_tip, &wq, bm);
+    w.src_uq = mm3(&to_world_tip, &uq, bm);
+    w.src_wv = mm3(&to_world_tip, &wv, bm);
     w.src_uv = w.s_world;
-    w.dwq_world = base_inv.transpose() * dw_q * bm;
-    w.dwv_world = base_inv.transpose() * dw_v * bm;
+    w.dwq_world = mm(&tm(&base_inv, &dw_q), bm);
+    w.dwv_world = mm(&tm(&base_inv, &dw_v), bm);
     let bt_ = bm.transpose();
-    w.rcv_m = bt_ * (w.rm + tlt * mc * al) * base_inv;
-    w.rcv_b = bt_ * (w.rb + tlt * bc * al) * base_inv;
+    w.rcv_m = mm3(&bt_, &(w.rm + mm3(&tlt, mc, &al)), &base_inv);
+    w.rcv_b = mm3(&bt_, &(w.rb + mm3(&tlt, bc, &al)), &base_inv);
     if dead {
-        w.rcv_y = bt_ * (w.ry + tlt * yc * al) * base_inv;
+        w.rcv_y = mm3(&bt_, &(w.ry + mm3(&tlt, yc, &al)), &base_inv);
     }
     // Composites carried to L_{n−1} (D43), and τ_n's wrench (D18).
     let base = Subtree {
-        m: w.mt + alt * mc * al,
-        b: w.bt + alt * bc * al,
+        m: w.mt + mm3(&alt, mc, &al),
+        b: w.bt + mm3(&alt, bc, &al),
         y: if dead {
-            w.yt + alt * yc * al
+            w.yt + mm3(&alt, yc, &al)
         } else {
             Mat6::zeros()
         },
@@ -287,7 +292,11 @@ pub(crate) fn close_piece(
 #[inline(always)]
 pub(crate) fn close_mass(w: &mut PieceWork, mc: &Mat6, bm: &Mat6) {
     let tl = w.tm_tip;
-    w.blk_a = bm.transpose() * (w.mtt + tl.transpose() * mc * tl) * bm;
+    w.blk_a = mm3(
+        &bm.transpose(),
+        &(w.mtt + mm3(&tl.transpose(), mc, &tl)),
+        bm,
+    );
 }
 
 /// Writes a piece's `τ_n` and returns its diagonal blocks (k×k in the
@@ -323,8 +332,8 @@ pub(crate) fn write_piece(
         work.tensions.as_ref(),
     );
     let bt_ = bm.transpose();
-    let mut dq6 = bt_ * (diag_q + cable_hess) * bm;
-    let mut dv6 = bt_ * diag_v * bm;
+    let mut dq6 = mm3(&bt_, &(diag_q + cable_hess), bm);
+    let mut dv6 = mm3(&bt_, diag_v, bm);
     let inert = wrench + cable_force;
     for i in 0..k {
         let mut tau = piece.basis.column(i).dot(&inert) + pd.offset6[i];
