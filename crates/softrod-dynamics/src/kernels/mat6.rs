@@ -81,8 +81,8 @@ impl Cols {
         match &self.sel {
             Some(sel) => {
                 let mut out = Mat6::zeros();
-                for j in 0..self.k {
-                    out.set_column(j, &x.column(sel[j]));
+                for (j, &c) in sel.iter().enumerate().take(self.k) {
+                    out.set_column(j, &x.column(c));
                 }
                 out
             }
@@ -96,8 +96,8 @@ impl Cols {
         match &self.sel {
             Some(sel) => {
                 let mut out = Mat6::zeros();
-                for i in 0..self.k {
-                    out.set_row(i, &x.row(sel[i]));
+                for (i, &r) in sel.iter().enumerate().take(self.k) {
+                    out.set_row(i, &x.row(r));
                 }
                 out
             }
