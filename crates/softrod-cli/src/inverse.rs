@@ -1,5 +1,5 @@
 //! `softrod inverse SCENE [--json]`: the cable tensions that bring the
-//! scene's `[[target]]` sections closest to their targets, within each
+//! scene's `[[target]]` sections and bodies closest to their targets, within each
 //! cable's `max_tension` (inverse statics, docs/theory-control.md).
 
 use std::path::Path;
@@ -29,6 +29,7 @@ pub fn inverse(path: &Path, json: bool) -> Result<(), CliError> {
         .map(|t| Target {
             rod: t.rod,
             s: t.s,
+            body: t.body,
             position: t.position,
             rotation: t.rotation,
             weight: t.weight,
@@ -72,7 +73,8 @@ pub fn inverse(path: &Path, json: bool) -> Result<(), CliError> {
         .map(|(t, r)| {
             serde_json::json!({
                 "element": t.element,
-                "s": t.s,
+                // A body's target is its frame: no arc length.
+                "s": if t.body.is_some() { serde_json::Value::Null } else { serde_json::json!(t.s) },
                 "target": {
                     "position": t.position.map(|p| [p.x, p.y, p.z]),
                     "rotation": t.rotation.map(|m| (0..3).map(|i| [m[(i, 0)], m[(i, 1)], m[(i, 2)]]).collect::<Vec<_>>()),
@@ -126,10 +128,17 @@ pub fn inverse(path: &Path, json: bool) -> Result<(), CliError> {
         }
         for (t, r) in l.scene.targets.iter().zip(&a.residuals) {
             let p = r.position;
-            print!(
-                "target on {} at s = {}: section at ({:.6}, {:.6}, {:.6}) m",
-                t.element, t.s, p.x, p.y, p.z
-            );
+            if t.body.is_some() {
+                print!(
+                    "target on body {}: frame at ({:.6}, {:.6}, {:.6}) m",
+                    t.element, p.x, p.y, p.z
+                );
+            } else {
+                print!(
+                    "target on {} at s = {}: section at ({:.6}, {:.6}, {:.6}) m",
+                    t.element, t.s, p.x, p.y, p.z
+                );
+            }
             if t.position.is_some() {
                 print!(", position error {:.3e} m", r.position_error);
             }

@@ -1428,6 +1428,42 @@ fn a_closed_stdout_ends_the_command_quietly() {
     assert!(!err.contains("panicked"), "{err}");
 }
 
+/// The rows written on the writer thread, which receives them in batches
+/// (issue 30), are every output time's, once each and in order, with the
+/// numbers of the facade's own run of the same scene (`Simulation::simulate`:
+/// a second path to the same deterministic integration, no files), read
+/// back exactly: 101 output times are six whole batches and a partial one.
+#[test]
+fn trajectory_rows_from_the_writer_thread_match_the_facade_run() {
+    let dir = tmp("rows_thread");
+    let run_table = "[run]\nduration = 0.1\noutput_every = 0.001";
+    let scene = with_run("cantilever_gravity.toml", run_table, &dir);
+    let out = dir.join("out");
+    let o = run_scene(&scene, &out);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&scene).unwrap();
+    let (mut sim, _, _) = softrod::Simulation::from_toml(&text, "cantilever_gravity").unwrap();
+    let traj = sim.simulate(0.1).unwrap();
+    let (header, rows) = csv(&out.join("trajectory.csv"));
+    assert_eq!(rows.len(), 101);
+    assert_eq!(traj.t.len(), rows.len());
+    let col = |name: &str| header.iter().position(|h| h == name).unwrap();
+    let n = traj.q[0].len();
+    for (k, row) in rows.iter().enumerate() {
+        assert_eq!(row[col("t")], traj.t[k], "row {k}");
+        for i in 0..n {
+            assert_eq!(row[col(&format!("q{i}"))], traj.q[k][i], "row {k}, q{i}");
+            assert_eq!(
+                row[col(&format!("qdot{i}"))],
+                traj.qdot[k][i],
+                "row {k}, qdot{i}"
+            );
+        }
+    }
+    let (_, shape) = csv_shape(&out.join("shape.csv"));
+    assert_eq!(shape, rows.len() * 65);
+}
+
 /// `shape.csv`'s leading fields, which the writer formats once per time
 /// (`t`) or once per run (the rod's name, each sample's `s`), are at every
 /// row what the facade's sampling and output times give, formatted here by

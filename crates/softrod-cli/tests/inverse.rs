@@ -136,3 +136,99 @@ fn inverse_refuses_bad_input_naming_the_key() {
         assert!(stdout(&o).is_empty(), "{name}: {}", stdout(&o));
     }
 }
+
+/// A three-cable arm (bending, torsion, stretch; the material of
+/// examples/cable_arm_inverse.toml) under gravity with a
+/// gripper body 3 cm beyond its tip, turned 30° about z, on a stiff
+/// revolute joint; `tensions` are the three cables' `tension` values.
+fn gripper_arm(tensions: [f64; 3], extra: &str) -> String {
+    let mut text = String::from(
+        "[world]\ngravity = [0.0, 0.0, -9.81]\n\
+         [[rod]]\nname = \"arm\"\nlength = 0.5\npieces = 10\n\
+         strains = [\"kx\", \"ky\", \"kz\", \"qx\"]\n\
+         section = { shape = \"circle\", radius = 0.01 }\n\
+         material = { density = 1000.0, young = 1.0e6, poisson = 0.5 }\n\
+         [[body]]\nname = \"gripper\"\nparent = \"arm\"\n\
+         base = { position = [0.03, 0.0, 0.0], rotation = [[0.8660254037844387, -0.5, 0.0], [0.5, 0.8660254037844387, 0.0], [0.0, 0.0, 1.0]] }\n\
+         joint = { type = \"revolute\", axis = [0, 1, 0], stiffness = 0.05 }\n\
+         mass = 0.02\ninertia = [4e-6, 4e-6, 4e-6]\n",
+    );
+    for (a, t) in [90.0f64, 210.0, 330.0].iter().zip(tensions) {
+        let (y, z) = (0.008 * a.to_radians().cos(), 0.008 * a.to_radians().sin());
+        text.push_str(&format!(
+            "[[cable]]\nrod = \"arm\"\noffset = [{y}, {z}]\ntension = {t}\n"
+        ));
+    }
+    text.push_str(extra);
+    text
+}
+
+/// A `[[target]]` on a body (IS11): the gripper's pose printed by
+/// `softrod statics --json` at known tensions gives them back through
+/// `softrod inverse --json`, and the JSON names the body with `s: null`.
+#[test]
+fn inverse_json_reaches_a_body_target_of_a_forward_solve() {
+    let truth = [12.0, 3.0, 7.0];
+    let p = write("gripper-forward", &gripper_arm(truth, ""));
+    let o = run(&["statics", &p, "--json"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let v = stdout_json(&o);
+    let body = &v["bodies"][0];
+    assert_eq!(body["name"], "gripper");
+    let pos = body["position"].to_string();
+    let rot = body["rotation"].to_string();
+    let target = format!("[[target]]\nelement = \"gripper\"\nposition = {pos}\nrotation = {rot}\n");
+    let p = write("gripper-inverse", &gripper_arm([0.0; 3], &target));
+    let o = run(&["inverse", &p, "--json"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let v = stdout_json(&o);
+    assert_eq!(v["converged"], true, "{v}");
+    assert_eq!(v["reached"], true, "{v}");
+    let t = &v["targets"][0];
+    assert_eq!(t["element"], "gripper");
+    assert!(t["s"].is_null(), "{t}");
+    // The default effort weight (ρ = 1e-9 of ‖∂e/∂T‖², IS2) biases the
+    // answer along the least-controlled direction, the common pull (1, 1, 1)
+    // that only compresses the arm: measured −5.5e-6 N on each tension,
+    // 3e-8 m and 1e-7 rad at the gripper (within the reach tolerance 1e-6).
+    assert!(t["position_error"].as_f64().unwrap() < 1e-6, "{t}");
+    assert!(t["rotation_error"].as_f64().unwrap() < 1e-6, "{t}");
+    for (c, want) in truth.iter().enumerate() {
+        let got = v["tensions"][c].as_f64().unwrap();
+        assert!((got - want).abs() < 2e-5, "cable {c}: {got} vs {want}");
+    }
+    let o = run(&["inverse", &p]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(
+        stdout(&o).contains("target on body gripper"),
+        "{}",
+        stdout(&o)
+    );
+}
+
+/// Bad body targets: `s` on a body, an unknown name (the message lists
+/// rods and bodies); exit 2 naming the key.
+#[test]
+fn inverse_refuses_bad_body_targets_naming_the_key() {
+    let cases = [
+        (
+            "body-s",
+            "[[target]]\nelement = \"gripper\"\ns = 0.1\nposition = [0.5, 0, 0]\n",
+            "target[0].s",
+            "body",
+        ),
+        (
+            "body-unknown",
+            "[[target]]\nelement = \"hand\"\nposition = [0.5, 0, 0]\n",
+            "target[0].element",
+            "gripper",
+        ),
+    ];
+    for (name, target, key, word) in cases {
+        let p = write(name, &gripper_arm([0.0; 3], target));
+        let o = run(&["inverse", &p]);
+        assert_eq!(o.status.code(), Some(2), "{name}: {}", stderr(&o));
+        assert!(stderr(&o).contains(key), "{name}: {}", stderr(&o));
+        assert!(stderr(&o).contains(word), "{name}: {}", stderr(&o));
+    }
+}

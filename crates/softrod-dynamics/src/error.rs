@@ -174,6 +174,14 @@ pub enum DynamicsError {
         /// The number of rods.
         count: usize,
     },
+    /// A body index past the model's bodies.
+    #[error("body index {index} is out of range (the model has {count} bodies)")]
+    BodyIndex {
+        /// The index given.
+        index: usize,
+        /// The number of bodies.
+        count: usize,
+    },
     /// A vector argument has the wrong length.
     #[error("{what} has {got} entries, the model has {expected} coordinates")]
     SizeMismatch {

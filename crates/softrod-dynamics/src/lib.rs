@@ -29,6 +29,8 @@
 //! | [`linearize`] | `(A, B)` of `ẋ = f(x, u)`, `x = (q, q̇)`; closed models: of the constrained `q̈` | (D49), (CD9) |
 //! | [`dynamics_jacobians`] | `∂q̈/∂q`, `∂q̈/∂q̇` (allocating) | (D48) |
 //! | [`section_jacobian`] | world pose and spatial Jacobian of a rod section, through joints and parents | (D11), (D57), (D62) |
+//! | [`body_jacobian`] | world pose and spatial Jacobian of a rigid body's frame | (D11), (D57) |
+//! | [`statics_sensitivity`] | `∂q/∂p`, `∂λ/∂p` of an equilibrium, closed models by the bordered system | docs/theory-control.md (IS3), (IS8–IS10) |
 //! | [`ShiftedSolver`] | `(M + aK + bD)⁻¹ x`, O(N), chains and trees; with the contact's stiffness and damping ([`ShiftedSolver::linearize_contact`]) | §6 with armature `aK_n + bD_n`; docs/theory-contact.md CT17 |
 //! | [`ClosedShiftedSolver`] | the KKT solve of a closed model's implicit step, O(N·m) | docs/theory-derivatives.md (CD5–CD7) |
 //!
@@ -117,14 +119,15 @@ pub use algorithms::{
 };
 pub use analysis::{
     ContactChange, Energies, IMPACT_LIMIT, ModeKind, Modes, StaticsOptions, StaticsResult,
-    StaticsSolver, actuation_matrix, closure_statics, commit_contact, commit_contact_change,
-    coriolis_matrix, damping_matrix, energies, frames, generalized_gravity, lowest_modes, modes,
-    section_jacobian, static_force, statics, stiffness_matrix,
+    StaticsSensitivity, StaticsSolver, actuation_matrix, body_jacobian, closure_statics,
+    commit_contact, commit_contact_change, coriolis_matrix, damping_matrix, energies, frames,
+    generalized_gravity, lowest_modes, modes, section_jacobian, static_force, statics,
+    statics_sensitivity, stiffness_matrix,
 };
 pub use constraints::{
     ClosedDerivatives, ClosedShiftedSolver, check_closures, closed_dynamics_derivatives,
-    closure_multipliers, closure_residuals, constraint_jacobian, constraint_rank,
-    constraint_residual, max_closure_residual,
+    closed_force_response, closure_multipliers, closure_residuals, constraint_jacobian,
+    constraint_rank, constraint_residual, max_closure_residual, open_tree_inverse_dynamics,
 };
 pub use derivatives::{
     DynamicsJacobians, FdDerivatives, IdDerivatives, Linearization, dynamics_jacobians,

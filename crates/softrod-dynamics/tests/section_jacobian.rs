@@ -2,15 +2,16 @@
 //! `frames` and the rod kinematics give (`rod_to_world · g_local(s)`, the
 //! path the outputs use): on a clamped rod, and on robots with every joint
 //! type, bodies between rods, children inside pieces and a prescribed
-//! joint, at piece boundaries and inside pieces.
+//! joint, at piece boundaries and inside pieces; `body_jacobian` the same
+//! way against the body poses of `frames`.
 
 mod common;
 
 use common::{Lcg, robot, soft_rod as rod};
 use nalgebra::{Matrix3, Matrix6xX};
 use softrod_dynamics::{
-    Attachment, BodySpec, Curve, Data, DynamicsError, Joint, Model, Prescribed, frames,
-    section_jacobian,
+    Attachment, BodySpec, Curve, Data, DynamicsError, Joint, Model, Prescribed, body_jacobian,
+    frames, section_jacobian,
 };
 use softrod_kinematics::RodKinematics;
 use softrod_lie::{Pose, Vec3};
@@ -32,15 +33,29 @@ fn world_pose(model: &Model, q: &[f64], r: usize, s: f64) -> Pose {
 /// pose: `ω̂ = Ṙ Rᵀ`, `v = ṗ − ω × p` (the velocity of the world point at
 /// the origin).
 fn differences(model: &Model, q: &[f64], r: usize, s: f64) -> Matrix6xX<f64> {
+    pose_differences(q, |q| world_pose(model, q, r, s))
+}
+
+/// The world pose of body `b`'s frame, by `frames`.
+fn body_pose(model: &Model, q: &[f64], b: usize) -> Pose {
+    let mut data = Data::new(model);
+    model.set_time(&mut data, 0.3);
+    frames(model, &mut data, q).unwrap();
+    data.body_poses[b]
+}
+
+/// The spatial Jacobian of the pose `pose(q)` by central differences, as
+/// [`differences`].
+fn pose_differences(q: &[f64], pose: impl Fn(&[f64]) -> Pose) -> Matrix6xX<f64> {
     let n = q.len();
-    let g = world_pose(model, q, r, s);
+    let g = pose(q);
     let mut j = Matrix6xX::zeros(n);
     let h = 1e-6;
     for c in 0..n {
         let (mut qp, mut qm) = (q.to_vec(), q.to_vec());
         qp[c] += h;
         qm[c] -= h;
-        let (gp, gm) = (world_pose(model, &qp, r, s), world_pose(model, &qm, r, s));
+        let (gp, gm) = (pose(&qp), pose(&qm));
         let rdot: Matrix3<f64> = (gp.rotation - gm.rotation) / (2.0 * h);
         let w = rdot * g.rotation.transpose();
         let omega = Vec3::new(
@@ -150,4 +165,63 @@ fn bad_arguments_are_errors() {
     assert!(matches!(e, DynamicsError::Kinematics { rod: 0, .. }), "{e}");
     let e = section_jacobian(&m, &mut data, &q[1..], 0, 0.0).unwrap_err();
     assert!(matches!(e, DynamicsError::SizeMismatch { .. }), "{e}");
+}
+
+/// `body_jacobian` (the closures' frame machinery, exposed) against
+/// central differences of the body poses `frames` writes: the hand of the
+/// robot fixture (a body on a rod's tip through joints) and a hub on a
+/// revolute joint inside a rod piece with a rod hanging from it.
+#[test]
+fn body_jacobians_match_differences() {
+    let m = robot(true, true, true, true);
+    let hub = Model::builder()
+        .rod(rod("trunk", 0.4, 3))
+        .body(
+            BodySpec::principal("hub", 0.02, [1e-6, 2e-6, 3e-6]),
+            Attachment::to("trunk", Joint::revolute([0.0, 1.0, 0.3])).at(0.21),
+        )
+        .rod_on(
+            rod("finger", 0.2, 2),
+            Attachment::to("hub", Joint::universal([0.0, 0.0, 1.0], [0.0, 1.0, 0.0])),
+        )
+        .build()
+        .unwrap();
+    let mut rng = Lcg(17);
+    for model in [&m, &hub] {
+        let q = rng.vec(model.n_dof(), 0.4);
+        assert!(!model.bodies().is_empty());
+        for b in 0..model.bodies().len() {
+            let label = &model.bodies()[b].spec.name;
+            let mut data = Data::new(model);
+            model.set_time(&mut data, 0.3);
+            let (g, j) = body_jacobian(model, &mut data, &q, b).unwrap();
+            let g_ref = body_pose(model, &q, b);
+            assert!(
+                (g.translation - g_ref.translation).amax() < 1e-12
+                    && (g.rotation - g_ref.rotation).amax() < 1e-12,
+                "{label}: pose"
+            );
+            let fd = pose_differences(&q, |q| body_pose(model, q, b));
+            // As for sections: truncation ~1e-12, round-off ~1e-10.
+            let e = (&j - &fd).amax() / fd.amax().max(1.0);
+            assert!(e < 1e-7, "{label}: {e:e}");
+            // Every column the body depends on is there (not an all-zero J).
+            assert!(fd.amax() > 1e-3, "{label}: the pose does not move");
+        }
+    }
+    let mut data = Data::new(&m);
+    let q = vec![0.0; m.n_dof()];
+    let count = m.bodies().len();
+    let e = body_jacobian(&m, &mut data, &q, count).unwrap_err();
+    assert!(
+        matches!(e, DynamicsError::BodyIndex { index, count: c } if index == count && c == count),
+        "{e}"
+    );
+    let chain = Model::builder().rod(rod("arm", 0.4, 3)).build().unwrap();
+    let mut data = Data::new(&chain);
+    let e = body_jacobian(&chain, &mut data, &vec![0.0; chain.n_dof()], 0).unwrap_err();
+    assert!(
+        matches!(e, DynamicsError::BodyIndex { count: 0, .. }),
+        "{e}"
+    );
 }

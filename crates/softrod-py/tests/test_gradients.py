@@ -145,3 +145,72 @@ def test_an_unknown_gradient_method_names_it():
     s = sim()
     with pytest.raises(softrod.InputError, match="method: 'backward' is not a gradient method"):
         s.value_and_gradient(loss(s.n_dof), ["arm.young"], 0.1, method="backward", **KW)
+
+
+CLOSED = """
+[world]
+gravity = [0.0, 0.0, -9.81]
+[[rod]]
+name = "a"
+joint = {{ type = "revolute", axis = [0, 1, 0] }}
+length = 0.3
+pieces = 2
+strains = ["ky", "kz", "qx"]
+section = {{ shape = "circle", radius = 0.01 }}
+material = {{ density = 1000.0, young = {young!r}, poisson = 0.5, viscosity = 300.0 }}
+[[rod]]
+name = "b"
+base = {{ position = [0.3, 0.0, -0.15], rotation = [[0, 0, -1], [0, 1, 0], [1, 0, 0]] }}
+joint = {{ type = "revolute", axis = [0, 1, 0] }}
+length = 0.15
+pieces = 2
+strains = ["ky", "qx"]
+section = {{ shape = "circle", radius = 0.008 }}
+material = {{ density = 1100.0, young = 2.0e6, poisson = 0.5, viscosity = 1.0e3 }}
+[[body]]
+name = "hand"
+parent = "b"
+mass = {mass!r}
+inertia = [1e-6, 1e-6, 1e-6]
+[[closure]]
+type = "ball"
+a = {{ element = "a" }}
+b = {{ element = "hand" }}
+[run]
+rtol = 1e-8
+atol = 1e-10
+"""
+
+
+def test_closed_chain_gradient_matches_central_differences():
+    """A four-bar closed by a ball joint (docs/theory-control.md G22-G24): the adjoint
+    through the constrained dynamics against central differences of whole runs."""
+    truth = {"young": 1.0e6, "mass": 0.01}
+
+    def closed(**over: float) -> softrod.Simulation:
+        return softrod.Simulation.from_toml(CLOSED.format(**{**truth, **over}))
+
+    def closed_loss(n: int) -> list[object]:
+        return [
+            {
+                "type": "position",
+                "rod": "a",
+                "s": 0.15,
+                "times": TIMES,
+                "targets": [[0.15, 0.0, 0.02]] * 3,
+                "weight": 100.0,
+            },
+            {"type": "quadratic", "times": [0.1], "q_weights": 0.1, "qdot_weights": 1e-3},
+        ]
+
+    s = closed()
+    _, g = s.value_and_gradient(closed_loss(s.n_dof), ["a.young", "hand.mass"], 0.1, **KW)
+    for key, name in [("young", "a.young"), ("mass", "hand.mass")]:
+        h = 1e-6 * truth[key]
+
+        def at(x: float) -> float:
+            c = closed(**{key: x})
+            return c.value_and_gradient(closed_loss(c.n_dof), [], 0.1, **KW)[0]
+
+        fd = (at(truth[key] + h) - at(truth[key] - h)) / (2 * h)
+        assert g[name] == pytest.approx(fd, rel=1e-6), name

@@ -77,6 +77,70 @@ def test_matches_the_cli(softrod_bin):
     assert np.allclose(r["tensions"], cli["tensions"], rtol=1e-12, atol=0)
 
 
+# A three-cable arm under gravity, a gripper body 3 cm beyond its tip, the tip sliding
+# on the world's x axis (a slider closure): a closed model with a body target.
+GRIPPER_ON_SLIDER = """
+[world]
+gravity = [0.0, 0.0, -9.81]
+[[rod]]
+name = "arm"
+length = 0.5
+pieces = 10
+strains = ["kx", "ky", "kz", "qx"]
+section = { shape = "circle", radius = 0.01 }
+material = { density = 1000.0, young = 1.0e6, poisson = 0.5 }
+[[body]]
+name = "gripper"
+parent = "arm"
+base = { position = [0.03, 0.0, 0.0] }
+joint = { type = "revolute", axis = [0, 1, 0], stiffness = 0.05 }
+mass = 0.02
+inertia = [4e-6, 4e-6, 4e-6]
+[[closure]]
+type = "slider"
+axis = [1, 0, 0]
+a = { element = "arm" }
+b = { element = "world" }
+""" + "".join(
+    f'[[cable]]\nrod = "arm"\noffset = [{0.008 * math.cos(math.radians(a))}, '
+    f"{0.008 * math.sin(math.radians(a))}]\ntension = 0.0\n"
+    for a in (90.0, 210.0, 330.0)
+)
+
+
+def test_body_target_on_a_closed_model_recovers_a_forward_solve():
+    # docs/theory-control.md IS8-IS11: the gripper's position and the arm's midpoint at
+    # known tensions (forward constrained statics) give the tensions back.
+    sim = softrod.Simulation.from_toml(GRIPPER_ON_SLIDER)
+    truth = np.array([0.4, 1.1, 0.7])
+    st = sim.statics(tensions=truth)
+    grip = st.bodies["gripper"][:3, 3]
+    mid = sim.pose("arm", 0.25, st.q)[:3, 3]
+    r = sim.solve_actuation(
+        [{"body": "gripper", "position": grip}, {"rod": "arm", "s": 0.25, "position": mid}],
+        effort_weight=0.0,
+    )
+    assert r["converged"] and r["reached"], r["message"]
+    assert np.allclose(r["tensions"], truth, rtol=0, atol=1e-7)
+    assert np.allclose(r["q"], st.q, rtol=0, atol=1e-8)
+    assert np.allclose(r["targets"][0]["position"], grip, rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize(
+    "target, words",
+    [
+        ({"body": "hand", "position": [0, 0, 0]}, "targets[0].body"),
+        ({"body": 3, "position": [0, 0, 0]}, "targets[0].body"),
+        ({"body": "gripper", "s": 0.1, "position": [0, 0, 0]}, "targets[0].s"),
+        ({"body": "gripper", "rod": "arm", "position": [0, 0, 0]}, "targets[0].rod"),
+    ],
+)
+def test_bad_body_targets_raise(target, words):
+    sim = softrod.Simulation.from_toml(GRIPPER_ON_SLIDER)
+    with pytest.raises(softrod.InputError, match=__import__("re").escape(words)):
+        sim.solve_actuation([target])
+
+
 @pytest.mark.parametrize(
     "targets, kwargs, words",
     [

@@ -111,18 +111,25 @@ pub struct Scene {
     pub(crate) origins: Origins,
 }
 
-/// A `[[target]]`: where `softrod inverse` should bring a rod section.
+/// A `[[target]]`: where `softrod inverse` should bring a rod section or
+/// a body's frame.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Target {
-    /// The rod's name, as written.
+    /// The rod's or body's name, as written.
     pub element: String,
-    /// Its index in [`Scene::rods`] (= in the model).
+    /// The rod's index in [`Scene::rods`] (= in the model); 0 and not
+    /// read for a body.
     pub rod: usize,
-    /// Arc length of the section \[m\] (default the tip).
+    /// Arc length of the section \[m\] (default the tip); 0 and not read
+    /// for a body.
     pub s: f64,
+    /// The body's index in the `[[body]]` tables (= in the model's
+    /// bodies), when `element` names a body: the target is then its frame.
+    pub body: Option<usize>,
     /// Wanted world position \[m\].
     pub position: Option<softrod_lie::Vec3>,
-    /// Wanted orientation, section to world (made exactly orthonormal).
+    /// Wanted orientation, section (body frame) to world (made exactly
+    /// orthonormal).
     pub rotation: Option<softrod_lie::Mat3>,
     /// Weight of the squared error (default 1).
     pub weight: f64,

@@ -15,6 +15,13 @@
 //! its two rods, one line each; without, the scene as shipped (4 each).
 //! Each time is the fastest of `reps` calls (3, 1 above 300 coordinates).
 //! Errors print their whole chain (`Error::report`) and exit 1.
+//!
+//! `planar [RTOL...]`: instead, the planar release of
+//! examples/cantilever_gravity.toml (1 s) with the loss of the soromox
+//! side by side (crates/softrod-py/bench/gradient_side_by_side.py: the
+//! tip against `(0.25, 0, −0.25)` at `0.05·k`, `k = 1…20`) and the
+//! parameters `cantilever.young`, `cantilever.density`, at each `RTOL`
+//! (`atol = 1e-3·rtol`; default the scene's 1e-3).
 
 use std::process::ExitCode;
 use std::time::Instant;
@@ -22,8 +29,12 @@ use std::time::Instant;
 use softrod::{GradientOptions, LossTerm, Simulation};
 
 const SCENE: &str = include_str!("../../../examples/arm_with_payload.toml");
+const PLANAR: &str = include_str!("../../../examples/cantilever_gravity.toml");
 
 fn main() -> ExitCode {
+    if std::env::args().nth(1).as_deref() == Some("planar") {
+        return planar_main();
+    }
     let pieces: Vec<usize> = match std::env::args()
         .skip(1)
         .map(|a| a.parse::<usize>().map_err(|_| a))
@@ -115,6 +126,94 @@ fn measure(pieces: Option<usize>) -> softrod::Result<()> {
         ms(gradient),
         gradient / forward,
         ms(2.0 * scalar_params as f64 * forward),
+    );
+    Ok(())
+}
+
+fn planar_main() -> ExitCode {
+    let rtols: Vec<f64> = match std::env::args()
+        .skip(2)
+        .map(|a| a.parse::<f64>().map_err(|_| a))
+        .collect::<Result<Vec<f64>, String>>()
+    {
+        Ok(r) if r.is_empty() => vec![1e-3],
+        Ok(r) => r,
+        Err(a) => {
+            eprintln!("error: '{a}' is not a tolerance");
+            return ExitCode::from(2);
+        }
+    };
+    println!(
+        "| rtol | n_dof | steps | plain run | recorded forward | gradient (young, density) | gradient / forward | dL/dE | dL/drho |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|");
+    for rtol in rtols {
+        if let Err(e) = measure_planar(rtol) {
+            eprintln!("error: {}", e.report());
+            return ExitCode::FAILURE;
+        }
+    }
+    ExitCode::SUCCESS
+}
+
+fn measure_planar(rtol: f64) -> softrod::Result<()> {
+    let (mut sim, _, _) = Simulation::from_toml(PLANAR, "examples/cantilever_gravity.toml")?;
+    let settings = sim.settings().clone().with_rtol(rtol);
+    sim.set_settings(softrod::Settings {
+        atol: 1e-3 * rtol,
+        ..settings
+    })?;
+    let duration = 1.0;
+    let times: Vec<f64> = (1..=20).map(|k| 0.05 * k as f64).collect();
+    let loss = || {
+        vec![LossTerm::Position {
+            rod: "cantilever".into(),
+            s: None,
+            times: times.clone(),
+            targets: vec![[0.25, 0.0, -0.25]; times.len()],
+            weight: 1.0,
+        }]
+    };
+    let params = ["cantilever.young", "cantilever.density"];
+    let options = GradientOptions::default();
+    let reps = 3;
+    let best = |f: &mut dyn FnMut() -> softrod::Result<()>| -> softrod::Result<f64> {
+        let mut fastest = f64::INFINITY;
+        for _ in 0..reps {
+            let t = Instant::now();
+            f()?;
+            fastest = fastest.min(t.elapsed().as_secs_f64());
+        }
+        Ok(fastest)
+    };
+    let mut s = sim.clone();
+    let forward = best(&mut || {
+        s.value_and_gradient(&mut loss(), &[], duration, &options)
+            .map(|g| drop(std::hint::black_box(g)))
+    })?;
+    let mut s = sim.clone();
+    let plain = best(&mut || s.simulate(duration).map(|r| drop(std::hint::black_box(r))))?;
+    let mut steps = 0;
+    let mut grads = (f64::NAN, f64::NAN);
+    let gradient = best(&mut || {
+        let g = sim.value_and_gradient(&mut loss(), &params, duration, &options)?;
+        steps = g.steps;
+        grads = (
+            g.get(params[0]).map_or(f64::NAN, |v| v[0]),
+            g.get(params[1]).map_or(f64::NAN, |v| v[0]),
+        );
+        Ok(())
+    })?;
+    let ms = |s: f64| format!("{:.1} ms", 1e3 * s);
+    println!(
+        "| {rtol:e} | {} | {steps} | {} | {} | {} | {:.1} | {:.9e} | {:.9e} |",
+        sim.n_dof(),
+        ms(plain),
+        ms(forward),
+        ms(gradient),
+        gradient / forward,
+        grads.0,
+        grads.1,
     );
     Ok(())
 }

@@ -8,7 +8,7 @@
 //! right-hand sides) and the largest tip distance over the samples from a
 //! Radau IIA reference at rtol 1e-10 of the same model.
 //!
-//! `cargo run --release -p softrod --example work_precision -- [--repeat 3] [--scene planar,3d,steel] [--method esdirk,...] [--cache DIR]`
+//! `cargo run --release -p softrod --example work_precision -- [--repeat 3] [--scene planar,3d,steel] [--method esdirk,...] [--rtol 1e-2,...] [--cache DIR]`
 //!
 //! scripts/work_precision.py turns the CSV into docs/performance.md's table
 //! and the work-precision diagrams.
@@ -106,6 +106,14 @@ fn main() {
     let scenes = value("--scene").unwrap_or_else(|| "planar,3d,steel".into());
     let methods = value("--method")
         .unwrap_or_else(|| "esdirk,esdirk5,radau5,rosenbrock,generalized-alpha".into());
+    let rtols: Vec<f64> = value("--rtol").map_or_else(
+        || vec![1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7],
+        |v| {
+            v.split(',')
+                .map(|r| r.parse().expect("--rtol R,R,..."))
+                .collect()
+        },
+    );
     println!(
         "scene,method,setting,wall_s,steps,rejected,newton,jacobians,factorizations,lu_solves,rhs,error_m,status"
     );
@@ -146,11 +154,12 @@ fn main() {
                 .find(|i| i.name() == method)
                 .expect("a method name");
             let settings: Vec<(String, Settings)> = if integrator.is_adaptive() {
-                [1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7]
-                    .into_iter()
+                rtols
+                    .iter()
+                    .copied()
                     .map(|r| {
                         (
-                            format!("rtol {r:.0e}"),
+                            format!("rtol {r:e}"),
                             Settings::default().with_rtol(r).with_integrator(integrator),
                         )
                     })

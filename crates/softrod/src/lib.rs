@@ -87,7 +87,7 @@
 //! [`record::Record`] and [`record::Columns`]), [`study`] (work–precision
 //! studies behind `softrod report`), [`limits`] (memory estimates),
 //! [`control`] (inverse statics: cable tensions for targets,
-//! [`Simulation::solve_actuation`]; docs/theory-control.md IS1–IS7),
+//! [`Simulation::solve_actuation`]; docs/theory-control.md IS1–IS12),
 //! [`Settings`] and the energy watch ([`EnergyBalance`]).
 //!
 //! Units are SI; twists and wrenches are 6-vectors, angular part first;

@@ -1,5 +1,5 @@
 //! Inverse statics (`Simulation::solve_actuation`, docs/theory-control.md
-//! IS1–IS7) against independent references: tensions of a forward statics
+//! IS1–IS12) against independent references: tensions of a forward statics
 //! solve recovered, the constant-curvature law `κ = T d / EI` of a cable at
 //! constant offset, the nearest reachable point of a dense scan of
 //! tensions, the least-effort point of a redundant family known in closed
@@ -325,26 +325,4 @@ fn bad_input_names_the_key() {
     assert_eq!(key(std::slice::from_ref(&ok), &nan), "cable[0].max_tension");
     let e = s.solve_actuation(&[], &d).unwrap_err();
     assert!(e.is_input());
-}
-
-/// A closed model is refused, naming the closure, not solved wrongly
-/// (its equilibrium carries closure forces the sensitivity does not; IS7).
-#[test]
-fn closed_models_are_refused() {
-    let mut s = sim(&format!(
-        "[[rod]]\nname = \"arm\"\nlength = {LENGTH}\npieces = 4\nstrains = \"all\"\n\
-         section = {{ shape = \"circle\", radius = {RADIUS} }}\n\
-         material = {{ density = 1000.0, young = {YOUNG}, poisson = 0.5 }}\n\
-         [[cable]]\nrod = \"arm\"\noffset = [0.0, {D}]\ntension = 0.0\n\
-         [[closure]]\ntype = \"ball\"\na = {{ element = \"arm\" }}\n\
-         b = {{ element = \"world\", base = {{ position = [{LENGTH}, 0.0, 0.0] }} }}\n"
-    ));
-    let t = Target::position(0, 0.25, [0.25, 0.0, 0.01]);
-    match s.solve_actuation(&[t], &ActuationOptions::default()) {
-        Err(Error::Actuation { key, message }) => {
-            assert_eq!(key, "closure");
-            assert!(message.contains("not supported"), "{message}");
-        }
-        other => panic!("expected a refusal, got {other:?}"),
-    }
 }

@@ -163,6 +163,7 @@ pub fn run(
         r => r,
     };
     Progress::lock(&progress).closing = true;
+    streamer.finish_rows();
     if let Some(b) = &streamer.bar {
         b.finish_and_clear();
     }
@@ -235,10 +236,9 @@ pub fn run(
     }
     // The archive holds the rows the CSV holds, also after a failure; if it
     // cannot be written it is removed, and the run says so.
-    if let Err(e) = streamer
-        .rows()
-        .write_npz(&dir, &l.sim.q_names(), &l.sim.prescribed_names())
-    {
+    if let Err(e) = streamer.rows().map_or(Ok(()), |rows| {
+        rows.write_npz(&dir, &l.sim.q_names(), &l.sim.prescribed_names())
+    }) {
         status = if status == "ok" {
             format!("error: {e}")
         } else {

@@ -8,7 +8,7 @@ use std::io::Write;
 use std::path::Path;
 
 use softrod::dynamics::Model;
-use softrod::mechanics::Contactee;
+use softrod::mechanics::{ContactPoint, Contactee};
 use softrod::record::{Columns, Record, position, quaternion};
 use softrod_viz::collect::FrameCollector;
 use softrod_viz::run_dir::{BODIES_HEADER, SHAPE_HEADER};
@@ -68,6 +68,54 @@ impl OutFile {
     }
 }
 
+/// One output time's numbers for the files, copied out of a [`Record`]
+/// so that they can be formatted and written on another thread while the
+/// integration goes on (its buffers are reused from row to row).
+#[derive(Default)]
+pub struct RowData {
+    /// Time \[s\].
+    pub t: f64,
+    /// The row of `trajectory.csv`, in its column order.
+    values: Vec<f64>,
+    /// Per rod: the samples' abscissae \[m\] and world poses `[x, y, z,
+    /// qw, qx, qy, qz]` (m; unit quaternion with `qw ≥ 0`).
+    s: Vec<Vec<f64>>,
+    samples: Vec<Vec<[f64; 7]>>,
+    /// The rigid bodies' world poses, as the samples'.
+    bodies: Vec<[f64; 7]>,
+    /// The active contacts.
+    contacts: Vec<ContactPoint>,
+}
+
+/// A pose as `[x, y, z, qw, qx, qy, qz]`.
+fn pose7(g: &softrod::lie::Pose) -> [f64; 7] {
+    let [x, y, z] = position(g);
+    let [qw, qx, qy, qz] = quaternion(g);
+    [x, y, z, qw, qx, qy, qz]
+}
+
+impl RowData {
+    /// Copies `rec`'s numbers (`columns`: the run's [`Columns`]).
+    pub fn fill(&mut self, columns: &Columns, rec: &Record) {
+        self.t = rec.t;
+        self.values.clear();
+        columns.push_row(rec.row(), &mut self.values);
+        let n_rods = rec.poses.n_rods();
+        self.s.resize_with(n_rods, Vec::new);
+        self.samples.resize_with(n_rods, Vec::new);
+        for r in 0..n_rods {
+            self.s[r].clear();
+            self.s[r].extend_from_slice(&rec.poses.sampling(r).s);
+            self.samples[r].clear();
+            self.samples[r].extend(rec.poses.samples(r).iter().map(pose7));
+        }
+        self.bodies.clear();
+        self.bodies.extend(rec.poses.bodies().iter().map(pose7));
+        self.contacts.clear();
+        self.contacts.extend_from_slice(&rec.contacts);
+    }
+}
+
 /// Writes each record's rows to the run's CSV files (every file gets a
 /// time's rows, or none does) and keeps them for `trajectory.npz`. A new
 /// per-time file (e.g. `contacts.csv`, from the record's contact forces)
@@ -95,8 +143,6 @@ pub struct RowWriter {
     /// with its comma (the same at every time: formatted once, not at
     /// every row of `shape.csv`).
     s_fields: Vec<Vec<(f64, String)>>,
-    /// The current row's numbers (allocated once).
-    values: Vec<f64>,
     /// With `--npz`: every written row's numbers, in `trajectory.csv`'s
     /// column order (kept for `trajectory.npz`, written at the end).
     npz_rows: Option<Vec<f64>>,
@@ -156,7 +202,6 @@ impl RowWriter {
                 .collect(),
             prefix: String::new(),
             s_fields: vec![Vec::new(); model.rods().len()],
-            values: Vec::with_capacity(columns.width()),
             npz_rows: npz.then(Vec::new),
             view: None,
         })
@@ -178,14 +223,18 @@ impl RowWriter {
         self.view.take()
     }
 
-    /// Appends `rec`'s rows to every file; on a failed write, cuts every
-    /// file back to its previous whole rows.
-    pub fn write(&mut self, rec: &Record) -> Result<(), String> {
-        let t = rec.t;
-        self.values.clear();
-        self.columns.push_row(rec.row(), &mut self.values);
+    /// The shape of `trajectory.csv` (to fill a [`RowData`]).
+    pub fn columns(&self) -> Columns {
+        self.columns
+    }
+
+    /// Appends one time's rows (`d`, filled from a record by
+    /// [`RowData::fill`]) to every file; on a failed write, cuts every file
+    /// back to its previous whole rows.
+    pub fn write(&mut self, d: &RowData) -> Result<(), String> {
+        let t = d.t;
         self.traj_text.clear();
-        push_csv_row(&mut self.traj_text, "", self.values.iter().copied());
+        push_csv_row(&mut self.traj_text, "", d.values.iter().copied());
         self.shape_text.clear();
         let ts = num(t);
         for (r, name) in self.rod_fields.iter().enumerate() {
@@ -194,7 +243,7 @@ impl RowWriter {
             self.prefix.push(',');
             self.prefix.push_str(name);
             self.prefix.push(',');
-            let s = &rec.poses.sampling(r).s;
+            let s = &d.s[r];
             let cached = &mut self.s_fields[r];
             let same = cached.len() == s.len()
                 && cached
@@ -209,29 +258,23 @@ impl RowWriter {
                     (v, text)
                 }));
             }
-            for ((_, s_text), g) in cached.iter().zip(rec.poses.samples(r)) {
-                let [x, y, z] = position(g);
-                let [qw, qx, qy, qz] = quaternion(g);
+            for ((_, s_text), g) in cached.iter().zip(&d.samples[r]) {
                 self.shape_text.push_str(&self.prefix);
-                push_csv_row(&mut self.shape_text, s_text, [x, y, z, qw, qx, qy, qz]);
+                push_csv_row(&mut self.shape_text, s_text, g.iter().copied());
             }
         }
         self.bodies_text.clear();
-        for (name, g) in self.body_fields.iter().zip(rec.poses.bodies()) {
+        for (name, g) in self.body_fields.iter().zip(&d.bodies) {
             self.prefix.clear();
             self.prefix.push_str(&ts);
             self.prefix.push(',');
             self.prefix.push_str(name);
             self.prefix.push(',');
-            push_csv_row(
-                &mut self.bodies_text,
-                &self.prefix,
-                position(g).into_iter().chain(quaternion(g)),
-            );
+            push_csv_row(&mut self.bodies_text, &self.prefix, g.iter().copied());
         }
         self.contacts_text.clear();
         if self.contacts.is_some() {
-            for c in &rec.contacts {
+            for c in &d.contacts {
                 self.prefix.clear();
                 self.prefix.push_str(&ts);
                 self.prefix.push(',');
@@ -305,23 +348,18 @@ impl RowWriter {
         self.traj.commit(self.traj_text.len());
         if let Some(rows) = &mut self.npz_rows {
             // `+ 0.0` turns −0 into 0, as the CSV writes it.
-            rows.extend(self.values.iter().map(|v| v + 0.0));
+            rows.extend(d.values.iter().map(|v| v + 0.0));
         }
         if let Some(view) = &mut self.view {
-            for r in 0..self.rod_fields.len() {
-                view.push_rod(
-                    r,
-                    rec.poses.samples(r).iter().map(|g| Pose {
-                        position: position(g),
-                        rotation: quaternion(g),
-                    }),
-                );
+            let pose = |g: &[f64; 7]| Pose {
+                position: [g[0], g[1], g[2]],
+                rotation: [g[3], g[4], g[5], g[6]],
+            };
+            for (r, samples) in d.samples.iter().enumerate() {
+                view.push_rod(r, samples.iter().map(pose));
             }
-            for g in rec.poses.bodies() {
-                view.push_body(Pose {
-                    position: position(g),
-                    rotation: quaternion(g),
-                });
+            for g in &d.bodies {
+                view.push_body(pose(g));
             }
             // The frame is whole by construction (the rows just written).
             let _ = view.end_time(t);

@@ -2,16 +2,18 @@
 //! [`Recorder`], written as rows, kept for the figures; the progress bar,
 //! the running summary and the signals that stop a run.
 
+use std::sync::mpsc::{Receiver, SyncSender};
 use std::sync::{Arc, Mutex, MutexGuard};
+use std::thread::JoinHandle;
 use std::time::Instant;
 
 use indicatif::ProgressBar;
 use softrod::dynamics::Model;
 use softrod::integrate::Stats;
-use softrod::record::{Recorder, RodSampling};
+use softrod::record::{Columns, Recorder, RodSampling};
 use softrod::{Flow, Observer, Sample};
 
-use super::rows::RowWriter;
+use super::rows::{RowData, RowWriter};
 use super::summary::Summary;
 use crate::common::CliError;
 use crate::plots::{Series, Snapshot};
@@ -46,6 +48,23 @@ impl Progress {
     /// consistent: each is a plain store).
     pub fn lock(p: &Mutex<Progress>) -> MutexGuard<'_, Progress> {
         p.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
+    }
+
+    /// Counts a row written at time `t` (s) and keeps summary.json current
+    /// (at most every [`SUMMARY_EVERY`] s; `summary_at`: when it was last
+    /// written), so that a run killed with SIGKILL still says how far it
+    /// got (its status stays "running") with the rows the files hold.
+    fn count_row(&mut self, t: f64, summary_at: &mut Option<Instant>) -> Result<(), String> {
+        self.rows += 1;
+        self.t = t;
+        if summary_at.is_none_or(|w| w.elapsed().as_secs_f64() >= SUMMARY_EVERY) {
+            let wall = self.start.elapsed().as_secs_f64();
+            self.summary
+                .write(&self.stats, wall, t, "running", self.rows)
+                .map_err(|e| e.to_string())?;
+            *summary_at = Some(Instant::now());
+        }
+        Ok(())
     }
 
     /// What the watchdog writes when the run did not stop within the
@@ -83,13 +102,292 @@ impl Progress {
     }
 }
 
+/// Batches of output times in flight between the integration and the
+/// writer thread: enough that neither waits for the other's jitter, few
+/// enough that a failed write stops the run soon after.
+const BATCHES_IN_FLIGHT: usize = 4;
+/// Output times per batch: the writer is woken once per batch, not once
+/// per row (on a busy machine each wake-up is a switch between threads).
+const BATCH_ROWS: usize = 16;
+/// Batching is for rows that come fast: a row computed at least this long
+/// after the last batch was sent goes at once (the first row too), and a
+/// batch is sent at the end of the step in which its first row has waited
+/// this long, s — a slow run's files follow it as before.
+const BATCH_WAIT: f64 = 0.05;
+
+/// One batch of output times.
+type Batch = Vec<RowData>;
+
+/// What the writer thread hands back: the files' writer, the rows it
+/// wrote, the last one's time \[s\], and the error it stopped at.
+type Written = (RowWriter, usize, f64, Option<String>);
+
+/// Where the rows go: formatted and written on a thread of their own
+/// while the integration goes on (the process is timed by its wall clock,
+/// and the text of the rows costs about as much as the integration of a
+/// short run: docs/performance.md, issue 30), or, if no thread can be
+/// started, here.
+// One per run: the variants' sizes do not matter.
+#[allow(clippy::large_enum_variant)]
+enum Sink {
+    Thread {
+        rows: SyncSender<Batch>,
+        /// Batches written, for reuse.
+        spent: Receiver<Batch>,
+        /// The batch being filled, when its first row was computed, and
+        /// when the last batch was sent.
+        batch: Batch,
+        since: Option<Instant>,
+        sent: Option<Instant>,
+        /// Row buffers for reuse.
+        free: Vec<RowData>,
+        /// The error the writer stopped at.
+        failed: Arc<Mutex<Option<String>>>,
+        writer: JoinHandle<Option<Written>>,
+    },
+    /// Written on the integration's thread; also the writer once the
+    /// thread is joined.
+    Here {
+        rows: RowWriter,
+        written: usize,
+        last_t: f64,
+        spare: RowData,
+        /// When the running summary was last written.
+        summary_at: Option<Instant>,
+    },
+    /// The writer thread panicked: no writer is left.
+    Lost,
+}
+
+/// The writer thread: writes each time's rows as they come, counts them in
+/// `progress` under its lock (so the signal watchdog sees whole rows only
+/// and a summary that matches the files), and stops at the first error.
+fn write_rows(
+    mut rows: RowWriter,
+    incoming: Receiver<Batch>,
+    spent: SyncSender<Batch>,
+    failed: Arc<Mutex<Option<String>>>,
+    progress: Arc<Mutex<Progress>>,
+) -> Written {
+    let (mut written, mut last_t, mut summary_at) = (0, 0.0, None);
+    for batch in incoming {
+        for d in &batch {
+            let mut p = Progress::lock(&progress);
+            let done = rows
+                .write(d)
+                .and_then(|()| p.count_row(d.t, &mut summary_at));
+            if let Err(e) = done {
+                drop(p);
+                *failed
+                    .lock()
+                    .unwrap_or_else(std::sync::PoisonError::into_inner) = Some(e.clone());
+                return (rows, written, last_t, Some(e));
+            }
+            written += 1;
+            last_t = d.t;
+        }
+        // Full only if the integration has buffers enough: then dropped.
+        let _ = spent.try_send(batch);
+    }
+    (rows, written, last_t, None)
+}
+
+impl Sink {
+    /// The writer thread for `rows`, or `rows` here if no thread starts.
+    fn start(rows: RowWriter, progress: &Arc<Mutex<Progress>>) -> Self {
+        let (tx, incoming) = std::sync::mpsc::sync_channel(BATCHES_IN_FLIGHT);
+        let (spent_tx, spent) = std::sync::mpsc::sync_channel(BATCHES_IN_FLIGHT + 2);
+        let failed = Arc::new(Mutex::new(None));
+        // Held in a slot so that it comes back if the thread cannot start.
+        let slot = Arc::new(Mutex::new(Some(rows)));
+        let (f, p, sl) = (Arc::clone(&failed), Arc::clone(progress), Arc::clone(&slot));
+        let started = std::thread::Builder::new()
+            .name("softrod-rows".into())
+            .spawn(move || {
+                let rows = sl
+                    .lock()
+                    .unwrap_or_else(std::sync::PoisonError::into_inner)
+                    .take();
+                // Always there: it leaves the slot here or, if the thread
+                // never starts, below.
+                rows.map(|rows| write_rows(rows, incoming, spent_tx, f, p))
+            });
+        match started {
+            Ok(writer) => Sink::Thread {
+                rows: tx,
+                spent,
+                batch: Vec::with_capacity(BATCH_ROWS),
+                since: None,
+                sent: None,
+                free: Vec::new(),
+                failed,
+                writer,
+            },
+            Err(_) => match slot
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner)
+                .take()
+            {
+                Some(rows) => Sink::Here {
+                    rows,
+                    written: 0,
+                    last_t: 0.0,
+                    spare: RowData::default(),
+                    summary_at: None,
+                },
+                None => Sink::Lost,
+            },
+        }
+    }
+
+    /// Hands one time's rows (`fill` copies them into a buffer) to the
+    /// writer; the error of a failed write, also of an earlier row on the
+    /// thread.
+    fn push(
+        &mut self,
+        progress: &Arc<Mutex<Progress>>,
+        fill: impl FnOnce(&mut RowData),
+    ) -> Result<(), String> {
+        match self {
+            Sink::Thread {
+                failed,
+                batch,
+                since,
+                sent,
+                free,
+                ..
+            } => {
+                if let Some(e) = failed
+                    .lock()
+                    .unwrap_or_else(std::sync::PoisonError::into_inner)
+                    .clone()
+                {
+                    return Err(e);
+                }
+                let mut d = free.pop().unwrap_or_default();
+                fill(&mut d);
+                batch.push(d);
+                since.get_or_insert_with(Instant::now);
+                let sparse = sent.is_none_or(|w| w.elapsed().as_secs_f64() >= BATCH_WAIT);
+                if batch.len() >= BATCH_ROWS || sparse {
+                    self.send()
+                } else {
+                    Ok(())
+                }
+            }
+            Sink::Here {
+                rows,
+                written,
+                last_t,
+                spare,
+                summary_at,
+            } => {
+                fill(spare);
+                let mut p = Progress::lock(progress);
+                rows.write(spare)?;
+                p.count_row(spare.t, summary_at)?;
+                *written += 1;
+                *last_t = spare.t;
+                Ok(())
+            }
+            Sink::Lost => Err("writing the rows failed unexpectedly".into()),
+        }
+    }
+
+    /// Sends the batch if its first row has waited [`BATCH_WAIT`].
+    fn send_if_due(&mut self) -> Result<(), String> {
+        match self {
+            Sink::Thread {
+                since: Some(since), ..
+            } if since.elapsed().as_secs_f64() >= BATCH_WAIT => self.send(),
+            _ => Ok(()),
+        }
+    }
+
+    /// Hands the batch to the writer thread (if it holds rows) and takes
+    /// back the row buffers of the batches it has written.
+    fn send(&mut self) -> Result<(), String> {
+        let Sink::Thread {
+            rows,
+            spent,
+            batch,
+            since,
+            sent,
+            free,
+            failed,
+            ..
+        } = self
+        else {
+            return Ok(());
+        };
+        *since = None;
+        if batch.is_empty() {
+            return Ok(());
+        }
+        *sent = Some(Instant::now());
+        let mut next = match spent.try_recv() {
+            Ok(mut done) => {
+                free.append(&mut done);
+                done
+            }
+            Err(_) => Vec::with_capacity(BATCH_ROWS),
+        };
+        std::mem::swap(batch, &mut next);
+        // Fails only once the writer has stopped: at an error (set before
+        // it stops) or a panic.
+        rows.send(next).map_err(|_| {
+            failed
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner)
+                .clone()
+                .unwrap_or_else(|| "writing the rows failed unexpectedly".into())
+        })
+    }
+
+    /// Waits for the writer to write every row handed to it: the rows
+    /// written, the last one's time \[s\], and the error it stopped at.
+    fn finish(mut self) -> (Sink, usize, f64, Option<String>) {
+        // An error here is the writer's, returned by its join below.
+        let _ = self.send();
+        match self {
+            Sink::Thread { rows, writer, .. } => {
+                // Closing the channel ends the writer's loop.
+                drop(rows);
+                match writer.join() {
+                    Ok(Some((rows, written, last_t, error))) => (
+                        Sink::Here {
+                            rows,
+                            written,
+                            last_t,
+                            spare: RowData::default(),
+                            summary_at: None,
+                        },
+                        written,
+                        last_t,
+                        error,
+                    ),
+                    Ok(None) | Err(_) => (
+                        Sink::Lost,
+                        0,
+                        0.0,
+                        Some("writing the rows failed unexpectedly".into()),
+                    ),
+                }
+            }
+            Sink::Here {
+                written, last_t, ..
+            } => (self, written, last_t, None),
+            Sink::Lost => (Sink::Lost, 0, 0.0, None),
+        }
+    }
+}
+
 /// Records, writes and keeps output rows as the integration produces them.
 pub struct Streamer {
     recorder: Recorder,
-    rows: RowWriter,
+    columns: Columns,
+    sink: Sink,
     progress: Arc<Mutex<Progress>>,
-    start: Instant,
-    summary_written: Option<Instant>,
     /// The signal that ended the run, if one did.
     pub interrupted: Option<&'static str>,
     expected: usize,
@@ -165,12 +463,13 @@ impl Streamer {
         bar: Option<ProgressBar>,
     ) -> Self {
         rows.collect_view(model, sampling.iter().map(|r| r.s.clone()).collect());
+        let columns = rows.columns();
+        let sink = Sink::start(rows, &progress);
         Self {
             recorder: Recorder::with_sampling(model, sampling),
-            rows,
+            columns,
+            sink,
             progress,
-            start: Instant::now(),
-            summary_written: None,
             interrupted: None,
             next: 0,
             snapshot_at,
@@ -215,14 +514,39 @@ impl Streamer {
         self.recorder.max_contacts()
     }
 
-    /// The file writer (for `trajectory.npz` at the end).
-    pub fn rows(&self) -> &RowWriter {
-        &self.rows
+    /// Waits until every row handed to the writer is written (call once
+    /// the integration has ended): afterwards the rows written and the last
+    /// time are the files', and a write error the writer stopped at is
+    /// [`Streamer::error`].
+    pub fn finish_rows(&mut self) {
+        let sink = std::mem::replace(&mut self.sink, Sink::Lost);
+        let (sink, written, last_t, error) = sink.finish();
+        self.sink = sink;
+        if let Some(e) = error {
+            self.error.get_or_insert(e);
+        }
+        if written < self.next {
+            // The rows after a failed write were computed, not written.
+            (self.next, self.last_t) = (written, last_t);
+        }
     }
 
-    /// The frames of the 3-D view kept from the rows written.
+    /// The file writer (for `trajectory.npz` at the end; after
+    /// [`Streamer::finish_rows`]), unless it was lost.
+    pub fn rows(&self) -> Option<&RowWriter> {
+        match &self.sink {
+            Sink::Here { rows, .. } => Some(rows),
+            _ => None,
+        }
+    }
+
+    /// The frames of the 3-D view kept from the rows written (after
+    /// [`Streamer::finish_rows`]).
     pub fn take_view(&mut self) -> Option<softrod_viz::collect::FrameCollector> {
-        self.rows.take_view()
+        match &mut self.sink {
+            Sink::Here { rows, .. } => rows.take_view(),
+            _ => None,
+        }
     }
 
     /// The series for the figures; a run that stopped early gets its last
@@ -243,7 +567,8 @@ impl Streamer {
             .recorder
             .record(s.model, s.data, s.t, s.q, s.qd)
             .map_err(|e| softrod::report(&e))?;
-        self.rows.write(rec)?;
+        let columns = &self.columns;
+        self.sink.push(&self.progress, |d| d.fill(columns, rec))?;
         self.series.push(rec);
         let snapshot = Snapshot::of(rec);
         if self.snapshot_at.contains(&self.next) {
@@ -260,37 +585,17 @@ impl Observer for Streamer {
     /// One output row: the integrator's dense output at the next output time.
     fn sample(&mut self, s: Sample<'_>) -> Result<Flow, String> {
         let t = s.t;
-        // Held while the row is written and counted: the watchdog then
-        // sees whole rows only.
-        let progress = Arc::clone(&self.progress);
-        let mut p = Progress::lock(&progress);
+        // The writer counts the rows in `progress` as it writes them, under
+        // its lock: the watchdog sees whole rows only.
         if let Err(e) = self.write_row(s) {
             self.error = Some(e.clone());
             return Err(e);
         }
         self.next += 1;
         self.last_t = t;
-        (p.rows, p.t) = (self.next, t);
-        // Keep summary.json current, so a run killed with SIGKILL still
-        // says how far it got (its status stays "running").
-        if self
-            .summary_written
-            .is_none_or(|w| w.elapsed().as_secs_f64() >= SUMMARY_EVERY)
-        {
-            let wall = self.start.elapsed().as_secs_f64();
-            if let Err(e) = p
-                .summary
-                .write(&self.last_stats, wall, t, "running", self.next)
-            {
-                let e = e.to_string();
-                self.error = Some(e.clone());
-                return Err(e);
-            }
-            self.summary_written = Some(Instant::now());
-        }
         if let Some(sig) = signals::received() {
             self.interrupted = Some(sig);
-            p.closing = true;
+            Progress::lock(&self.progress).closing = true;
             return Ok(Flow::Stop);
         }
         Ok(Flow::Continue)
@@ -310,6 +615,9 @@ impl Observer for Streamer {
     }
 
     fn step(&mut self, t: f64, stats: &Stats) {
+        // A row computed long ago reaches the files also while no new row
+        // comes (a slow run); a failed write shows at the next row.
+        let _ = self.sink.send_if_due();
         self.last_stats = *stats;
         Progress::lock(&self.progress).stats = *stats;
         if let Some(b) = &self.bar {

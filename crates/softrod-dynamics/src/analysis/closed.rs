@@ -419,3 +419,119 @@ pub fn closure_statics(
     check_workspace(model, data)?;
     statics(model, tree, data, q0, options)
 }
+
+/// `∂q/∂p` and `∂λ/∂p` of an equilibrium, from [`statics_sensitivity`].
+#[derive(Clone, Debug)]
+pub struct StaticsSensitivity {
+    /// `∂q/∂p` (n_dof × k), in the units of `q` per unit of `p`.
+    pub dq: DMatrix<f64>,
+    /// `∂λ/∂p` (n_constraints × k; zero on redundant rows; 0 × k on an open
+    /// model), in the units of `λ` (N, N·m) per unit of `p`.
+    pub dlambda: DMatrix<f64>,
+}
+
+/// The sensitivity of a static equilibrium to a parameter `p` that enters
+/// its generalized force linearly (docs/theory-control.md IS3, IS8–IS10):
+/// with the equilibrium `F(q, λ, p) = [τ_s(q) − G(q) p − J_vᵀλ; φ(q)] = 0`
+/// (`τ_s` the static force of [`crate::statics`] with the cable tensions
+/// `data` holds, `G` given as `rhs` = `−∂τ/∂p` at `q`, n_dof × k; for cable
+/// tensions `G = B`, [`crate::actuation_matrix`]), returns `∂q/∂p`
+/// (n_dof × k) and `∂λ/∂p` (n_constraints × k, zero on redundant rows)
+/// ([`StaticsSensitivity`]) from the bordered system (IS9)
+///
+/// ```text
+/// [ K_t   −J_vᵀ ] [∂q/∂p]   [G]
+/// [ J_e     0   ] [∂λ/∂p] = [0],    K_t = ∂(τ_s − J_vᵀλ)/∂q,
+/// ```
+///
+/// the Newton matrix of the constrained statics at its solution (D69):
+/// the same tangent (central differences of `τ_s − J_vᵀλ`, relative
+/// error ~1e-10), the same exact rows `J_e = ∂φ/∂q` and the same choice of
+/// independent rows. `q` and `lambda` must be an equilibrium and its
+/// multipliers, as [`closure_statics`] returns them. An open model has
+/// no rows: `∂q/∂p = K_t⁻¹ G` with the analytic `K_t` (D37–D47). `Ok(None)`
+/// when the matrix is singular (a buckling or limit point, a redundant
+/// closure the rank test missed) or the solution is not finite. Allocates.
+pub fn statics_sensitivity(
+    model: &Model,
+    data: &mut Data,
+    time: f64,
+    q: &[f64],
+    lambda: &[f64],
+    rhs: &DMatrix<f64>,
+) -> Result<Option<StaticsSensitivity>, DynamicsError> {
+    crate::algorithms::check_vec(model, "q", q)?;
+    let n = model.n_dof();
+    let m = model.n_constraints();
+    if rhs.nrows() != n {
+        return Err(DynamicsError::SizeMismatch {
+            what: "rhs (rows)",
+            got: rhs.nrows(),
+            expected: n,
+        });
+    }
+    if lambda.len() != m {
+        return Err(DynamicsError::SizeMismatch {
+            what: "lambda (one per closure row)",
+            got: lambda.len(),
+            expected: m,
+        });
+    }
+    let k = rhs.ncols();
+    let finite = |x: &DMatrix<f64>| x.iter().all(|v| v.is_finite());
+    let Some(tree) = model.tree.as_ref().filter(|_| model.has_closures()) else {
+        let mut w = crate::derivatives::IdDerivatives::new(model);
+        w.tensions = data.cable_tensions().map(DVector::from_column_slice);
+        let zero = vec![0.0; n];
+        crate::derivatives::inverse_dynamics_derivatives_with(
+            model,
+            &mut w,
+            Forces::at_rest(1.0),
+            time,
+            q,
+            &zero,
+            &zero,
+        )?;
+        let dq = w.dtau_dq.clone().lu().solve(rhs);
+        return Ok(dq.filter(finite).map(|dq| StaticsSensitivity {
+            dq,
+            dlambda: DMatrix::zeros(0, k),
+        }));
+    };
+    check_workspace(model, data)?;
+    let cx = Closed {
+        model,
+        tree,
+        t: time,
+        forces: Forces::at_rest(1.0),
+    };
+    let qv = DVector::from_column_slice(q);
+    let lam = DVector::from_column_slice(lambda);
+    let stiffness = stiffness_matrix(model);
+    let (kt, _) = cx.tangent(data, &qv, &lam, &stiffness);
+    let (_, jv) = cx.phi_jac(data, q, false);
+    let (_, je) = cx.phi_jac(data, q, true);
+    let rows = independent_rows(&je);
+    let mr = rows.len();
+    let mut kkt = DMatrix::zeros(n + mr, n + mr);
+    kkt.view_mut((0, 0), (n, n)).copy_from(&kt);
+    for (c, &row) in rows.iter().enumerate() {
+        for i in 0..n {
+            kkt[(i, n + c)] = -jv[(row, i)];
+            kkt[(n + c, i)] = je[(row, i)];
+        }
+    }
+    let mut b = DMatrix::zeros(n + mr, k);
+    b.view_mut((0, 0), (n, k)).copy_from(rhs);
+    let Some(x) = kkt.lu().solve(&b).filter(finite) else {
+        return Ok(None);
+    };
+    let mut dl = DMatrix::zeros(m, k);
+    for (c, &row) in rows.iter().enumerate() {
+        dl.row_mut(row).copy_from(&x.row(n + c));
+    }
+    Ok(Some(StaticsSensitivity {
+        dq: x.rows(0, n).into_owned(),
+        dlambda: dl,
+    }))
+}

@@ -88,3 +88,49 @@ pub fn section_jacobian(
     jac.copy_from(&dense);
     Ok((fs.pose, jac))
 }
+
+/// The world pose `g_b` of rigid body `body`'s frame (index in
+/// [`Model::bodies`]; the frame of `data.body_poses`, whose origin is the
+/// point of application of the body's loads, not its centre of mass) and
+/// its spatial Jacobian `J` (6 × n_dof, angular rows first), as
+/// [`section_jacobian`]: `J q̇ = (ω, v₀)` with `ω` the body's angular
+/// velocity in world axes \[rad/s\] and `v₀` the velocity of the body-fixed
+/// point at the world origin \[m/s\] (D11, D57), so the body frame's
+/// origin `p` moves at `v₀ + ω × p = J_v q̇ − [p]× J_ω q̇`. The columns are
+/// those of the body's joint and of every ancestor (the frame machinery
+/// of the closures' rows, D63–D64); prescribed joints (D59) stand at
+/// their last [`Model::set_time`]. Allocates `J`.
+pub fn body_jacobian(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    body: usize,
+) -> Result<(Pose, Matrix6xX<f64>), DynamicsError> {
+    check_vec(model, "q", q)?;
+    let count = model.bodies().len();
+    // A model with bodies has a tree (a body always hangs from a parent).
+    let (Some(tree), true) = (&model.tree, body < count) else {
+        return Err(DynamicsError::BodyIndex { index: body, count });
+    };
+    frames_on_tree(model, tree, data, q);
+    let frame = ResolvedFrame {
+        target: Target::Body {
+            node: tree.body_nodes[body],
+        },
+        offset: Pose::identity(),
+    };
+    let fs = frame_state(model, tree, data, &frame, q, None);
+    let n = model.n_dof();
+    let mut dense = nalgebra::DMatrix::zeros(6, n);
+    let identity = Mat6::identity();
+    let block = RowBlock {
+        c: &identity,
+        m: 6,
+        row: 0,
+        sign: 1.0,
+    };
+    add_frame_columns(tree, data, &fs, block, &mut dense);
+    let mut jac = Matrix6xX::zeros(n);
+    jac.copy_from(&dense);
+    Ok((fs.pose, jac))
+}

@@ -17,11 +17,11 @@ pub(crate) mod modes;
 pub(crate) mod statics;
 
 pub use crate::model::contact::IMPACT_LIMIT;
-pub use closed::closure_statics;
+pub use closed::{StaticsSensitivity, closure_statics, statics_sensitivity};
 pub(crate) use contact::raise_for_rest;
 pub use contact::{ContactChange, commit_contact, commit_contact_change};
 pub use energy::{Energies, energies};
-pub use frames::{frames, section_jacobian};
+pub use frames::{body_jacobian, frames, section_jacobian};
 pub use lanczos::lowest_modes;
 pub use matrices::{
     actuation_matrix, coriolis_matrix, damping_matrix, generalized_gravity, stiffness_matrix,

@@ -11,7 +11,7 @@ use super::queries::check_workspace;
 use super::rows::{assemble, prescribed_columns};
 use crate::algorithms::shifted::tree_solve;
 use crate::algorithms::tree::outward_from;
-use crate::algorithms::{Motion, Pass, check_forward_inputs, check_qdd};
+use crate::algorithms::{Motion, Pass, check_forward_inputs, check_qdd, check_vec};
 use crate::derivatives::{IdDerivatives, open_tree_id_derivatives};
 use crate::error::DynamicsError;
 use crate::forces::Forces;
@@ -359,4 +359,87 @@ pub(crate) fn closed_input_response(
         unreachable!("the constrained forward dynamics ran")
     };
     project(cw, x, None, &mut work.z);
+}
+
+/// `x ← P M⁻¹ x` column by column: the constrained acceleration's response
+/// to generalized forces `x` (n_dof × k) at `(t, q, q̇)` of a closed model
+/// (docs/theory-control.md G22; CD3 with `h = 0`):
+/// `P M⁻¹ = M⁻¹ − Y A⁻¹ J M⁻¹`, `Y = M⁻¹Jᵀ`, `A = J M⁻¹ Jᵀ` on the rows the
+/// forward solve keeps (its pivoted Cholesky of `A`: redundant rows carry
+/// no multiplier here either). `P M⁻¹` is symmetric, so the same call gives
+/// the transposed products `wᵀ P M⁻¹` of an adjoint. Runs the constrained
+/// forward dynamics at `(t, q, q̇)` first (its factorizations of `M` and
+/// `A` are what is applied; `M`, `J` and the pivots depend on `q` alone),
+/// then `k` O(N) solves and `O(k·m·n)` for the projection. `data` holds
+/// that forward dynamics afterwards; no allocation.
+///
+/// Errors: a model without closures, a workspace of another model, bad
+/// inputs, `x` without `n_dof` rows, a non-finite result.
+#[allow(clippy::too_many_arguments)]
+pub fn closed_force_response(
+    model: &Model,
+    data: &mut Data,
+    work: &mut ClosedDerivatives,
+    t: f64,
+    q: &[f64],
+    qd: &[f64],
+    tau_act: Option<&[f64]>,
+    x: &mut DMatrix<f64>,
+) -> Result<(), DynamicsError> {
+    let forces = Forces::ALL;
+    if model.tree.is_none() || !model.has_closures() {
+        return Err(DynamicsError::UnsupportedClosed {
+            what: "closed_force_response of an open model (use the mass matrix's solve)",
+        });
+    }
+    let n = model.n_dof();
+    if work.qdd.len() != n || x.nrows() != n {
+        return Err(DynamicsError::WorkspaceMismatch {
+            what: "closed_force_response",
+            built: work.qdd.len(),
+            got: if x.nrows() != n { x.nrows() } else { n },
+        });
+    }
+    check_workspace(model, data)?;
+    check_forward_inputs(model, forces, q, qd, tau_act)?;
+    model.set_time(data, t);
+    constrained_forward(model, data, forces, t, q, qd, tau_act)?;
+    closed_input_response(model, data, work, x);
+    if let Some((i, v)) = x.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        return Err(DynamicsError::NotFinite {
+            what: format!(
+                "closed force response entry ({}, {}) at t = {t}",
+                i % n,
+                i / n
+            ),
+            value: *v,
+        });
+    }
+    Ok(())
+}
+
+/// The inverse dynamics of a closed model's open tree (the closure forces
+/// `Jᵀλ` left out): `ID(q, q̇, q̈)` of (CD1), whose derivatives in the
+/// model's parameters give the constrained acceleration's through
+/// [`closed_force_response`] (docs/theory-control.md G22). For an open model
+/// the same as `inverse_dynamics`. Result in `data.tau`; no allocation.
+pub fn open_tree_inverse_dynamics<'a>(
+    model: &Model,
+    data: &'a mut Data,
+    t: f64,
+    q: &[f64],
+    qd: &[f64],
+    qdd: &[f64],
+) -> Result<&'a DVector<f64>, DynamicsError> {
+    check_vec(model, "q", q)?;
+    check_vec(model, "qdot", qd)?;
+    check_vec(model, "qddot", qdd)?;
+    crate::algorithms::inverse_dynamics_open(
+        model,
+        data,
+        Forces::ALL,
+        t,
+        Motion::new(q, Some(qd), Some(qdd)),
+    );
+    Ok(&data.tau)
 }

@@ -15,7 +15,10 @@ pub(crate) mod newton;
 pub(crate) mod queries;
 pub(crate) mod rows;
 
-pub use derivatives::{ClosedDerivatives, closed_dynamics_derivatives};
+pub use derivatives::{
+    ClosedDerivatives, closed_dynamics_derivatives, closed_force_response,
+    open_tree_inverse_dynamics,
+};
 pub use newton::ClosedShiftedSolver;
 pub use queries::{
     check_closures, closure_multipliers, closure_residuals, constraint_jacobian, constraint_rank,

@@ -9,6 +9,7 @@ use super::point::{PieceLin, basis6, linearize_point, own_points};
 use super::{At, IdDerivatives};
 use crate::forces::external::gravity_base_acceleration;
 use crate::forces::linearized::{drag_diagonal, has_dead_loads};
+use crate::kernels::mat6::{mm, tm};
 use crate::kernels::piece_derivs::PieceDerivMaps;
 use crate::model::{Model, RodModel};
 use softrod_lie::{PieceMaps, Vec6};
@@ -91,17 +92,19 @@ pub(crate) fn pairs(rm: &RodModel, work: &mut IdDerivatives, r: usize) {
             let wi = &ws[i];
             let (bq, bv) = if i < j {
                 (
-                    wi.s_world.transpose() * wj.dwq_world,
-                    wi.s_world.transpose() * wj.dwv_world,
+                    tm(&wi.s_world, &wj.dwq_world),
+                    tm(&wi.s_world, &wj.dwv_world),
                 )
             } else {
                 (
                     if dead {
-                        wi.rcv_m * wj.src_wq + wi.rcv_b * wj.src_uq + wi.rcv_y * wj.s_world
+                        mm(&wi.rcv_m, &wj.src_wq)
+                            + mm(&wi.rcv_b, &wj.src_uq)
+                            + mm(&wi.rcv_y, &wj.s_world)
                     } else {
-                        wi.rcv_m * wj.src_wq + wi.rcv_b * wj.src_uq
+                        mm(&wi.rcv_m, &wj.src_wq) + mm(&wi.rcv_b, &wj.src_uq)
                     },
-                    wi.rcv_m * wj.src_wv + wi.rcv_b * wj.src_uv,
+                    mm(&wi.rcv_m, &wj.src_wv) + mm(&wi.rcv_b, &wj.src_uv),
                 )
             };
             let ld = work.dtau_dq.nrows();

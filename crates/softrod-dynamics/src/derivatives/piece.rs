@@ -7,6 +7,7 @@
 use super::point::PointLin;
 use super::{At, IdDerivatives};
 use crate::forces::linearized::cable_terms;
+use crate::kernels::mat6::{Cols, mm_part, mm3};
 use crate::kernels::piece_derivs::{Coefficients, PieceDerivMaps, lambda, tangent_transpose_form};
 use crate::model::{Model, RodModel};
 use softrod_lie::{Mat6, Pose, Vec6, ad};
@@ -196,9 +197,13 @@ impl Subtree {
     pub(crate) fn through(&self, a: &Mat6, dead: bool) -> Self {
         let at = a.transpose();
         Self {
-            m: at * self.m * a,
-            b: at * self.b * a,
-            y: if dead { at * self.y * a } else { Mat6::zeros() },
+            m: mm3(&at, &self.m, a),
+            b: mm3(&at, &self.b, a),
+            y: if dead {
+                mm3(&at, &self.y, a)
+            } else {
+                Mat6::zeros()
+            },
             w: at * self.w,
         }
     }
@@ -228,56 +233,68 @@ pub(crate) fn close_piece(
     let al = w.tip.ad_inv().to_mat6();
     let tl = w.tm_tip;
     let adeta = ad(&w.eta_tip);
+    // Everything with a strain-direction index `ζ` is needed only on the
+    // basis's `k` directions (its columns `ζ = B eᵢ`, or rows of `Bᵀ`):
+    // carried as `X B` from here on (docs/theory-derivatives.md D87), the
+    // same numbers as the
+    // six directions projected at the end.
+    let c = Cols::of(bm);
+    let k = c.k;
+    let tlb = c.right(&tl);
     // (D43): the subtree's wrench at L_n changes by
     // 𝓜ᶜ w̄ + 𝓑ᶜ u + 𝒴ᶜ Δ, with u = δη(ℓ), w̄ = δη̇′(ℓ) + ad_η(ℓ) δη(ℓ).
-    let wq = w.h_etad + adeta * w.h_eta;
-    let uq = w.h_eta;
-    let mut dwn_q = mc * wq + bc * uq;
+    let uq = c.right(&w.h_eta);
+    let wq = c.right(&w.h_etad) + mm_part(&adeta, &uq, 6, k);
+    let mut dwn_q = mm_part(mc, &wq, 6, k) + mm_part(bc, &uq, 6, k);
     if dead {
-        dwn_q += yc * tl;
+        dwn_q += mm_part(yc, &tlb, 6, k);
     }
-    let wv = w.h_vd + adeta * tl;
-    let dwn_v = mc * wv + bc * tl;
+    let wv = c.right(&w.h_vd) + mm_part(&adeta, &tlb, 6, k);
+    let dwn_v = mm_part(mc, &wv, 6, k) + mm_part(bc, &tlb, 6, k);
     let (mut phi, mut chi) = (w.phi, w.chi);
     for i in 0..4 {
         phi[i] += wn * w.co_tip.d[i];
         chi[i] += wn * w.co_tip.c[i];
     }
     let qform = tangent_transpose_form(&w.powers, &w.kbar, &phi, &chi);
-    let tlt = tl.transpose();
-    let diag_q = w.dq_diag + tlt * dwn_q + qform;
-    let diag_v = w.dv_diag + tlt * dwn_v;
+    let tlbt = tlb.transpose();
+    let diag_q = c.both(&w.dq_diag) + mm_part(&tlbt, &dwn_q, k, k) + c.both(&qform);
+    let diag_v = c.both(&w.dv_diag) + mm_part(&tlbt, &dwn_v, k, k);
     let alt = al.transpose();
-    let dw_q = w.dq_w + alt * (lambda(wn) * tl + dwn_q);
-    let dw_v = w.dv_w + alt * dwn_v;
+    let dw_q = c.right(&w.dq_w) + mm_part(&alt, &(mm_part(&lambda(wn), &tlb, 6, k) + dwn_q), 6, k);
+    let dw_v = c.right(&w.dv_w) + mm_part(&alt, &dwn_v, 6, k);
     // World-frame pairing quantities (D46).
     let to_world_tip = w.tip_world.ad().to_mat6();
     let base_inv = w.base_world.ad_inv().to_mat6();
-    w.s_world = to_world_tip * tl * bm;
-    w.src_wq = to_world_tip * wq * bm;
-    w.src_uq = to_world_tip * uq * bm;
-    w.src_wv = to_world_tip * wv * bm;
+    w.s_world = mm_part(&to_world_tip, &tlb, 6, k);
+    w.src_wq = mm_part(&to_world_tip, &wq, 6, k);
+    w.src_uq = mm_part(&to_world_tip, &uq, 6, k);
+    w.src_wv = mm_part(&to_world_tip, &wv, 6, k);
     w.src_uv = w.s_world;
-    w.dwq_world = base_inv.transpose() * dw_q * bm;
-    w.dwv_world = base_inv.transpose() * dw_v * bm;
-    let bt_ = bm.transpose();
-    w.rcv_m = bt_ * (w.rm + tlt * mc * al) * base_inv;
-    w.rcv_b = bt_ * (w.rb + tlt * bc * al) * base_inv;
+    let bit = base_inv.transpose();
+    w.dwq_world = mm_part(&bit, &dw_q, 6, k);
+    w.dwv_world = mm_part(&bit, &dw_v, 6, k);
+    // `Bᵀ(X + T₋(ℓ)ᵀ 𝓒 A)` then `· Ad⁻¹`: `k` rows.
+    let tmc = mm_part(&tlbt, mc, k, 6);
+    w.rcv_m = mm_part(&(c.left(&w.rm) + mm_part(&tmc, &al, k, 6)), &base_inv, k, 6);
+    let tbc = mm_part(&tlbt, bc, k, 6);
+    w.rcv_b = mm_part(&(c.left(&w.rb) + mm_part(&tbc, &al, k, 6)), &base_inv, k, 6);
     if dead {
-        w.rcv_y = bt_ * (w.ry + tlt * yc * al) * base_inv;
+        let tyc = mm_part(&tlbt, yc, k, 6);
+        w.rcv_y = mm_part(&(c.left(&w.ry) + mm_part(&tyc, &al, k, 6)), &base_inv, k, 6);
     }
     // Composites carried to L_{n−1} (D43), and τ_n's wrench (D18).
     let base = Subtree {
-        m: w.mt + alt * mc * al,
-        b: w.bt + alt * bc * al,
+        m: w.mt + mm3(&alt, mc, &al),
+        b: w.bt + mm3(&alt, bc, &al),
         y: if dead {
-            w.yt + alt * yc * al
+            w.yt + mm3(&alt, yc, &al)
         } else {
             Mat6::zeros()
         },
         w: w.wsum + alt * wn,
     };
-    (diag_q, diag_v, w.tsum + tlt * wn, base)
+    (diag_q, diag_v, w.tsum + tl.transpose() * wn, base)
 }
 
 /// The diagonal block of the mass matrix of a closed piece or joint (D86):
@@ -287,7 +304,11 @@ pub(crate) fn close_piece(
 #[inline(always)]
 pub(crate) fn close_mass(w: &mut PieceWork, mc: &Mat6, bm: &Mat6) {
     let tl = w.tm_tip;
-    w.blk_a = bm.transpose() * (w.mtt + tl.transpose() * mc * tl) * bm;
+    let c = Cols::of(bm);
+    let k = c.k;
+    let tlb = c.right(&tl);
+    let tlbt = tlb.transpose();
+    w.blk_a = c.both(&w.mtt) + mm_part(&mm_part(&tlbt, mc, k, 6), &tlb, k, k);
 }
 
 /// Writes a piece's `τ_n` and returns its diagonal blocks (k×k in the
@@ -322,9 +343,8 @@ pub(crate) fn write_piece(
         scale,
         work.tensions.as_ref(),
     );
-    let bt_ = bm.transpose();
-    let mut dq6 = bt_ * (diag_q + cable_hess) * bm;
-    let mut dv6 = bt_ * diag_v * bm;
+    let mut dq6 = diag_q + Cols::of(bm).both(&cable_hess);
+    let mut dv6 = *diag_v;
     let inert = wrench + cable_force;
     for i in 0..k {
         let mut tau = piece.basis.column(i).dot(&inert) + pd.offset6[i];

@@ -4,6 +4,7 @@
 
 use super::piece::PieceWork;
 use crate::forces::linearized::dead_load_map;
+use crate::kernels::mat6::{mm, tm};
 use crate::kernels::piece_derivs::{Coefficients, PieceDerivMaps, lambda};
 use crate::model::RodModel;
 use crate::model::rod::PieceData;
@@ -37,19 +38,19 @@ fn scale_columns(x: &Mat6, d: &Vec6) -> Mat6 {
 /// measured cheaper than six 3×3 block products with their copies).
 #[inline(always)]
 fn mul_op(x: &Mat6, op: &AdOp) -> Mat6 {
-    x * op.to_mat6()
+    mm(x, &op.to_mat6())
 }
 
 /// `Op · X`.
 #[inline(always)]
 fn op_mul(op: &AdOp, x: &Mat6) -> Mat6 {
-    op.to_mat6() * x
+    mm(&op.to_mat6(), x)
 }
 
 /// `Opᵀ · X`.
 #[inline(always)]
 fn op_tr_mul(op: &AdOp, x: &Mat6) -> Mat6 {
-    op.to_mat6().tr_mul(x)
+    tm(&op.to_mat6(), x)
 }
 
 /// One evaluation point of a piece, linearized (D39–D41).
@@ -188,7 +189,7 @@ pub(crate) fn own_points(
         }
         let wt = qp.w;
         let df_q = (diag_mul(m, &p.h_etad)
-            + b * p.h_eta
+            + mm(&b, &p.h_eta)
             + if has_y {
                 mul_op(&y, &p.t)
             } else {

@@ -386,7 +386,8 @@ fn write_joint(
     let joint = &info.attachment.joint;
     let first = node.dof - info.joint_dofs.start;
     let b = &node.bpad;
-    let (mut dq6, mut dv6) = (b.transpose() * diag_q * b, b.transpose() * diag_v * b);
+    // `close_piece` returned them in the joint's coordinates already.
+    let (mut dq6, mut dv6) = (*diag_q, *diag_v);
     let o = node.dof;
     for i in 0..node.k {
         let (kc, dc, rest) = joint.coefficients(first + i);

@@ -12,6 +12,7 @@
 pub(crate) mod blocks;
 pub(crate) mod chol;
 pub(crate) mod inertia;
+pub(crate) mod mat6;
 pub(crate) mod piece_derivs;
 pub(crate) mod planar;
 // The AVX2 copies: the crate's one `unsafe` call (after the CPU check) is

@@ -9,6 +9,7 @@
 //! ([`PieceDerivMaps::new`]), the coefficients per evaluation point
 //! ([`Coefficients::at`]).
 
+use super::mat6::{mm, tm};
 use softrod_lie::series::{PSI_SWITCH, tau_rho};
 use softrod_lie::{Mat6, Vec6, ad, angular, linear};
 
@@ -166,7 +167,7 @@ impl PieceDerivMaps {
         let pm = ad(xi);
         let mut p = [pm; 4];
         for i in 1..4 {
-            p[i] = pm * p[i - 1];
+            p[i] = mm(&pm, &p[i - 1]);
         }
         let powers = |v: &Vec6| {
             let mut out = [pm * v; 4];
@@ -181,7 +182,7 @@ impl PieceDerivMaps {
         let e_ops = |v: &Vec6, pv: &[Vec6; 4]| {
             let mut out = [ad(v); 4];
             for i in 1..4 {
-                out[i] = pm * out[i - 1] + ad(&pv[i - 1]);
+                out[i] = mm(&pm, &out[i - 1]) + ad(&pv[i - 1]);
             }
             out
         };
@@ -191,7 +192,7 @@ impl PieceDerivMaps {
         let adv = ad(xid);
         let mut f = [adv; 4];
         for i in 1..4 {
-            f[i] = pm * f[i - 1] + adv * p[i - 1];
+            f[i] = mm(&pm, &f[i - 1]) + mm(&adv, &p[i - 1]);
         }
         // e_1 = 0, e_{i+1} = ad_ξ̇ P^i ξ̇ + P e_i;
         // Ê_1 = 0, Ê_{i+1} = P Ê_i − ad_ξ̇ E_i(ξ̇) − ad_{e_i}.
@@ -199,7 +200,7 @@ impl PieceDerivMaps {
         let mut ehat = [Mat6::zeros(); 4];
         for i in 1..4 {
             e[i] = adv * vd[i - 1] + pm * e[i - 1];
-            ehat[i] = pm * ehat[i - 1] - adv * ed[i - 1] - ad(&e[i - 1]);
+            ehat[i] = mm(&pm, &ehat[i - 1]) - mm(&adv, &ed[i - 1]) - ad(&e[i - 1]);
         }
         let kd = k.dot(&angular(xid));
         Self {
@@ -297,7 +298,7 @@ pub(crate) fn tangent_transpose_form(
             if m == 0 {
                 out -= lam;
             } else {
-                out -= p[m - 1].transpose() * lam;
+                out -= tm(&p[m - 1], &lam);
             }
             fl = p[0].transpose() * fl;
         }

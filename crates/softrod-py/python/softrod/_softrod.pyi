@@ -522,7 +522,8 @@ class Simulation:
         t: float = 0.0,
     ) -> dict[str, object]:
         """Inverse statics: tensions 0 <= T <= max_tension [N] and the equilibrium that bring
-        rod sections closest to targets ({"rod", "s", "position", "rotation", "weight"});
+        rod sections or body frames closest to targets ({"rod", "s", "position", "rotation",
+        "weight"}, or {"body", "position", "rotation", "weight"}); closed models included;
         returns converged, reached, message, tensions, q, bounds, residual, targets, ...
         Raises InputError on bad input, SimulationError if it does not converge."""
     def value_and_gradient(

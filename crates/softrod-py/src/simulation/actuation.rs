@@ -1,5 +1,5 @@
 //! `Simulation.solve_actuation`: inverse statics (the facade's
-//! `Simulation::solve_actuation`, docs/theory-control.md IS1–IS7) with
+//! `Simulation::solve_actuation`, docs/theory-control.md IS1–IS12) with
 //! Python targets in and a dict out.
 
 use numpy::PyArrayDyn;
@@ -41,18 +41,39 @@ impl Simulation {
                 .map_err(|_| input(format!("targets[{i}] must be a dict")))?;
             for k in d.keys() {
                 let k: String = k.extract()?;
-                if !["rod", "s", "position", "rotation", "weight"].contains(&k.as_str()) {
+                if !["rod", "s", "body", "position", "rotation", "weight"].contains(&k.as_str()) {
                     return Err(input(format!(
-                        "targets[{i}]: unknown key {k:?} (rod, s, position, rotation, weight)"
+                        "targets[{i}]: unknown key {k:?} (rod, s, body, position, rotation, weight)"
                     )));
                 }
             }
+            // A body's target is its frame (IS11): no rod, no arc length.
+            let body = match d.get_item("body")? {
+                Some(b) => {
+                    for k in ["rod", "s"] {
+                        if d.contains(k)? {
+                            return Err(input(format!(
+                                "{}: a target on a body takes no {k:?} (its frame is the target)",
+                                key(k)
+                            )));
+                        }
+                    }
+                    Some(
+                        body_index(model, &b)
+                            .map_err(|e| input(format!("{}: {}", key("body"), e.value(py))))?,
+                    )
+                }
+                None => None,
+            };
             let rod = match d.get_item("rod")? {
                 Some(r) => rod_index(model, &r)
                     .map_err(|e| input(format!("{}: {}", key("rod"), e.value(py))))?,
                 None => 0,
             };
-            let length = model.rods()[rod].spec.geometry.length();
+            let length = match body {
+                Some(_) => 0.0,
+                None => model.rods()[rod].spec.geometry.length(),
+            };
             let s = match d.get_item("s")? {
                 Some(v) => v
                     .extract::<f64>()
@@ -76,6 +97,7 @@ impl Simulation {
             parsed.push(Target {
                 rod,
                 s,
+                body,
                 position,
                 rotation,
                 weight,
@@ -160,4 +182,33 @@ impl Simulation {
         out.set_item("targets", per)?;
         Ok(out)
     }
+}
+
+/// The index of a body given by name or index (negative from the end) in
+/// [`softrod::dynamics::Model::bodies`].
+fn body_index(model: &softrod::dynamics::Model, body: &Bound<'_, PyAny>) -> PyResult<usize> {
+    let n = model.bodies().len();
+    if let Ok(name) = body.cast::<pyo3::types::PyString>() {
+        let name = name.to_str()?;
+        return model
+            .bodies()
+            .iter()
+            .position(|b| b.spec.name == name)
+            .ok_or_else(|| {
+                let names: Vec<&str> = model
+                    .bodies()
+                    .iter()
+                    .map(|b| b.spec.name.as_str())
+                    .collect();
+                input(format!("no body {name:?} (bodies: {names:?})"))
+            });
+    }
+    let i: isize = body
+        .extract()
+        .map_err(|_| input("body must be a body name or an index"))?;
+    let k = if i < 0 { i + n as isize } else { i };
+    if !(0..n as isize).contains(&k) {
+        return Err(input(format!("body index {i} out of range for {n} bodies")));
+    }
+    Ok(k as usize)
 }

@@ -825,13 +825,16 @@ impl Simulation {
         self.statics_impl(py, tensions, loads)
     }
 
-    /// Inverse statics (docs/theory-control.md IS1–IS7): the cable tensions
-    /// `0 ≤ T ≤ max_tension` [N] and the static equilibrium that bring rod
-    /// sections closest to `targets`, the least effort among equally close
-    /// ones. `targets`: a list of dicts `{"rod": name or index (default 0),
-    /// "s": arc length [m] (default the tip), "position": (3,) [m, world],
-    /// "rotation": (3, 3) section → world, "weight": > 0 (default 1)}`, each
-    /// with a position, a rotation or both. `max_tension`: one number for
+    /// Inverse statics (docs/theory-control.md IS1–IS12): the cable tensions
+    /// `0 ≤ T ≤ max_tension` [N] and the static equilibrium (with loop
+    /// closures, the constrained one) that bring rod sections or body frames
+    /// closest to `targets`, the least effort among equally close ones.
+    /// `targets`: a list of dicts `{"rod": name or index (default 0), "s":
+    /// arc length [m] (default the tip), "position": (3,) [m, world],
+    /// "rotation": (3, 3) section → world, "weight": > 0 (default 1)}`, or,
+    /// for a rigid body's frame (origin and axes, as `Statics` reports its
+    /// pose), `{"body": name or index, "position", "rotation", "weight"}`
+    /// (no "rod" or "s"), each with a position, a rotation or both. `max_tension`: one number for
     /// every cable or one per cable (default none). `effort_weight`: the
     /// relative weight ρ of the effort term. `warm_start`: a previous result
     /// (its tensions and q start the search: a target that moved a little

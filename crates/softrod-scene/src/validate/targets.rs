@@ -1,4 +1,5 @@
-//! `[[target]]` (where `softrod inverse` should bring a rod section) and
+//! `[[target]]` (where `softrod inverse` should bring a rod section or a
+//! body's frame) and
 //! `[[cable]] max_tension` (the bound of its tension there).
 
 use softrod_dynamics::Rod;
@@ -20,9 +21,10 @@ pub(crate) struct RawTarget {
 }
 
 impl Ctx<'_> {
-    /// `target[j]`: a rod of the scene (bodies are not targets yet), `s`
-    /// in `[0, L]` (default the tip), a position, a rotation (row-major,
-    /// orthonormal like a box's) or both, a positive weight (default 1).
+    /// `target[j]`: a rod of the scene with `s` in `[0, L]` (default the
+    /// tip), or a `[[body]]` (its frame; `s` is an error there), a
+    /// position, a rotation (row-major, orthonormal like a box's) or both,
+    /// a positive weight (default 1).
     pub(super) fn target(
         &self,
         j: usize,
@@ -32,25 +34,50 @@ impl Ctx<'_> {
     ) -> Result<Target> {
         let p = format!("target[{j}]");
         let path = |k: &str| format!("{p}.{k}");
-        if robot.bodies.iter().any(|b| b.name == t.element) {
-            return Err(self.r.invalid(
-                &path("element"),
-                format!(
-                    "{:?} is a body: targets on bodies are not supported yet (name a rod)",
-                    t.element
-                ),
-            ));
-        }
-        let rod = self.rod_ref(&path("element"), &t.element, rods)?;
-        let length = rods[rod].properties.length();
-        let s = t.s.unwrap_or(length);
-        if !(0.0..=length).contains(&s) {
-            return Err(self.r.out_of_range(
-                &path("s"),
-                s,
-                format!("in [0, {length}] (the rod's length)"),
-            ));
-        }
+        let body = robot.bodies.iter().position(|b| b.name == t.element);
+        let (rod, s) = match body {
+            Some(_) => {
+                if let Some(s) = t.s {
+                    return Err(self.r.invalid(
+                        &path("s"),
+                        format!(
+                            "{:?} is a body: its target is the body's frame, which has no arc \
+                             length (remove `s = {s}`)",
+                            t.element
+                        ),
+                    ));
+                }
+                (0, 0.0)
+            }
+            None if rods.iter().any(|r| r.name == t.element) => {
+                let rod = self.rod_ref(&path("element"), &t.element, rods)?;
+                let length = rods[rod].properties.length();
+                let s = t.s.unwrap_or(length);
+                if !(0.0..=length).contains(&s) {
+                    return Err(self.r.out_of_range(
+                        &path("s"),
+                        s,
+                        format!("in [0, {length}] (the rod's length)"),
+                    ));
+                }
+                (rod, s)
+            }
+            None => {
+                let known: Vec<&str> = rods
+                    .iter()
+                    .map(|r| r.name.as_str())
+                    .chain(robot.bodies.iter().map(|b| b.name.as_str()))
+                    .collect();
+                return Err(self.r.invalid(
+                    &path("element"),
+                    format!(
+                        "{:?} is no rod or body of the scene (rods and bodies: {})",
+                        t.element,
+                        known.join(", ")
+                    ),
+                ));
+            }
+        };
         if t.position.is_none() && t.rotation.is_none() {
             return Err(self.r.missing(&path("position"), " (or rotation, or both)"));
         }
@@ -66,6 +93,7 @@ impl Ctx<'_> {
             element: t.element,
             rod,
             s,
+            body,
             position: t.position.map(Vec3::from),
             rotation: rotation.map(|r: Mat3| r),
             weight,

@@ -1,22 +1,24 @@
 //! Inverse statics: cable tensions for targets (docs/theory-control.md
-//! IS1–IS7).
+//! IS1–IS12).
 //!
 //! The equilibrium `r(q, T) = τ_s(q) − B(q) T = 0` (IS1) defines `q(T)`
 //! wherever its tangent stiffness `K_t = ∂r/∂q` is regular, with
 //! `∂q/∂T = K_t⁻¹ B` (IS3, the implicit function theorem; `B = −∂ℓ/∂q` the
-//! actuation matrix, D15). The tensions minimize
+//! actuation matrix, D15); with loop closures the equilibrium carries the
+//! closure forces `J_vᵀλ` and `∂q/∂T` comes from the bordered system
+//! `[[K_t, −J_vᵀ], [J_e, 0]]` (IS8–IS10). The tensions minimize
 //! `f(T) = ½ Σ_i w_i ‖e_i(q(T))‖² + ½ ε ‖T‖²` on the box `0 ≤ T ≤ T_max`
 //! (IS2) by projected Gauss–Newton: each step solves the bounded QP of the
 //! linearized residuals (IS4, [`super::qp`]), then re-solves the statics at
 //! the trial tensions from the last equilibrium and backtracks until `f`
 //! decreases enough (IS5).
 
-use nalgebra::{DMatrix, DVector, Matrix3, Rotation3};
+use nalgebra::{DMatrix, DVector, Matrix3, Matrix6xX, Rotation3};
 use softrod_dynamics::{
-    DynamicsError, Forces, IdDerivatives, Model, StaticsOptions, actuation_matrix,
-    inverse_dynamics_derivatives_with, section_jacobian, statics,
+    DynamicsError, Forces, IdDerivatives, Model, StaticsOptions, actuation_matrix, body_jacobian,
+    closure_statics, inverse_dynamics_derivatives_with, section_jacobian, statics_sensitivity,
 };
-use softrod_lie::{Mat3, Vec3};
+use softrod_lie::{Mat3, Pose, Vec3};
 
 use crate::error::{Error, Result};
 
@@ -32,18 +34,23 @@ use crate::error::{Error, Result};
 /// least-squares fit when the tensions are determined.
 pub const DEFAULT_EFFORT_WEIGHT: f64 = 1e-9;
 
-/// What a rod section should reach: a world position, a world orientation,
-/// or both, with a weight.
+/// What a rod section or a rigid body's frame should reach: a world
+/// position, a world orientation, or both, with a weight.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Target {
-    /// The rod's index in [`Model::rods`].
+    /// The rod's index in [`Model::rods`] (not read when `body` is set).
     pub rod: usize,
-    /// Arc length of the section \[m\], in `[0, L]`.
+    /// Arc length of the section \[m\], in `[0, L]` (not read when `body`
+    /// is set).
     pub s: f64,
-    /// The section's wanted world position \[m\], if any.
+    /// A rigid body's index in [`Model::bodies`]: the target is then the
+    /// body's frame (its origin and axes, the pose of
+    /// [`softrod_dynamics::body_jacobian`]; IS11) instead of a rod section.
+    pub body: Option<usize>,
+    /// The frame's wanted world position \[m\], if any.
     pub position: Option<Vec3>,
-    /// The section's wanted orientation (maps the section frame to the
-    /// world, like `Pose::rotation`), if any.
+    /// The frame's wanted orientation (maps the section's or body's frame
+    /// to the world, like `Pose::rotation`), if any.
     pub rotation: Option<Mat3>,
     /// Weight `w` of the target's squared error (position in m, rotation
     /// angle in rad): `> 0`, finite.
@@ -56,6 +63,20 @@ impl Target {
         Self {
             rod,
             s,
+            body: None,
+            position: Some(Vec3::from(position)),
+            rotation: None,
+            weight: 1.0,
+        }
+    }
+
+    /// A position target of weight 1 for the frame origin of body `body`
+    /// (index in [`Model::bodies`]).
+    pub fn body_position(body: usize, position: [f64; 3]) -> Self {
+        Self {
+            rod: 0,
+            s: 0.0,
+            body: Some(body),
             position: Some(Vec3::from(position)),
             rotation: None,
             weight: 1.0,
@@ -150,12 +171,12 @@ impl Bound {
     }
 }
 
-/// How far one target is from where the solution puts its section.
+/// How far one target is from where the solution puts its section or body.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TargetResidual {
-    /// The section's world position at the solution \[m\].
+    /// The section's (body frame's) world position at the solution \[m\].
     pub position: Vec3,
-    /// Its orientation (section to world).
+    /// Its orientation (section or body frame to world).
     pub rotation: Mat3,
     /// `‖p − p*‖` \[m\] (0 without a position target).
     pub position_error: f64,
@@ -194,18 +215,18 @@ pub struct Actuation {
 }
 
 /// Cable tensions within `0 ≤ T ≤ max_tension` and the equilibrium they
-/// hold that bring the sections of `targets` closest to them, the least
-/// effort among equally close ones (IS1–IS7). `data`'s cable inputs are
-/// left as they were.
+/// hold that bring the sections and bodies of `targets` closest to them,
+/// the least effort among equally close ones (IS1–IS12). Models with loop
+/// closures are solved with their constrained equilibrium (IS8–IS10).
+/// `data`'s cable inputs are left as they were.
 ///
 /// Refused (an input error naming the key): no targets, no cables, a
-/// target on a rod that does not exist or outside `[0, L]`, a non-finite
-/// or non-orthonormal target, a weight not positive, `max_tension` of the
-/// wrong length, negative or NaN, a closed model (its statics has closure
-/// forces the implicit-function step does not yet carry; IS7). A statics
-/// failure at the starting tensions is an error; later ones shorten the
-/// step. Not converging within `max_iterations` is `converged: false`
-/// with the residual, never an error.
+/// target on a rod or body that does not exist or outside `[0, L]`, a
+/// non-finite or non-orthonormal target, a weight not positive,
+/// `max_tension` of the wrong length, negative or NaN. A statics failure
+/// at the starting tensions is an error; later ones shorten the step. Not
+/// converging within `max_iterations` is `converged: false` with the
+/// residual, never an error.
 pub fn solve_actuation(
     model: &Model,
     data: &mut softrod_dynamics::Data,
@@ -227,12 +248,6 @@ fn bad(key: impl Into<String>, message: impl Into<String>) -> Error {
 }
 
 fn validate(model: &Model, targets: &[Target], options: &ActuationOptions) -> Result<()> {
-    if model.has_closures() {
-        return Err(bad(
-            "closure",
-            "inverse statics of closed models is not supported yet (docs/theory-control.md IS7)",
-        ));
-    }
     let nc = model.n_cables();
     if nc == 0 {
         return Err(bad("cable", "the model has no cables to solve for"));
@@ -242,20 +257,30 @@ fn validate(model: &Model, targets: &[Target], options: &ActuationOptions) -> Re
     }
     let rods = model.rods();
     for (i, t) in targets.iter().enumerate() {
-        let Some(r) = rods.get(t.rod) else {
-            return Err(bad(
-                format!("target[{i}].element"),
-                format!("no rod {} (the model has {})", t.rod, rods.len()),
-            ));
-        };
-        let len = r.spec.geometry.length();
-        // The rod's length is a sum of piece lengths: its nominal length
-        // may exceed it by round-off.
-        if !(t.s.is_finite() && (0.0..=len * (1.0 + 1e-12)).contains(&t.s)) {
-            return Err(bad(
-                format!("target[{i}].s"),
-                format!("must be in [0, {len}] (rod {:?}), got {}", r.spec.name, t.s),
-            ));
+        if let Some(b) = t.body {
+            let count = model.bodies().len();
+            if b >= count {
+                return Err(bad(
+                    format!("target[{i}].element"),
+                    format!("no body {b} (the model has {count})"),
+                ));
+            }
+        } else {
+            let Some(r) = rods.get(t.rod) else {
+                return Err(bad(
+                    format!("target[{i}].element"),
+                    format!("no rod {} (the model has {})", t.rod, rods.len()),
+                ));
+            };
+            let len = r.spec.geometry.length();
+            // The rod's length is a sum of piece lengths: its nominal length
+            // may exceed it by round-off.
+            if !(t.s.is_finite() && (0.0..=len * (1.0 + 1e-12)).contains(&t.s)) {
+                return Err(bad(
+                    format!("target[{i}].s"),
+                    format!("must be in [0, {len}] (rod {:?}), got {}", r.spec.name, t.s),
+                ));
+            }
         }
         if t.position.is_none() && t.rotation.is_none() {
             return Err(bad(
@@ -362,6 +387,8 @@ fn validate(model: &Model, targets: &[Target], options: &ActuationOptions) -> Re
 struct Point {
     t: DVector<f64>,
     q: DVector<f64>,
+    /// The closure multipliers at `q` (empty on an open model; IS8).
+    lambda: DVector<f64>,
     /// Weighted residuals `√w e` (IS2), stacked.
     e: DVector<f64>,
     cost: f64,
@@ -422,11 +449,19 @@ impl<'a> Solver<'a> {
             time: self.options.time,
             ..StaticsOptions::default()
         };
-        let r = statics(self.model, data, q0, &opts)?;
+        // `statics` itself on an open model; the constrained Newton of
+        // D69, with its multipliers, on a closed one (IS8).
+        let (r, lambda) = closure_statics(self.model, data, q0, &opts)?;
         self.statics_iterations += r.iterations;
         let e = self.residuals(data, r.q.as_slice(), None)?;
         let cost = 0.5 * e.norm_squared() + 0.5 * self.eps * t.norm_squared();
-        Ok(Point { t, q: r.q, e, cost })
+        Ok(Point {
+            t,
+            q: r.q,
+            lambda,
+            e,
+            cost,
+        })
     }
 
     /// The stacked weighted residuals at `q` (IS2) and, with `jac`, their
@@ -445,7 +480,7 @@ impl<'a> Solver<'a> {
         self.model.set_time(data, self.options.time);
         let mut row = 0;
         for tg in self.targets {
-            let (g, js) = section_jacobian(self.model, data, q, tg.rod, self.abscissa(tg))?;
+            let (g, js) = self.frame(data, q, tg)?;
             let sw = tg.weight.sqrt();
             if let Some(p) = &tg.position {
                 let d = g.translation - p;
@@ -475,6 +510,20 @@ impl<'a> Solver<'a> {
         Ok(e)
     }
 
+    /// The world pose and spatial Jacobian (D11) of the target's section
+    /// or body frame (IS11).
+    fn frame(
+        &self,
+        data: &mut softrod_dynamics::Data,
+        q: &[f64],
+        tg: &Target,
+    ) -> std::result::Result<(Pose, Matrix6xX<f64>), DynamicsError> {
+        match tg.body {
+            Some(b) => body_jacobian(self.model, data, q, b),
+            None => section_jacobian(self.model, data, q, tg.rod, self.abscissa(tg)),
+        }
+    }
+
     /// The target's `s` inside the rod (a nominal tip `s = L` may exceed
     /// the summed piece lengths by round-off).
     fn abscissa(&self, tg: &Target) -> f64 {
@@ -488,12 +537,32 @@ impl<'a> Solver<'a> {
             .sum()
     }
 
-    /// `∂e/∂T = (∂e/∂q) K_t⁻¹ B` at the equilibrium `p` (IS3).
+    /// `∂e/∂T = (∂e/∂q) K_t⁻¹ B` at the equilibrium `p` (IS3); with
+    /// closures `∂q/∂T` from the bordered system (IS9).
     fn sensitivity(
         &mut self,
         data: &mut softrod_dynamics::Data,
         p: &Point,
     ) -> std::result::Result<Option<Sensitivity>, DynamicsError> {
+        if self.model.has_closures() {
+            let b = actuation_matrix(self.model, p.q.as_slice())?;
+            data.set_cable_tensions(self.model, Some(p.t.as_slice()))?;
+            let Some(sens) = statics_sensitivity(
+                self.model,
+                data,
+                self.options.time,
+                p.q.as_slice(),
+                p.lambda.as_slice(),
+                &b,
+            )?
+            else {
+                return Ok(None);
+            };
+            let mut jq = DMatrix::zeros(0, 0);
+            self.residuals(data, p.q.as_slice(), Some(&mut jq))?;
+            let j = jq * &sens.dq;
+            return Ok(j.iter().all(|v| v.is_finite()).then_some((j, sens.dq)));
+        }
         let w = &mut self.work;
         w.tensions = Some(p.t.clone());
         inverse_dynamics_derivatives_with(
@@ -644,8 +713,7 @@ impl<'a> Solver<'a> {
         let mut residuals = Vec::with_capacity(self.targets.len());
         let mut reached = true;
         for tg in self.targets {
-            let (g, _) =
-                section_jacobian(self.model, data, p.q.as_slice(), tg.rod, self.abscissa(tg))?;
+            let (g, _) = self.frame(data, p.q.as_slice(), tg)?;
             let position_error = tg.position.map_or(0.0, |x| (g.translation - x).norm());
             let rotation_error = tg.rotation.map_or(0.0, |r| {
                 Rotation3::from_matrix_unchecked(g.rotation * r.transpose()).angle()

@@ -1,11 +1,12 @@
 //! Control: which actuation puts the model where it is wanted.
 //!
 //! [`solve_actuation`] (and [`Simulation::solve_actuation`](crate::Simulation::solve_actuation))
-//! is *inverse statics*: given targets for rod sections (a position, an
-//! orientation, or both, each with a weight), it finds the cable tensions
-//! `0 ≤ T ≤ T_max` and the static equilibrium `q(T)` that bring the sections
-//! closest to them, with the least effort among equally good tensions
-//! (docs/theory-control.md, IS1–IS7).
+//! is *inverse statics*: given targets for rod sections or bodies (a
+//! position, an orientation, or both, each with a weight), it finds the
+//! cable tensions `0 ≤ T ≤ T_max` and the static equilibrium `q(T)`
+//! (constrained, with loop closures) that bring them closest to the
+//! targets, with the least effort among equally good tensions
+//! (docs/theory-control.md, IS1–IS12).
 //!
 //! Why a module of the facade and not a crate of its own: the solver is a
 //! few hundred lines on top of `softrod-dynamics`' public statics, actuation

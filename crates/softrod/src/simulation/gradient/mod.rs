@@ -188,7 +188,7 @@ impl Simulation {
     /// `params` it is the loss of the recorded run alone (no backward pass).
     ///
     /// Errors ([`Error::Gradient`], naming the key): an integrator without
-    /// an adjoint (supported: esdirk), a closed model or one with contact,
+    /// an adjoint (supported: esdirk), a model with contact,
     /// a parameter or loss naming nothing in the model, a time outside the
     /// run, non-finite or negative weights, non-finite targets, a custom
     /// loss that fails or returns the wrong lengths or NaN.
@@ -222,12 +222,6 @@ impl Simulation {
                      (supported: esdirk)",
                     integrator.name()
                 ),
-            ));
-        }
-        if self.model().has_closures() {
-            return Err(bad(
-                "closure",
-                "gradients of closed models are not supported yet",
             ));
         }
         if self.model().has_contact() {

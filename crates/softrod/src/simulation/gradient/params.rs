@@ -18,9 +18,17 @@
 //! tensions the difference of the strain-space forces alone
 //! (`softrod_dynamics::strain_space_force`: `ID = ID_rest − τ_s`, and only
 //! `τ_s` depends on them), O(N) with no kinematic sweep.
+//!
+//! A closed model (G22): `ID` is its open tree's (the closure forces `Jᵀλ`
+//! left out; the closure rows do not depend on the parameters), and
+//! `∂q̈/∂p = −P M⁻¹ ∂ID/∂p` with the projection of the multiplier system
+//! (`softrod_dynamics::closed_force_response`), symmetric as `M⁻¹` is.
 
 use nalgebra::{DMatrix, DVector, Matrix6};
-use softrod_dynamics::{Data, DynamicsError, Model, inverse_dynamics, strain_space_force};
+use softrod_dynamics::{
+    ClosedDerivatives, Data, DynamicsError, Model, closed_force_response,
+    open_tree_inverse_dynamics, strain_space_force,
+};
 use softrod_integrate::{ParameterSystem, RodSystem, SecondOrderSystem};
 use softrod_mechanics::{Material, RodProperties, Tension};
 
@@ -291,6 +299,9 @@ pub(crate) struct ParamSystem<'a> {
     /// step, or a switched stage), whose derivatives' workspace the inertia
     /// products can use (G16); `None` before one.
     dense_at: Option<Point>,
+    /// A closed model: the workspace of the constrained projection
+    /// `P M⁻¹` (G22) and one column for its products.
+    closed: Option<(Box<ClosedDerivatives>, DMatrix<f64>)>,
 }
 
 /// An evaluation point `(t, q, q̇, q̈)`.
@@ -346,6 +357,12 @@ impl<'a> ParamSystem<'a> {
         }
         let n = sys.model.n_dof();
         let (rods, bodies) = (sys.model.rods().len(), sys.model.bodies().len());
+        let closed = sys.model.has_closures().then(|| {
+            (
+                Box::new(ClosedDerivatives::new(&sys.model)),
+                DMatrix::zeros(n, 1),
+            )
+        });
         Ok(Self {
             sys,
             variants,
@@ -356,6 +373,7 @@ impl<'a> ParamSystem<'a> {
             rods: vec![0.0; rods],
             bodies: vec![Matrix6::zeros(); bodies],
             dense_at: None,
+            closed,
         })
     }
 }
@@ -403,6 +421,34 @@ impl ParamSystem<'_> {
                 None => continue,
             };
         }
+    }
+
+    /// A closed model: `x ← P M⁻¹ x` at `(t, q, q̇)` (G22), the
+    /// constrained acceleration's response to the generalized forces in the
+    /// columns of `x` (`x = None`: the one column of the workspace). False
+    /// for an open model (nothing done).
+    fn closed_response(
+        &mut self,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+        x: Option<&mut DMatrix<f64>>,
+    ) -> Result<bool, DynamicsError> {
+        let Some((work, column)) = self.closed.as_mut() else {
+            return Ok(false);
+        };
+        let sys = &mut *self.sys;
+        closed_force_response(
+            &sys.model,
+            &mut sys.data,
+            work,
+            t,
+            q.as_slice(),
+            qd.as_slice(),
+            sys.tau.as_ref().map(|v| v.as_slice()),
+            x.unwrap_or(column),
+        )?;
+        Ok(true)
     }
 
     /// `(t, q, q̇, q̈)` is the point of the last dense linearization.
@@ -494,7 +540,8 @@ impl ParameterSystem for ParamSystem<'_> {
     }
 
     /// `wᵀ ∂q̈/∂pⱼ = −(M⁻¹w)ᵀ (ID(pⱼ + Δⱼ) − ID(pⱼ))/Δⱼ` (G8): one O(N)
-    /// solve with `M`, then [`force_param_vjp`](Self::force_param_vjp).
+    /// solve with `M`, then [`force_param_vjp`](Self::force_param_vjp). A
+    /// closed model: `P M⁻¹` for `M⁻¹` (G22), `ID` the open tree's.
     fn accel_param_vjp(
         &mut self,
         t: f64,
@@ -507,22 +554,31 @@ impl ParameterSystem for ParamSystem<'_> {
         if self.variants.is_empty() {
             return Ok(());
         }
-        // M(q) by the O(N) shifted solver with no shift (open models only:
-        // value_and_gradient refuses closed ones).
-        self.sys.factor_shifted_mass(t, q, 0.0, 0.0)?;
         let mut z = std::mem::take(&mut self.z);
         z.copy_from(w);
-        let solved = self
-            .sys
-            .solve_shifted_mass(&mut z)
-            .and_then(|()| self.force_param_vjp(t, q, qd, qdd, &z, out));
+        let solved = if let Some((_, column)) = self.closed.as_mut() {
+            // A closed model: `P M⁻¹` (symmetric) for `M⁻¹` (G22).
+            column.set_column(0, w);
+            self.closed_response(t, q, qd, None).map(|_| {
+                if let Some((_, column)) = &self.closed {
+                    z.copy_from(&column.column(0));
+                }
+            })
+        } else {
+            // M(q) by the O(N) shifted solver with no shift.
+            self.sys
+                .factor_shifted_mass(t, q, 0.0, 0.0)
+                .and_then(|_| self.sys.solve_shifted_mass(&mut z))
+        }
+        .and_then(|()| self.force_param_vjp(t, q, qd, qdd, &z, out));
         self.z = z;
         solved
     }
 
     /// `∂a/∂pⱼ = −M⁻¹ (ID(pⱼ + Δⱼ) − ID(pⱼ))/Δⱼ` column by column (G8,
     /// G21; `ID` is affine in each parameter): one inverse dynamics per
-    /// entry and one at `p`, one O(N) solve with `M` each.
+    /// entry and one at `p`, one O(N) solve with `M` each (a closed model:
+    /// `P M⁻¹` for `M⁻¹`, G22).
     fn accel_param_jvp(
         &mut self,
         t: f64,
@@ -534,9 +590,12 @@ impl ParameterSystem for ParamSystem<'_> {
         if self.variants.is_empty() {
             return Ok(());
         }
-        self.sys.factor_shifted_mass(t, q, 0.0, 0.0)?;
+        let closed = self.closed.is_some();
+        if !closed {
+            self.sys.factor_shifted_mass(t, q, 0.0, 0.0)?;
+        }
         let (qs, qds, qdds) = (q.as_slice(), qd.as_slice(), qdd.as_slice());
-        self.id0.copy_from(inverse_dynamics(
+        self.id0.copy_from(open_tree_inverse_dynamics(
             &self.sys.model,
             &mut self.sys.data,
             t,
@@ -546,14 +605,20 @@ impl ParameterSystem for ParamSystem<'_> {
         )?);
         let mut z = std::mem::take(&mut self.z);
         for v in &mut self.variants {
-            let id = inverse_dynamics(&v.model, &mut v.data, t, qs, qds, qdds)?;
+            let id = open_tree_inverse_dynamics(&v.model, &mut v.data, t, qs, qds, qdds)?;
             for r in 0..z.len() {
                 z[r] = -(id[r] - self.id0[r]) / v.delta;
             }
-            self.sys.solve_shifted_mass(&mut z)?;
+            if !closed {
+                self.sys.solve_shifted_mass(&mut z)?;
+            }
             out.set_column(v.slot, &z);
         }
         self.z = z;
+        if closed {
+            // `−P M⁻¹ ∂ID/∂p` on all columns at once (G22).
+            self.closed_response(t, q, qd, Some(out))?;
+        }
         Ok(())
     }
 
@@ -685,7 +750,7 @@ impl ParameterSystem for ParamSystem<'_> {
             return Ok(());
         }
         let (q, qd, qdd) = (q.as_slice(), qd.as_slice(), qdd.as_slice());
-        self.id0.copy_from(inverse_dynamics(
+        self.id0.copy_from(open_tree_inverse_dynamics(
             &self.sys.model,
             &mut self.sys.data,
             t,
@@ -694,7 +759,7 @@ impl ParameterSystem for ParamSystem<'_> {
             qdd,
         )?);
         for v in self.variants.iter_mut().filter(|v| !v.strain_only) {
-            let id = inverse_dynamics(&v.model, &mut v.data, t, q, qd, qdd)?;
+            let id = open_tree_inverse_dynamics(&v.model, &mut v.data, t, q, qd, qdd)?;
             let mut s = 0.0;
             for r in 0..id.len() {
                 s += z[r] * (id[r] - self.id0[r]);
