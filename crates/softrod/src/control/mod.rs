@@ -25,6 +25,6 @@ mod inverse;
 mod qp;
 
 pub use inverse::{
-    Actuation, ActuationOptions, Bound, DEFAULT_EFFORT_WEIGHT, Target, TargetResidual,
+    Actuation, ActuationOptions, Bound, DEFAULT_EFFORT_WEIGHT, Target, TargetResidual, UnknownLoad,
     solve_actuation,
 };
