@@ -1,5 +1,5 @@
-//! Inverse statics: cable tensions for targets (docs/theory-control.md
-//! IS1–IS12).
+//! Inverse statics: cable tensions (and unknown point forces) for
+//! targets (docs/theory-control.md IS1–IS13).
 //!
 //! The equilibrium `r(q, T) = τ_s(q) − B(q) T = 0` (IS1) defines `q(T)`
 //! wherever its tangent stiffness `K_t = ∂r/∂q` is regular, with
@@ -267,9 +267,12 @@ pub struct Actuation {
 /// hold that bring the sections and bodies of `targets` closest to them,
 /// the least effort among equally close ones (IS1–IS12). Models with loop
 /// closures are solved with their constrained equilibrium (IS8–IS10).
-/// `data`'s cable inputs are left as they were.
+/// The point forces of `options.unknown_loads` are unknowns too, within
+/// their bounds (IS13). `data`'s cable inputs are left as they were.
 ///
-/// Refused (an input error naming the key): no targets, no cables, a
+/// Refused (an input error naming the key): no targets, no cables and no
+/// unknown loads, an unknown load on a missing rod, off it or with NaN or
+/// crossed bounds (`unknown_load[i].…`), a
 /// target on a rod or body that does not exist or outside `[0, L]`, a
 /// non-finite or non-orthonormal target, a weight not positive,
 /// `max_tension` of the wrong length, negative or NaN. A statics failure
