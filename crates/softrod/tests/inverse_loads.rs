@@ -202,6 +202,63 @@ fn cantilever_tip_force_against_euler_bernoulli() {
     assert!(a.residuals[0].position_error < 1e-7 * LENGTH);
 }
 
+/// (a) on a closed model (IS13 with IS9's bordered system): the tip of
+/// the arm slides on the world's x axis; tensions and a 3D force at
+/// `s = 0.3` of a forward constrained statics solve are recovered from
+/// four section positions, and so is the shape.
+#[test]
+fn closed_arm_recovers_forward_force() {
+    const SLIDER: &str = "[[closure]]\ntype = \"slider\"\naxis = [1, 0, 0]\n\
+                          a = { element = \"arm\" }\nb = { element = \"world\" }\n";
+    const S_LOAD: f64 = 0.3;
+    let force = [0.04, 0.06, -0.1];
+    let tensions = [1.2, 0.5, 0.2];
+    let mut truth = three_cable_arm(&format!(
+        "{SLIDER}[[load]]\nrod = \"arm\"\ns = {S_LOAD}\nforce = [{}, {}, {}]\nframe = \"world\"\n",
+        force[0], force[1], force[2]
+    ));
+    truth.set_cable_tensions(Some(&tensions)).unwrap();
+    let q = statics_q(&mut truth);
+    let targets: Vec<Target> = [0.15, S_LOAD, 0.42, LENGTH]
+        .iter()
+        .map(|&s| Target::position(0, s, truth.pose("arm", s, &q).unwrap().translation.into()))
+        .collect();
+    let mut s = three_cable_arm(SLIDER);
+    let options = ActuationOptions {
+        effort_weight: 0.0,
+        unknown_loads: vec![UnknownLoad::new(0, S_LOAD, 10.0)],
+        ..ActuationOptions::default()
+    };
+    let a = s.solve_actuation(&targets, &options).unwrap();
+    assert!(a.converged && a.reached, "{}", a.message);
+    for c in 0..3 {
+        assert!(
+            (a.tensions[c] - tensions[c]).abs() < 1e-7,
+            "{:?} vs {tensions:?}",
+            a.tensions
+        );
+    }
+    for k in 0..3 {
+        assert!(
+            (a.forces[0][k] - force[k]).abs() < 1e-8,
+            "{:?} vs {force:?}",
+            a.forces[0]
+        );
+    }
+    let mut dp = 0.0f64;
+    for k in 0..=50 {
+        let sk = LENGTH * k as f64 / 50.0;
+        let want = truth.pose("arm", sk, &q).unwrap().translation;
+        let got = s.pose("arm", sk, a.q.as_slice()).unwrap().translation;
+        dp = dp.max((got - want).norm());
+    }
+    assert!(
+        dp < 1e-9,
+        "shape off by {dp:e} m ({} iterations)",
+        a.iterations
+    );
+}
+
 /// Bad unknown loads: an error naming the key.
 #[test]
 fn bad_unknown_loads_are_named() {
