@@ -1,6 +1,7 @@
 //! Point loads as unknowns of inverse statics (docs/theory-control.md
 //! IS13) against independent references: a force and tensions of a
-//! forward statics solve recovered with the shape, a cantilever's tip
+//! forward statics solve recovered with the shape (open and with a
+//! slider closure), a cantilever's tip
 //! force against Euler–Bernoulli `P = 3EIδ/L³` corrected by the known
 //! error of piecewise-constant curvature, and the errors of bad input.
 
