@@ -14,8 +14,10 @@
 //! derivative of the step-size controller's choices (which are piecewise
 //! constant in the data; G1).
 //!
-//! Supported: [`Integrator::Esdirk`] (the default). Other methods are
-//! refused with an error naming the ones that are supported.
+//! Supported: [`Integrator::Esdirk`] (the default) and
+//! [`Integrator::Esdirk5`], one code on their tableaux (both stiffly
+//! accurate with an explicit first stage, G27). Other methods are refused
+//! with an error naming the ones that are supported.
 //!
 //! The system's parameters `p` enter through [`ParameterSystem`]: it gives
 //! the vector–Jacobian product `wᵀ ∂a/∂p` at a state, so the backward pass
@@ -42,12 +44,11 @@ use crate::integrator::Integrator;
 use crate::krylov::Gmres;
 use crate::linalg::DenseLu;
 use crate::methods::{
-    ESDIRK_A as A, ESDIRK_C as C, ESDIRK_GAMMA as GAMMA, esdirk_explicit_part as explicit_part,
+    Esdirk43, Esdirk54, EsdirkCoefficients as Coefficients, esdirk_explicit_part as explicit_part,
     esdirk_stage_values as stage_values,
 };
 use crate::system::SecondOrderSystem;
 
-const S: usize = 6;
 /// Newton iterations allowed when a stage is recomputed.
 const MAX_NEWTON: usize = 50;
 
@@ -65,7 +66,16 @@ const SWITCH_ITERATIONS: f64 = 24.0;
 const RECOMPUTE_ROUNDOFF: f64 = 1e-13;
 
 /// The integrators whose discrete adjoint [`adjoint_second_order`] has.
-pub const ADJOINT_INTEGRATORS: [Integrator; 1] = [Integrator::Esdirk];
+pub const ADJOINT_INTEGRATORS: [Integrator; 2] = [Integrator::Esdirk, Integrator::Esdirk5];
+
+/// The tableau of an integrator in [`ADJOINT_INTEGRATORS`] (G27).
+fn coefficients(integrator: Integrator) -> Option<Coefficients> {
+    match integrator {
+        Integrator::Esdirk => Some(Coefficients::of::<Esdirk43>()),
+        Integrator::Esdirk5 => Some(Coefficients::of::<Esdirk54>()),
+        _ => None,
+    }
+}
 
 /// A [`SecondOrderSystem`] `q̈ = a(t, q, q̇; p)` with parameters `p`
 /// (`n_params` of them) whose derivatives the backward pass needs.
@@ -166,8 +176,9 @@ pub trait ParameterSystem: SecondOrderSystem {
     /// Optional, beside [`force_jacobians`](Self::force_jacobians)
     /// (docs/theory-control.md G12): writes `M(q)` into `mass` and keeps
     /// the force residual's `∂r/∂q`, `∂r/∂q̇` at `(t, q, q̇, q̈)` in `slot`
-    /// (`slot < 6`; a later call on the same slot replaces it) as an
-    /// operator for [`force_vjp`](Self::force_vjp), without forming them.
+    /// (`slot` below the method's stage count, 7 at most; a later call on
+    /// the same slot replaces it) as an operator for
+    /// [`force_vjp`](Self::force_vjp), without forming them.
     /// Returns `Ok(true)`; the default `Ok(false)` (not offered: the
     /// backward pass forms the dense derivatives).
     #[allow(clippy::too_many_arguments)]
@@ -362,7 +373,7 @@ pub struct AdjointGradient {
     pub dqd0: DVector<f64>,
     /// `∂L/∂pⱼ`.
     pub dp: Vec<f64>,
-    /// Linearizations of the backward pass (6 per step, plus the
+    /// Linearizations of the backward pass (one per stage and step, plus the
     /// recomputation's switches): the dense Jacobians of the acceleration
     /// ([`AdjointSolver::Dense`]) or of the force residual (the force form,
     /// G11), or the O(N) operators of a system that keeps them (G12).
@@ -410,8 +421,8 @@ pub fn adjoint_second_order_with<Sys: ParameterSystem>(
     seed: &mut Seed<'_>,
     solver: AdjointSolver,
 ) -> Result<AdjointGradient, IntegrateError> {
-    let n = check_request(sys.dim(), integrator, tape)?;
-    let mut w = EsdirkAdjoint::new(n, sys.n_params(), solver == AdjointSolver::Structured);
+    let (n, tab) = check_request(sys.dim(), integrator, tape)?;
+    let mut w = EsdirkAdjoint::new(tab, n, sys.n_params(), solver == AdjointSolver::Structured);
     let mut lq = DVector::zeros(n);
     let mut lv = DVector::zeros(n);
     let last = tape.nodes() - 1;
@@ -444,14 +455,14 @@ pub fn adjoint_second_order_with<Sys: ParameterSystem>(
 
 /// The checks a gradient request passes before either pass (the adjoint,
 /// the forward sensitivities): an integrator with the discrete derivatives
-/// ([`ADJOINT_INTEGRATORS`]) and a tape of the system's dimension `n`,
-/// which it returns.
+/// ([`ADJOINT_INTEGRATORS`]) and a tape of the system's dimension `n`;
+/// returns `n` and the integrator's tableau.
 pub(crate) fn check_request(
     n: usize,
     integrator: Integrator,
     tape: &Tape,
-) -> Result<usize, IntegrateError> {
-    if !ADJOINT_INTEGRATORS.contains(&integrator) {
+) -> Result<(usize, Coefficients), IntegrateError> {
+    let Some(tab) = coefficients(integrator) else {
         let names: Vec<&str> = ADJOINT_INTEGRATORS.iter().map(|i| i.name()).collect();
         return Err(IntegrateError::InvalidInput {
             what: format!(
@@ -461,13 +472,13 @@ pub(crate) fn check_request(
                 names.join(", ")
             ),
         });
-    }
+    };
     if tape.dim() != n {
         return Err(IntegrateError::InvalidInput {
             what: format!("the tape has {} coordinates, the system {n}", tape.dim()),
         });
     }
-    Ok(n)
+    Ok((n, tab))
 }
 
 /// GMRES iterations per cycle and cycles of a transposed stage solve
@@ -477,34 +488,36 @@ const KRYLOV_CYCLES: usize = 3;
 
 /// The buffers of the ESDIRK backward pass (allocated once per pass).
 struct EsdirkAdjoint {
+    /// The tableau (G27): `s` stages, every per-stage buffer below has `s`.
+    tab: Coefficients,
     n: usize,
     /// The force form (G11): `jq`, `jv` hold `∂r/∂q`, `∂r/∂q̇` and `mass`
     /// `M`; otherwise (or once the system declined it) `∂a/∂q`, `∂a/∂q̇`.
     force: bool,
     q: DVector<f64>,
     v: DVector<f64>,
-    qs: [DVector<f64>; S],
-    vs: [DVector<f64>; S],
-    accs: [DVector<f64>; S],
+    qs: Vec<DVector<f64>>,
+    vs: Vec<DVector<f64>>,
+    accs: Vec<DVector<f64>>,
     /// The node whose step-start acceleration `accs[0]` holds (the pass
     /// runs backwards, so at step `k` it is node `k + 1`'s, the end of the
     /// step: the recomputation's predictor), and a copy of it.
     a0_node: Option<usize>,
     a_end: DVector<f64>,
-    jq: [DMatrix<f64>; S],
-    jv: [DMatrix<f64>; S],
+    jq: Vec<DMatrix<f64>>,
+    jv: Vec<DMatrix<f64>>,
     /// `M` at each stage (force form).
-    mass: [DMatrix<f64>; S],
+    mass: Vec<DMatrix<f64>>,
     /// `S = M + hγ ∂r/∂q̇ + h²γ² ∂r/∂q` of each implicit stage (force form,
     /// formed only where the system keeps no operator).
-    shifted: [DMatrix<f64>; S],
+    shifted: Vec<DMatrix<f64>>,
     /// Stage `i`'s `∂r/∂q`, `∂r/∂q̇` are kept by the system in slot `i`
     /// (G12): products by [`ParameterSystem::force_vjp`], `jq`, `jv`,
     /// `shifted` not formed.
-    ops: [bool; S],
+    ops: Vec<bool>,
     /// Stage `i`'s `M` is kept with its operator too (G15): `M v` by
     /// [`ParameterSystem::force_mass_product`], `mass[i]` not formed.
-    mass_ops: [bool; S],
+    mass_ops: Vec<bool>,
     /// The products' outputs `(∂r/∂q)ᵀu`, `(∂r/∂q̇)ᵀu`, and probes.
     pq: DVector<f64>,
     pv: DVector<f64>,
@@ -512,15 +525,15 @@ struct EsdirkAdjoint {
     /// `(I − hγJ)ᵀ` (force form: `Sᵀ`) of each implicit stage, factored;
     /// slot 0: the (untransposed) step-start matrix of the recomputing
     /// Newton iteration.
-    lus: [DenseLu; S],
+    lus: Vec<DenseLu>,
     gmres: Gmres,
     qhat: DVector<f64>,
     vhat: DVector<f64>,
     f: DVector<f64>,
     g: DVector<f64>,
-    qbar: [DVector<f64>; S],
-    vbar: [DVector<f64>; S],
-    abar: [DVector<f64>; S],
+    qbar: Vec<DVector<f64>>,
+    vbar: Vec<DVector<f64>>,
+    abar: Vec<DVector<f64>>,
     mu: DVector<f64>,
     rhs: DVector<f64>,
     qhat_bar: DVector<f64>,
@@ -533,7 +546,8 @@ struct EsdirkAdjoint {
 }
 
 impl EsdirkAdjoint {
-    fn new(n: usize, np: usize, force: bool) -> Self {
+    fn new(tab: Coefficients, n: usize, np: usize, force: bool) -> Self {
+        let s = tab.stages();
         let z = DVector::zeros(n);
         let m = DMatrix::zeros(n, n);
         // The force form's matrices are allocated only when it is asked for.
@@ -543,33 +557,34 @@ impl EsdirkAdjoint {
             DMatrix::zeros(0, 0)
         };
         Self {
+            tab,
             n,
             force,
             q: z.clone(),
             v: z.clone(),
-            qs: std::array::from_fn(|_| z.clone()),
-            vs: std::array::from_fn(|_| z.clone()),
-            accs: std::array::from_fn(|_| z.clone()),
+            qs: (0..s).map(|_| z.clone()).collect(),
+            vs: (0..s).map(|_| z.clone()).collect(),
+            accs: (0..s).map(|_| z.clone()).collect(),
             a0_node: None,
             a_end: z.clone(),
-            jq: std::array::from_fn(|_| m.clone()),
-            jv: std::array::from_fn(|_| m.clone()),
-            mass: std::array::from_fn(|_| fm.clone()),
-            shifted: std::array::from_fn(|_| fm.clone()),
-            ops: [false; S],
-            mass_ops: [false; S],
+            jq: (0..s).map(|_| m.clone()).collect(),
+            jv: (0..s).map(|_| m.clone()).collect(),
+            mass: (0..s).map(|_| fm.clone()).collect(),
+            shifted: (0..s).map(|_| fm.clone()).collect(),
+            ops: vec![false; s],
+            mass_ops: vec![false; s],
             pq: z.clone(),
             pv: z.clone(),
             probe: z.clone(),
-            lus: std::array::from_fn(|_| DenseLu::new(n)),
+            lus: (0..s).map(|_| DenseLu::new(n)).collect(),
             gmres: Gmres::new(if force { n } else { 0 }, KRYLOV_ITERATIONS.min(n)),
             qhat: z.clone(),
             vhat: z.clone(),
             f: z.clone(),
             g: z.clone(),
-            qbar: std::array::from_fn(|_| z.clone()),
-            vbar: std::array::from_fn(|_| z.clone()),
-            abar: std::array::from_fn(|_| z.clone()),
+            qbar: (0..s).map(|_| z.clone()).collect(),
+            vbar: (0..s).map(|_| z.clone()).collect(),
+            abar: (0..s).map(|_| z.clone()).collect(),
             mu: z.clone(),
             rhs: z.clone(),
             qhat_bar: z.clone(),
@@ -636,7 +651,8 @@ impl EsdirkAdjoint {
                 &mut self.jv[i],
             )? {
                 if keep {
-                    let (hg, hg2) = (h * GAMMA, h * h * GAMMA * GAMMA);
+                    let gamma = self.tab.gamma;
+                    let (hg, hg2) = (h * gamma, h * h * gamma * gamma);
                     let s = self.shifted[i].as_mut_slice();
                     let (m, jv, jq) = (&self.mass[i], &self.jv[i], &self.jq[i]);
                     for (k, x) in s.iter_mut().enumerate() {
@@ -666,7 +682,8 @@ impl EsdirkAdjoint {
     fn factor(&mut self, slot: usize, j: usize, h: f64, transpose: bool) -> bool {
         self.factorizations += 1;
         if self.force {
-            let (hg, hg2) = (h * GAMMA, h * h * GAMMA * GAMMA);
+            let gamma = self.tab.gamma;
+            let (hg, hg2) = (h * gamma, h * h * gamma * gamma);
             let m = self.lus[slot].matrix_mut();
             let (mass, jq, jv) = (&self.mass[j], &self.jq[j], &self.jv[j]);
             for c in 0..self.n {
@@ -677,7 +694,14 @@ impl EsdirkAdjoint {
             }
             return self.lus[slot].factor();
         }
-        stage_matrix(&mut self.lus[slot], &self.jq[j], &self.jv[j], h, transpose)
+        stage_matrix(
+            &mut self.lus[slot],
+            &self.jq[j],
+            &self.jv[j],
+            self.tab.gamma,
+            h,
+            transpose,
+        )
     }
 
     /// The Newton correction of a recomputed stage, `W⁻¹ g` with the matrix
@@ -704,7 +728,9 @@ impl EsdirkAdjoint {
         let t = tape.time(k);
         let t_new = tape.time(k + 1);
         let h = tape.step_size(k);
-        let (hg, hg2) = (h * GAMMA, h * h * GAMMA * GAMMA);
+        let (s, c, a) = (self.tab.stages(), self.tab.c, self.tab.a);
+        let gamma = self.tab.gamma;
+        let (hg, hg2) = (h * gamma, h * h * gamma * gamma);
         let err = |what: &'static str| {
             move |e: Sys::Error| IntegrateError::System {
                 t,
@@ -734,12 +760,12 @@ impl EsdirkAdjoint {
         if !self.factor(0, 0, h, false) {
             return Err(singular(t, h));
         }
-        // Stages 1..5, recomputed (G3): simplified Newton on the step-start
-        // matrix, to round-off.
-        for i in 1..S {
-            let ti = if i == S - 1 { t_new } else { t + C[i] * h };
+        // Stages 1..s−1, recomputed (G3): simplified Newton on the
+        // step-start matrix, to round-off.
+        for i in 1..s {
+            let ti = if i == s - 1 { t_new } else { t + c[i] * h };
             explicit_part(
-                i,
+                &a[i][..i],
                 h,
                 &self.q,
                 &self.v,
@@ -754,7 +780,7 @@ impl EsdirkAdjoint {
             {
                 let (done, rest) = self.accs.split_at_mut(i);
                 if end {
-                    let th = C[i];
+                    let th = c[i];
                     let wd = (6.0 * th - 6.0 * th * th) / h;
                     let w0 = 3.0 * th * th - 4.0 * th + 1.0;
                     let w1 = 3.0 * th * th - 2.0 * th;
@@ -910,17 +936,17 @@ impl EsdirkAdjoint {
             }
         }
         // The reverse sweep (G5–G7).
-        for i in 0..S {
+        for i in 0..s {
             self.qbar[i].fill(0.0);
             self.vbar[i].fill(0.0);
             self.abar[i].fill(0.0);
         }
-        self.qbar[S - 1].copy_from(lq);
-        self.vbar[S - 1].copy_from(lv);
+        self.qbar[s - 1].copy_from(lq);
+        self.vbar[s - 1].copy_from(lv);
         lq.fill(0.0);
         lv.fill(0.0);
-        for i in (1..S).rev() {
-            let ti = if i == S - 1 { t_new } else { t + C[i] * h };
+        for i in (1..s).rev() {
+            let ti = if i == s - 1 { t_new } else { t + c[i] * h };
             // Ã = Ā + hγ V̄ + h²γ² Q̄.
             for r in 0..n {
                 self.rhs[r] = self.abar[i][r] + hg * self.vbar[i][r] + hg2 * self.qbar[i][r];
@@ -995,10 +1021,10 @@ impl EsdirkAdjoint {
             }
             *lq += &self.qhat_bar;
             *lv += &self.vhat_bar;
-            for (j, &a) in A[i][..i].iter().enumerate() {
-                if a != 0.0 {
-                    self.vbar[j].axpy(h * a, &self.qhat_bar, 1.0);
-                    self.abar[j].axpy(h * a, &self.vhat_bar, 1.0);
+            for (j, &aij) in a[i][..i].iter().enumerate() {
+                if aij != 0.0 {
+                    self.vbar[j].axpy(h * aij, &self.qhat_bar, 1.0);
+                    self.abar[j].axpy(h * aij, &self.vhat_bar, 1.0);
                 }
             }
         }
@@ -1047,7 +1073,8 @@ impl EsdirkAdjoint {
         ti: f64,
         h: f64,
     ) -> Result<bool, Sys::Error> {
-        let (hg, hg2) = (h * GAMMA, h * h * GAMMA * GAMMA);
+        let gamma = self.tab.gamma;
+        let (hg, hg2) = (h * gamma, h * h * gamma * gamma);
         if sys.factor_shifted_mass(ti, &self.qs[i], hg2, hg)? {
             let rtol = 16.0 * f64::EPSILON * (self.n as f64).sqrt();
             let solved = if self.ops[i] {
@@ -1123,7 +1150,8 @@ impl EsdirkAdjoint {
         h: f64,
         rtol: f64,
     ) -> Result<Option<usize>, Sys::Error> {
-        let (hg, hg2) = (h * GAMMA, h * h * GAMMA * GAMMA);
+        let gamma = self.tab.gamma;
+        let (hg, hg2) = (h * gamma, h * h * gamma * gamma);
         let kept_mass = self.mass_ops[i];
         // ‖M‖∞ where `M` is formed; where it is kept as products (G15),
         // its probes `‖M x‖∞` (a lower bound, like the probes of `Sᵀ`).
@@ -1223,10 +1251,11 @@ fn stage_matrix(
     lu: &mut DenseLu,
     jq: &DMatrix<f64>,
     jv: &DMatrix<f64>,
+    gamma: f64,
     h: f64,
     transpose: bool,
 ) -> bool {
-    let (hg, hg2) = (h * GAMMA, h * h * GAMMA * GAMMA);
+    let (hg, hg2) = (h * gamma, h * h * gamma * gamma);
     let n = jq.nrows();
     let m = lu.matrix_mut();
     for c in 0..n {

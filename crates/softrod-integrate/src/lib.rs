@@ -18,7 +18,7 @@
 //! | integrator | kind | order | steps | for |
 //! |---|---|---|---|---|
 //! | [`Integrator::Esdirk`] | ESDIRK4(3)6L\[2\]SA, L-stable, Newton on `M + h²γ²K + hγD` (O(N)), exact-Jacobian fallback | 4 | adaptive or fixed | stiff rods, any size: **recommended** |
-//! | [`Integrator::Esdirk5`] | ESDIRK5(4)7L\[2\]SA, L-stable, the same structured Newton | 5 | adaptive or fixed | stiff rods, tighter tolerances (no adjoint) |
+//! | [`Integrator::Esdirk5`] | ESDIRK5(4)7L\[2\]SA, L-stable, the same structured Newton | 5 | adaptive or fixed | stiff rods, tighter tolerances |
 //! | [`Integrator::Radau5`] | Radau IIA, RADAU5's design, exact dense Jacobian | 5 | adaptive or fixed | small stiff systems, tight tolerances |
 //! | [`Integrator::Rosenbrock`] | Rosenbrock–W ROS34PW2, L-stable, no Newton | 3 | adaptive or fixed | stiff, loose tolerances |
 //! | [`Integrator::GeneralizedAlpha`] | Chung–Hulbert / Arnold–Brüls, `ρ∞` dissipation | 2 | fixed, or adaptive | large fixed steps (linearly implicit: [`Iteration::LinearlyImplicit`]) |

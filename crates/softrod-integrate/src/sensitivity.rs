@@ -20,11 +20,10 @@ use crate::error::{IntegrateError, first_non_finite};
 use crate::integrator::Integrator;
 use crate::linalg::DenseLu;
 use crate::methods::{
-    ESDIRK_A as A, ESDIRK_C as C, ESDIRK_GAMMA as GAMMA, esdirk_explicit_part as explicit_part,
+    EsdirkCoefficients as Coefficients, esdirk_explicit_part as explicit_part,
     esdirk_stage_values as stage_values,
 };
 
-const S: usize = 6;
 /// Newton iterations allowed when a stage is recomputed.
 const MAX_NEWTON: usize = 60;
 
@@ -37,7 +36,7 @@ const MAX_NEWTON: usize = 60;
 /// first.
 ///
 /// Errors: an integrator without these sensitivities (as the adjoint: the
-/// ESDIRK method), a tape of another dimension, a failing or non-finite
+/// ESDIRK methods), a tape of another dimension, a failing or non-finite
 /// evaluation, a singular stage matrix, a stage whose Newton iteration
 /// does not converge.
 pub fn forward_sensitivity_second_order<Sys: ParameterSystem>(
@@ -47,10 +46,10 @@ pub fn forward_sensitivity_second_order<Sys: ParameterSystem>(
     seed: &mut Seed<'_>,
     initial: bool,
 ) -> Result<AdjointGradient, IntegrateError> {
-    let n = check_request(sys.dim(), integrator, tape)?;
+    let (n, tab) = check_request(sys.dim(), integrator, tape)?;
     let np = sys.n_params();
     let m = np + if initial { 2 * n } else { 0 };
-    let mut w = Forward::new(n, np, m);
+    let mut w = Forward::new(tab, n, np, m);
     if initial {
         for r in 0..n {
             w.sq[(r, np + r)] = 1.0;
@@ -94,6 +93,8 @@ pub fn forward_sensitivity_second_order<Sys: ParameterSystem>(
 
 /// The buffers of the forward pass (allocated once per pass).
 struct Forward {
+    /// The tableau (G27): the per-stage buffers have one entry per stage.
+    tab: Coefficients,
     n: usize,
     np: usize,
     /// `∂qₙ/∂·`, `∂q̇ₙ/∂·` at the current node (n × m).
@@ -125,15 +126,17 @@ struct Forward {
 }
 
 impl Forward {
-    fn new(n: usize, np: usize, m: usize) -> Self {
+    fn new(tab: Coefficients, n: usize, np: usize, m: usize) -> Self {
+        let s = tab.stages();
         let z = || DMatrix::zeros(n, m);
         Self {
+            tab,
             n,
             np,
             sq: z(),
             sv: z(),
-            dv: (0..S).map(|_| z()).collect(),
-            da: (0..S).map(|_| z()).collect(),
+            dv: (0..s).map(|_| z()).collect(),
+            da: (0..s).map(|_| z()).collect(),
             dqh: z(),
             dvh: z(),
             rhs: z(),
@@ -143,9 +146,9 @@ impl Forward {
             lu: DenseLu::new(n),
             q: DVector::zeros(n),
             v: DVector::zeros(n),
-            qs: (0..S).map(|_| DVector::zeros(n)).collect(),
-            vs: (0..S).map(|_| DVector::zeros(n)).collect(),
-            accs: (0..S).map(|_| DVector::zeros(n)).collect(),
+            qs: (0..s).map(|_| DVector::zeros(n)).collect(),
+            vs: (0..s).map(|_| DVector::zeros(n)).collect(),
+            accs: (0..s).map(|_| DVector::zeros(n)).collect(),
             qhat: DVector::zeros(n),
             vhat: DVector::zeros(n),
             f: DVector::zeros(n),
@@ -190,7 +193,8 @@ impl Forward {
 
     /// Factors `W = I − hγ J_v − h²γ² J_q` (G2) of the Jacobians held.
     fn factor(&mut self, h: f64) -> bool {
-        let (hg, hg2) = (h * GAMMA, h * h * GAMMA * GAMMA);
+        let gamma = self.tab.gamma;
+        let (hg, hg2) = (h * gamma, h * h * gamma * gamma);
         let w = self.lu.matrix_mut();
         for c in 0..self.n {
             for r in 0..self.n {
@@ -213,7 +217,8 @@ impl Forward {
         let t = tape.time(k);
         let t_new = tape.time(k + 1);
         let h = tape.step_size(k);
-        let hg = h * GAMMA;
+        let (s, c, a) = (self.tab.stages(), self.tab.c, self.tab.a);
+        let hg = h * self.tab.gamma;
         let err = |what: &'static str| {
             move |e: Sys::Error| IntegrateError::System {
                 t,
@@ -235,10 +240,10 @@ impl Forward {
         self.da[0].gemm(1.0, &self.jq, &self.sq, 0.0);
         self.da[0].gemm(1.0, &self.jv, &self.sv, 1.0);
         add_params(&mut self.da[0], &self.ap);
-        for i in 1..S {
-            let ti = if i == S - 1 { t_new } else { t + C[i] * h };
+        for i in 1..s {
+            let ti = if i == s - 1 { t_new } else { t + c[i] * h };
             explicit_part(
-                i,
+                &a[i][..i],
                 h,
                 &self.q,
                 &self.v,
@@ -252,10 +257,10 @@ impl Forward {
             // dVᵢ = dv̂ + hγ dAᵢ (G2 differentiated).
             self.dqh.copy_from(&self.sq);
             self.dvh.copy_from(&self.sv);
-            for (j, &a) in A[i][..i].iter().enumerate() {
-                if a != 0.0 {
-                    axpy(&mut self.dqh, h * a, &self.dv[j]);
-                    axpy(&mut self.dvh, h * a, &self.da[j]);
+            for (j, &aij) in a[i][..i].iter().enumerate() {
+                if aij != 0.0 {
+                    axpy(&mut self.dqh, h * aij, &self.dv[j]);
+                    axpy(&mut self.dvh, h * aij, &self.da[j]);
                 }
             }
             self.rhs.copy_from(&self.dqh);
@@ -274,8 +279,9 @@ impl Forward {
             }
             self.dv[i].copy_from(&self.dvh);
             axpy(&mut self.dv[i], hg, &self.da[i]);
-            if i == S - 1 {
-                // Stiffly accurate: yₙ₊₁ = (Q₅, V₅), dQ₅ = dq̂ + hγ dV₅.
+            if i == s - 1 {
+                // Stiffly accurate: yₙ₊₁ = (Q_{s−1}, V_{s−1}),
+                // dQ_{s−1} = dq̂ + hγ dV_{s−1}.
                 self.sq.copy_from(&self.dqh);
                 axpy(&mut self.sq, hg, &self.dv[i]);
                 self.sv.copy_from(&self.dv[i]);
@@ -295,7 +301,8 @@ impl Forward {
         h: f64,
     ) -> Result<(), IntegrateError> {
         let n = self.n;
-        let (hg, hg2) = (h * GAMMA, h * h * GAMMA * GAMMA);
+        let gamma = self.tab.gamma;
+        let (hg, hg2) = (h * gamma, h * h * gamma * gamma);
         let err = |what: &'static str| {
             move |e: Sys::Error| IntegrateError::System {
                 t: ti,

@@ -1,12 +1,13 @@
-//! The discrete adjoint of ESDIRK against central differences of whole
-//! runs of the same discrete map (fixed steps, stage equations solved to
+//! The discrete adjoint of ESDIRK (ESDIRK4(3) and ESDIRK5(4),
+//! docs/theory-control.md G27) against central differences of whole runs
+//! of the same discrete map (fixed steps, stage equations solved to
 //! round-off), on a nonlinear damped, forced two-coordinate system with
 //! analytic Jacobians.
 
 use nalgebra::{DMatrix, DVector};
 use softrod_integrate::{
     Control, Hooks, Integrator, Iteration, Options, ParameterSystem, SecondOrderSystem, StepInfo,
-    Tape, adjoint_second_order, integrate_second_order,
+    Tape, adjoint_second_order, forward_sensitivity_second_order, integrate_second_order,
 };
 
 /// q̈₀ = −k sin q₀ − c q̇₀ + f sin 3t + 0.3 q₁²,
@@ -102,12 +103,17 @@ const T1: f64 = 1.5;
 
 /// The loss: Σ over the nodes of q₀² + 0.5 q̇₁² (every step end).
 fn run(p: [f64; 3], q0: [f64; 2], v0: [f64; 2]) -> (f64, Tape) {
+    run_with(Integrator::Esdirk, p, q0, v0)
+}
+
+/// [`run`] with `integrator`.
+fn run_with(integrator: Integrator, p: [f64; 3], q0: [f64; 2], v0: [f64; 2]) -> (f64, Tape) {
     let mut sys = Forced { p };
     let (q0, v0) = (DVector::from_row_slice(&q0), DVector::from_row_slice(&v0));
     let mut rec = Record(Tape::new(0.0, q0.as_slice(), v0.as_slice()));
     integrate_second_order(
         &mut sys,
-        Integrator::Esdirk,
+        integrator,
         (0.0, T1),
         &q0,
         &v0,
@@ -124,13 +130,48 @@ fn run(p: [f64; 3], q0: [f64; 2], v0: [f64; 2]) -> (f64, Tape) {
 
 #[test]
 fn esdirk_adjoint_matches_central_differences_of_whole_runs() {
+    adjoint_matches_differences(Integrator::Esdirk);
+}
+
+#[test]
+fn esdirk5_adjoint_matches_central_differences_of_whole_runs() {
+    adjoint_matches_differences(Integrator::Esdirk5);
+}
+
+/// ESDIRK5(4)'s forward sensitivities (G21 on its tableau) give its
+/// adjoint's numbers: two algorithms, one discrete map.
+#[test]
+fn esdirk5_forward_sensitivities_equal_the_adjoint() {
+    let (p, q0, v0) = ([3.0, 0.4, 0.7], [0.5, -0.3], [0.2, 0.1]);
+    let (_, tape) = run_with(Integrator::Esdirk5, p, q0, v0);
+    let mut seed = |k: usize, lq: &mut DVector<f64>, lv: &mut DVector<f64>| {
+        lq[0] += 2.0 * tape.q(k)[0];
+        lv[1] += tape.qd(k)[1];
+    };
+    let mut sys = Forced { p };
+    let a = adjoint_second_order(&mut sys, Integrator::Esdirk5, &tape, &mut seed).unwrap();
+    let f = forward_sensitivity_second_order(&mut sys, Integrator::Esdirk5, &tape, &mut seed, true)
+        .unwrap();
+    let all = |g: &softrod_integrate::AdjointGradient| {
+        let mut v = g.dp.clone();
+        v.extend(g.dq0.iter().chain(g.dqd0.iter()));
+        v
+    };
+    for (k, (x, y)) in all(&a).iter().zip(all(&f)).enumerate() {
+        let rel = (x - y).abs() / x.abs().max(1e-3);
+        assert!(rel < 1e-10, "[{k}]: adjoint {x:e}, forward {y:e}, {rel:e}");
+    }
+}
+
+fn adjoint_matches_differences(integrator: Integrator) {
     let p = [3.0, 0.4, 0.7];
     let q0 = [0.5, -0.3];
     let v0 = [0.2, 0.1];
+    let run = |p, q0, v0| run_with(integrator, p, q0, v0);
     let (_, tape) = run(p, q0, v0);
     assert_eq!(tape.steps(), 30);
     let mut sys = Forced { p };
-    let g = adjoint_second_order(&mut sys, Integrator::Esdirk, &tape, &mut |k, lq, lv| {
+    let g = adjoint_second_order(&mut sys, integrator, &tape, &mut |k, lq, lv| {
         lq[0] += 2.0 * tape.q(k)[0];
         lv[1] += tape.qd(k)[1];
     })
@@ -184,5 +225,8 @@ fn other_integrators_are_refused_by_name() {
     let e = adjoint_second_order(&mut sys, Integrator::Radau5, &tape, &mut |_, _, _| {})
         .unwrap_err()
         .to_string();
-    assert!(e.contains("radau5") && e.contains("esdirk"), "{e}");
+    assert!(
+        e.contains("radau5") && e.contains("(supported: esdirk, esdirk5)"),
+        "{e}"
+    );
 }

@@ -13,6 +13,9 @@ use softrod::dynamics::{
 };
 use softrod::{GradientMethod, GradientOptions, LossTerm, Simulation};
 
+mod gradient_support;
+use gradient_support::{agree, central};
+
 const OPTIONS: GradientOptions = GradientOptions {
     fixed_step: Some(0.004),
     newton_tol: Some(1e-3),
@@ -127,22 +130,6 @@ fn value(mut s: Simulation) -> f64 {
     s.value_and_gradient(&mut loss(n), &[], DURATION, &OPTIONS)
         .unwrap()
         .value
-}
-
-/// Central difference of `f` at `x` with relative step 1e-6 (absolute
-/// `floor` for a zero `x`).
-fn central(x: f64, floor: f64, f: impl Fn(f64) -> f64) -> f64 {
-    let d = (1e-6 * x.abs()).max(floor);
-    (f(x + d) - f(x - d)) / (2.0 * d)
-}
-
-fn agree(name: &str, adjoint: f64, differences: f64, scale: f64) {
-    let err = (adjoint - differences).abs() / differences.abs().max(scale);
-    eprintln!("{name}: adjoint {adjoint:e}, differences {differences:e}, relative {err:e}");
-    assert!(
-        err < 1e-6,
-        "{name}: adjoint {adjoint:e}, differences {differences:e}, relative {err:e}"
-    );
 }
 
 /// G22: `∂q̈/∂p = −P M⁻¹ (ID(p + Δ) − ID(p))/Δ` (the open tree's inverse

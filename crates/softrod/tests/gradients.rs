@@ -1,6 +1,7 @@
 //! Trajectory gradients (`Simulation::value_and_gradient`, the discrete
 //! adjoint of ESDIRK) against central differences of whole runs: every
-//! parameter kind on a cantilever with a cable, and on an arm with a joint
+//! parameter kind on a cantilever with a cable (with ESDIRK4(3) and
+//! ESDIRK5(4), docs/theory-control.md G27), and on an arm with a joint
 //! and two bodies (examples/arm_with_payload.toml's structure). The
 //! differenced runs are separate scenes with the parameter changed in the
 //! text, run with the same fixed step sequence (GradientOptions::fixed_step)
@@ -8,6 +9,9 @@
 //! adjoint must then agree with them to round-off and truncation, ~1e-7.
 
 use softrod::{GradientMethod, GradientOptions, LossTerm, Simulation};
+
+mod gradient_support;
+use gradient_support::{agree, central};
 
 const OPTIONS: GradientOptions = GradientOptions {
     fixed_step: Some(0.004),
@@ -120,24 +124,27 @@ fn value(mut s: Simulation, rod: &str) -> f64 {
         .value
 }
 
-/// Central difference of `f` at `x` with relative step 1e-6 (absolute
-/// `floor` for a zero `x`).
-fn central(x: f64, floor: f64, f: impl Fn(f64) -> f64) -> f64 {
-    let d = (1e-6 * x.abs()).max(floor);
-    (f(x + d) - f(x - d)) / (2.0 * d)
-}
-
-fn agree(name: &str, adjoint: f64, differences: f64, scale: f64) {
-    let err = (adjoint - differences).abs() / differences.abs().max(scale);
-    assert!(
-        err < 1e-6,
-        "{name}: adjoint {adjoint:e}, differences {differences:e}, relative {err:e}"
-    );
-    eprintln!("{name}: adjoint {adjoint:e}, differences {differences:e}, relative {err:e}");
+/// `text` run with `integrator` (the scene's `[run]` names it).
+fn with_integrator(text: String, integrator: &str) -> String {
+    text.replace("[run]", &format!("[run]\nintegrator = \"{integrator}\""))
 }
 
 #[test]
 fn cantilever_gradients_match_central_differences() {
+    cantilever_against_differences("esdirk");
+}
+
+/// The same with ESDIRK5(4)7L[2]SA: its own discrete adjoint, on its own
+/// recorded run, against differences of its own runs (G27).
+#[test]
+fn esdirk5_cantilever_gradients_match_central_differences() {
+    cantilever_against_differences("esdirk5");
+}
+
+fn cantilever_against_differences(integrator: &str) {
+    let cantilever = |e: f64, rho: f64, mu: f64, t: [f64; 3]| {
+        with_integrator(cantilever(e, rho, mu, t), integrator)
+    };
     let (e, rho, mu, t) = (1.0e6, 1000.0, 500.0, [0.0, 1.5, 0.5]);
     let mut s = sim(&cantilever(e, rho, mu, t));
     let n = s.n_dof();
@@ -368,13 +375,10 @@ fn bad_requests_name_what_is_wrong() {
     let mut s2 = sim(&cantilever(1.0e6, 1000.0, 500.0, [0.0, 1.5, 0.5])
         .replace("[run]", "[run]\nintegrator = \"radau5\""));
     let e = err(&mut s2, &mut loss("arm", n), &["q0"]);
-    assert!(e.contains("radau5") && e.contains("esdirk"), "{e}");
-    // ESDIRK5(4)7L[2]SA has no adjoint: refused, naming the setting.
-    let mut s3 = sim(&cantilever(1.0e6, 1000.0, 500.0, [0.0, 1.5, 0.5])
-        .replace("[run]", "[run]\nintegrator = \"esdirk5\""));
-    let e = err(&mut s3, &mut loss("arm", n), &["q0"]);
     assert!(
-        e.contains("run.integrator") && e.contains("esdirk5 has none"),
+        e.contains("run.integrator")
+            && e.contains("radau5 has none")
+            && e.contains("(supported: esdirk, esdirk5)"),
         "{e}"
     );
 }
@@ -738,6 +742,10 @@ fn forward_sensitivities_equal_the_adjoint() {
     };
     compare(&cantilever_text, "arm", &names, tight(Some(0.004)));
     compare(&cantilever_text, "arm", &names, tight(None));
+    // ESDIRK5(4)7L[2]SA's adjoint against its forward sensitivities (G27).
+    let esdirk5_text = with_integrator(cantilever_text.clone(), "esdirk5");
+    compare(&esdirk5_text, "arm", &names, tight(Some(0.004)));
+    compare(&esdirk5_text, "arm", &names, tight(None));
     let arm_text = arm(2.0e6, 1100.0, 0.01, 0.02, [2.0, 8.0]);
     let names = [
         "upper.young",

@@ -4,12 +4,13 @@
 
 use crate::algorithms::check_vec;
 use crate::algorithms::frames::{
-    RowBlock, add_frame_columns, frame_state, frames as frames_on_tree,
+    FrameState, RowBlock, add_frame_columns, frame_state, frames as frames_on_tree,
 };
 use crate::error::DynamicsError;
 use crate::model::Model;
 use crate::model::closure::{ResolvedFrame, Target};
 use crate::model::data::Data;
+use crate::model::tree::Tree;
 use nalgebra::Matrix6xX;
 use softrod_kinematics::{Frame, RodKinematics};
 use softrod_lie::{Mat6, Pose};
@@ -76,6 +77,13 @@ pub fn section_jacobian(
         offset: Pose::identity(),
     };
     let fs = frame_state(model, tree, data, &frame, q, None);
+    jac.copy_from(&frame_columns(tree, data, &fs, n));
+    Ok((fs.pose, jac))
+}
+
+/// The six rows of the frame `fs` as columns of every coordinate that
+/// moves it (the closures' frame machinery, D63–D64), 6 × `n`.
+fn frame_columns(tree: &Tree, data: &Data, fs: &FrameState, n: usize) -> nalgebra::DMatrix<f64> {
     let mut dense = nalgebra::DMatrix::zeros(6, n);
     let identity = Mat6::identity();
     let block = RowBlock {
@@ -84,9 +92,8 @@ pub fn section_jacobian(
         row: 0,
         sign: 1.0,
     };
-    add_frame_columns(tree, data, &fs, block, &mut dense);
-    jac.copy_from(&dense);
-    Ok((fs.pose, jac))
+    add_frame_columns(tree, data, fs, block, &mut dense);
+    dense
 }
 
 /// The world pose `g_b` of rigid body `body`'s frame (index in
@@ -121,16 +128,7 @@ pub fn body_jacobian(
     };
     let fs = frame_state(model, tree, data, &frame, q, None);
     let n = model.n_dof();
-    let mut dense = nalgebra::DMatrix::zeros(6, n);
-    let identity = Mat6::identity();
-    let block = RowBlock {
-        c: &identity,
-        m: 6,
-        row: 0,
-        sign: 1.0,
-    };
-    add_frame_columns(tree, data, &fs, block, &mut dense);
     let mut jac = Matrix6xX::zeros(n);
-    jac.copy_from(&dense);
+    jac.copy_from(&frame_columns(tree, data, &fs, n));
     Ok((fs.pose, jac))
 }

@@ -110,25 +110,11 @@ pub(crate) const B_HAT: [f64; S] = [
 /// Step-size controller (RADAU5's defaults): safety factor, bounds of
 /// `h_new/h`, and the band within which `h` is kept.
 /// Stage `i`'s explicit part `(Q̂ᵢ, V̂ᵢ) = (q, v) + h Σ_{j<i} a_ij (V_j, A_j)`
-/// (shared with the adjoint's recomputed stages, so both take the same
+/// with `row` the coefficients `a_ij, j < i` of any tableau (shared with
+/// the discrete derivatives' recomputed stages, so both take the same
 /// rounding).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn explicit_part(
-    i: usize,
-    h: f64,
-    q: &DVector<f64>,
-    v: &DVector<f64>,
-    vs: &[DVector<f64>],
-    accs: &[DVector<f64>],
-    qhat: &mut DVector<f64>,
-    vhat: &mut DVector<f64>,
-) {
-    explicit_part_of_row(&A[i][..i], h, q, v, vs, accs, qhat, vhat);
-}
-
-/// [`explicit_part`] with the coefficients `a_ij, j < i` of any tableau.
-#[allow(clippy::too_many_arguments)]
-fn explicit_part_of_row(
     row: &[f64],
     h: f64,
     q: &DVector<f64>,
@@ -196,6 +182,36 @@ impl Tableau for Esdirk43 {
     const B_HAT: &'static [f64] = &B_HAT;
     const EXPONENT: f64 = 0.25;
     const START_ORDER: i32 = 3;
+}
+
+/// A [`Tableau`]'s coefficients as a value: what the discrete adjoint and
+/// the forward sensitivities (`crate::adjoint`, `crate::sensitivity`) run
+/// on, one code for every stiffly accurate ESDIRK with an explicit first
+/// stage (docs/theory-control.md G27).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Coefficients {
+    /// The diagonal `γ` of the implicit stages.
+    pub(crate) gamma: f64,
+    /// Nodes `cᵢ` (one per stage).
+    pub(crate) c: &'static [f64],
+    /// Rows of `aᵢⱼ` (the last is `b`).
+    pub(crate) a: &'static [&'static [f64]],
+}
+
+impl Coefficients {
+    pub(crate) fn of<T: Tableau>() -> Self {
+        debug_assert!(T::C.len() == T::S && T::A.len() == T::S);
+        Self {
+            gamma: T::GAMMA,
+            c: T::C,
+            a: T::A,
+        }
+    }
+
+    /// Number of stages `s` (the first explicit).
+    pub(crate) fn stages(&self) -> usize {
+        self.c.len()
+    }
 }
 
 const SAFETY: f64 = 0.9;
@@ -376,7 +392,7 @@ impl<T: Tableau> Esdirk<T> {
                 t + T::C[i] * h
             };
             // Explicit parts.
-            explicit_part_of_row(
+            explicit_part(
                 &T::A[i][..i],
                 h,
                 &self.q,

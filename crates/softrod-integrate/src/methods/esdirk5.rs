@@ -20,10 +20,9 @@
 //! (`O(h⁶)` in `q`, `O(h⁵)` in `q̇`: not below the method's order). What
 //! differs: the estimate is `O(h⁵)`, so the controller's exponent is `1/5`
 //! (Gustafsson's predictive form as before), and a step costs six implicit
-//! stages instead of five. Why a second ESDIRK rather than a changed
-//! tableau: the discrete adjoint (`crate::adjoint`) is built on the
-//! ESDIRK4(3)6L\[2\]SA tableau; this method has none, and the gradient API
-//! refuses it.
+//! stages instead of five. The discrete adjoint and the forward
+//! sensitivities (`crate::adjoint`, `crate::sensitivity`) run on this
+//! tableau as on ESDIRK4(3)6L\[2\]SA's (docs/theory-control.md G27).
 
 // The coefficients are transcribed with all the digits published.
 #![allow(clippy::excessive_precision)]

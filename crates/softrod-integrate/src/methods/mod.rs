@@ -11,10 +11,11 @@ mod rosw;
 
 pub(crate) use dopri5::Dopri5;
 pub(crate) use esdirk::{Esdirk, Esdirk43};
-pub(crate) use esdirk5::Esdirk5;
-// The tableau, for the discrete adjoint (`crate::adjoint`).
+pub(crate) use esdirk5::{Esdirk5, Esdirk54};
+// The tableaux, for the discrete adjoint and the forward sensitivities
+// (`crate::adjoint`, `crate::sensitivity`).
 pub(crate) use esdirk::{
-    A as ESDIRK_A, C as ESDIRK_C, GAMMA as ESDIRK_GAMMA, explicit_part as esdirk_explicit_part,
+    Coefficients as EsdirkCoefficients, explicit_part as esdirk_explicit_part,
     stage_values as esdirk_stage_values,
 };
 pub(crate) use genalpha::GeneralizedAlpha;

@@ -1,5 +1,5 @@
-//! Inverse statics: cable tensions for targets (docs/theory-control.md
-//! IS1–IS12).
+//! Inverse statics: cable tensions (and unknown point forces) for
+//! targets (docs/theory-control.md IS1–IS13).
 //!
 //! The equilibrium `r(q, T) = τ_s(q) − B(q) T = 0` (IS1) defines `q(T)`
 //! wherever its tangent stiffness `K_t = ∂r/∂q` is regular, with
@@ -13,12 +13,15 @@
 //! the trial tensions from the last equilibrium and backtracks until `f`
 //! decreases enough (IS5).
 
+use std::borrow::Cow;
+
 use nalgebra::{DMatrix, DVector, Matrix3, Matrix6xX, Rotation3};
 use softrod_dynamics::{
     DynamicsError, Forces, IdDerivatives, Model, StaticsOptions, actuation_matrix, body_jacobian,
     closure_statics, inverse_dynamics_derivatives_with, section_jacobian, statics_sensitivity,
 };
 use softrod_lie::{Mat3, Pose, Vec3};
+use softrod_mechanics::{LoadFrame, PointLoad};
 
 use crate::error::{Error, Result};
 
@@ -96,12 +99,46 @@ impl Target {
     }
 }
 
+/// A point force whose value is an unknown of the inverse problem
+/// (IS13): a dead force `f` \[N\] in world axes at the rod section
+/// `(rod, s)`, each component within `min[k] ≤ f_k ≤ max[k]`. It acts in
+/// addition to the model's own loads; its generalized force is `J_pᵀ f`
+/// (`J_p` the section point's linear Jacobian), one column of the
+/// actuation matrix per component.
+#[derive(Clone, Debug, PartialEq)]
+pub struct UnknownLoad {
+    /// The rod's index in [`Model::rods`].
+    pub rod: usize,
+    /// Arc length of the point of application \[m\], in `[0, L]`.
+    pub s: f64,
+    /// Lower bounds of the world components \[N\]; `−∞` for none.
+    pub min: [f64; 3],
+    /// Upper bounds of the world components \[N\]; `+∞` for none.
+    pub max: [f64; 3],
+}
+
+impl UnknownLoad {
+    /// An unknown force at `(rod, s)` with `|f_k| ≤ max_force` for each
+    /// world component (`f64::INFINITY` for no bound).
+    pub fn new(rod: usize, s: f64, max_force: f64) -> Self {
+        Self {
+            rod,
+            s,
+            min: [-max_force; 3],
+            max: [max_force; 3],
+        }
+    }
+}
+
 /// Settings of [`solve_actuation`].
 #[derive(Clone, Debug)]
 pub struct ActuationOptions {
     /// Upper bound of each cable's tension \[N\], model order; `+∞` for
     /// none. Empty: no upper bounds. The lower bound is 0 (a cable pulls).
     pub max_tension: Vec<f64>,
+    /// Point forces solved for together with the tensions (IS13), in the
+    /// order of [`Actuation::forces`]. Empty by default.
+    pub unknown_loads: Vec<UnknownLoad>,
     /// Relative weight `ρ` of the effort term (IS2), `≥ 0`: `ε = ρ ‖∂e/∂T‖²_F`
     /// at the starting point; [`DEFAULT_EFFORT_WEIGHT`].
     pub effort_weight: f64,
@@ -120,6 +157,9 @@ pub struct ActuationOptions {
     /// Warm start: the equilibrium at `initial_tensions` or near it; default
     /// the rest shape.
     pub initial_q: Option<Vec<f64>>,
+    /// Warm start: the unknown loads' forces to start from \[N\, world\]
+    /// (clipped to their bounds); default 0 (clipped).
+    pub initial_forces: Option<Vec<[f64; 3]>>,
     /// Time of the prescribed joints (held at rest) \[s\].
     pub time: f64,
 }
@@ -128,12 +168,14 @@ impl Default for ActuationOptions {
     fn default() -> Self {
         Self {
             max_tension: Vec::new(),
+            unknown_loads: Vec::new(),
             effort_weight: DEFAULT_EFFORT_WEIGHT,
             step_tolerance: 1e-10,
             reach_tolerance: 1e-6,
             max_iterations: 100,
             initial_tensions: None,
             initial_q: None,
+            initial_forces: None,
             time: 0.0,
         }
     }
@@ -145,6 +187,7 @@ impl ActuationOptions {
     pub fn warm_start(mut self, previous: &Actuation) -> Self {
         self.initial_tensions = Some(previous.tensions.as_slice().to_vec());
         self.initial_q = Some(previous.q.as_slice().to_vec());
+        self.initial_forces = Some(previous.forces.iter().map(|f| (*f).into()).collect());
         self
     }
 }
@@ -210,6 +253,12 @@ pub struct Actuation {
     pub target_error: f64,
     /// Where each tension is relative to its bounds.
     pub bounds: Vec<Bound>,
+    /// The unknown loads' forces \[N, world axes\], in the order of
+    /// [`ActuationOptions::unknown_loads`] (IS13).
+    pub forces: Vec<Vec3>,
+    /// Where each of their components is relative to its bounds
+    /// (`Lower` at `min`, `Upper` at `max`).
+    pub force_bounds: Vec<[Bound; 3]>,
     /// One sentence: reached, closest reachable shape, or why not converged.
     pub message: String,
 }
@@ -218,9 +267,12 @@ pub struct Actuation {
 /// hold that bring the sections and bodies of `targets` closest to them,
 /// the least effort among equally close ones (IS1–IS12). Models with loop
 /// closures are solved with their constrained equilibrium (IS8–IS10).
-/// `data`'s cable inputs are left as they were.
+/// The point forces of `options.unknown_loads` are unknowns too, within
+/// their bounds (IS13). `data`'s cable inputs are left as they were.
 ///
-/// Refused (an input error naming the key): no targets, no cables, a
+/// Refused (an input error naming the key): no targets, no cables and no
+/// unknown loads, an unknown load on a missing rod, off it or with NaN or
+/// crossed bounds (`unknown_load[i].…`), a
 /// target on a rod or body that does not exist or outside `[0, L]`, a
 /// non-finite or non-orthonormal target, a weight not positive,
 /// `max_tension` of the wrong length, negative or NaN. A statics failure
@@ -249,8 +301,11 @@ fn bad(key: impl Into<String>, message: impl Into<String>) -> Error {
 
 fn validate(model: &Model, targets: &[Target], options: &ActuationOptions) -> Result<()> {
     let nc = model.n_cables();
-    if nc == 0 {
-        return Err(bad("cable", "the model has no cables to solve for"));
+    if nc == 0 && options.unknown_loads.is_empty() {
+        return Err(bad(
+            "cable",
+            "the model has no cables and no unknown loads to solve for",
+        ));
     }
     if targets.is_empty() {
         return Err(bad("target", "no targets given"));
@@ -362,6 +417,62 @@ fn validate(model: &Model, targets: &[Target], options: &ActuationOptions) -> Re
             ));
         }
     }
+    for (i, u) in options.unknown_loads.iter().enumerate() {
+        let Some(r) = rods.get(u.rod) else {
+            return Err(bad(
+                format!("unknown_load[{i}].rod"),
+                format!("no rod {} (the model has {})", u.rod, rods.len()),
+            ));
+        };
+        let len = r.spec.geometry.length();
+        if !(u.s.is_finite() && (0.0..=len * (1.0 + 1e-12)).contains(&u.s)) {
+            return Err(bad(
+                format!("unknown_load[{i}].s"),
+                format!("must be in [0, {len}] (rod {:?}), got {}", r.spec.name, u.s),
+            ));
+        }
+        for k in 0..3 {
+            let (lo, hi) = (u.min[k], u.max[k]);
+            if lo.is_nan() || lo == f64::INFINITY {
+                return Err(bad(
+                    format!("unknown_load[{i}].min[{k}]"),
+                    format!("must be a number below +∞, got {lo}"),
+                ));
+            }
+            if hi.is_nan() || hi == f64::NEG_INFINITY {
+                return Err(bad(
+                    format!("unknown_load[{i}].max[{k}]"),
+                    format!("must be a number above −∞, got {hi}"),
+                ));
+            }
+            if lo > hi {
+                return Err(bad(
+                    format!("unknown_load[{i}].max[{k}]"),
+                    format!("must be ≥ min ({lo}), got {hi}"),
+                ));
+            }
+        }
+    }
+    if let Some(f) = &options.initial_forces {
+        if f.len() != options.unknown_loads.len() {
+            return Err(bad(
+                "initial_forces",
+                format!(
+                    "has {} entries, there are {} unknown loads",
+                    f.len(),
+                    options.unknown_loads.len()
+                ),
+            ));
+        }
+        for (i, v) in f.iter().enumerate() {
+            if let Some(k) = v.iter().position(|x| !x.is_finite()) {
+                return Err(bad(
+                    format!("initial_forces[{i}][{k}]"),
+                    format!("must be finite, got {}", v[k]),
+                ));
+            }
+        }
+    }
     if let Some(q) = &options.initial_q {
         if q.len() != model.n_dof() {
             return Err(bad(
@@ -385,6 +496,8 @@ fn validate(model: &Model, targets: &[Target], options: &ActuationOptions) -> Re
 
 /// An equilibrium and what the step needs of it.
 struct Point {
+    /// The unknowns `x = (T, f_1, …)`: tensions, then the unknown loads'
+    /// world force components (IS13).
     t: DVector<f64>,
     q: DVector<f64>,
     /// The closure multipliers at `q` (empty on an open model; IS8).
@@ -394,13 +507,20 @@ struct Point {
     cost: f64,
 }
 
-/// `(∂e/∂T, ∂q/∂T)` at an equilibrium (IS3).
+/// `(∂e/∂x, ∂q/∂x)` at an equilibrium (IS3, IS13).
 type Sensitivity = (DMatrix<f64>, DMatrix<f64>);
 
 struct Solver<'a> {
-    model: &'a Model,
+    /// The caller's model, without the unknown loads.
+    base: &'a Model,
+    /// What the statics see: `base` with the unknown loads appended at
+    /// the forces of the last [`Solver::set_loads`] (IS13); `base` itself
+    /// without unknown loads.
+    model: Cow<'a, Model>,
     targets: &'a [Target],
     options: &'a ActuationOptions,
+    /// Number of cables: the first `nc` unknowns are tensions.
+    nc: usize,
     lo: Vec<f64>,
     hi: Vec<f64>,
     work: IdDerivatives,
@@ -413,22 +533,100 @@ struct Solver<'a> {
 impl<'a> Solver<'a> {
     fn new(model: &'a Model, targets: &'a [Target], options: &'a ActuationOptions) -> Self {
         let nc = model.n_cables();
-        let hi = if options.max_tension.is_empty() {
+        let mut hi = if options.max_tension.is_empty() {
             vec![f64::INFINITY; nc]
         } else {
             options.max_tension.clone()
         };
+        let mut lo = vec![0.0; nc];
+        for u in &options.unknown_loads {
+            lo.extend_from_slice(&u.min);
+            hi.extend_from_slice(&u.max);
+        }
         Self {
-            model,
+            base: model,
+            model: Cow::Borrowed(model),
             targets,
             options,
-            lo: vec![0.0; nc],
+            nc,
+            lo,
             hi,
             work: IdDerivatives::new(model),
             zero: vec![0.0; model.n_dof()],
             statics_iterations: 0,
             eps: 0.0,
         }
+    }
+
+    /// The unknown loads at the forces of `x` (IS13): the caller's model
+    /// with one dead point load per unknown load appended to its rod.
+    /// Rebuilding the rods (their load placement) is cheap next to a
+    /// statics solve; `Data` does not depend on the loads.
+    fn set_loads(&mut self, x: &DVector<f64>) -> std::result::Result<(), DynamicsError> {
+        let loads = &self.options.unknown_loads;
+        if loads.is_empty() {
+            return Ok(());
+        }
+        let mut m = self.base.clone();
+        let mut rods: Vec<usize> = loads.iter().map(|u| u.rod).collect();
+        rods.sort_unstable();
+        rods.dedup();
+        for rod in rods {
+            let on_rod = loads
+                .iter()
+                .enumerate()
+                .filter(|(_, u)| u.rod == rod)
+                .map(|(i, u)| PointLoad {
+                    s: u.s.min(self.base.rods()[rod].spec.geometry.length()),
+                    force: Vec3::new(
+                        x[self.nc + 3 * i],
+                        x[self.nc + 3 * i + 1],
+                        x[self.nc + 3 * i + 2],
+                    ),
+                    moment: Vec3::zeros(),
+                    frame: LoadFrame::World,
+                })
+                .collect();
+            m = m.with_point_loads(rod, on_rod)?;
+        }
+        self.model = Cow::Owned(m);
+        Ok(())
+    }
+
+    /// Sets `data`'s cable tensions to those of `x`.
+    fn set_tensions(
+        &self,
+        data: &mut softrod_dynamics::Data,
+        x: &DVector<f64>,
+    ) -> std::result::Result<(), DynamicsError> {
+        data.set_cable_tensions(&self.model, Some(&x.as_slice()[..self.nc]))
+    }
+
+    /// The actuation matrix of all unknowns at `q` (n_dof × (n_c + 3 n_u)):
+    /// `B` (D15), then per unknown load the generalized forces `J_pᵀ e_k`
+    /// of unit world forces at its point, `J_p = J_v − [p]× J_ω` the
+    /// point's linear velocity rows (IS13).
+    fn actuation(
+        &self,
+        data: &mut softrod_dynamics::Data,
+        q: &[f64],
+    ) -> std::result::Result<DMatrix<f64>, DynamicsError> {
+        let b = actuation_matrix(&self.model, q)?;
+        let loads = &self.options.unknown_loads;
+        if loads.is_empty() {
+            return Ok(b);
+        }
+        let n = self.model.n_dof();
+        let mut g = DMatrix::zeros(n, self.nc + 3 * loads.len());
+        g.columns_mut(0, self.nc).copy_from(&b);
+        self.model.set_time(data, self.options.time);
+        for (i, u) in loads.iter().enumerate() {
+            let s = u.s.min(self.model.rods()[u.rod].spec.geometry.length());
+            let (pose, js) = section_jacobian(&self.model, data, q, u.rod, s)?;
+            let jp = js.fixed_rows::<3>(3) - skew(&pose.translation) * js.fixed_rows::<3>(0);
+            g.columns_mut(self.nc + 3 * i, 3).copy_from(&jp.transpose());
+        }
+        Ok(g)
     }
 
     fn clamp(&self, t: &mut DVector<f64>) {
@@ -444,14 +642,15 @@ impl<'a> Solver<'a> {
         t: DVector<f64>,
         q0: &[f64],
     ) -> std::result::Result<Point, DynamicsError> {
-        data.set_cable_tensions(self.model, Some(t.as_slice()))?;
+        self.set_loads(&t)?;
+        self.set_tensions(data, &t)?;
         let opts = StaticsOptions {
             time: self.options.time,
             ..StaticsOptions::default()
         };
         // `statics` itself on an open model; the constrained Newton of
         // D69, with its multipliers, on a closed one (IS8).
-        let (r, lambda) = closure_statics(self.model, data, q0, &opts)?;
+        let (r, lambda) = closure_statics(&self.model, data, q0, &opts)?;
         self.statics_iterations += r.iterations;
         let e = self.residuals(data, r.q.as_slice(), None)?;
         let cost = 0.5 * e.norm_squared() + 0.5 * self.eps * t.norm_squared();
@@ -519,8 +718,8 @@ impl<'a> Solver<'a> {
         tg: &Target,
     ) -> std::result::Result<(Pose, Matrix6xX<f64>), DynamicsError> {
         match tg.body {
-            Some(b) => body_jacobian(self.model, data, q, b),
-            None => section_jacobian(self.model, data, q, tg.rod, self.abscissa(tg)),
+            Some(b) => body_jacobian(&self.model, data, q, b),
+            None => section_jacobian(&self.model, data, q, tg.rod, self.abscissa(tg)),
         }
     }
 
@@ -537,18 +736,22 @@ impl<'a> Solver<'a> {
             .sum()
     }
 
-    /// `∂e/∂T = (∂e/∂q) K_t⁻¹ B` at the equilibrium `p` (IS3); with
-    /// closures `∂q/∂T` from the bordered system (IS9).
+    /// `∂e/∂T = (∂e/∂q) K_t⁻¹ B` at the equilibrium `p` (IS3), with the
+    /// unknown loads' columns (IS13); with closures `∂q/∂T` from the
+    /// bordered system (IS9).
     fn sensitivity(
         &mut self,
         data: &mut softrod_dynamics::Data,
         p: &Point,
     ) -> std::result::Result<Option<Sensitivity>, DynamicsError> {
+        // The last statics may have been a rejected trial point: the
+        // tangent is the one at `p`'s loads.
+        self.set_loads(&p.t)?;
         if self.model.has_closures() {
-            let b = actuation_matrix(self.model, p.q.as_slice())?;
-            data.set_cable_tensions(self.model, Some(p.t.as_slice()))?;
+            let b = self.actuation(data, p.q.as_slice())?;
+            self.set_tensions(data, &p.t)?;
             let Some(sens) = statics_sensitivity(
-                self.model,
+                &self.model,
                 data,
                 self.options.time,
                 p.q.as_slice(),
@@ -563,10 +766,11 @@ impl<'a> Solver<'a> {
             let j = jq * &sens.dq;
             return Ok(j.iter().all(|v| v.is_finite()).then_some((j, sens.dq)));
         }
+        let b = self.actuation(data, p.q.as_slice())?;
         let w = &mut self.work;
-        w.tensions = Some(p.t.clone());
+        w.tensions = Some(p.t.rows(0, self.nc).into_owned());
         inverse_dynamics_derivatives_with(
-            self.model,
+            &self.model,
             w,
             Forces::at_rest(1.0),
             self.options.time,
@@ -574,7 +778,6 @@ impl<'a> Solver<'a> {
             &self.zero,
             &self.zero,
         )?;
-        let b = actuation_matrix(self.model, p.q.as_slice())?;
         let Some(dq_dt) = w.dtau_dq.clone().lu().solve(&b) else {
             return Ok(None);
         };
@@ -585,11 +788,10 @@ impl<'a> Solver<'a> {
     }
 
     fn run(mut self, data: &mut softrod_dynamics::Data) -> Result<Actuation> {
-        let nc = self.model.n_cables();
-        let mut t0 = match &self.options.initial_tensions {
+        let tensions = match &self.options.initial_tensions {
             Some(t) => DVector::from_column_slice(t),
             None => DVector::from_iterator(
-                nc,
+                self.nc,
                 self.model.rods().iter().flat_map(|r| {
                     r.spec
                         .cables
@@ -598,6 +800,20 @@ impl<'a> Solver<'a> {
                 }),
             ),
         };
+        let nu = self.options.unknown_loads.len();
+        let forces = self
+            .options
+            .initial_forces
+            .clone()
+            .unwrap_or_else(|| vec![[0.0; 3]; nu]);
+        let nx = self.lo.len();
+        let mut t0 = DVector::from_iterator(
+            nx,
+            tensions
+                .iter()
+                .copied()
+                .chain(forces.iter().flatten().copied()),
+        );
         self.clamp(&mut t0);
         let q0 = self
             .options
@@ -622,17 +838,17 @@ impl<'a> Solver<'a> {
             // The QP of the linearized problem in the step d (IS4):
             // ½‖e + J d‖² + ½ε‖T + d‖² on lo − T ≤ d ≤ hi − T.
             let mut h = j.transpose() * &j;
-            for i in 0..nc {
+            for i in 0..nx {
                 h[(i, i)] += eps;
             }
             let g = j.transpose() * &p.e + &p.t * eps;
-            let lo: Vec<f64> = (0..nc).map(|i| self.lo[i] - p.t[i]).collect();
-            let hi: Vec<f64> = (0..nc).map(|i| self.hi[i] - p.t[i]).collect();
+            let lo: Vec<f64> = (0..nx).map(|i| self.lo[i] - p.t[i]).collect();
+            let hi: Vec<f64> = (0..nx).map(|i| self.hi[i] - p.t[i]).collect();
             // A singular H (a cable that moves no target, ε = 0) has many
             // minimizers; a whisker of the effort term picks the smallest
             // step among them without moving a determined one measurably.
             let tiny = 1e-14 * h.diagonal().amax().max(f64::MIN_POSITIVE);
-            for i in 0..nc {
+            for i in 0..nx {
                 h[(i, i)] += tiny;
             }
             let d = match super::qp::bounded_qp(&h, &g, &lo, &hi) {
@@ -731,15 +947,13 @@ impl<'a> Solver<'a> {
         }
         // A tension within 1e-9 of its range of a bound is at it (the
         // polished QP step puts it there exactly).
-        let bounds = (0..p.t.len())
+        let mut bounds = (0..p.t.len())
             .map(|i| {
-                let tol = 1e-9
-                    * (1.0
-                        + if self.hi[i].is_finite() {
-                            self.hi[i]
-                        } else {
-                            p.t[i]
-                        });
+                let range = [self.lo[i], self.hi[i], p.t[i]]
+                    .iter()
+                    .filter(|v| v.is_finite())
+                    .fold(0.0f64, |m, v| m.max(v.abs()));
+                let tol = 1e-9 * (1.0 + range);
                 if p.t[i] - self.lo[i] <= tol {
                     Bound::Lower
                 } else if self.hi[i] - p.t[i] <= tol {
@@ -749,6 +963,15 @@ impl<'a> Solver<'a> {
                 }
             })
             .collect::<Vec<_>>();
+        let force_bounds: Vec<[Bound; 3]> = bounds[self.nc..]
+            .chunks_exact(3)
+            .map(|c| [c[0], c[1], c[2]])
+            .collect();
+        bounds.truncate(self.nc);
+        let forces: Vec<Vec3> = p.t.as_slice()[self.nc..]
+            .chunks_exact(3)
+            .map(|c| Vec3::new(c[0], c[1], c[2]))
+            .collect();
         let target_error = p.e.norm();
         let message = if !converged {
             format!(
@@ -760,12 +983,22 @@ impl<'a> Solver<'a> {
                 self.options.reach_tolerance
             )
         } else {
-            let held: Vec<String> = bounds
+            let mut held: Vec<String> = bounds
                 .iter()
                 .enumerate()
                 .filter(|(_, b)| **b != Bound::Free)
                 .map(|(i, b)| format!("cable {i} at its {} bound", b.name()))
                 .collect();
+            for (i, fb) in force_bounds.iter().enumerate() {
+                for (k, b) in fb.iter().enumerate() {
+                    if *b != Bound::Free {
+                        held.push(format!(
+                            "unknown load {i} component {k} at its {} bound",
+                            b.name()
+                        ));
+                    }
+                }
+            }
             format!(
                 "target not reachable: the closest reachable shape has weighted error {target_error:.3e}{}",
                 if held.is_empty() {
@@ -775,10 +1008,11 @@ impl<'a> Solver<'a> {
                 }
             )
         };
+        let tensions = p.t.rows(0, self.nc).into_owned();
         Ok(Actuation {
             converged,
             reached: converged && reached,
-            tensions: p.t,
+            tensions,
             q: p.q,
             iterations,
             statics_iterations: self.statics_iterations,
@@ -787,6 +1021,8 @@ impl<'a> Solver<'a> {
             effort_weight: self.eps,
             target_error,
             bounds,
+            forces,
+            force_bounds,
             message,
         })
     }

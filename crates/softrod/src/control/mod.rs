@@ -6,7 +6,8 @@
 //! cable tensions `0 ≤ T ≤ T_max` and the static equilibrium `q(T)`
 //! (constrained, with loop closures) that bring them closest to the
 //! targets, with the least effort among equally good tensions
-//! (docs/theory-control.md, IS1–IS12).
+//! (docs/theory-control.md, IS1–IS12); point forces marked unknown
+//! ([`UnknownLoad`]) are solved for with them (IS13).
 //!
 //! Why a module of the facade and not a crate of its own: the solver is a
 //! few hundred lines on top of `softrod-dynamics`' public statics, actuation
@@ -25,6 +26,6 @@ mod inverse;
 mod qp;
 
 pub use inverse::{
-    Actuation, ActuationOptions, Bound, DEFAULT_EFFORT_WEIGHT, Target, TargetResidual,
+    Actuation, ActuationOptions, Bound, DEFAULT_EFFORT_WEIGHT, Target, TargetResidual, UnknownLoad,
     solve_actuation,
 };

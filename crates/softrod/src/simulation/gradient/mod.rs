@@ -10,8 +10,8 @@ mod tests;
 
 use nalgebra::DVector;
 use softrod_integrate::{
-    AdjointSolver, Control, Hooks, IntegrateError, Integrator, Iteration, RodSystem, StepControl,
-    StepInfo, Tape, adjoint_second_order_with, forward_sensitivity_second_order,
+    ADJOINT_INTEGRATORS, AdjointSolver, Control, Hooks, IntegrateError, Iteration, RodSystem,
+    StepControl, StepInfo, Tape, adjoint_second_order_with, forward_sensitivity_second_order,
     integrate_second_order,
 };
 use softrod_kinematics::Frame;
@@ -188,7 +188,7 @@ impl Simulation {
     /// `params` it is the loss of the recorded run alone (no backward pass).
     ///
     /// Errors ([`Error::Gradient`], naming the key): an integrator without
-    /// an adjoint (supported: esdirk), a model with contact,
+    /// an adjoint (supported: esdirk, esdirk5), a model with contact,
     /// a parameter or loss naming nothing in the model, a time outside the
     /// run, non-finite or negative weights, non-finite targets, a custom
     /// loss that fails or returns the wrong lengths or NaN.
@@ -214,13 +214,15 @@ impl Simulation {
     ) -> Result<Gradient> {
         self.check_run(duration)?;
         let integrator = self.settings.integrator;
-        if integrator != Integrator::Esdirk {
+        if !ADJOINT_INTEGRATORS.contains(&integrator) {
+            let names: Vec<&str> = ADJOINT_INTEGRATORS.iter().map(|i| i.name()).collect();
             return Err(bad(
                 "run.integrator",
                 format!(
                     "gradients need the discrete adjoint of the integrator; {} has none \
-                     (supported: esdirk)",
-                    integrator.name()
+                     (supported: {})",
+                    integrator.name(),
+                    names.join(", ")
                 ),
             ));
         }
