@@ -175,6 +175,34 @@ fn constant_offset_cable_gives_the_closed_form_tension() {
     }
 }
 
+/// The reported rotation error resolves small angles: the tip target of
+/// the closed-form test above, turned by `α = 1e-8` rad about the tip's own
+/// axis — a twist the planar arm cannot make, so `α` is what remains, and
+/// the tension is still the closed form's. (The angle from `acos` of the
+/// trace read 0 here: `cos α = 1 − 5e-17` rounds to 1.)
+#[test]
+fn a_small_rotation_error_is_reported_as_it_is() {
+    use nalgebra::{Rotation3, Vector3};
+    let mut s = planar_arm();
+    let (kappa, alpha) = (-2.0, 1e-8);
+    let rotation = Rotation3::from_axis_angle(&Vector3::y_axis(), kappa * LENGTH)
+        * Rotation3::from_axis_angle(&Vector3::x_axis(), alpha);
+    let targets = [Target::position(0, LENGTH, arc_tip(kappa)).with_rotation(*rotation.matrix())];
+    let options = ActuationOptions {
+        effort_weight: 0.0,
+        ..ActuationOptions::default()
+    };
+    let a = solve(&mut s, &targets, &options);
+    assert!(a.converged, "{}", a.message);
+    let want = -kappa * ei() / D;
+    assert!((a.tensions[0] - want).abs() < 1e-9 * want, "{a:?}");
+    let e = a.residuals[0].rotation_error;
+    assert!(
+        (e - alpha).abs() < 1e-6 * alpha,
+        "rotation error {e:e}, want {alpha:e}"
+    );
+}
+
 /// (3) A target off the arm's one-parameter workspace: the solver's point
 /// is the nearest of a dense scan of `T ∈ [0, T_max]` (2001 forward statics
 /// solves), and the result says the target is not reachable.

@@ -15,7 +15,7 @@
 
 use std::borrow::Cow;
 
-use nalgebra::{DMatrix, DVector, Matrix3, Matrix6xX, Rotation3};
+use nalgebra::{DMatrix, DVector, Matrix3, Matrix6xX, Rotation3, Vector3};
 use softrod_dynamics::{
     DynamicsError, Forces, IdDerivatives, Model, StaticsOptions, actuation_matrix, body_jacobian,
     closure_statics, inverse_dynamics_derivatives_with, section_jacobian, statics_sensitivity,
@@ -696,9 +696,8 @@ impl<'a> Solver<'a> {
                 row += 3;
             }
             if let Some(rs) = &tg.rotation {
-                let err = Rotation3::from_matrix_unchecked(g.rotation * rs.transpose());
-                e.fixed_rows_mut::<3>(row)
-                    .copy_from(&(err.scaled_axis() * sw));
+                let err = rotation_vector(&(g.rotation * rs.transpose()));
+                e.fixed_rows_mut::<3>(row).copy_from(&(err * sw));
                 if let Some(j) = jac.as_deref_mut() {
                     // d log(R R*ᵀ) ≈ ω (world), exact at zero error (IS2).
                     j.rows_mut(row, 3).copy_from(&(js.fixed_rows::<3>(0) * sw));
@@ -932,7 +931,7 @@ impl<'a> Solver<'a> {
             let (g, _) = self.frame(data, p.q.as_slice(), tg)?;
             let position_error = tg.position.map_or(0.0, |x| (g.translation - x).norm());
             let rotation_error = tg.rotation.map_or(0.0, |r| {
-                Rotation3::from_matrix_unchecked(g.rotation * r.transpose()).angle()
+                rotation_vector(&(g.rotation * r.transpose())).norm()
             });
             let sw = tg.weight.sqrt();
             if sw * position_error.max(rotation_error) > self.options.reach_tolerance {
@@ -1030,4 +1029,54 @@ impl<'a> Solver<'a> {
 
 fn skew(p: &Vec3) -> Mat3 {
     Mat3::new(0.0, -p.z, p.y, p.z, 0.0, -p.x, -p.y, p.x, 0.0)
+}
+
+/// The rotation vector `θ a` of the rotation matrix `r` (its so(3)
+/// logarithm, rad, in the axes `r` is written in): `sin θ · a` is
+/// `vee(r − rᵀ)/2` and `θ = atan2(sin θ, (tr r − 1)/2)`, which resolves
+/// small angles to round-off — `acos((tr r − 1)/2)` cannot: `cos θ`
+/// rounds to 1 below θ ≈ 1e-8 rad, so an error of 1e-8 rad read 0. Past
+/// a quarter turn, where `sin θ` no longer carries the axis well,
+/// nalgebra's own logarithm.
+fn rotation_vector(r: &Matrix3<f64>) -> Vector3<f64> {
+    let v = 0.5
+        * Vector3::new(
+            r[(2, 1)] - r[(1, 2)],
+            r[(0, 2)] - r[(2, 0)],
+            r[(1, 0)] - r[(0, 1)],
+        );
+    let c = 0.5 * (r.trace() - 1.0);
+    if c <= 0.0 {
+        return Rotation3::from_matrix_unchecked(*r).scaled_axis();
+    }
+    let sin = v.norm();
+    if sin == 0.0 {
+        return Vector3::zeros();
+    }
+    v * (sin.atan2(c) / sin)
+}
+
+#[cfg(test)]
+mod rotation_vector_tests {
+    use super::rotation_vector;
+    use nalgebra::{Rotation3, Unit, Vector3};
+
+    /// Built from a known axis and angle, the rotation gives them back:
+    /// to round-off relative at small angles (where `acos` of the trace
+    /// reads 0 or ~1.5e-8), and across the whole range.
+    #[test]
+    fn gives_back_the_axis_and_angle_it_was_built_from() {
+        let axis = Unit::new_normalize(Vector3::new(0.3, -0.5, 0.8));
+        for angle in [1e-14, 1e-10, 1e-8, 3e-8, 1e-4, 0.3, 1.5, 1.6, 2.5, 3.1] {
+            let r = Rotation3::from_axis_angle(&axis, angle);
+            let v = rotation_vector(r.matrix());
+            let want = axis.into_inner() * angle;
+            let err = (v - want).norm() / angle;
+            assert!(err < 1e-12, "angle {angle:e}: {v:?} vs {want:?} ({err:e})");
+        }
+        assert_eq!(
+            rotation_vector(&nalgebra::Matrix3::identity()),
+            Vector3::zeros()
+        );
+    }
 }
