@@ -5,6 +5,7 @@
 //! (docs/theory-control.md G1–G9).
 
 mod params;
+mod prescribed;
 #[cfg(test)]
 mod tests;
 
@@ -261,6 +262,15 @@ impl Simulation {
                 krylov_iterations: 0,
             });
         }
+        // The position terms' rods and abscissae, for their direct
+        // dependence on prescribed samples (G19).
+        let mut sections = Vec::new();
+        for term in loss.iter() {
+            if let LossTerm::Position { rod, s, .. } = term {
+                let r = self.rod_index(rod.as_str())?;
+                sections.push((r, s.unwrap_or(self.model().rods()[r].spec.properties.length())));
+            }
+        }
         let mut sys = ParamSystem::new(&mut self.system, &parsed)?;
         let mut seed = |k: usize, lq: &mut DVector<f64>, lv: &mut DVector<f64>| {
             if let Some((dq, dv)) = &seeds[k] {
@@ -268,7 +278,7 @@ impl Simulation {
                 *lv += dv;
             }
         };
-        let g = match options.method {
+        let mut g = match options.method {
             GradientMethod::Adjoint => {
                 adjoint_second_order_with(&mut sys, integrator, &tape, &mut seed, solver)
             }
@@ -280,6 +290,38 @@ impl Simulation {
             }
         }
         .map_err(|e| Error::Integration(Box::new(e)))?;
+        if sys.has_prescribed() {
+            // A section's world position depends on the prescribed
+            // coordinates directly, besides through q (G19).
+            let eps = node_tolerance(duration);
+            let mut positions = sections.iter();
+            for term in loss.iter() {
+                let LossTerm::Position {
+                    times,
+                    targets,
+                    weight,
+                    ..
+                } = term
+                else {
+                    continue;
+                };
+                let &(rod, s) = positions.next().expect("one per position term");
+                for (&t, target) in times.iter().zip(targets) {
+                    let k = (0..tape.nodes())
+                        .find(|&k| (tape.time(k) - t).abs() <= eps)
+                        .expect("evaluate_loss found every node");
+                    sys.prescribed_position_term(
+                        tape.time(k),
+                        tape.q(k),
+                        rod,
+                        s,
+                        *target,
+                        *weight,
+                        &mut g.dp,
+                    )?;
+                }
+            }
+        }
         let mut gradients = Vec::with_capacity(parsed.len());
         let mut slot = 0;
         for p in &parsed {
