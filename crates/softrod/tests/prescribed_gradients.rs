@@ -222,3 +222,47 @@ fn bad_prescribed_requests_name_what_is_wrong() {
         .to_string();
     assert!(m.contains("arm.prescribed") && m.contains("sinusoid"), "{m}");
 }
+
+/// A closed model (a four-bar whose crank is driven): its closure rows
+/// depend on the prescribed coordinates too, which the gradient does not
+/// carry yet — a clear error, not a wrong number.
+#[test]
+fn prescribed_samples_of_a_closed_model_are_refused() {
+    let text = r#"
+[world]
+gravity = [0.0, 0.0, -9.81]
+[[rod]]
+name = "a"
+joint = { type = "revolute", axis = [0, 1, 0], prescribed = { times = [0.0, 0.1], values = [0.0, 0.0] } }
+length = 0.3
+pieces = 2
+strains = ["ky", "kz", "qx"]
+section = { shape = "circle", radius = 0.01 }
+material = { density = 1000.0, young = 1.0e6, poisson = 0.5, viscosity = 300.0 }
+[[rod]]
+name = "b"
+base = { position = [0.3, 0.0, -0.15], rotation = [[0, 0, -1], [0, 1, 0], [1, 0, 0]] }
+joint = { type = "revolute", axis = [0, 1, 0] }
+length = 0.15
+pieces = 2
+strains = ["ky", "qx", "qz"]
+section = { shape = "circle", radius = 0.008 }
+material = { density = 1100.0, young = 2.0e6, shear_modulus = 6.0e5, viscosity = 1.0e3 }
+[[body]]
+name = "hand"
+parent = "b"
+mass = 0.01
+inertia = [1e-6, 1e-6, 1e-6]
+[[closure]]
+type = "ball"
+a = { element = "a" }
+b = { element = "hand" }
+"#;
+    let mut s = sim(text);
+    let n = s.n_dof();
+    let m = s
+        .value_and_gradient(&mut loss("a", n), &["a.prescribed"], DURATION, &OPTIONS)
+        .unwrap_err()
+        .to_string();
+    assert!(m.contains("a.prescribed") && m.contains("closed model"), "{m}");
+}
