@@ -118,7 +118,9 @@ pub struct Gradient {
     pub value: f64,
     /// `∂L/∂p` for each parameter named, in the order named: one entry
     /// for a material constant or a mass, one per table value (or one for
-    /// a constant) for a cable's tension, `n_dof` for `q0` and `qdot0`.
+    /// a constant) for a cable's tension, samples × coordinates for a
+    /// prescribed joint (entry `i·dof + c` for sample `i`, coordinate `c`),
+    /// `n_dof` for `q0` and `qdot0`.
     pub gradients: Vec<(String, Vec<f64>)>,
     /// Accepted steps of the forward run (the backward pass has as many).
     pub steps: usize,
@@ -178,7 +180,11 @@ impl Simulation {
     /// G1–G9): `"q0"`, `"qdot0"`, `"ROD.young"`, `"ROD.shear_modulus"`
     /// (a material given by its shear modulus), `"ROD.density"`,
     /// `"ROD.viscosity"`, `"BODY.mass"`, `"cableN.tension"` (one entry per
-    /// value of a tension table, the scene's `[[cable]]` order).
+    /// value of a tension table, the scene's `[[cable]]` order),
+    /// `"ELEMENT.prescribed"` (the samples of the spline that prescribes
+    /// the joint of rod or body `ELEMENT` \[rad or m\]: one entry per
+    /// sample and coordinate, sample-major — the order of the scene's
+    /// `values` rows; G17–G20; open models only).
     ///
     /// The gradient is the discrete adjoint of the run's integrator: exact
     /// for the computed trajectory (its accepted step sequence held fixed)
@@ -190,6 +196,8 @@ impl Simulation {
     ///
     /// Errors ([`Error::Gradient`], naming the key): an integrator without
     /// an adjoint (supported: esdirk, esdirk5), a model with contact,
+    /// `ELEMENT.prescribed` on a joint that is not prescribed, or prescribed
+    /// by a sinusoid, or on a closed model,
     /// a parameter or loss naming nothing in the model, a time outside the
     /// run, non-finite or negative weights, non-finite targets, a custom
     /// loss that fails or returns the wrong lengths or NaN.
