@@ -93,7 +93,9 @@ atol = 1e-10
 }
 
 fn sim(text: &str) -> Simulation {
-    Simulation::from_toml(text, "prescribed gradient test").unwrap().0
+    Simulation::from_toml(text, "prescribed gradient test")
+        .unwrap()
+        .0
 }
 
 /// The tip of `rod` tracked to fixed points (it depends on the prescribed
@@ -184,7 +186,12 @@ fn universal_samples_match_central_differences() {
                 xk[i][c] = v;
                 value(&wrist(xk, young), "lower")
             });
-            agree(&format!("lower.prescribed[{i}][{c}]"), gp[2 * i + c], d, 0.0);
+            agree(
+                &format!("lower.prescribed[{i}][{c}]"),
+                gp[2 * i + c],
+                d,
+                0.0,
+            );
         }
     }
     let d = central(young, 0.0, |v| value(&wrist(x, v), "lower"));
@@ -207,9 +214,15 @@ fn bad_prescribed_requests_name_what_is_wrong() {
             .to_string()
     };
     let m = message(&mut s, "elbow.prescribed");
-    assert!(m.contains("elbow.prescribed") && m.contains("no rod or body named 'elbow'"), "{m}");
+    assert!(
+        m.contains("elbow.prescribed") && m.contains("no rod or body named 'elbow'"),
+        "{m}"
+    );
     let m = message(&mut s, "upper.prescribed");
-    assert!(m.contains("upper.prescribed") && m.contains("not prescribed"), "{m}");
+    assert!(
+        m.contains("upper.prescribed") && m.contains("not prescribed"),
+        "{m}"
+    );
     let sine = sim(&turning([0.0; 4]).replace(
         "prescribed = { times = [0.0, 0.03, 0.06, 0.09], values = [0e0, 0e0, 0e0, 0e0] }",
         "prescribed = { sine = { amplitude = 0.1, frequency = 5.0 } }",
@@ -220,7 +233,10 @@ fn bad_prescribed_requests_name_what_is_wrong() {
         .value_and_gradient(&mut loss("arm", n), &["arm.prescribed"], DURATION, &OPTIONS)
         .unwrap_err()
         .to_string();
-    assert!(m.contains("arm.prescribed") && m.contains("sinusoid"), "{m}");
+    assert!(
+        m.contains("arm.prescribed") && m.contains("sinusoid"),
+        "{m}"
+    );
 }
 
 /// A closed model (a four-bar whose crank is driven): its closure rows
@@ -264,5 +280,8 @@ b = { element = "hand" }
         .value_and_gradient(&mut loss("a", n), &["a.prescribed"], DURATION, &OPTIONS)
         .unwrap_err()
         .to_string();
-    assert!(m.contains("a.prescribed") && m.contains("closed model"), "{m}");
+    assert!(
+        m.contains("a.prescribed") && m.contains("closed model"),
+        "{m}"
+    );
 }

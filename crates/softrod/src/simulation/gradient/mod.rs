@@ -276,7 +276,10 @@ impl Simulation {
         for term in loss.iter() {
             if let LossTerm::Position { rod, s, .. } = term {
                 let r = self.rod_index(rod.as_str())?;
-                sections.push((r, s.unwrap_or(self.model().rods()[r].spec.properties.length())));
+                sections.push((
+                    r,
+                    s.unwrap_or(self.model().rods()[r].spec.properties.length()),
+                ));
             }
         }
         let mut sys = ParamSystem::new(&mut self.system, &parsed)?;

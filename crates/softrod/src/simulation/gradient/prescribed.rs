@@ -114,8 +114,7 @@ impl Companion {
                 }
             })
             .collect();
-        let companion =
-            Model::with_elements(elements, model.gravity(), model.quadrature().len())?;
+        let companion = Model::with_elements(elements, model.gravity(), model.quadrature().len())?;
         let mut free = vec![0; model.n_dof()];
         let mut pres = vec![0; model.n_prescribed()];
         for (info, cinfo) in model.elements().iter().zip(companion.elements()) {
@@ -309,7 +308,14 @@ impl PrescribedParams {
         z: &DVector<f64>,
         out: &mut [f64],
     ) -> Result<(), DynamicsError> {
-        self.linearize(model, tensions, t, q.as_slice(), qd.as_slice(), qdd.as_slice())?;
+        self.linearize(
+            model,
+            tensions,
+            t,
+            q.as_slice(),
+            qd.as_slice(),
+            qdd.as_slice(),
+        )?;
         self.u.fill(0.0);
         for (i, &c) in self.companion.free.iter().enumerate() {
             self.u[c] = z[i];
@@ -323,7 +329,12 @@ impl PrescribedParams {
             self.oqd.as_mut_slice(),
         )?;
         // `(M_c u)_p = Σ_f M_pf z_f = zᵀ M_fp`: M is symmetric.
-        inverse_dynamics_mass_product(cm, &mut self.work, self.u.as_slice(), self.om.as_mut_slice())?;
+        inverse_dynamics_mass_product(
+            cm,
+            &mut self.work,
+            self.u.as_slice(),
+            self.om.as_mut_slice(),
+        )?;
         for e in &self.entries {
             let dof = e.dof();
             for (c, &j) in e.comp.iter().enumerate() {
@@ -352,7 +363,14 @@ impl PrescribedParams {
         qdd: &DVector<f64>,
         out: &mut DMatrix<f64>,
     ) -> Result<(), DynamicsError> {
-        self.linearize(model, tensions, t, q.as_slice(), qd.as_slice(), qdd.as_slice())?;
+        self.linearize(
+            model,
+            tensions,
+            t,
+            q.as_slice(),
+            qd.as_slice(),
+            qdd.as_slice(),
+        )?;
         let cm = &self.companion.model;
         for e in &self.entries {
             let dof = e.dof();
