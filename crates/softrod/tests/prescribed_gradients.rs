@@ -1,7 +1,8 @@
 //! Trajectory gradients with respect to the samples of prescribed joints
 //! (`ELEMENT.prescribed`, docs/theory-control.md G17–G20) against central
 //! differences of whole runs: a soft rod with a tip body on a prescribed
-//! revolute joint (its base driven through a spline of four samples), and
+//! revolute joint (its base driven through a spline of four samples), a
+//! soft rod hanging from a body on a prescribed prismatic joint, and
 //! a rod hanging from a clamped one by a prescribed universal joint (two
 //! coordinates, free coordinates before and after it). The differenced
 //! runs are separate scenes with one sample changed in the text, run with
@@ -283,5 +284,73 @@ b = { element = "hand" }
     assert!(
         m.contains("a.prescribed") && m.contains("closed model"),
         "{m}"
+    );
+}
+
+/// A body on a prescribed prismatic joint (a linear stage), a soft rod
+/// hanging from it: the samples of a body's joint.
+fn stage(values: [f64; 3]) -> String {
+    format!(
+        r#"
+[world]
+gravity = [0.0, 0.0, -9.81]
+[[body]]
+name = "carriage"
+parent = "world"
+joint = {{ type = "prismatic", axis = [1, 0, 0], prescribed = {{ times = [0.0, 0.04, 0.08], values = [{:e}, {:e}, {:e}] }} }}
+mass = 0.1
+inertia = [1e-5, 1e-5, 1e-5]
+[[rod]]
+name = "arm"
+parent = "carriage"
+base = {{ rotation = [[0, 0, -1], [0, 1, 0], [1, 0, 0]] }}
+length = 0.25
+pieces = 3
+strains = ["ky", "kz", "qx"]
+section = {{ shape = "circle", radius = 0.008 }}
+material = {{ density = 1000.0, young = 5.0e5, poisson = 0.5, viscosity = 300.0 }}
+[run]
+rtol = 1e-8
+atol = 1e-10
+"#,
+        values[0], values[1], values[2]
+    )
+}
+
+#[test]
+fn a_bodys_prismatic_samples_match_central_differences() {
+    let x = [0.0, 0.02, 0.05];
+    let mut s = sim(&stage(x));
+    let n = s.n_dof();
+    let g = s
+        .value_and_gradient(
+            &mut loss("arm", n),
+            &["carriage.prescribed"],
+            DURATION,
+            &OPTIONS,
+        )
+        .unwrap();
+    let gp = g.get("carriage.prescribed").unwrap();
+    assert_eq!(gp.len(), 3);
+    for k in 0..3 {
+        let d = central(x[k], 1e-6, |v| {
+            let mut xk = x;
+            xk[k] = v;
+            value(&stage(xk), "arm")
+        });
+        agree(&format!("carriage.prescribed[{k}]"), gp[k], d, 0.0);
+    }
+    let f = s
+        .value_and_gradient(
+            &mut loss("arm", n),
+            &["carriage.prescribed"],
+            DURATION,
+            &FORWARD,
+        )
+        .unwrap();
+    same(
+        "carriage.prescribed",
+        gp,
+        f.get("carriage.prescribed").unwrap(),
     );
 }
