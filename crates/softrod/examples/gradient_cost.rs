@@ -16,6 +16,13 @@
 //! Each time is the fastest of `reps` calls (3, 1 above 300 coordinates).
 //! Errors print their whole chain (`Error::report`) and exit 1.
 //!
+//! `prescribed`: a soft rod (8 pieces, six strains) with a tip body, turned
+//! at its base by a prescribed revolute joint through 11 samples over
+//! 0.5 s (the scene's adaptive ESDIRK, a tip tracking loss at `0.05·k`):
+//! the gradient by `tip.mass` alone against `tip.mass` and the 11 samples
+//! `arm.prescribed` (docs/theory-control.md G17–G20), and the recorded
+//! forward run.
+//!
 //! `planar [RTOL...]`: instead, the planar release of
 //! examples/cantilever_gravity.toml (1 s) with the loss of the soromox
 //! side by side (crates/softrod-py/bench/gradient_side_by_side.py: the
@@ -34,6 +41,15 @@ const PLANAR: &str = include_str!("../../../examples/cantilever_gravity.toml");
 fn main() -> ExitCode {
     if std::env::args().nth(1).as_deref() == Some("planar") {
         return planar_main();
+    }
+    if std::env::args().nth(1).as_deref() == Some("prescribed") {
+        return match measure_prescribed() {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("error: {}", e.report());
+                ExitCode::FAILURE
+            }
+        };
     }
     let pieces: Vec<usize> = match std::env::args()
         .skip(1)
@@ -215,5 +231,73 @@ fn measure_planar(rtol: f64) -> softrod::Result<()> {
         grads.0,
         grads.1,
     );
+    Ok(())
+}
+
+/// The rod of `prescribed` mode.
+const TURNED: &str = r#"
+[world]
+gravity = [0.0, 0.0, -9.81]
+[[rod]]
+name = "arm"
+joint = { type = "revolute", axis = [0, 1, 0], prescribed = { times = [0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.45, 0.5], values = [0.0, 0.1, 0.3, 0.6, 0.8, 0.9, 0.8, 0.6, 0.5, 0.45, 0.4] } }
+length = 0.3
+pieces = 8
+section = { shape = "circle", radius = 0.01 }
+material = { density = 1100.0, young = 3.0e6, poisson = 0.45, viscosity = 1.0e3 }
+[[body]]
+name = "tip"
+parent = "arm"
+mass = 0.02
+inertia = [2e-6, 2e-6, 2e-6]
+"#;
+
+fn measure_prescribed() -> softrod::Result<()> {
+    let (sim, _, _) = Simulation::from_toml(TURNED, "prescribed")?;
+    let duration = 0.5;
+    let times: Vec<f64> = (1..=10).map(|k| 0.05 * k as f64).collect();
+    let loss = || {
+        vec![LossTerm::Position {
+            rod: "arm".into(),
+            s: None,
+            times: times.clone(),
+            targets: vec![[0.2, 0.0, -0.1]; times.len()],
+            weight: 1.0,
+        }]
+    };
+    let options = GradientOptions::default();
+    println!(
+        "| parameters | n_dof | steps | time (fastest of 5) | linearizations | GMRES iterations |"
+    );
+    println!("|---|---|---|---|---|---|");
+    for params in [
+        &[][..],
+        &["tip.mass"][..],
+        &["tip.mass", "arm.prescribed"][..],
+    ] {
+        let mut fastest = f64::INFINITY;
+        let mut last = None;
+        for _ in 0..5 {
+            let mut s = sim.clone();
+            let t = Instant::now();
+            let g = s.value_and_gradient(&mut loss(), params, duration, &options)?;
+            fastest = fastest.min(t.elapsed().as_secs_f64());
+            last = Some(g);
+        }
+        let g = last.expect("five runs");
+        println!(
+            "| {} | {} | {} | {:.1} ms | {} | {} |",
+            if params.is_empty() {
+                "none (forward run)".to_string()
+            } else {
+                params.join(", ")
+            },
+            sim.n_dof(),
+            g.steps,
+            1e3 * fastest,
+            g.jacobian_evaluations,
+            g.krylov_iterations
+        );
+    }
     Ok(())
 }

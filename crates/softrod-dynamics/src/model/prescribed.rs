@@ -140,6 +140,16 @@ impl Spline {
         })
     }
 
+    /// The sample times \[s\].
+    pub fn times(&self) -> &[f64] {
+        &self.t
+    }
+
+    /// The sample values (rad or m).
+    pub fn values(&self) -> &[f64] {
+        &self.x
+    }
+
     /// First and last knot \[s\].
     pub fn span(&self) -> (f64, f64) {
         (self.t[0], self.t[self.t.len() - 1])

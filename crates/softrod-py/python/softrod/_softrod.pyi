@@ -541,7 +541,8 @@ class Simulation:
     ) -> tuple[float, dict[str, float | _F64]]:
         """Loss of a run and its exact gradient (discrete adjoint of esdirk or esdirk5) w.r.t. params
         ("q0", "qdot0", "ROD.young", "ROD.shear_modulus", "ROD.density", "ROD.viscosity",
-        "BODY.mass", "cableN.tension"). loss: {"type": "position", "rod", "s", "times",
+        "BODY.mass", "cableN.tension", "ELEMENT.prescribed": a prescribed joint's samples, shaped as
+        its values, open models only). loss: {"type": "position", "rod", "s", "times",
         "targets", "weight"}, {"type": "quadratic", "times", "q_weights", "qdot_weights",
         "q_ref"}, a callable l(t, q, qdot) -> (value, dl_dq, dl_dqdot) at `times`, or a list.
         method: "adjoint" (default) or "forward" (forward sensitivities; few parameters).

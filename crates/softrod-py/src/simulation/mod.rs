@@ -878,7 +878,10 @@ impl Simulation {
     /// `params`: names among `"q0"`, `"qdot0"` (arrays of n_dof),
     /// `"ROD.young"`, `"ROD.shear_modulus"`, `"ROD.density"`,
     /// `"ROD.viscosity"`, `"BODY.mass"` (floats), `"cableN.tension"` (an
-    /// array, one entry per value of the tension table). `loss`: a dict or a
+    /// array, one entry per value of the tension table),
+    /// `"ELEMENT.prescribed"` (the samples of the prescribed joint of rod or
+    /// body ELEMENT, in the shape of its `values`: `(samples,)` for one
+    /// coordinate, `(samples, dof)` for more; open models, G17–G20). `loss`: a dict or a
     /// list of dicts — `{"type": "position", "rod": name or index, "s":
     /// arc length (default the tip), "times": (k,), "targets": (k, 3) [m],
     /// "weight": w}` for `½ w ‖p(t) − target‖²`, `{"type": "quadratic",
