@@ -1,5 +1,5 @@
 //! The discrete adjoint of ESDIRK (ESDIRK4(3) and ESDIRK5(4),
-//! docs/theory-control.md G27) against central differences of whole runs
+//! docs/theory-control.md G27) and of Radau IIA (G25) against central differences of whole runs
 //! of the same discrete map (fixed steps, stage equations solved to
 //! round-off), on a nonlinear damped, forced two-coordinate system with
 //! analytic Jacobians.
@@ -138,20 +138,38 @@ fn esdirk5_adjoint_matches_central_differences_of_whole_runs() {
     adjoint_matches_differences(Integrator::Esdirk5);
 }
 
+/// Radau IIA's adjoint (G25): the transposed collocation system at the
+/// recomputed stages, against differences of whole radau5 runs.
+#[test]
+fn radau5_adjoint_matches_central_differences_of_whole_runs() {
+    adjoint_matches_differences(Integrator::Radau5);
+}
+
+/// Radau IIA's forward sensitivities (G26) give its adjoint's numbers:
+/// one factorization of the collocation matrix, solved with it and with
+/// its transpose, on every entry.
+#[test]
+fn radau5_forward_sensitivities_equal_the_adjoint() {
+    forward_equals_adjoint(Integrator::Radau5);
+}
+
 /// ESDIRK5(4)'s forward sensitivities (G21 on its tableau) give its
 /// adjoint's numbers: two algorithms, one discrete map.
 #[test]
 fn esdirk5_forward_sensitivities_equal_the_adjoint() {
+    forward_equals_adjoint(Integrator::Esdirk5);
+}
+
+fn forward_equals_adjoint(integrator: Integrator) {
     let (p, q0, v0) = ([3.0, 0.4, 0.7], [0.5, -0.3], [0.2, 0.1]);
-    let (_, tape) = run_with(Integrator::Esdirk5, p, q0, v0);
+    let (_, tape) = run_with(integrator, p, q0, v0);
     let mut seed = |k: usize, lq: &mut DVector<f64>, lv: &mut DVector<f64>| {
         lq[0] += 2.0 * tape.q(k)[0];
         lv[1] += tape.qd(k)[1];
     };
     let mut sys = Forced { p };
-    let a = adjoint_second_order(&mut sys, Integrator::Esdirk5, &tape, &mut seed).unwrap();
-    let f = forward_sensitivity_second_order(&mut sys, Integrator::Esdirk5, &tape, &mut seed, true)
-        .unwrap();
+    let a = adjoint_second_order(&mut sys, integrator, &tape, &mut seed).unwrap();
+    let f = forward_sensitivity_second_order(&mut sys, integrator, &tape, &mut seed, true).unwrap();
     let all = |g: &softrod_integrate::AdjointGradient| {
         let mut v = g.dp.clone();
         v.extend(g.dq0.iter().chain(g.dqd0.iter()));
@@ -159,6 +177,7 @@ fn esdirk5_forward_sensitivities_equal_the_adjoint() {
     };
     for (k, (x, y)) in all(&a).iter().zip(all(&f)).enumerate() {
         let rel = (x - y).abs() / x.abs().max(1e-3);
+        eprintln!("[{k}]: adjoint {x:e}, forward {y:e}, {rel:e}");
         assert!(rel < 1e-10, "[{k}]: adjoint {x:e}, forward {y:e}, {rel:e}");
     }
 }
@@ -180,6 +199,7 @@ fn adjoint_matches_differences(integrator: Integrator) {
     let check = |name: &str, exact: f64, plus: f64, minus: f64| {
         let fd = (plus - minus) / (2.0 * d);
         let rel = (exact - fd).abs() / fd.abs().max(1e-3);
+        eprintln!("{name}: adjoint {exact:e}, differences {fd:e}, rel {rel:e}");
         assert!(
             rel < 1e-6,
             "{name}: adjoint {exact}, differences {fd}, rel {rel:e}"
@@ -222,11 +242,11 @@ fn adjoint_matches_differences(integrator: Integrator) {
 fn other_integrators_are_refused_by_name() {
     let (_, tape) = run([1.0, 0.1, 0.0], [0.1, 0.0], [0.0, 0.0]);
     let mut sys = Forced { p: [1.0, 0.1, 0.0] };
-    let e = adjoint_second_order(&mut sys, Integrator::Radau5, &tape, &mut |_, _, _| {})
+    let e = adjoint_second_order(&mut sys, Integrator::Rosenbrock, &tape, &mut |_, _, _| {})
         .unwrap_err()
         .to_string();
     assert!(
-        e.contains("radau5") && e.contains("(supported: esdirk, esdirk5)"),
+        e.contains("rosenbrock") && e.contains("(supported: esdirk, esdirk5, radau5)"),
         "{e}"
     );
 }
