@@ -11,7 +11,7 @@
 use softrod::{GradientMethod, GradientOptions, LossTerm, Simulation};
 
 mod gradient_support;
-use gradient_support::{agree, central};
+use gradient_support::{agree, central, options_for};
 
 const OPTIONS: GradientOptions = GradientOptions {
     fixed_step: Some(0.004),
@@ -119,7 +119,8 @@ fn loss(rod: &str, n: usize) -> Vec<LossTerm<'static>> {
 
 fn value(mut s: Simulation, rod: &str) -> f64 {
     let n = s.n_dof();
-    s.value_and_gradient(&mut loss(rod, n), &[], DURATION, &OPTIONS)
+    let options = options_for(&s, OPTIONS);
+    s.value_and_gradient(&mut loss(rod, n), &[], DURATION, &options)
         .unwrap()
         .value
 }
@@ -141,6 +142,13 @@ fn esdirk5_cantilever_gradients_match_central_differences() {
     cantilever_against_differences("esdirk5");
 }
 
+/// Radau IIA (G25): the transposed collocation system of its own
+/// recorded run, against differences of its own runs.
+#[test]
+fn radau5_cantilever_gradients_match_central_differences() {
+    cantilever_against_differences("radau5");
+}
+
 fn cantilever_against_differences(integrator: &str) {
     let cantilever = |e: f64, rho: f64, mu: f64, t: [f64; 3]| {
         with_integrator(cantilever(e, rho, mu, t), integrator)
@@ -157,7 +165,12 @@ fn cantilever_against_differences(integrator: &str) {
         "qdot0",
     ];
     let g = s
-        .value_and_gradient(&mut loss("arm", n), &names, DURATION, &OPTIONS)
+        .value_and_gradient(
+            &mut loss("arm", n),
+            &names,
+            DURATION,
+            &options_for(&s, OPTIONS),
+        )
         .unwrap();
     assert!(g.value > 0.0);
     assert_eq!(g.get("cable0.tension").unwrap().len(), 3);
@@ -216,6 +229,19 @@ fn cantilever_against_differences(integrator: &str) {
 
 #[test]
 fn arm_with_joint_and_bodies_gradients_match_central_differences() {
+    arm_against_differences("esdirk");
+}
+
+/// The arm with a joint and two bodies run with Radau IIA (G25).
+#[test]
+fn radau5_arm_with_joint_and_bodies_gradients_match_central_differences() {
+    arm_against_differences("radau5");
+}
+
+fn arm_against_differences(integrator: &str) {
+    let arm = |e: f64, rho: f64, mc: f64, mg: f64, t: [f64; 2]| {
+        with_integrator(arm(e, rho, mc, mg, t), integrator)
+    };
     let (e, rho, mc, mg, t) = (2.0e6, 1100.0, 0.01, 0.02, [2.0, 8.0]);
     let mut s = sim(&arm(e, rho, mc, mg, t));
     let n = s.n_dof();
@@ -229,7 +255,12 @@ fn arm_with_joint_and_bodies_gradients_match_central_differences() {
         "qdot0",
     ];
     let g = s
-        .value_and_gradient(&mut loss("lower", n), &names, DURATION, &OPTIONS)
+        .value_and_gradient(
+            &mut loss("lower", n),
+            &names,
+            DURATION,
+            &options_for(&s, OPTIONS),
+        )
         .unwrap();
     let l = |text: String| value(sim(&text), "lower");
     let d = central(e, 0.0, |x| l(arm(x, rho, mc, mg, t)));
@@ -373,12 +404,12 @@ fn bad_requests_name_what_is_wrong() {
     let e = err(&mut s, &mut late, &["q0"]);
     assert!(e.contains("loss[0].times") && e.contains("0.5"), "{e}");
     let mut s2 = sim(&cantilever(1.0e6, 1000.0, 500.0, [0.0, 1.5, 0.5])
-        .replace("[run]", "[run]\nintegrator = \"radau5\""));
+        .replace("[run]", "[run]\nintegrator = \"rosenbrock\""));
     let e = err(&mut s2, &mut loss("arm", n), &["q0"]);
     assert!(
         e.contains("run.integrator")
-            && e.contains("radau5 has none")
-            && e.contains("(supported: esdirk, esdirk5)"),
+            && e.contains("rosenbrock has none")
+            && e.contains("(supported: esdirk, esdirk5, radau5)"),
         "{e}"
     );
 }
@@ -388,7 +419,21 @@ fn bad_requests_name_what_is_wrong() {
 /// the discretization error, not to round-off.
 #[test]
 fn adaptive_runs_give_gradients_too() {
-    let text = cantilever(1.0e6, 1000.0, 500.0, [0.0, 1.5, 0.5]);
+    adaptive_against_fixed("esdirk");
+}
+
+/// The same with Radau IIA (G25): its adaptive run's gradient is that of
+/// another discretization of the trajectory than its fixed-step one's.
+#[test]
+fn radau5_adaptive_runs_give_gradients_too() {
+    adaptive_against_fixed("radau5");
+}
+
+fn adaptive_against_fixed(integrator: &str) {
+    let text = with_integrator(
+        cantilever(1.0e6, 1000.0, 500.0, [0.0, 1.5, 0.5]),
+        integrator,
+    );
     let mut s = sim(&text);
     let n = s.n_dof();
     let adaptive = GradientOptions {
@@ -746,6 +791,10 @@ fn forward_sensitivities_equal_the_adjoint() {
     let esdirk5_text = with_integrator(cantilever_text.clone(), "esdirk5");
     compare(&esdirk5_text, "arm", &names, tight(Some(0.004)));
     compare(&esdirk5_text, "arm", &names, tight(None));
+    // Radau IIA's adjoint against its forward sensitivities (G25, G26).
+    let radau5_text = with_integrator(cantilever_text.clone(), "radau5");
+    compare(&radau5_text, "arm", &names, tight(Some(0.004)));
+    compare(&radau5_text, "arm", &names, tight(None));
     let arm_text = arm(2.0e6, 1100.0, 0.01, 0.02, [2.0, 8.0]);
     let names = [
         "upper.young",
@@ -757,4 +806,7 @@ fn forward_sensitivities_equal_the_adjoint() {
         "qdot0",
     ];
     compare(&arm_text, "lower", &names, tight(Some(0.004)));
+    let arm_radau5 = with_integrator(arm_text.clone(), "radau5");
+    compare(&arm_radau5, "lower", &names, tight(Some(0.004)));
+    compare(&arm_radau5, "lower", &names, tight(None));
 }
