@@ -737,7 +737,7 @@ atol = 1e-9
 /// steps) and the arm with a joint and two bodies (masses, shear modulus).
 #[test]
 fn forward_sensitivities_equal_the_adjoint() {
-    let compare = |text: &str, rod: &str, names: &[&str], options: GradientOptions| {
+    let compare = |text: &str, rod: &str, names: &[&str], options: GradientOptions, limit: f64| {
         let mut s = sim(text);
         let n = s.n_dof();
         let a = s
@@ -756,18 +756,24 @@ fn forward_sensitivities_equal_the_adjoint() {
             .iter()
             .flat_map(|(_, g)| g.iter())
             .fold(0.0f64, |m, v| m.max(v.abs()));
+        let mut worst = 0.0f64;
         for ((name, ga), (_, gf)) in a.gradients.iter().zip(&f.gradients) {
             assert_eq!(ga.len(), gf.len(), "{name}");
             for (k, (x, y)) in ga.iter().zip(gf).enumerate() {
                 // Relative to the entry, or (entries near zero, as q0's
                 // of strains the loss hardly sees) to the largest.
                 let err = (x - y).abs() / x.abs().max(1e-6 * scale);
+                worst = worst.max(err);
                 assert!(
-                    err < 1e-8,
+                    err < limit,
                     "{name}[{k}]: adjoint {x:e}, forward {y:e}, {err:e}"
                 );
             }
         }
+        eprintln!(
+            "{:?}, {} steps: adjoint vs forward ≤ {worst:e}",
+            options.fixed_step, a.steps
+        );
     };
     let cantilever_text = cantilever(1.0e6, 1000.0, 500.0, [0.0, 1.5, 0.5]);
     let names = [
@@ -785,16 +791,19 @@ fn forward_sensitivities_equal_the_adjoint() {
         newton_tol: Some(1e-3),
         method: GradientMethod::Adjoint,
     };
-    compare(&cantilever_text, "arm", &names, tight(Some(0.004)));
-    compare(&cantilever_text, "arm", &names, tight(None));
+    compare(&cantilever_text, "arm", &names, tight(Some(0.004)), 1e-8);
+    compare(&cantilever_text, "arm", &names, tight(None), 1e-8);
     // ESDIRK5(4)7L[2]SA's adjoint against its forward sensitivities (G27).
     let esdirk5_text = with_integrator(cantilever_text.clone(), "esdirk5");
-    compare(&esdirk5_text, "arm", &names, tight(Some(0.004)));
-    compare(&esdirk5_text, "arm", &names, tight(None));
-    // Radau IIA's adjoint against its forward sensitivities (G25, G26).
+    compare(&esdirk5_text, "arm", &names, tight(Some(0.004)), 1e-8);
+    compare(&esdirk5_text, "arm", &names, tight(None), 1e-8);
+    // Radau IIA's adjoint against its forward sensitivities (G25, G26):
+    // both recompute the stages by one code and solve with one LU of the
+    // collocation matrix (transposed, or not), so they differ by the
+    // order of the linear algebra alone (measured ≤ 7e-12).
     let radau5_text = with_integrator(cantilever_text.clone(), "radau5");
-    compare(&radau5_text, "arm", &names, tight(Some(0.004)));
-    compare(&radau5_text, "arm", &names, tight(None));
+    compare(&radau5_text, "arm", &names, tight(Some(0.004)), 1e-10);
+    compare(&radau5_text, "arm", &names, tight(None), 1e-10);
     let arm_text = arm(2.0e6, 1100.0, 0.01, 0.02, [2.0, 8.0]);
     let names = [
         "upper.young",
@@ -805,8 +814,8 @@ fn forward_sensitivities_equal_the_adjoint() {
         "cable0.tension",
         "qdot0",
     ];
-    compare(&arm_text, "lower", &names, tight(Some(0.004)));
+    compare(&arm_text, "lower", &names, tight(Some(0.004)), 1e-8);
     let arm_radau5 = with_integrator(arm_text.clone(), "radau5");
-    compare(&arm_radau5, "lower", &names, tight(Some(0.004)));
-    compare(&arm_radau5, "lower", &names, tight(None));
+    compare(&arm_radau5, "lower", &names, tight(Some(0.004)), 1e-10);
+    compare(&arm_radau5, "lower", &names, tight(None), 1e-10);
 }
