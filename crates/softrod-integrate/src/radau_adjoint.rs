@@ -40,9 +40,12 @@ const MAX_RELINEARIZATIONS: usize = 4;
 /// round-off (as the ESDIRK recomputation's, G14).
 const RECOMPUTE_ROUNDOFF: f64 = 1e-13;
 
-/// A contraction slower than this, measured over two iterations on one
-/// matrix, linearizes again at the iterate.
-const SLOW: f64 = 0.25;
+/// What a new linearization costs in iterations of the simplified Newton
+/// iteration (three Jacobians and a `3n×3n` LU against three
+/// accelerations and one pair of triangular solves: ~10 on the planar
+/// release, n = 24): a contraction predicted to need more iterations than
+/// this to reach round-off linearizes again at the iterate.
+const SWITCH_ITERATIONS: f64 = 10.0;
 
 /// A held factorization is the next step's Newton matrix when the step
 /// sizes differ by at most this factor (`K` depends on `h`).
@@ -299,7 +302,12 @@ impl Stages {
                 converged = true;
                 break;
             }
-            if on_matrix >= 2 && rate > SLOW && relinearized < MAX_RELINEARIZATIONS {
+            let slow = if rate < 1.0 {
+                (RECOMPUTE_ROUNDOFF * size / dx).ln() / rate.ln() > SWITCH_ITERATIONS
+            } else {
+                true
+            };
+            if on_matrix >= 2 && slow && relinearized < MAX_RELINEARIZATIONS {
                 // Newton's method proper from here: `K` at the iterate.
                 self.linearize(sys, t, h)?;
                 relinearized += 1;
