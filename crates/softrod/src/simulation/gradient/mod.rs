@@ -188,7 +188,7 @@ impl Simulation {
     /// `params` it is the loss of the recorded run alone (no backward pass).
     ///
     /// Errors ([`Error::Gradient`], naming the key): an integrator without
-    /// an adjoint (supported: esdirk, esdirk5), a model with contact,
+    /// an adjoint (supported: esdirk, esdirk5, radau5), a model with contact,
     /// a parameter or loss naming nothing in the model, a time outside the
     /// run, non-finite or negative weights, non-finite targets, a custom
     /// loss that fails or returns the wrong lengths or NaN.
