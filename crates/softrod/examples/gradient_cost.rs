@@ -29,6 +29,9 @@
 //! tip against `(0.25, 0, −0.25)` at `0.05·k`, `k = 1…20`) and the
 //! parameters `cantilever.young`, `cantilever.density`, at each `RTOL`
 //! (`atol = 1e-3·rtol`; default the scene's 1e-3).
+//!
+//! `--integrator NAME` (anywhere): run both scenes with that integrator
+//! instead of the scene's (`radau5`: its discrete adjoint, G25).
 
 use std::process::ExitCode;
 use std::time::Instant;
@@ -38,11 +41,43 @@ use softrod::{GradientOptions, LossTerm, Simulation};
 const SCENE: &str = include_str!("../../../examples/arm_with_payload.toml");
 const PLANAR: &str = include_str!("../../../examples/cantilever_gravity.toml");
 
-fn main() -> ExitCode {
-    if std::env::args().nth(1).as_deref() == Some("planar") {
-        return planar_main();
+/// The arguments without `--integrator NAME`, and the integrator named.
+fn args() -> Result<(Vec<String>, Option<softrod::Integrator>), String> {
+    let mut rest = Vec::new();
+    let mut integrator = None;
+    let mut it = std::env::args().skip(1);
+    while let Some(a) = it.next() {
+        if a == "--integrator" {
+            let name = it.next().ok_or("--integrator needs a name")?;
+            integrator = Some(name.parse().map_err(|e| format!("{e}"))?);
+        } else {
+            rest.push(a);
+        }
     }
-    if std::env::args().nth(1).as_deref() == Some("prescribed") {
+    Ok((rest, integrator))
+}
+
+/// `sim` with the integrator of `--integrator`, if any.
+fn with_integrator(sim: &mut Simulation) -> softrod::Result<()> {
+    if let Ok((_, Some(integrator))) = args() {
+        let settings = sim.settings().clone().with_integrator(integrator);
+        sim.set_settings(settings)?;
+    }
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    let args = match args() {
+        Ok((a, _)) => a,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    if args.first().map(String::as_str) == Some("planar") {
+        return planar_main(&args[1..]);
+    }
+    if args.first().map(String::as_str) == Some("prescribed") {
         return match measure_prescribed() {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {
@@ -51,9 +86,9 @@ fn main() -> ExitCode {
             }
         };
     }
-    let pieces: Vec<usize> = match std::env::args()
-        .skip(1)
-        .map(|a| a.parse::<usize>().map_err(|_| a))
+    let pieces: Vec<usize> = match args
+        .iter()
+        .map(|a| a.parse::<usize>().map_err(|_| a.clone()))
         .collect()
     {
         Ok(p) => p,
@@ -63,9 +98,9 @@ fn main() -> ExitCode {
         }
     };
     println!(
-        "| pieces per rod | n_dof | steps | plain run | recorded forward | gradient (7 + q0, qdot0) | gradient / forward | central differences, 7 params |"
+        "| pieces per rod | n_dof | steps | plain run | recorded forward | gradient (7 + q0, qdot0) | gradient / forward | central differences, 7 params | Jacobians / dense LUs |"
     );
-    println!("|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|");
     let sizes: Vec<Option<usize>> = if pieces.is_empty() {
         vec![None]
     } else {
@@ -86,6 +121,7 @@ fn measure(pieces: Option<usize>) -> softrod::Result<()> {
         None => SCENE.to_string(),
     };
     let (mut sim, _, _) = Simulation::from_toml(&text, "examples/arm_with_payload.toml")?;
+    with_integrator(&mut sim)?;
     let duration = 0.5;
     let times: Vec<f64> = (1..=10).map(|k| 0.05 * k as f64).collect();
     let loss = || {
@@ -126,15 +162,17 @@ fn measure(pieces: Option<usize>) -> softrod::Result<()> {
     let mut s = sim.clone();
     let plain = best(&mut || s.simulate(duration).map(|r| drop(std::hint::black_box(r))))?;
     let mut steps = 0;
+    let mut work = (0, 0);
     let gradient = best(&mut || {
         let g = sim.value_and_gradient(&mut loss(), &params, duration, &options)?;
         steps = g.steps;
+        work = (g.jacobian_evaluations, g.dense_factorizations);
         Ok(())
     })?;
     let scalar_params = 7; // five scalars + the two tension values
     let ms = |s: f64| format!("{:.1} ms", 1e3 * s);
     println!(
-        "| {} | {} | {steps} | {} | {} | {} | {:.1} | {} |",
+        "| {} | {} | {steps} | {} | {} | {} | {:.1} | {} | {} / {} |",
         pieces.map_or("4 (as shipped)".to_string(), |n| n.to_string()),
         sim.n_dof(),
         ms(plain),
@@ -142,14 +180,16 @@ fn measure(pieces: Option<usize>) -> softrod::Result<()> {
         ms(gradient),
         gradient / forward,
         ms(2.0 * scalar_params as f64 * forward),
+        work.0,
+        work.1,
     );
     Ok(())
 }
 
-fn planar_main() -> ExitCode {
-    let rtols: Vec<f64> = match std::env::args()
-        .skip(2)
-        .map(|a| a.parse::<f64>().map_err(|_| a))
+fn planar_main(args: &[String]) -> ExitCode {
+    let rtols: Vec<f64> = match args
+        .iter()
+        .map(|a| a.parse::<f64>().map_err(|_| a.clone()))
         .collect::<Result<Vec<f64>, String>>()
     {
         Ok(r) if r.is_empty() => vec![1e-3],
@@ -160,9 +200,9 @@ fn planar_main() -> ExitCode {
         }
     };
     println!(
-        "| rtol | n_dof | steps | plain run | recorded forward | gradient (young, density) | gradient / forward | dL/dE | dL/drho |"
+        "| rtol | n_dof | steps | plain run | recorded forward | gradient (young, density) | gradient / forward | dL/dE | dL/drho | Jacobians / dense LUs |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|");
     for rtol in rtols {
         if let Err(e) = measure_planar(rtol) {
             eprintln!("error: {}", e.report());
@@ -179,6 +219,7 @@ fn measure_planar(rtol: f64) -> softrod::Result<()> {
         atol: 1e-3 * rtol,
         ..settings
     })?;
+    with_integrator(&mut sim)?;
     let duration = 1.0;
     let times: Vec<f64> = (1..=20).map(|k| 0.05 * k as f64).collect();
     let loss = || {
@@ -211,9 +252,11 @@ fn measure_planar(rtol: f64) -> softrod::Result<()> {
     let plain = best(&mut || s.simulate(duration).map(|r| drop(std::hint::black_box(r))))?;
     let mut steps = 0;
     let mut grads = (f64::NAN, f64::NAN);
+    let mut work = (0, 0);
     let gradient = best(&mut || {
         let g = sim.value_and_gradient(&mut loss(), &params, duration, &options)?;
         steps = g.steps;
+        work = (g.jacobian_evaluations, g.dense_factorizations);
         grads = (
             g.get(params[0]).map_or(f64::NAN, |v| v[0]),
             g.get(params[1]).map_or(f64::NAN, |v| v[0]),
@@ -222,7 +265,7 @@ fn measure_planar(rtol: f64) -> softrod::Result<()> {
     })?;
     let ms = |s: f64| format!("{:.1} ms", 1e3 * s);
     println!(
-        "| {rtol:e} | {} | {steps} | {} | {} | {} | {:.1} | {:.9e} | {:.9e} |",
+        "| {rtol:e} | {} | {steps} | {} | {} | {} | {:.1} | {:.9e} | {:.9e} | {} / {} |",
         sim.n_dof(),
         ms(plain),
         ms(forward),
@@ -230,6 +273,8 @@ fn measure_planar(rtol: f64) -> softrod::Result<()> {
         gradient / forward,
         grads.0,
         grads.1,
+        work.0,
+        work.1,
     );
     Ok(())
 }

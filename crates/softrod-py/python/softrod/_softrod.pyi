@@ -539,7 +539,7 @@ class Simulation:
         newton_tol: float | None = None,
         method: Literal["adjoint", "forward"] | None = None,
     ) -> tuple[float, dict[str, float | _F64]]:
-        """Loss of a run and its exact gradient (discrete adjoint of esdirk or esdirk5) w.r.t. params
+        """Loss of a run and its exact gradient (discrete adjoint of esdirk, esdirk5 or radau5) w.r.t. params
         ("q0", "qdot0", "ROD.young", "ROD.shear_modulus", "ROD.density", "ROD.viscosity",
         "BODY.mass", "cableN.tension", "ELEMENT.prescribed": a prescribed joint's samples, shaped as
         its values, open models only). loss: {"type": "position", "rod", "s", "times",

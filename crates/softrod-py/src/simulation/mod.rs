@@ -888,8 +888,8 @@ impl Simulation {
     /// "times", "q_weights", "qdot_weights" (number or (n_dof,)), "q_ref"}`
     /// for `½ Σ wq (q − q_ref)² + wv q̇²` — or a callable
     /// `l(t, q, qdot) -> (value, dl_dq, dl_dqdot)` evaluated at `times`.
-    /// The gradient is the discrete adjoint of the ESDIRK run (`esdirk` or
-    /// `esdirk5`, the scene's integrator; its step
+    /// The gradient is the discrete adjoint of the run (`esdirk`, `esdirk5`
+    /// or `radau5`, the scene's integrator; its step
     /// sequence held fixed; the steps end on every loss time): exact for
     /// the computed trajectory to round-off and the Newton tolerance
     /// (`newton_tol`). `fixed_step`: fixed steps of that size (one step

@@ -195,7 +195,7 @@ impl Simulation {
     /// `params` it is the loss of the recorded run alone (no backward pass).
     ///
     /// Errors ([`Error::Gradient`], naming the key): an integrator without
-    /// an adjoint (supported: esdirk, esdirk5), a model with contact,
+    /// an adjoint (supported: esdirk, esdirk5, radau5), a model with contact,
     /// `ELEMENT.prescribed` on a joint that is not prescribed, or prescribed
     /// by a sinusoid, or on a closed model,
     /// a parameter or loss naming nothing in the model, a time outside the
