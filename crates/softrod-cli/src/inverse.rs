@@ -6,7 +6,7 @@
 
 use std::path::Path;
 
-use softrod::control::{ActuationOptions, Target, UnknownLoad};
+use softrod::control::{ActuationOptions, Target};
 
 use crate::common::{CliError, failed, load, pose_json};
 
@@ -44,17 +44,7 @@ pub fn inverse(path: &Path, json: bool) -> Result<(), CliError> {
     let bounds = l.scene.max_tensions();
     let options = ActuationOptions {
         max_tension: bounds.iter().map(|b| b.1).collect(),
-        unknown_loads: l
-            .scene
-            .unknown_loads
-            .iter()
-            .map(|u| UnknownLoad {
-                rod: u.rod,
-                s: u.s,
-                min: u.max_force.map(|m| -m),
-                max: u.max_force,
-            })
-            .collect(),
+        unknown_loads: l.sim.scene_unknown_loads().to_vec(),
         ..ActuationOptions::default()
     };
     let a = l.sim.solve_actuation(&targets, &options)?;

@@ -55,6 +55,9 @@ pub struct Simulation {
     /// The time \[s\] of the prescribed joints for the evaluations that take
     /// none ([`Self::set_time`]); the calls that take a `t` do not move it.
     time: f64,
+    /// The scene's `[[load]]`s with `unknown = true` (IS13): what
+    /// [`Self::scene_unknown_loads`] gives the inverse statics.
+    unknown_loads: Vec<crate::control::UnknownLoad>,
 }
 
 impl Simulation {
@@ -69,6 +72,7 @@ impl Simulation {
             qd0: DVector::zeros(n),
             limits: Limits::default(),
             time: 0.0,
+            unknown_loads: Vec::new(),
         }
     }
 
@@ -85,6 +89,16 @@ impl Simulation {
         }
         sim.q0 = built.q0;
         sim.qd0 = built.qd0;
+        sim.unknown_loads = scene
+            .unknown_loads
+            .iter()
+            .map(|u| crate::control::UnknownLoad {
+                rod: u.rod,
+                s: u.s,
+                min: u.max_force.map(|m| -m),
+                max: u.max_force,
+            })
+            .collect();
         Ok(sim)
     }
 
@@ -247,6 +261,16 @@ impl Simulation {
     /// The inputs set by [`Simulation::set_cable_tensions`], if any.
     pub fn cable_tensions(&self) -> Option<&[f64]> {
         self.system.data.cable_tensions()
+    }
+
+    /// The point forces the scene marks unknown (`[[load]] unknown = true`,
+    /// docs/theory-control.md IS13), with their bounds `|f_k| ≤ max_force`,
+    /// in file order: what `softrod inverse` solves for beside the tensions
+    /// and actuated joints' forces (pass them as
+    /// [`crate::control::ActuationOptions::unknown_loads`]). Empty for a
+    /// simulation not built from a scene.
+    pub fn scene_unknown_loads(&self) -> &[crate::control::UnknownLoad] {
+        &self.unknown_loads
     }
 
     /// Integrates `duration` seconds from the initial state with the run
