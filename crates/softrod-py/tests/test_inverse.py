@@ -250,3 +250,28 @@ def test_joint_torque_of_a_forward_solve_is_recovered():
     assert w["iterations"] <= 2 and abs(w["joint_forces"][0] - tau) < 1e-8
     with pytest.raises(softrod.SceneError, match=r"body\[0\]\.joint\.actuator\.max_force"):
         softrod.Simulation.from_toml(LINK.replace("ACTUATOR", "{ max_force = -1.0 }"))
+
+
+def test_actuated_joint_from_the_builders_matches_the_scene_text():
+    # The builders' joint with an actuator is the scene's: the same equilibrium, bit for bit.
+    from softrod.builders import Body, Joint
+
+    text = softrod.Simulation.from_toml(LINK.replace("ACTUATOR", "{ force = -0.1 }"))
+    scene = {
+        "world": {"gravity": [0.0, 0.0, -9.81]},
+        "rod": [
+            {
+                "name": "base", "length": 0.2, "pieces": 2, "strains": ["kx", "ky", "kz"],
+                "section": {"shape": "circle", "radius": 0.01},
+                "material": {"density": 1000.0, "young": 1.0e7, "poisson": 0.5},
+            }
+        ],
+        "body": [
+            Body("link", "base", mass=0.2, inertia=[1e-4, 1e-4, 1e-4],
+                 center_of_mass=[0.1, 0, 0],
+                 joint=Joint("revolute", axis=[0, 1, 0], stiffness=0.2,
+                             actuator={"force": -0.1}))
+        ],
+    }
+    built = softrod.Simulation.from_dict(scene)
+    assert np.array_equal(built.statics().q, text.statics().q)
