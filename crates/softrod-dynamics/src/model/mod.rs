@@ -499,6 +499,9 @@ impl Model {
         }) {
             t.push("joint springs".into());
         }
+        if self.n_joint_inputs() > 0 {
+            t.push("joint actuators".into());
+        }
         t
     }
 
