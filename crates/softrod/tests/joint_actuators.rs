@@ -90,6 +90,16 @@ fn prismatic_force_holds_a_weight() {
     let x = q[q.len() - 1];
     let want = (f - MASS * G) / k;
     assert!((x - want).abs() < 1e-12, "x = {x}, want {want}");
+    // An input replaces the schedule (and goes back to it).
+    s.set_joint_forces(Some(&[2.0 * f])).unwrap();
+    let q = s.statics().unwrap().q.as_slice().to_vec();
+    let want2 = (2.0 * f - MASS * G) / k;
+    assert!((q[q.len() - 1] - want2).abs() < 1e-12);
+    assert!(s.set_joint_forces(Some(&[1.0, 2.0])).is_err());
+    assert!(s.set_joint_forces(Some(&[f64::NAN])).is_err());
+    s.set_joint_forces(None).unwrap();
+    let q = s.statics().unwrap().q.as_slice().to_vec();
+    assert!((q[q.len() - 1] - want).abs() < 1e-12);
 }
 
 /// A free body pushed along a prismatic joint by a tabled force
@@ -205,6 +215,19 @@ fn bad_actuators_name_the_key() {
         Ok(_) => panic!("an actuator on a fixed joint accepted"),
     }
     // The library refuses a bad actuator too, naming the element.
+    use softrod::dynamics::{Joint, JointActuator};
+    let bad = [
+        Joint::fixed().with_actuator(JointActuator::constant(&[1.0])),
+        Joint::revolute([0.0, 1.0, 0.0]).with_actuator(JointActuator::constant(&[1.0, 2.0])),
+        Joint::revolute([0.0, 1.0, 0.0])
+            .with_actuator(JointActuator::constant(&[1.0]).with_max_force(&[-1.0])),
+        Joint::revolute([0.0, 1.0, 0.0]).with_actuator(JointActuator::constant(&[f64::NAN])),
+    ];
+    for mut j in bad {
+        let e = j.validate("link").unwrap_err().to_string();
+        assert!(e.contains("link") && e.contains("actuator"), "{e}");
+    }
+    // Inverse statics with no targets is an input error.
     let mut s = sim(&arm_with_link("{ force = 0.1 }"));
     let err = s.solve_actuation(&[], &ActuationOptions::default());
     assert!(matches!(err, Err(Error::Actuation { .. })));

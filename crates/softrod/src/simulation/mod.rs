@@ -263,6 +263,21 @@ impl Simulation {
         self.system.data.cable_tensions()
     }
 
+    /// Sets the joint actuators' forces `f` \[N or N·m\] (one per actuated
+    /// joint coordinate, `Model::n_joint_inputs` order; docs/theory-control.md
+    /// IS14) that replace the actuators' schedules in every evaluation and
+    /// run of this simulation; `None` restores the schedules. Errors: the
+    /// wrong length, a value that is not finite.
+    pub fn set_joint_forces(&mut self, f: Option<&[f64]>) -> Result<()> {
+        let s = &mut self.system;
+        Ok(s.data.set_joint_forces(&s.model, f)?)
+    }
+
+    /// The inputs set by [`Simulation::set_joint_forces`], if any.
+    pub fn joint_forces(&self) -> Option<&[f64]> {
+        self.system.data.joint_forces()
+    }
+
     /// The point forces the scene marks unknown (`[[load]] unknown = true`,
     /// docs/theory-control.md IS13), with their bounds `|f_k| ≤ max_force`,
     /// in file order: what `softrod inverse` solves for beside the tensions
