@@ -392,6 +392,17 @@ fn write_joint(
     for i in 0..node.k {
         let (kc, dc, rest) = joint.coefficients(first + i);
         work.tau[o + i] = b.column(i).dot(wrench) + kc * (q[o + i] - rest) + dc * qd[o + i];
+        if let (Some(a), false) = (&joint.actuator, at.forces.gravity_only) {
+            // A force of time alone (IS14): in τ, not in its derivatives.
+            work.tau[o + i] -= at.forces.load_scale
+                * crate::forces::strain::actuator_force(
+                    work.joint_inputs.as_ref(),
+                    info,
+                    a,
+                    first + i,
+                    at.t,
+                );
+        }
         dq6[(i, i)] += kc;
         dv6[(i, i)] += dc;
     }

@@ -520,11 +520,15 @@ class Simulation:
         max_iterations: int = 100,
         warm_start: dict[str, object] | None = None,
         t: float = 0.0,
+        unknown_loads: Sequence[dict[str, object]] | None = None,
     ) -> dict[str, object]:
-        """Inverse statics: tensions 0 <= T <= max_tension [N] and the equilibrium that bring
+        """Inverse statics: tensions 0 <= T <= max_tension [N], actuated joints' forces
+        |f| <= max_force [N or N m], unknown point loads ({"rod", "s", "max_force"}; default the
+        scene's [[load]] unknown = true) and the equilibrium that bring
         rod sections or body frames closest to targets ({"rod", "s", "position", "rotation",
         "weight"}, or {"body", "position", "rotation", "weight"}); closed models included;
-        returns converged, reached, message, tensions, q, bounds, residual, targets, ...
+        returns converged, reached, message, tensions, q, bounds, forces, force_bounds,
+        joint_forces, joint_force_bounds, residual, targets, ...
         Raises InputError on bad input, SimulationError if it does not converge."""
     def value_and_gradient(
         self,

@@ -825,8 +825,10 @@ impl Simulation {
         self.statics_impl(py, tensions, loads)
     }
 
-    /// Inverse statics (docs/theory-control.md IS1–IS12): the cable tensions
-    /// `0 ≤ T ≤ max_tension` [N] and the static equilibrium (with loop
+    /// Inverse statics (docs/theory-control.md IS1–IS14): the cable tensions
+    /// `0 ≤ T ≤ max_tension` [N], the forces of the joints with an actuator
+    /// (`|f| ≤ max_force`, N or N·m, IS14) and of the unknown point loads
+    /// (IS13), and the static equilibrium (with loop
     /// closures, the constrained one) that bring rod sections or body frames
     /// closest to `targets`, the least effort among equally close ones.
     /// `targets`: a list of dicts `{"rod": name or index (default 0), "s":
@@ -838,16 +840,23 @@ impl Simulation {
     /// every cable or one per cable (default none). `effort_weight`: the
     /// relative weight ρ of the effort term. `warm_start`: a previous result
     /// (its tensions and q start the search: a target that moved a little
-    /// costs a few iterations). Returns a dict: `converged`, `reached`,
+    /// costs a few iterations). `unknown_loads`: point forces to solve for, a
+    /// list of dicts `{"rod": name or index, "s": [m] (default the tip),
+    /// "max_force": one bound for |f_x|, |f_y|, |f_z| or three [N] (default
+    /// none)}`; default the scene's `[[load]]`s with `unknown = true`
+    /// (`[]`: none). Returns a dict: `converged`, `reached`,
     /// `message`, `tensions`, `q`, `bounds` ("free", "lower", "upper" per
-    /// cable), `residual` (weighted target error), `targets` (per target:
+    /// cable), `forces` ((n_u, 3) world forces of the unknown loads [N]),
+    /// `force_bounds` (per load three bound names), `joint_forces` (one per
+    /// actuated joint coordinate, elements in order [N or N·m]),
+    /// `joint_force_bounds`, `residual` (weighted target error), `targets` (per target:
     /// reached `position`, `rotation`, `position_error`, `rotation_error`),
     /// `iterations`, `statics_iterations`, `cost`, `effort_weight`. A target
     /// out of reach returns the closest reachable shape with `reached`
     /// False. Bad input raises `softrod.InputError`; an iteration that does
     /// not converge raises `softrod.SimulationError` with its residual.
     /// Releases the GIL.
-    #[pyo3(signature = (targets, *, max_tension=None, effort_weight=1e-9, reach_tolerance=1e-6, max_iterations=100, warm_start=None, t=0.0))]
+    #[pyo3(signature = (targets, *, max_tension=None, effort_weight=1e-9, reach_tolerance=1e-6, max_iterations=100, warm_start=None, t=0.0, unknown_loads=None))]
     #[allow(clippy::too_many_arguments)]
     fn solve_actuation<'py>(
         &mut self,
@@ -859,6 +868,7 @@ impl Simulation {
         max_iterations: usize,
         warm_start: Option<&Bound<'py, pyo3::types::PyDict>>,
         t: f64,
+        unknown_loads: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
         let settings = actuation::Settings {
             max_tension,
@@ -867,6 +877,7 @@ impl Simulation {
             max_iterations,
             warm_start,
             t,
+            unknown_loads,
         };
         self.solve_actuation_impl(py, targets, settings)
     }
