@@ -9,7 +9,7 @@
 //! ([`PieceDerivMaps::new`]), the coefficients per evaluation point
 //! ([`Coefficients::at`]).
 
-use super::mat6::{mm, tm};
+use super::mat6::{mm_lower, tm};
 use softrod_lie::series::{PSI_SWITCH, tau_rho};
 use softrod_lie::{Mat6, Vec6, ad, angular, linear};
 
@@ -163,11 +163,13 @@ pub(crate) struct PieceDerivMaps {
 impl PieceDerivMaps {
     #[inline(always)]
     pub fn new(xi: &Vec6, xid: &Vec6, xidd: &Vec6) -> Self {
+        // Every matrix here is of the form [[X, 0], [Y, X]] (`ad_v` and
+        // its sums and products): products in that form (`mm_lower`).
         let k = angular(xi);
         let pm = ad(xi);
         let mut p = [pm; 4];
         for i in 1..4 {
-            p[i] = mm(&pm, &p[i - 1]);
+            p[i] = mm_lower(&pm, &p[i - 1]);
         }
         let powers = |v: &Vec6| {
             let mut out = [pm * v; 4];
@@ -182,7 +184,7 @@ impl PieceDerivMaps {
         let e_ops = |v: &Vec6, pv: &[Vec6; 4]| {
             let mut out = [ad(v); 4];
             for i in 1..4 {
-                out[i] = mm(&pm, &out[i - 1]) + ad(&pv[i - 1]);
+                out[i] = mm_lower(&pm, &out[i - 1]) + ad(&pv[i - 1]);
             }
             out
         };
@@ -192,7 +194,7 @@ impl PieceDerivMaps {
         let adv = ad(xid);
         let mut f = [adv; 4];
         for i in 1..4 {
-            f[i] = mm(&pm, &f[i - 1]) + mm(&adv, &p[i - 1]);
+            f[i] = mm_lower(&pm, &f[i - 1]) + mm_lower(&adv, &p[i - 1]);
         }
         // e_1 = 0, e_{i+1} = ad_ξ̇ P^i ξ̇ + P e_i;
         // Ê_1 = 0, Ê_{i+1} = P Ê_i − ad_ξ̇ E_i(ξ̇) − ad_{e_i}.
@@ -200,7 +202,7 @@ impl PieceDerivMaps {
         let mut ehat = [Mat6::zeros(); 4];
         for i in 1..4 {
             e[i] = adv * vd[i - 1] + pm * e[i - 1];
-            ehat[i] = mm(&pm, &ehat[i - 1]) - mm(&adv, &ed[i - 1]) - ad(&e[i - 1]);
+            ehat[i] = mm_lower(&pm, &ehat[i - 1]) - mm_lower(&adv, &ed[i - 1]) - ad(&e[i - 1]);
         }
         let kd = k.dot(&angular(xid));
         Self {
