@@ -8,7 +8,9 @@ use super::point::PointLin;
 use super::{At, IdDerivatives};
 use crate::forces::linearized::cable_terms;
 use crate::kernels::mat6::{Cols, mm_part, mm3};
-use crate::kernels::piece_derivs::{Coefficients, PieceDerivMaps, lambda, tangent_transpose_form};
+use crate::kernels::piece_derivs::{
+    Coefficients, PieceDerivMaps, lambda, tangent_transpose_form_basis,
+};
 use crate::model::{Model, RodModel};
 use softrod_lie::{Mat6, Pose, Vec6, ad};
 
@@ -257,9 +259,9 @@ pub(crate) fn close_piece(
         phi[i] += wn * w.co_tip.d[i];
         chi[i] += wn * w.co_tip.c[i];
     }
-    let qform = tangent_transpose_form(&w.powers, &w.kbar, &phi, &chi);
+    let qform = tangent_transpose_form_basis(&w.powers, &w.kbar, &phi, &chi, &c);
     let tlbt = tlb.transpose();
-    let diag_q = w.dq_diag + mm_part(&tlbt, &dwn_q, k, k) + c.both(&qform);
+    let diag_q = w.dq_diag + mm_part(&tlbt, &dwn_q, k, k) + qform;
     let diag_v = w.dv_diag + mm_part(&tlbt, &dwn_v, k, k);
     let alt = al.transpose();
     let dw_q = w.dq_w + mm_part(&alt, &(mm_part(&lambda(wn), &tlb, 6, k) + dwn_q), 6, k);
