@@ -322,7 +322,8 @@ pub(crate) fn tangent_transpose_form_basis(
     cols: &Cols,
 ) -> Mat6 {
     match (cols.selection().is_some(), cols.k) {
-        (false, _) => cols.both(&tangent_transpose_form(p, kbar, phi, chi)),
+        // A general `B`, or all six directions: the whole form.
+        (false, _) | (true, 6) => cols.both(&tangent_transpose_form(p, kbar, phi, chi)),
         (true, 0..=3) => form_selected::<3>(p, kbar, phi, chi, cols),
         (true, 4) => form_selected::<4>(p, kbar, phi, chi, cols),
         (true, _) => form_selected::<6>(p, kbar, phi, chi, cols),
