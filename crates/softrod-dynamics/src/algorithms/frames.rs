@@ -211,6 +211,80 @@ pub(crate) fn add_prescribed_wrench(
     }
 }
 
+/// `(Ad_{g_world} S)ᵀ W` of node `c`'s parent's coordinates: the transpose
+/// of [`parent_column`] applied to the world wrench `W` (spatial, at the
+/// world origin, angular first) without forming the column — `Sᵀ (Ad_gᵀ W)`.
+/// Its first `k` entries (the parent's `k`) are meaningful.
+fn parent_column_tr(tree: &Tree, data: &Data, c: usize, w: &Vec6) -> Vec6 {
+    let Some(p) = tree.nodes[c].parent else {
+        return Vec6::zeros();
+    };
+    let wp = &data.nodes[p];
+    if tree.nodes[c].attach.is_some() {
+        let wc = &data.nodes[c];
+        let local = wp.base_world.compose(&wc.attach_pose).ad().tr_mul_vec(w);
+        wc.attach_s.tr_mul(&local)
+    } else {
+        let local = wp.base_world.compose(&wp.tip).ad().tr_mul_vec(w);
+        wp.s_tip.tr_mul(&local)
+    }
+}
+
+/// The first half of a point wrench's generalized force (CT28): the world
+/// wrench `W` (spatial, at the world origin, angular first; `(p × f, f)` of
+/// a force `f` at the point `p`) acting on the frame `fs` — a rod section
+/// or a body's frame — adds its own piece's share `(Ad_{G(x)} T₋(x) B)ᵀ W`
+/// into `out` (n_dof) and is kept in `acc[node]` (per node of the tree) for
+/// [`inward_wrenches`], which projects it on every ancestor's coordinates.
+pub(crate) fn add_frame_wrench(
+    tree: &Tree,
+    fs: &FrameState,
+    wrench: &Vec6,
+    acc: &mut [Vec6],
+    out: &mut [f64],
+) {
+    if let Some((node, sw)) = &fs.own {
+        let nd = &tree.nodes[*node];
+        let own = sw.tr_mul(wrench);
+        for (o, v) in out[nd.dof..nd.dof + nd.k].iter_mut().zip(own.iter()) {
+            *o += v;
+        }
+    }
+    if let Some(from) = fs.from {
+        acc[from] += wrench;
+    }
+}
+
+/// The second half (CT28): one inward sweep, children before parents, that
+/// carries the wrenches gathered in `acc` by [`add_frame_wrench`] to the
+/// root — each node's sum (its own and its subtree's, all at the world
+/// origin, so they add as they are) projected on its parent's coordinates
+/// by `(Ad_{g_world} S)ᵀ` where the path leaves the parent (its tip, or
+/// inside it: D62) — and adds `Σ J_pᵀ f` into `out`. `O(N)` for all the
+/// wrenches together, against `O(N)` per wrench for their dense point
+/// Jacobians. Leaves `acc` zero. The node data of `data` must be the
+/// state's (any outward sweep at the same `q`).
+pub(crate) fn inward_wrenches(tree: &Tree, data: &Data, acc: &mut [Vec6], out: &mut [f64]) {
+    for i in (0..tree.nodes.len()).rev() {
+        let w = acc[i];
+        if w == Vec6::zeros() {
+            continue;
+        }
+        acc[i] = Vec6::zeros();
+        let Some(p) = tree.nodes[i].parent else {
+            continue;
+        };
+        let np = &tree.nodes[p];
+        if np.k > 0 {
+            let g = parent_column_tr(tree, data, i, &w);
+            for (o, v) in out[np.dof..np.dof + np.k].iter_mut().zip(g.iter()) {
+                *o += v;
+            }
+        }
+        acc[p] += w;
+    }
+}
+
 /// World poses of every rod's base frame and every body's frame into
 /// `data.rod_bases`, `data.body_poses` (D51).
 pub(crate) fn frames(model: &Model, tree: &Tree, data: &mut Data, q: &[f64]) {
