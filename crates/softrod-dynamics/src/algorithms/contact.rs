@@ -326,11 +326,10 @@ fn evaluate_tree(
                     // The force on the rod's section, the opposite on the
                     // obstacle's body; projected with the others below (CT28).
                     let f = work.active.last().expect("just pushed").force;
-                    let w = point_wrench(&p, &f);
                     let tau = work.tau.as_mut_slice();
-                    add_frame_wrench(tree, &fs, &w, &mut work.wrenches, tau);
+                    add_frame_wrench(tree, &fs, &p, &f, &mut work.wrenches, tau);
                     if let Some(fb) = &fb {
-                        add_frame_wrench(tree, fb, &(-w), &mut work.wrenches, tau);
+                        add_frame_wrench(tree, fb, &p, &(-f), &mut work.wrenches, tau);
                     }
                 }
             }
@@ -430,6 +429,7 @@ mod tests {
     use super::*;
     use crate::algorithms::contact_force;
     use crate::{Attachment, BodySpec, Joint, JointKind, Rod, commit_contact};
+    use nalgebra::DVector;
     use softrod_kinematics::Strain;
     use softrod_mechanics::Material;
     use softrod_mechanics::contact::{ContactSettings, Obstacle, Shape};
@@ -515,6 +515,22 @@ mod tests {
         (model, q, qd)
     }
 
+    /// The material points `(rod, s, obstacle's body, force on the rod)` of
+    /// the last evaluation's contacts, a pair's rod `b` with the opposite.
+    type Points = Vec<(usize, f64, Option<usize>, Vec3)>;
+
+    /// `Σ J_relᵀ f` by the dense point Jacobians.
+    fn dense_route(model: &Model, data: &Data, q: &[f64], points: &Points) -> DVector<f64> {
+        let n = model.n_dof();
+        let mut jrel = DMatrix::zeros(3, n);
+        let mut dense = DVector::<f64>::zeros(n);
+        for &(rod, s, body, f) in points {
+            tree_point_jacobian(model, data, q, rod, s, body, &mut jrel);
+            dense += jrel.transpose() * f;
+        }
+        dense
+    }
+
     /// The generalized contact force of the inward sweep (CT28) against
     /// the dense route `Σ J_relᵀ f` of the point Jacobians, and both
     /// against central differences of the forces' virtual work
@@ -563,7 +579,7 @@ mod tests {
                 .any(|a| a.force.cross(&a.normal).norm() > 1e-3 * a.force.norm())
         );
         // The material points and the sign of each force on them.
-        let mut points: Vec<(usize, f64, Option<usize>, Vec3)> = Vec::new();
+        let mut points: Points = Vec::new();
         for a in &work.active {
             let s = model.contact.samples[a.rod][a.sample].s;
             points.push((a.rod, s, model.contact.parents[a.obstacle], a.force));
@@ -572,13 +588,7 @@ mod tests {
             points.push((c.a, c.sa, None, c.force));
             points.push((c.b, c.sb, None, -c.force));
         }
-        // The dense route.
-        let mut jrel = DMatrix::zeros(3, n);
-        let mut dense = nalgebra::DVector::<f64>::zeros(n);
-        for &(rod, s, body, f) in &points {
-            tree_point_jacobian(&model, &data, &q, rod, s, body, &mut jrel);
-            dense += jrel.transpose() * f;
-        }
+        let dense = dense_route(&model, &data, &q, &points);
         let scale = dense.norm();
         let diff = (&tau - &dense).norm();
         eprintln!(

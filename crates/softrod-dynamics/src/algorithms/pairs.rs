@@ -8,7 +8,7 @@
 //! chain it reads the rods' kinematics in `ContactWork::kin`; on a tree the
 //! node data of the last outward sweep.
 
-use super::contact::{Ask, point_velocity, point_wrench, rod_frame};
+use super::contact::{Ask, point_velocity, rod_frame};
 use super::frames::{add_frame_wrench, frame_state, inward_wrenches};
 use crate::forces::contact::{Distance, Law, closest_on_segments, force};
 use crate::model::Model;
@@ -181,8 +181,7 @@ pub(crate) fn evaluate_pairs(
         }
     }
     // The generalized force: J_a(s_a)ᵀ f − J_b(s_b)ᵀ f — on a tree as the
-    // point wrenches ±(p × f, f) at the two sections, projected in one
-    // inward sweep (CT28).
+    // forces ±f at the two sections, projected in one inward sweep (CT28).
     match &model.tree {
         None => {
             for k in 0..pw.active.len() {
@@ -206,8 +205,8 @@ pub(crate) fn evaluate_pairs(
             for c in &pw.active {
                 for (rod, s, sign) in [(c.a, c.sa, 1.0), (c.b, c.sb, -1.0)] {
                     let fs = frame_state(model, tree, data, &rod_frame(model, rod, s), q, None);
-                    let w = point_wrench(&fs.pose.translation, &(c.force * sign));
-                    add_frame_wrench(tree, &fs, &w, &mut work.wrenches, tau);
+                    let (p, f) = (fs.pose.translation, c.force * sign);
+                    add_frame_wrench(tree, &fs, &p, &f, &mut work.wrenches, tau);
                 }
             }
             inward_wrenches(tree, data, &mut work.wrenches, tau);
