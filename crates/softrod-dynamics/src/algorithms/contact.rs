@@ -456,7 +456,7 @@ mod tests {
                 .strains(Strain::ALL)
                 .base(base)
                 .circle(r)
-                .material(silicone.clone())
+                .material(silicone)
         };
         let mut ball = BodySpec::principal("ball", 0.05, [1e-5, 1e-5, 1e-5]);
         ball.base = Pose::new(Mat3::identity(), Vec3::new(0.25, 0.0, r + 0.02 - 3e-4));
