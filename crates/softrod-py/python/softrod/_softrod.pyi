@@ -426,6 +426,12 @@ class Simulation:
     @property
     def n_cables(self) -> int: ...
     @property
+    def n_joint_inputs(self) -> int:
+        """Actuated joint coordinates (the length of a joint_forces input)."""
+    @property
+    def joint_max_forces(self) -> list[float]:
+        """Each actuated coordinate's max_force [N or N m]; inf where the scene gives none."""
+    @property
     def duration(self) -> float | None:
         """The scene's [run] duration [s]; None when built in Python."""
     @property
@@ -508,8 +514,10 @@ class Simulation:
     def statics(
         self, *, tensions: ArrayLike | None = None,
         loads: Sequence[tuple[_RodRef, PointLoad]] | None = None,
+        joint_forces: ArrayLike | None = None,
     ) -> Statics:
-        """tensions (n_cables,) [N] replace the schedules, loads are added, for this solve."""
+        """tensions (n_cables,) [N] and joint_forces (n_joint_inputs,) replace the
+        schedules, loads are added, for this solve."""
     def solve_actuation(
         self,
         targets: Sequence[dict[str, object]],
@@ -573,7 +581,8 @@ class Simulation:
         control_every: float | None = None,
     ) -> Trajectory: ...
     def step(
-        self, state: State, dt: float, u: ArrayLike | None = None, *, substeps: int | None = None
+        self, state: State, dt: float, u: ArrayLike | None = None, *, substeps: int | None = None,
+        joint_forces: ArrayLike | None = None,
     ) -> State: ...
     def copy(self) -> Simulation: ...
     def __copy__(self) -> Simulation: ...
@@ -605,11 +614,14 @@ class BatchStepper:
     @property
     def n_cables(self) -> int: ...
     @property
+    def n_joint_inputs(self) -> int: ...
+    @property
     def threads(self) -> int: ...
     def reset_contact(self, i: int | None = None) -> None:
         """Forget copy i's (None: every copy's) committed contact state."""
     def step(
         self, t: float | ArrayLike, q: ArrayLike, qdot: ArrayLike, u: ArrayLike, dt: float,
         active: Sequence[bool] | None = None, *, substeps: int | None = None,
+        joint_forces: ArrayLike | None = None,
     ) -> tuple[_F64, _F64, list[str | None]]:
         """(q (n, n_dof), qdot (n, n_dof), errors: None or the failure's message per copy)"""

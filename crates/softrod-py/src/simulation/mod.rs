@@ -31,7 +31,7 @@ use softrod::dynamics::{
 };
 use softrod::integrate::RodSystem;
 
-use crate::control::{CableInputs, check_tensions};
+use crate::control::{CableInputs, check_joint_forces, check_tensions};
 use crate::convert::{mat_out, vec_out, vector};
 use crate::errors::{dynamics, guard, input, to_py};
 use crate::model::simulation_of;
@@ -159,6 +159,14 @@ impl Simulation {
             ));
         }
         Ok(self.inputs.as_mut().expect("just set"))
+    }
+
+    /// Joint forces checked against the model's actuated joint coordinates.
+    pub(crate) fn joint_forces(&mut self, f: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
+        let nj = self.sim.model().n_joint_inputs();
+        let a = vector(f, "joint_forces", nj)?;
+        check_joint_forces(nj, "joint_forces", a.slice()).map_err(input)?;
+        Ok(a.slice().to_vec())
     }
 
     /// `u` checked against the model's cables.
@@ -307,6 +315,35 @@ impl Simulation {
     #[getter]
     fn n_cables(&self) -> usize {
         self.sim.model().n_cables()
+    }
+
+    /// Number of actuated joint coordinates (the length of a `joint_forces`
+    /// input; docs/theory-control.md IS14): each joint with an actuator
+    /// contributes its coordinates, elements in model order.
+    #[getter]
+    fn n_joint_inputs(&self) -> usize {
+        self.sim.model().n_joint_inputs()
+    }
+
+    /// The bound `|f_i| ≤ max_force_i` [N or N·m] of each actuated joint
+    /// coordinate (`n_joint_inputs` of them, in their order), from the
+    /// scene's `actuator = { max_force }`; `inf` where none is given.
+    #[getter]
+    fn joint_max_forces(&self) -> Vec<f64> {
+        let model = self.sim.model();
+        model
+            .elements()
+            .iter()
+            .filter_map(|e| {
+                let j = &e.attachment.joint;
+                j.actuator.as_ref().map(|a| {
+                    (0..j.actuated_dof())
+                        .map(|i| a.bound(i))
+                        .collect::<Vec<_>>()
+                })
+            })
+            .flatten()
+            .collect()
     }
 
     /// A name for every generalized coordinate, in the order of `q`:
@@ -814,15 +851,18 @@ impl Simulation {
     /// For actuation and load studies without editing the scene:
     /// `tensions` (n_cables,) [N, ≥ 0] replace the cables' schedules for
     /// this solve; `loads`, a list of `(rod, softrod.PointLoad)` pairs (rod
-    /// a name or an index), are added to the model's loads for this solve.
-    #[pyo3(signature = (*, tensions=None, loads=None))]
+    /// a name or an index), are added to the model's loads for this solve;
+    /// `joint_forces` (n_joint_inputs,) [N or N·m] replace the joint
+    /// actuators' schedules for this solve (IS14).
+    #[pyo3(signature = (*, tensions=None, loads=None, joint_forces=None))]
     fn statics(
         &mut self,
         py: Python<'_>,
         tensions: Option<&Bound<'_, PyAny>>,
         loads: Option<&Bound<'_, PyAny>>,
+        joint_forces: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Statics> {
-        self.statics_impl(py, tensions, loads)
+        self.statics_impl(py, tensions, loads, joint_forces)
     }
 
     /// Inverse statics (docs/theory-control.md IS1–IS14): the cable tensions
@@ -1031,7 +1071,10 @@ impl Simulation {
     /// One step of `dt` seconds from `state` (a `softrod.State`), with the
     /// run settings' integrator, returning the state at `state.t + dt`.
     /// `u` (n_cables,) [N]: cable tensions held over the step (replacing
-    /// the scheduled ones); None: the scheduled tensions. For RL and MPC
+    /// the scheduled ones); None: the scheduled tensions. `joint_forces`
+    /// (n_joint_inputs,) [N or N·m, finite]: the joint actuators' forces
+    /// held over the step (docs/theory-control.md IS14, replacing their
+    /// schedules); None: the schedules. For RL and MPC
     /// loops: `state = sim.step(state, 1e-3, u)`. Each call starts the
     /// integrator afresh (first step `settings.dt`, capped at `dt`), so a
     /// loop of steps equals `simulate(controller=…, control_every=dt)`.
@@ -1049,7 +1092,7 @@ impl Simulation {
     /// raises `SimulationError`. A loop of steps that starts an episode
     /// from an initial state calls `reset_contact()` first (the
     /// environments' `reset` does).
-    #[pyo3(signature = (state, dt, u = None, *, substeps = None))]
+    #[pyo3(signature = (state, dt, u = None, *, substeps = None, joint_forces = None))]
     fn step(
         &mut self,
         py: Python<'_>,
@@ -1057,8 +1100,9 @@ impl Simulation {
         dt: f64,
         u: Option<&Bound<'_, PyAny>>,
         substeps: Option<usize>,
+        joint_forces: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<State> {
-        self.step_impl(py, state, dt, u, substeps)
+        self.step_impl(py, state, dt, u, substeps, joint_forces)
     }
 
     /// An independent copy (its own buffers), e.g. for another thread.
