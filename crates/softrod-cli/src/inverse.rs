@@ -1,6 +1,8 @@
-//! `softrod inverse SCENE [--json]`: the cable tensions that bring the
-//! scene's `[[target]]` sections and bodies closest to their targets, within each
-//! cable's `max_tension` (inverse statics, docs/theory-control.md).
+//! `softrod inverse SCENE [--json]`: the cable tensions, actuated joints'
+//! forces and unknown point loads that bring the scene's `[[target]]`
+//! sections and bodies closest to their targets, within each cable's
+//! `max_tension`, each actuator's and unknown load's `max_force` (inverse
+//! statics, docs/theory-control.md IS1–IS14).
 
 use std::path::Path;
 
@@ -16,9 +18,13 @@ pub fn inverse(path: &Path, json: bool) -> Result<(), CliError> {
             l.scene.source
         )));
     }
-    if l.sim.n_cables() == 0 {
+    if l.sim.n_cables() == 0
+        && l.sim.model().n_joint_inputs() == 0
+        && l.scene.unknown_loads.is_empty()
+    {
         return Err(CliError::Input(format!(
-            "{}: cable: the scene has no [[cable]] to solve for",
+            "{}: cable: the scene has no [[cable]], no joint with an actuator and no [[load]] with \
+             unknown = true to solve for",
             l.scene.source
         )));
     }
@@ -38,10 +44,17 @@ pub fn inverse(path: &Path, json: bool) -> Result<(), CliError> {
     let bounds = l.scene.max_tensions();
     let options = ActuationOptions {
         max_tension: bounds.iter().map(|b| b.1).collect(),
+        unknown_loads: l.sim.scene_unknown_loads().to_vec(),
         ..ActuationOptions::default()
     };
     let a = l.sim.solve_actuation(&targets, &options)?;
-    if a.tensions.iter().chain(a.q.iter()).any(|v| !v.is_finite()) {
+    if a.tensions
+        .iter()
+        .chain(a.q.iter())
+        .chain(&a.joint_forces)
+        .chain(a.forces.iter().flat_map(|f| f.iter()))
+        .any(|v| !v.is_finite())
+    {
         return Err(failed("inverse statics returned a non-finite state"));
     }
     let model = l.sim.model();
@@ -62,6 +75,44 @@ pub fn inverse(path: &Path, json: bool) -> Result<(), CliError> {
                 "tension": t,
                 "max_tension": if max.is_finite() { serde_json::json!(max) } else { serde_json::Value::Null },
                 "bound": b.name(),
+            })
+        })
+        .collect();
+    let bound_or_null = |m: f64| {
+        if m.is_finite() {
+            serde_json::json!(m)
+        } else {
+            serde_json::Value::Null
+        }
+    };
+    let loads: Vec<serde_json::Value> = l
+        .scene
+        .unknown_loads
+        .iter()
+        .zip(a.forces.iter().zip(&a.force_bounds))
+        .map(|(u, (f, b))| {
+            serde_json::json!({
+                "load": u.load,
+                "rod": model.rods()[u.rod].spec.name,
+                "s": u.s,
+                "force": [f.x, f.y, f.z],
+                "max_force": u.max_force.map(bound_or_null),
+                "bounds": b.map(|x| x.name()),
+            })
+        })
+        .collect();
+    let joints: Vec<serde_json::Value> = model
+        .elements()
+        .iter()
+        .filter_map(|e| e.attachment.joint.actuator.as_ref().map(|act| (e, act)))
+        .map(|(e, act)| {
+            let r = e.actuator_inputs.clone();
+            serde_json::json!({
+                "element": e.name,
+                "type": e.attachment.joint.kind.name(),
+                "forces": &a.joint_forces[r.clone()],
+                "max_force": (0..r.len()).map(|i| bound_or_null(act.bound(i))).collect::<Vec<_>>(),
+                "bounds": a.joint_force_bounds[r].iter().map(|b| b.name()).collect::<Vec<_>>(),
             })
         })
         .collect();
@@ -106,6 +157,9 @@ pub fn inverse(path: &Path, json: bool) -> Result<(), CliError> {
             "cost": a.cost,
             "tensions": a.tensions.as_slice(),
             "cables": cables,
+            "joint_forces": a.joint_forces,
+            "joints": joints,
+            "loads": loads,
             "targets": target_json,
             "q": a.q.as_slice(),
             "rods": rods,
@@ -124,6 +178,25 @@ pub fn inverse(path: &Path, json: bool) -> Result<(), CliError> {
                 c["rod"].as_str().unwrap_or(""),
                 c["tension"].as_f64().unwrap_or(f64::NAN),
                 c["bound"].as_str().unwrap_or("")
+            );
+        }
+        for j in &joints {
+            println!(
+                "joint of {} ({}): forces {} N or N m ({})",
+                j["element"].as_str().unwrap_or(""),
+                j["type"].as_str().unwrap_or(""),
+                j["forces"],
+                j["bounds"]
+            );
+        }
+        for ld in &loads {
+            println!(
+                "load[{}] on {} at s = {}: force {} N ({})",
+                ld["load"],
+                ld["rod"].as_str().unwrap_or(""),
+                ld["s"],
+                ld["force"],
+                ld["bounds"]
             );
         }
         for (t, r) in l.scene.targets.iter().zip(&a.residuals) {

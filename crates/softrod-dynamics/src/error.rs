@@ -208,6 +208,15 @@ pub enum DynamicsError {
         /// The value given.
         value: f64,
     },
+    /// The joint force inputs do not match the model's actuated joint
+    /// coordinates (IS14).
+    #[error("{got} joint forces given, the model has {expected} actuated joint coordinates")]
+    JointForceCount {
+        /// Forces given.
+        got: usize,
+        /// [`crate::Model::n_joint_inputs`].
+        expected: usize,
+    },
     /// A value is NaN or infinite.
     #[error("{what} is not finite ({value})")]
     NotFinite {

@@ -139,7 +139,7 @@ pub use dispatch::{forward_dynamics, forward_dynamics_with, linearize};
 pub use error::{DynamicsError, RodId};
 pub use forces::{Drives, Forces};
 pub use model::Data;
-pub use model::{Attachment, BodyLoad, BodySpec, Joint, JointKind};
+pub use model::{Attachment, BodyLoad, BodySpec, Joint, JointActuator, JointForce, JointKind};
 pub use model::{BodyModel, Element, ElementInfo, ElementKind, Model, Rod, RodModel};
 pub use model::{Closure, ClosureFrame, ClosureKind};
 pub use model::{Curve, Prescribed, Spline};

@@ -8,14 +8,16 @@ mod common;
 
 use common::{Lcg, Shape, Terms, gravity, rod_spec, state, tilted_base};
 use softrod_dynamics::{
-    Data, Model, bias_force, forward_dynamics, generalized_gravity, inverse_dynamics,
+    Data, Model, bias_force, energies, forward_dynamics, generalized_gravity, inverse_dynamics,
 };
 use softrod_kinematics::{Basis, Strain};
 use softrod_lie::Vec6;
 
 /// The largest of max |x_planar − x_3D| / max |x_3D| over the forward
 /// dynamics `q̈`, the inverse dynamics `τ` (at a varied `q̈`), the bias `b`
-/// and the generalized gravity at `(q, q̇)`, after checking that the
+/// the generalized gravity and the energies (kinetic, elastic,
+/// gravitational; relative to the largest of the three) at `(q, q̇)`,
+/// after checking that the
 /// first model really runs every planar rod on the planar path and the
 /// second does not.
 fn compare(model: &Model, q: &[f64], qd: &[f64]) -> f64 {
@@ -62,7 +64,24 @@ fn compare(model: &Model, q: &[f64], qd: &[f64]) -> f64 {
     } else {
         0.0
     };
-    fd.max(id).max(bias).max(grav)
+    let (e1, e2) = (
+        energies(model, &mut d1, q, qd).unwrap(),
+        energies(&general, &mut d2, q, qd).unwrap(),
+    );
+    let scale = [e2.kinetic, e2.elastic, e2.gravitational]
+        .map(f64::abs)
+        .into_iter()
+        .fold(f64::MIN_POSITIVE, f64::max);
+    let energy = [
+        e1.kinetic - e2.kinetic,
+        e1.elastic - e2.elastic,
+        e1.gravitational - e2.gravitational,
+    ]
+    .map(f64::abs)
+    .into_iter()
+    .fold(0.0, f64::max)
+        / scale;
+    fd.max(id).max(bias).max(grav).max(energy)
 }
 
 fn select(s: &[Strain]) -> Basis {

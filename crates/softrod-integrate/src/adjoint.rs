@@ -16,8 +16,10 @@
 //!
 //! Supported: [`Integrator::Esdirk`] (the default) and
 //! [`Integrator::Esdirk5`], one code on their tableaux (both stiffly
-//! accurate with an explicit first stage, G27). Other methods are refused
-//! with an error naming the ones that are supported.
+//! accurate with an explicit first stage, G27), and
+//! [`Integrator::Radau5`] (its fully implicit collocation system, solved
+//! as one dense `3n×3n` system: `crate::radau_adjoint`, G25). Other
+//! methods are refused with an error naming the ones that are supported.
 //!
 //! The system's parameters `p` enter through [`ParameterSystem`]: it gives
 //! the vector–Jacobian product `wᵀ ∂a/∂p` at a state, so the backward pass
@@ -66,9 +68,11 @@ const SWITCH_ITERATIONS: f64 = 24.0;
 const RECOMPUTE_ROUNDOFF: f64 = 1e-13;
 
 /// The integrators whose discrete adjoint [`adjoint_second_order`] has.
-pub const ADJOINT_INTEGRATORS: [Integrator; 2] = [Integrator::Esdirk, Integrator::Esdirk5];
+pub const ADJOINT_INTEGRATORS: [Integrator; 3] =
+    [Integrator::Esdirk, Integrator::Esdirk5, Integrator::Radau5];
 
-/// The tableau of an integrator in [`ADJOINT_INTEGRATORS`] (G27).
+/// The tableau of an ESDIRK integrator in [`ADJOINT_INTEGRATORS`] (G27;
+/// Radau IIA has its own pass, G25).
 fn coefficients(integrator: Integrator) -> Option<Coefficients> {
     match integrator {
         Integrator::Esdirk => Some(Coefficients::of::<Esdirk43>()),
@@ -421,6 +425,11 @@ pub fn adjoint_second_order_with<Sys: ParameterSystem>(
     seed: &mut Seed<'_>,
     solver: AdjointSolver,
 ) -> Result<AdjointGradient, IntegrateError> {
+    if integrator == Integrator::Radau5 {
+        // Radau IIA's collocation system is solved densely whatever
+        // `solver` says (G25).
+        return crate::radau_adjoint::adjoint(sys, tape, seed);
+    }
     let (n, tab) = check_request(sys.dim(), integrator, tape)?;
     let mut w = EsdirkAdjoint::new(tab, n, sys.n_params(), solver == AdjointSolver::Structured);
     let mut lq = DVector::zeros(n);

@@ -148,6 +148,7 @@ mod methods;
 mod adjoint;
 mod driver;
 mod krylov;
+mod radau_adjoint;
 mod recommended;
 mod sensitivity;
 

@@ -153,6 +153,37 @@ impl DenseLu {
 }
 
 impl DenseLu {
+    /// Solves `Aᵀ x = b` in place with the factorization of `A` (the
+    /// discrete adjoint's transposed stage system, docs/theory-control.md
+    /// G25): `Aᵀ = Uᵀ Lᵀ P`, so `Uᵀ y = b` forwards, `Lᵀ z = y` backwards
+    /// (both by dot products down contiguous columns), `x = Pᵀ z` (the
+    /// row swaps undone in reverse order). A Cholesky factor is symmetric.
+    pub(crate) fn solve_transposed_in_place(&self, b: &mut DVector<f64>) {
+        if self.kind == Kind::Cholesky {
+            self.solve_cholesky(b.as_mut_slice());
+            return;
+        }
+        let n = self.a.nrows();
+        let a = self.a.as_slice();
+        let x = b.as_mut_slice();
+        for j in 0..n {
+            let col = &a[j * n..j * n + j];
+            let s = dot(col, &x[..j]);
+            x[j] = (x[j] - s) / a[j * n + j];
+        }
+        for j in (0..n).rev() {
+            let col = &a[j * n + j + 1..j * n + n];
+            let s = dot(col, &x[j + 1..]);
+            x[j] -= s;
+        }
+        for k in (0..n).rev() {
+            let p = self.piv[k];
+            if p != k {
+                x.swap(p, k);
+            }
+        }
+    }
+
     /// `L·Lᵀ x = b`: forward substitution by columns, back substitution by
     /// dot products with the columns of `L` (both contiguous).
     fn solve_cholesky(&self, b: &mut [f64]) {
@@ -317,6 +348,11 @@ mod tests {
         lu.solve_in_place(&mut x);
         let r = &m * &x - &b;
         assert!(r.amax() < 1e-13, "residual {r}");
+        // The transposed system with the same factorization.
+        let mut y = b.clone();
+        lu.solve_transposed_in_place(&mut y);
+        let r = m.transpose() * &y - &b;
+        assert!(r.amax() < 1e-13, "transposed residual {r}");
     }
 
     #[test]

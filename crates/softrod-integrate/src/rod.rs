@@ -219,6 +219,7 @@ impl RodSystem {
 /// Cable tensions set as inputs replace the schedules in the derivatives'
 /// workspace, as in the forward dynamics.
 fn copy_tensions(data: &Data, work: &mut IdDerivatives) {
+    work.copy_joint_inputs(data);
     match (data.cable_tensions(), &mut work.tensions) {
         (None, t) => *t = None,
         (Some(u), Some(t)) => t.as_mut_slice().copy_from_slice(u),

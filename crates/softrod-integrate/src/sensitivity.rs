@@ -36,7 +36,7 @@ const MAX_NEWTON: usize = 60;
 /// first.
 ///
 /// Errors: an integrator without these sensitivities (as the adjoint: the
-/// ESDIRK methods), a tape of another dimension, a failing or non-finite
+/// ESDIRK methods and Radau IIA, G26), a tape of another dimension, a failing or non-finite
 /// evaluation, a singular stage matrix, a stage whose Newton iteration
 /// does not converge.
 pub fn forward_sensitivity_second_order<Sys: ParameterSystem>(
@@ -46,6 +46,9 @@ pub fn forward_sensitivity_second_order<Sys: ParameterSystem>(
     seed: &mut Seed<'_>,
     initial: bool,
 ) -> Result<AdjointGradient, IntegrateError> {
+    if integrator == Integrator::Radau5 {
+        return crate::radau_adjoint::forward(sys, tape, seed, initial);
+    }
     let (n, tab) = check_request(sys.dim(), integrator, tape)?;
     let np = sys.n_params();
     let m = np + if initial { 2 * n } else { 0 };

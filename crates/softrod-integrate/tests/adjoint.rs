@@ -1,5 +1,5 @@
 //! The discrete adjoint of ESDIRK (ESDIRK4(3) and ESDIRK5(4),
-//! docs/theory-control.md G27) against central differences of whole runs
+//! docs/theory-control.md G27) and of Radau IIA (G25) against central differences of whole runs
 //! of the same discrete map (fixed steps, stage equations solved to
 //! round-off), on a nonlinear damped, forced two-coordinate system with
 //! analytic Jacobians.
@@ -138,20 +138,38 @@ fn esdirk5_adjoint_matches_central_differences_of_whole_runs() {
     adjoint_matches_differences(Integrator::Esdirk5);
 }
 
+/// Radau IIA's adjoint (G25): the transposed collocation system at the
+/// recomputed stages, against differences of whole radau5 runs.
+#[test]
+fn radau5_adjoint_matches_central_differences_of_whole_runs() {
+    adjoint_matches_differences(Integrator::Radau5);
+}
+
+/// Radau IIA's forward sensitivities (G26) give its adjoint's numbers:
+/// one factorization of the collocation matrix, solved with it and with
+/// its transpose, on every entry.
+#[test]
+fn radau5_forward_sensitivities_equal_the_adjoint() {
+    forward_equals_adjoint(Integrator::Radau5);
+}
+
 /// ESDIRK5(4)'s forward sensitivities (G21 on its tableau) give its
 /// adjoint's numbers: two algorithms, one discrete map.
 #[test]
 fn esdirk5_forward_sensitivities_equal_the_adjoint() {
+    forward_equals_adjoint(Integrator::Esdirk5);
+}
+
+fn forward_equals_adjoint(integrator: Integrator) {
     let (p, q0, v0) = ([3.0, 0.4, 0.7], [0.5, -0.3], [0.2, 0.1]);
-    let (_, tape) = run_with(Integrator::Esdirk5, p, q0, v0);
+    let (_, tape) = run_with(integrator, p, q0, v0);
     let mut seed = |k: usize, lq: &mut DVector<f64>, lv: &mut DVector<f64>| {
         lq[0] += 2.0 * tape.q(k)[0];
         lv[1] += tape.qd(k)[1];
     };
     let mut sys = Forced { p };
-    let a = adjoint_second_order(&mut sys, Integrator::Esdirk5, &tape, &mut seed).unwrap();
-    let f = forward_sensitivity_second_order(&mut sys, Integrator::Esdirk5, &tape, &mut seed, true)
-        .unwrap();
+    let a = adjoint_second_order(&mut sys, integrator, &tape, &mut seed).unwrap();
+    let f = forward_sensitivity_second_order(&mut sys, integrator, &tape, &mut seed, true).unwrap();
     let all = |g: &softrod_integrate::AdjointGradient| {
         let mut v = g.dp.clone();
         v.extend(g.dq0.iter().chain(g.dqd0.iter()));
@@ -159,6 +177,7 @@ fn esdirk5_forward_sensitivities_equal_the_adjoint() {
     };
     for (k, (x, y)) in all(&a).iter().zip(all(&f)).enumerate() {
         let rel = (x - y).abs() / x.abs().max(1e-3);
+        eprintln!("[{k}]: adjoint {x:e}, forward {y:e}, {rel:e}");
         assert!(rel < 1e-10, "[{k}]: adjoint {x:e}, forward {y:e}, {rel:e}");
     }
 }
@@ -180,6 +199,7 @@ fn adjoint_matches_differences(integrator: Integrator) {
     let check = |name: &str, exact: f64, plus: f64, minus: f64| {
         let fd = (plus - minus) / (2.0 * d);
         let rel = (exact - fd).abs() / fd.abs().max(1e-3);
+        eprintln!("{name}: adjoint {exact:e}, differences {fd:e}, rel {rel:e}");
         assert!(
             rel < 1e-6,
             "{name}: adjoint {exact}, differences {fd}, rel {rel:e}"
@@ -222,11 +242,120 @@ fn adjoint_matches_differences(integrator: Integrator) {
 fn other_integrators_are_refused_by_name() {
     let (_, tape) = run([1.0, 0.1, 0.0], [0.1, 0.0], [0.0, 0.0]);
     let mut sys = Forced { p: [1.0, 0.1, 0.0] };
-    let e = adjoint_second_order(&mut sys, Integrator::Radau5, &tape, &mut |_, _, _| {})
+    let e = adjoint_second_order(&mut sys, Integrator::Rosenbrock, &tape, &mut |_, _, _| {})
         .unwrap_err()
         .to_string();
     assert!(
-        e.contains("radau5") && e.contains("(supported: esdirk, esdirk5)"),
+        e.contains("rosenbrock") && e.contains("(supported: esdirk, esdirk5, radau5)"),
         "{e}"
     );
+}
+
+/// An adaptive radau5 run's adjoint is the gradient of its own discrete
+/// map: the recorded steps replayed one by one (each a fixed step of the
+/// recorded size, the stage equations solved far below the differences'
+/// step) with the parameters moved give central differences that agree
+/// with it to the differences' truncation and round-off.
+#[test]
+fn radau5_adaptive_adjoint_matches_differences_of_its_recorded_steps() {
+    let (p, q0, v0) = ([3.0, 0.4, 0.7], [0.5, -0.3], [0.2, 0.1]);
+    let mut opts = Options::tol(1e-6, 1e-8);
+    opts.iteration = Iteration::Newton {
+        tol: 1e-5,
+        max_iter: 40,
+    };
+    let mut sys = Forced { p };
+    let (q, v) = (DVector::from_row_slice(&q0), DVector::from_row_slice(&v0));
+    let mut rec = Record(Tape::new(0.0, &q0, &v0));
+    integrate_second_order(
+        &mut sys,
+        Integrator::Radau5,
+        (0.0, T1),
+        &q,
+        &v,
+        &opts,
+        &mut rec,
+    )
+    .unwrap();
+    let tape = rec.0;
+    // Steps of several sizes: not a fixed-step run in disguise.
+    let (hmin, hmax) = (0..tape.steps()).fold((f64::INFINITY, 0.0f64), |(a, b), k| {
+        (a.min(tape.step_size(k)), b.max(tape.step_size(k)))
+    });
+    assert!(hmax > 2.0 * hmin, "steps {hmin:e}..{hmax:e}");
+    let loss_at = |q: &[f64], v: &[f64]| q[0].powi(2) + 0.5 * v[1].powi(2);
+    let replay = |p: [f64; 3], q0: [f64; 2], v0: [f64; 2]| {
+        let mut sys = Forced { p };
+        let (mut q, mut v) = (DVector::from_row_slice(&q0), DVector::from_row_slice(&v0));
+        let mut loss = loss_at(q.as_slice(), v.as_slice());
+        for k in 0..tape.steps() {
+            let mut o = Options::fixed(tape.step_size(k));
+            o.rtol = opts.rtol;
+            o.atol = opts.atol;
+            o.iteration = Iteration::Newton {
+                tol: 1e-8,
+                max_iter: 40,
+            };
+            let mut one = Record(Tape::new(tape.time(k), q.as_slice(), v.as_slice()));
+            let span = (tape.time(k), tape.time(k + 1));
+            integrate_second_order(&mut sys, Integrator::Radau5, span, &q, &v, &o, &mut one)
+                .unwrap();
+            assert_eq!(one.0.steps(), 1, "step {k} replayed in one step");
+            q.copy_from_slice(one.0.q(1));
+            v.copy_from_slice(one.0.qd(1));
+            loss += loss_at(q.as_slice(), v.as_slice());
+        }
+        loss
+    };
+    let g = adjoint_second_order(
+        &mut Forced { p },
+        Integrator::Radau5,
+        &tape,
+        &mut |k, lq, lv| {
+            lq[0] += 2.0 * tape.q(k)[0];
+            lv[1] += tape.qd(k)[1];
+        },
+    )
+    .unwrap();
+    let d = 1e-6;
+    let check = |name: &str, exact: f64, plus: f64, minus: f64| {
+        let fd = (plus - minus) / (2.0 * d);
+        let rel = (exact - fd).abs() / fd.abs().max(1e-3);
+        eprintln!("{name}: adjoint {exact:e}, differences {fd:e}, rel {rel:e}");
+        assert!(
+            rel < 1e-6,
+            "{name}: adjoint {exact}, differences {fd}, rel {rel:e}"
+        );
+    };
+    for j in 0..3 {
+        let (mut a, mut b) = (p, p);
+        a[j] += d;
+        b[j] -= d;
+        check(
+            &format!("p{j}"),
+            g.dp[j],
+            replay(a, q0, v0),
+            replay(b, q0, v0),
+        );
+    }
+    for j in 0..2 {
+        let (mut a, mut b) = (q0, q0);
+        a[j] += d;
+        b[j] -= d;
+        check(
+            &format!("q0[{j}]"),
+            g.dq0[j],
+            replay(p, a, v0),
+            replay(p, b, v0),
+        );
+        let (mut a, mut b) = (v0, v0);
+        a[j] += d;
+        b[j] -= d;
+        check(
+            &format!("qd0[{j}]"),
+            g.dqd0[j],
+            replay(p, q0, a),
+            replay(p, q0, b),
+        );
+    }
 }

@@ -24,7 +24,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyList;
 use rayon::prelude::*;
 
-use crate::control::{CableInputs, check_substeps, check_tensions, step};
+use crate::control::{CableInputs, check_joint_forces, check_substeps, check_tensions, step};
 use crate::convert::{array, shaped};
 use crate::errors::{dynamics, guard, input};
 use crate::simulation::Simulation;
@@ -43,7 +43,7 @@ type Outcome = Result<(DVector<f64>, DVector<f64>), String>;
 /// `BatchStepper(sims, *, threads=None)`: one copy of each
 /// `softrod.Simulation` in `sims` (its model and run settings, taken at
 /// construction; the originals are not touched). All copies must have the
-/// same `n_dof` and `n_cables`. `threads`: the pool size (default: the
+/// same `n_dof`, `n_cables` and `n_joint_inputs`. `threads`: the pool size (default: the
 /// machine's cores).
 ///
 /// `step(t, q, qdot, u, dt, active=None)` integrates every active copy
@@ -60,12 +60,16 @@ type Outcome = Result<(DVector<f64>, DVector<f64>), String>;
 /// (then its rows are its input state). `active` (n bools): copies to
 /// step; the others are returned unchanged with error None. `substeps`:
 /// as for `Simulation.step` (k fixed steps per call instead of adaptive
-/// ones). The GIL is released while the copies step.
+/// ones). `joint_forces` (n, n_joint_inputs) [N or N·m, finite]: the
+/// joint actuators' forces held over the step, as `Simulation.step`'s
+/// `joint_forces` (None: the actuators' schedules). The GIL is released
+/// while the copies step.
 #[pyclass(module = "softrod")]
 pub struct BatchStepper {
     copies: Vec<Copy>,
     n_dof: usize,
     n_cables: usize,
+    n_joint_inputs: usize,
     pool: rayon::ThreadPool,
 }
 
@@ -104,13 +108,13 @@ impl BatchStepper {
                     .map_err(|_| input(format!("sims[{i}] is not a softrod.Simulation")))?;
                 let s = s.borrow();
                 let model = s.sim.model();
-                let this = (s.sim.n_dof(), model.n_cables());
+                let this = (s.sim.n_dof(), model.n_cables(), model.n_joint_inputs());
                 let first = *shape.get_or_insert(this);
                 if this != first {
                     return Err(input(format!(
-                        "sims[{i}] has n_dof = {}, n_cables = {}, sims[0] {}, {}: \
-                         a batch's copies must have the same sizes",
-                        this.0, this.1, first.0, first.1
+                        "sims[{i}] has n_dof = {}, n_cables = {}, n_joint_inputs = {}, \
+                         sims[0] {}, {}, {}: a batch's copies must have the same sizes",
+                        this.0, this.1, this.2, first.0, first.1, first.2
                     )));
                 }
                 let settings = s.sim.settings().clone();
@@ -119,7 +123,7 @@ impl BatchStepper {
                 inputs.tau_extra = None;
                 copies.push(Copy { inputs, settings });
             }
-            let (n_dof, n_cables) = shape.expect("at least one copy");
+            let (n_dof, n_cables, n_joint_inputs) = shape.expect("at least one copy");
             if threads == Some(0) {
                 return Err(input("threads must be at least 1"));
             }
@@ -133,6 +137,7 @@ impl BatchStepper {
                 copies,
                 n_dof,
                 n_cables,
+                n_joint_inputs,
                 pool,
             })
         })
@@ -181,6 +186,12 @@ impl BatchStepper {
         self.n_cables
     }
 
+    /// Actuated joint coordinates (joint force inputs) of each copy.
+    #[getter]
+    fn n_joint_inputs(&self) -> usize {
+        self.n_joint_inputs
+    }
+
     /// Threads of the pool.
     #[getter]
     fn threads(&self) -> usize {
@@ -188,7 +199,7 @@ impl BatchStepper {
     }
 
     /// Steps every active copy `dt` seconds (see the class documentation).
-    #[pyo3(signature = (t, q, qdot, u, dt, active = None, *, substeps = None))]
+    #[pyo3(signature = (t, q, qdot, u, dt, active = None, *, substeps = None, joint_forces = None))]
     #[allow(clippy::type_complexity, clippy::too_many_arguments)]
     fn step<'py>(
         &mut self,
@@ -200,6 +211,7 @@ impl BatchStepper {
         dt: f64,
         active: Option<Vec<bool>>,
         substeps: Option<usize>,
+        joint_forces: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<(
         Bound<'py, PyArray2<f64>>,
         Bound<'py, PyArray2<f64>>,
@@ -242,6 +254,32 @@ impl BatchStepper {
                 check_tensions(nc, &format!("u[{i}]"), row).map_err(input)?;
             }
         }
+        let nj = self.n_joint_inputs;
+        let fs: Option<Vec<Vec<f64>>> = match joint_forces {
+            None => None,
+            Some(f) => {
+                let f = array(f, "joint_forces")?;
+                if f.shape() != [n, nj] {
+                    return Err(input(format!(
+                        "joint_forces must have shape ({n}, {nj}) (one force per actuated \
+                         joint coordinate and copy), got {:?}",
+                        f.shape()
+                    )));
+                }
+                let rows: Vec<Vec<f64>> = if nj == 0 {
+                    vec![Vec::new(); n]
+                } else {
+                    f.slice().chunks(nj).map(<[f64]>::to_vec).collect()
+                };
+                for (i, row) in rows.iter().enumerate() {
+                    if active[i] {
+                        check_joint_forces(nj, &format!("joint_forces[{i}]"), row)
+                            .map_err(input)?;
+                    }
+                }
+                Some(rows)
+            }
+        };
         let rows = |a: &[f64]| -> Vec<DVector<f64>> {
             if nd == 0 {
                 vec![DVector::zeros(0); n]
@@ -263,6 +301,11 @@ impl BatchStepper {
                         }
                         c.inputs.u.clear();
                         c.inputs.u.extend_from_slice(us[i]);
+                        match (&fs, &mut c.inputs.joint_forces) {
+                            (None, jf) => *jf = None,
+                            (Some(f), Some(jf)) => jf.copy_from_slice(&f[i]),
+                            (Some(f), jf) => *jf = Some(f[i].clone()),
+                        }
                         let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
                             step(
                                 &mut c.inputs,
@@ -311,10 +354,11 @@ impl BatchStepper {
 
     fn __repr__(&self) -> String {
         format!(
-            "BatchStepper(copies={}, n_dof={}, n_cables={}, threads={})",
+            "BatchStepper(copies={}, n_dof={}, n_cables={}, n_joint_inputs={}, threads={})",
             self.copies.len(),
             self.n_dof,
             self.n_cables,
+            self.n_joint_inputs,
             self.pool.current_num_threads()
         )
     }

@@ -29,6 +29,10 @@ pub struct CableInputs {
     pub u: Vec<f64>,
     /// An actuator force besides the cables (n_dof), if any.
     pub tau_extra: Option<DVector<f64>>,
+    /// The joint actuators' forces held with `u` [N or N·m]
+    /// (`Model::n_joint_inputs`, docs/theory-control.md IS14), or `None`
+    /// for the actuators' schedules.
+    pub joint_forces: Option<Vec<f64>>,
 }
 
 impl CableInputs {
@@ -39,14 +43,18 @@ impl CableInputs {
             sys: RodSystem::new(model.clone()),
             u: vec![0.0; model.n_cables()],
             tau_extra: None,
+            joint_forces: None,
         })
     }
 
-    /// Hands `u` and `τ_extra` to the system (`u` was checked on entry:
-    /// non-negative and finite, one per cable).
+    /// Hands `u`, the joint forces and `τ_extra` to the system (`u` was
+    /// checked on entry: non-negative and finite, one per cable; the joint
+    /// forces finite, one per actuated coordinate).
     pub fn sync(&mut self) -> Result<(), DynamicsError> {
         let s = &mut self.sys;
         s.data.set_cable_tensions(&s.model, Some(&self.u))?;
+        s.data
+            .set_joint_forces(&s.model, self.joint_forces.as_deref())?;
         match (&self.tau_extra, &mut s.tau) {
             (None, tau) => *tau = None,
             (Some(t), Some(tau)) => tau.copy_from(t),
@@ -211,6 +219,21 @@ pub fn check_tensions(n_cables: usize, what: &str, u: &[f64]) -> Result<(), Stri
         return Err(format!(
             "{what}[{i}] = {v}: cable tensions must be finite and >= 0 (a cable cannot push)"
         ));
+    }
+    Ok(())
+}
+
+/// Checks joint forces: one finite value per actuated joint coordinate
+/// (`n_inputs` of them).
+pub fn check_joint_forces(n_inputs: usize, what: &str, f: &[f64]) -> Result<(), String> {
+    if f.len() != n_inputs {
+        return Err(format!(
+            "{what} must have shape ({n_inputs},) (one force per actuated joint coordinate), got ({},)",
+            f.len()
+        ));
+    }
+    if let Some((i, v)) = f.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        return Err(format!("{what}[{i}] = {v}: joint forces must be finite"));
     }
     Ok(())
 }

@@ -13,7 +13,7 @@ use crate::errors::{input, to_py};
 /// `integrator`: "esdirk" (the default: stiff, adaptive, error controlled,
 /// Newton on the exact Jacobian), "esdirk5" (order 5, the same Newton: less
 /// work at equal error on most rods, more accurate and dearer at equal
-/// `rtol`; no gradients), "radau5" (Radau IIA order 5, faster on
+/// `rtol`), "radau5" (Radau IIA order 5, faster on
 /// small models at tight tolerances), "rosenbrock" (linearly implicit,
 /// adaptive), "dopri5" (explicit adaptive), "rk4" (explicit, fixed `dt`)
 /// or "generalized-alpha" (implicit, fixed `dt`; with `error_control` the

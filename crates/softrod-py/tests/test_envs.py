@@ -409,3 +409,170 @@ def test_contact_tasks_terminate_a_diverging_step_without_nan(which):
     assert info["termination"].startswith("diverged: ")
     assert np.all(np.isfinite(obs)) and np.isfinite(reward)
     np.testing.assert_array_equal(obs, obs0)
+
+
+# -- joint actuators (issue 29: actions are tensions and/or joint forces) ----
+
+G, LINK_MASS, LINK_COM, LINK_K = 9.81, 0.2, 0.1, 0.2
+
+
+def link_scene(actuator="{ max_force = 0.5 }", cable=False):
+    """A short flexible rod clamped to the world with a link body on an
+    actuated revolute joint about y at its tip (spring LINK_K), gravity
+    along -z; with ``cable``, one cable along the rod."""
+    text = (
+        f"[world]\ngravity = [0.0, 0.0, -{G}]\n"
+        '[[rod]]\nname = "base"\nlength = 0.2\npieces = 2\nstrains = ["kx", "ky", "kz"]\n'
+        'section = { shape = "circle", radius = 0.01 }\n'
+        "material = { density = 1000.0, young = 1.0e7, poisson = 0.5, viscosity = 2.0e5 }\n"
+        '[[body]]\nname = "link"\nparent = "base"\n'
+        f'joint = {{ type = "revolute", axis = [0, 1, 0], stiffness = {LINK_K}, damping = 0.05, '
+        f"actuator = {actuator} }}\n"
+        f"mass = {LINK_MASS}\ninertia = [1e-4, 1e-4, 1e-4]\n"
+        f"center_of_mass = [{LINK_COM}, 0, 0]\n"
+    )
+    if cable:
+        text += (
+            '[[cable]]\nrod = "base"\noffset = [0.0, 0.008]\ntension = 0.0\nmax_tension = 2.0\n'
+        )
+    return softrod.Simulation.from_toml(text, name="link.toml")
+
+
+def passive_torque(sim, q):
+    """The spring's -k theta plus gravity's moment about the joint axis,
+    a . (R c x m g), from the link's pose: what a held joint torque must
+    balance at rest (the link is the only thing beyond the joint)."""
+    pose = sim.body_poses(q)[0]
+    r = pose[:3, :3] @ np.array([LINK_COM, 0.0, 0.0])
+    a = pose[:3, :3] @ np.array([0.0, 1.0, 0.0])
+    return -LINK_K * q[-1] + a @ np.cross(r, np.array([0.0, 0.0, -LINK_MASS * G]))
+
+
+def test_joint_actuator_action_space_from_the_scene_and_refusals():
+    env = se.RodEnv(link_scene(cable=True), se.ReachTask(), observe=["strains", "joint_forces"])
+    assert env.n_cables == 1 and env.n_joint_inputs == 1
+    np.testing.assert_array_equal(env.action_space.low, [0.0, -0.5])
+    np.testing.assert_array_equal(env.action_space.high, [se.DEFAULT_MAX_TENSION, 0.5])
+    sl = env.observation_slices["joint_forces"]
+    np.testing.assert_array_equal(env.observation_space.low[sl], [-0.5])
+    np.testing.assert_array_equal(env.observation_space.high[sl], [0.5])
+    # The env's max_force overrides the scene's.
+    env2 = se.RodEnv(link_scene(), se.ReachTask(), max_force=0.25)
+    np.testing.assert_array_equal(env2.action_space.low, [-0.25])
+    # An actuated coordinate without a bound is refused, naming the key.
+    with pytest.raises(softrod.InputError, match="max_force"):
+        se.RodEnv(link_scene("{ force = 0.0 }"), se.ReachTask())
+    # Out of the box: clipped (info says so) or rejected; NaN always raises.
+    env.reset(seed=0)
+    _, _, _, _, info = env.step(np.array([-1.0, -7.0]))
+    assert info["action_clipped"]
+    np.testing.assert_array_equal(env.u, [0.0])
+    np.testing.assert_array_equal(env.f, [-0.5])
+    obs = env._observation()
+    np.testing.assert_array_equal(obs[sl], [-0.5])
+    with pytest.raises(softrod.InputError, match="joint forces must be finite"):
+        env.step(np.array([1.0, np.nan]))
+    with pytest.raises(ValueError, match="shape"):
+        env.step(np.array([1.0]))
+    strict = se.RodEnv(link_scene(), se.ReachTask(), action_policy="reject")
+    strict.reset(seed=0)
+    with pytest.raises(softrod.InputError, match="outside"):
+        strict.step(np.array([0.6]))
+    # Simulation.step and BatchStepper check the joint forces too.
+    sim = link_scene()
+    st = softrod.State(0.0, *sim.initial_state())
+    with pytest.raises(softrod.InputError, match="joint_forces"):
+        sim.step(st, 0.05, [], joint_forces=[np.inf])
+    with pytest.raises(softrod.InputError, match="joint_forces"):
+        sim.step(st, 0.05, [], joint_forces=[1.0, 2.0])
+
+
+def test_held_joint_torque_reaches_the_moment_balance_and_the_statics():
+    """A constant torque held over many periods settles where it balances
+    the spring and gravity's moment about the joint (checked from the
+    link's pose), and where Simulation.statics puts it (Newton on the
+    static residual, an independent path)."""
+    tau = 0.3
+    # A tight tolerance: at rest the step's Newton tolerance is what is left.
+    env = se.RodEnv(
+        link_scene(), se.ReachTask(), episode_steps=400, control_period=0.05, rtol=1e-8
+    )
+    env.reset(seed=0)
+    for _ in range(300):  # 15 s, ~35 decay times of the slowest mode
+        _, _, term, _, _ = env.step(np.array([tau]))
+        assert not term
+    assert np.max(np.abs(env.qdot)) < 1e-10
+    theta = env.q[-1]
+    assert abs(theta) > 0.5  # the link swung down (1.32 rad)
+    # Residual of the moment balance, relative to the gravity moment m g d.
+    assert abs(tau + passive_torque(env.sim, env.q)) < 1e-10 * LINK_MASS * G * LINK_COM
+    st = env.sim.statics(joint_forces=[tau])
+    np.testing.assert_allclose(env.q, st.q, rtol=0, atol=1e-9)
+    # Without the input the statics differ by the torque: the input is used.
+    st0 = env.sim.statics(joint_forces=[0.0])
+    assert abs(st0.q[-1] - theta) > 0.1
+
+
+def test_joint_force_batch_equals_single_steps_bit_for_bit():
+    sims = [link_scene(cable=True) for _ in range(4)]
+    rng = np.random.default_rng(3)
+    n = sims[0].n_dof
+    q0, _ = sims[0].initial_state()
+    q = q0 + 0.05 * rng.standard_normal((4, n))
+    qd = 0.1 * rng.standard_normal((4, n))
+    u = rng.uniform(0.0, 2.0, (4, 1))
+    f = rng.uniform(-0.5, 0.5, (4, 1))
+    batch = softrod.BatchStepper(sims, threads=2)
+    assert batch.n_joint_inputs == 1
+    q1, qd1, errors = batch.step(0.0, q, qd, u, 0.05, joint_forces=f)
+    for i, sim in enumerate(sims):
+        s = sim.step(softrod.State(0.0, q[i], qd[i]), 0.05, u[i], joint_forces=f[i])
+        assert errors[i] is None
+        np.testing.assert_array_equal(q1[i], s.q)
+        np.testing.assert_array_equal(qd1[i], s.qdot)
+    # The force is an input: a different one moves the link differently.
+    q2, _, _ = batch.step(0.0, q, qd, u, 0.05, joint_forces=-f)
+    assert np.all(q2[:, -1] != q1[:, -1])
+    with pytest.raises(softrod.InputError, match=r"joint_forces\[1\]"):
+        bad = f.copy()
+        bad[1, 0] = np.nan
+        batch.step(0.0, q, qd, u, 0.05, joint_forces=bad)
+    with pytest.raises(softrod.InputError, match="shape"):
+        batch.step(0.0, q, qd, u, 0.05, joint_forces=f[:2])
+
+
+@pytest.mark.parametrize("mode", ["NextStep", "SameStep"])
+def test_joint_force_batched_vector_env_equals_sync_vector_env(mode):
+    from gymnasium.vector import SyncVectorEnv
+
+    fns = [
+        lambda k=k: se.RodEnv(link_scene(cable=True), se.ReachTask(), episode_steps=k)
+        for k in (3, 5, 4)
+    ]
+    sync = SyncVectorEnv(fns, autoreset_mode=mode)
+    batched = se.BatchedVectorEnv(fns, threads=2, autoreset_mode=mode)
+    o1, _ = sync.reset(seed=5)
+    o2, _ = batched.reset(seed=5)
+    np.testing.assert_array_equal(o1, o2)
+    rng = np.random.default_rng(0)
+    for _ in range(10):
+        a = np.column_stack([rng.uniform(-0.5, 3.5, 3), rng.uniform(-0.7, 0.7, 3)])
+        r1, r2 = sync.step(a), batched.step(a)
+        for x, y in zip(r1[:4], r2[:4]):
+            np.testing.assert_array_equal(x, y)
+
+
+def test_joint_actuator_env_passes_gymnasiums_checker():
+    from gymnasium.utils.env_checker import check_env
+
+    for sim in (link_scene(), link_scene(cable=True)):
+        env = se.RodEnv(sim, se.ReachTask(), episode_steps=5)
+        with warnings.catch_warnings():
+            # Its advice (normalized actions) is a recommendation, as above.
+            warnings.simplefilter("ignore")
+            check_env(env)
+        obs, _ = env.reset(seed=1)
+        for _ in range(3):
+            obs, reward, terminated, _, _ = env.step(env.action_space.sample())
+            assert env.observation_space.contains(obs)
+            assert np.isfinite(reward) and not terminated

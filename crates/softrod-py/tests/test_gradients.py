@@ -141,6 +141,37 @@ def test_forward_sensitivities_equal_the_adjoint():
         np.testing.assert_allclose(gf[p], ga[p], rtol=1e-8, atol=1e-12 * scale)
 
 
+def test_radau5_scene_gradients_match_differences_and_forward_sensitivities():
+    # G25, G26: a radau5 scene gets its own discrete adjoint (it was refused before). Its
+    # Newton test is relative to its internal tolerance 0.1*rtol^(2/3), 46x this scene's
+    # rtol: newton_tol scaled by rtol / (0.1*rtol^(2/3)) solves the stages of the
+    # differenced runs to the same absolute accuracy as the esdirk runs above.
+    radau = SCENE.replace("[run]", '[run]\nintegrator = "radau5"')
+    kw = {"fixed_step": 0.004, "newton_tol": 1e-3 * 1e-8 / (0.1 * 1e-8 ** (2 / 3))}
+
+    def make(**over: float) -> softrod.Simulation:
+        return softrod.Simulation.from_toml(radau.format(**{**TRUTH, **over}))
+
+    def val(s: softrod.Simulation) -> float:
+        return s.value_and_gradient(loss(s.n_dof), [], 0.1, **kw)[0]
+
+    s = make()
+    params = ["arm.young", "arm.viscosity", "cable0.tension", "q0", "qdot0"]
+    va, ga = s.value_and_gradient(loss(s.n_dof), params, 0.1, **kw)
+    for key, name, index in [("young", "arm.young", None), ("t1", "cable0.tension", 1)]:
+        d = 1e-6 * TRUTH[key]
+        fd = (val(make(**{key: TRUTH[key] + d})) - val(make(**{key: TRUTH[key] - d}))) / (2 * d)
+        adjoint = ga[name] if index is None else ga[name][index]
+        assert adjoint == pytest.approx(fd, rel=1e-6), key
+    # Both passes recompute the stages by one code and solve with one LU (transposed or
+    # not): equal to round-off.
+    vf, gf = s.value_and_gradient(loss(s.n_dof), params, 0.1, method="forward", **kw)
+    assert va == vf
+    scale = max(float(np.max(np.abs(ga[p]))) for p in params)
+    for p in params:
+        np.testing.assert_allclose(gf[p], ga[p], rtol=1e-10, atol=1e-12 * scale)
+
+
 def test_an_unknown_gradient_method_names_it():
     s = sim()
     with pytest.raises(softrod.InputError, match="method: 'backward' is not a gradient method"):
@@ -214,3 +245,84 @@ def test_closed_chain_gradient_matches_central_differences():
 
         fd = (at(truth[key] + h) - at(truth[key] - h)) / (2 * h)
         assert g[name] == pytest.approx(fd, rel=1e-6), name
+
+
+WRIST = """
+[world]
+gravity = [0.0, 0.0, -9.81]
+[[rod]]
+name = "upper"
+length = 0.25
+pieces = 2
+strains = ["ky", "kz", "qx"]
+section = {{ shape = "circle", radius = 0.01 }}
+material = {{ density = 1100.0, young = 2.0e6, poisson = 0.5, viscosity = 2.0e3 }}
+[[rod]]
+name = "lower"
+parent = "upper"
+joint = {{ type = "{kind}", {axes}, prescribed = {{ times = [0.0, 0.05, 0.1], values = {values} }} }}
+length = 0.2
+pieces = 2
+strains = ["ky", "kz", "qx"]
+section = {{ shape = "circle", radius = 0.008 }}
+material = {{ density = 1000.0, young = 2.0e6, poisson = 0.5, viscosity = 2.0e3 }}
+[run]
+rtol = 1e-8
+atol = 1e-10
+"""
+
+
+def _wrist(values: np.ndarray) -> softrod.Simulation:
+    if values.ndim == 1:
+        kind, axes = "revolute", "axis = [0, 1, 0]"
+    else:
+        kind, axes = "universal", "axes = [[0, 1, 0], [0, 0, 1]]"
+    text = WRIST.format(kind=kind, axes=axes, values=repr(values.tolist()))
+    return softrod.Simulation.from_toml(text)
+
+
+def _wrist_loss(n: int) -> list[object]:
+    targets = [[0.4, 0.0, -0.05], [0.42, 0.02, -0.1], [0.38, -0.01, -0.12]]
+    return [
+        {"type": "position", "rod": "lower", "times": TIMES, "targets": targets, "weight": 100.0},
+        {"type": "quadratic", "times": [0.1], "q_weights": 0.1, "qdot_weights": 1e-3},
+    ]
+
+
+@pytest.mark.parametrize(
+    "values", [np.array([0.0, 0.4, 0.1]), np.array([[0.0, 0.0], [0.4, -0.2], [0.1, 0.3]])]
+)
+def test_prescribed_samples_match_central_differences(values):
+    """ELEMENT.prescribed (docs/theory-control.md G17-G20): the gradient by a prescribed
+    joint's samples, shaped as its values, against central differences of whole runs;
+    the forward sensitivities give the same numbers."""
+    s = _wrist(values)
+    _, g = s.value_and_gradient(_wrist_loss(s.n_dof), ["lower.prescribed"], 0.1, **KW)
+    gp = g["lower.prescribed"]
+    assert gp.shape == values.shape
+    for index in np.ndindex(values.shape):
+        h = 1e-6
+
+        def at(x: float) -> float:
+            v = values.copy()
+            v[index] = x
+            w = _wrist(v)
+            return w.value_and_gradient(_wrist_loss(w.n_dof), [], 0.1, **KW)[0]
+
+        fd = (at(values[index] + h) - at(values[index] - h)) / (2 * h)
+        assert gp[index] == pytest.approx(fd, rel=1e-6), index
+    _, gf = s.value_and_gradient(
+        _wrist_loss(s.n_dof), ["lower.prescribed"], 0.1, method="forward", **KW
+    )
+    scale = float(np.max(np.abs(gp)))
+    np.testing.assert_allclose(gf["lower.prescribed"], gp, rtol=1e-8, atol=1e-12 * scale)
+
+
+@pytest.mark.parametrize(
+    ("param", "says"),
+    [("elbow.prescribed", "no rod or body named 'elbow'"), ("upper.prescribed", "not prescribed")],
+)
+def test_bad_prescribed_parameters_name_it(param, says):
+    s = _wrist(np.array([0.0, 0.4, 0.1]))
+    with pytest.raises(softrod.InputError, match=says):
+        s.value_and_gradient(_wrist_loss(s.n_dof), [param], 0.1, **KW)

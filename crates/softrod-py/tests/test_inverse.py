@@ -158,3 +158,120 @@ def test_bad_input_raises(targets, kwargs, words):
     sim = softrod.Simulation.from_toml(PLANAR)
     with pytest.raises(softrod.InputError, match=__import__("re").escape(words)):
         sim.solve_actuation(targets, **kwargs)
+
+
+# A cantilever bending in x-z (no gravity, no cable).
+CANTILEVER = """
+[[rod]]
+name = "arm"
+length = 0.5
+pieces = 10
+strains = ["ky"]
+section = { shape = "circle", radius = 0.01 }
+material = { density = 1000.0, young = 1.0e6, poisson = 0.5 }
+"""
+
+# A link body on an actuated revolute joint (with a spring) at the tip of a short rod, gravity -z.
+LINK = """
+[world]
+gravity = [0.0, 0.0, -9.81]
+[[rod]]
+name = "base"
+length = 0.2
+pieces = 2
+strains = ["kx", "ky", "kz"]
+section = { shape = "circle", radius = 0.01 }
+material = { density = 1000.0, young = 1.0e7, poisson = 0.5 }
+[[body]]
+name = "link"
+parent = "base"
+joint = { type = "revolute", axis = [0, 1, 0], stiffness = 0.2, actuator = ACTUATOR }
+mass = 0.2
+inertia = [1e-4, 1e-4, 1e-4]
+center_of_mass = [0.1, 0, 0]
+"""
+
+
+def test_unknown_load_of_a_forward_solve_is_recovered():
+    # The tip force of a forward [[load]] solve, recovered from the tip position with the
+    # scene's unknown load (default) and with unknown_loads= given in Python.
+    force = -0.02
+    given = softrod.Simulation.from_toml(
+        CANTILEVER + f'[[load]]\nrod = "arm"\ns = 0.5\nforce = [0.0, 0.0, {force}]\n'
+    )
+    tip = given.statics().tip[:3, 3]
+    # Bounds [0, 0, 1]: the force is vertical (f_x, f_y held at 0), one unknown.
+    scene = softrod.Simulation.from_toml(
+        CANTILEVER
+        + '[[load]]\nrod = "arm"\ns = 0.5\nunknown = true\nmax_force = [0.0, 0.0, 1.0]\n'
+    )
+    r = scene.solve_actuation([{"position": tip}])
+    assert r["reached"], r["message"]
+    assert r["forces"].shape == (1, 3)
+    assert abs(r["forces"][0, 2] - force) < 1e-7 * abs(force)
+    assert r["forces"][0, 0] == 0.0 and r["forces"][0, 1] == 0.0
+    assert r["force_bounds"] == [["lower", "lower", "free"]]
+    assert len(r["tensions"]) == 0 and len(r["joint_forces"]) == 0
+    # All three components free: f_x moves the bent tip through its small arm only, so the
+    # default effort term (IS2) would bias the fit at ~1e-4; without it the fit is exact.
+    plain = softrod.Simulation.from_toml(CANTILEVER)
+    p = plain.solve_actuation(
+        [{"position": tip}],
+        unknown_loads=[{"rod": "arm", "s": 0.5, "max_force": [1, 1, 1]}],
+        effort_weight=0.0,
+    )
+    assert abs(p["forces"][0, 2] - force) < 1e-7 * abs(force)
+    assert abs(p["forces"][0, 0]) < 1e-8
+    # A bound below the force: held at it, out of reach.
+    b = plain.solve_actuation([{"position": tip}], unknown_loads=[{"max_force": 0.01}])
+    assert b["converged"] and not b["reached"]
+    assert b["forces"][0, 2] == -0.01 and b["force_bounds"][0][2] == "lower"
+    with pytest.raises(softrod.InputError, match=r"unknown_loads\[0\]\.max_force\[1\]"):
+        plain.solve_actuation([{"position": tip}], unknown_loads=[{"max_force": [1, -1, 1]}])
+    with pytest.raises(softrod.SceneError, match=r"load\[0\]\.max_force"):
+        softrod.Simulation.from_toml(
+            CANTILEVER + '[[load]]\nrod = "arm"\ns = 0.5\nunknown = true\nmax_force = -1.0\n'
+        )
+
+
+def test_joint_torque_of_a_forward_solve_is_recovered():
+    tau = -0.1
+    truth = softrod.Simulation.from_toml(LINK.replace("ACTUATOR", f"{{ force = {tau} }}"))
+    st = truth.statics()
+    position = truth.body_poses(st.q)[0][:3, 3]
+    sim = softrod.Simulation.from_toml(LINK.replace("ACTUATOR", "{ max_force = 1.0 }"))
+    r = sim.solve_actuation([{"body": "link", "position": position}])
+    assert r["reached"], r["message"]
+    assert abs(r["joint_forces"][0] - tau) < 1e-8
+    assert r["joint_force_bounds"] == ["free"]
+    assert np.allclose(r["q"], st.q, rtol=0, atol=1e-8)
+    # Warm-started from it, the same target costs no step.
+    w = sim.solve_actuation([{"body": "link", "position": position}], warm_start=r)
+    assert w["iterations"] <= 2 and abs(w["joint_forces"][0] - tau) < 1e-8
+    with pytest.raises(softrod.SceneError, match=r"body\[0\]\.joint\.actuator\.max_force"):
+        softrod.Simulation.from_toml(LINK.replace("ACTUATOR", "{ max_force = -1.0 }"))
+
+
+def test_actuated_joint_from_the_builders_matches_the_scene_text():
+    # The builders' joint with an actuator is the scene's: the same equilibrium, bit for bit.
+    from softrod.builders import Body, Joint
+
+    text = softrod.Simulation.from_toml(LINK.replace("ACTUATOR", "{ force = -0.1 }"))
+    scene = {
+        "world": {"gravity": [0.0, 0.0, -9.81]},
+        "rod": [
+            {
+                "name": "base", "length": 0.2, "pieces": 2, "strains": ["kx", "ky", "kz"],
+                "section": {"shape": "circle", "radius": 0.01},
+                "material": {"density": 1000.0, "young": 1.0e7, "poisson": 0.5},
+            }
+        ],
+        "body": [
+            Body("link", "base", mass=0.2, inertia=[1e-4, 1e-4, 1e-4],
+                 center_of_mass=[0.1, 0, 0],
+                 joint=Joint("revolute", axis=[0, 1, 0], stiffness=0.2,
+                             actuator={"force": -0.1}))
+        ],
+    }
+    built = softrod.Simulation.from_dict(scene)
+    assert np.array_equal(built.statics().q, text.statics().q)

@@ -77,7 +77,7 @@ pub use locate::MAX_MAGNITUDE;
 pub use overrides::{Override, OverrideSyntaxError};
 pub use robot::Robot;
 pub use run::{Integrator, Mode, Run, UnknownIntegrator};
-pub use scene::{Initial, InitialShape, Reference, Scene, Target, World};
+pub use scene::{Initial, InitialShape, Reference, Scene, Target, UnknownLoad, World};
 pub use validate::MAX_QUADRATURE;
 
 /// The README's examples, compiled and run as doctests.

@@ -119,6 +119,10 @@ pub(crate) struct RawLoad {
     pub force: Option<[f64; 3]>,
     pub moment: Option<[f64; 3]>,
     pub frame: Option<String>,
+    /// An unknown of `softrod inverse` (IS13) instead of a given load.
+    pub unknown: Option<bool>,
+    /// Bound of an unknown load's world components: a number or three.
+    pub max_force: Option<toml::Value>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -19,6 +19,7 @@ pub(crate) struct RawJoint {
     pub damping: Option<toml::Value>,
     pub rest: Option<toml::Value>,
     pub prescribed: Option<toml::Value>,
+    pub actuator: Option<toml::Value>,
 }
 
 /// `[[body]]`.

@@ -108,7 +108,25 @@ pub struct Scene {
     /// Each `[[cable]]`'s `max_tension` \[N\] in file order (`None`: no
     /// upper bound); [`Scene::max_tensions`] in the model's order.
     pub max_tension: Vec<Option<f64>>,
+    /// The `[[load]]` tables with `unknown = true`, in file order: point
+    /// forces `softrod inverse` solves for (docs/theory-control.md IS13);
+    /// the other commands ignore them.
+    pub unknown_loads: Vec<UnknownLoad>,
     pub(crate) origins: Origins,
+}
+
+/// A `[[load]]` with `unknown = true`: a world force at a rod section whose
+/// value inverse statics finds, each component within `|f_k| ≤ max_force[k]`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct UnknownLoad {
+    /// Index of the `[[load]]` table in the file (`load[j]` in messages).
+    pub load: usize,
+    /// The rod's index in [`Scene::rods`].
+    pub rod: usize,
+    /// Arc length of the point of application \[m\], in `[0, L]`.
+    pub s: f64,
+    /// Bound of each world component \[N\] (`+∞`: none).
+    pub max_force: [f64; 3],
 }
 
 /// A `[[target]]`: where `softrod inverse` should bring a rod section or

@@ -197,7 +197,7 @@ impl Quantizer {
     fn push_point(&self, out: &mut String, p: &[f64; 3]) {
         let mut buf = itoa::Buffer::new();
         for (x, o) in p.iter().zip(&self.origin) {
-            let v = ((x - o) / self.quantum).round() as i64;
+            let v = round_to_i64((x - o) / self.quantum);
             out.push_str(buf.format(v));
             out.push(',');
         }
@@ -210,10 +210,28 @@ impl Quantizer {
         let sign = if r[0] < 0.0 { -1.0 } else { 1.0 };
         let mut buf = itoa::Buffer::new();
         for v in r {
-            let i = (sign * v / n * QUAT_SCALE).round() as i64;
+            let i = round_to_i64(sign * v / n * QUAT_SCALE);
             out.push_str(buf.format(i));
             out.push(',');
         }
+    }
+}
+
+/// `x.round() as i64` (halves away from zero, saturating) without a call:
+/// x86-64's baseline has no rounding instruction, so `f64::round` is a
+/// library call, and the page rounds seven numbers per sample and frame.
+/// Truncation is exact and `x − trunc(x)` is exact for `|x| < 2⁵²` (above
+/// it `x` is an integer and the difference is 0, or `trunc` saturated).
+#[inline(always)]
+fn round_to_i64(x: f64) -> i64 {
+    let t = x as i64;
+    let frac = x - t as f64;
+    if frac >= 0.5 {
+        t.saturating_add(1)
+    } else if frac <= -0.5 {
+        t.saturating_sub(1)
+    } else {
+        t
     }
 }
 
@@ -414,4 +432,51 @@ pub fn embedded_data(page: &str) -> Option<serde_json::Value> {
     let i = page.find(start_tag)? + start_tag.len();
     let j = page[i..].find("</script>")? + i;
     serde_json::from_str(&page[i..j]).ok()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::round_to_i64;
+
+    /// Against the standard library's `round` and `as` on halves, values
+    /// next to halves, integers beyond 2⁵², saturation and NaN, and a
+    /// sweep of scaled values like the page's.
+    #[test]
+    fn rounding_matches_the_standard_library() {
+        let mut xs = vec![
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.5,
+            -1.5,
+            2.5,
+            -2.5,
+            0.49999999999999994,
+            -0.49999999999999994,
+            4503599627370495.5,
+            -4503599627370495.5,
+            4503599627370497.0,
+            9007199254740993.0,
+            9.3e18,
+            -9.3e18,
+            1e300,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            f64::MIN_POSITIVE,
+        ];
+        let mut u = 0x2545_f491_4f6c_dd1du64;
+        for _ in 0..100_000 {
+            u ^= u << 13;
+            u ^= u >> 7;
+            u ^= u << 17;
+            let r = (u >> 11) as f64 / (1u64 << 53) as f64;
+            xs.push((r - 0.5) * 2.0 * 1_048_576.0);
+            xs.push(((r * 20_000.0).floor() - 10_000.0) + 0.5);
+        }
+        for x in xs {
+            assert_eq!(round_to_i64(x), x.round() as i64, "x = {x:e}");
+        }
+    }
 }

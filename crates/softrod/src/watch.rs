@@ -153,7 +153,7 @@ fn dot(a: &[f64], b: &DVector<f64>) -> f64 {
 }
 
 /// The model without viscosity, drag, cables and loads (on rods and bodies)
-/// and without joint damping, if it has any of them; joints, bodies and
+/// and without joint damping and actuators, if it has any of them; joints, bodies and
 /// joint springs stay (they are conservative).
 fn conservative_model(model: &Model) -> Result<Option<Model>, Error> {
     let has = model.rods().iter().any(|r| {
@@ -168,10 +168,10 @@ fn conservative_model(model: &Model) -> Result<Option<Model>, Error> {
         // Contact forces do work (the penalty stores it, damping and
         // friction dissipate it): the conservative model leaves them out.
         || model.has_contact()
-        || model
-            .elements()
-            .iter()
-            .any(|e| e.attachment.joint.damping.iter().any(|d| *d != 0.0));
+        || model.elements().iter().any(|e| {
+            e.attachment.joint.damping.iter().any(|d| *d != 0.0)
+                || e.attachment.joint.actuator.is_some()
+        });
     if !has {
         return Ok(None);
     }
@@ -209,6 +209,9 @@ fn conservative_model(model: &Model) -> Result<Option<Model>, Error> {
         .map(|e| {
             let mut at = e.attachment.clone();
             at.joint.damping.iter_mut().for_each(|d| *d = 0.0);
+            // A joint actuator's force is an input: its work is the
+            // non-conservative power's (IS14).
+            at.joint.actuator = None;
             Ok(match e.kind {
                 ElementKind::Rod(i) => Element::Rod(conservative_rod(&model.rods()[i].spec)?, at),
                 ElementKind::Body(i) => {
@@ -277,6 +280,21 @@ fn work_scale(model: &Model, tensions: Option<&[f64]>) -> f64 {
             let set = tensions.and_then(|t| t.get(k)).copied().unwrap_or(0.0);
             force += c.tension.max().max(set.abs());
             k += 1;
+        }
+    }
+    // A joint actuator's largest force or torque, over the rods' length
+    // (a torque's work scale is its moment times a rotation of order 1).
+    for e in model.elements() {
+        if let Some(a) = &e.attachment.joint.actuator {
+            let largest = match &a.force {
+                softrod_dynamics::JointForce::Constant(v) => {
+                    v.iter().fold(0.0f64, |m, x| m.max(x.abs()))
+                }
+                softrod_dynamics::JointForce::Table { values, .. } => {
+                    values.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()))
+                }
+            };
+            moment += largest;
         }
     }
     for b in model.bodies() {
@@ -405,6 +423,12 @@ impl Watch {
         self.full.copy_friction_state_from(data);
         if let Some((_, od)) = &mut self.open {
             od.copy_friction_state_from(data);
+        }
+        if self.full.joint_forces() != data.joint_forces() {
+            self.full.set_joint_forces(model, data.joint_forces())?;
+            if let Some((om, od)) = &mut self.open {
+                od.set_joint_forces(om, data.joint_forces())?;
+            }
         }
         if self.full.cable_tensions() != data.cable_tensions() {
             self.full.set_cable_tensions(model, data.cable_tensions())?;

@@ -5,7 +5,10 @@
 //! kinematics, on the tree with the frames of [`super::frames`] (joints,
 //! parents and the bodies that carry obstacles).
 
-use super::frames::{RowBlock, add_frame_columns, add_prescribed_wrench, frame_state};
+use super::frames::{
+    RowBlock, add_frame_columns, add_frame_wrench, add_prescribed_wrench, frame_state,
+    inward_wrenches,
+};
 use super::pairs::Search;
 use super::tree::outward;
 use super::{Motion, Pass};
@@ -17,7 +20,7 @@ use crate::model::contact::{Active, ContactWork};
 use crate::model::data::Data;
 use nalgebra::DMatrix;
 use softrod_kinematics::Frame;
-use softrod_lie::{Mat6, Pose, Vec3, Vec6, skew};
+use softrod_lie::{Mat3, Mat6, Pose, Vec3, Vec6, skew};
 
 /// What one evaluation asks of contact.
 #[derive(Clone, Copy, Debug)]
@@ -51,29 +54,16 @@ pub(crate) fn law(model: &Model, rod: usize, sample: usize, o: usize, friction: 
     )
 }
 
-/// The translational Jacobian of the world point `p` moving with a frame
-/// whose spatial Jacobian is `spatial` (6 × n, angular rows first):
-/// `J_p = J_v − [p]× J_ω`, added with `sign` into `out` (3 × n).
-fn point_rows(spatial: &DMatrix<f64>, p: &Vec3, sign: f64, out: &mut DMatrix<f64>) {
-    let px = skew(p);
-    for c in 0..spatial.ncols() {
-        let w = Vec3::new(spatial[(0, c)], spatial[(1, c)], spatial[(2, c)]);
-        let v = Vec3::new(spatial[(3, c)], spatial[(4, c)], spatial[(5, c)]);
-        let j = v - px * w;
-        for r in 0..3 {
-            out[(r, c)] += sign * j[r];
-        }
-    }
-}
-
 /// The relative translational Jacobian (3 × n_dof, into `out`) of a rod
 /// point against the obstacle's parent on a tree model: the rod's section
 /// at `s` minus the body point at the same place (zero for the world).
-#[allow(clippy::too_many_arguments)]
+/// Each frame's spatial columns on its path to the root go straight into
+/// their point rows `J_p = J_v − [p]× J_ω` (the row operator
+/// `[−[p]×, I]`). For the dense two-sided terms of the shifted solve
+/// (CT17) and as the reference of the inward sweep (CT28).
 pub(crate) fn tree_point_jacobian(
     model: &Model,
     data: &Data,
-    work: &mut ContactWork,
     q: &[f64],
     rod: usize,
     s: f64,
@@ -81,33 +71,20 @@ pub(crate) fn tree_point_jacobian(
     out: &mut DMatrix<f64>,
 ) -> Vec3 {
     let tree = model.tree.as_ref().expect("a tree model");
-    let (piece, x) = model.rods[rod]
-        .spec
-        .geometry
-        .locate(s)
-        .expect("a contact sample lies on its rod");
-    let frame = ResolvedFrame {
-        target: Target::Rod {
-            rod,
-            piece,
-            x,
-            node: tree.rod_nodes[rod][piece],
-        },
-        offset: Pose::identity(),
-    };
-    let fs = frame_state(model, tree, data, &frame, q, None);
-    let identity = Mat6::identity();
+    let fs = frame_state(model, tree, data, &rod_frame(model, rod, s), q, None);
+    let p = fs.pose.translation;
+    let mut rows = Mat6::zeros();
+    rows.fixed_view_mut::<3, 3>(0, 0).copy_from(&(-skew(&p)));
+    rows.fixed_view_mut::<3, 3>(0, 3)
+        .copy_from(&Mat3::identity());
     let block = RowBlock {
-        c: &identity,
-        m: 6,
+        c: &rows,
+        m: 3,
         row: 0,
         sign: 1.0,
     };
-    work.dense.fill(0.0);
-    add_frame_columns(tree, data, &fs, block, &mut work.dense);
-    let p = fs.pose.translation;
     out.fill(0.0);
-    point_rows(&work.dense, &p, 1.0, out);
+    add_frame_columns(tree, data, &fs, block, out);
     if let Some(b) = body {
         let frame = ResolvedFrame {
             target: Target::Body {
@@ -116,9 +93,16 @@ pub(crate) fn tree_point_jacobian(
             offset: Pose::identity(),
         };
         let fb = frame_state(model, tree, data, &frame, q, None);
-        work.dense_body.fill(0.0);
-        add_frame_columns(tree, data, &fb, block, &mut work.dense_body);
-        point_rows(&work.dense_body, &p, -1.0, out);
+        add_frame_columns(
+            tree,
+            data,
+            &fb,
+            RowBlock {
+                sign: -1.0,
+                ..block
+            },
+            out,
+        );
     }
     p
 }
@@ -308,60 +292,76 @@ fn evaluate_tree(
     ask: Ask,
 ) {
     let tree = model.tree.as_ref().expect("a tree model");
-    let mut jrel = std::mem::take(&mut work.jrel);
-    for (r, rm) in model.rods.iter().enumerate() {
-        let g = &rm.spec.geometry;
-        for (i, smp) in model.contact.samples[r].iter().enumerate() {
-            let (piece, x) = g.locate(smp.s).expect("a sample lies on its rod");
-            let frame = ResolvedFrame {
-                target: Target::Rod {
-                    rod: r,
-                    piece,
-                    x,
-                    node: tree.rod_nodes[r][piece],
-                },
-                offset: Pose::identity(),
-            };
-            let fs = frame_state(model, tree, data, &frame, q, qd);
+    for (r, samples) in model.contact.samples.iter().enumerate() {
+        for (i, smp) in samples.iter().enumerate() {
+            let fs = frame_state(model, tree, data, &rod_frame(model, r, smp.s), q, qd);
             let p = fs.pose.translation;
             let vp = point_velocity(&fs.vel, &p);
             for (o, ob) in model.contact.obstacles.iter().enumerate() {
                 let parent = model.contact.parents[o];
-                let (pose, vb) = match parent {
-                    None => (Pose::identity(), Vec3::zeros()),
-                    Some(b) => {
-                        let fb = frame_state(
-                            model,
-                            tree,
-                            data,
-                            &ResolvedFrame {
-                                target: Target::Body {
-                                    node: tree.body_nodes[b],
-                                },
-                                offset: Pose::identity(),
+                let fb = parent.map(|b| {
+                    frame_state(
+                        model,
+                        tree,
+                        data,
+                        &ResolvedFrame {
+                            target: Target::Body {
+                                node: tree.body_nodes[b],
                             },
-                            q,
-                            qd,
-                        );
-                        (fb.pose, point_velocity(&fb.vel, &p))
-                    }
+                            offset: Pose::identity(),
+                        },
+                        q,
+                        qd,
+                    )
+                });
+                let (pose, vb) = match &fb {
+                    None => (Pose::identity(), Vec3::zeros()),
+                    Some(fb) => (fb.pose, point_velocity(&fb.vel, &p)),
                 };
                 let dist = distance(&ob.shape, &pose, &p);
                 if dist.d - smp.radius >= 0.0 {
                     continue;
                 }
                 if touch(model, work, r, i, o, &dist, &p, &(vp - vb), &pose, ask) {
+                    // The force on the rod's section, the opposite on the
+                    // obstacle's body; projected with the others below (CT28).
                     let f = work.active.last().expect("just pushed").force;
-                    tree_point_jacobian(model, data, work, q, r, smp.s, parent, &mut jrel);
-                    for c in 0..jrel.ncols() {
-                        work.tau[c] +=
-                            jrel[(0, c)] * f[0] + jrel[(1, c)] * f[1] + jrel[(2, c)] * f[2];
+                    let tau = work.tau.as_mut_slice();
+                    add_frame_wrench(tree, &fs, &p, &f, &mut work.wrenches, tau);
+                    if let Some(fb) = &fb {
+                        add_frame_wrench(tree, fb, &p, &(-f), &mut work.wrenches, tau);
                     }
                 }
             }
         }
     }
-    work.jrel = jrel;
+    inward_wrenches(tree, data, &mut work.wrenches, work.tau.as_mut_slice());
+}
+
+/// The frame of rod `rod`'s section at `s` \[m\] on a tree model.
+pub(crate) fn rod_frame(model: &Model, rod: usize, s: f64) -> ResolvedFrame {
+    let tree = model.tree.as_ref().expect("a tree model");
+    let (piece, x) = model.rods[rod]
+        .spec
+        .geometry
+        .locate(s)
+        .expect("a contact point lies on its rod");
+    ResolvedFrame {
+        target: Target::Rod {
+            rod,
+            piece,
+            x,
+            node: tree.rod_nodes[rod][piece],
+        },
+        offset: Pose::identity(),
+    }
+}
+
+/// The world wrench (spatial, at the world origin, angular first) of the
+/// force `f` \[N\] at the world point `p` \[m\]: `(p × f, f)`.
+pub(crate) fn point_wrench(p: &Vec3, f: &Vec3) -> Vec6 {
+    let m = p.cross(f);
+    Vec6::new(m.x, m.y, m.z, f.x, f.y, f.z)
 }
 
 /// The contacts' share of the prescribed joints' forces (CT18) into
@@ -379,31 +379,11 @@ pub(crate) fn prescribed_share(model: &Model, data: &Data, work: &mut ContactWor
     if model.n_prescribed() == 0 {
         return;
     }
-    let rod_frame = |rod: usize, s: f64| {
-        let (piece, x) = model.rods[rod]
-            .spec
-            .geometry
-            .locate(s)
-            .expect("a contact point lies on its rod");
-        ResolvedFrame {
-            target: Target::Rod {
-                rod,
-                piece,
-                x,
-                node: tree.rod_nodes[rod][piece],
-            },
-            offset: Pose::identity(),
-        }
-    };
-    let wrench = |p: &Vec3, f: &Vec3| {
-        let m = p.cross(f);
-        Vec6::new(m.x, m.y, m.z, f.x, f.y, f.z)
-    };
     let out = work.tau_p.as_mut_slice();
     for a in &work.active {
         let s = model.contact.samples[a.rod][a.sample].s;
-        let fs = frame_state(model, tree, data, &rod_frame(a.rod, s), q, None);
-        let w = wrench(&fs.pose.translation, &a.force);
+        let fs = frame_state(model, tree, data, &rod_frame(model, a.rod, s), q, None);
+        let w = point_wrench(&fs.pose.translation, &a.force);
         add_prescribed_wrench(tree, data, &fs, &w, out);
         if let Some(b) = model.contact.parents[a.obstacle] {
             let body = ResolvedFrame {
@@ -419,8 +399,8 @@ pub(crate) fn prescribed_share(model: &Model, data: &Data, work: &mut ContactWor
     if let Some(pw) = &work.pairs {
         for c in &pw.active {
             for (rod, s, sign) in [(c.a, c.sa, 1.0), (c.b, c.sb, -1.0)] {
-                let fs = frame_state(model, tree, data, &rod_frame(rod, s), q, None);
-                let w = wrench(&fs.pose.translation, &(c.force * sign));
+                let fs = frame_state(model, tree, data, &rod_frame(model, rod, s), q, None);
+                let w = point_wrench(&fs.pose.translation, &(c.force * sign));
                 add_prescribed_wrench(tree, data, &fs, &w, out);
             }
         }
@@ -441,5 +421,231 @@ pub(crate) fn parent_pose(model: &Model, data: &Data, o: usize) -> Pose {
     match (model.contact.parents[o], &model.tree) {
         (Some(b), Some(tree)) => data.nodes[tree.body_nodes[b]].base_world,
         _ => Pose::identity(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::algorithms::contact_force;
+    use crate::{Attachment, BodySpec, Joint, JointKind, Rod, commit_contact};
+    use nalgebra::DVector;
+    use softrod_kinematics::Strain;
+    use softrod_mechanics::Material;
+    use softrod_mechanics::contact::{ContactSettings, Obstacle, Shape};
+
+    /// A tree with every kind of contact force: an arm on a hinge lying on
+    /// a table (fixed obstacle), a twig hanging inside the arm's middle
+    /// piece (D62) lying on it too, a free ball carrying a sphere that
+    /// presses on the arm (an obstacle on a body), and a free rod crossing
+    /// over the arm (a rod pair); friction anchors committed a moment
+    /// before, so that the forces have tangential parts.
+    fn scene() -> (Model, Vec<f64>, Vec<f64>) {
+        let r = 0.01;
+        let silicone = Material::builder()
+            .density(1000.0)
+            .young(1.0e6)
+            .poisson(0.5)
+            .build()
+            .unwrap();
+        let along_y = Mat3::new(0.0, -1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0);
+        let rod = |name: &str, length: f64, pieces: usize, base: Pose| {
+            Rod::builder(length)
+                .name(name)
+                .pieces(pieces)
+                .strains(Strain::ALL)
+                .base(base)
+                .circle(r)
+                .material(silicone)
+        };
+        let mut ball = BodySpec::principal("ball", 0.05, [1e-5, 1e-5, 1e-5]);
+        ball.base = Pose::new(Mat3::identity(), Vec3::new(0.25, 0.0, r + 0.02 - 3e-4));
+        let model = Model::builder()
+            .rod_on(
+                rod("arm", 0.3, 3, Pose::identity()),
+                Attachment::world_joint(Joint::revolute([0.0, 1.0, 0.0])),
+            )
+            .rod_on(
+                rod("twig", 0.1, 2, Pose::new(along_y, Vec3::zeros())),
+                Attachment::to("arm", Joint::revolute([0.0, 0.0, 1.0])).at(0.15),
+            )
+            .rod_on(
+                rod(
+                    "b",
+                    0.2,
+                    2,
+                    Pose::new(along_y, Vec3::new(0.05, -0.1, 2.0 * r - 5e-4)),
+                ),
+                Attachment::world_joint(Joint::new(JointKind::Free)),
+            )
+            .body(ball, Attachment::world_joint(Joint::new(JointKind::Free)))
+            .gravity([0.0, 0.0, -9.81])
+            .obstacle(
+                Obstacle::new(
+                    "table",
+                    Shape::Plane {
+                        point: Vec3::new(0.0, 0.0, -0.995 * r),
+                        normal: Vec3::z(),
+                    },
+                )
+                .friction(0.5),
+            )
+            .obstacle(
+                Obstacle::new(
+                    "sphere",
+                    Shape::Sphere {
+                        center: Vec3::zeros(),
+                        radius: 0.02,
+                    },
+                )
+                .on("ball")
+                .friction(0.3),
+            )
+            .contact(ContactSettings {
+                rods: true,
+                self_contact: true,
+                friction: 0.4,
+                ..Default::default()
+            })
+            .build()
+            .unwrap();
+        let n = model.n_dof();
+        let q: Vec<f64> = (0..n).map(|i| 1e-5 * ((i as f64) * 1.3).sin()).collect();
+        let qd: Vec<f64> = (0..n).map(|i| 0.01 * ((i as f64) * 0.7).cos()).collect();
+        (model, q, qd)
+    }
+
+    /// The material points `(rod, s, obstacle's body, force on the rod)` of
+    /// the last evaluation's contacts, a pair's rod `b` with the opposite.
+    type Points = Vec<(usize, f64, Option<usize>, Vec3)>;
+
+    /// `Σ J_relᵀ f` by the dense point Jacobians.
+    fn dense_route(model: &Model, data: &Data, q: &[f64], points: &Points) -> DVector<f64> {
+        let n = model.n_dof();
+        let mut jrel = DMatrix::zeros(3, n);
+        let mut dense = DVector::<f64>::zeros(n);
+        for &(rod, s, body, f) in points {
+            tree_point_jacobian(model, data, q, rod, s, body, &mut jrel);
+            dense += jrel.transpose() * f;
+        }
+        dense
+    }
+
+    /// The generalized contact force of the inward sweep (CT28) against
+    /// the dense route `Σ J_relᵀ f` of the point Jacobians, and both
+    /// against central differences of the forces' virtual work
+    /// `Σ f · δp` (the forces held, the material points moved by `q`):
+    /// positions only, independent of either Jacobian.
+    #[test]
+    fn the_inward_sweep_equals_dense_point_jacobians_and_the_virtual_work() {
+        let (model, q, qd) = scene();
+        let tree = model.tree.as_ref().unwrap();
+        let n = model.n_dof();
+        let mut data = Data::new(&model);
+        let q_before: Vec<f64> = q
+            .iter()
+            .enumerate()
+            .map(|(i, v)| v - 1e-5 * ((i as f64) * 2.1).cos())
+            .collect();
+        commit_contact(&model, &mut data, 0.0, &q_before, &qd).unwrap();
+        assert!(contact_force(
+            &model,
+            &mut data,
+            Forces::ALL,
+            0.0,
+            &q,
+            Some(&qd)
+        ));
+        let work = data.contact.take().unwrap();
+        let tau = work.tau.clone();
+        let pairs = &work.pairs.as_ref().unwrap().active;
+        let twig = model
+            .rods
+            .iter()
+            .position(|r| r.spec.name == "twig")
+            .unwrap();
+        let on = |o: usize| work.active.iter().filter(|a| a.obstacle == o).count();
+        assert!(
+            on(0) >= 4 && on(1) >= 1,
+            "table {}, sphere {}",
+            on(0),
+            on(1)
+        );
+        assert!(work.active.iter().any(|a| a.rod == twig));
+        assert!(!pairs.is_empty());
+        assert!(
+            work.active
+                .iter()
+                .any(|a| a.force.cross(&a.normal).norm() > 1e-3 * a.force.norm())
+        );
+        // The material points and the sign of each force on them.
+        let mut points: Points = Vec::new();
+        for a in &work.active {
+            let s = model.contact.samples[a.rod][a.sample].s;
+            points.push((a.rod, s, model.contact.parents[a.obstacle], a.force));
+        }
+        for c in pairs {
+            points.push((c.a, c.sa, None, c.force));
+            points.push((c.b, c.sb, None, -c.force));
+        }
+        let dense = dense_route(&model, &data, &q, &points);
+        let scale = dense.norm();
+        let diff = (&tau - &dense).norm();
+        eprintln!(
+            "{} points: |τ| {scale:.3e}, sweep − dense {diff:.3e}",
+            points.len()
+        );
+        assert!(diff <= 1e-13 * scale, "{diff:.3e} of {scale:.3e}");
+        // Central differences of the virtual work.
+        let place = |data: &mut Data, qq: &[f64]| -> Vec<Vec3> {
+            outward(
+                &model,
+                tree,
+                data,
+                Motion::at_rest(qq),
+                Pass::Inverse,
+                Forces::ALL,
+            );
+            points
+                .iter()
+                .map(|&(rod, s, _, _)| {
+                    frame_state(&model, tree, data, &rod_frame(&model, rod, s), qq, None)
+                        .pose
+                        .translation
+                })
+                .collect()
+        };
+        let body_poses = |data: &Data| -> Vec<Option<Pose>> {
+            points
+                .iter()
+                .map(|&(_, _, b, _)| b.map(|b| data.nodes[tree.body_nodes[b]].base_world))
+                .collect()
+        };
+        let p0 = place(&mut data, &q);
+        let b0 = body_poses(&data);
+        let h = 1e-6;
+        let mut worst: f64 = 0.0;
+        for l in 0..n {
+            let mut work_of = |sign: f64| -> f64 {
+                let mut qq = q.clone();
+                qq[l] += sign * h;
+                let p = place(&mut data, &qq);
+                let bp = body_poses(&data);
+                let mut w = 0.0;
+                for (k, &(_, _, _, f)) in points.iter().enumerate() {
+                    w += f.dot(&p[k]);
+                    // The body's material point where the rod point was.
+                    if let (Some(g0), Some(g)) = (b0[k], bp[k]) {
+                        w -= f.dot(&g.compose(&g0.inverse()).transform_point(&p0[k]));
+                    }
+                }
+                w
+            };
+            let fd = (work_of(1.0) - work_of(-1.0)) / (2.0 * h);
+            worst = worst.max((fd - tau[l]).abs());
+        }
+        eprintln!("virtual work: worst |Δτ| {worst:.3e} of |τ| {scale:.3e}");
+        assert!(worst <= 1e-7 * scale, "{worst:.3e} of {scale:.3e}");
+        data.contact = Some(work);
     }
 }

@@ -13,7 +13,7 @@ use crate::model::closure::{ResolvedFrame, Target};
 use crate::model::data::Data;
 use crate::model::tree::Tree;
 use nalgebra::DMatrix;
-use softrod_lie::{Mat6, PieceMaps, Pose, Vec6, ad_vec};
+use softrod_lie::{Mat6, PieceMaps, Pose, Vec3, Vec6, ad_vec};
 
 /// The motion `(η, η̇)` of the frame node `c` hangs from (its parent's tip,
 /// or the point inside the parent piece, D62), in that frame's axes.
@@ -53,6 +53,9 @@ pub(crate) struct FrameState {
     /// In-piece spatial column block `Ad_{G(x)} T₋(x) B` (6×k padded) and
     /// its node; `None` for bodies and the world.
     pub own: Option<(usize, Mat6)>,
+    /// A rod section's local pose in its node `g(x)` and its node's local
+    /// columns `T₋(x) B` (6×k padded); `None` for bodies and the world.
+    pub local: Option<(Pose, Mat6)>,
     /// First ancestor node whose coordinates move the frame rigidly.
     pub ancestors: Option<usize>,
     /// The node whose parent that is (where the path to the root starts).
@@ -73,6 +76,7 @@ pub(crate) fn frame_state(
             vel: Vec6::zeros(),
             acc: Vec6::zeros(),
             own: None,
+            local: None,
             ancestors: None,
             from: None,
         },
@@ -84,6 +88,7 @@ pub(crate) fn frame_state(
                 vel: ad.mul_vec(&w.eta_tip),
                 acc: ad.mul_vec(&w.etadot_tip),
                 own: None,
+                local: None,
                 ancestors: tree.nodes[node].parent,
                 from: Some(node),
             }
@@ -118,11 +123,13 @@ pub(crate) fn frame_state(
                     Vec6::zeros()
                 };
             let ad = g.ad();
+            let sb = tm.to_mat6() * nd.bpad;
             FrameState {
                 pose: g.compose(&f.offset),
                 vel: ad.mul_vec(&eta),
                 acc: ad.mul_vec(&etadot),
-                own: Some((node, ad.to_mat6() * tm.to_mat6() * nd.bpad)),
+                own: Some((node, ad.to_mat6() * sb)),
+                local: Some((gl, sb)),
                 ancestors: nd.parent,
                 from: Some(node),
             }
@@ -208,6 +215,83 @@ pub(crate) fn add_prescribed_wrench(
         }
         c = Some(j);
         anc = nj.parent;
+    }
+}
+
+/// The first half of a point force's generalized force (CT28): the force
+/// `f` \[N\] (world) at the world point `p` \[m\] of the frame `fs` — a rod
+/// section (offset identity) or a body's frame — as the wrench `F` in that
+/// frame's own coordinates, `(r × Rᵀf, Rᵀf)` with `r = Rᵀ(p − o)` (zero at
+/// a section's centreline point: no moment arm to round). A section adds
+/// its own piece's share `(T₋(x) B)ᵀ F` into `out` (n_dof) at once; the
+/// wrench moved to its node's base frame, `Ad_{g(x)⁻¹}ᵀ F`, is kept in
+/// `acc[node]` (per node of the tree) for [`inward_wrenches`].
+pub(crate) fn add_frame_wrench(
+    tree: &Tree,
+    fs: &FrameState,
+    p: &Vec3,
+    f: &Vec3,
+    acc: &mut [Vec6],
+    out: &mut [f64],
+) {
+    let rot = &fs.pose.rotation;
+    let fl = rot.tr_mul(f);
+    let r = rot.tr_mul(&(p - fs.pose.translation));
+    let m = r.cross(&fl);
+    let wrench = Vec6::new(m.x, m.y, m.z, fl.x, fl.y, fl.z);
+    match (&fs.own, &fs.local) {
+        (Some((node, _)), Some((gl, sb))) => {
+            let nd = &tree.nodes[*node];
+            let own = sb.tr_mul(&wrench);
+            for (o, v) in out[nd.dof..nd.dof + nd.k].iter_mut().zip(own.iter()) {
+                *o += v;
+            }
+            acc[*node] += gl.ad_inv().tr_mul_vec(&wrench);
+        }
+        _ => {
+            if let Some(from) = fs.from {
+                acc[from] += wrench;
+            }
+        }
+    }
+}
+
+/// The second half (CT28): one inward sweep, children before parents, that
+/// carries the wrenches gathered in `acc` by [`add_frame_wrench`] (each in
+/// its node's base frame) to the root: a node's sum, its own and its
+/// subtree's, moves across its offset into the frame it hangs from (its
+/// parent's tip, or a point inside the parent: D62), is projected there on
+/// the parent's coordinates by `S(ℓ)ᵀ`, and moves on to the parent's base
+/// frame — the articulated recursion's backward pass for forces alone.
+/// Adds `Σ J_pᵀ f` into `out`: `O(N)` for all the forces together, against
+/// `O(N)` per force for their dense point Jacobians. Leaves `acc` zero.
+/// The node data of `data` must be the state's (any outward sweep at the
+/// same `q`).
+pub(crate) fn inward_wrenches(tree: &Tree, data: &Data, acc: &mut [Vec6], out: &mut [f64]) {
+    for i in (0..tree.nodes.len()).rev() {
+        let w = acc[i];
+        if w == Vec6::zeros() {
+            continue;
+        }
+        acc[i] = Vec6::zeros();
+        let node = &tree.nodes[i];
+        let Some(p) = node.parent else {
+            continue;
+        };
+        let at = node.offset.ad_inv().tr_mul_vec(&w);
+        let (pose, s) = if node.attach.is_some() {
+            (&data.nodes[i].attach_pose, &data.nodes[i].attach_s)
+        } else {
+            (&data.nodes[p].tip, &data.nodes[p].s_tip)
+        };
+        let np = &tree.nodes[p];
+        if np.k > 0 {
+            let g = s.tr_mul(&at);
+            for (o, v) in out[np.dof..np.dof + np.k].iter_mut().zip(g.iter()) {
+                *o += v;
+            }
+        }
+        acc[p] += pose.ad_inv().tr_mul_vec(&at);
     }
 }
 

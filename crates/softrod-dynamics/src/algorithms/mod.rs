@@ -370,7 +370,8 @@ pub(crate) fn bias_force_with<'a>(
 /// D53): `τ_s = τ_c(q, t) − τ_e(q) − D q̇ − k_j(q_j − q_rest) − d_j q̇_j`
 /// — cable forces at their tensions at `t` (schedules, or the inputs of
 /// [`Data::set_cable_tensions`]), elasticity with its stress-free offset,
-/// Kelvin–Voigt damping, joint springs and dampers. Every inverse dynamics
+/// Kelvin–Voigt damping, joint springs and dampers, joint actuators' forces
+/// (docs/theory-control.md IS14). Every inverse dynamics
 /// subtracts exactly this vector from its other terms (`ID = ID_rest − τ_s`,
 /// `ID_rest` the inertial, gravity, load and drag terms), so the part of
 /// `ID` that depends on Young's or shear modulus, viscosity or a cable's
@@ -388,7 +389,7 @@ pub fn strain_space_force<'a>(
     check_vec(model, "q", q)?;
     check_vec(model, "qdot", qd)?;
     crate::forces::strain::strain_forces(model, data, Forces::ALL, t, q, Some(qd), None);
-    crate::forces::strain::joint_forces(model, data, Forces::ALL, q, Some(qd));
+    crate::forces::strain::joint_forces(model, data, Forces::ALL, t, q, Some(qd));
     Ok(&data.strain_force)
 }
 

@@ -8,8 +8,8 @@
 //! chain it reads the rods' kinematics in `ContactWork::kin`; on a tree the
 //! node data of the last outward sweep.
 
-use super::contact::{Ask, point_velocity, tree_point_jacobian};
-use super::frames::frame_state;
+use super::contact::{Ask, point_velocity, rod_frame};
+use super::frames::{add_frame_wrench, frame_state, inward_wrenches};
 use crate::forces::contact::{Distance, Law, closest_on_segments, force};
 use crate::model::Model;
 use crate::model::closure::{ResolvedFrame, Target};
@@ -180,14 +180,14 @@ pub(crate) fn evaluate_pairs(
             }
         }
     }
-    // The generalized force: J_a(s_a)ᵀ f − J_b(s_b)ᵀ f.
-    let mut jrel = std::mem::take(&mut work.jrel);
-    for k in 0..pw.active.len() {
-        let c = pw.active[k];
-        for (rod, s, sign) in [(c.a, c.sa, 1.0), (c.b, c.sb, -1.0)] {
-            let f = c.force * sign;
-            match &model.tree {
-                None => {
+    // The generalized force: J_a(s_a)ᵀ f − J_b(s_b)ᵀ f — on a tree as the
+    // forces ±f at the two sections, projected in one inward sweep (CT28).
+    match &model.tree {
+        None => {
+            for k in 0..pw.active.len() {
+                let c = pw.active[k];
+                for (rod, s, sign) in [(c.a, c.sa, 1.0), (c.b, c.sb, -1.0)] {
+                    let f = c.force * sign;
                     let rm = &model.rods[rod];
                     work.kin[rod]
                         .jacobian_at(&rm.spec.geometry, s, Frame::Mixed, &mut work.jac[rod])
@@ -198,17 +198,20 @@ pub(crate) fn evaluate_pairs(
                         pw.tau[rm.dof_offset + col] += jc[3] * f[0] + jc[4] * f[1] + jc[5] * f[2];
                     }
                 }
-                Some(_) => {
-                    tree_point_jacobian(model, data, work, q, rod, s, None, &mut jrel);
-                    for col in 0..jrel.ncols() {
-                        pw.tau[col] +=
-                            jrel[(0, col)] * f[0] + jrel[(1, col)] * f[1] + jrel[(2, col)] * f[2];
-                    }
-                }
             }
         }
+        Some(tree) => {
+            let tau = pw.tau.as_mut_slice();
+            for c in &pw.active {
+                for (rod, s, sign) in [(c.a, c.sa, 1.0), (c.b, c.sb, -1.0)] {
+                    let fs = frame_state(model, tree, data, &rod_frame(model, rod, s), q, None);
+                    let (p, f) = (fs.pose.translation, c.force * sign);
+                    add_frame_wrench(tree, &fs, &p, &f, &mut work.wrenches, tau);
+                }
+            }
+            inward_wrenches(tree, data, &mut work.wrenches, tau);
+        }
     }
-    work.jrel = jrel;
     work.pairs = Some(pw);
 }
 

@@ -208,16 +208,7 @@ impl ContactShift {
                     });
                 }
                 Some(body) => {
-                    tree_point_jacobian(
-                        model,
-                        data,
-                        &mut work,
-                        q,
-                        a.rod,
-                        smp.s,
-                        Some(body),
-                        &mut jrel,
-                    );
+                    tree_point_jacobian(model, data, q, a.rod, smp.s, Some(body), &mut jrel);
                     self.push_pair(n, k, c, |r, j| jrel[(r, j)]);
                 }
             }
@@ -229,10 +220,10 @@ impl ContactShift {
                 let c = psd_part(&-p.dv);
                 match &model.tree {
                     Some(_) => {
-                        tree_point_jacobian(model, data, &mut work, q, p.a, p.sa, None, &mut jrel);
+                        tree_point_jacobian(model, data, q, p.a, p.sa, None, &mut jrel);
                         let start = self.jw.len();
                         self.push_pair(n, k, c, |r, j| jrel[(r, j)]);
-                        tree_point_jacobian(model, data, &mut work, q, p.b, p.sb, None, &mut jrel);
+                        tree_point_jacobian(model, data, q, p.b, p.sb, None, &mut jrel);
                         for r in 0..3 {
                             for j in 0..n {
                                 self.jw[start + r * n + j] -= jrel[(r, j)];

@@ -298,7 +298,7 @@ pub(crate) fn inverse_dynamics(
     let Motion { q, qd, .. } = motion;
     outward(model, tree, data, motion, Pass::Inverse, forces);
     strain_forces(model, data, forces, t, q, qd, None);
-    joint_forces(model, data, forces, q, qd);
+    joint_forces(model, data, forces, t, q, qd);
     for w in &mut data.nodes {
         w.f_tip = Vec6::zeros();
     }
@@ -363,7 +363,7 @@ pub(crate) fn forward_dynamics(
     let Motion { q, qd, .. } = motion;
     outward(model, tree, data, motion, Pass::Articulated, forces);
     strain_forces(model, data, forces, t, q, qd, tau_act);
-    joint_forces(model, data, forces, q, qd);
+    joint_forces(model, data, forces, t, q, qd);
     for w in &mut data.nodes {
         w.m_tip = Mat6::zeros();
         w.f_tip = Vec6::zeros();

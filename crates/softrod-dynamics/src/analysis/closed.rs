@@ -482,6 +482,7 @@ pub fn statics_sensitivity(
     let Some(tree) = model.tree.as_ref().filter(|_| model.has_closures()) else {
         let mut w = crate::derivatives::IdDerivatives::new(model);
         w.tensions = data.cable_tensions().map(DVector::from_column_slice);
+        w.copy_joint_inputs(data);
         let zero = vec![0.0; n];
         crate::derivatives::inverse_dynamics_derivatives_with(
             model,

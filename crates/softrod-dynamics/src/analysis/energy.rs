@@ -4,10 +4,11 @@ use crate::algorithms::tree::outward;
 use crate::algorithms::{Motion, Pass, check_vec};
 use crate::error::DynamicsError;
 use crate::forces::Forces;
-use crate::model::Model;
+use crate::kernels::planar::{Pose2, maps};
 use crate::model::data::Data;
 use crate::model::tree::{NodeKind, Tree};
-use softrod_lie::{PieceMaps, Vec6, exp_and_tangent_minus, exp_twist};
+use crate::model::{Model, RodModel};
+use softrod_lie::{PieceMaps, Vec3, Vec6, exp_and_tangent_minus, exp_twist};
 use softrod_mechanics::elastic_energy;
 
 /// Mechanical energies of the model at `(q, q̇)` \[J\].
@@ -46,7 +47,7 @@ pub fn energies(
         return Ok(tree_energies(model, tree, _data, q, qd));
     }
     let mut e = Energies::default();
-    for rm in model.rods() {
+    for (r, rm) in model.rods().iter().enumerate() {
         let rod = &rm.spec.geometry;
         let range = rm.dofs();
         let qr = &q[range.clone()];
@@ -58,6 +59,12 @@ pub fn energies(
             qr,
             &model.quadrature,
         );
+        if model.uses_planar_path(r) {
+            let (kinetic, gravitational) = planar_rod_energies(model, rm, qr, qdr);
+            e.kinetic += kinetic;
+            e.gravitational += gravitational;
+            continue;
+        }
         let mut pose = *rod.base();
         let mut eta0 = Vec6::zeros();
         for (piece, pd) in rod.pieces().iter().zip(&rm.pieces) {
@@ -78,6 +85,45 @@ pub fn energies(
         }
     }
     Ok(e)
+}
+
+/// Kinetic and gravitational energy of a rod on the planar path (D71):
+/// the same quadrature and the same integrands as the general loop of
+/// [`energies`], with twists in `P` and the planar maps (D72–D74), which
+/// cost a fraction of the six-strain exponential and tangent at each
+/// point. The terms dropped are exactly zero: `η` has no component in `P⊥`
+/// (D71).
+fn planar_rod_energies(model: &Model, rm: &RodModel, qr: &[f64], qdr: &[f64]) -> (f64, f64) {
+    let Some(pr) = &rm.planar else {
+        unreachable!("the planar path runs planar rods only")
+    };
+    let rod = &rm.spec.geometry;
+    let base = rod.base();
+    let (b, c) = ((pr.axis + 1) % 3, (pr.axis + 2) % 3);
+    let (mut kinetic, mut gravitational) = (0.0, 0.0);
+    let mut pose = Pose2::IDENTITY;
+    let mut eta0 = Vec3::zeros();
+    let pieces = rod.pieces().iter().zip(&rm.pieces).zip(&pr.pieces);
+    for ((piece, pd), pp) in pieces {
+        let xi = pr.gather(&piece.strain(qr));
+        let dxi = pr.gather(&piece.strain_rate(qdr));
+        for (qp, m) in pd.points.iter().zip(&pp.inertia) {
+            let (gl, tm, _) = maps(&xi, &dxi, qp.x, false);
+            let eta = gl.ad_inv_vec(&eta0) + tm * dxi;
+            kinetic += 0.5 * qp.w * eta.dot(&m.component_mul(&eta));
+            if let Some(g) = model.gravity {
+                let local = pose.compose(&gl).p;
+                let mut p = Vec3::zeros();
+                p[b] = local[0];
+                p[c] = local[1];
+                gravitational -= qp.w * qp.mass_per_length * g.dot(&base.transform_point(&p));
+            }
+        }
+        let (gl, tm, _) = maps(&xi, &dxi, piece.length, false);
+        eta0 = gl.ad_inv_vec(&eta0) + tm * dxi;
+        pose = pose.compose(&gl);
+    }
+    (kinetic, gravitational)
 }
 
 /// Energies on the tree: kinetic `½q̇ᵀMq̇`, elastic (rods and joint

@@ -270,6 +270,7 @@ impl Newton<'_> {
                 cw.copy_friction_state(from);
             }
         }
+        w.copy_joint_inputs(data);
         match (data.cable_tensions(), &mut w.tensions) {
             (None, t) => *t = None,
             (Some(u), Some(t)) => t.as_mut_slice().copy_from_slice(u),

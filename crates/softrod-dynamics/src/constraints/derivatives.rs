@@ -196,6 +196,7 @@ pub fn closed_dynamics_derivatives<'a>(
         unreachable!("check_workspace found the closure buffers")
     };
     work.lambda.copy_from(&cw.lambda);
+    work.id.copy_joint_inputs(data);
     match (data.cable_tensions(), &mut work.id.tensions) {
         (None, t) => *t = None,
         (Some(u), Some(t)) => t.as_mut_slice().copy_from_slice(u),

@@ -9,7 +9,7 @@ use super::point::{PieceLin, basis6, linearize_point, own_points};
 use super::{At, IdDerivatives};
 use crate::forces::external::gravity_base_acceleration;
 use crate::forces::linearized::{drag_diagonal, has_dead_loads};
-use crate::kernels::mat6::{mm, tm};
+use crate::kernels::mat6::{Cols, mm, tm};
 use crate::kernels::piece_derivs::PieceDerivMaps;
 use crate::model::{Model, RodModel};
 use softrod_lie::{PieceMaps, Vec6};
@@ -35,6 +35,7 @@ pub(crate) fn outward(model: &Model, rm: &RodModel, works: &mut [PieceWork], at:
         let dm = PieceDerivMaps::new(&xi, &xid, &xidd);
         w.reset_sums();
         w.base_world = pose;
+        let cols = Cols::of(&basis6(&piece.basis));
         let pc = PieceLin {
             maps: &maps,
             dm: &dm,
@@ -42,6 +43,7 @@ pub(crate) fn outward(model: &Model, rm: &RodModel, works: &mut [PieceWork], at:
             etad0: &etad0,
             xid: &xid,
             xidd: &xidd,
+            cols: &cols,
         };
         own_points(rm, pd, &pc, &pose, drag.as_ref(), scale, !at.dense, w);
         let (g, p) = linearize_point(&pc, piece.length);

@@ -74,6 +74,10 @@ pub struct IdDerivatives {
     /// [`crate::Data::set_cable_tensions`] (copied from the `Data` by
     /// [`crate::forward_dynamics_derivatives`]).
     pub tensions: Option<DVector<f64>>,
+    /// Joint actuator forces replacing their schedules, as
+    /// [`crate::Data::set_joint_forces`] (they enter `tau` only: a force of
+    /// time alone has no derivative in `q`, `q̇`).
+    pub joint_inputs: Option<DVector<f64>>,
     n_dof: usize,
     /// The per-node buffers of an articulated model (D76–D80).
     tree: Option<Box<tree::TreeWork>>,
@@ -103,6 +107,17 @@ impl IdDerivatives {
         Self::with_dense(model, false)
     }
 
+    /// Takes `data`'s joint force inputs ([`crate::Data::set_joint_forces`])
+    /// into [`IdDerivatives::joint_inputs`], as the evaluations of `data`
+    /// see them. No allocation once set.
+    pub fn copy_joint_inputs(&mut self, data: &Data) {
+        match (data.joint_forces(), &mut self.joint_inputs) {
+            (None, f) => *f = None,
+            (Some(u), Some(f)) if f.len() == u.len() => f.as_mut_slice().copy_from_slice(u),
+            (Some(u), f) => *f = Some(DVector::from_column_slice(u)),
+        }
+    }
+
     fn with_dense(model: &Model, dense: bool) -> Self {
         let n = model.n_dof();
         let nd = if dense { n } else { 0 };
@@ -120,6 +135,7 @@ impl IdDerivatives {
             dtau_dqd: DMatrix::zeros(nd, nd),
             tau: DVector::zeros(n),
             tensions: None,
+            joint_inputs: None,
             contact: model.has_contact().then(|| Box::new(Data::new(model))),
             n_dof: n,
             tree: model

@@ -8,7 +8,9 @@ use super::point::PointLin;
 use super::{At, IdDerivatives};
 use crate::forces::linearized::cable_terms;
 use crate::kernels::mat6::{Cols, mm_part, mm3};
-use crate::kernels::piece_derivs::{Coefficients, PieceDerivMaps, lambda, tangent_transpose_form};
+use crate::kernels::piece_derivs::{
+    Coefficients, PieceDerivMaps, lambda, tangent_transpose_form_basis,
+};
 use crate::model::{Model, RodModel};
 use softrod_lie::{Mat6, Pose, Vec6, ad};
 
@@ -20,7 +22,8 @@ pub(crate) struct PieceWork {
     pub(crate) base_world: Pose,
     pub(crate) tip_world: Pose,
     pub(crate) tip: Pose,
-    /// `T₋(ℓ)`, `η(ℓ)` and the tip linearizations `H_η`, `H_η̇`, `H_v̇` (D39–D41).
+    /// `T₋(ℓ)`, `η(ℓ)` and the tip linearizations `H_η B`, `H_η̇ B`, `H_v̇ B`
+    /// (D39–D41, `k` columns, D90).
     pub(crate) tm_tip: Mat6,
     pub(crate) eta_tip: Vec6,
     pub(crate) etad_tip: Vec6,
@@ -29,7 +32,7 @@ pub(crate) struct PieceWork {
     pub(crate) h_vd: Mat6,
     pub(crate) co_tip: Coefficients,
     /// Own-point sums (frame `L_{n−1}`): `𝓜ᵗ`, `𝓑ᵗ`, `𝒴ᵗ` (D43) and the
-    /// receivers `Σ w T₋ᵀ X A` for `X = 𝓜, 𝓑̄, 𝒴` (D45).
+    /// receivers `Σ w BᵀT₋ᵀ X A` for `X = 𝓜, 𝓑̄, 𝒴` (D45; `k` rows, D90).
     pub(crate) mt: Mat6,
     pub(crate) bt: Mat6,
     pub(crate) yt: Mat6,
@@ -37,8 +40,8 @@ pub(crate) struct PieceWork {
     pub(crate) rb: Mat6,
     pub(crate) ry: Mat6,
     /// The own points' (and inside subtrees') part of the mass matrix's
-    /// diagonal block in strain space, `Σ w T₋ᵀ𝓜T₋` (D86; summed only by
-    /// the linearization without the dense matrices).
+    /// diagonal block in strain space, `Σ w BᵀT₋ᵀ𝓜T₋B` (D86, k×k; summed
+    /// only by the linearization without the dense matrices).
     pub(crate) mtt: Mat6,
     /// `Σ w T₋ᵀ f`, `Σ w Aᵀ f` (D17–D18 sums).
     pub(crate) tsum: Vec6,
@@ -49,7 +52,8 @@ pub(crate) struct PieceWork {
     /// of [`super::vjp::inverse_dynamics_inertia_vjp`] (D85).
     pub(crate) tin: Vec6,
     pub(crate) win: Vec6,
-    /// Own-point derivative sums, columns = strain perturbation `ζ` (D42).
+    /// Own-point derivative sums (D42) in the basis directions (D90): the
+    /// diagonal ones `Bᵀ(·)B` (k×k), the wrench's `(·)B` (6×k).
     pub(crate) dq_diag: Mat6,
     pub(crate) dv_diag: Mat6,
     pub(crate) dq_w: Mat6,
@@ -134,7 +138,7 @@ impl PieceWork {
     }
 
     /// The tip of the piece (or joint) from its linearization at `x = ℓ`
-    /// (`base_world` already set).
+    /// (`base_world` already set; `H` in the basis directions, D90).
     pub(crate) fn set_tip(&mut self, g: Pose, p: &PointLin, dm: &PieceDerivMaps) {
         self.tip = g;
         self.tm_tip = p.t.to_mat6();
@@ -235,34 +239,33 @@ pub(crate) fn close_piece(
     let adeta = ad(&w.eta_tip);
     // Everything with a strain-direction index `ζ` is needed only on the
     // basis's `k` directions (its columns `ζ = B eᵢ`, or rows of `Bᵀ`):
-    // carried as `X B` from here on (docs/theory-derivatives.md D87), the
-    // same numbers as the
-    // six directions projected at the end.
+    // carried as `X B` (docs/theory-derivatives.md D87), the tip's `H` and
+    // the own-point sums since the points (D90).
     let c = Cols::of(bm);
     let k = c.k;
     let tlb = c.right(&tl);
     // (D43): the subtree's wrench at L_n changes by
     // 𝓜ᶜ w̄ + 𝓑ᶜ u + 𝒴ᶜ Δ, with u = δη(ℓ), w̄ = δη̇′(ℓ) + ad_η(ℓ) δη(ℓ).
-    let uq = c.right(&w.h_eta);
-    let wq = c.right(&w.h_etad) + mm_part(&adeta, &uq, 6, k);
+    let uq = w.h_eta;
+    let wq = w.h_etad + mm_part(&adeta, &uq, 6, k);
     let mut dwn_q = mm_part(mc, &wq, 6, k) + mm_part(bc, &uq, 6, k);
     if dead {
         dwn_q += mm_part(yc, &tlb, 6, k);
     }
-    let wv = c.right(&w.h_vd) + mm_part(&adeta, &tlb, 6, k);
+    let wv = w.h_vd + mm_part(&adeta, &tlb, 6, k);
     let dwn_v = mm_part(mc, &wv, 6, k) + mm_part(bc, &tlb, 6, k);
     let (mut phi, mut chi) = (w.phi, w.chi);
     for i in 0..4 {
         phi[i] += wn * w.co_tip.d[i];
         chi[i] += wn * w.co_tip.c[i];
     }
-    let qform = tangent_transpose_form(&w.powers, &w.kbar, &phi, &chi);
+    let qform = tangent_transpose_form_basis(&w.powers, &w.kbar, &phi, &chi, &c);
     let tlbt = tlb.transpose();
-    let diag_q = c.both(&w.dq_diag) + mm_part(&tlbt, &dwn_q, k, k) + c.both(&qform);
-    let diag_v = c.both(&w.dv_diag) + mm_part(&tlbt, &dwn_v, k, k);
+    let diag_q = w.dq_diag + mm_part(&tlbt, &dwn_q, k, k) + qform;
+    let diag_v = w.dv_diag + mm_part(&tlbt, &dwn_v, k, k);
     let alt = al.transpose();
-    let dw_q = c.right(&w.dq_w) + mm_part(&alt, &(mm_part(&lambda(wn), &tlb, 6, k) + dwn_q), 6, k);
-    let dw_v = c.right(&w.dv_w) + mm_part(&alt, &dwn_v, 6, k);
+    let dw_q = w.dq_w + mm_part(&alt, &(mm_part(&lambda(wn), &tlb, 6, k) + dwn_q), 6, k);
+    let dw_v = w.dv_w + mm_part(&alt, &dwn_v, 6, k);
     // World-frame pairing quantities (D46).
     let to_world_tip = w.tip_world.ad().to_mat6();
     let base_inv = w.base_world.ad_inv().to_mat6();
@@ -276,12 +279,12 @@ pub(crate) fn close_piece(
     w.dwv_world = mm_part(&bit, &dw_v, 6, k);
     // `Bᵀ(X + T₋(ℓ)ᵀ 𝓒 A)` then `· Ad⁻¹`: `k` rows.
     let tmc = mm_part(&tlbt, mc, k, 6);
-    w.rcv_m = mm_part(&(c.left(&w.rm) + mm_part(&tmc, &al, k, 6)), &base_inv, k, 6);
+    w.rcv_m = mm_part(&(w.rm + mm_part(&tmc, &al, k, 6)), &base_inv, k, 6);
     let tbc = mm_part(&tlbt, bc, k, 6);
-    w.rcv_b = mm_part(&(c.left(&w.rb) + mm_part(&tbc, &al, k, 6)), &base_inv, k, 6);
+    w.rcv_b = mm_part(&(w.rb + mm_part(&tbc, &al, k, 6)), &base_inv, k, 6);
     if dead {
         let tyc = mm_part(&tlbt, yc, k, 6);
-        w.rcv_y = mm_part(&(c.left(&w.ry) + mm_part(&tyc, &al, k, 6)), &base_inv, k, 6);
+        w.rcv_y = mm_part(&(w.ry + mm_part(&tyc, &al, k, 6)), &base_inv, k, 6);
     }
     // Composites carried to L_{n−1} (D43), and τ_n's wrench (D18).
     let base = Subtree {
@@ -308,7 +311,7 @@ pub(crate) fn close_mass(w: &mut PieceWork, mc: &Mat6, bm: &Mat6) {
     let k = c.k;
     let tlb = c.right(&tl);
     let tlbt = tlb.transpose();
-    w.blk_a = c.both(&w.mtt) + mm_part(&mm_part(&tlbt, mc, k, 6), &tlb, k, k);
+    w.blk_a = w.mtt + mm_part(&mm_part(&tlbt, mc, k, 6), &tlb, k, k);
 }
 
 /// Writes a piece's `τ_n` and returns its diagonal blocks (k×k in the

@@ -4,7 +4,7 @@
 
 use super::piece::PieceWork;
 use crate::forces::linearized::dead_load_map;
-use crate::kernels::mat6::{mm, tm};
+use crate::kernels::mat6::{Cols, mm, mmk, tmk};
 use crate::kernels::piece_derivs::{Coefficients, PieceDerivMaps, lambda};
 use crate::model::RodModel;
 use crate::model::rod::PieceData;
@@ -28,6 +28,18 @@ pub(crate) fn diag_mul(d: &Vec6, x: &Mat6) -> Mat6 {
     Mat6::from_fn(|i, j| d[i] * x[(i, j)])
 }
 
+/// `diag(d) X` on the leading `K` columns of `X` (the rest zero).
+#[inline(always)]
+fn diag_mul_k<const K: usize>(d: &Vec6, x: &Mat6) -> Mat6 {
+    let mut out = Mat6::zeros();
+    for j in 0..K {
+        for i in 0..6 {
+            out[(i, j)] = d[i] * x[(i, j)];
+        }
+    }
+    out
+}
+
 /// `X diag(d)`.
 #[inline(always)]
 fn scale_columns(x: &Mat6, d: &Vec6) -> Mat6 {
@@ -41,23 +53,14 @@ fn mul_op(x: &Mat6, op: &AdOp) -> Mat6 {
     mm(x, &op.to_mat6())
 }
 
-/// `Op · X`.
-#[inline(always)]
-fn op_mul(op: &AdOp, x: &Mat6) -> Mat6 {
-    mm(&op.to_mat6(), x)
-}
-
-/// `Opᵀ · X`.
-#[inline(always)]
-fn op_tr_mul(op: &AdOp, x: &Mat6) -> Mat6 {
-    tm(&op.to_mat6(), x)
-}
-
-/// One evaluation point of a piece, linearized (D39–D41).
+/// One evaluation point of a piece, linearized (D39–D41) in the piece's
+/// basis directions (D90): `H_η B`, `H_η̇ B`, `H_v̇ B`, `T₋ B` (six rows,
+/// the basis's `k` leading columns, the rest zero).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct PointLin {
     pub a: AdOp,
     pub t: AdOp,
+    pub tb: Mat6,
     pub eta: Vec6,
     pub etad: Vec6,
     pub h_eta: Mat6,
@@ -69,7 +72,8 @@ pub(crate) struct PointLin {
 /// A piece's maps and motion, what linearizing one of its points needs:
 /// the maps of its strain ([`PieceMaps`]) and their strain derivatives
 /// ([`PieceDerivMaps`], D30–D36), the motion `(η₀, η̇′₀)` of its base frame
-/// (gravity in `η̇′₀`) and its strain rates `(ξ̇, ξ̈)`.
+/// (gravity in `η̇′₀`), its strain rates `(ξ̇, ξ̈)` and its basis `B`
+/// ([`Cols`]: the strain directions the linearization carries, D90).
 #[derive(Clone, Copy)]
 pub(crate) struct PieceLin<'a> {
     pub maps: &'a PieceMaps,
@@ -78,12 +82,24 @@ pub(crate) struct PieceLin<'a> {
     pub etad0: &'a Vec6,
     pub xid: &'a Vec6,
     pub xidd: &'a Vec6,
+    pub cols: &'a Cols,
 }
 
 /// The point at local abscissa `x` of the piece `pc`: its local pose and
-/// linearization (D39–D41).
+/// linearization (D39–D41) in the basis directions (D90).
 #[inline(always)]
 pub(crate) fn linearize_point(pc: &PieceLin, x: f64) -> (Pose, PointLin) {
+    match pc.cols.k {
+        0..=3 => linearize::<3>(pc, x),
+        4 => linearize::<4>(pc, x),
+        _ => linearize::<6>(pc, x),
+    }
+}
+
+/// [`linearize_point`] with at most `K ≥ k` columns (the products' sizes
+/// known at compile time; the columns past `k` are zero).
+#[inline(always)]
+fn linearize<const K: usize>(pc: &PieceLin, x: f64) -> (Pose, PointLin) {
     let PieceLin {
         maps,
         dm,
@@ -91,6 +107,7 @@ pub(crate) fn linearize_point(pc: &PieceLin, x: f64) -> (Pose, PointLin) {
         etad0,
         xid,
         xidd,
+        cols,
     } = *pc;
     let (g, tm, beta) = maps.eval(x);
     let a = g.ad_inv();
@@ -101,7 +118,7 @@ pub(crate) fn linearize_point(pc: &PieceLin, x: f64) -> (Pose, PointLin) {
     let a0 = a.mul_vec(etad0);
     let etad = a0 + t.mul_vec(xidd) + ad_vec(&c, &sv) + beta;
     let co = Coefficients::at(x, dm.theta);
-    let d1 = dm.d_tangent_applied(&co, false);
+    let d1 = cols.right(&dm.d_tangent_applied(&co, false));
     let d2 = dm.d_tangent_applied(&co, true);
     let dd = dm.bias_strain_derivative(&co);
     let td = dm.tangent_rate(&co);
@@ -109,19 +126,23 @@ pub(crate) fn linearize_point(pc: &PieceLin, x: f64) -> (Pose, PointLin) {
     // of 8 3×3 products).
     let adc_op = AdOp::ad(&c);
     let adc_t_op = adc_op * tm;
-    let adc_t = adc_t_op.to_mat6();
+    // Every block is needed on the basis's columns only (D90): `X B` is a
+    // gather for the selection bases, and the one 6×6 product, `ad_c 𝒟_ξ̇`,
+    // runs over `k` columns.
     // (D39): δη = ad_c Δ + 𝒟_ξ̇ ζ with Δ = T₋ζ.
-    let h_eta = adc_t + d1;
+    let h_eta = cols.right(&adc_t_op.to_mat6()) + d1;
     // (D40): δη̇′ = ad_{a₀}Δ − ad_{Tξ̇} ad_c Δ + 𝒟_ξ̈ ζ + ad_c 𝒟_ξ̇ ζ + 𝒟² ζ.
-    let h_etad =
-        (AdOp::ad(&a0) * tm - AdOp::ad(&sv) * adc_t_op).to_mat6() + d2 + op_mul(&adc_op, &d1) + dd;
+    let h_etad = cols.right(&((AdOp::ad(&a0) * tm - AdOp::ad(&sv) * adc_t_op).to_mat6() + d2))
+        + mmk::<6, K>(&adc_op.to_mat6(), &d1)
+        + cols.right(&dd);
     // (D41): ∂η̇′/∂ξ̇ = ad_c T₋ + 𝒟_ξ̇ + Ṫ.
-    let h_vd = h_eta + td;
+    let h_vd = h_eta + cols.right(&td);
     (
         g,
         PointLin {
             a,
             t,
+            tb: cols.right(&t.to_mat6()),
             eta,
             etad,
             h_eta,
@@ -140,7 +161,9 @@ pub(crate) fn linearize_point(pc: &PieceLin, x: f64) -> (Pose, PointLin) {
 /// world pose of the piece's base frame; the loads are scaled by `scale`
 /// (the evaluation's [`crate::Forces::load_scale`]). With `mass`, also the
 /// own points' part of the mass matrix's diagonal block, `Σ w T₋ᵀ𝓜T₋`
-/// (D86), for the O(N) products `M v`.
+/// (D86), for the O(N) products `M v`. Every sum with a strain direction
+/// is summed in the basis's `k` directions (D90): `Bᵀ(·)B` for the
+/// diagonal sums, `(·)B` for the wrench's, `Bᵀ(·)` for the receivers.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn own_points(
@@ -153,13 +176,33 @@ pub(crate) fn own_points(
     mass: bool,
     w: &mut PieceWork,
 ) {
-    let (maps, dm) = (pc.maps, pc.dm);
+    match pc.cols.k {
+        0..=3 => own_points_k::<3>(rm, pd, pc, pose, drag, scale, mass, w),
+        4 => own_points_k::<4>(rm, pd, pc, pose, drag, scale, mass, w),
+        _ => own_points_k::<6>(rm, pd, pc, pose, drag, scale, mass, w),
+    }
+}
+
+/// [`own_points`] with at most `K ≥ k` strain directions (as [`linearize`]).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn own_points_k<const K: usize>(
+    rm: &RodModel,
+    pd: &PieceData,
+    pc: &PieceLin,
+    pose: &Pose,
+    drag: Option<&Vec6>,
+    scale: f64,
+    mass: bool,
+    w: &mut PieceWork,
+) {
+    let (maps, dm, cols) = (pc.maps, pc.dm, pc.cols);
     // Drag or distributed loads make `f` more than the inertial wrench
     // density: then the inertial sums of D85 are summed apart; otherwise
     // they are `tsum`, `wsum` as they stand after the Gauss points.
     let apart = drag.is_some() || !rm.spec.distributed_loads.is_empty();
     for qp in &pd.points {
-        let (g, p) = linearize_point(pc, qp.x);
+        let (g, p) = linearize::<K>(pc, qp.x);
         let m = &qp.inertia;
         let me = m.component_mul(&p.eta);
         let mut f = m.component_mul(&p.etad) + coad_vec(&p.eta, &me);
@@ -188,20 +231,24 @@ pub(crate) fn own_points(
             }
         }
         let wt = qp.w;
-        let df_q = (diag_mul(m, &p.h_etad)
-            + mm(&b, &p.h_eta)
+        // Every product with a strain direction runs over the basis's `k`
+        // columns (or rows) (D90): `df_q`, `df_v` are `δf B`.
+        let tb = &p.tb;
+        let df_q = (diag_mul_k::<K>(m, &p.h_etad)
+            + mmk::<6, K>(&b, &p.h_eta)
             + if has_y {
-                mul_op(&y, &p.t)
+                mmk::<6, K>(&y, tb)
             } else {
                 Mat6::zeros()
             })
             * wt;
-        let df_v = (diag_mul(m, &p.h_vd) + mul_op(&b, &p.t)) * wt;
+        let df_v = (diag_mul_k::<K>(m, &p.h_vd) + mmk::<6, K>(&b, tb)) * wt;
         let fw = f * wt;
-        w.dq_diag += op_tr_mul(&p.t, &df_q);
-        w.dv_diag += op_tr_mul(&p.t, &df_v);
-        w.dq_w += op_tr_mul(&p.a, &(mul_op(&lambda(&fw), &p.t) + df_q));
-        w.dv_w += op_tr_mul(&p.a, &df_v);
+        let pa = p.a.to_mat6();
+        w.dq_diag += tmk::<K, K>(tb, &df_q);
+        w.dv_diag += tmk::<K, K>(tb, &df_v);
+        w.dq_w += tmk::<6, K>(&pa, &(mmk::<6, K>(&lambda(&fw), tb) + df_q));
+        w.dv_w += tmk::<6, K>(&pa, &df_v);
         w.tsum += p.t.tr_mul_vec(&fw);
         w.wsum += p.a.tr_mul_vec(&fw);
         for i in 0..4 {
@@ -210,20 +257,19 @@ pub(crate) fn own_points(
         }
         // (D43): B̄ = b − 𝓜 ad_η.
         let bbar = b - diag_mul(m, &ad(&p.eta));
-        let pa = p.a.to_mat6();
         let ma = diag_mul(&(m * wt), &pa);
         let ba = mul_op(&(bbar * wt), &p.a);
-        w.mt += op_tr_mul(&p.a, &ma);
-        w.bt += op_tr_mul(&p.a, &ba);
-        w.rm += op_tr_mul(&p.t, &ma);
-        w.rb += op_tr_mul(&p.t, &ba);
+        w.mt += tmk::<6, 6>(&pa, &ma);
+        w.bt += tmk::<6, 6>(&pa, &ba);
+        w.rm += tmk::<K, 6>(tb, &ma);
+        w.rb += tmk::<K, 6>(tb, &ba);
         if mass {
-            w.mtt += op_tr_mul(&p.t, &diag_mul(&(m * wt), &p.t.to_mat6()));
+            w.mtt += tmk::<K, K>(tb, &diag_mul_k::<K>(&(m * wt), tb));
         }
         if has_y {
             let ya = mul_op(&(y * wt), &p.a);
-            w.yt += op_tr_mul(&p.a, &ya);
-            w.ry += op_tr_mul(&p.t, &ya);
+            w.yt += tmk::<6, 6>(&pa, &ya);
+            w.ry += tmk::<K, 6>(tb, &ya);
         }
     }
     if !apart {
@@ -235,25 +281,104 @@ pub(crate) fn own_points(
         let (g, tm) = maps.exp_and_tangent_minus(pl.x);
         let a = g.ad_inv().to_mat6();
         let t = tm.to_mat6();
+        let tb = cols.right(&t);
         let co = Coefficients::at(pl.x, dm.theta);
         let fp = -(load.wrench(&pose.compose(&g)) * scale);
-        let (at, tt) = (a.transpose(), t.transpose());
-        let mut dq = lambda(&fp) * t;
+        let mut dq = mmk::<6, K>(&lambda(&fp), &tb);
         if load.frame == LoadFrame::World {
             let y = dead_load_map(&-fp);
-            let yt_ = y * t;
-            w.dq_diag += tt * yt_;
+            let yt_ = mmk::<6, K>(&y, &tb);
+            w.dq_diag += tmk::<K, K>(&tb, &yt_);
             dq += yt_;
             let ya = y * a;
-            w.yt += at * ya;
-            w.ry += tt * ya;
+            w.yt += a.transpose() * ya;
+            w.ry += tmk::<K, 6>(&tb, &ya);
         }
-        w.dq_w += at * dq;
-        w.tsum += tt * fp;
-        w.wsum += at * fp;
+        w.dq_w += tmk::<6, K>(&a, &dq);
+        w.tsum += t.transpose() * fp;
+        w.wsum += a.transpose() * fp;
         for i in 0..4 {
             w.phi[i] += fp * co.d[i];
             w.chi[i] += fp * co.c[i];
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use softrod_kinematics::Strain;
+
+    /// The linearization in a basis's `k` directions (D90) against the six
+    /// directions (`B = I`) projected afterwards, `H B`: equal bit for bit
+    /// for the selection bases (gathers of the same numbers), to round-off
+    /// for a general `B` (the products associated differently).
+    #[test]
+    fn basis_directions_equal_six_directions_projected() {
+        let xi = Vec6::new(0.7, -1.3, 0.4, 1.05, 0.2, -0.1);
+        let xid = Vec6::new(0.2, 0.1, -0.4, 0.3, -0.5, 0.9);
+        let xidd = Vec6::new(-1.0, 0.4, 0.3, 0.2, 0.7, -0.6);
+        let eta0 = Vec6::new(0.3, -0.8, 0.5, -0.2, 0.4, 0.1);
+        let etad0 = Vec6::new(-0.4, 0.6, 0.2, 0.8, 0.1, -9.81);
+        let maps = PieceMaps::new(&xi, Some(&xid));
+        let dm = PieceDerivMaps::new(&xi, &xid, &xidd);
+        let lin = |bm: &Mat6, x: f64| {
+            let cols = Cols::of(bm);
+            let pc = PieceLin {
+                maps: &maps,
+                dm: &dm,
+                eta0: &eta0,
+                etad0: &etad0,
+                xid: &xid,
+                xidd: &xidd,
+                cols: &cols,
+            };
+            linearize_point(&pc, x).1
+        };
+        let general = Mat6::from_fn(|i, j| {
+            if j < 4 {
+                ((i * 4 + j) as f64 * 0.9 + 0.3).sin() + if i == j { 1.5 } else { 0.0 }
+            } else {
+                0.0
+            }
+        });
+        let bases = [
+            (
+                basis6(&Basis::select(&[Strain::Ky, Strain::Qx, Strain::Qz]).unwrap()),
+                true,
+            ),
+            (basis6(&Basis::select(&[Strain::Kz]).unwrap()), true),
+            (basis6(&Basis::kirchhoff()), true),
+            (
+                basis6(
+                    &Basis::select(&[Strain::Qz, Strain::Kx, Strain::Qx, Strain::Kz, Strain::Ky])
+                        .unwrap(),
+                ),
+                true,
+            ),
+            (general, false),
+        ];
+        for x in [0.0, 0.13, 0.5] {
+            let six = lin(&Mat6::identity(), x);
+            for (bm, exact) in &bases {
+                let p = lin(bm, x);
+                for (got, full) in [
+                    (p.h_eta, six.h_eta),
+                    (p.h_etad, six.h_etad),
+                    (p.h_vd, six.h_vd),
+                    (p.tb, six.t.to_mat6()),
+                ] {
+                    let want = full * bm;
+                    if *exact {
+                        assert_eq!(got, want, "x = {x}, B = {bm}");
+                    } else {
+                        let err = (got - want).amax();
+                        assert!(err <= 1e-14 * (1.0 + want.amax()), "x = {x}: {err:e}");
+                    }
+                }
+                assert_eq!(p.eta, six.eta);
+                assert_eq!(p.etad, six.etad);
+            }
         }
     }
 }

@@ -15,6 +15,7 @@ use super::{At, IdDerivatives};
 use crate::algorithms::tree::local;
 use crate::forces::external::world_acceleration;
 use crate::forces::linearized::{dead_load_map, drag_diagonal, has_dead_loads};
+use crate::kernels::mat6::{Cols, mm_part, tm_part};
 use crate::kernels::piece_derivs::{PieceDerivMaps, lambda as lambda_of};
 use crate::model::Model;
 use crate::model::tree::{NodeKind, Tree};
@@ -194,6 +195,7 @@ fn outward(model: &Model, tree: &Tree, tw: &mut TreeWork, at: &At) {
         };
         let maps = PieceMaps::new(&xi, Some(&xid));
         let dm = PieceDerivMaps::new(&xi, &xid, &xidd);
+        let cols = Cols::of(&node.bpad);
         let pc = PieceLin {
             maps: &maps,
             dm: &dm,
@@ -201,6 +203,7 @@ fn outward(model: &Model, tree: &Tree, tw: &mut TreeWork, at: &At) {
             etad0: &etad_b,
             xid: &xid,
             xidd: &xidd,
+            cols: &cols,
         };
         if let NodeKind::Piece { rod, piece } = node.kind {
             let rm = &model.rods()[rod];
@@ -262,22 +265,26 @@ fn add_inner(
     bm: &Mat6,
     dead: bool,
 ) -> Exit {
+    // The piece's strain directions on its basis's `k` columns (D90):
+    // `lin`'s `H` and `T₋B` are 6×k already.
+    let k = Cols::of(bm).k;
     let a = lin.a.to_mat6();
     let t = lin.t.to_mat6();
+    let tb = &lin.tb;
     let adeta = ad(&lin.eta);
-    let wq = lin.h_etad + adeta * lin.h_eta;
+    let wq = lin.h_etad + mm_part(&adeta, &lin.h_eta, 6, k);
     let uq = lin.h_eta;
-    let mut dwq = sub.m * wq + sub.b * uq;
+    let mut dwq = mm_part(&sub.m, &wq, 6, k) + mm_part(&sub.b, &uq, 6, k);
     if dead {
-        dwq += sub.y * t;
+        dwq += mm_part(&sub.y, tb, 6, k);
     }
-    let wv = lin.h_vd + adeta * t;
-    let dwv = sub.m * wv + sub.b * t;
+    let wv = lin.h_vd + mm_part(&adeta, tb, 6, k);
+    let dwv = mm_part(&sub.m, &wv, 6, k) + mm_part(&sub.b, tb, 6, k);
     let (at, tt) = (a.transpose(), t.transpose());
-    w.dq_diag += tt * dwq;
-    w.dv_diag += tt * dwv;
-    w.dq_w += at * (lambda_of(&sub.w) * t + dwq);
-    w.dv_w += at * dwv;
+    w.dq_diag += tm_part(tb, &dwq, k, k);
+    w.dv_diag += tm_part(tb, &dwv, k, k);
+    w.dq_w += mm_part(&at, &(mm_part(&lambda_of(&sub.w), tb, 6, k) + dwq), 6, k);
+    w.dv_w += mm_part(&at, &dwv, 6, k);
     w.tsum += tt * sub.w;
     w.wsum += at * sub.w;
     for i in 0..4 {
@@ -285,22 +292,22 @@ fn add_inner(
         w.chi[i] += sub.w * lin.co.c[i];
     }
     let (ma, ba) = (sub.m * a, sub.b * a);
-    w.mtt += tt * sub.m * t;
+    w.mtt += tm_part(tb, &mm_part(&sub.m, tb, 6, k), k, k);
     w.mt += at * ma;
     w.bt += at * ba;
-    w.rm += tt * ma;
-    w.rb += tt * ba;
+    w.rm += tm_part(tb, &ma, k, 6);
+    w.rb += tm_part(tb, &ba, k, 6);
     if dead {
         let ya = sub.y * a;
         w.yt += at * ya;
-        w.ry += tt * ya;
+        w.ry += tm_part(tb, &ya, k, 6);
     }
     let to_world = w.base_world.compose(g).ad().to_mat6();
     Exit {
-        s: to_world * t * bm,
-        wq: to_world * wq * bm,
-        uq: to_world * uq * bm,
-        wv: to_world * wv * bm,
+        s: mm_part(&to_world, tb, 6, k),
+        wq: mm_part(&to_world, &wq, 6, k),
+        uq: mm_part(&to_world, &uq, 6, k),
+        wv: mm_part(&to_world, &wv, 6, k),
     }
 }
 
@@ -392,6 +399,17 @@ fn write_joint(
     for i in 0..node.k {
         let (kc, dc, rest) = joint.coefficients(first + i);
         work.tau[o + i] = b.column(i).dot(wrench) + kc * (q[o + i] - rest) + dc * qd[o + i];
+        if let (Some(a), false) = (&joint.actuator, at.forces.gravity_only) {
+            // A force of time alone (IS14): in τ, not in its derivatives.
+            work.tau[o + i] -= at.forces.load_scale
+                * crate::forces::strain::actuator_force(
+                    work.joint_inputs.as_ref(),
+                    info,
+                    a,
+                    first + i,
+                    at.t,
+                );
+        }
         dq6[(i, i)] += kc;
         dv6[(i, i)] += dc;
     }

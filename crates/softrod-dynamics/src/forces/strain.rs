@@ -102,12 +102,15 @@ pub(crate) fn strain_forces(
     }
 }
 
-/// `τ ← τ − k(q − q_rest) − d q̇` of every joint (D53), into the strain
-/// forces (skipped for gravity only).
+/// `τ ← τ − k(q − q_rest) − d q̇` of every joint (D53), and `+ λ f(t)` of
+/// every joint actuator (docs/theory-control.md IS14: its schedule, or the
+/// inputs of [`Data::set_joint_forces`]; `λ` = `forces.load_scale`), into
+/// the strain forces (skipped for gravity only).
 pub(crate) fn joint_forces(
     model: &Model,
     data: &mut Data,
     forces: Forces,
+    t: f64,
     q: &[f64],
     qd: Option<&[f64]>,
 ) {
@@ -116,6 +119,12 @@ pub(crate) fn joint_forces(
     }
     for e in &model.elements {
         let j = &e.attachment.joint;
+        if let Some(a) = &j.actuator {
+            for (i, o) in e.joint_dofs.clone().enumerate() {
+                data.strain_force[o] +=
+                    forces.load_scale * actuator_force(data.joint_inputs.as_ref(), e, a, i, t);
+            }
+        }
         if j.stiffness.is_empty() && j.damping.is_empty() {
             continue;
         }
@@ -124,5 +133,22 @@ pub(crate) fn joint_forces(
             let v = qd.map_or(0.0, |v| v[o]);
             data.strain_force[o] -= k * (q[o] - rest) + d * v;
         }
+    }
+}
+
+/// The force of coordinate `i` of element `e`'s joint actuator `a` at `t`
+/// \[N or N·m\]: the input when set, else the actuator's schedule (without
+/// the load factor).
+#[inline]
+pub(crate) fn actuator_force(
+    inputs: Option<&nalgebra::DVector<f64>>,
+    e: &crate::model::ElementInfo,
+    a: &crate::model::JointActuator,
+    i: usize,
+    t: f64,
+) -> f64 {
+    match inputs {
+        Some(u) => u[e.actuator_inputs.start + i],
+        None => a.force.at(i, t),
     }
 }

@@ -41,14 +41,110 @@ pub(crate) fn mm_part(a: &Mat6, b: &Mat6, rows: usize, cols: usize) -> Mat6 {
     Mat6::from_column_slice(&c)
 }
 
+/// [`mm_part`] with the block's size known at compile time (the loops
+/// unrolled): the leading `R × C` block of `A B`, the rest zero.
+#[inline(always)]
+pub(crate) fn mmk<const R: usize, const C: usize>(a: &Mat6, b: &Mat6) -> Mat6 {
+    let (a, b) = (a.as_slice(), b.as_slice());
+    let mut c = Mat6::zeros();
+    let cs = c.as_mut_slice();
+    for j in 0..C {
+        let mut col = [0.0f64; R];
+        let s = b[6 * j];
+        for i in 0..R {
+            col[i] = a[i] * s;
+        }
+        for k in 1..6 {
+            let s = b[6 * j + k];
+            for i in 0..R {
+                col[i] += a[6 * k + i] * s;
+            }
+        }
+        cs[6 * j..6 * j + R].copy_from_slice(&col);
+    }
+    c
+}
+
+/// `A B` for `A`, `B` of the form `[[X, 0], [Y, X]]` (3×3 blocks; `ad_v`
+/// and the sums and products of such, the algebra of (D32)–(D35)), whose
+/// product is `[[X₁X₂, 0], [Y₁X₂ + X₁Y₂, X₁X₂]]`: 3 instead of 8 3×3 block
+/// products, each entry summed in [`mm`]'s order without its zero terms
+/// (the same numbers up to the sign of a zero).
+#[inline(always)]
+pub(crate) fn mm_lower(a: &Mat6, b: &Mat6) -> Mat6 {
+    let (a, b) = (a.as_slice(), b.as_slice());
+    let mut c = [0.0f64; 36];
+    for j in 0..3 {
+        // Column j of the top-left (= bottom-right) block: Σ_k A[:3, k] B[k, j].
+        let mut x = [0.0f64; 3];
+        // Column j of the bottom-left: Σ_{k<3} Y₁[:, k] X₂[k, j] + Σ_k X₁[:, k] Y₂[k, j].
+        let mut y = [0.0f64; 3];
+        let s = b[6 * j];
+        for i in 0..3 {
+            x[i] = a[i] * s;
+            y[i] = a[3 + i] * s;
+        }
+        for k in 1..3 {
+            let s = b[6 * j + k];
+            for i in 0..3 {
+                x[i] += a[6 * k + i] * s;
+                y[i] += a[6 * k + 3 + i] * s;
+            }
+        }
+        for k in 0..3 {
+            let s = b[6 * j + 3 + k];
+            for i in 0..3 {
+                y[i] += a[6 * (3 + k) + 3 + i] * s;
+            }
+        }
+        c[6 * j..6 * j + 3].copy_from_slice(&x);
+        c[6 * j + 3..6 * j + 6].copy_from_slice(&y);
+        c[6 * (j + 3) + 3..6 * (j + 3) + 6].copy_from_slice(&x);
+    }
+    Mat6::from_column_slice(&c)
+}
+
+/// The leading `R × C` block of `Aᵀ B` (the rest zero): [`mmk`] of the
+/// transpose, read from `A`'s columns (the same operations, no copy).
+#[inline(always)]
+pub(crate) fn tmk<const R: usize, const C: usize>(a: &Mat6, b: &Mat6) -> Mat6 {
+    let (a, b) = (a.as_slice(), b.as_slice());
+    let mut c = Mat6::zeros();
+    let cs = c.as_mut_slice();
+    for j in 0..C {
+        let mut col = [0.0f64; R];
+        let s = b[6 * j];
+        for i in 0..R {
+            col[i] = a[6 * i] * s;
+        }
+        for k in 1..6 {
+            let s = b[6 * j + k];
+            for i in 0..R {
+                col[i] += a[6 * i + k] * s;
+            }
+        }
+        cs[6 * j..6 * j + R].copy_from_slice(&col);
+    }
+    c
+}
+
+/// The leading `rows × cols` block of `Aᵀ B` (the rest zero), as
+/// [`mm_part`] of the transpose.
+#[inline(always)]
+pub(crate) fn tm_part(a: &Mat6, b: &Mat6, rows: usize, cols: usize) -> Mat6 {
+    mm_part(&a.transpose(), b, rows, cols)
+}
+
 /// A piece's (or joint's) basis `B` zero-padded to 6×6 (`k` leading
 /// columns), with the components it selects when every column is a unit
 /// vector: then `X B` and `Bᵀ X` are gathers of columns and rows, exact, and
-/// equal bit for bit to the products by the padded `B`.
+/// equal bit for bit to the products by the padded `B` (the identity, six
+/// strains, returns `X` itself).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Cols {
     pub k: usize,
     sel: Option<[usize; 6]>,
+    ident: bool,
     bm: Mat6,
 }
 
@@ -71,13 +167,24 @@ impl Cols {
         Self {
             k,
             sel: unit.then_some(sel),
+            ident: unit && sel == [0, 1, 2, 3, 4, 5],
             bm: *bm,
         }
+    }
+
+    /// The components a selection basis selects (`k` of them), `None` for
+    /// a general `B`.
+    #[inline(always)]
+    pub(crate) fn selection(&self) -> Option<&[usize]> {
+        self.sel.as_ref().map(|s| &s[..self.k])
     }
 
     /// `X B` (the leading `k` columns).
     #[inline(always)]
     pub(crate) fn right(&self, x: &Mat6) -> Mat6 {
+        if self.ident {
+            return *x;
+        }
         match &self.sel {
             Some(sel) => {
                 let mut out = Mat6::zeros();
@@ -93,6 +200,9 @@ impl Cols {
     /// `Bᵀ X` (the leading `k` rows).
     #[inline(always)]
     pub(crate) fn left(&self, x: &Mat6) -> Mat6 {
+        if self.ident {
+            return *x;
+        }
         match &self.sel {
             Some(sel) => {
                 let mut out = Mat6::zeros();
@@ -148,6 +258,23 @@ mod tests {
             assert_eq!(tm(&a, &b), a.tr_mul(&b));
             assert_eq!(tm(&a, &b), a.transpose() * b);
             assert_eq!(mm3(&a, &b, &c), a * b * c);
+            assert_eq!(mmk::<6, 6>(&a, &b), a * b);
+            // Lower block forms `[[X, 0], [Y, X]]`.
+            let lower = |m: &Mat6| {
+                let mut l = *m;
+                for i in 0..3 {
+                    for j in 0..3 {
+                        l[(i, j + 3)] = 0.0;
+                        l[(i + 3, j + 3)] = m[(i, j)];
+                    }
+                }
+                l
+            };
+            let (la, lb) = (lower(&a), lower(&b));
+            assert_eq!(mm_lower(&la, &lb), la * lb);
+            assert_eq!(tmk::<6, 6>(&a, &b), a.transpose() * b);
+            assert_eq!(mmk::<3, 4>(&a, &b), mm_part(&a, &b, 3, 4));
+            assert_eq!(tmk::<4, 3>(&a, &b), mm_part(&a.transpose(), &b, 4, 3));
         }
     }
 
@@ -169,6 +296,7 @@ mod tests {
             assert_eq!(c.right(&x), x * bm);
             assert_eq!(c.left(&x), bm.transpose() * x);
             assert_eq!(c.both(&x), bm.transpose() * x * bm);
+            assert_eq!(tm_part(&bm, &x, c.k, 6), bm.transpose() * x);
         }
     }
 }

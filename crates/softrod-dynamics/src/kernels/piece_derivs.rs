@@ -9,7 +9,7 @@
 //! ([`PieceDerivMaps::new`]), the coefficients per evaluation point
 //! ([`Coefficients::at`]).
 
-use super::mat6::{mm, tm};
+use super::mat6::{Cols, mm_lower, tm, tmk};
 use softrod_lie::series::{PSI_SWITCH, tau_rho};
 use softrod_lie::{Mat6, Vec6, ad, angular, linear};
 
@@ -163,11 +163,13 @@ pub(crate) struct PieceDerivMaps {
 impl PieceDerivMaps {
     #[inline(always)]
     pub fn new(xi: &Vec6, xid: &Vec6, xidd: &Vec6) -> Self {
+        // Every matrix here is of the form [[X, 0], [Y, X]] (`ad_v` and
+        // its sums and products): products in that form (`mm_lower`).
         let k = angular(xi);
         let pm = ad(xi);
         let mut p = [pm; 4];
         for i in 1..4 {
-            p[i] = mm(&pm, &p[i - 1]);
+            p[i] = mm_lower(&pm, &p[i - 1]);
         }
         let powers = |v: &Vec6| {
             let mut out = [pm * v; 4];
@@ -182,7 +184,7 @@ impl PieceDerivMaps {
         let e_ops = |v: &Vec6, pv: &[Vec6; 4]| {
             let mut out = [ad(v); 4];
             for i in 1..4 {
-                out[i] = mm(&pm, &out[i - 1]) + ad(&pv[i - 1]);
+                out[i] = mm_lower(&pm, &out[i - 1]) + ad(&pv[i - 1]);
             }
             out
         };
@@ -192,7 +194,7 @@ impl PieceDerivMaps {
         let adv = ad(xid);
         let mut f = [adv; 4];
         for i in 1..4 {
-            f[i] = mm(&pm, &f[i - 1]) + mm(&adv, &p[i - 1]);
+            f[i] = mm_lower(&pm, &f[i - 1]) + mm_lower(&adv, &p[i - 1]);
         }
         // e_1 = 0, e_{i+1} = ad_ξ̇ P^i ξ̇ + P e_i;
         // Ê_1 = 0, Ê_{i+1} = P Ê_i − ad_ξ̇ E_i(ξ̇) − ad_{e_i}.
@@ -200,7 +202,7 @@ impl PieceDerivMaps {
         let mut ehat = [Mat6::zeros(); 4];
         for i in 1..4 {
             e[i] = adv * vd[i - 1] + pm * e[i - 1];
-            ehat[i] = mm(&pm, &ehat[i - 1]) - mm(&adv, &ed[i - 1]) - ad(&e[i - 1]);
+            ehat[i] = mm_lower(&pm, &ehat[i - 1]) - mm_lower(&adv, &ed[i - 1]) - ad(&e[i - 1]);
         }
         let kd = k.dot(&angular(xid));
         Self {
@@ -299,6 +301,66 @@ pub(crate) fn tangent_transpose_form(
                 out -= lam;
             } else {
                 out -= tm(&p[m - 1], &lam);
+            }
+            fl = p[0].transpose() * fl;
+        }
+    }
+    out
+}
+
+/// `Bᵀ 𝒬 B` (the leading `k × k` block) of [`tangent_transpose_form`] for
+/// a selection basis `cols` (D90): each term on the selected rows and
+/// columns only, `(P^m B)ᵀ(Λ B)` over `K ≥ k` columns; the same operations
+/// on the entries kept, so the numbers are those of `𝒬` gathered, bit for
+/// bit. A general `B` takes the whole `𝒬` and projects it.
+#[inline(always)]
+pub(crate) fn tangent_transpose_form_basis(
+    p: &[Mat6; 4],
+    kbar: &Vec6,
+    phi: &[Vec6; 4],
+    chi: &[Vec6; 4],
+    cols: &Cols,
+) -> Mat6 {
+    match (cols.selection().is_some(), cols.k) {
+        // A general `B`, or all six directions: the whole form.
+        (false, _) | (true, 6) => cols.both(&tangent_transpose_form(p, kbar, phi, chi)),
+        (true, 0..=3) => form_selected::<3>(p, kbar, phi, chi, cols),
+        (true, 4) => form_selected::<4>(p, kbar, phi, chi, cols),
+        (true, _) => form_selected::<6>(p, kbar, phi, chi, cols),
+    }
+}
+
+#[inline(always)]
+fn form_selected<const K: usize>(
+    p: &[Mat6; 4],
+    kbar: &Vec6,
+    phi: &[Vec6; 4],
+    chi: &[Vec6; 4],
+    cols: &Cols,
+) -> Mat6 {
+    let pb = [
+        cols.right(&p[0]),
+        cols.right(&p[1]),
+        cols.right(&p[2]),
+        cols.right(&p[3]),
+    ];
+    let kb = cols.right(&Mat6::from_rows(&[kbar.transpose(); 6]));
+    let mut out = Mat6::zeros();
+    for i in 0..4 {
+        let u = pb[i].transpose() * phi[i];
+        for b in 0..K {
+            for a in 0..K {
+                out[(a, b)] += u[a] * kb[(0, b)];
+            }
+        }
+        let mut fl = chi[i];
+        for l in 0..=i {
+            let lb = cols.right(&lambda(&fl));
+            let m = i - l;
+            if m == 0 {
+                out -= cols.left(&lb);
+            } else {
+                out -= tmk::<K, K>(&pb[m - 1], &lb);
             }
             fl = p[0].transpose() * fl;
         }
@@ -435,6 +497,36 @@ mod tests {
                 let rhs = f.dot(&(dz * y));
                 assert!((lhs - rhs).abs() < 1e-13 * (1.0 + rhs.abs()), "𝒬 at {x}");
             }
+        }
+    }
+
+    /// `Bᵀ𝒬B` on a selection's rows and columns is `𝒬` gathered, bit for bit.
+    #[test]
+    fn form_in_basis_directions_equals_the_whole_form_projected() {
+        let xd = Vec6::new(0.2, 0.1, -0.4, 0.3, -0.5, 0.9);
+        let pm = PieceDerivMaps::new(&xi(), &xd, &xd);
+        let f = Vec6::new(0.5, -0.2, 0.9, 1.1, -0.7, 0.3);
+        let mut phi = [Vec6::zeros(); 4];
+        let mut chi = [Vec6::zeros(); 4];
+        for i in 0..4 {
+            phi[i] = f * (0.3 + i as f64);
+            chi[i] = f.map(|v| v * v) * (1.0 - 0.2 * i as f64);
+        }
+        let q = tangent_transpose_form(&pm.p, &pm.kbar(), &phi, &chi);
+        for sel in [
+            &[1usize, 3, 5][..],
+            &[4, 0, 2, 5],
+            &[0, 1, 2, 3, 4, 5],
+            &[3],
+            &[5, 4, 3, 2, 1],
+        ] {
+            let mut bm = Mat6::zeros();
+            for (j, &c) in sel.iter().enumerate() {
+                bm[(c, j)] = 1.0;
+            }
+            let cols = Cols::of(&bm);
+            let got = tangent_transpose_form_basis(&pm.p, &pm.kbar(), &phi, &chi, &cols);
+            assert_eq!(got, bm.transpose() * q * bm, "{sel:?}");
         }
     }
 

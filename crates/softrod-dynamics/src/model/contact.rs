@@ -10,7 +10,7 @@ use crate::model::pairs::PairWork;
 use crate::model::second::SecondWork;
 use nalgebra::{DMatrix, DVector, Matrix6xX};
 use softrod_kinematics::RodKinematics;
-use softrod_lie::{Mat3, Vec3};
+use softrod_lie::{Mat3, Vec3, Vec6};
 use softrod_mechanics::contact::{ContactSettings, Obstacle, contact_radius};
 
 /// Reference impact speed of the default stiffness (CT3) \[m/s\].
@@ -271,11 +271,11 @@ pub(crate) struct ContactWork {
     /// Per rod, `J(s)` and `J̇(s)` in the mixed frame (6 × rod dofs).
     pub jac: Vec<Matrix6xX<f64>>,
     pub jdot: Vec<Matrix6xX<f64>>,
-    /// A dense spatial Jacobian (6 × n_dof) for tree models.
-    pub dense: DMatrix<f64>,
-    pub dense_body: DMatrix<f64>,
     /// The relative point Jacobian (3 × n_dof) of tree models.
     pub jrel: DMatrix<f64>,
+    /// Per node of a tree model, the world wrenches of the contact forces
+    /// gathered for one inward sweep (CT28); zero between evaluations.
+    pub wrenches: Vec<Vec6>,
     /// The contacts of the last evaluation.
     pub active: Vec<Active>,
     /// The generalized contact force of the last evaluation (n_dof), and
@@ -357,9 +357,8 @@ impl ContactWork {
                 .iter()
                 .map(|r| Matrix6xX::zeros(r.n_dof()))
                 .collect(),
-            dense: DMatrix::zeros(6, model.n_dof()),
-            dense_body: DMatrix::zeros(6, model.n_dof()),
             jrel: DMatrix::zeros(3, model.n_dof()),
+            wrenches: vec![Vec6::zeros(); model.tree.as_ref().map_or(0, |t| t.nodes.len())],
             active: Vec::with_capacity(64),
             tau: DVector::zeros(model.n_dof()),
             tau_total: DVector::zeros(model.n_dof()),

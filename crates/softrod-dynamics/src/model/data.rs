@@ -77,6 +77,10 @@ pub struct Data {
     /// Cable tensions that replace the cables' schedules (the inputs `u`,
     /// one per cable in model order), set by [`Data::set_cable_tensions`].
     pub(crate) tensions: Option<DVector<f64>>,
+    /// Joint actuator forces that replace the actuators' schedules (one per
+    /// actuated coordinate, [`Model::n_joint_inputs`]), set by
+    /// [`Data::set_joint_forces`] (IS14).
+    pub(crate) joint_inputs: Option<DVector<f64>>,
     /// Per-node work space of an articulated model (empty otherwise).
     pub(crate) nodes: Vec<NodeWork>,
     /// World pose of every rod's base frame, from the last [`crate::frames`]
@@ -138,6 +142,7 @@ impl Data {
             strain_force: DVector::zeros(n),
             cable_scratch: DVector::zeros(n),
             tensions: None,
+            joint_inputs: None,
             nodes: model.tree.as_ref().map_or(Vec::new(), |t| {
                 (0..t.nodes.len()).map(|_| NodeWork::new()).collect()
             }),
@@ -206,6 +211,47 @@ impl Data {
             None => self.tensions = Some(DVector::from_column_slice(u)),
         }
         Ok(())
+    }
+
+    /// Sets the joint actuators' forces \[N or N·m\] (one per actuated
+    /// coordinate, in the order of [`Model::n_joint_inputs`]) that every
+    /// evaluation with this `Data` uses instead of the actuators' schedules
+    /// (docs/theory-control.md IS14; still scaled by
+    /// [`crate::Forces::load_scale`]). `None` goes back to the schedules.
+    ///
+    /// Errors: a length other than [`Model::n_joint_inputs`], or a value
+    /// that is not finite.
+    pub fn set_joint_forces(
+        &mut self,
+        model: &Model,
+        f: Option<&[f64]>,
+    ) -> Result<(), DynamicsError> {
+        let Some(f) = f else {
+            self.joint_inputs = None;
+            return Ok(());
+        };
+        if f.len() != model.n_joint_inputs() {
+            return Err(DynamicsError::JointForceCount {
+                got: f.len(),
+                expected: model.n_joint_inputs(),
+            });
+        }
+        if let Some((i, v)) = f.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(DynamicsError::NotFinite {
+                what: format!("joint force f[{i}]"),
+                value: *v,
+            });
+        }
+        match &mut self.joint_inputs {
+            Some(t) => t.as_mut_slice().copy_from_slice(f),
+            None => self.joint_inputs = Some(DVector::from_column_slice(f)),
+        }
+        Ok(())
+    }
+
+    /// The joint forces set by [`Data::set_joint_forces`], if any.
+    pub fn joint_forces(&self) -> Option<&[f64]> {
+        self.joint_inputs.as_ref().map(|t| t.as_slice())
     }
 
     /// The map from the poses `softrod_kinematics` computes for rod `r`

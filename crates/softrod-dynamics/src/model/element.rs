@@ -44,6 +44,9 @@ pub struct ElementInfo {
     /// Range of a prescribed joint's coordinates among the model's
     /// prescribed coordinates ([`Model::n_prescribed`]; empty otherwise).
     pub prescribed_dofs: std::ops::Range<usize>,
+    /// Range of an actuated joint's forces among the model's joint force
+    /// inputs ([`Model::n_joint_inputs`], IS14; empty otherwise).
+    pub actuator_inputs: std::ops::Range<usize>,
 }
 
 /// A rigid body inside a [`Model`].

@@ -113,6 +113,156 @@ pub struct Joint {
     /// are not generalized coordinates, the joint has no spring, damper or
     /// rest value, and the force it needs is an output.
     pub prescribed: Option<Prescribed>,
+    /// A force source at the joint's coordinates (docs/theory-control.md
+    /// IS14): a generalized force per coordinate, an input of the model.
+    pub actuator: Option<JointActuator>,
+}
+
+/// The generalized force of a joint actuator per coordinate as a function
+/// of time \[N for a translation, N·m for a rotation coordinate\]
+/// (docs/theory-control.md IS14).
+#[derive(Clone, Debug, PartialEq)]
+pub enum JointForce {
+    /// One constant value per coordinate.
+    Constant(Vec<f64>),
+    /// Piecewise linear in time through `(times[i], values[i])` [s; one
+    /// value per coordinate], times strictly increasing; held at the first
+    /// and last rows outside.
+    Table {
+        /// Times \[s\], strictly increasing.
+        times: Vec<f64>,
+        /// One row per time, one value per coordinate.
+        values: Vec<Vec<f64>>,
+    },
+}
+
+impl JointForce {
+    /// The force of coordinate `i` at time `t`: the constant, or linear
+    /// interpolation in the table (held outside it). No allocation.
+    #[inline]
+    pub fn at(&self, i: usize, t: f64) -> f64 {
+        match self {
+            JointForce::Constant(v) => v[i],
+            JointForce::Table { times, values } => {
+                let last = times.len() - 1;
+                if t <= times[0] {
+                    return values[0][i];
+                }
+                if t >= times[last] {
+                    return values[last][i];
+                }
+                // First time above t: the segment [k − 1, k] holds it.
+                let k = times.partition_point(|&x| x <= t);
+                let (t0, t1) = (times[k - 1], times[k]);
+                let w = (t - t0) / (t1 - t0);
+                values[k - 1][i] + w * (values[k][i] - values[k - 1][i])
+            }
+        }
+    }
+
+    /// The times where the force has a kink (a table's times) \[s\].
+    pub fn breakpoints(&self) -> &[f64] {
+        match self {
+            JointForce::Constant(_) => &[],
+            JointForce::Table { times, .. } => times,
+        }
+    }
+}
+
+/// A joint actuator (docs/theory-control.md IS14): the generalized force
+/// `f(t)` it applies at each coordinate of its joint (adding `+f` to the
+/// joint's generalized forces, like a spring's `−k(q − rest)`), and the
+/// bound `|f_i| ≤ max_force[i]` an inverse statics solve keeps it within.
+#[derive(Clone, Debug, PartialEq)]
+pub struct JointActuator {
+    /// The force over time (one value per coordinate).
+    pub force: JointForce,
+    /// Bound of each coordinate's force \[N or N·m\], `≥ 0` (`+∞`: none);
+    /// empty: no bound.
+    pub max_force: Vec<f64>,
+}
+
+impl JointActuator {
+    /// A constant force per coordinate, no bound.
+    pub fn constant(force: &[f64]) -> Self {
+        Self {
+            force: JointForce::Constant(force.to_vec()),
+            max_force: Vec::new(),
+        }
+    }
+
+    /// The same actuator with the bound `|f_i| ≤ max_force[i]`.
+    pub fn with_max_force(mut self, max_force: &[f64]) -> Self {
+        self.max_force = max_force.to_vec();
+        self
+    }
+
+    /// The bound of coordinate `i` (`+∞` when none is given).
+    pub fn bound(&self, i: usize) -> f64 {
+        self.max_force.get(i).copied().unwrap_or(f64::INFINITY)
+    }
+
+    /// Checks the shapes and values for a joint of `k` coordinates; the
+    /// message names the key under `actuator` (`force`, `force.times`,
+    /// `max_force[1]`, …).
+    pub fn check(&self, k: usize) -> Result<(), String> {
+        let row = |what: &str, v: &[f64]| -> Result<(), String> {
+            if v.len() != k {
+                return Err(format!(
+                    "{what} has {} values, the joint has {k} coordinates",
+                    v.len()
+                ));
+            }
+            if let Some((i, x)) = v.iter().enumerate().find(|(_, x)| !x.is_finite()) {
+                return Err(format!("{what}[{i}] = {x} must be finite"));
+            }
+            Ok(())
+        };
+        match &self.force {
+            JointForce::Constant(v) => row("force", v)?,
+            JointForce::Table { times, values } => {
+                if times.is_empty() {
+                    return Err("force.times is empty".into());
+                }
+                if values.len() != times.len() {
+                    return Err(format!(
+                        "force.values has {} rows for {} times",
+                        values.len(),
+                        times.len()
+                    ));
+                }
+                for (i, t) in times.iter().enumerate() {
+                    if !t.is_finite() {
+                        return Err(format!("force.times[{i}] = {t} must be finite"));
+                    }
+                    if i > 0 && *t <= times[i - 1] {
+                        return Err(format!(
+                            "force.times[{i}] = {t} must be greater than the time before it ({})",
+                            times[i - 1]
+                        ));
+                    }
+                }
+                for (i, v) in values.iter().enumerate() {
+                    row(&format!("force.values[{i}]"), v)?;
+                }
+            }
+        }
+        if !self.max_force.is_empty() && self.max_force.len() != k {
+            return Err(format!(
+                "max_force has {} values, the joint has {k} coordinates",
+                self.max_force.len()
+            ));
+        }
+        if let Some((i, x)) = self
+            .max_force
+            .iter()
+            .enumerate()
+            .find(|(_, x)| x.is_nan() || **x < 0.0)
+        {
+            return Err(format!("max_force[{i}] = {x} must be ≥ 0"));
+        }
+        Ok(())
+    }
 }
 
 impl Default for Joint {
@@ -130,6 +280,7 @@ impl Joint {
             damping: Vec::new(),
             rest: Vec::new(),
             prescribed: None,
+            actuator: None,
         }
     }
 
@@ -187,6 +338,22 @@ impl Joint {
     pub fn with_prescribed(mut self, motion: Prescribed) -> Self {
         self.prescribed = Some(motion);
         self
+    }
+
+    /// With an actuator (IS14).
+    pub fn with_actuator(mut self, actuator: JointActuator) -> Self {
+        self.actuator = Some(actuator);
+        self
+    }
+
+    /// Number of actuated coordinates: the joint's coordinates when it has
+    /// an actuator, else 0.
+    pub fn actuated_dof(&self) -> usize {
+        if self.actuator.is_some() {
+            self.dof()
+        } else {
+            0
+        }
     }
 
     /// Number of generalized coordinates: the kind's, or zero when the
@@ -255,6 +422,20 @@ impl Joint {
                     "{what} on a prescribed joint: its motion is given, a spring or damper would do nothing"
                 )));
             }
+        }
+        if let Some(a) = &self.actuator {
+            if k == 0 {
+                return Err(bad(
+                    "an actuator on a fixed joint: it has no coordinates to drive".into(),
+                ));
+            }
+            if self.prescribed.is_some() {
+                return Err(bad(
+                    "an actuator on a prescribed joint: its motion is given, a force would do nothing"
+                        .into(),
+                ));
+            }
+            a.check(k).map_err(|e| bad(format!("actuator: {e}")))?;
         }
         for (what, v, non_neg) in [
             ("stiffness", &self.stiffness, true),

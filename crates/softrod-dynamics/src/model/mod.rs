@@ -23,7 +23,7 @@ pub use builder::{IntoRod, ModelBuilder, RodBuilder};
 pub use closure::{Closure, ClosureFrame, ClosureKind};
 pub use data::Data;
 pub use element::{BodyModel, Element, ElementInfo, ElementKind};
-pub use joint::{Attachment, BodyLoad, BodySpec, Joint, JointKind};
+pub use joint::{Attachment, BodyLoad, BodySpec, Joint, JointActuator, JointForce, JointKind};
 pub use prescribed::{Curve, Prescribed, Spline};
 pub use rod::{Rod, RodModel};
 
@@ -139,12 +139,14 @@ impl Model {
         let mut off = 0;
         let mut pres = 0;
         let mut cables = 0;
+        let mut inputs = 0;
         for element in elements {
             match element {
                 Element::Rod(spec, mut attachment) => {
                     attachment.joint.validate(&spec.name)?;
                     let jd = attachment.joint.dof();
                     let pd = attachment.joint.prescribed_dof();
+                    let ad = attachment.joint.actuated_dof();
                     let index = rods.len();
                     let rm = build_rod(spec, index, off + jd, cables, &gl)?;
                     infos.push(ElementInfo {
@@ -153,7 +155,9 @@ impl Model {
                         attachment,
                         joint_dofs: off..off + jd,
                         prescribed_dofs: pres..pres + pd,
+                        actuator_inputs: inputs..inputs + ad,
                     });
+                    inputs += ad;
                     pres += pd;
                     off += jd + rm.n_dof();
                     cables += rm.spec.cables.len();
@@ -164,13 +168,16 @@ impl Model {
                     attachment.joint.validate(&spec.name)?;
                     let jd = attachment.joint.dof();
                     let pd = attachment.joint.prescribed_dof();
+                    let ad = attachment.joint.actuated_dof();
                     infos.push(ElementInfo {
                         name: spec.name.clone(),
                         kind: ElementKind::Body(bodies.len()),
                         attachment,
                         joint_dofs: off..off + jd,
                         prescribed_dofs: pres..pres + pd,
+                        actuator_inputs: inputs..inputs + ad,
                     });
+                    inputs += ad;
                     pres += pd;
                     off += jd;
                     bodies.push(BodyModel {
@@ -492,12 +499,22 @@ impl Model {
         }) {
             t.push("joint springs".into());
         }
+        if self.n_joint_inputs() > 0 {
+            t.push("joint actuators".into());
+        }
         t
     }
 
     /// Number of cables over all rods (columns of the actuation matrix).
     pub fn n_cables(&self) -> usize {
         self.rods.iter().map(|r| r.spec.cables.len()).sum()
+    }
+
+    /// Number of joint force inputs: the coordinates of every joint with an
+    /// actuator (docs/theory-control.md IS14), elements in order, each
+    /// joint's coordinates in order ([`ElementInfo::actuator_inputs`]).
+    pub fn n_joint_inputs(&self) -> usize {
+        self.elements.iter().map(|e| e.actuator_inputs.len()).sum()
     }
 }
 

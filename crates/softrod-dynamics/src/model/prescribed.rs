@@ -140,6 +140,16 @@ impl Spline {
         })
     }
 
+    /// The sample times \[s\].
+    pub fn times(&self) -> &[f64] {
+        &self.t
+    }
+
+    /// The sample values (rad or m).
+    pub fn values(&self) -> &[f64] {
+        &self.x
+    }
+
     /// First and last knot \[s\].
     pub fn span(&self) -> (f64, f64) {
         (self.t[0], self.t[self.t.len() - 1])
@@ -239,8 +249,9 @@ impl Curve {
 impl crate::model::Model {
     /// The times where a drive of the model changes abruptly, sorted and
     /// without repeats \[s\]: the ends of the prescribed joints' spline
-    /// curves ([`Curve::breakpoints`]) and the times of the cables' tension
-    /// tables (piecewise linear, [`softrod_mechanics::Tension::breakpoints`]).
+    /// curves ([`Curve::breakpoints`]), the times of the cables' tension
+    /// tables (piecewise linear, [`softrod_mechanics::Tension::breakpoints`])
+    /// and of the joint actuators' force tables.
     /// The solution is not smooth there; an adaptive integrator ends its
     /// steps at these times instead of stepping across them
     /// (`softrod_integrate::Options::breakpoints`).
@@ -256,6 +267,12 @@ impl crate::model::Model {
                     .iter()
                     .flat_map(|c| c.tension.breakpoints().iter().copied())
             }))
+            .chain(
+                self.elements
+                    .iter()
+                    .filter_map(|e| e.attachment.joint.actuator.as_ref())
+                    .flat_map(|a| a.force.breakpoints().iter().copied()),
+            )
             .collect();
         times.sort_by(f64::total_cmp);
         times.dedup();

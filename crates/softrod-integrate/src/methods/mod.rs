@@ -20,6 +20,6 @@ pub(crate) use esdirk::{
 };
 pub(crate) use genalpha::GeneralizedAlpha;
 pub use genalpha::generalized_alpha_parameters;
-pub(crate) use radau5::Radau5;
+pub(crate) use radau5::{RADAU_A, RADAU_C, Radau5};
 pub(crate) use rk4::Rk4;
 pub(crate) use rosw::Rosw34;

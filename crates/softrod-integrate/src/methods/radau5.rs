@@ -48,6 +48,25 @@ use crate::stepper::Stepper;
 const SQ6: f64 = 2.449489742783178098197284074705891391965947480656670128432692567;
 const C1: f64 = (4.0 - SQ6) / 10.0;
 const C2: f64 = (4.0 + SQ6) / 10.0;
+/// The Radau IIA coefficients `A` (Hairer–Wanner, *ODEs II*, Table
+/// IV.5.6) and the nodes `c` (`c₃ = 1`, `A`'s last row is `b`): the
+/// collocation equations the discrete adjoint and the forward
+/// sensitivities solve (docs/theory-control.md G25).
+pub(crate) const RADAU_A: [[f64; 3]; 3] = [
+    [
+        (88.0 - 7.0 * SQ6) / 360.0,
+        (296.0 - 169.0 * SQ6) / 1800.0,
+        (-2.0 + 3.0 * SQ6) / 225.0,
+    ],
+    [
+        (296.0 + 169.0 * SQ6) / 1800.0,
+        (88.0 + 7.0 * SQ6) / 360.0,
+        (-2.0 - 3.0 * SQ6) / 225.0,
+    ],
+    [(16.0 - SQ6) / 36.0, (16.0 + SQ6) / 36.0, 1.0 / 9.0],
+];
+/// The nodes of [`RADAU_A`].
+pub(crate) const RADAU_C: [f64; 3] = [C1, C2, 1.0];
 /// Error-estimate weights `eᵢ` (`e = b̂ − b` scaled by the real eigenvalue).
 const DD1: f64 = -(13.0 + 7.0 * SQ6) / 3.0;
 const DD2: f64 = (-13.0 + 7.0 * SQ6) / 3.0;
@@ -580,17 +599,7 @@ mod tests {
     /// eigenvalues of [`eigenvalues`].
     #[test]
     fn transformation_diagonalizes_the_inverse_coefficients() {
-        let a = nalgebra::Matrix3::new(
-            (88.0 - 7.0 * SQ6) / 360.0,
-            (296.0 - 169.0 * SQ6) / 1800.0,
-            (-2.0 + 3.0 * SQ6) / 225.0,
-            (296.0 + 169.0 * SQ6) / 1800.0,
-            (88.0 + 7.0 * SQ6) / 360.0,
-            (-2.0 - 3.0 * SQ6) / 225.0,
-            (16.0 - SQ6) / 36.0,
-            (16.0 + SQ6) / 36.0,
-            1.0 / 9.0,
-        );
+        let a = nalgebra::Matrix3::from_fn(|i, j| RADAU_A[i][j]);
         // Row sums are the nodes.
         let c = a * nalgebra::Vector3::repeat(1.0);
         assert!(

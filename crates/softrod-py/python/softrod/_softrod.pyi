@@ -426,6 +426,12 @@ class Simulation:
     @property
     def n_cables(self) -> int: ...
     @property
+    def n_joint_inputs(self) -> int:
+        """Actuated joint coordinates (the length of a joint_forces input)."""
+    @property
+    def joint_max_forces(self) -> list[float]:
+        """Each actuated coordinate's max_force [N or N m]; inf where the scene gives none."""
+    @property
     def duration(self) -> float | None:
         """The scene's [run] duration [s]; None when built in Python."""
     @property
@@ -508,8 +514,10 @@ class Simulation:
     def statics(
         self, *, tensions: ArrayLike | None = None,
         loads: Sequence[tuple[_RodRef, PointLoad]] | None = None,
+        joint_forces: ArrayLike | None = None,
     ) -> Statics:
-        """tensions (n_cables,) [N] replace the schedules, loads are added, for this solve."""
+        """tensions (n_cables,) [N] and joint_forces (n_joint_inputs,) replace the
+        schedules, loads are added, for this solve."""
     def solve_actuation(
         self,
         targets: Sequence[dict[str, object]],
@@ -520,11 +528,15 @@ class Simulation:
         max_iterations: int = 100,
         warm_start: dict[str, object] | None = None,
         t: float = 0.0,
+        unknown_loads: Sequence[dict[str, object]] | None = None,
     ) -> dict[str, object]:
-        """Inverse statics: tensions 0 <= T <= max_tension [N] and the equilibrium that bring
+        """Inverse statics: tensions 0 <= T <= max_tension [N], actuated joints' forces
+        |f| <= max_force [N or N m], unknown point loads ({"rod", "s", "max_force"}; default the
+        scene's [[load]] unknown = true) and the equilibrium that bring
         rod sections or body frames closest to targets ({"rod", "s", "position", "rotation",
         "weight"}, or {"body", "position", "rotation", "weight"}); closed models included;
-        returns converged, reached, message, tensions, q, bounds, residual, targets, ...
+        returns converged, reached, message, tensions, q, bounds, forces, force_bounds,
+        joint_forces, joint_force_bounds, residual, targets, ...
         Raises InputError on bad input, SimulationError if it does not converge."""
     def value_and_gradient(
         self,
@@ -539,9 +551,10 @@ class Simulation:
         newton_tol: float | None = None,
         method: Literal["adjoint", "forward"] | None = None,
     ) -> tuple[float, dict[str, float | _F64]]:
-        """Loss of a run and its exact gradient (discrete adjoint of esdirk or esdirk5) w.r.t. params
+        """Loss of a run and its exact gradient (discrete adjoint of esdirk, esdirk5 or radau5) w.r.t. params
         ("q0", "qdot0", "ROD.young", "ROD.shear_modulus", "ROD.density", "ROD.viscosity",
-        "BODY.mass", "cableN.tension"). loss: {"type": "position", "rod", "s", "times",
+        "BODY.mass", "cableN.tension", "ELEMENT.prescribed": a prescribed joint's samples, shaped as
+        its values, open models only). loss: {"type": "position", "rod", "s", "times",
         "targets", "weight"}, {"type": "quadratic", "times", "q_weights", "qdot_weights",
         "q_ref"}, a callable l(t, q, qdot) -> (value, dl_dq, dl_dqdot) at `times`, or a list.
         method: "adjoint" (default) or "forward" (forward sensitivities; few parameters).
@@ -568,7 +581,8 @@ class Simulation:
         control_every: float | None = None,
     ) -> Trajectory: ...
     def step(
-        self, state: State, dt: float, u: ArrayLike | None = None, *, substeps: int | None = None
+        self, state: State, dt: float, u: ArrayLike | None = None, *, substeps: int | None = None,
+        joint_forces: ArrayLike | None = None,
     ) -> State: ...
     def copy(self) -> Simulation: ...
     def __copy__(self) -> Simulation: ...
@@ -600,11 +614,14 @@ class BatchStepper:
     @property
     def n_cables(self) -> int: ...
     @property
+    def n_joint_inputs(self) -> int: ...
+    @property
     def threads(self) -> int: ...
     def reset_contact(self, i: int | None = None) -> None:
         """Forget copy i's (None: every copy's) committed contact state."""
     def step(
         self, t: float | ArrayLike, q: ArrayLike, qdot: ArrayLike, u: ArrayLike, dt: float,
         active: Sequence[bool] | None = None, *, substeps: int | None = None,
+        joint_forces: ArrayLike | None = None,
     ) -> tuple[_F64, _F64, list[str | None]]:
         """(q (n, n_dof), qdot (n, n_dof), errors: None or the failure's message per copy)"""

@@ -57,15 +57,20 @@ def Prescribed(times: Sequence[float], values: Any) -> dict[str, Any]:
 def Joint(type: str = "fixed", *, axis: Sequence[float] | None = None,
           axes: Sequence[Sequence[float]] | None = None,
           stiffness: Any = None, damping: Any = None, rest: Any = None,
-          prescribed: Mapping[str, Any] | None = None) -> dict[str, Any]:
+          prescribed: Mapping[str, Any] | None = None,
+          actuator: Mapping[str, Any] | None = None) -> dict[str, Any]:
     """A ``joint`` table: ``type`` "fixed" (default), "revolute" or
     "prismatic" (``axis`` in the element's frame), "universal" (``axes``,
     two), "spherical" (rotation vector) or "free" (rotation vector,
     translation: a floating base); per DoF, optional ``stiffness``,
     ``damping`` (SI) and ``rest`` (the value at zero force);
-    ``prescribed``: see ``Prescribed``."""
+    ``prescribed``: see ``Prescribed``; ``actuator``: ``{"force": ...,
+    "max_force": ...}``, a generalized force per DoF [N or N m] (a number,
+    one per DoF, or ``{"times", "values"}``) and its bound for
+    ``solve_actuation`` (docs/theory-control.md IS14)."""
     return _table(type=type, axis=axis, axes=axes, stiffness=stiffness,
-                  damping=damping, rest=rest, prescribed=prescribed)
+                  damping=damping, rest=rest, prescribed=prescribed,
+                  actuator=actuator)
 
 
 def Body(name: str, parent: str, *, mass: float, inertia: Any,

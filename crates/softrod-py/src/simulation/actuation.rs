@@ -5,7 +5,7 @@
 use numpy::PyArrayDyn;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
-use softrod::control::{ActuationOptions, Target};
+use softrod::control::{ActuationOptions, Target, UnknownLoad};
 
 use super::{Simulation, rod_index};
 use crate::convert::{array_out, mat3, vec_out, vec3, vector};
@@ -19,6 +19,7 @@ pub(super) struct Settings<'a, 'py> {
     pub max_iterations: usize,
     pub warm_start: Option<&'a Bound<'py, PyDict>>,
     pub t: f64,
+    pub unknown_loads: Option<&'a Bound<'py, PyAny>>,
 }
 
 impl Simulation {
@@ -110,20 +111,57 @@ impl Simulation {
                 Err(_) => vector(m, "max_tension", nc)?.slice().to_vec(),
             },
         };
-        let (initial_tensions, initial_q) = match settings.warm_start {
-            None => (None, None),
-            Some(w) => {
-                let get = |k: &str, n: usize| -> PyResult<Vec<f64>> {
-                    let v = w.get_item(k)?.ok_or_else(|| {
-                        input(format!("warm_start must be a previous result (no {k:?})"))
-                    })?;
-                    Ok(vector(&v, &format!("warm_start[{k:?}]"), n)?
-                        .slice()
-                        .to_vec())
-                };
-                (Some(get("tensions", nc)?), Some(get("q", model.n_dof())?))
-            }
+        let unknown_loads = match settings.unknown_loads {
+            None => self.sim.scene_unknown_loads().to_vec(),
+            Some(v) => unknown_loads(model, v)?,
         };
+        let nu = unknown_loads.len();
+        let nj = model.n_joint_inputs();
+        let (initial_tensions, initial_q, initial_forces, initial_joint_forces) =
+            match settings.warm_start {
+                None => (None, None, None, None),
+                Some(w) => {
+                    let get = |k: &str, n: usize| -> PyResult<Vec<f64>> {
+                        let v = w.get_item(k)?.ok_or_else(|| {
+                            input(format!("warm_start must be a previous result (no {k:?})"))
+                        })?;
+                        Ok(vector(&v, &format!("warm_start[{k:?}]"), n)?
+                            .slice()
+                            .to_vec())
+                    };
+                    // A previous result of the same problem has them; one
+                    // of another (or a hand-made dict) may not: start those
+                    // from the defaults.
+                    let forces = match w.get_item("forces")? {
+                        Some(f) if nu > 0 => Some(
+                            vector(
+                                &f.call_method0("flatten")?,
+                                "warm_start[\"forces\"]",
+                                3 * nu,
+                            )?
+                            .slice()
+                            .chunks_exact(3)
+                            .map(|c| [c[0], c[1], c[2]])
+                            .collect::<Vec<_>>(),
+                        ),
+                        _ => None,
+                    };
+                    let joints = match w.get_item("joint_forces")? {
+                        Some(f) => Some(
+                            vector(&f, "warm_start[\"joint_forces\"]", nj)?
+                                .slice()
+                                .to_vec(),
+                        ),
+                        None => None,
+                    };
+                    (
+                        Some(get("tensions", nc)?),
+                        Some(get("q", model.n_dof())?),
+                        forces,
+                        joints,
+                    )
+                }
+            };
         let options = ActuationOptions {
             max_tension,
             effort_weight: settings.effort_weight,
@@ -131,6 +169,9 @@ impl Simulation {
             max_iterations: settings.max_iterations,
             initial_tensions,
             initial_q,
+            initial_forces,
+            initial_joint_forces,
+            unknown_loads,
             time: settings.t,
             ..ActuationOptions::default()
         };
@@ -165,6 +206,18 @@ impl Simulation {
         out.set_item("effort_weight", a.effort_weight)?;
         let bounds: Vec<&str> = a.bounds.iter().map(|b| b.name()).collect();
         out.set_item("bounds", bounds)?;
+        let forces: Vec<f64> = a.forces.iter().flat_map(|f| f.iter().copied()).collect();
+        let forces: Bound<'_, PyArrayDyn<f64>> = array_out(py, forces, &[a.forces.len(), 3])?;
+        out.set_item("forces", forces)?;
+        let force_bounds: Vec<Vec<&str>> = a
+            .force_bounds
+            .iter()
+            .map(|b| b.iter().map(|x| x.name()).collect())
+            .collect();
+        out.set_item("force_bounds", force_bounds)?;
+        out.set_item("joint_forces", vec_out(py, &a.joint_forces))?;
+        let joint_bounds: Vec<&str> = a.joint_force_bounds.iter().map(|b| b.name()).collect();
+        out.set_item("joint_force_bounds", joint_bounds)?;
         let per = PyList::empty(py);
         for r in &a.residuals {
             let d = PyDict::new(py);
@@ -182,6 +235,66 @@ impl Simulation {
         out.set_item("targets", per)?;
         Ok(out)
     }
+}
+
+/// `unknown_loads=`: a list of dicts `{"rod": name or index, "s": arc
+/// length [m] (default the tip), "max_force": a number or three (default
+/// none)}`.
+fn unknown_loads(
+    model: &softrod::dynamics::Model,
+    v: &Bound<'_, PyAny>,
+) -> PyResult<Vec<UnknownLoad>> {
+    let py = v.py();
+    let list = v
+        .cast::<PyList>()
+        .map_err(|_| input("unknown_loads must be a list of dicts"))?;
+    let mut out = Vec::with_capacity(list.len());
+    for (i, item) in list.iter().enumerate() {
+        let key = |k: &str| format!("unknown_loads[{i}].{k}");
+        let d = item
+            .cast::<PyDict>()
+            .map_err(|_| input(format!("unknown_loads[{i}] must be a dict")))?;
+        for k in d.keys() {
+            let k: String = k.extract()?;
+            if !["rod", "s", "max_force"].contains(&k.as_str()) {
+                return Err(input(format!(
+                    "unknown_loads[{i}]: unknown key {k:?} (rod, s, max_force)"
+                )));
+            }
+        }
+        let rod = match d.get_item("rod")? {
+            Some(r) => rod_index(model, &r)
+                .map_err(|e| input(format!("{}: {}", key("rod"), e.value(py))))?,
+            None => 0,
+        };
+        let s = match d.get_item("s")? {
+            Some(v) => v
+                .extract::<f64>()
+                .map_err(|_| input(format!("{} must be a number", key("s"))))?,
+            None => model.rods()[rod].spec.geometry.length(),
+        };
+        let max = match d.get_item("max_force")? {
+            None => [f64::INFINITY; 3],
+            Some(m) => match m.extract::<f64>() {
+                Ok(x) => [x; 3],
+                Err(_) => vec3(&m, &key("max_force"))?,
+            },
+        };
+        if let Some(k) = (0..3).find(|&k| max[k].is_nan() || max[k] < 0.0) {
+            return Err(input(format!(
+                "{}[{k}] must be >= 0, got {}",
+                key("max_force"),
+                max[k]
+            )));
+        }
+        out.push(UnknownLoad {
+            rod,
+            s,
+            min: max.map(|m| -m),
+            max,
+        });
+    }
+    Ok(out)
 }
 
 /// The index of a body given by name or index (negative from the end) in

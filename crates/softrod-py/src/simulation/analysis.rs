@@ -17,7 +17,12 @@ impl Simulation {
         py: Python<'_>,
         tensions: Option<&Bound<'_, PyAny>>,
         loads: Option<&Bound<'_, PyAny>>,
+        joint_forces: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Statics> {
+        let jf = match joint_forces {
+            Some(f) => Some(self.joint_forces(f)?),
+            None => None,
+        };
         let n_cables = self.sim.n_cables();
         let u = match tensions {
             Some(t) => {
@@ -36,12 +41,20 @@ impl Simulation {
         let sim = variant.as_mut().unwrap_or(&mut self.sim);
         let out = guard_detached(py, || {
             let previous = sim.cable_tensions().map(<[f64]>::to_vec);
+            let previous_joints = sim.joint_forces().map(<[f64]>::to_vec);
             if let Some(u) = &u {
                 sim.set_cable_tensions(Some(u)).map_err(to_py)?;
+            }
+            if let Some(f) = &jf {
+                sim.set_joint_forces(Some(f)).map_err(to_py)?;
             }
             let result = solve(sim);
             if u.is_some() {
                 sim.set_cable_tensions(previous.as_deref()).map_err(to_py)?;
+            }
+            if jf.is_some() {
+                sim.set_joint_forces(previous_joints.as_deref())
+                    .map_err(to_py)?;
             }
             result
         })?;

@@ -36,6 +36,7 @@ impl Simulation {
                 let inputs = self.inputs()?;
                 inputs.u = u;
                 inputs.tau_extra = tau.map(|t| DVector::from_column_slice(t.slice()));
+                inputs.joint_forces = None;
                 let qdd = inputs
                     .forward_dynamics(t, q.slice(), qd.slice())
                     .map_err(dynamics)?;
@@ -70,6 +71,7 @@ impl Simulation {
                 let inputs = self.inputs()?;
                 inputs.u = u;
                 inputs.tau_extra = None;
+                inputs.joint_forces = None;
                 inputs.sync().map_err(dynamics)?;
                 let s = &mut inputs.sys;
                 let tau = softrod::dynamics::inverse_dynamics(

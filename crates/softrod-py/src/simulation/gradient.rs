@@ -7,7 +7,7 @@ use pyo3::types::{PyDict, PyList, PyTuple};
 use softrod::{GradientOptions, LossTerm};
 
 use super::Simulation;
-use crate::convert::{array, vec_out, vector};
+use crate::convert::{array, mat_out, vec_out, vector};
 use crate::errors::{input, to_py};
 
 /// The times of a loss term (`key` names it in errors).
@@ -185,7 +185,26 @@ impl Simulation {
         let out = PyDict::new(py);
         for (name, v) in &g.gradients {
             // Material constants and masses as floats; the initial state and
-            // the tension tables as arrays (whatever their length).
+            // the tension tables as arrays (whatever their length); a
+            // prescribed joint's samples in the shape of its `values`: one
+            // row per sample, one column per coordinate when it has more
+            // than one.
+            if let Some(element) = name.strip_suffix(".prescribed") {
+                let dof = self
+                    .sim
+                    .model()
+                    .elements()
+                    .iter()
+                    .find(|e| e.name == element)
+                    .map_or(1, |e| e.attachment.joint.kind.dof());
+                if dof > 1 {
+                    let m = nalgebra::DMatrix::from_row_slice(v.len() / dof, dof, v);
+                    out.set_item(name, mat_out(py, &m))?;
+                } else {
+                    out.set_item(name, vec_out(py, v))?;
+                }
+                continue;
+            }
             let array = name == "q0" || name == "qdot0" || name.ends_with(".tension");
             if array {
                 out.set_item(name, vec_out(py, v))?;

@@ -31,7 +31,7 @@ use softrod::dynamics::{
 };
 use softrod::integrate::RodSystem;
 
-use crate::control::{CableInputs, check_tensions};
+use crate::control::{CableInputs, check_joint_forces, check_tensions};
 use crate::convert::{mat_out, vec_out, vector};
 use crate::errors::{dynamics, guard, input, to_py};
 use crate::model::simulation_of;
@@ -159,6 +159,14 @@ impl Simulation {
             ));
         }
         Ok(self.inputs.as_mut().expect("just set"))
+    }
+
+    /// Joint forces checked against the model's actuated joint coordinates.
+    pub(crate) fn joint_forces(&mut self, f: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
+        let nj = self.sim.model().n_joint_inputs();
+        let a = vector(f, "joint_forces", nj)?;
+        check_joint_forces(nj, "joint_forces", a.slice()).map_err(input)?;
+        Ok(a.slice().to_vec())
     }
 
     /// `u` checked against the model's cables.
@@ -307,6 +315,35 @@ impl Simulation {
     #[getter]
     fn n_cables(&self) -> usize {
         self.sim.model().n_cables()
+    }
+
+    /// Number of actuated joint coordinates (the length of a `joint_forces`
+    /// input; docs/theory-control.md IS14): each joint with an actuator
+    /// contributes its coordinates, elements in model order.
+    #[getter]
+    fn n_joint_inputs(&self) -> usize {
+        self.sim.model().n_joint_inputs()
+    }
+
+    /// The bound `|f_i| ≤ max_force_i` [N or N·m] of each actuated joint
+    /// coordinate (`n_joint_inputs` of them, in their order), from the
+    /// scene's `actuator = { max_force }`; `inf` where none is given.
+    #[getter]
+    fn joint_max_forces(&self) -> Vec<f64> {
+        let model = self.sim.model();
+        model
+            .elements()
+            .iter()
+            .filter_map(|e| {
+                let j = &e.attachment.joint;
+                j.actuator.as_ref().map(|a| {
+                    (0..j.actuated_dof())
+                        .map(|i| a.bound(i))
+                        .collect::<Vec<_>>()
+                })
+            })
+            .flatten()
+            .collect()
     }
 
     /// A name for every generalized coordinate, in the order of `q`:
@@ -814,19 +851,24 @@ impl Simulation {
     /// For actuation and load studies without editing the scene:
     /// `tensions` (n_cables,) [N, ≥ 0] replace the cables' schedules for
     /// this solve; `loads`, a list of `(rod, softrod.PointLoad)` pairs (rod
-    /// a name or an index), are added to the model's loads for this solve.
-    #[pyo3(signature = (*, tensions=None, loads=None))]
+    /// a name or an index), are added to the model's loads for this solve;
+    /// `joint_forces` (n_joint_inputs,) [N or N·m] replace the joint
+    /// actuators' schedules for this solve (IS14).
+    #[pyo3(signature = (*, tensions=None, loads=None, joint_forces=None))]
     fn statics(
         &mut self,
         py: Python<'_>,
         tensions: Option<&Bound<'_, PyAny>>,
         loads: Option<&Bound<'_, PyAny>>,
+        joint_forces: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Statics> {
-        self.statics_impl(py, tensions, loads)
+        self.statics_impl(py, tensions, loads, joint_forces)
     }
 
-    /// Inverse statics (docs/theory-control.md IS1–IS12): the cable tensions
-    /// `0 ≤ T ≤ max_tension` [N] and the static equilibrium (with loop
+    /// Inverse statics (docs/theory-control.md IS1–IS14): the cable tensions
+    /// `0 ≤ T ≤ max_tension` [N], the forces of the joints with an actuator
+    /// (`|f| ≤ max_force`, N or N·m, IS14) and of the unknown point loads
+    /// (IS13), and the static equilibrium (with loop
     /// closures, the constrained one) that bring rod sections or body frames
     /// closest to `targets`, the least effort among equally close ones.
     /// `targets`: a list of dicts `{"rod": name or index (default 0), "s":
@@ -838,16 +880,23 @@ impl Simulation {
     /// every cable or one per cable (default none). `effort_weight`: the
     /// relative weight ρ of the effort term. `warm_start`: a previous result
     /// (its tensions and q start the search: a target that moved a little
-    /// costs a few iterations). Returns a dict: `converged`, `reached`,
+    /// costs a few iterations). `unknown_loads`: point forces to solve for, a
+    /// list of dicts `{"rod": name or index, "s": [m] (default the tip),
+    /// "max_force": one bound for |f_x|, |f_y|, |f_z| or three [N] (default
+    /// none)}`; default the scene's `[[load]]`s with `unknown = true`
+    /// (`[]`: none). Returns a dict: `converged`, `reached`,
     /// `message`, `tensions`, `q`, `bounds` ("free", "lower", "upper" per
-    /// cable), `residual` (weighted target error), `targets` (per target:
+    /// cable), `forces` ((n_u, 3) world forces of the unknown loads [N]),
+    /// `force_bounds` (per load three bound names), `joint_forces` (one per
+    /// actuated joint coordinate, elements in order [N or N·m]),
+    /// `joint_force_bounds`, `residual` (weighted target error), `targets` (per target:
     /// reached `position`, `rotation`, `position_error`, `rotation_error`),
     /// `iterations`, `statics_iterations`, `cost`, `effort_weight`. A target
     /// out of reach returns the closest reachable shape with `reached`
     /// False. Bad input raises `softrod.InputError`; an iteration that does
     /// not converge raises `softrod.SimulationError` with its residual.
     /// Releases the GIL.
-    #[pyo3(signature = (targets, *, max_tension=None, effort_weight=1e-9, reach_tolerance=1e-6, max_iterations=100, warm_start=None, t=0.0))]
+    #[pyo3(signature = (targets, *, max_tension=None, effort_weight=1e-9, reach_tolerance=1e-6, max_iterations=100, warm_start=None, t=0.0, unknown_loads=None))]
     #[allow(clippy::too_many_arguments)]
     fn solve_actuation<'py>(
         &mut self,
@@ -859,6 +908,7 @@ impl Simulation {
         max_iterations: usize,
         warm_start: Option<&Bound<'py, pyo3::types::PyDict>>,
         t: f64,
+        unknown_loads: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
         let settings = actuation::Settings {
             max_tension,
@@ -867,6 +917,7 @@ impl Simulation {
             max_iterations,
             warm_start,
             t,
+            unknown_loads,
         };
         self.solve_actuation_impl(py, targets, settings)
     }
@@ -878,15 +929,18 @@ impl Simulation {
     /// `params`: names among `"q0"`, `"qdot0"` (arrays of n_dof),
     /// `"ROD.young"`, `"ROD.shear_modulus"`, `"ROD.density"`,
     /// `"ROD.viscosity"`, `"BODY.mass"` (floats), `"cableN.tension"` (an
-    /// array, one entry per value of the tension table). `loss`: a dict or a
+    /// array, one entry per value of the tension table),
+    /// `"ELEMENT.prescribed"` (the samples of the prescribed joint of rod or
+    /// body ELEMENT, in the shape of its `values`: `(samples,)` for one
+    /// coordinate, `(samples, dof)` for more; open models, G17–G20). `loss`: a dict or a
     /// list of dicts — `{"type": "position", "rod": name or index, "s":
     /// arc length (default the tip), "times": (k,), "targets": (k, 3) [m],
     /// "weight": w}` for `½ w ‖p(t) − target‖²`, `{"type": "quadratic",
     /// "times", "q_weights", "qdot_weights" (number or (n_dof,)), "q_ref"}`
     /// for `½ Σ wq (q − q_ref)² + wv q̇²` — or a callable
     /// `l(t, q, qdot) -> (value, dl_dq, dl_dqdot)` evaluated at `times`.
-    /// The gradient is the discrete adjoint of the ESDIRK run (`esdirk` or
-    /// `esdirk5`, the scene's integrator; its step
+    /// The gradient is the discrete adjoint of the run (`esdirk`, `esdirk5`
+    /// or `radau5`, the scene's integrator; its step
     /// sequence held fixed; the steps end on every loss time): exact for
     /// the computed trajectory to round-off and the Newton tolerance
     /// (`newton_tol`). `fixed_step`: fixed steps of that size (one step
@@ -1017,7 +1071,10 @@ impl Simulation {
     /// One step of `dt` seconds from `state` (a `softrod.State`), with the
     /// run settings' integrator, returning the state at `state.t + dt`.
     /// `u` (n_cables,) [N]: cable tensions held over the step (replacing
-    /// the scheduled ones); None: the scheduled tensions. For RL and MPC
+    /// the scheduled ones); None: the scheduled tensions. `joint_forces`
+    /// (n_joint_inputs,) [N or N·m, finite]: the joint actuators' forces
+    /// held over the step (docs/theory-control.md IS14, replacing their
+    /// schedules); None: the schedules. For RL and MPC
     /// loops: `state = sim.step(state, 1e-3, u)`. Each call starts the
     /// integrator afresh (first step `settings.dt`, capped at `dt`), so a
     /// loop of steps equals `simulate(controller=…, control_every=dt)`.
@@ -1035,7 +1092,7 @@ impl Simulation {
     /// raises `SimulationError`. A loop of steps that starts an episode
     /// from an initial state calls `reset_contact()` first (the
     /// environments' `reset` does).
-    #[pyo3(signature = (state, dt, u = None, *, substeps = None))]
+    #[pyo3(signature = (state, dt, u = None, *, substeps = None, joint_forces = None))]
     fn step(
         &mut self,
         py: Python<'_>,
@@ -1043,8 +1100,9 @@ impl Simulation {
         dt: f64,
         u: Option<&Bound<'_, PyAny>>,
         substeps: Option<usize>,
+        joint_forces: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<State> {
-        self.step_impl(py, state, dt, u, substeps)
+        self.step_impl(py, state, dt, u, substeps, joint_forces)
     }
 
     /// An independent copy (its own buffers), e.g. for another thread.

@@ -10,7 +10,7 @@ use crate::control::{
     ControlError, ControlledRun, check_substeps, check_tensions, simulate_controlled, step,
 };
 use crate::convert::{vec_out, vector};
-use crate::errors::{guard, guard_detached, input, integrate, simulation, to_py};
+use crate::errors::{dynamics, guard, guard_detached, input, integrate, simulation, to_py};
 use crate::trajectory::{State, Trajectory};
 
 /// Where a run of `simulate` starts and how it is driven.
@@ -91,6 +91,7 @@ impl Simulation {
                 self.inputs()?;
                 let inputs = self.inputs.as_mut().expect("built above");
                 inputs.tau_extra = None;
+                inputs.joint_forces = None;
                 // A run starts from a fresh contact state, as the facade's
                 // does (CT15), and leaves what it committed for `contacts`
                 // and `step`.
@@ -145,10 +146,15 @@ impl Simulation {
         dt: f64,
         u: Option<&Bound<'_, PyAny>>,
         substeps: Option<usize>,
+        joint_forces: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<State> {
         if let Some(k) = substeps {
             check_substeps(k).map_err(input)?;
         }
+        let joint_forces = match joint_forces {
+            Some(f) => Some(self.joint_forces(f)?),
+            None => None,
+        };
         let n = self.n();
         let q =
             DVector::from_column_slice(vector(state.q.bind(py).as_any(), "state.q", n)?.slice());
@@ -164,6 +170,7 @@ impl Simulation {
                 let inputs = self.inputs.as_mut().expect("built above");
                 inputs.u = u;
                 inputs.tau_extra = None;
+                inputs.joint_forces = joint_forces;
                 inputs.sys.jacobian = settings.stiff_jacobian();
                 self.sim.contact_state_into(&mut inputs.sys.data);
                 let r = guard_detached(py, || {
@@ -178,6 +185,9 @@ impl Simulation {
                 }
                 let sys = self.stepper.as_mut().expect("just set");
                 sys.jacobian = settings.stiff_jacobian();
+                sys.data
+                    .set_joint_forces(&sys.model, joint_forces.as_deref())
+                    .map_err(dynamics)?;
                 self.sim.contact_state_into(&mut sys.data);
                 let r = guard_detached(py, || {
                     step(&mut **sys, &settings, t, dt, &q, &qd, substeps).map_err(to_py)

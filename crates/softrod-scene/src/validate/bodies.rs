@@ -4,7 +4,8 @@
 
 use nalgebra::Matrix3;
 use softrod_dynamics::{
-    Attachment, BodyLoad, BodySpec, Curve, ElementKind, Joint, JointKind, Prescribed, Rod,
+    Attachment, BodyLoad, BodySpec, Curve, ElementKind, Joint, JointActuator, JointForce,
+    JointKind, Prescribed, Rod,
 };
 use softrod_lie::Vec3;
 use softrod_mechanics::LoadFrame;
@@ -293,10 +294,153 @@ impl Ctx<'_> {
             }
             joint.prescribed = Some(self.prescribed(&path, v, k)?);
         }
+        if let Some(v) = &raw.actuator {
+            let path = format!("{p}.actuator");
+            if k == 0 {
+                return Err(self.r.invalid(
+                    &path,
+                    "a fixed joint has no coordinates to drive (an actuator needs revolute, \
+                     prismatic, universal, spherical or free)",
+                ));
+            }
+            if raw.prescribed.is_some() {
+                return Err(self.r.inconsistent(
+                    &path,
+                    "a prescribed joint follows its curve: a force on it would do nothing",
+                ));
+            }
+            joint.actuator = Some(self.actuator(&path, v, k, &raw.kind)?);
+        }
         joint
             .validate(p)
             .map_err(|e| self.r.invalid(p, e.to_string()))?;
         Ok(joint)
+    }
+
+    /// `actuator = { force, max_force }` (docs/theory-control.md IS14):
+    /// `force` a number (every coordinate), `k` numbers, or `{ times,
+    /// values }` (values a list of numbers for one coordinate, else one row
+    /// of `k` per time), default 0; `max_force` a number or `k` numbers,
+    /// `≥ 0`, default none.
+    fn actuator(&self, path: &str, v: &toml::Value, k: usize, kind: &str) -> Result<JointActuator> {
+        let toml::Value::Table(t) = v else {
+            return Err(self
+                .r
+                .wrong_type(path, format!("expected a table, found {}", v.type_str())));
+        };
+        if let Some(key) = t
+            .keys()
+            .find(|key| !["force", "max_force"].contains(&key.as_str()))
+        {
+            return Err(self
+                .r
+                .unknown_key(&format!("{path}.{key}"), "force or max_force"));
+        }
+        let per_dof = |kp: &str, x: &toml::Value| -> Result<Vec<f64>> {
+            let values = match x {
+                toml::Value::Array(_) => self.numbers(kp, x)?,
+                _ => vec![self.number(kp, x)?; k],
+            };
+            if values.len() != k {
+                return Err(self.r.inconsistent(
+                    kp,
+                    format!(
+                        "{} values, but a {kind} joint has {k} coordinates",
+                        values.len()
+                    ),
+                ));
+            }
+            Ok(values)
+        };
+        let fp = format!("{path}.force");
+        let force = match t.get("force") {
+            None => JointForce::Constant(vec![0.0; k]),
+            Some(toml::Value::Table(ft)) => {
+                if let Some(key) = ft
+                    .keys()
+                    .find(|key| !["times", "values"].contains(&key.as_str()))
+                {
+                    return Err(self
+                        .r
+                        .unknown_key(&format!("{fp}.{key}"), "times or values"));
+                }
+                let tp = format!("{fp}.times");
+                let vp = format!("{fp}.values");
+                let times = ft.get("times").ok_or_else(|| self.r.missing(&tp, ""))?;
+                let times = self.numbers(&tp, times)?;
+                if times.is_empty() {
+                    return Err(self.r.invalid(&tp, "needs at least one time"));
+                }
+                if let Some(i) = (1..times.len()).find(|&i| times[i] <= times[i - 1]) {
+                    return Err(self.r.invalid(
+                        &format!("{tp}[{i}]"),
+                        format!(
+                            "times must increase strictly: {} after {}",
+                            times[i],
+                            times[i - 1]
+                        ),
+                    ));
+                }
+                let values = ft.get("values").ok_or_else(|| self.r.missing(&vp, ""))?;
+                let toml::Value::Array(rows) = values else {
+                    return Err(self
+                        .r
+                        .wrong_type(&vp, format!("expected a list, found {}", values.type_str())));
+                };
+                if rows.len() != times.len() {
+                    return Err(self.r.inconsistent(
+                        &vp,
+                        format!("{} values for {} times", rows.len(), times.len()),
+                    ));
+                }
+                let values: Vec<Vec<f64>> =
+                    if k == 1 && !matches!(rows.first(), Some(toml::Value::Array(_))) {
+                        self.numbers(&vp, values)?
+                            .into_iter()
+                            .map(|x| vec![x])
+                            .collect()
+                    } else {
+                        rows.iter()
+                            .enumerate()
+                            .map(|(i, r)| {
+                                let rp = format!("{vp}[{i}]");
+                                let row = self.numbers(&rp, r)?;
+                                if row.len() != k {
+                                    return Err(self.r.inconsistent(
+                                        &rp,
+                                        format!(
+                                            "{} values, but a {kind} joint has {k} coordinates",
+                                            row.len()
+                                        ),
+                                    ));
+                                }
+                                Ok(row)
+                            })
+                            .collect::<Result<_>>()?
+                    };
+                JointForce::Table { times, values }
+            }
+            Some(x) => JointForce::Constant(per_dof(&fp, x)?),
+        };
+        let max_force = match t.get("max_force") {
+            None => Vec::new(),
+            Some(x) => {
+                let mp = format!("{path}.max_force");
+                let m = per_dof(&mp, x)?;
+                if let Some((i, v)) = m.iter().enumerate().find(|(_, v)| **v < 0.0) {
+                    let key = if matches!(x, toml::Value::Array(_)) {
+                        format!("{mp}[{i}]")
+                    } else {
+                        mp.clone()
+                    };
+                    return Err(self.r.out_of_range(&key, v, ">= 0 (N or N m)"));
+                }
+                m
+            }
+        };
+        let a = JointActuator { force, max_force };
+        a.check(k).map_err(|e| self.r.invalid(path, e))?;
+        Ok(a)
     }
 
     /// `prescribed = { times, values }` (a spline per coordinate through the

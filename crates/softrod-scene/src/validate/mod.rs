@@ -218,7 +218,18 @@ impl Ctx<'_> {
             .enumerate()
             .map(|(j, t)| self.target(j, t, &rods, &robot))
             .collect::<Result<Vec<_>>>()?;
+        let mut unknown_loads = Vec::new();
         for (j, l) in raw.load.into_iter().enumerate() {
+            if l.unknown == Some(true) {
+                unknown_loads.push(self.unknown_load(j, l, &rods)?);
+                continue;
+            }
+            if l.max_force.is_some() {
+                return Err(self.r.inconsistent(
+                    &format!("load[{j}].max_force"),
+                    "only an unknown load (unknown = true) has a max_force",
+                ));
+            }
             if l.body.is_some() {
                 self.body_load(j, l, &mut robot)?;
                 continue;
@@ -244,6 +255,7 @@ impl Ctx<'_> {
             contact,
             targets,
             max_tension,
+            unknown_loads,
             origins,
         })
     }

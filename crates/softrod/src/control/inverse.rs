@@ -160,6 +160,11 @@ pub struct ActuationOptions {
     /// Warm start: the unknown loads' forces to start from \[N\, world\]
     /// (clipped to their bounds); default 0 (clipped).
     pub initial_forces: Option<Vec<[f64; 3]>>,
+    /// Warm start: the actuated joints' forces to start from \[N or N·m\],
+    /// one per actuated coordinate ([`Model::n_joint_inputs`], IS14;
+    /// clipped to their bounds); default their actuators' forces at `time`
+    /// (clipped).
+    pub initial_joint_forces: Option<Vec<f64>>,
     /// Time of the prescribed joints (held at rest) \[s\].
     pub time: f64,
 }
@@ -176,6 +181,7 @@ impl Default for ActuationOptions {
             initial_tensions: None,
             initial_q: None,
             initial_forces: None,
+            initial_joint_forces: None,
             time: 0.0,
         }
     }
@@ -188,6 +194,7 @@ impl ActuationOptions {
         self.initial_tensions = Some(previous.tensions.as_slice().to_vec());
         self.initial_q = Some(previous.q.as_slice().to_vec());
         self.initial_forces = Some(previous.forces.iter().map(|f| (*f).into()).collect());
+        self.initial_joint_forces = Some(previous.joint_forces.clone());
         self
     }
 }
@@ -259,6 +266,13 @@ pub struct Actuation {
     /// Where each of their components is relative to its bounds
     /// (`Lower` at `min`, `Upper` at `max`).
     pub force_bounds: Vec<[Bound; 3]>,
+    /// The actuated joints' forces \[N or N·m\], one per actuated
+    /// coordinate in the order of [`Model::n_joint_inputs`]
+    /// ([`softrod_dynamics::ElementInfo::actuator_inputs`]; IS14).
+    pub joint_forces: Vec<f64>,
+    /// Where each is relative to its bounds `−max_force ≤ f ≤ max_force`
+    /// (`Lower` at `−max_force`, `Upper` at `max_force`).
+    pub joint_force_bounds: Vec<Bound>,
     /// One sentence: reached, closest reachable shape, or why not converged.
     pub message: String,
 }
@@ -268,10 +282,12 @@ pub struct Actuation {
 /// the least effort among equally close ones (IS1–IS12). Models with loop
 /// closures are solved with their constrained equilibrium (IS8–IS10).
 /// The point forces of `options.unknown_loads` are unknowns too, within
-/// their bounds (IS13). `data`'s cable inputs are left as they were.
+/// their bounds (IS13), and so are the forces of the joints that carry an
+/// actuator, within `|f| ≤ max_force` (IS14). `data`'s cable and joint
+/// force inputs are left as they were.
 ///
-/// Refused (an input error naming the key): no targets, no cables and no
-/// unknown loads, an unknown load on a missing rod, off it or with NaN or
+/// Refused (an input error naming the key): no targets, no cables, no
+/// actuated joints and no unknown loads, an unknown load on a missing rod, off it or with NaN or
 /// crossed bounds (`unknown_load[i].…`), a
 /// target on a rod or body that does not exist or outside `[0, L]`, a
 /// non-finite or non-orthonormal target, a weight not positive,
@@ -287,8 +303,10 @@ pub fn solve_actuation(
 ) -> Result<Actuation> {
     validate(model, targets, options)?;
     let saved = data.cable_tensions().map(<[f64]>::to_vec);
+    let saved_joints = data.joint_forces().map(<[f64]>::to_vec);
     let out = Solver::new(model, targets, options).run(data);
     data.set_cable_tensions(model, saved.as_deref())?;
+    data.set_joint_forces(model, saved_joints.as_deref())?;
     out
 }
 
@@ -301,11 +319,29 @@ fn bad(key: impl Into<String>, message: impl Into<String>) -> Error {
 
 fn validate(model: &Model, targets: &[Target], options: &ActuationOptions) -> Result<()> {
     let nc = model.n_cables();
-    if nc == 0 && options.unknown_loads.is_empty() {
+    let nj = model.n_joint_inputs();
+    if nc == 0 && nj == 0 && options.unknown_loads.is_empty() {
         return Err(bad(
             "cable",
-            "the model has no cables and no unknown loads to solve for",
+            "the model has no cables, no actuated joints and no unknown loads to solve for",
         ));
+    }
+    if let Some(f) = &options.initial_joint_forces {
+        if f.len() != nj {
+            return Err(bad(
+                "initial_joint_forces",
+                format!(
+                    "has {} entries, the model has {nj} actuated joint coordinates",
+                    f.len()
+                ),
+            ));
+        }
+        if let Some(k) = f.iter().position(|v| !v.is_finite()) {
+            return Err(bad(
+                format!("initial_joint_forces[{k}]"),
+                format!("must be finite, got {}", f[k]),
+            ));
+        }
     }
     if targets.is_empty() {
         return Err(bad("target", "no targets given"));
@@ -496,8 +532,9 @@ fn validate(model: &Model, targets: &[Target], options: &ActuationOptions) -> Re
 
 /// An equilibrium and what the step needs of it.
 struct Point {
-    /// The unknowns `x = (T, f_1, …)`: tensions, then the unknown loads'
-    /// world force components (IS13).
+    /// The unknowns `x = (T, f_1, …, u)`: tensions, then the unknown
+    /// loads' world force components (IS13), then the actuated joints'
+    /// forces (IS14).
     t: DVector<f64>,
     q: DVector<f64>,
     /// The closure multipliers at `q` (empty on an open model; IS8).
@@ -521,6 +558,8 @@ struct Solver<'a> {
     options: &'a ActuationOptions,
     /// Number of cables: the first `nc` unknowns are tensions.
     nc: usize,
+    /// Where the joint forces start among the unknowns (`nc + 3 n_u`).
+    nj0: usize,
     lo: Vec<f64>,
     hi: Vec<f64>,
     work: IdDerivatives,
@@ -543,12 +582,22 @@ impl<'a> Solver<'a> {
             lo.extend_from_slice(&u.min);
             hi.extend_from_slice(&u.max);
         }
+        let nj0 = lo.len();
+        for e in model.elements() {
+            if let Some(a) = &e.attachment.joint.actuator {
+                for i in 0..e.actuator_inputs.len() {
+                    lo.push(-a.bound(i));
+                    hi.push(a.bound(i));
+                }
+            }
+        }
         Self {
             base: model,
             model: Cow::Borrowed(model),
             targets,
             options,
             nc,
+            nj0,
             lo,
             hi,
             work: IdDerivatives::new(model),
@@ -593,19 +642,23 @@ impl<'a> Solver<'a> {
         Ok(())
     }
 
-    /// Sets `data`'s cable tensions to those of `x`.
+    /// Sets `data`'s cable tensions and joint forces to those of `x`.
     fn set_tensions(
         &self,
         data: &mut softrod_dynamics::Data,
         x: &DVector<f64>,
     ) -> std::result::Result<(), DynamicsError> {
+        if self.nj0 < x.len() {
+            data.set_joint_forces(&self.model, Some(&x.as_slice()[self.nj0..]))?;
+        }
         data.set_cable_tensions(&self.model, Some(&x.as_slice()[..self.nc]))
     }
 
-    /// The actuation matrix of all unknowns at `q` (n_dof × (n_c + 3 n_u)):
-    /// `B` (D15), then per unknown load the generalized forces `J_pᵀ e_k`
-    /// of unit world forces at its point, `J_p = J_v − [p]× J_ω` the
-    /// point's linear velocity rows (IS13).
+    /// The actuation matrix of all unknowns at `q` (n_dof × (n_c + 3 n_u +
+    /// n_j)): `B` (D15), then per unknown load the generalized forces
+    /// `J_pᵀ e_k` of unit world forces at its point, `J_p = J_v − [p]× J_ω`
+    /// the point's linear velocity rows (IS13), then per actuated joint
+    /// coordinate the unit column of that coordinate (IS14).
     fn actuation(
         &self,
         data: &mut softrod_dynamics::Data,
@@ -613,11 +666,22 @@ impl<'a> Solver<'a> {
     ) -> std::result::Result<DMatrix<f64>, DynamicsError> {
         let b = actuation_matrix(&self.model, q)?;
         let loads = &self.options.unknown_loads;
-        if loads.is_empty() {
+        let nx = self.lo.len();
+        if nx == self.nc {
             return Ok(b);
         }
         let n = self.model.n_dof();
-        let mut g = DMatrix::zeros(n, self.nc + 3 * loads.len());
+        let mut g = DMatrix::zeros(n, nx);
+        for e in self.model.elements() {
+            for (i, o) in e
+                .joint_dofs
+                .clone()
+                .enumerate()
+                .take(e.actuator_inputs.len())
+            {
+                g[(o, self.nj0 + e.actuator_inputs.start + i)] = 1.0;
+            }
+        }
         g.columns_mut(0, self.nc).copy_from(&b);
         self.model.set_time(data, self.options.time);
         for (i, u) in loads.iter().enumerate() {
@@ -768,6 +832,8 @@ impl<'a> Solver<'a> {
         let b = self.actuation(data, p.q.as_slice())?;
         let w = &mut self.work;
         w.tensions = Some(p.t.rows(0, self.nc).into_owned());
+        w.joint_inputs =
+            (self.nj0 < p.t.len()).then(|| p.t.rows(self.nj0, p.t.len() - self.nj0).into_owned());
         inverse_dynamics_derivatives_with(
             &self.model,
             w,
@@ -806,12 +872,25 @@ impl<'a> Solver<'a> {
             .clone()
             .unwrap_or_else(|| vec![[0.0; 3]; nu]);
         let nx = self.lo.len();
+        let joints: Vec<f64> = match &self.options.initial_joint_forces {
+            Some(f) => f.clone(),
+            None => self
+                .model
+                .elements()
+                .iter()
+                .filter_map(|e| e.attachment.joint.actuator.as_ref().map(|a| (e, a)))
+                .flat_map(|(e, a)| {
+                    (0..e.actuator_inputs.len()).map(|i| a.force.at(i, self.options.time))
+                })
+                .collect(),
+        };
         let mut t0 = DVector::from_iterator(
             nx,
             tensions
                 .iter()
                 .copied()
-                .chain(forces.iter().flatten().copied()),
+                .chain(forces.iter().flatten().copied())
+                .chain(joints),
         );
         self.clamp(&mut t0);
         let q0 = self
@@ -962,12 +1041,14 @@ impl<'a> Solver<'a> {
                 }
             })
             .collect::<Vec<_>>();
+        let joint_force_bounds = bounds.split_off(self.nj0);
+        let joint_forces = p.t.as_slice()[self.nj0..].to_vec();
         let force_bounds: Vec<[Bound; 3]> = bounds[self.nc..]
             .chunks_exact(3)
             .map(|c| [c[0], c[1], c[2]])
             .collect();
         bounds.truncate(self.nc);
-        let forces: Vec<Vec3> = p.t.as_slice()[self.nc..]
+        let forces: Vec<Vec3> = p.t.as_slice()[self.nc..self.nj0]
             .chunks_exact(3)
             .map(|c| Vec3::new(c[0], c[1], c[2]))
             .collect();
@@ -998,6 +1079,18 @@ impl<'a> Solver<'a> {
                     }
                 }
             }
+            for e in self.model.elements() {
+                for (i, c) in e.actuator_inputs.clone().enumerate() {
+                    let b = joint_force_bounds[c];
+                    if b != Bound::Free {
+                        held.push(format!(
+                            "the joint of {:?} coordinate {i} at its {} bound",
+                            e.name,
+                            b.name()
+                        ));
+                    }
+                }
+            }
             format!(
                 "target not reachable: the closest reachable shape has weighted error {target_error:.3e}{}",
                 if held.is_empty() {
@@ -1022,6 +1115,8 @@ impl<'a> Solver<'a> {
             bounds,
             forces,
             force_bounds,
+            joint_forces,
+            joint_force_bounds,
             message,
         })
     }

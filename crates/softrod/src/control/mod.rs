@@ -7,7 +7,8 @@
 //! (constrained, with loop closures) that bring them closest to the
 //! targets, with the least effort among equally good tensions
 //! (docs/theory-control.md, IS1–IS12); point forces marked unknown
-//! ([`UnknownLoad`]) are solved for with them (IS13).
+//! ([`UnknownLoad`]) are solved for with them (IS13), and so are the
+//! forces of joints with an actuator, within `|f| ≤ max_force` (IS14–IS15).
 //!
 //! Why a module of the facade and not a crate of its own: the solver is a
 //! few hundred lines on top of `softrod-dynamics`' public statics, actuation
@@ -19,7 +20,8 @@
 //! library module it never prints: everything it has to say is in
 //! [`Actuation`].
 //!
-//! Units SI: positions in m, rotation errors in rad, tensions in N; poses
+//! Units SI: positions in m, rotation errors in rad, tensions and forces
+//! in N, joint torques in N·m; poses
 //! in the world frame.
 
 mod inverse;

@@ -7,10 +7,12 @@ use crate::error::Result;
 use crate::limits::STATICS_DENSE_MATRICES;
 
 impl Simulation {
-    /// Cable tensions within `0 ≤ T ≤ max_tension` and the static
+    /// Cable tensions within `0 ≤ T ≤ max_tension` (with the actuated
+    /// joints' forces within `|f| ≤ max_force`, IS14, and the unknown
+    /// loads of `options`, IS13) and the static
     /// equilibrium that bring the targets' sections and bodies closest to
     /// them, the least effort among equally close ones, closed models
-    /// included (docs/theory-control.md IS1–IS12; [`solve_actuation`]). Prescribed joints hold their values
+    /// included (docs/theory-control.md IS1–IS14; [`solve_actuation`]). Prescribed joints hold their values
     /// at `options.time`. The simulation's cable inputs
     /// ([`Self::set_cable_tensions`]) are left as they were; without
     /// `options.initial_q` the search starts from the initial `q`.

@@ -55,6 +55,9 @@ pub struct Simulation {
     /// The time \[s\] of the prescribed joints for the evaluations that take
     /// none ([`Self::set_time`]); the calls that take a `t` do not move it.
     time: f64,
+    /// The scene's `[[load]]`s with `unknown = true` (IS13): what
+    /// [`Self::scene_unknown_loads`] gives the inverse statics.
+    unknown_loads: Vec<crate::control::UnknownLoad>,
 }
 
 impl Simulation {
@@ -69,6 +72,7 @@ impl Simulation {
             qd0: DVector::zeros(n),
             limits: Limits::default(),
             time: 0.0,
+            unknown_loads: Vec::new(),
         }
     }
 
@@ -85,6 +89,16 @@ impl Simulation {
         }
         sim.q0 = built.q0;
         sim.qd0 = built.qd0;
+        sim.unknown_loads = scene
+            .unknown_loads
+            .iter()
+            .map(|u| crate::control::UnknownLoad {
+                rod: u.rod,
+                s: u.s,
+                min: u.max_force.map(|m| -m),
+                max: u.max_force,
+            })
+            .collect();
         Ok(sim)
     }
 
@@ -247,6 +261,31 @@ impl Simulation {
     /// The inputs set by [`Simulation::set_cable_tensions`], if any.
     pub fn cable_tensions(&self) -> Option<&[f64]> {
         self.system.data.cable_tensions()
+    }
+
+    /// Sets the joint actuators' forces `f` \[N or N·m\] (one per actuated
+    /// joint coordinate, `Model::n_joint_inputs` order; docs/theory-control.md
+    /// IS14) that replace the actuators' schedules in every evaluation and
+    /// run of this simulation; `None` restores the schedules. Errors: the
+    /// wrong length, a value that is not finite.
+    pub fn set_joint_forces(&mut self, f: Option<&[f64]>) -> Result<()> {
+        let s = &mut self.system;
+        Ok(s.data.set_joint_forces(&s.model, f)?)
+    }
+
+    /// The inputs set by [`Simulation::set_joint_forces`], if any.
+    pub fn joint_forces(&self) -> Option<&[f64]> {
+        self.system.data.joint_forces()
+    }
+
+    /// The point forces the scene marks unknown (`[[load]] unknown = true`,
+    /// docs/theory-control.md IS13), with their bounds `|f_k| ≤ max_force`,
+    /// in file order: what `softrod inverse` solves for beside the tensions
+    /// and actuated joints' forces (pass them as
+    /// [`crate::control::ActuationOptions::unknown_loads`]). Empty for a
+    /// simulation not built from a scene.
+    pub fn scene_unknown_loads(&self) -> &[crate::control::UnknownLoad] {
+        &self.unknown_loads
     }
 
     /// Integrates `duration` seconds from the initial state with the run

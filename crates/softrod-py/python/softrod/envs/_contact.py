@@ -150,7 +150,7 @@ class PushTask(Task):
         b = self.body_position(env.q, t)
         distance = float(np.linalg.norm(b - self._goal))
         tip_distance = float(np.linalg.norm(tip - b))
-        effort = float(np.mean((u / env.max_tension) ** 2))
+        effort = float(np.mean((u / env.action_scale) ** 2))
         reward = (
             -distance / env.length
             - self.reach_weight * tip_distance / env.length

@@ -3,8 +3,10 @@ target and a reward.
 
 Conventions (docs/envs.md of the repository): SI units, world frame; an
 action is the vector of cable tensions ``u`` [N] in the model's cable order
-(rod by rod, in the order the scene gives them), held constant over one
-control period (zero-order hold, ``Simulation.step(state, dt, u)``).
+(rod by rod, in the order the scene gives them) followed by the forces
+``f`` [N or N·m] of the actuated joint coordinates (elements in model
+order), held constant over one control period (zero-order hold,
+``Simulation.step(state, dt, u, joint_forces=f)``).
 """
 
 from __future__ import annotations
@@ -47,6 +49,7 @@ OBSERVATION_KEYS = (
     "target",
     "target_velocity",
     "tensions",
+    "joint_forces",
     "body_positions",
 )
 
@@ -94,6 +97,35 @@ def _bounds(
     return b
 
 
+def _force_bounds(
+    n_inputs: int, given: float | Sequence[float] | None, from_scene: Sequence[float]
+) -> np.ndarray:
+    """The force bound of each actuated joint coordinate [N or N·m]: the
+    env's ``max_force``, else the scene's ``actuator = { max_force }``;
+    a coordinate with neither is refused (a joint torque has no natural
+    scale to default to)."""
+    if given is not None:
+        b = np.broadcast_to(np.asarray(given, dtype=np.float64), (n_inputs,)).copy()
+        what = "max_force"
+    else:
+        b = np.asarray(from_scene, dtype=np.float64).reshape(n_inputs).copy()
+        missing = [i for i, v in enumerate(b) if math.isinf(v)]
+        if missing:
+            raise InputError(
+                f"actuated joint coordinate {missing[0]} has no force bound: give the joint "
+                "`actuator = { max_force = ... }` in the scene, or max_force= to the env "
+                "(the action space of a joint force is [-max_force, max_force])"
+            )
+        what = "actuator.max_force"
+    bad = [i for i, v in enumerate(b) if not (math.isfinite(v) and v > 0.0)]
+    if bad:
+        raise InputError(
+            f"{what}: every actuated joint coordinate's bound must be positive and finite, "
+            f"got {b[bad[0]]} for coordinate {bad[0]}"
+        )
+    return b
+
+
 class Task:
     """What an episode asks of the arm: a target and a reward.
 
@@ -118,10 +150,11 @@ class Task:
 
     def bind(self, env: RodEnv) -> None:
         """Called once by the env that owns the task."""
-        if env.n_cables == 0:
+        if env.n_cables + env.n_joint_inputs == 0:
             raise InputError(
-                f"{type(self).__name__} needs a scene with cables (the actions are cable "
-                "tensions); this scene has none"
+                f"{type(self).__name__} needs a scene with actuators (the actions are cable "
+                "tensions and actuated joints' forces); this scene has no cables and no joint "
+                "actuators"
             )
         self.env = env
 
@@ -135,11 +168,12 @@ class Task:
 
     def reward(self, t: float, tip: np.ndarray, u: np.ndarray) -> tuple[float, dict[str, Any]]:
         """The reward of the state reached at ``t`` with the tip at ``tip``
-        under tensions ``u``, and what ``info`` reports of it."""
+        under the action ``u`` (tensions, then joint forces), and what
+        ``info`` reports of it."""
         pos, _ = self.target(t)
         env = self.env
         distance = float(np.linalg.norm(tip - pos))
-        effort = float(np.mean((u / env.max_tension) ** 2))
+        effort = float(np.mean((u / env.action_scale) ** 2))
         reward = -distance / env.length - self.effort_weight * effort
         return reward, {
             "distance": distance,
@@ -155,9 +189,13 @@ class ReachTask(Task):
     cable, drawn uniformly, pulls with a tension drawn uniformly from
     ``[0, max_tension]`` and the others are slack: every target is
     reachable by a constant action (``target_tensions``), and on an
-    antagonistic pair the targets spread evenly over both sides. Reward
+    antagonistic pair the targets spread evenly over both sides. With
+    actuated joints the drawn input is one of all the action's entries, a
+    joint force uniform in ``[-max_force, max_force]``
+    (``target_joint_forces``). Reward
     per step, with ``d`` the tip–target distance [m], ``L`` the rod's
-    length and ``ū = u / max_tension``:
+    length and ``ū`` the action over its bound (``u / max_tension``,
+    ``f / max_force``):
 
         r = −d / L − effort_weight · mean(ū²)
 
@@ -174,17 +212,22 @@ class ReachTask(Task):
     def reset(self, rng: np.random.Generator) -> None:
         env = self.env
         last: Exception | None = None
+        nc, nj = env.n_cables, env.n_joint_inputs
         for _ in range(10):
-            u = np.zeros(env.n_cables)
-            k = int(rng.integers(env.n_cables))
-            u[k] = rng.uniform(0.0, env.max_tension[k])
+            u, f = np.zeros(nc), np.zeros(nj)
+            k = int(rng.integers(nc + nj))
+            if k < nc:
+                u[k] = rng.uniform(0.0, env.max_tension[k])
+            else:
+                f[k - nc] = rng.uniform(-env.max_force[k - nc], env.max_force[k - nc])
             try:
-                st = env.sim.statics(tensions=u)
+                st = env.sim.statics(tensions=u, joint_forces=f if nj else None)
             except SimulationError as e:  # rare: draw again
                 last = e
                 continue
             self._target = np.array(st.tips[env.rod_name][:3, 3], dtype=np.float64)
             self.target_tensions = u
+            self.target_joint_forces = f
             return
         raise SimulationError(f"no reachable target found in 10 draws: {last}")
 
@@ -270,7 +313,7 @@ class TrackTask(Task):
 
 class RodEnv(gymnasium.Env):
     """A Gymnasium environment over a softrod scene whose actions are cable
-    tensions.
+    tensions and actuated joints' forces.
 
     ``scene``: a scene file path (str or os.PathLike) or a
     ``softrod.Simulation`` (copied; its model, settings and initial state
@@ -280,7 +323,14 @@ class RodEnv(gymnasium.Env):
     Action: ``u`` (n_cables,) [N], a ``Box(0, max_tension)``. The bound of
     each cable is ``max_tension`` (a number or one per cable), else the
     scene's ``[[cable]] max_tension`` where a scene file gives it, else
-    :data:`DEFAULT_MAX_TENSION` = 3 N. ``action_policy``: what an action
+    :data:`DEFAULT_MAX_TENSION` = 3 N. With joint actuators
+    (docs/theory-control.md IS14) the action is ``(u, f)``: the tensions,
+    then one force ``f`` [N or N·m] per actuated joint coordinate (elements
+    in model order, ``Simulation.n_joint_inputs``) in ``[-max_force,
+    max_force]``, the bound from ``max_force`` (a number or one per
+    coordinate), else the scene's ``actuator = { max_force }``; a
+    coordinate with neither raises ``softrod.InputError``.
+    ``action_policy``: what an action
     outside the box does — ``"clip"`` (default) clips it to the box and
     sets ``info["action_clipped"]``, ``"reject"`` raises
     ``softrod.InputError``. An action that is not finite (NaN, ±inf) or
@@ -310,7 +360,8 @@ class RodEnv(gymnasium.Env):
     ``"tip_position"`` (3, m, world frame), ``"tip_rotation"`` (9, the tip
     frame's rotation matrix row by row), ``"target"`` (3, m),
     ``"target_velocity"`` (3, m/s), ``"tensions"`` (n_cables, N: the last
-    applied action), ``"body_positions"`` (3 per rigid body of the scene,
+    applied tensions), ``"joint_forces"`` (n_joint_inputs, N or N·m: the
+    last applied joint forces), ``"body_positions"`` (3 per rigid body of the scene,
     m, world frame: the origins of their frames, in the scene's order).
     ``observation_slices`` maps each key to its slice.
 
@@ -330,6 +381,7 @@ class RodEnv(gymnasium.Env):
         control_period: float = 0.05,
         episode_steps: int = 100,
         max_tension: float | Sequence[float] | None = None,
+        max_force: float | Sequence[float] | None = None,
         observe: Sequence[str] | None = None,
         action_policy: str = "clip",
         initial_noise: float = 0.0,
@@ -387,6 +439,15 @@ class RodEnv(gymnasium.Env):
         self.n_cables = self.sim.n_cables
         self.q0, self.qdot0 = self.sim.initial_state()
         self.max_tension = _bounds(self.n_cables, max_tension, scene_bounds)
+        self.n_joint_inputs = self.sim.n_joint_inputs
+        self.max_force = _force_bounds(
+            self.n_joint_inputs, max_force, self.sim.joint_max_forces
+        )
+        #: The action's bounds: tensions in [0, max_tension], joint forces
+        #: in [-max_force, max_force]; ``action_scale`` normalizes effort.
+        self.action_low = np.concatenate([np.zeros(self.n_cables), -self.max_force])
+        self.action_high = np.concatenate([self.max_tension, self.max_force])
+        self.action_scale = self.action_high.copy()
 
         # A copy: a task holds its episode's draw, so envs must not share one.
         self.task = copy.deepcopy(task) if task is not None else ReachTask()
@@ -408,6 +469,7 @@ class RodEnv(gymnasium.Env):
             "target": 3,
             "target_velocity": 3,
             "tensions": self.n_cables,
+            "joint_forces": self.n_joint_inputs,
             "body_positions": 3 * len(self.sim.body_names),
         }
         lo, hi, self.observation_slices, k = [], [], {}, 0
@@ -421,16 +483,20 @@ class RodEnv(gymnasium.Env):
             elif key == "tensions":
                 lo.append(np.zeros(n))
                 hi.append(self.max_tension.copy())
+            elif key == "joint_forces":
+                lo.append(-self.max_force)
+                hi.append(self.max_force.copy())
             else:
                 lo.append(np.full(n, -np.inf))
                 hi.append(np.full(n, np.inf))
         self.observation_space = spaces.Box(np.concatenate(lo), np.concatenate(hi), dtype=np.float64)
         self.action_space = spaces.Box(
-            np.zeros(self.n_cables), self.max_tension.copy(), dtype=np.float64
+            self.action_low.copy(), self.action_high.copy(), dtype=np.float64
         )
         self._steps = 0
         self.q, self.qdot = self.q0.copy(), self.qdot0.copy()
         self.u = np.zeros(self.n_cables)
+        self.f = np.zeros(self.n_joint_inputs)
 
     # -- state --------------------------------------------------------------
 
@@ -453,6 +519,7 @@ class RodEnv(gymnasium.Env):
             "target": target,
             "target_velocity": target_v,
             "tensions": self.u,
+            "joint_forces": self.f,
         }
         if "body_positions" in self.observe:
             poses = self.sim.body_poses(self.q, t=t)
@@ -471,48 +538,64 @@ class RodEnv(gymnasium.Env):
             self.q = self.q + rng.normal(0.0, self.initial_noise, self.n_dof)
             self.qdot = self.qdot + rng.normal(0.0, self.initial_noise, self.n_dof)
         self.u = np.zeros(self.n_cables)
+        self.f = np.zeros(self.n_joint_inputs)
         self.task.reset(rng)
         # An episode starts with no friction history (after the task's
         # statics, which commits its own contact state).
         self.sim.reset_contact()
         obs = self._observation()
-        _, info = self.task.reward(self.t, self._tip, self.u)
+        _, info = self.task.reward(self.t, self._tip, self._action())
         return obs, info
 
+    def _action(self) -> np.ndarray:
+        """The last applied action: tensions, then joint forces."""
+        return np.concatenate([self.u, self.f]) if self.n_joint_inputs else self.u
+
     def _prepare(self, action: Any) -> tuple[np.ndarray, bool]:
-        """The tensions of ``action`` by the action policy, and whether it
-        was clipped. Raises InputError for a bad shape, a non-finite entry
-        or (policy "reject") an action outside the box."""
+        """The action (tensions, then joint forces) of ``action`` by the
+        action policy, and whether it was clipped. Raises InputError for a
+        bad shape, a non-finite entry or (policy "reject") an action
+        outside the box."""
         a = np.asarray(action, dtype=np.float64)
-        if a.shape != (self.n_cables,):
-            raise InputError(
-                f"action must have shape ({self.n_cables},) (one tension per cable), got {a.shape}"
-            )
+        nc, na = self.n_cables, self.n_cables + self.n_joint_inputs
+        if a.shape != (na,):
+            what = "one tension per cable"
+            if self.n_joint_inputs:
+                what += ", then one force per actuated joint coordinate"
+            raise InputError(f"action must have shape ({na},) ({what}), got {a.shape}")
         if not np.all(np.isfinite(a)):
             i = int(np.flatnonzero(~np.isfinite(a))[0])
-            raise InputError(f"action[{i}] = {a[i]}: cable tensions must be finite")
-        inside = bool(np.all((a >= 0.0) & (a <= self.max_tension)))
+            what = "cable tensions" if i < nc else "joint forces"
+            raise InputError(f"action[{i}] = {a[i]}: {what} must be finite")
+        lo, hi = self.action_low, self.action_high
+        inside = bool(np.all((a >= lo) & (a <= hi)))
         if inside:
             return a.copy(), False
         if self.action_policy == "reject":
-            i = int(np.flatnonzero((a < 0.0) | (a > self.max_tension))[0])
+            i = int(np.flatnonzero((a < lo) | (a > hi))[0])
+            unit = "N" if i < nc else "N or N·m"
             raise InputError(
-                f"action[{i}] = {a[i]} is outside [0, {self.max_tension[i]}] N "
+                f"action[{i}] = {a[i]} is outside [{lo[i]}, {hi[i]}] {unit} "
                 '(action_policy="reject")'
             )
-        return np.clip(a, 0.0, self.max_tension), True
+        return np.clip(a, lo, hi), True
 
-    def _physics(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray, str | None]:
-        """One control period under ``u``: the new (q, q̇), or the failure."""
+    def _physics(self, a: np.ndarray) -> tuple[np.ndarray, np.ndarray, str | None]:
+        """One control period under the action ``a``: the new (q, q̇), or
+        the failure."""
         state = softrod.State(self.t, self.q, self.qdot)
+        nc = self.n_cables
+        f = a[nc:] if self.n_joint_inputs else None
         try:
-            s = self.sim.step(state, self.control_period, u, substeps=self.substeps)
+            s = self.sim.step(
+                state, self.control_period, a[:nc], substeps=self.substeps, joint_forces=f
+            )
         except SimulationError as e:
             return self.q, self.qdot, str(e)
         return s.q, s.qdot, None
 
     def _finish(
-        self, u: np.ndarray, clipped: bool, q: np.ndarray, qdot: np.ndarray, error: str | None
+        self, a: np.ndarray, clipped: bool, q: np.ndarray, qdot: np.ndarray, error: str | None
     ):
         """The step's result from the physics' outcome (shared with the
         batched vector env, so both give the same numbers)."""
@@ -525,22 +608,24 @@ class RodEnv(gymnasium.Env):
         info: dict[str, Any] = {"action_clipped": clipped}
         if error is not None:
             obs = self._observation()
-            reward, more = self.task.reward(self.t, self._tip, self.u)
+            reward, more = self.task.reward(self.t, self._tip, self._action())
             info.update(more)
             info["termination"] = f"diverged: {error}"
             return obs, reward, True, False, info
-        self.q, self.qdot, self.u = np.array(q), np.array(qdot), u
+        nc = self.n_cables
+        self.q, self.qdot = np.array(q), np.array(qdot)
+        self.u, self.f = (a[:nc], a[nc:]) if self.n_joint_inputs else (a, self.f)
         self._steps += 1
         obs = self._observation()
-        reward, more = self.task.reward(self.t, self._tip, u)
+        reward, more = self.task.reward(self.t, self._tip, a)
         info.update(more)
         truncated = self._steps >= self.episode_steps
         return obs, reward, False, truncated, info
 
     def step(self, action: Any):
-        u, clipped = self._prepare(action)
-        q, qdot, error = self._physics(u)
-        return self._finish(u, clipped, q, qdot, error)
+        a, clipped = self._prepare(action)
+        q, qdot, error = self._physics(a)
+        return self._finish(a, clipped, q, qdot, error)
 
 
 def _scene(name: str) -> str:

@@ -126,17 +126,18 @@ class BatchedVectorEnv(VectorEnv):
             env._prepare(a) if active[i] else None
             for i, (env, a) in enumerate(zip(self.envs, actions))
         ]
-        nc = self.envs[0].n_cables
-        u = np.zeros((n, nc))
+        nc, nj = self.envs[0].n_cables, self.envs[0].n_joint_inputs
+        a = np.zeros((n, nc + nj))
         for i, p in enumerate(prepared):
             if p is not None:
-                u[i] = p[0]
+                a[i] = p[0]
         t = np.array([e.t for e in self.envs])
         q = np.array([e.q for e in self.envs])
         qd = np.array([e.qdot for e in self.envs])
         q1, qd1, errors = self.stepper.step(
-            t, q, qd, u, self.envs[0].control_period, [bool(a) for a in active],
-            substeps=self.envs[0].substeps,
+            t, q, qd, np.ascontiguousarray(a[:, :nc]), self.envs[0].control_period,
+            [bool(x) for x in active], substeps=self.envs[0].substeps,
+            joint_forces=np.ascontiguousarray(a[:, nc:]) if nj else None,
         )
         rewards = np.zeros(n)
         terms = np.zeros(n, dtype=np.bool_)

@@ -5,6 +5,7 @@
 //! (docs/theory-control.md G1–G9).
 
 mod params;
+mod prescribed;
 #[cfg(test)]
 mod tests;
 
@@ -117,7 +118,9 @@ pub struct Gradient {
     pub value: f64,
     /// `∂L/∂p` for each parameter named, in the order named: one entry
     /// for a material constant or a mass, one per table value (or one for
-    /// a constant) for a cable's tension, `n_dof` for `q0` and `qdot0`.
+    /// a constant) for a cable's tension, samples × coordinates for a
+    /// prescribed joint (entry `i·dof + c` for sample `i`, coordinate `c`),
+    /// `n_dof` for `q0` and `qdot0`.
     pub gradients: Vec<(String, Vec<f64>)>,
     /// Accepted steps of the forward run (the backward pass has as many).
     pub steps: usize,
@@ -177,7 +180,11 @@ impl Simulation {
     /// G1–G9): `"q0"`, `"qdot0"`, `"ROD.young"`, `"ROD.shear_modulus"`
     /// (a material given by its shear modulus), `"ROD.density"`,
     /// `"ROD.viscosity"`, `"BODY.mass"`, `"cableN.tension"` (one entry per
-    /// value of a tension table, the scene's `[[cable]]` order).
+    /// value of a tension table, the scene's `[[cable]]` order),
+    /// `"ELEMENT.prescribed"` (the samples of the spline that prescribes
+    /// the joint of rod or body `ELEMENT` \[rad or m\]: one entry per
+    /// sample and coordinate, sample-major — the order of the scene's
+    /// `values` rows; G17–G20; open models only).
     ///
     /// The gradient is the discrete adjoint of the run's integrator: exact
     /// for the computed trajectory (its accepted step sequence held fixed)
@@ -188,7 +195,9 @@ impl Simulation {
     /// `params` it is the loss of the recorded run alone (no backward pass).
     ///
     /// Errors ([`Error::Gradient`], naming the key): an integrator without
-    /// an adjoint (supported: esdirk, esdirk5), a model with contact,
+    /// an adjoint (supported: esdirk, esdirk5, radau5), a model with contact,
+    /// `ELEMENT.prescribed` on a joint that is not prescribed, or prescribed
+    /// by a sinusoid, or on a closed model,
     /// a parameter or loss naming nothing in the model, a time outside the
     /// run, non-finite or negative weights, non-finite targets, a custom
     /// loss that fails or returns the wrong lengths or NaN.
@@ -261,6 +270,18 @@ impl Simulation {
                 krylov_iterations: 0,
             });
         }
+        // The position terms' rods and abscissae, for their direct
+        // dependence on prescribed samples (G19).
+        let mut sections = Vec::new();
+        for term in loss.iter() {
+            if let LossTerm::Position { rod, s, .. } = term {
+                let r = self.rod_index(rod.as_str())?;
+                sections.push((
+                    r,
+                    s.unwrap_or(self.model().rods()[r].spec.properties.length()),
+                ));
+            }
+        }
         let mut sys = ParamSystem::new(&mut self.system, &parsed)?;
         let mut seed = |k: usize, lq: &mut DVector<f64>, lv: &mut DVector<f64>| {
             if let Some((dq, dv)) = &seeds[k] {
@@ -268,7 +289,7 @@ impl Simulation {
                 *lv += dv;
             }
         };
-        let g = match options.method {
+        let mut g = match options.method {
             GradientMethod::Adjoint => {
                 adjoint_second_order_with(&mut sys, integrator, &tape, &mut seed, solver)
             }
@@ -280,6 +301,38 @@ impl Simulation {
             }
         }
         .map_err(|e| Error::Integration(Box::new(e)))?;
+        if sys.has_prescribed() {
+            // A section's world position depends on the prescribed
+            // coordinates directly, besides through q (G19).
+            let eps = node_tolerance(duration);
+            let mut positions = sections.iter();
+            for term in loss.iter() {
+                let LossTerm::Position {
+                    times,
+                    targets,
+                    weight,
+                    ..
+                } = term
+                else {
+                    continue;
+                };
+                let &(rod, s) = positions.next().expect("one per position term");
+                for (&t, target) in times.iter().zip(targets) {
+                    let k = (0..tape.nodes())
+                        .find(|&k| (tape.time(k) - t).abs() <= eps)
+                        .expect("evaluate_loss found every node");
+                    sys.prescribed_position_term(
+                        tape.time(k),
+                        tape.q(k),
+                        rod,
+                        s,
+                        *target,
+                        *weight,
+                        &mut g.dp,
+                    )?;
+                }
+            }
+        }
         let mut gradients = Vec::with_capacity(parsed.len());
         let mut slot = 0;
         for p in &parsed {

@@ -32,6 +32,7 @@ use softrod_dynamics::{
 use softrod_integrate::{ParameterSystem, RodSystem, SecondOrderSystem};
 use softrod_mechanics::{Material, RodProperties, Tension};
 
+use super::prescribed::{self, PrescribedParams};
 use crate::error::{Error, Result};
 
 /// What a parameter name refers to.
@@ -46,6 +47,9 @@ pub(crate) enum Kind {
     /// A cable's tension (index in the model's cable order): its constant,
     /// or one entry per table value.
     Tension(usize),
+    /// The samples of a prescribed joint (index among the model's
+    /// elements): one entry per sample and coordinate (G17–G20).
+    Prescribed(usize),
     Q0,
     Qdot0,
 }
@@ -77,7 +81,8 @@ fn locate_cable(model: &Model, c: usize) -> Option<(usize, usize)> {
 /// Parses a parameter name: `q0`, `qdot0`, `ROD.young`,
 /// `ROD.shear_modulus`, `ROD.density`, `ROD.viscosity`, `BODY.mass`,
 /// `cableN.tension` (or `cable[N].tension`; `N` in the model's cable
-/// order, the scene's `[[cable]]` order).
+/// order, the scene's `[[cable]]` order), `ELEMENT.prescribed` (the samples
+/// of the prescribed joint of rod or body `ELEMENT`).
 pub(crate) fn parse(model: &Model, name: &str) -> Result<Param> {
     let n = model.n_dof();
     match name {
@@ -101,7 +106,7 @@ pub(crate) fn parse(model: &Model, name: &str) -> Result<Param> {
         return Err(bad(
             name,
             "expected q0, qdot0, ROD.young, ROD.shear_modulus, ROD.density, ROD.viscosity, \
-             BODY.mass or cableN.tension",
+             BODY.mass, cableN.tension or ELEMENT.prescribed",
         ));
     };
     let rod = || {
@@ -155,12 +160,20 @@ pub(crate) fn parse(model: &Model, name: &str) -> Result<Param> {
             }
             Kind::Tension(index)
         }
+        "prescribed" => {
+            let (e, len) = prescribed::parse(model, name, element)?;
+            return Ok(Param {
+                name: name.into(),
+                kind: Kind::Prescribed(e),
+                len,
+            });
+        }
         _ => {
             return Err(bad(
                 name,
                 format!(
                     "unknown parameter '{key}' (young, shear_modulus, density, viscosity, mass, \
-                     tension)"
+                     tension, prescribed)"
                 ),
             ));
         }
@@ -276,7 +289,9 @@ fn variant(model: &Model, kind: Kind, entry: usize) -> Result<(Model, f64)> {
             };
             Ok((model.clone().with_rod_spec(r, spec)?, delta))
         }
-        Kind::Q0 | Kind::Qdot0 => unreachable!("initial states have no model variant"),
+        Kind::Q0 | Kind::Qdot0 | Kind::Prescribed(_) => {
+            unreachable!("initial states and prescribed samples have no model variant")
+        }
     }
 }
 
@@ -302,6 +317,8 @@ pub(crate) struct ParamSystem<'a> {
     /// A closed model: the workspace of the constrained projection
     /// `P M⁻¹` (G22) and one column for its products.
     closed: Option<(Box<ClosedDerivatives>, DMatrix<f64>)>,
+    /// The samples of prescribed joints (G17–G20), if any are asked for.
+    prescribed: Option<Box<PrescribedParams>>,
 }
 
 /// An evaluation point `(t, q, q̇, q̈)`.
@@ -312,8 +329,18 @@ impl<'a> ParamSystem<'a> {
         let mut variants = Vec::new();
         let mut slot = 0;
         let inputs = sys.data.cable_tensions().map(<[f64]>::to_vec);
+        let mut prescribed: Option<Box<PrescribedParams>> = None;
         for p in params {
             if matches!(p.kind, Kind::Q0 | Kind::Qdot0) {
+                continue;
+            }
+            if let Kind::Prescribed(element) = p.kind {
+                let pp = match &mut prescribed {
+                    Some(pp) => pp,
+                    None => prescribed.insert(Box::new(PrescribedParams::new(&sys.model)?)),
+                };
+                pp.add(&sys.model, element, slot)?;
+                slot += p.len;
                 continue;
             }
             if matches!(p.kind, Kind::Tension(_)) && inputs.is_some() {
@@ -374,6 +401,7 @@ impl<'a> ParamSystem<'a> {
             bodies: vec![Matrix6::zeros(); bodies],
             dense_at: None,
             closed,
+            prescribed,
         })
     }
 }
@@ -449,6 +477,48 @@ impl ParamSystem<'_> {
             x.unwrap_or(column),
         )?;
         Ok(true)
+    }
+
+    /// Adds the prescribed samples' `−zᵀ ∂ID/∂xᵢ` (G19); nothing without
+    /// them.
+    fn prescribed_products(
+        &mut self,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+        qdd: &DVector<f64>,
+        z: &DVector<f64>,
+        out: &mut [f64],
+    ) -> Result<(), DynamicsError> {
+        let Some(pp) = self.prescribed.as_mut() else {
+            return Ok(());
+        };
+        let sys = &*self.sys;
+        pp.force_vjp(&sys.model, sys.data.cable_tensions(), t, q, qd, qdd, z, out)
+    }
+
+    /// The directly dependent part of a position-tracking loss term on the
+    /// prescribed samples (G19): see [`PrescribedParams::position_term`].
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn prescribed_position_term(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        rod: usize,
+        s: f64,
+        target: [f64; 3],
+        weight: f64,
+        out: &mut [f64],
+    ) -> Result<()> {
+        match self.prescribed.as_mut() {
+            Some(pp) => pp.position_term(&self.sys.model, t, q, rod, s, target, weight, out),
+            None => Ok(()),
+        }
+    }
+
+    /// Whether prescribed samples are among the parameters.
+    pub(crate) fn has_prescribed(&self) -> bool {
+        self.prescribed.is_some()
     }
 
     /// `(t, q, q̇, q̈)` is the point of the last dense linearization.
@@ -551,7 +621,7 @@ impl ParameterSystem for ParamSystem<'_> {
         w: &DVector<f64>,
         out: &mut [f64],
     ) -> Result<(), DynamicsError> {
-        if self.variants.is_empty() {
+        if self.variants.is_empty() && self.prescribed.is_none() {
             return Ok(());
         }
         let mut z = std::mem::take(&mut self.z);
@@ -587,7 +657,7 @@ impl ParameterSystem for ParamSystem<'_> {
         qdd: &DVector<f64>,
         out: &mut DMatrix<f64>,
     ) -> Result<(), DynamicsError> {
-        if self.variants.is_empty() {
+        if self.variants.is_empty() && self.prescribed.is_none() {
             return Ok(());
         }
         let closed = self.closed.is_some();
@@ -615,6 +685,19 @@ impl ParameterSystem for ParamSystem<'_> {
             out.set_column(v.slot, &z);
         }
         self.z = z;
+        if let Some(pp) = self.prescribed.as_mut() {
+            // `−∂ID/∂xᵢ` into the samples' columns, then `M⁻¹` on each
+            // (an open model: `parse` refuses closed ones).
+            let sys = &mut *self.sys;
+            pp.force_columns(&sys.model, sys.data.cable_tensions(), t, q, qd, qdd, out)?;
+            let mut z = std::mem::take(&mut self.z);
+            for col in pp.slots() {
+                z.copy_from(&out.column(col));
+                sys.solve_shifted_mass(&mut z)?;
+                out.set_column(col, &z);
+            }
+            self.z = z;
+        }
         if closed {
             // `−P M⁻¹ ∂ID/∂p` on all columns at once (G22).
             self.closed_response(t, q, qd, Some(out))?;
@@ -710,7 +793,7 @@ impl ParameterSystem for ParamSystem<'_> {
         t: f64,
         q: &DVector<f64>,
         qd: &DVector<f64>,
-        _qdd: &DVector<f64>,
+        qdd: &DVector<f64>,
         z: &DVector<f64>,
         out: &mut [f64],
     ) -> Result<bool, DynamicsError> {
@@ -720,6 +803,7 @@ impl ParameterSystem for ParamSystem<'_> {
         }
         self.strain_products(t, q, qd, z, out)?;
         self.apply_inertia(out);
+        self.prescribed_products(t, q, qd, qdd, z, out)?;
         Ok(true)
     }
 
@@ -738,6 +822,7 @@ impl ParameterSystem for ParamSystem<'_> {
         out: &mut [f64],
     ) -> Result<(), DynamicsError> {
         self.strain_products(t, q, qd, z, out)?;
+        self.prescribed_products(t, q, qd, qdd, z, out)?;
         if !self.variants.iter().any(|v| !v.strain_only) {
             return Ok(());
         }
