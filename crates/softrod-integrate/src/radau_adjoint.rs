@@ -487,29 +487,12 @@ pub(crate) fn forward<Sys: ParameterSystem>(
         }
         contract(k + 1, &sq, &sv, &mut grad);
     }
-    if let Some(index) = first_non_finite(grad.as_slice()) {
-        return Err(IntegrateError::NonFinite {
-            t: tape.time(tape.steps()),
-            h: 0.0,
-            what: "sensitivity",
-            index,
-        });
-    }
-    let (dq0, dqd0) = if initial {
-        (
-            grad.rows(np, n).into_owned(),
-            grad.rows(np + n, n).into_owned(),
-        )
-    } else {
-        (DVector::zeros(n), DVector::zeros(n))
-    };
-    Ok(AdjointGradient {
-        dq0,
-        dqd0,
-        dp: grad.rows(0, np).iter().copied().collect(),
-        jacobian_evaluations: st.jacobians,
-        accel_evaluations: st.accels,
-        dense_factorizations: st.factorizations,
-        krylov_iterations: 0,
-    })
+    crate::sensitivity::gradient_of_sensitivities(
+        &grad,
+        np,
+        n,
+        initial,
+        tape,
+        [st.jacobians, st.accels, st.factorizations],
+    )
 }

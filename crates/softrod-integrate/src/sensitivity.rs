@@ -67,6 +67,29 @@ pub fn forward_sensitivity_second_order<Sys: ParameterSystem>(
         w.step(sys, tape, k)?;
         w.contract(k + 1, seed, &mut lq, &mut lv, &mut grad);
     }
+    gradient_of_sensitivities(
+        &grad,
+        np,
+        n,
+        initial,
+        tape,
+        [w.jacobians, w.accels, w.factorizations],
+    )
+}
+
+/// The gradient from the contracted sensitivities `grad` = `(dL/dp (np),
+/// dL/dq₀ (n), dL/dq̇₀ (n))` (the last two only when `initial`), checked
+/// finite; `counts` = Jacobian evaluations, acceleration evaluations,
+/// dense factorizations of the pass. Shared by the ESDIRK and the Radau IIA
+/// forward sensitivities.
+pub(crate) fn gradient_of_sensitivities(
+    grad: &DVector<f64>,
+    np: usize,
+    n: usize,
+    initial: bool,
+    tape: &Tape,
+    counts: [usize; 3],
+) -> Result<AdjointGradient, IntegrateError> {
     if let Some(index) = first_non_finite(grad.as_slice()) {
         return Err(IntegrateError::NonFinite {
             t: tape.time(tape.steps()),
@@ -87,9 +110,9 @@ pub fn forward_sensitivity_second_order<Sys: ParameterSystem>(
         dq0,
         dqd0,
         dp: grad.rows(0, np).iter().copied().collect(),
-        jacobian_evaluations: w.jacobians,
-        accel_evaluations: w.accels,
-        dense_factorizations: w.factorizations,
+        jacobian_evaluations: counts[0],
+        accel_evaluations: counts[1],
+        dense_factorizations: counts[2],
         krylov_iterations: 0,
     })
 }

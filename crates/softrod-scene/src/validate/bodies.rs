@@ -382,42 +382,8 @@ impl Ctx<'_> {
                     ));
                 }
                 let values = ft.get("values").ok_or_else(|| self.r.missing(&vp, ""))?;
-                let toml::Value::Array(rows) = values else {
-                    return Err(self
-                        .r
-                        .wrong_type(&vp, format!("expected a list, found {}", values.type_str())));
-                };
-                if rows.len() != times.len() {
-                    return Err(self.r.inconsistent(
-                        &vp,
-                        format!("{} values for {} times", rows.len(), times.len()),
-                    ));
-                }
-                let values: Vec<Vec<f64>> =
-                    if k == 1 && !matches!(rows.first(), Some(toml::Value::Array(_))) {
-                        self.numbers(&vp, values)?
-                            .into_iter()
-                            .map(|x| vec![x])
-                            .collect()
-                    } else {
-                        rows.iter()
-                            .enumerate()
-                            .map(|(i, r)| {
-                                let rp = format!("{vp}[{i}]");
-                                let row = self.numbers(&rp, r)?;
-                                if row.len() != k {
-                                    return Err(self.r.inconsistent(
-                                        &rp,
-                                        format!(
-                                            "{} values, but a {kind} joint has {k} coordinates",
-                                            row.len()
-                                        ),
-                                    ));
-                                }
-                                Ok(row)
-                            })
-                            .collect::<Result<_>>()?
-                    };
+                let values =
+                    self.value_rows(&vp, values, times.len(), k, &format!("a {kind} joint"))?;
                 JointForce::Table { times, values }
             }
             Some(x) => JointForce::Constant(per_dof(&fp, x)?),
@@ -522,41 +488,53 @@ impl Ctx<'_> {
         let values = t
             .get("values")
             .ok_or_else(|| self.r.missing(&values_path, ""))?;
+        let rows = self.value_rows(&values_path, values, times.len(), k, "the joint")?;
+        Prescribed::samples(&times, &rows).map_err(|e| self.r.invalid(path, e))
+    }
+
+    /// The `values` of a joint's time table at `path`: one row of `k`
+    /// numbers per time (`n_times` of them), or plain numbers when `k = 1`.
+    /// `joint` names the joint in the message of a row of another length.
+    fn value_rows(
+        &self,
+        path: &str,
+        values: &toml::Value,
+        n_times: usize,
+        k: usize,
+        joint: &str,
+    ) -> Result<Vec<Vec<f64>>> {
         let toml::Value::Array(rows) = values else {
             return Err(self.r.wrong_type(
-                &values_path,
+                path,
                 format!("expected a list, found {}", values.type_str()),
             ));
         };
-        if rows.len() != times.len() {
-            return Err(self.r.inconsistent(
-                &values_path,
-                format!("{} values for {} times", rows.len(), times.len()),
-            ));
+        if rows.len() != n_times {
+            return Err(self
+                .r
+                .inconsistent(path, format!("{} values for {n_times} times", rows.len())));
         }
-        let rows: Vec<Vec<f64>> = if k == 1 && !matches!(rows.first(), Some(toml::Value::Array(_)))
-        {
-            self.numbers(&values_path, values)?
+        if k == 1 && !matches!(rows.first(), Some(toml::Value::Array(_))) {
+            return Ok(self
+                .numbers(path, values)?
                 .into_iter()
                 .map(|x| vec![x])
-                .collect()
-        } else {
-            rows.iter()
-                .enumerate()
-                .map(|(i, r)| {
-                    let rp = format!("{values_path}[{i}]");
-                    let row = self.numbers(&rp, r)?;
-                    if row.len() != k {
-                        return Err(self.r.inconsistent(
-                            &rp,
-                            format!("{} values, but the joint has {k} coordinates", row.len()),
-                        ));
-                    }
-                    Ok(row)
-                })
-                .collect::<Result<_>>()?
-        };
-        Prescribed::samples(&times, &rows).map_err(|e| self.r.invalid(path, e))
+                .collect());
+        }
+        rows.iter()
+            .enumerate()
+            .map(|(i, r)| {
+                let rp = format!("{path}[{i}]");
+                let row = self.numbers(&rp, r)?;
+                if row.len() != k {
+                    return Err(self.r.inconsistent(
+                        &rp,
+                        format!("{} values, but {joint} has {k} coordinates", row.len()),
+                    ));
+                }
+                Ok(row)
+            })
+            .collect()
     }
 
     /// `body[j]`'s mass, inertia, centre of mass and base.
