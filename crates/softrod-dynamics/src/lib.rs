@@ -126,7 +126,8 @@ pub use analysis::{
 };
 pub use constraints::{
     ClosedDerivatives, ClosedShiftedSolver, check_closures, closed_dynamics_derivatives,
-    closed_force_response, closure_multipliers, closure_residuals, constraint_jacobian,
+    closed_force_response, closed_prescribed_derivatives, closed_row_response,
+    closed_row_response_transposed, closure_multipliers, closure_residuals, constraint_jacobian,
     constraint_rank, constraint_residual, max_closure_residual, open_tree_inverse_dynamics,
 };
 pub use derivatives::{

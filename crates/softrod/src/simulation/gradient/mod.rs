@@ -197,7 +197,7 @@ impl Simulation {
     /// Errors ([`Error::Gradient`], naming the key): an integrator without
     /// an adjoint (supported: esdirk, esdirk5, radau5), a model with contact,
     /// `ELEMENT.prescribed` on a joint that is not prescribed, or prescribed
-    /// by a sinusoid, or on a closed model,
+    /// by a sinusoid,
     /// a parameter or loss naming nothing in the model, a time outside the
     /// run, non-finite or negative weights, non-finite targets, a custom
     /// loss that fails or returns the wrong lengths or NaN.

@@ -27,6 +27,7 @@
 use nalgebra::{DMatrix, DVector, Matrix6};
 use softrod_dynamics::{
     ClosedDerivatives, Data, DynamicsError, Model, closed_force_response,
+    closed_prescribed_derivatives, closed_row_response, closed_row_response_transposed,
     open_tree_inverse_dynamics, strain_space_force,
 };
 use softrod_integrate::{ParameterSystem, RodSystem, SecondOrderSystem};
@@ -319,6 +320,13 @@ pub(crate) struct ParamSystem<'a> {
     closed: Option<(Box<ClosedDerivatives>, DMatrix<f64>)>,
     /// The samples of prescribed joints (G17–G20), if any are asked for.
     prescribed: Option<Box<PrescribedParams>>,
+    /// A closed model with prescribed samples (G28): `ν` and `h` (m), a
+    /// column (n), and per prescribed coordinate the cotangent's products
+    /// with the closure terms' derivatives by `p`, `ṗ`, `p̈`.
+    nu: DVector<f64>,
+    hrow: DVector<f64>,
+    col: DVector<f64>,
+    by_coordinate: Vec<[f64; 3]>,
 }
 
 /// An evaluation point `(t, q, q̇, q̈)`.
@@ -384,6 +392,7 @@ impl<'a> ParamSystem<'a> {
         }
         let n = sys.model.n_dof();
         let (rods, bodies) = (sys.model.rods().len(), sys.model.bodies().len());
+        let (m, np) = (sys.model.n_constraints(), sys.model.n_prescribed());
         let closed = sys.model.has_closures().then(|| {
             (
                 Box::new(ClosedDerivatives::new(&sys.model)),
@@ -402,6 +411,10 @@ impl<'a> ParamSystem<'a> {
             dense_at: None,
             closed,
             prescribed,
+            nu: DVector::zeros(m),
+            hrow: DVector::zeros(m),
+            col: DVector::zeros(n),
+            by_coordinate: vec![[0.0; 3]; np],
         })
     }
 }
@@ -495,6 +508,46 @@ impl ParamSystem<'_> {
         };
         let sys = &*self.sys;
         pp.force_vjp(&sys.model, sys.data.cable_tensions(), t, q, qd, qdd, z, out)
+    }
+
+    /// A closed model with prescribed samples: adds the closure terms'
+    /// part of `wᵀ ∂q̈/∂xᵢ` (G28), `zᵀ ∂(Jᵀλ)/∂xᵢ − νᵀ ∂R/∂xᵢ` with
+    /// `z = P M⁻¹ w` and `ν = A⁻¹ Yᵀ w`; nothing otherwise.
+    fn closed_prescribed_vjp(
+        &mut self,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+        w: &DVector<f64>,
+        z: &DVector<f64>,
+        out: &mut [f64],
+    ) -> Result<(), DynamicsError> {
+        let (Some(pp), Some((work, _))) = (self.prescribed.as_ref(), self.closed.as_mut()) else {
+            return Ok(());
+        };
+        let sys = &mut *self.sys;
+        closed_prescribed_derivatives(
+            &sys.model,
+            &mut sys.data,
+            work,
+            t,
+            q.as_slice(),
+            qd.as_slice(),
+            sys.tau.as_ref().map(|v| v.as_slice()),
+        )?;
+        closed_row_response_transposed(&sys.data, work, w, &mut self.nu)?;
+        for (k, c) in self.by_coordinate.iter_mut().enumerate() {
+            *c = [
+                z.dot(&work.force_dp.column(k)) - self.nu.dot(&work.rows_dp.column(k)),
+                -self.nu.dot(&work.rows_dpd.column(k)),
+                -self.nu.dot(&work.rows_dpdd.column(k)),
+            ];
+        }
+        for (slot, k, (b0, b1, b2)) in pp.samples_at(t) {
+            let [a, b, c] = self.by_coordinate[k];
+            out[slot] += a * b0 + b * b1 + c * b2;
+        }
+        Ok(())
     }
 
     /// The directly dependent part of a position-tracking loss term on the
@@ -640,7 +693,8 @@ impl ParameterSystem for ParamSystem<'_> {
                 .factor_shifted_mass(t, q, 0.0, 0.0)
                 .and_then(|_| self.sys.solve_shifted_mass(&mut z))
         }
-        .and_then(|()| self.force_param_vjp(t, q, qd, qdd, &z, out));
+        .and_then(|()| self.force_param_vjp(t, q, qd, qdd, &z, out))
+        .and_then(|()| self.closed_prescribed_vjp(t, q, qd, w, &z, out));
         self.z = z;
         solved
     }
@@ -687,20 +741,50 @@ impl ParameterSystem for ParamSystem<'_> {
         self.z = z;
         if let Some(pp) = self.prescribed.as_mut() {
             // `−∂ID/∂xᵢ` into the samples' columns, then `M⁻¹` on each
-            // (an open model: `parse` refuses closed ones).
+            // (a closed model: `+∂(Jᵀλ)/∂xᵢ`, then `P M⁻¹` below, G28).
             let sys = &mut *self.sys;
             pp.force_columns(&sys.model, sys.data.cable_tensions(), t, q, qd, qdd, out)?;
-            let mut z = std::mem::take(&mut self.z);
-            for col in pp.slots() {
-                z.copy_from(&out.column(col));
-                sys.solve_shifted_mass(&mut z)?;
-                out.set_column(col, &z);
+            if let Some((work, _)) = self.closed.as_mut() {
+                closed_prescribed_derivatives(
+                    &sys.model,
+                    &mut sys.data,
+                    work,
+                    t,
+                    q.as_slice(),
+                    qd.as_slice(),
+                    sys.tau.as_ref().map(|v| v.as_slice()),
+                )?;
+                for (slot, k, (b0, _, _)) in pp.samples_at(t) {
+                    out.column_mut(slot).axpy(b0, &work.force_dp.column(k), 1.0);
+                }
+            } else {
+                let mut z = std::mem::take(&mut self.z);
+                for col in pp.slots() {
+                    z.copy_from(&out.column(col));
+                    sys.solve_shifted_mass(&mut z)?;
+                    out.set_column(col, &z);
+                }
+                self.z = z;
             }
-            self.z = z;
         }
         if closed {
             // `−P M⁻¹ ∂ID/∂p` on all columns at once (G22).
             self.closed_response(t, q, qd, Some(out))?;
+            if let (Some(pp), Some((work, _))) = (self.prescribed.as_ref(), self.closed.as_mut()) {
+                // The rows' own dependence on the samples: `+Y A⁻¹ hᵢ`,
+                // `hᵢ = −∂R/∂xᵢ` (G28), with the factorizations the
+                // projection just used.
+                for (slot, k, (b0, b1, b2)) in pp.samples_at(t) {
+                    for r in 0..self.hrow.len() {
+                        self.hrow[r] = -(b0 * work.rows_dp[(r, k)]
+                            + b1 * work.rows_dpd[(r, k)]
+                            + b2 * work.rows_dpdd[(r, k)]);
+                    }
+                    self.col.copy_from(&out.column(slot));
+                    closed_row_response(&self.sys.data, work, &self.hrow, &mut self.col)?;
+                    out.set_column(slot, &self.col);
+                }
+            }
         }
         Ok(())
     }
