@@ -554,7 +554,8 @@ class Simulation:
         """Loss of a run and its exact gradient (discrete adjoint of esdirk, esdirk5 or radau5) w.r.t. params
         ("q0", "qdot0", "ROD.young", "ROD.shear_modulus", "ROD.density", "ROD.viscosity",
         "BODY.mass", "cableN.tension", "ELEMENT.prescribed": a prescribed joint's samples, shaped as
-        its values, open models only). loss: {"type": "position", "rod", "s", "times",
+        its values; "ELEMENT.actuator": a joint actuator's force values, a table shaped as its
+        values). loss: {"type": "position", "rod", "s", "times",
         "targets", "weight"}, {"type": "quadratic", "times", "q_weights", "qdot_weights",
         "q_ref"}, a callable l(t, q, qdot) -> (value, dl_dq, dl_dqdot) at `times`, or a list.
         method: "adjoint" (default) or "forward" (forward sensitivities; few parameters).

@@ -932,7 +932,10 @@ impl Simulation {
     /// array, one entry per value of the tension table),
     /// `"ELEMENT.prescribed"` (the samples of the prescribed joint of rod or
     /// body ELEMENT, in the shape of its `values`: `(samples,)` for one
-    /// coordinate, `(samples, dof)` for more; open models, G17–G20). `loss`: a dict or a
+    /// coordinate, `(samples, dof)` for more; G17–G20, G28),
+    /// `"ELEMENT.actuator"` (the force values of the actuator on ELEMENT's
+    /// joint, a table shaped as its `values`, a constant as `(dof,)`;
+    /// G29). `loss`: a dict or a
     /// list of dicts — `{"type": "position", "rod": name or index, "s":
     /// arc length (default the tip), "times": (k,), "targets": (k, 3) [m],
     /// "weight": w}` for `½ w ‖p(t) − target‖²`, `{"type": "quadratic",

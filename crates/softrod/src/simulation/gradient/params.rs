@@ -33,6 +33,7 @@ use softrod_dynamics::{
 use softrod_integrate::{ParameterSystem, RodSystem, SecondOrderSystem};
 use softrod_mechanics::{Material, RodProperties, Tension};
 
+use super::actuator::{self, ActuatorParam};
 use super::prescribed::{self, PrescribedParams};
 use crate::error::{Error, Result};
 
@@ -51,6 +52,9 @@ pub(crate) enum Kind {
     /// The samples of a prescribed joint (index among the model's
     /// elements): one entry per sample and coordinate (G17–G20).
     Prescribed(usize),
+    /// The force values of a joint actuator (index among the model's
+    /// elements): one entry per value and coordinate (G29).
+    Actuator(usize),
     Q0,
     Qdot0,
 }
@@ -83,7 +87,8 @@ fn locate_cable(model: &Model, c: usize) -> Option<(usize, usize)> {
 /// `ROD.shear_modulus`, `ROD.density`, `ROD.viscosity`, `BODY.mass`,
 /// `cableN.tension` (or `cable[N].tension`; `N` in the model's cable
 /// order, the scene's `[[cable]]` order), `ELEMENT.prescribed` (the samples
-/// of the prescribed joint of rod or body `ELEMENT`).
+/// of the prescribed joint of rod or body `ELEMENT`), `ELEMENT.actuator`
+/// (the force values of its joint's actuator).
 pub(crate) fn parse(model: &Model, name: &str) -> Result<Param> {
     let n = model.n_dof();
     match name {
@@ -107,7 +112,7 @@ pub(crate) fn parse(model: &Model, name: &str) -> Result<Param> {
         return Err(bad(
             name,
             "expected q0, qdot0, ROD.young, ROD.shear_modulus, ROD.density, ROD.viscosity, \
-             BODY.mass, cableN.tension or ELEMENT.prescribed",
+             BODY.mass, cableN.tension, ELEMENT.prescribed or ELEMENT.actuator",
         ));
     };
     let rod = || {
@@ -169,12 +174,20 @@ pub(crate) fn parse(model: &Model, name: &str) -> Result<Param> {
                 len,
             });
         }
+        "actuator" => {
+            let (e, len) = actuator::parse(model, name, element)?;
+            return Ok(Param {
+                name: name.into(),
+                kind: Kind::Actuator(e),
+                len,
+            });
+        }
         _ => {
             return Err(bad(
                 name,
                 format!(
                     "unknown parameter '{key}' (young, shear_modulus, density, viscosity, mass, \
-                     tension, prescribed)"
+                     tension, prescribed, actuator)"
                 ),
             ));
         }
@@ -290,8 +303,8 @@ fn variant(model: &Model, kind: Kind, entry: usize) -> Result<(Model, f64)> {
             };
             Ok((model.clone().with_rod_spec(r, spec)?, delta))
         }
-        Kind::Q0 | Kind::Qdot0 | Kind::Prescribed(_) => {
-            unreachable!("initial states and prescribed samples have no model variant")
+        Kind::Q0 | Kind::Qdot0 | Kind::Prescribed(_) | Kind::Actuator(_) => {
+            unreachable!("initial states, prescribed samples and actuators have no model variant")
         }
     }
 }
@@ -320,6 +333,8 @@ pub(crate) struct ParamSystem<'a> {
     closed: Option<(Box<ClosedDerivatives>, DMatrix<f64>)>,
     /// The samples of prescribed joints (G17–G20), if any are asked for.
     prescribed: Option<Box<PrescribedParams>>,
+    /// The joint actuators' force values asked for (G29).
+    actuators: Vec<ActuatorParam>,
     /// A closed model with prescribed samples (G28): `ν` and `h` (m), a
     /// column (n), and per prescribed coordinate the cotangent's products
     /// with the closure terms' derivatives by `p`, `ṗ`, `p̈`.
@@ -338,8 +353,20 @@ impl<'a> ParamSystem<'a> {
         let mut slot = 0;
         let inputs = sys.data.cable_tensions().map(<[f64]>::to_vec);
         let mut prescribed: Option<Box<PrescribedParams>> = None;
+        let mut actuators = Vec::new();
         for p in params {
             if matches!(p.kind, Kind::Q0 | Kind::Qdot0) {
+                continue;
+            }
+            if let Kind::Actuator(element) = p.kind {
+                if sys.data.joint_forces().is_some() {
+                    return Err(bad(
+                        &p.name,
+                        "the joint forces are set as inputs, not by the actuators' schedules",
+                    ));
+                }
+                actuators.push(ActuatorParam::new(&sys.model, element, slot));
+                slot += p.len;
                 continue;
             }
             if let Kind::Prescribed(element) = p.kind {
@@ -411,6 +438,7 @@ impl<'a> ParamSystem<'a> {
             dense_at: None,
             closed,
             prescribed,
+            actuators,
             nu: DVector::zeros(m),
             hrow: DVector::zeros(m),
             col: DVector::zeros(n),
@@ -490,6 +518,15 @@ impl ParamSystem<'_> {
             x.unwrap_or(column),
         )?;
         Ok(true)
+    }
+
+    /// Adds the actuators' `−zᵀ ∂ID/∂xᵢ = z_j wᵢ(t)` (G29).
+    fn actuator_products(&self, t: f64, z: &DVector<f64>, out: &mut [f64]) {
+        for a in &self.actuators {
+            for (slot, j, w) in a.weights(t) {
+                out[slot] += z[j] * w;
+            }
+        }
     }
 
     /// Adds the prescribed samples' `−zᵀ ∂ID/∂xᵢ` (G19); nothing without
@@ -674,7 +711,7 @@ impl ParameterSystem for ParamSystem<'_> {
         w: &DVector<f64>,
         out: &mut [f64],
     ) -> Result<(), DynamicsError> {
-        if self.variants.is_empty() && self.prescribed.is_none() {
+        if self.variants.is_empty() && self.prescribed.is_none() && self.actuators.is_empty() {
             return Ok(());
         }
         let mut z = std::mem::take(&mut self.z);
@@ -711,7 +748,7 @@ impl ParameterSystem for ParamSystem<'_> {
         qdd: &DVector<f64>,
         out: &mut DMatrix<f64>,
     ) -> Result<(), DynamicsError> {
-        if self.variants.is_empty() && self.prescribed.is_none() {
+        if self.variants.is_empty() && self.prescribed.is_none() && self.actuators.is_empty() {
             return Ok(());
         }
         let closed = self.closed.is_some();
@@ -766,6 +803,27 @@ impl ParameterSystem for ParamSystem<'_> {
                 }
                 self.z = z;
             }
+        }
+        // The actuators' columns `e_j wᵢ(t)`, then `M⁻¹` (G29; a closed
+        // model: `P M⁻¹` below).
+        if !self.actuators.is_empty() {
+            let mut z = std::mem::take(&mut self.z);
+            for a in &self.actuators {
+                for slot in a.slots() {
+                    out.column_mut(slot).fill(0.0);
+                }
+                for (slot, j, w) in a.weights(t) {
+                    out[(j, slot)] = w;
+                }
+                if !closed {
+                    for slot in a.slots() {
+                        z.copy_from(&out.column(slot));
+                        self.sys.solve_shifted_mass(&mut z)?;
+                        out.set_column(slot, &z);
+                    }
+                }
+            }
+            self.z = z;
         }
         if closed {
             // `−P M⁻¹ ∂ID/∂p` on all columns at once (G22).
@@ -888,6 +946,7 @@ impl ParameterSystem for ParamSystem<'_> {
         self.strain_products(t, q, qd, z, out)?;
         self.apply_inertia(out);
         self.prescribed_products(t, q, qd, qdd, z, out)?;
+        self.actuator_products(t, z, out);
         Ok(true)
     }
 
@@ -907,6 +966,7 @@ impl ParameterSystem for ParamSystem<'_> {
     ) -> Result<(), DynamicsError> {
         self.strain_products(t, q, qd, z, out)?;
         self.prescribed_products(t, q, qd, qdd, z, out)?;
+        self.actuator_products(t, z, out);
         if !self.variants.iter().any(|v| !v.strain_only) {
             return Ok(());
         }
