@@ -22,6 +22,7 @@ use crate::types::{Mat3, Vec3, Vec6, angular, join, linear};
 #[derive(Clone, Debug)]
 pub struct PieceMaps {
     theta: f64,
+    theta2: f64,
     sigma: f64,
     q: Vec3,
     kmat: Mat3,
@@ -49,6 +50,7 @@ impl PieceMaps {
         let kq = k.cross(&q);
         let mut out = Self {
             theta: th2.sqrt(),
+            theta2: th2,
             sigma,
             q,
             kmat: skew(&k),
@@ -142,13 +144,30 @@ impl PieceMaps {
     /// which is zero when no rate was given.
     #[inline(always)]
     pub fn eval(&self, x: f64) -> (Pose, AdOp, Vec6) {
+        let (g, t, bias, _) = self.eval_with_ta(x);
+        (g, t, bias)
+    }
+
+    /// [`Self::eval`] and the scalar coefficients `[x, c_b, c_c]` of the
+    /// diagonal block of `T₋(x)`: `T_a(x) = x I + c_b k̃ + c_c k̃²` (D3′), a
+    /// polynomial in `k̃` ([`Self::k_skew`], [`Self::k_skew_squared`]), so
+    /// sums over a piece's points of products of `T_a` can be carried as
+    /// scalar sums.
+    #[inline(always)]
+    pub fn eval_with_ta(&self, x: f64) -> (Pose, AdOp, Vec6, [f64; 3]) {
         if !self.has_rate {
-            let (g, t) = self.exp_and_tangent_minus(x);
-            return (g, t, Vec6::zeros());
+            let ([a, b, c], [t3, t4]) = series::abc_tau34(x * self.theta);
+            let x2 = x * x;
+            let ta = [x, -x2 * b, x2 * x * c];
+            return (
+                self.pose(x, a, b, c),
+                self.tangent_minus(x, b, c, t3, t4),
+                Vec6::zeros(),
+                ta,
+            );
         }
         let psi = x * self.theta;
-        let ([a, b, c], t, r) = series::abc_tau_rho(psi);
-        let (t3, t4) = (t[2], t[3]);
+        let ([a, b, c], [t2, t3, t4], r) = series::abc_tau234_rho(psi);
         let x2 = x * x;
         let x3 = x2 * x;
         let x4 = x2 * x2;
@@ -156,14 +175,33 @@ impl PieceMaps {
         let kd = self.kd;
         let [v1, v2, v3, v4] = &self.v;
         let [e2, e3, e4] = &self.e;
-        let bias = v1 * (-x4 * r[0] * kd) + (v2 * (x5 * r[1] * kd) + e2 * (x3 * t[1]))
-            - (v3 * (x5 * x * r[2] * kd) + e3 * (x4 * t[2]))
-            + (v4 * (x5 * x2 * r[3] * kd) + e4 * (x5 * t[3]));
+        let bias = v1 * (-x4 * r[0] * kd) + (v2 * (x5 * r[1] * kd) + e2 * (x3 * t2))
+            - (v3 * (x5 * x * r[2] * kd) + e3 * (x4 * t3))
+            + (v4 * (x5 * x2 * r[3] * kd) + e4 * (x5 * t4));
         (
             self.pose(x, a, b, c),
             self.tangent_minus(x, b, c, t3, t4),
             bias,
+            [x, -x2 * b, x3 * c],
         )
+    }
+
+    /// `k̃` of the piece's curvature `k`.
+    #[inline(always)]
+    pub fn k_skew(&self) -> &Mat3 {
+        &self.kmat
+    }
+
+    /// `k̃² = kkᵀ − θ²I`.
+    #[inline(always)]
+    pub fn k_skew_squared(&self) -> &Mat3 {
+        &self.k2
+    }
+
+    /// `θ² = |k|²` (`k̃³ = −θ²k̃`).
+    #[inline(always)]
+    pub fn theta_squared(&self) -> f64 {
+        self.theta2
     }
 }
 

@@ -155,6 +155,13 @@ impl SpatialSums {
 /// `tangent_blocks`, the sign flips exactly the skew parts). So
 /// `RR' = m T_aᵀ` and `RQ = m(T_bᵀ − p̃T_aᵀ)` need no product, `𝓤₂₂ = (Σ m T_a)ᵀ`,
 /// `𝓤₂₁ = (Σ m T_b)ᵀ − 𝓤₁₂` are formed once per piece.
+///
+/// The isotropic form also carries `Σ m T_a` and `Σ m T_aᵀT_a` as scalar
+/// sums: `T_a = xI + c_b k̃ + c_c k̃²` is a polynomial in `k̃`
+/// ([`softrod_lie::PieceMaps::eval_with_ta`]), and with `k̃ᵀ = −k̃`,
+/// `k̃³ = −θ²k̃`, `T_aᵀT_a = x²I + (2x c_c − c_b² − θ²c_c²) k̃²`: five scalar
+/// sums per point and one assembly per piece replace a symmetric 3×3 product,
+/// a scaling and two 3×3 sums.
 #[derive(Default)]
 pub(crate) struct FullSums {
     u11: softrod_lie::Mat3,
@@ -164,9 +171,11 @@ pub(crate) struct FullSums {
     d11: softrod_lie::Mat3,
     d12: softrod_lie::Mat3,
     d22: softrod_lie::Mat3,
-    /// `Σ m T_a`, `Σ m T_b` of the isotropic form (`u21`, `u22` unused).
-    ta_m: softrod_lie::Mat3,
+    /// `Σ m T_b` of the isotropic form (`u21`, `u22`, `d22` unused).
     tb_m: softrod_lie::Mat3,
+    /// `Σ m x`, `Σ m c_b`, `Σ m c_c` (so `Σ m T_a`), `Σ m x²` and
+    /// `Σ m (2x c_c − c_b² − θ²c_c²)` (so `Σ m T_aᵀT_a`) of the isotropic form.
+    ta_sums: [f64; 5],
     isotropic: bool,
 }
 
@@ -185,24 +194,38 @@ impl FullSums {
     /// `Aᵀ = [[R, p̃R], [0, R]]` the U blocks are `RP + p̃(RQ)`, `p̃(RR')`,
     /// `RQ`, `RR'`: three products and two cross-product sweeps, and no
     /// `Ad⁻¹` block built.
+    ///
+    /// `ta = [x, c_b, c_c]` and `theta2 = θ²` describe `T_a` as a polynomial
+    /// in `k̃` ([`softrod_lie::PieceMaps::eval_with_ta`]).
     #[inline(always)]
-    pub(crate) fn add(&mut self, g: &Pose, t: &AdOp, mw: &Vec6) {
+    pub(crate) fn add(&mut self, g: &Pose, t: &AdOp, mw: &Vec6, ta: &[f64; 3], theta2: f64) {
+        if self.isotropic {
+            let m = mw[3];
+            let p = scale_rows(&softrod_lie::angular(mw), &t.a);
+            let q = t.b * m;
+            // Taᵀ J Ta + Tbᵀ m Tb is symmetric.
+            self.d11 += tr_mul_sym2(&t.a, &p, &t.b, &q);
+            self.d12 += q.tr_mul(&t.a);
+            let [x, cb, cc] = *ta;
+            let s = &mut self.ta_sums;
+            s[0] += m * x;
+            s[1] += m * cb;
+            s[2] += m * cc;
+            s[3] += m * (x * x);
+            s[4] += m * ((2.0 * x * cc - cb * cb) - theta2 * (cc * cc));
+            // RQ = m(T_bᵀ − p̃T_aᵀ) and p̃RR' = m p̃T_aᵀ (see the type's docs).
+            let pta = cross_cols(&g.translation, &t.a.transpose()) * m;
+            let rq = q.transpose() - pta;
+            self.u11 += g.rotation * p + cross_cols(&g.translation, &rq);
+            self.u12 += pta;
+            self.tb_m += q;
+            return;
+        }
         let (p, r, q) = scaled_blocks(&softrod_lie::angular(mw), &softrod_lie::linear(mw), t);
         // Taᵀ J Ta + Tbᵀ m Tb and Taᵀ m Ta are symmetric.
         self.d11 += tr_mul_sym2(&t.a, &p, &t.b, &q);
         self.d12 += t.b.tr_mul(&r);
         self.d22 += tr_mul_sym(&t.a, &r);
-        if self.isotropic {
-            // RQ = m(T_bᵀ − p̃T_aᵀ) and p̃RR' = m p̃T_aᵀ (see the type's docs).
-            let m = mw[3];
-            let pta = cross_cols(&g.translation, &t.a.transpose()) * m;
-            let rq = q.transpose() - pta;
-            self.u11 += g.rotation * p + cross_cols(&g.translation, &rq);
-            self.u12 += pta;
-            self.ta_m += r;
-            self.tb_m += q;
-            return;
-        }
         let rot = &g.rotation;
         let rq = rot * q;
         let rr = rot * r;
@@ -212,16 +235,22 @@ impl FullSums {
         self.u22 += rr;
     }
 
-    /// Projects on the basis: `ut = 𝓤ᶠB` (6×k), `dt = Bᵀ𝓓ᶠB` (k×k, full).
+    /// Projects on the basis: `ut = 𝓤ᶠB` (6×k), `dt = Bᵀ𝓓ᶠB` (k×k, full);
+    /// `maps` are the piece's, whose `k̃` the isotropic sums need.
     pub(crate) fn project(
         &mut self,
+        maps: &softrod_lie::PieceMaps,
         basis: &softrod_kinematics::Basis,
         ut: &mut Mat6,
         dt: &mut Mat6,
     ) {
         if self.isotropic {
-            self.u22 = self.ta_m.transpose();
+            let (km, k2) = (maps.k_skew(), maps.k_skew_squared());
+            let [sx, scb, scc, sx2, sg] = self.ta_sums;
+            // (Σ m T_a)ᵀ = Σm x I − Σm c_b k̃ + Σm c_c k̃².
+            self.u22 = km * (-scb) + k2 * scc + softrod_lie::Mat3::from_diagonal_element(sx);
             self.u21 = self.tb_m.transpose() - self.u12;
+            self.d22 = k2 * sg + softrod_lie::Mat3::from_diagonal_element(sx2);
         }
         let d = Sym6 {
             a: self.d11,
