@@ -226,6 +226,40 @@ mod tests {
     use super::*;
     use crate::{d_tangent_minus_self, exp_and_tangent_minus};
 
+    /// `T_a = xI + c_b k̃ + c_c k̃²` from [`PieceMaps::eval_with_ta`], and the
+    /// scalar form `T_aᵀT_a = x²I + (2x c_c − c_b² − θ²c_c²) k̃²` the inertia
+    /// sums use, against the dense block and its dense product.
+    #[test]
+    fn ta_coefficients_give_the_block_and_its_gram() {
+        let xis = [
+            Vec6::new(0.3, -1.1, 0.7, 1.05, 0.2, -0.1),
+            Vec6::new(1e-9, 0.0, 2e-9, 0.9, 0.01, 0.0),
+            Vec6::new(12.0, -30.0, 5.0, 1.2, -0.3, 0.4),
+        ];
+        let d = Vec6::new(0.2, 0.1, -0.4, 0.3, -0.5, 0.9);
+        for xi in &xis {
+            for rate in [None, Some(&d)] {
+                let pm = PieceMaps::new(xi, rate);
+                let (km, k2, th2) = (pm.k_skew(), pm.k_skew_squared(), pm.theta_squared());
+                for x in [0.0, 0.01, 0.3, 1.0, 2.0] {
+                    let (g, t, bias, [x0, cb, cc]) = pm.eval_with_ta(x);
+                    assert_eq!(pm.eval(x), (g, t, bias));
+                    assert_eq!(x0, x);
+                    let ta = Mat3::identity() * x + km * cb + k2 * cc;
+                    let scale = 1.0 + t.a.amax();
+                    assert!((ta - t.a).amax() < 1e-15 * scale, "{xi:?} {x}");
+                    let gram = Mat3::identity() * (x * x)
+                        + k2 * ((2.0 * x * cc - cb * cb) - th2 * (cc * cc));
+                    let dense = t.a.transpose() * t.a;
+                    assert!(
+                        (gram - dense).amax() < 1e-14 * scale * scale,
+                        "{xi:?} {x}: {gram:?} vs {dense:?}"
+                    );
+                }
+            }
+        }
+    }
+
     #[test]
     fn equals_the_standalone_maps() {
         let xis = [
