@@ -365,3 +365,44 @@ pub(crate) fn s_columns(
     }
     k
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use softrod_lie::PieceMaps;
+
+    /// The isotropic form of [`FullSums`] (the scalar sums of `T_a`, the
+    /// identities `R T_a = T_aᵀ`, `R T_b = T_bᵀ − p̃T_aᵀ`) against the general
+    /// form's dense products, on the same points with `m·I` linear inertia.
+    #[test]
+    fn isotropic_sums_equal_the_general_ones() {
+        let basis = softrod_kinematics::Basis::all();
+        let d = Vec6::new(0.2, 0.1, -0.4, 0.3, -0.5, 0.9);
+        let xis = [
+            Vec6::new(0.3, -1.1, 0.7, 1.05, 0.2, -0.1),
+            Vec6::new(1e-9, 0.0, 2e-9, 0.9, 0.01, 0.0),
+            Vec6::new(12.0, -30.0, 5.0, 1.2, -0.3, 0.4),
+        ];
+        for xi in &xis {
+            for rate in [None, Some(&d)] {
+                let maps = PieceMaps::new(xi, rate);
+                let (mut iso, mut general) = (FullSums::new(true), FullSums::new(false));
+                for (x, w) in [(0.07, 0.17), (0.3, 0.33), (0.55, 0.33), (0.78, 0.17)] {
+                    let (g, t, _, ta) = maps.eval_with_ta(x);
+                    // A tapered section: the inertia changes along the piece.
+                    let mw = Vec6::new(2e-3, 1e-3, 1.1e-3, 0.5, 0.5, 0.5) * (w * (1.0 + x));
+                    iso.add(&g, &t, &mw, &ta, maps.theta_squared());
+                    general.add(&g, &t, &mw, &ta, maps.theta_squared());
+                }
+                let (mut u_iso, mut d_iso) = (Mat6::zeros(), Mat6::zeros());
+                let (mut u_gen, mut d_gen) = (Mat6::zeros(), Mat6::zeros());
+                iso.project(&maps, &basis, &mut u_iso, &mut d_iso);
+                general.project(&maps, &basis, &mut u_gen, &mut d_gen);
+                let tol_u = 1e-13 * (1.0 + u_gen.amax());
+                let tol_d = 1e-13 * (1.0 + d_gen.amax());
+                assert!((u_iso - u_gen).amax() < tol_u, "{xi:?}: {u_iso} vs {u_gen}");
+                assert!((d_iso - d_gen).amax() < tol_d, "{xi:?}: {d_iso} vs {d_gen}");
+            }
+        }
+    }
+}
