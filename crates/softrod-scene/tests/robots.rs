@@ -175,7 +175,11 @@ fn prescribed_joints_are_not_dof_and_follow_their_curves() {
             "values = [[0, 0], [0.5, 1], [2, 4]], bounds = [[-1, 1], [0, 2.5]] }",
             1,
         )
-        .replacen("phase = 0.5 } }", "phase = 0.5 }, bounds = [-0.02, 0.03] }", 1);
+        .replacen(
+            "phase = 0.5 } }",
+            "phase = 0.5 }, bounds = [-0.02, 0.03] }",
+            1,
+        );
     assert_ne!(bounded, text);
     let (scene, _) = Scene::from_str(&bounded, "robot.toml").unwrap();
     let m = scene.build().unwrap().model;
