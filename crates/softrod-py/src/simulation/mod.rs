@@ -453,6 +453,37 @@ impl Simulation {
         Ok((vec_out(py, &x), vec_out(py, &v)))
     }
 
+    /// Commands the prescribed joints to `targets` (n_prescribed,) over
+    /// `[t, t + dt]` without stepping, as `step(..., prescribed_targets=...)`
+    /// does before it integrates: each coordinate then follows the cubic
+    /// from its position and rate at `t` to its target at rest at `t + dt`
+    /// (poses and runs see it). The batched vector env keeps each copy's
+    /// own Simulation in line with its `BatchStepper` copy this way.
+    fn command_prescribed(&mut self, t: f64, dt: f64, targets: &Bound<'_, PyAny>) -> PyResult<()> {
+        let p = self.prescribed_targets_arg(targets)?;
+        self.sim.command_prescribed(t, dt, &p).map_err(to_py)?;
+        self.sync_prescribed()
+    }
+
+    /// Holds the prescribed joints at `values` (n_prescribed,) [rad or m,
+    /// within the scene's bounds] at rest at every time, until the next
+    /// `step(..., prescribed_targets=...)` or `reset_prescribed()`: statics,
+    /// poses and runs then see the drive there (e.g. a task drawing a
+    /// reachable target: `sim.hold_prescribed(x); sim.statics(...)`).
+    fn hold_prescribed(&mut self, values: &Bound<'_, PyAny>) -> PyResult<()> {
+        let model = self.sim.model();
+        let np = model.n_prescribed();
+        if np == 0 {
+            return Err(input(
+                "values: this simulation has no prescribed joint (a scene joint with \
+                 `prescribed = { times, values, bounds }`)",
+            ));
+        }
+        let a = vector(values, "values", np)?;
+        self.sim.hold_prescribed(a.slice()).map_err(to_py)?;
+        self.sync_prescribed()
+    }
+
     /// Puts the scene's prescribed curves back in force after
     /// `step(..., prescribed_targets=...)` commanded others: an episode
     /// that starts over calls it (the environments' `reset` does), as it

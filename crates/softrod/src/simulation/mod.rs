@@ -340,6 +340,28 @@ impl Simulation {
         r
     }
 
+    /// Holds the prescribed joints at `values` (one per prescribed
+    /// coordinate, checked as [`Self::command_prescribed`]'s targets) at
+    /// rest at every time, until the next command or
+    /// [`Self::reset_prescribed`]: for statics and poses with the drive
+    /// elsewhere than the scene puts it (a task's target draw). Recorded
+    /// as transitions from and to the value, at rest.
+    pub fn hold_prescribed(&mut self, values: &[f64]) -> Result<()> {
+        let names = self.prescribed_names();
+        crate::control::targets::check_prescribed_targets(self.model(), &names, "values", values)?;
+        let held: Vec<crate::control::Transition> = values
+            .iter()
+            .map(|&x| crate::control::Transition {
+                t0: 0.0,
+                t1: 1.0,
+                x0: x,
+                v0: 0.0,
+                x1: x,
+            })
+            .collect();
+        self.set_prescribed_transitions(&held)
+    }
+
     /// The transitions in force (one per prescribed coordinate), empty when
     /// the scene's curves are: what [`Self::set_prescribed_transitions`]
     /// puts back (a pickle keeps them).
