@@ -360,7 +360,15 @@ class RodEnv(gymnasium.Env):
     in model order, ``Simulation.n_joint_inputs``) in ``[-max_force,
     max_force]``, the bound from ``max_force`` (a number or one per
     coordinate), else the scene's ``actuator = { max_force }``; a
-    coordinate with neither raises ``softrod.InputError``.
+    coordinate with neither raises ``softrod.InputError``. With prescribed
+    joints the action ends with one target ``p`` [rad or m] per prescribed
+    coordinate (``Simulation.prescribed_names``) in the scene's
+    ``joint.prescribed.bounds`` (required: a scene without them raises
+    ``softrod.InputError`` naming the key); each period the joint follows
+    the cubic from its position and rate to ``p``, reached at rest at the
+    period's end (``Simulation.step(..., prescribed_targets=p)``,
+    docs/envs.md). Targets are not efforts (the effort term weighs ``u``
+    and ``f``).
     ``action_policy``: what an action
     outside the box does — ``"clip"`` (default) clips it to the box and
     sets ``info["action_clipped"]``, ``"reject"`` raises
@@ -392,7 +400,9 @@ class RodEnv(gymnasium.Env):
     frame's rotation matrix row by row), ``"target"`` (3, m),
     ``"target_velocity"`` (3, m/s), ``"tensions"`` (n_cables, N: the last
     applied tensions), ``"joint_forces"`` (n_joint_inputs, N or N·m: the
-    last applied joint forces), ``"body_positions"`` (3 per rigid body of the scene,
+    last applied joint forces), ``"prescribed"`` (n_prescribed, rad or m:
+    the prescribed joints' values now; added to the default observation
+    when the scene has prescribed joints), ``"body_positions"`` (3 per rigid body of the scene,
     m, world frame: the origins of their frames, in the scene's order).
     ``observation_slices`` maps each key to its slice.
 
