@@ -139,6 +139,7 @@ impl Simulation {
         }
     }
 
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn step_impl(
         &mut self,
         py: Python<'_>,

@@ -482,7 +482,7 @@ impl Ctx<'_> {
                     .r
                     .invalid(&at, format!("[{lo}, {hi}]: bounds must be finite")));
             }
-            if !(lo < hi) {
+            if lo >= hi {
                 return Err(self
                     .r
                     .invalid(&at, format!("lo = {lo} must be below hi = {hi}")));
