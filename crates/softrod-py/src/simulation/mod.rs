@@ -435,6 +435,7 @@ impl Simulation {
     /// under the motion in force (the scene's curves, or the transitions of
     /// the last `prescribed_targets`): `(x, xdot)`, each (n_prescribed,), in
     /// rad or m and per s.
+    #[allow(clippy::type_complexity)]
     fn prescribed_state<'py>(
         &self,
         py: Python<'py>,
