@@ -235,14 +235,22 @@ fn a_sliding_rod_stops_where_coulomb_says_at_every_tolerance() {
         let x = |q: &[f64]| sim.pose("rod", 0.5 * L, q).unwrap().translation.x;
         let x0 = x(&keep.0[0].1);
         // At rest from the stop (0.102 s) on: the last samples.
-        let tail: Vec<f64> = keep.0.iter().filter(|s| s.0 >= 0.15).map(|s| x(&s.1) - x0).collect();
+        let tail: Vec<f64> = keep
+            .0
+            .iter()
+            .filter(|s| s.0 >= 0.15)
+            .map(|s| x(&s.1) - x0)
+            .collect();
         let slid = *tail.last().unwrap();
         let spread = tail.iter().fold(0.0f64, |m, d| m.max((d - slid).abs()));
         eprintln!(
             "rtol {rtol:e}: {} steps, {} rejected, slid {slid:.6} m against {closed:.6} m, moved {spread:.2e} m at rest",
             summary.stats.steps, summary.stats.rejected_steps
         );
-        assert!((slid - closed).abs() < 0.01 * R, "rtol {rtol}: {slid} vs {closed}");
+        assert!(
+            (slid - closed).abs() < 0.01 * R,
+            "rtol {rtol}: {slid} vs {closed}"
+        );
         assert!(spread < 1e-6, "rtol {rtol}: creeps {spread}");
     }
 }
