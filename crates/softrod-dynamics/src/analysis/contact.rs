@@ -378,11 +378,11 @@ pub fn friction_stop(
     let mut work = data.contact.take().expect("contact work");
     work.slides.clear();
     for a in &work.active {
-        if let Some((s1, pre_slip)) = rate(a) {
-            if s1 < 0.0 {
-                let idx = a.sample * n_obs + a.obstacle;
-                work.slides.push((a.rod, idx, s1, pre_slip));
-            }
+        if let Some((s1, pre_slip)) = rate(a)
+            && s1 < 0.0
+        {
+            let idx = a.sample * n_obs + a.obstacle;
+            work.slides.push((a.rod, idx, s1, pre_slip));
         }
     }
     let any = !work.slides.is_empty();
