@@ -63,12 +63,17 @@ pub struct RodSystem {
     /// Newton matrix takes the world-obstacle contact laws whole
     /// (`ShiftedSolver::set_contact_whole`, docs/theory-contact.md CT26)
     /// and ESDIRK re-linearizes the contact at every Newton iterate (CT27).
-    /// **Experimental, default `false`**: on the cosseratbench capstan it
-    /// halves the CPU time and cuts the dense Jacobians from 70 to 20
-    /// (docs/performance.md, "Contact-heavy scenes"), but it moves the
-    /// friction reference path of `tests/contact_bounds.rs` by 7.8e-4 m
-    /// (its bound 1e-4 m): friction anchors commit at accepted steps (CT25).
+    /// Default `true` (with the stop location of CT29, which bounds the
+    /// friction paths' dependence on the steps): on the cosseratbench
+    /// capstan it cuts the dense Jacobians and the CPU time
+    /// (docs/performance.md, "Contact-heavy scenes"). `false` is the
+    /// symmetric CT17 blocks and a matrix kept for the step.
     pub contact_active_set: bool,
+    /// Whether ESDIRK retries a step inside which a sliding contact
+    /// stopped, at the stop (docs/theory-contact.md CT29,
+    /// `softrod_dynamics::friction_stop`; default `true`). `false` is the
+    /// step sequence without it, for comparisons.
+    pub locate_friction_stops: bool,
     /// The configuration of the last contact linearization
     /// ([`SecondOrderSystem::linearize_shifted`]); the factorizations carry
     /// it only at that `q` (a wrapper that forwards the factorization but
@@ -155,7 +160,8 @@ impl RodSystem {
             structured_closures: false,
             contact_in_shifted: true,
             geometric_in_shifted: false,
-            contact_active_set: false,
+            contact_active_set: true,
+            locate_friction_stops: true,
             contact_q: None,
             shifted,
             derivatives: None,
@@ -624,6 +630,34 @@ impl SecondOrderSystem for RodSystem {
             self.contact_q = None;
         }
         Ok(())
+    }
+
+    /// A slide that stopped inside the step (docs/theory-contact.md CT29,
+    /// `softrod_dynamics::friction_stop`).
+    fn step_event_fraction(
+        &mut self,
+        h: f64,
+        t0: f64,
+        q0: &DVector<f64>,
+        qd0: &DVector<f64>,
+        t1: f64,
+        q1: &DVector<f64>,
+        qd1: &DVector<f64>,
+    ) -> Result<Option<f64>, DynamicsError> {
+        if !self.locate_friction_stops {
+            return Ok(None);
+        }
+        softrod_dynamics::friction_stop(
+            &self.model,
+            &mut self.data,
+            h,
+            t0,
+            q0.as_slice(),
+            qd0.as_slice(),
+            t1,
+            q1.as_slice(),
+            qd1.as_slice(),
+        )
     }
 
     /// With contact in the structured matrix: the contact set and its

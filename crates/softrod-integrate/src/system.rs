@@ -234,6 +234,28 @@ pub trait SecondOrderSystem {
         false
     }
 
+    /// After a step from `(t0, q0, q̇0)` to `(t1, q1, q̇1)` of size `h` that
+    /// passed its error test: `Some(θ)`, `0 < θ < 1`, if the system's
+    /// internal state committed between steps (friction anchors) makes the
+    /// step wrong by more than the system tolerates and it must be retried
+    /// at `θ h` — where an event it cannot see inside a step happened (a
+    /// sliding contact stopped: docs/theory-contact.md CT29). ESDIRK asks
+    /// it; the default is `None`.
+    #[allow(clippy::too_many_arguments)]
+    fn step_event_fraction(
+        &mut self,
+        h: f64,
+        t0: f64,
+        q0: &DVector<f64>,
+        qd0: &DVector<f64>,
+        t1: f64,
+        q1: &DVector<f64>,
+        qd1: &DVector<f64>,
+    ) -> Result<Option<f64>, Self::Error> {
+        let _ = (h, t0, q0, qd0, t1, q1, qd1);
+        Ok(None)
+    }
+
     /// `x ← S⁻¹ x` with the `S` of the last successful
     /// [`factor_shifted_mass`](Self::factor_shifted_mass).
     ///

@@ -165,6 +165,23 @@ impl<'a, S: SecondOrderSystem> SecondOrderProblem<'a, S> {
         self.sys.relinearize_in_newton()
     }
 
+    /// [`SecondOrderSystem::step_event_fraction`].
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn step_event_fraction(
+        &mut self,
+        h: f64,
+        t0: f64,
+        q0: &DVector<f64>,
+        qd0: &DVector<f64>,
+        t1: f64,
+        q1: &DVector<f64>,
+        qd1: &DVector<f64>,
+    ) -> Result<Option<f64>, SystemError> {
+        self.sys
+            .step_event_fraction(h, t0, q0, qd0, t1, q1, qd1)
+            .map_err(|e| Box::new(e) as SystemError)
+    }
+
     /// What the last Jacobian update produced.
     pub(crate) fn kind(&self) -> JacKind {
         self.kind
