@@ -65,10 +65,14 @@ pub struct RodSystem {
     /// also carries the geometric stiffness of gravity and of the closure
     /// forces at the multipliers of the last Jacobian update
     /// (`ClosedShiftedSolver::set_geometric`, docs/theory-derivatives.md
-    /// CD11; default `true`). Without it the simplified Newton iteration
-    /// of a rope pinned at both ends stops contracting once the steps
-    /// outgrow its pieces' inertia (the rope's tension is these terms).
-    /// `false` is the matrix of CD6 alone, for comparisons.
+    /// CD11; **experimental, default `false`**). The terms are the exact
+    /// Hessian of gravity and of a pin's force where the matrix stays
+    /// positive definite, but they did not spare the cosseratbench
+    /// catenary's ESDIRK run a single dense fallback (51 dense Jacobians
+    /// with and without them) and made a welded twisted rod's run worse
+    /// (206 steps, 198 rejected, against 90 and 38): where they are
+    /// indefinite, CT23's modified factorization is a poorer Newton matrix
+    /// than none (docs/performance.md).
     pub geometric_in_closures: bool,
     /// Models with contact (a tree model: joints or bodies): the structured
     /// Newton matrix takes the world-obstacle contact laws whole
@@ -166,7 +170,7 @@ impl RodSystem {
             structured_closures: false,
             contact_in_shifted: true,
             geometric_in_shifted: false,
-            geometric_in_closures: true,
+            geometric_in_closures: false,
             contact_active_set: false,
             contact_q: None,
             shifted,
@@ -616,6 +620,9 @@ impl SecondOrderSystem for RodSystem {
         qd: &DVector<f64>,
     ) -> Result<(), DynamicsError> {
         if self.n_constraints() > 0 {
+            if !self.geometric_in_closures {
+                return Ok(());
+            }
             // The closure forces whose geometric stiffness the KKT matrix
             // holds (docs/theory-derivatives.md CD11): the constrained
             // forward dynamics' multipliers at the update's state.
