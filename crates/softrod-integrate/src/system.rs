@@ -212,7 +212,10 @@ pub trait SecondOrderSystem {
     /// so that a system whose shifted matrix has state-dependent parts
     /// beyond `M(q)` can linearize them there — for a rod in contact, the
     /// contact's stiffness and damping (`M + a(K + K_c) + b(D + D_c)`,
-    /// docs/theory-contact.md CT17). The default does nothing.
+    /// docs/theory-contact.md CT17), or for a closed model on
+    /// [`factor_shifted_constrained`](Self::factor_shifted_constrained) the
+    /// multipliers whose closure forces its geometric terms hold
+    /// (docs/theory-derivatives.md CD11). The default does nothing.
     fn linearize_shifted(
         &mut self,
         t: f64,

@@ -329,11 +329,11 @@ impl<'a, S: SecondOrderSystem> SecondOrderProblem<'a, S> {
         structured: bool,
     ) -> Result<Option<usize>, SystemError> {
         if structured && self.structured_available(t, q, qd)? {
-            if self.m == 0 {
-                self.sys
-                    .linearize_shifted(t, q, qd)
-                    .map_err(|e| Box::new(e) as SystemError)?;
-            }
+            // The contact's linearization, or a closed model's multipliers
+            // for the KKT matrix's geometric terms (CD11).
+            self.sys
+                .linearize_shifted(t, q, qd)
+                .map_err(|e| Box::new(e) as SystemError)?;
             self.kind = JacKind::Structured;
             self.jac_t = t;
             self.jac_q.copy_from(q);
