@@ -121,12 +121,13 @@ pub use analysis::{
     ContactChange, Energies, IMPACT_LIMIT, ModeKind, Modes, StaticsOptions, StaticsResult,
     StaticsSensitivity, StaticsSolver, actuation_matrix, body_jacobian, closure_statics,
     commit_contact, commit_contact_change, coriolis_matrix, damping_matrix, energies, frames,
-    generalized_gravity, lowest_modes, modes, section_jacobian, static_force, statics,
-    statics_sensitivity, stiffness_matrix,
+    friction_stop, generalized_gravity, lowest_modes, modes, section_jacobian, static_force,
+    statics, statics_sensitivity, stiffness_matrix,
 };
 pub use constraints::{
     ClosedDerivatives, ClosedShiftedSolver, check_closures, closed_dynamics_derivatives,
-    closed_force_response, closure_multipliers, closure_residuals, constraint_jacobian,
+    closed_force_response, closed_prescribed_derivatives, closed_row_response,
+    closed_row_response_transposed, closure_multipliers, closure_residuals, constraint_jacobian,
     constraint_rank, constraint_residual, max_closure_residual, open_tree_inverse_dynamics,
 };
 pub use derivatives::{

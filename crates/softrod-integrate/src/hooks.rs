@@ -21,10 +21,9 @@ pub enum Control {
     /// healed a penalty offset, docs/theory-contact.md CT5, CT15, CT25):
     /// the derivative at the current state and the event functions are
     /// re-evaluated. A method may keep its Jacobian across it (its
-    /// stepper's `forces_changed`); every method
-    /// currently drops it as for [`SystemChanged`](Self::SystemChanged) —
-    /// ESDIRK keeping its Newton matrix moved a friction test's path by
-    /// more than its bound (CT25).
+    /// stepper's `forces_changed`): ESDIRK does (CT25 (a), with the stop
+    /// location of CT29); the others drop it as for
+    /// [`SystemChanged`](Self::SystemChanged).
     ForcesChanged,
     /// Stop here; the solution ends at the current step or output
     /// ([`Status::Stopped`](crate::Status::Stopped)).

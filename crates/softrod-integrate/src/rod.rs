@@ -9,10 +9,11 @@
 use nalgebra::{DMatrix, DVector, Matrix6};
 use softrod_dynamics::{
     ClosedDerivatives, ClosedShiftedSolver, Data, DynamicsError, FdDerivatives, Forces,
-    IdDerivatives, Model, ShiftedSolver, closed_dynamics_derivatives, damping_matrix,
-    forward_dynamics, forward_dynamics_derivatives, inverse_dynamics, inverse_dynamics_derivatives,
-    inverse_dynamics_inertia_vjp, inverse_dynamics_linearization_with,
-    inverse_dynamics_mass_product, inverse_dynamics_vjp, mass_matrix, stiffness_matrix,
+    IdDerivatives, Model, ShiftedSolver, closed_dynamics_derivatives, closure_multipliers,
+    damping_matrix, forward_dynamics, forward_dynamics_derivatives, inverse_dynamics,
+    inverse_dynamics_derivatives, inverse_dynamics_inertia_vjp,
+    inverse_dynamics_linearization_with, inverse_dynamics_mass_product, inverse_dynamics_vjp,
+    mass_matrix, stiffness_matrix,
 };
 use softrod_mechanics::Tension;
 
@@ -59,16 +60,35 @@ pub struct RodSystem {
     /// geometric stiffness in the Newton matrix"), and on chain models it
     /// moves the factorization to the tree recursion (~1.5× its cost).
     pub geometric_in_shifted: bool,
+    /// Models with closures on the structured KKT solve
+    /// ([`RodSystem::structured_closures`]): whether its open-tree matrix
+    /// also carries the geometric stiffness of gravity and of the closure
+    /// forces at the multipliers of the last Jacobian update
+    /// (`ClosedShiftedSolver::set_geometric`, docs/theory-derivatives.md
+    /// CD11; **experimental, default `false`**). The terms are the exact
+    /// Hessian of gravity and of a pin's force where the matrix stays
+    /// positive definite, but they did not spare the cosseratbench
+    /// catenary's ESDIRK run a single dense fallback (51 dense Jacobians
+    /// with and without them) and made a welded twisted rod's run worse
+    /// (206 steps, 198 rejected, against 90 and 38): where they are
+    /// indefinite, CT23's modified factorization is a poorer Newton matrix
+    /// than none (docs/performance.md).
+    pub geometric_in_closures: bool,
     /// Models with contact (a tree model: joints or bodies): the structured
     /// Newton matrix takes the world-obstacle contact laws whole
     /// (`ShiftedSolver::set_contact_whole`, docs/theory-contact.md CT26)
     /// and ESDIRK re-linearizes the contact at every Newton iterate (CT27).
-    /// **Experimental, default `false`**: on the cosseratbench capstan it
-    /// halves the CPU time and cuts the dense Jacobians from 70 to 20
-    /// (docs/performance.md, "Contact-heavy scenes"), but it moves the
-    /// friction reference path of `tests/contact_bounds.rs` by 7.8e-4 m
-    /// (its bound 1e-4 m): friction anchors commit at accepted steps (CT25).
+    /// Default `true` (with the stop location of CT29, which bounds the
+    /// friction paths' dependence on the steps): on the cosseratbench
+    /// capstan it cuts the dense Jacobians and the CPU time
+    /// (docs/performance.md, "Contact-heavy scenes"). `false` is the
+    /// symmetric CT17 blocks and a matrix kept for the step.
     pub contact_active_set: bool,
+    /// Whether ESDIRK retries a step inside which a sliding contact
+    /// stopped, at the stop (docs/theory-contact.md CT29,
+    /// `softrod_dynamics::friction_stop`; default `true`). `false` is the
+    /// step sequence without it, for comparisons.
+    pub locate_friction_stops: bool,
     /// The configuration of the last contact linearization
     /// ([`SecondOrderSystem::linearize_shifted`]); the factorizations carry
     /// it only at that `q` (a wrapper that forwards the factorization but
@@ -155,7 +175,9 @@ impl RodSystem {
             structured_closures: false,
             contact_in_shifted: true,
             geometric_in_shifted: false,
-            contact_active_set: false,
+            geometric_in_closures: false,
+            contact_active_set: true,
+            locate_friction_stops: true,
             contact_q: None,
             shifted,
             derivatives: None,
@@ -603,6 +625,30 @@ impl SecondOrderSystem for RodSystem {
         q: &DVector<f64>,
         qd: &DVector<f64>,
     ) -> Result<(), DynamicsError> {
+        if self.n_constraints() > 0 {
+            if !self.geometric_in_closures {
+                return Ok(());
+            }
+            // The closure forces whose geometric stiffness the KKT matrix
+            // holds (docs/theory-derivatives.md CD11): the constrained
+            // forward dynamics' multipliers at the update's state.
+            let tau = self.tau.as_ref().map(|v| v.as_slice());
+            forward_dynamics(
+                &self.model,
+                &mut self.data,
+                t,
+                q.as_slice(),
+                qd.as_slice(),
+                tau,
+            )?;
+            let kkt = self
+                .kkt
+                .get_or_insert_with(|| Box::new(ClosedShiftedSolver::new(&self.model)));
+            if let Some((lambda, _)) = closure_multipliers(&self.data) {
+                kkt.set_multipliers(lambda.as_slice())?;
+            }
+            return Ok(());
+        }
         if !self.model.has_contact() || self.model.has_closures() {
             return Ok(());
         }
@@ -624,6 +670,34 @@ impl SecondOrderSystem for RodSystem {
             self.contact_q = None;
         }
         Ok(())
+    }
+
+    /// A slide that stopped inside the step (docs/theory-contact.md CT29,
+    /// `softrod_dynamics::friction_stop`).
+    fn step_event_fraction(
+        &mut self,
+        h: f64,
+        t0: f64,
+        q0: &DVector<f64>,
+        qd0: &DVector<f64>,
+        t1: f64,
+        q1: &DVector<f64>,
+        qd1: &DVector<f64>,
+    ) -> Result<Option<f64>, DynamicsError> {
+        if !self.locate_friction_stops {
+            return Ok(None);
+        }
+        softrod_dynamics::friction_stop(
+            &self.model,
+            &mut self.data,
+            h,
+            t0,
+            q0.as_slice(),
+            qd0.as_slice(),
+            t1,
+            q1.as_slice(),
+            qd1.as_slice(),
+        )
     }
 
     /// With contact in the structured matrix: the contact set and its
@@ -694,6 +768,7 @@ impl SecondOrderSystem for RodSystem {
         let kkt = self
             .kkt
             .get_or_insert_with(|| Box::new(ClosedShiftedSolver::new(&self.model)));
+        kkt.set_geometric(self.geometric_in_closures);
         kkt.factor_at(&self.model, t, q.as_slice(), a, b)?;
         Ok(true)
     }

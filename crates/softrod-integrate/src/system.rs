@@ -212,7 +212,10 @@ pub trait SecondOrderSystem {
     /// so that a system whose shifted matrix has state-dependent parts
     /// beyond `M(q)` can linearize them there — for a rod in contact, the
     /// contact's stiffness and damping (`M + a(K + K_c) + b(D + D_c)`,
-    /// docs/theory-contact.md CT17). The default does nothing.
+    /// docs/theory-contact.md CT17), or for a closed model on
+    /// [`factor_shifted_constrained`](Self::factor_shifted_constrained) the
+    /// multipliers whose closure forces its geometric terms hold
+    /// (docs/theory-derivatives.md CD11). The default does nothing.
     fn linearize_shifted(
         &mut self,
         t: f64,
@@ -232,6 +235,28 @@ pub trait SecondOrderSystem {
     /// The default is `false`.
     fn relinearize_in_newton(&self) -> bool {
         false
+    }
+
+    /// After a step from `(t0, q0, q̇0)` to `(t1, q1, q̇1)` of size `h` that
+    /// passed its error test: `Some(θ)`, `0 < θ < 1`, if the system's
+    /// internal state committed between steps (friction anchors) makes the
+    /// step wrong by more than the system tolerates and it must be retried
+    /// at `θ h` — where an event it cannot see inside a step happened (a
+    /// sliding contact stopped: docs/theory-contact.md CT29). ESDIRK asks
+    /// it; the default is `None`.
+    #[allow(clippy::too_many_arguments)]
+    fn step_event_fraction(
+        &mut self,
+        h: f64,
+        t0: f64,
+        q0: &DVector<f64>,
+        qd0: &DVector<f64>,
+        t1: f64,
+        q1: &DVector<f64>,
+        qd1: &DVector<f64>,
+    ) -> Result<Option<f64>, Self::Error> {
+        let _ = (h, t0, q0, qd0, t1, q1, qd1);
+        Ok(None)
     }
 
     /// `x ← S⁻¹ x` with the `S` of the last successful

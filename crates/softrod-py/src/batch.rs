@@ -33,6 +33,10 @@ use crate::simulation::Simulation;
 struct Copy {
     inputs: CableInputs,
     settings: softrod::Settings,
+    /// The scene's prescribed curves (what `reset_prescribed` restores).
+    scene_curves: Vec<softrod::dynamics::Curve>,
+    /// The transitions of the last commanded targets (reused buffer).
+    transitions: Vec<softrod::control::Transition>,
 }
 
 /// What one copy's step gave: the new `(q, q̇)`, or why it failed.
@@ -64,12 +68,25 @@ type Outcome = Result<(DVector<f64>, DVector<f64>), String>;
 /// joint actuators' forces held over the step, as `Simulation.step`'s
 /// `joint_forces` (None: the actuators' schedules). The GIL is released
 /// while the copies step.
+///
+/// `prescribed_targets` (n, n_prescribed) [rad or m]: the prescribed
+/// joints' targets for `t + dt`, as `Simulation.step`'s
+/// `prescribed_targets` (each copy's joints follow the cubic from their
+/// position and rate at `t` under the motion in force on that copy to the
+/// target at rest at `t + dt`; docs/envs.md). Each copy keeps its own
+/// transitions from step to step (it starts with those of its
+/// Simulation); `reset_prescribed(i)` puts the scene's curves back.
 #[pyclass(module = "softrod")]
 pub struct BatchStepper {
     copies: Vec<Copy>,
     n_dof: usize,
     n_cables: usize,
     n_joint_inputs: usize,
+    n_prescribed: usize,
+    /// Names of the actuated and prescribed coordinates (of copy 0), for
+    /// messages.
+    joint_input_names: Vec<String>,
+    prescribed_names: Vec<String>,
     pool: rayon::ThreadPool,
 }
 
@@ -102,28 +119,46 @@ impl BatchStepper {
             }
             let mut copies = Vec::with_capacity(list.len());
             let mut shape = None;
+            let mut names = (Vec::new(), Vec::new());
             for (i, s) in list.iter().enumerate() {
                 let s = s
                     .cast::<Simulation>()
                     .map_err(|_| input(format!("sims[{i}] is not a softrod.Simulation")))?;
                 let s = s.borrow();
                 let model = s.sim.model();
-                let this = (s.sim.n_dof(), model.n_cables(), model.n_joint_inputs());
+                let this = (
+                    s.sim.n_dof(),
+                    model.n_cables(),
+                    model.n_joint_inputs(),
+                    model.n_prescribed(),
+                );
                 let first = *shape.get_or_insert(this);
                 if this != first {
                     return Err(input(format!(
                         "sims[{i}] has n_dof = {}, n_cables = {}, n_joint_inputs = {}, \
-                         sims[0] {}, {}, {}: a batch's copies must have the same sizes",
-                        this.0, this.1, this.2, first.0, first.1, first.2
+                         n_prescribed = {}, sims[0] {}, {}, {}, {}: a batch's copies must have \
+                         the same sizes",
+                        this.0, this.1, this.2, this.3, first.0, first.1, first.2, first.3
                     )));
                 }
+                if i == 0 {
+                    names = (s.sim.joint_input_names(), s.sim.prescribed_names());
+                }
                 let settings = s.sim.settings().clone();
+                // The model with the prescribed curves in force on the
+                // simulation (a transition it was commanded included).
                 let mut inputs = CableInputs::new(model).map_err(dynamics)?;
                 inputs.sys.jacobian = settings.stiff_jacobian();
                 inputs.tau_extra = None;
-                copies.push(Copy { inputs, settings });
+                copies.push(Copy {
+                    inputs,
+                    settings,
+                    scene_curves: s.sim.scene_prescribed_curves(),
+                    transitions: s.sim.prescribed_transitions().to_vec(),
+                });
             }
-            let (n_dof, n_cables, n_joint_inputs) = shape.expect("at least one copy");
+            let (n_dof, n_cables, n_joint_inputs, n_prescribed) = shape.expect("at least one copy");
+            let (joint_input_names, prescribed_names) = names;
             if threads == Some(0) {
                 return Err(input("threads must be at least 1"));
             }
@@ -138,6 +173,9 @@ impl BatchStepper {
                 n_dof,
                 n_cables,
                 n_joint_inputs,
+                n_prescribed,
+                joint_input_names,
+                prescribed_names,
                 pool,
             })
         })
@@ -167,6 +205,60 @@ impl BatchStepper {
             }
         }
         Ok(())
+    }
+
+    /// Puts the scene's prescribed curves back in force on copy `i` (None:
+    /// on every copy) after `prescribed_targets` commanded others, as
+    /// `Simulation.reset_prescribed` does: an episode that starts over on
+    /// a copy calls this for it. Raises InputError for an index out of
+    /// range.
+    #[pyo3(signature = (i = None))]
+    fn reset_prescribed(&mut self, i: Option<usize>) -> PyResult<()> {
+        let n = self.copies.len();
+        let range = match i {
+            None => 0..n,
+            Some(i) if i < n => i..i + 1,
+            Some(i) => {
+                return Err(input(format!(
+                    "i = {i} is out of range: this stepper has {n} copies"
+                )));
+            }
+        };
+        for c in &mut self.copies[range] {
+            for (k, curve) in c.scene_curves.iter().enumerate() {
+                c.inputs
+                    .sys
+                    .model
+                    .set_prescribed_curve(k, curve.clone())
+                    .map_err(dynamics)?;
+            }
+            c.transitions.clear();
+        }
+        Ok(())
+    }
+
+    /// The targets in force on each copy (n, n_prescribed) [rad or m], NaN
+    /// in the rows of copies still on the scene's curves.
+    #[getter]
+    fn prescribed_targets<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        let (n, np) = (self.copies.len(), self.n_prescribed);
+        let out = PyArray2::<f64>::zeros(py, [n, np], false);
+        {
+            let mut w = out.readwrite();
+            let s = w.as_slice_mut().expect("new arrays are contiguous");
+            for (i, c) in self.copies.iter().enumerate() {
+                for k in 0..np {
+                    s[i * np + k] = c.transitions.get(k).map_or(f64::NAN, |t| t.x1);
+                }
+            }
+        }
+        out
+    }
+
+    /// Prescribed joint coordinates of each copy.
+    #[getter]
+    fn n_prescribed(&self) -> usize {
+        self.n_prescribed
     }
 
     /// Number of copies.
@@ -199,7 +291,8 @@ impl BatchStepper {
     }
 
     /// Steps every active copy `dt` seconds (see the class documentation).
-    #[pyo3(signature = (t, q, qdot, u, dt, active = None, *, substeps = None, joint_forces = None))]
+    #[pyo3(signature = (t, q, qdot, u, dt, active = None, *, substeps = None, joint_forces = None,
+                        prescribed_targets = None))]
     #[allow(clippy::type_complexity, clippy::too_many_arguments)]
     fn step<'py>(
         &mut self,
@@ -212,6 +305,7 @@ impl BatchStepper {
         active: Option<Vec<bool>>,
         substeps: Option<usize>,
         joint_forces: Option<&Bound<'py, PyAny>>,
+        prescribed_targets: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<(
         Bound<'py, PyArray2<f64>>,
         Bound<'py, PyArray2<f64>>,
@@ -273,13 +367,52 @@ impl BatchStepper {
                 };
                 for (i, row) in rows.iter().enumerate() {
                     if active[i] {
-                        check_joint_forces(nj, &format!("joint_forces[{i}]"), row)
-                            .map_err(input)?;
+                        check_joint_forces(
+                            &self.joint_input_names,
+                            &format!("joint_forces[{i}]"),
+                            row,
+                        )
+                        .map_err(input)?;
                     }
                 }
                 Some(rows)
             }
         };
+        let np = self.n_prescribed;
+        let ps: Option<Vec<Vec<f64>>> = match prescribed_targets {
+            None => None,
+            Some(_) if np == 0 => {
+                return Err(input(
+                    "prescribed_targets: these simulations have no prescribed joint (a scene \
+                     joint with `prescribed = { times, values, bounds }`)",
+                ));
+            }
+            Some(p) => {
+                let p = array(p, "prescribed_targets")?;
+                if p.shape() != [n, np] {
+                    return Err(input(format!(
+                        "prescribed_targets must have shape ({n}, {np}) (one target per \
+                         prescribed joint coordinate {:?} and copy), got {:?}",
+                        self.prescribed_names,
+                        p.shape()
+                    )));
+                }
+                let rows: Vec<Vec<f64>> = p.slice().chunks(np).map(<[f64]>::to_vec).collect();
+                for (i, row) in rows.iter().enumerate() {
+                    if active[i] {
+                        softrod::control::targets::check_prescribed_targets(
+                            &self.copies[i].inputs.sys.model,
+                            &self.prescribed_names,
+                            &format!("prescribed_targets[{i}]"),
+                            row,
+                        )
+                        .map_err(crate::errors::to_py)?;
+                    }
+                }
+                Some(rows)
+            }
+        };
+        let prescribed_names = &self.prescribed_names;
         let rows = |a: &[f64]| -> Vec<DVector<f64>> {
             if nd == 0 {
                 vec![DVector::zeros(0); n]
@@ -307,6 +440,16 @@ impl BatchStepper {
                             (Some(f), jf) => *jf = Some(f[i].clone()),
                         }
                         let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                            if let Some(p) = &ps {
+                                softrod::control::targets::command_prescribed_targets(
+                                    &mut c.inputs.sys.model,
+                                    prescribed_names,
+                                    ts[i],
+                                    dt,
+                                    &p[i],
+                                    &mut c.transitions,
+                                )?;
+                            }
                             step(
                                 &mut c.inputs,
                                 &c.settings,

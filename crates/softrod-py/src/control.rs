@@ -224,16 +224,22 @@ pub fn check_tensions(n_cables: usize, what: &str, u: &[f64]) -> Result<(), Stri
 }
 
 /// Checks joint forces: one finite value per actuated joint coordinate
-/// (`n_inputs` of them).
-pub fn check_joint_forces(n_inputs: usize, what: &str, f: &[f64]) -> Result<(), String> {
+/// (`names`, `softrod::Simulation::joint_input_names`); messages name the
+/// coordinate.
+pub fn check_joint_forces(names: &[String], what: &str, f: &[f64]) -> Result<(), String> {
+    let n_inputs = names.len();
     if f.len() != n_inputs {
         return Err(format!(
-            "{what} must have shape ({n_inputs},) (one force per actuated joint coordinate), got ({},)",
+            "{what} must have shape ({n_inputs},) (one force per actuated joint coordinate: \
+             {names:?}), got ({},)",
             f.len()
         ));
     }
     if let Some((i, v)) = f.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-        return Err(format!("{what}[{i}] = {v}: joint forces must be finite"));
+        return Err(format!(
+            "{what}[{i}] ({}) = {v}: joint forces must be finite",
+            names[i]
+        ));
     }
     Ok(())
 }

@@ -326,3 +326,40 @@ def test_bad_prescribed_parameters_name_it(param, says):
     s = _wrist(np.array([0.0, 0.4, 0.1]))
     with pytest.raises(softrod.InputError, match=says):
         s.value_and_gradient(_wrist_loss(s.n_dof), [param], 0.1, **KW)
+
+
+ACTUATED_WRIST = WRIST.replace(
+    "prescribed = {{ times = [0.0, 0.05, 0.1], values = {values} }}",
+    "stiffness = 0.2, actuator = {{ force = {{ times = [0.0, 0.05, 0.1], values = {values} }} }}",
+)
+
+
+def test_actuator_force_table_matches_central_differences():
+    """ELEMENT.actuator (docs/theory-control.md G29): the gradient by a joint actuator's
+    torque table, shaped as its values, against central differences of whole runs."""
+    assert "actuator" in ACTUATED_WRIST
+    values = np.array([[0.0, 0.01], [0.02, -0.01], [-0.01, 0.015]])
+
+    def sim(v: np.ndarray) -> softrod.Simulation:
+        text = ACTUATED_WRIST.format(
+            kind="universal", axes="axes = [[0, 1, 0], [0, 0, 1]]", values=repr(v.tolist())
+        )
+        return softrod.Simulation.from_toml(text)
+
+    s = sim(values)
+    _, g = s.value_and_gradient(_wrist_loss(s.n_dof), ["lower.actuator"], 0.1, **KW)
+    ga = g["lower.actuator"]
+    assert ga.shape == values.shape
+    for index in np.ndindex(values.shape):
+        h = 1e-6
+
+        def at(x: float) -> float:
+            v = values.copy()
+            v[index] = x
+            w = sim(v)
+            return w.value_and_gradient(_wrist_loss(w.n_dof), [], 0.1, **KW)[0]
+
+        fd = (at(values[index] + h) - at(values[index] - h)) / (2 * h)
+        assert ga[index] == pytest.approx(fd, rel=1e-6), index
+    with pytest.raises(softrod.InputError, match="no actuator"):
+        s.value_and_gradient(_wrist_loss(s.n_dof), ["upper.actuator"], 0.1, **KW)

@@ -165,6 +165,34 @@ fn prescribed_joints_are_not_dof_and_follow_their_curves() {
     assert!((pq[2] - 0.01 * (w * 1.5 + 0.5).sin()).abs() < 1e-15);
     assert!((data.prescribed_qd[1] - 3.0).abs() < 1e-12);
     assert!((data.prescribed_qdd[2] + 0.01 * w * w * (w * 1.5 + 0.5).sin()).abs() < 1e-12);
+    // No bounds given: none.
+    assert_eq!(m.prescribed_bounds(0), None);
+
+    // Bounds: one pair for every coordinate, or one per coordinate.
+    let bounded = text
+        .replacen(
+            "values = [[0, 0], [0.5, 1], [2, 4]] }",
+            "values = [[0, 0], [0.5, 1], [2, 4]], bounds = [[-1, 1], [0, 2.5]] }",
+            1,
+        )
+        .replacen(
+            "phase = 0.5 } }",
+            "phase = 0.5 }, bounds = [-0.02, 0.03] }",
+            1,
+        );
+    assert_ne!(bounded, text);
+    let (scene, _) = Scene::from_str(&bounded, "robot.toml").unwrap();
+    let m = scene.build().unwrap().model;
+    let b: Vec<_> = (0..4).map(|i| m.prescribed_bounds(i)).collect();
+    assert_eq!(
+        b,
+        vec![
+            Some([-1.0, 1.0]),
+            Some([0.0, 2.5]),
+            Some([-0.02, 0.03]),
+            None
+        ]
+    );
 }
 
 #[test]
@@ -303,7 +331,31 @@ fn bad_robots_name_the_key() {
             "joint = { type = \"free\" }",
             "joint = { type = \"free\", prescribed = { time = [0] } }",
             "body[2].joint.prescribed.time",
-            "times, values or sine",
+            "times, values, sine or bounds",
+        ),
+        (
+            "joint = { type = \"free\" }",
+            "joint = { type = \"free\", prescribed = { times = [0], values = [[0, 0, 0, 0, 0, 0]], bounds = [[0, 1], [0, 1]] } }",
+            "body[2].joint.prescribed.bounds",
+            "2 pairs, but the joint has 6 coordinates",
+        ),
+        (
+            "joint = { type = \"free\" }",
+            "joint = { type = \"free\", prescribed = { times = [0], values = [[0, 0, 0, 0, 0, 0]], bounds = [1, 0] } }",
+            "body[2].joint.prescribed.bounds",
+            "must be below",
+        ),
+        (
+            "joint = { type = \"free\" }",
+            "joint = { type = \"free\", prescribed = { times = [0], values = [[0, 0, 0, 0, 0, 0]], bounds = [0, 1, 2] } }",
+            "body[2].joint.prescribed.bounds",
+            "expected two numbers",
+        ),
+        (
+            "joint = { type = \"free\" }",
+            "joint = { type = \"free\", prescribed = { times = [0], values = [[0, 0, 0, 0, 0, 0]], bounds = [-inf, 0] } }",
+            "body[2].joint.prescribed.bounds[0]",
+            "finite",
         ),
         (
             "stiffness = 0.5,",

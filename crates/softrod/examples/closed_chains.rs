@@ -8,7 +8,11 @@
 //! of the final centre lines (every rod at 11 points) from the first run's
 //! (the methods must agree).
 //!
-//! `cargo run --release -p softrod --example closed_chains -- SCENE.toml [--duration 5] [--rtol 1e-3] [--atol 1e-5] [--method esdirk,radau5] [--newton structured,dense] [--reference RTOL] [--repeat 1] [--samples 101]`
+//! `--newton` takes `structured` (the KKT solve of CD6), `structured-geometric`
+//! (with the geometric stiffness of gravity and the closure forces, CD11:
+//! `RodSystem::geometric_in_closures`) and `dense`.
+//!
+//! `cargo run --release -p softrod --example closed_chains -- SCENE.toml [--duration 5] [--rtol 1e-3] [--atol 1e-5] [--method esdirk,radau5] [--newton structured,dense] [--reference RTOL] [--repeat 1] [--samples 101] [--steps-to-outputs]`
 
 use std::time::Instant;
 
@@ -36,6 +40,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let samples: usize = flag("--samples", "101").parse()?;
     let methods = flag("--method", "esdirk,radau5");
     let newton = flag("--newton", "structured,dense");
+    // The cosseratbench adapter's quasi-static ESDIRK runs end their steps
+    // on the outputs (docs/theory-derivatives.md CD10).
+    let steps_to_outputs = args.iter().any(|a| a == "--steps-to-outputs");
     // A reference run first (its row says "reference"): ESDIRK on the
     // dense exact Jacobian at this tolerance (atol = rtol / 1000).
     let reference: Option<f64> = args
@@ -68,20 +75,25 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Ok(out)
     };
     let mut first: Option<Vec<[f64; 3]>> = None;
-    let mut runs: Vec<(String, bool, f64, f64)> = Vec::new();
+    let mut runs: Vec<(String, &str, f64, f64)> = Vec::new();
     if let Some(r) = reference {
-        runs.push(("esdirk".into(), false, r, r * 1e-3));
+        runs.push(("esdirk".into(), "dense", r, r * 1e-3));
     }
     for method in methods.split(',') {
-        for structured in newton.split(',').map(|s| s == "structured") {
-            runs.push((method.into(), structured, rtol, atol));
+        for kind in newton.split(',') {
+            if !matches!(kind, "structured" | "structured-geometric" | "dense") {
+                return Err(format!("--newton: unknown {kind:?}").into());
+            }
+            runs.push((method.into(), kind, rtol, atol));
         }
     }
-    for (k, (method, structured, rtol, atol)) in runs.iter().enumerate() {
-        let (method, structured, rtol, atol) = (method.as_str(), *structured, *rtol, *atol);
+    for (k, (method, kind, rtol, atol)) in runs.iter().enumerate() {
+        let (method, kind, rtol, atol) = (method.as_str(), *kind, *rtol, *atol);
+        let structured = kind != "dense";
         let integrator: Integrator = method.parse()?;
         {
             let mut opts = Options::tol(rtol, atol);
+            opts.steps_to_outputs = steps_to_outputs;
             opts.t_eval = Some(
                 (0..samples)
                     .map(|k| duration * k as f64 / (samples - 1) as f64)
@@ -93,6 +105,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 let mut sys = RodSystem::new(model.clone());
                 sys.jacobian = RodJacobian::recommended(integrator);
                 sys.structured_closures = structured;
+                sys.geometric_in_closures = kind == "structured-geometric";
                 let start = Instant::now();
                 let sol = integrate_second_order(
                     &mut sys,
@@ -111,7 +124,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 Ok(s) => s,
                 Err(e) => {
                     println!(
-                        "{path},{n},{},{method},{structured},failed: {e}",
+                        "{path},{n},{},{method},{kind},failed: {e}",
                         model.n_constraints()
                     );
                     continue;
@@ -149,10 +162,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 model.n_constraints(),
                 if reference.is_some() && k == 0 {
                     "reference"
-                } else if structured {
-                    "structured"
                 } else {
-                    "dense"
+                    kind
                 },
                 s.steps,
                 s.rejected_steps,

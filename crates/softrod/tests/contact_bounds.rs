@@ -209,6 +209,52 @@ fn the_implicit_step_with_contact_follows_a_small_step_explicit_reference() {
     assert!(worst < 0.01 * R, "{worst}");
 }
 
+/// A slide's stop located inside the implicit step (docs/theory-contact.md
+/// CT29): a rod lying on a table with μ = 0.3, pushed along its own axis
+/// at 0.3 m/s, slides `v₀²/(2 μ g)` (15.3 mm, Coulomb's constant
+/// deceleration `μ g`) and stays there — at every tolerance. Without the
+/// location ESDIRK took the stop inside a 10–24 ms step whose fixed anchor
+/// held the rod on the slip branch and pushed it back by up to what it
+/// slid in the step (0.45 mm at rtol 1e-8 on the thrown rod above).
+#[test]
+fn a_sliding_rod_stops_where_coulomb_says_at_every_tolerance() {
+    let mu = 0.3;
+    let v0 = 0.3;
+    let base = Pose::new(Mat3::identity(), Vec3::new(0.0, 0.0, R));
+    let closed = v0 * v0 / (2.0 * mu * G);
+    for rtol in [1e-5, 1e-6, 1e-8] {
+        let mut sim = free_rod(base, table().friction(mu), &[], 0.0);
+        sim.set_settings(settings(Integrator::Esdirk, rtol, 0.01))
+            .unwrap();
+        let (q0, qd0) = sim.initial_state();
+        let (q0, mut qd0) = (q0.as_slice().to_vec(), qd0.as_slice().to_vec());
+        qd0[3] = v0;
+        sim.set_initial_state(&q0, &qd0).unwrap();
+        let mut keep = Keep(Vec::new());
+        let summary = sim.simulate_with(0.2, &mut keep).unwrap();
+        let x = |q: &[f64]| sim.pose("rod", 0.5 * L, q).unwrap().translation.x;
+        let x0 = x(&keep.0[0].1);
+        // At rest from the stop (0.102 s) on: the last samples.
+        let tail: Vec<f64> = keep
+            .0
+            .iter()
+            .filter(|s| s.0 >= 0.15)
+            .map(|s| x(&s.1) - x0)
+            .collect();
+        let slid = *tail.last().unwrap();
+        let spread = tail.iter().fold(0.0f64, |m, d| m.max((d - slid).abs()));
+        eprintln!(
+            "rtol {rtol:e}: {} steps, {} rejected, slid {slid:.6} m against {closed:.6} m, moved {spread:.2e} m at rest",
+            summary.stats.steps, summary.stats.rejected_steps
+        );
+        assert!(
+            (slid - closed).abs() < 0.01 * R,
+            "rtol {rtol}: {slid} vs {closed}"
+        );
+        assert!(spread < 1e-6, "rtol {rtol}: creeps {spread}");
+    }
+}
+
 /// Rod–rod Coulomb friction (CT10): a free rod "bar" lies across two stiff
 /// clamped rods ("rails", along x at y = ±5 cm), pressed on by its weight
 /// and a 1 N load at its middle (N = 1.616 N in all), and is pulled along

@@ -226,6 +226,7 @@ fn touch(
         None
     };
     let cf = force(&law, dist, radius, v, stretch);
+    let tangential = stretch.map_or_else(Vec3::zeros, |e| e - dist.normal * dist.normal.dot(&e));
     work.active.push(Active {
         rod,
         sample,
@@ -237,6 +238,9 @@ fn touch(
         dp: cf.dp,
         dv: cf.dv,
         sticking: cf.sticking,
+        velocity: *v,
+        stretch: tangential,
+        k: law.k,
     });
     true
 }

@@ -278,7 +278,7 @@ impl ShiftedSolver {
         let contact = (!self.contact.is_empty()).then_some(&self.contact);
         if let Some(tree) = &model.tree {
             model.set_time(&mut self.data, t);
-            tree_factor(model, tree, &mut self.data, q, a, b, contact, false)?;
+            tree_factor(model, tree, &mut self.data, q, a, b, contact, false, &[])?;
         } else {
             shifted_factor(model, &mut self.data, q, a, b, contact)?;
         }
@@ -312,7 +312,7 @@ impl ShiftedSolver {
         };
         let tree = m.tree.as_ref().expect("a tree");
         m.set_time(data, t);
-        tree_factor(m, tree, data, q, a, b, contact, true)?;
+        tree_factor(m, tree, data, q, a, b, contact, true, &[])?;
         if contact.is_some() {
             self.contact.factor_low_rank(m, data, scratch, a, b);
         }
@@ -478,7 +478,8 @@ pub(crate) fn shifted_solve(model: &Model, data: &Data, x: &mut [f64]) {
 /// prescribed joints at `data.prescribed_q` (their last [`Model::set_time`]).
 /// With `contact`, its one-sided blocks join the nodes' sums (CT17); with
 /// `geometric`, the geometric stiffness of gravity and of the contact
-/// forces (CT19–CT22): non-symmetric `𝓜ᵗ`, `𝓤`, `𝓓`, read with the inboard
+/// forces (CT19–CT22) and of the frame wrenches `extra` (a closed model's
+/// closure forces, docs/theory-derivatives.md CD11): non-symmetric `𝓜ᵗ`, `𝓤`, `𝓓`, read with the inboard
 /// coordinate on the left (`Û = 𝓤 + AᵀM_tip S`, `M_base = 𝓜ᵗ + AᵀM_tipA −
 /// ÛD̂⁻¹Ûᵀ`), `D̂`'s symmetric part factored.
 #[allow(clippy::too_many_arguments)]
@@ -491,6 +492,7 @@ pub(crate) fn tree_factor(
     b: f64,
     contact: Option<&ContactShift>,
     geometric: bool,
+    extra: &[shifted_geometric::FrameWrench],
 ) -> Result<(), DynamicsError> {
     outward(
         model,
@@ -512,7 +514,7 @@ pub(crate) fn tree_factor(
         c.add_tree(model, data, q, a, b, nonsym);
     }
     if geometric {
-        shifted_geometric::add(model, tree, data, q, a, contact);
+        shifted_geometric::add(model, tree, data, q, a, contact, extra);
     }
     for w in &mut data.nodes {
         w.m_tip = Mat6::zeros();

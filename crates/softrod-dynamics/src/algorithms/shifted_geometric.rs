@@ -100,13 +100,90 @@ fn force_wrench(f: &Vec3) -> Vec6 {
     join(&Vec3::zeros(), f)
 }
 
+/// A wrench held fixed in the world on a frame of the tree (a loop
+/// closure's force on one of its frames at given multipliers,
+/// docs/theory-derivatives.md CD11): moment `m` \[N·m\] and force `f` \[N\]
+/// at the origin of the frame, both in that frame's axes at the
+/// linearization point.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct FrameWrench {
+    /// The node that carries the frame (a rod piece or a body).
+    pub node: usize,
+    /// A rod piece's local abscissa of the frame's section \[m\]; `None`
+    /// for a body (the frame is then an offset of the body's base frame).
+    pub x: Option<f64>,
+    /// The frame in the section at `x` (a rod) or in the body's base frame.
+    pub offset: Pose,
+    /// `(m, f)` in the frame's axes.
+    pub wrench: Vec6,
+}
+
+/// `B·a` of a wrench `w = (m, f)` at a frame's origin, in that frame
+/// (CD11): `[[[m]×, [f]×], [0, 0]]` — the moment's part `ω_iᵀ[m]×ω_j` of
+/// `K_ij = −w·(ad_{S_i} S_j)` beside the force's (CT20 with `p = 0`).
+fn wrench_b(w: &Vec6, a: f64) -> Mat6 {
+    let mut b = Mat6::zeros();
+    b.fixed_view_mut::<3, 3>(0, 0)
+        .copy_from(&(skew(&angular(w)) * a));
+    b.fixed_view_mut::<3, 3>(0, 3)
+        .copy_from(&(skew(&Vec3::new(w[3], w[4], w[5])) * a));
+    b
+}
+
+/// Adds the blocks of the frame wrenches `extra` (CD11; after the point
+/// forces of [`add`], before its inward sweep): a wrench at an offset
+/// frame `o` of the section at `x` is `B_x = Ad_{o⁻¹}ᵀ B_o Ad_{o⁻¹}`
+/// there (B transforms like a spatial inertia, CT20), and its wrench at
+/// `x` is `Ad_{o⁻¹}ᵀ w_o` for the map Hessian (CT22) and the inward sweep.
+fn add_frame_wrenches(
+    model: &Model,
+    tree: &Tree,
+    data: &mut Data,
+    q: &[f64],
+    a: f64,
+    extra: &[FrameWrench],
+) {
+    for fw in extra {
+        let node = &tree.nodes[fw.node];
+        let ao = fw.offset.ad_inv();
+        let aom = ao.to_mat6();
+        let bx = aom.transpose() * (wrench_b(&fw.wrench, a) * aom);
+        let wx = ao.tr_mul_vec(&fw.wrench);
+        match (&node.kind, fw.x) {
+            (&NodeKind::Piece { rod, piece }, Some(x)) => {
+                let rm = &model.rods[rod];
+                let xi = rm.spec.geometry.pieces()[piece].strain(&q[rm.dofs()]);
+                let (gl, tm) = PieceMaps::new(&xi, None).exp_and_tangent_minus(x);
+                let w = &mut data.nodes[fw.node];
+                let am = gl.ad_inv().to_mat6();
+                let s = tm.to_mat6() * node.bpad;
+                let bs = bx * s;
+                w.mt += am.transpose() * (bx * am);
+                w.ut += am.transpose() * bs;
+                w.dt += s.transpose() * bs;
+                w.dt += map_hessian(&xi, x, &wx, &node.bpad, node.k) * a;
+                w.p_big += gl.ad_inv().tr_mul_vec(&wx);
+            }
+            (NodeKind::Body { .. }, None) => {
+                let w = &mut data.nodes[fw.node];
+                w.mt += bx;
+                w.p_big += wx;
+            }
+            // The caller builds the wrenches from the closures' resolved
+            // frames: a rod frame is on a piece, a body frame on a body.
+            _ => {}
+        }
+    }
+}
+
 /// Adds `a`× the geometric stiffness of the world-fixed forces to every
 /// node's sums (after the composite outward sweep at `q`, CT21–CT22):
 /// gravity (each rod quadrature point's weight `m g` at its centreline
 /// point; each body's `m g` at its centre of mass, `B = E_g 𝓜`,
 /// `E_g = [[0, [g]×], [0, 0]]` in the body frame) and the contact forces
 /// of `contact`'s one-sided blocks (held at their values at the
-/// linearization). Then an inward sweep of the wrenches those forces put on
+/// linearization) and the wrenches `extra` (a closed model's closure
+/// forces at held multipliers, CD11). Then an inward sweep of the wrenches those forces put on
 /// each node's tip and attachment points adds the pieces' map Hessians
 /// under them ([`map_hessian`]). Uses the nodes' `p_big` and `f_tip` as
 /// scratch (the factorization does not read them).
@@ -117,6 +194,7 @@ pub(crate) fn add(
     q: &[f64],
     a: f64,
     contact: Option<&ContactShift>,
+    extra: &[FrameWrench],
 ) {
     let g = model.gravity.map(|g| g * Forces::ALL.load_scale);
     for w in &mut data.nodes {
@@ -167,6 +245,7 @@ pub(crate) fn add(
             point(data, tree.rod_nodes[rod][piece], x, &blk.f);
         }
     }
+    add_frame_wrenches(model, tree, data, q, a, extra);
     // Inward: the wrench beyond each tip or attachment point, and the map
     // Hessian of the node that carries it there.
     for (i, node) in tree.nodes.iter().enumerate().rev() {

@@ -322,6 +322,104 @@ pub fn commit_contact_change(
     result.map(|()| change)
 }
 
+/// Where a slide stopped inside a step (docs/theory-contact.md CT29): the
+/// fraction `θ ∈ (0, 1)` of the step `h` from `(t0, q0, q̇0)` to
+/// `(t1, q1, q̇1)` at which a sliding contact's tangential velocity
+/// crossed zero, if the step must be retried at `θ h`; `None` if it may be
+/// accepted. Read at the committed anchors, without writing them.
+///
+/// Within a step the anchors are fixed (CT5), so a sliding point that
+/// stops inside the step is still held on the slip branch by the stretch
+/// it slid out in the step: friction `μ f_n` pushes it back toward its
+/// anchor by up to the distance it slid in the step — the continuous law
+/// would have stuck it within its pre-slip `μ f_n/k`. A contact on the
+/// slip branch at the step end whose tangential velocity points toward its
+/// anchor (`s₁ = v_t·ê < 0`, `ê` the stretch's direction) while it
+/// pointed away at the step start (`s₀ > 0`) marks such a stop; `θ` is
+/// the zero of the secant of `s` (exact for a constant friction force).
+/// The step is retried if the slide back it caused, `½ |s₁| (1 − θ) h`,
+/// exceeds that contact's pre-slip `μ f_n/k` (the elastic give CT5
+/// already allows): a stop is located to the law's own resolution,
+/// whatever the tolerances. Rod–obstacle contacts; rod pairs (CT10) are
+/// not located. Nothing for a model without friction.
+#[allow(clippy::too_many_arguments)]
+pub fn friction_stop(
+    model: &Model,
+    data: &mut Data,
+    h: f64,
+    t0: f64,
+    q0: &[f64],
+    qd0: &[f64],
+    t1: f64,
+    q1: &[f64],
+    qd1: &[f64],
+) -> Result<Option<f64>, DynamicsError> {
+    if !model.has_contact() || !model.obstacles().iter().any(|o| o.friction > 0.0) {
+        return Ok(None);
+    }
+    check_vec(model, "q", q1)?;
+    check_vec(model, "qdot", qd1)?;
+    check_vec(model, "q", q0)?;
+    check_vec(model, "qdot", qd0)?;
+    let n_obs = model.contact.obstacles.len();
+    // The slide rate along the stretch and the pre-slip of a contact.
+    let rate = |a: &Active| -> Option<(f64, f64)> {
+        let e = a.stretch.norm();
+        if a.sticking || e <= 0.0 || a.k <= 0.0 {
+            return None;
+        }
+        let vt = a.velocity - a.normal * a.normal.dot(&a.velocity);
+        let ft = a.force - a.normal * a.normal.dot(&a.force);
+        Some((vt.dot(&a.stretch) / e, ft.norm() / a.k))
+    };
+    if !contact_force(model, data, Forces::ALL, t1, q1, Some(qd1)) {
+        return Ok(None);
+    }
+    let mut work = data.contact.take().expect("contact work");
+    work.slides.clear();
+    for a in &work.active {
+        if let Some((s1, pre_slip)) = rate(a)
+            && s1 < 0.0
+        {
+            let idx = a.sample * n_obs + a.obstacle;
+            work.slides.push((a.rod, idx, s1, pre_slip));
+        }
+    }
+    let any = !work.slides.is_empty();
+    data.contact = Some(work);
+    if !any || !contact_force(model, data, Forces::ALL, t0, q0, Some(qd0)) {
+        return Ok(None);
+    }
+    let work = data.contact.as_ref().expect("contact work");
+    let mut theta: Option<f64> = None;
+    for &(rod, idx, s1, pre_slip) in &work.slides {
+        let Some(a) = work
+            .active
+            .iter()
+            .find(|a| a.rod == rod && a.sample * n_obs + a.obstacle == idx)
+        else {
+            continue;
+        };
+        // The start's own rate: on either branch, its velocity along the
+        // stretch (a sticking start has a stretch too).
+        let e = a.stretch.norm();
+        if e <= 0.0 {
+            continue;
+        }
+        let vt = a.velocity - a.normal * a.normal.dot(&a.velocity);
+        let s0 = vt.dot(&a.stretch) / e;
+        if s0 <= 0.0 {
+            continue;
+        }
+        let th = s0 / (s0 - s1);
+        let back = 0.5 * (-s1) * (1.0 - th) * h;
+        if back > pre_slip {
+            theta = Some(theta.map_or(th, |m: f64| m.min(th)));
+        }
+    }
+    Ok(theta)
+}
+
 /// The stiffness of resting contacts for statics (CT15): at the
 /// equilibrium `q` (drives at rest at `t`), every contact whose spring
 /// carries its force deeper than [`REST_TARGET`] of its radius has its

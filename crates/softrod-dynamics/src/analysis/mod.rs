@@ -19,7 +19,7 @@ pub(crate) mod statics;
 pub use crate::model::contact::IMPACT_LIMIT;
 pub use closed::{StaticsSensitivity, closure_statics, statics_sensitivity};
 pub(crate) use contact::raise_for_rest;
-pub use contact::{ContactChange, commit_contact, commit_contact_change};
+pub use contact::{ContactChange, commit_contact, commit_contact_change, friction_stop};
 pub use energy::{Energies, energies};
 pub use frames::{body_jacobian, frames, section_jacobian};
 pub use lanczos::lowest_modes;

@@ -67,6 +67,19 @@ pub struct ClosedDerivatives {
     solve: Vec<SolveNode>,
     /// One right side of the multiplier system (m).
     z: DVector<f64>,
+    /// `∂(Jᵀλ)/∂p` at fixed `λ` (n_dof × n_p) by the prescribed
+    /// coordinates `p` (docs/theory-control.md G28), from
+    /// [`closed_prescribed_derivatives`].
+    pub force_dp: DMatrix<f64>,
+    /// `∂R/∂p` of the stabilized rows (CD1) at fixed `q̈` (m × n_p; G28),
+    /// from [`closed_prescribed_derivatives`].
+    pub rows_dp: DMatrix<f64>,
+    /// `∂R/∂ṗ` (m × n_p; G28).
+    pub rows_dpd: DMatrix<f64>,
+    /// `∂R/∂p̈` (m × n_p; G28): the rows' columns `J_p`.
+    pub rows_dpdd: DMatrix<f64>,
+    /// The prescribed coordinates with the node that holds each.
+    pres_order: Vec<(usize, usize)>,
 }
 
 impl ClosedDerivatives {
@@ -86,6 +99,14 @@ impl ClosedDerivatives {
             }
         }
         order.sort_by(|a, b| b.cmp(a));
+        let mut pres_order = Vec::new();
+        if let Some(tree) = &model.tree {
+            for (i, node) in tree.nodes.iter().enumerate() {
+                if let Some((o, kp)) = node.prescribed {
+                    pres_order.extend((o..o + kp).map(|k| (i, k)));
+                }
+            }
+        }
         Self {
             id: IdDerivatives::new(model),
             dqdd_dq: DMatrix::zeros(n, n),
@@ -104,6 +125,11 @@ impl ClosedDerivatives {
             order,
             solve: vec![SolveNode::default(); model.tree.as_ref().map_or(0, |t| t.nodes.len())],
             z: DVector::zeros(m),
+            force_dp: DMatrix::zeros(n, np),
+            rows_dp: DMatrix::zeros(m, np),
+            rows_dpd: DMatrix::zeros(m, np),
+            rows_dpdd: DMatrix::zeros(m, np),
+            pres_order,
         }
     }
 }
@@ -314,20 +340,7 @@ fn project(
             z[i] = s;
         }
         // L L^T z = s on the first r (kept) rows.
-        for i in 0..r {
-            let mut s = z[i];
-            for k in 0..i {
-                s -= cw.a[(i, k)] * z[k];
-            }
-            z[i] = s / cw.a[(i, i)];
-        }
-        for i in (0..r).rev() {
-            let mut s = z[i];
-            for k in i + 1..r {
-                s -= cw.a[(k, i)] * z[k];
-            }
-            z[i] = s / cw.a[(i, i)];
-        }
+        cholesky_solve(cw, r, z);
         for i in 0..r {
             let p = cw.perm[i];
             let zi = z[i];
@@ -443,4 +456,233 @@ pub fn open_tree_inverse_dynamics<'a>(
         Motion::new(q, Some(qd), Some(qdd)),
     );
     Ok(&data.tau)
+}
+
+/// The closure terms' derivatives by the prescribed coordinates `p` of a
+/// closed model with prescribed joints (docs/theory-control.md G28):
+/// `∂(Jᵀλ)/∂p` at fixed `λ` into `work.force_dp`, and `∂R/∂p`, `∂R/∂ṗ`,
+/// `∂R/∂p̈` of the stabilized rows (CD1) at fixed `q̈` into
+/// `work.rows_dp`, `rows_dpd`, `rows_dpdd`, at `(t, q, q̇)` with `q̈`, `λ`
+/// the constrained forward dynamics' (run here first; `data` holds it
+/// afterwards, its factorizations of `M` and `A` intact for
+/// [`closed_row_response`] and [`closed_row_response_transposed`]).
+///
+/// As (CD4) in `q`: central differences of the closure rows alone, the
+/// prescribed values moved in `data` (one kinematic sweep from the node
+/// that holds the coordinate per difference), steps `6e-6 max(1, |p_k|)`
+/// in `p` and `0.1 max(1, |ṗ_k|)`, `0.1 max(1, |p̈_k|)` in the rate and
+/// acceleration, where `R` is quadratic and linear (exact but for
+/// rounding). No allocation.
+///
+/// Errors: a model without closures, a workspace of another model, bad
+/// inputs, a non-finite result.
+#[allow(clippy::too_many_arguments)]
+pub fn closed_prescribed_derivatives(
+    model: &Model,
+    data: &mut Data,
+    work: &mut ClosedDerivatives,
+    t: f64,
+    q: &[f64],
+    qd: &[f64],
+    tau_act: Option<&[f64]>,
+) -> Result<(), DynamicsError> {
+    let forces = Forces::ALL;
+    let (Some(tree), true) = (&model.tree, model.has_closures()) else {
+        return Err(DynamicsError::UnsupportedClosed {
+            what: "closed_prescribed_derivatives of an open model",
+        });
+    };
+    let (n, m, np) = (model.n_dof(), model.n_constraints(), model.n_prescribed());
+    if work.qdd.len() != n || work.lambda.len() != m || work.force_dp.ncols() != np {
+        return Err(DynamicsError::WorkspaceMismatch {
+            what: "ClosedDerivatives",
+            built: work.qdd.len(),
+            got: n,
+        });
+    }
+    check_workspace(model, data)?;
+    check_forward_inputs(model, forces, q, qd, tau_act)?;
+    model.set_time(data, t);
+    constrained_forward(model, data, forces, t, q, qd, tau_act)?;
+    work.qdd.copy_from(check_qdd(data, t)?);
+    let Some(cw) = data.closure.as_ref() else {
+        unreachable!("check_workspace found the closure buffers")
+    };
+    work.lambda.copy_from(&cw.lambda);
+    let qdd = std::mem::take(&mut work.qdd);
+    work.qx.copy_from_slice(q);
+    work.qdx.copy_from_slice(qd);
+    let sweep = |data: &mut Data, w: &ClosedDerivatives, from: usize| {
+        let motion = Motion::new(w.qx.as_slice(), Some(w.qdx.as_slice()), None);
+        outward_from(model, tree, data, motion, Pass::Kinematic, forces, from);
+    };
+    // Which of the prescribed value, rate, acceleration a difference moves.
+    #[derive(Clone, Copy, PartialEq)]
+    enum Which {
+        Value,
+        Rate,
+        Acc,
+    }
+    for which in [Which::Value, Which::Rate, Which::Acc] {
+        for idx in 0..work.pres_order.len() {
+            let (node, k) = work.pres_order[idx];
+            let slot = match which {
+                Which::Value => &mut data.prescribed_q,
+                Which::Rate => &mut data.prescribed_qd,
+                Which::Acc => &mut data.prescribed_qdd,
+            };
+            let x0 = slot[k];
+            let h = if which == Which::Value {
+                ROW_STEP
+            } else {
+                RATE_STEP
+            } * x0.abs().max(1.0);
+            for (plus, x) in [(true, x0 + h), (false, x0 - h)] {
+                match which {
+                    Which::Value => data.prescribed_q[k] = x,
+                    Which::Rate => data.prescribed_qd[k] = x,
+                    Which::Acc => data.prescribed_qdd[k] = x,
+                }
+                sweep(data, work, node);
+                rows_at(model, tree, data, work, &qdd, plus, which == Which::Value);
+            }
+            match which {
+                Which::Value => data.prescribed_q[k] = x0,
+                Which::Rate => data.prescribed_qd[k] = x0,
+                Which::Acc => data.prescribed_qdd[k] = x0,
+            }
+            let inv = 0.5 / h;
+            let rows = match which {
+                Which::Value => &mut work.rows_dp,
+                Which::Rate => &mut work.rows_dpd,
+                Which::Acc => &mut work.rows_dpdd,
+            };
+            for i in 0..m {
+                rows[(i, k)] = (work.plus[n + i] - work.minus[n + i]) * inv;
+            }
+            if which == Which::Value {
+                for i in 0..n {
+                    work.force_dp[(i, k)] = (work.plus[i] - work.minus[i]) * inv;
+                }
+            }
+        }
+    }
+    sweep(data, work, 0);
+    work.qdd = qdd;
+    for (what, x) in [
+        ("d(J^T lambda)/dp", &work.force_dp),
+        ("dR/dp", &work.rows_dp),
+        ("dR/dpdot", &work.rows_dpd),
+        ("dR/dpddot", &work.rows_dpdd),
+    ] {
+        if let Some((i, v)) = x.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            let r = x.nrows().max(1);
+            return Err(DynamicsError::NotFinite {
+                what: format!("closed {what} entry ({}, {}) at t = {t}", i % r, i / r),
+                value: *v,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The closure rows' state in `data` after a constrained forward dynamics,
+/// or an error naming `what`.
+fn closure_work<'a>(data: &'a Data, what: &'static str) -> Result<&'a ClosureWork, DynamicsError> {
+    data.closure
+        .as_ref()
+        .ok_or(DynamicsError::UnsupportedClosed { what })
+}
+
+/// `out += Y A⁻¹ h`: the constrained acceleration's response to a change
+/// `h` (m) of the stabilized rows' right side (CD3–CD4 with `g = 0`,
+/// `δq̈ = Y A⁻¹ h`; docs/theory-control.md G28), on the rows the forward
+/// solve kept (redundant rows take no part), with the factorizations the
+/// last constrained forward dynamics left in `data` (call after
+/// [`closed_prescribed_derivatives`] or [`closed_force_response`] at the
+/// state). No allocation.
+pub fn closed_row_response(
+    data: &Data,
+    work: &mut ClosedDerivatives,
+    h: &DVector<f64>,
+    out: &mut DVector<f64>,
+) -> Result<(), DynamicsError> {
+    let cw = closure_work(
+        data,
+        "closed_row_response without a constrained forward dynamics",
+    )?;
+    let (m, r) = (h.len(), cw.rank);
+    if m != work.z.len() || out.len() != cw.y.nrows() {
+        return Err(DynamicsError::WorkspaceMismatch {
+            what: "closed_row_response",
+            built: work.z.len(),
+            got: m,
+        });
+    }
+    for i in 0..m {
+        work.z[i] = h[cw.perm[i]];
+    }
+    cholesky_solve(cw, r, &mut work.z);
+    for i in 0..r {
+        let zi = work.z[i];
+        let p = cw.perm[i];
+        for c in 0..out.len() {
+            out[c] += cw.y[(c, p)] * zi;
+        }
+    }
+    Ok(())
+}
+
+/// `ν = A⁻¹ Yᵀ w` (m; zero on redundant rows): the transposed product of
+/// [`closed_row_response`], `wᵀ Y A⁻¹ h = νᵀ h` for every `h`
+/// (docs/theory-control.md G28). Same preconditions; no allocation.
+pub fn closed_row_response_transposed(
+    data: &Data,
+    work: &mut ClosedDerivatives,
+    w: &DVector<f64>,
+    nu: &mut DVector<f64>,
+) -> Result<(), DynamicsError> {
+    let cw = closure_work(
+        data,
+        "closed_row_response_transposed without a constrained forward dynamics",
+    )?;
+    let (m, r) = (nu.len(), cw.rank);
+    if m != work.z.len() || w.len() != cw.y.nrows() {
+        return Err(DynamicsError::WorkspaceMismatch {
+            what: "closed_row_response_transposed",
+            built: work.z.len(),
+            got: m,
+        });
+    }
+    for i in 0..m {
+        let p = cw.perm[i];
+        work.z[i] = (0..w.len()).map(|c| cw.y[(c, p)] * w[c]).sum();
+    }
+    cholesky_solve(cw, r, &mut work.z);
+    nu.fill(0.0);
+    for i in 0..r {
+        nu[cw.perm[i]] = work.z[i];
+    }
+    Ok(())
+}
+
+/// `L Lᵀ z = z` on the first `r` (kept, pivot-ordered) entries with the
+/// pivoted Cholesky factor of `A` in `cw.a`.
+// Triangular solves read clearest with explicit indices.
+#[allow(clippy::needless_range_loop)]
+fn cholesky_solve(cw: &ClosureWork, r: usize, z: &mut DVector<f64>) {
+    for i in 0..r {
+        let mut s = z[i];
+        for k in 0..i {
+            s -= cw.a[(i, k)] * z[k];
+        }
+        z[i] = s / cw.a[(i, i)];
+    }
+    for i in (0..r).rev() {
+        let mut s = z[i];
+        for k in i + 1..r {
+            s -= cw.a[(k, i)] * z[k];
+        }
+        z[i] = s / cw.a[(i, i)];
+    }
 }

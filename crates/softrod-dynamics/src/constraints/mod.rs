@@ -17,6 +17,7 @@ pub(crate) mod rows;
 
 pub use derivatives::{
     ClosedDerivatives, closed_dynamics_derivatives, closed_force_response,
+    closed_prescribed_derivatives, closed_row_response, closed_row_response_transposed,
     open_tree_inverse_dynamics,
 };
 pub use newton::ClosedShiftedSolver;

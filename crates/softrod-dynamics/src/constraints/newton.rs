@@ -5,15 +5,20 @@
 //! O(N) shifted solve of the open tree and an `m×m` Schur complement.
 
 use super::forward::pivoted_cholesky;
-use super::rows::{assemble, prescribed_columns};
+use super::rows::{assemble, closure_rows, prescribed_columns};
+use crate::algorithms::frames::frame_state;
 use crate::algorithms::shifted::{check_shift, tree_factor, tree_solve};
+use crate::algorithms::shifted_geometric::FrameWrench;
 use crate::algorithms::tree::outward;
 use crate::algorithms::{Motion, Pass, check_vec, inverse_dynamics_open};
 use crate::error::DynamicsError;
 use crate::forces::Forces;
 use crate::model::Model;
+use crate::model::closure::Target;
 use crate::model::data::{ConstraintRows, Data, SolveNode};
+use crate::model::tree::Tree;
 use nalgebra::{DMatrix, DVector};
+use softrod_lie::{Vec3, Vec6, join};
 
 /// Solves the KKT system of a closed model's implicit step (CD6),
 ///
@@ -83,6 +88,16 @@ pub struct ClosedShiftedSolver {
     mu: DVector<f64>,
     n_dof: usize,
     factored: bool,
+    /// Whether the factorizations add the geometric stiffness of gravity
+    /// and of the closure forces at `lambda` (CD11), and whether the last
+    /// one holds it.
+    geometric: bool,
+    geo_factored: bool,
+    /// The multipliers whose closure forces the geometric terms hold fixed
+    /// (m), and their wrenches on the closures' frames (two per closure at
+    /// most, capacity reserved in [`Self::new`]).
+    lambda: DVector<f64>,
+    wrenches: Vec<FrameWrench>,
 }
 
 impl ClosedShiftedSolver {
@@ -104,6 +119,92 @@ impl ClosedShiftedSolver {
             mu: DVector::zeros(m),
             n_dof: n,
             factored: false,
+            geometric: false,
+            geo_factored: false,
+            lambda: DVector::zeros(m),
+            wrenches: Vec::with_capacity(2 * model.closures.len()),
+        }
+    }
+
+    /// Turns the geometric stiffness on or off for the following
+    /// factorizations (docs/theory-derivatives.md CD11): `S` then also
+    /// holds the Hessian of the potential of gravity (on the rods'
+    /// quadrature points and the bodies, docs/theory-contact.md CT19–CT22)
+    /// and of the closure forces `Jᵀλ` at the multipliers of
+    /// [`Self::set_multipliers`], held fixed in the world while the frames
+    /// they act on move — the tension of a rope pinned at both ends, which
+    /// the elastic `K` lacks. Where a node's block is then indefinite it is
+    /// factored with its eigenvalues' magnitudes (CT23); if the
+    /// factorization fails even so, [`Self::factor_at`] factors without the
+    /// terms ([`Self::geometric_in_factor`] tells). The fixed point of the
+    /// Newton iteration does not change, only how fast it contracts.
+    pub fn set_geometric(&mut self, on: bool) {
+        self.geometric = on;
+        self.factored = false;
+    }
+
+    /// The closure multipliers `λ` (m = [`Model::n_constraints`], the
+    /// velocity rows' multipliers of the constrained forward dynamics,
+    /// `crate::closure_multipliers`) whose forces the geometric terms of
+    /// the following factorizations hold (CD11). Zero until set. Fails on
+    /// a wrong length or non-finite entries (nothing changed then).
+    pub fn set_multipliers(&mut self, lambda: &[f64]) -> Result<(), DynamicsError> {
+        if lambda.len() != self.lambda.len() {
+            return Err(DynamicsError::SizeMismatch {
+                what: "lambda",
+                expected: self.lambda.len(),
+                got: lambda.len(),
+            });
+        }
+        if let Some((i, v)) = lambda.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(DynamicsError::NotFinite {
+                what: format!("closure multiplier [{i}]"),
+                value: *v,
+            });
+        }
+        self.lambda.copy_from_slice(lambda);
+        self.factored = false;
+        Ok(())
+    }
+
+    /// Whether the last successful factorization holds the geometric
+    /// terms ([`Self::set_geometric`]; false after its fallback).
+    pub fn geometric_in_factor(&self) -> bool {
+        self.geometric && self.factored && self.geo_factored
+    }
+
+    /// The closure forces at `lambda` as wrenches on the closures' frames
+    /// (CD11), after a kinematic outward pass at `q`: on frame a the
+    /// spatial wrench `Cᵀλ` of the velocity rows `φ̇ = C(V_a − V_b)` (about
+    /// the world origin), on frame b its opposite, each moved to its
+    /// frame's origin and axes. The world carries none.
+    fn closure_wrenches(&mut self, model: &Model, tree: &Tree, q: &[f64]) {
+        self.wrenches.clear();
+        for rc in &model.closures {
+            let fa = frame_state(model, tree, &self.data, &rc.a, q, None);
+            let fb = frame_state(model, tree, &self.data, &rc.b, q, None);
+            let rows = closure_rows(rc, &fa, &fb, false);
+            let mut w = Vec6::zeros();
+            for i in 0..rc.spec.kind.n_constraints() {
+                w += rows.c.row(i).transpose() * self.lambda[rc.row + i];
+            }
+            let (m0, f) = (Vec3::new(w[0], w[1], w[2]), Vec3::new(w[3], w[4], w[5]));
+            for (fs, frame, sign) in [(&fa, &rc.a, 1.0), (&fb, &rc.b, -1.0)] {
+                let (node, x) = match frame.target {
+                    Target::World => continue,
+                    Target::Rod { node, x, .. } => (node, Some(x)),
+                    Target::Body { node } => (node, None),
+                };
+                let (p, r) = (fs.pose.translation, fs.pose.rotation);
+                let m = (m0 - p.cross(&f)) * sign;
+                let rt = r.transpose();
+                self.wrenches.push(FrameWrench {
+                    node,
+                    x,
+                    offset: frame.offset,
+                    wrench: join(&(rt * m), &(rt * (f * sign))),
+                });
+            }
         }
     }
 
@@ -166,7 +267,29 @@ impl ClosedShiftedSolver {
             Forces::ALL,
         );
         assemble(model, tree, &self.data, motion, false, &mut self.rows);
-        tree_factor(model, tree, &mut self.data, q, a, b, None, false)?;
+        self.geo_factored = false;
+        if self.geometric && a != 0.0 {
+            self.closure_wrenches(model, tree, q);
+            match tree_factor(
+                model,
+                tree,
+                &mut self.data,
+                q,
+                a,
+                b,
+                None,
+                true,
+                &self.wrenches,
+            ) {
+                Ok(()) => self.geo_factored = true,
+                // Not positive definite even with CT23: without the terms.
+                Err(DynamicsError::Singular { .. } | DynamicsError::SingularNode { .. }) => {}
+                Err(e) => return Err(e),
+            }
+        }
+        if !self.geo_factored {
+            tree_factor(model, tree, &mut self.data, q, a, b, None, false, &[])?;
+        }
         let m = model.n_constraints();
         for c in 0..m {
             for i in 0..self.n_dof {

@@ -260,6 +260,13 @@ pub(crate) struct Active {
     pub dp: Mat3,
     pub dv: Mat3,
     pub sticking: bool,
+    /// The point's velocity relative to the obstacle, and (friction with
+    /// an anchor) the tangential stretch `P(p − a)` from its anchor and the
+    /// tangential spring's stiffness `k`: what the stop location of CT29
+    /// reads.
+    pub velocity: Vec3,
+    pub stretch: Vec3,
+    pub k: f64,
 }
 
 /// The buffers and the friction state of contact, in [`crate::Data`]
@@ -295,6 +302,9 @@ pub(crate) struct ContactWork {
     pub pairs: Option<Box<PairWork>>,
     /// The buffers of the analytic linearization (CT12–CT14).
     pub second: Box<SecondWork>,
+    /// The step-start slide rates of [`crate::friction_stop`] (CT29): per
+    /// contact sliding back toward its anchor, `(rod, index, v_t·ê, μ f_n/k)`.
+    pub slides: Vec<(usize, usize, f64, f64)>,
 }
 
 impl ContactWork {
@@ -377,6 +387,7 @@ impl ContactWork {
                 .collect(),
             pairs: PairWork::new(model).map(Box::new),
             second: Box::new(SecondWork::new(model.n_dof())),
+            slides: Vec::new(),
         }
     }
 }

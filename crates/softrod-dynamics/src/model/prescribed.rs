@@ -140,6 +140,50 @@ impl Spline {
         })
     }
 
+    /// The one cubic on `[t0, t1]` with the end values and rates
+    /// `x(t0) = x0`, `ẋ(t0) = v0`, `x(t1) = x1`, `ẋ(t1) = v1` (cubic Hermite
+    /// interpolation), held at `x1` at rest after `t1` and at `x0` at rest
+    /// before `t0` like any spline. In this form's second derivatives at
+    /// the two knots, with `h = t1 − t0` and `d = (x1 − x0)/h`, the end
+    /// rates give `2m0 + m1 = 6(d − v0)/h` and `m0 + 2m1 = 6(v1 − d)/h`.
+    ///
+    /// Errors (as text): `t1 ≤ t0`, a value that is not finite.
+    pub fn hermite(
+        t0: f64,
+        t1: f64,
+        (x0, v0): (f64, f64),
+        (x1, v1): (f64, f64),
+    ) -> Result<Self, String> {
+        for (what, v) in [
+            ("t0", t0),
+            ("t1", t1),
+            ("x0", x0),
+            ("v0", v0),
+            ("x1", x1),
+            ("v1", v1),
+        ] {
+            if !v.is_finite() {
+                return Err(format!("{what} = {v} is not finite"));
+            }
+        }
+        if t1 <= t0 {
+            return Err(format!("t1 = {t1} must come after t0 = {t0}"));
+        }
+        let h = t1 - t0;
+        let d = (x1 - x0) / h;
+        let a = 6.0 * (d - v0) / h;
+        let b = 6.0 * (v1 - d) / h;
+        let (m0, m1) = ((2.0 * a - b) / 3.0, (2.0 * b - a) / 3.0);
+        if !(m0.is_finite() && m1.is_finite()) {
+            return Err(format!("the cubic over [{t0}, {t1}] is not finite"));
+        }
+        Ok(Self {
+            t: vec![t0, t1],
+            x: vec![x0, x1],
+            m: vec![m0, m1],
+        })
+    }
+
     /// The sample times \[s\].
     pub fn times(&self) -> &[f64] {
         &self.t
@@ -233,6 +277,63 @@ fn not_a_knot(t: &[f64], x: &[f64]) -> Result<Vec<f64>, String> {
     Ok(m)
 }
 
+impl crate::model::Model {
+    /// The curve of prescribed coordinate `i` (model order, the order of
+    /// [`crate::Data::prescribed_q`]), `None` past the last.
+    pub fn prescribed_curve(&self, i: usize) -> Option<&Curve> {
+        let e = self
+            .elements
+            .iter()
+            .find(|e| e.prescribed_dofs.contains(&i))?;
+        let p = e.attachment.joint.prescribed.as_ref()?;
+        p.curves.get(i - e.prescribed_dofs.start)
+    }
+
+    /// The target bounds `[lo, hi]` of prescribed coordinate `i` (the
+    /// scene's `prescribed.bounds`), `None` when its joint has none or
+    /// past the last coordinate.
+    pub fn prescribed_bounds(&self, i: usize) -> Option<[f64; 2]> {
+        let e = self
+            .elements
+            .iter()
+            .find(|e| e.prescribed_dofs.contains(&i))?;
+        let p = e.attachment.joint.prescribed.as_ref()?;
+        p.bounds.as_ref()?.get(i - e.prescribed_dofs.start).copied()
+    }
+
+    /// Replaces the curve of prescribed coordinate `i` (model order): a
+    /// drive commanded while the model runs (the learning environments'
+    /// prescribed-joint targets). The layout of `q` does not change, nor the
+    /// tree: only the motion the coordinate follows. Errors: no prescribed
+    /// coordinate `i`, a sinusoid with parameters that are not finite.
+    pub fn set_prescribed_curve(&mut self, i: usize, curve: Curve) -> Result<(), DynamicsError> {
+        let n = self.n_prescribed;
+        let e = self
+            .elements
+            .iter_mut()
+            .find(|e| e.prescribed_dofs.contains(&i))
+            .ok_or(DynamicsError::InvalidJoint {
+                element: String::new(),
+                reason: format!("no prescribed coordinate {i} (the model has {n})"),
+            })?;
+        curve
+            .validate()
+            .map_err(|reason| DynamicsError::InvalidJoint {
+                element: e.name.clone(),
+                reason: format!("prescribed motion: {reason}"),
+            })?;
+        let k = i - e.prescribed_dofs.start;
+        let p = e
+            .attachment
+            .joint
+            .prescribed
+            .as_mut()
+            .expect("an element with prescribed coordinates has a prescribed joint");
+        p.curves[k] = curve;
+        Ok(())
+    }
+}
+
 impl Curve {
     /// The times where the motion's rate or acceleration may jump \[s\]: a
     /// spline's first and last sample times, where it starts from and
@@ -285,12 +386,26 @@ impl crate::model::Model {
 pub struct Prescribed {
     /// One curve per coordinate of the joint, in the joint's order.
     pub curves: Vec<Curve>,
+    /// The range `[lo, hi]` (rad or m) of each coordinate a commanded
+    /// target may take (the scene's `prescribed.bounds`), or `None`: no
+    /// range given. Not a constraint on the curves: the bounds of the
+    /// actions that set targets (docs/envs.md).
+    pub bounds: Option<Vec<[f64; 2]>>,
 }
 
 impl Prescribed {
-    /// One curve per coordinate.
+    /// One curve per coordinate, no bounds.
     pub fn new(curves: Vec<Curve>) -> Self {
-        Self { curves }
+        Self {
+            curves,
+            bounds: None,
+        }
+    }
+
+    /// The same motion with target bounds `[lo, hi]` per coordinate.
+    pub fn with_bounds(mut self, bounds: Vec<[f64; 2]>) -> Self {
+        self.bounds = Some(bounds);
+        self
     }
 
     /// A spline per coordinate through `values[i][c]` at `times[i]` (one
@@ -309,7 +424,7 @@ impl Prescribed {
                 Spline::new(times, &col).map(Curve::Spline)
             })
             .collect::<Result<Vec<_>, _>>()?;
-        Ok(Self { curves })
+        Ok(Self::new(curves))
     }
 
     /// Checks the curve count against the joint's coordinates and each
@@ -331,6 +446,21 @@ impl Prescribed {
         for (i, c) in self.curves.iter().enumerate() {
             c.validate()
                 .map_err(|e| bad(format!("coordinate {i}: {e}")))?;
+        }
+        if let Some(b) = &self.bounds {
+            if b.len() != dof {
+                return Err(bad(format!(
+                    "{} bounds for a joint of {dof} coordinates",
+                    b.len()
+                )));
+            }
+            for (i, [lo, hi]) in b.iter().enumerate() {
+                if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+                    return Err(bad(format!(
+                        "coordinate {i}: bounds [{lo}, {hi}] must be finite with lo < hi"
+                    )));
+                }
+            }
         }
         Ok(())
     }
@@ -383,6 +513,44 @@ mod tests {
             assert!((v - ve).abs() < 1e-11, "v at {t}: {v} vs {ve}");
             assert!((a - ae).abs() < 1e-10, "a at {t}: {a} vs {ae}");
         }
+    }
+
+    #[test]
+    fn hermite_is_the_cubic_through_its_end_values_and_rates() {
+        // The cubic Hermite basis in closed form, s = (t − t0)/h.
+        let (t0, t1, x0, v0, x1, v1) = (0.3, 0.35, 0.2, -1.5, -0.4, 0.7);
+        let h = t1 - t0;
+        let f = |t: f64| {
+            let s = (t - t0) / h;
+            let (s2, s3) = (s * s, s * s * s);
+            let x = (2.0 * s3 - 3.0 * s2 + 1.0) * x0
+                + (s3 - 2.0 * s2 + s) * h * v0
+                + (-2.0 * s3 + 3.0 * s2) * x1
+                + (s3 - s2) * h * v1;
+            let v = (6.0 * s2 - 6.0 * s) * x0 / h
+                + (3.0 * s2 - 4.0 * s + 1.0) * v0
+                + (-6.0 * s2 + 6.0 * s) * x1 / h
+                + (3.0 * s2 - 2.0 * s) * v1;
+            let a = (12.0 * s - 6.0) * x0 / (h * h)
+                + (6.0 * s - 4.0) * v0 / h
+                + (-12.0 * s + 6.0) * x1 / (h * h)
+                + (6.0 * s - 2.0) * v1 / h;
+            (x, v, a)
+        };
+        let sp = Spline::hermite(t0, t1, (x0, v0), (x1, v1)).unwrap();
+        for k in 0..=20 {
+            let t = t0 + h * k as f64 / 20.0;
+            let (x, v, a) = sp.eval(t);
+            let (xe, ve, ae) = f(t);
+            assert!((x - xe).abs() < 1e-14, "x at {t}: {x} vs {xe}");
+            assert!((v - ve).abs() < 1e-12, "v at {t}: {v} vs {ve}");
+            assert!(
+                (a - ae).abs() < 1e-9 * ae.abs().max(1.0),
+                "a at {t}: {a} vs {ae}"
+            );
+        }
+        assert!(Spline::hermite(1.0, 1.0, (0.0, 0.0), (1.0, 0.0)).is_err());
+        assert!(Spline::hermite(0.0, 1.0, (0.0, f64::NAN), (1.0, 0.0)).is_err());
     }
 
     #[test]

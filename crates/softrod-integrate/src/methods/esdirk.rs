@@ -231,6 +231,12 @@ const THETA_KEEP_CHEAP: f64 = 0.05;
 /// Accepted steps on the exact Jacobian after a fallback before the cheap
 /// (structured or mass-form) matrix is tried again.
 const EXACT_STEPS: usize = 10;
+/// At most this many retries of one step to land on a stopping slide
+/// (docs/theory-contact.md CT29): the secant of a constant friction force
+/// is exact, a varying one converges in a few.
+const MAX_LOCATE: usize = 4;
+/// The smallest fraction of a step a stop location retries it at.
+const LOCATE_MIN: f64 = 0.01;
 
 /// Which iteration matrix the Newton iteration uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -592,8 +598,9 @@ impl<T: Tableau, Sys: SecondOrderSystem> Stepper<SecondOrderProblem<'_, Sys>> fo
     ) -> Result<(), IntegrateError> {
         let fixed = opts.fixed_dt();
         let mut h = self.s.h_next.min(opts.h_max);
-        let mut rejected_before = false;
         let mut relinearized_failed = false;
+        let mut located = 0;
+        let mut shrunk = false;
         let mut reason = "step size";
         loop {
             let t = self.s.t;
@@ -611,12 +618,12 @@ impl<T: Tableau, Sys: SecondOrderSystem> Stepper<SecondOrderProblem<'_, Sys>> fo
                 if !ok {
                     self.factored_h = f64::NAN;
                     stats.rejected_steps += 1;
-                    rejected_before = true;
                     reason = "singular iteration matrix";
                     if !self.jac_fresh {
                         self.jac_valid = false;
                     } else {
                         h *= 0.5;
+                        shrunk = true;
                     }
                     continue;
                 }
@@ -629,7 +636,6 @@ impl<T: Tableau, Sys: SecondOrderSystem> Stepper<SecondOrderProblem<'_, Sys>> fo
                     // A Newton failure: a stale matrix first, then the exact
                     // Jacobian, then a smaller step.
                     stats.rejected_steps += 1;
-                    rejected_before = true;
                     reason = why;
                     if self.relinearized && !relinearized_failed {
                         // The active-set iteration (CT27) already followed
@@ -639,6 +645,7 @@ impl<T: Tableau, Sys: SecondOrderSystem> Stepper<SecondOrderProblem<'_, Sys>> fo
                         relinearized_failed = true;
                         self.jac_valid = false;
                         h *= 0.5;
+                        shrunk = true;
                     } else if !self.jac_fresh {
                         self.jac_valid = false;
                     } else if self.matrix == Matrix::Cheap && p.kind() != JacKind::Full {
@@ -647,6 +654,7 @@ impl<T: Tableau, Sys: SecondOrderSystem> Stepper<SecondOrderProblem<'_, Sys>> fo
                         self.jac_valid = false;
                     } else {
                         h *= 0.5;
+                        shrunk = true;
                     }
                     continue;
                 }
@@ -655,6 +663,28 @@ impl<T: Tableau, Sys: SecondOrderSystem> Stepper<SecondOrderProblem<'_, Sys>> fo
                 Some(_) => err.is_finite(),
                 None => err <= 1.0,
             };
+            if accept && fixed.is_none() && located < MAX_LOCATE {
+                // A slide that stopped inside the step (CT29): the step
+                // again, ending at the stop.
+                let stop = p
+                    .step_event_fraction(
+                        h,
+                        t,
+                        &self.q,
+                        &self.v,
+                        t_new,
+                        &self.qs[T::S - 1],
+                        &self.vs[T::S - 1],
+                    )
+                    .map_err(sys_err(t, h, "friction stop"))?;
+                if let Some(theta) = stop {
+                    located += 1;
+                    stats.rejected_steps += 1;
+                    reason = "friction stop";
+                    h *= theta.clamp(LOCATE_MIN, 1.0);
+                    continue;
+                }
+            }
             if accept {
                 self.accept(t_new, h, stats);
                 // The next step size.
@@ -671,7 +701,12 @@ impl<T: Tableau, Sys: SecondOrderSystem> Stepper<SecondOrderProblem<'_, Sys>> fo
                             fac = fac.min(gus);
                         }
                         let mut fac = fac.clamp(FAC_MIN, FAC_MAX);
-                        if rejected_before {
+                        // Only a step that had to shrink caps the growth: a
+                        // Newton failure retried at the same `h` with a
+                        // fresh or exact matrix, or a step shortened to a
+                        // friction stop, says nothing of the error
+                        // (CT25 (b), CT29).
+                        if shrunk {
                             fac = fac.min(1.0);
                         }
                         self.h_acc = h;
@@ -703,7 +738,7 @@ impl<T: Tableau, Sys: SecondOrderSystem> Stepper<SecondOrderProblem<'_, Sys>> fo
                 return Ok(());
             }
             stats.rejected_steps += 1;
-            rejected_before = true;
+            shrunk = true;
             reason = if err.is_finite() {
                 "error test"
             } else {
@@ -726,6 +761,26 @@ impl<T: Tableau, Sys: SecondOrderSystem> Stepper<SecondOrderProblem<'_, Sys>> fo
 
     fn dense(&self, t: f64, out: &mut DVector<f64>) {
         self.s.quintic_dense(t, out);
+    }
+
+    /// Friction anchors or healed offsets only (CT25 (a)): the step-start
+    /// acceleration again, the Jacobian and its factorization kept — they
+    /// are refreshed when the Newton iteration's own tests ask (a stale
+    /// matrix that fails, a contraction above `THETA_KEEP_*`). The slope
+    /// of the law moves only where a branch flips, which the active-set
+    /// iteration (CT27) re-linearizes anyway.
+    fn forces_changed(
+        &mut self,
+        p: &mut SecondOrderProblem<'_, Sys>,
+        stats: &mut Stats,
+    ) -> Result<(), IntegrateError> {
+        let (t, h) = (self.s.t, self.s.h);
+        p.accel(t, &self.q, &self.v, &mut self.acc)
+            .map_err(sys_err(t, h, "accel"))?;
+        stats.rhs_evaluations += 1;
+        check_finite(&self.acc, t, h, "acceleration")?;
+        self.set_first_order();
+        Ok(())
     }
 
     fn system_changed(

@@ -432,6 +432,26 @@ class Simulation:
     def joint_max_forces(self) -> list[float]:
         """Each actuated coordinate's max_force [N or N m]; inf where the scene gives none."""
     @property
+    def joint_input_names(self) -> list[str]:
+        """The actuated joint coordinates' names, in joint_forces order."""
+    @property
+    def n_prescribed(self) -> int:
+        """Prescribed joint coordinates (the length of a prescribed_targets input)."""
+    @property
+    def prescribed_bounds(self) -> list[tuple[float, float] | None]:
+        """Each prescribed coordinate's target range (the scene's joint.prescribed.bounds)."""
+    @property
+    def prescribed_targets(self) -> _F64 | None:
+        """The targets in force (None: the scene's curves)."""
+    def prescribed_state(self, t: float) -> tuple[_F64, _F64]:
+        """The prescribed coordinates' values and rates at t under the motion in force."""
+    def command_prescribed(self, t: float, dt: float, targets: ArrayLike) -> None:
+        """Command targets over [t, t + dt] without stepping (the cubic to rest, docs/envs.md)."""
+    def hold_prescribed(self, values: ArrayLike) -> None:
+        """Hold the prescribed joints at values, at rest, until the next command or reset."""
+    def reset_prescribed(self) -> None:
+        """Put the scene's prescribed curves back in force."""
+    @property
     def duration(self) -> float | None:
         """The scene's [run] duration [s]; None when built in Python."""
     @property
@@ -554,7 +574,8 @@ class Simulation:
         """Loss of a run and its exact gradient (discrete adjoint of esdirk, esdirk5 or radau5) w.r.t. params
         ("q0", "qdot0", "ROD.young", "ROD.shear_modulus", "ROD.density", "ROD.viscosity",
         "BODY.mass", "cableN.tension", "ELEMENT.prescribed": a prescribed joint's samples, shaped as
-        its values, open models only). loss: {"type": "position", "rod", "s", "times",
+        its values; "ELEMENT.actuator": a joint actuator's force values, a table shaped as its
+        values). loss: {"type": "position", "rod", "s", "times",
         "targets", "weight"}, {"type": "quadratic", "times", "q_weights", "qdot_weights",
         "q_ref"}, a callable l(t, q, qdot) -> (value, dl_dq, dl_dqdot) at `times`, or a list.
         method: "adjoint" (default) or "forward" (forward sensitivities; few parameters).
@@ -582,7 +603,7 @@ class Simulation:
     ) -> Trajectory: ...
     def step(
         self, state: State, dt: float, u: ArrayLike | None = None, *, substeps: int | None = None,
-        joint_forces: ArrayLike | None = None,
+        joint_forces: ArrayLike | None = None, prescribed_targets: ArrayLike | None = None,
     ) -> State: ...
     def copy(self) -> Simulation: ...
     def __copy__(self) -> Simulation: ...
@@ -619,9 +640,16 @@ class BatchStepper:
     def threads(self) -> int: ...
     def reset_contact(self, i: int | None = None) -> None:
         """Forget copy i's (None: every copy's) committed contact state."""
+    @property
+    def n_prescribed(self) -> int: ...
+    @property
+    def prescribed_targets(self) -> _F64:
+        """(n, n_prescribed) targets in force, NaN rows on the scene's curves."""
+    def reset_prescribed(self, i: int | None = None) -> None:
+        """Put copy i's (None: every copy's) scene prescribed curves back."""
     def step(
         self, t: float | ArrayLike, q: ArrayLike, qdot: ArrayLike, u: ArrayLike, dt: float,
         active: Sequence[bool] | None = None, *, substeps: int | None = None,
-        joint_forces: ArrayLike | None = None,
+        joint_forces: ArrayLike | None = None, prescribed_targets: ArrayLike | None = None,
     ) -> tuple[_F64, _F64, list[str | None]]:
         """(q (n, n_dof), qdot (n, n_dof), errors: None or the failure's message per copy)"""

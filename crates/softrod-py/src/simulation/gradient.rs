@@ -205,6 +205,30 @@ impl Simulation {
                 }
                 continue;
             }
+            // A joint actuator's force values (G29): a table in the shape
+            // of its `values` (one row per time, one column per coordinate
+            // when it has more than one), a constant as one value per
+            // coordinate.
+            if let Some(element) = name.strip_suffix(".actuator") {
+                let joint = self
+                    .sim
+                    .model()
+                    .elements()
+                    .iter()
+                    .find(|e| e.name == element)
+                    .map(|e| &e.attachment.joint);
+                let dof = joint.map_or(1, |j| j.kind.dof());
+                let table = joint.and_then(|j| j.actuator.as_ref()).is_some_and(|a| {
+                    matches!(a.force, softrod::dynamics::JointForce::Table { .. })
+                });
+                if table && dof > 1 {
+                    let m = nalgebra::DMatrix::from_row_slice(v.len() / dof, dof, v);
+                    out.set_item(name, mat_out(py, &m))?;
+                } else {
+                    out.set_item(name, vec_out(py, v))?;
+                }
+                continue;
+            }
             let array = name == "q0" || name == "qdot0" || name.ends_with(".tension");
             if array {
                 out.set_item(name, vec_out(py, v))?;

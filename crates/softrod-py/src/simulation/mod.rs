@@ -164,9 +164,55 @@ impl Simulation {
     /// Joint forces checked against the model's actuated joint coordinates.
     pub(crate) fn joint_forces(&mut self, f: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
         let nj = self.sim.model().n_joint_inputs();
+        if nj == 0 {
+            return Err(input(
+                "joint_forces: this simulation has no actuated joint (a scene joint with \
+                 `actuator = { force, max_force }`)",
+            ));
+        }
         let a = vector(f, "joint_forces", nj)?;
-        check_joint_forces(nj, "joint_forces", a.slice()).map_err(input)?;
+        check_joint_forces(&self.sim.joint_input_names(), "joint_forces", a.slice())
+            .map_err(input)?;
         Ok(a.slice().to_vec())
+    }
+
+    /// Prescribed-joint targets checked against the model: one per
+    /// prescribed coordinate, finite, within the scene's bounds.
+    pub(crate) fn prescribed_targets_arg(&self, p: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
+        let model = self.sim.model();
+        let np = model.n_prescribed();
+        if np == 0 {
+            return Err(input(
+                "prescribed_targets: this simulation has no prescribed joint (a scene joint \
+                 with `prescribed = { times, values, bounds }`)",
+            ));
+        }
+        let a = vector(p, "prescribed_targets", np)?;
+        softrod::control::targets::check_prescribed_targets(
+            model,
+            &self.sim.prescribed_names(),
+            "prescribed_targets",
+            a.slice(),
+        )
+        .map_err(to_py)?;
+        Ok(a.slice().to_vec())
+    }
+
+    /// Makes the steppers' copies of the model follow the prescribed
+    /// curves in force on `sim`.
+    pub(crate) fn sync_prescribed(&mut self) -> PyResult<()> {
+        if self.sim.model().n_prescribed() == 0 {
+            return Ok(());
+        }
+        let src = self.sim.model();
+        use softrod::control::targets::copy_prescribed_curves;
+        if let Some(i) = self.inputs.as_mut() {
+            copy_prescribed_curves(src, &mut i.sys.model).map_err(to_py)?;
+        }
+        if let Some(s) = self.stepper.as_mut() {
+            copy_prescribed_curves(src, &mut s.model).map_err(to_py)?;
+        }
+        Ok(())
     }
 
     /// `u` checked against the model's cables.
@@ -344,6 +390,108 @@ impl Simulation {
             })
             .flatten()
             .collect()
+    }
+
+    /// Names of the actuated joint coordinates, in the order of
+    /// `joint_forces` (`"<element>.joint.<c>"`, as in `q_names`).
+    #[getter]
+    fn joint_input_names(&self) -> Vec<String> {
+        self.sim.joint_input_names()
+    }
+
+    /// Number of prescribed joint coordinates (the length of a
+    /// `prescribed_targets` of `step`).
+    #[getter]
+    fn n_prescribed(&self) -> usize {
+        self.sim.model().n_prescribed()
+    }
+
+    /// The target range `(lo, hi)` [rad or m] of each prescribed coordinate
+    /// (`prescribed_names` order) from the scene's
+    /// `joint.prescribed.bounds`, None where the scene gives none.
+    #[getter]
+    fn prescribed_bounds(&self) -> Vec<Option<(f64, f64)>> {
+        self.sim
+            .prescribed_bounds()
+            .into_iter()
+            .map(|b| b.map(|[lo, hi]| (lo, hi)))
+            .collect()
+    }
+
+    /// The targets of the last `step(..., prescribed_targets=...)` in force
+    /// (n_prescribed,) [rad or m], or None while the scene's prescribed
+    /// curves are (before any, and after `reset_prescribed`).
+    #[getter]
+    fn prescribed_targets<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray1<f64>>> {
+        let tr = self.sim.prescribed_transitions();
+        if tr.is_empty() {
+            return None;
+        }
+        let x: Vec<f64> = tr.iter().map(|t| t.x1).collect();
+        Some(vec_out(py, &x))
+    }
+
+    /// The prescribed coordinates' values and rates at time `t` [s]
+    /// under the motion in force (the scene's curves, or the transitions of
+    /// the last `prescribed_targets`): `(x, xdot)`, each (n_prescribed,), in
+    /// rad or m and per s.
+    #[allow(clippy::type_complexity)]
+    fn prescribed_state<'py>(
+        &self,
+        py: Python<'py>,
+        t: f64,
+    ) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>)> {
+        if !t.is_finite() {
+            return Err(input(format!("t must be finite, got {t}")));
+        }
+        let m = self.sim.model();
+        let (x, v): (Vec<f64>, Vec<f64>) = (0..m.n_prescribed())
+            .map(|i| {
+                let (x, v, _) = m.prescribed_curve(i).expect("i < n_prescribed").eval(t);
+                (x, v)
+            })
+            .unzip();
+        Ok((vec_out(py, &x), vec_out(py, &v)))
+    }
+
+    /// Commands the prescribed joints to `targets` (n_prescribed,) over
+    /// `[t, t + dt]` without stepping, as `step(..., prescribed_targets=...)`
+    /// does before it integrates: each coordinate then follows the cubic
+    /// from its position and rate at `t` to its target at rest at `t + dt`
+    /// (poses and runs see it). The batched vector env keeps each copy's
+    /// own Simulation in line with its `BatchStepper` copy this way.
+    fn command_prescribed(&mut self, t: f64, dt: f64, targets: &Bound<'_, PyAny>) -> PyResult<()> {
+        let p = self.prescribed_targets_arg(targets)?;
+        self.sim.command_prescribed(t, dt, &p).map_err(to_py)?;
+        self.sync_prescribed()
+    }
+
+    /// Holds the prescribed joints at `values` (n_prescribed,) [rad or m,
+    /// within the scene's bounds] at rest at every time, until the next
+    /// `step(..., prescribed_targets=...)` or `reset_prescribed()`: statics,
+    /// poses and runs then see the drive there (e.g. a task drawing a
+    /// reachable target: `sim.hold_prescribed(x); sim.statics(...)`).
+    fn hold_prescribed(&mut self, values: &Bound<'_, PyAny>) -> PyResult<()> {
+        let model = self.sim.model();
+        let np = model.n_prescribed();
+        if np == 0 {
+            return Err(input(
+                "values: this simulation has no prescribed joint (a scene joint with \
+                 `prescribed = { times, values, bounds }`)",
+            ));
+        }
+        let a = vector(values, "values", np)?;
+        self.sim.hold_prescribed(a.slice()).map_err(to_py)?;
+        self.sync_prescribed()
+    }
+
+    /// Puts the scene's prescribed curves back in force after
+    /// `step(..., prescribed_targets=...)` commanded others: an episode
+    /// that starts over calls it (the environments' `reset` does), as it
+    /// calls `reset_contact`.
+    fn reset_prescribed(&mut self) -> PyResult<()> {
+        self.sim.reset_prescribed();
+        self.sync_prescribed()
     }
 
     /// A name for every generalized coordinate, in the order of `q`:
@@ -932,7 +1080,10 @@ impl Simulation {
     /// array, one entry per value of the tension table),
     /// `"ELEMENT.prescribed"` (the samples of the prescribed joint of rod or
     /// body ELEMENT, in the shape of its `values`: `(samples,)` for one
-    /// coordinate, `(samples, dof)` for more; open models, G17–G20). `loss`: a dict or a
+    /// coordinate, `(samples, dof)` for more; G17–G20, G28),
+    /// `"ELEMENT.actuator"` (the force values of the actuator on ELEMENT's
+    /// joint, a table shaped as its `values`, a constant as `(dof,)`;
+    /// G29). `loss`: a dict or a
     /// list of dicts — `{"type": "position", "rod": name or index, "s":
     /// arc length (default the tip), "times": (k,), "targets": (k, 3) [m],
     /// "weight": w}` for `½ w ‖p(t) − target‖²`, `{"type": "quadratic",
@@ -1092,7 +1243,21 @@ impl Simulation {
     /// raises `SimulationError`. A loop of steps that starts an episode
     /// from an initial state calls `reset_contact()` first (the
     /// environments' `reset` does).
-    #[pyo3(signature = (state, dt, u = None, *, substeps = None, joint_forces = None))]
+    ///
+    /// `prescribed_targets` (n_prescribed,) [rad or m, finite, within the
+    /// scene's `joint.prescribed.bounds` where given]: the prescribed
+    /// joints' targets for `state.t + dt`. Each prescribed coordinate then
+    /// follows the cubic from its position and rate at `state.t` (under the
+    /// motion in force: the scene's curve, or the previous target's
+    /// transition) to its target, reached at rest at `state.t + dt` and
+    /// held there (C¹ across periods; docs/envs.md, "Actions"). The
+    /// transition stays in force for this simulation's evaluations and
+    /// runs until the next command or `reset_prescribed()`. None: the
+    /// motion in force goes on. Errors name the coordinate
+    /// (`prescribed_names`).
+    #[pyo3(signature = (state, dt, u = None, *, substeps = None, joint_forces = None,
+                        prescribed_targets = None))]
+    #[allow(clippy::too_many_arguments)]
     fn step(
         &mut self,
         py: Python<'_>,
@@ -1101,8 +1266,9 @@ impl Simulation {
         u: Option<&Bound<'_, PyAny>>,
         substeps: Option<usize>,
         joint_forces: Option<&Bound<'_, PyAny>>,
+        prescribed_targets: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<State> {
-        self.step_impl(py, state, dt, u, substeps, joint_forces)
+        self.step_impl(py, state, dt, u, substeps, joint_forces, prescribed_targets)
     }
 
     /// An independent copy (its own buffers), e.g. for another thread.
@@ -1119,8 +1285,9 @@ impl Simulation {
     }
 
     /// Pickling (Ray, multiprocessing): the scene text the simulation was
-    /// built from, its settings, initial state, the tensions `step` last
-    /// held, its duration and warnings — plain values; loading rebuilds the
+    /// built from, its settings, initial state, the tensions and joint
+    /// forces `step` last held, the prescribed-joint transitions in force,
+    /// its duration and warnings — plain values; loading rebuilds the
     /// model by the scene loader, so a loaded copy steps and simulates bit
     /// for bit as the original. A Simulation not built from a scene
     /// raises TypeError.

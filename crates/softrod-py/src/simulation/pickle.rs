@@ -1,6 +1,7 @@
 //! Pickling a `softrod.Simulation` (for Ray, multiprocessing): its state is
 //! the scene text it was built from, its run settings, its initial state,
-//! the cable tensions last held by `step` and the scene's duration and
+//! the cable tensions and joint forces last held by `step`, the
+//! prescribed joints' transitions in force, and the scene's duration and
 //! warnings — plain Python values, so a pickle holds no Rust memory and
 //! loads in any process with the same softrod.
 //!
@@ -49,6 +50,21 @@ impl Simulation {
         d.set_item("q0", q0.as_slice().to_vec())?;
         d.set_item("qdot0", qd0.as_slice().to_vec())?;
         d.set_item("tensions", self.inputs.as_ref().map(|i| i.u.clone()))?;
+        // What the last step held besides the tensions: the joint forces
+        // (None: the actuators' schedules) and the prescribed joints'
+        // transitions (PT1; empty: the scene's curves), as plain numbers
+        // from which the same curves are rebuilt to the bit.
+        d.set_item(
+            "joint_forces",
+            self.inputs.as_ref().and_then(|i| i.joint_forces.clone()),
+        )?;
+        let tr: Vec<[f64; 5]> = self
+            .sim
+            .prescribed_transitions()
+            .iter()
+            .map(|t| [t.t0, t.t1, t.x0, t.v0, t.x1])
+            .collect();
+        d.set_item("prescribed_transitions", tr)?;
         d.set_item("duration", self.duration)?;
         d.set_item("warnings", self.warnings.clone())?;
         Ok(d)
@@ -118,6 +134,23 @@ impl Simulation {
             let nc = me.sim.model().n_cables();
             crate::control::check_tensions(nc, "Simulation state: tensions", &u).map_err(input)?;
             me.inputs()?.u = u;
+        }
+        // Absent from pickles written before these were kept.
+        if let Some(f) = state.get_item("joint_forces")? {
+            if let Some(f) = f.extract::<Option<Vec<f64>>>()? {
+                let names = me.sim.joint_input_names();
+                crate::control::check_joint_forces(&names, "Simulation state: joint_forces", &f)
+                    .map_err(input)?;
+                me.inputs()?.joint_forces = Some(f);
+            }
+        }
+        if let Some(tr) = state.get_item("prescribed_transitions")? {
+            let tr: Vec<[f64; 5]> = tr.extract()?;
+            let tr: Vec<softrod::control::Transition> = tr
+                .into_iter()
+                .map(|[t0, t1, x0, v0, x1]| softrod::control::Transition { t0, t1, x0, v0, x1 })
+                .collect();
+            me.sim.set_prescribed_transitions(&tr).map_err(to_py)?;
         }
         Ok(me)
     }

@@ -139,6 +139,7 @@ impl Simulation {
         }
     }
 
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn step_impl(
         &mut self,
         py: Python<'_>,
@@ -147,12 +148,17 @@ impl Simulation {
         u: Option<&Bound<'_, PyAny>>,
         substeps: Option<usize>,
         joint_forces: Option<&Bound<'_, PyAny>>,
+        prescribed_targets: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<State> {
         if let Some(k) = substeps {
             check_substeps(k).map_err(input)?;
         }
         let joint_forces = match joint_forces {
             Some(f) => Some(self.joint_forces(f)?),
+            None => None,
+        };
+        let targets = match prescribed_targets {
+            Some(p) => Some(self.prescribed_targets_arg(p)?),
             None => None,
         };
         let n = self.n();
@@ -163,10 +169,24 @@ impl Simulation {
         );
         let t = state.t;
         let settings = self.sim.settings().clone();
+        let u = match u {
+            Some(u) => Some(self.tensions(u)?),
+            None => None,
+        };
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(to_py(softrod::Error::InvalidSetting {
+                key: "dt",
+                message: format!("the step length must be positive and finite, got {dt}"),
+            }));
+        }
+        // Every input checked: the command cannot leave a half-made step.
+        if let Some(p) = &targets {
+            self.sim.command_prescribed(t, dt, p).map_err(to_py)?;
+        }
         let (q1, qd1) = match u {
             Some(u) => {
-                let u = self.tensions(u)?;
                 self.inputs()?;
+                self.sync_prescribed()?;
                 let inputs = self.inputs.as_mut().expect("built above");
                 inputs.u = u;
                 inputs.tau_extra = None;
@@ -183,6 +203,7 @@ impl Simulation {
                 if self.stepper.is_none() {
                     self.stepper = Some(Box::new(RodSystem::new(self.sim.model().clone())));
                 }
+                self.sync_prescribed()?;
                 let sys = self.stepper.as_mut().expect("just set");
                 sys.jacobian = settings.stiff_jacobian();
                 sys.data

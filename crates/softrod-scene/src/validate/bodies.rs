@@ -421,12 +421,84 @@ impl Ctx<'_> {
         };
         if let Some(key) = t
             .keys()
-            .find(|key| !["times", "values", "sine"].contains(&key.as_str()))
+            .find(|key| !["times", "values", "sine", "bounds"].contains(&key.as_str()))
         {
             return Err(self
                 .r
-                .unknown_key(&format!("{path}.{key}"), "times, values or sine"));
+                .unknown_key(&format!("{path}.{key}"), "times, values, sine or bounds"));
         }
+        let motion = self.prescribed_curves(path, t, k)?;
+        match t.get("bounds") {
+            None => Ok(motion),
+            Some(b) => {
+                Ok(motion.with_bounds(self.prescribed_bounds(&format!("{path}.bounds"), b, k)?))
+            }
+        }
+    }
+
+    /// `bounds = [lo, hi]` (every coordinate) or `[[lo, hi], …]` (one pair
+    /// per coordinate): the range of the targets the learning environments
+    /// command (docs/envs.md), finite with `lo < hi`.
+    fn prescribed_bounds(&self, path: &str, v: &toml::Value, k: usize) -> Result<Vec<[f64; 2]>> {
+        let toml::Value::Array(items) = v else {
+            return Err(self.r.wrong_type(
+                path,
+                format!(
+                    "expected [lo, hi] or one [lo, hi] per coordinate, found {}",
+                    v.type_str()
+                ),
+            ));
+        };
+        let pairs: Vec<Vec<f64>> = if matches!(items.first(), Some(toml::Value::Array(_))) {
+            if items.len() != k {
+                return Err(self.r.inconsistent(
+                    path,
+                    format!("{} pairs, but the joint has {k} coordinates", items.len()),
+                ));
+            }
+            items
+                .iter()
+                .enumerate()
+                .map(|(i, x)| self.numbers(&format!("{path}[{i}]"), x))
+                .collect::<Result<_>>()?
+        } else {
+            vec![self.numbers(path, v)?; k]
+        };
+        let mut out = Vec::with_capacity(k);
+        for (i, pair) in pairs.iter().enumerate() {
+            let at = if matches!(items.first(), Some(toml::Value::Array(_))) {
+                format!("{path}[{i}]")
+            } else {
+                path.to_string()
+            };
+            let [lo, hi] = pair[..] else {
+                return Err(self.r.invalid(
+                    &at,
+                    format!("expected two numbers [lo, hi], got {}", pair.len()),
+                ));
+            };
+            if !(lo.is_finite() && hi.is_finite()) {
+                return Err(self
+                    .r
+                    .invalid(&at, format!("[{lo}, {hi}]: bounds must be finite")));
+            }
+            if lo >= hi {
+                return Err(self
+                    .r
+                    .invalid(&at, format!("lo = {lo} must be below hi = {hi}")));
+            }
+            out.push([lo, hi]);
+        }
+        Ok(out)
+    }
+
+    /// The curves of `prescribed` (see [`Self::prescribed`]).
+    fn prescribed_curves(
+        &self,
+        path: &str,
+        t: &toml::map::Map<String, toml::Value>,
+        k: usize,
+    ) -> Result<Prescribed> {
         if let Some(sine) = t.get("sine") {
             let sp = format!("{path}.sine");
             if t.contains_key("times") || t.contains_key("values") {

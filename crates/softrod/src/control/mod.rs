@@ -26,8 +26,10 @@
 
 mod inverse;
 mod qp;
+pub mod targets;
 
 pub use inverse::{
     Actuation, ActuationOptions, Bound, DEFAULT_EFFORT_WEIGHT, Target, TargetResidual, UnknownLoad,
     solve_actuation,
 };
+pub use targets::Transition;

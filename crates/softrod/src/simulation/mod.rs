@@ -58,6 +58,12 @@ pub struct Simulation {
     /// The scene's `[[load]]`s with `unknown = true` (IS13): what
     /// [`Self::scene_unknown_loads`] gives the inverse statics.
     unknown_loads: Vec<crate::control::UnknownLoad>,
+    /// The scene's prescribed curves, saved when a target is first
+    /// commanded ([`Self::command_prescribed`]); `None` before.
+    scene_curves: Option<Vec<softrod_dynamics::Curve>>,
+    /// The transitions in force (PT1), one per prescribed coordinate;
+    /// empty: the scene's curves.
+    transitions: Vec<crate::control::Transition>,
 }
 
 impl Simulation {
@@ -73,6 +79,8 @@ impl Simulation {
             limits: Limits::default(),
             time: 0.0,
             unknown_loads: Vec::new(),
+            scene_curves: None,
+            transitions: Vec::new(),
         }
     }
 
@@ -278,6 +286,146 @@ impl Simulation {
         self.system.data.joint_forces()
     }
 
+    /// Names of the actuated joint coordinates (the entries of
+    /// [`Self::set_joint_forces`]' `f`, `Model::n_joint_inputs` order), as
+    /// in [`Self::q_names`]: `"ELEMENT.joint.C"`.
+    pub fn joint_input_names(&self) -> Vec<String> {
+        self.model()
+            .elements()
+            .iter()
+            .filter(|e| e.attachment.joint.actuated_dof() > 0)
+            .flat_map(joint_names)
+            .collect()
+    }
+
+    /// The target bounds `[lo, hi]` of each prescribed coordinate (rad or
+    /// m; the scene's `joint.prescribed.bounds`), `None` where the scene
+    /// gives none; [`Self::prescribed_names`] order.
+    pub fn prescribed_bounds(&self) -> Vec<Option<[f64; 2]>> {
+        let m = self.model();
+        (0..m.n_prescribed())
+            .map(|i| m.prescribed_bounds(i))
+            .collect()
+    }
+
+    /// Commands the prescribed joints to `targets` (one per prescribed
+    /// coordinate, [`Self::prescribed_names`] order, rad or m) over the
+    /// period `[t, t + dt]`: each coordinate then follows the cubic
+    /// transition from its position and rate at `t` to its target, reached
+    /// at rest at `t + dt` and held after (docs/envs.md;
+    /// [`crate::control::targets`] PT1). Every evaluation and run of this
+    /// simulation then uses these curves, until the next command or
+    /// [`Self::reset_prescribed`].
+    ///
+    /// Errors (input): no prescribed joint, the wrong count, a target not
+    /// finite or outside its joint's `prescribed.bounds` (named by
+    /// coordinate), `dt ≤ 0`.
+    pub fn command_prescribed(&mut self, t: f64, dt: f64, targets: &[f64]) -> Result<()> {
+        use crate::control::targets;
+        let names = self.prescribed_names();
+        targets::check_prescribed_targets(self.model(), &names, "prescribed_targets", targets)?;
+        if self.scene_curves.is_none() {
+            self.scene_curves = Some(self.scene_prescribed_curves());
+        }
+        let mut out = std::mem::take(&mut self.transitions);
+        let r = targets::command_prescribed_targets(
+            &mut self.system.model,
+            &names,
+            t,
+            dt,
+            targets,
+            &mut out,
+        );
+        self.transitions = out;
+        r
+    }
+
+    /// Holds the prescribed joints at `values` (one per prescribed
+    /// coordinate, checked as [`Self::command_prescribed`]'s targets) at
+    /// rest at every time, until the next command or
+    /// [`Self::reset_prescribed`]: for statics and poses with the drive
+    /// elsewhere than the scene puts it (a task's target draw). Recorded
+    /// as transitions from and to the value, at rest.
+    pub fn hold_prescribed(&mut self, values: &[f64]) -> Result<()> {
+        let names = self.prescribed_names();
+        crate::control::targets::check_prescribed_targets(self.model(), &names, "values", values)?;
+        let held: Vec<crate::control::Transition> = values
+            .iter()
+            .map(|&x| crate::control::Transition {
+                t0: 0.0,
+                t1: 1.0,
+                x0: x,
+                v0: 0.0,
+                x1: x,
+            })
+            .collect();
+        self.set_prescribed_transitions(&held)
+    }
+
+    /// The transitions in force (one per prescribed coordinate), empty when
+    /// the scene's curves are: what [`Self::set_prescribed_transitions`]
+    /// puts back (a pickle keeps them).
+    pub fn prescribed_transitions(&self) -> &[crate::control::Transition] {
+        &self.transitions
+    }
+
+    /// Puts `transitions` (one per prescribed coordinate, from
+    /// [`Self::prescribed_transitions`]) in force; empty: the scene's
+    /// curves ([`Self::reset_prescribed`]).
+    pub fn set_prescribed_transitions(
+        &mut self,
+        transitions: &[crate::control::Transition],
+    ) -> Result<()> {
+        use crate::control::targets;
+        let np = self.model().n_prescribed();
+        if transitions.is_empty() {
+            self.reset_prescribed();
+            return Ok(());
+        }
+        if transitions.len() != np {
+            return Err(Error::SizeMismatch {
+                what: "prescribed transitions",
+                got: transitions.len(),
+                expected: np,
+            });
+        }
+        if self.scene_curves.is_none() {
+            self.scene_curves = Some(self.scene_prescribed_curves());
+        }
+        let names = self.prescribed_names();
+        targets::install(&mut self.system.model, &names, transitions)?;
+        self.transitions = transitions.to_vec();
+        Ok(())
+    }
+
+    /// Puts the scene's prescribed curves back in force (after
+    /// [`Self::command_prescribed`]): an episode that starts over does this.
+    pub fn reset_prescribed(&mut self) {
+        if let Some(curves) = self.scene_curves.take() {
+            for (i, c) in curves.into_iter().enumerate() {
+                self.system
+                    .model
+                    .set_prescribed_curve(i, c)
+                    .expect("the scene's own curves");
+            }
+        }
+        self.transitions.clear();
+    }
+
+    /// The scene's prescribed curves (those in force before any
+    /// [`Self::command_prescribed`]), one per prescribed coordinate.
+    pub fn scene_prescribed_curves(&self) -> Vec<softrod_dynamics::Curve> {
+        match &self.scene_curves {
+            Some(c) => c.clone(),
+            None => {
+                let m = self.model();
+                (0..m.n_prescribed())
+                    .map(|i| m.prescribed_curve(i).expect("i < n_prescribed").clone())
+                    .collect()
+            }
+        }
+    }
+
     /// The point forces the scene marks unknown (`[[load]] unknown = true`,
     /// docs/theory-control.md IS13), with their bounds `|f_k| ≤ max_force`,
     /// in file order: what `softrod inverse` solves for beside the tensions
@@ -309,7 +457,7 @@ impl Simulation {
 }
 
 /// The names of a joint's coordinates (see [`Simulation::q_names`]).
-fn joint_names(e: &softrod_dynamics::ElementInfo) -> Vec<String> {
+pub(crate) fn joint_names(e: &softrod_dynamics::ElementInfo) -> Vec<String> {
     use softrod_dynamics::JointKind;
     let parts: &[&str] = match e.attachment.joint.kind {
         JointKind::Fixed => &[],

@@ -165,6 +165,23 @@ impl<'a, S: SecondOrderSystem> SecondOrderProblem<'a, S> {
         self.sys.relinearize_in_newton()
     }
 
+    /// [`SecondOrderSystem::step_event_fraction`].
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn step_event_fraction(
+        &mut self,
+        h: f64,
+        t0: f64,
+        q0: &DVector<f64>,
+        qd0: &DVector<f64>,
+        t1: f64,
+        q1: &DVector<f64>,
+        qd1: &DVector<f64>,
+    ) -> Result<Option<f64>, SystemError> {
+        self.sys
+            .step_event_fraction(h, t0, q0, qd0, t1, q1, qd1)
+            .map_err(|e| Box::new(e) as SystemError)
+    }
+
     /// What the last Jacobian update produced.
     pub(crate) fn kind(&self) -> JacKind {
         self.kind
@@ -312,11 +329,11 @@ impl<'a, S: SecondOrderSystem> SecondOrderProblem<'a, S> {
         structured: bool,
     ) -> Result<Option<usize>, SystemError> {
         if structured && self.structured_available(t, q, qd)? {
-            if self.m == 0 {
-                self.sys
-                    .linearize_shifted(t, q, qd)
-                    .map_err(|e| Box::new(e) as SystemError)?;
-            }
+            // The contact's linearization, or a closed model's multipliers
+            // for the KKT matrix's geometric terms (CD11).
+            self.sys
+                .linearize_shifted(t, q, qd)
+                .map_err(|e| Box::new(e) as SystemError)?;
             self.kind = JacKind::Structured;
             self.jac_t = t;
             self.jac_q.copy_from(q);

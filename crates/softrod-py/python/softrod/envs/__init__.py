@@ -17,7 +17,10 @@ Importing this module registers:
   with a post in its way, in contact (:func:`reach_around_env`,
   :class:`ReachAroundTask`);
 - ``softrod/Push-v0``: the two-cable arm pushing a box along a table to a
-  random goal, in contact (:func:`push_env`, :class:`PushTask`).
+  random goal, in contact (:func:`push_env`, :class:`PushTask`);
+- ``softrod/SwingReach-v0``: the two-cable arm on a prescribed revolute
+  base whose angle target is part of the action (:func:`swing_reach_env`,
+  :class:`ReachTask`).
 
 Both accept the keywords of :class:`RodEnv` through ``gymnasium.make``
 (``scene=``, ``control_period=``, ``max_tension=``, ``observe=``, …), and
@@ -38,6 +41,7 @@ from ._core import (
     DEFAULT_Q_LIMIT,
     OBSERVATION_KEYS,
     REACH_SCENE,
+    SWING_REACH_SCENE,
     TASK_RTOL,
     TRACK_SCENE,
     ReachTask,
@@ -45,6 +49,7 @@ from ._core import (
     Task,
     TrackTask,
     reach_env,
+    swing_reach_env,
     track_env,
 )
 from ._contact import (
@@ -78,6 +83,14 @@ def reach_around_vector_env(
     return _vector(reach_around_env, num_envs, threads, autoreset_mode, kwargs)
 
 
+def swing_reach_vector_env(
+    num_envs: int, *, threads: int | None = None, autoreset_mode=None, **kwargs
+):
+    """A :class:`BatchedVectorEnv` of ``num_envs`` softrod/SwingReach-v0
+    copies (keywords of :func:`swing_reach_env`)."""
+    return _vector(swing_reach_env, num_envs, threads, autoreset_mode, kwargs)
+
+
 def push_vector_env(num_envs: int, *, threads: int | None = None, autoreset_mode=None, **kwargs):
     """A :class:`BatchedVectorEnv` of ``num_envs`` softrod/Push-v0 copies
     (keywords of :func:`push_env`)."""
@@ -90,6 +103,7 @@ TASKS = {
     "track": track_env,
     "reach_around": reach_around_env,
     "push": push_env,
+    "swing_reach": swing_reach_env,
 }
 
 
@@ -98,7 +112,7 @@ def make_env_from_config(config) -> RodEnv:
     env factory (``ray.tune.registry.register_env(name, lambda c:
     softrod.envs.make_env_from_config(c))``): ``config["task"]`` names the
     task (``"reach"`` — the default —, ``"track"``, ``"reach_around"``,
-    ``"push"``); the other entries are the keywords of its env function
+    ``"push"``, ``"swing_reach"``); the other entries are the keywords of its env function
     (:func:`reach_env`, …). An unknown task raises ``softrod.InputError``."""
     kwargs = dict(config or {})
     task = kwargs.pop("task", "reach")
@@ -124,6 +138,11 @@ def _register() -> None:
             "softrod.envs:reach_around_vector_env",
         ),
         ("softrod/Push-v0", "softrod.envs:push_env", "softrod.envs:push_vector_env"),
+        (
+            "softrod/SwingReach-v0",
+            "softrod.envs:swing_reach_env",
+            "softrod.envs:swing_reach_vector_env",
+        ),
     ):
         if env_id not in gymnasium.registry:
             # No max_episode_steps: the env truncates by itself (episode_steps),
@@ -140,6 +159,7 @@ __all__ = [
     "PUSH_SCENE",
     "REACH_AROUND_SCENE",
     "REACH_SCENE",
+    "SWING_REACH_SCENE",
     "TASK_RTOL",
     "TRACK_SCENE",
     "TASKS",
@@ -157,6 +177,8 @@ __all__ = [
     "reach_around_vector_env",
     "reach_env",
     "reach_vector_env",
+    "swing_reach_env",
+    "swing_reach_vector_env",
     "track_env",
     "track_vector_env",
 ]

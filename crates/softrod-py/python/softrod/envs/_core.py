@@ -51,6 +51,7 @@ OBSERVATION_KEYS = (
     "tensions",
     "joint_forces",
     "body_positions",
+    "prescribed",
 )
 
 
@@ -95,6 +96,24 @@ def _bounds(
             f"for cable {bad[0]}"
         )
     return b
+
+
+def _target_bounds(sim: softrod.Simulation) -> tuple[np.ndarray, np.ndarray]:
+    """The target range ``[lo, hi]`` (rad or m) of each prescribed joint
+    coordinate, from the scene's ``joint.prescribed.bounds``; a coordinate
+    without one is refused (a target's action space needs a box)."""
+    bounds = sim.prescribed_bounds
+    names = sim.prescribed_names
+    missing = [i for i, b in enumerate(bounds) if b is None]
+    if missing:
+        raise InputError(
+            f"prescribed joint coordinate {names[missing[0]]!r} has no target bounds: give its "
+            "joint `prescribed = { ..., bounds = [lo, hi] }` in the scene (joint.prescribed.bounds; "
+            "the action space of a prescribed-joint target is [lo, hi])"
+        )
+    lo = np.array([b[0] for b in bounds], dtype=np.float64)
+    hi = np.array([b[1] for b in bounds], dtype=np.float64)
+    return lo, hi
 
 
 def _force_bounds(
@@ -150,11 +169,11 @@ class Task:
 
     def bind(self, env: RodEnv) -> None:
         """Called once by the env that owns the task."""
-        if env.n_cables + env.n_joint_inputs == 0:
+        if env.n_cables + env.n_joint_inputs + env.n_prescribed == 0:
             raise InputError(
                 f"{type(self).__name__} needs a scene with actuators (the actions are cable "
-                "tensions and actuated joints' forces); this scene has no cables and no joint "
-                "actuators"
+                "tensions, actuated joints' forces and prescribed joints' targets); this scene "
+                "has no cables, no joint actuators and no prescribed joints"
             )
         self.env = env
 
@@ -168,12 +187,13 @@ class Task:
 
     def reward(self, t: float, tip: np.ndarray, u: np.ndarray) -> tuple[float, dict[str, Any]]:
         """The reward of the state reached at ``t`` with the tip at ``tip``
-        under the action ``u`` (tensions, then joint forces), and what
-        ``info`` reports of it."""
+        under the action ``u`` (its effort part: tensions, then joint
+        forces — a prescribed joint's target is a position, not an effort),
+        and what ``info`` reports of it."""
         pos, _ = self.target(t)
         env = self.env
         distance = float(np.linalg.norm(tip - pos))
-        effort = float(np.mean((u / env.action_scale) ** 2))
+        effort = float(np.mean((u / env.action_scale) ** 2)) if u.size else 0.0
         reward = -distance / env.length - self.effort_weight * effort
         return reward, {
             "distance": distance,
@@ -192,7 +212,10 @@ class ReachTask(Task):
     antagonistic pair the targets spread evenly over both sides. With
     actuated joints the drawn input is one of all the action's entries, a
     joint force uniform in ``[-max_force, max_force]``
-    (``target_joint_forces``). Reward
+    (``target_joint_forces``). With prescribed joints (targets in the
+    action) their targets are drawn too, uniformly in their bounds
+    (``target_prescribed``), and the statics holds the joints there
+    (``Simulation.hold_prescribed``). Reward
     per step, with ``d`` the tip–target distance [m], ``L`` the rod's
     length and ``ū`` the action over its bound (``u / max_tension``,
     ``f / max_force``):
@@ -215,19 +238,27 @@ class ReachTask(Task):
         nc, nj = env.n_cables, env.n_joint_inputs
         for _ in range(10):
             u, f = np.zeros(nc), np.zeros(nj)
-            k = int(rng.integers(nc + nj))
-            if k < nc:
+            k = int(rng.integers(nc + nj)) if nc + nj else -1
+            if 0 <= k < nc:
                 u[k] = rng.uniform(0.0, env.max_tension[k])
-            else:
+            elif k >= nc:
                 f[k - nc] = rng.uniform(-env.max_force[k - nc], env.max_force[k - nc])
+            p = None
+            if env.n_prescribed:
+                p = rng.uniform(env.target_low, env.target_high)
+                env.sim.hold_prescribed(p)
             try:
                 st = env.sim.statics(tensions=u, joint_forces=f if nj else None)
             except SimulationError as e:  # rare: draw again
                 last = e
                 continue
+            finally:
+                if p is not None:
+                    env.sim.reset_prescribed()
             self._target = np.array(st.tips[env.rod_name][:3, 3], dtype=np.float64)
             self.target_tensions = u
             self.target_joint_forces = f
+            self.target_prescribed = p
             return
         raise SimulationError(f"no reachable target found in 10 draws: {last}")
 
@@ -329,7 +360,15 @@ class RodEnv(gymnasium.Env):
     in model order, ``Simulation.n_joint_inputs``) in ``[-max_force,
     max_force]``, the bound from ``max_force`` (a number or one per
     coordinate), else the scene's ``actuator = { max_force }``; a
-    coordinate with neither raises ``softrod.InputError``.
+    coordinate with neither raises ``softrod.InputError``. With prescribed
+    joints the action ends with one target ``p`` [rad or m] per prescribed
+    coordinate (``Simulation.prescribed_names``) in the scene's
+    ``joint.prescribed.bounds`` (required: a scene without them raises
+    ``softrod.InputError`` naming the key); each period the joint follows
+    the cubic from its position and rate to ``p``, reached at rest at the
+    period's end (``Simulation.step(..., prescribed_targets=p)``,
+    docs/envs.md). Targets are not efforts (the effort term weighs ``u``
+    and ``f``).
     ``action_policy``: what an action
     outside the box does — ``"clip"`` (default) clips it to the box and
     sets ``info["action_clipped"]``, ``"reject"`` raises
@@ -361,7 +400,9 @@ class RodEnv(gymnasium.Env):
     frame's rotation matrix row by row), ``"target"`` (3, m),
     ``"target_velocity"`` (3, m/s), ``"tensions"`` (n_cables, N: the last
     applied tensions), ``"joint_forces"`` (n_joint_inputs, N or N·m: the
-    last applied joint forces), ``"body_positions"`` (3 per rigid body of the scene,
+    last applied joint forces), ``"prescribed"`` (n_prescribed, rad or m:
+    the prescribed joints' values now; added to the default observation
+    when the scene has prescribed joints), ``"body_positions"`` (3 per rigid body of the scene,
     m, world frame: the origins of their frames, in the scene's order).
     ``observation_slices`` maps each key to its slice.
 
@@ -445,14 +486,27 @@ class RodEnv(gymnasium.Env):
         )
         #: The action's bounds: tensions in [0, max_tension], joint forces
         #: in [-max_force, max_force]; ``action_scale`` normalizes effort.
-        self.action_low = np.concatenate([np.zeros(self.n_cables), -self.max_force])
-        self.action_high = np.concatenate([self.max_tension, self.max_force])
-        self.action_scale = self.action_high.copy()
+        #: Prescribed joint coordinates whose targets end the action, with
+        #: their ranges (the scene's ``joint.prescribed.bounds``, required).
+        self.n_prescribed = self.sim.n_prescribed
+        if self.n_prescribed:
+            self.target_low, self.target_high = _target_bounds(self.sim)
+        else:
+            self.target_low = self.target_high = np.zeros(0)
+        #: Entries of the action that are efforts (tensions, joint forces).
+        self.n_effort = self.n_cables + self.n_joint_inputs
+        self.action_low = np.concatenate(
+            [np.zeros(self.n_cables), -self.max_force, self.target_low]
+        )
+        self.action_high = np.concatenate([self.max_tension, self.max_force, self.target_high])
+        self.action_scale = self.action_high[: self.n_effort].copy()
 
         # A copy: a task holds its episode's draw, so envs must not share one.
         self.task = copy.deepcopy(task) if task is not None else ReachTask()
         self.task.bind(self)
         keys = tuple(observe) if observe is not None else self.task.default_observation
+        if observe is None and self.n_prescribed and "prescribed" not in keys:
+            keys = keys + ("prescribed",)
         unknown = [k for k in keys if k not in OBSERVATION_KEYS]
         if unknown or not keys:
             raise InputError(
@@ -471,6 +525,7 @@ class RodEnv(gymnasium.Env):
             "tensions": self.n_cables,
             "joint_forces": self.n_joint_inputs,
             "body_positions": 3 * len(self.sim.body_names),
+            "prescribed": self.n_prescribed,
         }
         lo, hi, self.observation_slices, k = [], [], {}, 0
         for key in keys:
@@ -497,6 +552,7 @@ class RodEnv(gymnasium.Env):
         self.q, self.qdot = self.q0.copy(), self.qdot0.copy()
         self.u = np.zeros(self.n_cables)
         self.f = np.zeros(self.n_joint_inputs)
+        self.p = self._prescribed_now()
 
     # -- state --------------------------------------------------------------
 
@@ -504,6 +560,12 @@ class RodEnv(gymnasium.Env):
     def t(self) -> float:
         """The simulation time [s] of the current state (steps × period)."""
         return self._steps * self.control_period
+
+    def _prescribed_now(self) -> np.ndarray:
+        """The prescribed joints' values at the current time [rad or m]."""
+        if not self.n_prescribed:
+            return np.zeros(0)
+        return np.asarray(self.sim.prescribed_state(self.t)[0], dtype=np.float64)
 
     def _observation(self) -> np.ndarray:
         t = self.t
@@ -521,6 +583,8 @@ class RodEnv(gymnasium.Env):
             "tensions": self.u,
             "joint_forces": self.f,
         }
+        if "prescribed" in self.observe:
+            parts["prescribed"] = self._prescribed_now()
         if "body_positions" in self.observe:
             poses = self.sim.body_poses(self.q, t=t)
             parts["body_positions"] = poses[:, :3, 3].reshape(-1)
@@ -539,6 +603,9 @@ class RodEnv(gymnasium.Env):
             self.qdot = self.qdot + rng.normal(0.0, self.initial_noise, self.n_dof)
         self.u = np.zeros(self.n_cables)
         self.f = np.zeros(self.n_joint_inputs)
+        # The drive follows the scene's curve again until the first action.
+        self.sim.reset_prescribed()
+        self.p = self._prescribed_now()
         self.task.reset(rng)
         # An episode starts with no friction history (after the task's
         # statics, which commits its own contact state).
@@ -548,7 +615,8 @@ class RodEnv(gymnasium.Env):
         return obs, info
 
     def _action(self) -> np.ndarray:
-        """The last applied action: tensions, then joint forces."""
+        """The effort part of the last applied action: tensions, then joint
+        forces (what a task's effort term weighs)."""
         return np.concatenate([self.u, self.f]) if self.n_joint_inputs else self.u
 
     def _prepare(self, action: Any) -> tuple[np.ndarray, bool]:
@@ -557,15 +625,22 @@ class RodEnv(gymnasium.Env):
         bad shape, a non-finite entry or (policy "reject") an action
         outside the box."""
         a = np.asarray(action, dtype=np.float64)
-        nc, na = self.n_cables, self.n_cables + self.n_joint_inputs
+        nc, ne = self.n_cables, self.n_effort
+        na = ne + self.n_prescribed
         if a.shape != (na,):
             what = "one tension per cable"
             if self.n_joint_inputs:
                 what += ", then one force per actuated joint coordinate"
+            if self.n_prescribed:
+                what += ", then one target per prescribed joint coordinate"
             raise InputError(f"action must have shape ({na},) ({what}), got {a.shape}")
         if not np.all(np.isfinite(a)):
             i = int(np.flatnonzero(~np.isfinite(a))[0])
-            what = "cable tensions" if i < nc else "joint forces"
+            what = (
+                "cable tensions" if i < nc
+                else "joint forces" if i < ne
+                else f"prescribed-joint targets ({self.sim.prescribed_names[i - ne]})"
+            )
             raise InputError(f"action[{i}] = {a[i]}: {what} must be finite")
         lo, hi = self.action_low, self.action_high
         inside = bool(np.all((a >= lo) & (a <= hi)))
@@ -573,7 +648,10 @@ class RodEnv(gymnasium.Env):
             return a.copy(), False
         if self.action_policy == "reject":
             i = int(np.flatnonzero((a < lo) | (a > hi))[0])
-            unit = "N" if i < nc else "N or N·m"
+            unit = (
+                "N" if i < nc else "N or N·m" if i < ne
+                else f"rad or m, the target of {self.sim.prescribed_names[i - ne]}"
+            )
             raise InputError(
                 f"action[{i}] = {a[i]} is outside [{lo[i]}, {hi[i]}] {unit} "
                 '(action_policy="reject")'
@@ -584,11 +662,13 @@ class RodEnv(gymnasium.Env):
         """One control period under the action ``a``: the new (q, q̇), or
         the failure."""
         state = softrod.State(self.t, self.q, self.qdot)
-        nc = self.n_cables
-        f = a[nc:] if self.n_joint_inputs else None
+        nc, ne = self.n_cables, self.n_effort
+        f = a[nc:ne] if self.n_joint_inputs else None
+        p = a[ne:] if self.n_prescribed else None
         try:
             s = self.sim.step(
-                state, self.control_period, a[:nc], substeps=self.substeps, joint_forces=f
+                state, self.control_period, a[:nc], substeps=self.substeps, joint_forces=f,
+                prescribed_targets=p,
             )
         except SimulationError as e:
             return self.q, self.qdot, str(e)
@@ -612,12 +692,13 @@ class RodEnv(gymnasium.Env):
             info.update(more)
             info["termination"] = f"diverged: {error}"
             return obs, reward, True, False, info
-        nc = self.n_cables
+        nc, ne = self.n_cables, self.n_effort
         self.q, self.qdot = np.array(q), np.array(qdot)
-        self.u, self.f = (a[:nc], a[nc:]) if self.n_joint_inputs else (a, self.f)
+        self.u, self.f = a[:nc], a[nc:ne]
+        self.p = a[ne:]
         self._steps += 1
         obs = self._observation()
-        reward, more = self.task.reward(self.t, self._tip, a)
+        reward, more = self.task.reward(self.t, self._tip, a[:ne])
         info.update(more)
         truncated = self._steps >= self.episode_steps
         return obs, reward, False, truncated, info
@@ -636,6 +717,9 @@ def _scene(name: str) -> str:
 REACH_SCENE = _scene("reach_arm.toml")
 #: The scene file of softrod/Track-v0 (four cables, 3-D, 15 DoF).
 TRACK_SCENE = _scene("track_arm.toml")
+#: The scene file of softrod/SwingReach-v0 (two cables and a prescribed
+#: revolute base, 18 DoF + 1 prescribed coordinate).
+SWING_REACH_SCENE = _scene("swing_reach_arm.toml")
 
 
 def reach_env(scene=None, *, task: ReachTask | None = None, **kwargs) -> RodEnv:
@@ -658,3 +742,15 @@ def track_env(scene=None, *, task: TrackTask | None = None, **kwargs) -> RodEnv:
     kwargs.setdefault("episode_steps", 200)
     kwargs.setdefault("rtol", TASK_RTOL)
     return RodEnv(scene or TRACK_SCENE, task or TrackTask(**task_kw), **kwargs)
+
+
+def swing_reach_env(scene=None, *, task: ReachTask | None = None, **kwargs) -> RodEnv:
+    """softrod/SwingReach-v0: the Reach arm on a driven base
+    (``SWING_REACH_SCENE``): the action is the two cables' tensions [N]
+    and the target [rad] of the prescribed revolute joint at the clamp
+    (bounds [-0.3, 0.3] rad, from the scene), which the joint reaches at
+    rest at each period's end (docs/envs.md). Targets are drawn as Reach's
+    with the base angle drawn too (reachable by a constant action); reward
+    as Reach (the base angle is not an effort). 20 Hz, 100 steps;
+    keywords as :func:`reach_env`."""
+    return reach_env(scene or SWING_REACH_SCENE, task=task, **kwargs)

@@ -108,7 +108,7 @@ class BatchedVectorEnv(VectorEnv):
         for i, (env, s) in enumerate(zip(self.envs, seeds)):
             if mask[i]:
                 self._obs[i], info = env.reset(seed=s, options=options or None)
-                self.stepper.reset_contact(i)
+                self._restart(i)
                 infos = self._add_info(infos, info, i)
         self._autoreset[mask] = False
         return self._obs.copy(), infos
@@ -126,19 +126,30 @@ class BatchedVectorEnv(VectorEnv):
             env._prepare(a) if active[i] else None
             for i, (env, a) in enumerate(zip(self.envs, actions))
         ]
-        nc, nj = self.envs[0].n_cables, self.envs[0].n_joint_inputs
-        a = np.zeros((n, nc + nj))
+        e0 = self.envs[0]
+        nc, nj, ne, npr = e0.n_cables, e0.n_joint_inputs, e0.n_effort, e0.n_prescribed
+        a = np.zeros((n, ne + npr))
         for i, p in enumerate(prepared):
             if p is not None:
                 a[i] = p[0]
         t = np.array([e.t for e in self.envs])
         q = np.array([e.q for e in self.envs])
         qd = np.array([e.qdot for e in self.envs])
+        if npr:
+            # An inactive copy's row is never read; keep it inside the box.
+            a[~active, ne:] = e0.target_low
         q1, qd1, errors = self.stepper.step(
             t, q, qd, np.ascontiguousarray(a[:, :nc]), self.envs[0].control_period,
             [bool(x) for x in active], substeps=self.envs[0].substeps,
-            joint_forces=np.ascontiguousarray(a[:, nc:]) if nj else None,
+            joint_forces=np.ascontiguousarray(a[:, nc:ne]) if nj else None,
+            prescribed_targets=np.ascontiguousarray(a[:, ne:]) if npr else None,
         )
+        if npr:
+            # Each env's own Simulation (its observations' poses) follows the
+            # drive its stepper copy was commanded, as Simulation.step does.
+            for i, env in enumerate(self.envs):
+                if prepared[i] is not None:
+                    env.sim.command_prescribed(t[i], env.control_period, a[i, ne:])
         rewards = np.zeros(n)
         terms = np.zeros(n, dtype=np.bool_)
         truncs = np.zeros(n, dtype=np.bool_)
@@ -147,7 +158,7 @@ class BatchedVectorEnv(VectorEnv):
             p = prepared[i]
             if p is None:  # NEXT_STEP: this copy's episode ended last step
                 self._obs[i], info = env.reset()
-                self.stepper.reset_contact(i)
+                self._restart(i)
             else:
                 self._obs[i], rewards[i], terms[i], truncs[i], info = env._finish(
                     p[0], p[1], q1[i], qd1[i], errors[i]
@@ -157,10 +168,17 @@ class BatchedVectorEnv(VectorEnv):
                         infos, {"final_obs": self._obs[i].copy(), "final_info": info}, i
                     )
                     self._obs[i], info = env.reset()
-                    self.stepper.reset_contact(i)
+                    self._restart(i)
             infos = self._add_info(infos, info, i)
         self._autoreset = terms | truncs
         return self._obs.copy(), rewards, terms, truncs, infos
+
+    def _restart(self, i: int) -> None:
+        """Copy i's episode starts over: no friction history, the scene's
+        prescribed curves (as ``RodEnv.reset`` does to its Simulation)."""
+        self.stepper.reset_contact(i)
+        if self.envs[i].n_prescribed:
+            self.stepper.reset_prescribed(i)
 
     def close_extras(self, **kwargs):
         for e in self.envs:

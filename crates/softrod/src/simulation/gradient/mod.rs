@@ -4,6 +4,7 @@
 //! (`softrod_integrate::adjoint_second_order`) runs them backwards
 //! (docs/theory-control.md G1–G9).
 
+mod actuator;
 mod params;
 mod prescribed;
 #[cfg(test)]
@@ -184,7 +185,10 @@ impl Simulation {
     /// `"ELEMENT.prescribed"` (the samples of the spline that prescribes
     /// the joint of rod or body `ELEMENT` \[rad or m\]: one entry per
     /// sample and coordinate, sample-major — the order of the scene's
-    /// `values` rows; G17–G20; open models only).
+    /// `values` rows; G17–G20, closed models G28), `"ELEMENT.actuator"` (the
+    /// force values of the actuator on the joint of `ELEMENT` \[N or N·m\]:
+    /// one entry per table row and coordinate, row-major, or per
+    /// coordinate for a constant; G29).
     ///
     /// The gradient is the discrete adjoint of the run's integrator: exact
     /// for the computed trajectory (its accepted step sequence held fixed)
@@ -197,7 +201,7 @@ impl Simulation {
     /// Errors ([`Error::Gradient`], naming the key): an integrator without
     /// an adjoint (supported: esdirk, esdirk5, radau5), a model with contact,
     /// `ELEMENT.prescribed` on a joint that is not prescribed, or prescribed
-    /// by a sinusoid, or on a closed model,
+    /// by a sinusoid,
     /// a parameter or loss naming nothing in the model, a time outside the
     /// run, non-finite or negative weights, non-finite targets, a custom
     /// loss that fails or returns the wrong lengths or NaN.

@@ -27,11 +27,13 @@
 use nalgebra::{DMatrix, DVector, Matrix6};
 use softrod_dynamics::{
     ClosedDerivatives, Data, DynamicsError, Model, closed_force_response,
+    closed_prescribed_derivatives, closed_row_response, closed_row_response_transposed,
     open_tree_inverse_dynamics, strain_space_force,
 };
 use softrod_integrate::{ParameterSystem, RodSystem, SecondOrderSystem};
 use softrod_mechanics::{Material, RodProperties, Tension};
 
+use super::actuator::{self, ActuatorParam};
 use super::prescribed::{self, PrescribedParams};
 use crate::error::{Error, Result};
 
@@ -50,6 +52,9 @@ pub(crate) enum Kind {
     /// The samples of a prescribed joint (index among the model's
     /// elements): one entry per sample and coordinate (G17–G20).
     Prescribed(usize),
+    /// The force values of a joint actuator (index among the model's
+    /// elements): one entry per value and coordinate (G29).
+    Actuator(usize),
     Q0,
     Qdot0,
 }
@@ -82,7 +87,8 @@ fn locate_cable(model: &Model, c: usize) -> Option<(usize, usize)> {
 /// `ROD.shear_modulus`, `ROD.density`, `ROD.viscosity`, `BODY.mass`,
 /// `cableN.tension` (or `cable[N].tension`; `N` in the model's cable
 /// order, the scene's `[[cable]]` order), `ELEMENT.prescribed` (the samples
-/// of the prescribed joint of rod or body `ELEMENT`).
+/// of the prescribed joint of rod or body `ELEMENT`), `ELEMENT.actuator`
+/// (the force values of its joint's actuator).
 pub(crate) fn parse(model: &Model, name: &str) -> Result<Param> {
     let n = model.n_dof();
     match name {
@@ -106,7 +112,7 @@ pub(crate) fn parse(model: &Model, name: &str) -> Result<Param> {
         return Err(bad(
             name,
             "expected q0, qdot0, ROD.young, ROD.shear_modulus, ROD.density, ROD.viscosity, \
-             BODY.mass, cableN.tension or ELEMENT.prescribed",
+             BODY.mass, cableN.tension, ELEMENT.prescribed or ELEMENT.actuator",
         ));
     };
     let rod = || {
@@ -168,12 +174,20 @@ pub(crate) fn parse(model: &Model, name: &str) -> Result<Param> {
                 len,
             });
         }
+        "actuator" => {
+            let (e, len) = actuator::parse(model, name, element)?;
+            return Ok(Param {
+                name: name.into(),
+                kind: Kind::Actuator(e),
+                len,
+            });
+        }
         _ => {
             return Err(bad(
                 name,
                 format!(
                     "unknown parameter '{key}' (young, shear_modulus, density, viscosity, mass, \
-                     tension, prescribed)"
+                     tension, prescribed, actuator)"
                 ),
             ));
         }
@@ -289,8 +303,8 @@ fn variant(model: &Model, kind: Kind, entry: usize) -> Result<(Model, f64)> {
             };
             Ok((model.clone().with_rod_spec(r, spec)?, delta))
         }
-        Kind::Q0 | Kind::Qdot0 | Kind::Prescribed(_) => {
-            unreachable!("initial states and prescribed samples have no model variant")
+        Kind::Q0 | Kind::Qdot0 | Kind::Prescribed(_) | Kind::Actuator(_) => {
+            unreachable!("initial states, prescribed samples and actuators have no model variant")
         }
     }
 }
@@ -319,6 +333,15 @@ pub(crate) struct ParamSystem<'a> {
     closed: Option<(Box<ClosedDerivatives>, DMatrix<f64>)>,
     /// The samples of prescribed joints (G17–G20), if any are asked for.
     prescribed: Option<Box<PrescribedParams>>,
+    /// The joint actuators' force values asked for (G29).
+    actuators: Vec<ActuatorParam>,
+    /// A closed model with prescribed samples (G28): `ν` and `h` (m), a
+    /// column (n), and per prescribed coordinate the cotangent's products
+    /// with the closure terms' derivatives by `p`, `ṗ`, `p̈`.
+    nu: DVector<f64>,
+    hrow: DVector<f64>,
+    col: DVector<f64>,
+    by_coordinate: Vec<[f64; 3]>,
 }
 
 /// An evaluation point `(t, q, q̇, q̈)`.
@@ -330,8 +353,20 @@ impl<'a> ParamSystem<'a> {
         let mut slot = 0;
         let inputs = sys.data.cable_tensions().map(<[f64]>::to_vec);
         let mut prescribed: Option<Box<PrescribedParams>> = None;
+        let mut actuators = Vec::new();
         for p in params {
             if matches!(p.kind, Kind::Q0 | Kind::Qdot0) {
+                continue;
+            }
+            if let Kind::Actuator(element) = p.kind {
+                if sys.data.joint_forces().is_some() {
+                    return Err(bad(
+                        &p.name,
+                        "the joint forces are set as inputs, not by the actuators' schedules",
+                    ));
+                }
+                actuators.push(ActuatorParam::new(&sys.model, element, slot));
+                slot += p.len;
                 continue;
             }
             if let Kind::Prescribed(element) = p.kind {
@@ -384,6 +419,7 @@ impl<'a> ParamSystem<'a> {
         }
         let n = sys.model.n_dof();
         let (rods, bodies) = (sys.model.rods().len(), sys.model.bodies().len());
+        let (m, np) = (sys.model.n_constraints(), sys.model.n_prescribed());
         let closed = sys.model.has_closures().then(|| {
             (
                 Box::new(ClosedDerivatives::new(&sys.model)),
@@ -402,6 +438,11 @@ impl<'a> ParamSystem<'a> {
             dense_at: None,
             closed,
             prescribed,
+            actuators,
+            nu: DVector::zeros(m),
+            hrow: DVector::zeros(m),
+            col: DVector::zeros(n),
+            by_coordinate: vec![[0.0; 3]; np],
         })
     }
 }
@@ -479,6 +520,15 @@ impl ParamSystem<'_> {
         Ok(true)
     }
 
+    /// Adds the actuators' `−zᵀ ∂ID/∂xᵢ = z_j wᵢ(t)` (G29).
+    fn actuator_products(&self, t: f64, z: &DVector<f64>, out: &mut [f64]) {
+        for a in &self.actuators {
+            for (slot, j, w) in a.weights(t) {
+                out[slot] += z[j] * w;
+            }
+        }
+    }
+
     /// Adds the prescribed samples' `−zᵀ ∂ID/∂xᵢ` (G19); nothing without
     /// them.
     fn prescribed_products(
@@ -495,6 +545,46 @@ impl ParamSystem<'_> {
         };
         let sys = &*self.sys;
         pp.force_vjp(&sys.model, sys.data.cable_tensions(), t, q, qd, qdd, z, out)
+    }
+
+    /// A closed model with prescribed samples: adds the closure terms'
+    /// part of `wᵀ ∂q̈/∂xᵢ` (G28), `zᵀ ∂(Jᵀλ)/∂xᵢ − νᵀ ∂R/∂xᵢ` with
+    /// `z = P M⁻¹ w` and `ν = A⁻¹ Yᵀ w`; nothing otherwise.
+    fn closed_prescribed_vjp(
+        &mut self,
+        t: f64,
+        q: &DVector<f64>,
+        qd: &DVector<f64>,
+        w: &DVector<f64>,
+        z: &DVector<f64>,
+        out: &mut [f64],
+    ) -> Result<(), DynamicsError> {
+        let (Some(pp), Some((work, _))) = (self.prescribed.as_ref(), self.closed.as_mut()) else {
+            return Ok(());
+        };
+        let sys = &mut *self.sys;
+        closed_prescribed_derivatives(
+            &sys.model,
+            &mut sys.data,
+            work,
+            t,
+            q.as_slice(),
+            qd.as_slice(),
+            sys.tau.as_ref().map(|v| v.as_slice()),
+        )?;
+        closed_row_response_transposed(&sys.data, work, w, &mut self.nu)?;
+        for (k, c) in self.by_coordinate.iter_mut().enumerate() {
+            *c = [
+                z.dot(&work.force_dp.column(k)) - self.nu.dot(&work.rows_dp.column(k)),
+                -self.nu.dot(&work.rows_dpd.column(k)),
+                -self.nu.dot(&work.rows_dpdd.column(k)),
+            ];
+        }
+        for (slot, k, (b0, b1, b2)) in pp.samples_at(t) {
+            let [a, b, c] = self.by_coordinate[k];
+            out[slot] += a * b0 + b * b1 + c * b2;
+        }
+        Ok(())
     }
 
     /// The directly dependent part of a position-tracking loss term on the
@@ -621,7 +711,7 @@ impl ParameterSystem for ParamSystem<'_> {
         w: &DVector<f64>,
         out: &mut [f64],
     ) -> Result<(), DynamicsError> {
-        if self.variants.is_empty() && self.prescribed.is_none() {
+        if self.variants.is_empty() && self.prescribed.is_none() && self.actuators.is_empty() {
             return Ok(());
         }
         let mut z = std::mem::take(&mut self.z);
@@ -640,7 +730,8 @@ impl ParameterSystem for ParamSystem<'_> {
                 .factor_shifted_mass(t, q, 0.0, 0.0)
                 .and_then(|_| self.sys.solve_shifted_mass(&mut z))
         }
-        .and_then(|()| self.force_param_vjp(t, q, qd, qdd, &z, out));
+        .and_then(|()| self.force_param_vjp(t, q, qd, qdd, &z, out))
+        .and_then(|()| self.closed_prescribed_vjp(t, q, qd, w, &z, out));
         self.z = z;
         solved
     }
@@ -657,7 +748,7 @@ impl ParameterSystem for ParamSystem<'_> {
         qdd: &DVector<f64>,
         out: &mut DMatrix<f64>,
     ) -> Result<(), DynamicsError> {
-        if self.variants.is_empty() && self.prescribed.is_none() {
+        if self.variants.is_empty() && self.prescribed.is_none() && self.actuators.is_empty() {
             return Ok(());
         }
         let closed = self.closed.is_some();
@@ -687,20 +778,71 @@ impl ParameterSystem for ParamSystem<'_> {
         self.z = z;
         if let Some(pp) = self.prescribed.as_mut() {
             // `−∂ID/∂xᵢ` into the samples' columns, then `M⁻¹` on each
-            // (an open model: `parse` refuses closed ones).
+            // (a closed model: `+∂(Jᵀλ)/∂xᵢ`, then `P M⁻¹` below, G28).
             let sys = &mut *self.sys;
             pp.force_columns(&sys.model, sys.data.cable_tensions(), t, q, qd, qdd, out)?;
+            if let Some((work, _)) = self.closed.as_mut() {
+                closed_prescribed_derivatives(
+                    &sys.model,
+                    &mut sys.data,
+                    work,
+                    t,
+                    q.as_slice(),
+                    qd.as_slice(),
+                    sys.tau.as_ref().map(|v| v.as_slice()),
+                )?;
+                for (slot, k, (b0, _, _)) in pp.samples_at(t) {
+                    out.column_mut(slot).axpy(b0, &work.force_dp.column(k), 1.0);
+                }
+            } else {
+                let mut z = std::mem::take(&mut self.z);
+                for col in pp.slots() {
+                    z.copy_from(&out.column(col));
+                    sys.solve_shifted_mass(&mut z)?;
+                    out.set_column(col, &z);
+                }
+                self.z = z;
+            }
+        }
+        // The actuators' columns `e_j wᵢ(t)`, then `M⁻¹` (G29; a closed
+        // model: `P M⁻¹` below).
+        if !self.actuators.is_empty() {
             let mut z = std::mem::take(&mut self.z);
-            for col in pp.slots() {
-                z.copy_from(&out.column(col));
-                sys.solve_shifted_mass(&mut z)?;
-                out.set_column(col, &z);
+            for a in &self.actuators {
+                for slot in a.slots() {
+                    out.column_mut(slot).fill(0.0);
+                }
+                for (slot, j, w) in a.weights(t) {
+                    out[(j, slot)] = w;
+                }
+                if !closed {
+                    for slot in a.slots() {
+                        z.copy_from(&out.column(slot));
+                        self.sys.solve_shifted_mass(&mut z)?;
+                        out.set_column(slot, &z);
+                    }
+                }
             }
             self.z = z;
         }
         if closed {
             // `−P M⁻¹ ∂ID/∂p` on all columns at once (G22).
             self.closed_response(t, q, qd, Some(out))?;
+            if let (Some(pp), Some((work, _))) = (self.prescribed.as_ref(), self.closed.as_mut()) {
+                // The rows' own dependence on the samples: `+Y A⁻¹ hᵢ`,
+                // `hᵢ = −∂R/∂xᵢ` (G28), with the factorizations the
+                // projection just used.
+                for (slot, k, (b0, b1, b2)) in pp.samples_at(t) {
+                    for r in 0..self.hrow.len() {
+                        self.hrow[r] = -(b0 * work.rows_dp[(r, k)]
+                            + b1 * work.rows_dpd[(r, k)]
+                            + b2 * work.rows_dpdd[(r, k)]);
+                    }
+                    self.col.copy_from(&out.column(slot));
+                    closed_row_response(&self.sys.data, work, &self.hrow, &mut self.col)?;
+                    out.set_column(slot, &self.col);
+                }
+            }
         }
         Ok(())
     }
@@ -804,6 +946,7 @@ impl ParameterSystem for ParamSystem<'_> {
         self.strain_products(t, q, qd, z, out)?;
         self.apply_inertia(out);
         self.prescribed_products(t, q, qd, qdd, z, out)?;
+        self.actuator_products(t, z, out);
         Ok(true)
     }
 
@@ -823,6 +966,7 @@ impl ParameterSystem for ParamSystem<'_> {
     ) -> Result<(), DynamicsError> {
         self.strain_products(t, q, qd, z, out)?;
         self.prescribed_products(t, q, qd, qdd, z, out)?;
+        self.actuator_products(t, z, out);
         if !self.variants.iter().any(|v| !v.strain_only) {
             return Ok(());
         }

@@ -1,5 +1,5 @@
 //! The derivatives with respect to the samples of prescribed joints
-//! (docs/theory-control.md G17–G20).
+//! (docs/theory-control.md G17–G20; closed models G28).
 //!
 //! A prescribed joint's coordinates `p(t)` are not in `q`; the free
 //! coordinates' inverse dynamics `ID_f(t, q, q̇, q̈; p, ṗ, p̈)` depends on
@@ -54,13 +54,6 @@ pub(crate) fn parse(model: &Model, name: &str, element: &str) -> Result<(usize, 
             ),
         ));
     };
-    if model.has_closures() {
-        return Err(bad(
-            name,
-            "gradients with respect to prescribed motion are not supported on a closed model \
-             yet (the closure rows depend on the prescribed coordinates too)",
-        ));
-    }
     let mut samples = None;
     for (c, curve) in motion.curves.iter().enumerate() {
         let Curve::Spline(s) = curve else {
@@ -147,6 +140,9 @@ struct Entry {
     slot: usize,
     /// The joint's coordinates in the companion.
     comp: Vec<usize>,
+    /// The joint's coordinates among the original's prescribed ones
+    /// ([`Model::n_prescribed`]'s order).
+    pres: Vec<usize>,
     /// `basis[c][i]`: coordinate `c`'s cardinal spline of sample `i`.
     basis: Vec<Vec<Spline>>,
 }
@@ -231,8 +227,32 @@ impl PrescribedParams {
             .clone()
             .map(|k| self.companion.pres[k])
             .collect();
-        self.entries.push(Entry { slot, comp, basis });
+        let pres = info.prescribed_dofs.clone().collect();
+        self.entries.push(Entry {
+            slot,
+            comp,
+            pres,
+            basis,
+        });
         Ok(())
+    }
+
+    /// Every sample entry at `t`: its slot, its coordinate among the
+    /// original's prescribed ones, and its cardinal spline's value, rate
+    /// and acceleration `(Bᵢ, Ḃᵢ, B̈ᵢ)(t)` (G18).
+    pub(crate) fn samples_at(
+        &self,
+        t: f64,
+    ) -> impl Iterator<Item = (usize, usize, (f64, f64, f64))> + '_ {
+        self.entries.iter().flat_map(move |e| {
+            let dof = e.dof();
+            e.pres.iter().enumerate().flat_map(move |(c, &k)| {
+                e.basis[c]
+                    .iter()
+                    .enumerate()
+                    .map(move |(i, b)| (e.slot + i * dof + c, k, b.eval(t)))
+            })
+        })
     }
 
     /// The slots of every sample entry.
