@@ -6,7 +6,7 @@
 //! over the nodes below the perturbed coordinate per difference), and one
 //! projection through the multiplier system the forward solve factored.
 
-use super::forward::forward_dynamics as constrained_forward;
+use super::forward::{forward_dynamics as constrained_forward, kept_solve};
 use super::queries::check_workspace;
 use super::rows::{assemble, prescribed_columns};
 use crate::algorithms::shifted::tree_solve;
@@ -340,7 +340,7 @@ fn project(
             z[i] = s;
         }
         // L L^T z = s on the first r (kept) rows.
-        cholesky_solve(cw, r, z);
+        kept_solve(&cw.a, r, z.as_mut_slice());
         for i in 0..r {
             let p = cw.perm[i];
             let zi = z[i];
@@ -587,11 +587,29 @@ pub fn closed_prescribed_derivatives(
 }
 
 /// The closure rows' state in `data` after a constrained forward dynamics,
-/// or an error naming `what`.
-fn closure_work<'a>(data: &'a Data, what: &'static str) -> Result<&'a ClosureWork, DynamicsError> {
-    data.closure
+/// checked against a row vector of `m` and a coordinate vector of `n`
+/// entries; errors name `what`.
+fn row_response_work<'a>(
+    data: &'a Data,
+    work: &ClosedDerivatives,
+    m: usize,
+    n: usize,
+    what: &'static str,
+) -> Result<&'a ClosureWork, DynamicsError> {
+    let cw = data
+        .closure
         .as_ref()
-        .ok_or(DynamicsError::UnsupportedClosed { what })
+        .ok_or(DynamicsError::UnsupportedClosed {
+            what: "a closed row response without a constrained forward dynamics",
+        })?;
+    if m != work.z.len() || n != cw.y.nrows() {
+        return Err(DynamicsError::WorkspaceMismatch {
+            what,
+            built: work.z.len(),
+            got: m,
+        });
+    }
+    Ok(cw)
 }
 
 /// `out += Y A⁻¹ h`: the constrained acceleration's response to a change
@@ -607,22 +625,12 @@ pub fn closed_row_response(
     h: &DVector<f64>,
     out: &mut DVector<f64>,
 ) -> Result<(), DynamicsError> {
-    let cw = closure_work(
-        data,
-        "closed_row_response without a constrained forward dynamics",
-    )?;
+    let cw = row_response_work(data, work, h.len(), out.len(), "closed_row_response")?;
     let (m, r) = (h.len(), cw.rank);
-    if m != work.z.len() || out.len() != cw.y.nrows() {
-        return Err(DynamicsError::WorkspaceMismatch {
-            what: "closed_row_response",
-            built: work.z.len(),
-            got: m,
-        });
-    }
     for i in 0..m {
         work.z[i] = h[cw.perm[i]];
     }
-    cholesky_solve(cw, r, &mut work.z);
+    kept_solve(&cw.a, r, work.z.as_mut_slice());
     for i in 0..r {
         let zi = work.z[i];
         let p = cw.perm[i];
@@ -642,47 +650,22 @@ pub fn closed_row_response_transposed(
     w: &DVector<f64>,
     nu: &mut DVector<f64>,
 ) -> Result<(), DynamicsError> {
-    let cw = closure_work(
+    let cw = row_response_work(
         data,
-        "closed_row_response_transposed without a constrained forward dynamics",
+        work,
+        nu.len(),
+        w.len(),
+        "closed_row_response_transposed",
     )?;
     let (m, r) = (nu.len(), cw.rank);
-    if m != work.z.len() || w.len() != cw.y.nrows() {
-        return Err(DynamicsError::WorkspaceMismatch {
-            what: "closed_row_response_transposed",
-            built: work.z.len(),
-            got: m,
-        });
-    }
     for i in 0..m {
         let p = cw.perm[i];
         work.z[i] = (0..w.len()).map(|c| cw.y[(c, p)] * w[c]).sum();
     }
-    cholesky_solve(cw, r, &mut work.z);
+    kept_solve(&cw.a, r, work.z.as_mut_slice());
     nu.fill(0.0);
     for i in 0..r {
         nu[cw.perm[i]] = work.z[i];
     }
     Ok(())
-}
-
-/// `L Lᵀ z = z` on the first `r` (kept, pivot-ordered) entries with the
-/// pivoted Cholesky factor of `A` in `cw.a`.
-// Triangular solves read clearest with explicit indices.
-#[allow(clippy::needless_range_loop)]
-fn cholesky_solve(cw: &ClosureWork, r: usize, z: &mut DVector<f64>) {
-    for i in 0..r {
-        let mut s = z[i];
-        for k in 0..i {
-            s -= cw.a[(i, k)] * z[k];
-        }
-        z[i] = s / cw.a[(i, i)];
-    }
-    for i in (0..r).rev() {
-        let mut s = z[i];
-        for k in i + 1..r {
-            s -= cw.a[(k, i)] * z[k];
-        }
-        z[i] = s / cw.a[(i, i)];
-    }
 }

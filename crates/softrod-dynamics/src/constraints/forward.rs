@@ -21,6 +21,27 @@ use nalgebra::DMatrix;
 /// a pivot below `1e-10 ×` the largest diagonal is a redundant constraint.
 pub(crate) const RANK_TOLERANCE: f64 = 1e-10;
 
+/// `L Lᵀ x = x` on the first `r` entries (the kept rows, in pivot order)
+/// with the factor [`pivoted_cholesky`] left in the lower triangle of `l`.
+// Triangular solves read clearest with explicit indices.
+#[allow(clippy::needless_range_loop)]
+pub(crate) fn kept_solve(l: &DMatrix<f64>, r: usize, x: &mut [f64]) {
+    for i in 0..r {
+        let mut s = x[i];
+        for k in 0..i {
+            s -= l[(i, k)] * x[k];
+        }
+        x[i] = s / l[(i, i)];
+    }
+    for i in (0..r).rev() {
+        let mut s = x[i];
+        for k in i + 1..r {
+            s -= l[(k, i)] * x[k];
+        }
+        x[i] = s / l[(i, i)];
+    }
+}
+
 /// Pivoted Cholesky of the symmetric positive semidefinite `a` in place
 /// (lower triangle, symmetric row/column swaps recorded in `perm`);
 /// returns the numerical rank.
@@ -163,20 +184,7 @@ fn forward_inner(
     }
     // L₁₁ L₁₁ᵀ x₁ = b₁ on the independent rows; the redundant rows get
     // λ = 0 (consistent redundant constraints hold through the others).
-    for i in 0..r {
-        let mut s = x[i];
-        for k in 0..i {
-            s -= w.a[(i, k)] * x[k];
-        }
-        x[i] = s / w.a[(i, i)];
-    }
-    for i in (0..r).rev() {
-        let mut s = x[i];
-        for k in i + 1..r {
-            s -= w.a[(k, i)] * x[k];
-        }
-        x[i] = s / w.a[(i, i)];
-    }
+    kept_solve(&w.a, r, x);
     w.lambda.fill(0.0);
     for i in 0..r {
         w.lambda[w.perm[i]] = x[i];

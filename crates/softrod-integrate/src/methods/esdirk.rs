@@ -788,12 +788,7 @@ impl<T: Tableau, Sys: SecondOrderSystem> Stepper<SecondOrderProblem<'_, Sys>> fo
         p: &mut SecondOrderProblem<'_, Sys>,
         stats: &mut Stats,
     ) -> Result<(), IntegrateError> {
-        let (t, h) = (self.s.t, self.s.h);
-        p.accel(t, &self.q, &self.v, &mut self.acc)
-            .map_err(sys_err(t, h, "accel"))?;
-        stats.rhs_evaluations += 1;
-        check_finite(&self.acc, t, h, "acceleration")?;
-        self.set_first_order();
+        self.forces_changed(p, stats)?;
         p.system_changed();
         self.jac_valid = false;
         self.factored_h = f64::NAN;

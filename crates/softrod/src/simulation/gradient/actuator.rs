@@ -10,25 +10,15 @@
 
 use softrod_dynamics::{JointForce, Model};
 
-use crate::error::{Error, Result};
-
-fn bad(name: &str, message: impl Into<String>) -> Error {
-    Error::Gradient {
-        key: name.to_owned(),
-        message: message.into(),
-    }
-}
+use super::params::{bad, element_index};
+use crate::error::Result;
 
 /// The element `element` of `model` whose joint carries an actuator: its
 /// index and its gradient length (one entry per coordinate for a constant
 /// force, per row and coordinate for a table, in the scene's `values`
 /// order). Errors name `name`.
 pub(crate) fn parse(model: &Model, name: &str, element: &str) -> Result<(usize, usize)> {
-    let e = model
-        .elements()
-        .iter()
-        .position(|e| e.name == element)
-        .ok_or_else(|| bad(name, format!("no rod or body named '{element}'")))?;
+    let e = element_index(model, name, element)?;
     let info = &model.elements()[e];
     let Some(actuator) = &info.attachment.joint.actuator else {
         return Err(bad(

@@ -68,11 +68,21 @@ pub(crate) struct Param {
     pub len: usize,
 }
 
-fn bad(name: &str, message: impl Into<String>) -> Error {
+pub(super) fn bad(name: &str, message: impl Into<String>) -> Error {
     Error::Gradient {
         key: name.to_owned(),
         message: message.into(),
     }
+}
+
+/// The index of the rod or body named `element` among `model`'s elements;
+/// errors name the parameter `name`.
+pub(super) fn element_index(model: &Model, name: &str, element: &str) -> Result<usize> {
+    model
+        .elements()
+        .iter()
+        .position(|e| e.name == element)
+        .ok_or_else(|| bad(name, format!("no rod or body named '{element}'")))
 }
 
 /// The cable `c` of `model`: its rod and its index on the rod.
@@ -307,6 +317,26 @@ fn variant(model: &Model, kind: Kind, entry: usize) -> Result<(Model, f64)> {
             unreachable!("initial states, prescribed samples and actuators have no model variant")
         }
     }
+}
+
+/// The closure terms' derivatives by the prescribed coordinates at
+/// `(t, q, q̇)` into `work` (G28), with the run's actuation.
+fn closure_terms(
+    sys: &mut RodSystem,
+    work: &mut ClosedDerivatives,
+    t: f64,
+    q: &DVector<f64>,
+    qd: &DVector<f64>,
+) -> Result<(), DynamicsError> {
+    closed_prescribed_derivatives(
+        &sys.model,
+        &mut sys.data,
+        work,
+        t,
+        q.as_slice(),
+        qd.as_slice(),
+        sys.tau.as_ref().map(|v| v.as_slice()),
+    )
 }
 
 /// The rod system with the parameter derivatives of the backward pass
@@ -563,15 +593,7 @@ impl ParamSystem<'_> {
             return Ok(());
         };
         let sys = &mut *self.sys;
-        closed_prescribed_derivatives(
-            &sys.model,
-            &mut sys.data,
-            work,
-            t,
-            q.as_slice(),
-            qd.as_slice(),
-            sys.tau.as_ref().map(|v| v.as_slice()),
-        )?;
+        closure_terms(sys, work, t, q, qd)?;
         closed_row_response_transposed(&sys.data, work, w, &mut self.nu)?;
         for (k, c) in self.by_coordinate.iter_mut().enumerate() {
             *c = [
@@ -782,15 +804,7 @@ impl ParameterSystem for ParamSystem<'_> {
             let sys = &mut *self.sys;
             pp.force_columns(&sys.model, sys.data.cable_tensions(), t, q, qd, qdd, out)?;
             if let Some((work, _)) = self.closed.as_mut() {
-                closed_prescribed_derivatives(
-                    &sys.model,
-                    &mut sys.data,
-                    work,
-                    t,
-                    q.as_slice(),
-                    qd.as_slice(),
-                    sys.tau.as_ref().map(|v| v.as_slice()),
-                )?;
+                closure_terms(sys, work, t, q, qd)?;
                 for (slot, k, (b0, _, _)) in pp.samples_at(t) {
                     out.column_mut(slot).axpy(b0, &work.force_dp.column(k), 1.0);
                 }

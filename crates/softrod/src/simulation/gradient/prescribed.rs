@@ -25,24 +25,14 @@ use softrod_dynamics::{
     inverse_dynamics_vjp, section_jacobian,
 };
 
-use crate::error::{Error, Result};
-
-fn bad(name: &str, message: impl Into<String>) -> Error {
-    Error::Gradient {
-        key: name.to_owned(),
-        message: message.into(),
-    }
-}
+use super::params::{bad, element_index};
+use crate::error::Result;
 
 /// The element `element` of `model` whose joint is prescribed by splines
 /// of a common sample count: its index and its gradient length
 /// (samples × coordinates). Errors name `name`.
 pub(crate) fn parse(model: &Model, name: &str, element: &str) -> Result<(usize, usize)> {
-    let e = model
-        .elements()
-        .iter()
-        .position(|e| e.name == element)
-        .ok_or_else(|| bad(name, format!("no rod or body named '{element}'")))?;
+    let e = element_index(model, name, element)?;
     let joint = &model.elements()[e].attachment.joint;
     let Some(motion) = &joint.prescribed else {
         return Err(bad(
