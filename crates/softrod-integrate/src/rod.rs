@@ -447,6 +447,21 @@ impl RodSystem {
         Ok(self.commit_contact_control(t, q, qd)? != crate::Control::Continue)
     }
 
+    /// Forgets the contact linearization the structured Newton matrix keeps
+    /// between evaluations (CT17, CT27). It is keyed by `q` only, so one
+    /// taken at the end of an integration (the last Newton iterate of a
+    /// stiffly accurate step is its end state) would be reused by the next
+    /// integration starting there although the commit that ended the step
+    /// moved the anchors. An integration that starts afresh calls this, so
+    /// that it is a function of its state, contact state and inputs alone,
+    /// whatever this workspace integrated before; its first Jacobian update
+    /// linearizes the contact anyway. No allocation.
+    pub fn forget_contact_linearization(&mut self) {
+        if self.contact_q.take().is_some() {
+            self.shifted.clear_contact();
+        }
+    }
+
     /// [`commit_contact`](Self::commit_contact) as what the step hook
     /// returns (CT25): a stiffness that rose changes the law's slope
     /// ([`Control::SystemChanged`](crate::Control::SystemChanged): the
