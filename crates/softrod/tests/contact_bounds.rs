@@ -337,7 +337,7 @@ fn bar_across_rails(load: Vec3, damped: bool) -> Simulation {
 /// rigid block lacks: the rails' lateral give under the sliding friction
 /// `μ (W/2) a³/(3 E I)` = 1.3e-5 m (they spring back once the bar
 /// sticks) plus the pair's pre-slip `μ f_n/k` ≈ 8e-6 m (CT5). Without the
-/// location the stop at 0.25 m/s, rtol 1e-5, fell late in a step whose
+/// location the stop at 0.25 m/s, rtol 1e-5, fell inside a step whose
 /// fixed pair anchors pushed the bar back: 36 µm short (8 µm with it).
 #[test]
 fn a_rod_sliding_across_two_rods_stops_where_coulomb_says_at_every_tolerance() {
