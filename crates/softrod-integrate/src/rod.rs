@@ -85,7 +85,7 @@ pub struct RodSystem {
     /// symmetric CT17 blocks and a matrix kept for the step.
     pub contact_active_set: bool,
     /// Whether ESDIRK retries a step inside which a sliding contact
-    /// stopped, at the stop (docs/theory-contact.md CT29,
+    /// stopped, at the stop (docs/theory-contact.md CT29; rod pairs CT30;
     /// `softrod_dynamics::friction_stop`; default `true`). `false` is the
     /// step sequence without it, for comparisons.
     pub locate_friction_stops: bool,
@@ -445,6 +445,21 @@ impl RodSystem {
             return Ok(false);
         }
         Ok(self.commit_contact_control(t, q, qd)? != crate::Control::Continue)
+    }
+
+    /// Forgets the contact linearization the structured Newton matrix keeps
+    /// between evaluations (CT17, CT27). It is keyed by `q` only, so one
+    /// taken at the end of an integration (the last Newton iterate of a
+    /// stiffly accurate step is its end state) would be reused by the next
+    /// integration starting there although the commit that ended the step
+    /// moved the anchors. An integration that starts afresh calls this, so
+    /// that it is a function of its state, contact state and inputs alone,
+    /// whatever this workspace integrated before; its first Jacobian update
+    /// linearizes the contact anyway. No allocation.
+    pub fn forget_contact_linearization(&mut self) {
+        if self.contact_q.take().is_some() {
+            self.shifted.clear_contact();
+        }
     }
 
     /// [`commit_contact`](Self::commit_contact) as what the step hook

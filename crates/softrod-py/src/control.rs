@@ -161,6 +161,27 @@ impl SecondOrderSystem for CableInputs {
         self.sys.linearize_shifted(t, q, qd)
     }
 
+    /// The rod system's choice (CT27): without it a step with inputs would
+    /// iterate on another matrix than the same step without them.
+    fn relinearize_in_newton(&self) -> bool {
+        self.sys.relinearize_in_newton()
+    }
+
+    /// The rod system's friction stops (CT29): `u` does not enter the
+    /// contact law.
+    fn step_event_fraction(
+        &mut self,
+        h: f64,
+        t0: f64,
+        q0: &DVector<f64>,
+        qd0: &DVector<f64>,
+        t1: f64,
+        q1: &DVector<f64>,
+        qd1: &DVector<f64>,
+    ) -> Result<Option<f64>, DynamicsError> {
+        self.sys.step_event_fraction(h, t0, q0, qd0, t1, q1, qd1)
+    }
+
     fn force_residual(
         &mut self,
         t: f64,
@@ -266,17 +287,29 @@ pub trait CommitContact {
     /// changed, as the step hook reports it (CT25: a raised stiffness drops
     /// the Jacobians, moved anchors only re-evaluate the forces).
     fn commit_contact(&mut self, t: f64, q: &[f64], qd: &[f64]) -> Result<Control, DynamicsError>;
+
+    /// `RodSystem::forget_contact_linearization`: a step starts afresh,
+    /// whatever the workspace integrated before.
+    fn forget_contact_linearization(&mut self);
 }
 
 impl CommitContact for RodSystem {
     fn commit_contact(&mut self, t: f64, q: &[f64], qd: &[f64]) -> Result<Control, DynamicsError> {
         self.commit_contact_control(t, q, qd)
     }
+
+    fn forget_contact_linearization(&mut self) {
+        RodSystem::forget_contact_linearization(self);
+    }
 }
 
 impl CommitContact for CableInputs {
     fn commit_contact(&mut self, t: f64, q: &[f64], qd: &[f64]) -> Result<Control, DynamicsError> {
         self.sys.commit_contact_control(t, q, qd)
+    }
+
+    fn forget_contact_linearization(&mut self) {
+        self.sys.forget_contact_linearization();
     }
 }
 
@@ -400,6 +433,7 @@ pub fn simulate_controlled(
             },
             failure: None,
         };
+        inputs.forget_contact_linearization();
         let result = integrate_second_order(inputs, method, (t0, t1), &q, &qd, &opts, &mut hooks);
         if let Some(f) = hooks.failure {
             return Err(f);
@@ -521,6 +555,7 @@ pub fn step<S: SecondOrderSystem + CommitContact>(
     opts.t_eval = Some(Vec::new());
     let n = sys.dim();
     let mut hooks = CommitHooks { n, failure: None };
+    sys.forget_contact_linearization();
     let result = integrate_second_order(sys, method, (t, t + dt), q, qd, &opts, &mut hooks);
     if let Some(e) = hooks.failure {
         return Err(e.into());

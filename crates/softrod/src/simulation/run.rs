@@ -217,6 +217,7 @@ impl Simulation {
             failure: None,
             violation: None,
         };
+        self.system.forget_contact_linearization();
         let result =
             integrate_second_order(&mut self.system, method, t_span, q0, qd0, &opts, &mut hooks);
         let s = &mut self.system;
