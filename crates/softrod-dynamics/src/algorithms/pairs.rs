@@ -466,6 +466,8 @@ fn narrowphase(
         dv: cf.dv,
         de: cf.de,
         anchor,
+        velocity: va - vb,
+        stretch: stretch.map_or(Vec3::zeros(), |e| e - normal * normal.dot(&e)),
     });
 }
 

@@ -14,7 +14,7 @@ use crate::model::contact::{
     Active, ContactWork, HEAL_PERIODS, Hold, IMPACT_LIMIT, RAISE_HEADROOM, REST_TARGET,
 };
 use crate::model::data::Data;
-use crate::model::pairs::{PairAnchor, PairHold, radius_at};
+use crate::model::pairs::{PairActive, PairAnchor, PairHold, PairSlide, radius_at};
 use softrod_lie::Vec3;
 use softrod_mechanics::contact::{ContactPoint, Contactee};
 
@@ -322,6 +322,18 @@ pub fn commit_contact_change(
     result.map(|()| change)
 }
 
+/// A rod pair's slide rate along its tangential stretch `v_t·ê` \[m/s\]
+/// and pre-slip `|f_t|/k` \[m\] (CT30), on the slip branch with an anchor.
+fn pair_rate(c: &PairActive) -> Option<(f64, f64)> {
+    let e = c.stretch.norm();
+    if c.sticking || e <= 0.0 || c.k <= 0.0 {
+        return None;
+    }
+    let vt = c.velocity - c.normal * c.normal.dot(&c.velocity);
+    let ft = c.force - c.normal * c.normal.dot(&c.force);
+    Some((vt.dot(&c.stretch) / e, ft.norm() / c.k))
+}
+
 /// Where a slide stopped inside a step (docs/theory-contact.md CT29): the
 /// fraction `θ ∈ (0, 1)` of the step `h` from `(t0, q0, q̇0)` to
 /// `(t1, q1, q̇1)` at which a sliding contact's tangential velocity
@@ -340,8 +352,9 @@ pub fn commit_contact_change(
 /// The step is retried if the slide back it caused, `½ |s₁| (1 − θ) h`,
 /// exceeds that contact's pre-slip `μ f_n/k` (the elastic give CT5
 /// already allows): a stop is located to the law's own resolution,
-/// whatever the tolerances. Rod–obstacle contacts; rod pairs (CT10) are
-/// not located. Nothing for a model without friction.
+/// whatever the tolerances. Rod–obstacle contacts, and rod–rod and self
+/// contact pairs (CT10, CT30: their relative velocity along the pair's
+/// tangential stretch). Nothing for a model without friction.
 #[allow(clippy::too_many_arguments)]
 pub fn friction_stop(
     model: &Model,
@@ -354,7 +367,10 @@ pub fn friction_stop(
     q1: &[f64],
     qd1: &[f64],
 ) -> Result<Option<f64>, DynamicsError> {
-    if !model.has_contact() || !model.obstacles().iter().any(|o| o.friction > 0.0) {
+    let pair_friction = model.contact.settings.any() && model.contact.settings.friction > 0.0;
+    if !model.has_contact()
+        || !(pair_friction || model.obstacles().iter().any(|o| o.friction > 0.0))
+    {
         return Ok(None);
     }
     check_vec(model, "q", q1)?;
@@ -385,13 +401,63 @@ pub fn friction_stop(
             work.slides.push((a.rod, idx, s1, pre_slip));
         }
     }
-    let any = !work.slides.is_empty();
+    let mut any = !work.slides.is_empty();
+    if let Some(pw) = &mut work.pairs {
+        pw.slides.clear();
+        for c in &pw.active {
+            if let Some((s1, pre_slip)) = pair_rate(c)
+                && s1 < 0.0
+            {
+                pw.slides.push(PairSlide {
+                    a: c.a,
+                    sa: c.sa,
+                    b: c.b,
+                    sb: c.sb,
+                    reach: c.radius_a + radius_at(model, c.b, c.sb),
+                    rate: s1,
+                    pre_slip,
+                });
+            }
+        }
+        any |= !pw.slides.is_empty();
+    }
     data.contact = Some(work);
     if !any || !contact_force(model, data, Forces::ALL, t0, q0, Some(qd0)) {
         return Ok(None);
     }
     let work = data.contact.as_ref().expect("contact work");
     let mut theta: Option<f64> = None;
+    // Retried at the earliest stop whose slide back exceeds its pre-slip.
+    let mut stop = |s0: f64, s1: f64, pre_slip: f64| {
+        if s0 <= 0.0 {
+            return;
+        }
+        let th = s0 / (s0 - s1);
+        let back = 0.5 * (-s1) * (1.0 - th) * h;
+        if back > pre_slip {
+            theta = Some(theta.map_or(th, |m: f64| m.min(th)));
+        }
+    };
+    // Rod pairs (CT30): the same pair at the step start is the one the
+    // anchors' rule (CT10) matches, its two arc lengths within `r_a + r_b`.
+    if let Some(pw) = &work.pairs {
+        for sl in &pw.slides {
+            let Some(c) = pw.active.iter().find(|c| {
+                c.a == sl.a
+                    && c.b == sl.b
+                    && (c.sa - sl.sa).abs() < sl.reach
+                    && (c.sb - sl.sb).abs() < sl.reach
+            }) else {
+                continue;
+            };
+            let e = c.stretch.norm();
+            if e <= 0.0 {
+                continue;
+            }
+            let vt = c.velocity - c.normal * c.normal.dot(&c.velocity);
+            stop(vt.dot(&c.stretch) / e, sl.rate, sl.pre_slip);
+        }
+    }
     for &(rod, idx, s1, pre_slip) in &work.slides {
         let Some(a) = work
             .active
@@ -407,15 +473,7 @@ pub fn friction_stop(
             continue;
         }
         let vt = a.velocity - a.normal * a.normal.dot(&a.velocity);
-        let s0 = vt.dot(&a.stretch) / e;
-        if s0 <= 0.0 {
-            continue;
-        }
-        let th = s0 / (s0 - s1);
-        let back = 0.5 * (-s1) * (1.0 - th) * h;
-        if back > pre_slip {
-            theta = Some(theta.map_or(th, |m: f64| m.min(th)));
-        }
+        stop(vt.dot(&a.stretch) / e, s1, pre_slip);
     }
     Ok(theta)
 }

@@ -116,6 +116,27 @@ pub(crate) struct PairActive {
     pub dv: Mat3,
     pub de: Mat3,
     pub anchor: Option<PairAnchor>,
+    /// The relative velocity `v_a(s_a) − v_b(s_b)` of the closest points
+    /// and (friction with an anchor) the tangential stretch `P e` of CT10
+    /// (`P = I − n nᵀ`; zero without an anchor): what the stop location of
+    /// CT30 reads.
+    pub velocity: Vec3,
+    pub stretch: Vec3,
+}
+
+/// A touching pair on the slip branch sliding back toward its anchor at
+/// the end of a step (CT30), keyed like [`PairAnchor`]: its slide rate
+/// `v_t·ê` \[m/s\] and pre-slip `μ f_n/k` \[m\].
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PairSlide {
+    pub a: usize,
+    pub sa: f64,
+    pub b: usize,
+    pub sb: f64,
+    /// `r_a + r_b` at the step end \[m\]: the anchors' matching reach.
+    pub reach: f64,
+    pub rate: f64,
+    pub pre_slip: f64,
 }
 
 /// The friction anchor of a touching pair (CT10): the material points
@@ -176,6 +197,8 @@ pub(crate) struct PairWork {
     /// The seeds of the pairs touching at the state the central
     /// differences start from: they re-evaluate only those (CT11).
     pub fd_seeds: Vec<(SegmentBox, SegmentBox)>,
+    /// The step-end slides of `crate::friction_stop` (CT30).
+    pub slides: Vec<PairSlide>,
     /// Per segment pair tested, the evaluations of the last call (for the
     /// cost checks of the tests).
     pub narrow_tests: usize,
@@ -207,6 +230,7 @@ impl PairWork {
             next_holds: Vec::with_capacity(64),
             scratch: vec![0.0; model.n_dof()],
             fd_seeds: Vec::with_capacity(64),
+            slides: Vec::with_capacity(16),
             narrow_tests: 0,
         })
     }
