@@ -322,16 +322,30 @@ pub fn commit_contact_change(
     result.map(|()| change)
 }
 
-/// A rod pair's slide rate along its tangential stretch `v_t·ê` \[m/s\]
-/// and pre-slip `|f_t|/k` \[m\] (CT30), on the slip branch with an anchor.
-fn pair_rate(c: &PairActive) -> Option<(f64, f64)> {
-    let e = c.stretch.norm();
-    if c.sticking || e <= 0.0 || c.k <= 0.0 {
+/// A contact's slide rate along its tangential stretch `ṡ = ė·ê` \[m/s\]
+/// (`ê = P e/|P e|`, `ė` the stretch's rate, world axes) and pre-slip
+/// `|f_t|/k` \[m\] (CT29, CT30), if it is on the slip branch with an
+/// anchor and carries friction: a contact whose normal force is zero (an
+/// opening one, its damping holding it at `f_n = 0`) carries none, so it
+/// pushes nothing back.
+fn slide_rate(
+    sticking: bool,
+    k: f64,
+    normal: &Vec3,
+    force: &Vec3,
+    stretch: &Vec3,
+    rate: &Vec3,
+) -> Option<(f64, f64)> {
+    let e = stretch.norm();
+    if sticking || e <= 0.0 || k <= 0.0 {
         return None;
     }
-    let vt = c.velocity - c.normal * c.normal.dot(&c.velocity);
-    let ft = c.force - c.normal * c.normal.dot(&c.force);
-    Some((vt.dot(&c.stretch) / e, ft.norm() / c.k))
+    let ft = (force - normal * normal.dot(force)).norm();
+    if ft <= 0.0 {
+        return None;
+    }
+    let vt = rate - normal * normal.dot(rate);
+    Some((vt.dot(stretch) / e, ft / k))
 }
 
 /// Where a slide stopped inside a step (docs/theory-contact.md CT29): the
@@ -345,16 +359,18 @@ fn pair_rate(c: &PairActive) -> Option<(f64, f64)> {
 /// it slid out in the step: friction `μ f_n` pushes it back toward its
 /// anchor by up to the distance it slid in the step — the continuous law
 /// would have stuck it within its pre-slip `μ f_n/k`. A contact on the
-/// slip branch at the step end whose tangential velocity points toward its
-/// anchor (`s₁ = v_t·ê < 0`, `ê` the stretch's direction) while it
-/// pointed away at the step start (`s₀ > 0`) marks such a stop; `θ` is
-/// the zero of the secant of `s` (exact for a constant friction force).
-/// The step is retried if the slide back it caused, `½ |s₁| (1 − θ) h`,
-/// exceeds that contact's pre-slip `μ f_n/k` (the elastic give CT5
-/// already allows): a stop is located to the law's own resolution,
-/// whatever the tolerances. Rod–obstacle contacts, and rod–rod and self
-/// contact pairs (CT10, CT30: their relative velocity along the pair's
-/// tangential stretch). Nothing for a model without friction.
+/// slip branch at the step end whose stretch shrinks (`s₁ = ė·ê < 0`,
+/// `ê` the stretch's direction, `ė` its rate) while it grew at the step
+/// start (`s₀ > 0`) marks such a stop; `θ` is the zero of the secant of
+/// `s` (exact for a constant friction force). The step is retried if the
+/// slide back it caused, `½ |s₁| (1 − θ) h`, exceeds that contact's
+/// pre-slip `μ f_n/k` (the elastic give CT5 already allows): a stop is
+/// located to the law's own resolution, whatever the tolerances. A
+/// contact without friction force at the step end (`f_n = 0`) is skipped.
+/// Rod–obstacle contacts (`ė` the point's velocity), and rod–rod and self
+/// contact pairs (CT10, CT30: `ė` the relative velocity of the anchor's
+/// material points, `b`'s turning with its section). Nothing for a model
+/// without friction.
 #[allow(clippy::too_many_arguments)]
 pub fn friction_stop(
     model: &Model,
@@ -377,19 +393,54 @@ pub fn friction_stop(
     check_vec(model, "qdot", qd1)?;
     check_vec(model, "q", q0)?;
     check_vec(model, "qdot", qd0)?;
-    let n_obs = model.contact.obstacles.len();
-    // The slide rate along the stretch and the pre-slip of a contact.
-    let rate = |a: &Active| -> Option<(f64, f64)> {
-        let e = a.stretch.norm();
-        if a.sticking || e <= 0.0 || a.k <= 0.0 {
-            return None;
+    // The pairs' stretch rates for these two evaluations only.
+    let set_rates = |data: &mut Data, on: bool| {
+        if let Some(pw) = data.contact.as_mut().and_then(|w| w.pairs.as_mut()) {
+            pw.rates = on;
         }
-        let vt = a.velocity - a.normal * a.normal.dot(&a.velocity);
-        let ft = a.force - a.normal * a.normal.dot(&a.force);
-        Some((vt.dot(&a.stretch) / e, ft.norm() / a.k))
+    };
+    set_rates(data, true);
+    let theta = locate_stop(model, data, h, t0, q0, qd0, t1, q1, qd1);
+    set_rates(data, false);
+    Ok(theta)
+}
+
+/// [`friction_stop`] after its checks, with the pairs' rates on.
+#[allow(clippy::too_many_arguments)]
+fn locate_stop(
+    model: &Model,
+    data: &mut Data,
+    h: f64,
+    t0: f64,
+    q0: &[f64],
+    qd0: &[f64],
+    t1: f64,
+    q1: &[f64],
+    qd1: &[f64],
+) -> Option<f64> {
+    let n_obs = model.contact.obstacles.len();
+    let rate = |a: &Active| {
+        slide_rate(
+            a.sticking,
+            a.k,
+            &a.normal,
+            &a.force,
+            &a.stretch,
+            &a.velocity,
+        )
+    };
+    let pair_rate = |c: &PairActive| {
+        slide_rate(
+            c.sticking,
+            c.k,
+            &c.normal,
+            &c.force,
+            &c.stretch,
+            &c.stretch_rate,
+        )
     };
     if !contact_force(model, data, Forces::ALL, t1, q1, Some(qd1)) {
-        return Ok(None);
+        return None;
     }
     let mut work = data.contact.take().expect("contact work");
     work.slides.clear();
@@ -423,7 +474,7 @@ pub fn friction_stop(
     }
     data.contact = Some(work);
     if !any || !contact_force(model, data, Forces::ALL, t0, q0, Some(qd0)) {
-        return Ok(None);
+        return None;
     }
     let work = data.contact.as_ref().expect("contact work");
     let mut theta: Option<f64> = None;
@@ -438,6 +489,12 @@ pub fn friction_stop(
             theta = Some(theta.map_or(th, |m: f64| m.min(th)));
         }
     };
+    // The start's own rate: on either branch, its stretch's rate along the
+    // stretch (a sticking start has a stretch too).
+    let start = |stretch: &Vec3, normal: &Vec3, rate: &Vec3| {
+        let e = stretch.norm();
+        (e > 0.0).then(|| (rate - normal * normal.dot(rate)).dot(stretch) / e)
+    };
     // Rod pairs (CT30): the same pair at the step start is the one the
     // anchors' rule (CT10) matches, its two arc lengths within `r_a + r_b`.
     if let Some(pw) = &work.pairs {
@@ -450,12 +507,9 @@ pub fn friction_stop(
             }) else {
                 continue;
             };
-            let e = c.stretch.norm();
-            if e <= 0.0 {
-                continue;
+            if let Some(s0) = start(&c.stretch, &c.normal, &c.stretch_rate) {
+                stop(s0, sl.rate, sl.pre_slip);
             }
-            let vt = c.velocity - c.normal * c.normal.dot(&c.velocity);
-            stop(vt.dot(&c.stretch) / e, sl.rate, sl.pre_slip);
         }
     }
     for &(rod, idx, s1, pre_slip) in &work.slides {
@@ -466,16 +520,11 @@ pub fn friction_stop(
         else {
             continue;
         };
-        // The start's own rate: on either branch, its velocity along the
-        // stretch (a sticking start has a stretch too).
-        let e = a.stretch.norm();
-        if e <= 0.0 {
-            continue;
+        if let Some(s0) = start(&a.stretch, &a.normal, &a.velocity) {
+            stop(s0, s1, pre_slip);
         }
-        let vt = a.velocity - a.normal * a.normal.dot(&a.velocity);
-        stop(vt.dot(&a.stretch) / e, s1, pre_slip);
     }
-    Ok(theta)
+    theta
 }
 
 /// The stiffness of resting contacts for statics (CT15): at the

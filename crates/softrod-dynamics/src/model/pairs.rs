@@ -116,12 +116,13 @@ pub(crate) struct PairActive {
     pub dv: Mat3,
     pub de: Mat3,
     pub anchor: Option<PairAnchor>,
-    /// The relative velocity `v_a(s_a) − v_b(s_b)` of the closest points
-    /// and (friction with an anchor) the tangential stretch `P e` of CT10
-    /// (`P = I − n nᵀ`; zero without an anchor): what the stop location of
-    /// CT30 reads.
-    pub velocity: Vec3,
+    /// The tangential stretch `P e` of CT10 (`P = I − n nᵀ`; zero without
+    /// an anchor) \[m\] and, only for an evaluation of
+    /// `crate::friction_stop` ([`PairWork::rates`]), the stretch's own rate
+    /// `ė = v_a(σ_a) − v_b(σ_b) − ω_b(σ_b) × R_b o` \[m/s\] (world axes;
+    /// zero otherwise): what the stop location of CT30 reads.
     pub stretch: Vec3,
+    pub stretch_rate: Vec3,
 }
 
 /// A touching pair on the slip branch sliding back toward its anchor at
@@ -199,6 +200,10 @@ pub(crate) struct PairWork {
     pub fd_seeds: Vec<(SegmentBox, SegmentBox)>,
     /// The step-end slides of `crate::friction_stop` (CT30).
     pub slides: Vec<PairSlide>,
+    /// Whether an evaluation computes [`PairActive::stretch_rate`] (two
+    /// more section velocities per anchored pair): set by
+    /// `crate::friction_stop` for its own evaluations only.
+    pub rates: bool,
     /// Per segment pair tested, the evaluations of the last call (for the
     /// cost checks of the tests).
     pub narrow_tests: usize,
@@ -231,6 +236,7 @@ impl PairWork {
             scratch: vec![0.0; model.n_dof()],
             fd_seeds: Vec::with_capacity(64),
             slides: Vec::with_capacity(16),
+            rates: false,
             narrow_tests: 0,
         })
     }
