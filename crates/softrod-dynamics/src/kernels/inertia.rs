@@ -155,6 +155,13 @@ impl SpatialSums {
 /// `tangent_blocks`, the sign flips exactly the skew parts). So
 /// `RR' = m T_aᵀ` and `RQ = m(T_bᵀ − p̃T_aᵀ)` need no product, `𝓤₂₂ = (Σ m T_a)ᵀ`,
 /// `𝓤₂₁ = (Σ m T_b)ᵀ − 𝓤₁₂` are formed once per piece.
+///
+/// The isotropic form also carries `Σ m T_a` and `Σ m T_aᵀT_a` as scalar
+/// sums: `T_a = xI + c_b k̃ + c_c k̃²` is a polynomial in `k̃`
+/// ([`softrod_lie::PieceMaps::eval_with_ta`]), and with `k̃ᵀ = −k̃`,
+/// `k̃³ = −θ²k̃`, `T_aᵀT_a = x²I + (2x c_c − c_b² − θ²c_c²) k̃²`: five scalar
+/// sums per point and one assembly per piece replace a symmetric 3×3 product,
+/// a scaling and two 3×3 sums.
 #[derive(Default)]
 pub(crate) struct FullSums {
     u11: softrod_lie::Mat3,
@@ -164,9 +171,11 @@ pub(crate) struct FullSums {
     d11: softrod_lie::Mat3,
     d12: softrod_lie::Mat3,
     d22: softrod_lie::Mat3,
-    /// `Σ m T_a`, `Σ m T_b` of the isotropic form (`u21`, `u22` unused).
-    ta_m: softrod_lie::Mat3,
+    /// `Σ m T_b` of the isotropic form (`u21`, `u22`, `d22` unused).
     tb_m: softrod_lie::Mat3,
+    /// `Σ m x`, `Σ m c_b`, `Σ m c_c` (so `Σ m T_a`), `Σ m x²` and
+    /// `Σ m (2x c_c − c_b² − θ²c_c²)` (so `Σ m T_aᵀT_a`) of the isotropic form.
+    ta_sums: [f64; 5],
     isotropic: bool,
 }
 
@@ -185,24 +194,38 @@ impl FullSums {
     /// `Aᵀ = [[R, p̃R], [0, R]]` the U blocks are `RP + p̃(RQ)`, `p̃(RR')`,
     /// `RQ`, `RR'`: three products and two cross-product sweeps, and no
     /// `Ad⁻¹` block built.
+    ///
+    /// `ta = [x, c_b, c_c]` and `theta2 = θ²` describe `T_a` as a polynomial
+    /// in `k̃` ([`softrod_lie::PieceMaps::eval_with_ta`]).
     #[inline(always)]
-    pub(crate) fn add(&mut self, g: &Pose, t: &AdOp, mw: &Vec6) {
+    pub(crate) fn add(&mut self, g: &Pose, t: &AdOp, mw: &Vec6, ta: &[f64; 3], theta2: f64) {
+        if self.isotropic {
+            let m = mw[3];
+            let p = scale_rows(&softrod_lie::angular(mw), &t.a);
+            let q = t.b * m;
+            // Taᵀ J Ta + Tbᵀ m Tb is symmetric.
+            self.d11 += tr_mul_sym2(&t.a, &p, &t.b, &q);
+            self.d12 += q.tr_mul(&t.a);
+            let [x, cb, cc] = *ta;
+            let s = &mut self.ta_sums;
+            s[0] += m * x;
+            s[1] += m * cb;
+            s[2] += m * cc;
+            s[3] += m * (x * x);
+            s[4] += m * ((2.0 * x * cc - cb * cb) - theta2 * (cc * cc));
+            // RQ = m(T_bᵀ − p̃T_aᵀ) and p̃RR' = m p̃T_aᵀ (see the type's docs).
+            let pta = cross_cols(&g.translation, &t.a.transpose()) * m;
+            let rq = q.transpose() - pta;
+            self.u11 += g.rotation * p + cross_cols(&g.translation, &rq);
+            self.u12 += pta;
+            self.tb_m += q;
+            return;
+        }
         let (p, r, q) = scaled_blocks(&softrod_lie::angular(mw), &softrod_lie::linear(mw), t);
         // Taᵀ J Ta + Tbᵀ m Tb and Taᵀ m Ta are symmetric.
         self.d11 += tr_mul_sym2(&t.a, &p, &t.b, &q);
         self.d12 += t.b.tr_mul(&r);
         self.d22 += tr_mul_sym(&t.a, &r);
-        if self.isotropic {
-            // RQ = m(T_bᵀ − p̃T_aᵀ) and p̃RR' = m p̃T_aᵀ (see the type's docs).
-            let m = mw[3];
-            let pta = cross_cols(&g.translation, &t.a.transpose()) * m;
-            let rq = q.transpose() - pta;
-            self.u11 += g.rotation * p + cross_cols(&g.translation, &rq);
-            self.u12 += pta;
-            self.ta_m += r;
-            self.tb_m += q;
-            return;
-        }
         let rot = &g.rotation;
         let rq = rot * q;
         let rr = rot * r;
@@ -212,16 +235,22 @@ impl FullSums {
         self.u22 += rr;
     }
 
-    /// Projects on the basis: `ut = 𝓤ᶠB` (6×k), `dt = Bᵀ𝓓ᶠB` (k×k, full).
+    /// Projects on the basis: `ut = 𝓤ᶠB` (6×k), `dt = Bᵀ𝓓ᶠB` (k×k, full);
+    /// `maps` are the piece's, whose `k̃` the isotropic sums need.
     pub(crate) fn project(
         &mut self,
+        maps: &softrod_lie::PieceMaps,
         basis: &softrod_kinematics::Basis,
         ut: &mut Mat6,
         dt: &mut Mat6,
     ) {
         if self.isotropic {
-            self.u22 = self.ta_m.transpose();
+            let (km, k2) = (maps.k_skew(), maps.k_skew_squared());
+            let [sx, scb, scc, sx2, sg] = self.ta_sums;
+            // (Σ m T_a)ᵀ = Σm x I − Σm c_b k̃ + Σm c_c k̃².
+            self.u22 = km * (-scb) + k2 * scc + softrod_lie::Mat3::from_diagonal_element(sx);
             self.u21 = self.tb_m.transpose() - self.u12;
+            self.d22 = k2 * sg + softrod_lie::Mat3::from_diagonal_element(sx2);
         }
         let d = Sym6 {
             a: self.d11,
@@ -335,4 +364,45 @@ pub(crate) fn s_columns(
         }
     }
     k
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use softrod_lie::PieceMaps;
+
+    /// The isotropic form of [`FullSums`] (the scalar sums of `T_a`, the
+    /// identities `R T_a = T_aᵀ`, `R T_b = T_bᵀ − p̃T_aᵀ`) against the general
+    /// form's dense products, on the same points with `m·I` linear inertia.
+    #[test]
+    fn isotropic_sums_equal_the_general_ones() {
+        let basis = softrod_kinematics::Basis::all();
+        let d = Vec6::new(0.2, 0.1, -0.4, 0.3, -0.5, 0.9);
+        let xis = [
+            Vec6::new(0.3, -1.1, 0.7, 1.05, 0.2, -0.1),
+            Vec6::new(1e-9, 0.0, 2e-9, 0.9, 0.01, 0.0),
+            Vec6::new(12.0, -30.0, 5.0, 1.2, -0.3, 0.4),
+        ];
+        for xi in &xis {
+            for rate in [None, Some(&d)] {
+                let maps = PieceMaps::new(xi, rate);
+                let (mut iso, mut general) = (FullSums::new(true), FullSums::new(false));
+                for (x, w) in [(0.07, 0.17), (0.3, 0.33), (0.55, 0.33), (0.78, 0.17)] {
+                    let (g, t, _, ta) = maps.eval_with_ta(x);
+                    // A tapered section: the inertia changes along the piece.
+                    let mw = Vec6::new(2e-3, 1e-3, 1.1e-3, 0.5, 0.5, 0.5) * (w * (1.0 + x));
+                    iso.add(&g, &t, &mw, &ta, maps.theta_squared());
+                    general.add(&g, &t, &mw, &ta, maps.theta_squared());
+                }
+                let (mut u_iso, mut d_iso) = (Mat6::zeros(), Mat6::zeros());
+                let (mut u_gen, mut d_gen) = (Mat6::zeros(), Mat6::zeros());
+                iso.project(&maps, &basis, &mut u_iso, &mut d_iso);
+                general.project(&maps, &basis, &mut u_gen, &mut d_gen);
+                let tol_u = 1e-13 * (1.0 + u_gen.amax());
+                let tol_d = 1e-13 * (1.0 + d_gen.amax());
+                assert!((u_iso - u_gen).amax() < tol_u, "{xi:?}: {u_iso} vs {u_gen}");
+                assert!((d_iso - d_gen).amax() < tol_d, "{xi:?}: {d_iso} vs {d_gen}");
+            }
+        }
+    }
 }
