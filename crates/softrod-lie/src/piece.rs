@@ -186,6 +186,13 @@ impl PieceMaps {
         )
     }
 
+    /// The piece's curvature `k` (read off `k̃`).
+    #[inline(always)]
+    pub fn k(&self) -> Vec3 {
+        let m = &self.kmat;
+        Vec3::new(m[(2, 1)], m[(0, 2)], m[(1, 0)])
+    }
+
     /// `k̃` of the piece's curvature `k`.
     #[inline(always)]
     pub fn k_skew(&self) -> &Mat3 {
@@ -227,8 +234,8 @@ mod tests {
     use crate::{d_tangent_minus_self, exp_and_tangent_minus};
 
     /// `T_a = xI + c_b k̃ + c_c k̃²` from [`PieceMaps::eval_with_ta`], and the
-    /// scalar form `T_aᵀT_a = x²I + (2x c_c − c_b² − θ²c_c²) k̃²` the inertia
-    /// sums use, against the dense block and its dense product.
+    /// scalar form `T_aᵀT_a = −2c_b I + (2x c_c − c_b² − θ²c_c²) kkᵀ` the
+    /// inertia sums use (D91), against the dense block and its dense product.
     #[test]
     fn ta_coefficients_give_the_block_and_its_gram() {
         let xis = [
@@ -241,6 +248,8 @@ mod tests {
             for rate in [None, Some(&d)] {
                 let pm = PieceMaps::new(xi, rate);
                 let (km, k2, th2) = (pm.k_skew(), pm.k_skew_squared(), pm.theta_squared());
+                let k = pm.k();
+                assert_eq!(k, angular(xi));
                 for x in [0.0, 0.01, 0.3, 1.0, 2.0] {
                     let (g, t, bias, [x0, cb, cc]) = pm.eval_with_ta(x);
                     assert_eq!(pm.eval(x), (g, t, bias));
@@ -248,8 +257,8 @@ mod tests {
                     let ta = Mat3::identity() * x + km * cb + k2 * cc;
                     let scale = 1.0 + t.a.amax();
                     assert!((ta - t.a).amax() < 1e-15 * scale, "{xi:?} {x}");
-                    let gram = Mat3::identity() * (x * x)
-                        + k2 * ((2.0 * x * cc - cb * cb) - th2 * (cc * cc));
+                    let gram = Mat3::identity() * (-2.0 * cb)
+                        + k * k.transpose() * ((2.0 * x * cc - cb * cb) - th2 * (cc * cc));
                     let dense = t.a.transpose() * t.a;
                     assert!(
                         (gram - dense).amax() < 1e-14 * scale * scale,
