@@ -85,7 +85,7 @@ pub struct RodSystem {
     /// symmetric CT17 blocks and a matrix kept for the step.
     pub contact_active_set: bool,
     /// Whether ESDIRK retries a step inside which a sliding contact
-    /// stopped, at the stop (docs/theory-contact.md CT29,
+    /// stopped, at the stop (docs/theory-contact.md CT29; rod pairs CT30;
     /// `softrod_dynamics::friction_stop`; default `true`). `false` is the
     /// step sequence without it, for comparisons.
     pub locate_friction_stops: bool,

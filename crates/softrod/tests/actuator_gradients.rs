@@ -11,7 +11,7 @@
 use softrod::{GradientMethod, GradientOptions, LossTerm, Simulation};
 
 mod gradient_support;
-use gradient_support::{agree, central, options_for};
+use gradient_support::{FOUR_BAR, FourBar, agree, central, options_for};
 
 const OPTIONS: GradientOptions = GradientOptions {
     fixed_step: Some(0.004),
@@ -163,42 +163,15 @@ fn a_universal_joints_constant_torques_match_central_differences_with_radau5() {
 /// A soft four-bar whose crank is driven by a torque table (the closure
 /// projection P M⁻¹ of G22 on the actuator's columns).
 fn four_bar(values: [f64; 3]) -> String {
-    format!(
-        r#"
-[world]
-gravity = [0.0, 0.0, -9.81]
-[[rod]]
-name = "a"
-joint = {{ type = "revolute", axis = [0, 1, 0], damping = 0.001, actuator = {{ force = {{ times = [0.0, 0.05, 0.1], values = [{:e}, {:e}, {:e}] }} }} }}
-length = 0.3
-pieces = 2
-strains = ["ky", "kz", "qx"]
-section = {{ shape = "circle", radius = 0.01 }}
-material = {{ density = 1000.0, young = 1.0e6, poisson = 0.5, viscosity = 300.0 }}
-[[rod]]
-name = "b"
-base = {{ position = [0.3, 0.0, -0.15], rotation = [[0, 0, -1], [0, 1, 0], [1, 0, 0]] }}
-joint = {{ type = "revolute", axis = [0, 1, 0] }}
-length = 0.15
-pieces = 2
-strains = ["ky", "qx", "qz"]
-section = {{ shape = "circle", radius = 0.008 }}
-material = {{ density = 1100.0, young = 2.0e6, shear_modulus = 6.0e5, viscosity = 1.0e3 }}
-[[body]]
-name = "hand"
-parent = "b"
-mass = 0.01
-inertia = [1e-6, 1e-6, 1e-6]
-[[closure]]
-type = "ball"
-a = {{ element = "a" }}
-b = {{ element = "hand" }}
-[run]
-rtol = 1e-8
-atol = 1e-10
-"#,
+    let joint = format!(
+        ", damping = 0.001, actuator = {{ force = {{ times = [0.0, 0.05, 0.1], values = [{:e}, {:e}, {:e}] }} }}",
         values[0], values[1], values[2]
-    )
+    );
+    FourBar {
+        crank_joint: &joint,
+        ..FOUR_BAR
+    }
+    .toml()
 }
 
 #[test]

@@ -14,7 +14,7 @@ use softrod::dynamics::{
 use softrod::{GradientMethod, GradientOptions, LossTerm, Simulation};
 
 mod gradient_support;
-use gradient_support::{agree, central, options_for};
+use gradient_support::{FourBar, agree, central, options_for};
 
 const OPTIONS: GradientOptions = GradientOptions {
     fixed_step: Some(0.004),
@@ -51,47 +51,24 @@ const BASE: P = P {
 /// without a column (every coordinate moves in the x-z plane): a redundant
 /// row the forward solve drops.
 fn four_bar(p: P, a_strains: &str) -> String {
-    format!(
-        r#"
-[world]
-gravity = [0.0, 0.0, -9.81]
-[[rod]]
-name = "a"
-joint = {{ type = "revolute", axis = [0, 1, 0], damping = 0.001 }}
-length = 0.3
-pieces = 2
-strains = {a_strains}
-section = {{ shape = "circle", radius = 0.01 }}
-material = {{ density = {:e}, young = {:e}, poisson = 0.5, viscosity = {:e} }}
-[[cable]]
-rod = "a"
-offset = [0.0, 0.006]
-tension = {{ times = [0.0, 0.1], values = [{:e}, {:e}] }}
-[[rod]]
-name = "b"
-base = {{ position = [0.3, 0.0, -0.15], rotation = [[0, 0, -1], [0, 1, 0], [1, 0, 0]] }}
-joint = {{ type = "revolute", axis = [0, 1, 0] }}
-length = 0.15
-pieces = 2
-strains = ["ky", "qx", "qz"]
-section = {{ shape = "circle", radius = 0.008 }}
-material = {{ density = 1100.0, young = 2.0e6, shear_modulus = {:e}, viscosity = 1.0e3 }}
-[[body]]
-name = "hand"
-parent = "b"
-mass = {:e}
-inertia = [1e-6, 1e-6, 1e-6]
-center_of_mass = [0.005, 0.0, 0.0]
-[[closure]]
-type = "ball"
-a = {{ element = "a" }}
-b = {{ element = "hand" }}
-[run]
-rtol = 1e-8
-atol = 1e-10
-"#,
-        p.density, p.young, p.viscosity, p.tension[0], p.tension[1], p.shear, p.mass
-    )
+    let material = format!(
+        "density = {:e}, young = {:e}, poisson = 0.5, viscosity = {:e}",
+        p.density, p.young, p.viscosity
+    );
+    let cable = format!(
+        "[[cable]]\nrod = \"a\"\noffset = [0.0, 0.006]\ntension = {{ times = [0.0, 0.1], values = [{:e}, {:e}] }}",
+        p.tension[0], p.tension[1]
+    );
+    FourBar {
+        crank_joint: ", damping = 0.001",
+        a_strains,
+        a_material: &material,
+        after_a: &cable,
+        b_shear: p.shear,
+        hand_mass: p.mass,
+        hand_extra: "center_of_mass = [0.005, 0.0, 0.0]",
+    }
+    .toml()
 }
 
 /// A parameter's name, value and the model with it moved.

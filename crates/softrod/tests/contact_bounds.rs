@@ -261,11 +261,27 @@ fn a_sliding_rod_stops_where_coulomb_says_at_every_tolerance() {
 /// its own axis (y: no rolling) by `F`. Returns the bar's centre y at the
 /// output times (every 10 ms).
 fn bar_on_rails(pull: f64, duration: f64) -> Vec<(f64, f64)> {
+    let mut sim = bar_across_rails(Vec3::new(0.0, pull, -1.0), false);
+    sim.set_settings(settings(Integrator::Esdirk, 1e-7, 0.01))
+        .unwrap();
+    let mut keep = Keep(Vec::new());
+    sim.simulate_with(duration, &mut keep).unwrap();
+    keep.0
+        .iter()
+        .map(|(t, q, _)| (*t, sim.pose("bar", 0.5 * L, q).unwrap().translation.y))
+        .collect()
+}
+
+/// The bar of [`bar_on_rails`] across its two rails, loaded at its middle
+/// by `load` (world frame) \[N\]. `damped`: rails and bar of the rails'
+/// stiffness with a viscosity of 1e7 Pa s (their lowest bending modes
+/// about critically damped, so they settle within a few periods).
+fn bar_across_rails(load: Vec3, damped: bool) -> Simulation {
     let stiff = Material::builder()
         .density(1000.0)
         .young(1.0e9)
         .poisson(0.5)
-        .viscosity(1.0e5)
+        .viscosity(if damped { 1.0e7 } else { 1.0e5 })
         .build()
         .unwrap();
     let rail = |y: f64, name: &str| {
@@ -285,10 +301,14 @@ fn bar_on_rails(pull: f64, duration: f64) -> Vec<(f64, f64)> {
         .strains([Strain::Ky, Strain::Kz])
         .base(Pose::new(along_y, Vec3::new(0.15, -0.5 * L, 2.0 * R)))
         .circle(R)
-        .material(material(1.0e6, 1.0e3))
+        .material(if damped {
+            stiff
+        } else {
+            material(1.0e6, 1.0e3)
+        })
         .point_load(PointLoad {
             s: 0.5 * L,
-            force: Vec3::new(0.0, pull, -1.0),
+            force: load,
             moment: Vec3::zeros(),
             frame: LoadFrame::World,
         });
@@ -304,15 +324,77 @@ fn bar_on_rails(pull: f64, duration: f64) -> Vec<(f64, f64)> {
         })
         .build()
         .unwrap();
-    let mut sim = Simulation::new(model);
-    sim.set_settings(settings(Integrator::Esdirk, 1e-7, 0.01))
-        .unwrap();
-    let mut keep = Keep(Vec::new());
-    sim.simulate_with(duration, &mut keep).unwrap();
-    keep.0
-        .iter()
-        .map(|(t, q, _)| (*t, sim.pose("bar", 0.5 * L, q).unwrap().translation.y))
-        .collect()
+    Simulation::new(model)
+}
+
+/// A rod–rod slide's stop located inside the implicit step
+/// (docs/theory-contact.md CT30): the bar of [`bar_on_rails`], unloaded
+/// and with rails and bar stiff and damped, settled on the rails (so the
+/// normal forces are its weight's shares and the bar decelerates at `μ g`
+/// while both contacts slide), thrown along its own axis (y) at `v₀`
+/// with μ = 0.3, slides Coulomb's `v₀²/(2 μ g)` and stays there — at
+/// every tolerance. The bound, 2e-5 m, is the elastic give Coulomb's
+/// rigid block lacks: the rails' lateral give under the sliding friction
+/// `μ (W/2) a³/(3 E I)` = 1.3e-5 m (they spring back once the bar
+/// sticks) plus the pair's pre-slip `μ f_n/k` ≈ 8e-6 m (CT5). Without the
+/// location the stop at 0.25 m/s, rtol 1e-5, fell inside a step whose
+/// fixed pair anchors pushed the bar back: 36 µm short (8 µm with it).
+#[test]
+fn a_rod_sliding_across_two_rods_stops_where_coulomb_says_at_every_tolerance() {
+    const SETTLE: f64 = 0.2;
+    for (v0, rtol) in [
+        (0.25, 1e-4),
+        (0.25, 1e-5),
+        (0.3, 1e-5),
+        (0.25, 1e-6),
+        (0.25, 1e-8),
+    ] {
+        let closed = v0 * v0 / (2.0 * MU * G);
+        let mut sim = bar_across_rails(Vec3::zeros(), true);
+        sim.set_settings(settings(Integrator::Esdirk, rtol, 0.01))
+            .unwrap();
+        // Settled on the rails first (no landing transient in the normal
+        // forces), then thrown.
+        let mut keep = Keep(Vec::new());
+        sim.simulate_with(SETTLE, &mut keep).unwrap();
+        let (_, q0, mut qd0) = keep.0.pop().unwrap();
+        let centre = |sim: &Simulation, q: &[f64]| sim.pose("bar", 0.5 * L, q).unwrap().translation;
+        // The coordinate that moves the bar's centre along y (its free
+        // joint's translation along the bar's axis).
+        let c0 = centre(&sim, &q0);
+        let along = (0..q0.len())
+            .find(|&i| {
+                let mut q = q0.clone();
+                q[i] += 1e-6;
+                centre(&sim, &q).y - c0.y > 0.99e-6
+            })
+            .expect("a coordinate along the bar");
+        qd0[along] += v0;
+        sim.set_initial_state(&q0, &qd0).unwrap();
+        let mut keep = Keep(Vec::new());
+        let summary = sim.simulate_with(0.25, &mut keep).unwrap();
+        let y = |q: &[f64]| centre(&sim, q).y;
+        let y0 = y(&keep.0[0].1);
+        // At rest from the stop (≤ 0.12 s) and the rails' spring-back on:
+        // the last samples.
+        let tail: Vec<f64> = keep
+            .0
+            .iter()
+            .filter(|s| s.0 >= 0.2)
+            .map(|s| y(&s.1) - y0)
+            .collect();
+        let slid = *tail.last().unwrap();
+        let spread = tail.iter().fold(0.0f64, |m, d| m.max((d - slid).abs()));
+        eprintln!(
+            "v0 {v0} rtol {rtol:e}: {} steps, {} rejected, slid {slid:.6} m against {closed:.6} m, moved {spread:.2e} m at rest",
+            summary.stats.steps, summary.stats.rejected_steps
+        );
+        assert!(
+            (slid - closed).abs() < 2e-5,
+            "v0 {v0} rtol {rtol}: {slid} vs {closed}"
+        );
+        assert!(spread < 1e-6, "v0 {v0} rtol {rtol}: creeps {spread}");
+    }
 }
 
 const MU: f64 = 0.3;

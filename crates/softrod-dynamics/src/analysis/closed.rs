@@ -5,11 +5,12 @@
 use super::matrices::stiffness_matrix;
 use super::modes::{Modes, difference_noise, frequencies, mapped_noise};
 use super::statics::{MAX_STIFFNESS_ROUNDS, StaticsOptions, StaticsResult};
-use crate::algorithms::tree::{self, outward};
+use crate::algorithms::tree::{self, outward, outward_from};
 use crate::algorithms::{Motion, Pass, contact_force};
 use crate::constraints::forward::pivoted_cholesky;
 use crate::constraints::queries::{check_workspace, length_scale};
 use crate::constraints::rows::assemble;
+use crate::derivatives::{IdDerivatives, open_tree_id_derivatives};
 use crate::error::DynamicsError;
 use crate::forces::Forces;
 use crate::model::Model;
@@ -102,6 +103,92 @@ impl Closed<'_> {
         (jac, noise)
     }
 
+    /// `∂(τ − J_vᵀλ)/∂q` for Newton and the sensitivities: the open
+    /// tree's `∂τ/∂q` analytic (D37–D47 at `q̇ = q̈ = 0`, under the
+    /// evaluation's forces and `data`'s tensions and joint inputs) less
+    /// central differences of `J_vᵀλ` alone at fixed `λ` (the closure
+    /// rows: kinematics, no dynamics), as the closed dynamics' (CD3).
+    /// With contact, [`Self::tangent`] (whose static force takes the
+    /// frictionless contact at rest, which the derivatives do not).
+    fn newton_tangent(
+        &self,
+        data: &mut Data,
+        q: &DVector<f64>,
+        lambda: &DVector<f64>,
+        k: &DMatrix<f64>,
+        work: &mut Option<IdDerivatives>,
+    ) -> Result<DMatrix<f64>, DynamicsError> {
+        if self.model.has_contact() {
+            return Ok(self.tangent(data, q, lambda, k).0);
+        }
+        let n = q.len();
+        let w = work.get_or_insert_with(|| IdDerivatives::new(self.model));
+        w.copy_joint_inputs(data);
+        match (data.cable_tensions(), &mut w.tensions) {
+            (None, t) => *t = None,
+            (Some(u), Some(t)) => t.as_mut_slice().copy_from_slice(u),
+            (Some(u), t) => *t = Some(DVector::from_column_slice(u)),
+        }
+        let zero = vec![0.0; n];
+        open_tree_id_derivatives(
+            self.model,
+            w,
+            self.forces,
+            self.t,
+            q.as_slice(),
+            &zero,
+            &zero,
+        )?;
+        let mut jac = w.dtau_dq.clone();
+        // One kinematic sweep from the node that holds each coordinate,
+        // deepest nodes first (the nodes before it are at `q`), as CD3.
+        let mut order: Vec<(usize, usize)> = Vec::with_capacity(n);
+        for (i, node) in self.tree.nodes.iter().enumerate() {
+            if node.prescribed.is_none() {
+                order.extend((node.dof..node.dof + node.k).map(|j| (i, j)));
+            }
+        }
+        order.sort_by(|a, b| b.cmp(a));
+        let mut rows = ConstraintRows::new(self.model.n_constraints(), n);
+        let (mut plus, mut minus) = (DVector::zeros(n), DVector::zeros(n));
+        let mut qp = q.clone();
+        let sweep = |data: &mut Data, qp: &DVector<f64>, from: usize| {
+            let motion = Motion::at_rest(qp.as_slice());
+            outward_from(
+                self.model,
+                self.tree,
+                data,
+                motion,
+                Pass::Kinematic,
+                Forces::ALL,
+                from,
+            );
+        };
+        sweep(data, &qp, 0);
+        for &(node, j) in &order {
+            let h = 6e-6 * q[j].abs().max(1.0);
+            for (x, out) in [(q[j] + h, &mut plus), (q[j] - h, &mut minus)] {
+                qp[j] = x;
+                sweep(data, &qp, node);
+                assemble(
+                    self.model,
+                    self.tree,
+                    data,
+                    Motion::at_rest(qp.as_slice()),
+                    false,
+                    &mut rows,
+                );
+                out.gemv_tr(1.0, &rows.jac, lambda, 0.0);
+            }
+            qp[j] = q[j];
+            let mut col = jac.column_mut(j);
+            col.axpy(-0.5 / h, &plus, 1.0);
+            col.axpy(0.5 / h, &minus, 1.0);
+        }
+        sweep(data, &qp, 0);
+        Ok(jac)
+    }
+
     /// Least-squares multipliers `λ = argmin ‖τ − J_vᵀλ‖` at `q`.
     fn multipliers(&self, data: &mut Data, q: &[f64]) -> DVector<f64> {
         let tau = self.static_force(data, q);
@@ -171,13 +258,15 @@ fn statics_once(
     let r_full = full.static_force(data, q0).amax();
     let f_ref = r_full.max(f64::MIN_POSITIVE);
     let mut iterations = 0;
+    let mut derivatives = None;
     // Scaled merit: forces relative to f_ref, residuals relative to ℓ.
     let merit = |r: &DVector<f64>, p: &DVector<f64>| (r.amax() / f_ref).max(p.amax() / ell);
     let solve = |cx: Closed,
                  data: &mut Data,
                  q: &mut DVector<f64>,
                  lam: &mut DVector<f64>,
-                 iterations: &mut usize|
+                 iterations: &mut usize,
+                 derivatives: &mut Option<IdDerivatives>|
      -> Result<Result<f64, f64>, DynamicsError> {
         let mut r = cx.force_residual(data, q.as_slice(), lam);
         let (mut p, _) = cx.phi_jac(data, q.as_slice(), true);
@@ -187,7 +276,7 @@ fn statics_once(
                 return Ok(Ok(r.amax()));
             }
             *iterations += 1;
-            let (kt, _) = cx.tangent(data, q, lam, &k);
+            let kt = cx.newton_tangent(data, q, lam, &k, derivatives)?;
             let (_, jv) = cx.phi_jac(data, q.as_slice(), false);
             let (_, je) = cx.phi_jac(data, q.as_slice(), true);
             // Only independent rows enter the KKT matrix (D69): a
@@ -251,7 +340,14 @@ fn statics_once(
     };
     let mut lam = full.multipliers(data, q0);
     let start = (q.clone(), lam.clone());
-    if let Ok(res) = solve(full, data, &mut q, &mut lam, &mut iterations)? {
+    if let Ok(res) = solve(
+        full,
+        data,
+        &mut q,
+        &mut lam,
+        &mut iterations,
+        &mut derivatives,
+    )? {
         return Ok((
             StaticsResult {
                 q,
@@ -265,7 +361,16 @@ fn statics_once(
     // Load continuation from the unloaded state.
     let (mut q_prev, mut l_prev) = start;
     l_prev.fill(0.0);
-    if solve(at(0.0), data, &mut q_prev, &mut l_prev, &mut iterations)?.is_err() {
+    if solve(
+        at(0.0),
+        data,
+        &mut q_prev,
+        &mut l_prev,
+        &mut iterations,
+        &mut derivatives,
+    )?
+    .is_err()
+    {
         return Err(DynamicsError::StaticsFailed {
             reason: "no constrained equilibrium even without loads (do the closures hold?)".into(),
             load_fraction: 0.0,
@@ -286,7 +391,14 @@ fn statics_once(
         steps += 1;
         let target = (lam_s + step).min(1.0);
         let (mut qt, mut lt) = (q_prev.clone(), l_prev.clone());
-        match solve(at(target), data, &mut qt, &mut lt, &mut iterations)? {
+        match solve(
+            at(target),
+            data,
+            &mut qt,
+            &mut lt,
+            &mut iterations,
+            &mut derivatives,
+        )? {
             Ok(res) => {
                 lam_s = target;
                 q_prev = qt;
@@ -509,7 +621,7 @@ pub fn statics_sensitivity(
     let qv = DVector::from_column_slice(q);
     let lam = DVector::from_column_slice(lambda);
     let stiffness = stiffness_matrix(model);
-    let (kt, _) = cx.tangent(data, &qv, &lam, &stiffness);
+    let kt = cx.newton_tangent(data, &qv, &lam, &stiffness, &mut None)?;
     let (_, jv) = cx.phi_jac(data, q, false);
     let (_, je) = cx.phi_jac(data, q, true);
     let rows = independent_rows(&je);

@@ -14,7 +14,7 @@ use crate::model::contact::{
     Active, ContactWork, HEAL_PERIODS, Hold, IMPACT_LIMIT, RAISE_HEADROOM, REST_TARGET,
 };
 use crate::model::data::Data;
-use crate::model::pairs::{PairAnchor, PairHold, radius_at};
+use crate::model::pairs::{PairActive, PairAnchor, PairHold, PairSlide, radius_at};
 use softrod_lie::Vec3;
 use softrod_mechanics::contact::{ContactPoint, Contactee};
 
@@ -322,6 +322,32 @@ pub fn commit_contact_change(
     result.map(|()| change)
 }
 
+/// A contact's slide rate along its tangential stretch `ṡ = ė·ê` \[m/s\]
+/// (`ê = P e/|P e|`, `ė` the stretch's rate, world axes) and pre-slip
+/// `|f_t|/k` \[m\] (CT29, CT30), if it is on the slip branch with an
+/// anchor and carries friction: a contact whose normal force is zero (an
+/// opening one, its damping holding it at `f_n = 0`) carries none, so it
+/// pushes nothing back.
+fn slide_rate(
+    sticking: bool,
+    k: f64,
+    normal: &Vec3,
+    force: &Vec3,
+    stretch: &Vec3,
+    rate: &Vec3,
+) -> Option<(f64, f64)> {
+    let e = stretch.norm();
+    if sticking || e <= 0.0 || k <= 0.0 {
+        return None;
+    }
+    let ft = (force - normal * normal.dot(force)).norm();
+    if ft <= 0.0 {
+        return None;
+    }
+    let vt = rate - normal * normal.dot(rate);
+    Some((vt.dot(stretch) / e, ft / k))
+}
+
 /// Where a slide stopped inside a step (docs/theory-contact.md CT29): the
 /// fraction `θ ∈ (0, 1)` of the step `h` from `(t0, q0, q̇0)` to
 /// `(t1, q1, q̇1)` at which a sliding contact's tangential velocity
@@ -333,15 +359,18 @@ pub fn commit_contact_change(
 /// it slid out in the step: friction `μ f_n` pushes it back toward its
 /// anchor by up to the distance it slid in the step — the continuous law
 /// would have stuck it within its pre-slip `μ f_n/k`. A contact on the
-/// slip branch at the step end whose tangential velocity points toward its
-/// anchor (`s₁ = v_t·ê < 0`, `ê` the stretch's direction) while it
-/// pointed away at the step start (`s₀ > 0`) marks such a stop; `θ` is
-/// the zero of the secant of `s` (exact for a constant friction force).
-/// The step is retried if the slide back it caused, `½ |s₁| (1 − θ) h`,
-/// exceeds that contact's pre-slip `μ f_n/k` (the elastic give CT5
-/// already allows): a stop is located to the law's own resolution,
-/// whatever the tolerances. Rod–obstacle contacts; rod pairs (CT10) are
-/// not located. Nothing for a model without friction.
+/// slip branch at the step end whose stretch shrinks (`s₁ = ė·ê < 0`,
+/// `ê` the stretch's direction, `ė` its rate) while it grew at the step
+/// start (`s₀ > 0`) marks such a stop; `θ` is the zero of the secant of
+/// `s` (exact for a constant friction force). The step is retried if the
+/// slide back it caused, `½ |s₁| (1 − θ) h`, exceeds that contact's
+/// pre-slip `μ f_n/k` (the elastic give CT5 already allows): a stop is
+/// located to the law's own resolution, whatever the tolerances. A
+/// contact without friction force at the step end (`f_n = 0`) is skipped.
+/// Rod–obstacle contacts (`ė` the point's velocity), and rod–rod and self
+/// contact pairs (CT10, CT30: `ė` the relative velocity of the anchor's
+/// material points, `b`'s turning with its section). Nothing for a model
+/// without friction.
 #[allow(clippy::too_many_arguments)]
 pub fn friction_stop(
     model: &Model,
@@ -354,26 +383,64 @@ pub fn friction_stop(
     q1: &[f64],
     qd1: &[f64],
 ) -> Result<Option<f64>, DynamicsError> {
-    if !model.has_contact() || !model.obstacles().iter().any(|o| o.friction > 0.0) {
+    let pair_friction = model.contact.settings.any() && model.contact.settings.friction > 0.0;
+    if !model.has_contact()
+        || !(pair_friction || model.obstacles().iter().any(|o| o.friction > 0.0))
+    {
         return Ok(None);
     }
     check_vec(model, "q", q1)?;
     check_vec(model, "qdot", qd1)?;
     check_vec(model, "q", q0)?;
     check_vec(model, "qdot", qd0)?;
-    let n_obs = model.contact.obstacles.len();
-    // The slide rate along the stretch and the pre-slip of a contact.
-    let rate = |a: &Active| -> Option<(f64, f64)> {
-        let e = a.stretch.norm();
-        if a.sticking || e <= 0.0 || a.k <= 0.0 {
-            return None;
+    // The pairs' stretch rates for these two evaluations only.
+    let set_rates = |data: &mut Data, on: bool| {
+        if let Some(pw) = data.contact.as_mut().and_then(|w| w.pairs.as_mut()) {
+            pw.rates = on;
         }
-        let vt = a.velocity - a.normal * a.normal.dot(&a.velocity);
-        let ft = a.force - a.normal * a.normal.dot(&a.force);
-        Some((vt.dot(&a.stretch) / e, ft.norm() / a.k))
+    };
+    set_rates(data, true);
+    let theta = locate_stop(model, data, h, t0, q0, qd0, t1, q1, qd1);
+    set_rates(data, false);
+    Ok(theta)
+}
+
+/// [`friction_stop`] after its checks, with the pairs' rates on.
+#[allow(clippy::too_many_arguments)]
+fn locate_stop(
+    model: &Model,
+    data: &mut Data,
+    h: f64,
+    t0: f64,
+    q0: &[f64],
+    qd0: &[f64],
+    t1: f64,
+    q1: &[f64],
+    qd1: &[f64],
+) -> Option<f64> {
+    let n_obs = model.contact.obstacles.len();
+    let rate = |a: &Active| {
+        slide_rate(
+            a.sticking,
+            a.k,
+            &a.normal,
+            &a.force,
+            &a.stretch,
+            &a.velocity,
+        )
+    };
+    let pair_rate = |c: &PairActive| {
+        slide_rate(
+            c.sticking,
+            c.k,
+            &c.normal,
+            &c.force,
+            &c.stretch,
+            &c.stretch_rate,
+        )
     };
     if !contact_force(model, data, Forces::ALL, t1, q1, Some(qd1)) {
-        return Ok(None);
+        return None;
     }
     let mut work = data.contact.take().expect("contact work");
     work.slides.clear();
@@ -385,13 +452,66 @@ pub fn friction_stop(
             work.slides.push((a.rod, idx, s1, pre_slip));
         }
     }
-    let any = !work.slides.is_empty();
+    let mut any = !work.slides.is_empty();
+    if let Some(pw) = &mut work.pairs {
+        pw.slides.clear();
+        for c in &pw.active {
+            if let Some((s1, pre_slip)) = pair_rate(c)
+                && s1 < 0.0
+            {
+                pw.slides.push(PairSlide {
+                    a: c.a,
+                    sa: c.sa,
+                    b: c.b,
+                    sb: c.sb,
+                    reach: c.radius_a + radius_at(model, c.b, c.sb),
+                    rate: s1,
+                    pre_slip,
+                });
+            }
+        }
+        any |= !pw.slides.is_empty();
+    }
     data.contact = Some(work);
     if !any || !contact_force(model, data, Forces::ALL, t0, q0, Some(qd0)) {
-        return Ok(None);
+        return None;
     }
     let work = data.contact.as_ref().expect("contact work");
     let mut theta: Option<f64> = None;
+    // Retried at the earliest stop whose slide back exceeds its pre-slip.
+    let mut stop = |s0: f64, s1: f64, pre_slip: f64| {
+        if s0 <= 0.0 {
+            return;
+        }
+        let th = s0 / (s0 - s1);
+        let back = 0.5 * (-s1) * (1.0 - th) * h;
+        if back > pre_slip {
+            theta = Some(theta.map_or(th, |m: f64| m.min(th)));
+        }
+    };
+    // The start's own rate: on either branch, its stretch's rate along the
+    // stretch (a sticking start has a stretch too).
+    let start = |stretch: &Vec3, normal: &Vec3, rate: &Vec3| {
+        let e = stretch.norm();
+        (e > 0.0).then(|| (rate - normal * normal.dot(rate)).dot(stretch) / e)
+    };
+    // Rod pairs (CT30): the same pair at the step start is the one the
+    // anchors' rule (CT10) matches, its two arc lengths within `r_a + r_b`.
+    if let Some(pw) = &work.pairs {
+        for sl in &pw.slides {
+            let Some(c) = pw.active.iter().find(|c| {
+                c.a == sl.a
+                    && c.b == sl.b
+                    && (c.sa - sl.sa).abs() < sl.reach
+                    && (c.sb - sl.sb).abs() < sl.reach
+            }) else {
+                continue;
+            };
+            if let Some(s0) = start(&c.stretch, &c.normal, &c.stretch_rate) {
+                stop(s0, sl.rate, sl.pre_slip);
+            }
+        }
+    }
     for &(rod, idx, s1, pre_slip) in &work.slides {
         let Some(a) = work
             .active
@@ -400,24 +520,11 @@ pub fn friction_stop(
         else {
             continue;
         };
-        // The start's own rate: on either branch, its velocity along the
-        // stretch (a sticking start has a stretch too).
-        let e = a.stretch.norm();
-        if e <= 0.0 {
-            continue;
-        }
-        let vt = a.velocity - a.normal * a.normal.dot(&a.velocity);
-        let s0 = vt.dot(&a.stretch) / e;
-        if s0 <= 0.0 {
-            continue;
-        }
-        let th = s0 / (s0 - s1);
-        let back = 0.5 * (-s1) * (1.0 - th) * h;
-        if back > pre_slip {
-            theta = Some(theta.map_or(th, |m: f64| m.min(th)));
+        if let Some(s0) = start(&a.stretch, &a.normal, &a.velocity) {
+            stop(s0, s1, pre_slip);
         }
     }
-    Ok(theta)
+    theta
 }
 
 /// The stiffness of resting contacts for statics (CT15): at the

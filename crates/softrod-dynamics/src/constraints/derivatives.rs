@@ -200,28 +200,14 @@ pub fn closed_dynamics_derivatives<'a>(
     tau_act: Option<&[f64]>,
 ) -> Result<&'a ClosedDerivatives, DynamicsError> {
     let forces = Forces::ALL;
-    let (Some(tree), true) = (&model.tree, model.has_closures()) else {
-        return Err(DynamicsError::UnsupportedClosed {
-            what: "closed_dynamics_derivatives of an open model (use forward_dynamics_derivatives)",
-        });
-    };
+    let tree = closed_start(
+        model,
+        data,
+        work,
+        (t, q, qd, tau_act),
+        "closed_dynamics_derivatives of an open model (use forward_dynamics_derivatives)",
+    )?;
     let (n, m) = (model.n_dof(), model.n_constraints());
-    if work.qdd.len() != n || work.lambda.len() != m || work.solve.len() != tree.nodes.len() {
-        return Err(DynamicsError::WorkspaceMismatch {
-            what: "ClosedDerivatives",
-            built: work.qdd.len(),
-            got: n,
-        });
-    }
-    check_workspace(model, data)?;
-    check_forward_inputs(model, forces, q, qd, tau_act)?;
-    model.set_time(data, t);
-    constrained_forward(model, data, forces, t, q, qd, tau_act)?;
-    work.qdd.copy_from(check_qdd(data, t)?);
-    let Some(cw) = data.closure.as_ref() else {
-        unreachable!("check_workspace found the closure buffers")
-    };
-    work.lambda.copy_from(&cw.lambda);
     work.id.copy_joint_inputs(data);
     match (data.cable_tensions(), &mut work.id.tensions) {
         (None, t) => *t = None,
@@ -313,6 +299,46 @@ pub fn closed_dynamics_derivatives<'a>(
         }
     }
     Ok(work)
+}
+
+/// The start of [`closed_dynamics_derivatives`] and
+/// [`closed_prescribed_derivatives`]: checks the model (closed; `open`
+/// names the call in the error otherwise), the workspace and the inputs,
+/// runs the constrained forward dynamics at `(t, q, q̇)` and keeps its
+/// `q̈`, `λ` in `work`. Returns the model's tree.
+fn closed_start<'m>(
+    model: &'m Model,
+    data: &mut Data,
+    work: &mut ClosedDerivatives,
+    (t, q, qd, tau_act): (f64, &[f64], &[f64], Option<&[f64]>),
+    open: &'static str,
+) -> Result<&'m Tree, DynamicsError> {
+    let forces = Forces::ALL;
+    let (Some(tree), true) = (&model.tree, model.has_closures()) else {
+        return Err(DynamicsError::UnsupportedClosed { what: open });
+    };
+    let (n, m, np) = (model.n_dof(), model.n_constraints(), model.n_prescribed());
+    if work.qdd.len() != n
+        || work.lambda.len() != m
+        || work.solve.len() != tree.nodes.len()
+        || work.force_dp.ncols() != np
+    {
+        return Err(DynamicsError::WorkspaceMismatch {
+            what: "ClosedDerivatives",
+            built: work.qdd.len(),
+            got: n,
+        });
+    }
+    check_workspace(model, data)?;
+    check_forward_inputs(model, forces, q, qd, tau_act)?;
+    model.set_time(data, t);
+    constrained_forward(model, data, forces, t, q, qd, tau_act)?;
+    work.qdd.copy_from(check_qdd(data, t)?);
+    let Some(cw) = data.closure.as_ref() else {
+        unreachable!("check_workspace found the closure buffers")
+    };
+    work.lambda.copy_from(&cw.lambda);
+    Ok(tree)
 }
 
 /// (CD4) in place on the columns of `x` (each `X_j = M⁻¹ g_j`):
@@ -487,28 +513,14 @@ pub fn closed_prescribed_derivatives(
     tau_act: Option<&[f64]>,
 ) -> Result<(), DynamicsError> {
     let forces = Forces::ALL;
-    let (Some(tree), true) = (&model.tree, model.has_closures()) else {
-        return Err(DynamicsError::UnsupportedClosed {
-            what: "closed_prescribed_derivatives of an open model",
-        });
-    };
-    let (n, m, np) = (model.n_dof(), model.n_constraints(), model.n_prescribed());
-    if work.qdd.len() != n || work.lambda.len() != m || work.force_dp.ncols() != np {
-        return Err(DynamicsError::WorkspaceMismatch {
-            what: "ClosedDerivatives",
-            built: work.qdd.len(),
-            got: n,
-        });
-    }
-    check_workspace(model, data)?;
-    check_forward_inputs(model, forces, q, qd, tau_act)?;
-    model.set_time(data, t);
-    constrained_forward(model, data, forces, t, q, qd, tau_act)?;
-    work.qdd.copy_from(check_qdd(data, t)?);
-    let Some(cw) = data.closure.as_ref() else {
-        unreachable!("check_workspace found the closure buffers")
-    };
-    work.lambda.copy_from(&cw.lambda);
+    let tree = closed_start(
+        model,
+        data,
+        work,
+        (t, q, qd, tau_act),
+        "closed_prescribed_derivatives of an open model",
+    )?;
+    let (n, m) = (model.n_dof(), model.n_constraints());
     let qdd = std::mem::take(&mut work.qdd);
     work.qx.copy_from_slice(q);
     work.qdx.copy_from_slice(qd);

@@ -116,6 +116,28 @@ pub(crate) struct PairActive {
     pub dv: Mat3,
     pub de: Mat3,
     pub anchor: Option<PairAnchor>,
+    /// The tangential stretch `P e` of CT10 (`P = I − n nᵀ`; zero without
+    /// an anchor) \[m\] and, only for an evaluation of
+    /// `crate::friction_stop` ([`PairWork::rates`]), the stretch's own rate
+    /// `ė = v_a(σ_a) − v_b(σ_b) − ω_b(σ_b) × R_b o` \[m/s\] (world axes;
+    /// zero otherwise): what the stop location of CT30 reads.
+    pub stretch: Vec3,
+    pub stretch_rate: Vec3,
+}
+
+/// A touching pair on the slip branch sliding back toward its anchor at
+/// the end of a step (CT30), keyed like [`PairAnchor`]: its slide rate
+/// `v_t·ê` \[m/s\] and pre-slip `μ f_n/k` \[m\].
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PairSlide {
+    pub a: usize,
+    pub sa: f64,
+    pub b: usize,
+    pub sb: f64,
+    /// `r_a + r_b` at the step end \[m\]: the anchors' matching reach.
+    pub reach: f64,
+    pub rate: f64,
+    pub pre_slip: f64,
 }
 
 /// The friction anchor of a touching pair (CT10): the material points
@@ -176,6 +198,12 @@ pub(crate) struct PairWork {
     /// The seeds of the pairs touching at the state the central
     /// differences start from: they re-evaluate only those (CT11).
     pub fd_seeds: Vec<(SegmentBox, SegmentBox)>,
+    /// The step-end slides of `crate::friction_stop` (CT30).
+    pub slides: Vec<PairSlide>,
+    /// Whether an evaluation computes [`PairActive::stretch_rate`] (two
+    /// more section velocities per anchored pair): set by
+    /// `crate::friction_stop` for its own evaluations only.
+    pub rates: bool,
     /// Per segment pair tested, the evaluations of the last call (for the
     /// cost checks of the tests).
     pub narrow_tests: usize,
@@ -207,6 +235,8 @@ impl PairWork {
             next_holds: Vec::with_capacity(64),
             scratch: vec![0.0; model.n_dof()],
             fd_seeds: Vec::with_capacity(64),
+            slides: Vec::with_capacity(16),
+            rates: false,
             narrow_tests: 0,
         })
     }
