@@ -350,7 +350,7 @@ fn forward_dynamics_is_defined_at_extreme_bends() {
                         .pieces(1)
                         .strains(strains.iter().copied())
                         .circle(0.008)
-                        .material(material.clone())
+                        .material(material)
                         .rest_strain(Vec6::new(k[0], k[1], k[2], 1.0, 0.0, 0.7));
                     let b = Model::builder().gravity([0.0, 0.0, -9.81]);
                     let m = if joint {
