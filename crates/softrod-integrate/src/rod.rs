@@ -223,7 +223,7 @@ impl RodSystem {
         let work = self
             .id_derivatives
             .get_or_insert_with(|| Box::new(IdDerivatives::new(&self.model)));
-        copy_tensions(&self.data, work);
+        work.copy_inputs(&self.data);
         let d = inverse_dynamics_derivatives(
             &self.model,
             work,
@@ -235,17 +235,6 @@ impl RodSystem {
         dr_dq.copy_from(&d.dtau_dq);
         dr_dqd.copy_from(&d.dtau_dqd);
         Ok(true)
-    }
-}
-
-/// Cable tensions set as inputs replace the schedules in the derivatives'
-/// workspace, as in the forward dynamics.
-fn copy_tensions(data: &Data, work: &mut IdDerivatives) {
-    work.copy_joint_inputs(data);
-    match (data.cable_tensions(), &mut work.tensions) {
-        (None, t) => *t = None,
-        (Some(u), Some(t)) => t.as_mut_slice().copy_from_slice(u),
-        (Some(u), t) => *t = Some(DVector::from_column_slice(u)),
     }
 }
 
@@ -296,7 +285,7 @@ impl RodSystem {
             self.products.push(IdDerivatives::for_products(&self.model));
         }
         let work = &mut self.products[slot];
-        copy_tensions(&self.data, work);
+        work.copy_inputs(&self.data);
         inverse_dynamics_linearization_with(
             &self.model,
             work,

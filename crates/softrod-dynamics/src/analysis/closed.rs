@@ -7,6 +7,7 @@ use super::modes::{Modes, difference_noise, frequencies, mapped_noise};
 use super::statics::{MAX_STIFFNESS_ROUNDS, StaticsOptions, StaticsResult};
 use crate::algorithms::tree::{self, outward, outward_from};
 use crate::algorithms::{Motion, Pass, contact_force};
+use crate::constraints::derivatives::coordinate_order;
 use crate::constraints::forward::pivoted_cholesky;
 use crate::constraints::queries::{check_workspace, length_scale};
 use crate::constraints::rows::assemble;
@@ -123,12 +124,7 @@ impl Closed<'_> {
         }
         let n = q.len();
         let w = work.get_or_insert_with(|| IdDerivatives::new(self.model));
-        w.copy_joint_inputs(data);
-        match (data.cable_tensions(), &mut w.tensions) {
-            (None, t) => *t = None,
-            (Some(u), Some(t)) => t.as_mut_slice().copy_from_slice(u),
-            (Some(u), t) => *t = Some(DVector::from_column_slice(u)),
-        }
+        w.copy_inputs(data);
         let zero = vec![0.0; n];
         open_tree_id_derivatives(
             self.model,
@@ -142,13 +138,7 @@ impl Closed<'_> {
         let mut jac = w.dtau_dq.clone();
         // One kinematic sweep from the node that holds each coordinate,
         // deepest nodes first (the nodes before it are at `q`), as CD3.
-        let mut order: Vec<(usize, usize)> = Vec::with_capacity(n);
-        for (i, node) in self.tree.nodes.iter().enumerate() {
-            if node.prescribed.is_none() {
-                order.extend((node.dof..node.dof + node.k).map(|j| (i, j)));
-            }
-        }
-        order.sort_by(|a, b| b.cmp(a));
+        let order = coordinate_order(self.tree);
         let mut rows = ConstraintRows::new(self.model.n_constraints(), n);
         let (mut plus, mut minus) = (DVector::zeros(n), DVector::zeros(n));
         let mut qp = q.clone();

@@ -270,12 +270,7 @@ impl Newton<'_> {
                 cw.copy_friction_state(from);
             }
         }
-        w.copy_joint_inputs(data);
-        match (data.cable_tensions(), &mut w.tensions) {
-            (None, t) => *t = None,
-            (Some(u), Some(t)) => t.as_mut_slice().copy_from_slice(u),
-            (Some(u), t) => *t = Some(DVector::from_column_slice(u)),
-        }
+        w.copy_inputs(data);
         inverse_dynamics_derivatives_with(
             self.model,
             w,

@@ -82,6 +82,20 @@ pub struct ClosedDerivatives {
     pres_order: Vec<(usize, usize)>,
 }
 
+/// The free coordinates `(node, j)` of `tree`, deepest nodes first: a
+/// kinematic sweep from each coordinate's node in this order leaves the
+/// nodes before it at the unperturbed `q` (the differences of CD3).
+pub(crate) fn coordinate_order(tree: &Tree) -> Vec<(usize, usize)> {
+    let mut order = Vec::new();
+    for (i, node) in tree.nodes.iter().enumerate() {
+        if node.prescribed.is_none() {
+            order.extend((node.dof..node.dof + node.k).map(|j| (i, j)));
+        }
+    }
+    order.sort_by(|a, b| b.cmp(a));
+    order
+}
+
 impl ClosedDerivatives {
     /// Allocates the buffers for `model` (a model with closures; for an open
     /// one the buffers are empty and [`closed_dynamics_derivatives`]
@@ -90,15 +104,7 @@ impl ClosedDerivatives {
         let n = model.n_dof();
         let m = model.n_constraints();
         let np = model.n_prescribed();
-        let mut order = Vec::new();
-        if let Some(tree) = &model.tree {
-            for (i, node) in tree.nodes.iter().enumerate() {
-                if node.prescribed.is_none() {
-                    order.extend((node.dof..node.dof + node.k).map(|j| (i, j)));
-                }
-            }
-        }
-        order.sort_by(|a, b| b.cmp(a));
+        let order = model.tree.as_ref().map_or_else(Vec::new, coordinate_order);
         let mut pres_order = Vec::new();
         if let Some(tree) = &model.tree {
             for (i, node) in tree.nodes.iter().enumerate() {
@@ -208,12 +214,7 @@ pub fn closed_dynamics_derivatives<'a>(
         "closed_dynamics_derivatives of an open model (use forward_dynamics_derivatives)",
     )?;
     let (n, m) = (model.n_dof(), model.n_constraints());
-    work.id.copy_joint_inputs(data);
-    match (data.cable_tensions(), &mut work.id.tensions) {
-        (None, t) => *t = None,
-        (Some(u), Some(t)) => t.as_mut_slice().copy_from_slice(u),
-        (Some(u), t) => *t = Some(DVector::from_column_slice(u)),
-    }
+    work.id.copy_inputs(data);
     if let (Some(from), Some(to)) = (&data.contact, &mut work.id.contact) {
         // The contact state of the run (anchors, raised stiffness), not a
         // fresh one: the open tree's derivatives then carry the contact

@@ -132,12 +132,7 @@ fn fd_derivatives<'a>(
     check_forward_inputs(model, forces, q, qd, tau_act)?;
     forward_dynamics_open(model, data, forces, t, q, qd, tau_act)?;
     work.qdd.copy_from(check_qdd(data, t)?);
-    work.id.copy_joint_inputs(data);
-    match (data.cable_tensions(), &mut work.id.tensions) {
-        (None, t) => *t = None,
-        (Some(u), Some(t)) => t.as_mut_slice().copy_from_slice(u),
-        (Some(u), t) => *t = Some(DVector::from_column_slice(u)),
-    }
+    work.id.copy_inputs(data);
     if let (Some(from), Some(to)) = (&data.contact, &mut work.id.contact) {
         // The friction state of the run, not a fresh one.
         if let Some(w) = &mut to.contact {

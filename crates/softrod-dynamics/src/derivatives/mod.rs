@@ -118,6 +118,18 @@ impl IdDerivatives {
         }
     }
 
+    /// Takes `data`'s joint force inputs and cable tensions
+    /// ([`crate::Data::set_cable_tensions`]) into the workspace, as the
+    /// evaluations of `data` see them. No allocation once set.
+    pub fn copy_inputs(&mut self, data: &Data) {
+        self.copy_joint_inputs(data);
+        match (data.cable_tensions(), &mut self.tensions) {
+            (None, t) => *t = None,
+            (Some(u), Some(t)) if t.len() == u.len() => t.as_mut_slice().copy_from_slice(u),
+            (Some(u), t) => *t = Some(DVector::from_column_slice(u)),
+        }
+    }
+
     fn with_dense(model: &Model, dense: bool) -> Self {
         let n = model.n_dof();
         let nd = if dense { n } else { 0 };
