@@ -98,15 +98,16 @@ pub(crate) fn outward_inl(
                 w.dt.fill(0.0);
             }
             let mut sp = PointInertia::default();
-            let mut fs = FullSums::new(
-                pd.points
-                    .iter()
-                    .all(|p| p.inertia[3] == p.inertia[4] && p.inertia[3] == p.inertia[5]),
-            );
             let mut scols = [Vec6::zeros(); 6];
             // Everything x-independent of the local maps, once per piece.
             let maps = PieceMaps::new(&xi, has_vel.then_some(&dxi));
             let theta2 = maps.theta_squared();
+            let mut fs = FullSums::new(
+                pd.points
+                    .iter()
+                    .all(|p| p.inertia[3] == p.inertia[4] && p.inertia[3] == p.inertia[5]),
+                theta2 * (piece.length * piece.length),
+            );
             for qp in &pd.points {
                 let (gl, tm, dbias, ta) = maps.eval_with_ta(qp.x);
                 let m = &qp.inertia;

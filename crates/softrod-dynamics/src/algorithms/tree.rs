@@ -183,6 +183,7 @@ pub(crate) fn outward_from(
                 pd.points
                     .iter()
                     .all(|p| p.inertia[3] == p.inertia[4] && p.inertia[3] == p.inertia[5]),
+                maps.theta_squared() * (length * length),
             );
             let mut pi = PointInertia::default();
             for qp in &pd.points {

@@ -183,13 +183,22 @@ pub(crate) struct FullSums {
     isotropic: bool,
 }
 
+/// `ψ² = θ²L²` of a piece above which [`FullSums`] takes the general form
+/// even for an isotropic inertia (D111): beyond `ψ = 1e8` the cross-`k`
+/// entries of `T_a` keep a relative `εψ > 1e-8` and less (none beyond
+/// `1/ε`), and only sums of the same rounded `T₋` (a Gram matrix of its
+/// columns) keep `𝓓ᶠ` positive semidefinite there; the scalar `𝓓₂₂` of D91
+/// is exact where `𝓓₁₂` is not.
+const PSI2_SCALAR_MAX: f64 = 1e16;
+
 impl FullSums {
     /// Empty sums for a piece whose points all have an isotropic linear
-    /// inertia `m·I` (`isotropic`) or not.
+    /// inertia `m·I` (`isotropic`) or not, bent by `ψ² = θ²L²` (`psi2`): the
+    /// isotropic form for `ψ ≤ 1e8` only (D111).
     #[inline(always)]
-    pub(crate) fn new(isotropic: bool) -> Self {
+    pub(crate) fn new(isotropic: bool, psi2: f64) -> Self {
         Self {
-            isotropic,
+            isotropic: isotropic && psi2 <= PSI2_SCALAR_MAX,
             ..Self::default()
         }
     }
@@ -392,7 +401,7 @@ mod tests {
         for xi in &xis {
             for rate in [None, Some(&d)] {
                 let maps = PieceMaps::new(xi, rate);
-                let (mut iso, mut general) = (FullSums::new(true), FullSums::new(false));
+                let (mut iso, mut general) = (FullSums::new(true, 0.0), FullSums::new(false, 0.0));
                 for (x, w) in [(0.07, 0.17), (0.3, 0.33), (0.55, 0.33), (0.78, 0.17)] {
                     let (g, t, _, ta) = maps.eval_with_ta(x);
                     // A tapered section: the inertia changes along the piece.
@@ -447,7 +456,7 @@ mod tests {
                 let k = n * theta;
                 let xi = Vec6::new(k[0], k[1], k[2], 0.9, 0.1, -0.2);
                 let maps = PieceMaps::new(&xi, None);
-                let (mut iso, mut general) = (FullSums::new(true), FullSums::new(false));
+                let (mut iso, mut general) = (FullSums::new(true, 0.0), FullSums::new(false, 0.0));
                 let (mut along, mut across) = (0.0, 0.0);
                 for &(x, w) in &points {
                     let (g, t, _, ta) = maps.eval_with_ta(x);
@@ -502,5 +511,52 @@ mod tests {
                 assert!(e <= 16.0 * eps * u_gen.amax(), "{at}: 𝓤 {e:e}");
             }
         }
+    }
+
+    /// Beyond `ψ = 1e8` an isotropic piece takes the general form (D111),
+    /// here at the strain a diverged rk4 step reached in
+    /// softrod-cli's tests/watch.rs (`ψ = 3.4e30`, a shear of 1e45): the
+    /// sums equal the general ones bit for bit, and the `(k_y, q_z)` block of
+    /// `𝓓ᶠ`, a Gram matrix of the rounded `T₋` columns, keeps a non-negative
+    /// determinant, where the exact scalar `𝓓₂₂` of D91 (4e-67, next to a
+    /// `𝓓₁₂` whose rounding is 1e-10) makes it negative.
+    #[test]
+    fn a_bend_beyond_double_precision_takes_the_general_form() {
+        let basis = softrod_kinematics::Basis::all();
+        let len = 0.02;
+        let xi = Vec6::new(
+            0.0,
+            1.682_825_912_807_287_2e32,
+            0.0,
+            1.0,
+            0.7,
+            -1.321_359_538_564_532_7e45,
+        );
+        let psi2 = xi[1] * xi[1] * len * len;
+        let maps = PieceMaps::new(&xi, None);
+        let (mut guarded, mut general, mut scalar) = (
+            FullSums::new(true, psi2),
+            FullSums::new(false, psi2),
+            FullSums::new(true, 0.0),
+        );
+        let (g1, g2) = (0.339_981_043_584_856_3, 0.861_136_311_594_052_6);
+        let (w1, w2) = (0.652_145_154_862_546_1, 0.347_854_845_137_453_9);
+        for (g, w) in [(g2, w2), (g1, w1), (-g1, w1), (-g2, w2)] {
+            let (x, w) = (0.5 * len * (1.0 - g), 0.5 * len * w);
+            let (pose, t, _, ta) = maps.eval_with_ta(x);
+            let mw = Vec6::new(7.0e-6, 3.5e-6, 3.5e-6, 0.221, 0.221, 0.221) * w;
+            for fs in [&mut guarded, &mut general, &mut scalar] {
+                fs.add(&pose, &t, &mw, &ta, maps.theta_squared());
+            }
+        }
+        let mut out = [(Mat6::zeros(), Mat6::zeros()); 3];
+        for (fs, (u, d)) in [guarded, general, scalar].iter_mut().zip(&mut out) {
+            fs.project(&maps, &basis, u, d);
+        }
+        assert_eq!(out[0], out[1]);
+        let det = |d: &Mat6| d[(1, 1)] * d[(5, 5)] - d[(1, 5)] * d[(5, 1)];
+        assert!(det(&out[0].1) >= 0.0, "{}", out[0].1);
+        // What the guard avoids: the scalar 𝓓₂₂ there.
+        assert!(det(&out[2].1) < 0.0, "{}", out[2].1);
     }
 }
