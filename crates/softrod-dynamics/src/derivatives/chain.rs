@@ -5,6 +5,7 @@
 //! world-frame quantities.
 
 use super::piece::{PieceWork, Subtree, close_mass, close_piece, write_piece};
+use super::planar;
 use super::point::{PieceLin, basis6, linearize_point, own_points};
 use super::{At, IdDerivatives};
 use crate::forces::external::gravity_base_acceleration;
@@ -18,6 +19,12 @@ use softrod_lie::{PieceMaps, Vec6};
 /// densities and their linearizations at every point; own-point sums.
 #[inline(always)]
 pub(crate) fn outward(model: &Model, rm: &RodModel, works: &mut [PieceWork], at: &At) {
+    // Planar rods on the forward run's planar path: the points on se(2)
+    // (D95–D98), the closes below as for any rod.
+    if let (true, Some(pr)) = (model.planar_path, &rm.planar) {
+        planar::outward(model, rm, pr, works, at);
+        return;
+    }
     let (q, qd, qdd) = (at.q, at.qd, at.qdd);
     let scale = at.forces.load_scale;
     let rod = &rm.spec.geometry;
