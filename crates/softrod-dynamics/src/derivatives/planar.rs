@@ -527,8 +527,9 @@ fn own_points3(
 /// The outward sweep of [`super::chain::outward`] on a planar rod (D97):
 /// every piece's own points and tip linearized on `P`, written into the
 /// six-direction buffers (D98). The rod must be planar and the model
-/// without a tree.
-#[inline(always)]
+/// without a tree. Kept out of line: inlined into
+/// [`super::chain::outward`] it would grow the six-strain sweep's caller.
+#[inline(never)]
 pub(crate) fn outward(
     model: &Model,
     rm: &RodModel,
