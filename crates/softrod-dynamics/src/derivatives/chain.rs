@@ -20,7 +20,7 @@ use softrod_lie::{PieceMaps, Vec6};
 #[inline(always)]
 pub(crate) fn outward(model: &Model, rm: &RodModel, works: &mut [PieceWork], at: &At) {
     // Planar rods on the forward run's planar path: the points on se(2)
-    // (D95–D98), the closes below as for any rod.
+    // (D95–D98); their closes too (`inward`, D99–D100).
     if let (true, Some(pr)) = (model.planar_path, &rm.planar) {
         planar::outward(model, rm, pr, works, at);
         return;
@@ -64,6 +64,11 @@ pub(crate) fn outward(model: &Model, rm: &RodModel, works: &mut [PieceWork], at:
 /// The inward sweep (D43–D46): composites, each piece's diagonal block,
 /// `τ`, and the world-frame pairing quantities.
 pub(crate) fn inward(model: &Model, rm: &RodModel, work: &mut IdDerivatives, r: usize, at: &At) {
+    // Planar rods on the planar path: the closes on se(2) (D99–D100).
+    if let (true, Some(pr)) = (model.planar_path, &rm.planar) {
+        planar::inward(model, rm, pr, work, r, at);
+        return;
+    }
     // Dead loads only: the 𝒴 composites and receivers are zero otherwise.
     let dead = has_dead_loads(rm);
     let mut sub = Subtree::zero();
