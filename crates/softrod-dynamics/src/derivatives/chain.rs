@@ -5,9 +5,9 @@
 //! world-frame quantities.
 
 use super::piece::{PieceWork, Subtree, close_mass, close_piece, write_piece};
-use super::planar;
 use super::point::{PieceLin, basis6, linearize_point, own_points};
 use super::{At, IdDerivatives};
+use super::{planar, planar_close};
 use crate::forces::external::gravity_base_acceleration;
 use crate::forces::linearized::{drag_diagonal, has_dead_loads};
 use crate::kernels::mat6::{Cols, mm, tm};
@@ -66,7 +66,7 @@ pub(crate) fn outward(model: &Model, rm: &RodModel, works: &mut [PieceWork], at:
 pub(crate) fn inward(model: &Model, rm: &RodModel, work: &mut IdDerivatives, r: usize, at: &At) {
     // Planar rods on the planar path: the closes on se(2) (D99–D100).
     if let (true, Some(pr)) = (model.planar_path, &rm.planar) {
-        planar::inward(model, rm, pr, work, r, at);
+        planar_close::inward(model, rm, pr, work, r, at);
         return;
     }
     // Dead loads only: the 𝒴 composites and receivers are zero otherwise.

@@ -21,6 +21,7 @@ pub(crate) mod forward;
 pub(crate) mod pairs;
 pub(crate) mod piece;
 pub(crate) mod planar;
+pub(crate) mod planar_close;
 pub(crate) mod point;
 pub(crate) mod second;
 pub(crate) mod tree;
