@@ -22,7 +22,6 @@ use super::tree::{Exit, TreeWork};
 use crate::algorithms::check_vec;
 use crate::error::DynamicsError;
 use crate::forces::linearized::has_dead_loads;
-use crate::kernels::mat6::tv;
 use crate::model::tree::{NodeKind, Tree};
 use crate::model::{Model, RodModel};
 use softrod_lie::{Mat6, Vec6, coad};
@@ -250,8 +249,8 @@ fn chain_mass(rm: &RodModel, ws: &[PieceWork], v: &[f64], out: &mut [f64]) {
     let mut d = Vec6::zeros();
     for (p, w) in pieces.iter().zip(ws).rev() {
         let (o, k) = (rm.dof_offset + p.dof_offset, p.basis.dof());
-        add_local(out, o, k, &tv(&w.s_world, &d));
-        d += tv(&w.rcv_m, &local(v, o, k));
+        add_local(out, o, k, &w.s_world.tr_mul(&d));
+        d += w.rcv_m.tr_mul(&local(v, o, k));
     }
 }
 
@@ -275,14 +274,14 @@ fn tree_mass(tree: &Tree, tw: &mut TreeWork, v: &[f64], out: &mut [f64]) {
     for (i, node) in tree.nodes.iter().enumerate().rev() {
         if node.k > 0 {
             let w = &tw.nodes[i];
-            tw.down[i][0] += tv(&w.rcv_m, &local(v, node.dof, node.k));
+            tw.down[i][0] += w.rcv_m.tr_mul(&local(v, node.dof, node.k));
         }
         let Some(p) = node.parent else { continue };
         let d = tw.down[i][0];
         let pn = &tree.nodes[p];
         if pn.k > 0 {
             let ex = exit_towards(tree, tw, p, i);
-            add_local(out, pn.dof, pn.k, &tv(&ex.s, &d));
+            add_local(out, pn.dof, pn.k, &ex.s.tr_mul(&d));
         }
         tw.down[p][0] += d;
     }
@@ -321,7 +320,7 @@ fn tree_inertia(
                 // f = 𝓜η̇′ + ad*_η 𝓜η at the body frame (its tip):
                 // (J z)ᵀ δf = tr(δ𝓜 · (η̇′ (J z)ᵀ + η (ad*_ηᵀ J z)ᵀ)ᵀ).
                 let ez = w.base_world.ad_inv().mul_vec(&up);
-                let cz = tv(&coad(&w.eta_tip), &ez);
+                let cz = coad(&w.eta_tip).tr_mul(&ez);
                 bodies[body] = ez * w.etad_tip.transpose() + cz * w.eta_tip.transpose();
             }
             NodeKind::Joint { .. } => {}
@@ -386,7 +385,7 @@ fn chain_jvp(rm: &RodModel, ws: &[PieceWork], a: &[f64], b: &[f64], out: &mut [f
     let mut d = Vec6::zeros();
     for (p, w) in pieces.iter().zip(ws).rev() {
         let (o, k) = (rm.dof_offset + p.dof_offset, p.basis.dof());
-        add_local(out, o, k, &tv(&w.s_world, &d));
+        add_local(out, o, k, &w.s_world.tr_mul(&d));
         d += w.dwq_world * local(a, o, k) + w.dwv_world * local(b, o, k);
     }
 }
@@ -403,8 +402,8 @@ fn chain_vjp(rm: &RodModel, ws: &[PieceWork], u: &[f64], out_q: &mut [f64], out_
     for (p, w) in pieces.iter().zip(ws) {
         let (o, k) = (rm.dof_offset + p.dof_offset, p.basis.dof());
         let uj = local(u, o, k);
-        let vq = tv(&w.blk_q, &uj) + tv(&w.dwq_world, &a);
-        let vv = tv(&w.blk_v, &uj) + tv(&w.dwv_world, &a);
+        let vq = w.blk_q.tr_mul(&uj) + w.dwq_world.tr_mul(&a);
+        let vv = w.blk_v.tr_mul(&uj) + w.dwv_world.tr_mul(&a);
         add_local(out_q, o, k, &vq);
         add_local(out_qd, o, k, &vv);
         a += w.s_world * uj;
@@ -413,18 +412,18 @@ fn chain_vjp(rm: &RodModel, ws: &[PieceWork], u: &[f64], out_q: &mut [f64], out_
     let (mut bm, mut bb, mut by) = (Vec6::zeros(), Vec6::zeros(), Vec6::zeros());
     for (p, w) in pieces.iter().zip(ws).rev() {
         let (o, k) = (rm.dof_offset + p.dof_offset, p.basis.dof());
-        let mut vq = tv(&w.src_wq, &bm) + tv(&w.src_uq, &bb);
+        let mut vq = w.src_wq.tr_mul(&bm) + w.src_uq.tr_mul(&bb);
         if dead {
-            vq += tv(&w.s_world, &by);
+            vq += w.s_world.tr_mul(&by);
         }
-        let vv = tv(&w.src_wv, &bm) + tv(&w.src_uv, &bb);
+        let vv = w.src_wv.tr_mul(&bm) + w.src_uv.tr_mul(&bb);
         add_local(out_q, o, k, &vq);
         add_local(out_qd, o, k, &vv);
         let uj = local(u, o, k);
-        bm += tv(&w.rcv_m, &uj);
-        bb += tv(&w.rcv_b, &uj);
+        bm += w.rcv_m.tr_mul(&uj);
+        bb += w.rcv_b.tr_mul(&uj);
         if dead {
-            by += tv(&w.rcv_y, &uj);
+            by += w.rcv_y.tr_mul(&uj);
         }
     }
 }
@@ -475,8 +474,8 @@ fn tree_vjp(tree: &Tree, tw: &mut TreeWork, u: &[f64], out_q: &mut [f64], out_qd
         if node.k > 0 {
             let w = &tw.nodes[i];
             let ui = local(u, node.dof, node.k);
-            let vq = tv(&w.blk_q, &ui) + tv(&w.dwq_world, &up);
-            let vv = tv(&w.blk_v, &ui) + tv(&w.dwv_world, &up);
+            let vq = w.blk_q.tr_mul(&ui) + w.dwq_world.tr_mul(&up);
+            let vv = w.blk_v.tr_mul(&ui) + w.dwv_world.tr_mul(&up);
             add_local(out_q, node.dof, node.k, &vq);
             add_local(out_qd, node.dof, node.k, &vv);
         }
@@ -490,10 +489,10 @@ fn tree_vjp(tree: &Tree, tw: &mut TreeWork, u: &[f64], out_q: &mut [f64], out_qd
             let w = &tw.nodes[i];
             let ui = local(u, node.dof, node.k);
             let d = &mut tw.down[i];
-            d[0] += tv(&w.rcv_m, &ui);
-            d[1] += tv(&w.rcv_b, &ui);
+            d[0] += w.rcv_m.tr_mul(&ui);
+            d[1] += w.rcv_b.tr_mul(&ui);
             if dead {
-                d[2] += tv(&w.rcv_y, &ui);
+                d[2] += w.rcv_y.tr_mul(&ui);
             }
         }
         let Some(p) = node.parent else { continue };
@@ -501,11 +500,11 @@ fn tree_vjp(tree: &Tree, tw: &mut TreeWork, u: &[f64], out_q: &mut [f64], out_qd
         let pn = &tree.nodes[p];
         if pn.k > 0 {
             let ex = exit_towards(tree, tw, p, i);
-            let mut vq = tv(&ex.wq, &sm) + tv(&ex.uq, &sb);
+            let mut vq = ex.wq.tr_mul(&sm) + ex.uq.tr_mul(&sb);
             if dead {
-                vq += tv(&ex.s, &sy);
+                vq += ex.s.tr_mul(&sy);
             }
-            let vv = tv(&ex.wv, &sm) + tv(&ex.s, &sb);
+            let vv = ex.wv.tr_mul(&sm) + ex.s.tr_mul(&sb);
             add_local(out_q, pn.dof, pn.k, &vq);
             add_local(out_qd, pn.dof, pn.k, &vv);
         }
@@ -566,7 +565,7 @@ fn tree_jvp(tree: &Tree, tw: &mut TreeWork, a: &[f64], b: &[f64], out: &mut [f64
         let pn = &tree.nodes[p];
         if pn.k > 0 {
             let ex = exit_towards(tree, tw, p, i);
-            add_local(out, pn.dof, pn.k, &tv(&ex.s, &d));
+            add_local(out, pn.dof, pn.k, &ex.s.tr_mul(&d));
         }
         tw.up[p] += d;
     }

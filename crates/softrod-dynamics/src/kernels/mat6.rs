@@ -9,7 +9,7 @@
 //! the results are nalgebra's, bit for bit (tested below; a product that
 //! is exactly zero may differ in the sign of the zero).
 
-use softrod_lie::{Mat6, Vec6};
+use softrod_lie::Mat6;
 
 /// `A B`.
 #[inline(always)]
@@ -228,23 +228,6 @@ pub(crate) fn tm(a: &Mat6, b: &Mat6) -> Mat6 {
     mm(&a.transpose(), b)
 }
 
-/// `Aᵀ v`: each entry the sum `Σᵢ A[i, j] v[i]` in the order of
-/// nalgebra's `tr_mul` (so the same numbers), inlined where nalgebra's
-/// generic product is an out-of-line call (the O(N) products' inner
-/// loops, D81–D86).
-#[inline(always)]
-pub(crate) fn tv(a: &Mat6, v: &Vec6) -> Vec6 {
-    let mut out = Vec6::zeros();
-    for j in 0..6 {
-        let mut s = 0.0;
-        for i in 0..6 {
-            s += a[(i, j)] * v[i];
-        }
-        out[j] = s;
-    }
-    out
-}
-
 /// `A B C`, left to right (as `a * b * c`).
 #[inline(always)]
 pub(crate) fn mm3(a: &Mat6, b: &Mat6, c: &Mat6) -> Mat6 {
@@ -292,8 +275,6 @@ mod tests {
             assert_eq!(tmk::<6, 6>(&a, &b), a.transpose() * b);
             assert_eq!(mmk::<3, 4>(&a, &b), mm_part(&a, &b, 3, 4));
             assert_eq!(tmk::<4, 3>(&a, &b), mm_part(&a.transpose(), &b, 4, 3));
-            let v = b.column(2).into_owned();
-            assert_eq!(tv(&a, &v), a.tr_mul(&v));
         }
     }
 
