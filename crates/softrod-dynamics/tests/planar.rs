@@ -239,3 +239,130 @@ fn non_planar_rods_are_not_detected() {
         assert!(!model.rods()[0].is_planar(), "{basis:?}, {rest:?}");
     }
 }
+
+/// The largest relative difference between the planar (se(2), D95–D98)
+/// and the general linearization of the inverse dynamics on `model`: the
+/// dense `τ`, `∂τ/∂q`, `∂τ/∂q̇`, and the O(N) products of the linearization
+/// without them (`uᵀ∂τ`, `∂τ·(a, b)`, `M v`, the inertia products), each
+/// relative to the largest entry of the general path's result.
+fn compare_linearization(model: &Model, q: &[f64], qd: &[f64], qdd: &[f64], rng: &mut Lcg) -> f64 {
+    use nalgebra::DVector;
+    use softrod_dynamics::{
+        Forces, IdDerivatives, inverse_dynamics_derivatives_with, inverse_dynamics_inertia_vjp,
+        inverse_dynamics_jvp, inverse_dynamics_linearization_with, inverse_dynamics_mass_product,
+        inverse_dynamics_vjp,
+    };
+    let general = model.clone().with_planar_path(false);
+    let n = model.n_dof();
+    let t = 0.3;
+    let rel = |a: &[f64], b: &[f64]| {
+        let (a, b) = (DVector::from_column_slice(a), DVector::from_column_slice(b));
+        (a - &b).amax() / b.amax().max(f64::MIN_POSITIVE)
+    };
+    let mut worst: f64 = 0.0;
+    let (mut w1, mut w2) = (IdDerivatives::new(model), IdDerivatives::new(&general));
+    let d1 = inverse_dynamics_derivatives_with(model, &mut w1, Forces::ALL, t, q, qd, qdd).unwrap();
+    let d2 =
+        inverse_dynamics_derivatives_with(&general, &mut w2, Forces::ALL, t, q, qd, qdd).unwrap();
+    worst = worst
+        .max(rel(d1.tau.as_slice(), d2.tau.as_slice()))
+        .max(rel(d1.dtau_dq.as_slice(), d2.dtau_dq.as_slice()))
+        .max(rel(d1.dtau_dqd.as_slice(), d2.dtau_dqd.as_slice()));
+    let (mut p1, mut p2) = (
+        IdDerivatives::for_products(model),
+        IdDerivatives::for_products(&general),
+    );
+    inverse_dynamics_linearization_with(model, &mut p1, Forces::ALL, t, q, qd, qdd).unwrap();
+    inverse_dynamics_linearization_with(&general, &mut p2, Forces::ALL, t, q, qd, qdd).unwrap();
+    worst = worst.max(rel(p1.tau.as_slice(), p2.tau.as_slice()));
+    let (u, a, b) = (rng.vec(n, 1.0), rng.vec(n, 1.0), rng.vec(n, 1.0));
+    // uᵀ∂τ/∂q, uᵀ∂τ/∂q̇, ∂τ/∂q·a + ∂τ/∂q̇·b, M a, the inertia products.
+    let products = |m: &Model, p: &mut IdDerivatives| {
+        let mut out = vec![vec![0.0; n]; 4];
+        let [oq, ov, j, mv] = &mut out[..] else {
+            unreachable!()
+        };
+        inverse_dynamics_vjp(m, p, &u, oq, ov).unwrap();
+        inverse_dynamics_jvp(m, p, &a, &b, j).unwrap();
+        inverse_dynamics_mass_product(m, p, &a, mv).unwrap();
+        let mut rods = vec![0.0; m.rods().len()];
+        inverse_dynamics_inertia_vjp(m, p, &u, &mut rods, &mut []).unwrap();
+        out.push(rods);
+        out
+    };
+    let (x1, x2) = (products(model, &mut p1), products(&general, &mut p2));
+    for (a, b) in x1.iter().zip(&x2) {
+        worst = worst.max(rel(a, b));
+    }
+    worst
+}
+
+/// The linearization of planar rods on se(2) (D95–D98) against the
+/// general path (six strain directions, 6×6 blocks) on the same model:
+/// the three bending planes, strain subsets, every force term (oblique
+/// gravity and world loads with out-of-plane parts, which the planar path
+/// drops), straight, barely curved and wound-up pieces, at rest and moving
+/// fast, one to twelve pieces.
+#[test]
+fn linearization_matches_the_general_path() {
+    let mut rng = Lcg(41);
+    for axis in 0..3 {
+        let (bases, rest) = plane(axis);
+        for (pieces, terms, young) in [
+            (1, Terms::NONE, 2e6),
+            (3, Terms::ALL, 2e6),
+            (5, Terms::ALL, 1.0),
+            (12, Terms::NONE, 10.0),
+        ] {
+            let mut shape = Shape::new(pieces, bases.clone());
+            shape.rest = rest;
+            shape.young = young;
+            let model = Model::new(
+                vec![rod_spec("arm", &shape, terms, tilted_base())],
+                gravity(terms),
+                4,
+            )
+            .unwrap();
+            assert!(model.uses_planar_path(0));
+            let n = model.n_dof();
+            for (q_scale, qd_scale) in [(0.0, 0.0), (3.0, 5.0)] {
+                let (q, qd, qdd) = state(&mut rng, n, q_scale, qd_scale, 20.0);
+                let e = compare_linearization(&model, &q, &qd, &qdd, &mut rng);
+                println!("axis {axis}, {pieces} pieces, q ±{q_scale}: {e:.1e}");
+                assert!(
+                    e < 1e-12,
+                    "axis {axis}, {pieces} pieces, {terms:?}, E {young}, q ±{q_scale}: {e:e}"
+                );
+            }
+        }
+    }
+    // Curvature from exactly zero to several turns per piece (both
+    // branches of the coefficient series).
+    use Strain::*;
+    for (k, scale) in [
+        (0.0, 0.0),
+        (1e-9, 1e-9),
+        (1e-4, 1e-3),
+        (2.0, 1.0),
+        (40.0, 30.0),
+    ] {
+        let mut shape = Shape::new(4, vec![select(&[Ky, Qx, Qz])]);
+        shape.rest = Vec6::new(0.0, k, 0.0, 1.0, 0.0, 0.0);
+        shape.young = 10.0;
+        let model = Model::new(
+            vec![rod_spec("arm", &shape, Terms::ALL, tilted_base())],
+            gravity(Terms::ALL),
+            4,
+        )
+        .unwrap();
+        let n = model.n_dof();
+        let q = rng.vec(n, scale);
+        for qd_scale in [0.0, 50.0] {
+            let qd = rng.vec(n, qd_scale);
+            let qdd = rng.vec(n, 10.0);
+            let e = compare_linearization(&model, &q, &qd, &qdd, &mut rng);
+            println!("curvature {k}, rates {qd_scale}: {e:.1e}");
+            assert!(e < 1e-12, "curvature {k}, rates {qd_scale}: {e:e}");
+        }
+    }
+}

@@ -22,6 +22,7 @@ use crate::types::{Mat3, Vec3, Vec6, angular, join, linear};
 #[derive(Clone, Debug)]
 pub struct PieceMaps {
     theta: f64,
+    theta2: f64,
     sigma: f64,
     q: Vec3,
     kmat: Mat3,
@@ -49,6 +50,7 @@ impl PieceMaps {
         let kq = k.cross(&q);
         let mut out = Self {
             theta: th2.sqrt(),
+            theta2: th2,
             sigma,
             q,
             kmat: skew(&k),
@@ -142,13 +144,30 @@ impl PieceMaps {
     /// which is zero when no rate was given.
     #[inline(always)]
     pub fn eval(&self, x: f64) -> (Pose, AdOp, Vec6) {
+        let (g, t, bias, _) = self.eval_with_ta(x);
+        (g, t, bias)
+    }
+
+    /// [`Self::eval`] and the scalar coefficients `[x, c_b, c_c]` of the
+    /// diagonal block of `T₋(x)`: `T_a(x) = x I + c_b k̃ + c_c k̃²` (D3′), a
+    /// polynomial in `k̃` ([`Self::k_skew`], [`Self::k_skew_squared`]), so
+    /// sums over a piece's points of products of `T_a` can be carried as
+    /// scalar sums.
+    #[inline(always)]
+    pub fn eval_with_ta(&self, x: f64) -> (Pose, AdOp, Vec6, [f64; 3]) {
         if !self.has_rate {
-            let (g, t) = self.exp_and_tangent_minus(x);
-            return (g, t, Vec6::zeros());
+            let ([a, b, c], [t3, t4]) = series::abc_tau34(x * self.theta);
+            let x2 = x * x;
+            let ta = [x, -x2 * b, x2 * x * c];
+            return (
+                self.pose(x, a, b, c),
+                self.tangent_minus(x, b, c, t3, t4),
+                Vec6::zeros(),
+                ta,
+            );
         }
         let psi = x * self.theta;
-        let ([a, b, c], t, r) = series::abc_tau_rho(psi);
-        let (t3, t4) = (t[2], t[3]);
+        let ([a, b, c], [t2, t3, t4], r) = series::abc_tau234_rho(psi);
         let x2 = x * x;
         let x3 = x2 * x;
         let x4 = x2 * x2;
@@ -156,14 +175,40 @@ impl PieceMaps {
         let kd = self.kd;
         let [v1, v2, v3, v4] = &self.v;
         let [e2, e3, e4] = &self.e;
-        let bias = v1 * (-x4 * r[0] * kd) + (v2 * (x5 * r[1] * kd) + e2 * (x3 * t[1]))
-            - (v3 * (x5 * x * r[2] * kd) + e3 * (x4 * t[2]))
-            + (v4 * (x5 * x2 * r[3] * kd) + e4 * (x5 * t[3]));
+        let bias = v1 * (-x4 * r[0] * kd) + (v2 * (x5 * r[1] * kd) + e2 * (x3 * t2))
+            - (v3 * (x5 * x * r[2] * kd) + e3 * (x4 * t3))
+            + (v4 * (x5 * x2 * r[3] * kd) + e4 * (x5 * t4));
         (
             self.pose(x, a, b, c),
             self.tangent_minus(x, b, c, t3, t4),
             bias,
+            [x, -x2 * b, x3 * c],
         )
+    }
+
+    /// The piece's curvature `k` (read off `k̃`).
+    #[inline(always)]
+    pub fn k(&self) -> Vec3 {
+        let m = &self.kmat;
+        Vec3::new(m[(2, 1)], m[(0, 2)], m[(1, 0)])
+    }
+
+    /// `k̃` of the piece's curvature `k`.
+    #[inline(always)]
+    pub fn k_skew(&self) -> &Mat3 {
+        &self.kmat
+    }
+
+    /// `k̃² = kkᵀ − θ²I`.
+    #[inline(always)]
+    pub fn k_skew_squared(&self) -> &Mat3 {
+        &self.k2
+    }
+
+    /// `θ² = |k|²` (`k̃³ = −θ²k̃`).
+    #[inline(always)]
+    pub fn theta_squared(&self) -> f64 {
+        self.theta2
     }
 }
 
@@ -187,6 +232,42 @@ fn skew_plus_sym(delta: f64, k: &Mat3, alpha: f64, s: &Mat3, beta: f64) -> Mat3 
 mod tests {
     use super::*;
     use crate::{d_tangent_minus_self, exp_and_tangent_minus};
+
+    /// `T_a = xI + c_b k̃ + c_c k̃²` from [`PieceMaps::eval_with_ta`], and the
+    /// scalar form `T_aᵀT_a = −2c_b I + (2x c_c − c_b² − θ²c_c²) kkᵀ` the
+    /// inertia sums use (D91), against the dense block and its dense product.
+    #[test]
+    fn ta_coefficients_give_the_block_and_its_gram() {
+        let xis = [
+            Vec6::new(0.3, -1.1, 0.7, 1.05, 0.2, -0.1),
+            Vec6::new(1e-9, 0.0, 2e-9, 0.9, 0.01, 0.0),
+            Vec6::new(12.0, -30.0, 5.0, 1.2, -0.3, 0.4),
+        ];
+        let d = Vec6::new(0.2, 0.1, -0.4, 0.3, -0.5, 0.9);
+        for xi in &xis {
+            for rate in [None, Some(&d)] {
+                let pm = PieceMaps::new(xi, rate);
+                let (km, k2, th2) = (pm.k_skew(), pm.k_skew_squared(), pm.theta_squared());
+                let k = pm.k();
+                assert_eq!(k, angular(xi));
+                for x in [0.0, 0.01, 0.3, 1.0, 2.0] {
+                    let (g, t, bias, [x0, cb, cc]) = pm.eval_with_ta(x);
+                    assert_eq!(pm.eval(x), (g, t, bias));
+                    assert_eq!(x0, x);
+                    let ta = Mat3::identity() * x + km * cb + k2 * cc;
+                    let scale = 1.0 + t.a.amax();
+                    assert!((ta - t.a).amax() < 1e-15 * scale, "{xi:?} {x}");
+                    let gram = Mat3::identity() * (-2.0 * cb)
+                        + k * k.transpose() * ((2.0 * x * cc - cb * cb) - th2 * (cc * cc));
+                    let dense = t.a.transpose() * t.a;
+                    assert!(
+                        (gram - dense).amax() < 1e-14 * scale * scale,
+                        "{xi:?} {x}: {gram:?} vs {dense:?}"
+                    );
+                }
+            }
+        }
+    }
 
     #[test]
     fn equals_the_standalone_maps() {

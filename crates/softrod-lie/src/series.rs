@@ -127,6 +127,21 @@ static ABC_T34_P: Packed<6> = pack(&[
     &TAU_SERIES[2],
     &TAU_SERIES[3],
 ]);
+/// `[a, b, c, τ₂, τ₃, τ₄, ρ₁, …, ρ₄]`: what a point of a moving piece needs
+/// ([`abc_tau234_rho`]), five lane pairs where the three tables of
+/// [`abc_tau_rho`] take six.
+static ABC_T234_RHO_P: Packed<10> = pack(&[
+    &ABC_SERIES[0],
+    &ABC_SERIES[1],
+    &ABC_SERIES[2],
+    &TAU_SERIES[1],
+    &TAU_SERIES[2],
+    &TAU_SERIES[3],
+    &RHO_SERIES[0],
+    &RHO_SERIES[1],
+    &RHO_SERIES[2],
+    &RHO_SERIES[3],
+]);
 /// `[τ₁, …, τ₄]`.
 static TAU_P: Packed<4> = pack(&[
     &TAU_SERIES[0],
@@ -441,6 +456,27 @@ pub fn abc_tau_rho(psi: f64) -> ([f64; 3], [f64; 4], [f64; 4]) {
     }
 }
 
+/// [`abc_tau_rho`] without `τ₁` (which `T₋` and its strain derivative
+/// fold into `b`): `([a, b, c], [τ₂, τ₃, τ₄], [ρ₁, …, ρ₄])`, the same bits,
+/// one packed Horner below the switch.
+#[inline(always)]
+pub fn abc_tau234_rho(psi: f64) -> ([f64; 3], [f64; 3], [f64; 4]) {
+    let psi = psi.abs();
+    if psi < PSI_SWITCH {
+        let u = psi * psi;
+        let [a, b, c, t2, t3, t4, r1, r2, r3, r4] = horner_packed(&ABC_T234_RHO_P, u, terms(u));
+        ([a, b, c], [t2, t3, t4], [r1, r2, r3, r4])
+    } else {
+        let (s, c) = sin_cos(psi);
+        let t = tau_closed(psi, s, c);
+        (
+            abc_closed(psi, s, c),
+            [t[1], t[2], t[3]],
+            rho_closed(psi, s, c),
+        )
+    }
+}
+
 /// `tau(ψ)` and `rho(ψ)` together, sharing one `sin_cos` above the switch.
 #[inline]
 pub fn tau_rho(psi: f64) -> ([f64; 4], [f64; 4]) {
@@ -486,6 +522,10 @@ mod tests {
             let one = |f: &[f64; N]| horner(f, u, n);
             let [a, b, c] = abc(psi);
             assert_eq!([a, b, c], [0, 1, 2].map(|j| one(&ABC_SERIES[j])));
+            let (abc3, t234, r4) = abc_tau234_rho(psi);
+            let (abc4, t4, r5) = abc_tau_rho(psi);
+            assert_eq!((abc3, r4), (abc4, r5));
+            assert_eq!(t234, [t4[1], t4[2], t4[3]]);
             let (abc2, t34) = abc_tau34(psi);
             assert_eq!(abc2, [a, b, c]);
             assert_eq!(t34, [one(&TAU_SERIES[2]), one(&TAU_SERIES[3])]);

@@ -231,6 +231,9 @@ fn main() {
     modes.push(Start::Adaptive(Integrator::Esdirk, 1e-2));
     modes.push(Start::Adaptive(Integrator::Esdirk, 3e-2));
     modes.push(Start::Adaptive(Integrator::Esdirk, 1e-1));
+    for rtol in [3e-2, 1e-1, 3e-1] {
+        modes.push(Start::Adaptive(Integrator::Esdirk5, rtol));
+    }
     modes.push(Start::Adaptive(Integrator::Radau5, 1e-3));
     modes.push(Start::Adaptive(Integrator::Radau5, 1e-2));
     modes.push(Start::Adaptive(Integrator::Rosenbrock, 1e-3));

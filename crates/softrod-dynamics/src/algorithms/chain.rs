@@ -98,16 +98,18 @@ pub(crate) fn outward_inl(
                 w.dt.fill(0.0);
             }
             let mut sp = PointInertia::default();
+            let mut scols = [Vec6::zeros(); 6];
+            // Everything x-independent of the local maps, once per piece.
+            let maps = PieceMaps::new(&xi, has_vel.then_some(&dxi));
+            let theta2 = maps.theta_squared();
             let mut fs = FullSums::new(
                 pd.points
                     .iter()
                     .all(|p| p.inertia[3] == p.inertia[4] && p.inertia[3] == p.inertia[5]),
+                theta2 * (piece.length * piece.length),
             );
-            let mut scols = [Vec6::zeros(); 6];
-            // Everything x-independent of the local maps, once per piece.
-            let maps = PieceMaps::new(&xi, has_vel.then_some(&dxi));
             for qp in &pd.points {
-                let (gl, tm, dbias) = maps.eval(qp.x);
+                let (gl, tm, dbias, ta) = maps.eval_with_ta(qp.x);
                 let m = &qp.inertia;
                 if pass != Pass::Composite {
                     let carried = ad_inv_vec(&gl, &eta0);
@@ -150,7 +152,7 @@ pub(crate) fn outward_inl(
                     // full T₋ for k ≥ 4 ([`FullSums`]), column by column on
                     // S = T₋B (k products and k(k+1)/2 dots) below that.
                     if full {
-                        fs.add(&gl, &tm, &mw);
+                        fs.add(&gl, &tm, &mw, &ta, theta2);
                     } else {
                         let a = gl.ad_inv();
                         let k = s_columns(&tm, &piece.basis, &mut scols);
@@ -207,7 +209,7 @@ pub(crate) fn outward_inl(
                     }
                 }
                 if full {
-                    fs.project(&piece.basis, &mut w.ut, &mut w.dt);
+                    fs.project(&maps, &piece.basis, &mut w.ut, &mut w.dt);
                 } else {
                     for c in 0..k {
                         for r in 0..c {

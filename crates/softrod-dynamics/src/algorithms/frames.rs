@@ -137,6 +137,30 @@ pub(crate) fn frame_state(
     }
 }
 
+/// The pose of a frame after an outward sweep: [`frame_state`]`(…, None)`'s
+/// `pose` to the bit (the same exponential, D4, and compositions), without
+/// the twists, the tangent map's column blocks and their 6×6 products —
+/// what contact needs of every sample before it knows whether it touches
+/// (CT7).
+pub(crate) fn frame_pose(model: &Model, data: &Data, f: &ResolvedFrame, q: &[f64]) -> Pose {
+    match f.target {
+        Target::World => f.offset,
+        Target::Body { node } => data.nodes[node].base_world.compose(&f.offset),
+        Target::Rod {
+            rod,
+            piece,
+            x,
+            node,
+        } => {
+            let rm = &model.rods[rod];
+            let pc = &rm.spec.geometry.pieces()[piece];
+            let xi = pc.strain(&q[rm.dofs()]);
+            let (gl, _) = PieceMaps::new(&xi, None).exp_and_tangent_minus(x);
+            data.nodes[node].base_world.compose(&gl).compose(&f.offset)
+        }
+    }
+}
+
 /// A block of rows to fill with a frame's spatial columns: the row
 /// operator `C` (its first `m` rows), the first row and the sign.
 #[derive(Clone, Copy, Debug)]

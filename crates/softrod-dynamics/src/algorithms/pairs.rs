@@ -9,7 +9,7 @@
 //! node data of the last outward sweep.
 
 use super::contact::{Ask, point_velocity, rod_frame};
-use super::frames::{add_frame_wrench, frame_state, inward_wrenches};
+use super::frames::{add_frame_wrench, frame_pose, frame_state, inward_wrenches};
 use crate::forces::contact::{Distance, Law, closest_on_segments, force};
 use crate::model::Model;
 use crate::model::closure::{ResolvedFrame, Target};
@@ -84,8 +84,19 @@ impl Sections<'_> {
                     offset: Pose::identity(),
                 };
                 let qd = if velocity { self.qd } else { None };
-                let fs = frame_state(self.model, tree, self.data, &frame, self.q, qd);
                 let xi = g.strain(piece, &self.q[rm.dofs()]);
+                if qd.is_none() {
+                    // Positions and tangents only (the broadphase, the
+                    // closest points): the pose alone, the same bits.
+                    let pose = frame_pose(self.model, self.data, &frame, self.q);
+                    return At {
+                        tangent: pose.rotation * Vec3::new(xi[3], xi[4], xi[5]),
+                        pose,
+                        velocity: Vec3::zeros(),
+                        omega: Vec3::zeros(),
+                    };
+                }
+                let fs = frame_state(self.model, tree, self.data, &frame, self.q, qd);
                 At {
                     tangent: fs.pose.rotation * Vec3::new(xi[3], xi[4], xi[5]),
                     velocity: if qd.is_some() {

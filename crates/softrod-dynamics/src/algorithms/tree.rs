@@ -183,10 +183,11 @@ pub(crate) fn outward_from(
                 pd.points
                     .iter()
                     .all(|p| p.inertia[3] == p.inertia[4] && p.inertia[3] == p.inertia[5]),
+                maps.theta_squared() * (length * length),
             );
             let mut pi = PointInertia::default();
             for qp in &pd.points {
-                let (gl, tm, dbias) = maps.eval(qp.x);
+                let (gl, tm, dbias, ta) = maps.eval_with_ta(qp.x);
                 let a = gl.ad_inv();
                 let m = &qp.inertia;
                 if pass != Pass::Composite {
@@ -217,12 +218,13 @@ pub(crate) fn outward_from(
                 }
                 if pass != Pass::Inverse {
                     let mw = m * qp.w;
-                    fs.add(&gl, &tm, &mw);
+                    fs.add(&gl, &tm, &mw, &ta, maps.theta_squared());
                     pi.add(&gl, &mw);
                 }
             }
             if pass != Pass::Inverse {
                 fs.project(
+                    &maps,
                     &rm.spec.geometry.pieces()[piece].basis,
                     &mut w.ut,
                     &mut w.dt,

@@ -7,6 +7,7 @@
 use super::piece::{PieceWork, Subtree, close_mass, close_piece, write_piece};
 use super::point::{PieceLin, basis6, linearize_point, own_points};
 use super::{At, IdDerivatives};
+use super::{planar, planar_close};
 use crate::forces::external::gravity_base_acceleration;
 use crate::forces::linearized::{drag_diagonal, has_dead_loads};
 use crate::kernels::mat6::{Cols, mm, tm};
@@ -18,6 +19,12 @@ use softrod_lie::{PieceMaps, Vec6};
 /// densities and their linearizations at every point; own-point sums.
 #[inline(always)]
 pub(crate) fn outward(model: &Model, rm: &RodModel, works: &mut [PieceWork], at: &At) {
+    // Planar rods on the forward run's planar path: the points on se(2)
+    // (D95–D98); their closes too (`inward`, D99–D100).
+    if let (true, Some(pr)) = (model.planar_path, &rm.planar) {
+        planar::outward(model, rm, pr, works, at);
+        return;
+    }
     let (q, qd, qdd) = (at.q, at.qd, at.qdd);
     let scale = at.forces.load_scale;
     let rod = &rm.spec.geometry;
@@ -57,6 +64,11 @@ pub(crate) fn outward(model: &Model, rm: &RodModel, works: &mut [PieceWork], at:
 /// The inward sweep (D43–D46): composites, each piece's diagonal block,
 /// `τ`, and the world-frame pairing quantities.
 pub(crate) fn inward(model: &Model, rm: &RodModel, work: &mut IdDerivatives, r: usize, at: &At) {
+    // Planar rods on the planar path: the closes on se(2) (D99–D100).
+    if let (true, Some(pr)) = (model.planar_path, &rm.planar) {
+        planar_close::inward(model, rm, pr, work, r, at);
+        return;
+    }
     // Dead loads only: the 𝒴 composites and receivers are zero otherwise.
     let dead = has_dead_loads(rm);
     let mut sub = Subtree::zero();

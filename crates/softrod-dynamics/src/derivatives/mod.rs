@@ -20,6 +20,8 @@ pub(crate) mod contact;
 pub(crate) mod forward;
 pub(crate) mod pairs;
 pub(crate) mod piece;
+pub(crate) mod planar;
+pub(crate) mod planar_close;
 pub(crate) mod point;
 pub(crate) mod second;
 pub(crate) mod tree;

@@ -428,7 +428,10 @@ impl Model {
     /// The same model with the planar path of the forward dynamics on
     /// (the default) or off: off, planar rods take the general se(3) path
     /// — the cross-check of docs/validation.md and the baseline of the
-    /// planar benchmarks. Results agree to rounding.
+    /// planar benchmarks. Results agree to rounding. The same switch takes
+    /// the linearization of the inverse dynamics (its outward sweep,
+    /// docs/theory-derivatives.md D95–D98) on se(2) or on six strain
+    /// directions.
     pub fn with_planar_path(mut self, on: bool) -> Self {
         self.planar_path = on;
         self
