@@ -597,15 +597,16 @@ pub(crate) fn outward(
     }
 }
 
+/// The three bending planes' directions in a twist (`ky, qx, qz` and its
+/// two rotations), and a 3-vector or 3×3 block placed at or taken from them:
+/// what the planar tests compare against the six-direction path with.
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::kernels::piece_derivs::{PieceDerivMaps, lambda};
-    use softrod_lie::{ad, coad};
+pub(crate) mod plane_blocks {
+    use softrod_lie::{Mat3, Mat6, Vec3, Vec6};
 
-    const IDX: [[usize; 3]; 3] = [[0, 4, 5], [1, 5, 3], [2, 3, 4]];
+    pub(crate) const IDX: [[usize; 3]; 3] = [[0, 4, 5], [1, 5, 3], [2, 3, 4]];
 
-    fn scatter(idx: &[usize; 3], v: &Vec3) -> Vec6 {
+    pub(crate) fn scatter(idx: &[usize; 3], v: &Vec3) -> Vec6 {
         let mut out = Vec6::zeros();
         for r in 0..3 {
             out[idx[r]] = v[r];
@@ -613,9 +614,18 @@ mod tests {
         out
     }
 
-    fn block(idx: &[usize; 3], m: &Mat6) -> Mat3 {
+    pub(crate) fn block(idx: &[usize; 3], m: &Mat6) -> Mat3 {
         Mat3::from_fn(|r, c| m[(idx[r], idx[c])])
     }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kernels::piece_derivs::{PieceDerivMaps, lambda};
+    use softrod_lie::{ad, coad};
+
+    use super::plane_blocks::{IDX, block, scatter};
 
     /// The `P` operators are the `P` blocks of the six-direction ones, and
     /// those are block diagonal on `P ⊕ P⊥` for `P` arguments (D95), for

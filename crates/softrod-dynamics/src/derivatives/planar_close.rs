@@ -248,19 +248,7 @@ mod tests {
     use crate::derivatives::planar::PlanarDerivMaps;
     use crate::kernels::piece_derivs::{PieceDerivMaps, tangent_transpose_form};
 
-    const IDX: [[usize; 3]; 3] = [[0, 4, 5], [1, 5, 3], [2, 3, 4]];
-
-    fn scatter(idx: &[usize; 3], v: &Vec3) -> Vec6 {
-        let mut out = Vec6::zeros();
-        for r in 0..3 {
-            out[idx[r]] = v[r];
-        }
-        out
-    }
-
-    fn block(idx: &[usize; 3], m: &Mat6) -> Mat3 {
-        Mat3::from_fn(|r, c| m[(idx[r], idx[c])])
-    }
+    use crate::derivatives::planar::plane_blocks::{IDX, block, scatter};
 
     /// `𝒬` on `P` (D99) against the P block of the six-direction form
     /// (D36) for P-valued wrench sums, and the six-direction form has no
