@@ -550,6 +550,46 @@ mod tests {
         (model, q, qd)
     }
 
+    /// The pose-only sample position of the obstacle pre-test and the rod
+    /// pairs ([`frame_pose`]) is [`frame_state`]'s pose: to the bit without
+    /// rates (the same exponential and compositions: what keeps the pairs'
+    /// outputs unchanged), and within far less than the pre-test's 1e-9 m
+    /// slack with them (another series evaluation of the same map), at
+    /// every contact sample of every rod of the tree scene, bent.
+    #[test]
+    fn the_pose_only_frame_is_the_frame_states_pose() {
+        let (model, q0, qd) = scene();
+        let tree = model.tree.as_ref().unwrap();
+        let q: Vec<f64> = q0
+            .iter()
+            .enumerate()
+            .map(|(i, v)| v + 0.3 * ((i as f64) * 0.9).sin())
+            .collect();
+        let mut data = Data::new(&model);
+        outward(
+            &model,
+            tree,
+            &mut data,
+            Motion::at_rest(&q),
+            Pass::Inverse,
+            Forces::ALL,
+        );
+        let mut checked = 0;
+        for (r, samples) in model.contact.samples.iter().enumerate() {
+            for smp in samples {
+                let frame = rod_frame(&model, r, smp.s);
+                let pose = frame_pose(&model, &data, &frame, &q);
+                let full = frame_state(&model, tree, &data, &frame, &q, None).pose;
+                assert_eq!(pose.translation, full.translation, "rod {r}, s {}", smp.s);
+                assert_eq!(pose.rotation, full.rotation, "rod {r}, s {}", smp.s);
+                let rated = frame_state(&model, tree, &data, &frame, &q, Some(&qd)).pose;
+                assert!((pose.translation - rated.translation).norm() < 1e-14);
+                checked += 1;
+            }
+        }
+        assert!(checked > 10, "{checked} samples");
+    }
+
     /// The material points `(rod, s, obstacle's body, force on the rod)` of
     /// the last evaluation's contacts, a pair's rod `b` with the opposite.
     type Points = Vec<(usize, f64, Option<usize>, Vec3)>;
