@@ -133,7 +133,7 @@ fn project_inner(
         if norm <= tol {
             break norm;
         }
-        if !(norm < last) {
+        if norm >= last || norm.is_nan() {
             // Backtracking: half of the last correction, from where it
             // started (a plain Newton step overshoots from far off, where
             // the soft strains make φ strongly nonlinear).
