@@ -11,8 +11,8 @@ use std::path::{Path, PathBuf};
 use crate::data::{Pose, pose_valid};
 use crate::error::VizError;
 use crate::html::{
-    DEFAULT_MAX_BYTES, DEFAULT_MAX_FRAMES, Prepared, RotationText, ViewOptions, ViewStats,
-    write_prepared,
+    DEFAULT_MAX_BYTES, DEFAULT_MAX_FRAMES, Prepared, ROTATION_TEXT, RotationText, ViewOptions,
+    ViewStats, write_prepared,
 };
 use crate::run_dir::{
     BodyPoses, RodShape, ShapeData, Thinning, VIEW_HTML, ViewSpec, halve, view_cap, view_from_parts,
@@ -115,14 +115,19 @@ impl FrameCollector {
                 break;
             }
             for pose in f {
-                ok &= pose_valid(pose);
-                text.push(pose);
+                ok &= pose_valid(pose) && text.push(pose);
                 for j in 0..3 {
-                    bbox[0][j] = bbox[0][j].min(pose.position[j]);
-                    bbox[1][j] = bbox[1][j].max(pose.position[j]);
+                    // Finite (else dropped): comparisons are `min`, `max`.
+                    let x = pose.position[j];
+                    if x < bbox[0][j] {
+                        bbox[0][j] = x;
+                    }
+                    if x > bbox[1][j] {
+                        bbox[1][j] = x;
+                    }
                 }
             }
-            ok &= text.text.len() <= max_bytes.min(u32::MAX as usize);
+            ok &= text.slots.len() * ROTATION_TEXT <= max_bytes;
         }
         if ok {
             p.boxes.push(bbox);

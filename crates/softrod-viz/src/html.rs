@@ -119,26 +119,30 @@ pub(crate) struct Prepared<'a> {
     pub boxes: &'a [[[f64; 3]; 2]],
 }
 
-/// The rotation text of one rod's poses, time after time: pose `j`
-/// (counting every pose of every time in order) is
-/// `text[ends[j − 1]..ends[j]]` (from 0 for the first).
+/// The rotation text of one rod's poses, time after time (pose `j`
+/// counts every pose of every time in order): what [`push_rotation`]
+/// writes, each in a fixed slot (a unit quaternion's text never takes
+/// more than [`ROTATION_TEXT`] bytes).
 #[derive(Debug, Clone, Default)]
 pub(crate) struct RotationText {
-    pub text: String,
-    pub ends: Vec<u32>,
+    pub slots: Vec<([u8; ROTATION_TEXT], u8)>,
 }
 
 impl RotationText {
-    /// Appends the rotation text of `p` (see [`push_rotation`]).
-    pub fn push(&mut self, p: &Pose) {
-        push_rotation(&mut self.text, &p.rotation);
-        self.ends.push(self.text.len() as u32);
-    }
-
-    /// The text of pose `j`.
-    fn get(&self, j: usize) -> &str {
-        let start = if j == 0 { 0 } else { self.ends[j - 1] as usize };
-        &self.text[start..self.ends[j] as usize]
+    /// Appends the rotation text of `p`; false (nothing appended) if it
+    /// does not fit a slot.
+    pub fn push(&mut self, p: &Pose) -> bool {
+        let mut line = [0u8; 4 * INT_TEXT];
+        let end = put_rotation(&mut line, 0, &p.rotation);
+        match line.get(..ROTATION_TEXT) {
+            Some(head) if end <= ROTATION_TEXT => {
+                let mut slot = [0u8; ROTATION_TEXT];
+                slot.copy_from_slice(head);
+                self.slots.push((slot, end as u8));
+                true
+            }
+            _ => false,
+        }
     }
 }
 
@@ -269,12 +273,12 @@ impl Quantizer {
     }
 
     fn push_point(&self, out: &mut String, p: &[f64; 3]) {
-        let mut buf = itoa::Buffer::new();
+        let mut line = [0u8; 3 * INT_TEXT];
+        let mut at = 0;
         for (x, o) in p.iter().zip(&self.origin) {
-            let v = round_to_i64((x - o) / self.quantum);
-            out.push_str(buf.format(v));
-            out.push(',');
+            at = put_int(&mut line, at, round_to_i64((x - o) / self.quantum));
         }
+        out.push_str(ascii(&line[..at]));
     }
 
     fn push_pose(&self, out: &mut String, p: &Pose) {
@@ -283,24 +287,22 @@ impl Quantizer {
     }
 
     /// [`Quantizer::push_pose`] of a pose at `position` whose rotation's
-    /// text is `rotation` (made by [`push_rotation`]): one append per pose.
-    fn push_pose_text(&self, out: &mut String, position: &[f64; 3], rotation: &str) {
-        let mut line = [0u8; 3 * INT_TEXT + ROTATION_TEXT];
-        let mut at = 0;
+    /// text is `rotation` (a [`RotationText`] slot), into `line` at `at`;
+    /// returns the end. `line` has `3·INT_TEXT + ROTATION_TEXT` bytes
+    /// from `at`.
+    #[inline(always)]
+    fn put_pose_text(
+        &self,
+        line: &mut [u8],
+        mut at: usize,
+        position: &[f64; 3],
+        rotation: &([u8; ROTATION_TEXT], u8),
+    ) -> usize {
         for (x, o) in position.iter().zip(&self.origin) {
-            at = put_int(&mut line, at, round_to_i64((x - o) / self.quantum));
+            at = put_int(line, at, round_to_i64((x - o) / self.quantum));
         }
-        match line.get_mut(at..at + rotation.len()) {
-            Some(room) => {
-                room.copy_from_slice(rotation.as_bytes());
-                at += rotation.len();
-                out.push_str(ascii(&line[..at]));
-            }
-            None => {
-                out.push_str(ascii(&line[..at]));
-                out.push_str(rotation);
-            }
-        }
+        line[at..at + ROTATION_TEXT].copy_from_slice(&rotation.0);
+        at + rotation.1 as usize
     }
 }
 
@@ -308,7 +310,14 @@ impl Quantizer {
 const INT_TEXT: usize = 21;
 /// The longest rotation text of a unit quaternion: four integers within
 /// ±[`QUAT_SCALE`], each with its comma.
-const ROTATION_TEXT: usize = 4 * 7;
+pub(crate) const ROTATION_TEXT: usize = 4 * 7;
+
+/// Two-digit groups, `"00"` to `"99"`.
+const PAIRS: &[u8; 200] = b"0001020304050607080910111213141516171819\
+2021222324252627282930313233343536373839\
+4041424344454647484950515253545556575859\
+6061626364656667686970717273747576777879\
+8081828384858687888990919293949596979899";
 
 /// Writes `v` in decimal (what `itoa` and `Display` write) and a comma at
 /// `line[at..]`; returns the end. `line` has [`INT_TEXT`] bytes from `at`.
@@ -326,30 +335,48 @@ fn put_int(line: &mut [u8], mut at: usize, v: i64) -> usize {
         p = p.wrapping_mul(10);
     }
     let end = at + digits;
-    for slot in line[at..end].iter_mut().rev() {
-        *slot = b'0' + (n % 10) as u8;
-        n /= 10;
+    let mut i = end;
+    while n >= 100 {
+        let d = (n % 100) as usize * 2;
+        n /= 100;
+        i -= 2;
+        line[i] = PAIRS[d];
+        line[i + 1] = PAIRS[d + 1];
+    }
+    if n >= 10 {
+        let d = n as usize * 2;
+        line[i - 2] = PAIRS[d];
+        line[i - 1] = PAIRS[d + 1];
+    } else {
+        line[i - 1] = b'0' + n as u8;
     }
     line[end] = b',';
     end + 1
 }
 
+/// A rotation as the page holds it, at `line[at..]` (which has
+/// `4·INT_TEXT` bytes): the quaternion normalized, with `w ≥ 0`, each
+/// component as `round(10⁴ · q)` and its comma. Returns the end.
+#[inline(always)]
+fn put_rotation(line: &mut [u8], mut at: usize, r: &[f64; 4]) -> usize {
+    let n = (r[0] * r[0] + r[1] * r[1] + r[2] * r[2] + r[3] * r[3]).sqrt();
+    let sign = if r[0] < 0.0 { -1.0 } else { 1.0 };
+    for v in r {
+        at = put_int(line, at, round_to_i64(sign * v / n * QUAT_SCALE));
+    }
+    at
+}
+
+/// [`put_rotation`] appended to `out`.
+fn push_rotation(out: &mut String, r: &[f64; 4]) {
+    let mut line = [0u8; 4 * INT_TEXT];
+    let end = put_rotation(&mut line, 0, r);
+    out.push_str(ascii(&line[..end]));
+}
+
 /// `bytes` as text: only ASCII digits, signs and commas are put there.
 fn ascii(bytes: &[u8]) -> &str {
     std::str::from_utf8(bytes).unwrap_or_default()
-}
-
-/// A rotation as the page holds it: the quaternion normalized, with
-/// `w ≥ 0`, each component as `round(10⁴ · q)` and its comma.
-pub(crate) fn push_rotation(out: &mut String, r: &[f64; 4]) {
-    let n = (r[0] * r[0] + r[1] * r[1] + r[2] * r[2] + r[3] * r[3]).sqrt();
-    let sign = if r[0] < 0.0 { -1.0 } else { 1.0 };
-    let mut buf = itoa::Buffer::new();
-    for v in r {
-        let i = round_to_i64(sign * v / n * QUAT_SCALE);
-        out.push_str(buf.format(i));
-        out.push(',');
-    }
 }
 
 /// `x.round() as i64` (halves away from zero, saturating) without a call:
@@ -449,14 +476,22 @@ fn data_json(
         json_f64s(o, rod.radius.iter().copied());
         o.push_str(",\"frames\":[");
         let rotations = pre.map(|p| &p.rotations[r]);
+        let mut frame: Vec<u8> = Vec::new();
         for &k in frames {
             o.push('[');
             match rotations {
                 Some(text) => {
+                    // A frame's text is made in bytes, a pose at a time,
+                    // and appended at once (one check that it is text).
                     let first = k * rod.s.len();
-                    for (i, p) in rod.frames[k].iter().enumerate() {
-                        q.push_pose_text(o, &p.position, text.get(first + i));
+                    let slots = &text.slots[first..first + rod.s.len()];
+                    frame.clear();
+                    for (p, rotation) in rod.frames[k].iter().zip(slots) {
+                        let mut line = [0u8; 3 * INT_TEXT + ROTATION_TEXT];
+                        let end = q.put_pose_text(&mut line, 0, &p.position, rotation);
+                        frame.extend_from_slice(&line[..end]);
                     }
+                    o.push_str(ascii(&frame));
                 }
                 None => {
                     for p in &rod.frames[k] {
