@@ -312,6 +312,19 @@ const INT_TEXT: usize = 21;
 /// ±[`QUAT_SCALE`], each with its comma.
 pub(crate) const ROTATION_TEXT: usize = 4 * 7;
 
+/// `10^k` for `k` in `0..20`, and `u64::MAX` (no `u64` reaches it).
+const POW10: [u64; 21] = {
+    let mut p = [u64::MAX; 21];
+    let mut k = 0;
+    let mut v = 1u64;
+    while k < 20 {
+        p[k] = v;
+        v = v.wrapping_mul(10);
+        k += 1;
+    }
+    p
+};
+
 /// Two-digit groups, `"00"` to `"99"`.
 const PAIRS: &[u8; 200] = b"0001020304050607080910111213141516171819\
 2021222324252627282930313233343536373839\
@@ -328,13 +341,12 @@ fn put_int(line: &mut [u8], mut at: usize, v: i64) -> usize {
         at += 1;
     }
     let mut n = v.unsigned_abs();
-    let mut digits = 1;
-    let mut p = 10u64;
-    while digits < 20 && n >= p {
-        digits += 1;
-        p = p.wrapping_mul(10);
-    }
-    let end = at + digits;
+    // ⌊log₁₀ n⌋ from the bit length (1233/4096 ≈ log₁₀ 2), corrected by
+    // one comparison.
+    let bits = 64 - (n | 1).leading_zeros() as usize;
+    let guess = (bits * 1233) >> 12;
+    let digits = guess + usize::from(n >= POW10[guess]);
+    let end = at + digits.max(1);
     let mut i = end;
     while n >= 100 {
         let d = (n % 100) as usize * 2;
