@@ -237,18 +237,7 @@ pub fn rasterize(dir: &Path, names: &[String], quiet: bool) -> Result<(), CliErr
     Ok(())
 }
 
-/// Which of a run's figures [`run_figures`] draws: one of two parts of
-/// about equal work, so that two threads can draw them (the figures are
-/// independent files).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Figures {
-    /// `tip_trajectory.svg` and `shapes.svg`.
-    Shapes,
-    /// `energy.svg`, the strains and `actuators.svg`.
-    Series,
-}
-
-/// Writes the figures `which` of a run: `tip_trajectory.svg`, `energy.svg`,
+/// Writes every figure of a run: `tip_trajectory.svg`, `energy.svg`,
 /// `shapes.svg`, `strains.svg` (`strains_R.svg` for rod R ≥ 1) and, with
 /// cables, `actuators.svg`. Returns the names written (nothing without rows).
 pub fn run_figures(
@@ -256,47 +245,40 @@ pub fn run_figures(
     s: &Series,
     model: &Model,
     title: &str,
-    which: Figures,
 ) -> Result<Vec<String>, CliError> {
     let mut written = Vec::new();
     if s.t.is_empty() {
         return Ok(written);
     }
-    let shapes = which == Figures::Shapes;
-    let series = which == Figures::Series;
     let names: Vec<String> = model.rods().iter().map(|r| r.spec.name.clone()).collect();
-    if shapes {
-        let tips: Vec<RodCurve> = names
-            .iter()
-            .zip(&s.tips)
-            .map(|(n, p)| RodCurve {
-                name: n.clone(),
-                points: p.clone(),
-            })
-            .collect();
-        write(
-            dir,
-            "tip_trajectory.svg",
-            plot::tip_trajectory(&format!("{title}: tip trajectory"), &tips),
-        )?;
-        written.push("tip_trajectory.svg".to_string());
-    }
-    if series {
-        let energy = EnergySeries {
-            t: s.t.clone(),
-            kinetic: s.energies.iter().map(|e| e.kinetic).collect(),
-            elastic: s.energies.iter().map(|e| e.elastic).collect(),
-            gravitational: s.energies.iter().map(|e| e.gravitational).collect(),
-            extra: Vec::new(),
-        };
-        write(
-            dir,
-            "energy.svg",
-            plot::energy(&format!("{title}: energy"), &energy),
-        )?;
-        written.push("energy.svg".to_string());
-    }
-    if shapes && !s.snapshots.is_empty() {
+    let tips: Vec<RodCurve> = names
+        .iter()
+        .zip(&s.tips)
+        .map(|(n, p)| RodCurve {
+            name: n.clone(),
+            points: p.clone(),
+        })
+        .collect();
+    write(
+        dir,
+        "tip_trajectory.svg",
+        plot::tip_trajectory(&format!("{title}: tip trajectory"), &tips),
+    )?;
+    written.push("tip_trajectory.svg".to_string());
+    let energy = EnergySeries {
+        t: s.t.clone(),
+        kinetic: s.energies.iter().map(|e| e.kinetic).collect(),
+        elastic: s.energies.iter().map(|e| e.elastic).collect(),
+        gravitational: s.energies.iter().map(|e| e.gravitational).collect(),
+        extra: Vec::new(),
+    };
+    write(
+        dir,
+        "energy.svg",
+        plot::energy(&format!("{title}: energy"), &energy),
+    )?;
+    written.push("energy.svg".to_string());
+    if !s.snapshots.is_empty() {
         let snaps: Vec<ShapeSnapshot> = s
             .snapshots
             .iter()
@@ -325,8 +307,6 @@ pub fn run_figures(
             plot::shapes_with_obstacles(&format!("{title}: rod shapes"), &snaps, &obstacles),
         )?;
         written.push("shapes.svg".to_string());
-    }
-    if series && !s.snapshots.is_empty() {
         for (r, name) in names.iter().enumerate() {
             let per_piece: Vec<Vec<[f64; 6]>> =
                 s.snapshots.iter().map(|sn| sn.strains[r].clone()).collect();
@@ -346,7 +326,7 @@ pub fn run_figures(
             written.push(file);
         }
     }
-    if series && !s.tensions.is_empty() {
+    if !s.tensions.is_empty() {
         let named = |v: &[Vec<f64>]| -> Vec<NamedSeries> {
             v.iter()
                 .enumerate()

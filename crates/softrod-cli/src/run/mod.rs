@@ -19,7 +19,6 @@ use softrod::record::{CLOSURE_WARN_RELATIVE, Columns, RodSampling, closure_lengt
 use softrod::{Error, output_times};
 
 use crate::common::{CliError, failed, load, out_dir};
-use crate::plots::Figures;
 use crate::{npz, outputs, plots, signals};
 use rows::RowWriter;
 use stream::{Progress, Streamer, chosen_rows};
@@ -259,34 +258,23 @@ pub fn run(
     let frames = streamer.take_view().filter(|_| streamer.rows_written() > 0);
     let series = streamer.finish_series();
     // The 3-D view and the figures are independent files from the same
-    // rows: drawn on two threads (the view with the shape figures, the
-    // series' figures here: about equal work), the process ends when the
-    // longer part is done (their bytes are those of one after the other).
+    // rows: drawn side by side, the process ends when the longer is done
+    // (their bytes are those of one after the other).
     let plot_result = std::thread::scope(|scope| {
-        let view = scope.spawn(|| {
-            let view = match frames {
-                Some(frames) => outputs::write_view(&dir, model, &title, frames).map(|_| ()),
-                None => Ok(()),
-            };
-            let shapes = plots::run_figures(&dir, series, model, &title, Figures::Shapes);
-            (view, shapes)
+        let view = scope.spawn(|| match frames {
+            Some(frames) => outputs::write_view(&dir, model, &title, frames).map(|_| ()),
+            None => Ok(()),
         });
-        let figures = plots::run_figures(&dir, series, model, &title, Figures::Series);
-        let (view, shapes) = view.join().unwrap_or_else(|_| {
-            let lost = || failed("drawing the 3-D view failed unexpectedly");
-            (Err(lost()), Err(lost()))
-        });
-        let figures = shapes.and_then(|mut names| {
-            names.extend(figures?);
-            Ok(names)
-        });
-        let figures = figures.and_then(|names| {
+        let figures = plots::run_figures(&dir, series, model, &title).and_then(|names| {
             if png {
                 plots::rasterize(&dir, &names, quiet)
             } else {
                 Ok(())
             }
         });
+        let view = view
+            .join()
+            .unwrap_or_else(|_| Err(failed("writing the 3-D view failed unexpectedly")));
         figures.and(view)
     });
     if status != "ok" {
