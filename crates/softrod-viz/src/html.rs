@@ -228,11 +228,11 @@ struct Quantizer {
 }
 
 impl Quantizer {
-    /// From the extent of everything drawn; `boxes`: the rods' sample
-    /// positions' per time (see [`Prepared::boxes`]), the same lowest and
-    /// highest coordinates as the frames themselves give (the positions
-    /// are finite, and `−0` is written `0`, so the order of `min` does
-    /// not matter).
+    /// From the extent of everything drawn; `boxes`: per time, the extent
+    /// of the rods' sample positions (see [`Prepared::boxes`]): the same
+    /// lowest and highest coordinates as the frames themselves give (the
+    /// positions are finite and `−0` is written `0`, so the order of `min`
+    /// and `max` does not matter).
     fn new(d: &ViewData, boxes: Option<&[[[f64; 3]; 2]]>) -> Self {
         let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
         let mut add = |p: &[f64; 3]| {
@@ -341,8 +341,8 @@ fn put_int(line: &mut [u8], mut at: usize, v: i64) -> usize {
         at += 1;
     }
     let mut n = v.unsigned_abs();
-    // ⌊log₁₀ n⌋ from the bit length (1233/4096 ≈ log₁₀ 2), corrected by
-    // one comparison.
+    // The digit count from the bit length (1233/4096 ≈ log₁₀ 2), corrected
+    // by one comparison.
     let bits = 64 - (n | 1).leading_zeros() as usize;
     let guess = (bits * 1233) >> 12;
     let digits = guess + usize::from(n >= POW10[guess]);
