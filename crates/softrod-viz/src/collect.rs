@@ -108,7 +108,7 @@ impl FrameCollector {
             return;
         };
         let (max_times, max_bytes) = self.limits;
-        let mut bbox = [[f64::INFINITY; 3], [f64::NEG_INFINITY; 3]];
+        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
         let mut ok = p.boxes.len() < max_times;
         for (f, text) in self.now_rods.iter().zip(&mut p.rotations) {
             if !ok {
@@ -116,21 +116,20 @@ impl FrameCollector {
             }
             for pose in f {
                 ok &= pose_valid(pose) && text.push(pose);
-                for j in 0..3 {
+                for ((l, h), &x) in lo.iter_mut().zip(&mut hi).zip(&pose.position) {
                     // Finite (else dropped): comparisons are `min`, `max`.
-                    let x = pose.position[j];
-                    if x < bbox[0][j] {
-                        bbox[0][j] = x;
+                    if x < *l {
+                        *l = x;
                     }
-                    if x > bbox[1][j] {
-                        bbox[1][j] = x;
+                    if x > *h {
+                        *h = x;
                     }
                 }
             }
             ok &= text.slots.len() * ROTATION_TEXT <= max_bytes;
         }
         if ok {
-            p.boxes.push(bbox);
+            p.boxes.push([lo, hi]);
         } else {
             self.prepared = None;
         }
