@@ -34,7 +34,8 @@
 //! A system that also keeps the linearization as an O(N) operator
 //! ([`ParameterSystem::force_linearization`] with its transposed products)
 //! gets G12: the stages the reverse sweep solves with are linearized in
-//! O(N) and used only through products.
+//! O(N) and used only through products, their GMRES preconditioned by the
+//! dense LU the recomputation factored (G32).
 
 // Negated comparisons are deliberate: a NaN must fail every check.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -285,8 +286,10 @@ pub enum AdjointSolver {
     /// acceleration, the transposed stage system `Sᵀν = Ã` solved by GMRES
     /// preconditioned with the system's structured
     /// [`factor_shifted_mass`](SecondOrderSystem::factor_shifted_mass)
-    /// (O(N) per iteration beside one dense product), a dense LU of `Sᵀ`
-    /// where that is not offered or does not converge to round-off.
+    /// (O(N) per iteration beside one dense product) — or, on a stage kept
+    /// as an operator, with the recomputation's dense LU (G32) — a dense
+    /// LU of `Sᵀ` where neither is offered or GMRES does not converge to
+    /// round-off.
     /// Otherwise [`AdjointSolver::Dense`].
     #[default]
     Structured,
@@ -491,11 +494,11 @@ pub(crate) fn check_request(
 }
 
 /// Up to this many coordinates the step start's `M₀⁻¹` (G6, G11) is a
-/// dense Cholesky of the `M₀` stage 0 formed anyway (`n³/3` flops: ~5 k
+/// dense Cholesky of the `M₀` stage 0 formed anyway (`n³/3` flops: ~22 k
 /// instructions at 24 coordinates) instead of the structured O(N)
-/// factorization (~2.6 k instructions per coordinate on a planar rod):
-/// the two cost the same near 90 coordinates (G33).
-const DENSE_MASS_MAX: usize = 64;
+/// factorization (~62 k at 24 coordinates of a planar rod): the two cost
+/// about the same near 40 coordinates (G33).
+const DENSE_MASS_MAX: usize = 40;
 
 /// GMRES iterations per cycle and cycles of a transposed stage solve
 /// before it falls back to the dense LU (G11).
