@@ -50,6 +50,7 @@ fn add_local(out: &mut [f64], o: usize, k: usize, x: &Vec6) {
 /// quantities live in its basis's `k` columns or rows). The sizes are
 /// compile-time constants so the loops unroll.
 #[inline(always)]
+#[allow(clippy::needless_range_loop)] // index loops over compile-time sizes, as kernels/mat6.rs
 fn trk<const R: usize, const C: usize>(m: &Mat6, x: &Vec6) -> Vec6 {
     let (a, x) = (m.as_slice(), x.as_slice());
     let mut out = Vec6::zeros();
@@ -71,6 +72,7 @@ fn trk<const R: usize, const C: usize>(m: &Mat6, x: &Vec6) -> Vec6 {
 /// `A` whose columns from `C` on or `x`'s entries from `C` on are zero and
 /// of which only the first `R` outputs are read (D101).
 #[inline(always)]
+#[allow(clippy::needless_range_loop)] // index loops over compile-time sizes, as kernels/mat6.rs
 fn mk<const R: usize, const C: usize>(m: &Mat6, x: &Vec6) -> Vec6 {
     let (a, x) = (m.as_slice(), x.as_slice());
     let mut out = Vec6::zeros();
