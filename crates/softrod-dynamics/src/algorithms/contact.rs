@@ -6,7 +6,7 @@
 //! parents and the bodies that carry obstacles).
 
 use super::frames::{
-    RowBlock, add_frame_columns, add_frame_wrench, add_prescribed_wrench, frame_pose, frame_state,
+    RowBlock, add_frame_columns, add_frame_wrench, add_prescribed_wrench, frame_state,
     inward_wrenches,
 };
 use super::pairs::Search;
@@ -16,12 +16,12 @@ use crate::forces::Forces;
 use crate::forces::contact::{Distance, Law, distance, force};
 use crate::model::Model;
 use crate::model::closure::{ResolvedFrame, Target};
-use crate::model::contact::{Active, ContactWork};
+use crate::model::contact::{Active, ContactWork, Sample};
 use crate::model::data::Data;
 use crate::model::tree::Tree;
 use nalgebra::DMatrix;
 use softrod_kinematics::Frame;
-use softrod_lie::{Mat3, Mat6, Pose, Vec3, Vec6, skew};
+use softrod_lie::{Mat3, Mat6, PieceMaps, Pose, Vec3, Vec6, skew};
 
 /// What one evaluation asks of contact.
 #[derive(Clone, Copy, Debug)]
@@ -139,6 +139,7 @@ pub(crate) fn evaluate(
                 Pass::Inverse,
                 Forces::ALL,
             );
+            sample_poses(model, data, work, q);
             if obstacles {
                 evaluate_tree(model, data, work, q, qd, ask);
             }
@@ -192,6 +193,9 @@ pub(crate) fn evaluate_pairs_only(
                 Pass::Inverse,
                 Forces::ALL,
             );
+            if search == Search::All {
+                sample_poses(model, data, work, q);
+            }
         }
     }
     super::pairs::evaluate_pairs(model, data, work, q, qd, ask, search);
@@ -299,10 +303,11 @@ fn evaluate_tree(
     let tree = model.tree.as_ref().expect("a tree model");
     for (r, samples) in model.contact.samples.iter().enumerate() {
         for (i, smp) in samples.iter().enumerate() {
-            let frame = rod_frame(model, r, smp.s);
-            if !near_an_obstacle(model, tree, data, &frame, q, smp.radius) {
+            let p = work.poses[r][i].translation;
+            if !near_an_obstacle(model, tree, data, &p, smp.radius) {
                 continue;
             }
+            let frame = sample_frame(tree, r, smp);
             let fs = frame_state(model, tree, data, &frame, q, qd);
             let p = fs.pose.translation;
             let vp = point_velocity(&fs.vel, &p);
@@ -347,6 +352,60 @@ fn evaluate_tree(
     inward_wrenches(tree, data, &mut work.wrenches, work.tau.as_mut_slice());
 }
 
+/// The world pose of every contact point of a tree model into
+/// `work.poses` and every piece's stretch `|ν|` into `work.stretch`, after
+/// the outward sweep at `q`: [`super::frames::frame_pose`]'s pose to the bit (the same
+/// strain, exponential and compositions), with the strain and the
+/// piece's `PieceMaps` built once per piece instead of once per point;
+/// the strains and maps are kept in `work` for [`shared_pose`].
+pub(crate) fn sample_poses(model: &Model, data: &Data, work: &mut ContactWork, q: &[f64]) {
+    let tree = model.tree.as_ref().expect("a tree model");
+    for (r, samples) in model.contact.samples.iter().enumerate() {
+        let rm = &model.rods[r];
+        let qr = &q[rm.dofs()];
+        for (n, pc) in rm.spec.geometry.pieces().iter().enumerate() {
+            let xi = pc.strain(qr);
+            work.strains[r][n] = xi;
+            work.stretch[r][n] = Vec3::new(xi[3], xi[4], xi[5]).norm();
+            work.maps[r][n] = PieceMaps::new(&xi, None);
+        }
+        for (i, smp) in samples.iter().enumerate() {
+            work.poses[r][i] = shared_pose(tree, data, work, r, smp.piece, smp.x);
+        }
+    }
+}
+
+/// The world pose of rod `rod`'s section at abscissa `x` of piece `piece`
+/// from the piece maps [`sample_poses`] stored: `frame_pose` of that
+/// section to the bit.
+#[inline]
+pub(crate) fn shared_pose(
+    tree: &Tree,
+    data: &Data,
+    work: &ContactWork,
+    rod: usize,
+    piece: usize,
+    x: f64,
+) -> Pose {
+    let (gl, _) = work.maps[rod][piece].exp_and_tangent_minus(x);
+    let base = &data.nodes[tree.rod_nodes[rod][piece]].base_world;
+    base.compose(&gl).compose(&Pose::identity())
+}
+
+/// The frame of contact point `smp` of rod `rod` on a tree model (its
+/// piece and abscissa fixed with the model): [`rod_frame`] at `smp.s`.
+pub(crate) fn sample_frame(tree: &Tree, rod: usize, smp: &Sample) -> ResolvedFrame {
+    ResolvedFrame {
+        target: Target::Rod {
+            rod,
+            piece: smp.piece,
+            x: smp.x,
+            node: tree.rod_nodes[rod][smp.piece],
+        },
+        offset: Pose::identity(),
+    }
+}
+
 /// The frame of rod `rod`'s section at `s` \[m\] on a tree model.
 pub(crate) fn rod_frame(model: &Model, rod: usize, s: f64) -> ResolvedFrame {
     let tree = model.tree.as_ref().expect("a tree model");
@@ -367,28 +426,20 @@ pub(crate) fn rod_frame(model: &Model, rod: usize, s: f64) -> ResolvedFrame {
 }
 
 /// Whether a tree model's contact sample may touch an obstacle: its gap at
-/// the pose-only position ([`frame_pose`]) below a slack of `1e-9 (1 + |p|)`
+/// the pose-only position `p` (`frame_pose`'s, from [`sample_poses`]) below a slack of `1e-9 (1 + |p|)`
 /// m. Most samples touch nothing; this spares them [`frame_state`]'s twists
 /// and column blocks (CT7). The slack covers the round-off between the
 /// pose-only exponential and `frame_state`'s (the same D4 pose, its
 /// coefficients from another series evaluation when a rate is given), so
 /// every sample the full test finds touching passes this one, and the
 /// contacts and forces are those of the full test alone.
-fn near_an_obstacle(
-    model: &Model,
-    tree: &Tree,
-    data: &Data,
-    frame: &ResolvedFrame,
-    q: &[f64],
-    radius: f64,
-) -> bool {
-    let p = frame_pose(model, data, frame, q).translation;
+fn near_an_obstacle(model: &Model, tree: &Tree, data: &Data, p: &Vec3, radius: f64) -> bool {
     let slack = 1e-9 * (1.0 + p.norm());
     model.contact.obstacles.iter().enumerate().any(|(o, ob)| {
         let pose = model.contact.parents[o].map_or(Pose::identity(), |b| {
             data.nodes[tree.body_nodes[b]].base_world
         });
-        distance(&ob.shape, &pose, &p).d - radius < slack
+        distance(&ob.shape, &pose, p).d - radius < slack
     })
 }
 
@@ -463,6 +514,7 @@ pub(crate) fn parent_pose(model: &Model, data: &Data, o: usize) -> Pose {
 mod tests {
     use super::*;
     use crate::algorithms::contact_force;
+    use crate::algorithms::frames::frame_pose;
     use crate::{Attachment, BodySpec, Joint, JointKind, Rod, commit_contact};
     use nalgebra::DVector;
     use softrod_kinematics::Strain;
@@ -588,6 +640,61 @@ mod tests {
             }
         }
         assert!(checked > 10, "{checked} samples");
+    }
+
+    /// The per-evaluation sample poses and piece stretches (one strain and
+    /// one `PieceMaps` per piece) are the per-point recomputation's to the
+    /// bit: each point's pose is `frame_pose` at `locate(s)` (the piece and
+    /// abscissa the model fixed are `locate`'s), each piece's stretch the
+    /// norm of its strain's `ν`, and each segment's piece `locate` of its
+    /// midpoint — at every contact point of every rod of the tree scene,
+    /// bent, and again at a second state (nothing kept from the first).
+    #[test]
+    fn the_shared_sample_poses_are_the_per_point_ones() {
+        let (model, q0, _) = scene();
+        let tree = model.tree.as_ref().unwrap();
+        let mut data = Data::new(&model);
+        let mut work = ContactWork::new(&model);
+        let mut checked = 0;
+        for amp in [0.3, -0.7] {
+            let q: Vec<f64> = q0
+                .iter()
+                .enumerate()
+                .map(|(i, v)| v + amp * ((i as f64) * 0.9).sin())
+                .collect();
+            outward(
+                &model,
+                tree,
+                &mut data,
+                Motion::at_rest(&q),
+                Pass::Inverse,
+                Forces::ALL,
+            );
+            sample_poses(&model, &data, &mut work, &q);
+            for (r, samples) in model.contact.samples.iter().enumerate() {
+                let g = &model.rods[r].spec.geometry;
+                for (i, smp) in samples.iter().enumerate() {
+                    let (piece, x) = g.locate(smp.s).unwrap();
+                    assert_eq!((smp.piece, smp.x), (piece, x), "rod {r}, s {}", smp.s);
+                    if i + 1 < samples.len() {
+                        let mid = 0.5 * (smp.s + samples[i + 1].s);
+                        assert_eq!(smp.segment_piece, g.locate(mid).unwrap().0);
+                    }
+                    let frame = rod_frame(&model, r, smp.s);
+                    let pose = frame_pose(&model, &data, &frame, &q);
+                    assert_eq!(work.poses[r][i].translation, pose.translation);
+                    assert_eq!(work.poses[r][i].rotation, pose.rotation);
+                    checked += 1;
+                }
+                for (n, pc) in g.pieces().iter().enumerate() {
+                    let xi = g.strain(n, &q[model.rods[r].dofs()]);
+                    let nu = Vec3::new(xi[3], xi[4], xi[5]).norm();
+                    assert_eq!(work.stretch[r][n], nu);
+                    assert!(nu > 0.0 && pc.length > 0.0);
+                }
+            }
+        }
+        assert!(checked > 20, "{checked} samples");
     }
 
     /// The material points `(rod, s, obstacle's body, force on the rod)` of

@@ -8,7 +8,7 @@
 //! chain it reads the rods' kinematics in `ContactWork::kin`; on a tree the
 //! node data of the last outward sweep.
 
-use super::contact::{Ask, point_velocity, rod_frame};
+use super::contact::{Ask, point_velocity, rod_frame, shared_pose};
 use super::frames::{add_frame_wrench, frame_pose, frame_state, inward_wrenches};
 use crate::forces::contact::{Distance, Law, closest_on_segments, force};
 use crate::model::Model;
@@ -34,6 +34,10 @@ struct Sections<'a> {
     work: &'a ContactWork,
     q: &'a [f64],
     qd: Option<&'a [f64]>,
+    /// On a tree: `work`'s piece strains and maps are this state's
+    /// (`super::contact::sample_poses` ran), so a pose-only section is
+    /// read from them.
+    shared: bool,
 }
 
 /// A rod section as contact needs it: pose, the centreline's tangent
@@ -84,11 +88,19 @@ impl Sections<'_> {
                     offset: Pose::identity(),
                 };
                 let qd = if velocity { self.qd } else { None };
-                let xi = g.strain(piece, &self.q[rm.dofs()]);
+                let xi = if self.shared {
+                    self.work.strains[rod][piece]
+                } else {
+                    g.strain(piece, &self.q[rm.dofs()])
+                };
                 if qd.is_none() {
                     // Positions and tangents only (the broadphase, the
                     // closest points): the pose alone, the same bits.
-                    let pose = frame_pose(self.model, self.data, &frame, self.q);
+                    let pose = if self.shared {
+                        shared_pose(tree, self.data, self.work, rod, piece, x)
+                    } else {
+                        frame_pose(self.model, self.data, &frame, self.q)
+                    };
                     return At {
                         tangent: pose.rotation * Vec3::new(xi[3], xi[4], xi[5]),
                         pose,
@@ -140,7 +152,9 @@ pub(crate) fn seed_differences(work: &mut ContactWork) {
 
 /// The touching pairs at `(q, q̇)` and their generalized force into
 /// `pairs.tau` (`pairs.active` lists them). The chain's kinematics in
-/// `work.kin`, or the tree's node data in `data`, must be this state's.
+/// `work.kin`, or the tree's node data in `data` (and for [`Search::All`]
+/// the sample poses of `super::contact::sample_poses`), must be this
+/// state's.
 pub(crate) fn evaluate_pairs(
     model: &Model,
     data: &Data,
@@ -163,6 +177,7 @@ pub(crate) fn evaluate_pairs(
             work,
             q,
             qd,
+            shared: false,
         };
         for k in 0..pw.fd_seeds.len() {
             let (ba, bb) = pw.fd_seeds[k];
@@ -181,25 +196,15 @@ pub(crate) fn evaluate_pairs(
             work,
             q,
             qd,
+            shared: model.tree.is_some(),
         };
         broadphase(model, &sec, &mut pw);
-        let n = pw.boxes.len();
-        for i in 0..n {
-            let bi = pw.boxes[i];
-            let reach = bi.center.x + bi.radius;
-            for j in i + 1..n {
-                let bj = pw.boxes[j];
-                if bj.center.x - bj.radius > reach {
-                    break;
-                }
-                if (bi.center - bj.center).norm() > bi.radius + bj.radius
-                    || !could_touch(model, &bi, &bj)
-                {
-                    continue;
-                }
-                pw.narrow_tests += 1;
-                narrowphase(model, &sec, &mut pw, &bi, &bj, ask);
-            }
+        candidates(model, &mut pw);
+        for k in 0..pw.candidates.len() {
+            let (i, j) = pw.candidates[k];
+            let (bi, bj) = (pw.boxes[i as usize], pw.boxes[j as usize]);
+            pw.narrow_tests += 1;
+            narrowphase(model, &sec, &mut pw, &bi, &bj, ask);
         }
     }
     // The generalized force: J_a(s_a)ᵀ f − J_b(s_b)ᵀ f — on a tree as the
@@ -243,22 +248,28 @@ pub(crate) fn evaluate_pairs(
 fn broadphase(model: &Model, sec: &Sections, pw: &mut PairWork) {
     pw.boxes.clear();
     for (r, samples) in model.contact.samples.iter().enumerate() {
-        let g = &model.rods[r].spec.geometry;
-        for (i, smp) in samples.iter().enumerate() {
-            pw.points[r][i] = sec.at(r, smp.s, false).pose.translation;
+        match &model.tree {
+            None => {
+                for (i, smp) in samples.iter().enumerate() {
+                    pw.points[r][i] = sec.at(r, smp.s, false).pose.translation;
+                }
+            }
+            // This evaluation's poses, filled after its outward sweep.
+            Some(_) => {
+                for (p, pose) in pw.points[r].iter_mut().zip(&sec.work.poses[r]) {
+                    *p = pose.translation;
+                }
+            }
         }
         for i in 0..samples.len().saturating_sub(1) {
             let (s0, s1) = (samples[i].s, samples[i + 1].s);
-            let (piece, _) = g.locate(0.5 * (s0 + s1)).expect("on the rod");
+            let piece = samples[i].segment_piece;
             let stretch = match &model.tree {
                 None => {
                     let xi = sec.work.kin[r].strains()[piece];
                     Vec3::new(xi[3], xi[4], xi[5]).norm()
                 }
-                Some(_) => {
-                    let xi = g.strain(piece, &sec.q[model.rods[r].dofs()]);
-                    Vec3::new(xi[3], xi[4], xi[5]).norm()
-                }
+                Some(_) => sec.work.stretch[r][piece],
             };
             let arc = stretch * (s1 - s0);
             pw.arcs[r][i] = arc;
@@ -273,6 +284,80 @@ fn broadphase(model: &Model, sec: &Sections, pw: &mut PairWork) {
     }
     pw.boxes
         .sort_unstable_by(|a, b| (a.center.x - a.radius).total_cmp(&(b.center.x - b.radius)));
+}
+
+/// The segment pairs the narrowphase tests into `pw.candidates`: bounding
+/// spheres overlapping and [`could_touch`], in the order of a sweep along
+/// x over `pw.boxes` (sorted by lowest x) — pairs `(i, j)`, `i < j`, by
+/// `i` then `j`, the order that fixes the touching pairs' list and its
+/// sums. The sweep runs along the axis of the boxes' largest spread: a
+/// rope hanging along z has every box overlapping every other in x, where
+/// a sweep along x tests all `n²/2` pairs. A pair the x sweep would pass
+/// over (`j`'s lowest x beyond `i`'s highest) is passed over here too, so
+/// the pairs are the x sweep's exactly.
+fn candidates(model: &Model, pw: &mut PairWork) {
+    pw.candidates.clear();
+    let n = pw.boxes.len();
+    let keep = |bi: &SegmentBox, bj: &SegmentBox| {
+        !((bi.center - bj.center).norm() > bi.radius + bj.radius) && could_touch(model, bi, bj)
+    };
+    let (mut lo, mut hi) = (Vec3::repeat(f64::INFINITY), Vec3::repeat(f64::NEG_INFINITY));
+    for b in &pw.boxes {
+        lo = lo.inf(&b.center);
+        hi = hi.sup(&b.center);
+    }
+    let spread = hi - lo;
+    let axis = if spread.x >= spread.y && spread.x >= spread.z {
+        0
+    } else if spread.y >= spread.z {
+        1
+    } else {
+        2
+    };
+    if axis == 0 || !spread.iter().all(|v| v.is_finite()) {
+        for i in 0..n {
+            let bi = pw.boxes[i];
+            let reach = bi.center.x + bi.radius;
+            for j in i + 1..n {
+                let bj = pw.boxes[j];
+                if bj.center.x - bj.radius > reach {
+                    break;
+                }
+                if keep(&bi, &bj) {
+                    pw.candidates.push((i as u32, j as u32));
+                }
+            }
+        }
+        return;
+    }
+    pw.order.clear();
+    pw.order.extend(
+        pw.boxes
+            .iter()
+            .enumerate()
+            .map(|(i, b)| (b.center[axis] - b.radius, i as u32)),
+    );
+    pw.order.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+    for a in 0..n {
+        let ia = pw.order[a].1;
+        let ba = pw.boxes[ia as usize];
+        let reach = ba.center[axis] + ba.radius;
+        for b in a + 1..n {
+            let (low, ib) = pw.order[b];
+            if low > reach {
+                break;
+            }
+            let (i, j) = if ia < ib { (ia, ib) } else { (ib, ia) };
+            let (bi, bj) = (pw.boxes[i as usize], pw.boxes[j as usize]);
+            if bj.center.x - bj.radius > bi.center.x + bi.radius {
+                continue;
+            }
+            if keep(&bi, &bj) {
+                pw.candidates.push((i, j));
+            }
+        }
+    }
+    pw.candidates.sort_unstable();
 }
 
 /// Whether any points of the two segments may touch (CT9): rods and self
@@ -589,6 +674,7 @@ pub(crate) fn pair_poses(
         work,
         q,
         qd: None,
+        shared: false,
     };
     (
         sec.at(c.a, c.sa, false).pose.translation,
@@ -620,6 +706,7 @@ mod tests {
             work,
             q,
             qd: None,
+            shared: false,
         };
         let gb = sec.at(k.b, k.sb, false).pose;
         sec.at(k.a, k.sa, false).pose.translation - gb.translation - gb.rotation * k.offset
@@ -716,6 +803,7 @@ mod tests {
                     work,
                     q: &q,
                     qd: Some(&qd),
+                    shared: false,
                 };
                 sec.at(c.a, c.sa, true).velocity - sec.at(c.b, c.sb, true).velocity
             };
