@@ -19,7 +19,7 @@ use crate::model::pairs::{
     BROADPHASE_MARGIN, PairActive, PairWork, SegmentBox, exclusion, may_touch, radius_at,
     radius_slope,
 };
-use softrod_kinematics::Frame;
+use softrod_kinematics::{Frame, RodGeometry};
 use softrod_lie::{Mat3, Pose, Vec3};
 
 /// Iterations of the closest-point refinement (CT8); it stops earlier when
@@ -50,11 +50,39 @@ struct At {
     omega: Vec3,
 }
 
+/// `RodGeometry::locate(s)` when `s` is likely on piece `n` (a closest-point
+/// iteration held to its piece, CT8): the same piece and abscissa, to the
+/// bit, from the two boundaries of piece `n` instead of a search — and the
+/// search itself when `s` is not on it.
+fn locate_near(g: &RodGeometry, n: usize, s: f64) -> (usize, f64) {
+    let pieces = g.pieces();
+    let p = &pieces[n];
+    // `locate` takes the first piece whose end is ≥ s (s within [0, L]).
+    if s >= 0.0 && s <= g.length() && s <= p.end() && (n == 0 || pieces[n - 1].end() < s) {
+        let x = if s >= p.end() {
+            p.length
+        } else {
+            (s - p.start).clamp(0.0, p.length)
+        };
+        return (n, x);
+    }
+    g.locate(s).expect("a contact point lies on its rod")
+}
+
 impl Sections<'_> {
     fn at(&self, rod: usize, s: f64, velocity: bool) -> At {
+        let (piece, x) = self.model.rods[rod]
+            .spec
+            .geometry
+            .locate(s)
+            .expect("a contact point lies on its rod");
+        self.at_on(rod, piece, x, s, velocity)
+    }
+
+    /// [`Self::at`] with the piece and abscissa of `s` known.
+    fn at_on(&self, rod: usize, piece: usize, x: f64, s: f64, velocity: bool) -> At {
         let rm = &self.model.rods[rod];
         let g = &rm.spec.geometry;
-        let (piece, x) = g.locate(s).expect("a contact point lies on its rod");
         match &self.model.tree {
             None => {
                 let kin = &self.work.kin[rod];
@@ -290,7 +318,8 @@ fn broadphase(model: &Model, sec: &Sections, pw: &mut PairWork) {
 /// spheres overlapping and [`could_touch`], in the order of a sweep along
 /// x over `pw.boxes` (sorted by lowest x) — pairs `(i, j)`, `i < j`, by
 /// `i` then `j`, the order that fixes the touching pairs' list and its
-/// sums. The sweep runs along the axis of the boxes' largest spread: a
+/// sums. The sweep runs along y or z where the boxes' centres spread over
+/// more than four times their spread in x: a
 /// rope hanging along z has every box overlapping every other in x, where
 /// a sweep along x tests all `n²/2` pairs. A pair the x sweep would pass
 /// over (`j`'s lowest x beyond `i`'s highest) is passed over here too, so
@@ -307,12 +336,13 @@ fn candidates(model: &Model, pw: &mut PairWork) {
         hi = hi.sup(&b.center);
     }
     let spread = hi - lo;
-    let axis = if spread.x >= spread.y && spread.x >= spread.z {
-        0
-    } else if spread.y >= spread.z {
-        1
+    // Another axis only where it thins the sweep by far: its own sort and
+    // the candidates' are not free.
+    let widest = if spread.y >= spread.z { 1 } else { 2 };
+    let axis = if spread[widest] > 4.0 * spread.x {
+        widest
     } else {
-        2
+        0
     };
     if axis == 0 || !spread.iter().all(|v| v.is_finite()) {
         for i in 0..n {
@@ -410,9 +440,23 @@ fn narrowphase(
     // there, and an iteration allowed to cross it bounces from side to side
     // without converging. A corner that is the closest point is reached
     // from both sides as a clamp and kept once (the test below).
-    let (a_lo, a_hi) = piece_span(model, ba.rod, 0.5 * (sa_[ba.seg].s + sa_[ba.seg + 1].s));
-    let (b_lo, b_hi) = piece_span(model, bb.rod, 0.5 * (sb_[bb.seg].s + sb_[bb.seg + 1].s));
-    let (mut xa, mut xb) = (sec.at(ba.rod, sa, false), sec.at(bb.rod, sb, false));
+    let (a_lo, a_hi, piece_a) =
+        piece_span(model, ba.rod, 0.5 * (sa_[ba.seg].s + sa_[ba.seg + 1].s));
+    let (b_lo, b_hi, piece_b) =
+        piece_span(model, bb.rod, 0.5 * (sb_[bb.seg].s + sb_[bb.seg + 1].s));
+    let (ga_, gb_) = (
+        &model.rods[ba.rod].spec.geometry,
+        &model.rods[bb.rod].spec.geometry,
+    );
+    let on_a = |s: f64| {
+        let (n, x) = locate_near(ga_, piece_a, s);
+        sec.at_on(ba.rod, n, x, s, false)
+    };
+    let on_b = |s: f64| {
+        let (n, x) = locate_near(gb_, piece_b, s);
+        sec.at_on(bb.rod, n, x, s, false)
+    };
+    let (mut xa, mut xb) = (on_a(sa), on_b(sb));
     for _ in 0..REFINE_ITERATIONS {
         // Gauss–Newton on ½|p_a(s_a) − p_b(s_b)|², each parameter kept on
         // its piece (a rod's round end: a clamped end is the closest point).
@@ -440,8 +484,8 @@ fn narrowphase(
         }
         sa += da;
         sb += db;
-        xa = sec.at(ba.rod, sa, false);
-        xb = sec.at(bb.rod, sb, false);
+        xa = on_a(sa);
+        xb = on_b(sb);
         if da.abs() + db.abs() <= tol {
             break;
         }
@@ -598,7 +642,7 @@ fn narrowphase(
 /// moved [`past`] it, so that every evaluation on the piece reads this
 /// piece's strain — a boundary belongs to the piece that ends there, and a
 /// tangent read across a corner would make the iteration cycle.
-fn piece_span(model: &Model, rod: usize, s: f64) -> (f64, f64) {
+fn piece_span(model: &Model, rod: usize, s: f64) -> (f64, f64, usize) {
     let g = &model.rods[rod].spec.geometry;
     let (n, x) = g.locate(s).expect("a seed lies on its rod");
     let l = g.length();
@@ -608,6 +652,7 @@ fn piece_span(model: &Model, rod: usize, s: f64) -> (f64, f64) {
     (
         if n == 0 { 0.0 } else { past(start, l) },
         if n + 1 == g.pieces().len() { l } else { end },
+        n,
     )
 }
 
@@ -684,16 +729,131 @@ pub(crate) fn pair_poses(
 
 #[cfg(test)]
 mod tests {
-    use super::Sections;
+    use super::{Sections, before, candidates, could_touch, past};
     use crate::algorithms::contact_force;
     use crate::commit_contact;
     use crate::forces::Forces;
     use crate::model::pairs::PairAnchor;
+    use crate::model::pairs::{PairWork, SegmentBox};
     use crate::model::{Attachment, Data, Joint, JointKind, Model, Rod};
     use softrod_kinematics::Strain;
     use softrod_lie::{Pose, Vec3, Vec6, exp_twist};
     use softrod_mechanics::Material;
     use softrod_mechanics::contact::ContactSettings;
+
+    /// A straight rod of `pieces` pieces along x, offset by `y`.
+    fn straight(name: &str, pieces: usize, y: f64) -> Rod {
+        let material = Material::builder()
+            .density(1000.0)
+            .young(1.0e6)
+            .poisson(0.5)
+            .build()
+            .unwrap();
+        Rod::builder(0.4)
+            .name(name)
+            .pieces(pieces)
+            .base(Pose::new(
+                softrod_lie::Mat3::identity(),
+                Vec3::new(0.0, y, 0.0),
+            ))
+            .circle(0.01)
+            .material(material)
+            .build()
+            .unwrap()
+    }
+
+    /// `locate_near` is `RodGeometry::locate` to the bit for every guess of
+    /// the piece: at, just before and just past every piece boundary
+    /// (`past`, `before`), inside the pieces, and at the rod's ends.
+    #[test]
+    fn locate_near_is_locate() {
+        let rod = straight("a", 7, 0.0);
+        let g = &rod.geometry;
+        let l = g.length();
+        let mut at = vec![0.0, l, 0.5 * l, 1e-3 * l];
+        for p in g.pieces() {
+            for s in [p.start, p.end(), past(p.end(), l), before(p.start, l)] {
+                at.push(s.clamp(0.0, l));
+            }
+            at.push(p.start + 0.37 * p.length);
+        }
+        for &s in &at {
+            for n in 0..g.pieces().len() {
+                assert_eq!(
+                    super::locate_near(g, n, s),
+                    g.locate(s).unwrap(),
+                    "s {s}, n {n}"
+                );
+            }
+        }
+    }
+
+    /// The candidate pairs of a sweep along z (boxes spread along z, the
+    /// hanging rope) and along x are those of the x sweep the narrowphase
+    /// took them from before, in the same order: scattered boxes on two
+    /// rods with self contact, checked against that sweep written out.
+    #[test]
+    fn the_candidates_are_the_x_sweeps_in_its_order() {
+        let settings = ContactSettings {
+            rods: true,
+            self_contact: true,
+            ..Default::default()
+        };
+        let model = Model::builder()
+            .rod(straight("a", 30, 0.0))
+            .rod(straight("b", 30, 0.5))
+            .build()
+            .unwrap()
+            .with_contact(vec![], settings)
+            .unwrap();
+        let mut pw = PairWork::new(&model).unwrap();
+        let segs: Vec<usize> = model.contact.samples.iter().map(|s| s.len() - 1).collect();
+        let mut state = 12345u64;
+        let mut rnd = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for stretch in [Vec3::new(0.02, 0.03, 0.6), Vec3::new(0.3, 0.25, 0.3)] {
+            pw.boxes.clear();
+            for (rod, &n) in segs.iter().enumerate() {
+                for seg in 0..n {
+                    let c = Vec3::new(rnd() * stretch.x, rnd() * stretch.y, rnd() * stretch.z);
+                    pw.boxes.push(SegmentBox {
+                        rod,
+                        seg,
+                        center: c,
+                        radius: 0.02 + 0.06 * rnd(),
+                    });
+                }
+            }
+            pw.boxes.sort_unstable_by(|a, b| {
+                (a.center.x - a.radius).total_cmp(&(b.center.x - b.radius))
+            });
+            let mut expected = Vec::new();
+            let n = pw.boxes.len();
+            for i in 0..n {
+                let bi = pw.boxes[i];
+                let reach = bi.center.x + bi.radius;
+                for j in i + 1..n {
+                    let bj = pw.boxes[j];
+                    if bj.center.x - bj.radius > reach {
+                        break;
+                    }
+                    if (bi.center - bj.center).norm() > bi.radius + bj.radius
+                        || !could_touch(&model, &bi, &bj)
+                    {
+                        continue;
+                    }
+                    expected.push((i as u32, j as u32));
+                }
+            }
+            candidates(&model, &mut pw);
+            assert!(expected.len() > 20, "{} pairs", expected.len());
+            assert_eq!(pw.candidates, expected, "spread {stretch:?}");
+        }
+    }
 
     /// The stretch `e = p_a(σ_a) − p_b(σ_b) − R_b(σ_b) o` of anchor `k`
     /// at `q` (CT10), from the sections' poses alone.
