@@ -328,7 +328,9 @@ fn candidates(model: &Model, pw: &mut PairWork) {
     pw.candidates.clear();
     let n = pw.boxes.len();
     let keep = |bi: &SegmentBox, bj: &SegmentBox| {
-        !((bi.center - bj.center).norm() > bi.radius + bj.radius) && could_touch(model, bi, bj)
+        // `norm > sum` is false on NaN too, as in the x sweep's test.
+        let apart = (bi.center - bj.center).norm() > bi.radius + bj.radius;
+        !apart && could_touch(model, bi, bj)
     };
     let (mut lo, mut hi) = (Vec3::repeat(f64::INFINITY), Vec3::repeat(f64::NEG_INFINITY));
     for b in &pw.boxes {
