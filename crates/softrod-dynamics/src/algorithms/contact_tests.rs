@@ -1,5 +1,7 @@
 //! Tests of `contact.rs` (a file of their own: the layout test's length bound).
 
+// Test code only (the layout test reads no further than this marker).
+#[cfg(test)]
 use super::*;
 use crate::algorithms::contact_force;
 use crate::algorithms::frames::frame_pose;

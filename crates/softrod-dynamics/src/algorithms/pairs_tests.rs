@@ -1,5 +1,7 @@
 //! Tests of `pairs.rs` (a file of their own: the layout test's length bound).
 
+// Test code only (the layout test reads no further than this marker).
+#[cfg(test)]
 use super::{Sections, before, candidates, could_touch, past};
 use crate::algorithms::contact_force;
 use crate::commit_contact;
