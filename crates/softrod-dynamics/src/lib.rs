@@ -125,10 +125,11 @@ pub use analysis::{
     statics, statics_sensitivity, stiffness_matrix,
 };
 pub use constraints::{
-    ClosedDerivatives, ClosedShiftedSolver, check_closures, closed_dynamics_derivatives,
-    closed_force_response, closed_prescribed_derivatives, closed_row_response,
-    closed_row_response_transposed, closure_multipliers, closure_residuals, constraint_jacobian,
-    constraint_rank, constraint_residual, max_closure_residual, open_tree_inverse_dynamics,
+    ClosedDerivatives, ClosedShiftedSolver, ClosureProjection, check_closures,
+    closed_dynamics_derivatives, closed_force_response, closed_prescribed_derivatives,
+    closed_row_response, closed_row_response_transposed, closure_multipliers, closure_residuals,
+    constraint_jacobian, constraint_rank, constraint_residual, max_closure_residual,
+    open_tree_inverse_dynamics, project_onto_closures, projection_tolerance,
 };
 pub use derivatives::{
     DynamicsJacobians, FdDerivatives, IdDerivatives, Linearization, dynamics_jacobians,

@@ -165,6 +165,32 @@ fn planar_rod() {
     assert!(e < TOL, "planar: {e:e}");
 }
 
+/// The chain's products run each piece in its basis's `k` directions
+/// (D101, one compile-time size per `k`): every size from 1 to 6 on one
+/// rod, against the dense matrices and the mass matrix.
+#[test]
+fn every_basis_size_on_one_rod() {
+    use Strain::*;
+    let mut rng = Lcg(29);
+    let sel = |s: &[Strain]| Basis::select(s).unwrap();
+    let shape = Shape::new(
+        6,
+        vec![
+            sel(&[Ky]),
+            sel(&[Kx, Qz]),
+            sel(&[Kx, Ky, Kz]),
+            sel(&[Kx, Ky, Kz, Qx]),
+            sel(&[Kx, Ky, Qx, Qy, Qz]),
+            Basis::all(),
+        ],
+    );
+    let m = model(&shape, Terms::ALL);
+    let (q, qd, qdd) = state(&mut rng, m.n_dof(), 0.8, 2.0, 5.0);
+    let e = vjp_error(&m, 0.2, &q, &qd, &qdd, &mut rng);
+    println!("bases of 1 to 6 strains: {e:.1e}");
+    assert!(e < TOL, "every basis size: {e:e}");
+}
+
 #[test]
 fn trees_with_joints_bodies_and_branches() {
     let mut rng = Lcg(23);

@@ -34,7 +34,8 @@
 //! A system that also keeps the linearization as an O(N) operator
 //! ([`ParameterSystem::force_linearization`] with its transposed products)
 //! gets G12: the stages the reverse sweep solves with are linearized in
-//! O(N) and used only through products.
+//! O(N) and used only through products, their GMRES preconditioned by the
+//! dense LU the recomputation factored (G32).
 
 // Negated comparisons are deliberate: a NaN must fail every check.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -285,8 +286,10 @@ pub enum AdjointSolver {
     /// acceleration, the transposed stage system `Sᵀν = Ã` solved by GMRES
     /// preconditioned with the system's structured
     /// [`factor_shifted_mass`](SecondOrderSystem::factor_shifted_mass)
-    /// (O(N) per iteration beside one dense product), a dense LU of `Sᵀ`
-    /// where that is not offered or does not converge to round-off.
+    /// (O(N) per iteration beside one dense product) — or, on a stage kept
+    /// as an operator, with the recomputation's dense LU (G32) — a dense
+    /// LU of `Sᵀ` where neither is offered or GMRES does not converge to
+    /// round-off.
     /// Otherwise [`AdjointSolver::Dense`].
     #[default]
     Structured,
@@ -490,6 +493,13 @@ pub(crate) fn check_request(
     Ok((n, tab))
 }
 
+/// Up to this many coordinates the step start's `M₀⁻¹` (G6, G11) is a
+/// dense Cholesky of the `M₀` stage 0 formed anyway (`n³/3` flops: ~22 k
+/// instructions at 24 coordinates) instead of the structured O(N)
+/// factorization (~62 k at 24 coordinates of a planar rod): the two cost
+/// about the same near 40 coordinates (G33).
+const DENSE_MASS_MAX: usize = 40;
+
 /// GMRES iterations per cycle and cycles of a transposed stage solve
 /// before it falls back to the dense LU (G11).
 const KRYLOV_ITERATIONS: usize = 40;
@@ -527,14 +537,21 @@ struct EsdirkAdjoint {
     /// Stage `i`'s `M` is kept with its operator too (G15): `M v` by
     /// [`ParameterSystem::force_mass_product`], `mass[i]` not formed.
     mass_ops: Vec<bool>,
-    /// The products' outputs `(∂r/∂q)ᵀu`, `(∂r/∂q̇)ᵀu`, and probes.
+    /// The products' outputs `(∂r/∂q)ᵀu`, `(∂r/∂q̇)ᵀu`.
     pq: DVector<f64>,
     pv: DVector<f64>,
-    probe: DVector<f64>,
     /// `(I − hγJ)ᵀ` (force form: `Sᵀ`) of each implicit stage, factored;
     /// slot 0: the (untransposed) step-start matrix of the recomputing
     /// Newton iteration.
     lus: Vec<DenseLu>,
+    /// Force form: `‖Sᵀ‖∞` of the matrix factored (untransposed) in each
+    /// slot of `lus`, for GMRES's stopping test (G32).
+    lu_norms: Vec<f64>,
+    /// Force form: the slot of `lus` whose `S` the recomputation of stage
+    /// `i` last iterated with (the step start's, or the stage's own after
+    /// a switch): its transposed solves precondition stage `i`'s GMRES
+    /// (G32).
+    lu_slot: Vec<usize>,
     gmres: Gmres,
     qhat: DVector<f64>,
     vhat: DVector<f64>,
@@ -584,8 +601,9 @@ impl EsdirkAdjoint {
             mass_ops: vec![false; s],
             pq: z.clone(),
             pv: z.clone(),
-            probe: z.clone(),
             lus: (0..s).map(|_| DenseLu::new(n)).collect(),
+            lu_norms: vec![0.0; s],
+            lu_slot: vec![0; s],
             gmres: Gmres::new(if force { n } else { 0 }, KRYLOV_ITERATIONS.min(n)),
             qhat: z.clone(),
             vhat: z.clone(),
@@ -695,12 +713,19 @@ impl EsdirkAdjoint {
             let (hg, hg2) = (h * gamma, h * h * gamma * gamma);
             let m = self.lus[slot].matrix_mut();
             let (mass, jq, jv) = (&self.mass[j], &self.jq[j], &self.jv[j]);
+            // ‖Sᵀ‖∞ of the untransposed `S`: its largest column sum.
+            let mut norm: f64 = 0.0;
             for c in 0..self.n {
+                let mut sum = 0.0;
                 for r in 0..self.n {
                     let (a, b) = if transpose { (c, r) } else { (r, c) };
-                    m[(r, c)] = mass[(a, b)] + hg * jv[(a, b)] + hg2 * jq[(a, b)];
+                    let x = mass[(a, b)] + hg * jv[(a, b)] + hg2 * jq[(a, b)];
+                    m[(r, c)] = x;
+                    sum += x.abs();
                 }
+                norm = norm.max(sum);
             }
+            self.lu_norms[slot] = norm;
             return self.lus[slot].factor();
         }
         stage_matrix(
@@ -920,6 +945,7 @@ impl EsdirkAdjoint {
                 prev2 = prev;
                 prev = dx;
             }
+            self.lu_slot[i] = slot;
             if !converged {
                 return Err(IntegrateError::NewtonNonConvergence {
                     t,
@@ -1071,10 +1097,11 @@ impl EsdirkAdjoint {
         Ok(())
     }
 
-    /// `ν = Sᵢ⁻ᵀ rhs` into `mu` (G11): GMRES preconditioned by the system's
-    /// structured `M + h²γ²K + hγD` at the stage, or a dense LU of `Sᵢᵀ`
-    /// (no structured factorization, or GMRES not at round-off). False
-    /// when `Sᵢ` is singular.
+    /// `ν = Sᵢ⁻ᵀ rhs` into `mu` (G11): on a kept operator GMRES
+    /// preconditioned by the recomputation's dense LU (G32); on a formed
+    /// `Sᵢ` GMRES preconditioned by the system's structured
+    /// `M + h²γ²K + hγD` at the stage; or a dense LU of `Sᵢᵀ` (neither
+    /// offered, or GMRES not at round-off). False when `Sᵢ` is singular.
     fn solve_transposed<Sys: ParameterSystem>(
         &mut self,
         sys: &mut Sys,
@@ -1084,11 +1111,23 @@ impl EsdirkAdjoint {
     ) -> Result<bool, Sys::Error> {
         let gamma = self.tab.gamma;
         let (hg, hg2) = (h * gamma, h * h * gamma * gamma);
-        if sys.factor_shifted_mass(ti, &self.qs[i], hg2, hg)? {
-            let rtol = 16.0 * f64::EPSILON * (self.n as f64).sqrt();
-            let solved = if self.ops[i] {
-                self.gmres_products(sys, i, h, rtol)?
-            } else {
+        let rtol = 16.0 * f64::EPSILON * (self.n as f64).sqrt();
+        // The kept operator: GMRES preconditioned by the transposed solves
+        // of the dense LU the recomputation iterated with (G32), no
+        // structured factorization.
+        let solved = if self.ops[i] {
+            self.gmres_products(sys, i, h, rtol)?
+        } else {
+            None
+        };
+        if let Some(iterations) = solved {
+            self.krylov += iterations;
+            return Ok(true);
+        }
+        if self.ops[i] {
+            self.krylov += KRYLOV_ITERATIONS.min(self.n) * KRYLOV_CYCLES;
+        } else if sys.factor_shifted_mass(ti, &self.qs[i], hg2, hg)? {
+            let solved = {
                 let s = &self.shifted[i];
                 // ‖Sᵀ‖∞: the largest column sum of |S|.
                 let anorm = s
@@ -1148,10 +1187,10 @@ impl EsdirkAdjoint {
     }
 
     /// GMRES on `Sᵢᵀν = rhs` with `Sᵢᵀv = Mv + hγ(∂r/∂q̇)ᵀv + h²γ²(∂r/∂q)ᵀv`
-    /// by the system's O(N) products (G12), preconditioned by its factored
-    /// `M + h²γ²K + hγD`. `‖Sᵀ‖∞` for the stopping test is estimated from
-    /// `‖M‖∞` and two probes `‖Sᵀx‖∞` (all ones, alternating signs): a
-    /// lower bound, so the test is at most stricter than the dense one's.
+    /// by the system's O(N) products (G12), preconditioned by the
+    /// transposed solves of the dense LU of `S` the recomputation of stage
+    /// `i` iterated with (the step start's `S₀`, or the stage's own after a
+    /// switch), and with that matrix's `‖Sᵀ‖∞` in the stopping test (G32).
     fn gmres_products<Sys: ParameterSystem>(
         &mut self,
         sys: &mut Sys,
@@ -1162,38 +1201,9 @@ impl EsdirkAdjoint {
         let gamma = self.tab.gamma;
         let (hg, hg2) = (h * gamma, h * h * gamma * gamma);
         let kept_mass = self.mass_ops[i];
-        // ‖M‖∞ where `M` is formed; where it is kept as products (G15),
-        // its probes `‖M x‖∞` (a lower bound, like the probes of `Sᵀ`).
-        let mut anorm = if kept_mass {
-            0.0
-        } else {
-            self.mass[i]
-                .column_iter()
-                .map(|c| c.iter().map(|v| v.abs()).sum::<f64>())
-                .fold(0.0, f64::max)
-        };
-        for sign in [1.0, -1.0] {
-            let mut x = 1.0;
-            for p in self.probe.iter_mut() {
-                *p = x;
-                x *= sign;
-            }
-            sys.force_vjp(i, &self.probe, &mut self.pq, &mut self.pv)?;
-            if kept_mass {
-                sys.force_mass_product(i, &self.probe, &mut self.f)?;
-                anorm = anorm.max(self.f.amax());
-            } else {
-                self.f.gemv_tr(1.0, &self.mass[i], &self.probe, 0.0);
-            }
-            let mut worst: f64 = 0.0;
-            for r in 0..self.n {
-                worst = worst.max((self.f[r] + hg * self.pv[r] + hg2 * self.pq[r]).abs());
-            }
-            anorm = anorm.max(worst);
-        }
-        // Both closures need the system: the products and the
-        // preconditioner take turns through a RefCell.
-        let cell = std::cell::RefCell::new(sys);
+        let slot = self.lu_slot[i];
+        let anorm = self.lu_norms[slot];
+        let lu = &self.lus[slot];
         let mut failure = None;
         let (mass, pq, pv) = (&self.mass[i], &mut self.pq, &mut self.pv);
         let solved = self.gmres.solve(
@@ -1204,7 +1214,7 @@ impl EsdirkAdjoint {
             KRYLOV_CYCLES,
             |v, out| {
                 if failure.is_none() {
-                    let mut s = cell.borrow_mut();
+                    let s = &mut *sys;
                     let done = s.force_vjp(i, v, pq, pv).and_then(|()| {
                         if kept_mass {
                             s.force_mass_product(i, v, out)
@@ -1224,7 +1234,10 @@ impl EsdirkAdjoint {
                 }
                 out.fill(0.0);
             },
-            |v| cell.borrow_mut().solve_shifted_mass(v),
+            |v| {
+                lu.solve_transposed_in_place(v);
+                Ok::<(), Sys::Error>(())
+            },
         )?;
         match failure {
             Some(e) => Err(e),
@@ -1232,17 +1245,23 @@ impl EsdirkAdjoint {
         }
     }
 
-    /// `mu ← M₀⁻¹ mu` at the step start: the system's structured solve with
-    /// no shift, or a dense Cholesky of `M₀`.
+    /// `mu ← M₀⁻¹ mu` at the step start: a dense Cholesky of the `M₀` stage
+    /// 0's linearization formed, up to [`DENSE_MASS_MAX`] coordinates
+    /// (G33), else the system's structured solve with no shift (or the
+    /// Cholesky where it has none).
     fn solve_mass<Sys: ParameterSystem>(
         &mut self,
         sys: &mut Sys,
         t: f64,
     ) -> Result<(), Sys::Error> {
-        if sys.factor_shifted_mass(t, &self.qs[0], 0.0, 0.0)? {
-            return sys.solve_shifted_mass(&mut self.mu);
+        if self.n > DENSE_MASS_MAX {
+            if sys.factor_shifted_mass(t, &self.qs[0], 0.0, 0.0)? {
+                return sys.solve_shifted_mass(&mut self.mu);
+            }
+            // A large dense Cholesky is counted with the LUs; the small one
+            // of G33 is not (it costs less than the structured one).
+            self.factorizations += 1;
         }
-        self.factorizations += 1;
         self.lus[0].matrix_mut().copy_from(&self.mass[0]);
         if !self.lus[0].factor_cholesky() {
             // Not positive definite: left to the final non-finite check.

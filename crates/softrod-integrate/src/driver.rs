@@ -381,6 +381,9 @@ fn drive<P: Problem, St: Stepper<P>>(
             st.state_mut().h_next = h_next;
         }
         after_breakpoint = bp_end < t1 && st.t() == bp_end;
+        if opts.project_state {
+            st.project(p, &mut stats)?;
+        }
         let (t, h) = (st.t(), st.h_last());
         if let Some(index) = first_non_finite(st.y().as_slice()) {
             return Err(IntegrateError::NonFinite {

@@ -209,6 +209,13 @@ impl Integrator {
         !matches!(self, Integrator::Rk4 | Integrator::GeneralizedAlpha)
     }
 
+    /// Whether it supports [`Options::project_state`](crate::Options::project_state)
+    /// (the projection of the state onto a system's constraints after each
+    /// accepted step): ESDIRK and ESDIRK5.
+    pub fn projects_state(self) -> bool {
+        matches!(self, Integrator::Esdirk | Integrator::Esdirk5)
+    }
+
     /// Whether it has an error estimate, so that it can run with
     /// [`StepControl::Adaptive`](crate::StepControl::Adaptive) (all but
     /// RK4).

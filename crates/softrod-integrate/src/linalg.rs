@@ -123,29 +123,32 @@ impl DenseLu {
             return;
         }
         let n = self.a.nrows();
-        let a = &self.a;
+        let a = self.a.as_slice();
+        let b = b.as_mut_slice();
         for k in 0..n {
             let p = self.piv[k];
             if p != k {
-                b.swap_rows(p, k);
+                b.swap(p, k);
             }
         }
-        // L y = b (unit diagonal), column oriented.
+        // L y = b (unit diagonal), column oriented on contiguous columns.
         for j in 0..n {
             let bj = b[j];
             if bj != 0.0 {
-                for i in j + 1..n {
-                    b[i] -= a[(i, j)] * bj;
+                let col = &a[j * n + j + 1..j * n + n];
+                for (x, &l) in b[j + 1..].iter_mut().zip(col) {
+                    *x -= l * bj;
                 }
             }
         }
         // U x = y, column oriented.
         for j in (0..n).rev() {
-            b[j] /= a[(j, j)];
+            b[j] /= a[j * n + j];
             let bj = b[j];
             if bj != 0.0 {
-                for i in 0..j {
-                    b[i] -= a[(i, j)] * bj;
+                let col = &a[j * n..j * n + j];
+                for (x, &u) in b[..j].iter_mut().zip(col) {
+                    *x -= u * bj;
                 }
             }
         }

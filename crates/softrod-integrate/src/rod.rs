@@ -13,7 +13,7 @@ use softrod_dynamics::{
     damping_matrix, forward_dynamics, forward_dynamics_derivatives, inverse_dynamics,
     inverse_dynamics_derivatives, inverse_dynamics_inertia_vjp,
     inverse_dynamics_linearization_with, inverse_dynamics_mass_product, inverse_dynamics_vjp,
-    mass_matrix, stiffness_matrix,
+    mass_matrix, project_onto_closures, projection_tolerance, stiffness_matrix,
 };
 use softrod_mechanics::Tension;
 
@@ -743,6 +743,32 @@ impl SecondOrderSystem for RodSystem {
 
     fn solve_shifted_mass(&mut self, x: &mut DVector<f64>) -> Result<(), DynamicsError> {
         self.shifted.solve(&self.model, x.as_mut_slice())
+    }
+
+    /// A closed model's loops: `softrod_dynamics::project_onto_closures`
+    /// (docs/theory.md D121) to `1e-11 ℓ` (`projection_tolerance`).
+    /// `Ok(false)` for a model without closures, and when the Newton
+    /// iteration on the positions did not converge (the state is then left
+    /// as it was: the stabilization alone goes on holding it).
+    fn project(
+        &mut self,
+        t: f64,
+        q: &mut DVector<f64>,
+        qd: &mut DVector<f64>,
+    ) -> Result<bool, DynamicsError> {
+        if !self.model.has_closures() {
+            return Ok(false);
+        }
+        let tol = projection_tolerance(&self.model);
+        let p = project_onto_closures(
+            &self.model,
+            &mut self.data,
+            t,
+            q.as_mut_slice(),
+            qd.as_mut_slice(),
+            tol,
+        )?;
+        Ok(p.converged)
     }
 
     /// The closure rows `m` for a model with closures and without contact

@@ -83,6 +83,15 @@ pub(crate) trait Stepper<P: Problem> {
     fn forces_changed(&mut self, p: &mut P, stats: &mut Stats) -> Result<(), IntegrateError> {
         self.system_changed(p, stats)
     }
+    /// [`Options::project_state`](crate::Options::project_state): projects
+    /// the current state onto the system's constraints and, if that moved
+    /// it, re-evaluates the derivative there as
+    /// [`forces_changed`](Self::forces_changed) does. `Ok(true)` if the
+    /// state moved. By default (methods that do not support it) nothing.
+    fn project(&mut self, p: &mut P, stats: &mut Stats) -> Result<bool, IntegrateError> {
+        let _ = (p, stats);
+        Ok(false)
+    }
     /// A step has just ended on one of [`Options::breakpoints`](crate::Options::breakpoints),
     /// where the right-hand side jumps: the next step starts from the
     /// derivative and Jacobian just after it (evaluated at the next

@@ -284,6 +284,21 @@ pub trait SecondOrderSystem {
         0
     }
 
+    /// Optional: projects `(q, q̇)` at `t` onto the system's constraint
+    /// manifold (a closed chain's loops, docs/theory.md D121), in place;
+    /// `Ok(true)` if it changed them. Called after each accepted step when
+    /// [`Options::project_state`](crate::Options::project_state) is on.
+    /// Default: no constraints, nothing to do (`Ok(false)`).
+    fn project(
+        &mut self,
+        t: f64,
+        q: &mut DVector<f64>,
+        qd: &mut DVector<f64>,
+    ) -> Result<bool, Self::Error> {
+        let _ = (t, q, qd);
+        Ok(false)
+    }
+
     /// Optional, with [`n_constraints`](Self::n_constraints) `= m > 0`:
     /// factors the KKT matrix `[S, −Jᵀ; s·J, 0]` of the constrained
     /// dynamics' implicit step at `(t, q)`, `S = M(q) + a·K + b·D` as in

@@ -85,6 +85,7 @@ fn simulate_many(
             None,
             None,
             None,
+            None,
         )
     };
     Ok(many::run_many(py, sims, duration, threads, q0, qdot0, &set)?.0)

@@ -26,6 +26,9 @@ use crate::errors::{input, to_py};
 /// methods' steps end on the sample times, so every sample is a step's
 /// solution rather than the dense output between steps (at least one step
 /// per sample; for quasi-static settles, docs/theory-derivatives.md CD10).
+/// `project_closures`: ESDIRK methods on models with loop closures project
+/// the state onto the closures after each step (docs/theory.md D121), so a
+/// loose run's loops cannot drift apart.
 /// Defaults: `softrod.Settings()`,
 /// the recommended setting of docs/defaults.md.
 #[pyclass(module = "softrod", from_py_object)]
@@ -50,6 +53,7 @@ pub(crate) fn overrides(
     error_control: Option<bool>,
     linearly_implicit: Option<bool>,
     steps_to_outputs: Option<bool>,
+    project_closures: Option<bool>,
 ) -> PyResult<()> {
     if let Some(i) = integrator_name {
         s.integrator = integrator(i)?;
@@ -75,6 +79,9 @@ pub(crate) fn overrides(
     if let Some(v) = steps_to_outputs {
         s.steps_to_outputs = v;
     }
+    if let Some(v) = project_closures {
+        s.project_closures = v;
+    }
     s.validate().map_err(to_py)
 }
 
@@ -82,7 +89,8 @@ pub(crate) fn overrides(
 impl Settings {
     #[new]
     #[pyo3(signature = (integrator = None, rtol = None, atol = None, dt = None, output_every = None,
-                        error_control = None, linearly_implicit = None, steps_to_outputs = None))]
+                        error_control = None, linearly_implicit = None, steps_to_outputs = None,
+                        project_closures = None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         integrator: Option<&str>,
@@ -93,6 +101,7 @@ impl Settings {
         error_control: Option<bool>,
         linearly_implicit: Option<bool>,
         steps_to_outputs: Option<bool>,
+        project_closures: Option<bool>,
     ) -> PyResult<Self> {
         let mut inner = RustSettings {
             output_every: None,
@@ -108,6 +117,7 @@ impl Settings {
             error_control,
             linearly_implicit,
             steps_to_outputs,
+            project_closures,
         )?;
         Ok(Self { inner })
     }
@@ -118,7 +128,8 @@ impl Settings {
     /// tolerance, which `Settings(...)` cannot state and would reset to
     /// their defaults — is kept. Raises `InputError` as `Settings(...)`.
     #[pyo3(signature = (*, integrator = None, rtol = None, atol = None, dt = None,
-                        output_every = None, error_control = None, linearly_implicit = None, steps_to_outputs = None))]
+                        output_every = None, error_control = None, linearly_implicit = None, steps_to_outputs = None,
+                        project_closures = None))]
     #[allow(clippy::too_many_arguments)]
     fn replace(
         &self,
@@ -130,6 +141,7 @@ impl Settings {
         error_control: Option<bool>,
         linearly_implicit: Option<bool>,
         steps_to_outputs: Option<bool>,
+        project_closures: Option<bool>,
     ) -> PyResult<Self> {
         let mut inner = self.inner.clone();
         overrides(
@@ -142,6 +154,7 @@ impl Settings {
             error_control,
             linearly_implicit,
             steps_to_outputs,
+            project_closures,
         )?;
         Ok(Self { inner })
     }
@@ -195,11 +208,18 @@ impl Settings {
         self.inner.steps_to_outputs
     }
 
+    /// ESDIRK methods on models with loop closures: the state is projected
+    /// onto the closures after each step (docs/theory.md D121).
+    #[getter]
+    fn project_closures(&self) -> bool {
+        self.inner.project_closures
+    }
+
     fn __repr__(&self) -> String {
         let s = &self.inner;
         format!(
             "Settings(integrator={:?}, rtol={:?}, atol={:?}, dt={:?}, output_every={}, \
-             error_control={}, linearly_implicit={}, steps_to_outputs={})",
+             error_control={}, linearly_implicit={}, steps_to_outputs={}, project_closures={})",
             s.integrator.name(),
             s.rtol,
             s.atol,
@@ -208,6 +228,7 @@ impl Settings {
             if s.error_control { "True" } else { "False" },
             if s.linearly_implicit { "True" } else { "False" },
             if s.steps_to_outputs { "True" } else { "False" },
+            if s.project_closures { "True" } else { "False" },
         )
     }
 }

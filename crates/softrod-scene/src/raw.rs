@@ -157,6 +157,7 @@ pub(crate) struct RawRun {
     pub error_control: Option<bool>,
     pub linearly_implicit: Option<bool>,
     pub steps_to_outputs: Option<bool>,
+    pub project_closures: Option<bool>,
     pub energy_tolerance: Option<f64>,
     pub shape_points_per_piece: Option<i64>,
     pub memory_limit_gib: Option<f64>,

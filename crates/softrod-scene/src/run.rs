@@ -63,6 +63,12 @@ pub struct Run {
     /// dense output between step ends (docs/theory-derivatives.md CD10;
     /// default `false`: at least one step per `output_every`).
     pub steps_to_outputs: bool,
+    /// ESDIRK methods on models with loop closures (an extension of the
+    /// format): after each accepted step the state is projected onto the
+    /// closures (docs/theory.md D121), so loops held by Baumgarte's
+    /// stabilization alone cannot drift apart at a loose tolerance (default
+    /// `false`).
+    pub project_closures: bool,
     /// Bound on the run's energy-balance error relative to its energy scale
     /// (an extension of the format; default [`Run::DEFAULT_ENERGY_TOLERANCE`]):
     /// beyond it the run fails, beyond a tenth of it the summary warns.
@@ -129,6 +135,7 @@ impl Default for Run {
             error_control: false,
             linearly_implicit: false,
             steps_to_outputs: false,
+            project_closures: false,
             energy_tolerance: Run::DEFAULT_ENERGY_TOLERANCE,
             shape_points_per_piece: None,
             memory_limit_gib: None,

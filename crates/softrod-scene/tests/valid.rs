@@ -90,6 +90,7 @@ fn contract_example_has_the_written_values() {
             error_control: false,
             linearly_implicit: false,
             steps_to_outputs: false,
+            project_closures: false,
             energy_tolerance: Run::DEFAULT_ENERGY_TOLERANCE,
             shape_points_per_piece: None,
             memory_limit_gib: None,
@@ -624,4 +625,30 @@ fn run_linearly_implicit_is_read_and_warned_where_it_does_not_apply() {
     .unwrap_err()
     .to_string();
     assert!(err.contains("run.linearly_implicit"), "{err}");
+}
+
+/// `[run] project_closures` (extension, docs/theory.md D121): read for
+/// ESDIRK and ESDIRK5, default false, a warning (ignored) with another
+/// integrator; a non-boolean is an error naming the key.
+#[test]
+fn run_project_closures_is_read_and_warned_off_esdirk() {
+    for integrator in ["esdirk", "esdirk5"] {
+        let (s, warnings) = parse(&minimal(&format!(
+            "[run]\nintegrator = \"{integrator}\"\nproject_closures = true"
+        )));
+        assert!(warnings.is_empty(), "{warnings:?}");
+        assert!(s.run.project_closures);
+    }
+    let (s, _) = parse(&minimal("[run]\nintegrator = \"esdirk\""));
+    assert!(!s.run.project_closures);
+    let (_, warnings) = parse(&minimal(
+        "[run]\nintegrator = \"radau5\"\nproject_closures = true",
+    ));
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    assert_eq!(warnings[0].path, "run.project_closures");
+    assert!(warnings[0].message.contains("ignored"));
+    let err = Scene::from_str(&minimal("[run]\nproject_closures = 1"), "t.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("run.project_closures"), "{err}");
 }

@@ -8,9 +8,12 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::data::Pose;
+use crate::data::{Pose, pose_valid};
 use crate::error::VizError;
-use crate::html::{ViewOptions, ViewStats, write_html};
+use crate::html::{
+    DEFAULT_MAX_BYTES, DEFAULT_MAX_FRAMES, Prepared, ROTATION_TEXT, RotationText, ViewOptions,
+    ViewStats, write_prepared,
+};
 use crate::run_dir::{
     BodyPoses, RodShape, ShapeData, Thinning, VIEW_HTML, ViewSpec, halve, view_cap, view_from_parts,
 };
@@ -36,6 +39,23 @@ pub struct FrameCollector {
     pending: Option<f64>,
     pending_rods: Vec<Vec<Pose>>,
     pending_bodies: Vec<Pose>,
+    /// The page's work on the kept times done as they come (the text of
+    /// the rotations, the extent of the positions, the checks): while
+    /// every kept time is in it; dropped once the times are thinned or it
+    /// outgrows `limits`, and the page is then made from the frames alone.
+    prepared: Option<Preparing>,
+    /// Most kept times and most bytes of rotation text it holds.
+    limits: (usize, usize),
+}
+
+/// See [`FrameCollector::prepared`].
+#[derive(Debug, Clone)]
+struct Preparing {
+    /// Per rod: the rotation text of every kept pose.
+    rotations: Vec<RotationText>,
+    /// Per kept time: the lowest and highest coordinates of the rods'
+    /// sample positions.
+    boxes: Vec<[[f64; 3]; 2]>,
 }
 
 impl FrameCollector {
@@ -43,7 +63,9 @@ impl FrameCollector {
     /// (names), keeping as many times as `write_view` with `opts` keeps.
     pub fn new(rods: Vec<(String, Vec<f64>)>, bodies: Vec<String>, opts: &ViewOptions) -> Self {
         let per_time = rods.iter().map(|r| r.1.len()).sum();
-        Self::with_cap(rods, bodies, view_cap(per_time, opts))
+        let mut c = Self::with_cap(rods, bodies, view_cap(per_time, opts));
+        c.limits = (opts.max_frames, opts.max_bytes);
+        c
     }
 
     /// [`FrameCollector::new`] keeping between `cap` and `2·cap` times (as
@@ -69,6 +91,47 @@ impl FrameCollector {
             pending: None,
             pending_rods: vec![Vec::new(); n_rods],
             pending_bodies: Vec::with_capacity(n_bodies),
+            prepared: Some(Preparing {
+                rotations: vec![RotationText::default(); n_rods],
+                boxes: Vec::new(),
+            }),
+            limits: (DEFAULT_MAX_FRAMES, DEFAULT_MAX_BYTES),
+        }
+    }
+
+    /// Prepares the page's part of the time being kept (the poses in
+    /// `now_rods`), or drops what was prepared: when a pose would not pass
+    /// the page's checks (the page then checks and names it), or when the
+    /// kept times or their text outgrow the limits.
+    fn prepare(&mut self) {
+        let Some(p) = &mut self.prepared else {
+            return;
+        };
+        let (max_times, max_bytes) = self.limits;
+        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        let mut ok = p.boxes.len() < max_times;
+        for (f, text) in self.now_rods.iter().zip(&mut p.rotations) {
+            if !ok {
+                break;
+            }
+            for pose in f {
+                ok &= pose_valid(pose) && text.push(pose);
+                for ((l, h), &x) in lo.iter_mut().zip(&mut hi).zip(&pose.position) {
+                    // Finite (else dropped): comparisons are `min`, `max`.
+                    if x < *l {
+                        *l = x;
+                    }
+                    if x > *h {
+                        *h = x;
+                    }
+                }
+            }
+            ok &= text.slots.len() * ROTATION_TEXT <= max_bytes;
+        }
+        if ok {
+            p.boxes.push([lo, hi]);
+        } else {
+            self.prepared = None;
         }
     }
 
@@ -120,6 +183,7 @@ impl FrameCollector {
         }
         let t = t + 0.0;
         if self.thin.keeps(self.k) {
+            self.prepare();
             self.times.push(t);
             for (r, f) in self.rods.iter_mut().zip(&mut self.now_rods) {
                 r.frames.push(std::mem::take(f));
@@ -129,6 +193,7 @@ impl FrameCollector {
             }
             self.pending = None;
             if self.thin.full(self.times.len()) {
+                self.prepared = None;
                 halve(&mut self.times);
                 for r in &mut self.rods {
                     halve(&mut r.frames);
@@ -140,6 +205,7 @@ impl FrameCollector {
         } else {
             // Swap rather than copy: the buffers go round without
             // allocating.
+            self.prepared = None;
             self.pending = Some(t);
             std::mem::swap(&mut self.pending_rods, &mut self.now_rods);
             std::mem::swap(&mut self.pending_bodies, &mut self.now_bodies);
@@ -156,7 +222,14 @@ impl FrameCollector {
     }
 
     /// The kept times, rods' shapes and bodies' poses.
-    pub fn finish(mut self) -> (ShapeData, Vec<BodyPoses>) {
+    pub fn finish(self) -> (ShapeData, Vec<BodyPoses>) {
+        let (shape, bodies, _) = self.finish_prepared();
+        (shape, bodies)
+    }
+
+    /// [`FrameCollector::finish`], and what was prepared for the page if
+    /// it holds every kept time.
+    fn finish_prepared(mut self) -> (ShapeData, Vec<BodyPoses>, Option<Preparing>) {
         if let Some(t) = self.pending.take() {
             self.times.push(t);
             for (r, f) in self.rods.iter_mut().zip(&mut self.pending_rods) {
@@ -166,12 +239,14 @@ impl FrameCollector {
                 b.1.push(*p);
             }
         }
+        let prepared = self.prepared.filter(|p| p.boxes.len() == self.times.len());
         (
             ShapeData {
                 times: self.times,
                 rods: self.rods,
             },
             self.bodies,
+            prepared,
         )
     }
 
@@ -184,10 +259,14 @@ impl FrameCollector {
         spec: &ViewSpec,
         opts: &ViewOptions,
     ) -> Result<(PathBuf, ViewStats), VizError> {
-        let (shape, bodies) = self.finish();
+        let (shape, bodies, prepared) = self.finish_prepared();
         let view = view_from_parts(spec, &dir.join(crate::run_dir::VIEW_JSON), shape, bodies)?;
         let out = dir.join(VIEW_HTML);
-        let stats = write_html(&out, &view, opts)?;
+        let pre = prepared.as_ref().map(|p| Prepared {
+            rotations: &p.rotations,
+            boxes: &p.boxes,
+        });
+        let stats = write_prepared(&out, &view, opts, pre.as_ref())?;
         Ok((out, stats))
     }
 }
@@ -197,5 +276,142 @@ fn as_written(p: Pose) -> Pose {
     Pose {
         position: p.position.map(|v| v + 0.0),
         rotation: p.rotation.map(|v| v + 0.0),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::BodyShape;
+    use crate::demo::SwingingRods;
+    use crate::html::render_html;
+    use crate::run_dir::{BodySpec, CableSpec, ObstacleSpec};
+
+    /// A view with two rods (one routed cable), a body and an obstacle
+    /// named to be escaped; a negative zero and a tiny number among the
+    /// positions, as the run's files hold them.
+    fn scene(times: usize) -> (crate::ViewData, ViewSpec) {
+        let mut view = SwingingRods {
+            rods: 2,
+            times,
+            samples: 7,
+            body: true,
+            ..SwingingRods::default()
+        }
+        .build();
+        view.rods[1].frames[times / 2][0].position = [-0.0, 1e-300, -2.5e-7];
+        let mut spec = ViewSpec::new("prepared </script>");
+        spec.cables.push(CableSpec {
+            name: "cable <0>".into(),
+            rod: view.rods[0].name.clone(),
+            path: vec![[0.05, 0.0, 0.008], [0.3, 0.004, 0.0], [0.45, 0.0, -0.006]],
+        });
+        spec.bodies.push(BodySpec {
+            name: view.bodies[0].name.clone(),
+            shape: BodyShape::Sphere { radius: 0.02 },
+        });
+        spec.obstacles.push(ObstacleSpec {
+            name: "</script> floor".into(),
+            shape: crate::ObstacleShape::Plane {
+                position: [0.0, 0.0, -0.6],
+                normal: [0.0, 0.0, 1.0],
+            },
+            parent: None,
+        });
+        (view, spec)
+    }
+
+    fn collected(view: &crate::ViewData, c: &mut FrameCollector) {
+        for (k, t) in view.times.iter().enumerate() {
+            for (r, rod) in view.rods.iter().enumerate() {
+                c.push_rod(r, rod.frames[k].iter().copied());
+            }
+            c.push_body(view.bodies[0].poses[k]);
+            c.end_time(*t).unwrap();
+        }
+    }
+
+    fn collector(view: &crate::ViewData, cap: Option<usize>, opts: &ViewOptions) -> FrameCollector {
+        let rods = view
+            .rods
+            .iter()
+            .map(|r| (r.name.clone(), r.s.clone()))
+            .collect();
+        let bodies = vec![view.bodies[0].name.clone()];
+        let mut c = match cap {
+            Some(cap) => FrameCollector::with_cap(rods, bodies, cap),
+            None => FrameCollector::new(rods, bodies, opts),
+        };
+        collected(view, &mut c);
+        c
+    }
+
+    /// The page from the frames with what was prepared as they came is,
+    /// byte for byte, [`render_html`] of the same frames (the path of
+    /// `softrod view`, which prepares nothing): every time kept, a subset
+    /// of them shown (frame and byte budgets), the times thinned (nothing
+    /// prepared), and more kept times than the limits (dropped on the
+    /// way).
+    #[test]
+    fn prepared_page_equals_the_plain_page() {
+        let dir = std::env::temp_dir().join(format!("softrod-viz-prepared-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let small_bytes = ViewOptions {
+            max_bytes: 300_000,
+            ..ViewOptions::default()
+        };
+        let few_frames = ViewOptions {
+            max_frames: 17,
+            ..ViewOptions::default()
+        };
+        let cases: [(usize, Option<usize>, ViewOptions, bool); 5] = [
+            (61, None, ViewOptions::default(), true),
+            (301, None, small_bytes, true),
+            (301, None, few_frames.clone(), false),
+            (61, Some(7), ViewOptions::default(), false),
+            (61, Some(1000), few_frames, true),
+        ];
+        for (times, cap, opts, kept) in cases {
+            let (view, spec) = scene(times);
+            let c = collector(&view, cap, &opts);
+            let (shape, bodies, prepared) = c.clone().finish_prepared();
+            assert_eq!(prepared.is_some(), kept, "{times} times, cap {cap:?}");
+            let plain = view_from_parts(&spec, &dir.join("view.json"), shape, bodies).unwrap();
+            let (expected, expected_stats) = render_html(&plain, &opts).unwrap();
+            let (path, stats) = c.write_view(&dir, &spec, &opts).unwrap();
+            let page = std::fs::read_to_string(path).unwrap();
+            assert!(
+                page == expected,
+                "{times} times, cap {cap:?}: the pages differ"
+            );
+            assert_eq!(stats, expected_stats);
+            // Every string of the data escapes `<`: the page's only
+            // "</script>" close its own scripts.
+            assert_eq!(
+                page.matches("</script>").count(),
+                expected.matches("<script").count()
+            );
+            assert!(page.contains("\"name\":\"\\u003c/script> floor\""));
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// A pose the page refuses is named by the page, whichever path.
+    #[test]
+    fn a_bad_pose_is_named_as_before() {
+        let dir = std::env::temp_dir().join(format!("softrod-viz-bad-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let (mut view, spec) = scene(11);
+        view.rods[1].frames[4][2].rotation = [0.0; 4];
+        let opts = ViewOptions::default();
+        let c = collector(&view, None, &opts);
+        let (shape, bodies, prepared) = c.clone().finish_prepared();
+        assert!(prepared.is_none());
+        let plain = view_from_parts(&spec, &dir.join("view.json"), shape, bodies).unwrap();
+        let expected = render_html(&plain, &opts).unwrap_err().to_string();
+        let e = c.write_view(&dir, &spec, &opts).unwrap_err().to_string();
+        assert_eq!(e, expected);
+        assert!(e.contains("frames[4][2].rotation"), "{e}");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

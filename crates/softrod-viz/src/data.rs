@@ -222,6 +222,13 @@ impl ViewData {
     /// Checks sizes, orderings and finiteness; the error names what is wrong
     /// and where.
     pub fn validate(&self) -> Result<(), VizError> {
+        self.validate_frames(true)
+    }
+
+    /// [`ViewData::validate`]; without `rod_poses`, the rods' frames are
+    /// counted but their poses not checked (a collector checked each as it
+    /// came: [`pose_valid`]).
+    pub(crate) fn validate_frames(&self, rod_poses: bool) -> Result<(), VizError> {
         let m = self.times.len();
         if m == 0 {
             return Err(VizError::Empty("times"));
@@ -269,9 +276,15 @@ impl ViewData {
             }
             count(&what("frames"), rod.frames.len(), m)?;
             for (k, f) in rod.frames.iter().enumerate() {
-                count(&format!("{}[{k}]", what("frames")), f.len(), n)?;
-                for (i, p) in f.iter().enumerate() {
-                    pose_ok(|| format!("{}[{k}][{i}]", what("frames")), p)?;
+                // The name is made only for an error: a view has a frame
+                // per output time.
+                if f.len() != n {
+                    count(&format!("{}[{k}]", what("frames")), f.len(), n)?;
+                }
+                if rod_poses {
+                    for (i, p) in f.iter().enumerate() {
+                        pose_ok(|| format!("{}[{k}][{i}]", what("frames")), p)?;
+                    }
                 }
             }
             if let Some(tr) = &rod.tip_trace {
@@ -344,6 +357,13 @@ fn finite(what: &str, at: Option<usize>, v: &[f64]) -> Result<(), VizError> {
             value: v[i],
         }),
     }
+}
+
+/// Whether [`pose_ok`] accepts `p`: finite, with a rotation of squared
+/// norm ≥ 1e-12.
+pub(crate) fn pose_valid(p: &Pose) -> bool {
+    p.position.iter().chain(&p.rotation).all(|x| x.is_finite())
+        && p.rotation.iter().map(|v| v * v).sum::<f64>() >= 1e-12
 }
 
 /// `what` names the pose in an error; it is only built for one (a view

@@ -103,7 +103,58 @@ const GUARD_JS: &str = include_str!("assets/guard.js");
 
 /// The page for `data`, and what it kept. Validates `data` first.
 pub fn render_html(data: &ViewData, opts: &ViewOptions) -> Result<(String, ViewStats), VizError> {
-    data.validate()?;
+    render_prepared(data, opts, None)
+}
+
+/// What a [`crate::collect::FrameCollector`] worked out about its rods'
+/// frames while the run went on (on the run's writer thread), so that the
+/// page after the run only quantizes positions: the same bytes as
+/// [`render_html`] of the same data (tested), less work at the end.
+pub(crate) struct Prepared<'a> {
+    /// Per rod (in [`ViewData::rods`]'s order), the text [`push_rotation`]
+    /// writes for each pose of each time of [`ViewData::times`].
+    pub rotations: &'a [RotationText],
+    /// Per time of [`ViewData::times`]: the lowest and highest coordinates
+    /// of every rod's sample positions, `[lo, hi]` (m).
+    pub boxes: &'a [[[f64; 3]; 2]],
+}
+
+/// The rotation text of one rod's poses, time after time (pose `j`
+/// counts every pose of every time in order): what [`push_rotation`]
+/// writes, each in a fixed slot (a unit quaternion's text never takes
+/// more than [`ROTATION_TEXT`] bytes).
+#[derive(Debug, Clone, Default)]
+pub(crate) struct RotationText {
+    pub slots: Vec<([u8; ROTATION_TEXT], u8)>,
+}
+
+impl RotationText {
+    /// Appends the rotation text of `p`; false (nothing appended) if it
+    /// does not fit a slot.
+    pub fn push(&mut self, p: &Pose) -> bool {
+        let mut line = [0u8; 4 * INT_TEXT];
+        let end = put_rotation(&mut line, 0, &p.rotation);
+        match line.get(..ROTATION_TEXT) {
+            Some(head) if end <= ROTATION_TEXT => {
+                let mut slot = [0u8; ROTATION_TEXT];
+                slot.copy_from_slice(head);
+                self.slots.push((slot, end as u8));
+                true
+            }
+            _ => false,
+        }
+    }
+}
+
+/// [`render_html`], with what a collector prepared (`None`: nothing).
+/// Prepared frames were checked as they came (finite, non-zero rotation):
+/// their poses are not checked again.
+pub(crate) fn render_prepared(
+    data: &ViewData,
+    opts: &ViewOptions,
+    pre: Option<&Prepared<'_>>,
+) -> Result<(String, ViewStats), VizError> {
+    data.validate_frames(pre.is_none())?;
     if opts.max_frames < 2 || opts.max_trace_points < 2 {
         return Err(VizError::Invalid {
             what: "ViewOptions".into(),
@@ -120,11 +171,11 @@ pub fn render_html(data: &ViewData, opts: &ViewOptions) -> Result<(String, ViewS
         });
     }
     let m = data.times.len();
-    let q = Quantizer::new(data);
+    let q = Quantizer::new(data, pre.map(|p| p.boxes));
     let mut n = opts.max_frames.min(m);
     loop {
         let frames = spread(m, n);
-        let page = assemble(data, opts, &q, &frames);
+        let page = assemble(data, opts, &q, &frames, pre);
         if page.len() <= opts.max_bytes {
             let bytes = page.len();
             return Ok((
@@ -143,7 +194,7 @@ pub fn render_html(data: &ViewData, opts: &ViewOptions) -> Result<(String, ViewS
             });
         }
         // Per-frame bytes are nearly equal; shrink to fit with 2 % margin.
-        let fixed = assemble(data, opts, &q, &[]).len();
+        let fixed = assemble(data, opts, &q, &[], pre).len();
         let per = (page.len() - fixed.min(page.len())) as f64 / n as f64;
         let fit = ((opts.max_bytes.saturating_sub(fixed)) as f64 / per * 0.98).floor() as usize;
         n = fit.clamp(2, n - 1);
@@ -152,7 +203,17 @@ pub fn render_html(data: &ViewData, opts: &ViewOptions) -> Result<(String, ViewS
 
 /// [`render_html`] written to `path`.
 pub fn write_html(path: &Path, data: &ViewData, opts: &ViewOptions) -> Result<ViewStats, VizError> {
-    let (page, stats) = render_html(data, opts)?;
+    write_prepared(path, data, opts, None)
+}
+
+/// [`write_html`] with what a collector prepared (see [`render_prepared`]).
+pub(crate) fn write_prepared(
+    path: &Path,
+    data: &ViewData,
+    opts: &ViewOptions,
+    pre: Option<&Prepared<'_>>,
+) -> Result<ViewStats, VizError> {
+    let (page, stats) = render_prepared(data, opts, pre)?;
     std::fs::write(path, page).map_err(|source| VizError::Io {
         path: path.to_path_buf(),
         source,
@@ -167,7 +228,12 @@ struct Quantizer {
 }
 
 impl Quantizer {
-    fn new(d: &ViewData) -> Self {
+    /// From the extent of everything drawn; `boxes`: per time, the extent
+    /// of the rods' sample positions (see [`Prepared::boxes`]): the same
+    /// lowest and highest coordinates as the frames themselves give (the
+    /// positions are finite and `−0` is written `0`, so the order of `min`
+    /// and `max` does not matter).
+    fn new(d: &ViewData, boxes: Option<&[[[f64; 3]; 2]]>) -> Self {
         let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
         let mut add = |p: &[f64; 3]| {
             for ((l, h), v) in lo.iter_mut().zip(hi.iter_mut()).zip(p) {
@@ -175,8 +241,20 @@ impl Quantizer {
                 *h = h.max(*v);
             }
         };
+        match boxes {
+            Some(boxes) => {
+                for [l, h] in boxes {
+                    add(l);
+                    add(h);
+                }
+            }
+            None => {
+                for rod in &d.rods {
+                    rod.frames.iter().flatten().for_each(|f| add(&f.position));
+                }
+            }
+        }
         for rod in &d.rods {
-            rod.frames.iter().flatten().for_each(|f| add(&f.position));
             rod.tip_trace.iter().flatten().for_each(&mut add);
         }
         d.cables
@@ -195,26 +273,122 @@ impl Quantizer {
     }
 
     fn push_point(&self, out: &mut String, p: &[f64; 3]) {
-        let mut buf = itoa::Buffer::new();
+        let mut line = [0u8; 3 * INT_TEXT];
+        let mut at = 0;
         for (x, o) in p.iter().zip(&self.origin) {
-            let v = round_to_i64((x - o) / self.quantum);
-            out.push_str(buf.format(v));
-            out.push(',');
+            at = put_int(&mut line, at, round_to_i64((x - o) / self.quantum));
         }
+        out.push_str(ascii(&line[..at]));
     }
 
     fn push_pose(&self, out: &mut String, p: &Pose) {
         self.push_point(out, &p.position);
-        let r = p.rotation;
-        let n = (r[0] * r[0] + r[1] * r[1] + r[2] * r[2] + r[3] * r[3]).sqrt();
-        let sign = if r[0] < 0.0 { -1.0 } else { 1.0 };
-        let mut buf = itoa::Buffer::new();
-        for v in r {
-            let i = round_to_i64(sign * v / n * QUAT_SCALE);
-            out.push_str(buf.format(i));
-            out.push(',');
-        }
+        push_rotation(out, &p.rotation);
     }
+
+    /// [`Quantizer::push_pose`] of a pose at `position` whose rotation's
+    /// text is `rotation` (a [`RotationText`] slot), into `line` at `at`;
+    /// returns the end. `line` has `3·INT_TEXT + ROTATION_TEXT` bytes
+    /// from `at`.
+    #[inline(always)]
+    fn put_pose_text(
+        &self,
+        line: &mut [u8],
+        mut at: usize,
+        position: &[f64; 3],
+        rotation: &([u8; ROTATION_TEXT], u8),
+    ) -> usize {
+        for (x, o) in position.iter().zip(&self.origin) {
+            at = put_int(line, at, round_to_i64((x - o) / self.quantum));
+        }
+        line[at..at + ROTATION_TEXT].copy_from_slice(&rotation.0);
+        at + rotation.1 as usize
+    }
+}
+
+/// The longest text [`put_int`] writes: `i64::MIN` and its comma.
+const INT_TEXT: usize = 21;
+/// The longest rotation text of a unit quaternion: four integers within
+/// ±[`QUAT_SCALE`], each with its comma.
+pub(crate) const ROTATION_TEXT: usize = 4 * 7;
+
+/// `10^k` for `k` in `0..20`, and `u64::MAX` (no `u64` reaches it).
+const POW10: [u64; 21] = {
+    let mut p = [u64::MAX; 21];
+    let mut k = 0;
+    let mut v = 1u64;
+    while k < 20 {
+        p[k] = v;
+        v = v.wrapping_mul(10);
+        k += 1;
+    }
+    p
+};
+
+/// Two-digit groups, `"00"` to `"99"`.
+const PAIRS: &[u8; 200] = b"0001020304050607080910111213141516171819\
+2021222324252627282930313233343536373839\
+4041424344454647484950515253545556575859\
+6061626364656667686970717273747576777879\
+8081828384858687888990919293949596979899";
+
+/// Writes `v` in decimal (what `itoa` and `Display` write) and a comma at
+/// `line[at..]`; returns the end. `line` has [`INT_TEXT`] bytes from `at`.
+#[inline(always)]
+fn put_int(line: &mut [u8], mut at: usize, v: i64) -> usize {
+    if v < 0 {
+        line[at] = b'-';
+        at += 1;
+    }
+    let mut n = v.unsigned_abs();
+    // The digit count from the bit length (1233/4096 ≈ log₁₀ 2), corrected
+    // by one comparison.
+    let bits = 64 - (n | 1).leading_zeros() as usize;
+    let guess = (bits * 1233) >> 12;
+    let digits = guess + usize::from(n >= POW10[guess]);
+    let end = at + digits.max(1);
+    let mut i = end;
+    while n >= 100 {
+        let d = (n % 100) as usize * 2;
+        n /= 100;
+        i -= 2;
+        line[i] = PAIRS[d];
+        line[i + 1] = PAIRS[d + 1];
+    }
+    if n >= 10 {
+        let d = n as usize * 2;
+        line[i - 2] = PAIRS[d];
+        line[i - 1] = PAIRS[d + 1];
+    } else {
+        line[i - 1] = b'0' + n as u8;
+    }
+    line[end] = b',';
+    end + 1
+}
+
+/// A rotation as the page holds it, at `line[at..]` (which has
+/// `4·INT_TEXT` bytes): the quaternion normalized, with `w ≥ 0`, each
+/// component as `round(10⁴ · q)` and its comma. Returns the end.
+#[inline(always)]
+fn put_rotation(line: &mut [u8], mut at: usize, r: &[f64; 4]) -> usize {
+    let n = (r[0] * r[0] + r[1] * r[1] + r[2] * r[2] + r[3] * r[3]).sqrt();
+    let sign = if r[0] < 0.0 { -1.0 } else { 1.0 };
+    for v in r {
+        at = put_int(line, at, round_to_i64(sign * v / n * QUAT_SCALE));
+    }
+    at
+}
+
+/// [`put_rotation`] appended to `out`.
+fn push_rotation(out: &mut String, r: &[f64; 4]) {
+    let mut line = [0u8; 4 * INT_TEXT];
+    let end = put_rotation(&mut line, 0, r);
+    out.push_str(ascii(&line[..end]));
+}
+
+/// `bytes` as text: only ASCII digits, signs and commas are put there.
+fn ascii(bytes: &[u8]) -> &str {
+    std::str::from_utf8(bytes).unwrap_or_default()
 }
 
 /// `x.round() as i64` (halves away from zero, saturating) without a call:
@@ -242,8 +416,13 @@ fn close_array(out: &mut String) {
     out.push(']');
 }
 
-fn json_str(s: &str) -> String {
-    serde_json::to_string(s).unwrap_or_else(|_| "\"\"".into())
+/// `s` as a JSON string, `<` escaped (`\u003c`): with it a name such as
+/// "</script>" cannot close the data block. Every string of the embedded
+/// data goes through here; nothing else there holds a `<`.
+pub(crate) fn json_str(s: &str) -> String {
+    serde_json::to_string(s)
+        .unwrap_or_else(|_| "\"\"".into())
+        .replace('<', "\\u003c")
 }
 
 fn json_f64s(out: &mut String, v: impl Iterator<Item = f64>) {
@@ -256,18 +435,24 @@ fn json_f64s(out: &mut String, v: impl Iterator<Item = f64>) {
     close_array(out);
 }
 
-/// The embedded JSON for the kept `frames`.
-fn data_json(d: &ViewData, opts: &ViewOptions, q: &Quantizer, frames: &[usize]) -> String {
-    let mut o = String::new();
+/// Appends the embedded JSON for the kept `frames` to `o`.
+fn data_json(
+    o: &mut String,
+    d: &ViewData,
+    opts: &ViewOptions,
+    q: &Quantizer,
+    frames: &[usize],
+    pre: Option<&Prepared<'_>>,
+) {
     let up_n = d.up.iter().map(|v| v * v).sum::<f64>().sqrt();
     let _ = write!(
         o,
         "{{\"format\":\"softrod-view\",\"version\":1,\"title\":{},\"up\":",
         json_str(&d.title)
     );
-    json_f64s(&mut o, d.up.iter().map(|v| v / up_n));
+    json_f64s(o, d.up.iter().map(|v| v / up_n));
     o.push_str(",\"origin\":");
-    json_f64s(&mut o, q.origin.iter().copied());
+    json_f64s(o, q.origin.iter().copied());
     let _ = write!(
         o,
         ",\"quantum\":{},\"quatScale\":{},\"sourceFrames\":{},\"frames\":[",
@@ -278,9 +463,9 @@ fn data_json(d: &ViewData, opts: &ViewOptions, q: &Quantizer, frames: &[usize]) 
     for k in frames {
         let _ = write!(o, "{k},");
     }
-    close_array(&mut o);
+    close_array(o);
     o.push_str(",\"times\":");
-    json_f64s(&mut o, frames.iter().map(|&k| d.times[k]));
+    json_f64s(o, frames.iter().map(|&k| d.times[k]));
     let _ = write!(
         o,
         ",\"budget\":{{\"maxFrames\":{},\"maxBytes\":{},\"maxTracePoints\":{}}}",
@@ -296,57 +481,76 @@ fn data_json(d: &ViewData, opts: &ViewOptions, q: &Quantizer, frames: &[usize]) 
     );
     o.push_str(",\"rods\":[");
     let trace_idx = spread(d.times.len(), opts.max_trace_points);
-    for rod in &d.rods {
+    for (r, rod) in d.rods.iter().enumerate() {
         let _ = write!(o, "{{\"name\":{},\"s\":", json_str(&rod.name));
-        json_f64s(&mut o, rod.s.iter().copied());
+        json_f64s(o, rod.s.iter().copied());
         o.push_str(",\"radius\":");
-        json_f64s(&mut o, rod.radius.iter().copied());
+        json_f64s(o, rod.radius.iter().copied());
         o.push_str(",\"frames\":[");
+        let rotations = pre.map(|p| &p.rotations[r]);
+        let mut frame: Vec<u8> = Vec::new();
         for &k in frames {
             o.push('[');
-            for p in &rod.frames[k] {
-                q.push_pose(&mut o, p);
+            match rotations {
+                Some(text) => {
+                    // A frame's text is made in bytes, a pose at a time,
+                    // and appended at once (one check that it is text).
+                    let first = k * rod.s.len();
+                    let slots = &text.slots[first..first + rod.s.len()];
+                    frame.clear();
+                    for (p, rotation) in rod.frames[k].iter().zip(slots) {
+                        let mut line = [0u8; 3 * INT_TEXT + ROTATION_TEXT];
+                        let end = q.put_pose_text(&mut line, 0, &p.position, rotation);
+                        frame.extend_from_slice(&line[..end]);
+                    }
+                    o.push_str(ascii(&frame));
+                }
+                None => {
+                    for p in &rod.frames[k] {
+                        q.push_pose(o, p);
+                    }
+                }
             }
-            close_array(&mut o);
+            close_array(o);
             o.push(',');
         }
-        close_array(&mut o);
+        close_array(o);
         o.push_str(",\"trace\":{\"t\":");
-        json_f64s(&mut o, trace_idx.iter().map(|&k| d.times[k]));
+        json_f64s(o, trace_idx.iter().map(|&k| d.times[k]));
         o.push_str(",\"p\":[");
         for &k in &trace_idx {
             let p = match &rod.tip_trace {
                 Some(t) => t[k],
                 None => rod.frames[k][rod.s.len() - 1].position,
             };
-            q.push_point(&mut o, &p);
+            q.push_point(o, &p);
         }
-        close_array(&mut o);
+        close_array(o);
         o.push_str("}},");
     }
-    close_array(&mut o);
+    close_array(o);
     o.push_str(",\"cables\":[");
     for c in &d.cables {
         let _ = write!(o, "{{\"name\":{},\"frames\":[", json_str(&c.name));
         for &k in frames {
             o.push('[');
             for p in &c.points[k] {
-                q.push_point(&mut o, p);
+                q.push_point(o, p);
             }
-            close_array(&mut o);
+            close_array(o);
             o.push(',');
         }
-        close_array(&mut o);
+        close_array(o);
         o.push_str("},");
     }
-    close_array(&mut o);
+    close_array(o);
     o.push_str(",\"bodies\":[");
     for b in &d.bodies {
         let _ = write!(o, "{{\"name\":{},", json_str(&b.name));
         match b.shape {
             BodyShape::Box { size } => {
                 o.push_str("\"shape\":\"box\",\"size\":");
-                json_f64s(&mut o, size.into_iter());
+                json_f64s(o, size.into_iter());
             }
             BodyShape::Sphere { radius } => {
                 let _ = write!(
@@ -359,22 +563,19 @@ fn data_json(d: &ViewData, opts: &ViewOptions, q: &Quantizer, frames: &[usize]) 
         o.push_str(",\"frames\":[");
         for &k in frames {
             o.push('[');
-            q.push_pose(&mut o, &b.poses[k]);
-            close_array(&mut o);
+            q.push_pose(o, &b.poses[k]);
+            close_array(o);
             o.push(',');
         }
-        close_array(&mut o);
+        close_array(o);
         o.push_str("},");
     }
-    close_array(&mut o);
+    close_array(o);
     o.push_str(",\"obstacles\":");
-    crate::obstacles::push_view_json(&mut o, d, frames, q.origin, &|o: &mut String, p: &Pose| {
+    crate::obstacles::push_view_json(o, d, frames, q.origin, &|o: &mut String, p: &Pose| {
         q.push_pose(o, p)
     });
     o.push('}');
-    // `<` occurs only inside JSON strings; escaping it keeps a name such as
-    // "</script>" from closing the data block.
-    o.replace('<', "\\u003c")
 }
 
 fn html_escape(s: &str) -> String {
@@ -394,10 +595,20 @@ fn html_escape(s: &str) -> String {
 
 /// The page: the template's `@@NAME@@` markers replaced in one pass over
 /// the template (so a marker inside the data is never expanded).
-fn assemble(d: &ViewData, opts: &ViewOptions, q: &Quantizer, frames: &[usize]) -> String {
-    let data = data_json(d, opts, q, frames);
+fn assemble(
+    d: &ViewData,
+    opts: &ViewOptions,
+    q: &Quantizer,
+    frames: &[usize],
+    pre: Option<&Prepared<'_>>,
+) -> String {
     let title = html_escape(&d.title);
-    let mut out = String::with_capacity(data.len() + TEMPLATE.len() + CSS.len() + JS.len());
+    // The data is written in place, where its marker stands; its size is
+    // about seven integers of four to seven digits per pose.
+    let poses: usize = d.rods.iter().map(|r| r.s.len()).sum::<usize>() + d.bodies.len();
+    let guess = 32 * poses * frames.len();
+    let mut out =
+        String::with_capacity(guess + TEMPLATE.len() + CSS.len() + JS.len() + GUARD_JS.len());
     let mut rest = TEMPLATE;
     while let Some(i) = rest.find("@@") {
         out.push_str(&rest[..i]);
@@ -412,7 +623,7 @@ fn assemble(d: &ViewData, opts: &ViewOptions, q: &Quantizer, frames: &[usize]) -
             "CSS" => out.push_str(CSS),
             "GUARD" => out.push_str(GUARD_JS),
             "JS" => out.push_str(JS),
-            "DATA" => out.push_str(&data),
+            "DATA" => data_json(&mut out, d, opts, q, frames, pre),
             other => {
                 out.push_str("@@");
                 out.push_str(other);
@@ -436,7 +647,43 @@ pub fn embedded_data(page: &str) -> Option<serde_json::Value> {
 
 #[cfg(test)]
 mod tests {
-    use super::round_to_i64;
+    use super::{INT_TEXT, put_int, round_to_i64};
+
+    /// The page's integer text is the standard library's (`Display`,
+    /// what `itoa` writes), each with its comma.
+    #[test]
+    fn integers_are_written_as_the_standard_library_writes_them() {
+        let mut vs = vec![
+            0,
+            1,
+            -1,
+            9,
+            10,
+            -10,
+            99,
+            100,
+            i64::MAX,
+            i64::MIN,
+            i64::MIN + 1,
+        ];
+        for d in 1..19 {
+            let p = 10i64.pow(d);
+            vs.extend([p - 1, p, p + 1, -p + 1, -p, -p - 1]);
+        }
+        let mut u = 0x9e37_79b9_7f4a_7c15u64;
+        for _ in 0..100_000 {
+            u ^= u << 13;
+            u ^= u >> 7;
+            u ^= u << 17;
+            vs.push(u as i64);
+            vs.push((u as i64) >> (u % 64));
+        }
+        for v in vs {
+            let mut line = [0u8; 3 + INT_TEXT];
+            let end = put_int(&mut line, 3, v);
+            assert_eq!(&line[3..end], format!("{v},").as_bytes(), "v = {v}");
+        }
+    }
 
     /// Against the standard library's `round` and `as` on halves, values
     /// next to halves, integers beyond 2⁵², saturation and NaN, and a

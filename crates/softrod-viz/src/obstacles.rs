@@ -472,8 +472,13 @@ pub(crate) fn push_view_json(
     push_pose: &dyn Fn(&mut String, &Pose),
 ) {
     use std::fmt::Write as _;
-    let region = view_region(d);
     o.push('[');
+    if d.obstacles.is_empty() {
+        // The region (a pass over every pose) is for the meshes only.
+        o.push(']');
+        return;
+    }
+    let region = view_region(d);
     for (k, ob) in d.obstacles.iter().enumerate() {
         if k > 0 {
             o.push(',');
@@ -486,7 +491,7 @@ pub(crate) fn push_view_json(
         let _ = write!(
             o,
             "{{\"name\":{},\"shape\":\"{}\",\"mesh\":[",
-            serde_json::to_string(&ob.name).unwrap_or_else(|_| "\"\"".into()),
+            crate::html::json_str(&ob.name),
             kind(&ob.shape)
         );
         for (i, v) in m.vertices.iter().enumerate() {

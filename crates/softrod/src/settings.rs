@@ -40,6 +40,12 @@ pub struct Settings {
     /// interval; pays on quasi-static settles whose steps grow far beyond
     /// the decay of the damped modes. Fixed steps ignore it.
     pub steps_to_outputs: bool,
+    /// ESDIRK methods on models with loop closures: project the state onto
+    /// the closures after each accepted step
+    /// (`softrod_integrate::Options::project_state`, docs/theory.md D121).
+    /// For loose, long runs whose loops the stabilization alone lets drift
+    /// apart; the other methods ignore it.
+    pub project_closures: bool,
     /// The run length a scene asks for (`[run] duration`) \[s\]: what a
     /// front end simulates when the user names no duration.
     pub duration: f64,
@@ -71,6 +77,7 @@ impl Settings {
             error_control: run.error_control,
             linearly_implicit: run.linearly_implicit,
             steps_to_outputs: run.steps_to_outputs,
+            project_closures: run.project_closures,
             duration: run.duration,
             energy_tolerance: run.energy_tolerance,
         }
@@ -172,6 +179,7 @@ impl Settings {
             opts.iteration = Iteration::LinearlyImplicit;
         }
         opts.steps_to_outputs = adaptive && self.steps_to_outputs;
+        opts.project_state = self.project_closures && self.integrator.projects_state();
         if adaptive {
             opts.max_steps = Recommended::MAX_STEPS;
         } else {
@@ -275,6 +283,32 @@ mod tests {
             .method_and_options(1.0)
             .unwrap();
         assert!(!o.steps_to_outputs);
+    }
+
+    /// `project_closures` reaches ESDIRK's and ESDIRK5's options only
+    /// (docs/theory.md D121); off by default.
+    #[test]
+    fn project_closures_reaches_the_esdirk_methods_only() {
+        let (_, o) = Settings::default().method_and_options(1.0).unwrap();
+        assert!(!o.project_state);
+        let on = Settings {
+            project_closures: true,
+            ..Settings::default()
+        };
+        for (integrator, projects) in [
+            (Integrator::Esdirk, true),
+            (Integrator::Esdirk5, true),
+            (Integrator::Radau5, false),
+            (Integrator::Dopri5, false),
+            (Integrator::Rk4, false),
+        ] {
+            let (_, o) = on
+                .clone()
+                .with_integrator(integrator)
+                .method_and_options(1.0)
+                .unwrap();
+            assert_eq!(o.project_state, projects, "{integrator}");
+        }
     }
 
     /// `with_rtol` tightens `atol` to `rtol`, never loosens it.

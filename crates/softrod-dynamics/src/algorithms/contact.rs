@@ -6,7 +6,7 @@
 //! parents and the bodies that carry obstacles).
 
 use super::frames::{
-    RowBlock, add_frame_columns, add_frame_wrench, add_prescribed_wrench, frame_pose, frame_state,
+    RowBlock, add_frame_columns, add_frame_wrench, add_prescribed_wrench, frame_state,
     inward_wrenches,
 };
 use super::pairs::Search;
@@ -16,12 +16,12 @@ use crate::forces::Forces;
 use crate::forces::contact::{Distance, Law, distance, force};
 use crate::model::Model;
 use crate::model::closure::{ResolvedFrame, Target};
-use crate::model::contact::{Active, ContactWork};
+use crate::model::contact::{Active, ContactWork, Sample};
 use crate::model::data::Data;
 use crate::model::tree::Tree;
 use nalgebra::DMatrix;
 use softrod_kinematics::Frame;
-use softrod_lie::{Mat3, Mat6, Pose, Vec3, Vec6, skew};
+use softrod_lie::{Mat3, Mat6, PieceMaps, Pose, Vec3, Vec6, skew};
 
 /// What one evaluation asks of contact.
 #[derive(Clone, Copy, Debug)]
@@ -139,6 +139,7 @@ pub(crate) fn evaluate(
                 Pass::Inverse,
                 Forces::ALL,
             );
+            sample_poses(model, data, work, q);
             if obstacles {
                 evaluate_tree(model, data, work, q, qd, ask);
             }
@@ -192,6 +193,9 @@ pub(crate) fn evaluate_pairs_only(
                 Pass::Inverse,
                 Forces::ALL,
             );
+            if search == Search::All {
+                sample_poses(model, data, work, q);
+            }
         }
     }
     super::pairs::evaluate_pairs(model, data, work, q, qd, ask, search);
@@ -299,10 +303,11 @@ fn evaluate_tree(
     let tree = model.tree.as_ref().expect("a tree model");
     for (r, samples) in model.contact.samples.iter().enumerate() {
         for (i, smp) in samples.iter().enumerate() {
-            let frame = rod_frame(model, r, smp.s);
-            if !near_an_obstacle(model, tree, data, &frame, q, smp.radius) {
+            let p = work.poses[r][i].translation;
+            if !near_an_obstacle(model, tree, data, &p, smp.radius) {
                 continue;
             }
+            let frame = sample_frame(tree, r, smp);
             let fs = frame_state(model, tree, data, &frame, q, qd);
             let p = fs.pose.translation;
             let vp = point_velocity(&fs.vel, &p);
@@ -347,6 +352,60 @@ fn evaluate_tree(
     inward_wrenches(tree, data, &mut work.wrenches, work.tau.as_mut_slice());
 }
 
+/// The world pose of every contact point of a tree model into
+/// `work.poses` and every piece's stretch `|ν|` into `work.stretch`, after
+/// the outward sweep at `q`: [`super::frames::frame_pose`]'s pose to the bit (the same
+/// strain, exponential and compositions), with the strain and the
+/// piece's `PieceMaps` built once per piece instead of once per point;
+/// the strains and maps are kept in `work` for [`shared_pose`].
+pub(crate) fn sample_poses(model: &Model, data: &Data, work: &mut ContactWork, q: &[f64]) {
+    let tree = model.tree.as_ref().expect("a tree model");
+    for (r, samples) in model.contact.samples.iter().enumerate() {
+        let rm = &model.rods[r];
+        let qr = &q[rm.dofs()];
+        for (n, pc) in rm.spec.geometry.pieces().iter().enumerate() {
+            let xi = pc.strain(qr);
+            work.strains[r][n] = xi;
+            work.stretch[r][n] = Vec3::new(xi[3], xi[4], xi[5]).norm();
+            work.maps[r][n] = PieceMaps::new(&xi, None);
+        }
+        for (i, smp) in samples.iter().enumerate() {
+            work.poses[r][i] = shared_pose(tree, data, work, r, smp.piece, smp.x);
+        }
+    }
+}
+
+/// The world pose of rod `rod`'s section at abscissa `x` of piece `piece`
+/// from the piece maps [`sample_poses`] stored: `frame_pose` of that
+/// section to the bit.
+#[inline]
+pub(crate) fn shared_pose(
+    tree: &Tree,
+    data: &Data,
+    work: &ContactWork,
+    rod: usize,
+    piece: usize,
+    x: f64,
+) -> Pose {
+    let (gl, _) = work.maps[rod][piece].exp_and_tangent_minus(x);
+    let base = &data.nodes[tree.rod_nodes[rod][piece]].base_world;
+    base.compose(&gl).compose(&Pose::identity())
+}
+
+/// The frame of contact point `smp` of rod `rod` on a tree model (its
+/// piece and abscissa fixed with the model): [`rod_frame`] at `smp.s`.
+pub(crate) fn sample_frame(tree: &Tree, rod: usize, smp: &Sample) -> ResolvedFrame {
+    ResolvedFrame {
+        target: Target::Rod {
+            rod,
+            piece: smp.piece,
+            x: smp.x,
+            node: tree.rod_nodes[rod][smp.piece],
+        },
+        offset: Pose::identity(),
+    }
+}
+
 /// The frame of rod `rod`'s section at `s` \[m\] on a tree model.
 pub(crate) fn rod_frame(model: &Model, rod: usize, s: f64) -> ResolvedFrame {
     let tree = model.tree.as_ref().expect("a tree model");
@@ -367,28 +426,20 @@ pub(crate) fn rod_frame(model: &Model, rod: usize, s: f64) -> ResolvedFrame {
 }
 
 /// Whether a tree model's contact sample may touch an obstacle: its gap at
-/// the pose-only position ([`frame_pose`]) below a slack of `1e-9 (1 + |p|)`
+/// the pose-only position `p` (`frame_pose`'s, from [`sample_poses`]) below a slack of `1e-9 (1 + |p|)`
 /// m. Most samples touch nothing; this spares them [`frame_state`]'s twists
 /// and column blocks (CT7). The slack covers the round-off between the
 /// pose-only exponential and `frame_state`'s (the same D4 pose, its
 /// coefficients from another series evaluation when a rate is given), so
 /// every sample the full test finds touching passes this one, and the
 /// contacts and forces are those of the full test alone.
-fn near_an_obstacle(
-    model: &Model,
-    tree: &Tree,
-    data: &Data,
-    frame: &ResolvedFrame,
-    q: &[f64],
-    radius: f64,
-) -> bool {
-    let p = frame_pose(model, data, frame, q).translation;
+fn near_an_obstacle(model: &Model, tree: &Tree, data: &Data, p: &Vec3, radius: f64) -> bool {
     let slack = 1e-9 * (1.0 + p.norm());
     model.contact.obstacles.iter().enumerate().any(|(o, ob)| {
         let pose = model.contact.parents[o].map_or(Pose::identity(), |b| {
             data.nodes[tree.body_nodes[b]].base_world
         });
-        distance(&ob.shape, &pose, &p).d - radius < slack
+        distance(&ob.shape, &pose, p).d - radius < slack
     })
 }
 
@@ -460,267 +511,5 @@ pub(crate) fn parent_pose(model: &Model, data: &Data, o: usize) -> Pose {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::algorithms::contact_force;
-    use crate::{Attachment, BodySpec, Joint, JointKind, Rod, commit_contact};
-    use nalgebra::DVector;
-    use softrod_kinematics::Strain;
-    use softrod_mechanics::Material;
-    use softrod_mechanics::contact::{ContactSettings, Obstacle, Shape};
-
-    /// A tree with every kind of contact force: an arm on a hinge lying on
-    /// a table (fixed obstacle), a twig hanging inside the arm's middle
-    /// piece (D62) lying on it too, a free ball carrying a sphere that
-    /// presses on the arm (an obstacle on a body), and a free rod crossing
-    /// over the arm (a rod pair); friction anchors committed a moment
-    /// before, so that the forces have tangential parts.
-    fn scene() -> (Model, Vec<f64>, Vec<f64>) {
-        let r = 0.01;
-        let silicone = Material::builder()
-            .density(1000.0)
-            .young(1.0e6)
-            .poisson(0.5)
-            .build()
-            .unwrap();
-        let along_y = Mat3::new(0.0, -1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0);
-        let rod = |name: &str, length: f64, pieces: usize, base: Pose| {
-            Rod::builder(length)
-                .name(name)
-                .pieces(pieces)
-                .strains(Strain::ALL)
-                .base(base)
-                .circle(r)
-                .material(silicone)
-        };
-        let mut ball = BodySpec::principal("ball", 0.05, [1e-5, 1e-5, 1e-5]);
-        ball.base = Pose::new(Mat3::identity(), Vec3::new(0.25, 0.0, r + 0.02 - 3e-4));
-        let model = Model::builder()
-            .rod_on(
-                rod("arm", 0.3, 3, Pose::identity()),
-                Attachment::world_joint(Joint::revolute([0.0, 1.0, 0.0])),
-            )
-            .rod_on(
-                rod("twig", 0.1, 2, Pose::new(along_y, Vec3::zeros())),
-                Attachment::to("arm", Joint::revolute([0.0, 0.0, 1.0])).at(0.15),
-            )
-            .rod_on(
-                rod(
-                    "b",
-                    0.2,
-                    2,
-                    Pose::new(along_y, Vec3::new(0.05, -0.1, 2.0 * r - 5e-4)),
-                ),
-                Attachment::world_joint(Joint::new(JointKind::Free)),
-            )
-            .body(ball, Attachment::world_joint(Joint::new(JointKind::Free)))
-            .gravity([0.0, 0.0, -9.81])
-            .obstacle(
-                Obstacle::new(
-                    "table",
-                    Shape::Plane {
-                        point: Vec3::new(0.0, 0.0, -0.995 * r),
-                        normal: Vec3::z(),
-                    },
-                )
-                .friction(0.5),
-            )
-            .obstacle(
-                Obstacle::new(
-                    "sphere",
-                    Shape::Sphere {
-                        center: Vec3::zeros(),
-                        radius: 0.02,
-                    },
-                )
-                .on("ball")
-                .friction(0.3),
-            )
-            .contact(ContactSettings {
-                rods: true,
-                self_contact: true,
-                friction: 0.4,
-                ..Default::default()
-            })
-            .build()
-            .unwrap();
-        let n = model.n_dof();
-        let q: Vec<f64> = (0..n).map(|i| 1e-5 * ((i as f64) * 1.3).sin()).collect();
-        let qd: Vec<f64> = (0..n).map(|i| 0.01 * ((i as f64) * 0.7).cos()).collect();
-        (model, q, qd)
-    }
-
-    /// The pose-only sample position of the obstacle pre-test and the rod
-    /// pairs ([`frame_pose`]) is [`frame_state`]'s pose: to the bit without
-    /// rates (the same exponential and compositions: what keeps the pairs'
-    /// outputs unchanged), and within far less than the pre-test's 1e-9 m
-    /// slack with them (another series evaluation of the same map), at
-    /// every contact sample of every rod of the tree scene, bent.
-    #[test]
-    fn the_pose_only_frame_is_the_frame_states_pose() {
-        let (model, q0, qd) = scene();
-        let tree = model.tree.as_ref().unwrap();
-        let q: Vec<f64> = q0
-            .iter()
-            .enumerate()
-            .map(|(i, v)| v + 0.3 * ((i as f64) * 0.9).sin())
-            .collect();
-        let mut data = Data::new(&model);
-        outward(
-            &model,
-            tree,
-            &mut data,
-            Motion::at_rest(&q),
-            Pass::Inverse,
-            Forces::ALL,
-        );
-        let mut checked = 0;
-        for (r, samples) in model.contact.samples.iter().enumerate() {
-            for smp in samples {
-                let frame = rod_frame(&model, r, smp.s);
-                let pose = frame_pose(&model, &data, &frame, &q);
-                let full = frame_state(&model, tree, &data, &frame, &q, None).pose;
-                assert_eq!(pose.translation, full.translation, "rod {r}, s {}", smp.s);
-                assert_eq!(pose.rotation, full.rotation, "rod {r}, s {}", smp.s);
-                let rated = frame_state(&model, tree, &data, &frame, &q, Some(&qd)).pose;
-                assert!((pose.translation - rated.translation).norm() < 1e-14);
-                checked += 1;
-            }
-        }
-        assert!(checked > 10, "{checked} samples");
-    }
-
-    /// The material points `(rod, s, obstacle's body, force on the rod)` of
-    /// the last evaluation's contacts, a pair's rod `b` with the opposite.
-    type Points = Vec<(usize, f64, Option<usize>, Vec3)>;
-
-    /// `Σ J_relᵀ f` by the dense point Jacobians.
-    fn dense_route(model: &Model, data: &Data, q: &[f64], points: &Points) -> DVector<f64> {
-        let n = model.n_dof();
-        let mut jrel = DMatrix::zeros(3, n);
-        let mut dense = DVector::<f64>::zeros(n);
-        for &(rod, s, body, f) in points {
-            tree_point_jacobian(model, data, q, rod, s, body, &mut jrel);
-            dense += jrel.transpose() * f;
-        }
-        dense
-    }
-
-    /// The generalized contact force of the inward sweep (CT28) against
-    /// the dense route `Σ J_relᵀ f` of the point Jacobians, and both
-    /// against central differences of the forces' virtual work
-    /// `Σ f · δp` (the forces held, the material points moved by `q`):
-    /// positions only, independent of either Jacobian.
-    #[test]
-    fn the_inward_sweep_equals_dense_point_jacobians_and_the_virtual_work() {
-        let (model, q, qd) = scene();
-        let tree = model.tree.as_ref().unwrap();
-        let n = model.n_dof();
-        let mut data = Data::new(&model);
-        let q_before: Vec<f64> = q
-            .iter()
-            .enumerate()
-            .map(|(i, v)| v - 1e-5 * ((i as f64) * 2.1).cos())
-            .collect();
-        commit_contact(&model, &mut data, 0.0, &q_before, &qd).unwrap();
-        assert!(contact_force(
-            &model,
-            &mut data,
-            Forces::ALL,
-            0.0,
-            &q,
-            Some(&qd)
-        ));
-        let work = data.contact.take().unwrap();
-        let tau = work.tau.clone();
-        let pairs = &work.pairs.as_ref().unwrap().active;
-        let twig = model
-            .rods
-            .iter()
-            .position(|r| r.spec.name == "twig")
-            .unwrap();
-        let on = |o: usize| work.active.iter().filter(|a| a.obstacle == o).count();
-        assert!(
-            on(0) >= 4 && on(1) >= 1,
-            "table {}, sphere {}",
-            on(0),
-            on(1)
-        );
-        assert!(work.active.iter().any(|a| a.rod == twig));
-        assert!(!pairs.is_empty());
-        assert!(
-            work.active
-                .iter()
-                .any(|a| a.force.cross(&a.normal).norm() > 1e-3 * a.force.norm())
-        );
-        // The material points and the sign of each force on them.
-        let mut points: Points = Vec::new();
-        for a in &work.active {
-            let s = model.contact.samples[a.rod][a.sample].s;
-            points.push((a.rod, s, model.contact.parents[a.obstacle], a.force));
-        }
-        for c in pairs {
-            points.push((c.a, c.sa, None, c.force));
-            points.push((c.b, c.sb, None, -c.force));
-        }
-        let dense = dense_route(&model, &data, &q, &points);
-        let scale = dense.norm();
-        let diff = (&tau - &dense).norm();
-        eprintln!(
-            "{} points: |τ| {scale:.3e}, sweep − dense {diff:.3e}",
-            points.len()
-        );
-        assert!(diff <= 1e-13 * scale, "{diff:.3e} of {scale:.3e}");
-        // Central differences of the virtual work.
-        let place = |data: &mut Data, qq: &[f64]| -> Vec<Vec3> {
-            outward(
-                &model,
-                tree,
-                data,
-                Motion::at_rest(qq),
-                Pass::Inverse,
-                Forces::ALL,
-            );
-            points
-                .iter()
-                .map(|&(rod, s, _, _)| {
-                    frame_state(&model, tree, data, &rod_frame(&model, rod, s), qq, None)
-                        .pose
-                        .translation
-                })
-                .collect()
-        };
-        let body_poses = |data: &Data| -> Vec<Option<Pose>> {
-            points
-                .iter()
-                .map(|&(_, _, b, _)| b.map(|b| data.nodes[tree.body_nodes[b]].base_world))
-                .collect()
-        };
-        let p0 = place(&mut data, &q);
-        let b0 = body_poses(&data);
-        let h = 1e-6;
-        let mut worst: f64 = 0.0;
-        for l in 0..n {
-            let mut work_of = |sign: f64| -> f64 {
-                let mut qq = q.clone();
-                qq[l] += sign * h;
-                let p = place(&mut data, &qq);
-                let bp = body_poses(&data);
-                let mut w = 0.0;
-                for (k, &(_, _, _, f)) in points.iter().enumerate() {
-                    w += f.dot(&p[k]);
-                    // The body's material point where the rod point was.
-                    if let (Some(g0), Some(g)) = (b0[k], bp[k]) {
-                        w -= f.dot(&g.compose(&g0.inverse()).transform_point(&p0[k]));
-                    }
-                }
-                w
-            };
-            let fd = (work_of(1.0) - work_of(-1.0)) / (2.0 * h);
-            worst = worst.max((fd - tau[l]).abs());
-        }
-        eprintln!("virtual work: worst |Δτ| {worst:.3e} of |τ| {scale:.3e}");
-        assert!(worst <= 1e-7 * scale, "{worst:.3e} of {scale:.3e}");
-        data.contact = Some(work);
-    }
-}
+#[path = "contact_tests.rs"]
+mod tests;

@@ -8,7 +8,7 @@
 //! chain it reads the rods' kinematics in `ContactWork::kin`; on a tree the
 //! node data of the last outward sweep.
 
-use super::contact::{Ask, point_velocity, rod_frame};
+use super::contact::{Ask, point_velocity, rod_frame, shared_pose};
 use super::frames::{add_frame_wrench, frame_pose, frame_state, inward_wrenches};
 use crate::forces::contact::{Distance, Law, closest_on_segments, force};
 use crate::model::Model;
@@ -19,7 +19,7 @@ use crate::model::pairs::{
     BROADPHASE_MARGIN, PairActive, PairWork, SegmentBox, exclusion, may_touch, radius_at,
     radius_slope,
 };
-use softrod_kinematics::Frame;
+use softrod_kinematics::{Frame, RodGeometry};
 use softrod_lie::{Mat3, Pose, Vec3};
 
 /// Iterations of the closest-point refinement (CT8); it stops earlier when
@@ -34,6 +34,10 @@ struct Sections<'a> {
     work: &'a ContactWork,
     q: &'a [f64],
     qd: Option<&'a [f64]>,
+    /// On a tree: `work`'s piece strains and maps are this state's
+    /// (`super::contact::sample_poses` ran), so a pose-only section is
+    /// read from them.
+    shared: bool,
 }
 
 /// A rod section as contact needs it: pose, the centreline's tangent
@@ -46,11 +50,39 @@ struct At {
     omega: Vec3,
 }
 
+/// `RodGeometry::locate(s)` when `s` is likely on piece `n` (a closest-point
+/// iteration held to its piece, CT8): the same piece and abscissa, to the
+/// bit, from the two boundaries of piece `n` instead of a search — and the
+/// search itself when `s` is not on it.
+fn locate_near(g: &RodGeometry, n: usize, s: f64) -> (usize, f64) {
+    let pieces = g.pieces();
+    let p = &pieces[n];
+    // `locate` takes the first piece whose end is ≥ s (s within [0, L]).
+    if s >= 0.0 && s <= g.length() && s <= p.end() && (n == 0 || pieces[n - 1].end() < s) {
+        let x = if s >= p.end() {
+            p.length
+        } else {
+            (s - p.start).clamp(0.0, p.length)
+        };
+        return (n, x);
+    }
+    g.locate(s).expect("a contact point lies on its rod")
+}
+
 impl Sections<'_> {
     fn at(&self, rod: usize, s: f64, velocity: bool) -> At {
+        let (piece, x) = self.model.rods[rod]
+            .spec
+            .geometry
+            .locate(s)
+            .expect("a contact point lies on its rod");
+        self.at_on(rod, piece, x, s, velocity)
+    }
+
+    /// [`Self::at`] with the piece and abscissa of `s` known.
+    fn at_on(&self, rod: usize, piece: usize, x: f64, s: f64, velocity: bool) -> At {
         let rm = &self.model.rods[rod];
         let g = &rm.spec.geometry;
-        let (piece, x) = g.locate(s).expect("a contact point lies on its rod");
         match &self.model.tree {
             None => {
                 let kin = &self.work.kin[rod];
@@ -84,11 +116,19 @@ impl Sections<'_> {
                     offset: Pose::identity(),
                 };
                 let qd = if velocity { self.qd } else { None };
-                let xi = g.strain(piece, &self.q[rm.dofs()]);
+                let xi = if self.shared {
+                    self.work.strains[rod][piece]
+                } else {
+                    g.strain(piece, &self.q[rm.dofs()])
+                };
                 if qd.is_none() {
                     // Positions and tangents only (the broadphase, the
                     // closest points): the pose alone, the same bits.
-                    let pose = frame_pose(self.model, self.data, &frame, self.q);
+                    let pose = if self.shared {
+                        shared_pose(tree, self.data, self.work, rod, piece, x)
+                    } else {
+                        frame_pose(self.model, self.data, &frame, self.q)
+                    };
                     return At {
                         tangent: pose.rotation * Vec3::new(xi[3], xi[4], xi[5]),
                         pose,
@@ -140,7 +180,9 @@ pub(crate) fn seed_differences(work: &mut ContactWork) {
 
 /// The touching pairs at `(q, q̇)` and their generalized force into
 /// `pairs.tau` (`pairs.active` lists them). The chain's kinematics in
-/// `work.kin`, or the tree's node data in `data`, must be this state's.
+/// `work.kin`, or the tree's node data in `data` (and for [`Search::All`]
+/// the sample poses of `super::contact::sample_poses`), must be this
+/// state's.
 pub(crate) fn evaluate_pairs(
     model: &Model,
     data: &Data,
@@ -163,6 +205,7 @@ pub(crate) fn evaluate_pairs(
             work,
             q,
             qd,
+            shared: false,
         };
         for k in 0..pw.fd_seeds.len() {
             let (ba, bb) = pw.fd_seeds[k];
@@ -181,25 +224,15 @@ pub(crate) fn evaluate_pairs(
             work,
             q,
             qd,
+            shared: model.tree.is_some(),
         };
         broadphase(model, &sec, &mut pw);
-        let n = pw.boxes.len();
-        for i in 0..n {
-            let bi = pw.boxes[i];
-            let reach = bi.center.x + bi.radius;
-            for j in i + 1..n {
-                let bj = pw.boxes[j];
-                if bj.center.x - bj.radius > reach {
-                    break;
-                }
-                if (bi.center - bj.center).norm() > bi.radius + bj.radius
-                    || !could_touch(model, &bi, &bj)
-                {
-                    continue;
-                }
-                pw.narrow_tests += 1;
-                narrowphase(model, &sec, &mut pw, &bi, &bj, ask);
-            }
+        candidates(model, &mut pw);
+        for k in 0..pw.candidates.len() {
+            let (i, j) = pw.candidates[k];
+            let (bi, bj) = (pw.boxes[i as usize], pw.boxes[j as usize]);
+            pw.narrow_tests += 1;
+            narrowphase(model, &sec, &mut pw, &bi, &bj, ask);
         }
     }
     // The generalized force: J_a(s_a)ᵀ f − J_b(s_b)ᵀ f — on a tree as the
@@ -243,22 +276,28 @@ pub(crate) fn evaluate_pairs(
 fn broadphase(model: &Model, sec: &Sections, pw: &mut PairWork) {
     pw.boxes.clear();
     for (r, samples) in model.contact.samples.iter().enumerate() {
-        let g = &model.rods[r].spec.geometry;
-        for (i, smp) in samples.iter().enumerate() {
-            pw.points[r][i] = sec.at(r, smp.s, false).pose.translation;
+        match &model.tree {
+            None => {
+                for (i, smp) in samples.iter().enumerate() {
+                    pw.points[r][i] = sec.at(r, smp.s, false).pose.translation;
+                }
+            }
+            // This evaluation's poses, filled after its outward sweep.
+            Some(_) => {
+                for (p, pose) in pw.points[r].iter_mut().zip(&sec.work.poses[r]) {
+                    *p = pose.translation;
+                }
+            }
         }
         for i in 0..samples.len().saturating_sub(1) {
             let (s0, s1) = (samples[i].s, samples[i + 1].s);
-            let (piece, _) = g.locate(0.5 * (s0 + s1)).expect("on the rod");
+            let piece = samples[i].segment_piece;
             let stretch = match &model.tree {
                 None => {
                     let xi = sec.work.kin[r].strains()[piece];
                     Vec3::new(xi[3], xi[4], xi[5]).norm()
                 }
-                Some(_) => {
-                    let xi = g.strain(piece, &sec.q[model.rods[r].dofs()]);
-                    Vec3::new(xi[3], xi[4], xi[5]).norm()
-                }
+                Some(_) => sec.work.stretch[r][piece],
             };
             let arc = stretch * (s1 - s0);
             pw.arcs[r][i] = arc;
@@ -273,6 +312,84 @@ fn broadphase(model: &Model, sec: &Sections, pw: &mut PairWork) {
     }
     pw.boxes
         .sort_unstable_by(|a, b| (a.center.x - a.radius).total_cmp(&(b.center.x - b.radius)));
+}
+
+/// The segment pairs the narrowphase tests into `pw.candidates`: bounding
+/// spheres overlapping and [`could_touch`], in the order of a sweep along
+/// x over `pw.boxes` (sorted by lowest x) — pairs `(i, j)`, `i < j`, by
+/// `i` then `j`, the order that fixes the touching pairs' list and its
+/// sums. The sweep runs along y or z where the boxes' centres spread over
+/// more than four times their spread in x: a
+/// rope hanging along z has every box overlapping every other in x, where
+/// a sweep along x tests all `n²/2` pairs. A pair the x sweep would pass
+/// over (`j`'s lowest x beyond `i`'s highest) is passed over here too, so
+/// the pairs are the x sweep's exactly.
+fn candidates(model: &Model, pw: &mut PairWork) {
+    pw.candidates.clear();
+    let n = pw.boxes.len();
+    let keep = |bi: &SegmentBox, bj: &SegmentBox| {
+        // `norm > sum` is false on NaN too, as in the x sweep's test.
+        let apart = (bi.center - bj.center).norm() > bi.radius + bj.radius;
+        !apart && could_touch(model, bi, bj)
+    };
+    let (mut lo, mut hi) = (Vec3::repeat(f64::INFINITY), Vec3::repeat(f64::NEG_INFINITY));
+    for b in &pw.boxes {
+        lo = lo.inf(&b.center);
+        hi = hi.sup(&b.center);
+    }
+    let spread = hi - lo;
+    // Another axis only where it thins the sweep by far: its own sort and
+    // the candidates' are not free.
+    let widest = if spread.y >= spread.z { 1 } else { 2 };
+    let axis = if spread[widest] > 4.0 * spread.x {
+        widest
+    } else {
+        0
+    };
+    if axis == 0 || !spread.iter().all(|v| v.is_finite()) {
+        for i in 0..n {
+            let bi = pw.boxes[i];
+            let reach = bi.center.x + bi.radius;
+            for j in i + 1..n {
+                let bj = pw.boxes[j];
+                if bj.center.x - bj.radius > reach {
+                    break;
+                }
+                if keep(&bi, &bj) {
+                    pw.candidates.push((i as u32, j as u32));
+                }
+            }
+        }
+        return;
+    }
+    pw.order.clear();
+    pw.order.extend(
+        pw.boxes
+            .iter()
+            .enumerate()
+            .map(|(i, b)| (b.center[axis] - b.radius, i as u32)),
+    );
+    pw.order.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+    for a in 0..n {
+        let ia = pw.order[a].1;
+        let ba = pw.boxes[ia as usize];
+        let reach = ba.center[axis] + ba.radius;
+        for b in a + 1..n {
+            let (low, ib) = pw.order[b];
+            if low > reach {
+                break;
+            }
+            let (i, j) = if ia < ib { (ia, ib) } else { (ib, ia) };
+            let (bi, bj) = (pw.boxes[i as usize], pw.boxes[j as usize]);
+            if bj.center.x - bj.radius > bi.center.x + bi.radius {
+                continue;
+            }
+            if keep(&bi, &bj) {
+                pw.candidates.push((i, j));
+            }
+        }
+    }
+    pw.candidates.sort_unstable();
 }
 
 /// Whether any points of the two segments may touch (CT9): rods and self
@@ -325,9 +442,23 @@ fn narrowphase(
     // there, and an iteration allowed to cross it bounces from side to side
     // without converging. A corner that is the closest point is reached
     // from both sides as a clamp and kept once (the test below).
-    let (a_lo, a_hi) = piece_span(model, ba.rod, 0.5 * (sa_[ba.seg].s + sa_[ba.seg + 1].s));
-    let (b_lo, b_hi) = piece_span(model, bb.rod, 0.5 * (sb_[bb.seg].s + sb_[bb.seg + 1].s));
-    let (mut xa, mut xb) = (sec.at(ba.rod, sa, false), sec.at(bb.rod, sb, false));
+    let (a_lo, a_hi, piece_a) =
+        piece_span(model, ba.rod, 0.5 * (sa_[ba.seg].s + sa_[ba.seg + 1].s));
+    let (b_lo, b_hi, piece_b) =
+        piece_span(model, bb.rod, 0.5 * (sb_[bb.seg].s + sb_[bb.seg + 1].s));
+    let (ga_, gb_) = (
+        &model.rods[ba.rod].spec.geometry,
+        &model.rods[bb.rod].spec.geometry,
+    );
+    let on_a = |s: f64| {
+        let (n, x) = locate_near(ga_, piece_a, s);
+        sec.at_on(ba.rod, n, x, s, false)
+    };
+    let on_b = |s: f64| {
+        let (n, x) = locate_near(gb_, piece_b, s);
+        sec.at_on(bb.rod, n, x, s, false)
+    };
+    let (mut xa, mut xb) = (on_a(sa), on_b(sb));
     for _ in 0..REFINE_ITERATIONS {
         // Gauss–Newton on ½|p_a(s_a) − p_b(s_b)|², each parameter kept on
         // its piece (a rod's round end: a clamped end is the closest point).
@@ -355,8 +486,8 @@ fn narrowphase(
         }
         sa += da;
         sb += db;
-        xa = sec.at(ba.rod, sa, false);
-        xb = sec.at(bb.rod, sb, false);
+        xa = on_a(sa);
+        xb = on_b(sb);
         if da.abs() + db.abs() <= tol {
             break;
         }
@@ -513,7 +644,7 @@ fn narrowphase(
 /// moved [`past`] it, so that every evaluation on the piece reads this
 /// piece's strain — a boundary belongs to the piece that ends there, and a
 /// tangent read across a corner would make the iteration cycle.
-fn piece_span(model: &Model, rod: usize, s: f64) -> (f64, f64) {
+fn piece_span(model: &Model, rod: usize, s: f64) -> (f64, f64, usize) {
     let g = &model.rods[rod].spec.geometry;
     let (n, x) = g.locate(s).expect("a seed lies on its rod");
     let l = g.length();
@@ -523,6 +654,7 @@ fn piece_span(model: &Model, rod: usize, s: f64) -> (f64, f64) {
     (
         if n == 0 { 0.0 } else { past(start, l) },
         if n + 1 == g.pieces().len() { l } else { end },
+        n,
     )
 }
 
@@ -589,6 +721,7 @@ pub(crate) fn pair_poses(
         work,
         q,
         qd: None,
+        shared: false,
     };
     (
         sec.at(c.a, c.sa, false).pose.translation,
@@ -597,147 +730,5 @@ pub(crate) fn pair_poses(
 }
 
 #[cfg(test)]
-mod tests {
-    use super::Sections;
-    use crate::algorithms::contact_force;
-    use crate::commit_contact;
-    use crate::forces::Forces;
-    use crate::model::pairs::PairAnchor;
-    use crate::model::{Attachment, Data, Joint, JointKind, Model, Rod};
-    use softrod_kinematics::Strain;
-    use softrod_lie::{Pose, Vec3, Vec6, exp_twist};
-    use softrod_mechanics::Material;
-    use softrod_mechanics::contact::ContactSettings;
-
-    /// The stretch `e = p_a(σ_a) − p_b(σ_b) − R_b(σ_b) o` of anchor `k`
-    /// at `q` (CT10), from the sections' poses alone.
-    fn stretch(model: &Model, data: &mut Data, q: &[f64], k: &PairAnchor) -> Vec3 {
-        assert!(contact_force(model, data, Forces::ALL, 0.0, q, None));
-        let work = data.contact.as_ref().unwrap();
-        let sec = Sections {
-            model,
-            data,
-            work,
-            q,
-            qd: None,
-        };
-        let gb = sec.at(k.b, k.sb, false).pose;
-        sec.at(k.a, k.sa, false).pose.translation - gb.translation - gb.rotation * k.offset
-    }
-
-    /// The stretch rate the stop location reads (CT30) against central
-    /// differences of the stretch along `q̇` at the committed anchor: two
-    /// crossing rods of all six strains, pressed together, anchored at
-    /// rest, then moved to a bent state with every coordinate moving —
-    /// their sections turn. On a chain model and on a tree (the upper rod
-    /// on a free joint). The closest points' relative velocity
-    /// `v_a(s_a) − v_b(s_b)` (what the location read before) misses `b`'s
-    /// section turning the anchor's offset `o ≈ (r_a + r_b) n`.
-    #[test]
-    fn the_pair_stretch_rate_matches_central_differences() {
-        let r = 0.01;
-        let material = Material::builder()
-            .density(1000.0)
-            .young(1.0e6)
-            .poisson(0.5)
-            .build()
-            .unwrap();
-        let rod = |name: &str, base: Pose| {
-            Rod::builder(0.3)
-                .name(name)
-                .pieces(3)
-                .strains(Strain::ALL)
-                .base(base)
-                .circle(r)
-                .material(material)
-        };
-        let w = Vec3::z() * 1.2;
-        let turned = exp_twist(1.0, &Vec6::new(w.x, w.y, w.z, 0.0, 0.0, 0.0)).rotation;
-        for tree in [false, true] {
-            let b = rod(
-                "b",
-                Pose::new(turned, Vec3::new(0.2, -0.15, 2.0 * r - 5e-4)),
-            );
-            let builder = Model::builder().rod(rod("a", Pose::identity()));
-            let builder = if tree {
-                builder.rod_on(b, Attachment::world_joint(Joint::new(JointKind::Free)))
-            } else {
-                builder.rod(b)
-            };
-            let settings = ContactSettings {
-                rods: true,
-                friction: 0.3,
-                ..Default::default()
-            };
-            let model = builder
-                .build()
-                .unwrap()
-                .with_contact(Vec::new(), settings)
-                .unwrap();
-            let n = model.n_dof();
-            let mut data = Data::new(&model);
-            let zero = vec![0.0; n];
-            commit_contact(&model, &mut data, 0.0, &zero, &zero).unwrap();
-            let anchors = &data
-                .contact
-                .as_ref()
-                .unwrap()
-                .pairs
-                .as_ref()
-                .unwrap()
-                .anchors;
-            assert_eq!(anchors.len(), 1, "tree {tree}: {anchors:?}");
-            let k = anchors[0];
-            // Bent a little (still touching, within the anchor's reach),
-            // every coordinate moving.
-            let q: Vec<f64> = (0..n).map(|i| 2e-3 * ((i as f64) * 1.3).sin()).collect();
-            let qd: Vec<f64> = (0..n).map(|i| 0.5 * ((i as f64) * 0.7).cos()).collect();
-            data.contact.as_mut().unwrap().pairs.as_mut().unwrap().rates = true;
-            assert!(contact_force(
-                &model,
-                &mut data,
-                Forces::ALL,
-                0.0,
-                &q,
-                Some(&qd)
-            ));
-            let pw = data.contact.as_mut().unwrap().pairs.as_mut().unwrap();
-            pw.rates = false;
-            assert_eq!(pw.active.len(), 1, "tree {tree}");
-            let c = pw.active[0];
-            assert!(c.anchor.is_some(), "tree {tree}");
-            let rate = c.stretch_rate;
-            // The closest points' relative velocity at (q, q̇).
-            let closest = {
-                let work = data.contact.as_ref().unwrap();
-                let sec = Sections {
-                    model: &model,
-                    data: &data,
-                    work,
-                    q: &q,
-                    qd: Some(&qd),
-                };
-                sec.at(c.a, c.sa, true).velocity - sec.at(c.b, c.sb, true).velocity
-            };
-            let eps = 1e-6;
-            let at = |sign: f64| -> Vec<f64> {
-                q.iter().zip(&qd).map(|(x, v)| x + sign * eps * v).collect()
-            };
-            let reference = (stretch(&model, &mut data, &at(1.0), &k)
-                - stretch(&model, &mut data, &at(-1.0), &k))
-                / (2.0 * eps);
-            let err = (rate - reference).norm();
-            let off = (closest - reference).norm();
-            eprintln!(
-                "tree {tree}: rate {rate:?}, central differences {reference:?}, error {err:.2e}; closest points' v_a − v_b off by {off:.2e}"
-            );
-            assert!(
-                err <= 1e-6 * reference.norm(),
-                "tree {tree}: {rate:?} vs {reference:?}"
-            );
-            // The test tells the two apart (4.5 % and 1.7 % of the rate
-            // here, 10⁴ times the tolerance of the check).
-            assert!(off > 1e-2 * reference.norm(), "tree {tree}: {off}");
-        }
-    }
-}
+#[path = "pairs_tests.rs"]
+mod tests;

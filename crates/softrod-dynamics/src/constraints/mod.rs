@@ -5,13 +5,15 @@
 //! recursion, and its derivatives ([`derivatives`], the open tree's
 //! analytic ones projected through the multiplier system), and the
 //! structured Newton matrix of a closed model's implicit step ([`newton`],
-//! KKT form on the open tree's shifted solve). The constrained statics and modes are `crate::analysis`'s.
+//! KKT form on the open tree's shifted solve), and the projection of a state onto
+//! the closures ([`project`], D121). The constrained statics and modes are `crate::analysis`'s.
 //! A new kind of closure goes in `crate::model::closure` (its spec and
 //! number of rows) and [`rows`] (its residual and row operator).
 
 pub(crate) mod derivatives;
 pub(crate) mod forward;
 pub(crate) mod newton;
+pub(crate) mod project;
 pub(crate) mod queries;
 pub(crate) mod rows;
 
@@ -21,6 +23,7 @@ pub use derivatives::{
     open_tree_inverse_dynamics,
 };
 pub use newton::ClosedShiftedSolver;
+pub use project::{ClosureProjection, project_onto_closures, projection_tolerance};
 pub use queries::{
     check_closures, closure_multipliers, closure_residuals, constraint_jacobian, constraint_rank,
     constraint_residual, max_closure_residual,

@@ -369,7 +369,8 @@ impl Place {
 
 /// The own points and point loads of one planar piece (D42–D43, D45 on
 /// `P`, D97–D98): as [`super::point::own_points`], every product 3×3.
-/// `pose` is the world pose of the piece's base frame.
+/// `pose` is the world pose of the piece's base frame. Writes (does not
+/// add to) every sum of `w` that [`PieceWork::reset_sums`] resets.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn own_points3(
@@ -503,24 +504,24 @@ fn own_points3(
             s.chi[i] += fp * co.c[i];
         }
     }
-    w.dq_diag += pl_.kk(&s.dq_diag);
-    w.dv_diag += pl_.kk(&s.dv_diag);
-    w.dq_w += pl_.sk(&s.dq_w);
-    w.dv_w += pl_.sk(&s.dv_w);
-    w.mt += pl_.ss(&s.mt);
-    w.bt += pl_.ss(&s.bt);
-    w.yt += pl_.ss(&s.yt);
-    w.rm += pl_.ks(&s.rm);
-    w.rb += pl_.ks(&s.rb);
-    w.ry += pl_.ks(&s.ry);
-    w.mtt += pl_.kk(&s.mtt);
-    w.tsum += pl_.v(&s.tsum);
-    w.wsum += pl_.v(&s.wsum);
-    w.tin += pl_.v(&s.tin);
-    w.win += pl_.v(&s.win);
+    w.dq_diag = pl_.kk(&s.dq_diag);
+    w.dv_diag = pl_.kk(&s.dv_diag);
+    w.dq_w = pl_.sk(&s.dq_w);
+    w.dv_w = pl_.sk(&s.dv_w);
+    w.mt = pl_.ss(&s.mt);
+    w.bt = pl_.ss(&s.bt);
+    w.yt = pl_.ss(&s.yt);
+    w.rm = pl_.ks(&s.rm);
+    w.rb = pl_.ks(&s.rb);
+    w.ry = pl_.ks(&s.ry);
+    w.mtt = pl_.kk(&s.mtt);
+    w.tsum = pl_.v(&s.tsum);
+    w.wsum = pl_.v(&s.wsum);
+    w.tin = pl_.v(&s.tin);
+    w.win = pl_.v(&s.win);
     for i in 0..4 {
-        w.phi[i] += pl_.v(&s.phi[i]);
-        w.chi[i] += pl_.v(&s.chi[i]);
+        w.phi[i] = pl_.v(&s.phi[i]);
+        w.chi[i] = pl_.v(&s.chi[i]);
     }
 }
 
@@ -552,7 +553,7 @@ pub(crate) fn outward(
         let xid = pr.gather(&piece.strain_rate(qdr));
         let xidd = pr.gather(&piece.strain_rate(qddr));
         let dm = PlanarDerivMaps::new(&xi, &xid, &xidd);
-        w.reset_sums();
+        // No `reset_sums`: `own_points3` writes every sum it resets.
         w.base_world = pose;
         let pc = PlanarLin {
             dm: &dm,

@@ -44,6 +44,69 @@ fn add_local(out: &mut [f64], o: usize, k: usize, x: &Vec6) {
     }
 }
 
+/// `out[c] = Σ_{r<R} A[r, c] x[r]` for `c < C`, the rest zero: `Aᵀx` for
+/// an `A` whose rows from `R` on or `x`'s entries from `R` on are zero and
+/// of which only the first `C` outputs are read (D101: a piece's
+/// quantities live in its basis's `k` columns or rows). The sizes are
+/// compile-time constants so the loops unroll.
+#[inline(always)]
+#[allow(clippy::needless_range_loop)] // index loops over compile-time sizes, as kernels/mat6.rs
+fn trk<const R: usize, const C: usize>(m: &Mat6, x: &Vec6) -> Vec6 {
+    let (a, x) = (m.as_slice(), x.as_slice());
+    let mut out = Vec6::zeros();
+    if R == 0 {
+        return out;
+    }
+    for c in 0..C {
+        let col = &a[6 * c..6 * c + R];
+        let mut s = col[0] * x[0];
+        for r in 1..R {
+            s += col[r] * x[r];
+        }
+        out[c] = s;
+    }
+    out
+}
+
+/// `out[r] = Σ_{c<C} A[r, c] x[c]` for `r < R`, the rest zero: `A x` for an
+/// `A` whose columns from `C` on or `x`'s entries from `C` on are zero and
+/// of which only the first `R` outputs are read (D101).
+#[inline(always)]
+#[allow(clippy::needless_range_loop)] // index loops over compile-time sizes, as kernels/mat6.rs
+fn mk<const R: usize, const C: usize>(m: &Mat6, x: &Vec6) -> Vec6 {
+    let (a, x) = (m.as_slice(), x.as_slice());
+    let mut out = Vec6::zeros();
+    if C == 0 {
+        return out;
+    }
+    let o = out.as_mut_slice();
+    for r in 0..R {
+        o[r] = a[r] * x[0];
+    }
+    for c in 1..C {
+        for r in 0..R {
+            o[r] += a[6 * c + r] * x[c];
+        }
+    }
+    out
+}
+
+/// Calls `$f::<K>($args)` with `K` the piece's `k` (0–6) as a
+/// compile-time constant.
+macro_rules! with_k {
+    ($k:expr, $f:ident($($arg:expr),*)) => {
+        match $k {
+            0 => $f::<0>($($arg),*),
+            1 => $f::<1>($($arg),*),
+            2 => $f::<2>($($arg),*),
+            3 => $f::<3>($($arg),*),
+            4 => $f::<4>($($arg),*),
+            5 => $f::<5>($($arg),*),
+            _ => $f::<6>($($arg),*),
+        }
+    };
+}
+
 /// `uᵀ ∂τ/∂q` into `out_q` and `uᵀ ∂τ/∂q̇` into `out_qd` (all dim
 /// `n_dof`; `out_q[j] = Σᵢ uᵢ ∂τᵢ/∂q_j`) at the point of the last
 /// successful [`crate::inverse_dynamics_linearization_with`] or
@@ -236,21 +299,40 @@ pub fn inverse_dynamics_mass_product(
     Ok(())
 }
 
-/// [`inverse_dynamics_mass_product`] on one rod of a chain.
+/// A piece of [`chain_mass`]'s outward pass in its `K` directions.
+#[inline(always)]
+fn mass_outward<const K: usize>(w: &PieceWork, vj: &Vec6, a: &mut Vec6) -> Vec6 {
+    let out = mk::<K, K>(&w.blk_a, vj) + mk::<K, 6>(&w.rcv_m, a);
+    *a += mk::<6, K>(&w.s_world, vj);
+    out
+}
+
+/// A piece of [`chain_mass`]'s inward pass in its `K` directions.
+#[inline(always)]
+fn mass_inward<const K: usize>(w: &PieceWork, vj: &Vec6, d: &mut Vec6) -> Vec6 {
+    let out = trk::<6, K>(&w.s_world, d);
+    *d += trk::<K, 6>(&w.rcv_m, vj);
+    out
+}
+
+/// [`inverse_dynamics_mass_product`] on one rod of a chain, each piece's
+/// products in its basis's `k` directions (D101).
+#[inline(never)]
 fn chain_mass(rm: &RodModel, ws: &[PieceWork], v: &[f64], out: &mut [f64]) {
     let pieces = rm.spec.geometry.pieces();
     let mut a = Vec6::zeros();
     for (p, w) in pieces.iter().zip(ws) {
         let (o, k) = (rm.dof_offset + p.dof_offset, p.basis.dof());
         let vj = local(v, o, k);
-        add_local(out, o, k, &(w.blk_a * vj + w.rcv_m * a));
-        a += w.s_world * vj;
+        let x = with_k!(k, mass_outward(w, &vj, &mut a));
+        add_local(out, o, k, &x);
     }
     let mut d = Vec6::zeros();
     for (p, w) in pieces.iter().zip(ws).rev() {
         let (o, k) = (rm.dof_offset + p.dof_offset, p.basis.dof());
-        add_local(out, o, k, &w.s_world.tr_mul(&d));
-        d += w.rcv_m.tr_mul(&local(v, o, k));
+        let vj = local(v, o, k);
+        let x = with_k!(k, mass_inward(w, &vj, &mut d));
+        add_local(out, o, k, &x);
     }
 }
 
@@ -390,10 +472,47 @@ fn chain_jvp(rm: &RodModel, ws: &[PieceWork], a: &[f64], b: &[f64], out: &mut [f
     }
 }
 
+/// A piece of [`chain_vjp`]'s outward pass in its `K` directions: the
+/// diagonal blocks and the proximal pairings against the prefix sum `a`,
+/// then `a` advanced by the piece's `Ad S u`.
+#[inline(always)]
+fn vjp_outward<const K: usize>(w: &PieceWork, uj: &Vec6, a: &mut Vec6) -> (Vec6, Vec6) {
+    let vq = trk::<K, K>(&w.blk_q, uj) + trk::<6, K>(&w.dwq_world, a);
+    let vv = trk::<K, K>(&w.blk_v, uj) + trk::<6, K>(&w.dwv_world, a);
+    *a += mk::<6, K>(&w.s_world, uj);
+    (vq, vv)
+}
+
+/// A piece of [`chain_vjp`]'s inward pass in its `K` directions: the
+/// distal pairings against the suffix sums, then the sums advanced by the
+/// piece's `ℛᵀu`.
+#[inline(always)]
+fn vjp_inward<const K: usize>(
+    w: &PieceWork,
+    uj: &Vec6,
+    dead: bool,
+    sums: &mut [Vec6; 3],
+) -> (Vec6, Vec6) {
+    let [bm, bb, by] = sums;
+    let mut vq = trk::<6, K>(&w.src_wq, bm) + trk::<6, K>(&w.src_uq, bb);
+    if dead {
+        vq += trk::<6, K>(&w.s_world, by);
+    }
+    let vv = trk::<6, K>(&w.src_wv, bm) + trk::<6, K>(&w.src_uv, bb);
+    *bm += trk::<K, 6>(&w.rcv_m, uj);
+    *bb += trk::<K, 6>(&w.rcv_b, uj);
+    if dead {
+        *by += trk::<K, 6>(&w.rcv_y, uj);
+    }
+    (vq, vv)
+}
+
 /// The products on one rod of a chain (pieces `0 … N−1` base to tip):
 /// the diagonal blocks, the prefix sum `a_j = Σ_{i<j} Ad S_i u_i` against
 /// the columns `δW_j` (D82), the suffix sums `Σ_{i>j} ℛᵢᵀ u_i` against the
-/// sources `[w̄, u, Δ]_j` (D83).
+/// sources `[w̄, u, Δ]_j` (D83); each piece's products in its basis's `k`
+/// directions only (D101).
+#[inline(never)]
 fn chain_vjp(rm: &RodModel, ws: &[PieceWork], u: &[f64], out_q: &mut [f64], out_qd: &mut [f64]) {
     let pieces = rm.spec.geometry.pieces();
     let dead = has_dead_loads(rm);
@@ -402,29 +521,18 @@ fn chain_vjp(rm: &RodModel, ws: &[PieceWork], u: &[f64], out_q: &mut [f64], out_
     for (p, w) in pieces.iter().zip(ws) {
         let (o, k) = (rm.dof_offset + p.dof_offset, p.basis.dof());
         let uj = local(u, o, k);
-        let vq = w.blk_q.tr_mul(&uj) + w.dwq_world.tr_mul(&a);
-        let vv = w.blk_v.tr_mul(&uj) + w.dwv_world.tr_mul(&a);
+        let (vq, vv) = with_k!(k, vjp_outward(w, &uj, &mut a));
         add_local(out_q, o, k, &vq);
         add_local(out_qd, o, k, &vv);
-        a += w.s_world * uj;
     }
     // Inward: the distal pairings.
-    let (mut bm, mut bb, mut by) = (Vec6::zeros(), Vec6::zeros(), Vec6::zeros());
+    let mut sums = [Vec6::zeros(); 3];
     for (p, w) in pieces.iter().zip(ws).rev() {
         let (o, k) = (rm.dof_offset + p.dof_offset, p.basis.dof());
-        let mut vq = w.src_wq.tr_mul(&bm) + w.src_uq.tr_mul(&bb);
-        if dead {
-            vq += w.s_world.tr_mul(&by);
-        }
-        let vv = w.src_wv.tr_mul(&bm) + w.src_uv.tr_mul(&bb);
+        let uj = local(u, o, k);
+        let (vq, vv) = with_k!(k, vjp_inward(w, &uj, dead, &mut sums));
         add_local(out_q, o, k, &vq);
         add_local(out_qd, o, k, &vv);
-        let uj = local(u, o, k);
-        bm += w.rcv_m.tr_mul(&uj);
-        bb += w.rcv_b.tr_mul(&uj);
-        if dead {
-            by += w.rcv_y.tr_mul(&uj);
-        }
     }
 }
 

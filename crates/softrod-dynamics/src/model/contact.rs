@@ -10,7 +10,7 @@ use crate::model::pairs::PairWork;
 use crate::model::second::SecondWork;
 use nalgebra::{DMatrix, DVector, Matrix6xX};
 use softrod_kinematics::RodKinematics;
-use softrod_lie::{Mat3, Vec3, Vec6};
+use softrod_lie::{Mat3, PieceMaps, Pose, Vec3, Vec6};
 use softrod_mechanics::contact::{ContactSettings, Obstacle, contact_radius};
 
 /// Reference impact speed of the default stiffness (CT3) \[m/s\].
@@ -71,6 +71,15 @@ pub(crate) struct Sample {
     pub radius: f64,
     /// Mass the point stands for (its share of the rod) \[kg\].
     pub mass: f64,
+    /// The piece holding the point and its local abscissa there \[m\]
+    /// (`RodGeometry::locate(s)`, fixed with the model): what every
+    /// evaluation would otherwise search for again.
+    pub piece: usize,
+    pub x: f64,
+    /// The piece of the segment from this point to the next (`locate` of
+    /// the segment's midpoint, CT8's broadphase); the last point's is its
+    /// own piece.
+    pub segment_piece: usize,
 }
 
 /// The contact part of a [`Model`].
@@ -117,6 +126,7 @@ pub(crate) fn samples(spec: &crate::model::Rod) -> Vec<Sample> {
     }
     let last = s_list.len() - 1;
     s_list[last] = length;
+    let on_rod = |s: f64| g.locate(s).expect("a contact point lies on its rod");
     (0..s_list.len())
         .map(|i| {
             let lo = if i == 0 {
@@ -130,10 +140,19 @@ pub(crate) fn samples(spec: &crate::model::Rod) -> Vec<Sample> {
                 0.5 * (s_list[i] + s_list[i + 1])
             };
             let mid = 0.5 * (lo + hi);
+            let (piece, x) = on_rod(s_list[i]);
+            let segment_piece = if i == last {
+                piece
+            } else {
+                on_rod(0.5 * (s_list[i] + s_list[i + 1])).0
+            };
             Sample {
                 s: s_list[i],
                 radius: radius_at(s_list[i]),
                 mass: spec.properties.mass_per_length(mid) * (hi - lo),
+                piece,
+                x,
+                segment_piece,
             }
         })
         .collect()
@@ -297,6 +316,18 @@ pub(crate) struct ContactWork {
     pub anchors: Vec<Vec<Option<Vec3>>>,
     /// Stiffness states (CT15), indexed like `anchors`.
     pub holds: Vec<Vec<Option<Hold>>>,
+    /// Per rod of a tree model, the world pose of each contact point at
+    /// the state of the last evaluation (`frame_pose`'s bits, CT7), and
+    /// per piece the stretch `|ν|` of its strain: filled once per
+    /// evaluation, read by the obstacle test and the broadphase. Empty on
+    /// chain models (their kinematics hold the poses).
+    pub poses: Vec<Vec<Pose>>,
+    pub stretch: Vec<Vec<f64>>,
+    /// Per rod and piece of a tree model, the strain `ξ` at that state and
+    /// its rate-free `PieceMaps` (D4): what the closest-point iterations
+    /// of the pairs (CT8) evaluate the piece's exponential with.
+    pub strains: Vec<Vec<Vec6>>,
+    pub maps: Vec<Vec<PieceMaps>>,
     /// Rod–rod and self contact (CT8–CT11); `None` without them: no
     /// broadphase is built.
     pub pairs: Option<Box<PairWork>>,
@@ -385,6 +416,41 @@ impl ContactWork {
                 .iter()
                 .map(|s| vec![None; s.len() * n_obs])
                 .collect(),
+            poses: match model.tree {
+                Some(_) => model
+                    .contact
+                    .samples
+                    .iter()
+                    .map(|s| vec![Pose::identity(); s.len()])
+                    .collect(),
+                None => Vec::new(),
+            },
+            stretch: match model.tree {
+                Some(_) => model
+                    .rods
+                    .iter()
+                    .map(|r| vec![0.0; r.spec.geometry.pieces().len()])
+                    .collect(),
+                None => Vec::new(),
+            },
+            strains: match model.tree {
+                Some(_) => model
+                    .rods
+                    .iter()
+                    .map(|r| vec![Vec6::zeros(); r.spec.geometry.pieces().len()])
+                    .collect(),
+                None => Vec::new(),
+            },
+            maps: match model.tree {
+                Some(_) => model
+                    .rods
+                    .iter()
+                    .map(|r| {
+                        vec![PieceMaps::new(&Vec6::zeros(), None); r.spec.geometry.pieces().len()]
+                    })
+                    .collect(),
+                None => Vec::new(),
+            },
             pairs: PairWork::new(model).map(Box::new),
             second: Box::new(SecondWork::new(model.n_dof())),
             slides: Vec::new(),

@@ -484,6 +484,8 @@ pub(crate) struct ClosureWork {
     /// prescribed coordinates `J_p` (m×n_p), and a copy of `q̈` (n).
     pub jac_p: DMatrix<f64>,
     pub qdd: DVector<f64>,
+    /// The last correction of a projection onto the closures (n, D121).
+    pub step: DVector<f64>,
 }
 
 impl ClosureWork {
@@ -492,6 +494,7 @@ impl ClosureWork {
             solve: vec![SolveNode::default(); nodes],
             jac_p: DMatrix::zeros(m, n_p),
             qdd: DVector::zeros(if n_p > 0 { n } else { 0 }),
+            step: DVector::zeros(n),
             rows: ConstraintRows::new(m, n),
             y: DMatrix::zeros(n, m),
             a: DMatrix::zeros(m, m),

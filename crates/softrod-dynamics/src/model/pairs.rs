@@ -181,6 +181,11 @@ pub(crate) struct PairWork {
     pub arcs: Vec<Vec<f64>>,
     /// The broadphase's segments, sorted along x each evaluation.
     pub boxes: Vec<SegmentBox>,
+    /// The boxes' lowest coordinate along the sweep's axis and their
+    /// index, sorted (when the sweep runs along y or z), and the candidate
+    /// pairs `(i, j)`, `i < j`, of the boxes' indices.
+    pub order: Vec<(f64, u32)>,
+    pub candidates: Vec<(u32, u32)>,
     /// The touching pairs of the last evaluation.
     pub active: Vec<PairActive>,
     /// The generalized force of the pairs alone.
@@ -227,6 +232,8 @@ impl PairWork {
                 .map(|s| vec![0.0; s.len().saturating_sub(1)])
                 .collect(),
             boxes: Vec::with_capacity(n_seg),
+            order: Vec::with_capacity(n_seg),
+            candidates: Vec::with_capacity(4 * n_seg),
             active: Vec::with_capacity(64),
             tau: DVector::zeros(model.n_dof()),
             anchors: Vec::with_capacity(64),

@@ -763,6 +763,26 @@ impl<T: Tableau, Sys: SecondOrderSystem> Stepper<SecondOrderProblem<'_, Sys>> fo
         self.s.quintic_dense(t, out);
     }
 
+    /// Projects `(q, v)` (docs/theory.md D121) and, if they moved, takes
+    /// the step-start acceleration there; the Jacobian and its
+    /// factorization are kept, as for [`forces_changed`](Self::forces_changed)
+    /// (the projection moves the state by about the step's constraint
+    /// drift, far less than a step).
+    fn project(
+        &mut self,
+        p: &mut SecondOrderProblem<'_, Sys>,
+        stats: &mut Stats,
+    ) -> Result<bool, IntegrateError> {
+        let (t, h) = (self.s.t, self.s.h);
+        let moved = p
+            .project(t, &mut self.q, &mut self.v)
+            .map_err(sys_err(t, h, "projection"))?;
+        if moved {
+            self.forces_changed(p, stats)?;
+        }
+        Ok(moved)
+    }
+
     /// Friction anchors or healed offsets only (CT25 (a)): the step-start
     /// acceleration again, the Jacobian and its factorization kept — they
     /// are refreshed when the Newton iteration's own tests ask (a stale

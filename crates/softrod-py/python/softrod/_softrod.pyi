@@ -162,6 +162,7 @@ class Settings:
         error_control: bool | None = None,
         linearly_implicit: bool | None = None,
         steps_to_outputs: bool | None = None,
+        project_closures: bool | None = None,
     ) -> Settings: ...
     def replace(
         self,
@@ -174,6 +175,7 @@ class Settings:
         error_control: bool | None = None,
         linearly_implicit: bool | None = None,
         steps_to_outputs: bool | None = None,
+        project_closures: bool | None = None,
     ) -> Settings:
         """A copy with the named keywords changed; the rest (and the scene's duration and
         energy tolerance) kept."""
@@ -193,6 +195,8 @@ class Settings:
     def linearly_implicit(self) -> bool: ...
     @property
     def steps_to_outputs(self) -> bool: ...
+    @property
+    def project_closures(self) -> bool: ...
 
 @final
 class Energies:
@@ -596,6 +600,7 @@ class Simulation:
         error_control: bool | None = None,
         linearly_implicit: bool | None = None,
         steps_to_outputs: bool | None = None,
+        project_closures: bool | None = None,
         q0: ArrayLike | None = None,
         qdot0: ArrayLike | None = None,
         controller: _Controller | None = None,

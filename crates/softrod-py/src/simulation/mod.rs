@@ -1159,7 +1159,7 @@ impl Simulation {
     ///
     /// Keywords override the run settings for this call only:
     /// `integrator`, `rtol`, `atol`, `dt`, `output_every`, `error_control`,
-    /// `linearly_implicit`, `steps_to_outputs` (see `softrod.Settings`); `q0`, `qdot0`
+    /// `linearly_implicit`, `steps_to_outputs`, `project_closures` (see `softrod.Settings`); `q0`, `qdot0`
     /// (n_dof,) override the initial state.
     ///
     /// Without `controller` this is the facade's `Simulation::simulate`,
@@ -1179,7 +1179,8 @@ impl Simulation {
     /// raised by the controller ends the run and propagates.
     #[pyo3(signature = (duration = None, *, output_every = None, integrator = None, rtol = None,
                         atol = None, dt = None, error_control = None, linearly_implicit = None,
-                        steps_to_outputs = None, q0 = None, qdot0 = None, controller = None, control_every = None))]
+                        steps_to_outputs = None, project_closures = None, q0 = None, qdot0 = None, controller = None,
+                        control_every = None))]
     #[allow(clippy::too_many_arguments)]
     fn simulate(
         &mut self,
@@ -1193,6 +1194,7 @@ impl Simulation {
         error_control: Option<bool>,
         linearly_implicit: Option<bool>,
         steps_to_outputs: Option<bool>,
+        project_closures: Option<bool>,
         q0: Option<&Bound<'_, PyAny>>,
         qdot0: Option<&Bound<'_, PyAny>>,
         controller: Option<Py<PyAny>>,
@@ -1209,6 +1211,7 @@ impl Simulation {
             error_control,
             linearly_implicit,
             steps_to_outputs,
+            project_closures,
         )?;
         let start = run::RunStart {
             q0,

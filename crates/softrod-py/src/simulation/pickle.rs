@@ -43,6 +43,7 @@ impl Simulation {
         settings.set_item("error_control", s.error_control)?;
         settings.set_item("linearly_implicit", s.linearly_implicit)?;
         settings.set_item("steps_to_outputs", s.steps_to_outputs)?;
+        settings.set_item("project_closures", s.project_closures)?;
         settings.set_item("duration", s.duration)?;
         settings.set_item("energy_tolerance", s.energy_tolerance)?;
         d.set_item("settings", settings)?;
@@ -120,6 +121,10 @@ impl Simulation {
             linearly_implicit: get("linearly_implicit")?.extract()?,
             // Absent from pickles written before the setting existed.
             steps_to_outputs: match st.get_item("steps_to_outputs")? {
+                Some(v) => v.extract()?,
+                None => false,
+            },
+            project_closures: match st.get_item("project_closures")? {
                 Some(v) => v.extract()?,
                 None => false,
             },

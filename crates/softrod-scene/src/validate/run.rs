@@ -100,6 +100,13 @@ impl Ctx<'_> {
                 format!("steps_to_outputs only applies to adaptive steps ({integrator} here has fixed steps): ignored"),
             );
         }
+        let project_closures = r.project_closures.unwrap_or(d.project_closures);
+        if project_closures && !integrator.projects_state() {
+            self.warn(
+                "run.project_closures",
+                format!("project_closures only applies to esdirk and esdirk5 ({integrator} here): ignored"),
+            );
+        }
         if r.dt.is_some() && dt > duration {
             self.warn(
                 "run.dt",
@@ -135,6 +142,7 @@ impl Ctx<'_> {
             error_control,
             linearly_implicit,
             steps_to_outputs,
+            project_closures,
             energy_tolerance,
             shape_points_per_piece,
             memory_limit_gib,

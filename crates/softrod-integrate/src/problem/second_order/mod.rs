@@ -361,6 +361,18 @@ impl<'a, S: SecondOrderSystem> SecondOrderProblem<'a, S> {
     }
 
     /// `qdd = a(t, q, q̇)` without splitting a first-order state.
+    /// [`SecondOrderSystem::project`] of the user's system.
+    pub(crate) fn project(
+        &mut self,
+        t: f64,
+        q: &mut DVector<f64>,
+        qd: &mut DVector<f64>,
+    ) -> Result<bool, SystemError> {
+        self.sys
+            .project(t, q, qd)
+            .map_err(|e| Box::new(e) as SystemError)
+    }
+
     pub(crate) fn accel(
         &mut self,
         t: f64,
