@@ -56,24 +56,26 @@ def test_the_solver_is_registered_and_scales_its_steps():
 
 
 def test_the_quasi_static_method_follows_the_models_structure():
-    """Quasi-static runs take ESDIRK, on open chains and on loop closures (a
-    far end pinned, clamped or driven) alike, but Radau IIA where a model
-    has both loop closures and contact; by the scenario's structure alone.
-    Dynamic runs take generalized-alpha. The catenary test below checks
-    ESDIRK's settle on a closed model."""
+    """Quasi-static runs take ESDIRK with steps ending on the frames, on
+    open chains and on loop closures (a far end pinned, clamped or driven)
+    alike, and project the state onto the closures where the model has them
+    (docs/theory.md D121); by the scenario's structure alone. Dynamic runs
+    take generalized-alpha. The catenary test below checks ESDIRK's settle
+    on a closed model, the twist and crossing tests its runs with contact."""
     solver = softrod_solver()
-    method = {name: solver.numerics(registry.load_experiment(name).scenario)["integrator"]
-              for name in ("cantilever", "catenary", "twist", "crossing", "capstan", "pile",
-                           "pendulum")}
-    assert method == {"cantilever": "esdirk", "catenary": "esdirk", "twist": "radau5",
-                      "crossing": "radau5", "capstan": "esdirk", "pile": "esdirk",
-                      "pendulum": "generalized-alpha"}
+    names = ("cantilever", "catenary", "twist", "crossing", "capstan", "pile", "pendulum")
+    numerics = {name: solver.numerics(registry.load_experiment(name).scenario)
+                for name in names}
+    assert {name: n["integrator"] for name, n in numerics.items()} == {
+        "cantilever": "esdirk", "catenary": "esdirk", "twist": "esdirk", "crossing": "esdirk",
+        "capstan": "esdirk", "pile": "esdirk", "pendulum": "generalized-alpha"}
+    assert {name for name, n in numerics.items() if n.get("project_closures")} == {
+        "catenary", "twist", "crossing"}
     # What the runner records is that rule.
     settings = solver.settings(registry.load_experiment("catenary").scenario, n_elements=4,
                                n_frames=3)
-    assert settings["integrator"] == "esdirk"
-    assert "Radau IIA on models with both loop closures and contact" in (
-        settings["integrator_rule"])
+    assert settings["integrator"] == "esdirk" and settings["project_closures"]
+    assert "loop closures projected after every step" in settings["integrator_rule"]
 
 
 def test_cantilever_against_euler_bernoulli():

@@ -22,6 +22,7 @@ use super::tree::{Exit, TreeWork};
 use crate::algorithms::check_vec;
 use crate::error::DynamicsError;
 use crate::forces::linearized::has_dead_loads;
+use crate::kernels::chol::with_k;
 use crate::model::tree::{NodeKind, Tree};
 use crate::model::{Model, RodModel};
 use softrod_lie::{Mat6, Vec6, coad};
@@ -89,22 +90,6 @@ fn mk<const R: usize, const C: usize>(m: &Mat6, x: &Vec6) -> Vec6 {
         }
     }
     out
-}
-
-/// Calls `$f::<K>($args)` with `K` the piece's `k` (0–6) as a
-/// compile-time constant.
-macro_rules! with_k {
-    ($k:expr, $f:ident($($arg:expr),*)) => {
-        match $k {
-            0 => $f::<0>($($arg),*),
-            1 => $f::<1>($($arg),*),
-            2 => $f::<2>($($arg),*),
-            3 => $f::<3>($($arg),*),
-            4 => $f::<4>($($arg),*),
-            5 => $f::<5>($($arg),*),
-            _ => $f::<6>($($arg),*),
-        }
-    };
 }
 
 /// `uᵀ ∂τ/∂q` into `out_q` and `uᵀ ∂τ/∂q̇` into `out_qd` (all dim

@@ -7,7 +7,10 @@
 
 use softrod_lie::{Mat6, Vec6};
 
-macro_rules! dispatch {
+/// Calls `$f::<K>($args)` with `K` the runtime `k` (0–6) as a
+/// compile-time constant (also the derivatives' per-piece products,
+/// `derivatives::vjp`).
+macro_rules! with_k {
     ($k:expr, $f:ident($($arg:expr),*)) => {
         match $k {
             0 => $f::<0>($($arg),*),
@@ -20,12 +23,13 @@ macro_rules! dispatch {
         }
     };
 }
+pub(crate) use with_k;
 
 /// In-place Cholesky `m = L Lᵀ` of the leading `k×k` block (`L` written to
 /// the lower triangle). Returns `false` if a pivot is not positive (or NaN).
 #[inline(always)]
 pub(crate) fn cholesky_k(m: &mut Mat6, k: usize) -> bool {
-    dispatch!(k, cholesky_n(m))
+    with_k!(k, cholesky_n(m))
 }
 
 #[inline(always)]
@@ -58,7 +62,7 @@ fn cholesky_n<const K: usize>(m: &mut Mat6) -> bool {
 /// triangular solve, column operations on whole 6-vectors.
 #[inline(always)]
 pub(crate) fn right_solve_lt(l: &Mat6, k: usize, w: &mut Mat6) {
-    dispatch!(k, right_solve_lt_n(l, w))
+    with_k!(k, right_solve_lt_n(l, w))
 }
 
 #[inline(always)]
@@ -75,7 +79,7 @@ fn right_solve_lt_n<const K: usize>(l: &Mat6, w: &mut Mat6) {
 /// `b ← L⁻¹ b` in the leading `k` entries.
 #[inline(always)]
 pub(crate) fn forward_sub(l: &Mat6, k: usize, b: &mut Vec6) {
-    dispatch!(k, forward_sub_n(l, b))
+    with_k!(k, forward_sub_n(l, b))
 }
 
 #[inline(always)]
@@ -92,7 +96,7 @@ fn forward_sub_n<const K: usize>(l: &Mat6, b: &mut Vec6) {
 /// `b ← L⁻ᵀ b` in the leading `k` entries.
 #[inline(always)]
 pub(crate) fn backward_sub(l: &Mat6, k: usize, b: &mut Vec6) {
-    dispatch!(k, backward_sub_n(l, b))
+    with_k!(k, backward_sub_n(l, b))
 }
 
 #[inline(always)]

@@ -62,21 +62,21 @@ declares (``settings`` states them):
   error-controlled implicit method at ``rtol = RTOL_QUASI_STATIC *
   time_step_scale**4`` (the steps of both methods below scale as the
   fourth root of the tolerance) and ``atol = ATOL_QUASI_STATIC``: the
-  tolerances bound only the path to the equilibrium. The method follows
-  the model's structure
-  (:func:`_closed_with_contact`): ESDIRK4(3), softrod's default (Newton on
-  the exact Jacobian: the O(n) structured solve on open chains, the dense
-  constrained one on loop closures), on every model but those with both
-  loop closures (a pinned, clamped or driven far end) and contact, which
-  take Radau IIA order 5. ESDIRK's steps end on the output frames
-  (``steps_to_outputs``, docs/theory-derivatives.md CD10): before, its quintic Hermite between
-  steps of up to 1.4 s left the catenary's sag wandering by +-40 um (a
-  settling residual of 3e-5 against Radau's 2e-7 rod lengths per second),
-  which kept every closed model on Radau IIA, 3 to 7 times slower. With
-  contact on loop closures ESDIRK at these tolerances still lets a loop
-  come apart (a closure residual above 1e-3 of the rod: the crossing's at
-  t = 0.1 s, the twist's at self contact, t = 15.4 s); why is open
-  (docs/performance.md). Damping: linear drag proportional to mass (force
+  tolerances bound only the path to the equilibrium: ESDIRK4(3),
+  softrod's default (Newton on the exact Jacobian: the O(n) structured
+  solve on open chains, the dense constrained one on loop closures), its
+  steps ending on the output frames (``steps_to_outputs``,
+  docs/theory-derivatives.md CD10: before, its quintic Hermite between
+  steps of up to 1.4 s left the catenary's sag wandering by +-40 um), and
+  on models with loop closures (a pinned, clamped or driven far end) the
+  state projected onto the closures after every step
+  (``project_closures``, docs/theory.md D121; :func:`_closed`): held by
+  the constraint stabilization alone, the crossing's loops came apart at
+  t = 0.1 s and the twist's at self contact (t = 15.4 s), which kept
+  models with both loop closures and contact on Radau IIA, hours on the
+  crossing
+  (docs/performance.md, "Closed chains: projection onto the closures").
+  Damping: linear drag proportional to mass (force
   ``-c_t v``, moment ``-c_r w`` per unit length, ``c_t = 2 omega_1 rho
   A``, ``c_r = 2 omega_1 rho I``), critical for the slowest mode
   ``omega_1 = Scenario.slowest_frequency()``: the rule of the PyElastica,
@@ -502,12 +502,10 @@ def _parts(scenario: Scenario, n_elements: int, damping_rate: float) -> list[_Pa
     ]
 
 
-def _closed_with_contact(scenario: Scenario) -> bool:
+def _closed(scenario: Scenario) -> bool:
     """Whether the scenario's model has loop closures (a rod whose far end
-    is pinned, clamped or driven, see :func:`_build`) and contact (obstacles,
-    rods that can touch each other or themselves)."""
-    closed = any(r.end is not EndCondition.FREE for r in scenario.rods)
-    return closed and bool(scenario.obstacles or _touching(scenario))
+    is pinned, clamped or driven, see :func:`_build`)."""
+    return any(r.end is not EndCondition.FREE for r in scenario.rods)
 
 
 def _build_key(scenario: Scenario, n_elements: int) -> tuple:
@@ -548,16 +546,17 @@ class SoftrodSolver:
         """The integrator and its settings for ``scenario`` (keywords of
         ``softrod.Simulation.simulate``)."""
         if scenario.quasi_static:
-            integrator = "radau5" if _closed_with_contact(scenario) else "esdirk"
             return {
-                "integrator": integrator,
+                "integrator": "esdirk",
                 "rtol": RTOL_QUASI_STATIC * self.time_step_scale**STEP_ORDER,
                 "atol": ATOL_QUASI_STATIC,
                 # A settle's ESDIRK steps outgrow the decay of the damped
                 # modes, and its quintic Hermite dense output across them
                 # does not follow that decay (docs/theory-derivatives.md
                 # CD10): the frames are step ends instead.
-                "steps_to_outputs": integrator == "esdirk",
+                "steps_to_outputs": True,
+                # Loops held exactly at every step end (docs/theory.md D121).
+                "project_closures": _closed(scenario),
             }
         period = 2.0 * np.pi / scenario.slowest_frequency()
         return {
@@ -587,9 +586,9 @@ class SoftrodSolver:
             fit[list(part.rods)] = part.fit_error
         return {
             **self.numerics(scenario),
-            **({"integrator_rule": "quasi-static: ESDIRK4(3) (steps ending on the output "
-                "frames), Radau IIA on models with both loop closures and contact (the "
-                "adapter's docstring says why)"}
+            **({"integrator_rule": "quasi-static: ESDIRK4(3), steps ending on the output "
+                "frames, loop closures projected after every step (the adapter's docstring "
+                "says why)"}
                if scenario.quasi_static else {}),
             "pieces_per_rod": n_elements,
             "strains": "all",
