@@ -40,14 +40,15 @@ const MAX_HALVINGS: usize = 30;
 /// Projects `(q, q̇)` onto the closures at time `t` in the metric of the
 /// mass matrix (docs/theory.md D121):
 /// `q ← q − M⁻¹Jᵀ(J M⁻¹ Jᵀ)⁻¹ φ(q)` (Newton, `J = ∂φ/∂q` exact, `M` at
-/// each iterate) until every closure's residual norm (D66) is at most
+/// each iterate; a correction that does not decrease the largest norm is
+/// halved) until every closure's residual norm (D66) is at most
 /// `tol` \[m\], then `q̇ ← q̇ − M⁻¹J_vᵀ(J_v M⁻¹ J_vᵀ)⁻¹(J_v q̇ + J_p q̇_p)`,
 /// so the closures' velocity rows vanish with the prescribed joints' motion
 /// at `t` (D59). Both are the smallest changes in kinetic-energy measure:
 /// the closest state on the constraint manifold that the motion could have
 /// reached. Redundant rows are dropped as in the constrained dynamics (the
 /// pivoted Cholesky of D68). `M⁻¹` is the tree's O(N) factorization
-/// (`m` solves per iteration), so a projection costs a few inverse
+/// (`m` solves per iteration), so a projection costs a few forward
 /// dynamics. A model without closures is left alone. Allocates nothing
 /// (the closure workspace of `data`; the multipliers that
 /// [`closure_multipliers`](crate::closure_multipliers) reports are those of
