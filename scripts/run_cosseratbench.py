@@ -111,18 +111,6 @@ EXPLAIN_TIME = {
 #: whose softrod runs this report leaves out, with the reason measured; run
 #: them with --with-slow.
 NOT_RUN = {
-    "crossing": (
-        "not run in this report: the adapter expresses it (two ropes pinned by ball "
-        "closures, rod-rod contact on closed models, docs/theory-contact.md CT16) and "
-        "softrod runs it (the Python suite runs it at 5 pieces per rope against the "
-        "elastica: lift error 17.7 %, 2.7 % at 10 pieces), but far too slowly at its "
-        "51 pieces. Measured (release build, the shared 2-core VM): building it takes "
-        "22 s, and the first 0.08 s of its 8 s take 122 s with the quasi-static rule's "
-        "Radau IIA on closed chains (477 steps of 1.7e-4 s, 25 rejected, 233 dense "
-        "Jacobians and 343 dense factorizations of the two ropes' ~620 coordinates "
-        "plus closures) while the upper rope drapes onto the lower, so the whole run "
-        "would take hours unless the steps grow once the ropes settle (not measured)."
-    ),
     "capstan": (
         "not run in this report: the adapter expresses it (contact tables, "
         "docs/theory-contact.md) and softrod runs it, but far too slowly. Measured at its "
