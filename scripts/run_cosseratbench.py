@@ -11,6 +11,7 @@ import json
 import os
 import platform
 import subprocess
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -70,6 +71,17 @@ EXPLAIN = {
         "larger is not established)."
     ),
 }
+#: Why softrod's rods pass further into each other (or into an obstacle) than
+#: PyElastica's, keyed by (experiment, observation).
+EXPLAIN_OVERLAP = {
+    ("twist", "max_rod_overlap"): (
+        "the six rods run as six simulations (one model of all six would have dense "
+        "Newton matrices of 1806 coordinates, docs/performance.md), so they cannot touch "
+        "one another: the plectoneme of a buckled rod grows into its neighbour, which "
+        "cosseratbench's measure counts (it takes every pair of rods). Within each rod "
+        "(self contact) the deepest overlap of this run is {self_overlap:.2g} radii."
+    ),
+}
 #: Why softrod's wall time is longer than PyElastica's where it is.
 EXPLAIN_TIME = {
     "catenary": (
@@ -83,27 +95,15 @@ EXPLAIN_TIME = {
         "reachable from Python."
     ),
     "twist": (
-        "each rod is a closed chain (a weld to a carriage on a prescribed drive), "
-        "with the dense Radau IIA Newton matrices of the catenary; the six rods "
-        "run as six simulations one after the other, and the rod that buckles costs "
-        "nearly all of it: measured alone after this report's run (same build, the shared "
-        "machine), the rod held at 1.06 of the critical twist took 199 s (3068 steps, 395 "
-        "rejected, 1198 dense Jacobians, 2591 factorizations) as it grows sideways, the "
-        "rod at 0.96 8.2 s (177 steps). The report of commit 36f46bc timed all six at "
-        "47.1 s with the same rule and the same critical_twist_error (9.081e-4), but "
-        "without self contact: softrod refused contact on models with loop closures "
-        "then, and the adapter left it out (its settings said so); softrod runs it "
-        "since commit 54f8fa5. Measured with softrod's CLI on that rod's scene: without "
-        "contact 289 steps (109 rejected, 126 Jacobians) at 36f46bc and b29b4da alike; "
-        "with self contact the path is the same to t = 15.2 s, where the rod, wrapping "
-        "into a plectoneme, first reaches itself, and the remaining 0.8 s take at least "
-        "2779 of the 3068 steps. Its plectoneme then passes through the rod at 1.04 "
-        "(cosseratbench's max_rod_overlap, 1.48 radii): the rods run as separate "
-        "simulations (one model of all six would have dense Newton matrices of 1806 "
-        "coordinates, docs/performance.md). ESDIRK (the rule on models without both "
-        "closures and contact) fails here: a rod's loop comes apart (closure "
-        "residual 1.8 mm at t = 15.4 s, which softrod's watch stops). PyElastica's "
-        "explicit step costs 26 microseconds."
+        "each rod is a closed chain (a weld to a carriage on a prescribed drive) with "
+        "self contact, run by the quasi-static rule's ESDIRK with its loop projected "
+        "back onto the weld after every step (docs/theory.md D121) and dense Newton "
+        "matrices (as the catenary's); the six rods run as six simulations one after the "
+        "other, and the rods that buckle cost most of it: the rod held at 1.06 of the "
+        "critical twist took 63.5 CPU s alone (commit 41ec6b8; 112.7 s with Radau IIA, the "
+        "rule on closed models with contact before the projection) as it grows sideways "
+        "and wraps into a plectoneme that reaches itself. PyElastica's explicit step "
+        "costs 26 microseconds."
     ),
 }
 
@@ -293,6 +293,24 @@ def bending_numbers() -> dict:
             "softrod_vs_elastica": abs((sag - elastica) / elastica)}
 
 
+def self_overlap(name: str, variant: dict, summary: dict) -> float:
+    """cosseratbench's max_rod_overlap of each rod with itself alone (the largest):
+    what self contact let through, without the pairs of different rods."""
+    from cosseratbench.experiment import max_rod_overlap
+
+    scenario = registry.load_experiment(name).scenario_for(
+        **{k: v for k, v in variant["varied"].items() if k in variant["values"]})
+    traj = Trajectory.load(Path(summary["_dir"]) / "trajectory.npz")
+    worst = 0.0
+    for rod, positions, directors in zip(scenario.rods, traj.positions, traj.directors):
+        alone = replace(scenario, rods=(rod,))
+        one = Trajectory(traj.times, (positions,), (directors,))
+        value = max_rod_overlap(alone, one)
+        if value == value:
+            worst = max(worst, value)
+    return worst
+
+
 def plot(name: str, variant: dict, runs_: list[dict], path: Path) -> bool:
     """The final shapes beside the reference, and the motion over time."""
     trajectories = {}
@@ -442,6 +460,14 @@ def write_report(results: Path, report: Path, images: Path, names: list[str], *,
                     if "{bending" in why:
                         why = why.format(**bending_numbers())
                     notes.append(f"- `{metric}`: softrod {fmt(a)}, PyElastica {fmt(b)}: {why}")
+            for key in ("max_penetration", "max_rod_overlap"):
+                a = (ours.get("observations") or {}).get(key)
+                b = (theirs.get("observations") or {}).get(key)
+                if a is not None and b is not None and a > b and a > 1e-3:
+                    why = EXPLAIN_OVERLAP.get((name, key), "not explained yet.")
+                    if "{self_overlap" in why:
+                        why = why.format(self_overlap=self_overlap(name, variant0, ours))
+                    notes.append(f"- `{key}` (radii): softrod {fmt(a)}, PyElastica {fmt(b)}: {why}")
             if ours["wall_time"] > theirs["wall_time"] / 10:
                 why = EXPLAIN_TIME.get(name, "")
                 notes.append(f"- wall time: softrod {ours['wall_time']:.3g} s, PyElastica "
