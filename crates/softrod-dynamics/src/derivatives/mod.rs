@@ -155,7 +155,11 @@ impl IdDerivatives {
                 .rods()
                 .iter()
                 .map(|r| match &r.planar {
-                    Some(pr) => pr.pieces.iter().map(|_| planar::PlanarWork::new()).collect(),
+                    Some(pr) => pr
+                        .pieces
+                        .iter()
+                        .map(|_| planar::PlanarWork::new())
+                        .collect(),
                     None => Vec::new(),
                 })
                 .collect(),

@@ -66,7 +66,13 @@ pub(crate) fn pairs(rm: &RodModel, work: &mut IdDerivatives, r: usize) {
 
 /// `uᵀ∂τ/∂q`, `uᵀ∂τ/∂q̇` of one planar rod, added to `out_q`, `out_qd`
 /// (as [`super::vjp`]'s chain products, D82–D83).
-pub(crate) fn vjp(rm: &RodModel, ws: &[PlanarWork], u: &[f64], out_q: &mut [f64], out_qd: &mut [f64]) {
+pub(crate) fn vjp(
+    rm: &RodModel,
+    ws: &[PlanarWork],
+    u: &[f64],
+    out_q: &mut [f64],
+    out_qd: &mut [f64],
+) {
     let pieces = rm.spec.geometry.pieces();
     let dead = has_dead_loads(rm);
     let mut a = Vec3::zeros();
