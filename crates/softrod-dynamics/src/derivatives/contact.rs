@@ -140,11 +140,13 @@ fn tree(
     }
 }
 
-/// `∂τ_c/∂q −= J_wᵀ ∂f/∂q + f·∂²p/∂q∂q`, `∂τ_c/∂q̇ −= J_wᵀ ∂f/∂q̇` of one
-/// point against a world obstacle (CT6, CT12), `gather` in the order of
-/// the path's sorted coordinates (`path.sorted`). Each entry first loses
+/// Subtracts one point's `∂τ_c/∂q = J_wᵀ ∂f/∂q + f·∂²p/∂q∂q` and
+/// `∂τ_c/∂q̇ = J_wᵀ ∂f/∂q̇` (a world obstacle: no carrier, CT6, CT12) from
+/// the inverse dynamics' `dq`, `dqd`; `gather` in the order of the path's
+/// sorted coordinates (`path.sorted`). Each entry first loses
 /// its rank term, then gains the geometric one, as
-/// [`PointPath::add_hessian_contraction`] after the rank pass would.
+/// [`second_path::PointPath::add_hessian_contraction`] after the rank pass
+/// would.
 fn product_and_hessian(
     path: &mut second_path::PointPath,
     gather: &[Gathered],
