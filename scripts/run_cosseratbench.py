@@ -84,6 +84,16 @@ EXPLAIN_OVERLAP = {
 }
 #: Why softrod's wall time is longer than PyElastica's where it is.
 EXPLAIN_TIME = {
+    "capstan": (
+        "the rope's ~150 touching points are stiff penalty contacts with anchored, "
+        "sticking friction (docs/theory-contact.md): the quasi-static rule's ESDIRK takes "
+        "steps of 1.1 ms on average (1770 over the 2 s, 508 rejected, measured with "
+        "softrod's CLI on the adapter's scene at overhang 0.95), each with Newton "
+        "iterations on the O(n) structured matrix re-linearized at every iterate (CT27) "
+        "and, where that fails, a dense exact Jacobian (132 over the run): about 22 ms "
+        "of CPU a step against PyElastica's explicit 0.22 ms (docs/performance.md, "
+        "\"Contact-heavy scenes\")."
+    ),
     "catenary": (
         "a cable pinned at both ends is a closed chain for softrod (a spherical joint "
         "and a ball closure), whose Newton matrices are dense (O(n^3) in the coordinates, "
@@ -111,33 +121,18 @@ EXPLAIN_TIME = {
 #: whose softrod runs this report leaves out, with the reason measured; run
 #: them with --with-slow.
 NOT_RUN = {
-    "capstan": (
-        "not run in this report: the adapter expresses it (contact tables, "
-        "docs/theory-contact.md) and softrod runs it, but far too slowly. Measured at its "
-        "100 pieces (overhang 0.95, release build, the shared 2-core VM): fitting the "
-        "wrapped start takes 21 s (139 s before the centreline fit stopped at its "
-        "stationary point); 0.004 s of the 2 s take 22 s with the quasi-static rule's "
-        "Radau IIA (73 steps of 5.5e-5 s, 3 rejected, a Jacobian and a dense factorization "
-        "of the 606-coordinate system every step, 232 Newton iterations), 19 s with ESDIRK "
-        "(94 steps, 96 rejected, 92 exact dense Jacobians after its structured matrix "
-        "failed, 1633 Newton iterations), and 21 s with Radau at atol 1e-3 (44 steps of "
-        "9e-5 s): the step size is what is small, and the tolerance hardly moves it (at "
-        "rtol = atol = 0.1: 30 steps of 1.3e-4 s and 23 rejected, 14 s), so the Newton "
-        "iteration of the contact, not the error control, bounds it; it is an eleventh to a "
-        "fifth of the contact's period (sqrt(k/m) = 10 v0/r = 1e4 rad/s for this 1 mm "
-        "rope, CT3). 2 s would take about three hours; the rope holds on that "
-        "stretch (light end risen 0 m, penetration 3.5e-6 m = 0.35 % of r). At 20 pieces "
-        "the fitted start cannot be lifted clear of the cylinder (it sinks 2.3e-5 m after "
-        "4 lifts), so the adapter refuses it."
-    ),
     "pile": (
         "not run in this report: the adapter expresses it (contact tables, "
         "docs/theory-contact.md) and softrod runs it, but far too slowly. Measured at its "
-        "100 pieces (release build, the shared 2-core VM, before the analytic contact "
-        "Jacobians and not measured since): 0.3 s of its 4.45 s took 252 s (781 Radau IIA "
-        "steps, 27 rejected, 0.32 s per step, the dense ~600-coordinate system factored "
-        "every step) after 36-51 s to build; the capstan's measurements (there) show the "
-        "same small steps with the analytic Jacobians."
+        "100 pieces with the adapter's rule (ESDIRK, steps ending on the output frames; "
+        "softrod's CLI on the adapter's scene, release build, the shared 2-core VM): the "
+        "first 0.3 s of its 4.45 s (the rope falling, its tip landing) take 39 CPU s, the "
+        "first 1.3 s took 1094 CPU s (5230 steps, 5267 rejected, 3921 dense Jacobians of "
+        "the 600 coordinates): about 1000 CPU s per simulated second once the rope lies "
+        "on the floor, so the whole run would take more than an hour. The steps (0.22 ms "
+        "on average, about as many rejected as accepted) are limited by the Newton "
+        "iteration at the touching points, and most fall back on the exact dense "
+        "Jacobian, whose contact terms and LU take about 70 % of the time (docs/performance.md, \"Contact-heavy scenes\")."
     ),
 }
 
