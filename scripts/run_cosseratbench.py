@@ -11,6 +11,7 @@ import json
 import os
 import platform
 import subprocess
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -70,8 +71,29 @@ EXPLAIN = {
         "larger is not established)."
     ),
 }
+#: Why softrod's rods pass further into each other (or into an obstacle) than
+#: PyElastica's, keyed by (experiment, observation).
+EXPLAIN_OVERLAP = {
+    ("twist", "max_rod_overlap"): (
+        "the six rods run as six simulations (one model of all six would have dense "
+        "Newton matrices of 1806 coordinates, docs/performance.md), so they cannot touch "
+        "one another: the plectoneme of a buckled rod grows into its neighbour, which "
+        "cosseratbench's measure counts (it takes every pair of rods). Within each rod "
+        "(self contact) the deepest overlap of this run is {self_overlap:.2g} radii."
+    ),
+}
 #: Why softrod's wall time is longer than PyElastica's where it is.
 EXPLAIN_TIME = {
+    "capstan": (
+        "the rope's ~150 touching points are stiff penalty contacts with anchored, "
+        "sticking friction (docs/theory-contact.md): the quasi-static rule's ESDIRK takes "
+        "steps of 1.1 ms on average (1770 over the 2 s, 508 rejected, measured with "
+        "softrod's CLI on the adapter's scene at overhang 0.95), each with Newton "
+        "iterations on the O(n) structured matrix re-linearized at every iterate (CT27) "
+        "and, where that fails, a dense exact Jacobian (132 over the run): about 22 ms "
+        "of CPU a step against PyElastica's explicit 0.22 ms (docs/performance.md, "
+        "\"Contact-heavy scenes\")."
+    ),
     "catenary": (
         "a cable pinned at both ends is a closed chain for softrod (a spherical joint "
         "and a ball closure), whose Newton matrices are dense (O(n^3) in the coordinates, "
@@ -83,27 +105,15 @@ EXPLAIN_TIME = {
         "reachable from Python."
     ),
     "twist": (
-        "each rod is a closed chain (a weld to a carriage on a prescribed drive), "
-        "with the dense Radau IIA Newton matrices of the catenary; the six rods "
-        "run as six simulations one after the other, and the rod that buckles costs "
-        "nearly all of it: measured alone after this report's run (same build, the shared "
-        "machine), the rod held at 1.06 of the critical twist took 199 s (3068 steps, 395 "
-        "rejected, 1198 dense Jacobians, 2591 factorizations) as it grows sideways, the "
-        "rod at 0.96 8.2 s (177 steps). The report of commit 36f46bc timed all six at "
-        "47.1 s with the same rule and the same critical_twist_error (9.081e-4), but "
-        "without self contact: softrod refused contact on models with loop closures "
-        "then, and the adapter left it out (its settings said so); softrod runs it "
-        "since commit 54f8fa5. Measured with softrod's CLI on that rod's scene: without "
-        "contact 289 steps (109 rejected, 126 Jacobians) at 36f46bc and b29b4da alike; "
-        "with self contact the path is the same to t = 15.2 s, where the rod, wrapping "
-        "into a plectoneme, first reaches itself, and the remaining 0.8 s take at least "
-        "2779 of the 3068 steps. Its plectoneme then passes through the rod at 1.04 "
-        "(cosseratbench's max_rod_overlap, 1.48 radii): the rods run as separate "
-        "simulations (one model of all six would have dense Newton matrices of 1806 "
-        "coordinates, docs/performance.md). ESDIRK (the rule on models without both "
-        "closures and contact) fails here: a rod's loop comes apart (closure "
-        "residual 1.8 mm at t = 15.4 s, which softrod's watch stops). PyElastica's "
-        "explicit step costs 26 microseconds."
+        "each rod is a closed chain (a weld to a carriage on a prescribed drive) with "
+        "self contact, run by the quasi-static rule's ESDIRK with its loop projected "
+        "back onto the weld after every step (docs/theory.md D121) and dense Newton "
+        "matrices (as the catenary's); the six rods run as six simulations one after the "
+        "other, and the rods that buckle cost most of it: the rod held at 1.06 of the "
+        "critical twist took 63.5 CPU s alone (commit 41ec6b8; 112.7 s with Radau IIA, the "
+        "rule on closed models with contact before the projection) as it grows sideways "
+        "and wraps into a plectoneme that reaches itself. PyElastica's explicit step "
+        "costs 26 microseconds."
     ),
 }
 
@@ -111,45 +121,18 @@ EXPLAIN_TIME = {
 #: whose softrod runs this report leaves out, with the reason measured; run
 #: them with --with-slow.
 NOT_RUN = {
-    "crossing": (
-        "not run in this report: the adapter expresses it (two ropes pinned by ball "
-        "closures, rod-rod contact on closed models, docs/theory-contact.md CT16) and "
-        "softrod runs it (the Python suite runs it at 5 pieces per rope against the "
-        "elastica: lift error 17.7 %, 2.7 % at 10 pieces), but far too slowly at its "
-        "51 pieces. Measured (release build, the shared 2-core VM): building it takes "
-        "22 s, and the first 0.08 s of its 8 s take 122 s with the quasi-static rule's "
-        "Radau IIA on closed chains (477 steps of 1.7e-4 s, 25 rejected, 233 dense "
-        "Jacobians and 343 dense factorizations of the two ropes' ~620 coordinates "
-        "plus closures) while the upper rope drapes onto the lower, so the whole run "
-        "would take hours unless the steps grow once the ropes settle (not measured)."
-    ),
-    "capstan": (
-        "not run in this report: the adapter expresses it (contact tables, "
-        "docs/theory-contact.md) and softrod runs it, but far too slowly. Measured at its "
-        "100 pieces (overhang 0.95, release build, the shared 2-core VM): fitting the "
-        "wrapped start takes 21 s (139 s before the centreline fit stopped at its "
-        "stationary point); 0.004 s of the 2 s take 22 s with the quasi-static rule's "
-        "Radau IIA (73 steps of 5.5e-5 s, 3 rejected, a Jacobian and a dense factorization "
-        "of the 606-coordinate system every step, 232 Newton iterations), 19 s with ESDIRK "
-        "(94 steps, 96 rejected, 92 exact dense Jacobians after its structured matrix "
-        "failed, 1633 Newton iterations), and 21 s with Radau at atol 1e-3 (44 steps of "
-        "9e-5 s): the step size is what is small, and the tolerance hardly moves it (at "
-        "rtol = atol = 0.1: 30 steps of 1.3e-4 s and 23 rejected, 14 s), so the Newton "
-        "iteration of the contact, not the error control, bounds it; it is an eleventh to a "
-        "fifth of the contact's period (sqrt(k/m) = 10 v0/r = 1e4 rad/s for this 1 mm "
-        "rope, CT3). 2 s would take about three hours; the rope holds on that "
-        "stretch (light end risen 0 m, penetration 3.5e-6 m = 0.35 % of r). At 20 pieces "
-        "the fitted start cannot be lifted clear of the cylinder (it sinks 2.3e-5 m after "
-        "4 lifts), so the adapter refuses it."
-    ),
     "pile": (
         "not run in this report: the adapter expresses it (contact tables, "
         "docs/theory-contact.md) and softrod runs it, but far too slowly. Measured at its "
-        "100 pieces (release build, the shared 2-core VM, before the analytic contact "
-        "Jacobians and not measured since): 0.3 s of its 4.45 s took 252 s (781 Radau IIA "
-        "steps, 27 rejected, 0.32 s per step, the dense ~600-coordinate system factored "
-        "every step) after 36-51 s to build; the capstan's measurements (there) show the "
-        "same small steps with the analytic Jacobians."
+        "100 pieces with the adapter's rule (ESDIRK, steps ending on the output frames; "
+        "softrod's CLI on the adapter's scene, release build, the shared 2-core VM): the "
+        "first 0.3 s of its 4.45 s (the rope falling, its tip landing) take 39 CPU s, the "
+        "first 1.3 s took 1094 CPU s (5230 steps, 5267 rejected, 3921 dense Jacobians of "
+        "the 600 coordinates): about 1000 CPU s per simulated second once the rope lies "
+        "on the floor, so the whole run would take more than an hour. The steps (0.22 ms "
+        "on average, about as many rejected as accepted) are limited by the Newton "
+        "iteration at the touching points, and most fall back on the exact dense "
+        "Jacobian, whose contact terms and LU take about 70 % of the time (docs/performance.md, \"Contact-heavy scenes\")."
     ),
 }
 
@@ -305,6 +288,24 @@ def bending_numbers() -> dict:
             "softrod_vs_elastica": abs((sag - elastica) / elastica)}
 
 
+def self_overlap(name: str, variant: dict, summary: dict) -> float:
+    """cosseratbench's max_rod_overlap of each rod with itself alone (the largest):
+    what self contact let through, without the pairs of different rods."""
+    from cosseratbench.experiment import max_rod_overlap
+
+    scenario = registry.load_experiment(name).scenario_for(
+        **{k: v for k, v in variant["varied"].items() if k in variant["values"]})
+    traj = Trajectory.load(Path(summary["_dir"]) / "trajectory.npz")
+    worst = 0.0
+    for rod, positions, directors in zip(scenario.rods, traj.positions, traj.directors):
+        alone = replace(scenario, rods=(rod,))
+        one = Trajectory(traj.times, (positions,), (directors,))
+        value = max_rod_overlap(alone, one)
+        if value == value:
+            worst = max(worst, value)
+    return worst
+
+
 def plot(name: str, variant: dict, runs_: list[dict], path: Path) -> bool:
     """The final shapes beside the reference, and the motion over time."""
     trajectories = {}
@@ -454,6 +455,14 @@ def write_report(results: Path, report: Path, images: Path, names: list[str], *,
                     if "{bending" in why:
                         why = why.format(**bending_numbers())
                     notes.append(f"- `{metric}`: softrod {fmt(a)}, PyElastica {fmt(b)}: {why}")
+            for key in ("max_penetration", "max_rod_overlap"):
+                a = (ours.get("observations") or {}).get(key)
+                b = (theirs.get("observations") or {}).get(key)
+                if a is not None and b is not None and a > b and a > 1e-3:
+                    why = EXPLAIN_OVERLAP.get((name, key), "not explained yet.")
+                    if "{self_overlap" in why:
+                        why = why.format(self_overlap=self_overlap(name, variant0, ours))
+                    notes.append(f"- `{key}` (radii): softrod {fmt(a)}, PyElastica {fmt(b)}: {why}")
             if ours["wall_time"] > theirs["wall_time"] / 10:
                 why = EXPLAIN_TIME.get(name, "")
                 notes.append(f"- wall time: softrod {ours['wall_time']:.3g} s, PyElastica "

@@ -301,7 +301,11 @@ pub enum AdjointSolver {
 /// The record of a forward run the backward pass needs: the times `tₙ`
 /// (node 0 is the start), the accepted step sizes `hₙ` (`tₙ₊₁` is the end
 /// of step `n`, exactly as the integrator landed on it) and the states
-/// `(qₙ, q̇ₙ)` at every node. `8·n` bytes per coordinate and node.
+/// `(qₙ, q̇ₙ)` at every node, `16` bytes per coordinate and node. Optionally
+/// ([`push_stages`](Self::push_stages)) the forward run's accelerations of
+/// every implicit stage, `8·(s − 1)` bytes per coordinate and step more
+/// (`s` stages: 40 for the ESDIRKs of six stages, 3.5× the tape): the
+/// backward pass starts its recomputed stages from them (G34).
 #[derive(Clone, Debug)]
 pub struct Tape {
     n: usize,
@@ -309,6 +313,12 @@ pub struct Tape {
     h: Vec<f64>,
     q: Vec<f64>,
     v: Vec<f64>,
+    /// Implicit stages kept per step (`s − 1`; 0: none yet), and whether a
+    /// step came without them (then none are kept).
+    stage_count: usize,
+    stages_dropped: bool,
+    /// `A₁ … A_{s−1}` of every step, step by step.
+    stage_acc: Vec<f64>,
 }
 
 impl Tape {
@@ -321,7 +331,73 @@ impl Tape {
             h: Vec::new(),
             q: q0.to_vec(),
             v: qd0.to_vec(),
+            stage_count: 0,
+            stages_dropped: false,
+            stage_acc: Vec::new(),
         }
+    }
+
+    /// Records the stage accelerations `A₀ … A_{s−1}` of the step just
+    /// [`push`](Self::push)ed (a method's [`StepInfo::stages`](crate::StepInfo)),
+    /// of which the tape keeps the implicit ones, `A₁ … A_{s−1}` (stage 0 is
+    /// evaluated again by the backward pass). Every step must have them
+    /// with the same stage count: a step recorded without them, or with
+    /// another count, drops them all (the backward pass then starts its
+    /// stages from its predictor, G3). They are starting points only: the
+    /// gradient does not depend on them beyond round-off (G34).
+    pub fn push_stages(&mut self, stages: &[DVector<f64>]) {
+        let k = self.steps();
+        if self.stages_dropped || k == 0 {
+            return;
+        }
+        let count = stages.len().saturating_sub(1);
+        if k == 1 && self.stage_count == 0 {
+            self.stage_count = count;
+        }
+        let complete = self.stage_acc.len() == (k - 1) * self.stage_count * self.n;
+        if count == 0
+            || count != self.stage_count
+            || !complete
+            || stages.iter().any(|a| a.len() != self.n)
+        {
+            self.drop_stages();
+            return;
+        }
+        for a in &stages[1..] {
+            self.stage_acc.extend_from_slice(a.as_slice());
+        }
+    }
+
+    fn drop_stages(&mut self) {
+        self.stages_dropped = true;
+        self.stage_count = 0;
+        self.stage_acc = Vec::new();
+    }
+
+    /// The implicit stages kept per step (`s − 1` for a tableau of `s`
+    /// stages), or 0 when the tape has none for every step.
+    pub fn stage_count(&self) -> usize {
+        if self.stages_dropped || self.stage_acc.len() != self.steps() * self.stage_count * self.n {
+            0
+        } else {
+            self.stage_count
+        }
+    }
+
+    /// The forward run's acceleration of implicit stage `i` (`1 ≤ i ≤`
+    /// [`stage_count`](Self::stage_count)) of step `k`, if the tape has it.
+    pub fn stage_acceleration(&self, k: usize, i: usize) -> Option<&[f64]> {
+        let count = self.stage_count();
+        if i == 0 || i > count || k >= self.steps() {
+            return None;
+        }
+        let at = ((k * count) + i - 1) * self.n;
+        Some(&self.stage_acc[at..at + self.n])
+    }
+
+    /// Bytes of the recorded data (times, step sizes, states and stages).
+    pub fn bytes(&self) -> usize {
+        8 * (self.t.len() + self.h.len() + self.q.len() + self.v.len() + self.stage_acc.len())
     }
 
     /// Records an accepted step of size `h` that ended at `(t, q, q̇)`.
@@ -332,6 +408,12 @@ impl Tape {
         self.h.push(h);
         self.q.extend_from_slice(q);
         self.v.extend_from_slice(qd);
+        if self.stage_count > 0
+            && self.stage_acc.len() != (self.steps() - 1) * self.stage_count * self.n
+        {
+            // The step before this one came without its stages.
+            self.drop_stages();
+        }
     }
 
     /// Number of nodes (accepted steps + 1).
@@ -500,6 +582,11 @@ pub(crate) fn check_request(
 /// about the same near 40 coordinates (G33).
 const DENSE_MASS_MAX: usize = 40;
 
+/// The stages whose `cᵢ` lies strictly inside this band iterate with the
+/// mean of the step start's and the step end's matrices; those before it
+/// with the start's, those after it with the end's (G35).
+const MID_BAND: (f64, f64) = (0.2, 0.8);
+
 /// GMRES iterations per cycle and cycles of a transposed stage solve
 /// before it falls back to the dense LU (G11).
 const KRYLOV_ITERATIONS: usize = 40;
@@ -523,6 +610,11 @@ struct EsdirkAdjoint {
     /// step: the recomputation's predictor), and a copy of it.
     a0_node: Option<usize>,
     a_end: DVector<f64>,
+    /// Whether stage 0's matrices were in the force form (`force` then).
+    a0_force: bool,
+    /// `∂r/∂q` (or `∂a/∂q`), `∂r/∂q̇` (or `∂a/∂q̇`), `M` of each stage, and
+    /// in the extra slot [`END`](Self::end) those of the step end: the
+    /// stage 0 of the step the pass did before (G35).
     jq: Vec<DMatrix<f64>>,
     jv: Vec<DMatrix<f64>>,
     /// `M` at each stage (force form).
@@ -542,8 +634,13 @@ struct EsdirkAdjoint {
     pv: DVector<f64>,
     /// `(I − hγJ)ᵀ` (force form: `Sᵀ`) of each implicit stage, factored;
     /// slot 0: the (untransposed) step-start matrix of the recomputing
-    /// Newton iteration.
+    /// Newton iteration; slot [`END`](Self::end): the step end's (G35).
     lus: Vec<DenseLu>,
+    /// The step start's `M₀` factored by Cholesky (G33).
+    chol: DenseLu,
+    /// Force form: `M` of the matrix in slot [`mid`](Self::mid) of `lus`,
+    /// the mean of the step start's and the step end's (G35).
+    mid_mass: DMatrix<f64>,
     /// Force form: `‖Sᵀ‖∞` of the matrix factored (untransposed) in each
     /// slot of `lus`, for GMRES's stopping test (G32).
     lu_norms: Vec<f64>,
@@ -572,6 +669,18 @@ struct EsdirkAdjoint {
 }
 
 impl EsdirkAdjoint {
+    /// The slot of the step end's matrices in `jq`, `jv`, `mass`, `lus`
+    /// (G35): the one after the stages'.
+    fn end(&self) -> usize {
+        self.tab.stages()
+    }
+
+    /// The slot in `lus` of the mean of the step start's and the step
+    /// end's matrices (G35).
+    fn mid(&self) -> usize {
+        self.tab.stages() + 1
+    }
+
     fn new(tab: Coefficients, n: usize, np: usize, force: bool) -> Self {
         let s = tab.stages();
         let z = DVector::zeros(n);
@@ -593,16 +702,19 @@ impl EsdirkAdjoint {
             accs: (0..s).map(|_| z.clone()).collect(),
             a0_node: None,
             a_end: z.clone(),
-            jq: (0..s).map(|_| m.clone()).collect(),
-            jv: (0..s).map(|_| m.clone()).collect(),
-            mass: (0..s).map(|_| fm.clone()).collect(),
+            a0_force: force,
+            mid_mass: fm.clone(),
+            jq: (0..=s).map(|_| m.clone()).collect(),
+            jv: (0..=s).map(|_| m.clone()).collect(),
+            mass: (0..=s).map(|_| fm.clone()).collect(),
             shifted: (0..s).map(|_| fm.clone()).collect(),
             ops: vec![false; s],
             mass_ops: vec![false; s],
             pq: z.clone(),
             pv: z.clone(),
-            lus: (0..s).map(|_| DenseLu::new(n)).collect(),
-            lu_norms: vec![0.0; s],
+            lus: (0..s + 2).map(|_| DenseLu::new(n)).collect(),
+            chol: DenseLu::new(n),
+            lu_norms: vec![0.0; s + 2],
             lu_slot: vec![0; s],
             gmres: Gmres::new(if force { n } else { 0 }, KRYLOV_ITERATIONS.min(n)),
             qhat: z.clone(),
@@ -738,11 +850,57 @@ impl EsdirkAdjoint {
         )
     }
 
+    /// Fills `lus[mid]` with the mean of the stage matrices of the step
+    /// start (slot 0) and the step end ([`end`](Self::end)), both at this
+    /// step's `h`, and factors it (G35); force form: their `M`s' mean into
+    /// `mid_mass` too.
+    fn factor_mid(&mut self, h: f64) -> bool {
+        self.factorizations += 1;
+        let (mid, end) = (self.mid(), self.end());
+        let gamma = self.tab.gamma;
+        let (hg, hg2) = (h * gamma, h * h * gamma * gamma);
+        let m = self.lus[mid].matrix_mut();
+        let n = self.n;
+        let (jq0, jq1) = (self.jq[0].as_slice(), self.jq[end].as_slice());
+        let (jv0, jv1) = (self.jv[0].as_slice(), self.jv[end].as_slice());
+        if self.force {
+            let (m0, m1) = (self.mass[0].as_slice(), self.mass[end].as_slice());
+            let mm = self.mid_mass.as_mut_slice();
+            let mut norm: f64 = 0.0;
+            for (c, col) in m.as_mut_slice().chunks_exact_mut(n).enumerate() {
+                let mut sum = 0.0;
+                for (r, x) in col.iter_mut().enumerate() {
+                    let k = c * n + r;
+                    let mass = 0.5 * (m0[k] + m1[k]);
+                    mm[k] = mass;
+                    *x = mass + hg * (0.5 * (jv0[k] + jv1[k])) + hg2 * (0.5 * (jq0[k] + jq1[k]));
+                    sum += x.abs();
+                }
+                norm = norm.max(sum);
+            }
+            self.lu_norms[mid] = norm;
+        } else {
+            for (c, col) in m.as_mut_slice().chunks_exact_mut(n).enumerate() {
+                for (r, x) in col.iter_mut().enumerate() {
+                    let k = c * n + r;
+                    let d = if r == c { 1.0 } else { 0.0 };
+                    *x = d - hg * (0.5 * (jv0[k] + jv1[k])) - hg2 * (0.5 * (jq0[k] + jq1[k]));
+                }
+            }
+        }
+        self.lus[mid].factor()
+    }
+
     /// The Newton correction of a recomputed stage, `W⁻¹ g` with the matrix
     /// of `slot` (force form: `S⁻¹ M g`, `W = M⁻¹S`), in place in `g`.
     fn newton_correction(&mut self, slot: usize) {
         if self.force {
-            self.mu.gemv(1.0, &self.mass[slot], &self.g, 0.0);
+            let mass = if slot == self.mid() {
+                &self.mid_mass
+            } else {
+                &self.mass[slot]
+            };
+            self.mu.gemv(1.0, mass, &self.g, 0.0);
             self.g.copy_from(&self.mu);
         }
         self.lus[slot].solve_in_place(&mut self.g);
@@ -781,6 +939,22 @@ impl EsdirkAdjoint {
         if end {
             self.a_end.copy_from(&self.accs[0]);
         }
+        // Its matrices too, `M`, `∂r/∂q`, `∂r/∂q̇` at (tₙ₊₁, yₙ₊₁): the
+        // later stages iterate with them (G35). The same `h` finds their
+        // LU done; another factors them again.
+        let end_slot = self.end();
+        let use_end = end && self.a0_force == self.force;
+        if use_end {
+            self.jq.swap(0, end_slot);
+            self.jv.swap(0, end_slot);
+            self.mass.swap(0, end_slot);
+            if h == tape.step_size(k + 1) {
+                self.lus.swap(0, end_slot);
+                self.lu_norms.swap(0, end_slot);
+            } else if !self.factor(end_slot, end_slot, h, false) {
+                return Err(singular(t_new, h));
+            }
+        }
         self.a0_node = None;
         // Stage 0: the step start (G2).
         self.qs[0].copy_from(&self.q);
@@ -791,6 +965,14 @@ impl EsdirkAdjoint {
         self.a0_node = Some(k);
         self.linearize(sys, 0, t, 0, h, false)
             .map_err(err("jacobian"))?;
+        self.a0_force = self.force;
+        // Stages in the middle of the step iterate with the mean of the
+        // start's and the end's matrices (G35).
+        let mid_slot = self.mid();
+        let use_mid = use_end && (1..s).any(|i| c[i] > MID_BAND.0 && c[i] < MID_BAND.1);
+        if use_mid && !self.factor_mid(h) {
+            return Err(singular(t, h));
+        }
         if !self.factor(0, 0, h, false) {
             return Err(singular(t, h));
         }
@@ -808,12 +990,20 @@ impl EsdirkAdjoint {
                 &mut self.qhat,
                 &mut self.vhat,
             );
-            // The starting guess: the cubic Hermite interpolant of the
+            // The starting guess: the forward run's own stage where the
+            // tape kept it (G34); else the cubic Hermite interpolant of the
             // velocity through (q̇ₙ, aₙ) and (q̇ₙ₊₁, aₙ₊₁), differentiated at
             // cᵢ (G3); without the step end, the previous stage's.
             {
                 let (done, rest) = self.accs.split_at_mut(i);
-                if end {
+                let stored = if tape.stage_count() == s - 1 {
+                    tape.stage_acceleration(k, i)
+                } else {
+                    None
+                };
+                if let Some(x) = stored {
+                    rest[0].copy_from_slice(x);
+                } else if end {
                     let th = c[i];
                     let wd = (6.0 * th - 6.0 * th * th) / h;
                     let w0 = 3.0 * th * th - 4.0 * th + 1.0;
@@ -830,8 +1020,16 @@ impl EsdirkAdjoint {
             let mut prev2 = f64::INFINITY;
             let mut converged = false;
             // The LU the iteration solves with: the step-start matrix, or
-            // (after a slow iteration) the stage's own at its iterate.
-            let mut slot = 0;
+            // the step end's for a stage nearer the end (G35), or (after a
+            // slow iteration) the stage's own at its iterate.
+            let start = if !use_end || c[i] <= MID_BAND.0 {
+                0
+            } else if c[i] < MID_BAND.1 {
+                mid_slot
+            } else {
+                end_slot
+            };
+            let mut slot = start;
             // Iterations done with the present `slot` (the contraction rate
             // is measured on one matrix only).
             let mut on_slot = 0;
@@ -925,7 +1123,7 @@ impl EsdirkAdjoint {
                 } else {
                     dx > 0.25 * prev
                 };
-                if slot == 0 && iteration >= 2 && slow {
+                if slot == start && iteration >= 2 && slow {
                     stage_values(
                         hg,
                         &self.qhat,
@@ -1262,13 +1460,13 @@ impl EsdirkAdjoint {
             // of G33 is not (it costs less than the structured one).
             self.factorizations += 1;
         }
-        self.lus[0].matrix_mut().copy_from(&self.mass[0]);
-        if !self.lus[0].factor_cholesky() {
+        self.chol.matrix_mut().copy_from(&self.mass[0]);
+        if !self.chol.factor_cholesky() {
             // Not positive definite: left to the final non-finite check.
             self.mu.fill(f64::NAN);
             return Ok(());
         }
-        self.lus[0].solve_in_place(&mut self.mu);
+        self.chol.solve_in_place(&mut self.mu);
         Ok(())
     }
 }

@@ -494,6 +494,7 @@ fn drive<P: Problem, St: Stepper<P>>(
             h,
             y: st.y(),
             stats: &stats,
+            stages: st.stage_accelerations(),
         };
         match hooks.step(&info, p.user()) {
             Control::Continue => {}

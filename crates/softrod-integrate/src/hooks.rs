@@ -44,6 +44,12 @@ pub struct StepInfo<'a> {
     pub y: &'a DVector<f64>,
     /// Statistics so far.
     pub stats: &'a Stats,
+    /// The second-order stage accelerations of the step just taken, one per
+    /// stage of the method's tableau (stage 0 first), for the methods that
+    /// have them (the ESDIRKs); empty otherwise. The discrete adjoint's
+    /// tape keeps them as the starting points of its recomputed stages
+    /// (docs/theory-control.md G34).
+    pub stages: &'a [DVector<f64>],
 }
 
 /// Which sign changes of an event function count.

@@ -165,7 +165,7 @@ pub use integrator::{Integrator, UnknownIntegrator};
 pub use methods::generalized_alpha_parameters;
 pub use options::{Iteration, Options, StepControl};
 pub use recommended::Recommended;
-pub use rod::{RodJacobian, RodSystem};
+pub use rod::{ProjectionMisses, RodJacobian, RodSystem};
 pub use sensitivity::forward_sensitivity_second_order;
 pub use solution::{EventRecord, Solution, Stats, Status};
 pub use system::{OdeSystem, SecondOrderSystem, fd_jacobian};

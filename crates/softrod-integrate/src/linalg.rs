@@ -81,12 +81,16 @@ impl DenseLu {
     pub(crate) fn factor(&mut self) -> bool {
         let n = self.a.nrows();
         self.kind = Kind::Lu;
-        let a = &mut self.a;
+        let a = self.a.as_mut_slice();
+        // On the column-major slice: the pivot search and the scaling run
+        // down column `k`, the update down the columns after it (every
+        // entry takes the same operations in the same order as by rows).
         for k in 0..n {
+            let col = &a[k * n..(k + 1) * n];
             let mut p = k;
-            let mut best = a[(k, k)].abs();
-            for i in k + 1..n {
-                let v = a[(i, k)].abs();
+            let mut best = col[k].abs();
+            for (i, x) in col.iter().enumerate().skip(k + 1) {
+                let v = x.abs();
                 if v > best {
                     best = v;
                     p = i;
@@ -97,18 +101,22 @@ impl DenseLu {
             }
             self.piv[k] = p;
             if p != k {
-                a.swap_rows(p, k);
+                for c in a.chunks_exact_mut(n) {
+                    c.swap(p, k);
+                }
             }
-            let inv = 1.0 / a[(k, k)];
-            for i in k + 1..n {
-                a[(i, k)] *= inv;
+            let (left, right) = a.split_at_mut((k + 1) * n);
+            let col_k = &mut left[k * n..];
+            let inv = 1.0 / col_k[k];
+            for x in &mut col_k[k + 1..] {
+                *x *= inv;
             }
-            for j in k + 1..n {
-                let akj = a[(k, j)];
+            let l = &col_k[k + 1..];
+            for col_j in right.chunks_exact_mut(n) {
+                let akj = col_j[k];
                 if akj != 0.0 {
-                    for i in k + 1..n {
-                        let lik = a[(i, k)];
-                        a[(i, j)] -= lik * akj;
+                    for (x, &lik) in col_j[k + 1..].iter_mut().zip(l) {
+                        *x -= lik * akj;
                     }
                 }
             }

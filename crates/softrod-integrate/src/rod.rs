@@ -20,6 +20,18 @@ use softrod_mechanics::Tension;
 use crate::integrator::Integrator;
 use crate::system::SecondOrderSystem;
 
+/// Where the projection onto the closures gave up
+/// ([`RodSystem::projection_misses`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ProjectionMisses {
+    /// Step ends at which it did not converge.
+    pub count: usize,
+    /// The time of the first \[s\] (0 when `count` is 0).
+    pub first_t: f64,
+    /// The largest closure residual norm (D66) left at them \[m\].
+    pub largest_residual: f64,
+}
+
 /// A rod model ready for integration: `q̈ = FD(t, q, q̇, τ)`.
 #[derive(Clone, Debug)]
 pub struct RodSystem {
@@ -94,6 +106,9 @@ pub struct RodSystem {
     /// it only at that `q` (a wrapper that forwards the factorization but
     /// not the linearization gets none, never a stale one).
     contact_q: Option<DVector<f64>>,
+    /// Step ends where [`SecondOrderSystem::project`] gave up since the
+    /// last [`reset_projection_misses`](Self::reset_projection_misses).
+    projection_misses: ProjectionMisses,
     /// The factored `M(q) + aK + bD` of
     /// [`SecondOrderSystem::factor_shifted_mass`] (O(N), no `n×n` matrix).
     shifted: ShiftedSolver,
@@ -179,6 +194,7 @@ impl RodSystem {
             contact_active_set: true,
             locate_friction_stops: true,
             contact_q: None,
+            projection_misses: ProjectionMisses::default(),
             shifted,
             derivatives: None,
             closed: None,
@@ -449,6 +465,21 @@ impl RodSystem {
         if self.contact_q.take().is_some() {
             self.shifted.clear_contact();
         }
+    }
+
+    /// The step ends at which the projection onto the closures
+    /// ([`Options::project_state`](crate::Options::project_state),
+    /// docs/theory.md D121) did not converge since the last
+    /// [`reset_projection_misses`](Self::reset_projection_misses): there the
+    /// state was left as the step ended it, held by the stabilization alone.
+    /// A run reports them rather than passing over them.
+    pub fn projection_misses(&self) -> ProjectionMisses {
+        self.projection_misses
+    }
+
+    /// Starts counting [`projection_misses`](Self::projection_misses) anew.
+    pub fn reset_projection_misses(&mut self) {
+        self.projection_misses = ProjectionMisses::default();
     }
 
     /// [`commit_contact`](Self::commit_contact) as what the step hook
@@ -768,6 +799,14 @@ impl SecondOrderSystem for RodSystem {
             qd.as_mut_slice(),
             tol,
         )?;
+        if !p.converged {
+            let m = &mut self.projection_misses;
+            if m.count == 0 {
+                m.first_t = t;
+            }
+            m.count += 1;
+            m.largest_residual = m.largest_residual.max(p.residual_before);
+        }
         Ok(p.converged)
     }
 

@@ -278,7 +278,12 @@ impl Forward {
                 &mut self.qhat,
                 &mut self.vhat,
             );
-            self.solve_stage(sys, i, ti, h)?;
+            let stored = if tape.stage_count() == s - 1 {
+                tape.stage_acceleration(k, i)
+            } else {
+                None
+            };
+            self.solve_stage(sys, i, ti, h, stored)?;
             // The stage's sensitivity: W dAᵢ = J_q (dq̂ + hγ dv̂) + J_v dv̂ + ∂a/∂p,
             // dVᵢ = dv̂ + hγ dAᵢ (G2 differentiated).
             self.dqh.copy_from(&self.sq);
@@ -318,13 +323,16 @@ impl Forward {
 
     /// Stage `i`'s acceleration `x = a(tᵢ, Qᵢ(x), Vᵢ(x))` by Newton's
     /// method with `W` at each iterate, to round-off (the adjoint's test,
-    /// G3); leaves the Jacobians and `∂a/∂p` at the converged values.
+    /// G3), from the forward run's stage where the tape kept it (G34), else
+    /// from the previous stage's; leaves the Jacobians and `∂a/∂p` at the
+    /// converged values.
     fn solve_stage<Sys: ParameterSystem>(
         &mut self,
         sys: &mut Sys,
         i: usize,
         ti: f64,
         h: f64,
+        stored: Option<&[f64]>,
     ) -> Result<(), IntegrateError> {
         let n = self.n;
         let gamma = self.tab.gamma;
@@ -338,7 +346,10 @@ impl Forward {
             }
         };
         let (done, rest) = self.accs.split_at_mut(i);
-        rest[0].copy_from(&done[i - 1]);
+        match stored {
+            Some(x) => rest[0].copy_from_slice(x),
+            None => rest[0].copy_from(&done[i - 1]),
+        }
         let mut prev = f64::INFINITY;
         for _ in 0..MAX_NEWTON {
             stage_values(

@@ -69,6 +69,12 @@ pub(crate) trait Stepper<P: Problem> {
     fn h_last(&self) -> f64 {
         self.state().h
     }
+    /// The second-order stage accelerations of the last accepted step (one
+    /// per stage, stage 0 first; [`StepInfo::stages`](crate::StepInfo)).
+    /// Empty by default (methods without second-order stages).
+    fn stage_accelerations(&self) -> &[DVector<f64>] {
+        &[]
+    }
     /// Dense output at `t ∈ [t_prev, t]` into `out` (cubic Hermite unless
     /// the method has its own).
     fn dense(&self, t: f64, out: &mut DVector<f64>) {

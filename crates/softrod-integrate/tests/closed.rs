@@ -378,3 +378,42 @@ fn projected_esdirk_holds_the_closures_at_every_step_end() {
         );
     }
 }
+
+/// A projection that cannot converge is counted, not passed over: a
+/// Kirchhoff rod (no stretch) of length 0.3 m pinned at its base, its tip
+/// asked by a ball closure to reach a point 0.5 m away. No bent shape
+/// reaches it (the tip is at most 0.3 m from the base), so the positions'
+/// Newton iteration gives up; the state is left as it was and
+/// `projection_misses` says when and how far apart the loop was: the
+/// residual there is the tip's distance from the point, 0.2 m in the
+/// straight start.
+#[test]
+fn a_projection_that_cannot_converge_is_counted() {
+    use softrod_integrate::{ProjectionMisses, SecondOrderSystem};
+    let g = RodGeometry::uniform(0.3, 3, Basis::kirchhoff(), straight(), Pose::identity()).unwrap();
+    let mat = Material::with_poisson(1000.0, 1e6, 0.5, 0.0).unwrap();
+    let body = RodProperties::new(Section::Circle { radius: 0.01 }, mat, 0.3).unwrap();
+    let model = Model::builder()
+        .rod_on(
+            Rod::new("r", g, body),
+            Attachment::world_joint(Joint::spherical()),
+        )
+        .closure(Closure::new("far", ClosureKind::Ball, tip("r"), world(0.5)))
+        .build()
+        .unwrap();
+    let n = model.n_dof();
+    let mut sys = RodSystem::new(model);
+    assert_eq!(sys.projection_misses(), ProjectionMisses::default());
+    let (mut q, mut qd) = (DVector::zeros(n), DVector::from_element(n, 0.1));
+    let (q0, qd0) = (q.clone(), qd.clone());
+    for t in [0.25, 0.5] {
+        let moved = sys.project(t, &mut q, &mut qd).unwrap();
+        assert!(!moved);
+    }
+    assert_eq!((q, qd), (q0, qd0), "the state is left as it was");
+    let m = sys.projection_misses();
+    assert_eq!((m.count, m.first_t), (2, 0.25));
+    assert!((m.largest_residual - 0.2).abs() < 1e-12, "{m:?}");
+    sys.reset_projection_misses();
+    assert_eq!(sys.projection_misses().count, 0);
+}

@@ -7,7 +7,6 @@
 use super::piece::{PieceWork, Subtree, close_mass, close_piece, write_piece};
 use super::point::{PieceLin, basis6, linearize_point, own_points};
 use super::{At, IdDerivatives};
-use super::{planar, planar_close};
 use crate::forces::external::gravity_base_acceleration;
 use crate::forces::linearized::{drag_diagonal, has_dead_loads};
 use crate::kernels::mat6::{Cols, mm, tm};
@@ -15,16 +14,11 @@ use crate::kernels::piece_derivs::PieceDerivMaps;
 use crate::model::{Model, RodModel};
 use softrod_lie::{PieceMaps, Vec6};
 
-/// The outward sweep (D39–D43): velocities, accelerations, force
+/// The outward sweep (D39–D43) of a rod that is not on the planar path
+/// (those: [`super::planar::outward`]): velocities, accelerations, force
 /// densities and their linearizations at every point; own-point sums.
 #[inline(always)]
 pub(crate) fn outward(model: &Model, rm: &RodModel, works: &mut [PieceWork], at: &At) {
-    // Planar rods on the forward run's planar path: the points on se(2)
-    // (D95–D98); their closes too (`inward`, D99–D100).
-    if let (true, Some(pr)) = (model.planar_path, &rm.planar) {
-        planar::outward(model, rm, pr, works, at);
-        return;
-    }
     let (q, qd, qdd) = (at.q, at.qd, at.qdd);
     let scale = at.forces.load_scale;
     let rod = &rm.spec.geometry;
@@ -64,11 +58,6 @@ pub(crate) fn outward(model: &Model, rm: &RodModel, works: &mut [PieceWork], at:
 /// The inward sweep (D43–D46): composites, each piece's diagonal block,
 /// `τ`, and the world-frame pairing quantities.
 pub(crate) fn inward(model: &Model, rm: &RodModel, work: &mut IdDerivatives, r: usize, at: &At) {
-    // Planar rods on the planar path: the closes on se(2) (D99–D100).
-    if let (true, Some(pr)) = (model.planar_path, &rm.planar) {
-        planar_close::inward(model, rm, pr, work, r, at);
-        return;
-    }
     // Dead loads only: the 𝒴 composites and receivers are zero otherwise.
     let dead = has_dead_loads(rm);
     let mut sub = Subtree::zero();

@@ -16,7 +16,7 @@ use crate::forces::Forces;
 use crate::model::Model;
 use crate::model::contact::ContactWork;
 use crate::model::data::Data;
-use crate::model::second::Gathered;
+use crate::model::second::{self as second_path, Gathered};
 use nalgebra::{DMatrix, DVector};
 use softrod_kinematics::Frame;
 use softrod_lie::{Vec3, angular};
@@ -118,6 +118,15 @@ fn tree(
             });
         }
         let n = dq.nrows();
+        if body.is_none() {
+            // A world obstacle: the carrier's angular columns are zero, and
+            // the geometric term `−f·∂²p/∂q∂q` is added in the same pass as
+            // the rank terms, entry by entry in the order of the two
+            // separate passes (the same sums, one sweep over the n × n).
+            sw.a.sorted_columns();
+            product_and_hessian(&mut sw.a, &sw.gather, &a.force, n, dq, dqd);
+            continue;
+        }
         let (mq, mqd) = (dq.as_mut_slice(), dqd.as_mut_slice());
         for (gl, &l) in sw.gather.iter().zip(&sw.dofs) {
             let jf = gl.j.cross(&a.force);
@@ -127,10 +136,48 @@ fn tree(
             }
         }
         sw.a.add_hessian_contraction(&a.force, -1.0, dq);
-        if body.is_some() {
-            sw.b.add_hessian_contraction(&a.force, 1.0, dq);
+        sw.b.add_hessian_contraction(&a.force, 1.0, dq);
+    }
+}
+
+/// Subtracts one point's `∂τ_c/∂q = J_wᵀ ∂f/∂q + f·∂²p/∂q∂q` and
+/// `∂τ_c/∂q̇ = J_wᵀ ∂f/∂q̇` (a world obstacle: no carrier, CT6, CT12) from
+/// the inverse dynamics' `dq`, `dqd`; `gather` in the order of the path's
+/// sorted coordinates (`path.sorted`). Each entry first loses
+/// its rank term, then gains the geometric one, as
+/// [`second_path::PointPath::add_hessian_contraction`] after the rank pass
+/// would.
+fn product_and_hessian(
+    path: &mut second_path::PointPath,
+    gather: &[Gathered],
+    force: &Vec3,
+    n: usize,
+    dq: &mut DMatrix<f64>,
+    dqd: &mut DMatrix<f64>,
+) {
+    let sign = -1.0;
+    let mut u = std::mem::take(&mut path.scratch);
+    u.clear();
+    u.extend(path.cols.iter().map(|c| c.j.cross(force) * sign));
+    let (mq, mqd) = (dq.as_mut_slice(), dqd.as_mut_slice());
+    for (gl, &lc) in gather.iter().zip(&path.sorted) {
+        let cl = path.cols[lc];
+        let col = cl.dof * n;
+        for (gi, &ic) in gather.iter().zip(&path.sorted) {
+            let ci = path.cols[ic];
+            let e = col + ci.dof;
+            mq[e] -= gi.j.dot(&gl.f);
+            mqd[e] -= gi.j.dot(&gl.g);
+            mq[e] += if ci.block == cl.block {
+                sign * force.dot(&path.hessian(ic, lc))
+            } else if ci.block > cl.block {
+                ci.w.dot(&u[lc])
+            } else {
+                cl.w.dot(&u[ic])
+            };
         }
     }
+    path.scratch = u;
 }
 
 /// Column `c` of a 3 × n matrix.

@@ -22,6 +22,7 @@ pub(crate) mod pairs;
 pub(crate) mod piece;
 pub(crate) mod planar;
 pub(crate) mod planar_close;
+pub(crate) mod planar_products;
 pub(crate) mod point;
 pub(crate) mod second;
 pub(crate) mod tree;
@@ -64,6 +65,11 @@ pub(crate) struct At<'a> {
 #[derive(Clone, Debug)]
 pub struct IdDerivatives {
     pub(crate) pieces: Vec<Vec<PieceWork>>,
+    /// The per-piece buffers of the planar rods' sweeps (D107; empty for
+    /// the other rods), and per rod whether the last evaluation took them
+    /// (the products read the buffers it wrote).
+    pub(crate) planar: Vec<Vec<planar::PlanarWork>>,
+    pub(crate) planar_taken: Vec<bool>,
     /// `∂τ/∂q` (n_dof × n_dof): row `i`, column `j` is `∂τ_i/∂q_j` at fixed
     /// `q̇, q̈` [N·m or N per coordinate unit].
     pub dtau_dq: DMatrix<f64>,
@@ -145,6 +151,19 @@ impl IdDerivatives {
                         .collect()
                 })
                 .collect(),
+            planar: model
+                .rods()
+                .iter()
+                .map(|r| match &r.planar {
+                    Some(pr) => pr
+                        .pieces
+                        .iter()
+                        .map(|_| planar::PlanarWork::new())
+                        .collect(),
+                    None => Vec::new(),
+                })
+                .collect(),
+            planar_taken: vec![false; model.rods().len()],
             dtau_dq: DMatrix::zeros(nd, nd),
             dtau_dqd: DMatrix::zeros(nd, nd),
             tau: DVector::zeros(n),
@@ -265,6 +284,11 @@ fn checked<'a>(
         || (dense && work.dtau_dq.nrows() != work.n_dof)
         || work.pieces.len() != model.rods().len()
         || work.tree.as_ref().map(|t| t.n_nodes()) != nodes
+        || work
+            .planar
+            .iter()
+            .zip(model.rods())
+            .any(|(p, r)| p.len() != r.planar.as_ref().map_or(0, |pr| pr.pieces.len()))
     {
         return Err(DynamicsError::WorkspaceMismatch {
             what: "IdDerivatives",
@@ -338,6 +362,18 @@ fn open_tree_core<'a>(
             work.dtau_dqd.fill(0.0);
         }
         for (r, rm) in model.rods().iter().enumerate() {
+            // Planar rods on the forward run's planar path: the sweeps on
+            // se(2) (D95–D100), their buffers 3×3 (D107).
+            let pr = rm.planar.as_ref().filter(|_| model.planar_path);
+            work.planar_taken[r] = pr.is_some();
+            if let Some(pr) = pr {
+                planar::outward(model, rm, pr, &mut work.planar[r], &at);
+                planar_close::inward(model, rm, pr, work, r, &at);
+                if dense {
+                    planar_products::pairs(rm, work, r);
+                }
+                continue;
+            }
             chain::outward(model, rm, &mut work.pieces[r], &at);
             chain::inward(model, rm, work, r, &at);
             if dense {

@@ -2,9 +2,8 @@
 //! (docs/theory-derivatives.md D95–D98): the strain-derivative maps of a
 //! piece (D32–D35 restricted to `P`, D96), every evaluation point's
 //! linearization (D39–D41, D97) and the own points' sums (D42–D43, D45)
-//! on 3-vectors and 3×3 matrices, written into the per-piece buffers of
-//! the six-direction sweeps (their `P` rows and columns, D98) for the
-//! closes and products that follow.
+//! on 3-vectors and 3×3 matrices, kept in the planar per-piece buffers
+//! ([`PlanarWork`], D107) for the closes and products that follow.
 //!
 //! A planar rod ([`PlanarRod`], D71) of a model without a tree: every
 //! twist and wrench the sweeps carry along a strain direction of its
@@ -15,7 +14,6 @@
 //! direction, and stay zero here.
 
 use super::At;
-use super::piece::PieceWork;
 use crate::forces::external::gravity_base_acceleration;
 use crate::forces::linearized::{dead_load_map, drag_diagonal};
 use crate::kernels::piece_derivs::Coefficients;
@@ -266,30 +264,145 @@ pub(crate) fn linearize_point3(pc: &PlanarLin, x: f64) -> (Pose2, PointLin3) {
 }
 
 /// A piece's own-point sums on `P` (D42–D43, D45, D85–D86), in `P`
-/// coordinates over all three directions.
-struct Sums3 {
-    dq_diag: Mat3,
-    dv_diag: Mat3,
-    dq_w: Mat3,
-    dv_w: Mat3,
-    mt: Mat3,
-    bt: Mat3,
-    yt: Mat3,
-    rm: Mat3,
-    rb: Mat3,
-    ry: Mat3,
-    mtt: Mat3,
-    tsum: Vec3,
-    wsum: Vec3,
-    tin: Vec3,
-    win: Vec3,
-    phi: [Vec3; 4],
-    chi: [Vec3; 4],
+/// coordinates over all three directions (those of [`super::piece::PieceWork`] of the
+/// six-direction sweeps, restricted to `P`).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Sums3 {
+    pub(crate) dq_diag: Mat3,
+    pub(crate) dv_diag: Mat3,
+    pub(crate) dq_w: Mat3,
+    pub(crate) dv_w: Mat3,
+    pub(crate) mt: Mat3,
+    pub(crate) bt: Mat3,
+    pub(crate) yt: Mat3,
+    pub(crate) rm: Mat3,
+    pub(crate) rb: Mat3,
+    pub(crate) ry: Mat3,
+    pub(crate) mtt: Mat3,
+    pub(crate) tsum: Vec3,
+    pub(crate) wsum: Vec3,
+    pub(crate) tin: Vec3,
+    pub(crate) win: Vec3,
+    pub(crate) phi: [Vec3; 4],
+    pub(crate) chi: [Vec3; 4],
 }
 
-/// How a planar piece's `P`-coordinate sums are written into the
-/// six-direction buffers (D98): `idx` the full indices of `P`, `sel` the
-/// `P` position of each of the basis's `k` columns.
+impl Sums3 {
+    pub(crate) fn zero() -> Self {
+        let z = Mat3::zeros();
+        Self {
+            dq_diag: z,
+            dv_diag: z,
+            dq_w: z,
+            dv_w: z,
+            mt: z,
+            bt: z,
+            yt: z,
+            rm: z,
+            rb: z,
+            ry: z,
+            mtt: z,
+            tsum: Vec3::zeros(),
+            wsum: Vec3::zeros(),
+            tin: Vec3::zeros(),
+            win: Vec3::zeros(),
+            phi: [Vec3::zeros(); 4],
+            chi: [Vec3::zeros(); 4],
+        }
+    }
+}
+
+/// Per-piece buffers of the derivative sweeps of a planar rod (D98, D107):
+/// what [`super::piece::PieceWork`] holds for the six-direction sweeps, on `P` and in
+/// 3×3 blocks. The outward sweep writes the sums and the tip; the close
+/// ([`super::planar_close::inward`]) the diagonal blocks and the pairing
+/// quantities, which are taken in the axes of the rod's base frame (D107)
+/// instead of the world's: every pairing contracts a twist with a wrench
+/// of the same rod, so a common rigid change of axes cancels, and in the
+/// base frame's axes the twists and wrenches of a planar rod stay in `P`.
+/// A "3×k" block holds the basis's `k` columns in its leading columns
+/// (zero beyond), a "k×3" block its rows, "k×k" both.
+#[derive(Clone, Debug)]
+pub(crate) struct PlanarWork {
+    /// The own points' sums (frame `L_{n−1}`).
+    pub(crate) s: Sums3,
+    /// `Bᵀ` times the inertial sum `Σ w T₋ᵀ f` (k entries, D85).
+    pub(crate) tin_b: Vec3,
+    /// The local tip pose `g(ℓ)`, and the poses of the piece's base and tip
+    /// relative to the rod's base frame.
+    pub(crate) tip: Pose2,
+    pub(crate) base_rel: Pose2,
+    pub(crate) tip_rel: Pose2,
+    /// `T₋(ℓ)`, `η(ℓ)`, `η̇′(ℓ)`; `H_η B`, `H_η̇ B`, `H_v̇ B` (3×k) at the tip.
+    pub(crate) tm_tip: Mat3,
+    pub(crate) eta_tip: Vec3,
+    pub(crate) etad_tip: Vec3,
+    pub(crate) h_eta: Mat3,
+    pub(crate) h_etad: Mat3,
+    pub(crate) h_vd: Mat3,
+    pub(crate) co_tip: Coefficients,
+    /// `P^i` and `k̄` of the piece's strain (D36 on `P`).
+    pub(crate) powers: [Mat3; 4],
+    pub(crate) kbar: Vec3,
+    /// Pairing quantities (D46) in the rod base frame's axes: `Ad S` (3×k),
+    /// the sources `Ad w̄`, `Ad u` (3×k), the columns `δW` (3×k), the
+    /// receivers `ℛ` (k×3).
+    pub(crate) s_rod: Mat3,
+    pub(crate) src_wq: Mat3,
+    pub(crate) src_uq: Mat3,
+    pub(crate) src_wv: Mat3,
+    pub(crate) dwq: Mat3,
+    pub(crate) dwv: Mat3,
+    pub(crate) rcv_m: Mat3,
+    pub(crate) rcv_b: Mat3,
+    pub(crate) rcv_y: Mat3,
+    /// The diagonal blocks of `∂τ/∂q`, `∂τ/∂q̇` and `M` (k×k).
+    pub(crate) blk_q: Mat3,
+    pub(crate) blk_v: Mat3,
+    pub(crate) blk_a: Mat3,
+}
+
+impl PlanarWork {
+    pub(crate) fn new() -> Self {
+        let z = Mat3::zeros();
+        Self {
+            s: Sums3::zero(),
+            tin_b: Vec3::zeros(),
+            tip: Pose2::IDENTITY,
+            base_rel: Pose2::IDENTITY,
+            tip_rel: Pose2::IDENTITY,
+            tm_tip: z,
+            eta_tip: Vec3::zeros(),
+            etad_tip: Vec3::zeros(),
+            h_eta: z,
+            h_etad: z,
+            h_vd: z,
+            co_tip: Coefficients {
+                c: [0.0; 4],
+                d: [0.0; 4],
+                h: [0.0; 4],
+            },
+            powers: [z; 4],
+            kbar: Vec3::zeros(),
+            s_rod: z,
+            src_wq: z,
+            src_uq: z,
+            src_wv: z,
+            dwq: z,
+            dwv: z,
+            rcv_m: z,
+            rcv_b: z,
+            rcv_y: z,
+            blk_q: z,
+            blk_v: z,
+            blk_a: z,
+        }
+    }
+}
+
+/// Where a planar piece's basis sits in `P` and `P` in the six
+/// directions: `idx` the full indices of `P`, `sel` the `P` position of
+/// each of the basis's `k` columns.
 #[derive(Clone, Copy)]
 pub(crate) struct Place {
     pub(crate) idx: [usize; 3],
@@ -298,63 +411,6 @@ pub(crate) struct Place {
 }
 
 impl Place {
-    /// `Bᵀ X B` (k×k).
-    #[inline(always)]
-    pub(crate) fn kk(&self, x: &Mat3) -> Mat6 {
-        let mut out = Mat6::zeros();
-        for j in 0..self.k {
-            for i in 0..self.k {
-                out[(i, j)] = x[(self.sel[i], self.sel[j])];
-            }
-        }
-        out
-    }
-
-    /// `X B` (6×k, `P` rows).
-    #[inline(always)]
-    pub(crate) fn sk(&self, x: &Mat3) -> Mat6 {
-        let mut out = Mat6::zeros();
-        for j in 0..self.k {
-            for r in 0..3 {
-                out[(self.idx[r], j)] = x[(r, self.sel[j])];
-            }
-        }
-        out
-    }
-
-    /// `Bᵀ X` (k×6, `P` columns).
-    #[inline(always)]
-    pub(crate) fn ks(&self, x: &Mat3) -> Mat6 {
-        let mut out = Mat6::zeros();
-        for c in 0..3 {
-            for i in 0..self.k {
-                out[(i, self.idx[c])] = x[(self.sel[i], c)];
-            }
-        }
-        out
-    }
-
-    /// `X` on `P` rows and columns (6×6).
-    #[inline(always)]
-    pub(crate) fn ss(&self, x: &Mat3) -> Mat6 {
-        let mut out = Mat6::zeros();
-        for c in 0..3 {
-            for r in 0..3 {
-                out[(self.idx[r], self.idx[c])] = x[(r, c)];
-            }
-        }
-        out
-    }
-
-    #[inline(always)]
-    pub(crate) fn v(&self, v: &Vec3) -> Vec6 {
-        let mut out = Vec6::zeros();
-        for r in 0..3 {
-            out[self.idx[r]] = v[r];
-        }
-        out
-    }
-
     /// The `P` block of a 6×6.
     #[inline(always)]
     pub(crate) fn block(&self, m: &Mat6) -> Mat3 {
@@ -370,7 +426,7 @@ impl Place {
 /// The own points and point loads of one planar piece (D42–D43, D45 on
 /// `P`, D97–D98): as [`super::point::own_points`], every product 3×3.
 /// `pose` is the world pose of the piece's base frame. Writes (does not
-/// add to) every sum of `w` that [`PieceWork::reset_sums`] resets.
+/// add to) the sums of `w`.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn own_points3(
@@ -383,33 +439,15 @@ fn own_points3(
     drag: Option<&Vec3>,
     scale: f64,
     mass: bool,
-    w: &mut PieceWork,
+    w: &mut PlanarWork,
 ) {
     let pl_ = Place {
         idx: pr.idx,
         sel: pp.sel,
         k: pp.k,
     };
-    let z = Mat3::zeros();
-    let mut s = Sums3 {
-        dq_diag: z,
-        dv_diag: z,
-        dq_w: z,
-        dv_w: z,
-        mt: z,
-        bt: z,
-        yt: z,
-        rm: z,
-        rb: z,
-        ry: z,
-        mtt: z,
-        tsum: Vec3::zeros(),
-        wsum: Vec3::zeros(),
-        tin: Vec3::zeros(),
-        win: Vec3::zeros(),
-        phi: [Vec3::zeros(); 4],
-        chi: [Vec3::zeros(); 4],
-    };
+    w.s = Sums3::zero();
+    let s = &mut w.s;
     let apart = drag.is_some() || !rm.spec.distributed_loads.is_empty();
     for (qp, m) in pd.points.iter().zip(&pp.inertia) {
         let (g, p) = linearize_point3(pc, qp.x);
@@ -504,38 +542,21 @@ fn own_points3(
             s.chi[i] += fp * co.c[i];
         }
     }
-    w.dq_diag = pl_.kk(&s.dq_diag);
-    w.dv_diag = pl_.kk(&s.dv_diag);
-    w.dq_w = pl_.sk(&s.dq_w);
-    w.dv_w = pl_.sk(&s.dv_w);
-    w.mt = pl_.ss(&s.mt);
-    w.bt = pl_.ss(&s.bt);
-    w.yt = pl_.ss(&s.yt);
-    w.rm = pl_.ks(&s.rm);
-    w.rb = pl_.ks(&s.rb);
-    w.ry = pl_.ks(&s.ry);
-    w.mtt = pl_.kk(&s.mtt);
-    w.tsum = pl_.v(&s.tsum);
-    w.wsum = pl_.v(&s.wsum);
-    w.tin = pl_.v(&s.tin);
-    w.win = pl_.v(&s.win);
-    for i in 0..4 {
-        w.phi[i] = pl_.v(&s.phi[i]);
-        w.chi[i] = pl_.v(&s.chi[i]);
-    }
+    w.tin_b = Vec3::from_fn(|i, _| if i < pl_.k { s.tin[pl_.sel[i]] } else { 0.0 });
 }
 
 /// The outward sweep of [`super::chain::outward`] on a planar rod (D97):
-/// every piece's own points and tip linearized on `P`, written into the
-/// six-direction buffers (D98). The rod must be planar and the model
-/// without a tree; its closes are [`super::planar_close::inward`]. Kept out of line: inlined into
-/// [`super::chain::outward`] it would grow the six-strain sweep's caller.
+/// every piece's own points and tip linearized on `P`, kept in the
+/// planar buffers (D107). The rod must be planar and the model without a
+/// tree; its closes are [`super::planar_close::inward`]. Kept out of line:
+/// inlined into [`super::chain::outward`] it would grow the six-strain
+/// sweep's caller.
 #[inline(never)]
 pub(crate) fn outward(
     model: &Model,
     rm: &RodModel,
     pr: &PlanarRod,
-    works: &mut [PieceWork],
+    works: &mut [PlanarWork],
     at: &At,
 ) {
     let (q, qd, qdd) = (at.q, at.qd, at.qdd);
@@ -543,7 +564,10 @@ pub(crate) fn outward(
     let rod = &rm.spec.geometry;
     let range = rm.dofs();
     let (qr, qdr, qddr) = (&q[range.clone()], &qd[range.clone()], &qdd[range]);
+    // The world pose of the piece's base (world loads), and its pose
+    // relative to the rod's base (the pairing quantities' axes, D107).
     let mut pose = *rod.base();
+    let mut rel = Pose2::IDENTITY;
     let mut eta0 = Vec3::zeros();
     let mut etad0 = pr.gather(&gravity_base_acceleration(model, rm, scale));
     let drag = drag_diagonal(rm).map(|d| pr.gather(&d));
@@ -553,8 +577,6 @@ pub(crate) fn outward(
         let xid = pr.gather(&piece.strain_rate(qdr));
         let xidd = pr.gather(&piece.strain_rate(qddr));
         let dm = PlanarDerivMaps::new(&xi, &xid, &xidd);
-        // No `reset_sums`: `own_points3` writes every sum it resets.
-        w.base_world = pose;
         let pc = PlanarLin {
             dm: &dm,
             xi: &xi,
@@ -581,20 +603,22 @@ pub(crate) fn outward(
             sel: pp.sel,
             k: pp.k,
         };
-        w.tip = pr.embed(&g);
-        w.tm_tip = place.ss(&p.t);
-        w.eta_tip = place.v(&p.eta);
-        w.etad_tip = place.v(&p.etad);
-        w.h_eta = place.sk(&p.h_eta);
-        w.h_etad = place.sk(&p.h_etad);
-        w.h_vd = place.sk(&p.h_vd);
+        w.tip = g;
+        w.base_rel = rel;
+        rel = rel.compose(&g);
+        w.tip_rel = rel;
+        w.tm_tip = p.t;
+        w.eta_tip = p.eta;
+        w.etad_tip = p.etad;
+        w.h_eta = place.right(&p.h_eta);
+        w.h_etad = place.right(&p.h_etad);
+        w.h_vd = place.right(&p.h_vd);
         w.co_tip = p.co;
-        w.powers = dm.p.map(|m| place.ss(&m));
-        w.kbar = place.v(&dm.kbar());
-        w.tip_world = w.base_world.compose(&w.tip);
+        w.powers = dm.p;
+        w.kbar = dm.kbar();
         eta0 = p.eta;
         etad0 = p.etad;
-        pose = w.tip_world;
+        pose = pose.compose(&pr.embed(&g));
     }
 }
 

@@ -1,44 +1,31 @@
 //! The closes of the inward sweep on planar rods, in se(2)
-//! (docs/theory-derivatives.md D99–D100): after the planar outward sweep
-//! ([`super::planar::outward`], D97–D98), each piece's composites,
+//! (docs/theory-derivatives.md D99–D100, D107): after the planar outward
+//! sweep ([`super::planar::outward`], D97–D98), each piece's composites,
 //! diagonal blocks, `𝒬`, transmitted wrench and mass-matrix block on 3×3
-//! blocks and `k` columns, and its world-frame pairing quantities as the
-//! `P` columns of `Ad` times 3×k, written into the buffers the pairings
-//! and the O(N) products read.
+//! blocks and `k` columns, and its pairing quantities in the axes of the
+//! rod's base frame (3×k), written into the planar buffers
+//! ([`PlanarWork`]) the pairings and the O(N) products of planar rods
+//! read ([`super::planar_products`]).
 
-use super::piece::{PieceWork, write_piece};
-use super::planar::{Place, ad3, lambda3};
-use super::point::basis6;
+use super::planar::{Place, PlanarWork, ad3, lambda3};
 use super::{At, IdDerivatives};
-use crate::forces::linearized::has_dead_loads;
+use crate::forces::linearized::{cable_terms, has_dead_loads};
+use crate::kernels::planar::Pose2;
 use crate::model::planar::PlanarRod;
 use crate::model::{Model, RodModel};
-use nalgebra::SMatrix;
-use softrod_lie::{Mat3, Mat6, Vec3, Vec6};
+use softrod_lie::{Mat3, Vec3};
 
 impl Place {
-    /// The `P` rows of a 6×k buffer written by [`Self::sk`] (3×k).
-    #[inline(always)]
-    pub(crate) fn rows_of(&self, m: &Mat6) -> Mat3 {
-        Mat3::from_fn(|r, j| m[(self.idx[r], j)])
-    }
-
-    /// The `P` columns of a k×6 buffer written by [`Self::ks`] (k×3).
-    #[inline(always)]
-    pub(crate) fn cols_of(&self, m: &Mat6) -> Mat3 {
-        Mat3::from_fn(|i, c| m[(i, self.idx[c])])
-    }
-
-    /// The leading k×k of a buffer written by [`Self::kk`].
-    #[inline(always)]
-    pub(crate) fn lead(&self, m: &Mat6) -> Mat3 {
-        m.fixed_view::<3, 3>(0, 0).into_owned()
-    }
-
     /// `X B` in `P` coordinates (3×k, the basis's columns of `X`).
     #[inline(always)]
     pub(crate) fn right(&self, x: &Mat3) -> Mat3 {
         Mat3::from_fn(|r, j| if j < self.k { x[(r, self.sel[j])] } else { 0.0 })
+    }
+
+    /// `Bᵀ X` in `P` coordinates (k×3, the basis's rows of `X`).
+    #[inline(always)]
+    pub(crate) fn left(&self, x: &Mat3) -> Mat3 {
+        Mat3::from_fn(|i, c| if i < self.k { x[(self.sel[i], c)] } else { 0.0 })
     }
 
     /// `Bᵀ X B` in `P` coordinates (k×k).
@@ -52,30 +39,6 @@ impl Place {
             }
         })
     }
-}
-
-/// A 3×k (or k×k) block in the leading part of a 6×6 buffer.
-#[inline(always)]
-fn lead6(x: &Mat3) -> Mat6 {
-    let mut out = Mat6::zeros();
-    out.fixed_view_mut::<3, 3>(0, 0).copy_from(x);
-    out
-}
-
-/// A 6×k block in the leading columns of a 6×6 buffer.
-#[inline(always)]
-fn cols6(x: &SMatrix<f64, 6, 3>) -> Mat6 {
-    let mut out = Mat6::zeros();
-    out.fixed_view_mut::<6, 3>(0, 0).copy_from(x);
-    out
-}
-
-/// A k×6 block in the leading rows of a 6×6 buffer.
-#[inline(always)]
-fn rows6(x: &SMatrix<f64, 3, 6>) -> Mat6 {
-    let mut out = Mat6::zeros();
-    out.fixed_view_mut::<3, 6>(0, 0).copy_from(x);
-    out
 }
 
 /// `𝒬` of (D36) on `P` (D99): the form of
@@ -117,96 +80,155 @@ struct Subtree3 {
     w: Vec3,
 }
 
+/// `Ad_g` on `P` as a matrix, the inverse of [`Pose2::ad_inv`]:
+/// `Ad_g η = (ω, R v − ω J p)`, `[[1, 0], [−Jp, R]]`.
+#[inline(always)]
+pub(crate) fn ad_mat(g: &Pose2) -> Mat3 {
+    Mat3::new(1.0, 0.0, 0.0, g.p[1], g.c, -g.s, -g.p[0], g.s, g.c)
+}
+
 /// [`super::piece::close_piece`] (and, with `mass`,
 /// [`super::piece::close_mass`]) on a planar piece, in `P` coordinates
-/// (D99–D100): the composites carried by the planar `Ad⁻¹` of the tip,
-/// the diagonal blocks, the transmitted wrench and `𝒬` on 3×3 and `k`
-/// columns; the world-frame pairing quantities (D46) as the `P` columns
-/// of `Ad_{G_n}` (6×3) times the 3×k blocks, the receivers as k×3 times
-/// the `P` rows of `Ad⁻¹_{G_{n−1}}`. Returns what `close_piece` returns
-/// (the blocks k×k in the leading part of 6×6, the wrench in six
-/// components) and the subtree handed to the base frame.
+/// (D99–D100, D107): the composites carried by the planar `Ad⁻¹` of the
+/// tip, the diagonal blocks, the transmitted wrench and `𝒬` on 3×3 and
+/// `k` columns; the pairing quantities (D46) in the axes of the rod's
+/// base frame, `Ad` of the tip relative to it times the 3×k blocks, the
+/// receivers times `Ad⁻¹` of the base relative to it. Returns the diagonal
+/// blocks (k×k, before the strain-space terms), the wrench `τ_n` projects
+/// (before them; in `P`) and the subtree handed to the base frame.
 #[inline(always)]
 fn close_piece3(
-    w: &mut PieceWork,
+    w: &mut PlanarWork,
     tip: &Subtree3,
     pl: &Place,
     dead: bool,
     mass: bool,
-) -> (Mat6, Mat6, Vec6, Subtree3) {
+) -> (Mat3, Mat3, Vec3, Subtree3) {
     let (mc, bc, yc, wn) = (&tip.m, &tip.b, &tip.y, &tip.w);
-    let al = pl.block(&w.tip.ad_inv().to_mat6());
-    let tl = pl.block(&w.tm_tip);
+    let s = &w.s;
+    let al = w.tip.ad_inv();
+    let tl = w.tm_tip;
     let tlb = pl.right(&tl);
     let tlbt = tlb.transpose();
-    let adeta = ad3(&pl.gather(&w.eta_tip));
+    let adeta = ad3(&w.eta_tip);
     // (D43) on P, `k` columns: u = δη(ℓ), w̄ = δη̇′(ℓ) + ad_η(ℓ) δη(ℓ).
-    let uq = pl.rows_of(&w.h_eta);
-    let wq = pl.rows_of(&w.h_etad) + adeta * uq;
+    let uq = w.h_eta;
+    let wq = w.h_etad + adeta * uq;
     let mut dwn_q = mc * wq + bc * uq;
     if dead {
         dwn_q += yc * tlb;
     }
-    let wv = pl.rows_of(&w.h_vd) + adeta * tlb;
+    let wv = w.h_vd + adeta * tlb;
     let dwn_v = mc * wv + bc * tlb;
     let mut phi = [Vec3::zeros(); 4];
     let mut chi = [Vec3::zeros(); 4];
-    let mut powers = [Mat3::zeros(); 4];
     for i in 0..4 {
-        phi[i] = pl.gather(&w.phi[i]) + wn * w.co_tip.d[i];
-        chi[i] = pl.gather(&w.chi[i]) + wn * w.co_tip.c[i];
-        powers[i] = pl.block(&w.powers[i]);
+        phi[i] = s.phi[i] + wn * w.co_tip.d[i];
+        chi[i] = s.chi[i] + wn * w.co_tip.c[i];
     }
-    let qform = pl.both(&tangent_transpose_form3(
-        &powers,
-        &pl.gather(&w.kbar),
-        &phi,
-        &chi,
-    ));
-    let diag_q = pl.lead(&w.dq_diag) + tlbt * dwn_q + qform;
-    let diag_v = pl.lead(&w.dv_diag) + tlbt * dwn_v;
-    let dw_q = pl.rows_of(&w.dq_w) + al.tr_mul(&(lambda3(wn) * tlb + dwn_q));
-    let dw_v = pl.rows_of(&w.dv_w) + al.tr_mul(&dwn_v);
-    // World-frame pairing quantities (D46, D100).
-    let to_world = w.tip_world.ad().to_mat6();
-    let base_inv = w.base_world.ad_inv().to_mat6();
-    let aw = SMatrix::<f64, 6, 3>::from_fn(|r, c| to_world[(r, pl.idx[c])]);
-    let bi = SMatrix::<f64, 3, 6>::from_fn(|r, c| base_inv[(pl.idx[r], c)]);
-    w.s_world = cols6(&(aw * tlb));
-    w.src_wq = cols6(&(aw * wq));
-    w.src_uq = cols6(&(aw * uq));
-    w.src_wv = cols6(&(aw * wv));
-    w.src_uv = w.s_world;
-    w.dwq_world = cols6(&bi.tr_mul(&dw_q));
-    w.dwv_world = cols6(&bi.tr_mul(&dw_v));
+    let qform = pl.both(&tangent_transpose_form3(&w.powers, &w.kbar, &phi, &chi));
+    let diag_q = pl.both(&s.dq_diag) + tlbt * dwn_q + qform;
+    let diag_v = pl.both(&s.dv_diag) + tlbt * dwn_v;
+    let dw_q = pl.right(&s.dq_w) + al.tr_mul(&(lambda3(wn) * tlb + dwn_q));
+    let dw_v = pl.right(&s.dv_w) + al.tr_mul(&dwn_v);
+    // Pairing quantities (D46) in the rod base frame's axes (D107).
+    let aw = ad_mat(&w.tip_rel);
+    let bi = w.base_rel.ad_inv();
+    w.s_rod = aw * tlb;
+    w.src_wq = aw * wq;
+    w.src_uq = aw * uq;
+    w.src_wv = aw * wv;
+    w.dwq = bi.tr_mul(&dw_q);
+    w.dwv = bi.tr_mul(&dw_v);
     let tmc = tlbt * mc;
-    w.rcv_m = rows6(&((pl.cols_of(&w.rm) + tmc * al) * bi));
-    w.rcv_b = rows6(&((pl.cols_of(&w.rb) + tlbt * bc * al) * bi));
+    w.rcv_m = (pl.left(&s.rm) + tmc * al) * bi;
+    w.rcv_b = (pl.left(&s.rb) + tlbt * bc * al) * bi;
     if dead {
-        w.rcv_y = rows6(&((pl.cols_of(&w.ry) + tlbt * yc * al) * bi));
+        w.rcv_y = (pl.left(&s.ry) + tlbt * yc * al) * bi;
     }
     if mass {
-        w.blk_a = lead6(&(pl.lead(&w.mtt) + tmc * tlb));
+        w.blk_a = pl.both(&s.mtt) + tmc * tlb;
     }
     let alt = al.transpose();
     let base = Subtree3 {
-        m: pl.block(&w.mt) + alt * mc * al,
-        b: pl.block(&w.bt) + alt * bc * al,
+        m: s.mt + alt * mc * al,
+        b: s.bt + alt * bc * al,
         y: if dead {
-            pl.block(&w.yt) + alt * yc * al
+            s.yt + alt * yc * al
         } else {
             Mat3::zeros()
         },
-        w: pl.gather(&w.wsum) + alt * wn,
+        w: s.wsum + alt * wn,
     };
-    let wrench = pl.v(&(pl.gather(&w.tsum) + tl.tr_mul(wn)));
-    (lead6(&diag_q), lead6(&diag_v), wrench, base)
+    (diag_q, diag_v, s.tsum + tl.tr_mul(wn), base)
 }
 
-/// The inward sweep of [`super::chain::inward`] on a planar rod (D99–D100)
-/// after [`super::planar::outward`]: the closes in `P` coordinates, `τ` and the blocks
-/// written as for any rod ([`super::piece::write_piece`]). Out of line
-/// for the same reason as [`super::planar::outward`].
+/// [`super::piece::write_piece`] on a planar piece: `τ_n` and the
+/// diagonal blocks (k×k) with the strain-space terms (D13, D15, D47),
+/// from [`close_piece3`]'s blocks and wrench (in `P`); the blocks go into
+/// the dense matrices too when the evaluation forms them.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn write_piece3(
+    model: &Model,
+    rm: &RodModel,
+    pl: &Place,
+    n: usize,
+    work: &mut IdDerivatives,
+    at: &At,
+    (diag_q, diag_v, wrench): (Mat3, Mat3, Vec3),
+) -> (Mat3, Mat3) {
+    let At { t, q, qd, .. } = *at;
+    let piece = &rm.spec.geometry.pieces()[n];
+    let pd = &rm.pieces[n];
+    let k = pl.k;
+    let o = rm.dof_offset + piece.dof_offset;
+    let (mut dq, mut dv) = (diag_q, diag_v);
+    // The basis's column `i` is the unit direction `idx[sel[i]]`.
+    let mut inert = Vec3::from_fn(|i, _| if i < k { wrench[pl.sel[i]] } else { 0.0 });
+    if !rm.spec.cables.is_empty() {
+        let xi = piece.strain(&q[rm.dofs()]);
+        let (force, hess) = cable_terms(
+            model,
+            rm,
+            (n, &q[rm.dofs()]),
+            &xi,
+            t,
+            at.forces.load_scale,
+            work.tensions.as_ref(),
+        );
+        for i in 0..k {
+            let fi = pl.idx[pl.sel[i]];
+            inert[i] += force[fi];
+            for j in 0..k {
+                dq[(i, j)] += hess[(fi, pl.idx[pl.sel[j]])];
+            }
+        }
+    }
+    for i in 0..k {
+        let mut tau = inert[i] + pd.offset6[i];
+        for j in 0..k {
+            tau += pd.stiffness[(i, j)] * q[o + j] + pd.damping[(i, j)] * qd[o + j];
+            dq[(i, j)] += pd.stiffness[(i, j)];
+            dv[(i, j)] += pd.damping[(i, j)];
+        }
+        work.tau[o + i] = tau;
+    }
+    if at.dense {
+        for i in 0..k {
+            for j in 0..k {
+                work.dtau_dq[(o + i, o + j)] = dq[(i, j)];
+                work.dtau_dqd[(o + i, o + j)] = dv[(i, j)];
+            }
+        }
+    }
+    (dq, dv)
+}
+
+/// The inward sweep of [`super::chain::inward`] on a planar rod (D99–D100,
+/// D107) after [`super::planar::outward`]: the closes in `P` coordinates,
+/// `τ` and the blocks. Out of line for the same reason as
+/// [`super::planar::outward`].
 #[inline(never)]
 pub(crate) fn inward(
     model: &Model,
@@ -224,19 +246,17 @@ pub(crate) fn inward(
         y: z,
         w: Vec3::zeros(),
     };
-    let pieces = rm.spec.geometry.pieces();
-    for (n, (piece, pp)) in pieces.iter().zip(&pr.pieces).enumerate().rev() {
+    for (n, pp) in pr.pieces.iter().enumerate().rev() {
         let pl = Place {
             idx: pr.idx,
             sel: pp.sel,
             k: pp.k,
         };
         let (diag_q, diag_v, wrench, base) =
-            close_piece3(&mut work.pieces[r][n], &sub, &pl, dead, !at.dense);
+            close_piece3(&mut work.planar[r][n], &sub, &pl, dead, !at.dense);
         sub = base;
-        let bm = basis6(&piece.basis);
-        let (bq, bv) = write_piece(model, rm, n, work, at, &bm, (&diag_q, &diag_v, &wrench));
-        let w = &mut work.pieces[r][n];
+        let (bq, bv) = write_piece3(model, rm, &pl, n, work, at, (diag_q, diag_v, wrench));
+        let w = &mut work.planar[r][n];
         w.blk_q = bq;
         w.blk_v = bv;
     }
@@ -287,6 +307,31 @@ mod tests {
                     }
                 }
             }
+        }
+    }
+
+    /// `Ad_g` on `P` (D107) is the inverse of the planar `Ad⁻¹_g` and the
+    /// `P` block of the six-direction `Ad` of the embedded pose, for the
+    /// three bending planes.
+    #[test]
+    fn planar_ad_is_the_p_block_of_ad() {
+        use crate::model::planar::PlanarRod;
+        let g = Pose2 {
+            c: 0.6_f64.cos(),
+            s: 0.6_f64.sin(),
+            p: crate::kernels::planar::V2::new(0.3, -1.7),
+        };
+        let err = (ad_mat(&g) * g.ad_inv() - Mat3::identity()).amax();
+        assert!(err < 1e-15, "{err:e}");
+        for (axis, idx) in IDX.iter().enumerate() {
+            let pr = PlanarRod {
+                idx: *idx,
+                axis,
+                pieces: Vec::new(),
+            };
+            let full = pr.embed(&g).ad().to_mat6();
+            let err = (ad_mat(&g) - block(idx, &full)).amax();
+            assert!(err < 1e-15, "axis {axis}: {err:e}");
         }
     }
 }

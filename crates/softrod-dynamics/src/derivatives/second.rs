@@ -333,6 +333,16 @@ impl PointPath {
         out
     }
 
+    /// Fills `sorted`: the column indices in increasing coordinate order
+    /// (blocks run from the point's node to the root, each block's
+    /// coordinates increasing; a node's coordinates follow its parent's).
+    pub(crate) fn sorted_columns(&mut self) {
+        self.sorted.clear();
+        self.sorted.extend(0..self.cols.len());
+        let cols = &self.cols;
+        self.sorted.sort_unstable_by_key(|&c| cols[c].dof);
+    }
+
     /// Adds `sign · J` (3 × n) into `out`.
     pub(crate) fn add_jacobian(&self, sign: f64, out: &mut DMatrix<f64>) {
         for c in &self.cols {

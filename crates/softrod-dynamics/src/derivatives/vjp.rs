@@ -17,6 +17,7 @@
 
 use super::IdDerivatives;
 use super::piece::PieceWork;
+use super::planar_products;
 use super::point::basis6;
 use super::tree::{Exit, TreeWork};
 use crate::algorithms::check_vec;
@@ -120,7 +121,11 @@ pub fn inverse_dynamics_vjp(
         (Some(tree), Some(tw)) => tree_vjp(tree, tw, u, out_q, out_qd),
         _ => {
             for (r, rm) in model.rods().iter().enumerate() {
-                chain_vjp(rm, &work.pieces[r], u, out_q, out_qd);
+                if work.planar_taken[r] {
+                    planar_products::vjp(rm, &work.planar[r], u, out_q, out_qd);
+                } else {
+                    chain_vjp(rm, &work.pieces[r], u, out_q, out_qd);
+                }
             }
         }
     }
@@ -156,7 +161,11 @@ pub fn inverse_dynamics_jvp(
         (Some(tree), Some(tw)) => tree_jvp(tree, tw, a, b, out),
         _ => {
             for (r, rm) in model.rods().iter().enumerate() {
-                chain_jvp(rm, &work.pieces[r], a, b, out);
+                if work.planar_taken[r] {
+                    planar_products::jvp(rm, &work.planar[r], a, b, out);
+                } else {
+                    chain_jvp(rm, &work.pieces[r], a, b, out);
+                }
             }
         }
     }
@@ -210,6 +219,10 @@ pub fn inverse_dynamics_inertia_vjp(
         (Some(tree), Some(tw)) => tree_inertia(model, tree, tw, z, rods, bodies),
         _ => {
             for (r, rm) in model.rods().iter().enumerate() {
+                if work.planar_taken[r] {
+                    rods[r] = planar_products::inertia(rm, &work.planar[r], z);
+                    continue;
+                }
                 let mut a = Vec6::zeros();
                 for (p, w) in rm.spec.geometry.pieces().iter().zip(&work.pieces[r]) {
                     let (o, k) = (rm.dof_offset + p.dof_offset, p.basis.dof());
@@ -271,7 +284,11 @@ pub fn inverse_dynamics_mass_product(
         (Some(tree), Some(tw)) => tree_mass(tree, tw, v, out),
         _ => {
             for (r, rm) in model.rods().iter().enumerate() {
-                chain_mass(rm, &work.pieces[r], v, out);
+                if work.planar_taken[r] {
+                    planar_products::mass(rm, &work.planar[r], v, out);
+                } else {
+                    chain_mass(rm, &work.pieces[r], v, out);
+                }
             }
         }
     }

@@ -62,6 +62,8 @@ pub(crate) struct PointPath {
     pub strain_rate: Vec6,
     /// `j_i × f` per column (the geometric term's work space).
     pub scratch: Vec<Vec3>,
+    /// Per coordinate in increasing order, its index in `cols`.
+    pub sorted: Vec<usize>,
 }
 
 /// The buffers of one linearization (CT12–CT14).

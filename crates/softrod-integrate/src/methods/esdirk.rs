@@ -564,7 +564,9 @@ impl<T: Tableau> Esdirk<T> {
         self.s.save_prev();
         std::mem::swap(&mut self.q, &mut self.qs[T::S - 1]);
         std::mem::swap(&mut self.v, &mut self.vs[T::S - 1]);
-        std::mem::swap(&mut self.acc, &mut self.accs[T::S - 1]);
+        // Copied, not swapped: `accs` keeps the step's stages for
+        // `stage_accelerations` (the adjoint's tape, G34).
+        self.acc.copy_from(&self.accs[T::S - 1]);
         self.set_first_order();
         self.s.advance(t_new, h, stats);
         self.accepted += 1;
@@ -752,6 +754,9 @@ impl<T: Tableau, Sys: SecondOrderSystem> Stepper<SecondOrderProblem<'_, Sys>> fo
         }
     }
 
+    fn stage_accelerations(&self) -> &[DVector<f64>] {
+        &self.accs
+    }
     fn state(&self) -> &StepState {
         &self.s
     }

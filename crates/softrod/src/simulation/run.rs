@@ -4,7 +4,9 @@
 
 use nalgebra::DVector;
 use softrod_dynamics::{Data, Model};
-use softrod_integrate::{Control, Hooks, RodSystem, Stats, StepInfo, integrate_second_order};
+use softrod_integrate::{
+    Control, Hooks, ProjectionMisses, RodSystem, Stats, StepInfo, integrate_second_order,
+};
 
 use super::Simulation;
 use crate::error::{Error, Result};
@@ -218,6 +220,7 @@ impl Simulation {
             violation: None,
         };
         self.system.forget_contact_linearization();
+        self.system.reset_projection_misses();
         let result =
             integrate_second_order(&mut self.system, method, t_span, q0, qd0, &opts, &mut hooks);
         let s = &mut self.system;
@@ -236,13 +239,16 @@ impl Simulation {
         } else {
             RunStatus::Stopped
         };
-        let (energy, warnings): (Option<EnergyBalance>, Vec<String>) = match hooks.watch {
+        let (energy, mut warnings): (Option<EnergyBalance>, Vec<String>) = match hooks.watch {
             Some(w) => {
                 let (b, warn) = w.finish();
                 (Some(b), warn)
             }
             None => (None, Vec::new()),
         };
+        if let Some(w) = projection_warning(self.system.projection_misses()) {
+            warnings.push(w);
+        }
         Ok(RunSummary {
             status,
             t_final: sol.t_final,
@@ -252,6 +258,21 @@ impl Simulation {
             warnings,
         })
     }
+}
+
+/// What a run says when the projection onto the closures (D121) gave up at
+/// some step ends: there the loops were held by the stabilization alone
+/// (still watched: a loop that comes apart stops the run), which the user
+/// asked not to rely on.
+fn projection_warning(m: ProjectionMisses) -> Option<String> {
+    (m.count > 0).then(|| {
+        format!(
+            "project_closures: the projection onto the closures did not converge at {} step \
+             end(s), first at t = {} s (closure residual left there up to {:.3e} m); those \
+             steps kept the stabilized state",
+            m.count, m.first_t, m.largest_residual
+        )
+    })
 }
 
 /// The integrator's hooks of a facade run, as one object: the observer

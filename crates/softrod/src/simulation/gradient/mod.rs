@@ -158,6 +158,7 @@ impl Hooks<RodSystem> for TapeHooks {
     fn step(&mut self, info: &StepInfo<'_>, _sys: &mut RodSystem) -> Control {
         let (q, qd) = info.y.as_slice().split_at(self.n);
         self.tape.push(info.t, info.h, q, qd);
+        self.tape.push_stages(info.stages);
         Control::Continue
     }
 }
