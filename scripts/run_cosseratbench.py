@@ -81,6 +81,12 @@ EXPLAIN = {
 #: Why softrod's rods pass further into each other (or into an obstacle) than
 #: PyElastica's, keyed by (experiment, observation).
 EXPLAIN_OVERLAP = {
+    ("capstan", "max_penetration"): (
+        "softrod's contact is a penalty sized to hold each contact point's weight within "
+        "1 % of the radius and raised to the force it carries (docs/theory-contact.md CT3, "
+        "CT15): here 0.14 % of the rope's radius, within that bound. PyElastica's reported "
+        "0 was not analysed."
+    ),
     ("crossing", "max_rod_overlap"): (
         "softrod's own contact reports about 1e-5 m of penetration (0.2 % of the radius) "
         "where the ropes press (its contacts at 0.1-0.4 s of a 51-piece run); cosseratbench "
@@ -117,6 +123,14 @@ EXPLAIN_TIME = {
         "rule on closed chains before CD10, took 15.6 s here. softrod's structured O(n) "
         "Newton solve of closed chains (the KKT form, CD5-CD8) is off by default and not "
         "reachable from Python."
+    ),
+    "crossing": (
+        "both ropes are closed chains (a spherical joint and a ball closure each) with "
+        "rod-rod contact: the quasi-static rule's ESDIRK with the loops projected after "
+        "every step (D121) factors the dense Newton matrices of the ~620 coordinates a few "
+        "hundred times (measured with softrod's CLI on the adapter's scene: 1287 steps, "
+        "229 rejected, 398 dense Jacobians, 84 CPU s; docs/performance.md, \"Closed chains: "
+        "projection onto the closures\")."
     ),
     "twist": (
         "each rod is a closed chain (a weld to a carriage on a prescribed drive) with "
