@@ -65,6 +65,13 @@ EXPLAIN = {
         "discrete critical twist lies above the reference's by more than the levels' 2 % "
         "spacing (it converges to the reference as the pieces are refined)."
     ),
+    ("crossing", "lift_error"): (
+        "the symmetric crossing is an unstable equilibrium of softrod's model at this resolution, and the run leaves it. Measured (docs/performance.md, \"The crossing at 51 pieces\"): softrod's statics from the symmetric start finds the symmetric equilibrium with the upper rope's middle at z = -0.2778981 m against the elastica reference's -0.2779154 (lift error 0.02 %, PyElastica's run 0.28 %), but its linearization there has one real positive eigenvalue (none at 21 pieces, -0.48/s at 31, +0.13/s at 41, +0.52/s at 51, +0.82/s at 61, +1.26/s at 81), whose mode slides the contact along the upper rope as the lower rope swings sideways; the dynamics follow it (a 1 mm sideways push grows in its own direction at rtol 1e-5; at the rule's rtol 1e-3 the contact's onset kicks it the same way whatever the push) into an asymmetric equilibrium with the lower rope's middle 3.1 cm aside. The destabilizing term is the geometric stiffness -f d''(q) of the exact closest points of the two curved centrelines (checked against a brute-force minimization of the distance, and the contact stiffness is symmetric: conservative; docs/theory-contact.md CT41); PyElastica and MuJoCo take contact between straight segments, and from the same push return to symmetric (PyElastica at 51 and 101 elements). Whether the continuum problem with smooth curved contact is stable, and so which model is right about it, is not settled."
+    ),
+    ("crossing", "shape_error"): (
+        "as for the lift: the run ends in the asymmetric equilibrium that the unstable "
+        "symmetric one decays into."
+    ),
     ("catenary", "settling_residual"): (
         "the same mass-proportional damping; both residuals are below 2e-7 rod lengths "
         "per second, what the damping leaves of the transient (why softrod's is the "
@@ -74,6 +81,19 @@ EXPLAIN = {
 #: Why softrod's rods pass further into each other (or into an obstacle) than
 #: PyElastica's, keyed by (experiment, observation).
 EXPLAIN_OVERLAP = {
+    ("capstan", "max_penetration"): (
+        "softrod's contact is a penalty sized to hold each contact point's weight within "
+        "1 % of the radius and raised to the force it carries (docs/theory-contact.md CT3, "
+        "CT15): here 0.14 % of the rope's radius, within that bound. PyElastica's reported "
+        "0 was not analysed."
+    ),
+    ("crossing", "max_rod_overlap"): (
+        "softrod's own contact reports about 1e-5 m of penetration (0.2 % of the radius) "
+        "where the ropes press (its contacts at 0.1-0.4 s of a 51-piece run); cosseratbench "
+        "measures between the straight segments joining the output nodes, which cut the "
+        "corner of a curved rope, and the run ends in the asymmetric state (see the lift). "
+        "Not analysed further."
+    ),
     ("twist", "max_rod_overlap"): (
         "the six rods run as six simulations (one model of all six would have dense "
         "Newton matrices of 1806 coordinates, docs/performance.md), so they cannot touch "
@@ -103,6 +123,14 @@ EXPLAIN_TIME = {
         "rule on closed chains before CD10, took 15.6 s here. softrod's structured O(n) "
         "Newton solve of closed chains (the KKT form, CD5-CD8) is off by default and not "
         "reachable from Python."
+    ),
+    "crossing": (
+        "both ropes are closed chains (a spherical joint and a ball closure each) with "
+        "rod-rod contact: the quasi-static rule's ESDIRK with the loops projected after "
+        "every step (D121) factors the dense Newton matrices of the ~620 coordinates a few "
+        "hundred times (measured with softrod's CLI on the adapter's scene: 1287 steps, "
+        "229 rejected, 398 dense Jacobians, 84 CPU s; docs/performance.md, \"Closed chains: "
+        "projection onto the closures\")."
     ),
     "twist": (
         "each rod is a closed chain (a weld to a carriage on a prescribed drive) with "

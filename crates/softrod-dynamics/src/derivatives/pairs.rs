@@ -523,6 +523,62 @@ mod tests {
         }
     }
 
+    /// Frictionless rod–rod contact is conservative (CT41): its force is the
+    /// gradient of the penalty potential `Φ(d(q))` of the exact closest
+    /// points' distance (CT8), so at rest (`q̇ = 0`, no damping) its
+    /// stiffness `−∂τ_c/∂q` is a Hessian and must be symmetric. Two curved
+    /// rods crossing, on the chain and on the tree, pressed to several depths
+    /// and crossing angles. A force applied at points that are not the
+    /// distance's closest points, or a law whose constants move with where
+    /// the contact sits along a rod, breaks the symmetry.
+    #[test]
+    fn frictionless_pair_stiffness_is_symmetric() {
+        for tree in [false, true] {
+            for (angle, dz, amp) in [
+                (1.2, 0.0195, 1e-3),
+                (1.57, 0.0198, 2e-2),
+                (1.0, 0.0195, 1e-2),
+            ] {
+                let model = crossing_at(0.0, tree, angle, Vec3::new(0.2, -0.15, dz));
+                let n = model.n_dof();
+                let q = wiggle(n, amp, 1.3);
+                let qd = vec![0.0; n];
+                let mut data = Data::new(&model);
+                let (mut tau, mut dq, mut dqd) = (
+                    DVector::zeros(n),
+                    DMatrix::zeros(n, n),
+                    DMatrix::zeros(n, n),
+                );
+                subtract_contact(
+                    &model,
+                    &mut data,
+                    Forces::ALL,
+                    0.0,
+                    &q,
+                    &qd,
+                    &mut tau,
+                    &mut dq,
+                    &mut dqd,
+                );
+                let touching = data
+                    .contact
+                    .as_ref()
+                    .unwrap()
+                    .pairs
+                    .as_ref()
+                    .map_or(0, |p| p.active.len());
+                assert!(touching > 0, "tree {tree}, angle {angle}: nothing touches");
+                let asym = (&dq - dq.transpose()).abs().max();
+                let scale = dq.abs().max();
+                eprintln!("tree {tree}, angle {angle}: |K − Kᵀ| {asym:.2e} of |K| {scale:.2e}");
+                assert!(
+                    asym <= 1e-9 * scale,
+                    "tree {tree}, angle {angle}: |K − Kᵀ| {asym:.3e} against |K| {scale:.3e}"
+                );
+            }
+        }
+    }
+
     /// Two tapered rods crossing, pressed together (CT14 with `∂r/∂s ≠ 0`):
     /// the gap and the law's radius move with the closest points. Both
     /// ways round (the law's radius on a, then on b), frictionless,

@@ -30,6 +30,9 @@ fn add3(out: &mut [f64], o: usize, k: usize, v: &Vec3) {
 /// The off-diagonal blocks of one planar rod into the dense `∂τ/∂q`,
 /// `∂τ/∂q̇` (D45–D46): `i < j` pairs `Ad S_i` with `δW_j`, `i > j` the
 /// receivers of `i` with the sources of `j`.
+// Out of line for the same reason as `planar::outward`: inlined into
+// `open_tree_core` it would grow the six-strain path's caller.
+#[inline(never)]
 pub(crate) fn pairs(rm: &RodModel, work: &mut IdDerivatives, r: usize) {
     let pieces = rm.spec.geometry.pieces();
     let dead = has_dead_loads(rm);
